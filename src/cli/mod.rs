@@ -1,0 +1,1 @@
+//! The `linterpd` subcommands. (Being written.)

@@ -1,0 +1,2 @@
+//! PURE. Strict TOML configuration, validated into [`crate::robot::Robot`]s.
+//! (Being written.)

@@ -1,0 +1,130 @@
+//! PURE. Poses, the straight line between two poses, and the motion profile along it.
+
+mod profile;
+
+pub use profile::{Profile, ProfileError, ProfileRequest};
+
+use nalgebra::Vector3;
+
+/// A tool pose in the base frame: position in mm and a tool angle about z in radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Position, mm.
+    pub position_mm: Vector3<f64>,
+    /// Tool angle about z, radians.
+    pub a_rad: f64,
+}
+
+impl Pose {
+    /// A pose from x, y, z in mm and the tool angle in degrees (the user's units).
+    #[must_use]
+    pub fn from_mm_deg(x: f64, y: f64, z: f64, a_deg: f64) -> Self {
+        Self {
+            position_mm: Vector3::new(x, y, z),
+            a_rad: a_deg.to_radians(),
+        }
+    }
+
+    /// `[x, y, z, a_deg]`, the user's units.
+    #[must_use]
+    pub fn to_mm_deg(&self) -> [f64; 4] {
+        let p = self.position_mm;
+        [p.x, p.y, p.z, self.a_rad.to_degrees()]
+    }
+}
+
+/// The straight line from one pose to another; the tool angle goes linearly with distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Line {
+    /// Start pose (P1).
+    pub from: Pose,
+    /// End pose (P2).
+    pub to: Pose,
+}
+
+impl Line {
+    /// Length of the line in mm (eq. 1).
+    #[must_use]
+    pub fn length_mm(&self) -> f64 {
+        (self.to.position_mm - self.from.position_mm).norm()
+    }
+
+    /// The pose at distance `s_mm` from P1 (eq. 7), the tool angle in proportion.
+    #[must_use]
+    pub fn at(&self, s_mm: f64) -> Pose {
+        let len = self.length_mm();
+        let u = if len > 0.0 { s_mm / len } else { 1.0 };
+        Pose {
+            position_mm: self.from.position_mm + (self.to.position_mm - self.from.position_mm) * u,
+            a_rad: self.from.a_rad + (self.to.a_rad - self.from.a_rad) * u,
+        }
+    }
+
+    /// Distance from a point to the segment P1P2, mm.
+    #[must_use]
+    pub fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
+        let d = self.to.position_mm - self.from.position_mm;
+        let len2 = d.norm_squared();
+        let u = if len2 > 0.0 {
+            ((p - self.from.position_mm).dot(&d) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p - (self.from.position_mm + d * u)).norm()
+    }
+
+    /// The smallest and largest distance of the segment's projection on the xy plane from the z
+    /// axis, mm (where kinematics with a vertical axis meet their singularities and reach limits).
+    #[must_use]
+    pub fn xy_radius_range_mm(&self) -> (f64, f64) {
+        let a = self.from.position_mm.xy();
+        let b = self.to.position_mm.xy();
+        let d = b - a;
+        let len2 = d.norm_squared();
+        let u = if len2 > 0.0 {
+            (-a.dot(&d) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let nearest = (a + d * u).norm();
+        (nearest, a.norm().max(b.norm()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_interpolates_position_and_angle() {
+        let line = Line {
+            from: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+            to: Pose::from_mm_deg(30.0, 40.0, 0.0, 90.0),
+        };
+        assert!((line.length_mm() - 50.0).abs() < 1e-12);
+        let mid = line.at(25.0);
+        assert!((mid.position_mm - Vector3::new(15.0, 20.0, 0.0)).norm() < 1e-12);
+        assert!((mid.a_rad - 45f64.to_radians()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn distance_to_segment_uses_the_end_points_beyond_them() {
+        let line = Line {
+            from: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+            to: Pose::from_mm_deg(10.0, 0.0, 0.0, 0.0),
+        };
+        assert!((line.distance_mm(&Vector3::new(5.0, 3.0, 0.0)) - 3.0).abs() < 1e-12);
+        assert!((line.distance_mm(&Vector3::new(13.0, 4.0, 0.0)) - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn xy_radius_range_finds_the_closest_approach_inside_the_segment() {
+        let line = Line {
+            from: Pose::from_mm_deg(-100.0, 60.0, 0.0, 0.0),
+            to: Pose::from_mm_deg(100.0, 60.0, 5.0, 0.0),
+        };
+        let (near, far) = line.xy_radius_range_mm();
+        assert!((near - 60.0).abs() < 1e-12);
+        assert!((far - 116.619_037_896_906).abs() < 1e-9);
+    }
+}

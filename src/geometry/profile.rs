@@ -1,0 +1,285 @@
+//! The trapezoidal motion profile s(t) along a path, on the constant-period grid.
+//!
+//! The seed's equations 2-6 with its non-integer step counts decided:
+//! - `Na = ceil(Ta / dT)` ramp periods: the ramp lasts a whole number of periods (never shorter
+//!   than asked);
+//! - `N0 = ceil(L / (V dT))`: the speed is lowered to `V' = L / (N0 dT)` so the line still ends
+//!   exactly on P2 at `t = (N0 + Na) dT`;
+//! - a move too short to reach V (`L < V Ta`) gets a triangular profile at the configured
+//!   acceleration `a = V / Ta`: ramp time `sqrt(L / a)`, rounded up to whole periods, and the peak
+//!   speed lowered to match;
+//! - the ramp's acceleration is `V' / (Na dT)`, never above the configured `V / Ta`.
+
+use thiserror::Error;
+
+/// What a profile is asked to do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileRequest {
+    /// Path length, mm.
+    pub length_mm: f64,
+    /// Cruise speed asked for, mm/s.
+    pub speed_mm_s: f64,
+    /// Acceleration (and deceleration) time asked for, s.
+    pub accel_s: f64,
+    /// Interpolation period, s.
+    pub period_s: f64,
+}
+
+/// Why no profile can be made.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ProfileError {
+    /// A value that must be finite and above zero is not.
+    #[error("{what} is {value}; it must be a number above 0")]
+    NotPositive {
+        /// Which value.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A value that must be finite and at least zero is not.
+    #[error("{what} is {value}; it must be a number of at least 0")]
+    Negative {
+        /// Which value.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// More periods than any table could hold.
+    #[error("the move needs {periods} periods of {period_s} s; at most {max} are allowed")]
+    TooManyPeriods {
+        /// Periods needed.
+        periods: f64,
+        /// The period.
+        period_s: f64,
+        /// The most allowed.
+        max: u32,
+    },
+}
+
+/// A trapezoidal (or triangular) profile with whole-period phases.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Profile {
+    /// Path length, mm.
+    pub length_mm: f64,
+    /// Cruise (or peak) speed actually used, mm/s.
+    pub speed_mm_s: f64,
+    /// Acceleration actually used, mm/s^2.
+    pub accel_mm_s2: f64,
+    /// Ramp time, s (`ramp_periods * period_s`).
+    pub accel_s: f64,
+    /// Interpolation period, s.
+    pub period_s: f64,
+    /// Periods in each ramp (Na).
+    pub ramp_periods: u32,
+    /// Periods from the start to the start of the deceleration (N0).
+    pub cruise_end_periods: u32,
+}
+
+/// The most periods one move may have (far beyond any table area).
+pub(crate) const MAX_PERIODS: u32 = 1_000_000;
+
+fn positive(what: &'static str, value: f64) -> Result<f64, ProfileError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ProfileError::NotPositive { what, value })
+    }
+}
+
+impl Profile {
+    /// Plans the profile; see the module docs for how non-integer step counts are decided.
+    pub fn new(req: ProfileRequest) -> Result<Self, ProfileError> {
+        let length_mm = positive("length_mm", req.length_mm)?;
+        let speed = positive("speed_mm_s", req.speed_mm_s)?;
+        let period_s = positive("period_s", req.period_s)?;
+        if !req.accel_s.is_finite() || req.accel_s < 0.0 {
+            return Err(ProfileError::Negative {
+                what: "accel_s",
+                value: req.accel_s,
+            });
+        }
+        let whole = |x: f64| -> Result<u32, ProfileError> {
+            // A hair of tolerance so 0.2 / 0.05 = 4.000000000000001 stays 4.
+            let n = (x - 1e-9).ceil().max(1.0);
+            if n > f64::from(MAX_PERIODS) {
+                Err(ProfileError::TooManyPeriods {
+                    periods: n,
+                    period_s,
+                    max: MAX_PERIODS,
+                })
+            } else {
+                Ok(n as u32)
+            }
+        };
+        if req.accel_s == 0.0 {
+            // No ramp asked for: a constant speed for the whole line.
+            let n0 = whole(length_mm / (speed * period_s))?;
+            let speed_mm_s = length_mm / (f64::from(n0) * period_s);
+            return Ok(Self {
+                length_mm,
+                speed_mm_s,
+                accel_mm_s2: f64::INFINITY,
+                accel_s: 0.0,
+                period_s,
+                ramp_periods: 0,
+                cruise_end_periods: n0,
+            });
+        }
+        let accel = speed / req.accel_s;
+        let (na, n0) = if length_mm >= speed * req.accel_s {
+            let na = whole(req.accel_s / period_s)?;
+            let n0 = whole(length_mm / (speed * period_s))?.max(na);
+            (na, n0)
+        } else {
+            let na = whole((length_mm / accel).sqrt() / period_s)?;
+            (na, na)
+        };
+        let speed_mm_s = length_mm / (f64::from(n0) * period_s);
+        let accel_s = f64::from(na) * period_s;
+        Ok(Self {
+            length_mm,
+            speed_mm_s,
+            accel_mm_s2: speed_mm_s / accel_s,
+            accel_s,
+            period_s,
+            ramp_periods: na,
+            cruise_end_periods: n0,
+        })
+    }
+
+    /// Periods in the whole move (N = N0 + Na).
+    #[must_use]
+    pub fn periods(&self) -> u32 {
+        self.cruise_end_periods + self.ramp_periods
+    }
+
+    /// Duration of the move, s.
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        f64::from(self.periods()) * self.period_s
+    }
+
+    /// Distance from P1 at time `t_s` (eq. 6, in continuous time), mm.
+    #[must_use]
+    pub fn distance_mm(&self, t_s: f64) -> f64 {
+        let total = self.duration_s();
+        let t = t_s.clamp(0.0, total);
+        let ta = self.accel_s;
+        if ta == 0.0 {
+            return self.speed_mm_s * t;
+        }
+        let a = self.accel_mm_s2;
+        if t <= ta {
+            0.5 * a * t * t
+        } else if t <= total - ta {
+            0.5 * a * ta * ta + self.speed_mm_s * (t - ta)
+        } else {
+            let r = total - t;
+            self.length_mm - 0.5 * a * r * r
+        }
+    }
+
+    /// Distance from P1 at interpolation point `i` (0..=N), mm. Point N is exactly the length.
+    #[must_use]
+    pub fn distance_at_point_mm(&self, i: u32) -> f64 {
+        if i >= self.periods() {
+            self.length_mm
+        } else {
+            self.distance_mm(f64::from(i) * self.period_s)
+        }
+    }
+
+    /// Speed at time `t_s`, mm/s.
+    #[must_use]
+    pub fn speed_at_mm_s(&self, t_s: f64) -> f64 {
+        let total = self.duration_s();
+        if !(0.0..=total).contains(&t_s) {
+            return 0.0;
+        }
+        let ta = self.accel_s;
+        if ta == 0.0 {
+            self.speed_mm_s
+        } else if t_s <= ta {
+            self.accel_mm_s2 * t_s
+        } else if t_s <= total - ta {
+            self.speed_mm_s
+        } else {
+            self.accel_mm_s2 * (total - t_s)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seed() -> Profile {
+        Profile::new(ProfileRequest {
+            length_mm: 285.73,
+            speed_mm_s: 240.0,
+            accel_s: 0.2,
+            period_s: 0.05,
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn seed_move_rounds_n0_up_and_lowers_the_speed() {
+        let p = seed();
+        // N0 = 285.73 / (240 * 0.05) = 23.81 -> 24; Na = 4.
+        assert_eq!(
+            (p.cruise_end_periods, p.ramp_periods, p.periods()),
+            (24, 4, 28)
+        );
+        assert!((p.speed_mm_s - 285.73 / 1.2).abs() < 1e-9);
+        assert!(p.speed_mm_s <= 240.0);
+        assert!((p.duration_s() - 1.4).abs() < 1e-12);
+    }
+
+    #[test]
+    fn profile_ends_exactly_on_the_length_and_is_continuous() {
+        let p = seed();
+        assert_eq!(p.distance_at_point_mm(p.periods()), 285.73);
+        assert!((p.distance_mm(p.duration_s()) - 285.73).abs() < 1e-9);
+        for t in [p.accel_s, p.duration_s() - p.accel_s] {
+            let (a, b) = (p.distance_mm(t - 1e-9), p.distance_mm(t + 1e-9));
+            assert!((a - b).abs() < 1e-6, "jump at {t}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn short_move_gets_a_triangular_profile_at_the_configured_acceleration() {
+        // a = 240 / 0.2 = 1200 mm/s^2; L = 12 mm: sqrt(12 / 1200) = 0.1 s ramp = 2 periods.
+        let p = Profile::new(ProfileRequest {
+            length_mm: 12.0,
+            speed_mm_s: 240.0,
+            accel_s: 0.2,
+            period_s: 0.05,
+        })
+        .unwrap();
+        assert_eq!((p.ramp_periods, p.cruise_end_periods), (2, 2));
+        assert!(p.accel_mm_s2 <= 1200.0 + 1e-9);
+        assert!((p.distance_mm(p.duration_s()) - 12.0).abs() < 1e-9);
+        assert!((p.distance_mm(0.1) - 6.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn zero_or_negative_inputs_are_refused_with_their_value() {
+        let bad = ProfileRequest {
+            length_mm: 10.0,
+            speed_mm_s: 0.0,
+            accel_s: 0.2,
+            period_s: 0.05,
+        };
+        let err = Profile::new(bad).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "speed_mm_s is 0; it must be a number above 0"
+        );
+        let nan = ProfileRequest {
+            period_s: f64::NAN,
+            ..bad
+        };
+        assert!(Profile::new(nan).is_err());
+    }
+}

@@ -1,0 +1,196 @@
+//! PURE. Forward and inverse kinematics behind one trait, for the robots linterpd drives.
+//!
+//! Every model has four joints, in this order, each driven by one pulse channel:
+//! - `cylindrical` (the seed's press loader, eqs. 8-9): theta1 (rad), d2 = z (mm), d3 = radial
+//!   extension (mm), wrist (rad) = a - theta1;
+//! - `cartesian`: X, Y, Z (mm), A (rad) = a;
+//! - `scara`: theta1, theta2 (rad), Z (mm), wrist (rad) = a - theta1 - theta2.
+//!
+//! Joint values are in radians or millimetres ([`JointKind`]); degrees only at the user's edge.
+
+mod cartesian;
+mod cylindrical;
+mod scara;
+
+pub use cartesian::Cartesian;
+pub use cylindrical::Cylindrical;
+pub use scara::{Elbow, Scara};
+
+use thiserror::Error;
+
+use crate::geometry::{Line, Pose};
+
+/// Joints every model has.
+pub const JOINTS: usize = 4;
+
+/// Joint values, radians or millimetres by [`JointKind`].
+pub type Joints = [f64; JOINTS];
+
+/// What a joint's value measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointKind {
+    /// An angle, radians.
+    Revolute,
+    /// A length, millimetres.
+    Prismatic,
+}
+
+impl JointKind {
+    /// The unit of a joint value inside linterpd.
+    #[must_use]
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::Revolute => "rad",
+            Self::Prismatic => "mm",
+        }
+    }
+
+    /// The unit the user writes (config, CLI, API).
+    #[must_use]
+    pub fn user_unit(self) -> &'static str {
+        match self {
+            Self::Revolute => "deg",
+            Self::Prismatic => "mm",
+        }
+    }
+
+    /// A user value (degrees or mm) in internal units.
+    #[must_use]
+    pub fn from_user(self, value: f64) -> f64 {
+        match self {
+            Self::Revolute => value.to_radians(),
+            Self::Prismatic => value,
+        }
+    }
+
+    /// An internal value in the user's units.
+    #[must_use]
+    pub fn to_user(self, value: f64) -> f64 {
+        match self {
+            Self::Revolute => value.to_degrees(),
+            Self::Prismatic => value,
+        }
+    }
+}
+
+/// Why a pose or a path cannot be reached.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum KinematicsError {
+    /// A pose coordinate is NaN or infinite.
+    #[error("pose coordinate {axis} is {value}; it must be a finite number")]
+    NotFinite {
+        /// x, y, z or a.
+        axis: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// The path passes the cylindrical robot's vertical axis closer than allowed.
+    #[error(
+        "the line passes {distance_mm:.3} mm from the base axis (x = y = 0); theta1 is singular \
+         there and at least {min_mm} mm is required"
+    )]
+    NearAxis {
+        /// Closest approach, mm.
+        distance_mm: f64,
+        /// The configured minimum, mm.
+        min_mm: f64,
+    },
+    /// A pose outside the SCARA's reachable annulus.
+    #[error(
+        "the line reaches {radius_mm:.3} mm from the base axis; this scara reaches {min_mm:.3} to \
+         {max_mm:.3} mm with its elbow kept {elbow}"
+    )]
+    OutOfReach {
+        /// Offending radius, mm.
+        radius_mm: f64,
+        /// Inner reach, mm.
+        min_mm: f64,
+        /// Outer reach, mm.
+        max_mm: f64,
+        /// The elbow side.
+        elbow: Elbow,
+    },
+}
+
+/// Forward and inverse kinematics of one robot model.
+pub trait Kinematics {
+    /// The model's name as written in config (`cylindrical`, `cartesian`, `scara`).
+    fn name(&self) -> &'static str;
+
+    /// The dimensions that define the model, in mm, for reports.
+    fn params(&self) -> Vec<(&'static str, f64)>;
+
+    /// What each joint measures.
+    fn joint_kinds(&self) -> [JointKind; JOINTS];
+
+    /// The pose the joints put the tool in.
+    fn fk(&self, q: &Joints) -> Pose;
+
+    /// Joint values for a pose. Revolute joints are taken on the turn nearest `near` (the
+    /// previous point of a path), so a path never jumps by a full turn; with no `near`, angles
+    /// fall in (-pi, pi].
+    fn ik(&self, pose: &Pose, near: Option<&Joints>) -> Result<Joints, KinematicsError>;
+
+    /// Checks the whole straight line, not only its end points: singularities and reach.
+    fn check_line(&self, line: &Line) -> Result<(), KinematicsError>;
+}
+
+/// The kinematic model of a configured robot.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Model {
+    /// The seed's R-P-P + wrist robot.
+    Cylindrical(Cylindrical),
+    /// X, Y, Z gantry plus a rotary A.
+    Cartesian(Cartesian),
+    /// Two revolute arms, Z and a wrist.
+    Scara(Scara),
+}
+
+impl Model {
+    fn inner(&self) -> &dyn Kinematics {
+        match self {
+            Self::Cylindrical(k) => k,
+            Self::Cartesian(k) => k,
+            Self::Scara(k) => k,
+        }
+    }
+}
+
+impl Kinematics for Model {
+    fn name(&self) -> &'static str {
+        self.inner().name()
+    }
+    fn params(&self) -> Vec<(&'static str, f64)> {
+        self.inner().params()
+    }
+    fn joint_kinds(&self) -> [JointKind; JOINTS] {
+        self.inner().joint_kinds()
+    }
+    fn fk(&self, q: &Joints) -> Pose {
+        self.inner().fk(q)
+    }
+    fn ik(&self, pose: &Pose, near: Option<&Joints>) -> Result<Joints, KinematicsError> {
+        self.inner().ik(pose, near)
+    }
+    fn check_line(&self, line: &Line) -> Result<(), KinematicsError> {
+        self.inner().check_line(line)
+    }
+}
+
+/// Checks that every coordinate of a pose is finite.
+pub fn check_finite(pose: &Pose) -> Result<(), KinematicsError> {
+    let p = pose.position_mm;
+    for (axis, value) in [("x", p.x), ("y", p.y), ("z", p.z), ("a", pose.a_rad)] {
+        if !value.is_finite() {
+            return Err(KinematicsError::NotFinite { axis, value });
+        }
+    }
+    Ok(())
+}
+
+/// The angle equal to `angle` modulo a full turn that lies nearest `near`.
+#[must_use]
+pub fn unwrap_near(angle: f64, near: f64) -> f64 {
+    let turn = std::f64::consts::TAU;
+    angle + ((near - angle) / turn).round() * turn
+}

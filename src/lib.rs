@@ -1,0 +1,32 @@
+//! linterpd: straight-line moves for PLC-driven robots.
+//!
+//! A robot whose controller is a motion PLC (a Panasonic FP-X) can output pulses per channel but
+//! cannot interpolate several joints along a line. linterpd plans the line on a PC with the
+//! constant time period method (LI, HE, WU 2015), turns every joint's motion into F174 pulse
+//! tables, and judges each table by simulating what the PLC will do with it.
+//!
+//! # Layout
+//! Rings pointing inward: the pure core does no IO and reads no clock.
+//! ```text
+//! geometry/    PURE  poses, the line P1P2, the trapezoidal profile s(t)
+//! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
+//! robot.rs     PURE  a robot as planned for: model, joints and channels, motion defaults
+//! plan/        PURE  move request -> joint samples -> pulse tables (constant-period, seed-exact),
+//!                    limits and over-speed policy
+//! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
+//!                    the DT word image (encode, decode)
+//! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
+//! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
+//! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
+//! cli/         the `linterpd` subcommands (one module each) and their output formats
+//! ```
+
+pub mod cli;
+pub mod config;
+pub mod geometry;
+pub mod kinematics;
+pub mod mewtocol;
+pub mod plan;
+pub mod robot;
+pub mod sim;
+pub mod table;

@@ -1,0 +1,2 @@
+//! The `linterpd` binary.
+fn main() {}

@@ -1,0 +1,1 @@
+//! SANS-IO. MEWTOCOL-COM frames and codecs. (Being written.)

@@ -1,0 +1,1 @@
+//! PURE. Move request -> pulse tables. (Being written.)

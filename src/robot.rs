@@ -1,0 +1,158 @@
+//! PURE. A robot as linterpd plans for it: its kinematic model, its four joints with their pulse
+//! channels, and its motion defaults. `config` builds these from TOML; `plan` consumes them.
+
+use crate::geometry::Pose;
+use crate::kinematics::{JOINTS, JointKind, Joints, Kinematics, KinematicsError, Model};
+use crate::table::{ChannelLimits, FrequencyModel, OutputMethod};
+
+/// One joint and the pulse channel that drives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// The joint's name (reports and errors).
+    pub name: String,
+    /// Pulse channel 0-3.
+    pub channel: u8,
+    /// Revolute (rad) or prismatic (mm).
+    pub kind: JointKind,
+    /// Joint value of one pulse, rad or mm (never 0; negative reverses the count direction).
+    pub step: f64,
+    /// Joint value at count 0, rad or mm.
+    pub offset: f64,
+    /// Lowest allowed joint value, rad or mm.
+    pub min: f64,
+    /// Highest allowed joint value, rad or mm.
+    pub max: f64,
+    /// Highest pulse frequency the channel may output, Hz.
+    pub max_freq_hz: u32,
+    /// How the channel is wired to its drive.
+    pub output: OutputMethod,
+}
+
+impl Joint {
+    /// The count nearest a joint value.
+    #[must_use]
+    pub fn count_of(&self, value: f64) -> i64 {
+        ((value - self.offset) / self.step).round() as i64
+    }
+
+    /// The joint value of a count.
+    #[must_use]
+    pub fn value_of(&self, count: i64) -> f64 {
+        self.offset + count as f64 * self.step
+    }
+
+    /// A joint value in the user's units (degrees or mm).
+    #[must_use]
+    pub fn user(&self, value: f64) -> f64 {
+        self.kind.to_user(value)
+    }
+}
+
+/// The planning method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// The seed's constant time period method.
+    #[default]
+    ConstantPeriod,
+}
+
+impl Method {
+    /// The name used in config, CLI and reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ConstantPeriod => "constant-period",
+        }
+    }
+}
+
+/// What to do when a move would need a channel faster than its maximum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OverSpeed {
+    /// Refuse the move, naming the joint, the frequency, the time and the limit.
+    #[default]
+    Reject,
+    /// Lower the whole move's speed and acceleration until every channel fits.
+    SlowDown,
+}
+
+impl OverSpeed {
+    /// The name used in config, CLI and reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Reject => "reject",
+            Self::SlowDown => "slow-down",
+        }
+    }
+}
+
+/// The motion settings of a move (a robot's defaults, overridden per move).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    /// The planning method.
+    pub method: Method,
+    /// Interpolation period, s.
+    pub period_s: f64,
+    /// Cruise speed along the line, mm/s.
+    pub speed_mm_s: f64,
+    /// Acceleration and deceleration time, s.
+    pub accel_s: f64,
+    /// What the PLC's channels really output.
+    pub frequency_model: FrequencyModel,
+    /// What to do when a channel would be too fast.
+    pub over_speed: OverSpeed,
+}
+
+/// A robot: kinematics, joints in the model's order, motion defaults and table area size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Robot {
+    /// The robot's name.
+    pub name: String,
+    /// The kinematic model.
+    pub kinematics: Model,
+    /// The four joints, in the model's order.
+    pub joints: [Joint; JOINTS],
+    /// Motion defaults.
+    pub motion: Motion,
+    /// Words in each channel's table area (CONTRACT.md default 2000).
+    pub area_words: usize,
+}
+
+impl Robot {
+    /// Joint values of counts.
+    #[must_use]
+    pub fn values_of(&self, counts: &[i64; JOINTS]) -> Joints {
+        std::array::from_fn(|j| self.joints[j].value_of(counts[j]))
+    }
+
+    /// Counts nearest joint values.
+    #[must_use]
+    pub fn counts_of(&self, q: &Joints) -> [i64; JOINTS] {
+        std::array::from_fn(|j| self.joints[j].count_of(q[j]))
+    }
+
+    /// The pose that counts put the tool in.
+    #[must_use]
+    pub fn pose_of(&self, counts: &[i64; JOINTS]) -> Pose {
+        self.kinematics.fk(&self.values_of(counts))
+    }
+
+    /// The pose of a point given without a tool angle: the angle the tool has when the wrist
+    /// joint sits at 0 there.
+    pub fn pose_with_wrist_at_zero(&self, x: f64, y: f64, z: f64) -> Result<Pose, KinematicsError> {
+        let probe = Pose::from_mm_deg(x, y, z, 0.0);
+        let mut q = self.kinematics.ik(&probe, None)?;
+        q[JOINTS - 1] = 0.0;
+        Ok(self.kinematics.fk(&q))
+    }
+
+    /// What channel `joint` allows.
+    #[must_use]
+    pub fn channel_limits(&self, joint: usize) -> ChannelLimits {
+        ChannelLimits {
+            max_freq_hz: self.joints[joint].max_freq_hz,
+            area_words: self.area_words,
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! PURE. The execution model. (Being written.)
