@@ -1,1 +1,342 @@
-//! PURE. Move request -> pulse tables. (Being written.)
+//! PURE. A move request becomes pulse tables, checked against every limit and judged by the
+//! execution model before anyone may send it.
+//!
+//! ```text
+//! request -> line P1P2 -> profile s(t) -> samples (IK, absolute counts) -> limits
+//!         -> spans per joint (constant-period) -> segments (direction, range, duty, frequencies)
+//!         -> validation -> sim -> figures
+//! ```
+
+mod constant_period;
+mod limits;
+mod samples;
+mod seed_exact;
+pub mod segments;
+
+use thiserror::Error;
+
+use crate::geometry::{Line, Pose, Profile, ProfileError, ProfileRequest};
+use crate::kinematics::{JOINTS, Kinematics, KinematicsError};
+use crate::robot::{Motion, OverSpeed, Robot};
+use crate::sim::{self, Execution, Figures, Settings};
+use crate::table::{ChannelTable, TableProblem, ValidTable};
+
+pub use samples::Samples;
+
+/// Where a move starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Origin {
+    /// A pose (a plan made ahead of time): the start counts are the nearest to it.
+    Pose(Pose),
+    /// The counts the PLC reports (a move about to run): the line starts at their pose.
+    Counts([i64; JOINTS]),
+}
+
+/// One straight-line move to plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MoveRequest {
+    /// Where the move starts.
+    pub from: Origin,
+    /// The target pose.
+    pub to: Pose,
+    /// The motion settings.
+    pub motion: Motion,
+    /// Plan the paper as printed (comparison only, never valid for a PLC).
+    pub seed_exact: bool,
+}
+
+/// Why a move cannot be planned.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PlanError {
+    /// A pose or the path cannot be reached.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// The speed, acceleration time or period is unusable.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+    /// The target is the start.
+    #[error(
+        "the move from ({x:.3}, {y:.3}, {z:.3}) mm has length 0; a line move needs a distance above 0"
+    )]
+    ZeroLength {
+        /// Start x, mm.
+        x: f64,
+        /// Start y, mm.
+        y: f64,
+        /// Start z, mm.
+        z: f64,
+    },
+    /// A joint would leave its position limits.
+    #[error(
+        "joint {joint} would reach {value:.4} {unit} at t = {t_s:.3} s; its limits are {min} to {max} {unit}"
+    )]
+    OutOfLimit {
+        /// Joint name.
+        joint: String,
+        /// The value, user units.
+        value: f64,
+        /// Lower limit, user units.
+        min: f64,
+        /// Upper limit, user units.
+        max: f64,
+        /// deg or mm.
+        unit: &'static str,
+        /// When, s.
+        t_s: f64,
+    },
+    /// A joint would need its channel faster than allowed.
+    #[error(
+        "joint {joint} would need {freq_hz:.0} Hz at t = {t_s:.3} s; channel {channel} allows {max_hz} Hz"
+    )]
+    OverSpeed {
+        /// Joint name.
+        joint: String,
+        /// Frequency needed, Hz.
+        freq_hz: f64,
+        /// When, s.
+        t_s: f64,
+        /// The channel.
+        channel: u8,
+        /// Its maximum, Hz.
+        max_hz: u32,
+    },
+    /// The tables break an F174 rule or do not fit their area.
+    #[error("joint {joint}: {first}{}", if *more > 0 { format!(" (and {more} more problems)") } else { String::new() })]
+    InvalidTable {
+        /// Joint name.
+        joint: String,
+        /// The first problem.
+        first: TableProblem,
+        /// How many more.
+        more: usize,
+    },
+}
+
+/// A planned move: tables, profile, and how the execution model says they will run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// The line, P1 to P2.
+    pub line: Line,
+    /// The profile actually used.
+    pub profile: Profile,
+    /// The motion settings actually used (speed lowered by `slow-down` if it had to).
+    pub motion: Motion,
+    /// Speed actually used over speed asked for (1 unless `slow-down` acted).
+    pub speed_factor: f64,
+    /// Whether this is the paper as printed.
+    pub seed_exact: bool,
+    /// Counts at every interpolation point.
+    pub samples: Samples,
+    /// One table per joint, in joint order (a joint that does not move has no segments).
+    pub tables: Vec<ChannelTable>,
+    /// Why the tables must not be sent (empty for a valid plan).
+    pub problems: Vec<String>,
+    /// The execution model's run of the tables.
+    pub execution: Execution,
+    /// The accuracy figures of that run.
+    pub figures: Figures,
+}
+
+impl Plan {
+    /// Whether the tables may be sent to a PLC.
+    #[must_use]
+    pub fn valid(&self) -> bool {
+        self.problems.is_empty()
+    }
+
+    /// The final counts, joint by joint.
+    #[must_use]
+    pub fn end_counts(&self) -> [i64; JOINTS] {
+        std::array::from_fn(|j| self.tables[j].end())
+    }
+
+    /// The planned position at time `t_s`.
+    #[must_use]
+    pub fn planned_position_mm(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        self.line.at(self.profile.distance_mm(t_s)).position_mm
+    }
+
+    /// The validated tables of the joints that move, for encoding; `None` for an invalid plan.
+    #[must_use]
+    pub fn valid_tables(&self, robot: &Robot) -> Option<Vec<ValidTable>> {
+        if !self.valid() {
+            return None;
+        }
+        self.tables
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| !t.segments.is_empty())
+            .map(|(j, t)| crate::table::validate(t.clone(), robot.channel_limits(j)).ok())
+            .collect()
+    }
+}
+
+/// The most times `slow-down` lowers the speed before giving up.
+const SLOW_DOWN_ATTEMPTS: usize = 12;
+
+/// Plans one move for `robot`.
+pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
+    let (line, start_values, start_counts) = resolve_line(robot, req)?;
+    robot.kinematics.check_line(&line)?;
+    let length_mm = line.length_mm();
+    if length_mm < 1e-6 {
+        let p = line.from.position_mm;
+        return Err(PlanError::ZeroLength {
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        });
+    }
+    let mut motion = req.motion;
+    let (profile, samples) =
+        loop_until_fast_enough(robot, &line, &mut motion, &start_values, start_counts)?;
+    let speed_factor = motion.speed_mm_s / req.motion.speed_mm_s;
+    let tables = build_tables(robot, &samples, &profile, &motion, req.seed_exact);
+    let problems = check_tables(robot, &tables, req.seed_exact)?;
+    let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
+    let execution = sim::execute(
+        &tables,
+        &max_hz,
+        Settings {
+            model: motion.frequency_model,
+            segment_gap_s: 0.0,
+        },
+    );
+    let planned = |t: f64| line.at(profile.distance_mm(t)).position_mm;
+    let figures = sim::measure(
+        robot,
+        &tables,
+        &execution,
+        &line,
+        &planned,
+        profile.duration_s(),
+    );
+    Ok(Plan {
+        line,
+        profile,
+        motion,
+        speed_factor,
+        seed_exact: req.seed_exact,
+        samples,
+        tables,
+        problems,
+        execution,
+        figures,
+    })
+}
+
+type Resolved = (Line, crate::kinematics::Joints, [i64; JOINTS]);
+
+fn resolve_line(robot: &Robot, req: &MoveRequest) -> Result<Resolved, PlanError> {
+    crate::kinematics::check_finite(&req.to)?;
+    match req.from {
+        Origin::Pose(from) => {
+            let q = robot.kinematics.ik(&from, None)?;
+            Ok((Line { from, to: req.to }, q, robot.counts_of(&q)))
+        }
+        Origin::Counts(counts) => {
+            let q = robot.values_of(&counts);
+            Ok((
+                Line {
+                    from: robot.kinematics.fk(&q),
+                    to: req.to,
+                },
+                q,
+                counts,
+            ))
+        }
+    }
+}
+
+fn loop_until_fast_enough(
+    robot: &Robot,
+    line: &Line,
+    motion: &mut Motion,
+    start_values: &crate::kinematics::Joints,
+    start_counts: [i64; JOINTS],
+) -> Result<(Profile, Samples), PlanError> {
+    let mut attempt = 0;
+    loop {
+        let profile = Profile::new(ProfileRequest {
+            length_mm: line.length_mm(),
+            speed_mm_s: motion.speed_mm_s,
+            accel_s: motion.accel_s,
+            period_s: motion.period_s,
+        })?;
+        let samples = samples::sample(robot, line, &profile, start_values, start_counts)?;
+        limits::check_positions(robot, &samples.counts, profile.period_s)?;
+        let peak = limits::peak(robot, &samples.counts, profile.period_s);
+        if peak.load <= 1.0 {
+            return Ok((profile, samples));
+        }
+        attempt += 1;
+        if motion.over_speed == OverSpeed::Reject || attempt > SLOW_DOWN_ATTEMPTS {
+            return Err(limits::over_speed(robot, &peak));
+        }
+        // Speed and acceleration scale together (the ramp time stays), a hair below the limit.
+        motion.speed_mm_s *= 0.999 / peak.load;
+    }
+}
+
+fn build_tables(
+    robot: &Robot,
+    samples: &Samples,
+    profile: &Profile,
+    motion: &Motion,
+    seed_exact: bool,
+) -> Vec<ChannelTable> {
+    robot
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| {
+            let counts = samples.joint(j);
+            if seed_exact {
+                return seed_exact::table(joint, &counts, profile.period_s);
+            }
+            let spans = constant_period::spans(&counts, profile.period_s);
+            let segments = segments::build(joint, motion.frequency_model, counts[0], &spans);
+            ChannelTable {
+                channel: joint.channel,
+                start: counts[0],
+                segments,
+            }
+        })
+        .collect()
+}
+
+fn check_tables(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    seed_exact: bool,
+) -> Result<Vec<String>, PlanError> {
+    let mut out = if seed_exact {
+        seed_exact::problems()
+    } else {
+        Vec::new()
+    };
+    for (j, table) in tables.iter().enumerate() {
+        let found = crate::table::problems(table, robot.channel_limits(j));
+        if found.is_empty() {
+            continue;
+        }
+        if !seed_exact {
+            let more = found.len() - 1;
+            let first = found.into_iter().next().expect("not empty");
+            return Err(PlanError::InvalidTable {
+                joint: robot.joints[j].name.clone(),
+                first,
+                more,
+            });
+        }
+        out.extend(
+            found
+                .iter()
+                .map(|p| format!("joint {}: {p}", robot.joints[j].name)),
+        );
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,1 +1,248 @@
-//! PURE. The execution model. (Being written.)
+//! PURE. The execution model: what a PLC does with a start's tables, and how close that comes to
+//! the planned line (`../shared/spec/ACCURACY.md`).
+//!
+//! - every channel of a start begins at t = 0 from its start count;
+//! - a row (f_set, target) emits |target - count| pulses at the real frequency
+//!   `model(f_set, range)`, clamped to the channel's maximum: pulse k of the row lands at
+//!   `row_start + k / f`, and the next row starts when the last pulse lands;
+//! - a channel's next segment starts when its previous one ends, plus a configurable gap (the
+//!   PLC's scan; 0 in the planner's own report);
+//! - rows go toward their target whatever the segment's direction says: the runaway of an FP-X on
+//!   a target against the direction is the mock PLC's business, and `table::problems` flags it.
+//!
+//! The planner's report and the mock PLC both use it.
+
+mod figures;
+
+pub use figures::{Figures, SAMPLE_PERIOD_S, measure};
+
+use crate::table::{ChannelTable, FrequencyModel};
+
+/// How a start is executed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// What the channels really output.
+    pub model: FrequencyModel,
+    /// Time between the end of one segment and the start of the next, s.
+    pub segment_gap_s: f64,
+}
+
+/// One pulse: at `t_s`, the channel of table `table` reaches `count`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PulseEvent {
+    /// Time from the start, s.
+    pub t_s: f64,
+    /// Index of the table (the joint) in the start.
+    pub table: usize,
+    /// The count after this pulse.
+    pub count: i64,
+}
+
+/// When one row ran.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowTiming {
+    /// Index of the table (the joint) in the start.
+    pub table: usize,
+    /// Segment index, from 0.
+    pub segment: usize,
+    /// Row index within the segment, from 0.
+    pub row: usize,
+    /// The real frequency the row ran at, Hz.
+    pub actual_hz: f64,
+    /// When its first pulse period began, s.
+    pub start_s: f64,
+    /// When its last pulse landed, s.
+    pub end_s: f64,
+}
+
+/// Everything a start did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Execution {
+    /// Every pulse of every channel, in time order (ties in table order).
+    pub events: Vec<PulseEvent>,
+    /// Every row's timing, table by table.
+    pub rows: Vec<RowTiming>,
+    /// When each table's last pulse landed (`None` for a table that emits nothing).
+    pub finish_s: Vec<Option<f64>>,
+}
+
+/// Executes a start: `tables[i]` runs with channel limit `max_hz[i]`.
+#[must_use]
+pub fn execute(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) -> Execution {
+    let mut exec = Execution {
+        finish_s: vec![None; tables.len()],
+        ..Execution::default()
+    };
+    for (i, table) in tables.iter().enumerate() {
+        let limit = max_hz.get(i).copied().map_or(f64::INFINITY, f64::from);
+        run_channel(i, table, limit, settings, &mut exec);
+    }
+    exec.events
+        .sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.table.cmp(&b.table)));
+    exec
+}
+
+fn run_channel(
+    index: usize,
+    table: &ChannelTable,
+    limit_hz: f64,
+    settings: Settings,
+    exec: &mut Execution,
+) {
+    let mut t = 0.0;
+    let mut count = table.start;
+    for (si, seg) in table.segments.iter().enumerate() {
+        if si > 0 {
+            t += settings.segment_gap_s;
+        }
+        for (ri, row) in seg.rows.iter().enumerate() {
+            let actual_hz = settings
+                .model
+                .actual_hz(row.freq_hz, seg.control.range)
+                .min(limit_hz);
+            let step = (row.target - count).signum();
+            let pulses = (row.target - count).abs();
+            let start_s = t;
+            for k in 1..=pulses {
+                count += step;
+                exec.events.push(PulseEvent {
+                    t_s: start_s + k as f64 / actual_hz,
+                    table: index,
+                    count,
+                });
+            }
+            t = start_s + pulses as f64 / actual_hz;
+            exec.rows.push(RowTiming {
+                table: index,
+                segment: si,
+                row: ri,
+                actual_hz,
+                start_s,
+                end_s: t,
+            });
+            if pulses > 0 {
+                exec.finish_s[index] = Some(t);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::{ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row, Segment};
+
+    fn segment(direction: Direction, range: FrequencyRange, rows: &[(u32, i64)]) -> Segment {
+        Segment {
+            control: ControlCode {
+                output: OutputMethod::PulseSign,
+                direction,
+                absolute: true,
+                range,
+                duty: Duty::Half,
+            },
+            rows: rows
+                .iter()
+                .map(|&(freq_hz, target)| Row { freq_hz, target })
+                .collect(),
+        }
+    }
+
+    const IDEAL: Settings = Settings {
+        model: FrequencyModel::Ideal,
+        segment_gap_s: 0.0,
+    };
+
+    #[test]
+    fn pulses_land_at_k_over_f_and_rows_chain() {
+        let t = ChannelTable {
+            channel: 0,
+            start: 10,
+            segments: vec![segment(
+                Direction::Up,
+                FrequencyRange::High,
+                &[(1_000, 12), (500, 13)],
+            )],
+        };
+        let exec = execute(&[t], &[100_000], IDEAL);
+        let times: Vec<f64> = exec.events.iter().map(|e| e.t_s).collect();
+        assert_eq!(times, vec![0.001, 0.002, 0.004]);
+        assert_eq!(exec.events.last().unwrap().count, 13);
+        assert_eq!(exec.finish_s, vec![Some(0.004)]);
+    }
+
+    #[test]
+    fn next_segment_waits_for_the_gap_and_counts_down() {
+        let t = ChannelTable {
+            channel: 0,
+            start: 0,
+            segments: vec![
+                segment(Direction::Up, FrequencyRange::High, &[(1_000, 2)]),
+                segment(Direction::Down, FrequencyRange::High, &[(1_000, 1)]),
+            ],
+        };
+        let exec = execute(
+            &[t],
+            &[100_000],
+            Settings {
+                segment_gap_s: 0.002,
+                ..IDEAL
+            },
+        );
+        let last = exec.events.last().unwrap();
+        assert!((last.t_s - 0.005).abs() < 1e-12);
+        assert_eq!(last.count, 1);
+    }
+
+    #[test]
+    fn frequency_above_the_channel_limit_runs_at_the_limit() {
+        let t = ChannelTable {
+            channel: 2,
+            start: 0,
+            segments: vec![segment(
+                Direction::Up,
+                FrequencyRange::High,
+                &[(40_000, 20_000)],
+            )],
+        };
+        let exec = execute(&[t], &[20_000], IDEAL);
+        assert!((exec.finish_s[0].unwrap() - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn divider_model_stretches_a_row() {
+        // 1000 Hz in range 0: 97656.25 / ceil(97.656) = 97656.25 / 98 = 996.49 Hz.
+        let t = ChannelTable {
+            channel: 0,
+            start: 0,
+            segments: vec![segment(
+                Direction::Up,
+                FrequencyRange::Low,
+                &[(1_000, 1_000)],
+            )],
+        };
+        let settings = Settings {
+            model: FrequencyModel::FpxDivider,
+            segment_gap_s: 0.0,
+        };
+        let exec = execute(&[t], &[100_000], settings);
+        assert!((exec.finish_s[0].unwrap() - 98.0 / 97.656_25).abs() < 1e-9);
+    }
+
+    #[test]
+    fn events_of_several_channels_are_merged_in_time_order() {
+        let a = ChannelTable {
+            channel: 0,
+            start: 0,
+            segments: vec![segment(Direction::Up, FrequencyRange::High, &[(300, 3)])],
+        };
+        let b = ChannelTable {
+            channel: 1,
+            start: 0,
+            segments: vec![segment(Direction::Down, FrequencyRange::High, &[(400, -4)])],
+        };
+        let exec = execute(&[a, b], &[100_000, 100_000], IDEAL);
+        assert!(exec.events.windows(2).all(|w| w[0].t_s <= w[1].t_s));
+        assert_eq!(exec.events.len(), 7);
+    }
+}

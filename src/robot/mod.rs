@@ -156,3 +156,65 @@ impl Robot {
         }
     }
 }
+
+/// The seed's robot as `ACCURACY.md` gives it, built in code (the same values as the shipped
+/// `config/linterpd.toml`): for tests, benchmarks and examples that must not depend on a file.
+#[must_use]
+pub fn seed_robot() -> Robot {
+    use crate::kinematics::Cylindrical;
+    let joint = |name: &str,
+                 channel: u8,
+                 kind: JointKind,
+                 step_user: f64,
+                 min: f64,
+                 max: f64,
+                 max_freq_hz: u32| Joint {
+        name: name.into(),
+        channel,
+        kind,
+        step: kind.from_user(step_user),
+        offset: 0.0,
+        min: kind.from_user(min),
+        max: kind.from_user(max),
+        max_freq_hz,
+        output: OutputMethod::PulseSign,
+    };
+    Robot {
+        name: "press-loader".into(),
+        kinematics: Model::Cylindrical(Cylindrical {
+            l0_mm: 500.0,
+            min_axis_distance_mm: 50.0,
+        }),
+        joints: [
+            joint(
+                "theta1",
+                0,
+                JointKind::Revolute,
+                0.0025,
+                -170.0,
+                170.0,
+                100_000,
+            ),
+            joint("d2", 1, JointKind::Prismatic, 0.025, -50.0, 400.0, 100_000),
+            joint("d3", 2, JointKind::Prismatic, 0.013, 0.0, 1_000.0, 20_000),
+            joint(
+                "wrist",
+                3,
+                JointKind::Revolute,
+                0.0025,
+                -360.0,
+                360.0,
+                20_000,
+            ),
+        ],
+        motion: Motion {
+            method: Method::ConstantPeriod,
+            period_s: 0.05,
+            speed_mm_s: 240.0,
+            accel_s: 0.2,
+            frequency_model: FrequencyModel::FpxDivider,
+            over_speed: OverSpeed::Reject,
+        },
+        area_words: 2_000,
+    }
+}

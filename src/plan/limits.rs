@@ -1,0 +1,89 @@
+//! Limits checked before anything moves: every joint's position over the whole path and every
+//! channel's pulse frequency.
+//!
+//! A table moves each joint monotonically from one sampled count to the next, so the counts it
+//! passes through are bounded by the sampled counts: checking every sample checks every position
+//! the PLC will command.
+
+use crate::kinematics::JOINTS;
+use crate::robot::Robot;
+
+use super::PlanError;
+
+/// Checks every joint's count at every sample against its position limits.
+pub(super) fn check_positions(
+    robot: &Robot,
+    counts: &[[i64; JOINTS]],
+    period_s: f64,
+) -> Result<(), PlanError> {
+    for (i, c) in counts.iter().enumerate() {
+        for (j, joint) in robot.joints.iter().enumerate() {
+            let value = joint.value_of(c[j]);
+            // Half a pulse of slack: a limit set exactly on a taught point must not trip on rounding.
+            let slack = joint.step.abs() / 2.0;
+            if value < joint.min - slack || value > joint.max + slack {
+                return Err(PlanError::OutOfLimit {
+                    joint: joint.name.clone(),
+                    value: joint.user(value),
+                    min: joint.user(joint.min),
+                    max: joint.user(joint.max),
+                    unit: joint.kind.user_unit(),
+                    t_s: i as f64 * period_s,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The fastest period of the fastest joint, relative to its channel's maximum.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Peak {
+    /// Joint index.
+    pub joint: usize,
+    /// Its frequency, Hz.
+    pub freq_hz: f64,
+    /// When that period ends, s.
+    pub t_s: f64,
+    /// `freq_hz / max_freq_hz`: above 1 means too fast.
+    pub load: f64,
+}
+
+/// The period in which a channel comes nearest (or furthest beyond) its maximum frequency.
+#[must_use]
+pub(super) fn peak(robot: &Robot, counts: &[[i64; JOINTS]], period_s: f64) -> Peak {
+    let mut best = Peak {
+        joint: 0,
+        freq_hz: 0.0,
+        t_s: 0.0,
+        load: 0.0,
+    };
+    for (i, w) in counts.windows(2).enumerate() {
+        for (j, joint) in robot.joints.iter().enumerate() {
+            let freq_hz = (w[1][j] - w[0][j]).abs() as f64 / period_s;
+            let load = freq_hz / f64::from(joint.max_freq_hz);
+            if load > best.load {
+                best = Peak {
+                    joint: j,
+                    freq_hz,
+                    t_s: (i + 1) as f64 * period_s,
+                    load,
+                };
+            }
+        }
+    }
+    best
+}
+
+/// The error for a peak beyond its channel's maximum.
+#[must_use]
+pub(super) fn over_speed(robot: &Robot, peak: &Peak) -> PlanError {
+    let joint = &robot.joints[peak.joint];
+    PlanError::OverSpeed {
+        joint: joint.name.clone(),
+        freq_hz: peak.freq_hz,
+        t_s: peak.t_s,
+        channel: joint.channel,
+        max_hz: joint.max_freq_hz,
+    }
+}

@@ -1,0 +1,51 @@
+//! The constant-period samples of a line: the pose at every interpolation point (eq. 6-7), its
+//! joint values by inverse kinematics (revolute joints kept continuous from the start), and each
+//! joint's absolute count, rounded from the absolute joint value so nothing drifts.
+
+use crate::geometry::{Line, Profile};
+use crate::kinematics::{JOINTS, Joints, Kinematics};
+use crate::robot::Robot;
+
+use super::PlanError;
+
+/// Counts of every joint at every interpolation point 0..=N.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Samples {
+    /// `counts[i][j]`: joint j's count at point i.
+    pub counts: Vec<[i64; JOINTS]>,
+    /// `values[i][j]`: joint j's exact value at point i, rad or mm (before rounding).
+    pub values: Vec<Joints>,
+}
+
+impl Samples {
+    /// Joint `j`'s counts over the points.
+    #[must_use]
+    pub fn joint(&self, j: usize) -> Vec<i64> {
+        self.counts.iter().map(|c| c[j]).collect()
+    }
+}
+
+/// Samples the line at every period of the profile. Point 0 takes `start_counts` (where the robot
+/// is), point N is exactly P2.
+pub(super) fn sample(
+    robot: &Robot,
+    line: &Line,
+    profile: &Profile,
+    start_values: &Joints,
+    start_counts: [i64; JOINTS],
+) -> Result<Samples, PlanError> {
+    let n = profile.periods() as usize;
+    let mut counts = Vec::with_capacity(n + 1);
+    let mut values = Vec::with_capacity(n + 1);
+    counts.push(start_counts);
+    values.push(*start_values);
+    let mut near = *start_values;
+    for i in 1..=n {
+        let pose = line.at(profile.distance_at_point_mm(i as u32));
+        let q = robot.kinematics.ik(&pose, Some(&near))?;
+        counts.push(robot.counts_of(&q));
+        values.push(q);
+        near = q;
+    }
+    Ok(Samples { counts, values })
+}

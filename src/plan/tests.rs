@@ -1,0 +1,126 @@
+//! The planner on the seed's robot and move.
+
+use super::*;
+use crate::robot::seed_robot;
+use crate::table::FrequencyModel;
+
+fn seed_request(model: FrequencyModel, seed_exact: bool) -> MoveRequest {
+    let robot = seed_robot();
+    let from = robot
+        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+        .unwrap();
+    let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
+    to.a_rad = from.a_rad;
+    MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion: Motion {
+            frequency_model: model,
+            ..robot.motion
+        },
+        seed_exact,
+    }
+}
+
+fn seed_plan(model: FrequencyModel, seed_exact: bool) -> Plan {
+    plan_move(&seed_robot(), &seed_request(model, seed_exact)).unwrap()
+}
+
+#[test]
+fn seed_move_plans_valid_and_no_worse_than_seed_exact() {
+    for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+        let ours = seed_plan(model, false);
+        let seed = seed_plan(model, true);
+        assert!(ours.valid(), "{:?}", ours.problems);
+        assert!(!seed.valid());
+        eprintln!("{model:?} ours {:?}\nseed {:?}", ours.figures, seed.figures);
+        assert!(ours.figures.path_deviation_mm <= seed.figures.path_deviation_mm);
+    }
+}
+
+#[test]
+fn divider_plan_stays_within_two_hundredths_of_the_ideal_and_ends_together() {
+    let ideal = seed_plan(FrequencyModel::Ideal, false);
+    let divider = seed_plan(FrequencyModel::FpxDivider, false);
+    let diff = (divider.figures.path_deviation_mm - ideal.figures.path_deviation_mm).abs();
+    assert!(
+        diff <= 0.02,
+        "ideal {:?} divider {:?}",
+        ideal.figures,
+        divider.figures
+    );
+    assert!(divider.figures.end_skew_ms < 1.0, "{:?}", divider.figures);
+}
+
+#[test]
+fn seed_move_ends_on_its_target_counts() {
+    let robot = seed_robot();
+    let plan = seed_plan(FrequencyModel::FpxDivider, false);
+    let q = robot.kinematics.ik(&plan.line.to, None).unwrap();
+    assert_eq!(plan.end_counts(), robot.counts_of(&q));
+    assert!(
+        plan.figures.end_error_mm < 0.05,
+        "{}",
+        plan.figures.end_error_mm
+    );
+}
+
+#[test]
+fn over_speed_is_rejected_naming_joint_frequency_time_and_limit() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::Ideal, false);
+    req.motion.speed_mm_s = 2_000.0;
+    let err = plan_move(&robot, &req).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.starts_with("joint d3 would need "), "{msg}");
+    assert!(msg.contains("channel 2 allows 20000 Hz"), "{msg}");
+}
+
+#[test]
+fn slow_down_scales_the_move_until_every_channel_fits() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::Ideal, false);
+    req.motion.speed_mm_s = 2_000.0;
+    req.motion.over_speed = OverSpeed::SlowDown;
+    let plan = plan_move(&robot, &req).unwrap();
+    assert!(
+        plan.speed_factor < 1.0 && plan.speed_factor > 0.05,
+        "{}",
+        plan.speed_factor
+    );
+    for (j, t) in plan.tables.iter().enumerate() {
+        for s in &t.segments {
+            assert!(
+                s.rows
+                    .iter()
+                    .all(|r| r.freq_hz <= robot.joints[j].max_freq_hz)
+            );
+        }
+    }
+}
+
+#[test]
+fn target_beyond_a_joint_limit_is_refused_with_the_limit() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::Ideal, false);
+    req.to.position_mm.z = 450.0;
+    let msg = plan_move(&robot, &req).unwrap_err().to_string();
+    assert!(
+        msg.contains("joint d2 would reach") && msg.contains("limits are -50 to 400 mm"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn zero_length_move_is_refused() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::Ideal, false);
+    let Origin::Pose(from) = req.from else {
+        unreachable!()
+    };
+    req.to = from;
+    assert!(matches!(
+        plan_move(&robot, &req),
+        Err(PlanError::ZeroLength { .. })
+    ));
+}

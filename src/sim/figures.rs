@@ -1,0 +1,90 @@
+//! The accuracy figures of an executed start (ACCURACY.md, "Figures"), evaluated exactly at every
+//! pulse event, where the pose changes.
+
+use nalgebra::Vector3;
+
+use super::Execution;
+use crate::geometry::Line;
+use crate::kinematics::{JOINTS, Kinematics};
+use crate::robot::Robot;
+use crate::table::{ChannelTable, encoded_words};
+
+/// The seed's sampling period for the "sampled deviation" figure, s.
+pub const SAMPLE_PERIOD_S: f64 = 0.010;
+
+/// How well an executed start follows its line.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Figures {
+    /// Largest distance from the executed pose to the segment P1P2, at every pulse event, mm.
+    pub path_deviation_mm: f64,
+    /// Largest distance from the executed pose to the planned pose at the same time, mm.
+    pub tracking_error_mm: f64,
+    /// Path deviation sampled every 10 ms, as the seed measured it, mm.
+    pub sampled_deviation_mm: f64,
+    /// Largest difference between the channels' finish times, ms.
+    pub end_skew_ms: f64,
+    /// Distance from the final pose to P2, mm.
+    pub end_error_mm: f64,
+    /// When the last pulse of the start landed, s.
+    pub finish_s: f64,
+    /// Table rows over all channels.
+    pub rows: usize,
+    /// DT words of every channel area the start writes.
+    pub words: usize,
+}
+
+/// Measures an execution of `tables` (one per joint, in joint order) against the `line` and the
+/// planned position `planned(t)`.
+#[must_use]
+pub fn measure(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    exec: &Execution,
+    line: &Line,
+    planned: &dyn Fn(f64) -> Vector3<f64>,
+    planned_duration_s: f64,
+) -> Figures {
+    let mut counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
+    let position = |c: &[i64; JOINTS]| robot.kinematics.fk(&robot.values_of(c)).position_mm;
+    let mut p = position(&counts);
+    let mut path = line.distance_mm(&p);
+    let mut tracking = (p - planned(0.0)).norm();
+    let mut sampled: f64 = 0.0;
+    let mut next_sample = 0.0;
+    for e in &exec.events {
+        while next_sample < e.t_s {
+            sampled = sampled.max(line.distance_mm(&p));
+            next_sample += SAMPLE_PERIOD_S;
+        }
+        // The planned pose moves while the executed one holds: check both ends of the hold.
+        let target = planned(e.t_s);
+        tracking = tracking.max((p - target).norm());
+        counts[e.table] = e.count;
+        p = position(&counts);
+        path = path.max(line.distance_mm(&p));
+        tracking = tracking.max((p - target).norm());
+    }
+    let finish_s = exec.events.last().map_or(0.0, |e| e.t_s);
+    tracking = tracking.max((p - planned(planned_duration_s.max(finish_s))).norm());
+    while next_sample <= planned_duration_s.max(finish_s) + 1e-12 {
+        sampled = sampled.max(line.distance_mm(&p));
+        next_sample += SAMPLE_PERIOD_S;
+    }
+    let finishes: Vec<f64> = exec.finish_s.iter().flatten().copied().collect();
+    let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - finishes.iter().copied().fold(f64::INFINITY, f64::min);
+    Figures {
+        path_deviation_mm: path,
+        tracking_error_mm: tracking,
+        sampled_deviation_mm: sampled,
+        end_skew_ms: if finishes.is_empty() { 0.0 } else { skew * 1e3 },
+        end_error_mm: (p - line.to.position_mm).norm(),
+        finish_s,
+        rows: tables.iter().map(ChannelTable::rows).sum(),
+        words: tables
+            .iter()
+            .filter(|t| !t.segments.is_empty())
+            .map(encoded_words)
+            .sum(),
+    }
+}
