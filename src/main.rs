@@ -1,2 +1,23 @@
-//! The `linterpd` binary.
-fn main() {}
+//! The `linterpd` binary: parse the command line, set up logging, run, map failures to exit codes
+//! (0 ok, 1 runtime failure, 2 bad input; clap's own usage errors also exit 2).
+
+use std::process::ExitCode;
+
+use clap::Parser;
+use linterpd::cli::{Cli, EXIT_OK, run};
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    let stdout = std::io::stdout();
+    match run(cli, &mut stdout.lock()) {
+        Ok(()) => ExitCode::from(EXIT_OK),
+        Err(failure) => {
+            eprintln!("error: {failure}");
+            ExitCode::from(failure.exit_code())
+        }
+    }
+}

@@ -172,7 +172,7 @@ impl Plan {
 }
 
 /// The most times `slow-down` lowers the speed before giving up.
-const SLOW_DOWN_ATTEMPTS: usize = 12;
+const SLOW_DOWN_ATTEMPTS: usize = 24;
 
 /// Plans one move for `robot`.
 pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
@@ -273,8 +273,10 @@ fn loop_until_fast_enough(
         if motion.over_speed == OverSpeed::Reject || attempt > SLOW_DOWN_ATTEMPTS {
             return Err(limits::over_speed(robot, &peak));
         }
-        // Speed and acceleration scale together (the ramp time stays), a hair below the limit.
-        motion.speed_mm_s *= 0.999 / peak.load;
+        // Speed and acceleration scale together (the ramp time stays). A count rounds to whole
+        // pulses, so a period can stay one pulse over after a proportional cut: every further try
+        // cuts at least 1 %.
+        motion.speed_mm_s *= (0.999 / peak.load).min(0.99);
     }
 }
 

@@ -1,0 +1,182 @@
+//! The JSON plan document (`"linterpd_plan": 1`), stable for scripts. Fields are only ever added.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+use crate::kinematics::{JointKind, Kinematics};
+use crate::plan::{MoveRequest, Plan};
+use crate::robot::Robot;
+use crate::table::{ChannelTable, Direction, Duty, Segment};
+
+/// The whole document.
+#[derive(Debug, Serialize)]
+pub(super) struct Document {
+    linterpd_plan: u32,
+    robot: RobotDoc,
+    #[serde(rename = "move")]
+    move_: MoveDoc,
+    profile: ProfileDoc,
+    channels: Vec<ChannelDoc>,
+    valid: bool,
+    problems: Vec<String>,
+    figures: FiguresDoc,
+}
+
+#[derive(Debug, Serialize)]
+struct RobotDoc {
+    name: String,
+    kinematics: &'static str,
+    params: BTreeMap<&'static str, f64>,
+    joints: Vec<JointDoc>,
+}
+
+#[derive(Debug, Serialize)]
+struct JointDoc {
+    name: String,
+    channel: u8,
+    kind: &'static str,
+    step: f64,
+    unit: &'static str,
+    offset: f64,
+    max_freq_hz: u32,
+    output: &'static str,
+}
+
+#[derive(Debug, Serialize)]
+struct MoveDoc {
+    from: [f64; 4],
+    to: [f64; 4],
+    method: &'static str,
+    seed_exact: bool,
+    frequency_model: &'static str,
+    over_speed: &'static str,
+    requested_speed_mm_s: f64,
+    speed_factor: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct ProfileDoc {
+    length_mm: f64,
+    speed_mm_s: f64,
+    accel_s: f64,
+    accel_mm_s2: f64,
+    period_s: f64,
+    periods: u32,
+    duration_s: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct ChannelDoc {
+    channel: u8,
+    joint: String,
+    start: i64,
+    end: i64,
+    segments: Vec<SegmentDoc>,
+}
+
+#[derive(Debug, Serialize)]
+struct SegmentDoc {
+    direction: i8,
+    range: u32,
+    duty: &'static str,
+    control_code: u32,
+    rows: Vec<[i64; 2]>,
+}
+
+#[derive(Debug, Serialize)]
+struct FiguresDoc {
+    path_deviation_mm: f64,
+    tracking_error_mm: f64,
+    sampled_deviation_mm: f64,
+    end_skew_ms: f64,
+    end_error_mm: f64,
+    finish_s: f64,
+    rows: usize,
+    words: usize,
+}
+
+/// Builds the document for a plan.
+pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Document {
+    let figures = plan.figures;
+    Document {
+        linterpd_plan: 1,
+        robot: robot_doc(robot),
+        move_: MoveDoc {
+            from: plan.line.from.to_mm_deg(),
+            to: plan.line.to.to_mm_deg(),
+            method: plan.motion.method.name(),
+            seed_exact: plan.seed_exact,
+            frequency_model: plan.motion.frequency_model.name(),
+            over_speed: plan.motion.over_speed.name(),
+            requested_speed_mm_s: request.motion.speed_mm_s,
+            speed_factor: plan.speed_factor,
+        },
+        profile: ProfileDoc {
+            length_mm: plan.profile.length_mm,
+            speed_mm_s: plan.profile.speed_mm_s,
+            accel_s: plan.profile.accel_s,
+            accel_mm_s2: plan.profile.accel_mm_s2,
+            period_s: plan.profile.period_s,
+            periods: plan.profile.periods(),
+            duration_s: plan.profile.duration_s(),
+        },
+        channels: plan.tables.iter().zip(&robot.joints).map(|(t, j)| channel_doc(t, &j.name)).collect(),
+        valid: plan.valid(),
+        problems: plan.problems.clone(),
+        figures: FiguresDoc {
+            path_deviation_mm: figures.path_deviation_mm,
+            tracking_error_mm: figures.tracking_error_mm,
+            sampled_deviation_mm: figures.sampled_deviation_mm,
+            end_skew_ms: figures.end_skew_ms,
+            end_error_mm: figures.end_error_mm,
+            finish_s: figures.finish_s,
+            rows: figures.rows,
+            words: figures.words,
+        },
+    }
+}
+
+fn robot_doc(robot: &Robot) -> RobotDoc {
+    RobotDoc {
+        name: robot.name.clone(),
+        kinematics: robot.kinematics.name(),
+        params: robot.kinematics.params().into_iter().collect(),
+        joints: robot
+            .joints
+            .iter()
+            .map(|j| JointDoc {
+                name: j.name.clone(),
+                channel: j.channel,
+                kind: match j.kind {
+                    JointKind::Revolute => "revolute",
+                    JointKind::Prismatic => "prismatic",
+                },
+                step: j.step,
+                unit: j.kind.unit(),
+                offset: j.offset,
+                max_freq_hz: j.max_freq_hz,
+                output: j.output.name(),
+            })
+            .collect(),
+    }
+}
+
+fn channel_doc(table: &ChannelTable, joint: &str) -> ChannelDoc {
+    ChannelDoc {
+        channel: table.channel,
+        joint: joint.to_owned(),
+        start: table.start,
+        end: table.end(),
+        segments: table.segments.iter().map(segment_doc).collect(),
+    }
+}
+
+fn segment_doc(seg: &Segment) -> SegmentDoc {
+    SegmentDoc {
+        direction: if seg.control.direction == Direction::Up { 1 } else { -1 },
+        range: seg.control.range.digit(),
+        duty: if seg.control.duty == Duty::Quarter { "1/4" } else { "1/2" },
+        control_code: seg.control.value(),
+        rows: seg.rows.iter().map(|r| [i64::from(r.freq_hz), r.target]).collect(),
+    }
+}

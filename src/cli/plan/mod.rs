@@ -1,0 +1,162 @@
+//! `linterpd plan`: plan one move from a config file and print its tables and figures as text,
+//! JSON or CSV.
+
+mod csv;
+mod json;
+mod text;
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+
+use super::args::{PoseArg, parse_pose};
+use super::{Failure, bad_input};
+use crate::config::{Config, parse_duration_s};
+use crate::geometry::Pose;
+use crate::plan::{MoveRequest, Origin, Plan, plan_move};
+use crate::robot::{Method, Motion, OverSpeed, Robot};
+use crate::table::FrequencyModel;
+
+/// Arguments of `linterpd plan`.
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// The configuration file.
+    #[arg(long, env = "LINTERPD_CONFIG", default_value = "/etc/linterpd/linterpd.toml")]
+    pub config: PathBuf,
+    /// The robot to plan for (needed when the file holds several).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Start pose: X,Y,Z[,A] in mm and degrees. Without A the wrist joint sits at 0.
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_pose)]
+    pub from: PoseArg,
+    /// Target pose: X,Y,Z[,A] in mm and degrees. Without A the tool keeps the start's angle.
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_pose)]
+    pub to: PoseArg,
+    /// Speed along the line, mm/s (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub speed: Option<String>,
+    /// Acceleration time, e.g. `200ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub accel_time: Option<String>,
+    /// Interpolation period, e.g. `50ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub period: Option<String>,
+    /// Planning method.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Reproduce the paper as printed (comparison only; never valid for a PLC).
+    #[arg(long)]
+    pub seed_exact: bool,
+    /// What the PLC's channels really output (default: the robot's).
+    #[arg(long, value_enum)]
+    pub frequency_model: Option<ModelArg>,
+    /// What to do when a channel would be too fast (default: the robot's).
+    #[arg(long, value_enum)]
+    pub over_speed: Option<OverSpeedArg>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+}
+
+/// `--method`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    /// The seed's constant time period method.
+    ConstantPeriod,
+}
+
+/// `--frequency-model`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModelArg {
+    /// The channel outputs the value written.
+    Ideal,
+    /// The FP-X's clock divider (derived, unverified on hardware).
+    FpxDivider,
+}
+
+/// `--over-speed`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum OverSpeedArg {
+    /// Refuse the move.
+    Reject,
+    /// Lower the move's speed until every channel fits.
+    SlowDown,
+}
+
+/// `--format`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// A readable summary with every table.
+    Text,
+    /// One JSON document (`linterpd_plan: 1`), stable for scripts.
+    Json,
+    /// One line per table row.
+    Csv,
+}
+
+/// Runs `linterpd plan`.
+pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let config = Config::load(&args.config).map_err(bad_input)?;
+    let robot = config.robot(args.robot.as_deref()).map_err(bad_input)?;
+    let request = request(robot, args).map_err(Failure::BadInput)?;
+    let plan = plan_move(robot, &request).map_err(bad_input)?;
+    write(robot, &request, &plan, args.format, out)
+        .context("writing the plan")
+        .map_err(Failure::Runtime)
+}
+
+fn write(robot: &Robot, request: &MoveRequest, plan: &Plan, format: Format, out: &mut dyn std::io::Write) -> anyhow::Result<()> {
+    match format {
+        Format::Text => text::write(robot, plan, out)?,
+        Format::Json => {
+            serde_json::to_writer_pretty(&mut *out, &json::document(robot, request, plan))?;
+            writeln!(out)?;
+        }
+        Format::Csv => csv::write(robot, plan, out)?,
+    }
+    Ok(())
+}
+
+/// The move request the arguments describe, the robot's defaults filling the gaps.
+fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
+    let motion = motion(robot.motion, args)?;
+    let [x, y, z] = args.from.xyz_mm;
+    let from = match args.from.a_deg {
+        Some(a) => Pose::from_mm_deg(x, y, z, a),
+        None => robot.pose_with_wrist_at_zero(x, y, z).context("--from")?,
+    };
+    let [x, y, z] = args.to.xyz_mm;
+    let to = Pose::from_mm_deg(x, y, z, 0.0);
+    let to = Pose { a_rad: args.to.a_deg.map_or(from.a_rad, f64::to_radians), ..to };
+    Ok(MoveRequest { from: Origin::Pose(from), to, motion, seed_exact: args.seed_exact })
+}
+
+fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
+    let mut m = defaults;
+    if let Some(text) = &args.speed {
+        m.speed_mm_s = super::args::parse_number(text).context("--speed")?;
+    }
+    if let Some(text) = &args.accel_time {
+        m.accel_s = parse_duration_s(text).context("--accel-time")?;
+    }
+    if let Some(text) = &args.period {
+        m.period_s = parse_duration_s(text).context("--period")?;
+    }
+    if let Some(MethodArg::ConstantPeriod) = args.method {
+        m.method = Method::ConstantPeriod;
+    }
+    if let Some(model) = args.frequency_model {
+        m.frequency_model = match model {
+            ModelArg::Ideal => FrequencyModel::Ideal,
+            ModelArg::FpxDivider => FrequencyModel::FpxDivider,
+        };
+    }
+    if let Some(policy) = args.over_speed {
+        m.over_speed = match policy {
+            OverSpeedArg::Reject => OverSpeed::Reject,
+            OverSpeedArg::SlowDown => OverSpeed::SlowDown,
+        };
+    }
+    Ok(m)
+}

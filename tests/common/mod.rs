@@ -1,0 +1,67 @@
+//! Robots for integration tests: the seed's cylindrical robot, a gantry and a SCARA, built in code.
+#![allow(dead_code, unreachable_pub, missing_docs)]
+
+use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
+use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};
+use linterpd::table::{FrequencyModel, OutputMethod};
+
+fn joint(name: &str, channel: u8, kind: JointKind, step_user: f64, limit_user: f64, max_freq_hz: u32) -> Joint {
+    Joint {
+        name: name.into(),
+        channel,
+        kind,
+        step: kind.from_user(step_user),
+        offset: 0.0,
+        min: kind.from_user(-limit_user),
+        max: kind.from_user(limit_user),
+        max_freq_hz,
+        output: OutputMethod::CwCcw,
+    }
+}
+
+fn motion() -> Motion {
+    Motion {
+        method: Method::ConstantPeriod,
+        period_s: 0.05,
+        speed_mm_s: 200.0,
+        accel_s: 0.2,
+        frequency_model: FrequencyModel::FpxDivider,
+        over_speed: OverSpeed::SlowDown,
+    }
+}
+
+pub fn gantry() -> Robot {
+    Robot {
+        name: "gantry".into(),
+        kinematics: Model::Cartesian(Cartesian),
+        joints: [
+            joint("x", 0, JointKind::Prismatic, 0.01, 2_000.0, 100_000),
+            joint("y", 1, JointKind::Prismatic, 0.01, 2_000.0, 100_000),
+            joint("z", 2, JointKind::Prismatic, 0.02, 2_000.0, 20_000),
+            joint("a", 3, JointKind::Revolute, 0.01, 720.0, 20_000),
+        ],
+        motion: motion(),
+        area_words: 2_000,
+    }
+}
+
+pub fn scara() -> Robot {
+    Robot {
+        name: "scara".into(),
+        kinematics: Model::Scara(Scara { l1_mm: 400.0, l2_mm: 300.0, elbow: Elbow::Left, reach_margin_mm: 1.0 }),
+        joints: [
+            joint("t1", 0, JointKind::Revolute, 0.001, 360.0, 100_000),
+            joint("t2", 1, JointKind::Revolute, 0.001, 360.0, 100_000),
+            joint("z", 2, JointKind::Prismatic, 0.01, 1_000.0, 20_000),
+            joint("wrist", 3, JointKind::Revolute, 0.005, 720.0, 20_000),
+        ],
+        motion: motion(),
+        area_words: 2_000,
+    }
+}
+
+pub fn cylindrical() -> Robot {
+    let mut r = seed_robot();
+    r.motion.over_speed = OverSpeed::SlowDown;
+    r
+}

@@ -1,0 +1,173 @@
+//! Property tests of the planner over random reachable moves, for every kinematics: FK(IK(p)) = p,
+//! every plan ends on its target, every table obeys the F174 rules, and no channel drifts more
+//! than one period from the grid.
+
+mod common;
+
+use linterpd::geometry::{Line, Pose};
+use linterpd::kinematics::Kinematics;
+use linterpd::plan::{MoveRequest, Origin, Plan, plan_move};
+use linterpd::robot::Robot;
+use linterpd::table::{FrequencyModel, FrequencyRange, problems};
+use proptest::prelude::*;
+
+/// A point at `radius_mm` and `angle_deg` around the z axis, for the robots with a vertical axis.
+fn polar(radius_mm: f64, angle_deg: f64, z: f64, a_deg: f64) -> Pose {
+    let t = angle_deg.to_radians();
+    Pose::from_mm_deg(radius_mm * t.cos(), radius_mm * t.sin(), z, a_deg)
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    speed_mm_s: f64,
+    accel_s: f64,
+    period_s: f64,
+    ideal: bool,
+}
+
+fn motion() -> impl Strategy<Value = Motion> {
+    (20.0..600.0f64, 0.0..0.5f64, 0.01..0.1f64, any::<bool>())
+        .prop_map(|(speed_mm_s, accel_s, period_s, ideal)| Motion { speed_mm_s, accel_s, period_s, ideal })
+}
+
+fn cylindrical_move() -> impl Strategy<Value = (Pose, Pose)> {
+    (700.0..1400.0f64, -60.0..60.0f64, 0.0..300.0f64, 700.0..1400.0f64, -60.0..60.0f64, 0.0..300.0f64, -30.0..30.0f64)
+        .prop_map(|(r1, t1, z1, r2, t2, z2, a)| (polar(r1, t1 + 90.0, z1, a), polar(r2, t2 + 90.0, z2, -a)))
+        // Reachable: the whole line stays outside d3 = 0 (500 mm from the axis).
+        .prop_filter("line passes inside the d3 = 0 cylinder", |(from, to)| {
+            Line { from: *from, to: *to }.xy_radius_range_mm().0 > 520.0
+        })
+}
+
+fn gantry_move() -> impl Strategy<Value = (Pose, Pose)> {
+    let p = || (-800.0..800.0f64, -800.0..800.0f64, -300.0..300.0f64, -90.0..90.0f64);
+    (p(), p()).prop_map(|(a, b)| (Pose::from_mm_deg(a.0, a.1, a.2, a.3), Pose::from_mm_deg(b.0, b.1, b.2, b.3)))
+}
+
+fn scara_move() -> impl Strategy<Value = (Pose, Pose)> {
+    // Ends 300-650 mm out and at most 60 degrees apart: the line stays inside the annulus.
+    (300.0..650.0f64, -30.0..30.0f64, 300.0..650.0f64, -30.0..30.0f64, -100.0..100.0f64, -45.0..45.0f64)
+        .prop_map(|(r1, t1, r2, t2, z, a)| (polar(r1, t1, z, a), polar(r2, t2, -z, -a)))
+}
+
+fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Plan {
+    let mut motion = robot.motion;
+    // At most ~400 periods, so every channel's rows fit its 2000-word area (a longer move is
+    // refused with an area error, tested elsewhere).
+    let length_mm = (to.position_mm - from.position_mm).norm();
+    motion.speed_mm_s = m.speed_mm_s.max(length_mm / (400.0 * m.period_s));
+    motion.accel_s = m.accel_s;
+    motion.period_s = m.period_s;
+    motion.frequency_model = if m.ideal { FrequencyModel::Ideal } else { FrequencyModel::FpxDivider };
+    let req = MoveRequest { from: Origin::Pose(from), to, motion, seed_exact: false };
+    plan_move(robot, &req).unwrap_or_else(|e| panic!("{from:?} -> {to:?}: {e}"))
+}
+
+fn check_fk_ik(robot: &Robot, pose: Pose) -> Result<(), TestCaseError> {
+    let q = robot.kinematics.ik(&pose, None).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let back = robot.kinematics.fk(&q);
+    prop_assert!((back.position_mm - pose.position_mm).norm() < 1e-9, "{pose:?} -> {back:?}");
+    let turn = std::f64::consts::TAU;
+    let da = (back.a_rad - pose.a_rad).rem_euclid(turn);
+    prop_assert!(da.min(turn - da) < 1e-9);
+    Ok(())
+}
+
+fn check_plan(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
+    prop_assert!(plan.valid(), "{:?}", plan.problems);
+    let last = plan.samples.values.last().expect("at least two points");
+    for (j, table) in plan.tables.iter().enumerate() {
+        // The last row's target is the count nearest P2's joint value...
+        let joint = &robot.joints[j];
+        let off = (joint.value_of(table.end()) - last[j]) / joint.step;
+        prop_assert!(off.abs() <= 0.5 + 1e-9, "joint {} ends {off} pulses off", joint.name);
+        // ... and the execution really gets there.
+        let executed = plan.execution.events.iter().rev().find(|e| e.table == j).map_or(table.start, |e| e.count);
+        prop_assert_eq!(executed, table.end());
+        prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
+        check_grid(plan, j)?;
+    }
+    Ok(())
+}
+
+/// The time by which one integer Hz moves the end of a row of `pulses` at `set_hz`: how finely a
+/// row can be placed at all.
+fn resolution_s(plan: &Plan, range: FrequencyRange, pulses: i64, set_hz: u32) -> f64 {
+    let model = plan.motion.frequency_model;
+    let dur = |f: u32| pulses as f64 / model.actual_hz(f.max(1), range);
+    (dur(set_hz.saturating_sub(1)) - dur(set_hz)).abs().max((dur(set_hz) - dur(set_hz + 1)).abs())
+}
+
+/// No drift: every row of joint `j` ends within one period of the grid point where its target was
+/// planned, or, for a row so slow that one Hz moves its end by more than that, within the row's
+/// own resolution, or for a row already at the slowest value its range has. The residual is carried, so errors never add up along the move.
+fn check_grid(plan: &Plan, j: usize) -> Result<(), TestCaseError> {
+    let counts = plan.samples.joint(j);
+    let period = plan.profile.period_s;
+    let last_point = counts.len() - 1;
+    let mut point = 0;
+    let mut prev = plan.tables[j].start;
+    let timings = plan.execution.rows.iter().filter(|r| r.table == j);
+    let rows = plan.tables[j].segments.iter().flat_map(|s| s.rows.iter().map(move |r| (s.control.range, *r)));
+    let n_rows = plan.tables[j].rows();
+    for (k, ((range, row), timing)) in rows.zip(timings).enumerate() {
+        point = (point + 1..=last_point).find(|&i| counts[i] == row.target).unwrap_or(last_point);
+        let planned = if k + 1 == n_rows { last_point as f64 * period } else { point as f64 * period };
+        let mut allowed = period.max(resolution_s(plan, range, (row.target - prev).abs(), row.freq_hz));
+        if row.freq_hz == range.min_set_hz() {
+            // The slowest the channel can go (1.5 Hz in range 0): a row that wants to be slower
+            // ends early and the next row takes up the time.
+            allowed = f64::INFINITY;
+        }
+        prop_assert!(
+            (timing.end_s - planned).abs() <= allowed + 1e-9,
+            "joint {j} row {k} ends at {} s, planned {planned} s (allowed {allowed} s)",
+            timing.end_s
+        );
+        prev = row.target;
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn cylindrical_fk_of_ik_is_the_pose((from, to) in cylindrical_move()) {
+        let robot = common::cylindrical();
+        check_fk_ik(&robot, from)?;
+        check_fk_ik(&robot, to)?;
+    }
+
+    #[test]
+    fn gantry_fk_of_ik_is_the_pose((from, to) in gantry_move()) {
+        let robot = common::gantry();
+        check_fk_ik(&robot, from)?;
+        check_fk_ik(&robot, to)?;
+    }
+
+    #[test]
+    fn scara_fk_of_ik_is_the_pose((from, to) in scara_move()) {
+        let robot = common::scara();
+        check_fk_ik(&robot, from)?;
+        check_fk_ik(&robot, to)?;
+    }
+
+    #[test]
+    fn cylindrical_plans_end_on_target_and_keep_every_rule(mv in cylindrical_move(), m in motion()) {
+        let robot = common::cylindrical();
+        check_plan(&robot, &plan(&robot, mv, m))?;
+    }
+
+    #[test]
+    fn gantry_plans_end_on_target_and_keep_every_rule(mv in gantry_move(), m in motion()) {
+        let robot = common::gantry();
+        check_plan(&robot, &plan(&robot, mv, m))?;
+    }
+
+    #[test]
+    fn scara_plans_end_on_target_and_keep_every_rule(mv in scara_move(), m in motion()) {
+        let robot = common::scara();
+        check_plan(&robot, &plan(&robot, mv, m))?;
+    }
+}
