@@ -151,3 +151,85 @@ fn scara(at: &At, raw: &Spanned<RawKinematics>) -> Result<Scara, ConfigError> {
     }
     Ok(scara)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::Config;
+    use super::super::fixture::{edited, message};
+    use super::*;
+
+    #[test]
+    fn key_of_another_model_names_the_keys_this_one_takes() {
+        let text = edited(&[(4, "l0_mm = 500.0\nl1_mm = 300.0")]);
+        assert_eq!(
+            message(&text),
+            "config line 5: robots.r.kinematics.l1_mm = 300: a cylindrical model takes l0_mm, \
+             min_axis_distance_mm"
+        );
+    }
+
+    #[test]
+    fn cylindrical_needs_l0() {
+        let text = edited(&[(4, "")]);
+        assert_eq!(
+            message(&text),
+            "config line 2: robots.r.kinematics.l0_mm is missing: a cylindrical model needs its \
+             radius at d3 = 0"
+        );
+    }
+
+    #[test]
+    fn negative_l0_is_refused() {
+        let text = edited(&[(4, "l0_mm = -1.0")]);
+        assert!(message(&text).ends_with("l0_mm = -1: must be at least 0"));
+    }
+
+    #[test]
+    fn zero_min_axis_distance_is_refused() {
+        let text = edited(&[(4, "l0_mm = 0\nmin_axis_distance_mm = 0")]);
+        assert!(message(&text).ends_with("min_axis_distance_mm = 0: must be above 0"));
+    }
+
+    #[test]
+    fn cartesian_takes_no_dimension() {
+        let text = edited(&[(3, "type = \"cartesian\"")]);
+        assert!(message(&text).ends_with("l0_mm = 500: a cartesian model takes no key but type"));
+    }
+
+    #[test]
+    fn scara_reads_arms_elbow_and_default_margin() {
+        let text = edited(&[(
+            4,
+            "l1_mm = 300.0\nl2_mm = 250.0\nelbow = \"right\"",
+        )])
+        .replace("type = \"cylindrical\"", "type = \"scara\"")
+        .replace("name = \"d2\"\nchannel = 1\nstep_mm = 0.025\nmin_mm = -50.0\nmax_mm = 400.0",
+                 "name = \"theta2\"\nchannel = 1\nstep_deg = 0.01\nmin_deg = -150.0\nmax_deg = 150.0");
+        let robot = &Config::from_toml(&text).unwrap().robots[0];
+        let Model::Scara(s) = robot.kinematics else {
+            panic!("scara")
+        };
+        assert_eq!(
+            (s.l1_mm, s.l2_mm, s.elbow, s.reach_margin_mm),
+            (300.0, 250.0, Elbow::Right, 1.0)
+        );
+    }
+
+    #[test]
+    fn scara_without_elbow_is_refused() {
+        let text = edited(&[(3, "type = \"scara\""), (4, "l1_mm = 300.0\nl2_mm = 250.0")]);
+        assert!(message(&text).starts_with("config line 2: robots.r.kinematics.elbow is missing"));
+    }
+
+    #[test]
+    fn scara_margin_that_leaves_no_reach_is_refused() {
+        let text = edited(&[
+            (3, "type = \"scara\""),
+            (
+                4,
+                "l1_mm = 300.0\nl2_mm = 250.0\nelbow = \"left\"\nreach_margin_mm = 260.0",
+            ),
+        ]);
+        assert!(message(&text).contains("reach_margin_mm = 260: leaves no reachable radius"));
+    }
+}
