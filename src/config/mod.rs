@@ -269,6 +269,15 @@ mod tests {
     }
 
     #[test]
+    fn missing_key_in_a_joint_names_the_joint_table() {
+        let text = edited(&[(24, "")]);
+        assert_eq!(
+            message(&text),
+            "config line 17: robots.r.joints[1]: missing field `output`"
+        );
+    }
+
+    #[test]
     fn unknown_method_is_an_error() {
         let text = edited(&[(6, "method = \"bounded-error\"\nperiod = \"50ms\"")]);
         assert!(
