@@ -1,2 +1,307 @@
-//! PURE. Strict TOML configuration, validated into [`crate::robot::Robot`]s.
-//! (Being written.)
+//! PURE (but for [`Config::load`]). Strict TOML configuration, validated into
+//! [`crate::robot::Robot`]s.
+//!
+//! Two passes: serde parses the text into the raw schema of `raw` (unknown keys and wrong types
+//! are errors), then `validate` and its section modules (`kinematics`, `motion`, `joints`) check
+//! every value and build the robots. Every error names the line, the key path and the value:
+//! `config line 14: robots.press-loader.joints[2].max_freq_hz = 200000: channel 2 of an FP-X
+//! C60T allows at most 20000 Hz`.
+//!
+//! ```toml
+//! [robots.press-loader]
+//! area_words = 2000                # optional, 64..=8000
+//! [robots.press-loader.kinematics]
+//! type = "cylindrical"             # cylindrical: l0_mm, min_axis_distance_mm (default 50)
+//! l0_mm = 500.0                    # scara: l1_mm, l2_mm, elbow, reach_margin_mm (default 1)
+//! [robots.press-loader.motion]     # cartesian: no keys
+//! period = "50ms"
+//! speed_mm_s = 240.0
+//! accel_time = "200ms"             # method, frequency_model, over_speed optional
+//! [[robots.press-loader.joints]]   # exactly 4, in the model's joint order
+//! name = "theta1"
+//! channel = 0
+//! step_deg = 0.0025                # revolute: *_deg, prismatic: *_mm
+//! min_deg = -170.0                 # offset_deg / offset_mm optional
+//! max_deg = 170.0
+//! max_freq_hz = 100000
+//! output = "pulse-sign"
+//! ```
+//! `config/linterpd.toml` is the commented example.
+
+mod check;
+mod duration;
+mod error;
+mod joints;
+mod kinematics;
+mod locate;
+mod motion;
+mod raw;
+mod validate;
+
+use std::path::Path;
+
+pub use duration::{DurationError, DurationProblem, parse_duration_s};
+pub use error::ConfigError;
+
+use crate::robot::Robot;
+
+/// A checked config file: its robots.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// The robots, in the order the file defines them (never empty).
+    pub robots: Vec<Robot>,
+}
+
+impl Config {
+    /// Parses and checks a config text.
+    pub fn from_toml(text: &str) -> Result<Config, ConfigError> {
+        let raw: raw::RawConfig =
+            toml::from_str(text).map_err(|e| locate::syntax_error(text, &e))?;
+        validate::config(text, raw)
+    }
+
+    /// Reads, parses and checks a config file.
+    pub fn load(path: &Path) -> Result<Config, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml(&text)
+    }
+
+    /// The robot called `name`, or with `None` the only robot of the file.
+    pub fn robot(&self, name: Option<&str>) -> Result<&Robot, ConfigError> {
+        match (name, self.robots.as_slice()) {
+            (_, []) => Err(ConfigError::NoRobots),
+            (None, [only]) => Ok(only),
+            (None, _) => Err(ConfigError::RobotNotChosen {
+                known: self.names(),
+            }),
+            (Some(name), robots) => {
+                robots
+                    .iter()
+                    .find(|r| r.name == name)
+                    .ok_or_else(|| ConfigError::UnknownRobot {
+                        name: name.to_owned(),
+                        known: self.names(),
+                    })
+            }
+        }
+    }
+
+    fn names(&self) -> String {
+        let names: Vec<&str> = self.robots.iter().map(|r| r.name.as_str()).collect();
+        names.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod fixture;
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // values parsed from TOML are exact
+mod tests {
+    use super::fixture::{MINIMAL, edited, message};
+    use super::*;
+    use crate::kinematics::{JointKind, Model};
+    use crate::robot::{Method, OverSpeed};
+    use crate::table::{FrequencyModel, OutputMethod};
+
+    const SHIPPED: &str = include_str!("../../config/linterpd.toml");
+
+    #[test]
+    fn shipped_file_describes_the_seed_press_loader() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let robot = config.robot(Some("press-loader")).unwrap();
+        let Model::Cylindrical(k) = &robot.kinematics else {
+            panic!("press-loader is cylindrical")
+        };
+        assert_eq!((k.l0_mm, k.min_axis_distance_mm), (500.0, 50.0));
+        assert_eq!(robot.area_words, 2000);
+        let names: Vec<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
+        assert_eq!(names, ["theta1", "d2", "d3", "wrist"]);
+        let channels: Vec<u8> = robot.joints.iter().map(|j| j.channel).collect();
+        assert_eq!(channels, [0, 1, 2, 3]);
+        let freqs: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
+        assert_eq!(freqs, [100_000, 100_000, 20_000, 20_000]);
+        assert!(
+            robot
+                .joints
+                .iter()
+                .all(|j| j.output == OutputMethod::PulseSign)
+        );
+    }
+
+    #[test]
+    fn shipped_file_reads_theta1_step_as_degrees_in_radians() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let [theta1, d2, d3, wrist] = &config.robots[0].joints;
+        assert_eq!(theta1.kind, JointKind::Revolute);
+        assert!((theta1.step - 0.0025_f64.to_radians()).abs() < 1e-15);
+        assert!((theta1.max - 170.0_f64.to_radians()).abs() < 1e-12);
+        assert!((wrist.min + std::f64::consts::TAU).abs() < 1e-12);
+        assert_eq!(
+            (d2.kind, d2.step, d2.min, d2.max),
+            (JointKind::Prismatic, 0.025, -50.0, 400.0)
+        );
+        assert_eq!((d3.step, d3.min, d3.max), (0.013, 0.0, 1000.0));
+    }
+
+    #[test]
+    fn shipped_file_holds_the_seed_motion() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let m = config.robots[0].motion;
+        assert_eq!(m.method, Method::ConstantPeriod);
+        assert!((m.period_s - 0.05).abs() < 1e-12);
+        assert!((m.accel_s - 0.2).abs() < 1e-12);
+        assert_eq!(m.speed_mm_s, 240.0);
+        assert_eq!(m.frequency_model, FrequencyModel::FpxDivider);
+        assert_eq!(m.over_speed, OverSpeed::Reject);
+    }
+
+    #[test]
+    fn shipped_file_seed_move_lies_within_joint_limits() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let robot = &config.robots[0];
+        for (x, y, z) in [(-926.57, 535.03, 50.0), (-1144.43, 659.60, 186.60)] {
+            let pose = robot.pose_with_wrist_at_zero(x, y, z).unwrap();
+            let q = crate::kinematics::Kinematics::ik(&robot.kinematics, &pose, None).unwrap();
+            for (joint, value) in robot.joints.iter().zip(q) {
+                assert!(
+                    joint.min < value && value < joint.max,
+                    "{}: {value}",
+                    joint.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn robots_keep_file_order() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let names: Vec<&str> = config.robots.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(names, ["press-loader", "gantry"]);
+    }
+
+    #[test]
+    fn defaults_fill_optional_keys() {
+        let robot = &Config::from_toml(MINIMAL).unwrap().robots[0];
+        assert_eq!(robot.area_words, 2000);
+        assert_eq!(robot.motion.method, Method::ConstantPeriod);
+        assert_eq!(robot.motion.frequency_model, FrequencyModel::FpxDivider);
+        assert_eq!(robot.motion.over_speed, OverSpeed::Reject);
+        assert!(robot.joints.iter().all(|j| j.offset == 0.0));
+    }
+
+    #[test]
+    fn robot_without_name_needs_a_single_robot() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let e = config.robot(None).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "config defines several robots (press-loader, gantry); name one of them"
+        );
+        let single = Config::from_toml(MINIMAL).unwrap();
+        assert_eq!(single.robot(None).unwrap().name, "r");
+    }
+
+    #[test]
+    fn unknown_robot_name_lists_known_names() {
+        let config = Config::from_toml(SHIPPED).unwrap();
+        let e = config.robot(Some("welder")).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "config defines no robot \"welder\"; it defines press-loader, gantry"
+        );
+    }
+
+    #[test]
+    fn config_without_robots_is_an_error() {
+        assert!(matches!(Config::from_toml(""), Err(ConfigError::NoRobots)));
+        assert!(matches!(
+            Config::from_toml("# nothing\n"),
+            Err(ConfigError::NoRobots)
+        ));
+    }
+
+    #[test]
+    fn unknown_key_names_key_and_line() {
+        let text = edited(&[(7, "speed_mm_s = 240.0\ncolour = \"red\"")]);
+        assert_eq!(
+            message(&text),
+            "config line 8: robots.r.motion.colour: unknown field `colour`, expected one of \
+             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`"
+        );
+    }
+
+    #[test]
+    fn unknown_top_level_key_is_an_error() {
+        let text = format!("robot = 1\n{MINIMAL}");
+        assert!(message(&text).starts_with("config line 1: robot: unknown field `robot`"));
+    }
+
+    #[test]
+    fn wrong_type_reports_its_line() {
+        let text = edited(&[(7, "speed_mm_s = \"fast\"")]);
+        assert_eq!(
+            message(&text),
+            "config line 7: robots.r.motion.speed_mm_s: invalid type: string \"fast\", expected f64"
+        );
+    }
+
+    #[test]
+    fn toml_syntax_error_reports_its_line() {
+        let text = edited(&[(12, "step_deg = ")]);
+        assert!(
+            message(&text).starts_with("config line 12: "),
+            "{}",
+            message(&text)
+        );
+    }
+
+    #[test]
+    fn missing_key_reports_the_table_line() {
+        let text = edited(&[(7, "")]);
+        assert_eq!(
+            message(&text),
+            "config line 5: robots.r.motion: missing field `speed_mm_s`"
+        );
+    }
+
+    #[test]
+    fn missing_key_in_a_joint_names_the_joint_table() {
+        let text = edited(&[(24, "")]);
+        assert_eq!(
+            message(&text),
+            "config line 17: robots.r.joints[1]: missing field `output`"
+        );
+    }
+
+    #[test]
+    fn unknown_method_is_an_error() {
+        let text = edited(&[(6, "method = \"bounded-error\"\nperiod = \"50ms\"")]);
+        assert!(
+            message(&text).starts_with("config line 6: robots.r.motion.method: unknown variant")
+        );
+    }
+
+    #[test]
+    fn area_words_outside_limits_is_an_error() {
+        let text = edited(&[(1, "[robots.r]\narea_words = 9000")]);
+        assert_eq!(
+            message(&text),
+            "config line 2: robots.r.area_words = 9000: must be within 64..=8000"
+        );
+    }
+
+    #[test]
+    fn load_reports_the_path_of_an_unreadable_file() {
+        let path = Path::new("/nonexistent/linterpd.toml");
+        let e = Config::load(path).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "cannot read config file /nonexistent/linterpd.toml"
+        );
+        assert!(std::error::Error::source(&e).is_some());
+    }
+}

@@ -1,0 +1,318 @@
+//! `[[robots.NAME.joints]]` -> four [`Joint`]s: units by the model's joint kinds, channels of an
+//! FP-X C60T and their top frequencies, position limits.
+
+use toml::Spanned;
+
+use super::ConfigError;
+use super::check::At;
+use super::kinematics::joint_order;
+use super::raw::{Quantity, RawJoint};
+use crate::kinematics::{JOINTS, JointKind, Kinematics, Model};
+use crate::robot::Joint;
+
+/// Highest pulse frequency of each channel of an FP-X C60T (transistor output), Hz: channels 0
+/// and 1 are the 100 kHz ones, 2 and 3 the 20 kHz ones (FP-X User's Manual, positioning
+/// specifications).
+const FPX_C60T_MAX_FREQ_HZ: [u32; JOINTS] = [100_000, 100_000, 20_000, 20_000];
+
+/// Highest count an F174 target holds (DINT).
+const MAX_COUNT: f64 = i32::MAX as f64;
+
+/// The joints table of a robot with `model`.
+pub(super) fn joints(
+    at: &At,
+    raw: &Spanned<Vec<Spanned<RawJoint>>>,
+    model: &Model,
+) -> Result<[Joint; JOINTS], ConfigError> {
+    let list = raw.get_ref();
+    if list.len() != JOINTS {
+        let count = Spanned::new(raw.span(), list.len() as i64);
+        let reason = format!(
+            "a {} robot has exactly {JOINTS} joints, in this order: {}",
+            model.name(),
+            joint_order(model)
+        );
+        return Err(at.invalid(&count, reason));
+    }
+    let kinds = model.joint_kinds();
+    let mut joints = Vec::with_capacity(JOINTS);
+    for (i, raw_joint) in list.iter().enumerate() {
+        let joint = joint(&at.index(i), raw_joint, kinds[i])?;
+        refuse_shared(at, i, raw_joint.get_ref(), &joints)?;
+        joints.push(joint);
+    }
+    Ok(joints
+        .try_into()
+        .expect("exactly JOINTS joints were checked"))
+}
+
+/// One joint of `kind`.
+fn joint(at: &At, table: &Spanned<RawJoint>, kind: JointKind) -> Result<Joint, ConfigError> {
+    let raw = table.get_ref();
+    let required = |q, value| required(at, table, q, kind, value);
+    let name = raw.name.get_ref();
+    if name.trim().is_empty() {
+        return Err(at.child("name").invalid(&raw.name, "a joint needs a name"));
+    }
+    let channel = at
+        .child("channel")
+        .int_within(&raw.channel, 0, JOINTS as i64 - 1)? as u8;
+    let value = |q| unit_value(at, raw, q, kind);
+    let step = value(Quantity::Step)?;
+    let offset = value(Quantity::Offset)?;
+    let (min, max) = (value(Quantity::Min)?, value(Quantity::Max)?);
+    let joint = Joint {
+        name: name.clone(),
+        channel,
+        kind,
+        step: required(Quantity::Step, step)?,
+        offset: offset.unwrap_or(0.0),
+        min: required(Quantity::Min, min)?,
+        max: required(Quantity::Max, max)?,
+        max_freq_hz: max_freq_hz(at, raw, channel)?,
+        output: raw.output,
+    };
+    check_step_and_limits(at, raw, &joint)?;
+    Ok(joint)
+}
+
+/// The quantity in internal units, when given in the unit `kind` takes; an error naming the
+/// right key when given in the other one.
+fn unit_value(
+    at: &At,
+    raw: &RawJoint,
+    quantity: Quantity,
+    kind: JointKind,
+) -> Result<Option<f64>, ConfigError> {
+    let (unit, other) = match kind {
+        JointKind::Revolute => ("deg", "mm"),
+        JointKind::Prismatic => ("mm", "deg"),
+    };
+    if let Some(wrong) = raw.get(quantity, other) {
+        let reason = format!(
+            "joint {} is {}, so it takes {}_{unit}",
+            raw.name.get_ref(),
+            kind_name(kind),
+            quantity.stem()
+        );
+        return Err(at
+            .child(&format!("{}_{other}", quantity.stem()))
+            .invalid(wrong, reason));
+    }
+    raw.get(quantity, unit)
+        .map(|v| at.child(&format!("{}_{unit}", quantity.stem())).finite(v))
+        .transpose()
+        .map(|v| v.map(|v| kind.from_user(v)))
+}
+
+/// A quantity that must be given.
+fn required(
+    at: &At,
+    table: &Spanned<RawJoint>,
+    quantity: Quantity,
+    kind: JointKind,
+    value: Option<f64>,
+) -> Result<f64, ConfigError> {
+    value.ok_or_else(|| {
+        let key = format!("{}_{}", quantity.stem(), kind.user_unit());
+        let name = table.get_ref().name.get_ref();
+        let reason = format!("joint {name} is {}", kind_name(kind));
+        at.child(&key).missing(&table.span(), reason)
+    })
+}
+
+fn kind_name(kind: JointKind) -> &'static str {
+    match kind {
+        JointKind::Revolute => "revolute",
+        JointKind::Prismatic => "prismatic",
+    }
+}
+
+/// `max_freq_hz` within 1 ..= what the channel allows.
+fn max_freq_hz(at: &At, raw: &RawJoint, channel: u8) -> Result<u32, ConfigError> {
+    let limit = FPX_C60T_MAX_FREQ_HZ[usize::from(channel)];
+    let value = *raw.max_freq_hz.get_ref();
+    let at = at.child("max_freq_hz");
+    if value < 1 {
+        return Err(at.invalid(&raw.max_freq_hz, "must be at least 1 Hz"));
+    }
+    if value > i64::from(limit) {
+        let reason = format!("channel {channel} of an FP-X C60T allows at most {limit} Hz");
+        return Err(at.invalid(&raw.max_freq_hz, reason));
+    }
+    Ok(value as u32)
+}
+
+/// A nonzero step, min below max, and both limits within the PLC's count range.
+fn check_step_and_limits(at: &At, raw: &RawJoint, joint: &Joint) -> Result<(), ConfigError> {
+    let unit = joint.kind.user_unit();
+    let spanned = |q| raw.get(q, unit).expect("required quantities are present");
+    let key = |q: Quantity| at.child(&format!("{}_{unit}", q.stem()));
+    if joint.step == 0.0 {
+        return Err(key(Quantity::Step).invalid(spanned(Quantity::Step), "must not be 0"));
+    }
+    if joint.min >= joint.max {
+        let min = joint.user(joint.min);
+        let reason = format!("must be above min_{unit} = {min}");
+        return Err(key(Quantity::Max).invalid(spanned(Quantity::Max), reason));
+    }
+    for q in [Quantity::Min, Quantity::Max] {
+        let value = if q == Quantity::Min {
+            joint.min
+        } else {
+            joint.max
+        };
+        let count = ((value - joint.offset) / joint.step).round();
+        if count.abs() > MAX_COUNT {
+            let reason = format!(
+                "is {count} pulses from offset_{unit}; a PLC count reaches at most {}",
+                i32::MAX
+            );
+            return Err(key(q).invalid(spanned(q), reason));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a channel or a name an earlier joint already has.
+fn refuse_shared(at: &At, i: usize, raw: &RawJoint, earlier: &[Joint]) -> Result<(), ConfigError> {
+    let channel = *raw.channel.get_ref();
+    if let Some((j, other)) = earlier
+        .iter()
+        .enumerate()
+        .find(|(_, o)| i64::from(o.channel) == channel)
+    {
+        let reason = format!(
+            "channel {channel} already drives joints[{j}] ({})",
+            other.name
+        );
+        return Err(at.index(i).child("channel").invalid(&raw.channel, reason));
+    }
+    if let Some(j) = earlier.iter().position(|o| o.name == *raw.name.get_ref()) {
+        let reason = format!("joints[{j}] already has this name");
+        return Err(at.index(i).child("name").invalid(&raw.name, reason));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::fixture::{edited, error, message};
+    use super::ConfigError;
+
+    #[test]
+    fn channel_outside_the_plc_names_value_and_limit() {
+        let text = edited(&[(35, "channel = 4")]);
+        assert_eq!(
+            message(&text),
+            "config line 35: robots.r.joints[3].channel = 4: must be within 0..=3"
+        );
+    }
+
+    #[test]
+    fn duplicate_channel_names_the_joint_that_has_it() {
+        let text = edited(&[(27, "channel = 1")]);
+        assert_eq!(
+            message(&text),
+            "config line 27: robots.r.joints[2].channel = 1: channel 1 already drives joints[1] (d2)"
+        );
+    }
+
+    #[test]
+    fn max_freq_above_the_channel_limit_names_the_limit() {
+        let text = edited(&[(31, "max_freq_hz = 200000")]);
+        assert_eq!(
+            message(&text),
+            "config line 31: robots.r.joints[2].max_freq_hz = 200000: channel 2 of an FP-X C60T \
+             allows at most 20000 Hz"
+        );
+    }
+
+    #[test]
+    fn max_freq_of_zero_is_refused() {
+        let text = edited(&[(15, "max_freq_hz = 0")]);
+        assert!(message(&text).ends_with("max_freq_hz = 0: must be at least 1 Hz"));
+    }
+
+    #[test]
+    fn zero_step_is_refused() {
+        let text = edited(&[(20, "step_mm = 0.0")]);
+        assert_eq!(
+            message(&text),
+            "config line 20: robots.r.joints[1].step_mm = 0: must not be 0"
+        );
+    }
+
+    #[test]
+    fn non_finite_step_is_refused() {
+        let text = edited(&[(12, "step_deg = nan")]);
+        assert_eq!(
+            message(&text),
+            "config line 12: robots.r.joints[0].step_deg = nan: must be a finite number"
+        );
+    }
+
+    #[test]
+    fn min_not_below_max_is_refused_at_max() {
+        let text = edited(&[(13, "min_deg = 170.0")]);
+        assert_eq!(
+            message(&text),
+            "config line 14: robots.r.joints[0].max_deg = 170: must be above min_deg = 170"
+        );
+    }
+
+    #[test]
+    fn step_mm_on_a_revolute_joint_names_the_key_it_needs() {
+        let text = edited(&[(36, "step_mm = 0.0025")]);
+        assert_eq!(
+            message(&text),
+            "config line 36: robots.r.joints[3].step_mm = 0.0025: joint wrist is revolute, so it \
+             takes step_deg"
+        );
+    }
+
+    #[test]
+    fn degrees_on_a_prismatic_joint_are_refused() {
+        let text = edited(&[(29, "min_deg = 0.0")]);
+        assert!(message(&text).contains("joint d3 is prismatic, so it takes min_mm"));
+    }
+
+    #[test]
+    fn missing_step_names_the_key_and_the_joint_line() {
+        let text = edited(&[(12, "")]);
+        assert_eq!(
+            message(&text),
+            "config line 9: robots.r.joints[0].step_deg is missing: joint theta1 is revolute"
+        );
+    }
+
+    #[test]
+    fn three_joints_are_refused_naming_the_model_order() {
+        let text = edited(&[(33, ""), (34, ""), (35, ""), (36, ""), (37, ""), (38, "")])
+            .replace("max_freq_hz = 20000\noutput = \"pulse-sign\"\n\n", "");
+        let e = error(&text);
+        assert!(
+            matches!(&e, ConfigError::Invalid { line: 9, key, value, .. }
+                if key == "robots.r.joints" && value == "3"),
+            "{e}"
+        );
+        assert!(
+            e.to_string()
+                .contains("a cylindrical robot has exactly 4 joints")
+        );
+    }
+
+    #[test]
+    fn duplicate_joint_names_are_refused() {
+        let text = edited(&[(34, "name = \"d2\"")]);
+        assert!(
+            message(&text).ends_with("joints[3].name = \"d2\": joints[1] already has this name")
+        );
+    }
+
+    #[test]
+    fn limit_beyond_the_plc_count_is_refused() {
+        let text = edited(&[(30, "max_mm = 1e9")]);
+        assert!(message(&text).contains("a PLC count reaches at most 2147483647"));
+    }
+}

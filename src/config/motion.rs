@@ -1,0 +1,82 @@
+//! `[robots.NAME.motion]` -> [`Motion`]: the robot's motion defaults, durations parsed.
+
+use toml::Spanned;
+
+use super::ConfigError;
+use super::check::At;
+use super::duration::parse_duration_s;
+use super::raw::RawMotion;
+use crate::robot::{Method, Motion, OverSpeed};
+
+/// The motion defaults a motion table describes.
+pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
+    let period_s = duration_s(&at.child("period"), &raw.period)?;
+    if period_s <= 0.0 {
+        return Err(at
+            .child("period")
+            .invalid(&raw.period, "must be longer than 0 s"));
+    }
+    Ok(Motion {
+        method: raw.method.map_or(Method::default(), Method::from),
+        period_s,
+        speed_mm_s: at.child("speed_mm_s").positive(&raw.speed_mm_s)?,
+        accel_s: duration_s(&at.child("accel_time"), &raw.accel_time)?,
+        frequency_model: raw.frequency_model.unwrap_or_default(),
+        over_speed: raw.over_speed.map_or(OverSpeed::default(), OverSpeed::from),
+    })
+}
+
+fn duration_s(at: &At, text: &Spanned<String>) -> Result<f64, ConfigError> {
+    parse_duration_s(text.get_ref()).map_err(|e| at.invalid(text, e.problem))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::fixture::{edited, message};
+
+    #[test]
+    fn period_without_unit_names_value_and_line() {
+        let text = edited(&[(6, "period = \"50\"")]);
+        assert_eq!(
+            message(&text),
+            "config line 6: robots.r.motion.period = \"50\": no unit; write s, ms or us after the \
+             number, as in 50ms"
+        );
+    }
+
+    #[test]
+    fn zero_period_is_refused() {
+        let text = edited(&[(6, "period = \"0ms\"")]);
+        assert!(message(&text).ends_with("period = \"0ms\": must be longer than 0 s"));
+    }
+
+    #[test]
+    fn zero_accel_time_is_allowed() {
+        let text = edited(&[(8, "accel_time = \"0s\"")]);
+        let config = super::super::Config::from_toml(&text).unwrap();
+        assert!(config.robots[0].motion.accel_s.abs() < f64::EPSILON);
+    }
+
+    #[test]
+    fn negative_accel_time_is_refused() {
+        let text = edited(&[(8, "accel_time = \"-1ms\"")]);
+        assert!(message(&text).ends_with("accel_time = \"-1ms\": must not be negative"));
+    }
+
+    #[test]
+    fn non_positive_speed_is_refused() {
+        let text = edited(&[(7, "speed_mm_s = 0")]);
+        assert!(message(&text).ends_with("speed_mm_s = 0: must be above 0"));
+    }
+
+    #[test]
+    fn slow_down_and_ideal_are_read() {
+        let text = edited(&[(
+            8,
+            "accel_time = \"200ms\"\nover_speed = \"slow-down\"\nfrequency_model = \"ideal\"",
+        )]);
+        let m = super::super::Config::from_toml(&text).unwrap().robots[0].motion;
+        assert_eq!(m.over_speed, crate::robot::OverSpeed::SlowDown);
+        assert_eq!(m.frequency_model, crate::table::FrequencyModel::Ideal);
+    }
+}

@@ -1,0 +1,167 @@
+//! The config file's schema exactly as written: serde structs that reject unknown keys and keep
+//! the span of every value the validation pass checks, so its errors can name the line.
+//!
+//! Nothing here is checked beyond TOML types; `validate` and the section modules turn these into
+//! [`crate::robot::Robot`]s. A new section (say `[robots.NAME.plc]`) is one more field of
+//! [`RawRobot`], one more struct here and one more section module.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::robot::{Method, OverSpeed};
+use crate::table::{FrequencyModel, OutputMethod};
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawConfig {
+    /// Robots by name; sorted by name here, put back in file order by the keys' spans.
+    #[serde(default)]
+    pub robots: BTreeMap<Spanned<String>, Spanned<RawRobot>>,
+}
+
+/// `[robots.NAME]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawRobot {
+    pub area_words: Option<Spanned<i64>>,
+    pub kinematics: Spanned<RawKinematics>,
+    pub motion: Spanned<RawMotion>,
+    pub joints: Spanned<Vec<Spanned<RawJoint>>>,
+}
+
+/// `[robots.NAME.kinematics]`: every model's keys, optional here; which ones a model takes is
+/// checked by `kinematics`, so a key of another model gets an error that names the model.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawKinematics {
+    #[serde(rename = "type")]
+    pub model: Spanned<ModelType>,
+    pub l0_mm: Option<Spanned<f64>>,
+    pub min_axis_distance_mm: Option<Spanned<f64>>,
+    pub l1_mm: Option<Spanned<f64>>,
+    pub l2_mm: Option<Spanned<f64>>,
+    pub elbow: Option<Spanned<RawElbow>>,
+    pub reach_margin_mm: Option<Spanned<f64>>,
+}
+
+/// `kinematics.type`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum ModelType {
+    Cylindrical,
+    Cartesian,
+    Scara,
+}
+
+/// `kinematics.elbow` (scara).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawElbow {
+    Left,
+    Right,
+}
+
+/// `[robots.NAME.motion]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawMotion {
+    pub method: Option<RawMethod>,
+    pub period: Spanned<String>,
+    pub speed_mm_s: Spanned<f64>,
+    pub accel_time: Spanned<String>,
+    pub frequency_model: Option<FrequencyModel>,
+    pub over_speed: Option<RawOverSpeed>,
+}
+
+/// `motion.method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawMethod {
+    ConstantPeriod,
+}
+
+impl From<RawMethod> for Method {
+    fn from(raw: RawMethod) -> Self {
+        match raw {
+            RawMethod::ConstantPeriod => Self::ConstantPeriod,
+        }
+    }
+}
+
+/// `motion.over_speed`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawOverSpeed {
+    Reject,
+    SlowDown,
+}
+
+impl From<RawOverSpeed> for OverSpeed {
+    fn from(raw: RawOverSpeed) -> Self {
+        match raw {
+            RawOverSpeed::Reject => Self::Reject,
+            RawOverSpeed::SlowDown => Self::SlowDown,
+        }
+    }
+}
+
+/// `[[robots.NAME.joints]]`: both unit spellings of each quantity, optional here; `joints` picks
+/// the one the joint's kind needs and refuses the other by name.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawJoint {
+    pub name: Spanned<String>,
+    pub channel: Spanned<i64>,
+    pub step_deg: Option<Spanned<f64>>,
+    pub step_mm: Option<Spanned<f64>>,
+    pub offset_deg: Option<Spanned<f64>>,
+    pub offset_mm: Option<Spanned<f64>>,
+    pub min_deg: Option<Spanned<f64>>,
+    pub min_mm: Option<Spanned<f64>>,
+    pub max_deg: Option<Spanned<f64>>,
+    pub max_mm: Option<Spanned<f64>>,
+    pub max_freq_hz: Spanned<i64>,
+    pub output: OutputMethod,
+}
+
+/// A joint quantity written in degrees or millimetres.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Quantity {
+    Step,
+    Offset,
+    Min,
+    Max,
+}
+
+impl Quantity {
+    /// The key's stem (`step` in `step_deg`).
+    pub(super) fn stem(self) -> &'static str {
+        match self {
+            Self::Step => "step",
+            Self::Offset => "offset",
+            Self::Min => "min",
+            Self::Max => "max",
+        }
+    }
+}
+
+impl RawJoint {
+    /// The quantity as written in `unit` ("deg" or "mm").
+    pub(super) fn get(&self, quantity: Quantity, unit: &str) -> Option<&Spanned<f64>> {
+        let deg = unit == "deg";
+        let field = match quantity {
+            Quantity::Step if deg => &self.step_deg,
+            Quantity::Step => &self.step_mm,
+            Quantity::Offset if deg => &self.offset_deg,
+            Quantity::Offset => &self.offset_mm,
+            Quantity::Min if deg => &self.min_deg,
+            Quantity::Min => &self.min_mm,
+            Quantity::Max if deg => &self.max_deg,
+            Quantity::Max => &self.max_mm,
+        };
+        field.as_ref()
+    }
+}

@@ -1,0 +1,62 @@
+//! The validation pass: raw robots, in file order, -> [`Robot`]s. Each section has its own module
+//! (`kinematics`, `joints`, `motion`); this one only assembles them, so a new section is one more
+//! call in [`robot`].
+
+use toml::Spanned;
+
+use super::check::At;
+use super::raw::{RawConfig, RawRobot};
+use super::{Config, ConfigError, joints, kinematics, motion};
+use crate::robot::Robot;
+
+/// `area_words` when not given (CONTRACT.md).
+pub(super) const DEFAULT_AREA_WORDS: i64 = 2000;
+/// Smallest table area: the directory plus a few rows.
+const MIN_AREA_WORDS: i64 = 64;
+/// Largest table area.
+const MAX_AREA_WORDS: i64 = 8000;
+
+/// The robots of a parsed file, checked, in the order the file names them.
+pub(super) fn config(text: &str, raw: RawConfig) -> Result<Config, ConfigError> {
+    let mut entries: Vec<_> = raw.robots.into_iter().collect();
+    entries.sort_by_key(|(name, _)| name.span().start);
+    let robots = entries
+        .iter()
+        .map(|(name, robot)| self::robot(text, name, robot))
+        .collect::<Result<Vec<_>, _>>()?;
+    if robots.is_empty() {
+        return Err(ConfigError::NoRobots);
+    }
+    Ok(Config { robots })
+}
+
+/// One robot.
+fn robot(
+    text: &str,
+    name: &Spanned<String>,
+    raw: &Spanned<RawRobot>,
+) -> Result<Robot, ConfigError> {
+    let at = At::new(text, "robots").child(name.get_ref());
+    if name.get_ref().trim().is_empty() {
+        return Err(At::new(text, "robots").invalid(name, "a robot needs a non-blank name"));
+    }
+    let r = raw.get_ref();
+    let area_words = area_words(&at.child("area_words"), r.area_words.as_ref())?;
+    let kinematics = kinematics::model(&at.child("kinematics"), &r.kinematics)?;
+    let motion = motion::motion(&at.child("motion"), r.motion.get_ref())?;
+    let joints = joints::joints(&at.child("joints"), &r.joints, &kinematics)?;
+    Ok(Robot {
+        name: name.get_ref().clone(),
+        kinematics,
+        joints,
+        motion,
+        area_words,
+    })
+}
+
+fn area_words(at: &At, raw: Option<&Spanned<i64>>) -> Result<usize, ConfigError> {
+    raw.map_or(Ok(DEFAULT_AREA_WORDS), |v| {
+        at.int_within(v, MIN_AREA_WORDS, MAX_AREA_WORDS)
+    })
+    .map(|v| v as usize)
+}
