@@ -26,27 +26,67 @@ struct Motion {
 }
 
 fn motion() -> impl Strategy<Value = Motion> {
-    (20.0..600.0f64, 0.0..0.5f64, 0.01..0.1f64, any::<bool>())
-        .prop_map(|(speed_mm_s, accel_s, period_s, ideal)| Motion { speed_mm_s, accel_s, period_s, ideal })
+    (20.0..600.0f64, 0.0..0.5f64, 0.01..0.1f64, any::<bool>()).prop_map(
+        |(speed_mm_s, accel_s, period_s, ideal)| Motion {
+            speed_mm_s,
+            accel_s,
+            period_s,
+            ideal,
+        },
+    )
 }
 
 fn cylindrical_move() -> impl Strategy<Value = (Pose, Pose)> {
-    (700.0..1400.0f64, -60.0..60.0f64, 0.0..300.0f64, 700.0..1400.0f64, -60.0..60.0f64, 0.0..300.0f64, -30.0..30.0f64)
-        .prop_map(|(r1, t1, z1, r2, t2, z2, a)| (polar(r1, t1 + 90.0, z1, a), polar(r2, t2 + 90.0, z2, -a)))
+    (
+        700.0..1400.0f64,
+        -60.0..60.0f64,
+        0.0..300.0f64,
+        700.0..1400.0f64,
+        -60.0..60.0f64,
+        0.0..300.0f64,
+        -30.0..30.0f64,
+    )
+        .prop_map(|(r1, t1, z1, r2, t2, z2, a)| {
+            (polar(r1, t1 + 90.0, z1, a), polar(r2, t2 + 90.0, z2, -a))
+        })
         // Reachable: the whole line stays outside d3 = 0 (500 mm from the axis).
         .prop_filter("line passes inside the d3 = 0 cylinder", |(from, to)| {
-            Line { from: *from, to: *to }.xy_radius_range_mm().0 > 520.0
+            Line {
+                from: *from,
+                to: *to,
+            }
+            .xy_radius_range_mm()
+            .0 > 520.0
         })
 }
 
 fn gantry_move() -> impl Strategy<Value = (Pose, Pose)> {
-    let p = || (-800.0..800.0f64, -800.0..800.0f64, -300.0..300.0f64, -90.0..90.0f64);
-    (p(), p()).prop_map(|(a, b)| (Pose::from_mm_deg(a.0, a.1, a.2, a.3), Pose::from_mm_deg(b.0, b.1, b.2, b.3)))
+    let p = || {
+        (
+            -800.0..800.0f64,
+            -800.0..800.0f64,
+            -300.0..300.0f64,
+            -90.0..90.0f64,
+        )
+    };
+    (p(), p()).prop_map(|(a, b)| {
+        (
+            Pose::from_mm_deg(a.0, a.1, a.2, a.3),
+            Pose::from_mm_deg(b.0, b.1, b.2, b.3),
+        )
+    })
 }
 
 fn scara_move() -> impl Strategy<Value = (Pose, Pose)> {
     // Ends 300-650 mm out and at most 60 degrees apart: the line stays inside the annulus.
-    (300.0..650.0f64, -30.0..30.0f64, 300.0..650.0f64, -30.0..30.0f64, -100.0..100.0f64, -45.0..45.0f64)
+    (
+        300.0..650.0f64,
+        -30.0..30.0f64,
+        300.0..650.0f64,
+        -30.0..30.0f64,
+        -100.0..100.0f64,
+        -45.0..45.0f64,
+    )
         .prop_map(|(r1, t1, r2, t2, z, a)| (polar(r1, t1, z, a), polar(r2, t2, -z, -a)))
 }
 
@@ -58,15 +98,30 @@ fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Plan {
     motion.speed_mm_s = m.speed_mm_s.max(length_mm / (400.0 * m.period_s));
     motion.accel_s = m.accel_s;
     motion.period_s = m.period_s;
-    motion.frequency_model = if m.ideal { FrequencyModel::Ideal } else { FrequencyModel::FpxDivider };
-    let req = MoveRequest { from: Origin::Pose(from), to, motion, seed_exact: false };
+    motion.frequency_model = if m.ideal {
+        FrequencyModel::Ideal
+    } else {
+        FrequencyModel::FpxDivider
+    };
+    let req = MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion,
+        seed_exact: false,
+    };
     plan_move(robot, &req).unwrap_or_else(|e| panic!("{from:?} -> {to:?}: {e}"))
 }
 
 fn check_fk_ik(robot: &Robot, pose: Pose) -> Result<(), TestCaseError> {
-    let q = robot.kinematics.ik(&pose, None).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let q = robot
+        .kinematics
+        .ik(&pose, None)
+        .map_err(|e| TestCaseError::fail(e.to_string()))?;
     let back = robot.kinematics.fk(&q);
-    prop_assert!((back.position_mm - pose.position_mm).norm() < 1e-9, "{pose:?} -> {back:?}");
+    prop_assert!(
+        (back.position_mm - pose.position_mm).norm() < 1e-9,
+        "{pose:?} -> {back:?}"
+    );
     let turn = std::f64::consts::TAU;
     let da = (back.a_rad - pose.a_rad).rem_euclid(turn);
     prop_assert!(da.min(turn - da) < 1e-9);
@@ -80,9 +135,19 @@ fn check_plan(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
         // The last row's target is the count nearest P2's joint value...
         let joint = &robot.joints[j];
         let off = (joint.value_of(table.end()) - last[j]) / joint.step;
-        prop_assert!(off.abs() <= 0.5 + 1e-9, "joint {} ends {off} pulses off", joint.name);
+        prop_assert!(
+            off.abs() <= 0.5 + 1e-9,
+            "joint {} ends {off} pulses off",
+            joint.name
+        );
         // ... and the execution really gets there.
-        let executed = plan.execution.events.iter().rev().find(|e| e.table == j).map_or(table.start, |e| e.count);
+        let executed = plan
+            .execution
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.table == j)
+            .map_or(table.start, |e| e.count);
         prop_assert_eq!(executed, table.end());
         prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
         check_grid(plan, j)?;
@@ -95,7 +160,9 @@ fn check_plan(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
 fn resolution_s(plan: &Plan, range: FrequencyRange, pulses: i64, set_hz: u32) -> f64 {
     let model = plan.motion.frequency_model;
     let dur = |f: u32| pulses as f64 / model.actual_hz(f.max(1), range);
-    (dur(set_hz.saturating_sub(1)) - dur(set_hz)).abs().max((dur(set_hz) - dur(set_hz + 1)).abs())
+    (dur(set_hz.saturating_sub(1)) - dur(set_hz))
+        .abs()
+        .max((dur(set_hz) - dur(set_hz + 1)).abs())
 }
 
 /// No drift: every row of joint `j` ends within one period of the grid point where its target was
@@ -108,12 +175,26 @@ fn check_grid(plan: &Plan, j: usize) -> Result<(), TestCaseError> {
     let mut point = 0;
     let mut prev = plan.tables[j].start;
     let timings = plan.execution.rows.iter().filter(|r| r.table == j);
-    let rows = plan.tables[j].segments.iter().flat_map(|s| s.rows.iter().map(move |r| (s.control.range, *r)));
+    let rows = plan.tables[j]
+        .segments
+        .iter()
+        .flat_map(|s| s.rows.iter().map(move |r| (s.control.range, *r)));
     let n_rows = plan.tables[j].rows();
     for (k, ((range, row), timing)) in rows.zip(timings).enumerate() {
-        point = (point + 1..=last_point).find(|&i| counts[i] == row.target).unwrap_or(last_point);
-        let planned = if k + 1 == n_rows { last_point as f64 * period } else { point as f64 * period };
-        let mut allowed = period.max(resolution_s(plan, range, (row.target - prev).abs(), row.freq_hz));
+        point = (point + 1..=last_point)
+            .find(|&i| counts[i] == row.target)
+            .unwrap_or(last_point);
+        let planned = if k + 1 == n_rows {
+            last_point as f64 * period
+        } else {
+            point as f64 * period
+        };
+        let mut allowed = period.max(resolution_s(
+            plan,
+            range,
+            (row.target - prev).abs(),
+            row.freq_hz,
+        ));
         if row.freq_hz == range.min_set_hz() {
             // The slowest the channel can go (1.5 Hz in range 0): a row that wants to be slower
             // ends early and the next row takes up the time.

@@ -16,18 +16,28 @@ pub struct PoseArg {
 pub fn parse_pose(text: &str) -> anyhow::Result<PoseArg> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     if !(3..=4).contains(&parts.len()) {
-        bail!("'{text}' has {} values; a pose is X,Y,Z or X,Y,Z,A (mm and degrees)", parts.len());
+        bail!(
+            "'{text}' has {} values; a pose is X,Y,Z or X,Y,Z,A (mm and degrees)",
+            parts.len()
+        );
     }
     let mut values = [0.0; 4];
     for (i, (part, name)) in parts.iter().zip(["x", "y", "z", "a"]).enumerate() {
-        values[i] = parse_number(part).with_context(|| format!("pose '{text}', coordinate {name}"))?;
+        values[i] =
+            parse_number(part).with_context(|| format!("pose '{text}', coordinate {name}"))?;
     }
-    Ok(PoseArg { xyz_mm: [values[0], values[1], values[2]], a_deg: (parts.len() == 4).then_some(values[3]) })
+    Ok(PoseArg {
+        xyz_mm: [values[0], values[1], values[2]],
+        a_deg: (parts.len() == 4).then_some(values[3]),
+    })
 }
 
 /// Parses a finite number.
 pub fn parse_number(text: &str) -> anyhow::Result<f64> {
-    let value: f64 = text.trim().parse().map_err(|_| anyhow!("'{text}' is not a number"))?;
+    let value: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| anyhow!("'{text}' is not a number"))?;
     if !value.is_finite() {
         bail!("'{text}' is not a finite number");
     }
@@ -49,9 +59,14 @@ mod tests {
     #[test]
     fn garbage_pose_is_refused_naming_the_text() {
         let err = format!("{:#}", parse_pose("1,2,abc").unwrap_err());
-        assert!(err.contains("coordinate z") && err.contains("'abc' is not a number"), "{err}");
+        assert!(
+            err.contains("coordinate z") && err.contains("'abc' is not a number"),
+            "{err}"
+        );
         assert!(parse_pose("1,2").is_err());
         assert!(parse_pose("1,2,3,4,5").is_err());
-        assert!(format!("{:#}", parse_pose("1,NaN,3").unwrap_err()).contains("not a finite number"));
+        assert!(
+            format!("{:#}", parse_pose("1,NaN,3").unwrap_err()).contains("not a finite number")
+        );
     }
 }

@@ -5,7 +5,14 @@ use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
 use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};
 use linterpd::table::{FrequencyModel, OutputMethod};
 
-fn joint(name: &str, channel: u8, kind: JointKind, step_user: f64, limit_user: f64, max_freq_hz: u32) -> Joint {
+fn joint(
+    name: &str,
+    channel: u8,
+    kind: JointKind,
+    step_user: f64,
+    limit_user: f64,
+    max_freq_hz: u32,
+) -> Joint {
     Joint {
         name: name.into(),
         channel,
@@ -48,7 +55,12 @@ pub fn gantry() -> Robot {
 pub fn scara() -> Robot {
     Robot {
         name: "scara".into(),
-        kinematics: Model::Scara(Scara { l1_mm: 400.0, l2_mm: 300.0, elbow: Elbow::Left, reach_margin_mm: 1.0 }),
+        kinematics: Model::Scara(Scara {
+            l1_mm: 400.0,
+            l2_mm: 300.0,
+            elbow: Elbow::Left,
+            reach_margin_mm: 1.0,
+        }),
         joints: [
             joint("t1", 0, JointKind::Revolute, 0.001, 360.0, 100_000),
             joint("t2", 1, JointKind::Revolute, 0.001, 360.0, 100_000),

@@ -8,7 +8,10 @@ use crate::robot::Robot;
 /// Writes the header and one line per row: channel, joint, segment, row (both from 1),
 /// frequency value, absolute target, start and end time in seconds.
 pub(super) fn write(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> std::io::Result<()> {
-    writeln!(out, "channel,joint,segment,row,frequency_hz,target,start_s,end_s")?;
+    writeln!(
+        out,
+        "channel,joint,segment,row,frequency_hz,target,start_s,end_s"
+    )?;
     for timing in &plan.execution.rows {
         let table = &plan.tables[timing.table];
         let row = table.segments[timing.segment].rows[timing.row];

@@ -120,7 +120,12 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             periods: plan.profile.periods(),
             duration_s: plan.profile.duration_s(),
         },
-        channels: plan.tables.iter().zip(&robot.joints).map(|(t, j)| channel_doc(t, &j.name)).collect(),
+        channels: plan
+            .tables
+            .iter()
+            .zip(&robot.joints)
+            .map(|(t, j)| channel_doc(t, &j.name))
+            .collect(),
         valid: plan.valid(),
         problems: plan.problems.clone(),
         figures: FiguresDoc {
@@ -173,10 +178,22 @@ fn channel_doc(table: &ChannelTable, joint: &str) -> ChannelDoc {
 
 fn segment_doc(seg: &Segment) -> SegmentDoc {
     SegmentDoc {
-        direction: if seg.control.direction == Direction::Up { 1 } else { -1 },
+        direction: if seg.control.direction == Direction::Up {
+            1
+        } else {
+            -1
+        },
         range: seg.control.range.digit(),
-        duty: if seg.control.duty == Duty::Quarter { "1/4" } else { "1/2" },
+        duty: if seg.control.duty == Duty::Quarter {
+            "1/4"
+        } else {
+            "1/2"
+        },
         control_code: seg.control.value(),
-        rows: seg.rows.iter().map(|r| [i64::from(r.freq_hz), r.target]).collect(),
+        rows: seg
+            .rows
+            .iter()
+            .map(|r| [i64::from(r.freq_hz), r.target])
+            .collect(),
     }
 }

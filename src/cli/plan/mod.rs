@@ -22,17 +22,21 @@ use crate::table::FrequencyModel;
 #[derive(Debug, Args)]
 pub struct PlanArgs {
     /// The configuration file.
-    #[arg(long, env = "LINTERPD_CONFIG", default_value = "/etc/linterpd/linterpd.toml")]
+    #[arg(
+        long,
+        env = "LINTERPD_CONFIG",
+        default_value = "/etc/linterpd/linterpd.toml"
+    )]
     pub config: PathBuf,
     /// The robot to plan for (needed when the file holds several).
     #[arg(long)]
     pub robot: Option<String>,
     /// Start pose: X,Y,Z[,A] in mm and degrees. Without A the wrist joint sits at 0.
-    #[arg(long, allow_hyphen_values = true, value_parser = parse_pose)]
-    pub from: PoseArg,
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: String,
     /// Target pose: X,Y,Z[,A] in mm and degrees. Without A the tool keeps the start's angle.
-    #[arg(long, allow_hyphen_values = true, value_parser = parse_pose)]
-    pub to: PoseArg,
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: String,
     /// Speed along the line, mm/s (default: the robot's).
     #[arg(long, allow_hyphen_values = true)]
     pub speed: Option<String>,
@@ -106,7 +110,13 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         .map_err(Failure::Runtime)
 }
 
-fn write(robot: &Robot, request: &MoveRequest, plan: &Plan, format: Format, out: &mut dyn std::io::Write) -> anyhow::Result<()> {
+fn write(
+    robot: &Robot,
+    request: &MoveRequest,
+    plan: &Plan,
+    format: Format,
+    out: &mut dyn std::io::Write,
+) -> anyhow::Result<()> {
     match format {
         Format::Text => text::write(robot, plan, out)?,
         Format::Json => {
@@ -121,15 +131,25 @@ fn write(robot: &Robot, request: &MoveRequest, plan: &Plan, format: Format, out:
 /// The move request the arguments describe, the robot's defaults filling the gaps.
 fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     let motion = motion(robot.motion, args)?;
-    let [x, y, z] = args.from.xyz_mm;
-    let from = match args.from.a_deg {
+    let from_arg: PoseArg = parse_pose(&args.from).context("--from")?;
+    let to_arg: PoseArg = parse_pose(&args.to).context("--to")?;
+    let [x, y, z] = from_arg.xyz_mm;
+    let from = match from_arg.a_deg {
         Some(a) => Pose::from_mm_deg(x, y, z, a),
         None => robot.pose_with_wrist_at_zero(x, y, z).context("--from")?,
     };
-    let [x, y, z] = args.to.xyz_mm;
+    let [x, y, z] = to_arg.xyz_mm;
     let to = Pose::from_mm_deg(x, y, z, 0.0);
-    let to = Pose { a_rad: args.to.a_deg.map_or(from.a_rad, f64::to_radians), ..to };
-    Ok(MoveRequest { from: Origin::Pose(from), to, motion, seed_exact: args.seed_exact })
+    let to = Pose {
+        a_rad: to_arg.a_deg.map_or(from.a_rad, f64::to_radians),
+        ..to
+    };
+    Ok(MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion,
+        seed_exact: args.seed_exact,
+    })
 }
 
 fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {

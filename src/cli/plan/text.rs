@@ -16,17 +16,39 @@ fn range_text(range: FrequencyRange) -> &'static str {
 }
 
 fn pose_text(p: [f64; 4]) -> String {
-    format!("({:.3}, {:.3}, {:.3}) mm, a {:.4} deg", p[0], p[1], p[2], p[3])
+    format!(
+        "({:.3}, {:.3}, {:.3}) mm, a {:.4} deg",
+        p[0], p[1], p[2], p[3]
+    )
 }
 
 /// Writes the whole plan.
 pub(super) fn write(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
-    let params: Vec<String> = robot.kinematics.params().iter().map(|(k, v)| format!("{k} {v}")).collect();
-    writeln!(out, "robot    {} ({}; {})", robot.name, robot.kinematics.name(), params.join(", "))?;
+    let params: Vec<String> = robot
+        .kinematics
+        .params()
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect();
+    writeln!(
+        out,
+        "robot    {} ({}; {})",
+        robot.name,
+        robot.kinematics.name(),
+        params.join(", ")
+    )?;
     writeln!(out, "from     {}", pose_text(plan.line.from.to_mm_deg()))?;
     writeln!(out, "to       {}", pose_text(plan.line.to.to_mm_deg()))?;
-    let method = if plan.seed_exact { "seed-exact (the paper as printed)" } else { plan.motion.method.name() };
-    writeln!(out, "method   {method}, frequency model {}", plan.motion.frequency_model.name())?;
+    let method = if plan.seed_exact {
+        "seed-exact (the paper as printed)"
+    } else {
+        plan.motion.method.name()
+    };
+    writeln!(
+        out,
+        "method   {method}, frequency model {}",
+        plan.motion.frequency_model.name()
+    )?;
     write_profile(plan, out)?;
     for (j, table) in plan.tables.iter().enumerate() {
         write_channel(robot, plan, j, out)?;
@@ -51,7 +73,11 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         p.duration_s()
     )?;
     if plan.speed_factor < 1.0 {
-        writeln!(out, "         slowed down to {:.1} % of the speed asked for (over-speed policy slow-down)", plan.speed_factor * 100.0)?;
+        writeln!(
+            out,
+            "         slowed down to {:.1} % of the speed asked for (over-speed policy slow-down)",
+            plan.speed_factor * 100.0
+        )?;
     }
     Ok(())
 }
@@ -77,13 +103,29 @@ fn write_channel(robot: &Robot, plan: &Plan, j: usize, out: &mut dyn Write) -> i
             out,
             "  segment {}: {}, {}, duty {}, control code {:#06x}",
             si + 1,
-            if c.direction == Direction::Up { "up" } else { "down" },
+            if c.direction == Direction::Up {
+                "up"
+            } else {
+                "down"
+            },
             range_text(c.range),
-            if c.duty == Duty::Quarter { "1/4" } else { "1/2" },
+            if c.duty == Duty::Quarter {
+                "1/4"
+            } else {
+                "1/2"
+            },
             c.value()
         )?;
-        writeln!(out, "    {:>4} {:>9} {:>12} {:>9} {:>9}", "row", "freq Hz", "target", "start s", "end s")?;
-        let timings = plan.execution.rows.iter().filter(|r| r.table == j && r.segment == si);
+        writeln!(
+            out,
+            "    {:>4} {:>9} {:>12} {:>9} {:>9}",
+            "row", "freq Hz", "target", "start s", "end s"
+        )?;
+        let timings = plan
+            .execution
+            .rows
+            .iter()
+            .filter(|r| r.table == j && r.segment == si);
         for (row, timing) in seg.rows.iter().zip(timings) {
             writeln!(
                 out,
@@ -101,10 +143,26 @@ fn write_channel(robot: &Robot, plan: &Plan, j: usize, out: &mut dyn Write) -> i
 
 fn write_figures(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
     let f = &plan.figures;
-    writeln!(out, "\nfigures (execution model, {})", plan.motion.frequency_model.name())?;
-    writeln!(out, "  path deviation      {:.4} mm  (at every pulse event)", f.path_deviation_mm)?;
-    writeln!(out, "  tracking error      {:.4} mm  (against the planned pose in time)", f.tracking_error_mm)?;
-    writeln!(out, "  sampled deviation   {:.4} mm  (every 10 ms, as the seed measured)", f.sampled_deviation_mm)?;
+    writeln!(
+        out,
+        "\nfigures (execution model, {})",
+        plan.motion.frequency_model.name()
+    )?;
+    writeln!(
+        out,
+        "  path deviation      {:.4} mm  (at every pulse event)",
+        f.path_deviation_mm
+    )?;
+    writeln!(
+        out,
+        "  tracking error      {:.4} mm  (against the planned pose in time)",
+        f.tracking_error_mm
+    )?;
+    writeln!(
+        out,
+        "  sampled deviation   {:.4} mm  (every 10 ms, as the seed measured)",
+        f.sampled_deviation_mm
+    )?;
     writeln!(out, "  end skew            {:.3} ms", f.end_skew_ms)?;
     writeln!(out, "  end error           {:.4} mm", f.end_error_mm)?;
     writeln!(out, "  last pulse at       {:.4} s", f.finish_s)?;
