@@ -17,16 +17,20 @@
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
 //! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
+//! contract/    PURE  the register contract: DT layout, status and command blocks
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
+//! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! ```
 
 pub mod cli;
 pub mod config;
+pub mod contract;
 pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;
 pub mod plan;
+pub mod plc;
 pub mod robot;
 pub mod sim;
 pub mod table;

@@ -1,0 +1,106 @@
+//! IO. Talking to a PLC: one [`Plc`] trait over the operations linterpd needs (DT words, R relays,
+//! the PLC's mode), implemented by the MEWTOCOL-COM and Modbus clients over any byte stream,
+//! and the register contract's flow on top of it.
+
+use std::future::Future;
+
+use thiserror::Error;
+
+/// RUN or PROG.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlcMode {
+    /// The program runs.
+    Run,
+    /// Programming mode: the program does not run.
+    Prog,
+}
+
+/// Why the PLC answered "no": a different thing from a failed link.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum Refusal {
+    /// A MEWTOCOL-COM `!` error reply.
+    #[error("MEWTOCOL error {code}: {meaning}")]
+    Mewtocol {
+        /// The two-digit error code.
+        code: u8,
+        /// Its meaning (PLC.md §1, "Error codes").
+        meaning: &'static str,
+    },
+    /// A Modbus exception response.
+    #[error("Modbus exception {code:#04x}: {meaning}")]
+    Modbus {
+        /// The exception code.
+        code: u8,
+        /// Its meaning.
+        meaning: &'static str,
+    },
+}
+
+/// A failed PLC operation.
+#[derive(Debug, Error)]
+pub enum PlcError {
+    /// The PLC answered and refused.
+    #[error("the PLC refused {operation}: {refusal}")]
+    Refused {
+        /// What was asked, e.g. `write DT2000..=DT2023`.
+        operation: String,
+        /// What it said.
+        refusal: Refusal,
+    },
+    /// No (complete) reply in time.
+    #[error("no reply to {operation} within {timeout_ms} ms")]
+    Timeout {
+        /// What was asked.
+        operation: String,
+        /// The timeout.
+        timeout_ms: u64,
+    },
+    /// The link itself failed (closed, IO error).
+    #[error("link failed during {operation}")]
+    Link {
+        /// What was asked.
+        operation: String,
+        /// The IO error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A reply that does not answer the request (bad checksum, wrong station, wrong length...).
+    #[error("bad reply to {operation}: {detail}")]
+    BadReply {
+        /// What was asked.
+        operation: String,
+        /// What was wrong with it.
+        detail: String,
+    },
+    /// A request linterpd must not send (address out of DT, too many words...).
+    #[error("invalid request {operation}: {detail}")]
+    InvalidRequest {
+        /// What was asked.
+        operation: String,
+        /// Why it is invalid.
+        detail: String,
+    },
+}
+
+impl PlcError {
+    /// Whether the link should be considered broken (reconnect before the next exchange).
+    #[must_use]
+    pub fn is_link_failure(&self) -> bool {
+        matches!(self, Self::Timeout { .. } | Self::Link { .. } | Self::BadReply { .. })
+    }
+}
+
+/// The operations linterpd needs from a PLC. Implementations chunk requests to their protocol's
+/// frame limits, put a timeout on every exchange and retry what is safe to retry.
+pub trait Plc: Send {
+    /// Reads `count` DT words from `start`.
+    fn read_words(&mut self, start: u16, count: u16) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send;
+    /// Writes `words` to DT from `start`.
+    fn write_words(&mut self, start: u16, words: &[u16]) -> impl Future<Output = Result<(), PlcError>> + Send;
+    /// Reads relay R`relay` (`relay` = word * 16 + bit).
+    fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send;
+    /// Writes relay R`relay`.
+    fn write_relay(&mut self, relay: u16, on: bool) -> impl Future<Output = Result<(), PlcError>> + Send;
+    /// Reads whether the PLC is in RUN or PROG mode.
+    fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send;
+}
