@@ -421,6 +421,19 @@ mod tests {
     }
 
     #[test]
+    fn server_decodes_a_2048_byte_angle_write_of_507_words() {
+        let write = Command::write_dt(0, vec![0x5678; 507]).unwrap();
+        let frame = write.to_frame(Header::Angle, st(1)).unwrap();
+        let wire = frame.to_bytes().unwrap();
+        assert_eq!(wire.len(), Header::Angle.max_frame_len());
+        let out = server_decode(&wire).0.unwrap();
+        let Some(ServerEvent::Request(request)) = out else {
+            panic!("{out:?}")
+        };
+        assert_eq!(request.message, Request::Command(write));
+    }
+
+    #[test]
     fn server_decode_two_frames_in_one_buffer() {
         let mut codec = ServerCodec::new();
         let mut buf = BytesMut::from(&b"%01#RT01\r%01**&\r"[..]);
