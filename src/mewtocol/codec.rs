@@ -205,7 +205,7 @@ impl Encoder<Frame> for ServerCodec {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mewtocol::command::{Contact, ContactArea, DtRange};
+    use crate::mewtocol::address::{Contact, ContactArea, DtRange};
     use crate::mewtocol::error::{FrameError, PlcError, PlcErrorCode};
     use crate::mewtocol::multi::response_frames;
     use crate::mewtocol::reply::Reply;

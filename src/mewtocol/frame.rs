@@ -78,9 +78,9 @@ impl Header {
 pub struct Station(u8);
 
 impl Station {
-    /// `FF`: every station; nobody answers (PLC.md §1, [doc]).
+    /// `FF`: every station; nobody answers (PLC.md §1, \[doc\]).
     pub const BROADCAST: Self = Self(0xFF);
-    /// `EE`: answered by the PLC whatever its station number (PLC.md §1, [practice]).
+    /// `EE`: answered by the PLC whatever its station number (PLC.md §1, \[practice\]).
     pub const ANY: Self = Self(0xEE);
     /// Highest station number (PLC.md §1: `01`-`99`).
     pub const MAX_NUMBER: u8 = 99;

@@ -14,7 +14,8 @@
 //! frame.rs    Header, Station, Frame (envelope only), BCC; encoding
 //! decoder.rs  FrameDecoder: bytes -> Skipped | Frame, check then parse; shared by both codecs
 //! words.rs    word data (4 hex, low byte first) and decimal fields
-//! command.rs  Command and its validated parts (DtRange, Contact, ContactWords, Mode); limits
+//! address.rs DtRange, Contact, ContactWords: validated addresses and their text
+//! command.rs  Command, Mode; the write-size limit
 //! reply.rs    Reply, PlcStatus, Response = Result<Reply, PlcError>; limits
 //! multi.rs    multi-frame replies: response_frames (PLC side), ReplyAssembler (host side)
 //! codec.rs    ClientCodec and ServerCodec (tokio-util), Addressed, Request, events
@@ -22,6 +23,7 @@
 //! ```
 //! Nothing here opens a socket or reads a clock.
 
+mod address;
 mod codec;
 mod command;
 mod decoder;
@@ -31,11 +33,12 @@ mod multi;
 mod reply;
 mod words;
 
-pub use codec::{Addressed, ClientCodec, ClientEvent, Request, ServerCodec, ServerEvent};
-pub use command::{
-    CONTACT_WORD_MAX, CONTACT_WORDS_MAX, Command, Contact, ContactArea, ContactWords, DT_MAX,
-    DtRange, Mode, SPECIAL_DT, max_write_words,
+pub use address::{
+    CONTACT_WORD_MAX, CONTACT_WORDS_MAX, Contact, ContactArea, ContactWords, DT_MAX, DtRange,
+    SPECIAL_DT,
 };
+pub use codec::{Addressed, ClientCodec, ClientEvent, Request, ServerCodec, ServerEvent};
+pub use command::{Command, Mode, max_write_words};
 pub use decoder::{Decoded, FrameDecoder};
 pub use error::{CodecError, FrameError, MessageError, PlcError, PlcErrorCode};
 pub use frame::{BccMode, CR, Frame, Header, MORE, NO_CHECK, Station, bcc};

@@ -8,12 +8,12 @@
 //!  PLC:  %01<data><BCC>CR          last frame: no `&`
 //!  joined body: $RD<data><data><data>
 //! ```
-//! (PLC.md §1, "Multi-frame replies" [practice].) Commands are never split: chunk writes instead
+//! (PLC.md §1, "Multi-frame replies" \[practice\].) Commands are never split: chunk writes instead
 //! ([`super::command::max_write_words`]).
 
 use bytes::{Bytes, BytesMut};
 
-use super::command::DT_MAX;
+use super::address::DT_MAX;
 use super::error::MessageError;
 use super::frame::{Frame, Header, Station};
 use super::reply::{Response, encode_response};

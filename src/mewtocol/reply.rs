@@ -14,10 +14,11 @@
 
 use bytes::{BufMut, Bytes, BytesMut};
 
-use super::command::{Command, expect_len, lossy_head};
+use super::command::Command;
 use super::error::{MessageError, PlcError, PlcErrorCode};
 use super::frame::{ENVELOPE_LEN, Header, hex_byte};
-use super::words::{WORD_CHARS, parse_byte, parse_decimal, parse_words, put_word, put_words};
+use super::words::{WORD_CHARS, expect_len, lossy_head, parse_byte, parse_decimal, parse_words};
+use super::words::{put_word, put_words};
 
 /// A reply as the host sees it: data, or the PLC's refusal.
 pub type Response = Result<Reply, PlcError>;
@@ -47,7 +48,7 @@ pub struct PlcStatus {
     pub link_info: u8,
     /// Error flags.
     pub error_flags: u8,
-    /// Self-diagnostic error code (a word, low byte first as every word [practice]).
+    /// Self-diagnostic error code (a word, low byte first as every word \[practice\]).
     pub self_diagnostic: u16,
 }
 
@@ -206,7 +207,7 @@ pub fn parse_response(body: &[u8]) -> Result<Response, MessageError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mewtocol::command::DtRange;
+    use crate::mewtocol::address::DtRange;
     use crate::mewtocol::frame::{Frame, Station};
 
     fn reply_bytes(response: &Response) -> Vec<u8> {

@@ -98,6 +98,24 @@ pub(super) fn parse_decimal(field: &'static str, text: &[u8]) -> Result<u32, Mes
     })
 }
 
+/// Refuses `text` unless it is `len` characters long.
+pub(super) fn expect_len(field: &'static str, text: &[u8], len: usize) -> Result<(), MessageError> {
+    if text.len() == len {
+        Ok(())
+    } else {
+        Err(MessageError::BadLength {
+            field,
+            len: text.len(),
+            expected: len.to_string(),
+        })
+    }
+}
+
+/// The first few characters of `text`, for error messages.
+pub(super) fn lossy_head(text: &[u8]) -> String {
+    String::from_utf8_lossy(&text[..text.len().min(8)]).into_owned()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
