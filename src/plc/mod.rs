@@ -4,6 +4,8 @@
 
 use std::future::Future;
 
+pub mod contract;
+
 use thiserror::Error;
 
 /// RUN or PROG.
