@@ -6,7 +6,9 @@
 //!  Decoder -> ClientEvent      <-- %01$RT...CR ---- Encoder<Addressed<Response>> / Encoder<Frame>
 //! ```
 //! The codecs know nothing of sockets. A frame error (bad BCC, too long) is returned as an error
-//! after its bytes are dropped; polling again carries on with the next frame.
+//! after its bytes are dropped; polling again carries on with the next frame. (tokio-util 0.7's
+//! `FramedRead` yields that error, then `None` once, then resumes reading if polled again.)
+//! A reply to `EE` may carry the PLC's own station number: match replies by order, not station.
 
 use bytes::{Bytes, BytesMut};
 use tokio_util::codec::{Decoder, Encoder};
