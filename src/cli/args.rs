@@ -45,6 +45,7 @@ pub fn parse_number(text: &str) -> anyhow::Result<f64> {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // parsed values are exact
 mod tests {
     use super::*;
 

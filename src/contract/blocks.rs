@@ -55,7 +55,12 @@ impl State {
             2 => Self::Done,
             3 => Self::Stopped,
             4 => Self::Fault,
-            _ => return Err(UnknownValue { field: "state", value }),
+            _ => {
+                return Err(UnknownValue {
+                    field: "state",
+                    value,
+                });
+            }
         })
     }
 
@@ -108,7 +113,12 @@ impl Fault {
             2 => Self::ChannelBusy,
             3 => Self::StoppedFromOutside,
             4 => Self::PulseInstruction,
-            _ => return Err(UnknownValue { field: "fault", value }),
+            _ => {
+                return Err(UnknownValue {
+                    field: "fault",
+                    value,
+                });
+            }
         })
     }
 
@@ -157,7 +167,12 @@ impl Command {
             1 => Self::Start,
             2 => Self::Stop,
             3 => Self::ClearFault,
-            _ => return Err(UnknownValue { field: "command", value }),
+            _ => {
+                return Err(UnknownValue {
+                    field: "command",
+                    value,
+                });
+            }
         })
     }
 }
@@ -201,7 +216,16 @@ impl StatusBlock {
     /// The word image.
     #[must_use]
     pub fn to_words(&self) -> Vec<u16> {
-        let mut w = vec![self.magic, self.version, self.heartbeat, self.state, self.seq, self.fault, self.busy, self.ready];
+        let mut w = vec![
+            self.magic,
+            self.version,
+            self.heartbeat,
+            self.state,
+            self.seq,
+            self.fault,
+            self.busy,
+            self.ready,
+        ];
         for e in self.elapsed {
             push_dint(&mut w, e);
         }
@@ -297,13 +321,22 @@ mod tests {
 
     #[test]
     fn command_block_round_trips() {
-        let c = CommandBlock { command: 1, seq: 9, mask: 0b1011, bank: 1, segments: [1, 2, 0, 8] };
+        let c = CommandBlock {
+            command: 1,
+            seq: 9,
+            mask: 0b1011,
+            bank: 1,
+            segments: [1, 2, 0, 8],
+        };
         assert_eq!(CommandBlock::from_words(&c.to_words()), Some(c));
     }
 
     #[test]
     fn unknown_state_is_named() {
-        assert_eq!(State::from_word(9).unwrap_err().to_string(), "state = 9 is not a value contract version 1 defines");
+        assert_eq!(
+            State::from_word(9).unwrap_err().to_string(),
+            "state = 9 is not a value contract version 1 defines"
+        );
         assert_eq!(Fault::from_word(4), Ok(Fault::PulseInstruction));
         assert_eq!(Command::from_word(2), Ok(Command::Stop));
     }

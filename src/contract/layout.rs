@@ -72,17 +72,27 @@ impl Layout {
     }
 
     fn regions(&self) -> Vec<(String, u32, u32)> {
-        let span = |start: u16, words: usize| (u32::from(start), u32::from(start) + words as u32 - 1);
+        let span =
+            |start: u16, words: usize| (u32::from(start), u32::from(start) + words as u32 - 1);
         let mut out = vec![
-            ("status block".to_owned(), span(self.status_base, STATUS_WORDS)),
-            ("command block".to_owned(), span(self.command_base, COMMAND_WORDS)),
+            (
+                "status block".to_owned(),
+                span(self.status_base, STATUS_WORDS),
+            ),
+            (
+                "command block".to_owned(),
+                span(self.command_base, COMMAND_WORDS),
+            ),
         ];
         for bank in 0..BANKS {
             for ch in 0..CHANNELS {
                 let start = u32::from(self.table_base)
                     + u32::from(bank) * u32::from(self.bank_stride)
                     + ch as u32 * u32::from(self.channel_stride);
-                out.push((format!("bank {bank} channel {ch} table area"), (start, start + u32::from(self.area_words) - 1)));
+                out.push((
+                    format!("bank {bank} channel {ch} table area"),
+                    (start, start + u32::from(self.area_words) - 1),
+                ));
             }
         }
         out.into_iter().map(|(n, (s, e))| (n, s, e)).collect()
@@ -93,7 +103,10 @@ impl Layout {
         let regions = self.regions();
         for (name, _, end) in &regions {
             if *end > u32::from(DT_LAST) {
-                return Err(LayoutError::PastEnd { region: name.clone(), end: *end });
+                return Err(LayoutError::PastEnd {
+                    region: name.clone(),
+                    end: *end,
+                });
             }
         }
         for (i, (a, a_start, a_end)) in regions.iter().enumerate() {
@@ -128,14 +141,23 @@ mod tests {
 
     #[test]
     fn area_past_dt_end_is_refused() {
-        let l = Layout { table_base: 20_000, ..Layout::default() };
+        let l = Layout {
+            table_base: 20_000,
+            ..Layout::default()
+        };
         let e = l.check().unwrap_err().to_string();
-        assert!(e.contains("bank 1 channel 2") && e.contains("DT32764"), "{e}");
+        assert!(
+            e.contains("bank 1 channel 2") && e.contains("DT32764"),
+            "{e}"
+        );
     }
 
     #[test]
     fn overlapping_blocks_are_refused() {
-        let l = Layout { command_base: 1_010, ..Layout::default() };
+        let l = Layout {
+            command_base: 1_010,
+            ..Layout::default()
+        };
         assert!(matches!(l.check(), Err(LayoutError::Overlap { .. })));
     }
 }

@@ -15,7 +15,9 @@
 mod blocks;
 mod layout;
 
-pub use blocks::{COMMAND_WORDS, Command, CommandBlock, Fault, STATUS_WORDS, State, StatusBlock, UnknownValue};
+pub use blocks::{
+    COMMAND_WORDS, Command, CommandBlock, Fault, STATUS_WORDS, State, StatusBlock, UnknownValue,
+};
 pub use layout::{Layout, LayoutError};
 
 /// `magic` once the PLC program runs ("LI").

@@ -210,6 +210,7 @@ impl Profile {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // the end point is exact by construction
 mod tests {
     use super::*;
 

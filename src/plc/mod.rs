@@ -88,7 +88,10 @@ impl PlcError {
     /// Whether the link should be considered broken (reconnect before the next exchange).
     #[must_use]
     pub fn is_link_failure(&self) -> bool {
-        matches!(self, Self::Timeout { .. } | Self::Link { .. } | Self::BadReply { .. })
+        matches!(
+            self,
+            Self::Timeout { .. } | Self::Link { .. } | Self::BadReply { .. }
+        )
     }
 }
 
@@ -96,13 +99,25 @@ impl PlcError {
 /// frame limits, put a timeout on every exchange and retry what is safe to retry.
 pub trait Plc: Send {
     /// Reads `count` DT words from `start`.
-    fn read_words(&mut self, start: u16, count: u16) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send;
+    fn read_words(
+        &mut self,
+        start: u16,
+        count: u16,
+    ) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send;
     /// Writes `words` to DT from `start`.
-    fn write_words(&mut self, start: u16, words: &[u16]) -> impl Future<Output = Result<(), PlcError>> + Send;
+    fn write_words(
+        &mut self,
+        start: u16,
+        words: &[u16],
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads relay R`relay` (`relay` = word * 16 + bit).
     fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send;
     /// Writes relay R`relay`.
-    fn write_relay(&mut self, relay: u16, on: bool) -> impl Future<Output = Result<(), PlcError>> + Send;
+    fn write_relay(
+        &mut self,
+        relay: u16,
+        on: bool,
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads whether the PLC is in RUN or PROG mode.
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send;
 }

@@ -2,7 +2,7 @@
 //! the planned line (`../shared/spec/ACCURACY.md`).
 //!
 //! - every channel of a start begins at t = 0 from its start count;
-//! - a row (f_set, target) emits |target - count| pulses at the real frequency
+//! - a row (`f_set`, target) emits |target - count| pulses at the real frequency
 //!   `model(f_set, range)`, clamped to the channel's maximum: pulse k of the row lands at
 //!   `row_start + k / f`, and the next row starts when the last pulse lands;
 //! - a channel's next segment starts when its previous one ends, plus a configurable gap (the
