@@ -237,7 +237,7 @@ mod tests {
         assert_eq!(
             message(&text),
             "config line 8: robots.r.motion.colour: unknown field `colour`, expected one of \
-             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`"
+             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`, `tolerance_mm`"
         );
     }
 
@@ -286,7 +286,7 @@ mod tests {
 
     #[test]
     fn unknown_method_is_an_error() {
-        let text = edited(&[(6, "method = \"bounded-error\"\nperiod = \"50ms\"")]);
+        let text = edited(&[(6, "method = \"spline\"\nperiod = \"50ms\"")]);
         assert!(
             message(&text).starts_with("config line 6: robots.r.motion.method: unknown variant")
         );

@@ -5,7 +5,7 @@ use toml::Spanned;
 use super::ConfigError;
 use super::check::At;
 use super::duration::parse_duration_s;
-use super::raw::RawMotion;
+use super::raw::{RawMethod, RawMotion};
 use crate::robot::{Method, Motion, OverSpeed};
 
 /// The motion defaults a motion table describes.
@@ -17,13 +17,30 @@ pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
             .invalid(&raw.period, "must be longer than 0 s"));
     }
     Ok(Motion {
-        method: raw.method.map_or(Method::default(), Method::from),
+        method: method(at, raw)?,
         period_s,
         speed_mm_s: at.child("speed_mm_s").positive(&raw.speed_mm_s)?,
         accel_s: duration_s(&at.child("accel_time"), &raw.accel_time)?,
         frequency_model: raw.frequency_model.unwrap_or_default(),
         over_speed: raw.over_speed.map_or(OverSpeed::default(), OverSpeed::from),
     })
+}
+
+/// The method; `bounded-error` needs `tolerance_mm`, which no other method takes.
+fn method(at: &At, raw: &RawMotion) -> Result<Method, ConfigError> {
+    let tolerance = at.child("tolerance_mm");
+    let method = raw.method.as_ref().map(|m| (*m.get_ref(), m.span()));
+    match (method, &raw.tolerance_mm) {
+        (Some((RawMethod::BoundedError, _)), Some(t)) => {
+            Ok(Method::BoundedError { tolerance_mm: tolerance.positive(t)? })
+        }
+        (Some((RawMethod::BoundedError, span)), None) => Err(tolerance.missing(
+            &span,
+            "method \"bounded-error\" needs the largest path deviation allowed, e.g. tolerance_mm = 0.05",
+        )),
+        (_, Some(t)) => Err(tolerance.invalid(t, "only method \"bounded-error\" takes a tolerance")),
+        (_, None) => Ok(Method::ConstantPeriod),
+    }
 }
 
 fn duration_s(at: &At, text: &Spanned<String>) -> Result<f64, ConfigError> {
@@ -67,6 +84,39 @@ mod tests {
     fn non_positive_speed_is_refused() {
         let text = edited(&[(7, "speed_mm_s = 0")]);
         assert!(message(&text).ends_with("speed_mm_s = 0: must be above 0"));
+    }
+
+    #[test]
+    fn bounded_error_reads_its_tolerance() {
+        let text = edited(&[(
+            8,
+            "accel_time = \"200ms\"\nmethod = \"bounded-error\"\ntolerance_mm = 0.05",
+        )]);
+        let m = super::super::Config::from_toml(&text).unwrap().robots[0].motion;
+        assert_eq!(
+            m.method,
+            crate::robot::Method::BoundedError { tolerance_mm: 0.05 }
+        );
+    }
+
+    #[test]
+    fn bounded_error_without_tolerance_is_refused() {
+        let text = edited(&[(8, "accel_time = \"200ms\"\nmethod = \"bounded-error\"")]);
+        assert!(
+            message(&text).starts_with("config line 9: robots.r.motion.tolerance_mm is missing"),
+            "{}",
+            message(&text)
+        );
+    }
+
+    #[test]
+    fn tolerance_without_bounded_error_is_refused() {
+        let text = edited(&[(8, "accel_time = \"200ms\"\ntolerance_mm = 0.05")]);
+        assert!(
+            message(&text).ends_with("only method \"bounded-error\" takes a tolerance"),
+            "{}",
+            message(&text)
+        );
     }
 
     #[test]

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::robot::{Method, OverSpeed};
+use crate::robot::OverSpeed;
 use crate::table::{FrequencyModel, OutputMethod};
 
 /// The whole file.
@@ -68,12 +68,13 @@ pub(super) enum RawElbow {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawMotion {
-    pub method: Option<RawMethod>,
+    pub method: Option<Spanned<RawMethod>>,
     pub period: Spanned<String>,
     pub speed_mm_s: Spanned<f64>,
     pub accel_time: Spanned<String>,
     pub frequency_model: Option<FrequencyModel>,
     pub over_speed: Option<RawOverSpeed>,
+    pub tolerance_mm: Option<Spanned<f64>>,
 }
 
 /// `motion.method`.
@@ -81,14 +82,7 @@ pub(super) struct RawMotion {
 #[serde(rename_all = "kebab-case")]
 pub(super) enum RawMethod {
     ConstantPeriod,
-}
-
-impl From<RawMethod> for Method {
-    fn from(raw: RawMethod) -> Self {
-        match raw {
-            RawMethod::ConstantPeriod => Self::ConstantPeriod,
-        }
-    }
+    BoundedError,
 }
 
 /// `motion.over_speed`.

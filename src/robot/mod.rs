@@ -49,11 +49,16 @@ impl Joint {
 }
 
 /// The planning method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Method {
     /// The seed's constant time period method.
     #[default]
     ConstantPeriod,
+    /// Rows of any length, as few as keep the executed path within `tolerance_mm` of the line.
+    BoundedError {
+        /// The largest path deviation allowed, mm.
+        tolerance_mm: f64,
+    },
 }
 
 impl Method {
@@ -62,6 +67,7 @@ impl Method {
     pub fn name(self) -> &'static str {
         match self {
             Self::ConstantPeriod => "constant-period",
+            Self::BoundedError { .. } => "bounded-error",
         }
     }
 }
