@@ -8,7 +8,7 @@
 use crate::kinematics::JOINTS;
 use crate::robot::Robot;
 
-use super::PlanError;
+use super::{PlanError, Samples};
 
 /// Checks every joint's count at every sample against its position limits.
 pub(super) fn check_positions(
@@ -49,18 +49,25 @@ pub(super) struct Peak {
     pub load: f64,
 }
 
-/// The period in which a channel comes nearest (or furthest beyond) its maximum frequency.
+/// The period in which a channel comes nearest (or furthest beyond) its maximum frequency: from
+/// the rounded counts (a constant-period row plays exactly those), or from the exact joint values
+/// (`continuous`, for a fine sampling where rounding would dominate).
 #[must_use]
-pub(super) fn peak(robot: &Robot, counts: &[[i64; JOINTS]], period_s: f64) -> Peak {
+pub(super) fn peak(robot: &Robot, samples: &Samples, period_s: f64, continuous: bool) -> Peak {
     let mut best = Peak {
         joint: 0,
         freq_hz: 0.0,
         t_s: 0.0,
         load: 0.0,
     };
-    for (i, w) in counts.windows(2).enumerate() {
+    for i in 0..samples.counts.len().saturating_sub(1) {
         for (j, joint) in robot.joints.iter().enumerate() {
-            let freq_hz = (w[1][j] - w[0][j]).abs() as f64 / period_s;
+            let pulses = if continuous {
+                ((samples.values[i + 1][j] - samples.values[i][j]) / joint.step).abs()
+            } else {
+                (samples.counts[i + 1][j] - samples.counts[i][j]).abs() as f64
+            };
+            let freq_hz = pulses / period_s;
             let load = freq_hz / f64::from(joint.max_freq_hz);
             if load > best.load {
                 best = Peak {

@@ -7,6 +7,7 @@
 //!         -> validation -> sim -> figures
 //! ```
 
+mod bounded;
 mod constant_period;
 mod limits;
 mod samples;
@@ -17,7 +18,7 @@ use thiserror::Error;
 
 use crate::geometry::{Line, Pose, Profile, ProfileError, ProfileRequest};
 use crate::kinematics::{JOINTS, Kinematics, KinematicsError};
-use crate::robot::{Motion, OverSpeed, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::sim::{self, Execution, Figures, Settings};
 use crate::table::{ChannelTable, TableProblem, ValidTable};
 
@@ -100,6 +101,20 @@ pub enum PlanError {
         /// Its maximum, Hz.
         max_hz: u32,
     },
+    /// The tolerance asked of a bounded-error plan cannot be met.
+    #[error(
+        "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse on time the path \
+         still deviates {floor_mm:.4} mm{}",
+        works_mm.map_or(String::new(), |w| format!("; {w} mm works"))
+    )]
+    ToleranceTooSmall {
+        /// The tolerance asked for, mm.
+        tolerance_mm: f64,
+        /// The pulse grid's own path deviation on this move, mm.
+        floor_mm: f64,
+        /// The smallest tolerance found to work, mm.
+        works_mm: Option<f64>,
+    },
     /// The tables break an F174 rule or do not fit their area.
     #[error("joint {joint}: {first}{}", if *more > 0 { format!(" (and {more} more problems)") } else { String::new() })]
     InvalidTable {
@@ -135,6 +150,8 @@ pub struct Plan {
     pub execution: Execution,
     /// The accuracy figures of that run.
     pub figures: Figures,
+    /// Bounded-error plans: the path deviation with every pulse exactly on time, mm.
+    pub floor_mm: Option<f64>,
 }
 
 impl Plan {
@@ -188,29 +205,46 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         });
     }
     let mut motion = req.motion;
-    let (profile, samples) =
-        loop_until_fast_enough(robot, &line, &mut motion, &start_values, start_counts)?;
-    let speed_factor = motion.speed_mm_s / req.motion.speed_mm_s;
-    let tables = build_tables(robot, &samples, &profile, &motion, req.seed_exact);
-    let problems = check_tables(robot, &tables, req.seed_exact)?;
-    let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
-    let execution = sim::execute(
-        &tables,
-        &max_hz,
-        Settings {
-            model: motion.frequency_model,
-            segment_gap_s: 0.0,
-        },
-    );
-    let planned = |t: f64| line.at(profile.distance_mm(t)).position_mm;
-    let figures = sim::measure(
+    let bounded = match motion.method {
+        Method::BoundedError { tolerance_mm } if !req.seed_exact => Some(tolerance_mm),
+        _ => None,
+    };
+    let grid_s = if bounded.is_some() {
+        bounded::SAMPLE_S
+    } else {
+        motion.period_s
+    };
+    let (profile, samples) = loop_until_fast_enough(
         robot,
-        &tables,
-        &execution,
         &line,
-        &planned,
-        profile.duration_s(),
-    );
+        &mut motion,
+        grid_s,
+        &start_values,
+        start_counts,
+    )?;
+    let speed_factor = motion.speed_mm_s / req.motion.speed_mm_s;
+    let (tables, problems, execution, figures, floor_mm) = if let Some(tolerance_mm) = bounded {
+        let m = bounded::Move {
+            robot,
+            line: &line,
+            profile: &profile,
+            samples: &samples,
+            motion: &motion,
+        };
+        let v = m.plan(tolerance_mm)?;
+        (
+            v.tables,
+            Vec::new(),
+            v.execution,
+            v.figures,
+            Some(v.floor_mm),
+        )
+    } else {
+        let tables = build_tables(robot, &samples, &profile, &motion, req.seed_exact);
+        let problems = check_tables(robot, &tables, req.seed_exact)?;
+        let (execution, figures) = simulate(robot, &tables, &line, &profile, &motion);
+        (tables, problems, execution, figures, None)
+    };
     Ok(Plan {
         line,
         profile,
@@ -222,7 +256,37 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         problems,
         execution,
         figures,
+        floor_mm,
     })
+}
+
+/// Plays `tables` in the execution model and measures them against the line and profile.
+fn simulate(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    line: &Line,
+    profile: &Profile,
+    motion: &Motion,
+) -> (Execution, Figures) {
+    let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
+    let execution = sim::execute(
+        tables,
+        &max_hz,
+        Settings {
+            model: motion.frequency_model,
+            segment_gap_s: 0.0,
+        },
+    );
+    let planned = |t: f64| line.at(profile.distance_mm(t)).position_mm;
+    let figures = sim::measure(
+        robot,
+        tables,
+        &execution,
+        line,
+        &planned,
+        profile.duration_s(),
+    );
+    (execution, figures)
 }
 
 type Resolved = (Line, crate::kinematics::Joints, [i64; JOINTS]);
@@ -252,6 +316,7 @@ fn loop_until_fast_enough(
     robot: &Robot,
     line: &Line,
     motion: &mut Motion,
+    grid_s: f64,
     start_values: &crate::kinematics::Joints,
     start_counts: [i64; JOINTS],
 ) -> Result<(Profile, Samples), PlanError> {
@@ -261,11 +326,11 @@ fn loop_until_fast_enough(
             length_mm: line.length_mm(),
             speed_mm_s: motion.speed_mm_s,
             accel_s: motion.accel_s,
-            period_s: motion.period_s,
+            period_s: grid_s,
         })?;
         let samples = samples::sample(robot, line, &profile, start_values, start_counts)?;
         limits::check_positions(robot, &samples.counts, profile.period_s)?;
-        let peak = limits::peak(robot, &samples.counts, profile.period_s);
+        let peak = limits::peak(robot, &samples, profile.period_s, grid_s != motion.period_s);
         if peak.load <= 1.0 {
             return Ok((profile, samples));
         }
@@ -307,7 +372,7 @@ fn build_tables(
         .collect()
 }
 
-fn check_tables(
+pub(super) fn check_tables(
     robot: &Robot,
     tables: &[ChannelTable],
     seed_exact: bool,

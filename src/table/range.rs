@@ -182,9 +182,88 @@ impl FrequencyModel {
     }
 }
 
+impl FrequencyModel {
+    /// A value whose real pulse period lies in `[lo_s, hi_s]`, inside the range and at or below
+    /// `max_set_hz`, the one nearest `want_s` among the few closest; `None` when none does.
+    /// Constant time: it works on the divisor (or the integer value) directly.
+    #[must_use]
+    pub fn set_for_period(
+        self,
+        range: FrequencyRange,
+        lo_s: f64,
+        hi_s: f64,
+        want_s: f64,
+        max_set_hz: u32,
+    ) -> Option<u32> {
+        let lo_set = range.min_set_hz();
+        let hi_set = range.max_set_hz().min(max_set_hz);
+        if hi_set < lo_set || !(lo_s > 0.0) || hi_s < lo_s {
+            return None;
+        }
+        let fits = |set: u32| {
+            let p = 1.0 / self.actual_hz(set, range);
+            (set >= lo_set
+                && set <= hi_set
+                && p >= lo_s * (1.0 - 1e-12)
+                && p <= hi_s * (1.0 + 1e-12))
+                .then_some((set, (p - want_s).abs()))
+        };
+        let candidates: Vec<u32> = match self {
+            Self::Ideal => {
+                let (a, b) = ((1.0 / hi_s).ceil(), (1.0 / lo_s).floor());
+                let w = (1.0 / want_s).round().clamp(a, b.max(a));
+                vec![a as u32, b.min(f64::from(u32::MAX)) as u32, w as u32, 1]
+            }
+            Self::FpxDivider => {
+                let clock = range.divider_clock_hz();
+                let (ka, kb) = ((clock * lo_s).ceil(), (clock * hi_s).floor());
+                let kw = (clock * want_s).round().clamp(ka, kb.max(ka));
+                [ka, kb, kw, kw - 1.0, kw + 1.0, ka + 1.0, kb - 1.0]
+                    .into_iter()
+                    .filter(|k| *k >= 1.0 && *k <= 65_535.0)
+                    .map(|k| (clock / k).ceil() as u32)
+                    .collect()
+            }
+        };
+        candidates
+            .into_iter()
+            .filter_map(fits)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(set, _)| set)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn set_for_period_finds_a_value_inside_the_window_or_none() {
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            for range in FrequencyRange::FINEST_FIRST {
+                // 1 kHz +- 1 % (range 0's divider moves in 1 % steps there): a value exists.
+                let set = model
+                    .set_for_period(range, 0.99e-3, 1.01e-3, 1e-3, 100_000)
+                    .unwrap();
+                let p = 1.0 / model.actual_hz(set, range);
+                assert!(
+                    (0.99e-3..=1.01e-3).contains(&p),
+                    "{model:?} {range:?} {set} {p}"
+                );
+            }
+            // A window narrower than one Hz step at 50 kHz holds no value.
+            assert_eq!(
+                model.set_for_period(
+                    FrequencyRange::High,
+                    1.0 / 50_000.4,
+                    1.0 / 50_000.2,
+                    1.0 / 50_000.3,
+                    100_000
+                ),
+                None
+            );
+        }
+    }
 
     #[test]
     fn divider_never_exceeds_the_set_value() {

@@ -49,6 +49,9 @@ pub struct PlanArgs {
     /// Planning method.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
+    /// Largest path deviation a bounded-error plan may have, e.g. `0.05mm` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tolerance: Option<String>,
     /// Reproduce the paper as printed (comparison only; never valid for a PLC).
     #[arg(long)]
     pub seed_exact: bool,
@@ -68,6 +71,8 @@ pub struct PlanArgs {
 pub enum MethodArg {
     /// The seed's constant time period method.
     ConstantPeriod,
+    /// Rows of any length, as few as keep the path within `--tolerance`.
+    BoundedError,
 }
 
 /// `--frequency-model`.
@@ -152,6 +157,16 @@ fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     })
 }
 
+/// A length in mm, written `0.05mm` or `0.05`; above 0.
+fn parse_mm(text: &str) -> anyhow::Result<f64> {
+    let number = text.trim().strip_suffix("mm").unwrap_or(text.trim());
+    let value = super::args::parse_number(number)?;
+    if value <= 0.0 {
+        anyhow::bail!("'{text}' must be above 0 mm");
+    }
+    Ok(value)
+}
+
 fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
     let mut m = defaults;
     if let Some(text) = &args.speed {
@@ -163,9 +178,30 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
     if let Some(text) = &args.period {
         m.period_s = parse_duration_s(text).context("--period")?;
     }
-    if let Some(MethodArg::ConstantPeriod) = args.method {
-        m.method = Method::ConstantPeriod;
-    }
+    let tolerance = args
+        .tolerance
+        .as_deref()
+        .map(parse_mm)
+        .transpose()
+        .context("--tolerance")?;
+    m.method = match (args.method, m.method, tolerance) {
+        (Some(MethodArg::ConstantPeriod), _, None) => Method::ConstantPeriod,
+        (Some(MethodArg::BoundedError) | None, _, Some(tolerance_mm)) => {
+            Method::BoundedError { tolerance_mm }
+        }
+        (Some(MethodArg::BoundedError), Method::BoundedError { tolerance_mm }, None) => {
+            Method::BoundedError { tolerance_mm }
+        }
+        (Some(MethodArg::BoundedError), Method::ConstantPeriod, None) => {
+            anyhow::bail!(
+                "--method bounded-error needs --tolerance (e.g. 0.05mm); the robot's config gives none"
+            )
+        }
+        (Some(MethodArg::ConstantPeriod), _, Some(_)) => {
+            anyhow::bail!("--tolerance only applies to --method bounded-error")
+        }
+        (None, method, None) => method,
+    };
     if let Some(model) = args.frequency_model {
         m.frequency_model = match model {
             ModelArg::Ideal => FrequencyModel::Ideal,

@@ -1,0 +1,228 @@
+//! The `bounded-error` method: rows of any length, as few as keep the executed path within a
+//! stated tolerance of the line, with no period grid.
+//!
+//! 1. The line is sampled finely ([`SAMPLE_S`]) and solved to every joint's fractional count.
+//! 2. The Cartesian tolerance becomes a per-joint pulse budget through the Jacobian: a joint whose
+//!    pulse moves the tool `s_j` mm may be `delta_j` pulses off where `s_j * delta_j` is its
+//!    share of the tolerance left above the pulse grid's own floor.
+//! 3. Every pulse gets a window of landing times ([`pulses`]); rows are the longest runs of
+//!    pulses one realisable frequency lands inside their windows (Klipper's step compression,
+//!    [`rows`]).
+//! 4. The execution model plays the tables; a plan whose path deviation exceeds the tolerance
+//!    (or whose tracking error exceeds twice it) is not returned: the windows narrow and it is
+//!    planned again, and a tolerance the grid cannot reach is refused with one that works.
+
+mod pulses;
+mod rows;
+
+use crate::geometry::{Line, Profile};
+use crate::kinematics::{JOINTS, Kinematics};
+use crate::robot::{Motion, Robot};
+use crate::sim::{Execution, Figures, PulseEvent};
+use crate::table::ChannelTable;
+
+use super::{PlanError, Samples, simulate};
+use pulses::{Run, Track};
+use rows::Channel;
+
+/// Sample spacing of the trajectory, s.
+pub(super) const SAMPLE_S: f64 = 0.001;
+/// The first try's windows, relative to the budget: the budget adds every joint's error at its
+/// worst as if they all pointed the same way, which they rarely do, so the search starts wider
+/// and lets the execution model judge.
+const FIRST_SCALE: f64 = 2.5;
+/// Tries with narrower windows before giving up on a tolerance.
+const TRIES: usize = 14;
+/// Each retry narrows every window to this fraction.
+const NARROWING: f64 = 0.8;
+/// The widest window, pulses each side (also for joints that do not move the tool point).
+const MAX_DELTA_PULSES: f64 = 8.0;
+
+/// A verified bounded-error plan's tables and how they ran.
+pub(super) struct Verified {
+    pub tables: Vec<ChannelTable>,
+    pub execution: Execution,
+    pub figures: Figures,
+    /// The path deviation with every pulse exactly on time (the pulse grid's floor), mm.
+    pub floor_mm: f64,
+}
+
+/// Everything the method needs about one move.
+pub(super) struct Move<'a> {
+    pub robot: &'a Robot,
+    pub line: &'a Line,
+    pub profile: &'a Profile,
+    pub samples: &'a Samples,
+    pub motion: &'a Motion,
+}
+
+impl Move<'_> {
+    /// Fractional counts of joint `j` at every sample.
+    fn fractional(&self, j: usize) -> Vec<f64> {
+        let joint = &self.robot.joints[j];
+        self.samples
+            .values
+            .iter()
+            .map(|q| (q[j] - joint.offset) / joint.step)
+            .collect()
+    }
+
+    fn start_counts(&self) -> [i64; JOINTS] {
+        self.samples.counts[0]
+    }
+
+    /// How far one pulse of each joint moves the tool point at most along the path, mm.
+    fn pulse_reach_mm(&self) -> [f64; JOINTS] {
+        let n = self.samples.values.len();
+        let mut reach = [0.0f64; JOINTS];
+        for i in (0..n).step_by((n / 32).max(1)).chain([n - 1]) {
+            let q = self.samples.values[i];
+            let p = self.robot.kinematics.fk(&q).position_mm;
+            for (j, r) in reach.iter_mut().enumerate() {
+                let mut moved = q;
+                moved[j] += self.robot.joints[j].step;
+                *r = r.max((self.robot.kinematics.fk(&moved).position_mm - p).norm());
+            }
+        }
+        reach
+    }
+
+    fn runs(&self, deltas: &[f64; JOINTS]) -> Vec<Vec<Run>> {
+        let start = self.start_counts();
+        (0..JOINTS)
+            .map(|j| {
+                Track {
+                    u: &self.fractional(j),
+                    dt_s: self.profile.period_s,
+                }
+                .runs(start[j], deltas[j])
+            })
+            .collect()
+    }
+
+    /// The path deviation with every pulse landing exactly on time.
+    fn floor_mm(&self) -> f64 {
+        let runs = self.runs(&[0.0; JOINTS]);
+        let mut events: Vec<PulseEvent> = runs
+            .iter()
+            .enumerate()
+            .flat_map(|(j, rs)| {
+                rs.iter().flat_map(move |r| {
+                    r.pulses.iter().map(move |p| PulseEvent {
+                        t_s: p.ideal_s,
+                        table: j,
+                        count: p.count,
+                    })
+                })
+            })
+            .collect();
+        events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        let tables: Vec<ChannelTable> = (0..JOINTS)
+            .map(|j| ChannelTable {
+                channel: self.robot.joints[j].channel,
+                start: self.start_counts()[j],
+                segments: Vec::new(),
+            })
+            .collect();
+        let exec = Execution {
+            events,
+            rows: Vec::new(),
+            finish_s: vec![None; JOINTS],
+        };
+        let planned = |t: f64| self.line.at(self.profile.distance_mm(t)).position_mm;
+        crate::sim::measure(
+            self.robot,
+            &tables,
+            &exec,
+            self.line,
+            &planned,
+            self.profile.duration_s(),
+        )
+        .path_deviation_mm
+    }
+
+    fn tables(&self, deltas: &[f64; JOINTS]) -> Vec<ChannelTable> {
+        let start = self.start_counts();
+        self.runs(deltas)
+            .iter()
+            .enumerate()
+            .map(|(j, runs)| {
+                let joint = &self.robot.joints[j];
+                let channel = Channel {
+                    joint,
+                    model: self.motion.frequency_model,
+                };
+                let (mut t_s, mut count, mut segments) = (0.0, start[j], Vec::new());
+                for (i, run) in runs.iter().enumerate() {
+                    let left = crate::table::MAX_SEGMENTS
+                        .saturating_sub(segments.len() + runs.len() - i - 1)
+                        .max(1);
+                    let (segs, end) = channel.run(run, t_s, count, left);
+                    count = run.pulses.last().map_or(count, |p| p.count);
+                    t_s = end;
+                    segments.extend(segs);
+                }
+                ChannelTable {
+                    channel: joint.channel,
+                    start: start[j],
+                    segments,
+                }
+            })
+            .collect()
+    }
+
+    /// Plans at `tolerance_mm`, narrowing the windows until the execution model agrees.
+    pub(super) fn plan(&self, tolerance_mm: f64) -> Result<Verified, PlanError> {
+        let floor_mm = self.floor_mm();
+        if floor_mm >= tolerance_mm {
+            return Err(self.too_tight(tolerance_mm, floor_mm));
+        }
+        match self.try_plan(tolerance_mm, floor_mm)? {
+            Some(v) => Ok(v),
+            None => Err(self.too_tight(tolerance_mm, floor_mm)),
+        }
+    }
+
+    fn try_plan(&self, tolerance_mm: f64, floor_mm: f64) -> Result<Option<Verified>, PlanError> {
+        let reach = self.pulse_reach_mm();
+        let mut scale = FIRST_SCALE;
+        for _ in 0..TRIES {
+            let deltas = reach.map(|r| {
+                if r > 0.0 {
+                    ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
+                } else {
+                    MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
+                }
+            });
+            let tables = self.tables(&deltas);
+            super::check_tables(self.robot, &tables, false)?;
+            let (execution, figures) =
+                simulate(self.robot, &tables, self.line, self.profile, self.motion);
+            if figures.path_deviation_mm <= tolerance_mm
+                && figures.tracking_error_mm <= 2.0 * tolerance_mm
+            {
+                return Ok(Some(Verified {
+                    tables,
+                    execution,
+                    figures,
+                    floor_mm,
+                }));
+            }
+            scale *= NARROWING;
+        }
+        Ok(None)
+    }
+
+    /// The refusal of a tolerance, naming the smallest one that does work on this move.
+    fn too_tight(&self, tolerance_mm: f64, floor_mm: f64) -> PlanError {
+        let works = [1.05, 1.1, 1.25, 1.5, 2.0, 3.0]
+            .iter()
+            .map(|k| (floor_mm * k * 1e4).ceil() / 1e4)
+            .find(|&t| t > tolerance_mm && matches!(self.try_plan(t, floor_mm), Ok(Some(_))));
+        PlanError::ToleranceTooSmall {
+            tolerance_mm,
+            floor_mm,
+            works_mm: works,
+        }
+    }
+}

@@ -1,0 +1,156 @@
+//! Every pulse a joint must make along the planned trajectory, when it would ideally land, and
+//! the window of times in which it may land while the joint stays within its error budget.
+//!
+//! With `u(t)` the joint's fractional count, the count `c` is ideal when `|u - c| <= 1/2`: the
+//! pulse from `c` to `c + 1` ideally lands when `u` crosses `c + 1/2`. Allowing `delta` pulses of
+//! error, it may land from when `u` reaches `c + 1/2 - delta` until it reaches `c + 1/2 + delta`
+//! (or the joint turns): then `|u - count| <= 1/2 + delta` at every instant.
+
+use crate::table::Direction;
+
+/// One pulse to make.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Pulse {
+    /// The count after the pulse.
+    pub count: i64,
+    /// When the trajectory crosses the half count, s.
+    pub ideal_s: f64,
+    /// Earliest allowed landing, s.
+    pub lo_s: f64,
+    /// Latest allowed landing, s.
+    pub hi_s: f64,
+}
+
+/// Pulses in one direction, back to back.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Run {
+    /// Their direction.
+    pub direction: Direction,
+    /// The pulses, in order.
+    pub pulses: Vec<Pulse>,
+}
+
+/// A joint's fractional count sampled every `dt_s` from t = 0.
+pub(super) struct Track<'a> {
+    /// `u[i]` at `i * dt_s`.
+    pub u: &'a [f64],
+    /// Sample spacing, s.
+    pub dt_s: f64,
+}
+
+impl Track<'_> {
+    fn t(&self, i: usize) -> f64 {
+        i as f64 * self.dt_s
+    }
+
+    /// Time in sample interval `i` at which `u` passes `level` (linear between samples).
+    fn at(&self, i: usize, level: f64) -> f64 {
+        let (a, b) = (self.u[i], self.u[i + 1]);
+        let f = if b == a {
+            0.0
+        } else {
+            ((level - a) / (b - a)).clamp(0.0, 1.0)
+        };
+        self.t(i) + f * self.dt_s
+    }
+
+    /// Moving in direction `d` (+1/-1) between samples `i` and `i + 1`.
+    fn moves(&self, i: usize, d: f64) -> bool {
+        (self.u[i + 1] - self.u[i]) * d > 0.0
+    }
+
+    /// Earliest time, searching back from interval `i`, since which `u` is past `level`.
+    fn since(&self, mut i: usize, level: f64, d: f64) -> f64 {
+        loop {
+            if (self.u[i] - level) * d <= 0.0 {
+                return self.at(i, level);
+            }
+            if i == 0 || !self.moves(i - 1, d) {
+                return self.t(i);
+            }
+            i -= 1;
+        }
+    }
+
+    /// Latest time, searching on from interval `i`, before which `u` has not reached `level`.
+    fn until(&self, mut i: usize, level: f64, d: f64) -> f64 {
+        loop {
+            if (self.u[i + 1] - level) * d >= 0.0 {
+                return self.at(i, level);
+            }
+            if i + 2 >= self.u.len() || !self.moves(i + 1, d) {
+                return self.t(i + 1);
+            }
+            i += 1;
+        }
+    }
+
+    /// The joint's pulses from count `start`, with windows `delta` pulses wide each side.
+    pub(super) fn runs(&self, start: i64, delta: f64) -> Vec<Run> {
+        let mut runs: Vec<Run> = Vec::new();
+        let mut count = start;
+        for i in 0..self.u.len().saturating_sub(1) {
+            let b = self.u[i + 1];
+            loop {
+                let d = if b > count as f64 + 0.5 {
+                    1
+                } else if b < count as f64 - 0.5 {
+                    -1
+                } else {
+                    break;
+                };
+                let h = count as f64 + 0.5 * d as f64;
+                let df = f64::from(d);
+                count += i64::from(d);
+                let pulse = Pulse {
+                    count,
+                    ideal_s: self.at(i, h),
+                    lo_s: self.since(i, h - df * delta, df),
+                    hi_s: self.until(i, h + df * delta, df),
+                };
+                let direction = if d > 0 {
+                    Direction::Up
+                } else {
+                    Direction::Down
+                };
+                match runs.last_mut() {
+                    Some(r) if r.direction == direction => r.pulses.push(pulse),
+                    _ => runs.push(Run {
+                        direction,
+                        pulses: vec![pulse],
+                    }),
+                }
+            }
+        }
+        runs
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steady_motion_gives_evenly_spaced_pulses_with_symmetric_windows() {
+        // u = 10 t, sampled every 0.1 s: pulses cross 0.5, 1.5, ... at 0.05, 0.15, ...
+        let u: Vec<f64> = (0..=10).map(|i| f64::from(i)).collect();
+        let runs = Track { u: &u, dt_s: 0.1 }.runs(0, 0.25);
+        assert_eq!(runs.len(), 1);
+        let p = &runs[0].pulses;
+        assert_eq!(p.len(), 10);
+        assert!((p[0].ideal_s - 0.05).abs() < 1e-12);
+        assert!((p[3].lo_s - 0.325).abs() < 1e-12 && (p[3].hi_s - 0.375).abs() < 1e-12);
+        assert_eq!(p[9].count, 10);
+    }
+
+    #[test]
+    fn reversal_starts_a_new_run_and_bounds_the_window_at_the_turn() {
+        let u = [0.0, 1.0, 2.0, 1.0, 0.0];
+        let runs = Track { u: &u, dt_s: 1.0 }.runs(0, 3.0);
+        assert_eq!(runs.len(), 2);
+        assert_eq!(runs[0].direction, Direction::Up);
+        assert_eq!(runs[1].pulses.last().unwrap().count, 0);
+        // The last up pulse may land no later than the turn at t = 2.
+        assert!((runs[0].pulses[1].hi_s - 2.0).abs() < 1e-12);
+    }
+}
