@@ -251,7 +251,7 @@ impl FromStr for FaultScript {
     }
 }
 
-/// SplitMix64: a tiny, well-mixed PRNG, enough for reproducible fault draws.
+/// `SplitMix64`: a tiny, well-mixed PRNG, enough for reproducible fault draws.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct SplitMix64(u64);
 
