@@ -172,22 +172,29 @@ impl Engine {
     }
 
     fn begin_row(&mut self, row: usize, at_s: f64, rec: &mut Recorder) {
-        let (min_hz, max_hz) = self.allowed(self.playing.as_ref().expect("playing").range);
-        let (channel, model, limit_hz, count) =
-            (self.channel, self.model, self.limit_hz, self.count);
-        let p = self.playing.as_mut().expect("playing");
+        let (model, limit_hz, count) = (self.model, self.limit_hz, self.count);
+        let p = self
+            .playing
+            .as_mut()
+            .expect("a row begins only while playing");
         let Row { freq_hz, target } = p.rows[row];
         p.row = row;
         p.row_start_s = at_s;
         p.emitted = 0;
         p.actual_hz = row_actual_hz(model, freq_hz, p.range, f64::from(limit_hz));
         p.step = p.direction.sign();
-        let segment = p.segment;
+        let delta = target - count;
+        p.pulses = (delta * p.step > 0).then_some(delta.abs());
+        let (segment, direction, range, runs_on) =
+            (p.segment, p.direction, p.range, p.pulses.is_none());
+        let (min_hz, max_hz) = self.allowed(range);
+        let channel = self.channel;
+        let row = row + 1;
         if freq_hz < min_hz || freq_hz > max_hz {
             tracing::warn!(
                 channel,
                 segment,
-                row = row + 1,
+                row,
                 freq_hz,
                 min_hz,
                 max_hz,
@@ -196,7 +203,7 @@ impl Engine {
             let a = Anomaly::Clamped {
                 channel,
                 segment,
-                row: row + 1,
+                row,
                 freq_hz,
                 min_hz,
                 max_hz,
@@ -204,30 +211,26 @@ impl Engine {
             };
             rec.anomalies.push(a);
         }
-        let delta = target - count;
-        if delta * p.step > 0 {
-            p.pulses = Some(delta.abs());
-            return;
+        if runs_on {
+            tracing::error!(
+                channel,
+                segment,
+                row,
+                from = count,
+                target,
+                "target against the segment's direction: the count runs on without end until a stop"
+            );
+            let a = Anomaly::RunOn {
+                channel,
+                segment,
+                row,
+                from: count,
+                target,
+                direction,
+                at_s,
+            };
+            rec.anomalies.push(a);
         }
-        p.pulses = None;
-        tracing::error!(
-            channel,
-            segment,
-            row = row + 1,
-            from = count,
-            target,
-            "target against the segment's direction: the count runs on without end until a stop"
-        );
-        let a = Anomaly::RunOn {
-            channel,
-            segment,
-            row: row + 1,
-            from: count,
-            target,
-            direction: p.direction,
-            at_s,
-        };
-        rec.anomalies.push(a);
     }
 
     /// Emits every pulse that lands at or before `to_s`.

@@ -198,7 +198,7 @@ impl MockPlc {
         self.program
             .scan(at_s, self.next_scan, &self.config.layout, &mut io);
         for (c, e) in self.engines.iter().enumerate() {
-            if e.running_on() && self.next_scan % 500 == 0 {
+            if e.running_on() && self.next_scan % self.scans_per_second() == 0 {
                 tracing::error!(
                     channel = c,
                     count = e.count(),
@@ -207,6 +207,10 @@ impl MockPlc {
                 );
             }
         }
+    }
+
+    fn scans_per_second(&self) -> u64 {
+        ((1.0 / self.config.scan_s).round() as u64).max(1)
     }
 
     /// RUN or PROG.

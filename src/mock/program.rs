@@ -178,27 +178,13 @@ impl Program {
             State::Fault => return Self::set_command(io.memory, layout, Command::None),
             State::Idle | State::Done | State::Stopped => {}
         }
-        let words = io
-            .memory
-            .read_dt(u32::from(layout.command_base), COMMAND_WORDS);
-        let block = words
-            .ok()
-            .and_then(CommandBlock::from_words)
-            .unwrap_or_default();
-        let tables = match load(&block, layout, io.memory) {
-            Ok(t) => t,
-            Err(e) => return self.latch(Fault::BadTableHeader, e.to_string(), io, layout),
+        let (block, tables) = match prepare(layout, io) {
+            Ok(prepared) => prepared,
+            Err((fault, why)) => return self.latch(fault, why, io, layout),
         };
-        if let Some(c) = (0..CHANNELS).find(|&c| tables[c].is_some() && io.engines[c].busy()) {
-            let why = format!("channel {c} is busy at start");
-            return self.latch(Fault::ChannelBusy, why, io, layout);
-        }
-        if let Err(e) = check_first_segments(&tables, io.engines) {
-            return self.latch(Fault::PulseInstruction, e.to_string(), io, layout);
-        }
         for (c, segments) in tables.into_iter().enumerate() {
             let Some(segments) = segments else { continue };
-            // Checked above: starting cannot fail.
+            // `prepare` checked segment 1: starting it cannot fail.
             let _ = io.engines[c].start(&segments[0], 1, at_s, io.rec);
             self.segment[c] = 1;
             self.runs[c] = Some(ChannelRun {
@@ -320,6 +306,26 @@ impl Program {
 }
 
 type Tables = [Option<Vec<Segment>>; CHANNELS];
+
+/// Reads the command block and checks everything a start needs, in the contract's order:
+/// bounds (fault 1), busy channels (fault 2), then F174's own check of every segment 1 (fault 4).
+fn prepare(layout: &Layout, io: &ScanIo<'_>) -> Result<(CommandBlock, Tables), (Fault, String)> {
+    let words = io
+        .memory
+        .read_dt(u32::from(layout.command_base), COMMAND_WORDS);
+    let block = words
+        .ok()
+        .and_then(CommandBlock::from_words)
+        .unwrap_or_default();
+    let tables =
+        load(&block, layout, io.memory).map_err(|e| (Fault::BadTableHeader, e.to_string()))?;
+    if let Some(c) = (0..CHANNELS).find(|&c| tables[c].is_some() && io.engines[c].busy()) {
+        return Err((Fault::ChannelBusy, format!("channel {c} is busy at start")));
+    }
+    check_first_segments(&tables, io.engines)
+        .map_err(|e| (Fault::PulseInstruction, e.to_string()))?;
+    Ok((block, tables))
+}
 
 /// Checks the command block's bounds and decodes every masked channel's segments.
 fn load(block: &CommandBlock, layout: &Layout, memory: &Memory) -> Result<Tables, HeaderError> {

@@ -4,7 +4,8 @@
 //! - every channel of a start begins at t = 0 from its start count;
 //! - a row `(f_set, target)` emits |target - count| pulses at the real frequency
 //!   `model(f_set, range)`, clamped to the channel's maximum: pulse k of the row lands at
-//!   `row_start + k / f`, and the next row starts when the last pulse lands (`row_actual_hz`, `pulse_time_s`: the mock PLC times rows with the same two);
+//!   `row_start + k / f`, and the next row starts when the last pulse lands ([`row_actual_hz`]
+//!   and [`pulse_time_s`]: the mock PLC times its rows with the same two);
 //! - a channel's next segment starts when its previous one ends, plus a configurable gap (the
 //!   PLC's scan; 0 in the planner's own report);
 //! - rows go toward their target whatever the segment's direction says: the runaway of an FP-X on
