@@ -71,14 +71,13 @@ impl InProcess {
     }
 }
 
-/// A memory range error as the refusal a MEWTOCOL-COM PLC gives (error 61 for a bad range of
-/// words, 66 for an address out of range).
+/// A memory range error as the refusal a MEWTOCOL-COM PLC gives.
 fn refused(operation: String, error: MemoryError) -> PlcError {
-    let (code, meaning) = match error {
-        MemoryError::DtOutOfRange { .. } | MemoryError::RelayWordOutOfRange { .. } => {
-            (61, "data error (range, start > end, non-hex data)")
-        }
-        MemoryError::RelayOutOfRange { .. } => (66, "address error (format, over or under range)"),
+    let code = error.mewtocol_code();
+    let meaning = if code == 66 {
+        "address error (address format, over or under range)"
+    } else {
+        "data error (range, start > end, non-hex data)"
     };
     tracing::debug!(%error, "in-process mock refused {operation}");
     PlcError::Refused {

@@ -48,6 +48,33 @@ pub enum MemoryError {
     },
 }
 
+impl MemoryError {
+    /// The MEWTOCOL-COM error a PLC answers (PLC.md §1, "Error codes"): 66 (address error) when
+    /// the first address is already outside the area, 61 (data error, range) when only the end of
+    /// the range runs past it.
+    #[must_use]
+    pub fn mewtocol_code(&self) -> u8 {
+        match *self {
+            Self::DtOutOfRange { start, last, .. }
+            | Self::RelayWordOutOfRange { start, last, .. } => {
+                if start > u32::from(last) {
+                    66
+                } else {
+                    61
+                }
+            }
+            Self::RelayOutOfRange { .. } => 66,
+        }
+    }
+
+    /// The Modbus exception a slave answers: 02, illegal data address (03, illegal data value,
+    /// is for a bad quantity, which the protocol layer checks before memory is reached).
+    #[must_use]
+    pub fn modbus_exception(&self) -> u8 {
+        2
+    }
+}
+
 /// DT words and R relays.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Memory {
@@ -171,6 +198,16 @@ mod tests {
         );
         assert_eq!(m.dt(32_764).unwrap(), 2, "a refused write changes nothing");
         assert!(e.to_string().contains("DT32764..=DT32765"), "{e}");
+    }
+
+    #[test]
+    fn range_errors_map_to_mewtocol_61_or_66_and_modbus_02() {
+        let m = Memory::new();
+        let partly = m.read_dt(32_760, 10).unwrap_err();
+        let wholly = m.read_dt(40_000, 1).unwrap_err();
+        assert_eq!((partly.mewtocol_code(), wholly.mewtocol_code()), (61, 66));
+        assert_eq!(m.relay(5_000).unwrap_err().mewtocol_code(), 66);
+        assert_eq!(partly.modbus_exception(), 2);
     }
 
     #[test]

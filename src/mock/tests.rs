@@ -635,3 +635,10 @@ fn in_process_handle_runs_a_move_through_the_plc_trait() {
     plc.advance(1.0);
     assert!(shared.lock().unwrap().now_s() > 1.0);
 }
+
+#[test]
+fn mock_can_be_shared_between_server_tasks() {
+    fn shareable<T: Send + 'static>() {}
+    shareable::<Arc<std::sync::Mutex<MockPlc>>>();
+    shareable::<InProcess>();
+}
