@@ -642,3 +642,15 @@ fn mock_can_be_shared_between_server_tasks() {
     shareable::<Arc<std::sync::Mutex<MockPlc>>>();
     shareable::<InProcess>();
 }
+
+#[test]
+fn in_process_mode_reports_prog_after_a_scripted_switch() {
+    use crate::plc::Plc;
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_faults("prog@t=0.01".parse().unwrap());
+    let mut plc = InProcess::new(Arc::new(std::sync::Mutex::new(m))).with_exchange_s(0.02);
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .build()
+        .unwrap();
+    assert_eq!(rt.block_on(plc.mode()).unwrap(), PlcMode::Prog);
+}
