@@ -19,6 +19,8 @@
 //! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
 //! contract/    PURE  the register contract: DT layout, status and command blocks
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
+//! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
+//!                    fault injection, pulse trace; synchronous core, time is an argument
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! ```
@@ -29,6 +31,7 @@ pub mod contract;
 pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;
+pub mod mock;
 pub mod plan;
 pub mod plc;
 pub mod robot;

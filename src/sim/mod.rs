@@ -2,9 +2,10 @@
 //! the planned line (`../shared/spec/ACCURACY.md`).
 //!
 //! - every channel of a start begins at t = 0 from its start count;
-//! - a row (`f_set`, target) emits |target - count| pulses at the real frequency
+//! - a row `(f_set, target)` emits |target - count| pulses at the real frequency
 //!   `model(f_set, range)`, clamped to the channel's maximum: pulse k of the row lands at
-//!   `row_start + k / f`, and the next row starts when the last pulse lands;
+//!   `row_start + k / f`, and the next row starts when the last pulse lands ([`row_actual_hz`]
+//!   and [`pulse_time_s`]: the mock PLC times its rows with the same two);
 //! - a channel's next segment starts when its previous one ends, plus a configurable gap (the
 //!   PLC's scan; 0 in the planner's own report);
 //! - rows go toward their target whatever the segment's direction says: the runaway of an FP-X on
@@ -16,7 +17,27 @@ mod figures;
 
 pub use figures::{Figures, SAMPLE_PERIOD_S, measure};
 
-use crate::table::{ChannelTable, FrequencyModel};
+use crate::table::{ChannelTable, FrequencyModel, FrequencyRange};
+
+/// The real frequency (Hz) a row written as `freq_hz` in `range` runs at on a channel whose top
+/// frequency is `limit_hz`: the model's output, clamped to the range and then to the channel.
+/// The planner's report and the mock PLC both time rows with this.
+#[must_use]
+pub fn row_actual_hz(
+    model: FrequencyModel,
+    freq_hz: u32,
+    range: FrequencyRange,
+    limit_hz: f64,
+) -> f64 {
+    model.actual_hz(freq_hz, range).min(limit_hz)
+}
+
+/// When pulse `k` (from 1) of a row that began at `row_start_s` and runs at `actual_hz` lands;
+/// pulse `n` of an `n`-pulse row is also when the row ends.
+#[must_use]
+pub fn pulse_time_s(row_start_s: f64, k: i64, actual_hz: f64) -> f64 {
+    row_start_s + k as f64 / actual_hz
+}
 
 /// How a start is executed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,22 +117,19 @@ fn run_channel(
             t += settings.segment_gap_s;
         }
         for (ri, row) in seg.rows.iter().enumerate() {
-            let actual_hz = settings
-                .model
-                .actual_hz(row.freq_hz, seg.control.range)
-                .min(limit_hz);
+            let actual_hz = row_actual_hz(settings.model, row.freq_hz, seg.control.range, limit_hz);
             let step = (row.target - count).signum();
             let pulses = (row.target - count).abs();
             let start_s = t;
             for k in 1..=pulses {
                 count += step;
                 exec.events.push(PulseEvent {
-                    t_s: start_s + k as f64 / actual_hz,
+                    t_s: pulse_time_s(start_s, k, actual_hz),
                     table: index,
                     count,
                 });
             }
-            t = start_s + pulses as f64 / actual_hz;
+            t = pulse_time_s(start_s, pulses, actual_hz);
             exec.rows.push(RowTiming {
                 table: index,
                 segment: si,

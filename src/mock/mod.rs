@@ -1,0 +1,394 @@
+//! The mock PLC: an FP-X running the contract's PLC program (`CONTRACT.md`), synchronous and
+//! deterministic. No sockets and no clock: time is an argument (`now_s`, seconds since the mock
+//! started). Servers (MEWTOCOL-COM, Modbus) wrap a [`MockPlc`] in `Arc<Mutex<_>>`, advance it to
+//! their clock's time before each command, and consult [`MockPlc::on_command`] for link faults;
+//! [`InProcess`] does the same without any protocol, for contract-flow tests.
+//!
+//! ```text
+//! memory.rs      DT0..=DT32764, R0..=R255F, range errors
+//! program.rs     the contract's PLC program, one scan at a time
+//! engine.rs      one F174 pulse channel on the shared execution model (crate::sim)
+//! trace.rs       pulse trace (CSV) and anomalies (clamped rows, run-ons)
+//! faults.rs      seeded, scriptable fault injection
+//! clock.rs       virtual and real clocks for drivers
+//! in_process.rs  a crate::plc::Plc handle on a shared mock
+//! ```
+//!
+//! Time: scans run at `k * scan_s` while in RUN; between scans the pulse engines run on their
+//! own, so every pulse lands at its model time, not at a scan.
+
+mod clock;
+mod engine;
+mod faults;
+mod in_process;
+mod memory;
+mod program;
+mod trace;
+
+use thiserror::Error;
+
+pub use clock::{Clock, RealClock, VirtualClock};
+pub use engine::PulseError;
+pub use faults::{
+    Action, CoreFault, FaultInjector, FaultItem, FaultScript, Fired, LinkFault, ScriptError,
+    Trigger,
+};
+pub use in_process::InProcess;
+pub use memory::{Memory, MemoryError, RELAY_LAST, RELAY_WORDS};
+pub use program::HeaderError;
+pub use trace::{Anomaly, PulsePoint, Recorder, write_csv};
+
+use crate::contract::{CHANNELS, Layout, LayoutError, State, StatusBlock};
+use crate::plc::PlcMode;
+use crate::table::FrequencyModel;
+use engine::Engine;
+use program::{Inputs, Program, ScanIo};
+
+/// Default scan time, s.
+pub const DEFAULT_SCAN_S: f64 = 0.002;
+/// Top frequency per channel of an FP-X C60T (PLC.md §3, "Channels"): 100 kHz on 0-1, 20 kHz on
+/// 2-3.
+pub const FPX_C60T_MAX_HZ: [u32; CHANNELS] = [100_000, 100_000, 20_000, 20_000];
+/// A scan due within this much of `now_s` runs (so clocks stepped by sums of floats do not skip
+/// a scan).
+const SCAN_SLACK_S: f64 = 1e-9;
+
+/// How the mock is built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MockConfig {
+    /// Where the contract's blocks and areas sit.
+    pub layout: Layout,
+    /// Scan time, s.
+    pub scan_s: f64,
+    /// What the channels really output.
+    pub model: FrequencyModel,
+    /// Top frequency per channel, Hz.
+    pub channel_max_hz: [u32; CHANNELS],
+}
+
+impl Default for MockConfig {
+    fn default() -> Self {
+        Self {
+            layout: Layout::default(),
+            scan_s: DEFAULT_SCAN_S,
+            model: FrequencyModel::default(),
+            channel_max_hz: FPX_C60T_MAX_HZ,
+        }
+    }
+}
+
+/// Why a mock cannot be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MockError {
+    /// The layout does not fit DT memory.
+    #[error(transparent)]
+    Layout(#[from] LayoutError),
+    /// The scan time is not a positive number of seconds.
+    #[error("scan time {scan_s} s must be above 0")]
+    ScanTime {
+        /// The scan time given.
+        scan_s: f64,
+    },
+}
+
+/// An FP-X running the contract's PLC program.
+#[derive(Debug, Clone)]
+pub struct MockPlc {
+    config: MockConfig,
+    memory: Memory,
+    engines: [Engine; CHANNELS],
+    program: Program,
+    mode: PlcMode,
+    now_s: f64,
+    next_scan: u64,
+    ready: u16,
+    estop_open: bool,
+    heartbeat_frozen: bool,
+    recorder: Recorder,
+    faults: FaultInjector,
+    commands: u64,
+}
+
+impl MockPlc {
+    /// A mock in RUN at t = 0, memory zero, counts 0, ready = 0b111, e-stop closed.
+    pub fn new(config: MockConfig) -> Result<Self, MockError> {
+        config.layout.check()?;
+        if !(config.scan_s.is_finite() && config.scan_s > 0.0) {
+            return Err(MockError::ScanTime {
+                scan_s: config.scan_s,
+            });
+        }
+        let engines =
+            std::array::from_fn(|c| Engine::new(c as u8, config.channel_max_hz[c], config.model));
+        Ok(Self {
+            config,
+            memory: Memory::new(),
+            engines,
+            program: Program::default(),
+            mode: PlcMode::Run,
+            now_s: 0.0,
+            next_scan: 0,
+            ready: 0b111,
+            estop_open: false,
+            heartbeat_frozen: false,
+            recorder: Recorder::default(),
+            faults: FaultInjector::default(),
+            commands: 0,
+        })
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub fn config(&self) -> &MockConfig {
+        &self.config
+    }
+
+    /// How far the mock has run, s.
+    #[must_use]
+    pub fn now_s(&self) -> f64 {
+        self.now_s
+    }
+
+    /// Scans run or skipped (PROG) so far.
+    #[must_use]
+    pub fn scans(&self) -> u64 {
+        self.next_scan
+    }
+
+    /// Runs every scan due up to `now_s`, in order, with the pulse engines advanced exactly to
+    /// each scan, then the engines to `now_s`. A time before the mock's own is ignored.
+    pub fn advance_to(&mut self, now_s: f64) {
+        if now_s.is_nan() || now_s < self.now_s {
+            return;
+        }
+        loop {
+            let at_s = self.next_scan as f64 * self.config.scan_s;
+            if at_s > now_s + SCAN_SLACK_S {
+                break;
+            }
+            self.advance_engines(at_s);
+            self.apply_due_faults(at_s);
+            if self.mode == PlcMode::Run {
+                self.scan(at_s);
+            }
+            self.next_scan += 1;
+        }
+        self.advance_engines(now_s);
+        self.apply_due_faults(now_s);
+        self.now_s = now_s;
+    }
+
+    fn advance_engines(&mut self, to_s: f64) {
+        for e in &mut self.engines {
+            e.advance(to_s, &mut self.recorder);
+        }
+    }
+
+    fn scan(&mut self, at_s: f64) {
+        let mut io = ScanIo {
+            memory: &mut self.memory,
+            engines: &mut self.engines,
+            rec: &mut self.recorder,
+            inputs: Inputs {
+                ready: self.ready,
+                estop_open: self.estop_open,
+                freeze_heartbeat: self.heartbeat_frozen,
+            },
+        };
+        self.program
+            .scan(at_s, self.next_scan, &self.config.layout, &mut io);
+        for (c, e) in self.engines.iter().enumerate() {
+            if e.running_on() && self.next_scan % self.scans_per_second() == 0 {
+                tracing::error!(
+                    channel = c,
+                    count = e.count(),
+                    at_s,
+                    "channel still running on without end"
+                );
+            }
+        }
+    }
+
+    fn scans_per_second(&self) -> u64 {
+        ((1.0 / self.config.scan_s).round() as u64).max(1)
+    }
+
+    /// RUN or PROG.
+    #[must_use]
+    pub fn mode(&self) -> PlcMode {
+        self.mode
+    }
+
+    /// Switches mode. Entering PROG stops every channel and the program (a running move ends
+    /// stopped); the status block then holds still, heartbeat included.
+    pub fn set_mode(&mut self, mode: PlcMode) {
+        if mode == PlcMode::Prog && self.mode == PlcMode::Run {
+            self.program.enter_prog(&mut self.engines);
+            tracing::warn!(at_s = self.now_s, "mock PLC switched to PROG");
+        }
+        self.mode = mode;
+    }
+
+    /// The program's state.
+    #[must_use]
+    pub fn state(&self) -> State {
+        self.program.state()
+    }
+
+    /// Why the last fault was latched.
+    #[must_use]
+    pub fn last_fault(&self) -> Option<&str> {
+        self.program.last_fault()
+    }
+
+    /// The status block as it stands in memory.
+    #[must_use]
+    pub fn status(&self) -> StatusBlock {
+        let words = self.memory.read_dt(
+            u32::from(self.config.layout.status_base),
+            crate::contract::STATUS_WORDS,
+        );
+        words
+            .ok()
+            .and_then(StatusBlock::from_words)
+            .unwrap_or_default()
+    }
+
+    /// Device memory (DT and R).
+    #[must_use]
+    pub fn memory(&self) -> &Memory {
+        &self.memory
+    }
+
+    /// Device memory, for writes from a server or a test.
+    pub fn memory_mut(&mut self) -> &mut Memory {
+        &mut self.memory
+    }
+
+    /// Reads `count` DT words from `start`.
+    pub fn read_words(&self, start: u32, count: usize) -> Result<Vec<u16>, MemoryError> {
+        self.memory.read_dt(start, count).map(<[u16]>::to_vec)
+    }
+
+    /// Writes DT words from `start`.
+    pub fn write_words(&mut self, start: u32, words: &[u16]) -> Result<(), MemoryError> {
+        self.memory.write_dt(start, words)
+    }
+
+    /// Reads relay R`relay` (word * 16 + bit).
+    pub fn read_relay(&self, relay: u32) -> Result<bool, MemoryError> {
+        self.memory.relay(relay)
+    }
+
+    /// Writes relay R`relay`.
+    pub fn write_relay(&mut self, relay: u32, on: bool) -> Result<(), MemoryError> {
+        self.memory.set_relay(relay, on)
+    }
+
+    /// Sets the `ready` word's wired bits (bit 0 homed, 1 drives ready, 2 e-stop clear).
+    pub fn set_ready(&mut self, bits: u16) {
+        self.ready = bits;
+    }
+
+    /// Opens (true) or closes the e-stop input. While it is open every scan stops every channel
+    /// (fault 3) and `ready` bit 2 reads 0.
+    pub fn set_estop_open(&mut self, open: bool) {
+        self.estop_open = open;
+    }
+
+    /// A channel's elapsed count (the engine's, not the status block's copy).
+    #[must_use]
+    pub fn count(&self, channel: usize) -> i64 {
+        self.engines[channel].count()
+    }
+
+    /// Presets a channel's count (as homing or writing the elapsed-value register does).
+    pub fn set_count(&mut self, channel: usize, count: i64) {
+        self.engines[channel].set_count(count);
+    }
+
+    /// Whether a channel is outputting pulses.
+    #[must_use]
+    pub fn busy(&self, channel: usize) -> bool {
+        self.engines[channel].busy()
+    }
+
+    /// Whether a channel is running on without end (a target against its direction).
+    #[must_use]
+    pub fn running_on(&self, channel: usize) -> bool {
+        self.engines[channel].running_on()
+    }
+
+    /// Starts or stops recording every pulse (it can be large). Stopping drops the record.
+    pub fn record_pulses(&mut self, on: bool) {
+        self.recorder.pulses = on.then(|| self.recorder.pulses.take().unwrap_or_default());
+    }
+
+    /// The pulses recorded so far, emptying the record (recording goes on).
+    pub fn take_pulses(&mut self) -> Vec<PulsePoint> {
+        self.recorder
+            .pulses
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
+    }
+
+    /// Every anomaly since the mock started (clamped rows, run-ons).
+    #[must_use]
+    pub fn anomalies(&self) -> &[Anomaly] {
+        &self.recorder.anomalies
+    }
+
+    /// Installs a fault script, starting it from the beginning.
+    pub fn set_faults(&mut self, script: FaultScript) {
+        self.faults = FaultInjector::new(script);
+    }
+
+    /// Whether the heartbeat is frozen.
+    #[must_use]
+    pub fn heartbeat_frozen(&self) -> bool {
+        self.heartbeat_frozen
+    }
+
+    /// Freezes or thaws the heartbeat (scans go on).
+    pub fn freeze_heartbeat(&mut self, frozen: bool) {
+        self.heartbeat_frozen = frozen;
+    }
+
+    /// Commands counted by [`Self::on_command`] so far.
+    #[must_use]
+    pub fn commands(&self) -> u64 {
+        self.commands
+    }
+
+    /// A server calls this once per command it receives, after advancing the mock: it counts the
+    /// command (the first is number 1), applies the core faults due at it and returns the link
+    /// faults the server must apply to its reply.
+    pub fn on_command(&mut self) -> Vec<LinkFault> {
+        self.commands += 1;
+        let fired = self.faults.on_command(self.commands);
+        for f in fired.core {
+            self.apply_core_fault(f);
+        }
+        fired.link
+    }
+
+    fn apply_due_faults(&mut self, at_s: f64) {
+        for f in self.faults.due_at(at_s) {
+            self.apply_core_fault(f);
+        }
+    }
+
+    fn apply_core_fault(&mut self, fault: CoreFault) {
+        tracing::warn!(?fault, at_s = self.now_s, "injected fault");
+        match fault {
+            CoreFault::FreezeHeartbeat => self.heartbeat_frozen = true,
+            CoreFault::ThawHeartbeat => self.heartbeat_frozen = false,
+            CoreFault::Prog => self.set_mode(PlcMode::Prog),
+            CoreFault::Run => self.set_mode(PlcMode::Run),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

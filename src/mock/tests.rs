@@ -1,0 +1,656 @@
+//! The mock PLC against CONTRACT.md's program and ACCURACY.md's execution model.
+
+use std::sync::Arc;
+
+use super::*;
+use crate::contract::{CommandBlock, Fault, State};
+use crate::table::{ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row, Segment};
+
+const SCAN: f64 = DEFAULT_SCAN_S;
+
+fn mock(model: FrequencyModel) -> MockPlc {
+    let mut m = MockPlc::new(MockConfig {
+        model,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    m.record_pulses(true);
+    m
+}
+
+fn seg(direction: Direction, range: FrequencyRange, rows: &[(u32, i64)]) -> Segment {
+    Segment {
+        control: ControlCode {
+            output: OutputMethod::PulseSign,
+            direction,
+            absolute: true,
+            range,
+            duty: Duty::Half,
+        },
+        rows: rows
+            .iter()
+            .map(|&(freq_hz, target)| Row { freq_hz, target })
+            .collect(),
+    }
+}
+
+fn up(rows: &[(u32, i64)]) -> Segment {
+    seg(Direction::Up, FrequencyRange::High, rows)
+}
+
+/// The area image of any segments, valid or not (`table::encode` only takes valid tables).
+fn image(segments: &[Segment]) -> Vec<u16> {
+    let mut w = vec![0u16; 8];
+    let dint = |w: &mut Vec<u16>, v: u32| w.extend([(v & 0xFFFF) as u16, (v >> 16) as u16]);
+    for (i, s) in segments.iter().enumerate() {
+        w[i] = w.len() as u16;
+        dint(&mut w, s.control.value());
+        for r in &s.rows {
+            dint(&mut w, r.freq_hz);
+            dint(&mut w, r.target as i32 as u32);
+        }
+        dint(&mut w, 0);
+    }
+    w
+}
+
+/// Writes the channels' areas of `bank`, then the command block with `command = 1`.
+fn start(m: &mut MockPlc, bank: u16, seq: u16, channels: &[(usize, Vec<Segment>)]) {
+    let layout = m.config().layout;
+    let mut block = CommandBlock {
+        command: 1,
+        seq,
+        bank,
+        ..CommandBlock::default()
+    };
+    for (c, segments) in channels {
+        m.write_words(u32::from(layout.area(bank, *c)), &image(segments))
+            .unwrap();
+        block.mask |= 1 << c;
+        block.segments[*c] = segments.len() as u16;
+    }
+    write_block(m, block);
+}
+
+fn write_block(m: &mut MockPlc, block: CommandBlock) {
+    let base = u32::from(m.config().layout.command_base);
+    m.write_words(base + 1, &block.to_words()[1..]).unwrap();
+    m.write_words(base, &[block.command]).unwrap();
+}
+
+fn command_word(m: &MockPlc) -> u16 {
+    m.read_words(u32::from(m.config().layout.command_base), 1)
+        .unwrap()[0]
+}
+
+fn write_command(m: &mut MockPlc, command: u16) {
+    let base = u32::from(m.config().layout.command_base);
+    m.write_words(base, &[command]).unwrap();
+}
+
+fn times(pulses: &[PulsePoint], channel: u8) -> Vec<f64> {
+    pulses
+        .iter()
+        .filter(|p| p.channel == channel)
+        .map(|p| p.time_s)
+        .collect()
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-9
+}
+
+#[test]
+fn heartbeat_counts_scans_and_freezes_on_request() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.advance_to(9.0 * SCAN);
+    let s = m.status();
+    assert_eq!(
+        (s.magic, s.version, s.heartbeat),
+        (crate::contract::MAGIC, 1, 10)
+    );
+    assert_eq!(s.ready, 0b111);
+    m.set_faults("freeze@t=0.05".parse().unwrap());
+    m.advance_to(0.1);
+    assert_eq!(
+        m.status().heartbeat,
+        25,
+        "scans before 50 ms count, the rest do not"
+    );
+    m.freeze_heartbeat(false);
+    m.advance_to(0.1 + SCAN);
+    assert_eq!(m.status().heartbeat, 26, "counting again");
+}
+
+#[test]
+fn prog_mode_stops_the_program_and_its_heartbeat() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 1_000)])])]);
+    m.advance_to(0.1);
+    let before = m.status();
+    assert!(before.busy & 1 == 1);
+    m.set_faults("prog@2".parse().unwrap());
+    assert!(m.on_command().is_empty());
+    assert_eq!(m.mode(), PlcMode::Run);
+    m.on_command();
+    assert_eq!(m.mode(), PlcMode::Prog);
+    let count = m.count(0);
+    m.advance_to(0.5);
+    assert_eq!(
+        m.status(),
+        before,
+        "nothing in the status block moves in PROG"
+    );
+    assert_eq!(m.count(0), count, "pulse output stops in PROG");
+    m.set_mode(PlcMode::Run);
+    m.advance_to(0.5 + SCAN);
+    assert_eq!(m.state(), State::Stopped);
+    assert_eq!(m.status().heartbeat, before.heartbeat + 1);
+}
+
+fn seed_plan() -> crate::plan::Plan {
+    use crate::geometry::Pose;
+    use crate::plan::{MoveRequest, Origin, plan_move};
+    let robot = crate::robot::seed_robot();
+    let from = robot
+        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+        .unwrap();
+    let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
+    to.a_rad = from.a_rad;
+    let motion = crate::robot::Motion {
+        frequency_model: FrequencyModel::FpxDivider,
+        ..robot.motion
+    };
+    plan_move(
+        &robot,
+        &MoveRequest {
+            from: Origin::Pose(from),
+            to,
+            motion,
+            seed_exact: false,
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn seed_move_gives_exactly_the_execution_models_pulses() {
+    let robot = crate::robot::seed_robot();
+    let plan = seed_plan();
+    let tables = plan.valid_tables(&robot).unwrap();
+    assert!(
+        tables.iter().all(|t| t.table().segments.len() == 1),
+        "a single-segment plan"
+    );
+    let mut m = mock(FrequencyModel::FpxDivider);
+    let layout = m.config().layout;
+    let mut block = CommandBlock {
+        command: 1,
+        seq: 5,
+        ..CommandBlock::default()
+    };
+    for t in &tables {
+        let c = usize::from(t.table().channel);
+        m.set_count(c, t.table().start);
+        m.write_words(u32::from(layout.area(0, c)), &crate::table::encode(t))
+            .unwrap();
+        block.mask |= 1 << c;
+        block.segments[c] = 1;
+    }
+    m.advance_to(0.001);
+    write_block(&mut m, block);
+    let start_s = SCAN; // the first scan after the write
+    m.advance_to(plan.profile.duration_s() + 0.1);
+    assert_eq!(m.state(), State::Done);
+    assert_eq!(m.status().seq, 5);
+    let mut pulses = m.take_pulses();
+    pulses.sort_by(|a, b| {
+        a.time_s
+            .total_cmp(&b.time_s)
+            .then(a.channel.cmp(&b.channel))
+    });
+    let events = &plan.execution.events;
+    assert_eq!(pulses.len(), events.len());
+    for (p, e) in pulses.iter().zip(events) {
+        assert_eq!(usize::from(p.channel), e.table);
+        assert_eq!(p.count, e.count);
+        assert!(close(p.time_s, start_s + e.t_s), "{p:?} vs {e:?}");
+    }
+    assert_eq!(m.status().elapsed.map(i64::from), plan.end_counts());
+}
+
+#[test]
+fn next_segment_starts_in_the_first_scan_after_the_previous_ends() {
+    let mut m = mock(FrequencyModel::Ideal);
+    let down = seg(Direction::Down, FrequencyRange::High, &[(1_000, 1)]);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 3)]), down])]);
+    m.advance_to(0.1);
+    let t = times(&m.take_pulses(), 0);
+    // Started at the scan at 0 ms: segment 1 ends at 3 ms, the next scan is at 4 ms.
+    assert_eq!(t.len(), 5);
+    assert!(
+        close(t[2], 0.003) && close(t[3], 0.005) && close(t[4], 0.006),
+        "{t:?}"
+    );
+    assert_eq!(m.count(0), 1);
+    assert_eq!(m.status().segment[0], 2);
+    assert_eq!(m.state(), State::Done);
+}
+
+#[test]
+fn start_while_running_waits_and_runs_right_after_done() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 9)])])]);
+    m.advance_to(0.005);
+    start(&mut m, 1, 2, &[(0, vec![up(&[(1_000, 12)])])]);
+    m.advance_to(0.0105);
+    assert_eq!(command_word(&m), 1, "the start waits while running");
+    assert_eq!(m.status().seq, 1);
+    m.advance_to(0.1);
+    let t = times(&m.take_pulses(), 0);
+    // Move 1 ends at 9 ms; the 10 ms scan sees it done; the 12 ms scan starts move 2.
+    assert!(close(t[8], 0.009) && close(t[9], 0.013), "{t:?}");
+    assert_eq!(
+        (m.status().seq, m.state(), m.count(0)),
+        (2, State::Done, 12)
+    );
+    assert_eq!(command_word(&m), 0);
+}
+
+#[test]
+fn stop_halts_every_channel() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(
+        &mut m,
+        0,
+        1,
+        &[(0, vec![up(&[(1_000, 100)])]), (3, vec![up(&[(500, 100)])])],
+    );
+    m.advance_to(0.021);
+    write_command(&mut m, 2);
+    m.advance_to(0.022);
+    let counts = (m.count(0), m.count(3));
+    assert!(
+        (21..=22).contains(&counts.0) && (10..=11).contains(&counts.1),
+        "{counts:?}"
+    );
+    m.advance_to(0.5);
+    assert_eq!((m.count(0), m.count(3)), counts);
+    let s = m.status();
+    assert_eq!((s.state, s.fault, s.busy), (State::Stopped.word(), 0, 0));
+    assert_eq!(command_word(&m), 0);
+}
+
+#[test]
+fn estop_input_stops_everything_clears_a_waiting_start_and_latches_fault_three() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(1, vec![up(&[(1_000, 100)])])]);
+    m.advance_to(0.011);
+    start(&mut m, 1, 2, &[(1, vec![up(&[(1_000, 200)])])]);
+    m.set_estop_open(true);
+    m.advance_to(0.012);
+    let count = m.count(1);
+    m.set_estop_open(false);
+    m.advance_to(0.5);
+    assert_eq!(m.count(1), count);
+    assert_eq!(command_word(&m), 0, "the waiting start is gone");
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault, s.seq),
+        (State::Stopped.word(), Fault::StoppedFromOutside.word(), 1)
+    );
+}
+
+#[test]
+fn estop_open_drops_ready_bit_two() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_ready(0b011);
+    m.advance_to(0.0);
+    assert_eq!(m.status().ready, 0b011);
+    m.set_ready(0b111);
+    m.set_estop_open(true);
+    m.advance_to(SCAN);
+    assert_eq!(m.status().ready, 0b011);
+}
+
+type Setup = Box<dyn Fn(&mut MockPlc)>;
+
+#[test]
+fn bad_command_block_latches_fault_one() {
+    let good = || vec![up(&[(1_000, 5)])];
+    let cases: Vec<(&str, Setup)> = vec![
+        (
+            "no channel",
+            Box::new(|m| {
+                write_block(
+                    m,
+                    CommandBlock {
+                        command: 1,
+                        ..CommandBlock::default()
+                    },
+                );
+            }),
+        ),
+        (
+            "bank 2",
+            Box::new(move |m| {
+                start(m, 0, 1, &[(0, good())]);
+                m.write_words(1_035, &[2]).unwrap();
+            }),
+        ),
+        (
+            "9 segments",
+            Box::new(move |m| {
+                start(m, 0, 1, &[(0, good())]);
+                m.write_words(1_036, &[9]).unwrap();
+            }),
+        ),
+        (
+            "area without segment 2",
+            Box::new(move |m| {
+                start(m, 0, 1, &[(0, good())]);
+                m.write_words(1_036, &[2]).unwrap();
+            }),
+        ),
+        (
+            "masked channel with 0 segments",
+            Box::new(|m| {
+                write_block(
+                    m,
+                    CommandBlock {
+                        command: 1,
+                        mask: 0b10,
+                        ..CommandBlock::default()
+                    },
+                );
+            }),
+        ),
+    ];
+    for (name, setup) in cases {
+        let mut m = mock(FrequencyModel::Ideal);
+        setup(&mut m);
+        m.advance_to(0.1);
+        let s = m.status();
+        assert_eq!(
+            (s.state, s.fault),
+            (State::Fault.word(), Fault::BadTableHeader.word()),
+            "{name}"
+        );
+        assert_eq!(command_word(&m), 0, "{name}");
+        assert!(m.take_pulses().is_empty(), "{name}");
+        assert!(m.last_fault().is_some(), "{name}");
+    }
+}
+
+#[test]
+fn fault_state_ignores_start_until_cleared() {
+    let mut m = mock(FrequencyModel::Ideal);
+    write_block(
+        &mut m,
+        CommandBlock {
+            command: 1,
+            ..CommandBlock::default()
+        },
+    );
+    m.advance_to(0.01);
+    start(&mut m, 0, 7, &[(0, vec![up(&[(1_000, 5)])])]);
+    m.advance_to(0.02);
+    assert_eq!(
+        (m.state(), command_word(&m), m.count(0)),
+        (State::Fault, 0, 0)
+    );
+    write_command(&mut m, 3);
+    m.advance_to(0.03);
+    assert_eq!(
+        (m.status().state, m.status().fault),
+        (State::Idle.word(), 0)
+    );
+    start(&mut m, 0, 7, &[(0, vec![up(&[(1_000, 5)])])]);
+    m.advance_to(0.1);
+    assert_eq!((m.state(), m.count(0), m.status().seq), (State::Done, 5, 7));
+}
+
+#[test]
+fn busy_channel_at_start_latches_fault_two() {
+    let mut m = mock(FrequencyModel::Ideal);
+    // Channel 1's second segment starts below range 2's 191 Hz: fault 4 at chaining, while
+    // channel 0 keeps running.
+    let bad_second = up(&[(100, 10)]);
+    start(
+        &mut m,
+        0,
+        1,
+        &[
+            (0, vec![up(&[(1_000, 1_000)])]),
+            (1, vec![up(&[(1_000, 3)]), bad_second]),
+        ],
+    );
+    m.advance_to(0.02);
+    assert_eq!(
+        (m.status().state, m.status().fault),
+        (State::Fault.word(), Fault::PulseInstruction.word())
+    );
+    assert!(m.busy(0));
+    write_command(&mut m, 3);
+    m.advance_to(0.03);
+    assert_eq!(m.state(), State::Idle);
+    start(&mut m, 1, 2, &[(0, vec![up(&[(1_000, 2_000)])])]);
+    m.advance_to(0.04);
+    assert_eq!(
+        (m.status().state, m.status().fault),
+        (State::Fault.word(), Fault::ChannelBusy.word())
+    );
+}
+
+#[test]
+fn first_frequency_out_of_range_latches_fault_four_and_outputs_nothing() {
+    let mut m = mock(FrequencyModel::Ideal);
+    // Channel 2 allows 20 kHz.
+    start(
+        &mut m,
+        0,
+        1,
+        &[
+            (0, vec![up(&[(1_000, 50)])]),
+            (2, vec![up(&[(25_000, 50)])]),
+        ],
+    );
+    m.advance_to(0.5);
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault, s.seq),
+        (State::Fault.word(), Fault::PulseInstruction.word(), 0)
+    );
+    assert!(m.take_pulses().is_empty());
+    assert!(
+        m.last_fault().unwrap().contains("25000 Hz"),
+        "{:?}",
+        m.last_fault()
+    );
+}
+
+#[test]
+fn incremental_targets_are_a_pulse_instruction_error() {
+    let mut m = mock(FrequencyModel::Ideal);
+    let mut s = up(&[(1_000, 50)]);
+    s.control.absolute = false;
+    start(&mut m, 0, 1, &[(0, vec![s])]);
+    m.advance_to(0.1);
+    assert_eq!(m.status().fault, Fault::PulseInstruction.word());
+}
+
+#[test]
+fn later_out_of_range_frequency_is_clamped_and_flagged() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(2, vec![up(&[(1_000, 2), (30_000, 4)])])]);
+    m.advance_to(0.1);
+    let t = times(&m.take_pulses(), 2);
+    assert!(
+        close(t[3] - t[2], 1.0 / 20_000.0),
+        "runs at the channel's 20 kHz: {t:?}"
+    );
+    assert_eq!(m.state(), State::Done);
+    assert!(matches!(
+        m.anomalies(),
+        [Anomaly::Clamped {
+            channel: 2,
+            segment: 1,
+            row: 2,
+            freq_hz: 30_000,
+            max_hz: 20_000,
+            ..
+        }]
+    ));
+}
+
+#[test]
+fn first_frequency_zero_outputs_nothing_and_finishes() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[])])]);
+    m.advance_to(0.1);
+    assert_eq!((m.state(), m.count(0)), (State::Done, 0));
+}
+
+#[test]
+fn target_against_the_direction_runs_on_without_end_until_stop() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 5), (1_000, 3)])])]);
+    m.advance_to(1.0);
+    assert!(m.count(0) > 900, "{}", m.count(0));
+    assert!(m.running_on(0));
+    assert_eq!(m.state(), State::Running, "a run-on never finishes");
+    let elapsed = m.status().elapsed[0];
+    m.advance_to(2.0);
+    assert!(m.status().elapsed[0] > elapsed + 900);
+    assert!(matches!(
+        m.anomalies(),
+        [Anomaly::RunOn {
+            from: 5,
+            target: 3,
+            ..
+        }]
+    ));
+    write_command(&mut m, 2);
+    m.advance_to(2.0 + SCAN);
+    let count = m.count(0);
+    m.advance_to(3.0);
+    assert_eq!(m.count(0), count);
+    assert!(!m.running_on(0));
+}
+
+#[test]
+fn elapsed_and_busy_in_the_status_block_match_the_engines_at_every_scan() {
+    let mut m = mock(FrequencyModel::FpxDivider);
+    m.set_count(1, -40);
+    let down = seg(
+        Direction::Down,
+        FrequencyRange::Mid,
+        &[(3_000, -70), (700, -90)],
+    );
+    start(
+        &mut m,
+        0,
+        1,
+        &[(0, vec![up(&[(2_345, 60)])]), (1, vec![down])],
+    );
+    for k in 0..60 {
+        m.advance_to(f64::from(k) * SCAN);
+        let s = m.status();
+        for c in 0..2 {
+            assert_eq!(i64::from(s.elapsed[c]), m.count(c), "scan {k} channel {c}");
+            assert_eq!(s.busy >> c & 1 == 1, m.busy(c), "scan {k} channel {c}");
+        }
+    }
+    assert_eq!((m.count(0), m.count(1)), (60, -90));
+}
+
+#[test]
+fn on_command_hands_link_faults_to_the_server_in_order() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_faults("drop@1,error61@2,delay30@2,close@3".parse().unwrap());
+    assert_eq!(m.on_command(), vec![LinkFault::Drop]);
+    assert_eq!(
+        m.on_command(),
+        vec![
+            LinkFault::MewtocolError { code: 61 },
+            LinkFault::Delay { ms: 30 }
+        ]
+    );
+    assert_eq!(m.on_command(), vec![LinkFault::Close]);
+    assert!(m.on_command().is_empty());
+    assert_eq!(m.commands(), 4);
+}
+
+#[test]
+fn pulse_trace_writes_csv() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 2)])])]);
+    m.advance_to(0.1);
+    let mut out = Vec::new();
+    write_csv(&m.take_pulses(), &mut out).unwrap();
+    assert_eq!(
+        String::from_utf8(out).unwrap(),
+        "time_s,channel,count\n0.001000000,0,1\n0.002000000,0,2\n"
+    );
+}
+
+#[test]
+fn in_process_handle_runs_a_move_through_the_plc_trait() {
+    use crate::plc::Plc;
+    let shared = Arc::new(std::sync::Mutex::new(mock(FrequencyModel::Ideal)));
+    let mut plc = InProcess::new(shared.clone());
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+        plc.write_words(2_000, &image(&[up(&[(1_000, 20)])]))
+            .await
+            .unwrap();
+        let block = CommandBlock {
+            command: 0,
+            seq: 9,
+            mask: 1,
+            bank: 0,
+            segments: [1, 0, 0, 0],
+        };
+        plc.write_words(1_033, &block.to_words()[1..])
+            .await
+            .unwrap();
+        plc.write_words(1_032, &[1]).await.unwrap();
+        let mut status = StatusBlock::default();
+        for _ in 0..100 {
+            status = StatusBlock::from_words(&plc.read_words(1_000, 20).await.unwrap()).unwrap();
+            if status.state == State::Done.word() {
+                break;
+            }
+        }
+        assert_eq!((status.seq, status.elapsed[0]), (9, 20));
+        plc.write_relay(0x2A, true).await.unwrap();
+        assert!(plc.read_relay(0x2A).await.unwrap());
+        let err = plc.read_words(32_760, 10).await.unwrap_err();
+        assert!(err.to_string().contains("error 61"), "{err}");
+    });
+    assert!(plc.now_s() > 0.02);
+    plc.advance(1.0);
+    assert!(shared.lock().unwrap().now_s() > 1.0);
+}
+
+#[test]
+fn mock_can_be_shared_between_server_tasks() {
+    fn shareable<T: Send + 'static>() {}
+    shareable::<Arc<std::sync::Mutex<MockPlc>>>();
+    shareable::<InProcess>();
+}
+
+#[test]
+fn in_process_mode_reports_prog_after_a_scripted_switch() {
+    use crate::plc::Plc;
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_faults("prog@t=0.01".parse().unwrap());
+    let mut plc = InProcess::new(Arc::new(std::sync::Mutex::new(m))).with_exchange_s(0.02);
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .build()
+        .unwrap();
+    assert_eq!(rt.block_on(plc.mode()).unwrap(), PlcMode::Prog);
+}
