@@ -73,9 +73,10 @@ fn pieces(start: i64, spans: &[Span]) -> Vec<Piece> {
     out
 }
 
-/// Builds the segments for `spans`, starting from count `start` at t = 0.
+/// Builds the segments for `spans`, starting from count `start` at t = 0; `grid_s` is the
+/// period whose points the rows' ends should stay near.
 #[must_use]
-pub fn build(joint: &Joint, model: FrequencyModel, start: i64, spans: &[Span]) -> Vec<Segment> {
+pub fn build(joint: &Joint, model: FrequencyModel, start: i64, spans: &[Span], grid_s: f64) -> Vec<Segment> {
     let pieces = pieces(start, spans);
     let mut ranges = vec![FrequencyRange::Low; spans.len()];
     for p in &pieces {
@@ -87,6 +88,7 @@ pub fn build(joint: &Joint, model: FrequencyModel, start: i64, spans: &[Span]) -
         start,
         spans,
         ranges: &ranges,
+        grid_s,
     }
     .choose();
     pieces
@@ -114,6 +116,7 @@ struct Frequencies<'a> {
     start: i64,
     spans: &'a [Span],
     ranges: &'a [FrequencyRange],
+    grid_s: f64,
 }
 
 impl Frequencies<'_> {
@@ -169,7 +172,7 @@ impl Frequencies<'_> {
     }
 
     /// Tries values around each tail row's aim (the last row always aims), keeping every inner
-    /// boundary within half a period of its planned time, for the combination that ends nearest
+    /// boundary within half a grid period of its planned time, for the combination that ends nearest
     /// the planned end.
     fn search_tail(&self, i: usize, t_s: f64, chosen: &mut Vec<u32>, best: &mut Tail) {
         let last = self.spans.len() - 1;
@@ -189,7 +192,7 @@ impl Frequencies<'_> {
         let hi = (aim + reach)
             .min(range.max_set_hz())
             .min(self.joint.max_freq_hz);
-        let slack_s = (self.spans[i].end_s - self.spans[i].start_s) / 2.0;
+        let slack_s = self.grid_s / 2.0;
         for f in lo..=hi {
             let end = t_s + self.duration_s(i, f);
             if f != aim && (end - self.spans[i].end_s).abs() > slack_s {
@@ -297,6 +300,7 @@ mod tests {
             FrequencyModel::Ideal,
             0,
             &spans(&[50, 100, 60, 20], 0.05),
+            0.05,
         );
         assert_eq!(segs.len(), 2);
         assert_eq!(segs[0].control.direction, Direction::Up);
@@ -311,6 +315,7 @@ mod tests {
             FrequencyModel::Ideal,
             0,
             &spans(&[10, 30], 0.05),
+            0.05,
         );
         assert_eq!(segs[0].control.range, FrequencyRange::High);
         let slow = build(
@@ -318,6 +323,7 @@ mod tests {
             FrequencyModel::Ideal,
             0,
             &spans(&[5, 10], 0.05),
+            0.05,
         );
         assert_eq!(slow[0].control.range, FrequencyRange::Mid);
     }
@@ -330,6 +336,7 @@ mod tests {
             FrequencyModel::Ideal,
             0,
             &spans(&[1, 751], 0.05),
+            0.05,
         );
         assert_eq!(segs.len(), 2);
         assert_eq!(segs[0].control.range, FrequencyRange::Low);
@@ -343,6 +350,7 @@ mod tests {
             FrequencyModel::Ideal,
             0,
             &spans(&[750], 0.05),
+            0.05,
         );
         assert_eq!(segs[0].rows[0].freq_hz, 15_000);
         assert_eq!(segs[0].control.duty, Duty::Quarter);
@@ -354,7 +362,7 @@ mod tests {
         // residual carried, the last row still ends within one pulse time of the grid.
         let targets: Vec<i64> = (1..=40).map(|i| i * 1_234).collect();
         let j = joint(0, 100_000);
-        let segs = build(&j, FrequencyModel::FpxDivider, 0, &spans(&targets, 0.05));
+        let segs = build(&j, FrequencyModel::FpxDivider, 0, &spans(&targets, 0.05), 0.05);
         let range = segs[0].control.range;
         let total: f64 = segs[0]
             .rows
