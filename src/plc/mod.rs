@@ -1,10 +1,33 @@
 //! IO. Talking to a PLC: one [`Plc`] trait over the operations linterpd needs (DT words, R relays,
 //! the PLC's mode), implemented by the MEWTOCOL-COM and Modbus clients over any byte stream,
 //! and the register contract's flow on top of it.
+//!
+//! # Layout
+//! ```text
+//! settings.rs  LinkSettings: protocol, transport, station, timeouts, contract layout (pure data)
+//! link.rs      opening a serial port or a TCP stream; SharedStream; drain
+//! mewtocol.rs  MewtocolClient: MEWTOCOL-COM over any byte stream
+//! modbus.rs    ModbusClient: Modbus RTU / TCP through tokio-modbus, reattached after timeouts
+//! any.rs       AnyPlc and connect(): the client a config's [robots.NAME.plc] section names
+//! ```
+
+mod any;
+mod link;
+mod mewtocol;
+mod modbus;
+mod settings;
 
 use std::future::Future;
 
 use thiserror::Error;
+
+pub use any::{AnyPlc, connect};
+pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_serial, open_tcp};
+pub use mewtocol::{MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
+pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
+pub use settings::{
+    HeaderChoice, LinkSettings, Parity, Protocol, R9020, SerialSettings, TcpSettings, Transport,
+};
 
 /// RUN or PROG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,7 +109,10 @@ impl PlcError {
     /// Whether the link should be considered broken (reconnect before the next exchange).
     #[must_use]
     pub fn is_link_failure(&self) -> bool {
-        matches!(self, Self::Timeout { .. } | Self::Link { .. } | Self::BadReply { .. })
+        matches!(
+            self,
+            Self::Timeout { .. } | Self::Link { .. } | Self::BadReply { .. }
+        )
     }
 }
 
@@ -94,13 +120,25 @@ impl PlcError {
 /// frame limits, put a timeout on every exchange and retry what is safe to retry.
 pub trait Plc: Send {
     /// Reads `count` DT words from `start`.
-    fn read_words(&mut self, start: u16, count: u16) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send;
+    fn read_words(
+        &mut self,
+        start: u16,
+        count: u16,
+    ) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send;
     /// Writes `words` to DT from `start`.
-    fn write_words(&mut self, start: u16, words: &[u16]) -> impl Future<Output = Result<(), PlcError>> + Send;
+    fn write_words(
+        &mut self,
+        start: u16,
+        words: &[u16],
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads relay R`relay` (`relay` = word * 16 + bit).
     fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send;
     /// Writes relay R`relay`.
-    fn write_relay(&mut self, relay: u16, on: bool) -> impl Future<Output = Result<(), PlcError>> + Send;
+    fn write_relay(
+        &mut self,
+        relay: u16,
+        on: bool,
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads whether the PLC is in RUN or PROG mode.
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send;
 }
