@@ -79,7 +79,7 @@ impl State {
     }
 
     /// The frames to answer with, or none.
-    fn answer(&mut self, header: Header, station: Station, command: Command) -> Vec<Frame> {
+    fn answer(&mut self, header: Header, station: Station, command: &Command) -> Vec<Frame> {
         self.log.push((header, command.clone()));
         let angle = header == Header::Angle;
         if self.silent || (angle && self.angle == Angle::Silent) {
@@ -90,7 +90,7 @@ impl State {
                 code: PlcErrorCode::NotSupported,
             })
         } else {
-            self.execute(&command)
+            self.execute(command)
         };
         response_frames(header, station, &response)
     }
@@ -126,7 +126,7 @@ async fn serve(state: Shared, stream: DuplexStream) {
                     state
                         .lock()
                         .unwrap()
-                        .answer(request.header, request.station, command);
+                        .answer(request.header, request.station, &command);
                 if frames.is_empty() {
                     continue;
                 }
