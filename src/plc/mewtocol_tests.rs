@@ -111,7 +111,7 @@ fn index(contact: Contact) -> usize {
 type Shared = Arc<Mutex<State>>;
 
 /// Serves `state` on `stream` until the client hangs up.
-async fn serve(state: Shared, stream: DuplexStream) {
+async fn serve<S: AsyncRead + AsyncWrite + Unpin>(state: Shared, stream: S) {
     let mut framed = Framed::new(stream, ServerCodec::new());
     let mut pending: Vec<Frame> = Vec::new();
     while let Some(event) = framed.next().await {
@@ -336,4 +336,29 @@ fn chunks_cover_the_range_exactly() {
     let pieces: Vec<_> = chunks(100, 60, 27).collect();
     assert_eq!(pieces, [(100, 27), (127, 27), (154, 6)]);
     assert_eq!(chunks(0, 0, 27).count(), 0);
+}
+
+#[tokio::test]
+async fn connect_opens_a_tcp_link_to_what_the_settings_name() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let state = fake();
+    let served = Arc::clone(&state);
+    tokio::spawn(async move {
+        let (stream, _) = listener.accept().await.unwrap();
+        serve(served, stream).await;
+    });
+    let tcp = crate::plc::TcpSettings {
+        address,
+        connect_timeout: Duration::from_secs(5),
+    };
+    let settings = LinkSettings::new(
+        crate::plc::Protocol::Mewtocol,
+        crate::plc::Transport::Tcp(tcp),
+    );
+    let mut plc = crate::plc::connect(&settings).await.unwrap();
+    assert!(matches!(plc, crate::plc::AnyPlc::Mewtocol(_)));
+    plc.write_words(1_032, &[1, 2, 3]).await.unwrap();
+    assert_eq!(plc.read_words(1_032, 3).await.unwrap(), [1, 2, 3]);
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
 }

@@ -262,3 +262,18 @@ fn exception_meanings_follow_the_modbus_spec() {
     );
     assert_eq!(exception_meaning(0x7F), "unknown exception code");
 }
+
+#[tokio::test]
+async fn connect_opens_modbus_tcp_from_settings() {
+    let memory = Memory::new();
+    let tcp = crate::plc::TcpSettings {
+        address: serve_tcp(&memory).await.to_string(),
+        connect_timeout: Duration::from_secs(5),
+    };
+    let mut settings = LinkSettings::new(Protocol::ModbusTcp, crate::plc::Transport::Tcp(tcp));
+    settings.timeout = Duration::from_secs(5);
+    let mut plc = crate::plc::connect(&settings).await.unwrap();
+    assert!(matches!(plc, crate::plc::AnyPlc::Modbus(_)));
+    plc.write_words(1_000, &[7, 8]).await.unwrap();
+    assert_eq!(plc.read_words(1_000, 2).await.unwrap(), [7, 8]);
+}
