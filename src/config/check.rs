@@ -35,6 +35,11 @@ impl<'t> At<'t> {
         Self::new(self.text, &format!("{}[{index}]", self.key))
     }
 
+    /// The key path.
+    pub(super) fn key(&self) -> &str {
+        &self.key
+    }
+
     /// The 1-based line of a span.
     pub(super) fn line(&self, span: &Range<usize>) -> usize {
         line_of(self.text, span.start)

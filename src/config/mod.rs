@@ -25,6 +25,9 @@
 //! max_deg = 170.0
 //! max_freq_hz = 100000
 //! output = "pulse-sign"
+//! [robots.press-loader.plc]        # optional: how to reach the PLC (see `plc`)
+//! protocol = "mewtocol"
+//! serial = { path = "/dev/ttyUSB0" }
 //! ```
 //! `config/linterpd.toml` is the commented example.
 
@@ -35,21 +38,26 @@ mod joints;
 mod kinematics;
 mod locate;
 mod motion;
+mod plc;
 mod raw;
 mod validate;
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use duration::{DurationError, DurationProblem, parse_duration_s};
 pub use error::ConfigError;
 
+use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
-/// A checked config file: its robots.
+/// A checked config file: its robots and the links to their PLCs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
     /// The robots, in the order the file defines them (never empty).
     pub robots: Vec<Robot>,
+    /// The PLC link of each robot with a `[robots.NAME.plc]` table, by robot name.
+    pub links: BTreeMap<String, LinkSettings>,
 }
 
 impl Config {
@@ -87,6 +95,12 @@ impl Config {
                     })
             }
         }
+    }
+
+    /// The PLC link of robot `name`, if its table has a `plc` section.
+    #[must_use]
+    pub fn link(&self, name: &str) -> Option<&LinkSettings> {
+        self.links.get(name)
     }
 
     fn names(&self) -> String {

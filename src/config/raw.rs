@@ -30,6 +30,72 @@ pub(super) struct RawRobot {
     pub kinematics: Spanned<RawKinematics>,
     pub motion: Spanned<RawMotion>,
     pub joints: Spanned<Vec<Spanned<RawJoint>>>,
+    pub plc: Option<Spanned<RawPlc>>,
+}
+
+/// `[robots.NAME.plc]`: how to reach the robot's PLC; checked by `plc`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPlc {
+    pub protocol: RawProtocol,
+    pub serial: Option<Spanned<RawSerial>>,
+    pub tcp: Option<Spanned<RawTcp>>,
+    pub station: Option<Spanned<i64>>,
+    pub header: Option<Spanned<String>>,
+    pub timeout: Option<Spanned<String>>,
+    pub retries: Option<Spanned<i64>>,
+    pub heartbeat_timeout: Option<Spanned<String>>,
+    pub mode_relay: Option<Spanned<String>>,
+    pub contract: Option<Spanned<RawContract>>,
+}
+
+/// `plc.protocol`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawProtocol {
+    Mewtocol,
+    ModbusRtu,
+    ModbusTcp,
+}
+
+/// `plc.serial`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSerial {
+    pub path: Spanned<String>,
+    pub baud: Option<Spanned<i64>>,
+    pub data_bits: Option<Spanned<i64>>,
+    pub parity: Option<RawParity>,
+    pub stop_bits: Option<Spanned<i64>>,
+}
+
+/// `plc.serial.parity`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawParity {
+    None,
+    Odd,
+    Even,
+}
+
+/// `plc.tcp`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTcp {
+    pub address: Spanned<String>,
+    pub connect_timeout: Option<Spanned<String>>,
+}
+
+/// `[robots.NAME.plc.contract]`: DT addresses of the register contract (CONTRACT.md); each
+/// defaults to `contract::Layout::default()`'s. The areas' size is `robots.NAME.area_words`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawContract {
+    pub status_base: Option<Spanned<i64>>,
+    pub command_base: Option<Spanned<i64>>,
+    pub table_base: Option<Spanned<i64>>,
+    pub bank_stride: Option<Spanned<i64>>,
+    pub channel_stride: Option<Spanned<i64>>,
 }
 
 /// `[robots.NAME.kinematics]`: every model's keys, optional here; which ones a model takes is

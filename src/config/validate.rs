@@ -6,7 +6,10 @@ use toml::Spanned;
 
 use super::check::At;
 use super::raw::{RawConfig, RawRobot};
-use super::{Config, ConfigError, joints, kinematics, motion};
+use std::collections::BTreeMap;
+
+use super::{Config, ConfigError, joints, kinematics, motion, plc};
+use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
 /// `area_words` when not given (CONTRACT.md).
@@ -20,14 +23,19 @@ const MAX_AREA_WORDS: i64 = 8000;
 pub(super) fn config(text: &str, raw: RawConfig) -> Result<Config, ConfigError> {
     let mut entries: Vec<_> = raw.robots.into_iter().collect();
     entries.sort_by_key(|(name, _)| name.span().start);
-    let robots = entries
-        .iter()
-        .map(|(name, robot)| self::robot(text, name, robot))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut robots = Vec::with_capacity(entries.len());
+    let mut links = BTreeMap::new();
+    for (name, raw) in &entries {
+        let robot = self::robot(text, name, raw)?;
+        if let Some(link) = self::link(text, &robot, raw)? {
+            links.insert(robot.name.clone(), link);
+        }
+        robots.push(robot);
+    }
     if robots.is_empty() {
         return Err(ConfigError::NoRobots);
     }
-    Ok(Config { robots })
+    Ok(Config { robots, links })
 }
 
 /// One robot.
@@ -52,6 +60,19 @@ fn robot(
         motion,
         area_words,
     })
+}
+
+/// The robot's `[robots.NAME.plc]` table, if it has one.
+fn link(
+    text: &str,
+    robot: &Robot,
+    raw: &Spanned<RawRobot>,
+) -> Result<Option<LinkSettings>, ConfigError> {
+    let Some(plc) = &raw.get_ref().plc else {
+        return Ok(None);
+    };
+    let at = At::new(text, "robots").child(&robot.name).child("plc");
+    plc::link(&at, plc, robot.area_words).map(Some)
 }
 
 fn area_words(at: &At, raw: Option<&Spanned<i64>>) -> Result<usize, ConfigError> {

@@ -1,12 +1,35 @@
 //! IO. Talking to a PLC: one [`Plc`] trait over the operations linterpd needs (DT words, R relays,
 //! the PLC's mode), implemented by the MEWTOCOL-COM and Modbus clients over any byte stream,
 //! and the register contract's flow on top of it.
+//!
+//! # Layout
+//! ```text
+//! settings.rs  LinkSettings: protocol, transport, station, timeouts, contract layout (pure data)
+//! link.rs      opening a serial port or a TCP stream; SharedStream; drain
+//! mewtocol.rs  MewtocolClient: MEWTOCOL-COM over any byte stream
+//! modbus.rs    ModbusClient: Modbus RTU / TCP through tokio-modbus, reattached after timeouts
+//! any.rs       AnyPlc and connect(): the client a config's [robots.NAME.plc] section names
+//! ```
+
+mod any;
+mod link;
+mod mewtocol;
+mod modbus;
+mod settings;
 
 use std::future::Future;
 
 pub mod contract;
 
 use thiserror::Error;
+
+pub use any::{AnyPlc, connect};
+pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_serial, open_tcp};
+pub use mewtocol::{MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
+pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
+pub use settings::{
+    HeaderChoice, LinkSettings, Parity, Protocol, R9020, SerialSettings, TcpSettings, Transport,
+};
 
 /// RUN or PROG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,0 +1,187 @@
+//! `[robots.NAME.plc]`: parsing, defaults, and errors that name key, value and line.
+
+use std::time::Duration;
+
+use super::super::Config;
+use super::super::fixture::{MINIMAL, message};
+use super::parse_relay;
+use crate::contract::Layout;
+use crate::plc::{HeaderChoice, Parity, Protocol, R9020, Transport};
+
+/// `MINIMAL` (40 lines) with a plc table from line 41: `[robots.r.plc]`, then `body` from 42.
+fn with_plc(body: &str) -> String {
+    format!("{MINIMAL}[robots.r.plc]\n{body}\n")
+}
+
+#[test]
+fn serial_mewtocol_section_fills_defaults() {
+    let text = with_plc("protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyUSB0\" }");
+    let config = Config::from_toml(&text).unwrap();
+    let link = config.link("r").unwrap();
+    assert_eq!(link.protocol, Protocol::Mewtocol);
+    let Transport::Serial(serial) = &link.transport else {
+        panic!("serial expected")
+    };
+    assert_eq!(
+        (serial.path.as_str(), serial.baud),
+        ("/dev/ttyUSB0", 19_200)
+    );
+    assert_eq!(
+        (serial.data_bits, serial.parity, serial.stop_bits),
+        (8, Parity::Odd, 1)
+    );
+    assert_eq!(
+        (link.station, link.header, link.retries),
+        (1, HeaderChoice::Auto, 2)
+    );
+    assert_eq!(link.timeout, Duration::from_millis(300));
+    assert_eq!(link.heartbeat_timeout, Duration::from_millis(500));
+    assert_eq!(link.layout, Layout::default());
+    assert!(config.link("other").is_none());
+}
+
+#[test]
+fn tcp_modbus_section_with_every_key() {
+    let text = with_plc(
+        "protocol = \"modbus-tcp\"\n\
+         tcp = { address = \"192.168.1.5:502\", connect_timeout = \"1s\" }\n\
+         station = 247\ntimeout = \"1s\"\nretries = 0\nheartbeat_timeout = \"2s\"\n\
+         mode_relay = \"R12A\"\n\
+         [robots.r.plc.contract]\nstatus_base = 100\ncommand_base = 140\n",
+    );
+    let link = Config::from_toml(&text).unwrap().links["r"].clone();
+    let Transport::Tcp(tcp) = &link.transport else {
+        panic!("tcp expected")
+    };
+    assert_eq!(
+        (tcp.address.as_str(), tcp.connect_timeout),
+        ("192.168.1.5:502", Duration::from_secs(1))
+    );
+    assert_eq!(
+        (link.station, link.retries, link.mode_relay),
+        (247, 0, 12 * 16 + 10)
+    );
+    assert_eq!(
+        (link.layout.status_base, link.layout.command_base),
+        (100, 140)
+    );
+    assert_eq!(link.layout.table_base, 2_000);
+}
+
+#[test]
+fn config_without_plc_has_no_links() {
+    assert!(Config::from_toml(MINIMAL).unwrap().links.is_empty());
+}
+
+#[test]
+fn bad_station_names_key_value_and_line() {
+    let text =
+        with_plc("protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\nstation = 120");
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.station = 120: must be within 1..=99, or 238 for EE"
+    );
+}
+
+#[test]
+fn bad_baud_lists_the_allowed_rates() {
+    let text =
+        with_plc("protocol = \"modbus-rtu\"\nserial = { path = \"/dev/ttyS0\", baud = 12345 }");
+    let m = message(&text);
+    assert!(
+        m.starts_with("config line 43: robots.r.plc.serial.baud = 12345: must be one of 2400,"),
+        "{m}"
+    );
+}
+
+#[test]
+fn header_with_modbus_is_refused() {
+    let text = with_plc(
+        "protocol = \"modbus-rtu\"\nserial = { path = \"/dev/ttyS0\" }\nheader = \"angle\"",
+    );
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.header = \"angle\": only MEWTOCOL has a header"
+    );
+}
+
+#[test]
+fn unknown_header_is_refused() {
+    let text =
+        with_plc("protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\nheader = \"<\"");
+    assert!(message(&text).ends_with("header = \"<\": must be \"auto\", \"percent\" or \"angle\""));
+}
+
+#[test]
+fn missing_transport_names_the_table_line() {
+    let text = with_plc("protocol = \"mewtocol\"");
+    assert_eq!(
+        message(&text),
+        "config line 41: robots.r.plc.serial is missing: a plc table needs either serial = { ... } \
+         or tcp = { ... }"
+    );
+}
+
+#[test]
+fn modbus_tcp_over_serial_is_refused() {
+    let text = with_plc("protocol = \"modbus-tcp\"\nserial = { path = \"/dev/ttyS0\" }");
+    assert!(message(&text).starts_with("config line 43: robots.r.plc.serial = { ... }: protocol"));
+}
+
+#[test]
+fn zero_timeout_and_bad_address_are_refused() {
+    let text =
+        with_plc("protocol = \"mewtocol\"\ntcp = { address = \"plc:9094\" }\ntimeout = \"0ms\"");
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.timeout = \"0ms\": must be longer than 0 s"
+    );
+    let text = with_plc("protocol = \"mewtocol\"\ntcp = { address = \"plc\" }");
+    assert!(message(&text).contains("robots.r.plc.tcp.address = \"plc\": must be host:port"));
+}
+
+#[test]
+fn unknown_key_and_protocol_are_refused_with_their_line() {
+    let text = with_plc("protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\nbaud = 9600");
+    assert!(message(&text).starts_with("config line 44: robots.r.plc.baud: unknown field `baud`"));
+    let text = with_plc("protocol = \"profibus\"\nserial = { path = \"/dev/ttyS0\" }");
+    assert!(message(&text).starts_with("config line 42: robots.r.plc.protocol: unknown variant"));
+}
+
+#[test]
+fn overlapping_contract_is_refused_by_layout_check() {
+    let text = with_plc(
+        "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\n\
+         [robots.r.plc.contract]\ncommand_base = 1010",
+    );
+    let m = message(&text);
+    assert!(
+        m.starts_with("config line 44: robots.r.plc.contract = { status_base = 1000"),
+        "{m}"
+    );
+    assert!(m.contains("overlaps"), "{m}");
+}
+
+#[test]
+fn mode_relay_is_for_modbus_and_spelled_as_panasonic_does() {
+    let text = with_plc(
+        "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\nmode_relay = \"R9020\"",
+    );
+    assert!(message(&text).contains("mode_relay is for Modbus"));
+    assert_eq!(parse_relay("R9020"), Some(R9020));
+    assert_eq!(parse_relay("R5"), Some(5));
+    assert_eq!(parse_relay("R999F"), Some(999 * 16 + 15));
+    for bad in ["R", "X9020", "R10000", "R+12", "R12G", "R9020 "] {
+        assert_eq!(parse_relay(bad), None, "{bad}");
+    }
+}
+
+#[test]
+fn shipped_file_has_a_valid_press_loader_plc_section() {
+    let config = Config::from_toml(include_str!("../../config/linterpd.toml")).unwrap();
+    let link = config.link("press-loader").unwrap();
+    assert_eq!(link.protocol, Protocol::Mewtocol);
+    assert_eq!(link.header, HeaderChoice::Auto);
+    assert_eq!(link.layout, Layout::default());
+    assert!(matches!(&link.transport, Transport::Serial(s) if s.path == "/dev/ttyUSB0"));
+}

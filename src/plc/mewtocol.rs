@@ -1,0 +1,428 @@
+//! IO. The MEWTOCOL-COM client: [`Plc`] over any byte stream, through the sans-IO
+//! [`crate::mewtocol`] codec.
+//!
+//! ```text
+//!  read_words / write_words        chunked to one frame each: % RD <= 27 words, WD <= 24;
+//!      |                                                      < RD <= 509 words, WD <= 507
+//!  exchange  -- retries (timeout, garbled reply, ! 40 BCC, ! 41 format) up to `retries` times
+//!      |       every linterpd command is idempotent: the same words to the same addresses
+//!  attempt   -- drains late bytes first if the last attempt failed, then one timeout around
+//!      |        send, any "next frame please" (**&) round trips, and the whole reply
+//!  Framed<T, ClientCodec>
+//! ```
+//! A `!` reply other than 40 / 41 is the PLC's answer and goes up unchanged as
+//! [`PlcError::Refused`]; it is never retried. Header `auto` probes `<` once with a 1-word read and
+//! falls back to `%` on no reply or an error (whether FP-X accepts `<` is \[unverified\], PLC.md §1).
+
+use std::fmt;
+use std::io;
+use std::time::Duration;
+
+use futures_util::{SinkExt, StreamExt};
+use tokio::io::{AsyncRead, AsyncWrite};
+use tokio_util::codec::Framed;
+
+use super::link::drain;
+use super::settings::{HeaderChoice, LinkSettings};
+use super::{Plc, PlcError, PlcMode, Refusal};
+use crate::mewtocol::{
+    Addressed, ClientCodec, ClientEvent, CodecError, Command, Contact, ContactArea, DtRange,
+    Header, PlcErrorCode, Reply, Request, Response, Station, max_read_reply_words, max_write_words,
+};
+
+/// Station number that means `EE` (answered by any PLC \[practice\]) in the config.
+pub const STATION_ANY: u8 = 0xEE;
+
+/// How the client talks: station, header, timeout and retries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MewtocolOptions {
+    /// The PLC's station.
+    pub station: Station,
+    /// The header, or `Auto` to probe.
+    pub header: HeaderChoice,
+    /// Longest wait for one exchange (send, all reply frames).
+    pub timeout: Duration,
+    /// Further attempts after a retryable failure.
+    pub retries: u8,
+}
+
+impl MewtocolOptions {
+    /// Options with a 300 ms timeout and 2 retries.
+    #[must_use]
+    pub fn new(station: Station, header: HeaderChoice) -> Self {
+        Self {
+            station,
+            header,
+            timeout: Duration::from_millis(300),
+            retries: 2,
+        }
+    }
+
+    /// The options a link's settings describe (station 238 is `EE`).
+    pub fn from_settings(settings: &LinkSettings) -> Result<Self, PlcError> {
+        let station = if settings.station == STATION_ANY {
+            Station::ANY
+        } else {
+            Station::new(settings.station).map_err(|e| PlcError::InvalidRequest {
+                operation: "choose the MEWTOCOL station".to_owned(),
+                detail: e.to_string(),
+            })?
+        };
+        Ok(Self {
+            station,
+            header: settings.header,
+            timeout: settings.timeout,
+            retries: settings.retries,
+        })
+    }
+}
+
+/// Why one attempt failed.
+#[derive(Debug)]
+enum Failure {
+    /// A `!` reply.
+    Refused(PlcErrorCode),
+    /// A reply that does not decode or does not answer the command.
+    Garbled(String),
+    /// No whole reply in time.
+    Timeout,
+    /// The stream failed or closed.
+    Link(io::Error),
+}
+
+impl Failure {
+    fn is_retryable(&self) -> bool {
+        match self {
+            Self::Refused(code) => {
+                matches!(code, PlcErrorCode::BccError | PlcErrorCode::FormatError)
+            }
+            Self::Garbled(_) | Self::Timeout => true,
+            Self::Link(_) => false,
+        }
+    }
+
+    fn into_error(self, operation: &str, timeout: Duration) -> PlcError {
+        let operation = operation.to_owned();
+        match self {
+            Self::Refused(code) => PlcError::Refused {
+                operation,
+                refusal: Refusal::Mewtocol {
+                    code: code.number(),
+                    meaning: code.meaning(),
+                },
+            },
+            Self::Garbled(detail) => PlcError::BadReply { operation, detail },
+            Self::Timeout => PlcError::Timeout {
+                operation,
+                timeout_ms: timeout.as_millis() as u64,
+            },
+            Self::Link(source) => PlcError::Link { operation, source },
+        }
+    }
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Refused(code) => write!(f, "refused with {code}"),
+            Self::Garbled(detail) => write!(f, "garbled reply: {detail}"),
+            Self::Timeout => write!(f, "no reply in time"),
+            Self::Link(e) => write!(f, "link failed: {e}"),
+        }
+    }
+}
+
+/// A MEWTOCOL-COM host over the stream `T`.
+#[derive(Debug)]
+pub struct MewtocolClient<T> {
+    framed: Framed<T, ClientCodec>,
+    options: MewtocolOptions,
+    header: Option<Header>,
+    stale: bool,
+}
+
+impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
+    /// A client over `stream`; with header `Auto` the first request probes `<`.
+    pub fn new(stream: T, options: MewtocolOptions) -> Self {
+        let header = match options.header {
+            HeaderChoice::Auto => None,
+            HeaderChoice::Percent => Some(Header::Percent),
+            HeaderChoice::Angle => Some(Header::Angle),
+        };
+        Self {
+            framed: Framed::new(stream, ClientCodec::new()),
+            options,
+            header,
+            stale: false,
+        }
+    }
+
+    /// The header in use, once chosen (`None` before an `Auto` probe).
+    #[must_use]
+    pub fn header(&self) -> Option<Header> {
+        self.header
+    }
+
+    /// Gives the stream back.
+    pub fn into_inner(self) -> T {
+        self.framed.into_inner()
+    }
+
+    async fn resolve_header(&mut self) -> Result<Header, PlcError> {
+        if let Some(header) = self.header {
+            return Ok(header);
+        }
+        let header = self.probe().await?;
+        self.header = Some(header);
+        Ok(header)
+    }
+
+    /// One 1-word `<` read: an answer means `<` works, anything else but a dead link means `%`.
+    async fn probe(&mut self) -> Result<Header, PlcError> {
+        let command = Command::ReadDt(dt_range(0, 1, "probe the < header")?);
+        match self.attempt(Header::Angle, &command).await {
+            Ok(_) => Ok(Header::Angle),
+            Err(Failure::Link(source)) => Err(PlcError::Link {
+                operation: "probe the < header".to_owned(),
+                source,
+            }),
+            Err(failure) => {
+                tracing::info!(%failure, "the PLC does not take the < header; using %");
+                Ok(Header::Percent)
+            }
+        }
+    }
+
+    /// Sends `command` and returns its reply, retrying what is safe to retry.
+    async fn exchange(
+        &mut self,
+        header: Header,
+        command: &Command,
+        operation: &str,
+    ) -> Result<Reply, PlcError> {
+        let mut attempt = 0;
+        loop {
+            let failure = match self.attempt(header, command).await {
+                Ok(reply) => return Ok(reply),
+                Err(failure) => failure,
+            };
+            if !failure.is_retryable() || attempt >= self.options.retries {
+                return Err(failure.into_error(operation, self.options.timeout));
+            }
+            attempt += 1;
+            tracing::warn!(operation, attempt, %failure, "retrying a MEWTOCOL exchange");
+        }
+    }
+
+    /// One try: settle the link, then one timeout around the whole round trip.
+    async fn attempt(&mut self, header: Header, command: &Command) -> Result<Reply, Failure> {
+        self.settle().await?;
+        let timeout = self.options.timeout;
+        let result = tokio::time::timeout(timeout, self.round_trip(header, command))
+            .await
+            .unwrap_or(Err(Failure::Timeout));
+        if matches!(result, Err(Failure::Timeout | Failure::Garbled(_))) {
+            self.stale = true;
+        }
+        result
+    }
+
+    /// After a failed attempt: forget half-read replies and drain late bytes.
+    async fn settle(&mut self) -> Result<(), Failure> {
+        if !std::mem::take(&mut self.stale) {
+            return Ok(());
+        }
+        self.framed.codec_mut().reset();
+        self.framed.read_buffer_mut().clear();
+        drain(self.framed.get_mut(), self.options.timeout)
+            .await
+            .map(|_| ())
+            .map_err(Failure::Link)
+    }
+
+    async fn send(
+        &mut self,
+        header: Header,
+        station: Station,
+        message: Request,
+    ) -> Result<(), Failure> {
+        let addressed = Addressed {
+            header,
+            station,
+            message,
+        };
+        self.framed.send(addressed).await.map_err(|e| match e {
+            CodecError::Io(e) => Failure::Link(e),
+            other => Failure::Garbled(other.to_string()),
+        })
+    }
+
+    async fn round_trip(&mut self, header: Header, command: &Command) -> Result<Reply, Failure> {
+        let request = Request::Command(command.clone());
+        self.send(header, self.options.station, request).await?;
+        loop {
+            match self.framed.next().await {
+                None => return Err(Failure::Link(io::ErrorKind::UnexpectedEof.into())),
+                Some(Err(CodecError::Io(e))) => return Err(Failure::Link(e)),
+                Some(Err(e)) => {
+                    // Framed yields `None` once after a decoder error: take it now.
+                    let _ = self.framed.next().await;
+                    return Err(Failure::Garbled(e.to_string()));
+                }
+                Some(Ok(ClientEvent::Skipped(bytes))) => {
+                    tracing::warn!(?bytes, "skipped bytes that start no MEWTOCOL frame");
+                }
+                Some(Ok(ClientEvent::MoreFollows { header, station })) => {
+                    self.send(header, station, Request::NextFrame).await?;
+                }
+                Some(Ok(ClientEvent::Response(reply))) => {
+                    return self.accept(reply, header, command);
+                }
+            }
+        }
+    }
+
+    /// The reply's data if it answers `command` from our station under our header.
+    fn accept(
+        &self,
+        reply: Addressed<Response>,
+        header: Header,
+        command: &Command,
+    ) -> Result<Reply, Failure> {
+        let station = self.options.station;
+        if reply.header != header || (station != Station::ANY && reply.station != station) {
+            return Err(Failure::Garbled(format!(
+                "reply from {:?} station {:?}, expected {header:?} station {station:?}",
+                reply.header, reply.station
+            )));
+        }
+        match reply.message {
+            Err(refusal) => Err(Failure::Refused(refusal.code)),
+            Ok(data) if data.answers(command) => Ok(data),
+            Ok(data) => Err(Failure::Garbled(format!(
+                "{data:?} does not answer {command:?}"
+            ))),
+        }
+    }
+
+    async fn read_chunk(
+        &mut self,
+        header: Header,
+        start: u32,
+        len: usize,
+    ) -> Result<Vec<u16>, PlcError> {
+        let operation = dt_operation("read", start, len);
+        let command = Command::ReadDt(dt_range(start, len, &operation)?);
+        match self.exchange(header, &command, &operation).await? {
+            Reply::ReadDt(words) => Ok(words),
+            other => Err(unexpected(&operation, &other)),
+        }
+    }
+
+    async fn write_chunk(
+        &mut self,
+        header: Header,
+        start: u32,
+        words: &[u16],
+    ) -> Result<(), PlcError> {
+        let operation = dt_operation("write", start, words.len());
+        let command =
+            Command::write_dt(start, words.to_vec()).map_err(|e| invalid(&operation, &e))?;
+        self.exchange(header, &command, &operation)
+            .await
+            .map(|_| ())
+    }
+}
+
+impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
+    async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
+        let header = self.resolve_header().await?;
+        let mut words = Vec::with_capacity(usize::from(count));
+        for (from, len) in chunks(start, usize::from(count), max_read_reply_words(header)) {
+            words.extend(self.read_chunk(header, from, len).await?);
+        }
+        Ok(words)
+    }
+
+    async fn write_words(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+        let header = self.resolve_header().await?;
+        let size = max_write_words(header);
+        for (from, chunk) in (u32::from(start)..).step_by(size).zip(words.chunks(size)) {
+            self.write_chunk(header, from, chunk).await?;
+        }
+        Ok(())
+    }
+
+    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
+        let operation = format!("read relay {}", relay_name(relay));
+        let command = Command::ReadContact(relay_contact(relay, &operation)?);
+        let header = self.resolve_header().await?;
+        match self.exchange(header, &command, &operation).await? {
+            Reply::ReadContact(on) => Ok(on),
+            other => Err(unexpected(&operation, &other)),
+        }
+    }
+
+    async fn write_relay(&mut self, relay: u16, on: bool) -> Result<(), PlcError> {
+        let operation = format!("write relay {} = {}", relay_name(relay), u8::from(on));
+        let contact = relay_contact(relay, &operation)?;
+        let command = Command::write_contact(contact, on).map_err(|e| invalid(&operation, &e))?;
+        let header = self.resolve_header().await?;
+        self.exchange(header, &command, &operation)
+            .await
+            .map(|_| ())
+    }
+
+    async fn mode(&mut self) -> Result<PlcMode, PlcError> {
+        let operation = "read the PLC status (RT)";
+        let header = self.resolve_header().await?;
+        match self.exchange(header, &Command::Status, operation).await? {
+            Reply::Status(status) if status.is_running() => Ok(PlcMode::Run),
+            Reply::Status(_) => Ok(PlcMode::Prog),
+            other => Err(unexpected(operation, &other)),
+        }
+    }
+}
+
+/// `(start, len)` pieces of `count` words from `start`, at most `size` words each.
+fn chunks(start: u16, count: usize, size: usize) -> impl Iterator<Item = (u32, usize)> {
+    (0..count)
+        .step_by(size)
+        .map(move |offset| (u32::from(start) + offset as u32, size.min(count - offset)))
+}
+
+fn dt_range(start: u32, len: usize, operation: &str) -> Result<DtRange, PlcError> {
+    DtRange::from_len(start, len).map_err(|e| invalid(operation, &e))
+}
+
+fn dt_operation(verb: &str, start: u32, len: usize) -> String {
+    format!("{verb} DT{start}..=DT{}", start + len as u32 - 1)
+}
+
+/// R`relay` as Panasonic writes it: word in decimal, bit in hex (R9020 = word 902, bit 0).
+#[must_use]
+pub fn relay_name(relay: u16) -> String {
+    format!("R{}{:X}", relay / 16, relay % 16)
+}
+
+fn relay_contact(relay: u16, operation: &str) -> Result<Contact, PlcError> {
+    Contact::new(ContactArea::R, relay / 16, (relay % 16) as u8).map_err(|e| invalid(operation, &e))
+}
+
+fn invalid(operation: &str, error: &impl fmt::Display) -> PlcError {
+    PlcError::InvalidRequest {
+        operation: operation.to_owned(),
+        detail: error.to_string(),
+    }
+}
+
+fn unexpected(operation: &str, reply: &Reply) -> PlcError {
+    PlcError::BadReply {
+        operation: operation.to_owned(),
+        detail: format!("unexpected reply {reply:?}"),
+    }
+}
+
+#[cfg(test)]
+#[path = "mewtocol_tests.rs"]
+mod tests;

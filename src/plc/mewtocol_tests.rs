@@ -1,0 +1,364 @@
+//! The MEWTOCOL client against a small memory-backed fake PLC built from the module's
+//! `ServerCodec`, over `tokio::io::duplex`, on paused time.
+
+use std::sync::{Arc, Mutex};
+
+use futures_util::{SinkExt, StreamExt};
+use tokio::io::{AsyncWriteExt, DuplexStream};
+use tokio_util::codec::Framed;
+
+use super::*;
+use crate::mewtocol::{
+    Frame, PlcError as Bang, PlcStatus, ServerCodec, ServerEvent, response_frames,
+};
+
+/// How the fake answers `<` frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Angle {
+    Accept,
+    Silent,
+    Refuse42,
+}
+
+#[derive(Debug)]
+struct State {
+    memory: Vec<u16>,
+    relays: Vec<bool>,
+    running: bool,
+    angle: Angle,
+    silent: bool,
+    refuse_writes: Option<u8>,
+    corrupt_replies: usize,
+    log: Vec<(Header, Command)>,
+}
+
+impl State {
+    fn new() -> Self {
+        Self {
+            memory: vec![0; 32_765],
+            relays: vec![false; 1000 * 16],
+            running: true,
+            angle: Angle::Accept,
+            silent: false,
+            refuse_writes: None,
+            corrupt_replies: 0,
+            log: Vec::new(),
+        }
+    }
+
+    fn execute(&mut self, command: &Command) -> Response {
+        let refuse = |code| {
+            Err(Bang {
+                code: PlcErrorCode::from_number(code),
+            })
+        };
+        match command {
+            Command::ReadDt(range) => {
+                let (s, e) = (range.start() as usize, range.end() as usize);
+                Ok(Reply::ReadDt(self.memory[s..=e].to_vec()))
+            }
+            Command::WriteDt { .. } if self.refuse_writes.is_some() => {
+                refuse(self.refuse_writes.unwrap_or_default())
+            }
+            Command::WriteDt { start, words } => {
+                let s = *start as usize;
+                self.memory[s..s + words.len()].copy_from_slice(words);
+                Ok(Reply::WriteDt)
+            }
+            Command::ReadContact(c) => Ok(Reply::ReadContact(self.relays[index(*c)])),
+            Command::WriteContact { contact, on } => {
+                self.relays[index(*contact)] = *on;
+                Ok(Reply::WriteContact)
+            }
+            Command::Status => Ok(Reply::Status(PlcStatus {
+                mode_flags: u8::from(self.running),
+                ..PlcStatus::default()
+            })),
+            _ => refuse(42),
+        }
+    }
+
+    /// The frames to answer with, or none.
+    fn answer(&mut self, header: Header, station: Station, command: &Command) -> Vec<Frame> {
+        self.log.push((header, command.clone()));
+        let angle = header == Header::Angle;
+        if self.silent || (angle && self.angle == Angle::Silent) {
+            return Vec::new();
+        }
+        let response = if angle && self.angle == Angle::Refuse42 {
+            Err(Bang {
+                code: PlcErrorCode::NotSupported,
+            })
+        } else {
+            self.execute(command)
+        };
+        response_frames(header, station, &response)
+    }
+
+    fn count(&self, header: Header, write: bool) -> usize {
+        let is = |c: &Command| matches!(c, Command::WriteDt { .. }) == write;
+        self.log
+            .iter()
+            .filter(|(h, c)| *h == header && is(c))
+            .count()
+    }
+}
+
+fn index(contact: Contact) -> usize {
+    usize::from(contact.word()) * 16 + usize::from(contact.bit())
+}
+
+type Shared = Arc<Mutex<State>>;
+
+/// Serves `state` on `stream` until the client hangs up.
+async fn serve<S: AsyncRead + AsyncWrite + Unpin>(state: Shared, stream: S) {
+    let mut framed = Framed::new(stream, ServerCodec::new());
+    let mut pending: Vec<Frame> = Vec::new();
+    while let Some(event) = framed.next().await {
+        let Ok(ServerEvent::Request(request)) = event else {
+            continue;
+        };
+        let frame = match request.message {
+            Request::NextFrame if !pending.is_empty() => pending.remove(0),
+            Request::NextFrame => continue,
+            Request::Command(command) => {
+                let mut frames =
+                    state
+                        .lock()
+                        .unwrap()
+                        .answer(request.header, request.station, &command);
+                if frames.is_empty() {
+                    continue;
+                }
+                pending = frames.split_off(1);
+                frames.remove(0)
+            }
+        };
+        let corrupt = {
+            let mut s = state.lock().unwrap();
+            let corrupt = s.corrupt_replies > 0;
+            s.corrupt_replies = s.corrupt_replies.saturating_sub(1);
+            corrupt
+        };
+        if corrupt {
+            let mut bytes = frame.to_bytes().unwrap();
+            let at = bytes.len() - 2;
+            bytes[at] = if bytes[at] == b'0' { b'1' } else { b'0' };
+            framed.get_mut().write_all(&bytes).await.unwrap();
+        } else {
+            framed.send(frame).await.unwrap();
+        }
+    }
+}
+
+fn client(state: &Shared, header: HeaderChoice) -> MewtocolClient<DuplexStream> {
+    let (ours, theirs) = tokio::io::duplex(4096);
+    tokio::spawn(serve(Arc::clone(state), theirs));
+    let options = MewtocolOptions::new(Station::new(1).unwrap(), header);
+    MewtocolClient::new(ours, options)
+}
+
+fn fake() -> Shared {
+    Arc::new(Mutex::new(State::new()))
+}
+
+fn ramp(n: u16) -> Vec<u16> {
+    (0..n).map(|i| i.wrapping_mul(257) ^ 0x5A5A).collect()
+}
+
+#[tokio::test(start_paused = true)]
+async fn percent_writes_100_words_in_24_word_chunks_and_reads_them_back() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Percent);
+    plc.write_words(2_000, &ramp(100)).await.unwrap();
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    let s = state.lock().unwrap();
+    assert_eq!(s.memory[2_000..2_100], ramp(100)[..]);
+    assert_eq!(s.count(Header::Percent, true), 5); // 24 + 24 + 24 + 24 + 4
+    assert_eq!(s.count(Header::Percent, false), 4); // 27 + 27 + 27 + 19
+}
+
+#[tokio::test(start_paused = true)]
+async fn angle_writes_and_reads_100_words_in_one_frame_each() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Angle);
+    plc.write_words(2_000, &ramp(100)).await.unwrap();
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    let s = state.lock().unwrap();
+    assert_eq!(
+        (s.count(Header::Angle, true), s.count(Header::Angle, false)),
+        (1, 1)
+    );
+    assert_eq!(
+        s.count(Header::Percent, true) + s.count(Header::Percent, false),
+        0
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn angle_write_of_600_words_takes_two_frames() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Angle);
+    plc.write_words(10_000, &ramp(600)).await.unwrap();
+    assert_eq!(state.lock().unwrap().count(Header::Angle, true), 2); // 507 + 93
+    assert_eq!(plc.read_words(10_000, 600).await.unwrap(), ramp(600));
+}
+
+#[tokio::test(start_paused = true)]
+async fn auto_uses_angle_when_the_plc_answers_it() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Auto);
+    assert_eq!(plc.header(), None);
+    plc.write_words(100, &[1, 2, 3]).await.unwrap();
+    assert_eq!(plc.header(), Some(Header::Angle));
+}
+
+#[tokio::test(start_paused = true)]
+async fn auto_falls_back_to_percent_when_angle_gets_no_reply() {
+    let state = fake();
+    state.lock().unwrap().angle = Angle::Silent;
+    let mut plc = client(&state, HeaderChoice::Auto);
+    plc.write_words(100, &ramp(30)).await.unwrap();
+    assert_eq!(plc.header(), Some(Header::Percent));
+    assert_eq!(plc.read_words(100, 30).await.unwrap(), ramp(30));
+    let s = state.lock().unwrap();
+    assert_eq!(
+        s.count(Header::Angle, false),
+        1,
+        "probed once, never retried"
+    );
+    assert_eq!(s.count(Header::Percent, true), 2);
+}
+
+#[tokio::test(start_paused = true)]
+async fn auto_falls_back_to_percent_on_error_42_and_remembers_it() {
+    let state = fake();
+    state.lock().unwrap().angle = Angle::Refuse42;
+    let mut plc = client(&state, HeaderChoice::Auto);
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+    assert_eq!(plc.header(), Some(Header::Percent));
+    assert_eq!(state.lock().unwrap().count(Header::Angle, false), 1);
+}
+
+#[tokio::test(start_paused = true)]
+async fn error_61_is_refused_with_its_code_and_not_retried() {
+    let state = fake();
+    state.lock().unwrap().refuse_writes = Some(61);
+    let mut plc = client(&state, HeaderChoice::Percent);
+    let e = plc.write_words(2_000, &[7; 10]).await.unwrap_err();
+    let PlcError::Refused { operation, refusal } = &e else {
+        panic!("{e:?}")
+    };
+    assert_eq!(operation, "write DT2000..=DT2009");
+    assert!(matches!(refusal, Refusal::Mewtocol { code: 61, meaning } if meaning.contains("data")));
+    assert!(!e.is_link_failure());
+    assert_eq!(state.lock().unwrap().count(Header::Percent, true), 1);
+}
+
+#[tokio::test(start_paused = true)]
+async fn reply_with_a_bad_bcc_is_retried_and_succeeds() {
+    let state = fake();
+    state.lock().unwrap().memory[500] = 0x1234;
+    state.lock().unwrap().corrupt_replies = 1;
+    let mut plc = client(&state, HeaderChoice::Percent);
+    assert_eq!(plc.read_words(500, 1).await.unwrap(), [0x1234]);
+    assert_eq!(state.lock().unwrap().count(Header::Percent, false), 2);
+}
+
+#[tokio::test(start_paused = true)]
+async fn too_many_bad_replies_give_bad_reply() {
+    let state = fake();
+    state.lock().unwrap().corrupt_replies = 10;
+    let mut plc = client(&state, HeaderChoice::Percent);
+    let e = plc.write_words(500, &[1]).await.unwrap_err();
+    assert!(matches!(e, PlcError::BadReply { .. }), "{e:?}");
+    assert_eq!(state.lock().unwrap().count(Header::Percent, true), 3); // 1 + 2 retries
+}
+
+#[tokio::test(start_paused = true)]
+async fn silent_plc_gives_a_timeout_after_the_retries() {
+    let state = fake();
+    state.lock().unwrap().silent = true;
+    let mut plc = client(&state, HeaderChoice::Percent);
+    let e = plc.read_words(0, 4).await.unwrap_err();
+    assert!(
+        matches!(
+            e,
+            PlcError::Timeout {
+                timeout_ms: 300,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.is_link_failure());
+    assert_eq!(state.lock().unwrap().count(Header::Percent, false), 3);
+}
+
+#[tokio::test(start_paused = true)]
+async fn rt_mode_flags_give_run_or_prog() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Percent);
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+    state.lock().unwrap().running = false;
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Prog);
+}
+
+#[tokio::test(start_paused = true)]
+async fn relays_are_written_and_read_through_rcs_and_wcs() {
+    let state = fake();
+    let mut plc = client(&state, HeaderChoice::Percent);
+    let r12a = 12 * 16 + 0xA;
+    assert!(!plc.read_relay(r12a).await.unwrap());
+    plc.write_relay(r12a, true).await.unwrap();
+    assert!(plc.read_relay(r12a).await.unwrap());
+    assert!(state.lock().unwrap().relays[usize::from(r12a)]);
+}
+
+#[tokio::test(start_paused = true)]
+async fn closed_link_is_a_link_error_without_retries() {
+    let (ours, theirs) = tokio::io::duplex(64);
+    drop(theirs);
+    let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
+    let mut plc = MewtocolClient::new(ours, options);
+    assert!(matches!(plc.mode().await, Err(PlcError::Link { .. })));
+}
+
+#[test]
+fn relay_names_are_decimal_word_and_hex_bit() {
+    assert_eq!(relay_name(super::super::settings::R9020), "R9020");
+    assert_eq!(relay_name(12 * 16 + 0xA), "R12A");
+}
+
+#[test]
+fn chunks_cover_the_range_exactly() {
+    let pieces: Vec<_> = chunks(100, 60, 27).collect();
+    assert_eq!(pieces, [(100, 27), (127, 27), (154, 6)]);
+    assert_eq!(chunks(0, 0, 27).count(), 0);
+}
+
+#[tokio::test]
+async fn connect_opens_a_tcp_link_to_what_the_settings_name() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let state = fake();
+    let served = Arc::clone(&state);
+    tokio::spawn(async move {
+        let (stream, _) = listener.accept().await.unwrap();
+        serve(served, stream).await;
+    });
+    let tcp = crate::plc::TcpSettings {
+        address,
+        connect_timeout: Duration::from_secs(5),
+    };
+    let settings = LinkSettings::new(
+        crate::plc::Protocol::Mewtocol,
+        crate::plc::Transport::Tcp(tcp),
+    );
+    let mut plc = crate::plc::connect(&settings).await.unwrap();
+    assert!(matches!(plc, crate::plc::AnyPlc::Mewtocol(_)));
+    plc.write_words(1_032, &[1, 2, 3]).await.unwrap();
+    assert_eq!(plc.read_words(1_032, 3).await.unwrap(), [1, 2, 3]);
+    assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+}
