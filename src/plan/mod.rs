@@ -362,7 +362,13 @@ fn build_tables(
                 return seed_exact::table(joint, &counts, profile.period_s);
             }
             let spans = constant_period::spans(&counts, profile.period_s);
-            let segments = segments::build(joint, motion.frequency_model, counts[0], &spans, profile.period_s);
+            let segments = segments::build(
+                joint,
+                motion.frequency_model,
+                counts[0],
+                &spans,
+                profile.period_s,
+            );
             ChannelTable {
                 channel: joint.channel,
                 start: counts[0],

@@ -76,7 +76,13 @@ fn pieces(start: i64, spans: &[Span]) -> Vec<Piece> {
 /// Builds the segments for `spans`, starting from count `start` at t = 0; `grid_s` is the
 /// period whose points the rows' ends should stay near.
 #[must_use]
-pub fn build(joint: &Joint, model: FrequencyModel, start: i64, spans: &[Span], grid_s: f64) -> Vec<Segment> {
+pub fn build(
+    joint: &Joint,
+    model: FrequencyModel,
+    start: i64,
+    spans: &[Span],
+    grid_s: f64,
+) -> Vec<Segment> {
     let pieces = pieces(start, spans);
     let mut ranges = vec![FrequencyRange::Low; spans.len()];
     for p in &pieces {
@@ -172,7 +178,7 @@ impl Frequencies<'_> {
     }
 
     /// Tries values around each tail row's aim (the last row always aims), keeping every inner
-    /// boundary within half a grid period of its planned time, for the combination that ends nearest
+    /// boundary within a grid period (and half its row) of its planned time, for the combination that ends nearest
     /// the planned end.
     fn search_tail(&self, i: usize, t_s: f64, chosen: &mut Vec<u32>, best: &mut Tail) {
         let last = self.spans.len() - 1;
@@ -192,7 +198,8 @@ impl Frequencies<'_> {
         let hi = (aim + reach)
             .min(range.max_set_hz())
             .min(self.joint.max_freq_hz);
-        let slack_s = self.grid_s / 2.0;
+        let span_s = self.spans[i].end_s - self.spans[i].start_s;
+        let slack_s = (span_s / 2.0).min(self.grid_s);
         for f in lo..=hi {
             let end = t_s + self.duration_s(i, f);
             if f != aim && (end - self.spans[i].end_s).abs() > slack_s {
@@ -362,7 +369,13 @@ mod tests {
         // residual carried, the last row still ends within one pulse time of the grid.
         let targets: Vec<i64> = (1..=40).map(|i| i * 1_234).collect();
         let j = joint(0, 100_000);
-        let segs = build(&j, FrequencyModel::FpxDivider, 0, &spans(&targets, 0.05), 0.05);
+        let segs = build(
+            &j,
+            FrequencyModel::FpxDivider,
+            0,
+            &spans(&targets, 0.05),
+            0.05,
+        );
         let range = segs[0].control.range;
         let total: f64 = segs[0]
             .rows

@@ -124,3 +124,16 @@ fn zero_length_move_is_refused() {
         Err(PlanError::ZeroLength { .. })
     ));
 }
+
+#[test]
+fn move_too_long_for_one_table_area_is_refused_naming_words_and_area() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::Ideal, false);
+    req.motion.speed_mm_s = 20.0;
+    req.motion.period_s = 0.01;
+    let msg = plan_move(&robot, &req).unwrap_err().to_string();
+    assert!(
+        msg.contains("table needs") && msg.contains("words; its area holds 2000"),
+        "{msg}"
+    );
+}
