@@ -42,16 +42,16 @@ fn bench(c: &mut Criterion) {
     );
     assert!((plan_move(&robot, &metre).expect("plans").line.length_mm() - 1000.0).abs() < 0.5);
     let bounded = |tolerance_mm| {
-        let mut r = seed.clone();
+        let mut r = seed;
         r.motion.method = linterpd::robot::Method::BoundedError { tolerance_mm };
         r
     };
     let (b05, b10) = (bounded(0.05), bounded(0.10));
     c.bench_function("plan seed move bounded-error 0.05 mm", |b| {
-        b.iter(|| plan_move(&robot, black_box(&b05)).unwrap())
+        b.iter(|| plan_move(&robot, black_box(&b05)).unwrap());
     });
     c.bench_function("plan seed move bounded-error 0.10 mm", |b| {
-        b.iter(|| plan_move(&robot, black_box(&b10)).unwrap())
+        b.iter(|| plan_move(&robot, black_box(&b10)).unwrap());
     });
     c.bench_function("plan seed move (50 ms period)", |b| {
         b.iter(|| plan_move(&robot, black_box(&seed)).unwrap());

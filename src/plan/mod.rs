@@ -219,6 +219,7 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         &line,
         &mut motion,
         grid_s,
+        bounded.is_some(),
         &start_values,
         start_counts,
     )?;
@@ -268,25 +269,36 @@ fn simulate(
     profile: &Profile,
     motion: &Motion,
 ) -> (Execution, Figures) {
+    simulate_within(robot, tables, line, profile, motion, f64::INFINITY).expect("no limit")
+}
+
+/// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`.
+fn simulate_within(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    line: &Line,
+    profile: &Profile,
+    motion: &Motion,
+    path_limit_mm: f64,
+) -> Option<(Execution, Figures)> {
     let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
-    let execution = sim::execute(
-        tables,
-        &max_hz,
-        Settings {
-            model: motion.frequency_model,
-            segment_gap_s: 0.0,
-        },
-    );
+    let settings = Settings {
+        model: motion.frequency_model,
+        segment_gap_s: 0.0,
+    };
+    let execution = sim::execute(tables, &max_hz, settings);
     let planned = |t: f64| line.at(profile.distance_mm(t)).position_mm;
-    let figures = sim::measure(
+    let duration_s = profile.duration_s();
+    let figures = sim::measure_within(
         robot,
         tables,
         &execution,
         line,
         &planned,
-        profile.duration_s(),
-    );
-    (execution, figures)
+        duration_s,
+        path_limit_mm,
+    )?;
+    Some((execution, figures))
 }
 
 type Resolved = (Line, crate::kinematics::Joints, [i64; JOINTS]);
@@ -317,6 +329,7 @@ fn loop_until_fast_enough(
     line: &Line,
     motion: &mut Motion,
     grid_s: f64,
+    continuous: bool,
     start_values: &crate::kinematics::Joints,
     start_counts: [i64; JOINTS],
 ) -> Result<(Profile, Samples), PlanError> {
@@ -330,7 +343,7 @@ fn loop_until_fast_enough(
         })?;
         let samples = samples::sample(robot, line, &profile, start_values, start_counts)?;
         limits::check_positions(robot, &samples.counts, profile.period_s)?;
-        let peak = limits::peak(robot, &samples, profile.period_s, grid_s != motion.period_s);
+        let peak = limits::peak(robot, &samples, profile.period_s, continuous);
         if peak.load <= 1.0 {
             return Ok((profile, samples));
         }

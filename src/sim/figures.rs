@@ -35,6 +35,9 @@ pub struct Figures {
 
 /// Measures an execution of `tables` (one per joint, in joint order) against the `line` and the
 /// planned position `planned(t)`.
+///
+/// # Panics
+/// Never: without a limit the measurement always completes.
 #[must_use]
 pub fn measure(
     robot: &Robot,
@@ -44,6 +47,29 @@ pub fn measure(
     planned: &dyn Fn(f64) -> Vector3<f64>,
     planned_duration_s: f64,
 ) -> Figures {
+    measure_within(
+        robot,
+        tables,
+        exec,
+        line,
+        planned,
+        planned_duration_s,
+        f64::INFINITY,
+    )
+    .expect("no limit")
+}
+
+/// [`measure`], giving up (`None`) as soon as the path deviation passes `path_limit_mm`.
+#[must_use]
+pub fn measure_within(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    exec: &Execution,
+    line: &Line,
+    planned: &dyn Fn(f64) -> Vector3<f64>,
+    planned_duration_s: f64,
+    path_limit_mm: f64,
+) -> Option<Figures> {
     let mut counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
     let position = |c: &[i64; JOINTS]| robot.kinematics.fk(&robot.values_of(c)).position_mm;
     let mut p = position(&counts);
@@ -62,6 +88,9 @@ pub fn measure(
         counts[e.table] = e.count;
         p = position(&counts);
         path = path.max(line.distance_mm(&p));
+        if path > path_limit_mm {
+            return None;
+        }
         tracking = tracking.max((p - target).norm());
     }
     let finish_s = exec.events.last().map_or(0.0, |e| e.t_s);
@@ -73,7 +102,7 @@ pub fn measure(
     let finishes: Vec<f64> = exec.finish_s.iter().flatten().copied().collect();
     let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - finishes.iter().copied().fold(f64::INFINITY, f64::min);
-    Figures {
+    Some(Figures {
         path_deviation_mm: path,
         tracking_error_mm: tracking,
         sampled_deviation_mm: sampled,
@@ -86,5 +115,5 @@ pub fn measure(
             .filter(|t| !t.segments.is_empty())
             .map(encoded_words)
             .sum(),
-    }
+    })
 }

@@ -15,7 +15,7 @@
 
 mod figures;
 
-pub use figures::{Figures, SAMPLE_PERIOD_S, measure};
+pub use figures::{Figures, SAMPLE_PERIOD_S, measure, measure_within};
 
 use crate::table::{ChannelTable, FrequencyModel, FrequencyRange};
 
@@ -94,13 +94,33 @@ pub fn execute(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) -> E
         finish_s: vec![None; tables.len()],
         ..Execution::default()
     };
+    let mut channels = Vec::with_capacity(tables.len());
     for (i, table) in tables.iter().enumerate() {
         let limit = max_hz.get(i).copied().map_or(f64::INFINITY, f64::from);
         run_channel(i, table, limit, settings, &mut exec);
+        channels.push(std::mem::take(&mut exec.events));
     }
-    exec.events
-        .sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.table.cmp(&b.table)));
+    exec.events = merge(&channels);
     exec
+}
+
+/// Merges per-channel event lists (each already in time order) into one, ties in table order.
+fn merge(channels: &[Vec<PulseEvent>]) -> Vec<PulseEvent> {
+    let mut out = Vec::with_capacity(channels.iter().map(Vec::len).sum());
+    let mut heads = vec![0usize; channels.len()];
+    loop {
+        let next = (0..channels.len())
+            .filter(|&c| heads[c] < channels[c].len())
+            .min_by(|&a, &b| {
+                channels[a][heads[a]]
+                    .t_s
+                    .total_cmp(&channels[b][heads[b]].t_s)
+                    .then(a.cmp(&b))
+            });
+        let Some(c) = next else { return out };
+        out.push(channels[c][heads[c]]);
+        heads[c] += 1;
+    }
 }
 
 fn run_channel(

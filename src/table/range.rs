@@ -197,7 +197,7 @@ impl FrequencyModel {
     ) -> Option<u32> {
         let lo_set = range.min_set_hz();
         let hi_set = range.max_set_hz().min(max_set_hz);
-        if hi_set < lo_set || !(lo_s > 0.0) || hi_s < lo_s {
+        if hi_set < lo_set || lo_s.is_nan() || lo_s <= 0.0 || hi_s < lo_s {
             return None;
         }
         let fits = |set: u32| {
@@ -208,26 +208,31 @@ impl FrequencyModel {
                 && p <= hi_s * (1.0 + 1e-12))
                 .then_some((set, (p - want_s).abs()))
         };
-        let candidates: Vec<u32> = match self {
+        let candidates: [f64; 7] = match self {
             Self::Ideal => {
                 let (a, b) = ((1.0 / hi_s).ceil(), (1.0 / lo_s).floor());
                 let w = (1.0 / want_s).round().clamp(a, b.max(a));
-                vec![a as u32, b.min(f64::from(u32::MAX)) as u32, w as u32, 1]
+                [a, b, w, 1.0, f64::NAN, f64::NAN, f64::NAN]
             }
             Self::FpxDivider => {
+                // The real frequency is clock / k: find divisors k in the window, then the
+                // smallest value that selects each.
                 let clock = range.divider_clock_hz();
                 let (ka, kb) = ((clock * lo_s).ceil(), (clock * hi_s).floor());
                 let kw = (clock * want_s).round().clamp(ka, kb.max(ka));
-                [ka, kb, kw, kw - 1.0, kw + 1.0, ka + 1.0, kb - 1.0]
-                    .into_iter()
-                    .filter(|k| *k >= 1.0 && *k <= 65_535.0)
-                    .map(|k| (clock / k).ceil() as u32)
-                    .collect()
+                [ka, kb, kw, kw - 1.0, kw + 1.0, ka + 1.0, kb - 1.0].map(|k| {
+                    if (1.0..=65_535.0).contains(&k) {
+                        (clock / k).ceil()
+                    } else {
+                        f64::NAN
+                    }
+                })
             }
         };
         candidates
             .into_iter()
-            .filter_map(fits)
+            .filter(|c| c.is_finite() && *c >= 1.0 && *c <= f64::from(u32::MAX))
+            .filter_map(|c| fits(c as u32))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(set, _)| set)
     }

@@ -186,22 +186,19 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
         .context("--tolerance")?;
     m.method = match (args.method, m.method, tolerance) {
         (Some(MethodArg::ConstantPeriod), _, None) => Method::ConstantPeriod,
-        (Some(MethodArg::BoundedError) | None, _, Some(tolerance_mm)) => {
+        (Some(MethodArg::BoundedError) | None, _, Some(tolerance_mm))
+        | (Some(MethodArg::BoundedError), Method::BoundedError { tolerance_mm }, None) => {
             Method::BoundedError { tolerance_mm }
         }
-        (Some(MethodArg::BoundedError), Method::BoundedError { tolerance_mm }, None) => {
-            Method::BoundedError { tolerance_mm }
-        }
-        (Some(MethodArg::BoundedError), Method::ConstantPeriod, None) => {
-            anyhow::bail!(
-                "--method bounded-error needs --tolerance (e.g. 0.05mm); the robot's config gives none"
-            )
-        }
+        (Some(MethodArg::BoundedError), Method::ConstantPeriod, None) => anyhow::bail!(
+            "--method bounded-error needs --tolerance (e.g. 0.05mm); the robot's config gives none"
+        ),
         (Some(MethodArg::ConstantPeriod), _, Some(_)) => {
             anyhow::bail!("--tolerance only applies to --method bounded-error")
         }
         (None, method, None) => method,
     };
+
     if let Some(model) = args.frequency_model {
         m.frequency_model = match model {
             ModelArg::Ideal => FrequencyModel::Ideal,

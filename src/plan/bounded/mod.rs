@@ -21,7 +21,7 @@ use crate::robot::{Motion, Robot};
 use crate::sim::{Execution, Figures, PulseEvent};
 use crate::table::ChannelTable;
 
-use super::{PlanError, Samples, simulate};
+use super::{PlanError, Samples, simulate_within};
 use pulses::{Run, Track};
 use rows::Channel;
 
@@ -196,9 +196,15 @@ impl Move<'_> {
             });
             let tables = self.tables(&deltas);
             super::check_tables(self.robot, &tables, false)?;
-            let (execution, figures) =
-                simulate(self.robot, &tables, self.line, self.profile, self.motion);
-            if figures.path_deviation_mm <= tolerance_mm
+            let run = simulate_within(
+                self.robot,
+                &tables,
+                self.line,
+                self.profile,
+                self.motion,
+                tolerance_mm,
+            );
+            if let Some((execution, figures)) = run
                 && figures.tracking_error_mm <= 2.0 * tolerance_mm
             {
                 return Ok(Some(Verified {

@@ -46,7 +46,7 @@ impl Track<'_> {
     /// Time in sample interval `i` at which `u` passes `level` (linear between samples).
     fn at(&self, i: usize, level: f64) -> f64 {
         let (a, b) = (self.u[i], self.u[i + 1]);
-        let f = if b == a {
+        let f = if (b - a).abs() <= f64::MIN_POSITIVE {
             0.0
         } else {
             ((level - a) / (b - a)).clamp(0.0, 1.0)
@@ -99,7 +99,7 @@ impl Track<'_> {
                 } else {
                     break;
                 };
-                let h = count as f64 + 0.5 * d as f64;
+                let h = count as f64 + 0.5 * f64::from(d);
                 let df = f64::from(d);
                 count += i64::from(d);
                 let pulse = Pulse {
@@ -133,7 +133,7 @@ mod tests {
     #[test]
     fn steady_motion_gives_evenly_spaced_pulses_with_symmetric_windows() {
         // u = 10 t, sampled every 0.1 s: pulses cross 0.5, 1.5, ... at 0.05, 0.15, ...
-        let u: Vec<f64> = (0..=10).map(|i| f64::from(i)).collect();
+        let u: Vec<f64> = (0..=10).map(f64::from).collect();
         let runs = Track { u: &u, dt_s: 0.1 }.runs(0, 0.25);
         assert_eq!(runs.len(), 1);
         let p = &runs[0].pulses;

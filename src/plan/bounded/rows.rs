@@ -76,16 +76,46 @@ impl Channel<'_> {
             }
             bounds.push((lo, hi));
         }
-        bounds.iter().enumerate().rev().find_map(|(i, &(lo, hi))| {
-            let want = (pulses[i].ideal_s - t_s) / (i + 1) as f64;
+        // The window only widens as the row gets shorter, so whether a value fits is monotonic
+        // in the row's length: search for the longest that fits.
+        let fit = |m: usize| {
+            let (lo, hi) = bounds[m - 1];
+            let want = (pulses[m - 1].ideal_s - t_s) / m as f64;
             self.realise(range, lo, hi, want)
-                .map(|(set, f)| (i + 1, set, f))
-        })
+                .map(|(set, f)| (m, set, f))
+        };
+        if bounds.is_empty() {
+            return None;
+        }
+        if let Some(found) = fit(bounds.len()) {
+            return Some(found);
+        }
+        let (mut good, mut bad, mut best) = (0usize, bounds.len(), None);
+        while bad - good > 1 {
+            let mid = usize::midpoint(good, bad);
+            match fit(mid) {
+                Some(found) => {
+                    good = mid;
+                    best = Some(found);
+                }
+                None => bad = mid,
+            }
+        }
+        best
     }
 
     /// Rows for `pulses` in `range` from `t_s`; a pulse no frequency can place is played at the
     /// nearest the range allows and counted as broken.
-    fn attempt(&self, range: FrequencyRange, pulses: &[Pulse], mut t_s: f64) -> Attempt {
+    /// Rows for `pulses` in `range` from `t_s`. With `stop_at_break` it ends at the first pulse
+    /// no frequency can place; otherwise such a pulse is played at the nearest value the range
+    /// allows and counted as broken.
+    fn attempt(
+        &self,
+        range: FrequencyRange,
+        pulses: &[Pulse],
+        mut t_s: f64,
+        stop_at_break: bool,
+    ) -> Attempt {
         let mut a = Attempt {
             rows: Vec::new(),
             end_s: t_s,
@@ -94,23 +124,18 @@ impl Channel<'_> {
         };
         let mut k = 0;
         while k < pulses.len() {
-            let (m, set, f) = self.longest(range, &pulses[k..], t_s).unwrap_or_else(|| {
+            let (m, set, f) = if let Some(row) = self.longest(range, &pulses[k..], t_s) {
+                row
+            } else {
                 if a.broken == 0 {
                     a.clean_pulses = k;
                 }
                 a.broken += 1;
-                let want = (pulses[k].ideal_s - t_s).max(1e-6);
-                let set = self
-                    .model
-                    .best_set_hz(1.0 / want, 1, range, self.joint.max_freq_hz);
-                (
-                    1,
-                    set,
-                    self.model
-                        .actual_hz(set, range)
-                        .min(f64::from(self.joint.max_freq_hz)),
-                )
-            });
+                if stop_at_break {
+                    break;
+                }
+                self.nearest(range, (pulses[k].ideal_s - t_s).max(1e-6))
+            };
             t_s += m as f64 / f;
             k += m;
             a.rows.push(Row {
@@ -120,6 +145,51 @@ impl Channel<'_> {
         }
         a.end_s = t_s;
         a
+    }
+
+    /// A one-pulse row as near a wanted pulse period as the range allows.
+    fn nearest(&self, range: FrequencyRange, want_s: f64) -> (usize, u32, f64) {
+        let set = self
+            .model
+            .best_set_hz(1.0 / want_s, 1, range, self.joint.max_freq_hz);
+        (
+            1,
+            set,
+            self.model
+                .actual_hz(set, range)
+                .min(f64::from(self.joint.max_freq_hz)),
+        )
+    }
+
+    /// The segment for the next stretch of `pulses`: the finest range that plays them all
+    /// within their windows; else, with segments to spare, the range that plays the longest
+    /// clean stretch (the rest goes to the next segment); else the range that breaks fewest.
+    fn next_segment(
+        &self,
+        pulses: &[Pulse],
+        t_s: f64,
+        last_chance: bool,
+    ) -> (FrequencyRange, Attempt) {
+        let mut prefixes = Vec::with_capacity(3);
+        for range in FrequencyRange::FINEST_FIRST {
+            let a = self.attempt(range, pulses, t_s, true);
+            if a.broken == 0 {
+                return (range, a);
+            }
+            prefixes.push((range, a));
+        }
+        let (range, best) = prefixes
+            .into_iter()
+            .max_by_key(|(_, a)| a.clean_pulses)
+            .expect("three ranges");
+        if !last_chance && best.clean_pulses > 0 {
+            return (range, best);
+        }
+        FrequencyRange::FINEST_FIRST
+            .map(|r| (r, self.attempt(r, pulses, t_s, false)))
+            .into_iter()
+            .min_by_key(|(_, a)| a.broken)
+            .expect("three ranges")
     }
 
     /// Segments for one run of pulses starting at `t_s` from `count`; returns them and the
@@ -134,58 +204,17 @@ impl Channel<'_> {
         let mut out = Vec::new();
         let mut pulses = &run.pulses[..];
         while !pulses.is_empty() {
-            let attempts = FrequencyRange::FINEST_FIRST.map(|r| (r, self.attempt(r, pulses, t_s)));
-            let clean = attempts.iter().find(|(_, a)| a.broken == 0);
             let last_chance = out.len() + 1 >= segments_left.min(MAX_SEGMENTS);
-            let (range, a) = match clean {
-                Some(found) => found,
-                None if last_chance => attempts
-                    .iter()
-                    .min_by_key(|(_, a)| a.broken)
-                    .expect("three ranges"),
-                None => attempts
-                    .iter()
-                    .max_by_key(|(_, a)| a.clean_pulses)
-                    .expect("three ranges"),
-            };
-            let take = if clean.is_some() || last_chance || a.clean_pulses == 0 {
-                pulses.len()
-            } else {
-                a.clean_pulses
-            };
-            let rows = rows_covering(&a.rows, count, take);
-            let played = rows
+            let (range, a) = self.next_segment(pulses, t_s, last_chance);
+            let played = a
+                .rows
                 .last()
                 .map_or(0, |r| (r.target - count).unsigned_abs() as usize);
-            t_s = if played == pulses.len() {
-                a.end_s
-            } else {
-                self.end_of(*range, &rows, t_s, count)
-            };
-            count = rows.last().map_or(count, |r| r.target);
-            out.push(segment(self.joint, run.direction, *range, rows));
+            t_s = a.end_s;
+            count = a.rows.last().map_or(count, |r| r.target);
+            out.push(segment(self.joint, run.direction, range, a.rows));
             pulses = &pulses[played.max(1).min(pulses.len())..];
         }
         (out, t_s)
     }
-
-    fn end_of(&self, range: FrequencyRange, rows: &[Row], mut t_s: f64, mut count: i64) -> f64 {
-        for r in rows {
-            let f = self
-                .model
-                .actual_hz(r.freq_hz, range)
-                .min(f64::from(self.joint.max_freq_hz));
-            t_s += (r.target - count).abs() as f64 / f;
-            count = r.target;
-        }
-        t_s
-    }
-}
-
-/// The rows that play exactly the first `pulses` pulses from `count`.
-fn rows_covering(rows: &[Row], count: i64, pulses: usize) -> Vec<Row> {
-    rows.iter()
-        .take_while(|r| (r.target - count).unsigned_abs() as usize <= pulses)
-        .copied()
-        .collect()
 }
