@@ -4,91 +4,14 @@
 
 mod common;
 
-use linterpd::geometry::{Line, Pose};
+use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_move};
 use linterpd::robot::Robot;
 use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem, problems};
 use proptest::prelude::*;
 
-/// A point at `radius_mm` and `angle_deg` around the z axis, for the robots with a vertical axis.
-fn polar(radius_mm: f64, angle_deg: f64, z: f64, a_deg: f64) -> Pose {
-    let t = angle_deg.to_radians();
-    Pose::from_mm_deg(radius_mm * t.cos(), radius_mm * t.sin(), z, a_deg)
-}
-
-#[derive(Debug, Clone, Copy)]
-struct Motion {
-    speed_mm_s: f64,
-    accel_s: f64,
-    period_s: f64,
-    ideal: bool,
-}
-
-fn motion() -> impl Strategy<Value = Motion> {
-    (20.0..600.0f64, 0.0..0.5f64, 0.01..0.1f64, any::<bool>()).prop_map(
-        |(speed_mm_s, accel_s, period_s, ideal)| Motion {
-            speed_mm_s,
-            accel_s,
-            period_s,
-            ideal,
-        },
-    )
-}
-
-fn cylindrical_move() -> impl Strategy<Value = (Pose, Pose)> {
-    (
-        700.0..1400.0f64,
-        -60.0..60.0f64,
-        0.0..300.0f64,
-        700.0..1400.0f64,
-        -60.0..60.0f64,
-        0.0..300.0f64,
-        -30.0..30.0f64,
-    )
-        .prop_map(|(r1, t1, z1, r2, t2, z2, a)| {
-            (polar(r1, t1 + 90.0, z1, a), polar(r2, t2 + 90.0, z2, -a))
-        })
-        // Reachable: the whole line stays outside d3 = 0 (500 mm from the axis).
-        .prop_filter("line passes inside the d3 = 0 cylinder", |(from, to)| {
-            Line {
-                from: *from,
-                to: *to,
-            }
-            .xy_radius_range_mm()
-            .0 > 520.0
-        })
-}
-
-fn gantry_move() -> impl Strategy<Value = (Pose, Pose)> {
-    let p = || {
-        (
-            -800.0..800.0f64,
-            -800.0..800.0f64,
-            -300.0..300.0f64,
-            -90.0..90.0f64,
-        )
-    };
-    (p(), p()).prop_map(|(a, b)| {
-        (
-            Pose::from_mm_deg(a.0, a.1, a.2, a.3),
-            Pose::from_mm_deg(b.0, b.1, b.2, b.3),
-        )
-    })
-}
-
-fn scara_move() -> impl Strategy<Value = (Pose, Pose)> {
-    // Ends 300-650 mm out and at most 60 degrees apart: the line stays inside the annulus.
-    (
-        300.0..650.0f64,
-        -30.0..30.0f64,
-        300.0..650.0f64,
-        -30.0..30.0f64,
-        -100.0..100.0f64,
-        -45.0..45.0f64,
-    )
-        .prop_map(|(r1, t1, r2, t2, z, a)| (polar(r1, t1, z, a), polar(r2, t2, -z, -a)))
-}
+use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
 
 /// Plans the move; `None` when it is refused only because its rows do not fit one table area
 /// (slow-down can stretch a move that far; that refusal has its own test).

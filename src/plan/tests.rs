@@ -137,3 +137,42 @@ fn move_too_long_for_one_table_area_is_refused_naming_words_and_area() {
         "{msg}"
     );
 }
+
+fn bounded(model: FrequencyModel, tolerance_mm: f64) -> Result<Plan, PlanError> {
+    let mut req = seed_request(model, false);
+    req.motion.method = crate::robot::Method::BoundedError { tolerance_mm };
+    plan_move(&seed_robot(), &req)
+}
+
+#[test]
+fn bounded_error_seed_move_stays_within_its_tolerance_under_both_models() {
+    for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+        let plan = bounded(model, 0.05).unwrap();
+        assert!(plan.valid());
+        assert!(plan.figures.path_deviation_mm <= 0.05, "{:?}", plan.figures);
+        assert!(plan.figures.tracking_error_mm <= 0.10, "{:?}", plan.figures);
+        let floor = plan.floor_mm.unwrap();
+        assert!(floor > 0.0 && floor < 0.05);
+    }
+}
+
+#[test]
+fn tolerance_below_the_pulse_grid_is_refused_naming_one_that_works() {
+    let err = bounded(FrequencyModel::FpxDivider, 0.01).unwrap_err();
+    let PlanError::ToleranceTooSmall {
+        floor_mm,
+        works_mm: Some(works),
+        ..
+    } = err
+    else {
+        panic!("{err}")
+    };
+    assert!(floor_mm > 0.01 && works > floor_mm);
+    let plan = bounded(FrequencyModel::FpxDivider, works).unwrap();
+    assert!(plan.figures.path_deviation_mm <= works);
+    assert!(
+        err.to_string()
+            .contains("is below what this move can reach"),
+        "{err}"
+    );
+}

@@ -1,0 +1,83 @@
+//! Random reachable moves for every kinematics, for property tests.
+
+use linterpd::geometry::{Line, Pose};
+use proptest::prelude::*;
+
+/// A point at `radius_mm` and `angle_deg` around the z axis, for the robots with a vertical axis.
+fn polar(radius_mm: f64, angle_deg: f64, z: f64, a_deg: f64) -> Pose {
+    let t = angle_deg.to_radians();
+    Pose::from_mm_deg(radius_mm * t.cos(), radius_mm * t.sin(), z, a_deg)
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Motion {
+    pub speed_mm_s: f64,
+    pub accel_s: f64,
+    pub period_s: f64,
+    pub ideal: bool,
+}
+
+pub fn motion() -> impl Strategy<Value = Motion> {
+    (20.0..600.0f64, 0.0..0.5f64, 0.01..0.1f64, any::<bool>()).prop_map(
+        |(speed_mm_s, accel_s, period_s, ideal)| Motion {
+            speed_mm_s,
+            accel_s,
+            period_s,
+            ideal,
+        },
+    )
+}
+
+pub fn cylindrical_move() -> impl Strategy<Value = (Pose, Pose)> {
+    (
+        700.0..1400.0f64,
+        -60.0..60.0f64,
+        0.0..300.0f64,
+        700.0..1400.0f64,
+        -60.0..60.0f64,
+        0.0..300.0f64,
+        -30.0..30.0f64,
+    )
+        .prop_map(|(r1, t1, z1, r2, t2, z2, a)| {
+            (polar(r1, t1 + 90.0, z1, a), polar(r2, t2 + 90.0, z2, -a))
+        })
+        // Reachable: the whole line stays outside d3 = 0 (500 mm from the axis).
+        .prop_filter("line passes inside the d3 = 0 cylinder", |(from, to)| {
+            Line {
+                from: *from,
+                to: *to,
+            }
+            .xy_radius_range_mm()
+            .0 > 520.0
+        })
+}
+
+pub fn gantry_move() -> impl Strategy<Value = (Pose, Pose)> {
+    let p = || {
+        (
+            -800.0..800.0f64,
+            -800.0..800.0f64,
+            -300.0..300.0f64,
+            -90.0..90.0f64,
+        )
+    };
+    (p(), p()).prop_map(|(a, b)| {
+        (
+            Pose::from_mm_deg(a.0, a.1, a.2, a.3),
+            Pose::from_mm_deg(b.0, b.1, b.2, b.3),
+        )
+    })
+}
+
+pub fn scara_move() -> impl Strategy<Value = (Pose, Pose)> {
+    // Ends 300-650 mm out and at most 60 degrees apart: the line stays inside the annulus.
+    (
+        300.0..650.0f64,
+        -30.0..30.0f64,
+        300.0..650.0f64,
+        -30.0..30.0f64,
+        -100.0..100.0f64,
+        -45.0..45.0f64,
+    )
+        .prop_map(|(r1, t1, r2, t2, z, a)| (polar(r1, t1, z, a), polar(r2, t2, -z, -a)))
+}
