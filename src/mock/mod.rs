@@ -406,4 +406,6 @@ impl MockPlc {
 }
 
 #[cfg(test)]
+mod server_tests;
+#[cfg(test)]
 mod tests;
