@@ -240,16 +240,12 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
     }
 
     async fn next_frame(&mut self) -> Result<Step, ServerError> {
-        match self.pending.pop_front() {
-            Some(frame) => {
-                self.send(&frame, &[]).await?;
-                Ok(Step::Continue)
-            }
-            None => {
-                tracing::warn!("next-frame request without a multi-frame reply in progress");
-                Ok(Step::Continue)
-            }
+        if let Some(frame) = self.pending.pop_front() {
+            self.send(&frame, &[]).await?;
+        } else {
+            tracing::warn!("next-frame request without a multi-frame reply in progress");
         }
+        Ok(Step::Continue)
     }
 
     async fn on_command(
@@ -290,10 +286,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
                 LinkFault::Close => return Ok(Step::Close),
                 LinkFault::Delay { ms } => tokio::time::sleep(Duration::from_millis(ms)).await,
                 LinkFault::MewtocolError { code } => {
-                    response = refusal(PlcErrorCode::from_number(code))
+                    response = refusal(PlcErrorCode::from_number(code));
                 }
                 LinkFault::ModbusException { .. } => {
-                    response = refusal(PlcErrorCode::ParameterError)
+                    response = refusal(PlcErrorCode::ParameterError);
                 }
                 LinkFault::Corrupt { .. } => {}
             }

@@ -135,15 +135,14 @@ impl<S: AsyncWrite + Unpin> AsyncWrite for WireStream<S> {
         if buf.is_empty() {
             return Poll::Ready(Ok(0));
         }
-        let len = match this.tx_pending {
-            Some(len) => len.min(buf.len()),
-            None => {
-                let len = buf.len();
-                this.tx_pending = Some(len);
-                let due = Instant::now() + this.char_time * len as u32;
-                this.tx_sleep.as_mut().reset(due);
-                len
-            }
+        let len = if let Some(len) = this.tx_pending {
+            len.min(buf.len())
+        } else {
+            let len = buf.len();
+            this.tx_pending = Some(len);
+            let due = Instant::now() + this.char_time * len as u32;
+            this.tx_sleep.as_mut().reset(due);
+            len
         };
         ready!(this.tx_sleep.as_mut().poll(cx));
         let written = ready!(Pin::new(&mut this.inner).poll_write(cx, &buf[..len]));
