@@ -8,8 +8,15 @@ use linterpd::cli::{Cli, EXIT_OK, run};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // The mock PLC logs its connections, starts, stops and faults unless RUST_LOG says otherwise.
+    let default_level = match cli.command {
+        linterpd::cli::Command::MockPlc(_) => "info",
+        linterpd::cli::Command::Plan(_) => "error",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level));
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_env_filter(filter)
         .with_writer(std::io::stderr)
         .init();
     let stdout = std::io::stdout();

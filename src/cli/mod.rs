@@ -2,6 +2,7 @@
 //! only; every failure is sorted into bad input (exit 2) or a runtime failure (exit 1).
 
 pub mod args;
+pub mod mock_plc;
 pub mod plan;
 
 use std::fmt;
@@ -22,6 +23,8 @@ pub struct Cli {
 pub enum Command {
     /// Plan one straight-line move and print its pulse tables and accuracy figures.
     Plan(plan::PlanArgs),
+    /// Serve the mock PLC (MEWTOCOL-COM or Modbus, TCP or serial) until SIGINT / SIGTERM.
+    MockPlc(mock_plc::MockPlcArgs),
 }
 
 /// Exit code for a run that worked.
@@ -67,5 +70,6 @@ pub fn bad_input(e: impl Into<anyhow::Error>) -> Failure {
 pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     match cli.command {
         Command::Plan(args) => plan::run(&args, out),
+        Command::MockPlc(args) => mock_plc::run(&args, out),
     }
 }

@@ -244,6 +244,12 @@ impl ContactWords {
         self.area
     }
 
+    /// The first word.
+    #[must_use]
+    pub fn start(self) -> u16 {
+        self.start
+    }
+
     /// Number of words.
     #[must_use]
     #[allow(clippy::len_without_is_empty)] // never empty

@@ -12,21 +12,32 @@
 //! faults.rs      seeded, scriptable fault injection
 //! clock.rs       virtual and real clocks for drivers
 //! in_process.rs  a crate::plc::Plc handle on a shared mock
+//! shared.rs      SharedMock: the mock behind Arc<Mutex<_>> with its clock and scan driver
+//! wire.rs        WireStream: serial line timing (11-bit characters at a baud rate)
+//! answer.rs      MEWTOCOL-COM commands executed on the mock; station rules
+//! mewtocol_server.rs  MEWTOCOL-COM server over any byte stream or a TCP listener
+//! modbus_server.rs    Modbus TCP / RTU servers through tokio-modbus
 //! ```
 //!
 //! Time: scans run at `k * scan_s` while in RUN; between scans the pulse engines run on their
 //! own, so every pulse lands at its model time, not at a scan.
 
+mod answer;
 mod clock;
 mod engine;
 mod faults;
 mod in_process;
 mod memory;
+mod mewtocol_server;
+mod modbus_server;
 mod program;
+mod shared;
 mod trace;
+mod wire;
 
 use thiserror::Error;
 
+pub use answer::{Route, StationFilter, execute as execute_mewtocol, plc_status};
 pub use clock::{Clock, RealClock, VirtualClock};
 pub use engine::PulseError;
 pub use faults::{
@@ -35,8 +46,12 @@ pub use faults::{
 };
 pub use in_process::InProcess;
 pub use memory::{Memory, MemoryError, RELAY_LAST, RELAY_WORDS};
+pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
+pub use modbus_server::{ModbusServer, ModbusServerOptions};
 pub use program::HeaderError;
+pub use shared::SharedMock;
 pub use trace::{Anomaly, PulsePoint, Recorder, write_csv};
+pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
 use crate::contract::{CHANNELS, Layout, LayoutError, State, StatusBlock};
 use crate::plc::PlcMode;
@@ -390,5 +405,7 @@ impl MockPlc {
     }
 }
 
+#[cfg(test)]
+mod server_tests;
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,192 @@
+//! What the mock PLC answers, protocol by protocol but without any link: MEWTOCOL-COM commands
+//! and station rules, executed on a [`MockPlc`].
+//!
+//! ```text
+//!  RDD / WDD   DT words                      memory errors -> ! 61 (range end) / ! 66 (address)
+//!  RCS / WCS   R relays (R9020 reads RUN)    X, Y, L: ! 66 (the mock has no I/O)
+//!  RCC         R relay words (WR)
+//!  RT          status, mode flags bit 0 = RUN
+//!  RMR / RMP   switch RUN / PROG
+//! ```
+//! Station rules (PLC.md §1, "Frames"): `FF` is executed and never answered; `EE` is answered by
+//! any station; a numbered station is answered only by that station, or by a mock configured to
+//! answer every station.
+
+use crate::mewtocol::{
+    Command, ContactArea, Mode, PlcError, PlcErrorCode, PlcStatus, Reply, Response, Station,
+};
+use crate::plc::{PlcMode, R9020};
+
+use super::{MemoryError, MockPlc};
+
+/// Which station (MEWTOCOL-COM) or unit id (Modbus) a server answers as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StationFilter {
+    /// Every station number (the reply carries the number asked for).
+    Any,
+    /// This station only (and `EE` for MEWTOCOL-COM).
+    Only(u8),
+}
+
+/// What to do with a command sent to some station.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Route {
+    /// Execute and reply from this station.
+    Answer(Station),
+    /// Execute, send nothing (broadcast).
+    Silent,
+    /// Not for us: neither execute nor reply.
+    Ignore,
+}
+
+impl StationFilter {
+    /// Where a MEWTOCOL-COM command to `station` goes.
+    #[must_use]
+    pub fn route(self, station: Station) -> Route {
+        if station.is_broadcast() {
+            return Route::Silent;
+        }
+        match (self, station.number()) {
+            (Self::Any, _) => Route::Answer(station),
+            (Self::Only(own), None) => {
+                Station::new(own).map_or(Route::Answer(station), Route::Answer)
+            }
+            (Self::Only(own), Some(n)) if n == own => Route::Answer(station),
+            (Self::Only(_), Some(_)) => Route::Ignore,
+        }
+    }
+
+    /// Whether a Modbus request to `unit` is ours (unit 0, broadcast, is everyone's).
+    #[must_use]
+    pub fn accepts_unit(self, unit: u8) -> bool {
+        match self {
+            Self::Any => true,
+            Self::Only(own) => unit == own || unit == 0,
+        }
+    }
+}
+
+fn refuse(code: PlcErrorCode) -> Response {
+    Err(PlcError { code })
+}
+
+/// A memory range error as the `!` code an FP-X answers (61 or 66).
+fn memory_refusal(error: MemoryError) -> PlcError {
+    tracing::debug!(%error, "mock refused a memory access");
+    PlcError {
+        code: PlcErrorCode::from_number(error.mewtocol_code()),
+    }
+}
+
+/// The relay number of an R contact (word * 16 + bit), or `None` for X, Y and L.
+fn relay_number(area: ContactArea, word: u16, bit: u8) -> Option<u32> {
+    (area == ContactArea::R).then(|| u32::from(word) * 16 + u32::from(bit))
+}
+
+fn read_relay(mock: &MockPlc, relay: u32) -> Result<bool, MemoryError> {
+    if relay == u32::from(R9020) {
+        return Ok(mock.mode() == PlcMode::Run);
+    }
+    mock.read_relay(relay)
+}
+
+/// The `RT` status the mock reports: only the mode flags mean anything.
+#[must_use]
+pub fn plc_status(mock: &MockPlc) -> PlcStatus {
+    PlcStatus {
+        mode_flags: u8::from(mock.mode() == PlcMode::Run),
+        ..PlcStatus::default()
+    }
+}
+
+/// Executes one MEWTOCOL-COM command on the mock and gives its response.
+pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
+    let address_error = || refuse(PlcErrorCode::AddressError);
+    match command {
+        Command::ReadDt(range) => mock
+            .read_words(range.start(), range.len())
+            .map(Reply::ReadDt)
+            .map_err(memory_refusal),
+        Command::WriteDt { start, words } => mock
+            .write_words(*start, words)
+            .map(|()| Reply::WriteDt)
+            .map_err(memory_refusal),
+        Command::ReadContact(c) => match relay_number(c.area(), c.word(), c.bit()) {
+            Some(relay) => read_relay(mock, relay)
+                .map(Reply::ReadContact)
+                .map_err(memory_refusal),
+            None => address_error(),
+        },
+        Command::WriteContact { contact: c, on } => {
+            match relay_number(c.area(), c.word(), c.bit()) {
+                Some(relay) => mock
+                    .write_relay(relay, *on)
+                    .map(|()| Reply::WriteContact)
+                    .map_err(memory_refusal),
+                None => address_error(),
+            }
+        }
+        Command::ReadContactWords(words) if words.area() == ContactArea::R => mock
+            .memory()
+            .read_wr(u32::from(words.start()), words.len())
+            .map(|w| Reply::ReadContactWords(w.to_vec()))
+            .map_err(memory_refusal),
+        Command::ReadContactWords(_) => address_error(),
+        Command::Status => Ok(Reply::Status(plc_status(mock))),
+        Command::SetMode(mode) => {
+            mock.set_mode(match mode {
+                Mode::Run => PlcMode::Run,
+                Mode::Prog => PlcMode::Prog,
+            });
+            Ok(Reply::SetMode)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mewtocol::{Contact, DtRange};
+    use crate::mock::MockConfig;
+
+    fn st(n: u8) -> Station {
+        Station::new(n).unwrap()
+    }
+
+    #[test]
+    fn station_rules_follow_the_manual() {
+        let own = StationFilter::Only(3);
+        assert_eq!(own.route(st(3)), Route::Answer(st(3)));
+        assert_eq!(own.route(st(4)), Route::Ignore);
+        assert_eq!(own.route(Station::ANY), Route::Answer(st(3)));
+        assert_eq!(own.route(Station::BROADCAST), Route::Silent);
+        assert_eq!(StationFilter::Any.route(st(42)), Route::Answer(st(42)));
+        assert_eq!(StationFilter::Any.route(Station::BROADCAST), Route::Silent);
+        assert!(own.accepts_unit(0) && own.accepts_unit(3) && !own.accepts_unit(4));
+    }
+
+    #[test]
+    fn reads_past_dt32764_are_address_errors_and_ends_past_it_data_errors() {
+        let mut mock = MockPlc::new(MockConfig::default()).unwrap();
+        let special = Command::ReadDt(DtRange::new(90_000, 90_001).unwrap());
+        let code = |r: Response| r.unwrap_err().code.number();
+        assert_eq!(code(execute(&mut mock, &special)), 66);
+        let status = execute(&mut mock, &Command::Status).unwrap();
+        assert_eq!(status, Reply::Status(plc_status(&mock)));
+        let r9020 = Contact::new(ContactArea::R, 902, 0).unwrap();
+        assert_eq!(
+            execute(&mut mock, &Command::ReadContact(r9020)),
+            Ok(Reply::ReadContact(true))
+        );
+        let y0 = Contact::new(ContactArea::Y, 0, 0).unwrap();
+        assert_eq!(code(execute(&mut mock, &Command::ReadContact(y0))), 66);
+    }
+
+    #[test]
+    fn rm_switches_the_mode() {
+        let mut mock = MockPlc::new(MockConfig::default()).unwrap();
+        execute(&mut mock, &Command::SetMode(Mode::Prog)).unwrap();
+        assert_eq!(mock.mode(), PlcMode::Prog);
+        assert!(!plc_status(&mock).is_running());
+    }
+}

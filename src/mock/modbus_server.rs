@@ -1,0 +1,347 @@
+//! IO. The mock PLC's Modbus servers, through tokio-modbus's server side (never Modbus by hand):
+//! Modbus TCP on a listener, Modbus RTU on a serial port (a real one or a pty).
+//!
+//! ```text
+//!  03 read holding registers   DT n = register n, 1..=125 a request
+//!  06 / 16 write register(s)   16: 1..=123 a request
+//!  01 read coils               coil 2048 + 16 w + b = R w.b, 1..=2000; R9020 reads RUN
+//!  05 / 15 write coil(s)       15: 1..=1968
+//!  out of memory: exception 02 (illegal data address); bad quantity: 03 (illegal data value);
+//!  any other function: 01 (illegal function)
+//! ```
+//! (PLC.md §2; Modbus Application Protocol v1.1b3, §6.) Link faults per request: drop (no reply),
+//! delay, exception N, close (TCP: the connection ends; RTU: no reply), a MEWTOCOL error in the
+//! script answers exception 04; corrupt is not possible through tokio-modbus and drops the reply.
+
+use std::future::Future;
+use std::io;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::task::{Context, Poll};
+use std::time::Duration;
+
+use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_modbus::server::Service;
+use tokio_modbus::{ExceptionCode, Request, Response, SlaveRequest};
+
+use super::answer::StationFilter;
+use super::shared::SharedMock;
+use super::wire::WireStream;
+use super::{LinkFault, MemoryError, MockPlc, RELAY_LAST};
+use crate::plc::{BoxedLink, PlcMode, R9020, RELAY_COIL_BASE};
+
+/// Registers one read (03) may ask for (Modbus spec).
+const MAX_READ_REGISTERS: u16 = 125;
+/// Registers one write (16) may carry.
+const MAX_WRITE_REGISTERS: usize = 123;
+/// Coils one read (01) may ask for.
+const MAX_READ_COILS: u16 = 2000;
+/// Coils one write (15) may carry.
+const MAX_WRITE_COILS: usize = 1968;
+
+/// How a Modbus server behaves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModbusServerOptions {
+    /// Which unit ids it answers.
+    pub unit: StationFilter,
+    /// Emulated line speed for TCP connections (see [`super::WireStream`]); replies then leave
+    /// at the end of the scan in which their request arrived.
+    pub baud: Option<u32>,
+}
+
+impl Default for ModbusServerOptions {
+    fn default() -> Self {
+        Self {
+            unit: StationFilter::Only(1),
+            baud: None,
+        }
+    }
+}
+
+/// A Modbus server on a shared mock.
+#[derive(Debug, Clone)]
+pub struct ModbusServer {
+    mock: SharedMock,
+    options: ModbusServerOptions,
+}
+
+/// The tokio-modbus service of one connection.
+#[derive(Debug, Clone)]
+struct MockService {
+    server: ModbusServer,
+    /// RTU: unit 0 is a broadcast (executed, never answered).
+    rtu: bool,
+    /// Set to end the connection (TCP).
+    closed: Arc<AtomicBool>,
+}
+
+impl ModbusServer {
+    /// A server on `mock`.
+    #[must_use]
+    pub fn new(mock: SharedMock, options: ModbusServerOptions) -> Self {
+        Self { mock, options }
+    }
+
+    /// Serves Modbus TCP on `listener` forever, one task per connection.
+    pub async fn serve_tcp(self, listener: TcpListener) -> io::Result<()> {
+        let on_connected = move |stream: TcpStream, peer| {
+            let server = self.clone();
+            async move {
+                tracing::info!(%peer, "Modbus TCP client connected");
+                let _ = stream.set_nodelay(true);
+                let link: BoxedLink = match server.options.baud {
+                    Some(baud) => Box::new(WireStream::new(stream, baud)),
+                    None => Box::new(stream),
+                };
+                let service = server.service(false);
+                let link = Closable {
+                    inner: link,
+                    closed: Arc::clone(&service.closed),
+                };
+                Ok(Some((service, link)))
+            }
+        };
+        let on_error = |e: io::Error| tracing::warn!(error = %e, "Modbus TCP connection failed");
+        tokio_modbus::server::tcp::Server::new(listener)
+            .serve(&on_connected, on_error)
+            .await
+    }
+
+    /// Serves Modbus RTU on a serial port until it fails or closes.
+    pub async fn serve_rtu(self, port: tokio_serial::SerialStream) -> io::Result<()> {
+        let service = self.service(true);
+        tokio_modbus::server::rtu::Server::new(port)
+            .serve_forever(service)
+            .await
+    }
+
+    fn service(&self, rtu: bool) -> MockService {
+        MockService {
+            server: self.clone(),
+            rtu,
+            closed: Arc::new(AtomicBool::new(false)),
+        }
+    }
+}
+
+type Answer = Pin<Box<dyn Future<Output = Result<Option<Response>, ExceptionCode>> + Send>>;
+
+impl Service for MockService {
+    type Request = SlaveRequest<'static>;
+    type Response = Option<Response>;
+    type Exception = ExceptionCode;
+    type Future = Answer;
+
+    fn call(&self, request: SlaveRequest<'static>) -> Answer {
+        let service = self.clone();
+        Box::pin(async move { service.answer(request).await })
+    }
+}
+
+impl MockService {
+    async fn answer(
+        self,
+        request: SlaveRequest<'static>,
+    ) -> Result<Option<Response>, ExceptionCode> {
+        let options = self.server.options;
+        if !options.unit.accepts_unit(request.slave) {
+            tracing::debug!(unit = request.slave, "request for another unit");
+            return Ok(None);
+        }
+        let mock = &self.server.mock;
+        if options.baud.is_some() {
+            mock.wait_scan_end().await;
+        }
+        let (faults, mut result) = mock.with(|m| (m.on_command(), execute(m, &request.request)));
+        for fault in faults {
+            tracing::warn!(?fault, "injecting link fault");
+            match fault {
+                LinkFault::Drop | LinkFault::Corrupt { .. } => return Ok(None),
+                LinkFault::Close => {
+                    self.closed.store(true, Ordering::SeqCst);
+                    return Ok(None);
+                }
+                LinkFault::Delay { ms } => tokio::time::sleep(Duration::from_millis(ms)).await,
+                LinkFault::ModbusException { code } => result = Err(ExceptionCode::new(code)),
+                LinkFault::MewtocolError { .. } => result = Err(ExceptionCode::ServerDeviceFailure),
+            }
+        }
+        if self.rtu && request.slave == 0 {
+            return Ok(None);
+        }
+        result.map(Some)
+    }
+}
+
+fn address_error(error: MemoryError) -> ExceptionCode {
+    tracing::debug!(%error, "mock refused a memory access");
+    ExceptionCode::new(error.modbus_exception())
+}
+
+fn quantity(n: usize, max: usize) -> Result<(), ExceptionCode> {
+    if (1..=max).contains(&n) {
+        Ok(())
+    } else {
+        Err(ExceptionCode::IllegalDataValue)
+    }
+}
+
+/// The relay a coil addresses (coils below 2048 are Y outputs, which the mock lacks).
+fn coil_relay(coil: u32) -> Result<u32, ExceptionCode> {
+    coil.checked_sub(u32::from(RELAY_COIL_BASE))
+        .ok_or(ExceptionCode::IllegalDataAddress)
+}
+
+fn read_coil(mock: &MockPlc, coil: u32) -> Result<bool, ExceptionCode> {
+    let relay = coil_relay(coil)?;
+    if relay == u32::from(R9020) {
+        return Ok(mock.mode() == PlcMode::Run);
+    }
+    mock.read_relay(relay).map_err(address_error)
+}
+
+fn write_coils(mock: &mut MockPlc, first: u16, coils: &[bool]) -> Result<(), ExceptionCode> {
+    let start = coil_relay(u32::from(first))?;
+    if start + coils.len() as u32 - 1 > u32::from(RELAY_LAST) {
+        return Err(ExceptionCode::IllegalDataAddress);
+    }
+    for (relay, on) in (start..).zip(coils) {
+        mock.write_relay(relay, *on).map_err(address_error)?;
+    }
+    Ok(())
+}
+
+/// Executes one Modbus request on the mock.
+fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, ExceptionCode> {
+    match request {
+        Request::ReadHoldingRegisters(start, n) => {
+            quantity(usize::from(*n), usize::from(MAX_READ_REGISTERS))?;
+            mock.read_words(u32::from(*start), usize::from(*n))
+                .map(Response::ReadHoldingRegisters)
+                .map_err(address_error)
+        }
+        Request::WriteSingleRegister(at, word) => mock
+            .write_words(u32::from(*at), &[*word])
+            .map(|()| Response::WriteSingleRegister(*at, *word))
+            .map_err(address_error),
+        Request::WriteMultipleRegisters(start, words) => {
+            quantity(words.len(), MAX_WRITE_REGISTERS)?;
+            mock.write_words(u32::from(*start), words)
+                .map(|()| Response::WriteMultipleRegisters(*start, words.len() as u16))
+                .map_err(address_error)
+        }
+        Request::ReadCoils(first, n) => {
+            quantity(usize::from(*n), usize::from(MAX_READ_COILS))?;
+            let coils = (0..u32::from(*n)).map(|i| read_coil(mock, u32::from(*first) + i));
+            coils.collect::<Result<_, _>>().map(Response::ReadCoils)
+        }
+        Request::WriteSingleCoil(coil, on) => {
+            write_coils(mock, *coil, &[*on]).map(|()| Response::WriteSingleCoil(*coil, *on))
+        }
+        Request::WriteMultipleCoils(first, coils) => {
+            quantity(coils.len(), MAX_WRITE_COILS)?;
+            write_coils(mock, *first, coils)
+                .map(|()| Response::WriteMultipleCoils(*first, coils.len() as u16))
+        }
+        _ => Err(ExceptionCode::IllegalFunction),
+    }
+}
+
+/// A stream that reads as closed (end of stream) once its flag is set, so tokio-modbus ends the
+/// connection after a scripted `close`.
+#[derive(Debug)]
+struct Closable<S> {
+    inner: S,
+    closed: Arc<AtomicBool>,
+}
+
+impl<S: AsyncRead + Unpin> AsyncRead for Closable<S> {
+    fn poll_read(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<io::Result<()>> {
+        let this = self.get_mut();
+        if this.closed.load(Ordering::SeqCst) {
+            return Poll::Ready(Ok(()));
+        }
+        Pin::new(&mut this.inner).poll_read(cx, buf)
+    }
+}
+
+impl<S: AsyncWrite + Unpin> AsyncWrite for Closable<S> {
+    fn poll_write(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &[u8],
+    ) -> Poll<io::Result<usize>> {
+        Pin::new(&mut self.get_mut().inner).poll_write(cx, buf)
+    }
+
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().inner).poll_flush(cx)
+    }
+
+    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().inner).poll_shutdown(cx)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mock::MockConfig;
+
+    fn mock() -> MockPlc {
+        MockPlc::new(MockConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn quantities_outside_the_spec_are_illegal_data_values() {
+        let mut m = mock();
+        let read = |n| Request::ReadHoldingRegisters(0, n);
+        assert_eq!(
+            execute(&mut m, &read(126)),
+            Err(ExceptionCode::IllegalDataValue)
+        );
+        assert_eq!(
+            execute(&mut m, &read(0)),
+            Err(ExceptionCode::IllegalDataValue)
+        );
+        assert_eq!(
+            execute(&mut m, &Request::ReadCoils(2048, 2001)),
+            Err(ExceptionCode::IllegalDataValue)
+        );
+        let big = Request::WriteMultipleRegisters(0, vec![0; 124].into());
+        assert_eq!(execute(&mut m, &big), Err(ExceptionCode::IllegalDataValue));
+    }
+
+    #[test]
+    fn addresses_outside_memory_are_illegal_data_addresses() {
+        let mut m = mock();
+        let past = Request::ReadHoldingRegisters(32_760, 10);
+        assert_eq!(
+            execute(&mut m, &past),
+            Err(ExceptionCode::IllegalDataAddress)
+        );
+        let y0 = Request::ReadCoils(0, 1);
+        assert_eq!(execute(&mut m, &y0), Err(ExceptionCode::IllegalDataAddress));
+        let past_r255f = Request::WriteMultipleCoils(2048 + 4095, vec![true; 2].into());
+        assert_eq!(
+            execute(&mut m, &past_r255f),
+            Err(ExceptionCode::IllegalDataAddress)
+        );
+    }
+
+    #[test]
+    fn coils_from_2048_are_r_relays_and_r9020_reads_run() {
+        let mut m = mock();
+        let r1a = 2048 + 16 + 0xA;
+        execute(&mut m, &Request::WriteSingleCoil(r1a, true)).unwrap();
+        assert!(m.read_relay(0x1A).unwrap());
+        let run = Request::ReadCoils(2048 + R9020, 1);
+        assert_eq!(execute(&mut m, &run), Ok(Response::ReadCoils(vec![true])));
+    }
+}
