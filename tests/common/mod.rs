@@ -1,6 +1,8 @@
 //! Robots for integration tests: the seed's cylindrical robot, a gantry and a SCARA, built in code.
 #![allow(dead_code, unreachable_pub, missing_docs)]
 
+pub mod process;
+
 use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
 use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};
 use linterpd::table::{FrequencyModel, OutputMethod};
