@@ -3,8 +3,9 @@
 
     pymodbus_server.py --tcp 127.0.0.1:0 [--unit 1] [--registers N] [--coils N]
     pymodbus_server.py --serial /path/to/pty [--baud 19200] [--unit 1] ...
+                       [--preset START:V,V,...]...
 
-Holding registers 0..N-1 and coils 0..M-1 start at 0 / off; any address past them answers
+Holding registers 0..N-1 and coils 0..M-1 start at 0 / off (--preset sets registers first); any address past them answers
 Modbus exception 02 (illegal data address). Once it is ready it prints exactly one line,
 `listening on ADDR` (the bound host:port, or the serial path), and serves until SIGTERM or
 SIGINT, then exits 0.
@@ -29,22 +30,31 @@ def parse_args():
     parser.add_argument("--unit", type=int, default=1, help="unit id (slave address)")
     parser.add_argument("--registers", type=int, default=10000, help="holding registers")
     parser.add_argument("--coils", type=int, default=4096, help="coils")
+    parser.add_argument(
+        "--preset", action="append", default=[], metavar="START:V,V,...",
+        help="initial register values (decimal or 0x hex)",
+    )
     return parser.parse_args()
 
 
-def device(unit, registers, coils):
-    """One device with separate coil and register blocks, all zero."""
+def device(unit, registers, coils, presets):
+    """One device with separate coil and register blocks, zero but for the presets."""
+    memory = [0] * registers
+    for text in presets:
+        start, _, values = text.partition(":")
+        for i, value in enumerate(values.split(",")):
+            memory[int(start, 0) + i] = int(value, 0)
     blocks = (
         [SimData(0, count=coils, values=False, datatype=DataType.BITS)],
         [SimData(0, count=16, values=False, datatype=DataType.BITS)],
-        [SimData(0, count=registers, values=0, datatype=DataType.REGISTERS)],
+        [SimData(0, values=memory, datatype=DataType.REGISTERS)],
         [SimData(0, count=16, values=0, datatype=DataType.REGISTERS)],
     )
     return SimDevice(id=unit, simdata=blocks)
 
 
 async def serve(args):
-    dev = device(args.unit, args.registers, args.coils)
+    dev = device(args.unit, args.registers, args.coils, args.preset)
     if args.tcp:
         host, _, port = args.tcp.rpartition(":")
         server = ModbusTcpServer(dev, address=(host, int(port)))
