@@ -2,6 +2,7 @@
 #![allow(dead_code, unreachable_pub, missing_docs)]
 
 pub mod moves;
+pub mod process;
 
 use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
 use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};
