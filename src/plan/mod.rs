@@ -214,15 +214,15 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
     } else {
         motion.period_s
     };
-    let (profile, samples) = loop_until_fast_enough(
+    let sampler = Sampler {
         robot,
-        &line,
-        &mut motion,
+        line: &line,
         grid_s,
-        bounded.is_some(),
-        &start_values,
+        continuous: bounded.is_some(),
+        start_values: &start_values,
         start_counts,
-    )?;
+    };
+    let (profile, samples) = sampler.fast_enough(&mut motion)?;
     let speed_factor = motion.speed_mm_s / req.motion.speed_mm_s;
     let (tables, problems, execution, figures, floor_mm) = if let Some(tolerance_mm) = bounded {
         let m = bounded::Move {
@@ -324,37 +324,81 @@ fn resolve_line(robot: &Robot, req: &MoveRequest) -> Result<Resolved, PlanError>
     }
 }
 
-fn loop_until_fast_enough(
-    robot: &Robot,
-    line: &Line,
-    motion: &mut Motion,
+/// Samples the line for one motion: the profile, the samples, and the fastest channel's load.
+struct Sampler<'a> {
+    robot: &'a Robot,
+    line: &'a Line,
     grid_s: f64,
     continuous: bool,
-    start_values: &crate::kinematics::Joints,
+    start_values: &'a crate::kinematics::Joints,
     start_counts: [i64; JOINTS],
-) -> Result<(Profile, Samples), PlanError> {
-    let mut attempt = 0;
-    loop {
+}
+
+impl Sampler<'_> {
+    fn at(&self, motion: &Motion) -> Result<(Profile, Samples, limits::Peak), PlanError> {
         let profile = Profile::new(ProfileRequest {
-            length_mm: line.length_mm(),
+            length_mm: self.line.length_mm(),
             speed_mm_s: motion.speed_mm_s,
             accel_s: motion.accel_s,
-            period_s: grid_s,
+            period_s: self.grid_s,
         })?;
-        let samples = samples::sample(robot, line, &profile, start_values, start_counts)?;
-        limits::check_positions(robot, &samples.counts, profile.period_s)?;
-        let peak = limits::peak(robot, &samples, profile.period_s, continuous);
+        let samples = samples::sample(
+            self.robot,
+            self.line,
+            &profile,
+            self.start_values,
+            self.start_counts,
+        )?;
+        limits::check_positions(self.robot, &samples.counts, profile.period_s)?;
+        let peak = limits::peak(self.robot, &samples, profile.period_s, self.continuous);
+        Ok((profile, samples, peak))
+    }
+
+    /// The profile and samples of `motion`, or under `slow-down` of the fastest speed (within
+    /// 1 %) at which every channel fits; `motion.speed_mm_s` is set to the speed used. Speed and
+    /// acceleration scale together (the ramp time stays).
+    fn fast_enough(&self, motion: &mut Motion) -> Result<(Profile, Samples), PlanError> {
+        let (profile, samples, peak) = self.at(motion)?;
         if peak.load <= 1.0 {
             return Ok((profile, samples));
         }
-        attempt += 1;
-        if motion.over_speed == OverSpeed::Reject || attempt > SLOW_DOWN_ATTEMPTS {
-            return Err(limits::over_speed(robot, &peak));
+        if motion.over_speed == OverSpeed::Reject {
+            return Err(limits::over_speed(self.robot, &peak));
         }
-        // Speed and acceleration scale together (the ramp time stays). A count rounds to whole
-        // pulses, so a period can stay one pulse over after a proportional cut: every further try
-        // cuts at least 1 %.
-        motion.speed_mm_s *= (0.999 / peak.load).min(0.99);
+        let asked = *motion;
+        let scaled = |f: f64| Motion {
+            speed_mm_s: asked.speed_mm_s * f,
+            ..asked
+        };
+        // Find a factor that fits. A triangular profile's peak speed goes with the square root of
+        // its acceleration, and counts round to whole pulses: cut by the square of the overload,
+        // and by at least 1 %.
+        let (mut bad, mut factor, mut peak) = (1.0, 1.0, peak);
+        let mut good = None;
+        for _ in 0..SLOW_DOWN_ATTEMPTS {
+            factor *= (0.999 / peak.load).powi(2).min(0.99);
+            let (p, s, pk) = self.at(&scaled(factor))?;
+            if pk.load <= 1.0 {
+                good = Some((factor, p, s));
+                break;
+            }
+            (bad, peak) = (factor, pk);
+        }
+        let Some((mut fits, mut profile, mut samples)) = good else {
+            return Err(limits::over_speed(self.robot, &peak));
+        };
+        // Then the fastest that fits, to within 1 %.
+        while bad / fits > 1.01 {
+            let mid = (fits * bad).sqrt();
+            let (p, s, pk) = self.at(&scaled(mid))?;
+            if pk.load <= 1.0 {
+                (fits, profile, samples) = (mid, p, s);
+            } else {
+                bad = mid;
+            }
+        }
+        *motion = scaled(fits);
+        Ok((profile, samples))
     }
 }
 
