@@ -354,9 +354,11 @@ impl<P: Plc> Contract<P> {
         Ok(())
     }
 
-    /// Starts a verified bank: writes `command = 1` as a single word. Accepted while idle, done
-    /// or stopped; while running, the PLC program holds it and starts it when the move ends.
+    /// Starts a verified bank: checks the PLC is still alive (heartbeat moving, no fault, ready),
+    /// then writes `command = 1` as a single word. Accepted while idle, done or stopped; while
+    /// running, the PLC program holds it and starts it when the move ends.
     pub async fn start(&mut self, bank: VerifiedBank) -> Result<CommandBlock, ContractError> {
+        self.check_alive().await?;
         self.command(Command::Start).await?;
         Ok(bank.block)
     }

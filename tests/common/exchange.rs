@@ -1,0 +1,84 @@
+//! One contract exchange against a mock PLC, the same over every link: check the PLC is alive,
+//! plan the seed's move from the counts it reports, upload and verify a bank, start it, follow it
+//! to done, and compare the final counts with the plan.
+
+use linterpd::geometry::Pose;
+use linterpd::kinematics::JOINTS;
+use linterpd::mock::{MockConfig, MockPlc, SharedMock};
+use linterpd::plan::{MoveRequest, Origin, Plan, plan_move};
+use linterpd::plc::Plc;
+use linterpd::plc::contract::{Contract, ContractError, ContractSettings, VerifiedBank};
+use linterpd::robot::{Robot, seed_robot};
+
+/// The seed's P1 and P2 (mm).
+pub const P1: [f64; 3] = [-926.57, 535.03, 50.0];
+pub const P2: [f64; 3] = [-1144.43, 659.60, 186.60];
+
+/// A mock PLC in RUN whose channels stand at the seed's start counts (joint j on channel j).
+pub fn mock_at_seed_start(script: &str) -> SharedMock {
+    let robot = seed_robot();
+    let mut mock = MockPlc::new(MockConfig::default()).unwrap();
+    mock.set_faults(script.parse().unwrap());
+    let start = robot.pose_with_wrist_at_zero(P1[0], P1[1], P1[2]).unwrap();
+    let q = linterpd::kinematics::Kinematics::ik(&robot.kinematics, &start, None).unwrap();
+    for (j, c) in robot.counts_of(&q).into_iter().enumerate() {
+        mock.set_count(robot.joints[j].channel as usize, c);
+    }
+    let shared = SharedMock::new(mock);
+    tokio::spawn(shared.clone().run_scans());
+    shared
+}
+
+/// The seed's move, planned from where the PLC says the robot is.
+pub fn plan_from(robot: &Robot, elapsed: [i32; 4]) -> Plan {
+    let counts: [i64; JOINTS] =
+        std::array::from_fn(|j| i64::from(elapsed[robot.joints[j].channel as usize]));
+    let from = robot.pose_of(&counts);
+    let to = Pose {
+        a_rad: from.a_rad,
+        ..Pose::from_mm_deg(P2[0], P2[1], P2[2], 0.0)
+    };
+    let req = MoveRequest {
+        from: Origin::Counts(counts),
+        to,
+        motion: robot.motion,
+        seed_exact: false,
+    };
+    plan_move(robot, &req).unwrap()
+}
+
+/// Checks the PLC, plans from its counts, uploads into bank 0 with sequence `seq`.
+pub async fn upload<P: Plc>(
+    c: &mut Contract<P>,
+    seq: u16,
+) -> Result<(Plan, VerifiedBank), ContractError> {
+    let robot = seed_robot();
+    let status = c.check_alive().await?;
+    let plan = plan_from(&robot, status.block.elapsed);
+    let tables = plan.valid_tables(&robot).expect("a valid plan");
+    let bank = c.upload(0, seq, &tables).await?;
+    Ok((plan, bank))
+}
+
+/// The whole exchange: upload, start, follow to done, final counts equal the plan's.
+pub async fn exchange<P: Plc>(c: &mut Contract<P>, seq: u16) -> Result<(), ContractError> {
+    let (plan, bank) = upload(c, seq).await?;
+    c.start(bank).await?;
+    let done = c.follow(seq, |_| {}).await?;
+    let robot = seed_robot();
+    let end = plan.end_counts();
+    for (j, joint) in robot.joints.iter().enumerate() {
+        assert_eq!(
+            i64::from(done.block.elapsed[joint.channel as usize]),
+            end[j],
+            "joint {}",
+            joint.name
+        );
+    }
+    Ok(())
+}
+
+/// Contract settings for tests: the defaults.
+pub fn settings() -> ContractSettings {
+    ContractSettings::default()
+}
