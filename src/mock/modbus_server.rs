@@ -86,27 +86,49 @@ impl ModbusServer {
 
     /// Serves Modbus TCP on `listener` forever, one task per connection.
     pub async fn serve_tcp(self, listener: TcpListener) -> io::Result<()> {
-        let on_connected = move |stream: TcpStream, peer| {
-            let server = self.clone();
-            async move {
-                tracing::info!(%peer, "Modbus TCP client connected");
-                let _ = stream.set_nodelay(true);
-                let link: BoxedLink = match server.options.baud {
-                    Some(baud) => Box::new(WireStream::new(stream, baud)),
-                    None => Box::new(stream),
-                };
-                let service = server.service(false);
-                let link = Closable {
-                    inner: link,
-                    closed: Arc::clone(&service.closed),
-                };
-                Ok(Some((service, link)))
-            }
-        };
+        let on_connected = self.on_connected(false);
         let on_error = |e: io::Error| tracing::warn!(error = %e, "Modbus TCP connection failed");
         tokio_modbus::server::tcp::Server::new(listener)
             .serve(&on_connected, on_error)
             .await
+    }
+
+    /// Serves Modbus RTU framing over TCP connections on `listener` forever, one task per
+    /// connection: with `baud`, a serial RTU line emulated at that speed (what the upload
+    /// benchmark measures), since tokio-modbus serves RTU on nothing else but a serial port.
+    pub async fn serve_rtu_over_tcp(self, listener: TcpListener) -> io::Result<()> {
+        let on_connected = self.on_connected(true);
+        let on_error =
+            |e: io::Error| tracing::warn!(error = %e, "Modbus RTU-over-TCP connection failed");
+        tokio_modbus::server::rtu_over_tcp::Server::new(listener)
+            .serve(&on_connected, on_error)
+            .await
+    }
+
+    /// What a new TCP connection gets: the service and the link (through the wire emulation
+    /// when a baud rate is set).
+    fn on_connected(
+        &self,
+        rtu: bool,
+    ) -> impl Fn(
+        TcpStream,
+        std::net::SocketAddr,
+    ) -> std::future::Ready<io::Result<Option<(MockService, Closable<BoxedLink>)>>> {
+        let server = self.clone();
+        move |stream: TcpStream, peer| {
+            tracing::info!(%peer, rtu, "Modbus client connected");
+            let _ = stream.set_nodelay(true);
+            let link: BoxedLink = match server.options.baud {
+                Some(baud) => Box::new(WireStream::new(stream, baud)),
+                None => Box::new(stream),
+            };
+            let service = server.service(rtu);
+            let link = Closable {
+                inner: link,
+                closed: Arc::clone(&service.closed),
+            };
+            std::future::ready(Ok(Some((service, link))))
+        }
     }
 
     /// Serves Modbus RTU on a serial port until it fails or closes.
