@@ -22,6 +22,7 @@
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
 //!                    fault injection, pulse trace; synchronous core, time is an argument
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
+//! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! ```
 
@@ -34,6 +35,7 @@ pub mod mewtocol;
 pub mod mock;
 pub mod plan;
 pub mod plc;
+pub mod plot;
 pub mod robot;
 pub mod sim;
 pub mod table;

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use crate::kinematics::{JointKind, Kinematics};
 use crate::plan::{MoveRequest, Plan};
 use crate::robot::Robot;
+use crate::sim::Figures;
 use crate::table::{ChannelTable, Direction, Duty, Segment};
 
 /// The whole document.
@@ -83,8 +84,9 @@ struct SegmentDoc {
     rows: Vec<[i64; 2]>,
 }
 
+/// A plan's accuracy figures, as both the plan and the comparison documents give them.
 #[derive(Debug, Serialize)]
-struct FiguresDoc {
+pub(super) struct FiguresDoc {
     path_deviation_mm: f64,
     tracking_error_mm: f64,
     sampled_deviation_mm: f64,
@@ -128,7 +130,13 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             .collect(),
         valid: plan.valid(),
         problems: plan.problems.clone(),
-        figures: FiguresDoc {
+        figures: FiguresDoc::from(figures),
+    }
+}
+
+impl From<Figures> for FiguresDoc {
+    fn from(figures: Figures) -> Self {
+        Self {
             path_deviation_mm: figures.path_deviation_mm,
             tracking_error_mm: figures.tracking_error_mm,
             sampled_deviation_mm: figures.sampled_deviation_mm,
@@ -137,7 +145,7 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             finish_s: figures.finish_s,
             rows: figures.rows,
             words: figures.words,
-        },
+        }
     }
 }
 

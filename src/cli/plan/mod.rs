@@ -1,11 +1,13 @@
 //! `linterpd plan`: plan one move from a config file and print its tables and figures as text,
-//! JSON or CSV.
+//! JSON or CSV; or, with `--compare`, plan it every way and print the figures side by side. `--svg`
+//! also draws the path and its deviation.
 
+mod compare;
 mod csv;
 mod json;
 mod text;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
@@ -64,6 +66,13 @@ pub struct PlanArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
+    /// Plan the move seed-exact, constant-period and bounded-error, each under both frequency
+    /// models, and print their figures side by side (text or json).
+    #[arg(long, conflicts_with_all = ["method", "seed_exact", "frequency_model"])]
+    pub compare: bool,
+    /// Also write an SVG of the path (XY, XZ) and its deviation along the line to this file.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
 }
 
 /// `--method`.
@@ -108,10 +117,27 @@ pub enum Format {
 pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let config = Config::load(&args.config).map_err(bad_input)?;
     let robot = config.robot(args.robot.as_deref()).map_err(bad_input)?;
+    if args.compare {
+        return compare::run(robot, args, out);
+    }
     let request = request(robot, args).map_err(Failure::BadInput)?;
     let plan = plan_move(robot, &request).map_err(bad_input)?;
     write(robot, &request, &plan, args.format, out)
         .context("writing the plan")
+        .map_err(Failure::Runtime)?;
+    match &args.svg {
+        Some(path) => write_svg(path, robot, &[&plan]),
+        None => Ok(()),
+    }
+}
+
+/// Draws `plans` (of one move) and writes the SVG to `path`.
+fn write_svg(path: &Path, robot: &Robot, plans: &[&Plan]) -> Result<(), Failure> {
+    let svg = crate::plot::svg(robot, plans)
+        .context("drawing the svg")
+        .map_err(Failure::Runtime)?;
+    std::fs::write(path, svg)
+        .with_context(|| format!("writing {}", path.display()))
         .map_err(Failure::Runtime)
 }
 
@@ -135,6 +161,35 @@ fn write(
 
 /// The move request the arguments describe, the robot's defaults filling the gaps.
 fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
+    let base = base_request(robot, args)?;
+    let method = method(base.motion.method, args.method, tolerance(args)?)?;
+    let model = args
+        .frequency_model
+        .map_or(base.motion.frequency_model, FrequencyModel::from);
+    Ok(variant(&base, method, model, args.seed_exact))
+}
+
+/// `base` planned with `method` under `model`, seed-exact or not.
+fn variant(
+    base: &MoveRequest,
+    method: Method,
+    model: FrequencyModel,
+    seed_exact: bool,
+) -> MoveRequest {
+    MoveRequest {
+        motion: Motion {
+            method,
+            frequency_model: model,
+            ..base.motion
+        },
+        seed_exact,
+        ..*base
+    }
+}
+
+/// What every way of planning the move shares: its ends, speed, ramps, period and over-speed
+/// policy; the method and frequency model are the robot's, and the plan is not seed-exact.
+fn base_request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     let motion = motion(robot.motion, args)?;
     let from_arg: PoseArg = parse_pose(&args.from).context("--from")?;
     let to_arg: PoseArg = parse_pose(&args.to).context("--to")?;
@@ -153,7 +208,7 @@ fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
         from: Origin::Pose(from),
         to,
         motion,
-        seed_exact: args.seed_exact,
+        seed_exact: false,
     })
 }
 
@@ -167,6 +222,16 @@ fn parse_mm(text: &str) -> anyhow::Result<f64> {
     Ok(value)
 }
 
+/// `--tolerance`, if given.
+fn tolerance(args: &PlanArgs) -> anyhow::Result<Option<f64>> {
+    args.tolerance
+        .as_deref()
+        .map(parse_mm)
+        .transpose()
+        .context("--tolerance")
+}
+
+/// The robot's motion defaults with `--speed`, `--accel-time`, `--period` and `--over-speed`.
 fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
     let mut m = defaults;
     if let Some(text) = &args.speed {
@@ -178,13 +243,22 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
     if let Some(text) = &args.period {
         m.period_s = parse_duration_s(text).context("--period")?;
     }
-    let tolerance = args
-        .tolerance
-        .as_deref()
-        .map(parse_mm)
-        .transpose()
-        .context("--tolerance")?;
-    m.method = match (args.method, m.method, tolerance) {
+    if let Some(policy) = args.over_speed {
+        m.over_speed = match policy {
+            OverSpeedArg::Reject => OverSpeed::Reject,
+            OverSpeedArg::SlowDown => OverSpeed::SlowDown,
+        };
+    }
+    Ok(m)
+}
+
+/// The method `--method` and `--tolerance` ask for, the robot's `default` filling the gaps.
+fn method(
+    default: Method,
+    asked: Option<MethodArg>,
+    tolerance: Option<f64>,
+) -> anyhow::Result<Method> {
+    Ok(match (asked, default, tolerance) {
         (Some(MethodArg::ConstantPeriod), _, None) => Method::ConstantPeriod,
         (Some(MethodArg::BoundedError) | None, _, Some(tolerance_mm))
         | (Some(MethodArg::BoundedError), Method::BoundedError { tolerance_mm }, None) => {
@@ -197,19 +271,14 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
             anyhow::bail!("--tolerance only applies to --method bounded-error")
         }
         (None, method, None) => method,
-    };
+    })
+}
 
-    if let Some(model) = args.frequency_model {
-        m.frequency_model = match model {
-            ModelArg::Ideal => FrequencyModel::Ideal,
-            ModelArg::FpxDivider => FrequencyModel::FpxDivider,
-        };
+impl From<ModelArg> for FrequencyModel {
+    fn from(model: ModelArg) -> Self {
+        match model {
+            ModelArg::Ideal => Self::Ideal,
+            ModelArg::FpxDivider => Self::FpxDivider,
+        }
     }
-    if let Some(policy) = args.over_speed {
-        m.over_speed = match policy {
-            OverSpeedArg::Reject => OverSpeed::Reject,
-            OverSpeedArg::SlowDown => OverSpeed::SlowDown,
-        };
-    }
-    Ok(m)
 }

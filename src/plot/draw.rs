@@ -1,0 +1,248 @@
+//! The drawing: plotters on its SVG backend, three panels and a legend (layout in `mod.rs`).
+
+use std::ops::Range;
+
+use nalgebra::Vector3;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::Series;
+use super::track::TrackPoint;
+use crate::geometry::Line;
+
+/// Width of the picture, px.
+pub const WIDTH_PX: u32 = 1280;
+/// Height of the picture, px.
+pub const HEIGHT_PX: u32 = 960;
+
+const FONT: &str = "sans-serif";
+/// Height of the top row (the path panels), px.
+const TOP_PX: u32 = 470;
+/// Width of the legend column, px.
+const LEGEND_PX: u32 = 300;
+const AXIS_GREY: RGBColor = RGBColor(90, 90, 90);
+const GRID: RGBColor = RGBColor(232, 232, 232);
+const GRID_BOLD: RGBColor = RGBColor(205, 205, 205);
+const TOLERANCE: RGBColor = RGBColor(190, 0, 160);
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+type Failed = Box<dyn std::error::Error + Send + Sync>;
+
+/// Everything the drawing needs, prepared.
+pub(super) struct Picture<'a> {
+    pub(super) title: String,
+    pub(super) line: Line,
+    /// Factor on every offset from the line in the path panels.
+    pub(super) magnify: f64,
+    /// Per series: the thinned executed path.
+    pub(super) paths: Vec<Vec<TrackPoint>>,
+    /// Length of the stretches of the line the deviation panel takes the largest of, mm.
+    pub(super) stretch_mm: f64,
+    /// Per series: (distance along the line, largest deviation) of each stretch.
+    pub(super) envelopes: Vec<Vec<(f64, f64)>>,
+    pub(super) series: &'a [Series],
+    pub(super) tolerances_mm: Vec<f64>,
+}
+
+fn colour(rgb: (u8, u8, u8)) -> RGBColor {
+    RGBColor(rgb.0, rgb.1, rgb.2)
+}
+
+/// The picture as an SVG document.
+pub(super) fn svg(picture: &Picture<'_>) -> Result<String, Failed> {
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (WIDTH_PX, HEIGHT_PX)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(&picture.title, (FONT, 22).into_font().color(&BLACK))?;
+        let (top, bottom) = root.split_vertically(TOP_PX);
+        let (xy, xz) = top.split_horizontally(WIDTH_PX / 2);
+        path_panel(&xy, picture, [0, 1], ["X (mm)", "Y (mm)"])?;
+        path_panel(&xz, picture, [0, 2], ["X (mm)", "Z (mm)"])?;
+        let (deviation, legend) = bottom.split_horizontally(WIDTH_PX - LEGEND_PX);
+        deviation_panel(&deviation, picture)?;
+        legend_panel(&legend, picture)?;
+        root.present()?;
+    }
+    Ok(out)
+}
+
+/// A position in the panel's plane: the foot on the line plus the magnified offset.
+fn projected(picture: &Picture<'_>, p: &TrackPoint, axes: [usize; 2]) -> (f64, f64) {
+    let v = foot(&picture.line, p.along_mm) + p.offset_mm * picture.magnify;
+    (v[axes[0]], v[axes[1]])
+}
+
+fn foot(line: &Line, along_mm: f64) -> Vector3<f64> {
+    line.at(along_mm).position_mm
+}
+
+/// The range of `values` with a margin of `pad` of its width (at least 1 mm) each side.
+fn padded(values: impl Iterator<Item = f64>, pad: f64) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    let margin = ((hi - lo) * pad).max(1.0);
+    (lo - margin)..(hi + margin)
+}
+
+/// `x` and `y` widened so one mm is as long on both axes of a `w` by `h` px plot.
+fn equal_scale(x: Range<f64>, y: Range<f64>, w: f64, h: f64) -> (Range<f64>, Range<f64>) {
+    let widen = |r: Range<f64>, span: f64| {
+        let mid = f64::midpoint(r.start, r.end);
+        (mid - span / 2.0)..(mid + span / 2.0)
+    };
+    let mm_per_px = ((x.end - x.start) / w).max((y.end - y.start) / h);
+    (widen(x, mm_per_px * w), widen(y, mm_per_px * h))
+}
+
+fn path_panel(
+    area: &Area<'_>,
+    picture: &Picture<'_>,
+    axes: [usize; 2],
+    names: [&str; 2],
+) -> Result<(), Failed> {
+    let ends = [picture.line.from.position_mm, picture.line.to.position_mm];
+    let points: Vec<Vec<(f64, f64)>> = picture
+        .paths
+        .iter()
+        .map(|path| path.iter().map(|p| projected(picture, p, axes)).collect())
+        .collect();
+    let all = || {
+        points
+            .iter()
+            .flatten()
+            .copied()
+            .chain(ends.iter().map(|e| (e[axes[0]], e[axes[1]])))
+    };
+    let (w, h) = area.dim_in_pixel();
+    let (x, y) = equal_scale(
+        padded(all().map(|p| p.0), 0.06),
+        padded(all().map(|p| p.1), 0.06),
+        f64::from(w) - 110.0,
+        f64::from(h) - 110.0,
+    );
+    let caption = format!(
+        "path in {}{} plane (offsets from the line x{})",
+        &names[0][..1],
+        &names[1][..1],
+        picture.magnify
+    );
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 16))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x, y)?;
+    chart
+        .configure_mesh()
+        .x_desc(names[0])
+        .y_desc(names[1])
+        .x_labels(6)
+        .y_labels(6)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(GRID)
+        .bold_line_style(GRID_BOLD)
+        .axis_style(AXIS_GREY)
+        .draw()?;
+    for (pts, s) in points.into_iter().zip(picture.series) {
+        chart.draw_series(LineSeries::new(pts, colour(s.rgb).stroke_width(2)))?;
+    }
+    let planned = ends.iter().map(|e| (e[axes[0]], e[axes[1]]));
+    chart.draw_series(LineSeries::new(planned, BLACK.stroke_width(1)))?;
+    Ok(())
+}
+
+fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
+    let length_mm = picture.line.length_mm();
+    let top = picture
+        .envelopes
+        .iter()
+        .flatten()
+        .map(|p| p.1)
+        .chain(picture.tolerances_mm.iter().copied())
+        .fold(0.0, f64::max);
+    let top = if top > 0.0 { top * 1.12 } else { 0.01 };
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            format!(
+                "deviation from the line, true scale (largest in each {:.2} mm of the line)",
+                picture.stretch_mm
+            ),
+            (FONT, 16),
+        )
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(74)
+        .build_cartesian_2d(0.0..length_mm, 0.0..top)?;
+    chart
+        .configure_mesh()
+        .x_desc("distance along the line (mm)")
+        .y_desc("deviation (mm)")
+        .x_labels(10)
+        .y_labels(8)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(GRID)
+        .bold_line_style(GRID_BOLD)
+        .axis_style(AXIS_GREY)
+        .draw()?;
+    for &tolerance in &picture.tolerances_mm {
+        let style = TOLERANCE.stroke_width(1);
+        chart.draw_series(DashedLineSeries::new(
+            [(0.0, tolerance), (length_mm, tolerance)],
+            8,
+            5,
+            style,
+        ))?;
+    }
+    for (env, s) in picture.envelopes.iter().zip(picture.series) {
+        chart.draw_series(LineSeries::new(
+            env.iter().copied(),
+            colour(s.rgb).stroke_width(2),
+        ))?;
+    }
+    Ok(())
+}
+
+/// The legend: a line sample and the label of every series, then the planned line and the
+/// tolerance.
+fn legend_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
+    let mut y = 60;
+    let entry = |y: i32, rgb: RGBColor, width: u32, text: &str| -> Result<(), Failed> {
+        area.draw(&PathElement::new(
+            vec![(12, y), (46, y)],
+            rgb.stroke_width(width),
+        ))?;
+        area.draw(&Text::new(
+            text.to_owned(),
+            (54, y),
+            (FONT, 14)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+        Ok(())
+    };
+    area.draw(&Text::new(
+        "executed paths",
+        (12, y - 30),
+        (FONT, 15).into_font().style(FontStyle::Bold),
+    ))?;
+    for s in picture.series {
+        entry(y, colour(s.rgb), 3, &s.label)?;
+        y += 26;
+    }
+    entry(y, BLACK, 1, "planned line")?;
+    for &tolerance in &picture.tolerances_mm {
+        y += 26;
+        entry(y, TOLERANCE, 1, &format!("tolerance {tolerance} mm"))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,165 @@
+//! PURE. An SVG picture of one move planned one or more ways, built as a string (no IO): the CLI's
+//! `plan --svg` writes it to a file, the demo can serve it.
+//!
+//! ```text
+//! +---------------------------- title: robot, P1 -> P2, speed --------------------------+
+//! | path in XY (deviation x k)              | path in XZ (deviation x k)                |
+//! |   planned line + every executed path    |   planned line + every executed path      |
+//! +-----------------------------------------+-------------------------------------------+
+//! | deviation from the line against distance along it, tolerance     | legend           |
+//! +------------------------------------------------------------------+------------------+
+//! ```
+//! The executed path is the tool position after every pulse event (forward kinematics of the
+//! counts the execution model produces). It strays from the line by hundredths of a millimetre, so
+//! the path panels magnify each position's offset from the line by one factor `k` (a 1-2-5 value,
+//! the same for every plan, said in the panel titles); the deviation panel plots the offset's
+//! length unmagnified, the largest in each short stretch of the line.
+//!
+//! Drawn with plotters' SVG backend only: text is SVG `<text>`, laid out with plotters' built-in
+//! estimate, so no font library is needed.
+
+mod draw;
+mod track;
+
+use thiserror::Error;
+
+use crate::plan::Plan;
+use crate::robot::{Method, Robot};
+use crate::table::FrequencyModel;
+
+pub use draw::{HEIGHT_PX, WIDTH_PX};
+
+/// Why no SVG could be drawn.
+#[derive(Debug, Error)]
+pub enum PlotError {
+    /// No plan was given.
+    #[error("nothing to draw: no plan")]
+    NoPlan,
+    /// plotters failed to draw.
+    #[error("drawing the svg")]
+    Draw(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// How one plan is drawn: its name and colour.
+#[derive(Debug, Clone, PartialEq)]
+struct Series {
+    /// e.g. `bounded-error 0.05 mm, fpx-divider`.
+    label: String,
+    /// Red, green, blue.
+    rgb: (u8, u8, u8),
+    /// Every executed position, placed against the line.
+    track: Vec<track::TrackPoint>,
+}
+
+/// The name a plan goes by in the legend.
+fn label(plan: &Plan) -> String {
+    let method = match plan.motion.method {
+        _ if plan.seed_exact => "seed-exact".to_owned(),
+        Method::ConstantPeriod => "constant-period".to_owned(),
+        Method::BoundedError { tolerance_mm } => format!("bounded-error {tolerance_mm} mm"),
+    };
+    format!("{method}, {}", plan.motion.frequency_model.name())
+}
+
+/// A hue per method, a darker and a lighter one per frequency model.
+fn rgb(plan: &Plan) -> (u8, u8, u8) {
+    let ideal = plan.motion.frequency_model == FrequencyModel::Ideal;
+    match (plan.motion.method, plan.seed_exact, ideal) {
+        (_, true, true) => (245, 140, 30),
+        (_, true, false) => (200, 30, 30),
+        (Method::ConstantPeriod, _, true) => (60, 160, 230),
+        (Method::ConstantPeriod, _, false) => (30, 50, 160),
+        (Method::BoundedError { .. }, _, true) => (120, 190, 40),
+        (Method::BoundedError { .. }, _, false) => (20, 110, 50),
+    }
+}
+
+/// The tolerances of the bounded-error plans among `plans`, each once, mm.
+fn tolerances(plans: &[&Plan]) -> Vec<f64> {
+    let mut out: Vec<f64> = plans
+        .iter()
+        .filter(|p| !p.seed_exact)
+        .filter_map(|p| match p.motion.method {
+            Method::BoundedError { tolerance_mm } => Some(tolerance_mm),
+            Method::ConstantPeriod => None,
+        })
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
+}
+
+/// The largest 1-2-5 factor that keeps the largest offset within `share` of the line's length.
+fn magnification(length_mm: f64, largest_offset_mm: f64, share: f64) -> f64 {
+    if largest_offset_mm <= 0.0 || length_mm <= 0.0 {
+        return 1.0;
+    }
+    let raw = share * length_mm / largest_offset_mm;
+    if raw <= 1.0 {
+        return 1.0;
+    }
+    let decade = 10f64.powf(raw.log10().floor());
+    let step = [5.0, 2.0, 1.0]
+        .into_iter()
+        .find(|s| s * decade <= raw)
+        .unwrap_or(1.0);
+    step * decade
+}
+
+/// The title: robot, ends of the line, speed.
+fn title(robot: &Robot, plan: &Plan) -> String {
+    let p = |v: [f64; 4]| format!("({:.2}, {:.2}, {:.2})", v[0], v[1], v[2]);
+    format!(
+        "{}: {} to {} mm, {:.1} mm, {} mm/s",
+        robot.name,
+        p(plan.line.from.to_mm_deg()),
+        p(plan.line.to.to_mm_deg()),
+        plan.profile.length_mm,
+        plan.motion.speed_mm_s
+    )
+}
+
+/// Points a path panel keeps per plan, in stretches of the line (two a stretch at most).
+const PATH_STRETCHES: usize = 400;
+/// Stretches of the line the deviation panel takes the largest deviation of.
+const DEVIATION_STRETCHES: usize = 300;
+
+/// The SVG of `plans`, which must all be plans of the same move (the first one's line and profile
+/// name it), drawn in the order given (the last on top).
+pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
+    let first = plans.first().ok_or(PlotError::NoPlan)?;
+    let line = first.line;
+    let length_mm = line.length_mm();
+    let series: Vec<Series> = plans
+        .iter()
+        .map(|plan| Series {
+            label: label(plan),
+            rgb: rgb(plan),
+            track: track::executed(robot, plan),
+        })
+        .collect();
+    let largest = series
+        .iter()
+        .flat_map(|s| s.track.iter().map(track::TrackPoint::deviation_mm))
+        .fold(0.0, f64::max);
+    let picture = draw::Picture {
+        title: title(robot, first),
+        line,
+        magnify: magnification(length_mm, largest, 0.08),
+        paths: series
+            .iter()
+            .map(|s| track::thin(&s.track, length_mm, PATH_STRETCHES))
+            .collect(),
+        stretch_mm: length_mm / DEVIATION_STRETCHES as f64,
+        envelopes: series
+            .iter()
+            .map(|s| track::envelope(&s.track, length_mm, DEVIATION_STRETCHES))
+            .collect(),
+        series: &series,
+        tolerances_mm: tolerances(plans),
+    };
+    draw::svg(&picture).map_err(PlotError::Draw)
+}
+
+#[cfg(test)]
+mod tests;
