@@ -29,6 +29,7 @@
 pub mod cli;
 pub mod config;
 pub mod contract;
+pub mod daemon;
 pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;

@@ -136,6 +136,9 @@ pub enum ContractError {
         /// Bank.
         bank: u16,
     },
+    /// The upload was abandoned between two exchanges (a stop overtook it); nothing was started.
+    #[error("upload abandoned before it was complete; nothing was started")]
+    Aborted,
     /// The start ended in a fault or a stop instead of done.
     #[error("start {seq} ended {state}{}", if *fault != 0 { format!(" with fault {fault}") } else { String::new() })]
     Ended {
@@ -175,6 +178,7 @@ pub struct Contract<P> {
     plc: P,
     settings: ContractSettings,
     heartbeat: Option<(u16, Instant)>,
+    abort: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl<P: Plc> Contract<P> {
@@ -184,7 +188,28 @@ impl<P: Plc> Contract<P> {
             plc,
             settings,
             heartbeat: None,
+            abort: None,
         }
+    }
+
+    /// A flag that, once set, makes [`Self::upload`] give up between two exchanges.
+    pub fn set_abort(&mut self, flag: std::sync::Arc<std::sync::atomic::AtomicBool>) {
+        self.abort = Some(flag);
+    }
+
+    fn aborted(&self) -> Result<(), ContractError> {
+        match &self.abort {
+            Some(flag) if flag.load(std::sync::atomic::Ordering::SeqCst) => {
+                Err(ContractError::Aborted)
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The heartbeat value last seen and when it last changed.
+    #[must_use]
+    pub fn heartbeat(&self) -> Option<(u16, Instant)> {
+        self.heartbeat
     }
 
     /// The link, for other requests.
@@ -323,10 +348,12 @@ impl<P: Plc> Contract<P> {
             block.to_words()[1..COMMAND_WORDS].to_vec(),
         ));
         for (address, words) in &writes {
+            self.aborted()?;
             self.plc.write_words(*address, words).await?;
         }
         if self.settings.verify {
             for (address, words) in &writes {
+                self.aborted()?;
                 self.compare(*address, words).await?;
             }
         }

@@ -1,0 +1,203 @@
+//! What the daemon tells about its robots and their moves: the robot's state and each move's
+//! report, as the API serves them and the progress feed streams them.
+
+use std::collections::{BTreeMap, VecDeque};
+
+use serde::Serialize;
+use tokio::sync::watch;
+
+use super::order::MoveOrder;
+
+/// A move's identifier, unique within one daemon run.
+pub type MoveId = u64;
+
+/// Where a move is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stage {
+    /// Accepted, waiting its turn.
+    Queued,
+    /// Planned; its bank is being written and verified.
+    Uploading,
+    /// Uploaded and started while the previous move runs: the PLC starts it when that one ends.
+    Waiting,
+    /// Running on the PLC.
+    Running,
+    /// Ended on its target.
+    Done,
+    /// Stopped (by a stop request, or cancelled by one while queued).
+    Stopped,
+    /// Failed: see `error`; nothing more will happen to it.
+    Failed,
+}
+
+impl Stage {
+    /// Whether nothing more will happen to the move.
+    #[must_use]
+    pub fn is_final(self) -> bool {
+        matches!(self, Self::Done | Self::Stopped | Self::Failed)
+    }
+}
+
+/// The planner's prediction for a move.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Predicted {
+    /// Table rows over all channels.
+    pub rows: usize,
+    /// DT words of the tables.
+    pub words: usize,
+    /// Planned duration, s.
+    pub duration_s: f64,
+    /// Path deviation the execution model predicts, mm.
+    pub path_deviation_mm: f64,
+    /// Tracking error the execution model predicts, mm.
+    pub tracking_error_mm: f64,
+}
+
+/// Everything known about one move.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MoveReport {
+    /// Its identifier.
+    pub id: MoveId,
+    /// The robot.
+    pub robot: String,
+    /// Where it is.
+    pub stage: Stage,
+    /// The order as accepted (empty for a move found running after a restart).
+    pub order: MoveOrder,
+    /// Found running on the PLC when the daemon (re)connected, not started by this run.
+    pub recovered: bool,
+    /// The contract sequence number of its start.
+    pub seq: Option<u16>,
+    /// The table bank it uses.
+    pub bank: Option<u16>,
+    /// Counts per channel it was planned from.
+    pub start_counts: Option<[i64; 4]>,
+    /// Counts per channel it should end at.
+    pub target_counts: Option<[i64; 4]>,
+    /// The plan's prediction.
+    pub predicted: Option<Predicted>,
+    /// Time to write and verify its bank, s.
+    pub upload_s: Option<f64>,
+    /// Time from its start to its end on the PLC, as polled, s.
+    pub motion_s: Option<f64>,
+    /// Share of its planned duration elapsed (0 to 1).
+    pub progress: f64,
+    /// The latest counts per channel read while it ran.
+    pub counts: Option<[i64; 4]>,
+    /// Final counts minus target counts per channel (`None` until it is done, and for a move
+    /// that chained into the next, whose start the PLC made from exactly these).
+    pub final_error_pulses: Option<[i64; 4]>,
+    /// Why it failed or stopped.
+    pub error: Option<String>,
+}
+
+impl MoveReport {
+    /// A new report for an order.
+    #[must_use]
+    pub fn new(id: MoveId, robot: &str, order: MoveOrder) -> Self {
+        Self {
+            id,
+            robot: robot.to_owned(),
+            stage: Stage::Queued,
+            order,
+            recovered: false,
+            seq: None,
+            bank: None,
+            start_counts: None,
+            target_counts: None,
+            predicted: None,
+            upload_s: None,
+            motion_s: None,
+            progress: 0.0,
+            counts: None,
+            final_error_pulses: None,
+            error: None,
+        }
+    }
+}
+
+/// The link to a robot's PLC.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Default)]
+pub struct LinkState {
+    /// Whether the link is up and the contract answered.
+    pub connected: bool,
+    /// The last link or contract error.
+    pub error: Option<String>,
+    /// Reconnections since the daemon started.
+    pub reconnects: u64,
+}
+
+/// A robot's state as last read.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct RobotState {
+    /// Robot name.
+    pub name: String,
+    /// The PLC link.
+    pub link: LinkState,
+    /// `run` or `prog`, when known.
+    pub plc_mode: Option<&'static str>,
+    /// Milliseconds since the heartbeat last changed.
+    pub heartbeat_age_ms: Option<u64>,
+    /// The PLC program's state (`idle`, `running`, `done`, `stopped`, `fault`).
+    pub state: Option<&'static str>,
+    /// The fault word, when not 0.
+    pub fault: Option<u16>,
+    /// Counts per channel.
+    pub counts: Option<[i64; 4]>,
+    /// The pose those counts put the tool in: x, y, z mm, a deg.
+    pub pose: Option<[f64; 4]>,
+    /// The move running now.
+    pub current_move: Option<MoveId>,
+    /// Moves waiting, in order.
+    pub queued: Vec<MoveId>,
+}
+
+/// The moves of one robot: every report (the latest few hundred) and a feed per move.
+#[derive(Debug, Default)]
+pub struct Moves {
+    feeds: BTreeMap<MoveId, watch::Sender<MoveReport>>,
+    order: VecDeque<MoveId>,
+}
+
+/// Reports kept per robot.
+const KEPT: usize = 500;
+
+impl Moves {
+    /// Records a new report.
+    pub fn insert(&mut self, report: MoveReport) {
+        let id = report.id;
+        self.feeds.insert(id, watch::channel(report).0);
+        self.order.push_back(id);
+        while self.order.len() > KEPT {
+            if let Some(old) = self.order.pop_front() {
+                self.feeds.remove(&old);
+            }
+        }
+    }
+
+    /// Changes a report and tells its watchers.
+    pub fn update(&self, id: MoveId, change: impl FnOnce(&mut MoveReport)) {
+        if let Some(feed) = self.feeds.get(&id) {
+            feed.send_modify(change);
+        }
+    }
+
+    /// A report.
+    #[must_use]
+    pub fn get(&self, id: MoveId) -> Option<MoveReport> {
+        self.feeds.get(&id).map(|f| f.borrow().clone())
+    }
+
+    /// A feed of a move's reports.
+    #[must_use]
+    pub fn subscribe(&self, id: MoveId) -> Option<watch::Receiver<MoveReport>> {
+        self.feeds.get(&id).map(watch::Sender::subscribe)
+    }
+
+    /// Every kept report, oldest first.
+    #[must_use]
+    pub fn all(&self) -> Vec<MoveReport> {
+        self.order.iter().filter_map(|id| self.get(*id)).collect()
+    }
+}

@@ -1,0 +1,316 @@
+//! The daemon's move path end to end against the mock PLC: the same code a real PLC gets.
+
+mod common;
+
+use std::time::Duration;
+
+use common::exchange::{P1, P2, mock_at_seed_start};
+use linterpd::contract::Layout;
+use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage};
+use linterpd::mewtocol::Station;
+use linterpd::mock::{
+    MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
+};
+use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::{
+    AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming,
+    ModbusOptions, PlcMode,
+};
+use linterpd::robot::seed_robot;
+use tokio::net::{TcpListener, TcpStream};
+
+const LIMIT: Duration = Duration::from_secs(15);
+
+fn mewtocol_options() -> MewtocolOptions {
+    MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent)
+}
+
+/// Opens a fresh `duplex` connection to the mock for every (re)connection, served at `baud`.
+fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
+    let shared = shared.clone();
+    Box::new(move || {
+        let shared = shared.clone();
+        Box::pin(async move {
+            let (ours, theirs) = tokio::io::duplex(4_096);
+            let server = MewtocolServer::new(
+                shared,
+                MewtocolServerOptions {
+                    baud,
+                    ..MewtocolServerOptions::default()
+                },
+            );
+            tokio::spawn(async move { server.serve(theirs).await });
+            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
+                Box::new(ours) as BoxedLink,
+                mewtocol_options(),
+            )))
+        })
+    })
+}
+
+fn daemon(connect: Connector, settings: ContractSettings) -> (Daemon, RobotHandle) {
+    let d = Daemon::spawn(vec![(seed_robot(), settings, connect)]);
+    let h = d.robot("press-loader").unwrap().clone();
+    (d, h)
+}
+
+fn order(p: [f64; 3]) -> MoveOrder {
+    MoveOrder {
+        to: p.to_vec(),
+        ..MoveOrder::default()
+    }
+}
+
+async fn wait_connected(h: &RobotHandle) {
+    for _ in 0..200 {
+        if h.state().counts.is_some() {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    panic!("never connected: {:?}", h.state());
+}
+
+async fn run(h: &RobotHandle, p: [f64; 3]) -> MoveReport {
+    let id = h.submit(order(p)).unwrap();
+    h.wait(id, LIMIT).await.unwrap()
+}
+
+fn assert_on_target(r: &MoveReport) {
+    assert_eq!(r.stage, Stage::Done, "{r:?}");
+    let e = r.final_error_pulses.expect("final counts compared");
+    assert!(e.iter().all(|p| p.abs() <= 1), "{e:?}");
+}
+
+/// Nothing was written into the table areas or the command word.
+fn assert_nothing_written(shared: &SharedMock) {
+    let (tables, command) = shared.with(|m| {
+        (
+            m.read_words(2_000, 16_000).unwrap(),
+            m.read_words(1_032, 8).unwrap(),
+        )
+    });
+    assert!(tables.iter().all(|w| *w == 0), "table words were written");
+    assert!(
+        command.iter().all(|w| *w == 0),
+        "command block was written: {command:?}"
+    );
+}
+
+#[tokio::test]
+async fn move_ends_on_its_target_over_mewtocol_duplex() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let r = run(&h, P2).await;
+    assert_on_target(&r);
+    assert!(r.predicted.unwrap().path_deviation_mm < 0.1);
+    d.shut_down().await;
+}
+
+#[tokio::test]
+async fn move_ends_on_its_target_over_mewtocol_and_modbus_tcp() {
+    for modbus in [false, true] {
+        let shared = mock_at_seed_start("");
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let address = listener.local_addr().unwrap();
+        if modbus {
+            tokio::spawn(
+                ModbusServer::new(shared.clone(), ModbusServerOptions::default())
+                    .serve_tcp(listener),
+            );
+        } else {
+            tokio::spawn(
+                MewtocolServer::new(shared.clone(), MewtocolServerOptions::default())
+                    .serve_tcp(listener),
+            );
+        }
+        let connect: Connector = Box::new(move || {
+            Box::pin(async move {
+                let stream: BoxedLink =
+                    Box::new(TcpStream::connect(address).await.map_err(|source| {
+                        linterpd::plc::PlcError::Link {
+                            operation: "connect".into(),
+                            source,
+                        }
+                    })?);
+                Ok(if modbus {
+                    AnyPlc::Modbus(ModbusClient::new(
+                        stream,
+                        ModbusOptions::new(ModbusFraming::Tcp, 1),
+                    ))
+                } else {
+                    AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
+                })
+            })
+        });
+        let (d, h) = daemon(connect, ContractSettings::default());
+        wait_connected(&h).await;
+        assert_on_target(&run(&h, P2).await);
+        assert_on_target(&run(&h, P1).await);
+        d.shut_down().await;
+    }
+}
+
+#[tokio::test]
+async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.record_pulses(true));
+    // At 115200 baud an upload takes about 0.3 s: a start after a host round trip would leave a
+    // gap that long between the moves.
+    let (d, h) = daemon(
+        duplex_connector(&shared, Some(115_200)),
+        ContractSettings::default(),
+    );
+    wait_connected(&h).await;
+    let a = h.submit(order(P2)).unwrap();
+    let b = h.submit(order(P1)).unwrap();
+    let rb = h.wait(b, LIMIT).await.unwrap();
+    let ra = h.report(a).unwrap();
+    assert_eq!(ra.stage, Stage::Done, "{ra:?}");
+    assert_on_target(&rb);
+    // d3 (channel 2) goes out with A and back with B: the gap between its last pulse going out
+    // and its first coming back.
+    let pulses: Vec<_> = shared
+        .with(|m| m.take_pulses())
+        .into_iter()
+        .filter(|p| p.channel == 2)
+        .collect();
+    let turn = pulses
+        .windows(2)
+        .position(|w| w[1].count < w[0].count)
+        .expect("d3 comes back");
+    let gap = pulses[turn + 1].time_s - pulses[turn].time_s;
+    assert!(gap < 0.03, "gap {gap} s between the moves");
+    d.shut_down().await;
+}
+
+#[tokio::test]
+async fn stop_mid_move_stops_every_channel() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let id = h.submit(order(P2)).unwrap();
+    let mut feed = h.subscribe(id).unwrap();
+    feed.wait_for(|r| r.stage == Stage::Running && r.progress > 0.3)
+        .await
+        .unwrap();
+    h.stop().await.unwrap();
+    let r = h.wait(id, LIMIT).await.unwrap();
+    assert_eq!(r.stage, Stage::Stopped, "{r:?}");
+    // The PLC program acts on the stop command in its next scan (2 ms).
+    tokio::time::sleep(Duration::from_millis(10)).await;
+    let before = shared.with(|m| m.status());
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let after = shared.with(|m| m.status());
+    assert_eq!(after.busy, 0);
+    assert_eq!(before.elapsed, after.elapsed, "a channel still moves");
+    assert_eq!(after.state, linterpd::contract::State::Stopped.word());
+    d.shut_down().await;
+}
+
+async fn refused(shared: &SharedMock, settings: ContractSettings, want: &str) {
+    let (d, h) = daemon(duplex_connector(shared, None), settings);
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let r = run(&h, P2).await;
+    assert_eq!(r.stage, Stage::Failed, "{r:?}");
+    let e = r.error.unwrap();
+    assert!(e.contains(want), "{e}");
+    assert_nothing_written(shared);
+    d.shut_down().await;
+}
+
+#[tokio::test]
+async fn prog_mode_frozen_heartbeat_and_wrong_magic_are_refused_and_nothing_is_written() {
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.set_mode(PlcMode::Prog));
+    refused(&shared, ContractSettings::default(), "and in PROG mode").await;
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.freeze_heartbeat(true));
+    refused(&shared, ContractSettings::default(), "the PLC is stalled").await;
+    let shared = mock_at_seed_start("");
+    let elsewhere = Layout {
+        status_base: 30_000,
+        ..Layout::default()
+    };
+    refused(
+        &shared,
+        ContractSettings {
+            layout: elsewhere,
+            ..ContractSettings::default()
+        },
+        "magic is 0x0000",
+    )
+    .await;
+}
+
+#[tokio::test]
+async fn link_cut_during_upload_starts_nothing_and_the_next_move_works_after_reconnection() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let before = shared.with(|m| m.status());
+    // Past check_alive's status reads (and an idle poll that may come first): inside the bank writes.
+    shared.with(|m| {
+        let k = m.commands() + 8;
+        m.set_faults(format!("close@{k}").parse().unwrap());
+    });
+    let r = run(&h, P2).await;
+    assert_eq!(r.stage, Stage::Failed, "{r:?}");
+    let after = shared.with(|m| (m.status(), m.read_words(1_032, 1).unwrap()[0]));
+    assert_eq!(after.1, 0, "a start command was written");
+    assert_eq!(after.0.elapsed, before.elapsed);
+    assert_eq!(after.0.busy, 0);
+    assert_on_target(&run(&h, P2).await);
+    assert!(h.state().link.reconnects >= 2);
+    d.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
+    let shared = mock_at_seed_start("");
+    let (first, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let id = h.submit(order(P2)).unwrap();
+    h.subscribe(id)
+        .unwrap()
+        .wait_for(|r| r.stage == Stage::Running)
+        .await
+        .unwrap();
+    while shared.with(|m| m.status().state) != linterpd::contract::State::Running.word() {
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+    first.shut_down().await;
+    let (second, h2) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h2).await;
+    let state = h2.state();
+    let found = state
+        .current_move
+        .unwrap_or_else(|| panic!("the running move is not found: {state:?}"));
+    let r = h2.report(found).unwrap();
+    assert!(r.recovered && r.stage == Stage::Running, "{r:?}");
+    let seq = shared.with(|m| m.status().seq);
+    assert_eq!(r.seq, Some(seq));
+    let r = h2.wait(found, LIMIT).await.unwrap();
+    assert_eq!(r.stage, Stage::Done);
+    second.shut_down().await;
+}
+
+#[tokio::test]
+async fn bad_orders_are_refused_and_nothing_is_queued() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let e = h
+        .submit(MoveOrder {
+            to: vec![1.0, 2.0],
+            ..MoveOrder::default()
+        })
+        .unwrap_err();
+    assert!(e.to_string().starts_with("to = [1.0, 2.0]"), "{e}");
+    let e = h.submit(order([-1144.43, 659.60, 500.0])).unwrap_err();
+    assert!(e.to_string().contains("joint d2 would reach"), "{e}");
+    assert!(h.state().queued.is_empty());
+    assert!(h.reports().is_empty());
+    d.shut_down().await;
+}
