@@ -172,7 +172,7 @@ async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
     // d3 (channel 2) goes out with A and back with B: the gap between its last pulse going out
     // and its first coming back.
     let pulses: Vec<_> = shared
-        .with(|m| m.take_pulses())
+        .with(linterpd::mock::MockPlc::take_pulses)
         .into_iter()
         .filter(|p| p.channel == 2)
         .collect();

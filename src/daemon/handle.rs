@@ -82,6 +82,9 @@ impl RobotHandle {
 
     /// Checks an order, plans it from where the robot will be when its turn comes (refusing it,
     /// with nothing queued, if that fails), and queues it.
+    ///
+    /// # Panics
+    /// If a lock was poisoned by a panic elsewhere.
     pub fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
         let checked = order.check(self.robot.motion)?;
         let from = self.shared.planned_end.lock().expect("lock").or_else(|| {
@@ -106,6 +109,9 @@ impl RobotHandle {
     }
 
     /// Stops every channel and cancels every queued move; returns once the stop is written.
+    ///
+    /// # Panics
+    /// If a lock was poisoned by a panic elsewhere.
     pub async fn stop(&self) -> Result<(), CommandError> {
         self.shared.stop_pending.store(true, Ordering::SeqCst);
         *self.shared.planned_end.lock().expect("lock") = None;

@@ -44,7 +44,7 @@ pub struct OrderError {
     pub reason: String,
 }
 
-fn refuse(field: &'static str, value: impl ToString, reason: impl Into<String>) -> OrderError {
+fn refuse(field: &'static str, value: &impl ToString, reason: impl Into<String>) -> OrderError {
     OrderError {
         field,
         value: value.to_string(),
@@ -56,19 +56,19 @@ fn positive(field: &'static str, value: f64) -> Result<f64, OrderError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(refuse(field, value, "must be a number above 0"))
+        Err(refuse(field, &value, "must be a number above 0"))
     }
 }
 
 fn duration(field: &'static str, text: &str, allow_zero: bool) -> Result<f64, OrderError> {
     let s =
-        parse_duration_s(text).map_err(|e| refuse(field, format!("{text:?}"), e.to_string()))?;
+        parse_duration_s(text).map_err(|e| refuse(field, &format!("{text:?}"), e.to_string()))?;
     if s > 0.0 || (allow_zero && s == 0.0) {
         Ok(s)
     } else {
         Err(refuse(
             field,
-            format!("{text:?}"),
+            &format!("{text:?}"),
             "must be longer than 0 s",
         ))
     }
@@ -91,7 +91,7 @@ impl MoveOrder {
         if !(3..=4).contains(&self.to.len()) {
             return Err(refuse(
                 "to",
-                format!("{:?}", self.to),
+                &format!("{:?}", self.to),
                 "must be [x, y, z] or [x, y, z, a] (mm, degrees)",
             ));
         }
@@ -130,30 +130,28 @@ impl MoveOrder {
             .transpose()?;
         m.method = match (self.method.as_deref(), tolerance, defaults.method) {
             (Some("constant-period"), None, _) => Method::ConstantPeriod,
-            (Some("bounded-error") | None, Some(tolerance_mm), _) => {
-                Method::BoundedError { tolerance_mm }
-            }
-            (Some("bounded-error"), None, Method::BoundedError { tolerance_mm }) => {
+            (Some("bounded-error") | None, Some(tolerance_mm), _)
+            | (Some("bounded-error"), None, Method::BoundedError { tolerance_mm }) => {
                 Method::BoundedError { tolerance_mm }
             }
             (Some("bounded-error"), None, Method::ConstantPeriod) => {
                 return Err(refuse(
                     "tolerance_mm",
-                    "null",
+                    &"null",
                     "method bounded-error needs a tolerance above 0 mm",
                 ));
             }
             (Some("constant-period"), Some(t), _) => {
                 return Err(refuse(
                     "tolerance_mm",
-                    t,
+                    &t,
                     "only method bounded-error takes a tolerance",
                 ));
             }
             (Some(other), _, _) => {
                 return Err(refuse(
                     "method",
-                    format!("{other:?}"),
+                    &format!("{other:?}"),
                     "must be \"constant-period\" or \"bounded-error\"",
                 ));
             }

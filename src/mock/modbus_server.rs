@@ -107,13 +107,7 @@ impl ModbusServer {
 
     /// What a new TCP connection gets: the service and the link (through the wire emulation
     /// when a baud rate is set).
-    fn on_connected(
-        &self,
-        rtu: bool,
-    ) -> impl Fn(
-        TcpStream,
-        std::net::SocketAddr,
-    ) -> std::future::Ready<io::Result<Option<(MockService, Closable<BoxedLink>)>>> {
+    fn on_connected(&self, rtu: bool) -> impl Fn(TcpStream, std::net::SocketAddr) -> Accepted {
         let server = self.clone();
         move |stream: TcpStream, peer| {
             tracing::info!(%peer, rtu, "Modbus client connected");
@@ -147,6 +141,9 @@ impl ModbusServer {
         }
     }
 }
+
+/// What accepting a TCP connection yields to tokio-modbus's server.
+type Accepted = std::future::Ready<io::Result<Option<(MockService, Closable<BoxedLink>)>>>;
 
 type Answer = Pin<Box<dyn Future<Output = Result<Option<Response>, ExceptionCode>> + Send>>;
 

@@ -118,7 +118,7 @@ impl Worker {
             m.update(id, |r| {
                 r.stage = stage;
                 r.upload_s = Some(upload_s);
-            })
+            });
         });
         let active = Active {
             id,
@@ -165,7 +165,7 @@ impl Worker {
                 r.start_counts = Some(start);
                 r.target_counts = Some(target);
                 r.predicted = Some(predicted);
-            })
+            });
         });
     }
 
@@ -288,7 +288,7 @@ impl Worker {
                 r.motion_s = Some(motion_s);
                 r.progress = 1.0;
                 r.counts = Some(counts);
-            })
+            });
         });
         self.finish(cur.id, Stage::Done, None, error);
         tracing::info!(robot = %self.robot.name, id = cur.id, ?error, "move done");
@@ -325,7 +325,7 @@ impl Worker {
             m.update(cur.id, |r| {
                 r.counts = Some(counts);
                 r.progress = progress;
-            })
+            });
         });
     }
 
