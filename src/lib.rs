@@ -24,6 +24,7 @@
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
+//! daemon/      `linterpd serve`: the daemon around the PLC link; systemd notification
 //! ```
 
 pub mod cli;

@@ -6,8 +6,11 @@
 //!                                            ^                                          |
 //!                                            +---- RobotState, MoveReport feeds <-------+
 //! ```
+//!
+//! [`notify`] tells systemd the daemon is ready, alive and stopping.
 
 mod handle;
+pub mod notify;
 mod order;
 mod report;
 mod worker;
