@@ -1,5 +1,6 @@
 //! The `linterpd` binary: parse the command line, set up logging, run, map failures to exit codes
-//! (0 ok, 1 runtime failure, 2 bad input; clap's own usage errors also exit 2).
+//! (0 ok, 1 runtime failure, 2 bad input, 3 a move ended stopped or failed, 4 daemon not
+//! reachable; clap's own usage errors also exit 2).
 
 use std::process::ExitCode;
 
@@ -11,7 +12,7 @@ fn main() -> ExitCode {
     // The mock PLC logs its connections, starts, stops and faults unless RUST_LOG says otherwise.
     let default_level = match cli.command {
         linterpd::cli::Command::MockPlc(_) => "info",
-        linterpd::cli::Command::Plan(_) => "error",
+        _ => "error",
     };
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level));
