@@ -47,6 +47,11 @@ fn bench(c: &mut Criterion) {
         r
     };
     let (b05, b10) = (bounded(0.05), bounded(0.10));
+    let mut seed_exact = seed;
+    seed_exact.seed_exact = true;
+    c.bench_function("plan seed move seed-exact", |b| {
+        b.iter(|| plan_move(&robot, black_box(&seed_exact)).unwrap());
+    });
     c.bench_function("plan seed move bounded-error 0.05 mm", |b| {
         b.iter(|| plan_move(&robot, black_box(&b05)).unwrap());
     });
