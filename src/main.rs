@@ -11,7 +11,7 @@ fn main() -> ExitCode {
     // The mock PLC logs its connections, starts, stops and faults unless RUST_LOG says otherwise.
     let default_level = match cli.command {
         linterpd::cli::Command::MockPlc(_) => "info",
-        linterpd::cli::Command::Plan(_) => "error",
+        linterpd::cli::Command::Plan(_) | linterpd::cli::Command::Demo(_) => "error",
     };
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level));
