@@ -9,10 +9,11 @@
 //!      pulses out of the trace, replay them through forward kinematics (replay.rs): measured
 //!      figures beside the planner's predicted ones
 //! ```
-//! The moves (`STEPS`): the seed's move P1 -> P2 at the robot's defaults (240 mm/s, Ta 200 ms,
+//! The moves ([`steps`]): the seed's move P1 -> P2 at the robot's defaults (240 mm/s, Ta 200 ms,
 //! dT 50 ms), back to P1 bounded-error 0.05 mm, to P2 at 120 mm/s, then two moves queued at once
-//! that the PLC chains (back to P1 and out to P2 again). All run on the line P1P2, so one picture
-//! shows them all (the seed's Figs. 6 and 7: the path, and the deviation along it).
+//! that the PLC chains (back to P1 with dT 20 ms, out to P2 bounded-error 0.05 mm). All run on the
+//! line P1P2, so one picture shows them all (the seed's Figs. 6 and 7: the path, and the
+//! deviation along it).
 
 mod replay;
 mod rig;
@@ -119,7 +120,7 @@ pub fn steps() -> Vec<Vec<Step>> {
     vec![
         vec![step("the seed's move, P1 -> P2", to(P2))],
         vec![step(
-            "back to P1, bounded-error 0.05 mm",
+            "back to P1, bounded",
             MoveOrder {
                 tolerance_mm: Some(0.05),
                 ..to(P1)
@@ -133,8 +134,20 @@ pub fn steps() -> Vec<Vec<Step>> {
             },
         )],
         vec![
-            step("P2 -> P1, queued with the next", to(P1)),
-            step("P1 -> P2, chained by the PLC", to(P2)),
+            step(
+                "P2 -> P1, dT 20 ms, queued",
+                MoveOrder {
+                    period: Some("20ms".into()),
+                    ..to(P1)
+                },
+            ),
+            step(
+                "P1 -> P2, bounded, chained",
+                MoveOrder {
+                    tolerance_mm: Some(0.05),
+                    ..to(P2)
+                },
+            ),
         ],
     ]
 }

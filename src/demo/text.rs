@@ -28,6 +28,14 @@ fn seconds(s: Option<f64>) -> String {
     s.map_or_else(|| "-".into(), |s| format!("{s:.3} s"))
 }
 
+/// A stage as the API spells it.
+fn stage(stage: crate::daemon::Stage) -> String {
+    serde_json::to_value(stage)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_owned))
+        .unwrap_or_else(|| format!("{stage:?}"))
+}
+
 fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     let link = demo.options.baud.map_or_else(
         || "MEWTOCOL-COM, no line speed emulated".to_owned(),
@@ -35,12 +43,15 @@ fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     );
     writeln!(
         out,
-        "linterpd demo: robot {} on a mock FP-X in process ({link}, scan {:.0} ms, channels {}),",
-        demo.robot.name,
+        "linterpd demo: robot {}, run by the daemon's own move path against a mock FP-X in",
+        demo.robot.name
+    )?;
+    writeln!(
+        out,
+        "process ({link}; scan {:.0} ms; channels {}).",
         demo.scan_s * 1e3,
         demo.robot.motion.frequency_model.name()
     )?;
-    writeln!(out, "run by the daemon's own move path.")?;
     writeln!(
         out,
         "P1 = {} mm (wrist at 0), P2 = {} mm.",
@@ -61,34 +72,38 @@ fn one(robot: &Robot, n: usize, m: &DemoMove, out: &mut dyn Write) -> io::Result
         .unwrap_or_else(|| unreachable!("a done move was planned"));
     writeln!(out)?;
     writeln!(out, "{n}. {}: {}", m.name, motion(&m.plan.motion))?;
+    let motion_s = r.motion_s.map_or_else(
+        || format!("{:.3} s in the trace", m.played.figures.finish_s),
+        |s| format!("{s:.3} s"),
+    );
     writeln!(
         out,
-        "   {:?}: {} rows, {} words, upload {}, motion {} (planned {:.3} s){}",
-        r.stage,
+        "   {}: {} rows, {} words, upload {}, motion {motion_s} (planned {:.3} s)",
+        stage(r.stage),
         p.rows,
         p.words,
         seconds(r.upload_s),
-        seconds(r.motion_s),
         p.duration_s,
-        if m.chained {
-            ", started by the PLC as the move before ended"
-        } else {
-            ""
-        }
     )?;
+    if m.chained {
+        writeln!(
+            out,
+            "   started by the PLC in the scan after the move before ended"
+        )?;
+    }
     let measured = m.played.figures.path_deviation_mm;
     writeln!(
         out,
-        "   path deviation: measured {measured:.4} mm, predicted {:.4} mm (difference {:+.4} mm)",
+        "   path deviation: measured {measured:.4} mm, predicted {:.4} mm (differ by {:.2} µm)",
         p.path_deviation_mm,
-        measured - p.path_deviation_mm
+        (measured - p.path_deviation_mm).abs() * 1e3
     )?;
     let (error, from_trace) = m.final_error_pulses(robot);
     writeln!(
         out,
         "   final error: {error:?} pulses{}",
         if from_trace {
-            " (from the trace: a chained move's final counts are the next one's start)"
+            " (from the trace: the daemon does not read a chained move's end)"
         } else {
             ""
         }
@@ -112,9 +127,14 @@ pub fn write_report(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "{} moves done. Measured and predicted path deviations differ by at most {worst:.4} mm: \
-         the mock starts a channel's next segment at its next scan, the planner at once.",
-        demo.moves.len()
+        "{} moves done; measured and predicted path deviations differ by at most {:.2} µm",
+        demo.moves.len(),
+        worst * 1e3
+    )?;
+    writeln!(
+        out,
+        "(they can differ only where a channel has several segments: the mock starts the next one \
+         at its next scan, the planner at once)."
     )
 }
 
@@ -128,7 +148,7 @@ pub fn picture(robot: &Robot, moves: &[DemoMove]) -> Result<String, PlotError> {
         .enumerate()
         .map(|(i, m)| {
             format!(
-                "{}. {} ({:.3} mm)",
+                "{}. {}: {:.3} mm",
                 i + 1,
                 m.name,
                 m.played.figures.path_deviation_mm
