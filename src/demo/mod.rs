@@ -212,8 +212,10 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
         ContractSettings::default(),
         rig.connector(options.baud),
     )]);
-    let handle = daemon.robot(&robot.name).expect("spawned").clone();
-    let moves = drive(&handle, &rig, scan_s).await;
+    let moves = match daemon.robot(&robot.name) {
+        Some(handle) => drive(handle, &rig, scan_s).await,
+        None => Err(DemoError::Rig("the daemon has no robot".into())),
+    };
     daemon.shut_down().await;
     rig.stop();
     let moves = moves?;

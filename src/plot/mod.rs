@@ -133,7 +133,7 @@ const DEVIATION_STRETCHES: usize = 300;
 pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
     let first = plans.first().ok_or(PlotError::NoPlan)?;
     let line = first.line;
-    let series = plans
+    let series: Vec<Series> = plans
         .iter()
         .map(|plan| Series {
             label: label(plan),
@@ -147,7 +147,7 @@ pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
             ),
         })
         .collect();
-    render(title(robot, first), line, series, tolerances(plans))
+    render(title(robot, first), line, &series, tolerances(plans))
 }
 
 /// Counts per joint a plan starts from.
@@ -192,7 +192,7 @@ pub fn svg_paths(
     if paths.is_empty() {
         return Err(PlotError::NoPlan);
     }
-    let series = paths
+    let series: Vec<Series> = paths
         .iter()
         .zip(PALETTE.iter().cycle())
         .map(|(p, rgb)| Series {
@@ -204,14 +204,14 @@ pub fn svg_paths(
     let mut tolerances: Vec<f64> = paths.iter().filter_map(|p| p.tolerance_mm).collect();
     tolerances.sort_by(f64::total_cmp);
     tolerances.dedup();
-    render(title.to_owned(), frame, series, tolerances)
+    render(title.to_owned(), frame, &series, tolerances)
 }
 
 /// Draws `series` against `line`.
 fn render(
     title: String,
     line: Line,
-    series: Vec<Series>,
+    series: &[Series],
     tolerances_mm: Vec<f64>,
 ) -> Result<String, PlotError> {
     let length_mm = line.length_mm();
@@ -232,7 +232,7 @@ fn render(
             .iter()
             .map(|s| track::envelope(&s.track, length_mm, DEVIATION_STRETCHES))
             .collect(),
-        series: &series,
+        series,
         tolerances_mm,
     };
     draw::svg(&picture).map_err(PlotError::Draw)
