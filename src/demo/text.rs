@@ -133,8 +133,8 @@ pub fn write_report(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     )?;
     writeln!(
         out,
-        "(they can differ only where a channel has several segments: the mock starts the next one \
-         at its next scan, the planner at once)."
+        "(they can differ only where a channel has several segments: the mock starts the next\n\
+         one at its next scan, the planner at once)."
     )
 }
 
