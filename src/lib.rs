@@ -25,12 +25,14 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: the daemon around the PLC link; systemd notification
+//! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
 //! ```
 
 pub mod cli;
 pub mod config;
 pub mod contract;
 pub mod daemon;
+pub mod demo;
 pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;

@@ -4,6 +4,7 @@
 pub mod args;
 pub mod check_config;
 pub mod client;
+pub mod demo;
 pub mod mock_plc;
 pub mod moves;
 pub mod plan;
@@ -26,6 +27,9 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Run the seed's move and a few others through the daemon against a mock PLC in process,
+    /// and report how closely they followed the line (no hardware, no config file).
+    Demo(demo::DemoArgs),
     /// Plan one straight-line move and print its pulse tables and accuracy figures.
     Plan(plan::PlanArgs),
     /// Serve the mock PLC (MEWTOCOL-COM or Modbus, TCP or serial) until SIGINT / SIGTERM.
@@ -154,6 +158,7 @@ pub fn bad_input(e: impl Into<anyhow::Error>) -> Failure {
 /// Runs a parsed command line, writing its output to `out`.
 pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     match cli.command {
+        Command::Demo(args) => demo::run(&args, out),
         Command::Plan(args) => plan::run(&args, out),
         Command::MockPlc(args) => mock_plc::run(&args, out),
         Command::Move(args) => moves::run(&args, out),

@@ -19,3 +19,4 @@ pub use handle::{CommandError, Daemon, RobotHandle, SubmitError};
 pub use order::{CheckedOrder, MoveOrder, OrderError};
 pub use report::{LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage};
 pub use worker::Connector;
+pub(crate) use worker::plan_order;

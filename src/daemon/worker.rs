@@ -340,4 +340,4 @@ impl Worker {
 
 mod flow;
 
-pub(super) use flow::plan_order;
+pub(crate) use flow::plan_order;

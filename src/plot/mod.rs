@@ -1,5 +1,6 @@
-//! PURE. An SVG picture of one move planned one or more ways, built as a string (no IO): the CLI's
-//! `plan --svg` writes it to a file, the demo can serve it.
+//! PURE. An SVG picture of one move planned one or more ways ([`svg`]), or of several executed
+//! moves along one line ([`svg_paths`]: the demo's moves replayed from the mock PLC's pulse
+//! trace), built as a string (no IO): `plan --svg` and `demo` write it to a file.
 //!
 //! ```text
 //! +---------------------------- title: robot, P1 -> P2, speed --------------------------+
@@ -23,8 +24,11 @@ mod track;
 
 use thiserror::Error;
 
+use crate::geometry::Line;
+use crate::kinematics::JOINTS;
 use crate::plan::Plan;
 use crate::robot::{Method, Robot};
+use crate::sim::PulseEvent;
 use crate::table::FrequencyModel;
 
 pub use draw::{HEIGHT_PX, WIDTH_PX};
@@ -129,21 +133,94 @@ const DEVIATION_STRETCHES: usize = 300;
 pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
     let first = plans.first().ok_or(PlotError::NoPlan)?;
     let line = first.line;
-    let length_mm = line.length_mm();
     let series: Vec<Series> = plans
         .iter()
         .map(|plan| Series {
             label: label(plan),
             rgb: rgb(plan),
-            track: track::executed(robot, plan),
+            track: track::executed(
+                robot,
+                &line,
+                &line,
+                start_counts(plan),
+                &plan.execution.events,
+            ),
         })
         .collect();
+    render(title(robot, first), line, &series, tolerances(plans))
+}
+
+/// Counts per joint a plan starts from.
+fn start_counts(plan: &Plan) -> [i64; JOINTS] {
+    std::array::from_fn(|j| plan.tables.get(j).map_or(0, |t| t.start))
+}
+
+/// One executed path to draw: the counts a move started from and every pulse after (a plan's run
+/// in the execution model, or a PLC's pulse trace replayed), with the line it was planned on.
+#[derive(Debug, Clone, Copy)]
+pub struct Path<'a> {
+    /// Legend text.
+    pub label: &'a str,
+    /// The line the move was planned on: its offsets are measured from it.
+    pub line: Line,
+    /// Counts per joint at the start.
+    pub start: [i64; JOINTS],
+    /// Every pulse after the start, in time order (`table` is the joint).
+    pub events: &'a [PulseEvent],
+    /// The move's path tolerance (a bounded-error move), drawn in the deviation panel.
+    pub tolerance_mm: Option<f64>,
+}
+
+/// Colours of [`svg_paths`]'s series, in turn.
+const PALETTE: [(u8, u8, u8); 6] = [
+    (30, 50, 160),
+    (200, 30, 30),
+    (20, 130, 50),
+    (235, 130, 20),
+    (130, 60, 180),
+    (40, 170, 200),
+];
+
+/// The SVG of several executed paths along one line, `frame` (moves back and forth on it): each
+/// path's offsets from its own line, placed along `frame`, drawn in the order given.
+pub fn svg_paths(
+    robot: &Robot,
+    title: &str,
+    frame: Line,
+    paths: &[Path<'_>],
+) -> Result<String, PlotError> {
+    if paths.is_empty() {
+        return Err(PlotError::NoPlan);
+    }
+    let series: Vec<Series> = paths
+        .iter()
+        .zip(PALETTE.iter().cycle())
+        .map(|(p, rgb)| Series {
+            label: p.label.to_owned(),
+            rgb: *rgb,
+            track: track::executed(robot, &p.line, &frame, p.start, p.events),
+        })
+        .collect();
+    let mut tolerances: Vec<f64> = paths.iter().filter_map(|p| p.tolerance_mm).collect();
+    tolerances.sort_by(f64::total_cmp);
+    tolerances.dedup();
+    render(title.to_owned(), frame, &series, tolerances)
+}
+
+/// Draws `series` against `line`.
+fn render(
+    title: String,
+    line: Line,
+    series: &[Series],
+    tolerances_mm: Vec<f64>,
+) -> Result<String, PlotError> {
+    let length_mm = line.length_mm();
     let largest = series
         .iter()
         .flat_map(|s| s.track.iter().map(track::TrackPoint::deviation_mm))
         .fold(0.0, f64::max);
     let picture = draw::Picture {
-        title: title(robot, first),
+        title,
         line,
         magnify: magnification(length_mm, largest, 0.08),
         paths: series
@@ -155,8 +232,8 @@ pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
             .iter()
             .map(|s| track::envelope(&s.track, length_mm, DEVIATION_STRETCHES))
             .collect(),
-        series: &series,
-        tolerances_mm: tolerances(plans),
+        series,
+        tolerances_mm,
     };
     draw::svg(&picture).map_err(PlotError::Draw)
 }

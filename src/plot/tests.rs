@@ -71,3 +71,44 @@ fn magnification_is_a_1_2_5_value_keeping_offsets_within_their_share() {
     assert!((magnification(250.0, 0.0, 0.04) - 1.0).abs() < 1e-9);
     assert!((magnification(10.0, 5.0, 0.04) - 1.0).abs() < 1e-9);
 }
+
+fn path<'a>(label: &'a str, p: &'a Plan) -> Path<'a> {
+    Path {
+        label,
+        line: p.line,
+        start: start_counts(p),
+        events: &p.execution.events,
+        tolerance_mm: None,
+    }
+}
+
+#[test]
+fn executed_paths_back_and_forth_on_one_line_are_drawn_with_their_tolerance() {
+    let there = plan(Method::ConstantPeriod, false);
+    let back_request = MoveRequest {
+        from: Origin::Counts(there.end_counts()),
+        to: there.line.from,
+        motion: crate::robot::Motion {
+            method: Method::BoundedError { tolerance_mm: 0.05 },
+            ..seed_robot().motion
+        },
+        seed_exact: false,
+    };
+    let back = plan_move(&seed_robot(), &back_request).unwrap();
+    let paths = [
+        path("there", &there),
+        Path {
+            tolerance_mm: Some(0.05),
+            ..path("back", &back)
+        },
+    ];
+    let svg = svg_paths(&seed_robot(), "two moves", there.line, &paths).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    for text in ["two moves", "there", "back", "tolerance 0.05 mm"] {
+        assert!(svg.contains(text), "no {text:?}");
+    }
+    assert!(matches!(
+        svg_paths(&seed_robot(), "none", there.line, &[]),
+        Err(PlotError::NoPlan)
+    ));
+}

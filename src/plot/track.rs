@@ -1,12 +1,13 @@
-//! The executed path of a plan: the tool position after every pulse event (forward kinematics of
-//! the counts), placed against the line, and thinned for drawing.
+//! An executed path (a plan's run in the execution model, or a PLC's pulse trace replayed): the
+//! tool position after every pulse event (forward kinematics of the counts), placed against the
+//! line, and thinned for drawing.
 
 use nalgebra::Vector3;
 
 use crate::geometry::Line;
 use crate::kinematics::JOINTS;
-use crate::plan::Plan;
 use crate::robot::Robot;
+use crate::sim::PulseEvent;
 
 /// One executed position, placed against the line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,17 +25,35 @@ impl TrackPoint {
     }
 }
 
-/// The tool position at the start and after every pulse event of `plan`.
-pub(super) fn executed(robot: &Robot, plan: &Plan) -> Vec<TrackPoint> {
-    let mut counts: [i64; JOINTS] =
-        std::array::from_fn(|j| plan.tables.get(j).map_or(0, |t| t.start));
-    let mut out = Vec::with_capacity(plan.execution.events.len() + 1);
-    out.push(place(&plan.line, &robot.pose_of(&counts).position_mm));
-    for e in &plan.execution.events {
+/// The tool position at the start and after every pulse event of a run from `start` (counts per
+/// joint): its offset measured from `own`, the line the move was planned on, and its place along
+/// `frame`, the line the picture is drawn on (the same line, or one it runs back and forth on).
+pub(super) fn executed(
+    robot: &Robot,
+    own: &Line,
+    frame: &Line,
+    start: [i64; JOINTS],
+    events: &[PulseEvent],
+) -> Vec<TrackPoint> {
+    let mut counts = start;
+    let mut out = Vec::with_capacity(events.len() + 1);
+    let at = |c: &[i64; JOINTS]| place_on(own, frame, &robot.pose_of(c).position_mm);
+    out.push(at(&counts));
+    for e in events {
         counts[e.table] = e.count;
-        out.push(place(&plan.line, &robot.pose_of(&counts).position_mm));
+        out.push(at(&counts));
     }
     out
+}
+
+/// `p` offset from the segment of `own`, its foot there placed along the segment of `frame`.
+fn place_on(own: &Line, frame: &Line, p: &Vector3<f64>) -> TrackPoint {
+    let on_own = place(own, p);
+    let foot = p - on_own.offset_mm;
+    TrackPoint {
+        along_mm: place(frame, &foot).along_mm,
+        offset_mm: on_own.offset_mm,
+    }
 }
 
 /// `p` against the segment of `line`.
@@ -119,6 +138,17 @@ mod tests {
         let p = place(&line(), &Vector3::new(4.0, 0.5, 0.0));
         assert!((p.along_mm - 4.0).abs() < 1e-12);
         assert!((p.deviation_mm() - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_move_back_along_the_line_is_placed_from_the_frames_start() {
+        let back = Line {
+            from: line().to,
+            to: line().from,
+        };
+        let p = place_on(&back, &line(), &Vector3::new(3.0, 0.25, 0.0));
+        assert!((p.along_mm - 3.0).abs() < 1e-12);
+        assert!((p.deviation_mm() - 0.25).abs() < 1e-12);
     }
 
     #[test]

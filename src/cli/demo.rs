@@ -1,0 +1,64 @@
+//! `linterpd demo`: the seed's move and a few others through the daemon against a mock PLC in
+//! process (the work is in [`crate::demo`]); prints a report and writes the picture.
+//!
+//! ```text
+//!  stdout:  the report, then where the picture went
+//!  exit:    0 every move done; 1 anything failed (one line on stderr); 2 bad arguments
+//! ```
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use super::Failure;
+use super::plan::ModelArg;
+use crate::demo::{DEFAULT_BAUD, DemoOptions, run as run_demo, write_report};
+
+/// Arguments of `linterpd demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Write the picture (paths and deviation along the line) to this file.
+    #[arg(long, value_name = "FILE", default_value = "linterpd-demo.svg")]
+    pub svg: PathBuf,
+    /// Do not draw the picture.
+    #[arg(long, conflicts_with = "svg")]
+    pub no_svg: bool,
+    /// What the pulse channels really output (the planner plans for it, the mock plays it).
+    #[arg(long, value_enum, default_value = "fpx-divider")]
+    pub frequency_model: ModelArg,
+    /// Speed of the emulated serial line to the mock, baud.
+    #[arg(long, default_value_t = DEFAULT_BAUD, value_parser = clap::value_parser!(u32).range(300..))]
+    pub baud: u32,
+}
+
+/// Runs `linterpd demo`.
+pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    let options = DemoOptions {
+        baud: Some(args.baud),
+        frequency_model: args.frequency_model.into(),
+        svg: !args.no_svg,
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")
+        .map_err(Failure::Runtime)?;
+    let demo = runtime
+        .block_on(run_demo(options))
+        .context("demo")
+        .map_err(Failure::Runtime)?;
+    write_report(&demo, out)
+        .context("cannot write to stdout")
+        .map_err(Failure::Runtime)?;
+    if let Some(svg) = &demo.svg {
+        std::fs::write(&args.svg, svg)
+            .with_context(|| format!("cannot write the picture to {}", args.svg.display()))
+            .map_err(Failure::Runtime)?;
+        writeln!(out, "Picture: {}", args.svg.display())
+            .context("cannot write to stdout")
+            .map_err(Failure::Runtime)?;
+    }
+    Ok(())
+}

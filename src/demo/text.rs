@@ -1,0 +1,178 @@
+//! The demo's report (text) and picture (SVG).
+
+use std::io::{self, Write};
+
+use super::{Demo, DemoMove, P1, P2};
+use crate::plot::{Path, PlotError, svg_paths};
+use crate::robot::{Method, Motion, Robot};
+
+/// `(x, y, z)` to two decimals.
+fn point(p: [f64; 3]) -> String {
+    format!("({:.2}, {:.2}, {:.2})", p[0], p[1], p[2])
+}
+
+/// The method and motion a move was planned with.
+fn motion(m: &Motion) -> String {
+    let method = match m.method {
+        Method::ConstantPeriod => format!("constant-period dT {:.0} ms", m.period_s * 1e3),
+        Method::BoundedError { tolerance_mm } => format!("bounded-error {tolerance_mm} mm"),
+    };
+    format!(
+        "{method}, V {} mm/s, Ta {:.0} ms",
+        m.speed_mm_s,
+        m.accel_s * 1e3
+    )
+}
+
+fn seconds(s: Option<f64>) -> String {
+    s.map_or_else(|| "-".into(), |s| format!("{s:.3} s"))
+}
+
+/// A stage as the API spells it.
+fn stage(stage: crate::daemon::Stage) -> String {
+    serde_json::to_value(stage)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_owned))
+        .unwrap_or_else(|| format!("{stage:?}"))
+}
+
+fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
+    let link = demo.options.baud.map_or_else(
+        || "MEWTOCOL-COM, no line speed emulated".to_owned(),
+        |b| format!("MEWTOCOL-COM over an emulated {b}-baud serial line"),
+    );
+    writeln!(
+        out,
+        "linterpd demo: robot {}, run by the daemon's own move path against a mock FP-X in",
+        demo.robot.name
+    )?;
+    writeln!(
+        out,
+        "process ({link}; scan {:.0} ms; channels {}).",
+        demo.scan_s * 1e3,
+        demo.robot.motion.frequency_model.name()
+    )?;
+    writeln!(
+        out,
+        "P1 = {} mm (wrist at 0), P2 = {} mm.",
+        point(P1),
+        point(P2)
+    )?;
+    writeln!(
+        out,
+        "Path deviation: measured = the mock's pulse trace replayed through forward kinematics;"
+    )?;
+    writeln!(out, "predicted = the planner's execution model.")
+}
+
+fn one(robot: &Robot, n: usize, m: &DemoMove, out: &mut dyn Write) -> io::Result<()> {
+    let r = &m.report;
+    let p = r
+        .predicted
+        .unwrap_or_else(|| unreachable!("a done move was planned"));
+    writeln!(out)?;
+    writeln!(out, "{n}. {}: {}", m.name, motion(&m.plan.motion))?;
+    let motion_s = r.motion_s.map_or_else(
+        || format!("{:.3} s in the trace", m.played.figures.finish_s),
+        |s| format!("{s:.3} s"),
+    );
+    writeln!(
+        out,
+        "   {}: {} rows, {} words, upload {}, motion {motion_s} (planned {:.3} s)",
+        stage(r.stage),
+        p.rows,
+        p.words,
+        seconds(r.upload_s),
+        p.duration_s,
+    )?;
+    if m.chained {
+        writeln!(
+            out,
+            "   started by the PLC in the scan after the move before ended"
+        )?;
+    }
+    let measured = m.played.figures.path_deviation_mm;
+    writeln!(
+        out,
+        "   path deviation: measured {measured:.4} mm, predicted {:.4} mm (differ by {:.2} µm)",
+        p.path_deviation_mm,
+        (measured - p.path_deviation_mm).abs() * 1e3
+    )?;
+    let (error, from_trace) = m.final_error_pulses(robot);
+    writeln!(
+        out,
+        "   final error: {error:?} pulses{}",
+        if from_trace {
+            " (from the trace: the daemon does not read a chained move's end)"
+        } else {
+            ""
+        }
+    )
+}
+
+/// Writes the report: a header, then a few lines per move and a closing line.
+pub fn write_report(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
+    header(demo, out)?;
+    for (i, m) in demo.moves.iter().enumerate() {
+        one(&demo.robot, i + 1, m, out)?;
+    }
+    let worst = demo
+        .moves
+        .iter()
+        .filter_map(|m| {
+            let p = m.report.predicted?;
+            Some((m.played.figures.path_deviation_mm - p.path_deviation_mm).abs())
+        })
+        .fold(0.0, f64::max);
+    writeln!(out)?;
+    writeln!(
+        out,
+        "{} moves done; measured and predicted path deviations differ by at most {:.2} µm",
+        demo.moves.len(),
+        worst * 1e3
+    )?;
+    writeln!(
+        out,
+        "(they can differ only where a channel has several segments: the mock starts the next\n\
+         one at its next scan, the planner at once)."
+    )
+}
+
+/// The picture: every move's executed path (from the trace) along P1P2 and its deviation.
+pub fn picture(robot: &Robot, moves: &[DemoMove]) -> Result<String, PlotError> {
+    let Some(first) = moves.first() else {
+        return Err(PlotError::NoPlan);
+    };
+    let labels: Vec<String> = moves
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            format!(
+                "{}. {}: {:.3} mm",
+                i + 1,
+                m.name,
+                m.played.figures.path_deviation_mm
+            )
+        })
+        .collect();
+    let paths: Vec<Path<'_>> = moves
+        .iter()
+        .zip(&labels)
+        .map(|(m, label)| Path {
+            label,
+            line: m.plan.line,
+            start: std::array::from_fn(|j| m.plan.tables[j].start),
+            events: &m.played.execution.events,
+            tolerance_mm: match m.plan.motion.method {
+                Method::BoundedError { tolerance_mm } => Some(tolerance_mm),
+                Method::ConstantPeriod => None,
+            },
+        })
+        .collect();
+    let title = format!(
+        "linterpd demo: {}, {} moves between P1 and P2 as the mock PLC played them",
+        robot.name,
+        moves.len()
+    );
+    svg_paths(robot, &title, first.plan.line, &paths)
+}

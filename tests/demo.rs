@@ -1,0 +1,72 @@
+//! `linterpd demo`: the library function end to end (the daemon against the in-process mock PLC
+//! at 115200 baud), and the binary.
+
+use std::process::Command;
+
+use linterpd::daemon::Stage;
+use linterpd::demo::{Demo, DemoOptions, run};
+
+/// How far the measured path deviation of the seed's move may be from the prediction, mm.
+///
+/// The mock plays the tables with the planner's own execution model (`sim`), pulse for pulse;
+/// the one difference is the scan gap between segments: the mock starts a channel's next
+/// segment at the first 2 ms scan after the previous one ends, the planner at once, so the rest
+/// of that channel runs up to one scan late (about that joint's speed x 2 ms off the line). The
+/// seed's move has one segment per channel, so no gap enters and the two agree to rounding
+/// (checked exactly below); 5 um is a tenth of the move's pulse-grid deviation (0.05 mm per
+/// theta1 pulse), room for a plan that splits a slow joint's table, not for a row played late.
+const AGREEMENT_MM: f64 = 0.005;
+
+async fn demo(svg: bool) -> Demo {
+    let options = DemoOptions {
+        svg,
+        ..DemoOptions::default()
+    };
+    run(options).await.expect("the demo runs")
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
+    let d = demo(true).await;
+    assert_eq!(d.moves.len(), 5);
+    for m in &d.moves {
+        assert_eq!(m.report.stage, Stage::Done, "{}: {:?}", m.name, m.report);
+        let (error, _) = m.final_error_pulses(&d.robot);
+        assert!(error.iter().all(|e| e.abs() <= 1), "{}: {error:?}", m.name);
+    }
+    for m in &d.moves {
+        let one_segment = m.plan.tables.iter().all(|t| t.segments.len() <= 1);
+        let gap = (m.played.figures.path_deviation_mm - m.plan.figures.path_deviation_mm).abs();
+        assert!(!one_segment || gap < 1e-9, "{}: {gap} mm", m.name);
+    }
+    let seed = &d.moves[0];
+    assert!(seed.name.contains("seed"), "{}", seed.name);
+    let predicted = seed.report.predicted.unwrap().path_deviation_mm;
+    let measured = seed.played.figures.path_deviation_mm;
+    assert!(
+        (measured - predicted).abs() <= AGREEMENT_MM,
+        "measured {measured} mm, predicted {predicted} mm"
+    );
+    assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_some());
+    let svg = d.svg.as_deref().expect("asked for");
+    assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(80)]);
+    assert!(svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("the seed&apos;s move") || svg.contains("the seed's move"));
+}
+
+#[test]
+fn the_binary_runs_the_demo_and_names_the_seeds_move() {
+    let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
+        .args(["demo", "--no-svg"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("the seed's move, P1 -> P2"), "{stdout}");
+    assert!(stdout.contains("5 moves done"), "{stdout}");
+    assert!(!stdout.contains("Picture:"), "{stdout}");
+}
