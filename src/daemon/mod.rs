@@ -9,6 +9,7 @@
 //!
 //! [`notify`] tells systemd the daemon is ready, alive and stopping.
 
+pub mod api;
 mod handle;
 pub mod notify;
 mod order;
