@@ -2,8 +2,10 @@
 //! only; every failure is sorted into bad input (exit 2) or a runtime failure (exit 1).
 
 pub mod args;
+pub mod logging;
 pub mod mock_plc;
 pub mod plan;
+pub mod serve;
 
 use std::fmt;
 
@@ -25,6 +27,20 @@ pub enum Command {
     Plan(plan::PlanArgs),
     /// Serve the mock PLC (MEWTOCOL-COM or Modbus, TCP or serial) until SIGINT / SIGTERM.
     MockPlc(mock_plc::MockPlcArgs),
+    /// Run the daemon: a worker per robot on its PLC link, the HTTP/JSON API on a Unix socket
+    /// (docs/API.md), until SIGINT / SIGTERM.
+    Serve(serve::ServeArgs),
+}
+
+impl Command {
+    /// The log level when `RUST_LOG` gives none: the daemon and the mock PLC log their work.
+    #[must_use]
+    pub fn default_log_level(&self) -> &'static str {
+        match self {
+            Self::Plan(_) => "error",
+            Self::MockPlc(_) | Self::Serve(_) => "info",
+        }
+    }
 }
 
 /// Exit code for a run that worked.
@@ -71,5 +87,6 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     match cli.command {
         Command::Plan(args) => plan::run(&args, out),
         Command::MockPlc(args) => mock_plc::run(&args, out),
+        Command::Serve(args) => serve::run(&args),
     }
 }

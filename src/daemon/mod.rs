@@ -14,6 +14,7 @@ mod handle;
 pub mod notify;
 mod order;
 mod report;
+pub mod service;
 mod worker;
 
 pub use handle::{CommandError, Daemon, RobotHandle, SubmitError};
