@@ -257,6 +257,9 @@ fn robot_status(s: &RobotState) -> String {
 }
 
 /// Completes on SIGTERM or SIGINT.
+///
+/// # Panics
+/// If the SIGTERM handler cannot be installed (no signal support in this process).
 pub async fn shutdown_signal() {
     let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
         .expect("SIGTERM handler");

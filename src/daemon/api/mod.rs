@@ -54,7 +54,6 @@ impl Api {
     }
 
     /// The routes; with a token, every request must carry it as `Authorization: Bearer`.
-    #[must_use]
     pub fn router(&self, token: Option<BearerToken>) -> Router {
         let robot = "/v1/robots/{name}";
         let router = Router::new()
