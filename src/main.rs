@@ -5,21 +5,11 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use linterpd::cli::{Cli, EXIT_OK, run};
+use linterpd::cli::{Cli, EXIT_OK, logging, run};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    // The mock PLC logs its connections, starts, stops and faults unless RUST_LOG says otherwise.
-    let default_level = match cli.command {
-        linterpd::cli::Command::MockPlc(_) => "info",
-        _ => "error",
-    };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level));
-    tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .init();
+    logging::init(cli.command.default_log_level());
     let stdout = std::io::stdout();
     match run(cli, &mut stdout.lock()) {
         Ok(()) => ExitCode::from(EXIT_OK),

@@ -5,9 +5,11 @@ pub mod args;
 pub mod check_config;
 pub mod client;
 pub mod demo;
+pub mod logging;
 pub mod mock_plc;
 pub mod moves;
 pub mod plan;
+pub mod serve;
 pub mod status;
 pub mod stop;
 
@@ -42,6 +44,20 @@ pub enum Command {
     Stop(stop::StopArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),
+    /// Run the daemon: a worker per robot on its PLC link, the HTTP/JSON API on a Unix socket
+    /// (docs/API.md), until SIGINT / SIGTERM.
+    Serve(serve::ServeArgs),
+}
+
+impl Command {
+    /// The log level when `RUST_LOG` gives none: the daemon and the mock PLC log their work.
+    #[must_use]
+    pub fn default_log_level(&self) -> &'static str {
+        match self {
+            Self::MockPlc(_) | Self::Serve(_) => "info",
+            _ => "error",
+        }
+    }
 }
 
 /// How to reach the daemon, and how to print.
@@ -165,5 +181,6 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Status(args) => status::run(&args, out),
         Command::Stop(args) => stop::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),
+        Command::Serve(args) => serve::run(&args),
     }
 }

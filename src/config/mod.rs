@@ -28,10 +28,13 @@
 //! [robots.press-loader.plc]        # optional: how to reach the PLC (see `plc`)
 //! protocol = "mewtocol"
 //! serial = { path = "/dev/ttyUSB0" }
+//! [daemon]                          # optional: the API of `linterpd serve` (see `daemon`)
+//! socket = "/run/linterpd/api.sock"
 //! ```
 //! `config/linterpd.toml` is the commented example.
 
 mod check;
+mod daemon;
 mod duration;
 mod error;
 mod joints;
@@ -45,6 +48,7 @@ mod validate;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use duration::{DurationError, DurationProblem, parse_duration_s};
 pub use error::ConfigError;
 
@@ -58,6 +62,8 @@ pub struct Config {
     pub robots: Vec<Robot>,
     /// The PLC link of each robot with a `[robots.NAME.plc]` table, by robot name.
     pub links: BTreeMap<String, LinkSettings>,
+    /// How `linterpd serve` offers its API (`[daemon]`; every default without one).
+    pub daemon: DaemonSettings,
 }
 
 impl Config {

@@ -20,6 +20,18 @@ pub(super) struct RawConfig {
     /// Robots by name; sorted by name here, put back in file order by the keys' spans.
     #[serde(default)]
     pub robots: BTreeMap<Spanned<String>, Spanned<RawRobot>>,
+    /// `[daemon]`: how `linterpd serve` offers its API; checked by `daemon`.
+    pub daemon: Option<Spanned<RawDaemon>>,
+}
+
+/// `[daemon]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawDaemon {
+    pub socket: Option<Spanned<String>>,
+    pub socket_mode: Option<Spanned<String>>,
+    pub listen: Option<Spanned<String>>,
+    pub token_file: Option<Spanned<String>>,
 }
 
 /// `[robots.NAME]`.

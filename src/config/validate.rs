@@ -8,7 +8,7 @@ use super::check::At;
 use super::raw::{RawConfig, RawRobot};
 use std::collections::BTreeMap;
 
-use super::{Config, ConfigError, joints, kinematics, motion, plc};
+use super::{Config, ConfigError, daemon, joints, kinematics, motion, plc};
 use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
@@ -20,8 +20,8 @@ const MIN_AREA_WORDS: i64 = 64;
 const MAX_AREA_WORDS: i64 = 8000;
 
 /// The robots of a parsed file, checked, in the order the file names them.
-pub(super) fn config(text: &str, raw: RawConfig) -> Result<Config, ConfigError> {
-    let mut entries: Vec<_> = raw.robots.into_iter().collect();
+pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigError> {
+    let mut entries: Vec<_> = std::mem::take(&mut raw.robots).into_iter().collect();
     entries.sort_by_key(|(name, _)| name.span().start);
     let mut robots = Vec::with_capacity(entries.len());
     let mut links = BTreeMap::new();
@@ -35,7 +35,12 @@ pub(super) fn config(text: &str, raw: RawConfig) -> Result<Config, ConfigError> 
     if robots.is_empty() {
         return Err(ConfigError::NoRobots);
     }
-    Ok(Config { robots, links })
+    let daemon = daemon::settings(&At::new(text, "daemon"), raw.daemon.as_ref())?;
+    Ok(Config {
+        robots,
+        links,
+        daemon,
+    })
 }
 
 /// One robot.

@@ -9,10 +9,12 @@
 //!
 //! [`notify`] tells systemd the daemon is ready, alive and stopping.
 
+pub mod api;
 mod handle;
 pub mod notify;
 mod order;
 mod report;
+pub mod service;
 mod worker;
 
 pub use handle::{CommandError, Daemon, RobotHandle, SubmitError};

@@ -1,0 +1,188 @@
+//! `[daemon]` -> [`DaemonSettings`]: where `linterpd serve` offers its HTTP/JSON API.
+//!
+//! ```toml
+//! [daemon]                           # optional, as are all its keys
+//! socket = "/run/linterpd/api.sock"  # the Unix socket (default)
+//! socket_mode = "0660"               # its permissions, octal (default "0660")
+//! listen = "127.0.0.1:8420"          # an optional TCP listener, IP:port
+//! token_file = "/etc/linterpd/token" # bearer token; required when listen is not loopback
+//! ```
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use toml::Spanned;
+
+use super::ConfigError;
+use super::check::At;
+use super::raw::RawDaemon;
+
+/// The API socket when the config names none (deploy/linterpd.service's `RuntimeDirectory`).
+pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
+/// The socket's permissions when the config gives none: owner and group read/write.
+const DEFAULT_SOCKET_MODE: u32 = 0o660;
+
+/// How `linterpd serve` offers its API.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DaemonSettings {
+    /// The Unix socket's path.
+    pub socket: PathBuf,
+    /// The Unix socket's permission bits.
+    pub socket_mode: u32,
+    /// A TCP listener, if any.
+    pub listen: Option<SocketAddr>,
+    /// The file holding the bearer token TCP clients must send, if any.
+    pub token_file: Option<PathBuf>,
+}
+
+impl Default for DaemonSettings {
+    fn default() -> Self {
+        Self {
+            socket: PathBuf::from(DEFAULT_SOCKET),
+            socket_mode: DEFAULT_SOCKET_MODE,
+            listen: None,
+            token_file: None,
+        }
+    }
+}
+
+/// The settings a `[daemon]` table describes (every default without one).
+pub(super) fn settings(
+    at: &At,
+    raw: Option<&Spanned<RawDaemon>>,
+) -> Result<DaemonSettings, ConfigError> {
+    let mut settings = DaemonSettings::default();
+    let Some(raw) = raw else {
+        return Ok(settings);
+    };
+    let r = raw.get_ref();
+    if let Some(v) = &r.socket {
+        settings.socket = path(&at.child("socket"), v)?;
+    }
+    if let Some(v) = &r.socket_mode {
+        settings.socket_mode = mode(&at.child("socket_mode"), v)?;
+    }
+    if let Some(v) = &r.token_file {
+        settings.token_file = Some(path(&at.child("token_file"), v)?);
+    }
+    if let Some(v) = &r.listen {
+        let address = listen(&at.child("listen"), v)?;
+        if !address.ip().is_loopback() && settings.token_file.is_none() {
+            return Err(at.child("listen").invalid(
+                v,
+                "a listener beyond loopback needs daemon.token_file (a bearer token for clients)",
+            ));
+        }
+        settings.listen = Some(address);
+    }
+    Ok(settings)
+}
+
+fn path(at: &At, value: &Spanned<String>) -> Result<PathBuf, ConfigError> {
+    if value.get_ref().trim().is_empty() {
+        return Err(at.invalid(value, "needs a file path"));
+    }
+    Ok(PathBuf::from(value.get_ref()))
+}
+
+/// Octal permission bits, `"0660"` or `"660"`.
+fn mode(at: &At, value: &Spanned<String>) -> Result<u32, ConfigError> {
+    let text = value.get_ref();
+    let digits_ok =
+        (3..=4).contains(&text.len()) && text.bytes().all(|b| (b'0'..=b'7').contains(&b));
+    match u32::from_str_radix(text, 8) {
+        Ok(bits) if digits_ok && bits <= 0o777 => Ok(bits),
+        _ => Err(at.invalid(value, "must be octal permission bits, e.g. \"0660\"")),
+    }
+}
+
+fn listen(at: &At, value: &Spanned<String>) -> Result<SocketAddr, ConfigError> {
+    value.get_ref().parse().map_err(|_| {
+        at.invalid(
+            value,
+            "must be an IP address and port, e.g. \"127.0.0.1:8420\" or \"[::1]:8420\"",
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Config;
+    use super::super::fixture::{MINIMAL, message};
+    use super::*;
+
+    fn with_daemon(table: &str) -> String {
+        format!("{MINIMAL}[daemon]\n{table}\n")
+    }
+
+    /// The line of the first key of the `[daemon]` table `with_daemon` appends.
+    fn first_key_line() -> usize {
+        MINIMAL.lines().count() + 2
+    }
+
+    #[test]
+    fn no_daemon_table_gives_the_defaults() {
+        let config = Config::from_toml(MINIMAL).unwrap();
+        assert_eq!(config.daemon, DaemonSettings::default());
+        assert_eq!(config.daemon.socket, PathBuf::from(DEFAULT_SOCKET));
+        assert_eq!(config.daemon.socket_mode, 0o660);
+    }
+
+    #[test]
+    fn every_key_is_read() {
+        let text = with_daemon(
+            "socket = \"/tmp/x.sock\"\nsocket_mode = \"0600\"\nlisten = \"0.0.0.0:8420\"\n\
+             token_file = \"/etc/linterpd/token\"",
+        );
+        let d = Config::from_toml(&text).unwrap().daemon;
+        assert_eq!(d.socket, PathBuf::from("/tmp/x.sock"));
+        assert_eq!(d.socket_mode, 0o600);
+        assert_eq!(d.listen, Some("0.0.0.0:8420".parse().unwrap()));
+        assert_eq!(d.token_file, Some(PathBuf::from("/etc/linterpd/token")));
+    }
+
+    #[test]
+    fn loopback_listener_needs_no_token() {
+        let d = Config::from_toml(&with_daemon("listen = \"127.0.0.1:8420\""))
+            .unwrap()
+            .daemon;
+        assert_eq!(d.listen, Some("127.0.0.1:8420".parse().unwrap()));
+        assert!(Config::from_toml(&with_daemon("listen = \"[::1]:0\"")).is_ok());
+    }
+
+    #[test]
+    fn listener_beyond_loopback_without_token_is_refused() {
+        assert_eq!(
+            message(&with_daemon("listen = \"0.0.0.0:8420\"")),
+            format!(
+                "config line {}: daemon.listen = \"0.0.0.0:8420\": a listener beyond loopback \
+                 needs daemon.token_file (a bearer token for clients)",
+                first_key_line()
+            )
+        );
+    }
+
+    #[test]
+    fn bad_values_name_key_value_and_line() {
+        let line = first_key_line();
+        assert_eq!(
+            message(&with_daemon("socket_mode = \"0999\"")),
+            format!(
+                "config line {line}: daemon.socket_mode = \"0999\": must be octal permission \
+                 bits, e.g. \"0660\""
+            )
+        );
+        assert!(
+            message(&with_daemon("listen = \"localhost\"")).starts_with(&format!(
+                "config line {line}: daemon.listen = \"localhost\": "
+            ))
+        );
+        assert!(
+            message(&with_daemon("socket = \"\""))
+                .starts_with(&format!("config line {line}: daemon.socket = \"\": "))
+        );
+        assert!(message(&with_daemon("port = 1")).starts_with(&format!(
+            "config line {line}: daemon.port: unknown field `port`"
+        )));
+    }
+}

@@ -1,0 +1,252 @@
+//! The handlers: each takes its path parameters and body, asks a [`RobotHandle`] and answers JSON
+//! (or NDJSON, or the metrics text).
+
+use std::convert::Infallible;
+
+use axum::Json;
+use axum::body::{Body, Bytes};
+use axum::extract::{Path, State};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Serialize;
+use serde_json::error::Category;
+use tokio::sync::watch;
+use tokio_util::sync::CancellationToken;
+
+use super::Api;
+use super::error::ApiError;
+use super::metrics::{self, RobotSample};
+use crate::daemon::{MoveId, MoveOrder, MoveReport, RobotHandle, RobotState};
+
+/// `POST .../moves` accepted.
+#[derive(Debug, Serialize)]
+pub(super) struct Accepted {
+    id: MoveId,
+    report: MoveReport,
+}
+
+pub(super) async fn robots(State(api): State<Api>) -> Json<Vec<RobotState>> {
+    Json(api.robots.values().map(RobotHandle::state).collect())
+}
+
+pub(super) async fn robot(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+) -> Result<Json<RobotState>, ApiError> {
+    Ok(Json(api.robot(&name)?.state()))
+}
+
+pub(super) async fn submit(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+    body: Bytes,
+) -> Result<(StatusCode, Json<Accepted>), ApiError> {
+    let robot = api.robot(&name)?;
+    let order = parse_order(&body)?;
+    let id = robot.submit(order)?;
+    tracing::info!(robot = %name, move_id = id, "move accepted");
+    let report = robot.report(id).ok_or(ApiError::ShuttingDown)?;
+    Ok((StatusCode::ACCEPTED, Json(Accepted { id, report })))
+}
+
+pub(super) async fn report(
+    State(api): State<Api>,
+    Path((name, id)): Path<(String, String)>,
+) -> Result<Json<MoveReport>, ApiError> {
+    let robot = api.robot(&name)?;
+    let id = move_id(&id)?;
+    robot.report(id).map(Json).ok_or_else(|| no_move(id))
+}
+
+pub(super) async fn events(
+    State(api): State<Api>,
+    Path((name, id)): Path<(String, String)>,
+) -> Result<Response, ApiError> {
+    let robot = api.robot(&name)?;
+    let id = move_id(&id)?;
+    let feed = robot.subscribe(id).ok_or_else(|| no_move(id))?;
+    let lines = futures_util::stream::unfold(
+        (Feed::First(feed), api.closing.clone()),
+        |(feed, closing)| async move {
+            let (line, next) = next_line(feed, &closing).await?;
+            Some((Ok::<_, Infallible>(line), (next, closing)))
+        },
+    );
+    Ok((
+        [(header::CONTENT_TYPE, "application/x-ndjson")],
+        Body::from_stream(lines),
+    )
+        .into_response())
+}
+
+pub(super) async fn stop(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let robot = api.robot(&name)?;
+    tracing::info!(robot = %name, "stop requested");
+    robot
+        .stop()
+        .await
+        .map_err(|e| ApiError::PlcUnreachable(e.to_string()))?;
+    Ok(Json(serde_json::json!({ "stopped": true })))
+}
+
+pub(super) async fn clear_fault(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let robot = api.robot(&name)?;
+    tracing::info!(robot = %name, "fault clear requested");
+    robot
+        .clear_fault()
+        .await
+        .map_err(|e| ApiError::PlcUnreachable(e.to_string()))?;
+    Ok(Json(serde_json::json!({ "cleared": true })))
+}
+
+pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {
+    let samples: Vec<RobotSample> = api
+        .robots
+        .values()
+        .map(|r| RobotSample {
+            state: r.state(),
+            reports: r.reports(),
+        })
+        .collect();
+    (
+        [(header::CONTENT_TYPE, metrics::CONTENT_TYPE)],
+        metrics::render(&samples),
+    )
+}
+
+pub(super) async fn no_route() -> ApiError {
+    ApiError::NotFound {
+        message: "no such path; the API is under /v1/robots (docs/API.md)".into(),
+        field: None,
+    }
+}
+
+pub(super) async fn wrong_method() -> ApiError {
+    ApiError::MethodNotAllowed
+}
+
+fn move_id(text: &str) -> Result<MoveId, ApiError> {
+    text.parse().map_err(|_| ApiError::NotFound {
+        message: format!("no move {text:?}: a move id is a number"),
+        field: Some("id"),
+    })
+}
+
+fn no_move(id: MoveId) -> ApiError {
+    ApiError::NotFound {
+        message: format!("no move {id}"),
+        field: Some("id"),
+    }
+}
+
+/// Where an event stream is.
+enum Feed {
+    /// Nothing sent yet: the current report goes first.
+    First(watch::Receiver<MoveReport>),
+    /// Sent at least one report; the next goes when it changes.
+    Next(watch::Receiver<MoveReport>),
+    /// Sent a final report.
+    Ended,
+}
+
+/// The next line of an event stream, or `None` when it ends (final stage sent, the move's feed
+/// gone, or the daemon closing).
+async fn next_line(feed: Feed, closing: &CancellationToken) -> Option<(Bytes, Feed)> {
+    let mut rx = match feed {
+        Feed::Ended => return None,
+        Feed::First(rx) => rx,
+        Feed::Next(mut rx) => {
+            tokio::select! {
+                changed = rx.changed() => changed.ok()?,
+                () = closing.cancelled() => return None,
+            }
+            rx
+        }
+    };
+    let report = rx.borrow_and_update().clone();
+    let mut line = serde_json::to_vec(&report).unwrap_or_default();
+    line.push(b'\n');
+    let next = if report.stage.is_final() {
+        Feed::Ended
+    } else {
+        Feed::Next(rx)
+    };
+    Some((Bytes::from(line), next))
+}
+
+/// A move order from a request body, or a 400 naming the field serde blames.
+fn parse_order(body: &[u8]) -> Result<MoveOrder, ApiError> {
+    let mut de = serde_json::Deserializer::from_slice(body);
+    let order = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        body_error(e.inner(), &path)
+    })?;
+    de.end().map_err(|e| body_error(&e, "."))?;
+    Ok(order)
+}
+
+fn body_error(e: &serde_json::Error, path: &str) -> ApiError {
+    if matches!(
+        e.classify(),
+        Category::Syntax | Category::Eof | Category::Io
+    ) {
+        return ApiError::BadRequest {
+            message: format!("the body is not valid JSON: {e}"),
+            field: None,
+        };
+    }
+    let message = e.to_string();
+    // The path names an unknown field itself, but stops above a missing one.
+    let field = match path {
+        "." => quoted_name(&message, "missing field `"),
+        path => Some(path.to_owned()),
+    };
+    let message = match &field {
+        Some(field) => format!("{field}: {message}"),
+        None => format!("the body is not a move order: {message}"),
+    };
+    ApiError::BadRequest { message, field }
+}
+
+/// The name between `prefix` and the next backquote in `message`.
+fn quoted_name(message: &str, prefix: &str) -> Option<String> {
+    let rest = &message[message.find(prefix)? + prefix.len()..];
+    Some(rest[..rest.find('`')?].to_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field_of(body: &str) -> Option<String> {
+        match parse_order(body.as_bytes()).unwrap_err() {
+            ApiError::BadRequest { field, .. } => field,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn body_errors_name_the_field_serde_blames() {
+        assert_eq!(
+            field_of(r#"{"to":[1,2,3],"colour":1}"#).as_deref(),
+            Some("colour")
+        );
+        assert_eq!(field_of(r#"{"speed_mm_s":1}"#).as_deref(), Some("to"));
+        assert_eq!(field_of(r#"{"to":"here"}"#).as_deref(), Some("to"));
+        assert_eq!(field_of(r#"{"to":[1,"x",3]}"#).as_deref(), Some("to[1]"));
+        assert_eq!(field_of("not json"), None);
+        assert_eq!(field_of(r#"{"to":[1,2,3]} x"#), None);
+    }
+
+    #[test]
+    fn a_good_body_parses() {
+        let order = parse_order(br#"{"to":[1,2,3],"speed_mm_s":100}"#).unwrap();
+        assert_eq!(order.to, [1.0, 2.0, 3.0]);
+    }
+}

@@ -1,0 +1,93 @@
+//! The HTTP/JSON API of `linterpd serve` (docs/API.md), on axum: routes, handlers, errors, the
+//! bearer token of a TCP listener, and the Prometheus metrics.
+//!
+//! ```text
+//! GET  /v1/robots                          [RobotState]
+//! GET  /v1/robots/{name}                   RobotState                    | 404
+//! POST /v1/robots/{name}/moves             202 {"id", "report"}          | 400 | 404 | 422
+//! GET  /v1/robots/{name}/moves/{id}        MoveReport                    | 404
+//! GET  /v1/robots/{name}/moves/{id}/events application/x-ndjson reports  | 404
+//! POST /v1/robots/{name}/stop              {"stopped": true}             | 404 | 502
+//! POST /v1/robots/{name}/clear-fault       {"cleared": true}             | 404 | 502
+//! GET  /metrics                            Prometheus text
+//! ```
+//! Every error is JSON with at least `error` (see [`ApiError`]).
+
+mod auth;
+mod error;
+mod handlers;
+pub mod metrics;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use axum::Router;
+use axum::routing::{get, post};
+use tokio_util::sync::CancellationToken;
+
+pub use auth::{BearerToken, TokenError};
+pub use error::ApiError;
+
+use super::RobotHandle;
+
+/// What every handler sees: the robots and the signal that the daemon is closing.
+#[derive(Debug, Clone)]
+pub struct Api {
+    robots: Arc<BTreeMap<String, RobotHandle>>,
+    closing: CancellationToken,
+}
+
+impl Api {
+    /// An API over these robots (by name, as [`super::Daemon::robots`] gives them).
+    #[must_use]
+    pub fn new(robots: BTreeMap<String, RobotHandle>) -> Self {
+        Self {
+            robots: Arc::new(robots),
+            closing: CancellationToken::new(),
+        }
+    }
+
+    /// Cancelled when the daemon begins to close: open event streams end.
+    #[must_use]
+    pub fn closing(&self) -> CancellationToken {
+        self.closing.clone()
+    }
+
+    /// The routes; with a token, every request must carry it as `Authorization: Bearer`.
+    pub fn router(&self, token: Option<BearerToken>) -> Router {
+        let robot = "/v1/robots/{name}";
+        let router = Router::new()
+            .route("/v1/robots", get(handlers::robots))
+            .route(robot, get(handlers::robot))
+            .route(&format!("{robot}/moves"), post(handlers::submit))
+            .route(&format!("{robot}/moves/{{id}}"), get(handlers::report))
+            .route(
+                &format!("{robot}/moves/{{id}}/events"),
+                get(handlers::events),
+            )
+            .route(&format!("{robot}/stop"), post(handlers::stop))
+            .route(&format!("{robot}/clear-fault"), post(handlers::clear_fault))
+            .route("/metrics", get(handlers::metrics))
+            .fallback(handlers::no_route)
+            .method_not_allowed_fallback(handlers::wrong_method)
+            .with_state(self.clone());
+        match token {
+            Some(token) => router.layer(axum::middleware::from_fn_with_state(
+                token,
+                auth::require_token,
+            )),
+            None => router,
+        }
+    }
+
+    /// The robot called `name`, or a 404 naming the robots there are.
+    fn robot(&self, name: &str) -> Result<&RobotHandle, ApiError> {
+        self.robots.get(name).ok_or_else(|| {
+            let known: Vec<&str> = self.robots.keys().map(String::as_str).collect();
+            ApiError::NotFound {
+                message: format!("no robot {name:?}; robots: {}", known.join(", ")),
+                field: Some("robot"),
+            }
+        })
+    }
+}

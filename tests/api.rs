@@ -1,0 +1,366 @@
+//! The HTTP/JSON API end to end: the router on a Unix socket in a temp dir, the daemon behind it
+//! on the mock PLC, and a real HTTP client; then the `linterpd serve` binary against
+//! `linterpd mock-plc`.
+
+mod common;
+
+use std::process::Command;
+use std::time::Duration;
+
+use common::exchange::{P2, mock_at_seed_start};
+use common::http::{Answer, Endpoint};
+use common::process::{Spawned, TempDir};
+use hyper::StatusCode;
+use linterpd::config::Config;
+use linterpd::daemon::api::{Api, BearerToken};
+use linterpd::daemon::{Connector, Daemon, RobotHandle};
+use linterpd::mewtocol::Station;
+use linterpd::mock::{MewtocolServer, MewtocolServerOptions, SharedMock};
+use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
+use linterpd::robot::seed_robot;
+use serde_json::{Value, json};
+use tokio::net::{TcpListener, UnixListener};
+
+const ROBOT: &str = "/v1/robots/press-loader";
+const READY: Duration = Duration::from_secs(20);
+const SHIPPED: &str = include_str!("../config/linterpd.toml");
+
+/// A fresh `duplex` connection to the mock for every (re)connection.
+fn duplex_connector(shared: &SharedMock) -> Connector {
+    let shared = shared.clone();
+    Box::new(move || {
+        let shared = shared.clone();
+        Box::pin(async move {
+            let (ours, theirs) = tokio::io::duplex(4_096);
+            let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
+            tokio::spawn(async move { server.serve(theirs).await });
+            let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
+            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
+                Box::new(ours) as BoxedLink,
+                options,
+            )))
+        })
+    })
+}
+
+/// The daemon on a mock at the seed's start, its API on a Unix socket in `dir`.
+struct Served {
+    daemon: Daemon,
+    api: Endpoint,
+    _dir: TempDir,
+}
+
+impl Served {
+    async fn start() -> Self {
+        let shared = mock_at_seed_start("");
+        let daemon = Daemon::spawn(vec![(
+            seed_robot(),
+            ContractSettings::default(),
+            duplex_connector(&shared),
+        )]);
+        let dir = TempDir::new("api");
+        let path = dir.path().join("api.sock");
+        let listener = UnixListener::bind(&path).unwrap();
+        let router = Api::new(daemon.robots().clone()).router(None);
+        tokio::spawn(async move { axum::serve(listener, router).await });
+        let served = Self {
+            api: Endpoint::unix(&path),
+            daemon,
+            _dir: dir,
+        };
+        served.wait_connected().await;
+        served
+    }
+
+    fn handle(&self) -> &RobotHandle {
+        self.daemon.robot("press-loader").unwrap()
+    }
+
+    /// Until the robot's counts are known (so a submitted move is planned at once).
+    async fn wait_connected(&self) {
+        let mut feed = tokio::time::interval(Duration::from_millis(10));
+        for _ in 0..1_000 {
+            if self.handle().state().counts.is_some() {
+                return;
+            }
+            feed.tick().await;
+        }
+        panic!("never connected: {:?}", self.handle().state());
+    }
+
+    async fn submit(&self, to: [f64; 3]) -> u64 {
+        let answer = self
+            .api
+            .post(&format!("{ROBOT}/moves"), &json!({ "to": to }).to_string())
+            .await;
+        assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
+        let body = answer.json();
+        assert_eq!(body["report"]["id"], body["id"]);
+        body["id"].as_u64().unwrap()
+    }
+
+    async fn events(&self, id: u64) -> Vec<Value> {
+        let answer = self.api.get(&format!("{ROBOT}/moves/{id}/events")).await;
+        assert_eq!(answer.status, StatusCode::OK);
+        assert_eq!(answer.content_type, "application/x-ndjson");
+        answer.lines()
+    }
+}
+
+fn assert_error(answer: &Answer, status: StatusCode, field: Option<&str>) {
+    assert_eq!(answer.status, status, "{}", answer.text());
+    let body = answer.json();
+    assert!(
+        body["error"].as_str().is_some_and(|e| !e.is_empty()),
+        "{body}"
+    );
+    assert_eq!(body["field"].as_str(), field, "{body}");
+}
+
+fn assert_done_on_target(report: &Value) {
+    assert_eq!(report["stage"], "done", "{report}");
+    let errors = report["final_error_pulses"]
+        .as_array()
+        .expect("final counts compared");
+    assert!(
+        errors.iter().all(|e| e.as_i64().unwrap().abs() <= 1),
+        "{report}"
+    );
+}
+
+#[tokio::test]
+async fn posted_move_ends_on_its_target_and_its_events_end_with_done() {
+    let s = Served::start().await;
+    let id = s.submit(P2).await;
+    let events = s.events(id).await;
+    assert!(events.len() >= 2, "{events:?}");
+    assert!(
+        events[..events.len() - 1]
+            .iter()
+            .all(|e| e["stage"] != "done")
+    );
+    assert_done_on_target(events.last().unwrap());
+    let report = s.api.get(&format!("{ROBOT}/moves/{id}")).await;
+    assert_eq!(report.status, StatusCode::OK);
+    assert_done_on_target(&report.json());
+    // The stream of a finished move is its final report alone.
+    assert_eq!(s.events(id).await.len(), 1);
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn bad_requests_get_a_json_error_naming_the_field_and_queue_nothing() {
+    let s = Served::start().await;
+    let moves = format!("{ROBOT}/moves");
+    for (body, status, field) in [
+        (r#"{"to":[1,2]}"#, StatusCode::BAD_REQUEST, Some("to")),
+        (
+            r#"{"to":[1,2,3],"colour":"red"}"#,
+            StatusCode::BAD_REQUEST,
+            Some("colour"),
+        ),
+        (r#"{"to":"home"}"#, StatusCode::BAD_REQUEST, Some("to")),
+        (
+            r#"{"to":[1,2,3],"speed_mm_s":0}"#,
+            StatusCode::BAD_REQUEST,
+            Some("speed_mm_s"),
+        ),
+        ("move to P2", StatusCode::BAD_REQUEST, None),
+        // Out of the d3 limit (0 to 1000 mm): a plan error.
+        (
+            r#"{"to":[-1144.43,659.6,5000]}"#,
+            StatusCode::UNPROCESSABLE_ENTITY,
+            None,
+        ),
+    ] {
+        assert_error(&s.api.post(&moves, body).await, status, field);
+    }
+    let state = s.api.get(ROBOT).await.json();
+    assert_eq!(state["queued"], json!([]), "{state}");
+    assert_eq!(state["current_move"], Value::Null, "{state}");
+    assert!(s.handle().reports().is_empty());
+    assert_error(
+        &s.api.get(&format!("{ROBOT}/moves/1")).await,
+        StatusCode::NOT_FOUND,
+        Some("id"),
+    );
+    let unknown = s.api.get("/v1/robots/welder").await;
+    assert_error(&unknown, StatusCode::NOT_FOUND, Some("robot"));
+    assert_eq!(
+        unknown.json()["error"],
+        "no robot \"welder\"; robots: press-loader"
+    );
+    assert_error(
+        &s.api
+            .post("/v1/robots/welder/moves", r#"{"to":[1,2,3]}"#)
+            .await,
+        StatusCode::NOT_FOUND,
+        Some("robot"),
+    );
+    assert_error(&s.api.get("/v2/nothing").await, StatusCode::NOT_FOUND, None);
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn several_clients_at_once_are_all_served() {
+    let s = Served::start().await;
+    let mut clients = tokio::task::JoinSet::new();
+    for i in 0..8 {
+        let api = s.api.clone();
+        let path = if i % 2 == 0 {
+            "/v1/robots".to_owned()
+        } else {
+            ROBOT.to_owned()
+        };
+        clients.spawn(async move { api.get(&path).await.status });
+    }
+    let api = s.api.clone();
+    clients.spawn(async move {
+        api.post(&format!("{ROBOT}/moves"), &json!({ "to": P2 }).to_string())
+            .await
+            .status
+    });
+    let mut statuses = Vec::new();
+    while let Some(status) = clients.join_next().await {
+        statuses.push(status.unwrap());
+    }
+    assert_eq!(statuses.len(), 9);
+    assert_eq!(
+        statuses.iter().filter(|s| **s == StatusCode::OK).count(),
+        8,
+        "{statuses:?}"
+    );
+    assert!(statuses.contains(&StatusCode::ACCEPTED), "{statuses:?}");
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn stop_answers_200_and_the_move_ends_stopped() {
+    let s = Served::start().await;
+    let id = s.submit(P2).await;
+    let mut feed = s.handle().subscribe(id).unwrap();
+    feed.wait_for(|r| r.progress > 0.3).await.unwrap();
+    let stop = s.api.post(&format!("{ROBOT}/stop"), "").await;
+    assert_eq!(stop.status, StatusCode::OK, "{}", stop.text());
+    assert_eq!(stop.json(), json!({ "stopped": true }));
+    let events = s.events(id).await;
+    assert_eq!(events.last().unwrap()["stage"], "stopped", "{events:?}");
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn metrics_count_the_done_move() {
+    let s = Served::start().await;
+    let id = s.submit(P2).await;
+    assert_done_on_target(s.events(id).await.last().unwrap());
+    let metrics = s.api.get("/metrics").await;
+    assert_eq!(metrics.status, StatusCode::OK);
+    assert!(
+        metrics.content_type.starts_with("text/plain"),
+        "{}",
+        metrics.content_type
+    );
+    let text = metrics.text();
+    for line in [
+        "linterpd_moves_total{robot=\"press-loader\",outcome=\"done\"} 1",
+        "linterpd_moves_total{robot=\"press-loader\",outcome=\"stopped\"} 0",
+        "linterpd_upload_seconds_count{robot=\"press-loader\"} 1",
+        "linterpd_motion_seconds_count{robot=\"press-loader\"} 1",
+        "linterpd_link_up{robot=\"press-loader\"} 1",
+    ] {
+        assert!(text.lines().any(|l| l == line), "no {line:?} in\n{text}");
+    }
+    assert!(
+        text.contains("linterpd_heartbeat_age_seconds{robot=\"press-loader\"} "),
+        "{text}"
+    );
+    assert!(
+        text.contains("linterpd_link_reconnects_total{robot=\"press-loader\"} "),
+        "{text}"
+    );
+    s.daemon.shut_down().await;
+}
+
+#[test]
+fn tcp_listener_beyond_loopback_without_a_token_file_is_refused() {
+    let text = format!("{SHIPPED}\n[daemon]\nlisten = \"0.0.0.0:8420\"\n");
+    let e = Config::from_toml(&text).unwrap_err().to_string();
+    assert!(e.contains("daemon.listen = \"0.0.0.0:8420\""), "{e}");
+    assert!(e.contains("token_file"), "{e}");
+    let with_token = format!("{text}token_file = \"/etc/linterpd/token\"\n");
+    assert!(Config::from_toml(&with_token).is_ok());
+}
+
+#[tokio::test]
+async fn tcp_listener_with_a_token_wants_it_as_bearer() {
+    let s = Served::start().await;
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let tcp = Endpoint::Tcp(listener.local_addr().unwrap());
+    let token = BearerToken::new("s3cret").unwrap();
+    let router = Api::new(s.daemon.robots().clone()).router(Some(token));
+    tokio::spawn(async move { axum::serve(listener, router).await });
+    assert_error(&tcp.get("/v1/robots").await, StatusCode::UNAUTHORIZED, None);
+    let wrong = tcp.call("GET", "/v1/robots", None, Some("guess")).await;
+    assert_error(&wrong, StatusCode::UNAUTHORIZED, None);
+    let right = tcp.call("GET", "/v1/robots", None, Some("s3cret")).await;
+    assert_eq!(right.status, StatusCode::OK, "{}", right.text());
+    assert_eq!(right.json()[0]["name"], "press-loader");
+    s.daemon.shut_down().await;
+}
+
+/// The shipped config's robot, with a TCP link to `address` and the API socket at `socket`.
+fn config_for(address: &str, socket: &std::path::Path) -> String {
+    let robot = SHIPPED
+        .split("[robots.press-loader.plc]")
+        .next()
+        .expect("the shipped config has a robot");
+    format!(
+        "{robot}[robots.press-loader.plc]\nprotocol = \"mewtocol\"\ntcp = {{ address = \"{address}\" }}\n\
+         [daemon]\nsocket = \"{}\"\n",
+        socket.display()
+    )
+}
+
+#[tokio::test]
+async fn serve_binary_runs_a_move_on_the_mock_plc_and_exits_0_on_sigterm() {
+    let bin = env!("CARGO_BIN_EXE_linterpd");
+    let mut mock_command = Command::new(bin);
+    mock_command.args([
+        "mock-plc",
+        "--listen",
+        "127.0.0.1:0",
+        "--protocol",
+        "mewtocol",
+    ]);
+    let mut mock = Spawned::spawn("linterpd mock-plc", mock_command);
+    let address = mock.first_line_after("listening on ", READY);
+    let dir = TempDir::new("serve");
+    let socket = dir.path().join("api.sock");
+    let config = dir.path().join("linterpd.toml");
+    std::fs::write(&config, config_for(&address, &socket)).unwrap();
+    let mut serve_command = Command::new(bin);
+    serve_command.arg("serve").arg("--config").arg(&config);
+    let mut serve = Spawned::spawn("linterpd serve", serve_command);
+    serve.wait_for_stderr("API listening", READY);
+    serve.wait_for_stderr("press-loader: connected", READY);
+    let api = Endpoint::unix(&socket);
+    // The mock starts at counts 0: tool at (0, 500, 0) mm. A short move from there.
+    let answer = api
+        .post(&format!("{ROBOT}/moves"), r#"{"to":[50,520,20]}"#)
+        .await;
+    assert_eq!(
+        answer.status,
+        StatusCode::ACCEPTED,
+        "{}\n{}",
+        answer.text(),
+        serve.output()
+    );
+    let id = answer.json()["id"].as_u64().unwrap();
+    let events = api.get(&format!("{ROBOT}/moves/{id}/events")).await.lines();
+    assert_done_on_target(events.last().unwrap());
+    let status = serve.terminate(READY);
+    assert!(status.success(), "{status}\n{}", serve.output());
+    assert!(!socket.exists(), "the socket is removed on exit");
+    drop(mock);
+}
