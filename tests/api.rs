@@ -4,12 +4,11 @@
 
 mod common;
 
-use std::process::Command;
 use std::time::Duration;
 
 use common::exchange::{P2, mock_at_seed_start};
 use common::http::{Answer, Endpoint};
-use common::process::{Spawned, TempDir};
+use common::process::TempDir;
 use hyper::StatusCode;
 use linterpd::config::Config;
 use linterpd::daemon::api::{Api, BearerToken};
@@ -23,7 +22,7 @@ use serde_json::{Value, json};
 use tokio::net::{TcpListener, UnixListener};
 
 const ROBOT: &str = "/v1/robots/press-loader";
-const READY: Duration = Duration::from_secs(20);
+use common::serve::READY;
 const SHIPPED: &str = include_str!("../config/linterpd.toml");
 
 /// A fresh `duplex` connection to the mock for every (re)connection.
@@ -309,41 +308,10 @@ async fn tcp_listener_with_a_token_wants_it_as_bearer() {
     s.daemon.shut_down().await;
 }
 
-/// The shipped config's robot, with a TCP link to `address` and the API socket at `socket`.
-fn config_for(address: &str, socket: &std::path::Path) -> String {
-    let robot = SHIPPED
-        .split("[robots.press-loader.plc]")
-        .next()
-        .expect("the shipped config has a robot");
-    format!(
-        "{robot}[robots.press-loader.plc]\nprotocol = \"mewtocol\"\ntcp = {{ address = \"{address}\" }}\n\
-         [daemon]\nsocket = \"{}\"\n",
-        socket.display()
-    )
-}
-
 #[tokio::test]
 async fn serve_binary_runs_a_move_on_the_mock_plc_and_exits_0_on_sigterm() {
-    let bin = env!("CARGO_BIN_EXE_linterpd");
-    let mut mock_command = Command::new(bin);
-    mock_command.args([
-        "mock-plc",
-        "--listen",
-        "127.0.0.1:0",
-        "--protocol",
-        "mewtocol",
-    ]);
-    let mut mock = Spawned::spawn("linterpd mock-plc", mock_command);
-    let address = mock.first_line_after("listening on ", READY);
-    let dir = TempDir::new("serve");
-    let socket = dir.path().join("api.sock");
-    let config = dir.path().join("linterpd.toml");
-    std::fs::write(&config, config_for(&address, &socket)).unwrap();
-    let mut serve_command = Command::new(bin);
-    serve_command.arg("serve").arg("--config").arg(&config);
-    let mut serve = Spawned::spawn("linterpd serve", serve_command);
-    serve.wait_for_stderr("API listening", READY);
-    serve.wait_for_stderr("press-loader: connected", READY);
+    let mut running = common::serve::start();
+    let socket = running.socket.clone();
     let api = Endpoint::unix(&socket);
     // The mock starts at counts 0: tool at (0, 500, 0) mm. A short move from there.
     let answer = api
@@ -354,13 +322,12 @@ async fn serve_binary_runs_a_move_on_the_mock_plc_and_exits_0_on_sigterm() {
         StatusCode::ACCEPTED,
         "{}\n{}",
         answer.text(),
-        serve.output()
+        running.serve.output()
     );
     let id = answer.json()["id"].as_u64().unwrap();
     let events = api.get(&format!("{ROBOT}/moves/{id}/events")).await.lines();
     assert_done_on_target(events.last().unwrap());
-    let status = serve.terminate(READY);
-    assert!(status.success(), "{status}\n{}", serve.output());
+    let status = running.serve.terminate(READY);
+    assert!(status.success(), "{status}\n{}", running.serve.output());
     assert!(!socket.exists(), "the socket is removed on exit");
-    drop(mock);
 }

@@ -229,11 +229,10 @@ impl Worker {
             && self
                 .current
                 .is_some_and(|c| c.accepted && c.target.is_some())
+            && let Some((id, order)) = self.queue.pop_front()
         {
-            if let Some((id, order)) = self.queue.pop_front() {
-                let from = self.current.and_then(|c| c.target);
-                return self.begin(id, order, from).await;
-            }
+            let from = self.current.and_then(|c| c.target);
+            return self.begin(id, order, from).await;
         }
         self.poll().await?;
         let pause = if self.current.is_some() {

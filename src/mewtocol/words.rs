@@ -31,7 +31,7 @@ pub(super) fn put_words(dst: &mut BytesMut, words: &[u16]) {
 
 /// The words that `text` spells, four hex digits each, low byte first.
 pub(super) fn parse_words(field: &'static str, text: &[u8]) -> Result<Vec<u16>, MessageError> {
-    if text.len() % WORD_CHARS != 0 {
+    if !text.len().is_multiple_of(WORD_CHARS) {
         return Err(MessageError::BadLength {
             field,
             len: text.len(),

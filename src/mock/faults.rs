@@ -53,11 +53,11 @@ pub enum LinkFault {
 impl LinkFault {
     /// Applies a [`LinkFault::Corrupt`] to a reply; other faults leave it alone.
     pub fn corrupt_in_place(&self, reply: &mut [u8]) {
-        if let Self::Corrupt { position, xor } = *self {
-            if !reply.is_empty() {
-                let at = (position % reply.len() as u64) as usize;
-                reply[at] ^= xor;
-            }
+        if let Self::Corrupt { position, xor } = *self
+            && !reply.is_empty()
+        {
+            let at = (position % reply.len() as u64) as usize;
+            reply[at] ^= xor;
         }
     }
 }
@@ -329,11 +329,12 @@ impl FaultInjector {
     pub fn due_at(&mut self, now_s: f64) -> Vec<CoreFault> {
         let mut due = Vec::new();
         for (item, fired) in self.script.items.iter().zip(&mut self.fired_at_time) {
-            if let (Trigger::Time(t), Action::Core(f)) = (item.trigger, item.action) {
-                if !*fired && t <= now_s {
-                    *fired = true;
-                    due.push(f);
-                }
+            if let (Trigger::Time(t), Action::Core(f)) = (item.trigger, item.action)
+                && !*fired
+                && t <= now_s
+            {
+                *fired = true;
+                due.push(f);
             }
         }
         due

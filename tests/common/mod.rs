@@ -5,6 +5,7 @@ pub mod exchange;
 pub mod http;
 pub mod moves;
 pub mod process;
+pub mod serve;
 
 use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
 use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};

@@ -83,11 +83,11 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
             ),
         })
         .collect();
-    if let Some(Err(first)) = entries.first().map(|e| &e.outcome) {
-        if entries.iter().all(|e| e.outcome.is_err()) {
-            // No way plans it: the move itself is the problem.
-            return Err(Failure::BadInput(first.clone().into()));
-        }
+    if let Some(Err(first)) = entries.first().map(|e| &e.outcome)
+        && entries.iter().all(|e| e.outcome.is_err())
+    {
+        // No way plans it: the move itself is the problem.
+        return Err(Failure::BadInput(first.clone().into()));
     }
     write(robot, &base, &entries, args.format, out)
         .context("writing the comparison")

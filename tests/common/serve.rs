@@ -1,0 +1,66 @@
+//! A real `linterpd mock-plc` and a real `linterpd serve` on it, as a line PC would run them.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::Duration;
+
+use super::process::{Spawned, TempDir};
+
+/// How long a process may take to say it is ready.
+pub const READY: Duration = Duration::from_secs(20);
+
+const SHIPPED: &str = include_str!("../../config/linterpd.toml");
+
+/// The shipped config's robot, with a TCP link to `address` and the API socket at `socket`.
+pub fn config_for(address: &str, socket: &std::path::Path) -> String {
+    let robot = SHIPPED
+        .split("[robots.press-loader.plc]")
+        .next()
+        .expect("the shipped config has a robot");
+    format!(
+        "{robot}[robots.press-loader.plc]\nprotocol = \"mewtocol\"\ntcp = {{ address = \"{address}\" }}\n\
+         [daemon]\nsocket = \"{}\"\n",
+        socket.display()
+    )
+}
+
+/// The mock PLC and the daemon on it, both running; the daemon connected.
+pub struct Running {
+    /// `linterpd mock-plc`.
+    pub mock: Spawned,
+    /// `linterpd serve`.
+    pub serve: Spawned,
+    /// The daemon's API socket.
+    pub socket: PathBuf,
+    _dir: TempDir,
+}
+
+/// Starts `linterpd mock-plc` on a free port and `linterpd serve` on it.
+pub fn start() -> Running {
+    let bin = env!("CARGO_BIN_EXE_linterpd");
+    let mut mock_command = Command::new(bin);
+    mock_command.args([
+        "mock-plc",
+        "--listen",
+        "127.0.0.1:0",
+        "--protocol",
+        "mewtocol",
+    ]);
+    let mut mock = Spawned::spawn("linterpd mock-plc", mock_command);
+    let address = mock.first_line_after("listening on ", READY);
+    let dir = TempDir::new("serve");
+    let socket = dir.path().join("api.sock");
+    let config = dir.path().join("linterpd.toml");
+    std::fs::write(&config, config_for(&address, &socket)).unwrap();
+    let mut serve_command = Command::new(bin);
+    serve_command.arg("serve").arg("--config").arg(&config);
+    let mut serve = Spawned::spawn("linterpd serve", serve_command);
+    serve.wait_for_stderr("API listening", READY);
+    serve.wait_for_stderr("press-loader: connected", READY);
+    Running {
+        mock,
+        serve,
+        socket,
+        _dir: dir,
+    }
+}
