@@ -213,7 +213,7 @@ impl MockPlc {
         self.program
             .scan(at_s, self.next_scan, &self.config.layout, &mut io);
         for (c, e) in self.engines.iter().enumerate() {
-            if e.running_on() && self.next_scan % self.scans_per_second() == 0 {
+            if e.running_on() && self.next_scan.is_multiple_of(self.scans_per_second()) {
                 tracing::error!(
                     channel = c,
                     count = e.count(),

@@ -81,10 +81,11 @@ impl SharedMock {
 
     /// Moves a stepped clock on by `dt_s` and the mock with it; a tokio clock ignores this.
     pub fn step(&self, dt_s: f64) {
-        if let MockClock::Stepped(now_s) = &self.clock {
-            if dt_s.is_finite() && dt_s > 0.0 {
-                *lock(now_s) += dt_s;
-            }
+        if let MockClock::Stepped(now_s) = &self.clock
+            && dt_s.is_finite()
+            && dt_s > 0.0
+        {
+            *lock(now_s) += dt_s;
         }
         self.with(|_| ());
     }
@@ -112,10 +113,11 @@ impl SharedMock {
 
     /// Waits until the clock reads `at_s` (a stepped clock does not wait).
     pub async fn sleep_until_s(&self, at_s: f64) {
-        if let MockClock::Tokio { started } = &self.clock {
-            if at_s.is_finite() && at_s > 0.0 {
-                tokio::time::sleep_until(*started + Duration::from_secs_f64(at_s)).await;
-            }
+        if let MockClock::Tokio { started } = &self.clock
+            && at_s.is_finite()
+            && at_s > 0.0
+        {
+            tokio::time::sleep_until(*started + Duration::from_secs_f64(at_s)).await;
         }
     }
 
