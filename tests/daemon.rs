@@ -153,6 +153,44 @@ async fn move_ends_on_its_target_over_mewtocol_and_modbus_tcp() {
 }
 
 #[tokio::test]
+async fn move_ends_on_its_target_over_pseudo_terminals_for_mewtocol_and_modbus_rtu() {
+    for modbus in [false, true] {
+        let shared = mock_at_seed_start("");
+        let server = shared.clone();
+        // Every (re)connection is a fresh pseudo-terminal pair: a real tty, through tokio-serial.
+        let connect: Connector = Box::new(move || {
+            let shared = server.clone();
+            Box::pin(async move {
+                let (ours, theirs) = tokio_serial::SerialStream::pair().map_err(|e| {
+                    linterpd::plc::PlcError::Link {
+                        operation: "open a pty pair".into(),
+                        source: e.into(),
+                    }
+                })?;
+                let stream: BoxedLink = Box::new(ours);
+                Ok(if modbus {
+                    tokio::spawn(
+                        ModbusServer::new(shared, ModbusServerOptions::default()).serve_rtu(theirs),
+                    );
+                    AnyPlc::Modbus(ModbusClient::new(
+                        stream,
+                        ModbusOptions::new(ModbusFraming::Rtu, 1),
+                    ))
+                } else {
+                    let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
+                    tokio::spawn(async move { server.serve(theirs).await });
+                    AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
+                })
+            })
+        });
+        let (d, h) = daemon(connect, ContractSettings::default());
+        wait_connected(&h).await;
+        assert_on_target(&run(&h, P2).await);
+        d.shut_down().await;
+    }
+}
+
+#[tokio::test]
 async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
     let shared = mock_at_seed_start("");
     shared.with(|m| m.record_pulses(true));
