@@ -2,17 +2,18 @@
 //!
 //! A robot whose controller is a motion PLC (a Panasonic FP-X) can output pulses per channel but
 //! cannot interpolate several joints along a line. linterpd plans the line on a PC with the
-//! constant time period method (LI, HE, WU 2015), turns every joint's motion into F174 pulse
-//! tables, and judges each table by simulating what the PLC will do with it.
+//! constant time period method (LI, HE, WU 2015) or a bounded-error method, turns every joint's
+//! motion into F174 pulse tables, judges each table by simulating what the PLC will do with it,
+//! and runs it on the PLC through a register contract with a small PLC program.
 //!
 //! # Layout
 //! Rings pointing inward: the pure core does no IO and reads no clock.
 //! ```text
 //! geometry/    PURE  poses, the line P1P2, the trapezoidal profile s(t)
 //! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
-//! robot.rs     PURE  a robot as planned for: model, joints and channels, motion defaults
-//! plan/        PURE  move request -> joint samples -> pulse tables (constant-period, seed-exact),
-//!                    limits and over-speed policy
+//! robot/       PURE  a robot as planned for: model, joints and channels, motion defaults
+//! plan/        PURE  move request -> joint samples -> pulse tables (constant-period, seed-exact,
+//!                    bounded-error), limits and over-speed policy
 //! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
@@ -20,11 +21,13 @@
 //! contract/    PURE  the register contract: DT layout, status and command blocks
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
-//!                    fault injection, pulse trace; synchronous core, time is an argument
+//!                    fault injection, pulse trace (a synchronous core, time is an argument);
+//!                    around it the MEWTOCOL and Modbus servers and the serial-line emulation
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
-//! daemon/      `linterpd serve`: the daemon around the PLC link; systemd notification
+//! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
+//!                    handles, the HTTP/JSON API, systemd notification
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
 //! ```
 
