@@ -16,7 +16,7 @@ use super::{DaemonArgs, Failure};
 /// Arguments of `linterpd move`.
 #[derive(Debug, Args)]
 pub struct MoveArgs {
-    /// Target pose: X,Y,Z[,A] in mm and degrees (without A the tool keeps its angle).
+    /// Target pose: X,Y,Z or X,Y,Z,A in mm and degrees (without A the tool keeps its angle).
     #[arg(long, allow_hyphen_values = true)]
     pub to: String,
     /// The robot (needed when the daemon runs several).

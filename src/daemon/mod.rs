@@ -1,5 +1,5 @@
 //! The daemon: one task per robot owns its PLC link and runs moves through the register contract
-//! ([`worker`]); the rest of the program talks to it through a [`RobotHandle`] per robot.
+//! (the worker); the rest of the program talks to it through a [`RobotHandle`] per robot.
 //!
 //! ```text
 //! API / CLI --submit/stop/clear/state--> RobotHandle --requests (stops overtake)--> worker task

@@ -33,10 +33,10 @@ pub struct PlanArgs {
     /// The robot to plan for (needed when the file holds several).
     #[arg(long)]
     pub robot: Option<String>,
-    /// Start pose: X,Y,Z[,A] in mm and degrees. Without A the wrist joint sits at 0.
+    /// Start pose: X,Y,Z or X,Y,Z,A in mm and degrees. Without A the wrist joint sits at 0.
     #[arg(long, allow_hyphen_values = true)]
     pub from: String,
-    /// Target pose: X,Y,Z[,A] in mm and degrees. Without A the tool keeps the start's angle.
+    /// Target pose: X,Y,Z or X,Y,Z,A in mm and degrees. Without A the tool keeps the start angle.
     #[arg(long, allow_hyphen_values = true)]
     pub to: String,
     /// Speed along the line, mm/s (default: the robot's).
