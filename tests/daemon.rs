@@ -48,6 +48,107 @@ fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
     })
 }
 
+/// Every link the daemon reaches a PLC by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Link {
+    MewtocolDuplex,
+    MewtocolTcp,
+    MewtocolPty,
+    ModbusTcp,
+    ModbusRtuPty,
+}
+
+const LINKS: [Link; 5] = [
+    Link::MewtocolDuplex,
+    Link::MewtocolTcp,
+    Link::MewtocolPty,
+    Link::ModbusTcp,
+    Link::ModbusRtuPty,
+];
+
+fn link_error(operation: &str, e: std::io::Error) -> linterpd::plc::PlcError {
+    linterpd::plc::PlcError::Link {
+        operation: operation.into(),
+        source: e,
+    }
+}
+
+/// A connector to the mock over `link`: every (re)connection is a new connection (TCP), a new
+/// pseudo-terminal pair (a real tty, through tokio-serial) or a new `duplex`.
+fn connector(link: Link, shared: &SharedMock, baud: Option<u32>) -> Connector {
+    if link == Link::MewtocolDuplex {
+        return duplex_connector(shared, baud);
+    }
+    let std_listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    std_listener.set_nonblocking(true).unwrap();
+    let address = std_listener.local_addr().unwrap();
+    match link {
+        Link::MewtocolTcp => {
+            let server = MewtocolServer::new(
+                shared.clone(),
+                MewtocolServerOptions {
+                    baud,
+                    ..MewtocolServerOptions::default()
+                },
+            );
+            tokio::spawn(server.serve_tcp(TcpListener::from_std(std_listener).unwrap()));
+        }
+        Link::ModbusTcp => {
+            let server = ModbusServer::new(
+                shared.clone(),
+                ModbusServerOptions {
+                    baud,
+                    ..ModbusServerOptions::default()
+                },
+            );
+            tokio::spawn(server.serve_tcp(TcpListener::from_std(std_listener).unwrap()));
+        }
+        _ => {}
+    }
+    let shared = shared.clone();
+    Box::new(move || {
+        let shared = shared.clone();
+        Box::pin(async move {
+            Ok(match link {
+                Link::MewtocolTcp | Link::ModbusTcp => {
+                    let stream: BoxedLink = Box::new(
+                        TcpStream::connect(address)
+                            .await
+                            .map_err(|e| link_error("connect", e))?,
+                    );
+                    if link == Link::ModbusTcp {
+                        AnyPlc::Modbus(ModbusClient::new(
+                            stream,
+                            ModbusOptions::new(ModbusFraming::Tcp, 1),
+                        ))
+                    } else {
+                        AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
+                    }
+                }
+                _ => {
+                    let (ours, theirs) = tokio_serial::SerialStream::pair()
+                        .map_err(|e| link_error("open a pty pair", e.into()))?;
+                    let stream: BoxedLink = Box::new(ours);
+                    if link == Link::ModbusRtuPty {
+                        tokio::spawn(
+                            ModbusServer::new(shared, ModbusServerOptions::default())
+                                .serve_rtu(theirs),
+                        );
+                        AnyPlc::Modbus(ModbusClient::new(
+                            stream,
+                            ModbusOptions::new(ModbusFraming::Rtu, 1),
+                        ))
+                    } else {
+                        let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
+                        tokio::spawn(async move { server.serve(theirs).await });
+                        AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
+                    }
+                }
+            })
+        })
+    })
+}
+
 fn daemon(connect: Connector, settings: ContractSettings) -> (Daemon, RobotHandle) {
     let d = Daemon::spawn(vec![(seed_robot(), settings, connect)]);
     let h = d.robot("press-loader").unwrap().clone();
@@ -98,240 +199,196 @@ fn assert_nothing_written(shared: &SharedMock) {
 }
 
 #[tokio::test]
-async fn move_ends_on_its_target_over_mewtocol_duplex() {
-    let shared = mock_at_seed_start("");
-    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
-    wait_connected(&h).await;
-    let r = run(&h, P2).await;
-    assert_on_target(&r);
-    assert!(r.predicted.unwrap().path_deviation_mm < 0.1);
-    d.shut_down().await;
-}
-
-#[tokio::test]
-async fn move_ends_on_its_target_over_mewtocol_and_modbus_tcp() {
-    for modbus in [false, true] {
+async fn moves_end_on_their_targets_over_every_link() {
+    for link in LINKS {
         let shared = mock_at_seed_start("");
-        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let address = listener.local_addr().unwrap();
-        if modbus {
-            tokio::spawn(
-                ModbusServer::new(shared.clone(), ModbusServerOptions::default())
-                    .serve_tcp(listener),
-            );
-        } else {
-            tokio::spawn(
-                MewtocolServer::new(shared.clone(), MewtocolServerOptions::default())
-                    .serve_tcp(listener),
-            );
-        }
-        let connect: Connector = Box::new(move || {
-            Box::pin(async move {
-                let stream: BoxedLink =
-                    Box::new(TcpStream::connect(address).await.map_err(|source| {
-                        linterpd::plc::PlcError::Link {
-                            operation: "connect".into(),
-                            source,
-                        }
-                    })?);
-                Ok(if modbus {
-                    AnyPlc::Modbus(ModbusClient::new(
-                        stream,
-                        ModbusOptions::new(ModbusFraming::Tcp, 1),
-                    ))
-                } else {
-                    AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
-                })
-            })
-        });
-        let (d, h) = daemon(connect, ContractSettings::default());
+        let (d, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
-        assert_on_target(&run(&h, P2).await);
+        let there = run(&h, P2).await;
+        assert_on_target(&there);
+        assert!(there.predicted.unwrap().path_deviation_mm < 0.1, "{link:?}");
         assert_on_target(&run(&h, P1).await);
         d.shut_down().await;
     }
 }
 
 #[tokio::test]
-async fn move_ends_on_its_target_over_pseudo_terminals_for_mewtocol_and_modbus_rtu() {
-    for modbus in [false, true] {
+async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
+    // The serial-line emulation makes an upload take about 0.3 s at 115200 baud: a start after a
+    // host round trip would leave a gap that long between the moves. (Over a pty there is no
+    // emulation; the gap is checked all the same.)
+    for link in LINKS {
         let shared = mock_at_seed_start("");
-        let server = shared.clone();
-        // Every (re)connection is a fresh pseudo-terminal pair: a real tty, through tokio-serial.
-        let connect: Connector = Box::new(move || {
-            let shared = server.clone();
-            Box::pin(async move {
-                let (ours, theirs) = tokio_serial::SerialStream::pair().map_err(|e| {
-                    linterpd::plc::PlcError::Link {
-                        operation: "open a pty pair".into(),
-                        source: e.into(),
-                    }
-                })?;
-                let stream: BoxedLink = Box::new(ours);
-                Ok(if modbus {
-                    tokio::spawn(
-                        ModbusServer::new(shared, ModbusServerOptions::default()).serve_rtu(theirs),
-                    );
-                    AnyPlc::Modbus(ModbusClient::new(
-                        stream,
-                        ModbusOptions::new(ModbusFraming::Rtu, 1),
-                    ))
-                } else {
-                    let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
-                    tokio::spawn(async move { server.serve(theirs).await });
-                    AnyPlc::Mewtocol(MewtocolClient::new(stream, mewtocol_options()))
-                })
-            })
-        });
-        let (d, h) = daemon(connect, ContractSettings::default());
+        shared.with(|m| m.record_pulses(true));
+        let (d, h) = daemon(
+            connector(link, &shared, Some(115_200)),
+            ContractSettings::default(),
+        );
         wait_connected(&h).await;
-        assert_on_target(&run(&h, P2).await);
+        let a = h.submit(order(P2)).unwrap();
+        let b = h.submit(order(P1)).unwrap();
+        let rb = h.wait(b, LIMIT).await.unwrap();
+        let ra = h.report(a).unwrap();
+        assert_eq!(ra.stage, Stage::Done, "{link:?} {ra:?}");
+        assert_on_target(&rb);
+        // d3 (channel 2) goes out with A and back with B: the gap between its last pulse going
+        // out and its first coming back.
+        let pulses: Vec<_> = shared
+            .with(linterpd::mock::MockPlc::take_pulses)
+            .into_iter()
+            .filter(|p| p.channel == 2)
+            .collect();
+        let turn = pulses
+            .windows(2)
+            .position(|w| w[1].count < w[0].count)
+            .expect("d3 comes back");
+        let gap = pulses[turn + 1].time_s - pulses[turn].time_s;
+        assert!(gap < 0.03, "{link:?}: gap {gap} s between the moves");
         d.shut_down().await;
     }
 }
 
 #[tokio::test]
-async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
-    let shared = mock_at_seed_start("");
-    shared.with(|m| m.record_pulses(true));
-    // At 115200 baud an upload takes about 0.3 s: a start after a host round trip would leave a
-    // gap that long between the moves.
-    let (d, h) = daemon(
-        duplex_connector(&shared, Some(115_200)),
-        ContractSettings::default(),
-    );
-    wait_connected(&h).await;
-    let a = h.submit(order(P2)).unwrap();
-    let b = h.submit(order(P1)).unwrap();
-    let rb = h.wait(b, LIMIT).await.unwrap();
-    let ra = h.report(a).unwrap();
-    assert_eq!(ra.stage, Stage::Done, "{ra:?}");
-    assert_on_target(&rb);
-    // d3 (channel 2) goes out with A and back with B: the gap between its last pulse going out
-    // and its first coming back.
-    let pulses: Vec<_> = shared
-        .with(linterpd::mock::MockPlc::take_pulses)
-        .into_iter()
-        .filter(|p| p.channel == 2)
-        .collect();
-    let turn = pulses
-        .windows(2)
-        .position(|w| w[1].count < w[0].count)
-        .expect("d3 comes back");
-    let gap = pulses[turn + 1].time_s - pulses[turn].time_s;
-    assert!(gap < 0.03, "gap {gap} s between the moves");
-    d.shut_down().await;
-}
-
-#[tokio::test]
 async fn stop_mid_move_stops_every_channel() {
-    let shared = mock_at_seed_start("");
-    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
-    wait_connected(&h).await;
-    let id = h.submit(order(P2)).unwrap();
-    let mut feed = h.subscribe(id).unwrap();
-    feed.wait_for(|r| r.stage == Stage::Running && r.progress > 0.3)
-        .await
-        .unwrap();
-    h.stop().await.unwrap();
-    let r = h.wait(id, LIMIT).await.unwrap();
-    assert_eq!(r.stage, Stage::Stopped, "{r:?}");
-    // The PLC program acts on the stop command in its next scan (2 ms).
-    tokio::time::sleep(Duration::from_millis(10)).await;
-    let before = shared.with(|m| m.status());
-    tokio::time::sleep(Duration::from_millis(100)).await;
-    let after = shared.with(|m| m.status());
-    assert_eq!(after.busy, 0);
-    assert_eq!(before.elapsed, after.elapsed, "a channel still moves");
-    assert_eq!(after.state, linterpd::contract::State::Stopped.word());
-    d.shut_down().await;
+    for link in LINKS {
+        let shared = mock_at_seed_start("");
+        let (d, h) = daemon(connector(link, &shared, None), ContractSettings::default());
+        wait_connected(&h).await;
+        let id = h.submit(order(P2)).unwrap();
+        let mut feed = h.subscribe(id).unwrap();
+        feed.wait_for(|r| r.stage == Stage::Running && r.progress > 0.3)
+            .await
+            .unwrap();
+        h.stop().await.unwrap();
+        let r = h.wait(id, LIMIT).await.unwrap();
+        assert_eq!(r.stage, Stage::Stopped, "{link:?} {r:?}");
+        // The PLC program acts on the stop command in its next scan (2 ms).
+        tokio::time::sleep(Duration::from_millis(10)).await;
+        let before = shared.with(|m| m.status());
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        let after = shared.with(|m| m.status());
+        assert_eq!(after.busy, 0, "{link:?}");
+        assert_eq!(
+            before.elapsed, after.elapsed,
+            "{link:?}: a channel still moves"
+        );
+        assert_eq!(after.state, linterpd::contract::State::Stopped.word());
+        d.shut_down().await;
+    }
 }
 
-async fn refused(shared: &SharedMock, settings: ContractSettings, want: &str) {
-    let (d, h) = daemon(duplex_connector(shared, None), settings);
+async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, want: &str) {
+    let (d, h) = daemon(connector(link, shared, None), settings);
     tokio::time::sleep(Duration::from_millis(100)).await;
     let r = run(&h, P2).await;
-    assert_eq!(r.stage, Stage::Failed, "{r:?}");
+    assert_eq!(r.stage, Stage::Failed, "{link:?} {r:?}");
     let e = r.error.unwrap();
-    assert!(e.contains(want), "{e}");
+    assert!(e.contains(want), "{link:?}: {e}");
     assert_nothing_written(shared);
     d.shut_down().await;
 }
 
 #[tokio::test]
 async fn prog_mode_frozen_heartbeat_and_wrong_magic_are_refused_and_nothing_is_written() {
-    let shared = mock_at_seed_start("");
-    shared.with(|m| m.set_mode(PlcMode::Prog));
-    refused(&shared, ContractSettings::default(), "and in PROG mode").await;
-    let shared = mock_at_seed_start("");
-    shared.with(|m| m.freeze_heartbeat(true));
-    refused(&shared, ContractSettings::default(), "the PLC is stalled").await;
-    let shared = mock_at_seed_start("");
-    let elsewhere = Layout {
-        status_base: 30_000,
-        ..Layout::default()
-    };
-    refused(
-        &shared,
-        ContractSettings {
-            layout: elsewhere,
-            ..ContractSettings::default()
-        },
-        "magic is 0x0000",
-    )
-    .await;
+    for link in LINKS {
+        let shared = mock_at_seed_start("");
+        shared.with(|m| m.set_mode(PlcMode::Prog));
+        // Over Modbus the mode comes from the RUN relay R9020, which the mock keeps.
+        refused(
+            link,
+            &shared,
+            ContractSettings::default(),
+            "and in PROG mode",
+        )
+        .await;
+        let shared = mock_at_seed_start("");
+        shared.with(|m| m.freeze_heartbeat(true));
+        refused(
+            link,
+            &shared,
+            ContractSettings::default(),
+            "the PLC is stalled",
+        )
+        .await;
+        let shared = mock_at_seed_start("");
+        let elsewhere = Layout {
+            status_base: 30_000,
+            ..Layout::default()
+        };
+        refused(
+            link,
+            &shared,
+            ContractSettings {
+                layout: elsewhere,
+                ..ContractSettings::default()
+            },
+            "magic is 0x0000",
+        )
+        .await;
+    }
 }
 
 #[tokio::test]
 async fn link_cut_during_upload_starts_nothing_and_the_next_move_works_after_reconnection() {
-    let shared = mock_at_seed_start("");
-    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
-    wait_connected(&h).await;
-    let before = shared.with(|m| m.status());
-    // Past check_alive's status reads (and an idle poll that may come first): inside the bank writes.
-    shared.with(|m| {
-        let k = m.commands() + 8;
-        m.set_faults(format!("close@{k}").parse().unwrap());
-    });
-    let r = run(&h, P2).await;
-    assert_eq!(r.stage, Stage::Failed, "{r:?}");
-    let after = shared.with(|m| (m.status(), m.read_words(1_032, 1).unwrap()[0]));
-    assert_eq!(after.1, 0, "a start command was written");
-    assert_eq!(after.0.elapsed, before.elapsed);
-    assert_eq!(after.0.busy, 0);
-    assert_on_target(&run(&h, P2).await);
-    assert!(h.state().link.reconnects >= 2);
-    d.shut_down().await;
+    for link in LINKS {
+        let shared = mock_at_seed_start("");
+        let (d, h) = daemon(connector(link, &shared, None), ContractSettings::default());
+        wait_connected(&h).await;
+        let before = shared.with(|m| m.status());
+        // Past check_alive's status reads (and an idle poll that may come first): inside the
+        // bank writes and read-backs. A cut serial line is replies that stop coming (three in a
+        // row, more than the client retries); a cut connection is a close.
+        shared.with(|m| {
+            let k = m.commands() + 8;
+            let script = if link == Link::ModbusRtuPty {
+                format!("drop@{k},drop@{},drop@{}", k + 1, k + 2)
+            } else {
+                format!("close@{k}")
+            };
+            m.set_faults(script.parse().unwrap());
+        });
+        let r = run(&h, P2).await;
+        assert_eq!(r.stage, Stage::Failed, "{link:?} {r:?}");
+        let after = shared.with(|m| (m.status(), m.read_words(1_032, 1).unwrap()[0]));
+        assert_eq!(after.1, 0, "{link:?}: a start command was written");
+        assert_eq!(after.0.elapsed, before.elapsed);
+        assert_eq!(after.0.busy, 0);
+        assert_on_target(&run(&h, P2).await);
+        assert!(h.state().link.reconnects >= 2, "{link:?}: {:?}", h.state());
+        d.shut_down().await;
+    }
 }
 
 #[tokio::test]
 async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
-    let shared = mock_at_seed_start("");
-    let (first, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
-    wait_connected(&h).await;
-    let id = h.submit(order(P2)).unwrap();
-    h.subscribe(id)
-        .unwrap()
-        .wait_for(|r| r.stage == Stage::Running)
-        .await
-        .unwrap();
-    while shared.with(|m| m.status().state) != linterpd::contract::State::Running.word() {
-        tokio::time::sleep(Duration::from_millis(2)).await;
+    for link in LINKS {
+        let shared = mock_at_seed_start("");
+        let (first, h) = daemon(connector(link, &shared, None), ContractSettings::default());
+        wait_connected(&h).await;
+        let id = h.submit(order(P2)).unwrap();
+        h.subscribe(id)
+            .unwrap()
+            .wait_for(|r| r.stage == Stage::Running)
+            .await
+            .unwrap();
+        while shared.with(|m| m.status().state) != linterpd::contract::State::Running.word() {
+            tokio::time::sleep(Duration::from_millis(2)).await;
+        }
+        first.shut_down().await;
+        let (second, h2) = daemon(connector(link, &shared, None), ContractSettings::default());
+        wait_connected(&h2).await;
+        let state = h2.state();
+        let found = state
+            .current_move
+            .unwrap_or_else(|| panic!("{link:?}: the running move is not found: {state:?}"));
+        let r = h2.report(found).unwrap();
+        assert!(r.recovered && r.stage == Stage::Running, "{link:?} {r:?}");
+        let seq = shared.with(|m| m.status().seq);
+        assert_eq!(r.seq, Some(seq));
+        let r = h2.wait(found, LIMIT).await.unwrap();
+        assert_eq!(r.stage, Stage::Done, "{link:?}");
+        second.shut_down().await;
     }
-    first.shut_down().await;
-    let (second, h2) = daemon(duplex_connector(&shared, None), ContractSettings::default());
-    wait_connected(&h2).await;
-    let state = h2.state();
-    let found = state
-        .current_move
-        .unwrap_or_else(|| panic!("the running move is not found: {state:?}"));
-    let r = h2.report(found).unwrap();
-    assert!(r.recovered && r.stage == Stage::Running, "{r:?}");
-    let seq = shared.with(|m| m.status().seq);
-    assert_eq!(r.seq, Some(seq));
-    let r = h2.wait(found, LIMIT).await.unwrap();
-    assert_eq!(r.stage, Stage::Done);
-    second.shut_down().await;
 }
 
 #[tokio::test]
