@@ -409,3 +409,29 @@ async fn bad_orders_are_refused_and_nothing_is_queued() {
     assert!(h.reports().is_empty());
     d.shut_down().await;
 }
+
+#[tokio::test]
+async fn a_stop_while_the_link_is_down_answers_at_once_and_cancels_the_queue() {
+    let shared = mock_at_seed_start("");
+    // A PLC that never answers the connection: every connect fails.
+    let connect: Connector = Box::new(|| {
+        Box::pin(async {
+            Err(linterpd::plc::PlcError::Link {
+                operation: "connect".into(),
+                source: std::io::Error::new(std::io::ErrorKind::ConnectionRefused, "refused"),
+            })
+        })
+    });
+    let (d, h) = daemon(connect, ContractSettings::default());
+    let id = h.submit(order(P2)).unwrap();
+    let answer = tokio::time::timeout(Duration::from_secs(7), h.stop())
+        .await
+        .expect("the stop answers");
+    let e = answer.unwrap_err().to_string();
+    assert!(e.contains("link is down"), "{e}");
+    let r = h.wait(id, LIMIT).await.unwrap();
+    assert_eq!(r.stage, Stage::Stopped, "{r:?}");
+    assert!(h.state().queued.is_empty());
+    assert_nothing_written(&shared);
+    d.shut_down().await;
+}

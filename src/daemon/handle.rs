@@ -40,6 +40,11 @@ impl Shared {
         f(&mut self.moves.lock().expect("moves lock"))
     }
 
+    /// Forgets where queued orders were planned to end (after a move that will not get there).
+    pub(super) fn forget_planned_end(&self) {
+        *self.planned_end.lock().expect("lock") = None;
+    }
+
     pub(super) fn next_id(&self) -> MoveId {
         self.ids.fetch_add(1, Ordering::SeqCst) + 1
     }

@@ -82,6 +82,21 @@ pub(super) struct Worker {
     issued: VecDeque<u16>,
 }
 
+/// An error and every cause under it, in one line (`link failed during stop: the PLC link is
+/// down`): what reports and replies say.
+pub(super) fn describe(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(cause) = source {
+        let more = cause.to_string();
+        if !text.contains(&more) {
+            text = format!("{text}: {more}");
+        }
+        source = cause.source();
+    }
+    text
+}
+
 /// Whether an error means the link must be reopened.
 fn link_broken(e: &ContractError) -> bool {
     matches!(e, ContractError::Plc(p) if p.is_link_failure())
@@ -139,7 +154,7 @@ impl Worker {
         self.link = None;
         self.shared.state(|s| {
             s.link.connected = false;
-            s.link.error = Some(e.to_string());
+            s.link.error = Some(describe(e));
         });
     }
 
@@ -164,17 +179,22 @@ impl Worker {
             Err(e) => {
                 self.shared.state(|s| {
                     s.link.connected = false;
-                    s.link.error = Some(e.to_string());
+                    s.link.error = Some(describe(&e));
                 });
                 let wait = self.backoff;
                 self.backoff = (self.backoff * 2).min(BACKOFF_MAX);
                 self.wait(wait).await;
+                // A stop cannot wait for the link: it is answered now (the link is down) and
+                // cancels the queued moves.
+                if !self.pending_stops.is_empty() {
+                    let _ = self.take_stops().await;
+                }
             }
         }
     }
 
     fn note_error(&self, e: &ContractError) {
-        self.shared.state(|s| s.link.error = Some(e.to_string()));
+        self.shared.state(|s| s.link.error = Some(describe(e)));
     }
 
     /// After (re)connecting: the sequence number and bank to use next, and a move found running.
@@ -262,7 +282,7 @@ impl Worker {
                     Some(Request::Move(id, order)) => self.queue.push_back((id, order)),
                     Some(Request::ClearFault(reply)) => {
                         let result = match self.link.as_mut() {
-                            Some(link) => link.clear_fault().await.map_err(|e| e.to_string()),
+                            Some(link) => link.clear_fault().await.map_err(|e| describe(&e)),
                             None => Err("the PLC link is down".to_owned()),
                         };
                         let _ = reply.send(result);
@@ -293,22 +313,40 @@ impl Worker {
             })),
         };
         self.shared.stop_pending.store(false, Ordering::SeqCst);
-        let text = result.as_ref().err().map(ToString::to_string);
+        let text = result.as_ref().err().map(|e| describe(e));
         for reply in replies {
             let _ = reply.send(text.clone().map_or(Ok(()), Err));
         }
-        let ids: Vec<MoveId> = self
-            .current
-            .take()
-            .into_iter()
-            .chain(self.waiting.take())
-            .map(|a| a.id)
-            .chain(self.queue.drain(..).map(|q| q.0))
-            .collect();
-        for id in ids {
-            self.finish(id, Stage::Stopped, Some("stopped by request".into()), None);
+        // Orders already sent (before this stop) join the queue, to be cancelled with it.
+        while let Ok(request) = self.requests.try_recv() {
+            match request {
+                Request::Move(id, order) => self.queue.push_back((id, order)),
+                Request::ClearFault(reply) => {
+                    let _ = reply.send(Err("a stop came first; ask again".to_owned()));
+                }
+            }
         }
-        tracing::info!(robot = %self.robot.name, "stop written");
+        // Queued moves never reached the PLC: cancelled either way. Moves the PLC was given
+        // are stopped only if the stop reached it; otherwise they are followed on reconnection.
+        let mut ids: Vec<MoveId> = self.queue.drain(..).map(|q| q.0).collect();
+        if result.is_ok() {
+            ids.extend(
+                self.current
+                    .take()
+                    .into_iter()
+                    .chain(self.waiting.take())
+                    .map(|a| a.id),
+            );
+        }
+        let why = if result.is_ok() {
+            "stopped by request"
+        } else {
+            "cancelled by a stop request"
+        };
+        for id in ids {
+            self.finish(id, Stage::Stopped, Some(why.into()), None);
+        }
+        tracing::info!(robot = %self.robot.name, ok = result.is_ok(), "stop taken");
         result
     }
 
@@ -334,6 +372,11 @@ impl Worker {
                 s.current_move = None;
             }
         });
+        if stage != Stage::Done {
+            // Later orders are checked from where the robot really is, not from a target this
+            // move will not reach.
+            self.shared.forget_planned_end();
+        }
     }
 }
 

@@ -76,7 +76,7 @@ impl Worker {
         let plan = match plan_order(&self.robot, &order, counts) {
             Ok(p) => p,
             Err(e) => {
-                self.finish(id, Stage::Failed, Some(e.to_string()), None);
+                self.finish(id, Stage::Failed, Some(super::describe(&e)), None);
                 return Ok(());
             }
         };
@@ -176,7 +176,7 @@ impl Worker {
         } else {
             Stage::Failed
         };
-        self.finish(id, stage, Some(e.to_string()), None);
+        self.finish(id, stage, Some(super::describe(&e)), None);
         tracing::warn!(robot = %self.robot.name, id, error = %e, "move did not start");
         if link_broken(&e) { Err(e) } else { Ok(()) }
     }
