@@ -9,7 +9,7 @@ use common::moves::{Motion, cylindrical_move, gantry_move, scara_move};
 use linterpd::geometry::Pose;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_move};
 use linterpd::robot::{Method, Robot};
-use linterpd::table::{FrequencyModel, TableProblem, problems};
+use linterpd::table::{FrequencyModel, TableProblem};
 use proptest::prelude::*;
 
 fn motion() -> impl Strategy<Value = (Motion, f64)> {
@@ -84,26 +84,7 @@ fn check(robot: &Robot, plan: &Plan, tolerance_mm: f64) -> Result<(), TestCaseEr
         plan.figures.path_deviation_mm
     );
     prop_assert!(plan.figures.tracking_error_mm <= 2.0 * tolerance_mm);
-    let last = plan.samples.values.last().expect("samples");
-    for (j, table) in plan.tables.iter().enumerate() {
-        prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
-        let joint = &robot.joints[j];
-        let off = (joint.value_of(table.end()) - last[j]) / joint.step;
-        prop_assert!(
-            off.abs() <= 0.5 + 1e-9,
-            "joint {} ends {off} pulses off",
-            joint.name
-        );
-        let executed = plan
-            .execution
-            .events
-            .iter()
-            .rev()
-            .find(|e| e.table == j)
-            .map_or(table.start, |e| e.count);
-        prop_assert_eq!(executed, table.end());
-    }
-    Ok(())
+    common::moves::check_tables_and_ends(robot, plan)
 }
 
 proptest! {

@@ -1,23 +1,11 @@
 //! `linterpd plan --compare` and `--svg` as a user runs them on the seed's move.
 
+mod common;
+
+use common::cli::SEED;
 use std::process::{Command, Output};
 
 use serde_json::Value;
-
-const SEED: [&str; 12] = [
-    "--from",
-    "-926.57,535.03,50",
-    "--to",
-    "-1144.43,659.60,186.60",
-    "--speed",
-    "240",
-    "--accel-time",
-    "200ms",
-    "--period",
-    "50ms",
-    "--config",
-    concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml"),
-];
 
 fn linterpd(extra: &[&str]) -> Output {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))

@@ -1,23 +1,11 @@
 //! `linterpd plan` as a user runs it: the seed's move, its formats, and bad input.
 
+mod common;
+
+use common::cli::SEED;
 use std::process::{Command, Output};
 
 use serde_json::Value;
-
-const SEED: [&str; 12] = [
-    "--from",
-    "-926.57,535.03,50",
-    "--to",
-    "-1144.43,659.60,186.60",
-    "--speed",
-    "240",
-    "--accel-time",
-    "200ms",
-    "--period",
-    "50ms",
-    "--config",
-    concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml"),
-];
 
 fn linterpd(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_linterpd"))

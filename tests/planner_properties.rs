@@ -8,7 +8,7 @@ use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_move};
 use linterpd::robot::Robot;
-use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem, problems};
+use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem};
 use proptest::prelude::*;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
@@ -62,26 +62,8 @@ fn check_fk_ik(robot: &Robot, pose: Pose) -> Result<(), TestCaseError> {
 
 fn check_plan(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
     prop_assert!(plan.valid(), "{:?}", plan.problems);
-    let last = plan.samples.values.last().expect("at least two points");
-    for (j, table) in plan.tables.iter().enumerate() {
-        // The last row's target is the count nearest P2's joint value...
-        let joint = &robot.joints[j];
-        let off = (joint.value_of(table.end()) - last[j]) / joint.step;
-        prop_assert!(
-            off.abs() <= 0.5 + 1e-9,
-            "joint {} ends {off} pulses off",
-            joint.name
-        );
-        // ... and the execution really gets there.
-        let executed = plan
-            .execution
-            .events
-            .iter()
-            .rev()
-            .find(|e| e.table == j)
-            .map_or(table.start, |e| e.count);
-        prop_assert_eq!(executed, table.end());
-        prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
+    common::moves::check_tables_and_ends(robot, plan)?;
+    for j in 0..plan.tables.len() {
         check_grid(plan, j)?;
     }
     Ok(())

@@ -1,6 +1,7 @@
 //! Robots for integration tests: the seed's cylindrical robot, a gantry and a SCARA, built in code.
 #![allow(dead_code, unreachable_pub, missing_docs)]
 
+pub mod cli;
 pub mod exchange;
 pub mod http;
 pub mod moves;

@@ -1,6 +1,9 @@
 //! Random reachable moves for every kinematics, for property tests.
 
 use linterpd::geometry::{Line, Pose};
+use linterpd::plan::Plan;
+use linterpd::robot::Robot;
+use linterpd::table::problems;
 use proptest::prelude::*;
 
 /// A point at `radius_mm` and `angle_deg` around the z axis, for the robots with a vertical axis.
@@ -80,4 +83,29 @@ pub fn scara_move() -> impl Strategy<Value = (Pose, Pose)> {
         -45.0..45.0f64,
     )
         .prop_map(|(r1, t1, r2, t2, z, a)| (polar(r1, t1, z, a), polar(r2, t2, -z, -a)))
+}
+
+/// Every table keeps the F174 rules, every joint's last target is the count nearest its value at
+/// P2, and the execution really gets there.
+pub fn check_tables_and_ends(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
+    let last = plan.samples.values.last().expect("at least two points");
+    for (j, table) in plan.tables.iter().enumerate() {
+        prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
+        let joint = &robot.joints[j];
+        let off = (joint.value_of(table.end()) - last[j]) / joint.step;
+        prop_assert!(
+            off.abs() <= 0.5 + 1e-9,
+            "joint {} ends {off} pulses off",
+            joint.name
+        );
+        let executed = plan
+            .execution
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.table == j)
+            .map_or(table.start, |e| e.count);
+        prop_assert_eq!(executed, table.end());
+    }
+    Ok(())
 }
