@@ -126,6 +126,29 @@ impl Client {
         Ok(Answer { status, body })
     }
 
+    /// Sends a request and returns the body of a success; a failed call or an error answer
+    /// becomes the [`super::Failure`] it calls for (4xx: bad input; daemon not there:
+    /// unreachable; anything else: runtime).
+    pub async fn expect(
+        &self,
+        method: Method,
+        path: &str,
+        body: Option<&Value>,
+    ) -> Result<Value, super::Failure> {
+        let answer = self
+            .call(method, path, body)
+            .await
+            .map_err(super::Failure::from_client)?;
+        if answer.status.is_success() {
+            Ok(answer.body)
+        } else {
+            Err(super::Failure::from_status(
+                answer.status,
+                anyhow!("{}", answer.error()),
+            ))
+        }
+    }
+
     /// Reads an NDJSON feed, calling `each` with every JSON line until the feed ends or `each`
     /// returns `false`.
     pub async fn feed(

@@ -74,28 +74,21 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
             .robot(args.robot.as_deref())
             .await
             .map_err(Failure::from_client)?;
-        let answer = client
-            .call(
+        let accepted = client
+            .expect(
                 Method::POST,
                 &format!("/v1/robots/{robot}/moves"),
                 Some(&order),
             )
-            .await
-            .map_err(Failure::from_client)?;
-        if !answer.status.is_success() {
-            return Err(Failure::from_status(
-                answer.status,
-                anyhow!("{}", answer.error()),
-            ));
-        }
-        let id = answer.body["id"]
+            .await?;
+        let id = accepted["id"]
             .as_u64()
             .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
         if args.no_wait {
             return super::print(
                 out,
                 args.daemon.json,
-                &answer.body,
+                &accepted,
                 &format!("move {id} accepted"),
             );
         }

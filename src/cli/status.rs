@@ -1,6 +1,5 @@
 //! `linterpd status`: each robot's link, PLC state, counts and moves, from the daemon.
 
-use anyhow::anyhow;
 use clap::Args;
 use hyper::Method;
 use serde_json::Value;
@@ -54,21 +53,12 @@ pub fn run(args: &StatusArgs, out: &mut dyn std::io::Write) -> Result<(), Failur
             .robot
             .as_ref()
             .map_or("/v1/robots".to_owned(), |r| format!("/v1/robots/{r}"));
-        let answer = client
-            .call(Method::GET, &path, None)
-            .await
-            .map_err(Failure::from_client)?;
-        if !answer.status.is_success() {
-            return Err(Failure::from_status(
-                answer.status,
-                anyhow!("{}", answer.error()),
-            ));
-        }
-        let robots = match &answer.body {
+        let answer = client.expect(Method::GET, &path, None).await?;
+        let robots = match &answer {
             Value::Array(list) => list.clone(),
             one => vec![one.clone()],
         };
         let text: Vec<String> = robots.iter().map(line).collect();
-        super::print(out, args.daemon.json, &answer.body, &text.join("\n"))
+        super::print(out, args.daemon.json, &answer, &text.join("\n"))
     })
 }

@@ -1,6 +1,5 @@
 //! `linterpd stop`: stop every channel of a robot now, cancelling its queued moves.
 
-use anyhow::anyhow;
 use clap::Args;
 use hyper::Method;
 
@@ -27,20 +26,8 @@ pub fn run(args: &StopArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
             .await
             .map_err(Failure::from_client)?;
         let answer = client
-            .call(Method::POST, &format!("/v1/robots/{robot}/stop"), None)
-            .await
-            .map_err(Failure::from_client)?;
-        if !answer.status.is_success() {
-            return Err(Failure::from_status(
-                answer.status,
-                anyhow!("{}", answer.error()),
-            ));
-        }
-        super::print(
-            out,
-            args.daemon.json,
-            &answer.body,
-            &format!("{robot}: stopped"),
-        )
+            .expect(Method::POST, &format!("/v1/robots/{robot}/stop"), None)
+            .await?;
+        super::print(out, args.daemon.json, &answer, &format!("{robot}: stopped"))
     })
 }
