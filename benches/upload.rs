@@ -119,7 +119,13 @@ async fn upload_with<P: Plc>(plc: P, tables: &[ValidTable], verify: bool) -> Dur
     };
     let mut contract = Contract::new(plc, settings);
     let t = Instant::now();
-    let _bank = contract.upload(0, 1, tables).await.expect("upload");
+    let from = std::array::from_fn(|c| {
+        tables
+            .iter()
+            .find(|t| usize::from(t.table().channel) == c)
+            .map_or(0, |t| t.table().start as i32)
+    });
+    let _bank = contract.upload(0, 1, from, tables).await.expect("upload");
     t.elapsed()
 }
 

@@ -6,19 +6,27 @@
 //! motion into F174 pulse tables, judges each table by simulating what the PLC will do with it,
 //! and runs it on the PLC through a register contract with a small PLC program.
 //!
+//! The documents the code cites by name are in the crate's `docs/`: `CONTRACT.md` (the register
+//! contract with the PLC program), `PLC.md` (the FP-X, MEWTOCOL-COM, Modbus and F174 facts, by
+//! section number) and `ACCURACY.md` (how a table is played and judged).
+//!
 //! # Layout
 //! Rings pointing inward: the pure core does no IO and reads no clock.
 //! ```text
-//! geometry/    PURE  poses, the line P1P2, the trapezoidal profile s(t)
+//! geometry/    PURE  poses, the line P1P2, the polyline of a curved tool path, the trapezoidal
+//!                    profile s(t)
 //! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
 //! robot/       PURE  a robot as planned for: model, joints and channels, motion defaults
-//! plan/        PURE  move request -> joint samples -> pulse tables (constant-period, seed-exact,
-//!                    bounded-error), limits and over-speed policy
+//! plan/        PURE  move request (a line, or a line in joint space) -> joint samples -> pulse
+//!                    tables (constant-period, seed-exact, bounded-error), limits and over-speed
+//!                    policy
 //! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
 //! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
-//! contract/    PURE  the register contract: DT layout, status and command blocks
+//! gateway/     PURE  the register gateway's addresses (DT, X, Y, R) and access lists
+//! contract/    PURE  the register contract: DT layout, status and command blocks, and the host's
+//!                    side as one state machine over the status block (machine/)
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
 //!                    fault injection, pulse trace (a synchronous core, time is an argument);
@@ -27,15 +35,19 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
-//!                    handles, the HTTP/JSON API, systemd notification
+//!                    handles, taught positions, the HTTP/JSON API, systemd notification
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
+//! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
+//!                    a pure part (rate fits, frequency models), reported with config lines
 //! ```
 
 pub mod cli;
+pub mod commission;
 pub mod config;
 pub mod contract;
 pub mod daemon;
 pub mod demo;
+pub mod gateway;
 pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;

@@ -1,6 +1,7 @@
 //! The `linterpd` binary: parse the command line, set up logging, run, map failures to exit codes
-//! (0 ok, 1 runtime failure, 2 bad input, 3 a move ended stopped or failed, 4 daemon not
-//! reachable; clap's own usage errors also exit 2).
+//! (see the module docs of `linterpd::cli`: 0 ok, 1 runtime failure, 2 bad input, 3 not done, 4
+//! daemon or PLC not reachable; clap's own usage errors also exit 2). Output to a closed pipe
+//! ends quietly with 0.
 
 use std::process::ExitCode;
 
@@ -13,8 +14,11 @@ fn main() -> ExitCode {
     let stdout = std::io::stdout();
     match run(cli, &mut stdout.lock()) {
         Ok(()) => ExitCode::from(EXIT_OK),
+        Err(failure) if failure.is_broken_pipe() => ExitCode::from(EXIT_OK),
         Err(failure) => {
-            eprintln!("error: {failure}");
+            if let Some(e) = failure.error() {
+                eprintln!("error: {e:#}");
+            }
             ExitCode::from(failure.exit_code())
         }
     }

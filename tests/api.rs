@@ -6,42 +6,21 @@ mod common;
 
 use std::time::Duration;
 
+use common::daemon::duplex_connector;
 use common::exchange::{P2, mock_at_seed_start};
 use common::http::{Answer, Endpoint};
 use common::process::TempDir;
 use hyper::StatusCode;
 use linterpd::config::Config;
 use linterpd::daemon::api::{Api, BearerToken};
-use linterpd::daemon::{Connector, Daemon, RobotHandle};
-use linterpd::mewtocol::Station;
-use linterpd::mock::{MewtocolServer, MewtocolServerOptions, SharedMock};
+use linterpd::daemon::{Daemon, RobotHandle};
 use linterpd::plc::contract::ContractSettings;
-use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
-use linterpd::robot::seed_robot;
 use serde_json::{Value, json};
 use tokio::net::{TcpListener, UnixListener};
 
 const ROBOT: &str = "/v1/robots/press-loader";
 use common::serve::READY;
 const SHIPPED: &str = include_str!("../config/linterpd.toml");
-
-/// A fresh `duplex` connection to the mock for every (re)connection.
-fn duplex_connector(shared: &SharedMock) -> Connector {
-    let shared = shared.clone();
-    Box::new(move || {
-        let shared = shared.clone();
-        Box::pin(async move {
-            let (ours, theirs) = tokio::io::duplex(4_096);
-            let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
-            tokio::spawn(async move { server.serve(theirs).await });
-            let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
-            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
-                Box::new(ours) as BoxedLink,
-                options,
-            )))
-        })
-    })
-}
 
 /// The daemon on a mock at the seed's start, its API on a Unix socket in `dir`.
 struct Served {
@@ -53,11 +32,8 @@ struct Served {
 impl Served {
     async fn start() -> Self {
         let shared = mock_at_seed_start("");
-        let daemon = Daemon::spawn(vec![(
-            seed_robot(),
-            ContractSettings::default(),
-            duplex_connector(&shared),
-        )]);
+        let (daemon, _) =
+            common::daemon::spawn(duplex_connector(&shared, None), ContractSettings::default());
         let dir = TempDir::new("api");
         let path = dir.path().join("api.sock");
         let listener = UnixListener::bind(&path).unwrap();

@@ -1,6 +1,11 @@
-//! The daemon's CLI when there is no daemon, and `check-config`, which needs none.
+//! The daemon's CLI when there is no daemon, and what needs none: `check-config`, `--version`,
+//! output into a closed pipe.
 
-use std::process::Command;
+mod common;
+
+use std::process::{Command, Stdio};
+
+use common::cli::SEED;
 
 fn linterpd(args: &[&str]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
@@ -20,7 +25,13 @@ fn every_client_command_says_clearly_that_the_daemon_is_not_running() {
     let dir = std::env::temp_dir().join(format!("linterpd-no-daemon-{}", std::process::id()));
     let socket = dir.join("api.sock");
     let socket = socket.to_str().unwrap();
-    for args in [vec!["status"], vec!["stop"], vec!["move", "--to", "1,2,3"]] {
+    for args in [
+        vec!["status"],
+        vec!["stop"],
+        vec!["home"],
+        vec!["clear-fault"],
+        vec!["move", "--to", "1,2,3"],
+    ] {
         let mut all = args.clone();
         all.extend(["--socket", socket]);
         let (code, out, err) = linterpd(&all);
@@ -41,6 +52,29 @@ fn bad_move_arguments_are_refused_before_any_connection() {
         err.contains("--to") && err.contains("a pose is X,Y,Z"),
         "{err}"
     );
+    let no_daemon = ["--socket", "/nonexistent/api.sock"];
+    for (args, named) in [
+        (
+            ["--tolerance", "0mm"],
+            "--tolerance: '0mm' must be above 0 mm",
+        ),
+        (["--timeout", "5"], "--timeout: duration \"5\": no unit"),
+        (["--accel-time", "x"], "--accel-time: duration \"x\""),
+    ] {
+        let line = [&["move", "--to", "1,2,3"][..], &args, &no_daemon].concat();
+        let (code, out, err) = linterpd(&line);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(out.is_empty() && err.contains(named), "{err}");
+    }
+    let (code, _, err) = linterpd(
+        &[
+            &["move", "--to", "1,2,3", "--method", "fast"][..],
+            &no_daemon,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(2));
+    assert!(err.contains("constant-period, bounded-error"), "{err}");
 }
 
 #[test]
@@ -52,6 +86,11 @@ fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
         out.contains("press-loader (cylindrical)") && out.contains("MEWTOCOL-COM on serial"),
         "{out}"
     );
+    let (code, out, err) = linterpd(&["check-config", "--config", shipped, "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(doc["robots"][0]["name"], "press-loader");
+    assert_eq!(doc["robots"][0]["joints"][2]["name"], "d3");
     let bad = std::env::temp_dir().join(format!("linterpd-bad-{}.toml", std::process::id()));
     let text = std::fs::read_to_string(shipped)
         .unwrap()
@@ -67,4 +106,60 @@ fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
             && err.contains("20000 Hz"),
         "{err}"
     );
+}
+
+#[test]
+fn version_names_the_commit_it_was_built_from() {
+    let (code, out, err) = linterpd(&["--version"]);
+    assert_eq!(code, Some(0), "{err}");
+    let commit = out
+        .trim()
+        .strip_prefix(concat!("linterpd ", env!("CARGO_PKG_VERSION"), " (commit "))
+        .and_then(|rest| rest.strip_suffix(')'))
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        commit == "unknown" || (commit.len() >= 7 && commit.chars().all(|c| c.is_ascii_hexdigit())),
+        "{out}"
+    );
+}
+
+/// Runs linterpd with its stdout a pipe whose reader has already gone, as in
+/// `linterpd plan ... | head -1` once head has its line.
+fn into_closed_pipe(args: &[&str]) -> (Option<i32>, String) {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
+        .args(args)
+        .stdout(writer)
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn output_into_a_closed_pipe_ends_quietly_with_0() {
+    for format in ["text", "json", "csv"] {
+        let args = [&["plan"][..], &SEED, &["--format", format]].concat();
+        assert_eq!(
+            into_closed_pipe(&args),
+            (Some(0), String::new()),
+            "{format}"
+        );
+    }
+    let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    for args in [
+        vec!["check-config", "--config", shipped],
+        vec!["completions", "bash"],
+        vec!["man"],
+    ] {
+        assert_eq!(
+            into_closed_pipe(&args),
+            (Some(0), String::new()),
+            "{args:?}"
+        );
+    }
 }

@@ -1,11 +1,15 @@
 //! The CLI against a running daemon: `linterpd serve` on `linterpd mock-plc`, both real
-//! processes, and `linterpd move / status / stop` as an operator types them.
+//! processes, and `linterpd move / status / stop / home / clear-fault` as an operator types them.
 
 mod common;
 
+use std::path::Path;
 use std::process::Command;
+use std::time::{Duration, Instant};
 
-use serde_json::Value;
+use common::process::Spawned;
+use common::serve::READY;
+use serde_json::{Value, json};
 
 fn linterpd(socket: &std::path::Path, args: &[&str]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
@@ -58,9 +62,10 @@ fn operator_moves_checks_status_and_stops_through_the_cli() {
     let (code, out, _) = linterpd(socket, &["status"]);
     assert_eq!(code, Some(0));
     assert!(
-        out.starts_with("press-loader: connected, PLC run / done"),
+        out.starts_with("press-loader: idle; link up; PLC in RUN, program done, homed"),
         "{out}"
     );
+    assert!(!out.contains("null"), "{out}");
 
     // A move the daemon refuses: exit 2, its reason, nothing printed as if it had worked.
     let (code, out, err) = linterpd(socket, &["move", "--to", "0,0,0"]);
@@ -109,4 +114,283 @@ fn operator_moves_checks_status_and_stops_through_the_cli() {
         Value::Null,
         "move {id} still current: {robots}"
     );
+}
+
+/// `status --json` until `done` holds for the robot (at most `READY`); returns its state.
+fn status_until(socket: &Path, what: &str, done: impl Fn(&Value) -> bool) -> Value {
+    status_until_or(socket, what, done, String::new)
+}
+
+/// As [`status_until`], with `more` told when it fails.
+fn status_until_or(
+    socket: &Path,
+    what: &str,
+    done: impl Fn(&Value) -> bool,
+    more: impl Fn() -> String,
+) -> Value {
+    let deadline = Instant::now() + READY;
+    loop {
+        let (_, out, err) = linterpd(socket, &["status", "--json"]);
+        let robots: Value = serde_json::from_str(out.trim())
+            .unwrap_or_else(|e| panic!("status --json: {e}: {out}{err}"));
+        if done(&robots[0]) {
+            return robots[0].clone();
+        }
+        assert!(
+            Instant::now() < deadline,
+            "waited for {what}: {robots}\n{}",
+            more()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// One `error: ...` line on stderr, nothing on stdout.
+fn assert_one_error_line(out: &str, err: &str) {
+    assert!(out.is_empty(), "printed as if it had worked: {out}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: "), "{err}");
+}
+
+#[test]
+fn an_unhomed_robot_refuses_moves_until_linterpd_home() {
+    let running = common::serve::start_with(&["--unhomed"]);
+    let socket = running.socket.as_path();
+    status_until(socket, "the unhomed phase", |r| r["phase"] == "unhomed");
+
+    // Connected, no fault: status exits 0, and says in words why moves are refused.
+    let (code, out, err) = linterpd(socket, &["status"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(
+        out.contains("link up; PLC in RUN, program idle, not homed")
+            && out.contains("new moves refused: the robot is not homed")
+            && !out.contains("null"),
+        "{out}"
+    );
+
+    let (code, out, err) = linterpd(socket, &["move", "--to", "50,520,20"]);
+    assert_eq!(code, Some(3), "{out}{err}");
+    assert_one_error_line(&out, &err);
+    assert!(
+        err.contains("the robot is not homed") && err.contains("(reason: not-homed)"),
+        "{err}"
+    );
+
+    let (code, out, err) = linterpd(socket, &["clear-fault"]);
+    assert_eq!(code, Some(3), "{out}{err}");
+    assert_one_error_line(&out, &err);
+    assert!(err.contains("the PLC reports no fault"), "{err}");
+
+    let (code, out, err) = linterpd(socket, &["home"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(out.trim(), "press-loader: homed");
+    let (code, out, err) = linterpd(socket, &["home", "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(out.trim(), r#"{"homed":true}"#);
+
+    let (code, out, err) = linterpd(socket, &["move", "--to", "50,520,20"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(out.starts_with("move 1 done: upload "), "{out}");
+
+    // A long move and a timeout far shorter: exit 3 saying what it waits for; it goes on.
+    let long = ["move", "--to", "0,700,100", "--speed", "20mm/s"];
+    let (code, out, err) = linterpd(socket, &[&long[..], &["--timeout", "300ms"]].concat());
+    assert_eq!(code, Some(3), "{out}{err}");
+    assert_one_error_line(&out, &err);
+    assert!(
+        err.contains("move 2 did not end within 0.3 s (--timeout)")
+            && err.contains("waiting for")
+            && err.contains("it was not stopped"),
+        "{err}"
+    );
+    let (code, _, err) = linterpd(socket, &["stop"]);
+    assert_eq!(code, Some(0), "{err}");
+}
+
+#[test]
+fn a_link_that_goes_down_is_said_by_move_and_status() {
+    let mut running = common::serve::start();
+    let socket = running.socket.clone();
+    let mut command = Command::new(env!("CARGO_BIN_EXE_linterpd"));
+    // About 11 s at 20 mm/s.
+    command.args([
+        "move",
+        "--to",
+        "0,700,100",
+        "--speed",
+        "20",
+        "--timeout",
+        "3s",
+    ]);
+    command.arg("--socket").arg(&socket);
+    let mut follower = Spawned::spawn("linterpd move", command);
+    status_until_or(
+        &socket,
+        "the move running",
+        |r| r["current_move"] == 1,
+        || follower.output(),
+    );
+    assert!(running.mock.terminate(READY).success());
+
+    follower.wait_for_stderr("move 1: waiting for the PLC link of press-loader", READY);
+    let ended = follower.finish(READY);
+    assert_eq!(ended.status.code(), Some(3), "{}", ended.describe());
+    let notices = ended
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("move 1: waiting for"))
+        .count();
+    assert_eq!(notices, 1, "said once: {}", ended.describe());
+    assert!(
+        ended
+            .stderr
+            .contains("move 1 did not end within 3.0 s (--timeout)")
+            && ended
+                .stderr
+                .contains("waiting for the PLC link of press-loader to come back"),
+        "{}",
+        ended.describe()
+    );
+
+    // status: exit 3 like `systemctl status` for a unit that is not running, in words.
+    status_until(&socket, "the link down", |r| {
+        r["link"]["connected"] == false
+    });
+    let (code, out, err) = linterpd(&socket, &["status"]);
+    assert_eq!(code, Some(3), "{out}{err}");
+    assert!(
+        out.starts_with("press-loader: link down; link error: ")
+            && out.contains("PLC as last read: in RUN")
+            && !out.contains("null"),
+        "{out}"
+    );
+    let (code, out, _) = linterpd(&socket, &["status", "--json"]);
+    assert_eq!(code, Some(3), "{out}");
+
+    // A new order is refused at once: exit 4 with the reason.
+    let (code, out, err) = linterpd(&socket, &["move", "--to", "50,520,20"]);
+    assert_eq!(code, Some(4), "{out}{err}");
+    assert_one_error_line(&out, &err);
+    assert!(err.contains("(reason: link-down)"), "{err}");
+}
+
+#[test]
+fn a_second_daemon_on_the_same_socket_refuses_and_sighup_keeps_the_first_running() {
+    let mut running = common::serve::start();
+    let mut second = Command::new(env!("CARGO_BIN_EXE_linterpd"));
+    second.arg("serve").arg("--config").arg(&running.config);
+    let second = common::process::Spawned::spawn("a second linterpd serve", second)
+        .finish(common::serve::READY);
+    assert_eq!(second.status.code(), Some(1), "{}", second.describe());
+    assert!(
+        second
+            .stderr
+            .contains("another linterpd daemon already serves"),
+        "{}",
+        second.describe()
+    );
+    // The first daemon's socket was left alone.
+    let (code, _, err) = linterpd(&running.socket, &["status", "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+
+    // SIGHUP reads the config again; the daemon goes on.
+    let pid = running.serve.id().to_string();
+    let sent = Command::new("sh")
+        .args(["-c", "kill -HUP \"$1\"", "sh", &pid])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    running
+        .serve
+        .wait_for_stderr("SIGHUP: the config is unchanged", common::serve::READY);
+    let (code, _, err) = linterpd(&running.socket, &["status", "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+}
+
+/// `status --json`'s counts of the only robot.
+fn counts(socket: &Path) -> Value {
+    let (_, out, _) = linterpd(socket, &["status", "--json"]);
+    let robots: Value = serde_json::from_str(out.trim()).unwrap();
+    robots[0]["counts"].clone()
+}
+
+#[test]
+fn operator_jogs_moves_joints_and_teaches_positions_through_the_cli() {
+    let running = common::serve::start();
+    let socket = running.socket.as_path();
+    let state_dir = socket.parent().unwrap();
+
+    // The mock starts at counts 0: the tool at (0, 500, 0) mm. A jog out and up.
+    let (code, out, err) = linterpd(socket, &["move", "--by", "0,20,10"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(
+        out.starts_with("move 1 done: ") && out.contains("final error [0,0,0,0] pulses"),
+        "{out}"
+    );
+    // d2 10 mm at 0.025 mm a pulse, d3 20 mm at 0.013 mm.
+    let taught = json!([0, 400, 1538, 0]);
+    assert_eq!(counts(socket), taught);
+
+    let (code, out, err) = linterpd(socket, &["pos", "save", "pick"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert_eq!(
+        out.trim(),
+        "press-loader: saved pick: x 0.000, y 519.994, z 10.000 mm, a 0.000 deg; joint counts [0,400,1538,0]"
+    );
+    assert!(state_dir.join("positions.json").exists());
+    let (code, out, _) = linterpd(socket, &["pos", "list"]);
+    assert_eq!(code, Some(0));
+    assert_eq!(out.lines().count(), 1, "{out}");
+    assert!(out.starts_with("pick: x 0.000, y 519.994"), "{out}");
+    let (code, out, _) = linterpd(socket, &["pos", "show", "pick", "--json"]);
+    assert_eq!(code, Some(0));
+    let shown: Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(shown["joint_counts"], taught);
+
+    // Away by a jog and a joint move, then back to the taught position.
+    let (code, out, err) = linterpd(socket, &["move", "--by", "15,0,-5", "--json"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    let last: Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(last["order"]["by"], json!([15.0, 0.0, -5.0]));
+    assert_eq!(last["final_error_pulses"], json!([0, 0, 0, 0]));
+    let (code, out, err) = linterpd(socket, &["move", "--joints", "5,20,30,-10"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert_eq!(counts(socket), json!([2000, 800, 2308, -4000]));
+    let (code, out, err) = linterpd(socket, &["move", "--to", "@pick"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(out.contains("final error [0,0,0,0] pulses"), "{out}");
+    assert_eq!(counts(socket), taught);
+
+    // Refusals: exit 2 naming what is wrong, nothing on stdout.
+    let (code, out, err) = linterpd(socket, &["pos", "show", "place"]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert_one_error_line(&out, &err);
+    assert!(
+        err.contains("no position \"place\" for robot press-loader; positions: pick"),
+        "{err}"
+    );
+    let (code, out, err) = linterpd(socket, &["pos", "save", "a/b"]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(err.contains("1 to 32 letters, digits"), "{err}");
+    let (code, out, err) = linterpd(socket, &["move", "--to", "@place"]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(
+        err.contains("no such position; taught positions: pick"),
+        "{err}"
+    );
+    let (code, out, err) = linterpd(socket, &["move", "--joints", "5,20,1200,0"]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(
+        err.contains("joint d3 target 1200.0000 mm is beyond its limits 0 to 1000 mm"),
+        "{err}"
+    );
+    let (code, _, err) = linterpd(socket, &["move", "--by", "1,2,3", "--to", "1,2,3"]);
+    assert_eq!(code, Some(2), "{err}");
+
+    let (code, out, err) = linterpd(socket, &["pos", "delete", "pick"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(out.trim(), "press-loader: deleted pick");
+    let (code, out, _) = linterpd(socket, &["pos", "list"]);
+    assert_eq!(code, Some(0));
+    assert_eq!(out.trim(), "press-loader: no taught positions");
 }

@@ -162,3 +162,23 @@ fn missing_config_is_bad_input_naming_the_path() {
     let e = refused(&[("--config", "/nonexistent/linterpd.toml")], &[]);
     assert!(e.contains("/nonexistent/linterpd.toml"), "{e}");
 }
+
+#[test]
+fn json_flag_is_format_json_and_speed_takes_its_unit() {
+    let mut args = vec!["plan"];
+    args.extend(SEED);
+    let at = args.iter().position(|a| *a == "--speed").unwrap() + 1;
+    args[at] = "240mm/s";
+    args.push("--json");
+    let out = linterpd(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(doc, plan_json(&[]));
+    args.extend(["--format", "csv"]);
+    let out = linterpd(&args);
+    assert_eq!(out.status.code(), Some(2), "--json and --format conflict");
+}

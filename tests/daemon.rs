@@ -4,49 +4,20 @@ mod common;
 
 use std::time::Duration;
 
+use common::daemon::{duplex_connector, mewtocol_options};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::contract::Layout;
-use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage};
-use linterpd::mewtocol::Station;
+use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage, SubmitError};
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
 };
 use linterpd::plc::contract::ContractSettings;
 use linterpd::plc::{
-    AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming,
-    ModbusOptions, PlcMode,
+    AnyPlc, BoxedLink, MewtocolClient, ModbusClient, ModbusFraming, ModbusOptions, PlcMode,
 };
-use linterpd::robot::seed_robot;
 use tokio::net::{TcpListener, TcpStream};
 
 const LIMIT: Duration = Duration::from_secs(15);
-
-fn mewtocol_options() -> MewtocolOptions {
-    MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent)
-}
-
-/// Opens a fresh `duplex` connection to the mock for every (re)connection, served at `baud`.
-fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
-    let shared = shared.clone();
-    Box::new(move || {
-        let shared = shared.clone();
-        Box::pin(async move {
-            let (ours, theirs) = tokio::io::duplex(4_096);
-            let server = MewtocolServer::new(
-                shared,
-                MewtocolServerOptions {
-                    baud,
-                    ..MewtocolServerOptions::default()
-                },
-            );
-            tokio::spawn(async move { server.serve(theirs).await });
-            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
-                Box::new(ours) as BoxedLink,
-                mewtocol_options(),
-            )))
-        })
-    })
-}
 
 /// Every link the daemon reaches a PLC by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -150,21 +121,21 @@ fn connector(link: Link, shared: &SharedMock, baud: Option<u32>) -> Connector {
 }
 
 fn daemon(connect: Connector, settings: ContractSettings) -> (Daemon, RobotHandle) {
-    let d = Daemon::spawn(vec![(seed_robot(), settings, connect)]);
-    let h = d.robot("press-loader").unwrap().clone();
-    (d, h)
+    common::daemon::spawn(connect, settings)
 }
 
 fn order(p: [f64; 3]) -> MoveOrder {
     MoveOrder {
-        to: p.to_vec(),
+        to: Some(p.to_vec()),
         ..MoveOrder::default()
     }
 }
 
+/// Waits until the daemon takes moves: connected, its host word echoed, nothing refusing them.
 async fn wait_connected(h: &RobotHandle) {
     for _ in 0..200 {
-        if h.state().counts.is_some() {
+        let s = h.state();
+        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
             return;
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
@@ -277,13 +248,15 @@ async fn stop_mid_move_stops_every_channel() {
     }
 }
 
+/// An order is refused at once, naming why, once the daemon has seen the PLC (a heartbeat
+/// standing still is known after its timeout); nothing is written.
 async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, want: &str) {
     let (d, h) = daemon(connector(link, shared, None), settings);
-    tokio::time::sleep(Duration::from_millis(100)).await;
-    let r = run(&h, P2).await;
-    assert_eq!(r.stage, Stage::Failed, "{link:?} {r:?}");
-    let e = r.error.unwrap();
-    assert!(e.contains(want), "{link:?}: {e}");
+    tokio::time::sleep(settings.watch.heartbeat_timeout + Duration::from_millis(300)).await;
+    let e = h.submit(order(P2)).unwrap_err();
+    assert!(matches!(e, SubmitError::NotNow { .. }), "{link:?}: {e:?}");
+    assert!(e.to_string().contains(want), "{link:?}: {e}");
+    assert!(h.reports().is_empty(), "nothing queued");
     assert_nothing_written(shared);
     d.shut_down().await;
 }
@@ -298,7 +271,7 @@ async fn prog_mode_frozen_heartbeat_and_wrong_magic_are_refused_and_nothing_is_w
             link,
             &shared,
             ContractSettings::default(),
-            "and in PROG mode",
+            "it reports PROG mode",
         )
         .await;
         let shared = mock_at_seed_start("");
@@ -353,8 +326,9 @@ async fn link_cut_during_upload_starts_nothing_and_the_next_move_works_after_rec
         assert_eq!(after.1, 0, "{link:?}: a start command was written");
         assert_eq!(after.0.elapsed, before.elapsed);
         assert_eq!(after.0.busy, 0);
+        wait_connected(&h).await;
         assert_on_target(&run(&h, P2).await);
-        assert!(h.state().link.reconnects >= 2, "{link:?}: {:?}", h.state());
+        assert!(h.state().link.reconnects >= 1, "{link:?}: {:?}", h.state());
         d.shut_down().await;
     }
 }
@@ -398,7 +372,7 @@ async fn bad_orders_are_refused_and_nothing_is_queued() {
     wait_connected(&h).await;
     let e = h
         .submit(MoveOrder {
-            to: vec![1.0, 2.0],
+            to: Some(vec![1.0, 2.0]),
             ..MoveOrder::default()
         })
         .unwrap_err();
@@ -411,7 +385,7 @@ async fn bad_orders_are_refused_and_nothing_is_queued() {
 }
 
 #[tokio::test]
-async fn a_stop_while_the_link_is_down_answers_at_once_and_cancels_the_queue() {
+async fn while_the_link_is_down_orders_are_refused_and_a_stop_answers_at_once() {
     let shared = mock_at_seed_start("");
     // A PLC that never answers the connection: every connect fails.
     let connect: Connector = Box::new(|| {
@@ -423,15 +397,88 @@ async fn a_stop_while_the_link_is_down_answers_at_once_and_cancels_the_queue() {
         })
     });
     let (d, h) = daemon(connect, ContractSettings::default());
-    let id = h.submit(order(P2)).unwrap();
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let e = h.submit(order(P2)).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("the PLC link is down: link failed during connect: refused"),
+        "{e}"
+    );
     let answer = tokio::time::timeout(Duration::from_secs(7), h.stop())
         .await
         .expect("the stop answers");
     let e = answer.unwrap_err().to_string();
     assert!(e.contains("link is down"), "{e}");
-    let r = h.wait(id, LIMIT).await.unwrap();
-    assert_eq!(r.stage, Stage::Stopped, "{r:?}");
-    assert!(h.state().queued.is_empty());
+    assert!(h.reports().is_empty());
     assert_nothing_written(&shared);
     d.shut_down().await;
+}
+
+/// The shipped config as it is (19200 baud, `header = "auto"`, `timeout = "300ms"`), its serial
+/// path pointed at a pseudo-terminal whose other end the mock serves at an emulated 19200 baud:
+/// the seed's move runs to its target. The exchange timeouts follow the line's speed, so a long
+/// `<` read is not cut off and no late reply is taken for the next request.
+#[tokio::test]
+async fn the_shipped_config_moves_over_a_19200_baud_line() {
+    let shipped = include_str!("../config/linterpd.toml");
+    let (mut master, slave) = tokio_serial::SerialStream::pair().unwrap();
+    let path = tokio_serial::SerialPort::name(&slave).expect("the pty's path");
+    // The daemon opens the path itself (exclusively), so this end is closed first.
+    drop(slave);
+    let config = shipped.replace("/dev/ttyUSB0", &path);
+    assert_ne!(config, shipped, "the shipped config names /dev/ttyUSB0");
+    let config = linterpd::config::Config::from_toml(&config).unwrap();
+    let shared = mock_at_seed_start("");
+    let server = MewtocolServer::new(
+        shared.clone(),
+        MewtocolServerOptions {
+            baud: Some(19_200),
+            ..MewtocolServerOptions::default()
+        },
+    );
+    // Until the daemon opens its end, reading the master fails: serve again.
+    tokio::spawn(async move {
+        loop {
+            let _ = server.serve(&mut master).await;
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        }
+    });
+    let robots = linterpd::daemon::service::robots_from_config(&config).unwrap();
+    let d = Daemon::spawn(robots, &linterpd::daemon::DaemonOptions::default());
+    let h = d.robot("press-loader").unwrap().clone();
+    wait_connected(&h).await;
+    let r = run(&h, P2).await;
+    assert_on_target(&r);
+    println!(
+        "seed's move at 19200 baud over a pty: upload and verify {:.2} s, motion {:.2} s",
+        r.upload_s.unwrap(),
+        r.motion_s.unwrap()
+    );
+    d.shut_down().await;
+}
+
+/// A connector that never returns: the worker hangs in it.
+fn hanging_connector() -> Connector {
+    Box::new(|| Box::pin(std::future::pending()))
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_worker_that_hangs_makes_the_daemon_unhealthy_and_one_that_panics_is_reported() {
+    use linterpd::daemon::service::healthy;
+    let shared = mock_at_seed_start("");
+    let (good, _) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    let (stuck, _) = daemon(hanging_connector(), ContractSettings::default());
+    tokio::time::sleep(Duration::from_secs(20)).await;
+    let limit = Duration::from_secs(15);
+    assert!(healthy(good.robots(), limit), "a working worker beats");
+    assert!(!healthy(stuck.robots(), limit), "a hung worker does not");
+    good.shut_down().await;
+    stuck.kill().await;
+
+    let panicking: Connector = Box::new(|| panic!("a bug in a connector"));
+    let (mut d, _) = daemon(panicking, ContractSettings::default());
+    let why = tokio::time::timeout(Duration::from_secs(5), d.worker_failed())
+        .await
+        .expect("the failure is reported");
+    assert!(why.contains("panicked"), "{why}");
 }

@@ -183,6 +183,10 @@ fn unit_for_verify() -> String {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs systemd's tools: cargo test --features third-party-peers (.ci/run)"
+)]
 fn unit_passes_systemd_analyze_verify_without_a_warning() {
     if let Err(report) = systemd_analyze_verify(&unit_for_verify()) {
         panic!("systemd-analyze verify {UNIT}:\n{report}");
@@ -190,6 +194,10 @@ fn unit_passes_systemd_analyze_verify_without_a_warning() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs systemd's tools: cargo test --features third-party-peers (.ci/run)"
+)]
 fn verify_check_catches_a_bad_line() {
     // The check above is only worth something if a real mistake fails it.
     for bad in [
@@ -237,6 +245,8 @@ fn unit_runs_as_linterpd_with_dialout_and_the_expected_hardening() {
         ("SupplementaryGroups", "dialout"),
         ("RuntimeDirectory", "linterpd"),
         ("RuntimeDirectoryMode", "0750"),
+        ("StateDirectory", "linterpd"),
+        ("StateDirectoryMode", "0750"),
         ("UMask", "0007"),
         ("ProtectSystem", "strict"),
         ("ProtectHome", "yes"),
@@ -309,6 +319,14 @@ fn sysusers_creates_linterpd_in_dialout() {
             .iter()
             .any(|e| e[..] == ["m", "linterpd", "dialout"])
     );
+}
+
+#[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs systemd's tools: cargo test --features third-party-peers (.ci/run)"
+)]
+fn systemd_sysusers_accepts_the_sysusers_file() {
     // systemd's own parser, on an empty root so nothing on this machine changes.
     let root = TempDir::new("sysusers-root");
     std::fs::create_dir(root.path().join("etc")).unwrap();
@@ -328,6 +346,26 @@ fn sysusers_creates_linterpd_in_dialout() {
 // The PLC side
 
 const LISTING: &str = "deploy/plc/linterpd-contract.fpwin.txt";
+const PLC_README: &str = "deploy/plc/README.md";
+
+// The listing's own names that these checks follow (its header lists every one).
+/// The command word as the scan took it.
+const COMMAND_OF_SCAN: &str = "DT1106";
+/// The program's state, fault and latched seq.
+const STATE: &str = "DT1100";
+const FAULT: &str = "DT1101";
+const SEQ: &str = "DT1102";
+/// Start to act on in this scan; the e-stop input open; start to act on with the e-stop closed;
+/// start goes ahead.
+const START_TO_ACT: &str = "R44";
+const ESTOP_OPEN: &str = "R46";
+const START_CHECKED: &str = "R47";
+const START_GOES: &str = "R42";
+/// The program's homed bit (ready bit 0).
+const HOMED: &str = "R22";
+/// TABLE MODE: the constant's word and the relay that selects the fixed buffers.
+const TABLE_MODE: &str = "DT1104";
+const BUFFER_MODE: &str = "R20";
 
 /// The listing's instruction lines: what is left of each line after its `;` comment, with runs
 /// of blanks made one space.
@@ -346,23 +384,565 @@ fn instructions(listing: &str) -> Vec<String> {
         .collect()
 }
 
+fn listing_code() -> Vec<String> {
+    instructions(&read(LISTING))
+}
+
+/// One rung: its contact lines (`ST..`, `AN..`, `OR..`, `ANS`, `ORS`, `DF`), then what they
+/// drive.
+#[derive(Debug, Default)]
+struct Rung {
+    conditions: Vec<String>,
+    outputs: Vec<String>,
+}
+
+impl Rung {
+    fn has_condition(&self, line: &str) -> bool {
+        self.conditions.iter().any(|c| c == line)
+    }
+
+    fn has_output(&self, line: &str) -> bool {
+        self.outputs.iter().any(|o| o == line)
+    }
+
+    fn first_condition(&self) -> &str {
+        self.conditions.first().map_or("", String::as_str)
+    }
+}
+
+fn is_condition(line: &str) -> bool {
+    let op = line.split(' ').next().unwrap_or("");
+    op.starts_with("ST") || op.starts_with("AN") || op.starts_with("OR") || op == "DF"
+}
+
+/// The code cut into rungs: a contact line after an output starts the next rung.
+fn rungs(code: &[String]) -> Vec<Rung> {
+    let mut out = Vec::new();
+    let mut rung = Rung::default();
+    for line in code {
+        if is_condition(line) {
+            if !rung.outputs.is_empty() {
+                out.push(std::mem::take(&mut rung));
+            }
+            rung.conditions.push(line.clone());
+        } else {
+            rung.outputs.push(line.clone());
+        }
+    }
+    out.push(rung);
+    out
+}
+
+/// The rung driving `output`; panics unless exactly one does.
+fn rung_with<'a>(rungs: &'a [Rung], output: &str) -> &'a Rung {
+    let found: Vec<&Rung> = rungs.iter().filter(|r| r.has_output(output)).collect();
+    assert_eq!(
+        found.len(),
+        1,
+        "{LISTING}: `{output}` in {} rungs",
+        found.len()
+    );
+    found[0]
+}
+
+/// An F instruction's number and operands: `F0 MV K0, DT1032` gives `F0` and `[K0, DT1032]`.
+fn f_instruction(line: &str) -> Option<(&str, Vec<&str>)> {
+    let mut words = line.splitn(3, ' ');
+    let op = words.next()?;
+    if !op.starts_with('F') || !op[1..].bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let _name = words.next()?;
+    Some((op, words.next().unwrap_or("").split(", ").collect()))
+}
+
+fn dt(operand: &str) -> Option<u32> {
+    operand.strip_prefix("DT")?.parse().ok()
+}
+
+/// Every DT word the code writes through a plain (not index-modified) operand.
+fn written_words(code: &[String]) -> BTreeSet<u32> {
+    let mut out = BTreeSet::new();
+    for (op, args) in code.iter().filter_map(|l| f_instruction(l)) {
+        let dest = |i: usize| args.get(i).and_then(|a| dt(a));
+        let (start, words) = match op {
+            "F0" | "F65" => (dest(1), 1),
+            "F1" => (dest(1), 2),
+            "F22" | "F27" => (dest(2), 1),
+            "F35" => (dest(0), 1),
+            "F10" => match (dest(0), dest(1)) {
+                (Some(s1), Some(s2)) => (dest(2), s2 - s1 + 1),
+                _ => (dest(2), 1),
+            },
+            "F11" => match (dest(1), dest(2)) {
+                (Some(d1), Some(d2)) => (Some(d1), d2 - d1 + 1),
+                _ => (None, 0),
+            },
+            _ => (None, 0),
+        };
+        if let Some(start) = start {
+            out.extend(start..start + words);
+        }
+    }
+    out
+}
+
+/// Every DT word the code names, 32-bit operands and block ranges counted whole.
+fn mentioned_words(code: &[String]) -> BTreeSet<u32> {
+    let mut out = BTreeSet::new();
+    for line in code {
+        let op = line.split(' ').next().unwrap_or("");
+        let dint = op == "F1" || ["STD", "AND", "ORD"].iter().any(|p| op.starts_with(p));
+        let operands: Vec<u32> = line.split([' ', ',']).filter_map(dt).collect();
+        for &w in &operands {
+            out.insert(w);
+            if dint {
+                out.insert(w + 1);
+            }
+        }
+        if op == "F10" && operands.len() == 3 {
+            out.extend(operands[0]..=operands[1]);
+        }
+    }
+    out
+}
+
+/// What the code copies into the DINT at `DT{dest}` (the first such `F1 DMV`).
+fn dmv_source(code: &[String], dest: u32) -> &str {
+    code.iter()
+        .find_map(|l| {
+            l.strip_prefix("F1 DMV ")?
+                .strip_suffix(&format!(", DT{dest}"))
+        })
+        .unwrap_or_else(|| panic!("{LISTING}: nothing copied into DT{dest}"))
+}
+
+/// A special relay (`R9xxx`) or special data register (`DT9xxxx`).
+fn is_special_address(word: &str) -> bool {
+    let digits = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_hexdigit());
+    word.strip_prefix("DT9").is_some_and(|d| digits(d, 4))
+        || word.strip_prefix("R9").is_some_and(|d| digits(d, 3))
+}
+
+fn special_addresses<'a>(lines: impl Iterator<Item = &'a str>) -> BTreeSet<String> {
+    lines
+        .flat_map(|l| {
+            l.split(|c: char| !c.is_ascii_alphanumeric())
+                .filter(|w| is_special_address(w))
+                .map(str::to_owned)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn plc_listing_speaks_contract_version_2_at_the_default_addresses() {
+    let code = listing_code();
+    for line in ["F0 MV H4C49, DT1000", "F0 MV K2, DT1001"] {
+        assert!(code.contains(&line.to_owned()), "{LISTING} lacks `{line}`");
+    }
+    let written = written_words(&code);
+    let missing: Vec<u32> = (1000..=1021).filter(|w| !written.contains(w)).collect();
+    assert!(
+        missing.is_empty(),
+        "status words never written: {missing:?}"
+    );
+    // The command block is linterpd's: the program reads all of it and writes back only the
+    // command word (0 once acted on) and the host word (0 in the first scan).
+    let mentioned = mentioned_words(&code);
+    let unread: Vec<u32> = (1032..=1048).filter(|w| !mentioned.contains(w)).collect();
+    assert!(
+        unread.is_empty(),
+        "command block words never used: {unread:?}"
+    );
+    let overwritten: Vec<u32> = (1032..=1048).filter(|w| written.contains(w)).collect();
+    assert_eq!(
+        overwritten,
+        [1032, 1048],
+        "the program writes linterpd's words"
+    );
+    // Nothing writes the table areas (DT2000 + bank * 8000 + channel * 2000, 2000 words each).
+    let into_tables: Vec<u32> = (2000..18_000).filter(|w| written.contains(w)).collect();
+    assert!(
+        into_tables.is_empty(),
+        "writes into the table areas: {into_tables:?}"
+    );
+    let joined = code.join("\n");
+    for base in ["K2000, DT1116", "K10000, DT1116", "DT1116, K2000, DT1117"] {
+        assert!(
+            joined.contains(base),
+            "{LISTING} lacks the area arithmetic `{base}`"
+        );
+    }
+    // The host word is echoed and the waiting start shown.
+    for line in ["F0 MV DT1048, DT1020", "F0 MV DT1033, DT1021"] {
+        assert!(code.contains(&line.to_owned()), "{LISTING} lacks `{line}`");
+    }
+}
+
+#[test]
+fn plc_listing_first_scan_clears_state_seq_command_both_hosts_and_the_homed_bit() {
+    let code = listing_code();
+    let rungs = rungs(&code);
+    let first = &rungs[0];
+    assert_eq!(
+        first.conditions,
+        ["ST R9013"],
+        "the first rung must be the first scan's"
+    );
+    let cleared = written_words(&first.outputs);
+    for (word, what) in [
+        (1032, "command"),
+        (1048, "command block host"),
+        (1100, "state"),
+        (1101, "fault"),
+        (1102, "seq"),
+    ] {
+        assert!(
+            cleared.contains(&word),
+            "the first scan leaves {what} DT{word}"
+        );
+    }
+    assert!(first.has_output(&format!("RST {HOMED}")));
+    // The homed bit is the ready word's bit 0, and the status host is the command host's copy.
+    assert!(
+        rungs
+            .iter()
+            .any(|r| r.conditions == [format!("ST {HOMED}")] && r.has_output("OT R200"))
+    );
+    assert!(code.contains(&"F0 MV WR20, DT1007".to_owned()));
+    // The scan takes the command word after the first-scan rung has cleared it.
+    assert!(rungs[1].has_output(&format!("F0 MV DT1032, {COMMAND_OF_SCAN}")));
+}
+
+#[test]
+fn plc_listing_ignores_a_repeated_seq_and_checks_starts_in_contract_order() {
+    let code = listing_code();
+    let rungs = rungs(&code);
+    let start = format!("ST= {COMMAND_OF_SCAN}, K1");
+    assert!(
+        rungs.iter().any(
+            |r| r.conditions == [start.clone(), format!("AN= DT1033, {SEQ}")]
+                && r.outputs == ["F0 MV K0, DT1032"]
+        ),
+        "no rung drops a start whose seq is the latched one"
+    );
+    let act = rung_with(&rungs, &format!("OT {START_TO_ACT}"));
+    assert!(act.has_condition(&format!("AN<> DT1033, {SEQ}")));
+    // Refusals: the first failing check wins, in the order 1, 6, 2, 5, 4; none touches seq.
+    let refusals: Vec<&Rung> = rungs
+        .iter()
+        .filter(|r| {
+            r.first_condition() == format!("ST {START_CHECKED}")
+                && r.outputs.iter().any(|o| o.ends_with(&format!(", {FAULT}")))
+        })
+        .collect();
+    let mut faults = Vec::new();
+    let mut earlier: Vec<String> = Vec::new();
+    for r in &refusals {
+        let fault = r
+            .outputs
+            .iter()
+            .find_map(|o| {
+                o.strip_prefix("F0 MV K")?
+                    .strip_suffix(&format!(", {FAULT}"))
+            })
+            .expect("a fault value");
+        faults.push(fault.to_owned());
+        let positive: Vec<&String> = r.conditions[1..]
+            .iter()
+            .filter(|c| c.starts_with("AN "))
+            .collect();
+        assert_eq!(positive.len(), 1, "fault {fault}: {:?}", r.conditions);
+        for e in &earlier {
+            assert!(
+                r.has_condition(&format!("AN/ {e}")),
+                "fault {fault} is not behind the earlier check {e}"
+            );
+        }
+        assert!(r.has_output(&format!("F0 MV K4, {STATE}")));
+        assert!(r.has_output("F0 MV K0, DT1032"));
+        assert!(
+            !r.outputs.iter().any(|o| o.contains(SEQ)),
+            "fault {fault} sets seq"
+        );
+        earlier.push(positive[0]["AN ".len()..].to_owned());
+    }
+    assert_eq!(faults, ["1", "6", "2", "5", "4"]);
+    let go = rung_with(&rungs, &format!("OT {START_GOES}"));
+    assert_eq!(go.first_condition(), format!("ST {START_CHECKED}"));
+    for e in &earlier {
+        assert!(
+            go.has_condition(&format!("AN/ {e}")),
+            "a start goes ahead past {e}"
+        );
+    }
+    // Fault 5 compares every channel's count with from[c], 32 bits, masked or not.
+    let from = rung_with(&rungs, &format!("OT {}", earlier[3]));
+    for c in 0..4 {
+        let cmp = format!("DT{}, DT{}", 1140 + 2 * c, 1040 + 2 * c);
+        assert!(
+            from.conditions
+                .iter()
+                .any(|l| l.ends_with(&cmp) && l.contains("D<>")),
+            "fault 5 does not compare channel {c}: {:?}",
+            from.conditions
+        );
+    }
+    // seq is latched only when the start went ahead.
+    let latch = rung_with(&rungs, &format!("F0 MV DT1033, {SEQ}"));
+    assert_eq!(latch.first_condition(), format!("ST {START_GOES}"));
+}
+
+#[test]
+fn plc_listing_refuses_a_start_while_the_estop_input_is_open() {
+    let code = listing_code();
+    let rungs = rungs(&code);
+    let estop = rung_with(&rungs, &format!("OT {ESTOP_OPEN}"));
+    assert_eq!(estop.conditions, ["ST/ X10"]);
+    let refused = rungs
+        .iter()
+        .find(|r| r.conditions == [format!("ST {START_TO_ACT}"), format!("AN {ESTOP_OPEN}")])
+        .expect("no rung refuses a start while the e-stop is open");
+    assert_eq!(
+        refused.outputs,
+        [
+            format!("F0 MV K3, {STATE}"),
+            format!("F0 MV K3, {FAULT}"),
+            "F0 MV K0, DT1032".to_owned()
+        ]
+    );
+    let checked = rung_with(&rungs, &format!("OT {START_CHECKED}"));
+    assert_eq!(
+        checked.conditions,
+        [format!("ST {START_TO_ACT}"), format!("AN/ {ESTOP_OPEN}")]
+    );
+    // Launch relays R70..R73 come only from a start that went ahead or a chain decided with
+    // the e-stop closed, and every F174 hangs on its channel's launch relay.
+    for c in 0..4 {
+        let chain = rung_with(&rungs, &format!("OT R6{c}"));
+        assert!(
+            chain.has_condition(&format!("AN/ {ESTOP_OPEN}")),
+            "channel {c} chains blind"
+        );
+        for r in rungs.iter().filter(|r| r.has_output(&format!("SET R7{c}"))) {
+            assert_eq!(r.first_condition(), format!("ST R6{c}"));
+        }
+    }
+    for r in &rungs {
+        for o in &r.outputs {
+            if o.ends_with(", WR7") && o != "F0 MV K0, WR7" {
+                assert_eq!(r.first_condition(), format!("ST {START_GOES}"), "`{o}`");
+            }
+            if let Some(("F174", args)) = f_instruction(o) {
+                let channel = args[1].trim_start_matches('K');
+                assert_eq!(r.first_condition(), format!("ST R7{channel}"), "`{o}`");
+            }
+            if let Some(("F171", _)) = f_instruction(o) {
+                assert!(
+                    r.has_condition(&format!("AN/ {ESTOP_OPEN}")),
+                    "`{o}` ignores the e-stop"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn plc_listing_chains_only_after_busy_was_seen_or_the_last_target_is_reached() {
+    let code = listing_code();
+    let rungs = rungs(&code);
+    assert!(
+        code.contains(&"F0 MV WR7, WR8".to_owned()),
+        "no memory of last scan's launches"
+    );
+    for c in 0..4 {
+        let busy = format!("R21{c}");
+        let seen = format!("R9{c}");
+        // The busy image comes straight from a special relay; the seen relay follows it while
+        // the channel takes part, and a launch forgets it.
+        let image = rung_with(&rungs, &format!("OT {busy}"));
+        let flag = image.first_condition().trim_start_matches("ST ");
+        assert!(
+            is_special_address(flag),
+            "channel {c}'s busy image reads {flag}"
+        );
+        let set_seen = rung_with(&rungs, &format!("SET {seen}"));
+        assert_eq!(
+            set_seen.conditions,
+            [format!("ST {busy}"), format!("AN R10{c}")]
+        );
+        let forget = rung_with(&rungs, &format!("RST {seen}"));
+        assert_eq!(forget.first_condition(), format!("ST R7{c}"));
+        // A segment has finished: busy OFF, and seen ON or the count at the last target;
+        // never in the scan of a launch or the one after.
+        let finished = rung_with(&rungs, &format!("OT R11{c}"));
+        for needed in [
+            format!("AN/ {busy}"),
+            format!("ST {seen}"),
+            format!("AN/ R7{c}"),
+            format!("AN/ R8{c}"),
+        ] {
+            assert!(
+                finished.has_condition(&needed),
+                "channel {c}: no `{needed}`"
+            );
+        }
+        let target = format!("ORD= DT{}, I3DT{}", 1140 + 2 * c, 1200 + 16 * c);
+        assert!(
+            finished.has_condition(&target),
+            "channel {c}: no `{target}`"
+        );
+        let chain = rung_with(&rungs, &format!("OT R6{c}"));
+        assert_eq!(chain.first_condition(), format!("ST R11{c}"));
+        // The count compared is the same channel's elapsed value the status block reports.
+        assert_eq!(
+            dmv_source(&code, 1140 + 2 * c),
+            dmv_source(&code, 1008 + 2 * c),
+            "channel {c}"
+        );
+    }
+}
+
+#[test]
+fn plc_listing_runs_f174_on_fixed_buffers_when_table_mode_selects_them() {
+    let code = listing_code();
+    let rungs = rungs(&code);
+    assert!(
+        code.contains(&format!("F0 MV K1, {TABLE_MODE}")),
+        "TABLE MODE must default to K1, the fixed buffers"
+    );
+    let mode = rung_with(&rungs, &format!("OT {BUFFER_MODE}"));
+    assert_eq!(mode.conditions, [format!("ST= {TABLE_MODE}, K1")]);
+    let mut buffers = Vec::new();
+    for r in &rungs {
+        for o in &r.outputs {
+            let Some(("F174", args)) = f_instruction(o) else {
+                continue;
+            };
+            assert!(r.has_condition("DF"), "`{o}` does not run on an edge");
+            let launch = r.first_condition().to_owned();
+            if args[0].starts_with('I') {
+                assert!(
+                    r.has_condition(&format!("AN/ {BUFFER_MODE}")),
+                    "index-modified `{o}` runs while TABLE MODE selects the buffers"
+                );
+                continue;
+            }
+            assert!(
+                r.has_condition(&format!("AN {BUFFER_MODE}")),
+                "`{o}` outside TABLE MODE 1"
+            );
+            let buffer = dt(args[0]).expect("F174 on a DT word");
+            let filled = rungs.iter().any(|b| {
+                b.first_condition() == launch
+                    && b.has_condition(&format!("AN {BUFFER_MODE}"))
+                    && b.outputs.iter().any(|l| {
+                        l.starts_with("F10 BKMV ") && l.ends_with(&format!(", {}", args[0]))
+                    })
+            });
+            assert!(
+                filled,
+                "nothing copies the segment into {} before `{o}`",
+                args[0]
+            );
+            buffers.push((args[1].to_owned(), buffer));
+        }
+    }
+    buffers.sort();
+    let channels: Vec<&str> = buffers.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(channels, ["K0", "K1", "K2", "K3"], "one buffer per channel");
+    // A buffer holds a whole segment (up to 1992 words), clear of the tables and of each other.
+    for pair in buffers.windows(2) {
+        assert!(
+            pair[1].1 >= pair[0].1 + 2000,
+            "buffers overlap: {buffers:?}"
+        );
+    }
+    for (_, start) in &buffers {
+        assert!(
+            *start >= 18_000 && start + 2000 <= 32_765,
+            "buffer DT{start}"
+        );
+    }
+}
+
+#[test]
+fn plc_listing_homes_with_command_4() {
+    let listing = read(LISTING);
+    let code = instructions(&listing);
+    let rungs = rungs(&code);
+    let home = format!("ST= {COMMAND_OF_SCAN}, K4");
+    assert!(
+        rungs.iter().any(|r| r.first_condition() == home),
+        "no home command"
+    );
+    let accept = rung_with(&rungs, &format!("F0 MV K5, {STATE}"));
+    for line in [
+        format!("RST {HOMED}"),
+        "F10 BKMV DT1040, DT1047, DT1150".to_owned(),
+        "F0 MV K0, DT1032".to_owned(),
+    ] {
+        assert!(
+            accept.has_output(&line),
+            "accepting a home command lacks `{line}`"
+        );
+    }
+    let homed = rung_with(&rungs, &format!("SET {HOMED}"));
+    assert_eq!(homed.first_condition(), format!("ST= {STATE}, K5"));
+    assert!(homed.has_output(&format!("F0 MV K2, {STATE}")));
+    // Fault 7: timeout or failure input, the e-stop while homing, a home command while open.
+    let fault7 = code
+        .iter()
+        .filter(|l| **l == format!("F0 MV K7, {FAULT}"))
+        .count();
+    assert!(fault7 >= 3, "fault 7 written {fault7} times");
+    for c in 0..4 {
+        // Each homed channel's count is preset to from[c], into the register the status block
+        // reports as its elapsed count.
+        let elapsed = dmv_source(&code, 1008 + 2 * c);
+        let preset = format!("F1 DMV DT{}, {elapsed}", 1150 + 2 * c);
+        assert!(
+            code.contains(&preset),
+            "channel {c} is never preset (`{preset}`)"
+        );
+        let f171 = format!("F171 SPDH DT{}, K{c}", 1300 + 10 * c);
+        assert!(code.contains(&f171), "no `{f171}` in the integrator block");
+        for marker in ["begin", "end"] {
+            let line = format!("INTEGRATOR BLOCK: channel {c}'s home routine, {marker}");
+            assert!(listing.contains(&line), "{LISTING} lacks `{line}`");
+        }
+    }
+}
+
 #[test]
 fn plc_listing_stops_every_channel_through_dt90052() {
-    let code = instructions(&read(LISTING));
+    let code = listing_code();
+    let rungs = rungs(&code);
+    let stop = rung_with(&rungs, "OT R45");
+    assert_eq!(
+        stop.conditions,
+        [
+            format!("ST {ESTOP_OPEN}"),
+            format!("OR= {COMMAND_OF_SCAN}, K2")
+        ]
+    );
+    let acts = rungs
+        .iter()
+        .find(|r| r.conditions == ["ST R45"])
+        .expect("no stop rung");
     for channel in 0..4 {
-        let stop = format!("F0 MV H{channel}108, DT90052");
-        assert!(
-            code.contains(&stop),
-            "{LISTING} never stops channel {channel} with `{stop}`"
-        );
-        let f174 = format!("F174 SP0H I0DT0, K{channel}");
-        assert!(code.contains(&f174), "{LISTING} never runs `{f174}`");
+        let line = format!("F0 MV H{channel}108, DT90052");
+        assert!(acts.has_output(&line), "the stop never runs `{line}`");
+    }
+    for line in ["F0 MV K0, DT1032", "F0 MV K0, WR10"] {
+        assert!(acts.has_output(line), "the stop lacks `{line}`");
     }
 }
 
 #[test]
 fn plc_listing_ends_its_main_program_before_its_subroutine() {
-    let code = instructions(&read(LISTING));
+    let code = listing_code();
     let at = |needle: &str| code.iter().position(|l| l == needle);
     let ed = at("ED").expect("no ED");
     assert!(
@@ -370,18 +950,15 @@ fn plc_listing_ends_its_main_program_before_its_subroutine() {
         "SUB 1 must follow ED"
     );
     assert_eq!(code.last().map(String::as_str), Some("RET"));
-    // The first scan clears the command word: no stale start after a power loss.
-    assert!(code.contains(&"F0 MV K0, DT1032".to_owned()));
-}
-
-#[test]
-fn plc_listing_uses_the_default_contract_addresses() {
-    let code = instructions(&read(LISTING)).join("\n");
-    // Magic and version into DT1000/DT1001, the command word DT1032, bank 0 channel 0's area.
-    for needle in [
-        "H4C49", "DT1000", "DT1001", "DT1002", "DT1032", "DT1033", "2000",
-    ] {
-        assert!(code.contains(needle), "{LISTING} lacks {needle}");
+    // Every label the subroutine jumps or loops to is in it, once.
+    let sub = &code[ed..];
+    for line in sub
+        .iter()
+        .filter(|l| l.starts_with("JP ") || l.starts_with("LOOP "))
+    {
+        let label = line.split([' ', ',']).nth(1).unwrap_or("");
+        let lbl = format!("LBL {label}");
+        assert_eq!(sub.iter().filter(|l| **l == lbl).count(), 1, "`{line}`");
     }
 }
 
@@ -404,36 +981,125 @@ fn plc_listing_comments_every_block() {
 }
 
 #[test]
-fn plc_readme_lists_every_unverified_address_of_the_listing() {
+fn plc_readme_and_header_list_every_special_address_with_its_status() {
     let listing = read(LISTING);
-    let readme = read("deploy/plc/README.md");
-    let unverified: BTreeSet<String> = listing
-        .lines()
-        .filter(|l| l.contains("UNVERIFIED"))
-        .flat_map(|l| {
-            l.split(|c: char| !c.is_ascii_alphanumeric())
-                .filter(|w| is_special_address(w))
-                .map(str::to_owned)
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    let readme = read(PLC_README);
+    let used = special_addresses(instructions(&listing).iter().map(String::as_str));
+    let unverified = special_addresses(listing.lines().filter(|l| l.contains("UNVERIFIED")));
     assert!(
         !unverified.is_empty(),
         "{LISTING} marks no special address UNVERIFIED"
     );
-    for address in &unverified {
+    // The header: every comment line before the first instruction.
+    let header: Vec<&str> = listing.lines().take_while(|l| l.starts_with(';')).collect();
+    let in_header = special_addresses(header.iter().copied());
+    for address in used.union(&unverified) {
         assert!(
-            readme.contains(address.as_str()),
-            "deploy/plc/README.md does not list {address}, which {LISTING} marks UNVERIFIED"
+            in_header.contains(address),
+            "{LISTING}'s header lacks {address}"
+        );
+        let rows: Vec<&str> = readme
+            .lines()
+            .filter(|l| l.starts_with('|') && l.contains(address.as_str()))
+            .collect();
+        assert!(
+            rows.iter().any(|r| ["confirmed", "probable", "unknown"]
+                .iter()
+                .any(|s| r.contains(s))),
+            "{PLC_README} has no row giving {address}'s status"
+        );
+    }
+    // The probable FP-X addresses come with the alternative written beside every use.
+    for line in listing.lines().filter(|l| {
+        let code = l.split(';').next().unwrap_or("");
+        ["R911", "DT9034", "DT9035", "DT9036"]
+            .iter()
+            .any(|a| code.contains(a))
+    }) {
+        assert!(
+            line.contains("UNVERIFIED") && line.contains("alternative"),
+            "{LISTING}: `{line}` has no alternative beside it"
         );
     }
 }
 
-/// A special relay (`R9xxx`) or special data register (`DT9xxxx`).
-fn is_special_address(word: &str) -> bool {
-    let digits = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_hexdigit());
-    word.strip_prefix("DT9").is_some_and(|d| digits(d, 4))
-        || word.strip_prefix("R9").is_some_and(|d| digits(d, 3))
+/// The commission's steps and checks, named as the commission command names them.
+const COMMISSION: [(&str, &[&str]); 3] = [
+    (
+        "link",
+        &[
+            "headers %, <",
+            "largest frame/read/write",
+            "round trip",
+            "scan time from heartbeat rate",
+            "RUN/PROG read",
+        ],
+    ),
+    (
+        "contract",
+        &["magic", "version", "heartbeat", "host echo", "ready bits"],
+    ),
+    (
+        "pulses",
+        &[
+            "busy on then off",
+            "elapsed moves by exactly the table's pulses",
+            "time taken vs frequency",
+            "two-segment table chains",
+            "stop mid-table then a following start works",
+            "`from` interlock refuses fault 5",
+            "repeated seq ignored",
+        ],
+    ),
+];
+
+#[test]
+fn plc_readme_names_commission_steps_exactly() {
+    let readme = read(PLC_README);
+    let mut cells = 0;
+    let mut header_has_column = false;
+    for line in readme.lines() {
+        if !line.starts_with('|') {
+            header_has_column = false;
+            continue;
+        }
+        let row: Vec<&str> = line.trim_matches('|').split(" | ").map(str::trim).collect();
+        if row.last() == Some(&"measured by") {
+            header_has_column = true;
+            continue;
+        }
+        if !header_has_column || line.chars().all(|ch| ch == '|' || ch == '-') {
+            continue;
+        }
+        let cell = row.last().unwrap();
+        for item in cell.split("; ") {
+            cells += 1;
+            if ["load", "by hand", "not measured"]
+                .iter()
+                .any(|p| item.starts_with(p))
+            {
+                continue;
+            }
+            let known = COMMISSION.iter().any(|(step, checks)| {
+                item.strip_prefix(step)
+                    .and_then(|rest| rest.strip_prefix(": "))
+                    .is_some_and(|check| checks.contains(&check))
+            });
+            assert!(known, "{PLC_README}: `{item}` names no commission check");
+        }
+    }
+    assert!(
+        cells > 40,
+        "{PLC_README}: only {cells} `measured by` entries"
+    );
+    for (step, checks) in COMMISSION {
+        for check in checks {
+            assert!(
+                readme.contains(&format!("{step}: {check}")),
+                "{PLC_README} never names `{step}: {check}`"
+            );
+        }
+    }
 }
 
 #[test]

@@ -311,6 +311,10 @@ async fn round_trip<P: Plc>(plc: &mut P, peer: &Spawned) {
 }
 
 #[tokio::test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 async fn linterpd_client_round_trips_with_a_pymodbus_tcp_server() {
     let (mut server, address) = pymodbus_tcp_server();
     let link = open_tcp(&TcpSettings {
@@ -327,6 +331,10 @@ async fn linterpd_client_round_trips_with_a_pymodbus_tcp_server() {
 }
 
 #[tokio::test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 async fn linterpd_client_round_trips_with_a_pymodbus_rtu_server_over_a_pty_pair() {
     let pty = PtyPair::new();
     let mut server = pymodbus_rtu_server(&pty.a);
@@ -381,6 +389,10 @@ fn mbpoll_read_two(port: &str, start: u16) -> (Finished, Vec<(u32, i64)>) {
 }
 
 #[tokio::test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 async fn mbpoll_reads_what_linterpd_wrote_to_a_pymodbus_server() {
     tool("mbpoll");
     let (mut server, address) = pymodbus_tcp_server();
@@ -440,6 +452,10 @@ fn assert_client_matched(finished: &Finished, what: &str) {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 fn pymodbus_client_round_trips_with_the_mock_over_tcp() {
     python();
     let (mut mock, address) = mock_plc(&["--listen", "127.0.0.1:0"]);
@@ -455,6 +471,10 @@ fn pymodbus_client_round_trips_with_the_mock_over_tcp() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 fn pymodbus_client_round_trips_with_the_mock_over_rtu_on_a_pty_pair() {
     python();
     let pty = PtyPair::new();
@@ -470,6 +490,10 @@ fn pymodbus_client_round_trips_with_the_mock_over_rtu_on_a_pty_pair() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs socat, mbpoll and pymodbus: cargo test --features third-party-peers (.ci/run)"
+)]
 fn mbpoll_reads_the_mock_status_block() {
     tool("mbpoll");
     let (mut mock, address) = mock_plc(&["--listen", "127.0.0.1:0"]);
@@ -482,8 +506,8 @@ fn mbpoll_reads_the_mock_status_block() {
     );
     assert_eq!(
         values,
-        [(1001, 19_529), (1002, 1)],
-        "mbpoll should show the magic 0x4C49 = 19529 and version 1\n{}",
+        [(1001, i64::from(MAGIC)), (1002, i64::from(VERSION))],
+        "mbpoll should show the magic 0x4C49 = 19529 and the contract version {VERSION}\n{}",
         finished.describe()
     );
     stop_cleanly(&mut mock, "linterpd mock-plc");

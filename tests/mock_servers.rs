@@ -6,6 +6,7 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
+use linterpd::contract::{MAGIC, VERSION};
 use linterpd::mewtocol::Station;
 use linterpd::mock::{
     FaultScript, MockConfig, MockPlc, ModbusServer, ModbusServerOptions, SharedMock, StationFilter,
@@ -121,7 +122,7 @@ async fn modbus_rtu_on_a_pseudo_terminal() {
     let status = plc.read_words(1_000, 2).await.unwrap();
     assert_eq!(
         status,
-        [0x4C49, 1],
+        [MAGIC, VERSION],
         "magic and version of a live status block"
     );
 }
@@ -165,7 +166,7 @@ async fn mock_plc_process_serves_mewtocol_and_exits_0_on_sigterm() {
     let stream = TcpStream::connect(&address).await.unwrap();
     let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
     let mut plc = MewtocolClient::new(stream, options);
-    assert_eq!(plc.read_words(1_000, 2).await.unwrap(), [0x4C49, 1]);
+    assert_eq!(plc.read_words(1_000, 2).await.unwrap(), [MAGIC, VERSION]);
 
     terminate(&child);
     let status = tokio::task::spawn_blocking(move || child.wait().unwrap())

@@ -7,7 +7,9 @@ mod common;
 
 use std::time::Duration;
 
-use common::exchange::{exchange, mock_at_seed_start, settings, upload};
+use common::exchange::{
+    exchange, home_where_it_stands, machine, mock_at_seed_start, settings, upload,
+};
 use linterpd::contract::MAGIC;
 use linterpd::mewtocol::Station;
 use linterpd::mock::{
@@ -21,8 +23,8 @@ use linterpd::plc::{
 use tokio::io::DuplexStream;
 use tokio::net::{TcpListener, TcpStream};
 
-/// Bank writes begin after the status reads of `check_alive` (commands 1-2): command 5 is
-/// inside the first channel's table.
+/// Bank writes begin after the host is made ready (status, host word, status: commands 1-3):
+/// command 5 is inside the second channel's table.
 const IN_UPLOAD: u64 = 5;
 
 fn mewtocol(shared: &SharedMock) -> Contract<MewtocolClient<DuplexStream>> {
@@ -51,17 +53,22 @@ fn assert_no_start(shared: &SharedMock, counts_before: [i32; 4]) {
     assert_eq!(status.elapsed, counts_before);
 }
 
+/// The channels' counts (the engines', not the status block's copy of its last scan).
 fn counts(shared: &SharedMock) -> [i32; 4] {
-    shared.with(|m| m.status()).elapsed
+    shared.with(|m| std::array::from_fn(|c| m.count(c) as i32))
 }
 
 async fn refused_then_recovers(script: &str, expect: impl Fn(&ContractError) -> bool) -> String {
     let shared = mock_at_seed_start(script);
     let before = counts(&shared);
     let mut c = mewtocol(&shared);
-    let err = match upload(&mut c, 1).await {
+    let mut m = machine();
+    let err = match upload(&mut c, &mut m, 1).await {
         Err(e) => e,
-        Ok((_, bank)) => c.start(bank).await.expect_err("the start must be refused"),
+        Ok((_, bank, planned)) => c
+            .run(&mut m, &bank, planned, |_| {})
+            .await
+            .expect_err("the start must be refused"),
     };
     assert!(expect(&err), "{err:?}");
     assert_no_start(&shared, before);
@@ -71,6 +78,10 @@ async fn refused_then_recovers(script: &str, expect: impl Fn(&ContractError) -> 
         m.set_mode(PlcMode::Run);
     });
     let mut again = mewtocol(&shared);
+    if !shared.with(|m| m.homed()) {
+        // PROG -> RUN is a restart: the program's first scan cleared the homed bit.
+        home_where_it_stands(&mut again).await.unwrap();
+    }
     exchange(&mut again, 2).await.unwrap();
     err.to_string()
 }
@@ -82,7 +93,7 @@ async fn dropped_replies_time_out_and_start_nothing() {
     })
     .await;
     assert!(
-        msg.starts_with("no reply to write DT") && msg.ends_with("within 300 ms"),
+        msg.starts_with("no reply to write DT") && msg.ends_with("within 320 ms"),
         "{msg}"
     );
 }
@@ -128,7 +139,7 @@ async fn plc_error_code_is_passed_up_unchanged_and_starts_nothing() {
 #[tokio::test]
 async fn heartbeat_frozen_during_the_upload_refuses_the_start() {
     let msg = refused_then_recovers(&format!("freeze@{IN_UPLOAD}"), |e| {
-        matches!(e, ContractError::StaleHeartbeat { .. })
+        matches!(e, ContractError::Stalled { .. })
     })
     .await;
     assert!(msg.contains("the PLC is stalled"), "{msg}");
@@ -137,7 +148,7 @@ async fn heartbeat_frozen_during_the_upload_refuses_the_start() {
 #[tokio::test]
 async fn prog_mode_during_the_upload_refuses_the_start() {
     let msg = refused_then_recovers(&format!("prog@{IN_UPLOAD}"), |e| {
-        matches!(e, ContractError::StaleHeartbeat { .. })
+        matches!(e, ContractError::Stalled { .. })
     })
     .await;
     assert!(msg.ends_with("stalled, and in PROG mode"), "{msg}");
@@ -172,7 +183,10 @@ async fn modbus_exception_and_lost_replies_during_upload_start_nothing() {
         let shared = mock_at_seed_start(&script);
         let before = counts(&shared);
         let mut c = modbus(&shared).await;
-        let err = upload(&mut c, 1).await.map(|_| ()).unwrap_err();
+        let err = upload(&mut c, &mut machine(), 1)
+            .await
+            .map(|_| ())
+            .unwrap_err();
         assert!(err.to_string().contains(want), "{script}: {err}");
         assert_no_start(&shared, before);
         exchange(&mut modbus(&shared).await, 2).await.unwrap();

@@ -1,7 +1,30 @@
-//! Parsers for values people type: poses and durations. Raw text in, typed values or an error
-//! naming the text out.
+//! Parsers for values people type: poses, lengths, speeds and durations, one spelling on every
+//! subcommand (`--tolerance 0.05mm`, `--speed 240mm/s`, `--period 50ms`, `--timeout 30s`). Raw
+//! text in, typed values or an error naming the text and the limit out; the caller adds the
+//! flag. Also the `--method` every subcommand shares.
 
 use anyhow::{Context, anyhow, bail};
+use clap::ValueEnum;
+
+/// `--method`, on `plan` and `move`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// The seed's constant time period method.
+    ConstantPeriod,
+    /// Rows of any length, as few as keep the path within `--tolerance`.
+    BoundedError,
+}
+
+impl MethodArg {
+    /// Its name as typed, and as the API takes it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ConstantPeriod => "constant-period",
+            Self::BoundedError => "bounded-error",
+        }
+    }
+}
 
 /// A pose as typed: x, y, z in mm and an optional tool angle in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,6 +55,45 @@ pub fn parse_pose(text: &str) -> anyhow::Result<PoseArg> {
     })
 }
 
+/// Parses `DX,DY,DZ` or `DX,DY,DZ,DA` (mm, mm, mm, degrees): a jog's offset, as typed.
+pub fn parse_offset(text: &str) -> anyhow::Result<Vec<f64>> {
+    parse_list(
+        text,
+        3..=4,
+        "an offset is DX,DY,DZ or DX,DY,DZ,DA (mm and degrees)",
+        &["dx", "dy", "dz", "da"],
+    )
+}
+
+/// Parses `J1,J2,J3,J4`: every joint's value in the joints' order (degrees or mm).
+pub fn parse_joints(text: &str) -> anyhow::Result<[f64; 4]> {
+    let values = parse_list(
+        text,
+        4..=4,
+        "joints are J1,J2,J3,J4 in the joints' order (degrees or mm)",
+        &["j1", "j2", "j3", "j4"],
+    )?;
+    Ok([values[0], values[1], values[2], values[3]])
+}
+
+/// Comma-separated finite numbers, as many as `count` allows, each named for errors.
+fn parse_list(
+    text: &str,
+    count: std::ops::RangeInclusive<usize>,
+    shape: &str,
+    names: &[&str],
+) -> anyhow::Result<Vec<f64>> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if !count.contains(&parts.len()) {
+        bail!("'{text}' has {} values; {shape}", parts.len());
+    }
+    parts
+        .iter()
+        .zip(names)
+        .map(|(part, name)| parse_number(part).with_context(|| format!("'{text}', value {name}")))
+        .collect()
+}
+
 /// Parses a finite number.
 pub fn parse_number(text: &str) -> anyhow::Result<f64> {
     let value: f64 = text
@@ -42,6 +104,33 @@ pub fn parse_number(text: &str) -> anyhow::Result<f64> {
         bail!("'{text}' is not a finite number");
     }
     Ok(value)
+}
+
+/// A number followed by an optional `unit` (blanks allowed between): the number.
+fn number_in(text: &str, unit: &str) -> anyhow::Result<f64> {
+    let trimmed = text.trim();
+    parse_number(trimmed.strip_suffix(unit).unwrap_or(trimmed))
+}
+
+/// A length in mm, written `0.05mm` or `0.05`; above 0.
+pub fn parse_length_mm(text: &str) -> anyhow::Result<f64> {
+    let value = number_in(text, "mm")?;
+    if value <= 0.0 {
+        bail!("'{text}' must be above 0 mm");
+    }
+    Ok(value)
+}
+
+/// A speed in mm/s, written `240mm/s` or `240` (the planner or the daemon checks its limits).
+pub fn parse_speed_mm_s(text: &str) -> anyhow::Result<f64> {
+    number_in(text, "mm/s")
+}
+
+/// A duration, written `50ms`, `0.2s` or `250us` (a unit is required, as in the config).
+pub fn parse_duration(text: &str) -> anyhow::Result<std::time::Duration> {
+    let seconds = crate::config::parse_duration_s(text)?;
+    std::time::Duration::try_from_secs_f64(seconds)
+        .map_err(|_| anyhow!("'{text}' is too long a duration"))
 }
 
 #[cfg(test)]
@@ -58,6 +147,27 @@ mod tests {
     }
 
     #[test]
+    fn offsets_and_joints_take_their_count_of_numbers() {
+        assert_eq!(parse_offset("0,5,-2").unwrap(), [0.0, 5.0, -2.0]);
+        assert_eq!(parse_offset("1,2,3,90").unwrap(), [1.0, 2.0, 3.0, 90.0]);
+        let e = format!("{:#}", parse_offset("1,2").unwrap_err());
+        assert!(
+            e.contains("'1,2' has 2 values; an offset is DX,DY,DZ"),
+            "{e}"
+        );
+        assert_eq!(
+            parse_joints("10, 20, 30, -5").unwrap(),
+            [10.0, 20.0, 30.0, -5.0]
+        );
+        let e = format!("{:#}", parse_joints("10,20,x,0").unwrap_err());
+        assert!(
+            e.contains("value j3") && e.contains("'x' is not a number"),
+            "{e}"
+        );
+        assert!(parse_joints("1,2,3").is_err());
+    }
+
+    #[test]
     fn garbage_pose_is_refused_naming_the_text() {
         let err = format!("{:#}", parse_pose("1,2,abc").unwrap_err());
         assert!(
@@ -69,5 +179,35 @@ mod tests {
         assert!(
             format!("{:#}", parse_pose("1,NaN,3").unwrap_err()).contains("not a finite number")
         );
+    }
+
+    #[test]
+    fn lengths_and_speeds_take_their_unit_or_none() {
+        assert_eq!(parse_length_mm("0.05mm").unwrap(), 0.05);
+        assert_eq!(parse_length_mm(" 0.05 mm").unwrap(), 0.05);
+        assert_eq!(parse_length_mm("0.05").unwrap(), 0.05);
+        let e = format!("{:#}", parse_length_mm("0mm").unwrap_err());
+        assert!(e.contains("'0mm' must be above 0 mm"), "{e}");
+        assert!(format!("{:#}", parse_length_mm("5in").unwrap_err()).contains("'5in'"));
+        assert_eq!(parse_speed_mm_s("240mm/s").unwrap(), 240.0);
+        assert_eq!(parse_speed_mm_s("240").unwrap(), 240.0);
+        assert!(parse_speed_mm_s("fast").is_err());
+    }
+
+    #[test]
+    fn durations_need_a_unit() {
+        assert_eq!(
+            parse_duration("250ms").unwrap(),
+            std::time::Duration::from_millis(250)
+        );
+        let e = format!("{:#}", parse_duration("3").unwrap_err());
+        assert!(e.contains("no unit"), "{e}");
+    }
+
+    #[test]
+    fn method_names_are_the_ones_clap_takes() {
+        for m in MethodArg::value_variants() {
+            assert_eq!(m.to_possible_value().unwrap().get_name(), m.name());
+        }
     }
 }

@@ -1,10 +1,13 @@
-//! `linterpd check-config`: read a configuration file as the daemon would and say what it holds,
-//! or the first thing wrong with it (line, key, value, limit). Needs no daemon.
+//! `linterpd check-config`: read a configuration file as the daemon would and say what it holds
+//! (text, or with `--json` one document: `{"config", "robots": [{"name", "kinematics",
+//! "joints": [{"name", "channel"}], "link"}]}`), or the first thing wrong with it (line, key,
+//! value, limit) on stderr with exit 2. Needs no daemon.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
+use serde_json::{Value, json};
 
 use super::{Failure, bad_input};
 use crate::config::Config;
@@ -21,6 +24,9 @@ pub struct CheckConfigArgs {
         default_value = "/etc/linterpd/linterpd.toml"
     )]
     pub config: PathBuf,
+    /// Print one JSON document instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// A link in a line: protocol, transport, station.
@@ -50,6 +56,19 @@ fn describe(link: &LinkSettings) -> String {
 /// Runs `linterpd check-config`.
 pub fn run(args: &CheckConfigArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let config = Config::load(&args.config).map_err(bad_input)?;
+    let written = if args.json {
+        writeln!(out, "{}", document(args, &config))
+    } else {
+        out.write_all(text(args, &config).as_bytes())
+    };
+    written.map_err(|e| Failure::Runtime(e.into()))
+}
+
+fn link_of(config: &Config, robot: &str) -> Option<String> {
+    config.link(robot).map(describe)
+}
+
+fn text(args: &CheckConfigArgs, config: &Config) -> String {
     let mut text = format!(
         "{}: {} robot(s)\n",
         args.config.display(),
@@ -61,9 +80,7 @@ pub fn run(args: &CheckConfigArgs, out: &mut dyn std::io::Write) -> Result<(), F
             .iter()
             .map(|j| format!("{} on channel {}", j.name, j.channel))
             .collect();
-        let link = config
-            .link(&robot.name)
-            .map_or("no PLC link".to_owned(), describe);
+        let link = link_of(config, &robot.name).unwrap_or_else(|| "no PLC link".to_owned());
         let _ = writeln!(
             text,
             "  {} ({}): {}; {link}",
@@ -72,6 +89,26 @@ pub fn run(args: &CheckConfigArgs, out: &mut dyn std::io::Write) -> Result<(), F
             joints.join(", ")
         );
     }
-    out.write_all(text.as_bytes())
-        .map_err(|e| Failure::Runtime(e.into()))
+    text
+}
+
+fn document(args: &CheckConfigArgs, config: &Config) -> Value {
+    let robots: Vec<Value> = config
+        .robots
+        .iter()
+        .map(|robot| {
+            let joints: Vec<Value> = robot
+                .joints
+                .iter()
+                .map(|j| json!({ "name": j.name, "channel": j.channel }))
+                .collect();
+            json!({
+                "name": robot.name,
+                "kinematics": robot.kinematics.name(),
+                "joints": joints,
+                "link": link_of(config, &robot.name),
+            })
+        })
+        .collect();
+    json!({ "config": args.config.display().to_string(), "robots": robots })
 }

@@ -20,8 +20,8 @@ use super::plan::ModelArg;
 use super::{Failure, bad_input};
 use crate::config::parse_duration_s;
 use crate::mock::{
-    FaultScript, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, ModbusServer,
-    ModbusServerOptions, SharedMock, StationFilter, write_csv,
+    FaultScript, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, MockVariant,
+    ModbusServer, ModbusServerOptions, SharedMock, StationFilter, write_csv,
 };
 use crate::table::FrequencyModel;
 
@@ -57,9 +57,58 @@ pub struct MockPlcArgs {
     /// Write every pulse as CSV (`time_s,channel,count`) here at exit.
     #[arg(long)]
     pub trace: Option<PathBuf>,
-    /// Fault script, e.g. `drop@3,corrupt@1%,prog@t=5,seed=7`.
+    /// Fault script, items separated by commas, e.g. `drop@3,corrupt@1%,prog@t=5,seed=7`.
+    /// `ACTION@K` at command number K (the first is 1), `ACTION@t=S` at S seconds (core actions
+    /// only), `ACTION@P%` on each command with probability P percent (link actions only),
+    /// `seed=N`. Link actions: drop, corrupt, close, delay<ms>, error<NN> (MEWTOCOL-COM),
+    /// exception<N> (Modbus). Core actions: freeze, thaw (the heartbeat), prog, run (the mode),
+    /// restart (a power cycle: counts 0, homed bit clear, first scan; e.g. `restart@t=2`).
     #[arg(long, allow_hyphen_values = true)]
     pub faults: Option<String>,
+    /// Start with the homed bit clear, as a PLC does at power-up: moves are refused until
+    /// `linterpd home` (default: homed, as a machine homed before linterpd came).
+    #[arg(long)]
+    pub unhomed: bool,
+    /// Behave like the reference listing, or misbehave in one way `linterpd commission` must
+    /// find.
+    #[arg(long, value_enum, default_value = "listing")]
+    pub variant: VariantArg,
+}
+
+/// `--variant`: the listing, or one defect a real FP-X might have.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VariantArg {
+    /// The reference listing as deploy/plc/README.md expects it.
+    Listing,
+    /// The busy relays never rise: busy word 0, fault 2 never; segments end by the count.
+    BusyNeverRises,
+    /// A stop only pauses F174; the next start on the channel resumes the stopped table.
+    StopPauses,
+    /// `<` frames get no answer.
+    AngleRefused,
+    /// MEWTOCOL reads/writes above 64 words get `! 41`, Modbus requests above 100 registers
+    /// exception 03.
+    SmallRequests,
+    /// The channels follow the fpx-divider model, whatever --frequency-model says.
+    DividerClock,
+    /// The channels output exactly the value written, whatever --frequency-model says.
+    IdealClock,
+}
+
+impl VariantArg {
+    /// The mock's variant.
+    #[must_use]
+    pub fn variant(self) -> MockVariant {
+        match self {
+            Self::Listing => MockVariant::Listing,
+            Self::BusyNeverRises => MockVariant::BusyNeverRises,
+            Self::StopPauses => MockVariant::StopPauses,
+            Self::AngleRefused => MockVariant::AngleRefused,
+            Self::SmallRequests => MockVariant::SmallRequests,
+            Self::DividerClock => MockVariant::DividerClock,
+            Self::IdealClock => MockVariant::IdealClock,
+        }
+    }
 }
 
 /// `--protocol`.
@@ -135,6 +184,8 @@ fn validate(args: &MockPlcArgs) -> anyhow::Result<Settings> {
     let config = MockConfig {
         scan_s,
         model,
+        homed: !args.unhomed,
+        variant: args.variant.variant(),
         ..MockConfig::default()
     };
     MockPlc::new(config).with_context(|| format!("--scan '{}'", args.scan))?;
@@ -183,6 +234,7 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         station = ?settings.station,
         baud = ?settings.baud,
         scan_s = settings.config.scan_s,
+        variant = settings.config.variant.name(),
         "mock PLC in RUN, listening on {shown}"
     );
     let outcome = tokio::select! {
@@ -324,6 +376,39 @@ mod tests {
         let s = parse(&line).unwrap();
         assert_eq!(s.station, StationFilter::Only(1));
         assert_eq!(s.endpoint, Endpoint::Serial("/dev/x".into()));
+        assert!(s.config.homed);
+    }
+
+    #[test]
+    fn unhomed_clears_the_homed_bit_and_restart_faults_parse() {
+        let line = [
+            "linterpd",
+            "mock-plc",
+            "--listen",
+            "127.0.0.1:0",
+            "--unhomed",
+            "--faults",
+            "restart@t=2,restart@5",
+        ];
+        let s = parse(&line).unwrap();
+        assert!(!s.config.homed);
+    }
+
+    #[test]
+    fn every_variant_is_offered_by_its_own_name() {
+        for v in MockVariant::ALL {
+            let line = [
+                "linterpd",
+                "mock-plc",
+                "--listen",
+                "127.0.0.1:0",
+                "--variant",
+                v.name(),
+            ];
+            assert_eq!(parse(&line).unwrap().config.variant, v);
+        }
+        let s = parse(&["linterpd", "mock-plc", "--listen", "127.0.0.1:0"]).unwrap();
+        assert_eq!(s.config.variant, MockVariant::Listing);
     }
 
     #[test]

@@ -1,25 +1,58 @@
 //! The `linterpd` command line: one module per subcommand. `anyhow` lives here and in `main.rs`
-//! only; every failure is sorted into bad input (exit 2) or a runtime failure (exit 1).
+//! only; every failure is sorted into one of the exit codes below.
+//!
+//! ```text
+//!  0  done (for `status`: every robot's link is up and no fault is latched)
+//!  1  any other failure (IO, the PLC refused or failed a command: a 502); `status`: a robot
+//!     reports a fault
+//!  2  bad input, nothing was done: arguments, config, a move the daemon refuses as impossible
+//!     (400, 404, 422)
+//!  3  the robot did not do it: refused for its state now (409: not-homed, homing, faulted,
+//!     not-ready, busy, no fault to clear), a move that ended stopped, failed or cancelled, or
+//!     `move --timeout` ran out; `status`: a robot's PLC link is down or stalled (as
+//!     `systemctl status` exits 3 for a unit that is not running)
+//!  4  the daemon cannot be reached (not running, wrong socket, no permission on it), or it
+//!     cannot reach the PLC now (503: link-down, stalled, shutting-down)
+//! ```
+//! A refusal's message ends with the API's `reason` word, e.g. `(reason: not-homed)`. Output to a
+//! closed pipe (`linterpd plan ... | head -1`) ends quietly with 0.
 
 pub mod args;
 pub mod check_config;
+pub mod clear_fault;
 pub mod client;
+pub mod commission;
+pub mod completions;
 pub mod demo;
+mod failure;
+pub mod home;
 pub mod logging;
 pub mod mock_plc;
 pub mod moves;
 pub mod plan;
+pub mod positions;
 pub mod serve;
 pub mod status;
 pub mod stop;
 
-use std::fmt;
-
 use clap::{Parser, Subcommand};
+
+pub use failure::{
+    EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_NOT_DONE, EXIT_OK, EXIT_UNREACHABLE, Failure, bad_input,
+};
+
+/// What `--version` prints after the name: the package version and the commit it was built
+/// from (`unknown` when built outside a git checkout; see build.rs).
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("LINTERPD_COMMIT"),
+    ")"
+);
 
 /// linterpd: straight-line moves for PLC-driven robots.
 #[derive(Debug, Parser)]
-#[command(name = "linterpd", version, about, long_about = None)]
+#[command(name = "linterpd", version = VERSION, about, long_about = None)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -36,17 +69,33 @@ pub enum Command {
     Plan(plan::PlanArgs),
     /// Serve the mock PLC (MEWTOCOL-COM or Modbus, TCP or serial) until SIGINT / SIGTERM.
     MockPlc(mock_plc::MockPlcArgs),
-    /// Ask the daemon for a straight-line move and follow it to its end.
+    /// Ask the daemon for a move and follow it to its end: a straight line to a pose (--to), to a
+    /// taught position (--to @NAME) or by an offset (--by), or a joint-space move (--joints).
     Move(moves::MoveArgs),
-    /// Show each robot's link, PLC state, pose and moves.
+    /// Teach and manage the robot's named positions: save (the pose now), list, show, delete.
+    Pos(positions::PosArgs),
+    /// Show each robot's link, PLC state, pose and moves; exit 3 when a robot's PLC link is
+    /// down or stalled, 1 when a robot reports a fault.
     Status(status::StatusArgs),
     /// Stop every channel of a robot now (queued moves are cancelled).
     Stop(stop::StopArgs),
+    /// Home a robot: the PLC's home routine sets every joint to its home count
+    /// (`home_counts` in the config); returns when it has ended.
+    Home(home::HomeArgs),
+    /// Clear a fault latched on a robot's PLC (refused when there is none, or while it moves).
+    ClearFault(clear_fault::ClearFaultArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),
+    /// Check a real unit with the drives' power off: the link, the contract, tiny pulse tables
+    /// per channel; report what fits and the config lines to paste.
+    Commission(commission::CommissionArgs),
     /// Run the daemon: a worker per robot on its PLC link, the HTTP/JSON API on a Unix socket
     /// (docs/API.md), until SIGINT / SIGTERM.
     Serve(serve::ServeArgs),
+    /// Print a shell completion script for linterpd (bash, zsh, fish, elvish, powershell).
+    Completions(completions::CompletionsArgs),
+    /// Print linterpd's man page (roff), or write a page per subcommand into a directory.
+    Man(completions::ManArgs),
 }
 
 impl Command {
@@ -100,75 +149,27 @@ fn print(
     written.map_err(|e| Failure::Runtime(e.into()))
 }
 
-/// Exit code for a run that worked.
-pub const EXIT_OK: u8 = 0;
-/// Exit code for a failure that is not the input's fault (IO, a bug).
-pub const EXIT_FAILURE: u8 = 1;
-/// Exit code for bad input: config, arguments, an impossible move (a 4xx from the daemon).
-/// Nothing was done.
-pub const EXIT_BAD_INPUT: u8 = 2;
-/// Exit code for a move that was accepted but ended stopped or failed.
-pub const EXIT_MOVE_ENDED: u8 = 3;
-/// Exit code when the daemon cannot be reached (not running, wrong socket).
-pub const EXIT_UNREACHABLE: u8 = 4;
-
-/// A failed run: what went wrong and whose fault it was.
-#[derive(Debug)]
-pub enum Failure {
-    /// The input is wrong (exit 2).
-    BadInput(anyhow::Error),
-    /// Something else failed (exit 1).
-    Runtime(anyhow::Error),
-    /// The move ended stopped or failed (exit 3).
-    MoveEnded(anyhow::Error),
-    /// The daemon cannot be reached (exit 4).
-    Unreachable(anyhow::Error),
-}
-
-impl Failure {
-    /// The process exit code for this failure.
-    #[must_use]
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::BadInput(_) => EXIT_BAD_INPUT,
-            Self::Runtime(_) => EXIT_FAILURE,
-            Self::MoveEnded(_) => EXIT_MOVE_ENDED,
-            Self::Unreachable(_) => EXIT_UNREACHABLE,
-        }
-    }
-
-    /// A client error: unreachable if the daemon is not there, else a runtime failure.
-    #[must_use]
-    pub fn from_client(e: anyhow::Error) -> Self {
-        if e.downcast_ref::<client::NotRunning>().is_some() {
-            Self::Unreachable(e)
-        } else {
-            Self::Runtime(e)
-        }
-    }
-
-    /// A failure for an error answer: 4xx is bad input, anything else a runtime failure.
-    #[must_use]
-    pub fn from_status(status: hyper::StatusCode, e: anyhow::Error) -> Self {
-        if status.is_client_error() {
-            Self::BadInput(e)
-        } else {
-            Self::Runtime(e)
-        }
-    }
-}
-
-impl fmt::Display for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (Self::BadInput(e) | Self::Runtime(e) | Self::MoveEnded(e) | Self::Unreachable(e)) =
-            self;
-        write!(f, "{e:#}")
-    }
-}
-
-/// Bad input from anything that converts into an `anyhow::Error`.
-pub fn bad_input(e: impl Into<anyhow::Error>) -> Failure {
-    Failure::BadInput(e.into())
+/// Resolves the robot (`robot`, else the daemon's only one), POSTs
+/// `/v1/robots/{robot}/{action}` and prints `{robot}: {done}`, or the answer as JSON.
+fn robot_command(
+    daemon: &DaemonArgs,
+    robot: Option<&str>,
+    action: &str,
+    done: &str,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
+    daemon.block_on(async {
+        let client = client::Client::new(&daemon.socket);
+        let robot = client.robot(robot).await.map_err(Failure::from_client)?;
+        let answer = client
+            .expect(
+                hyper::Method::POST,
+                &format!("/v1/robots/{robot}/{action}"),
+                None,
+            )
+            .await?;
+        print(out, daemon.json, &answer, &format!("{robot}: {done}"))
+    })
 }
 
 /// Runs a parsed command line, writing its output to `out`.
@@ -178,9 +179,15 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Plan(args) => plan::run(&args, out),
         Command::MockPlc(args) => mock_plc::run(&args, out),
         Command::Move(args) => moves::run(&args, out),
+        Command::Pos(args) => positions::run(&args, out),
         Command::Status(args) => status::run(&args, out),
         Command::Stop(args) => stop::run(&args, out),
+        Command::Home(args) => home::run(&args, out),
+        Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),
+        Command::Commission(args) => commission::run(&args, out),
         Command::Serve(args) => serve::run(&args),
+        Command::Completions(args) => completions::run(&args, out),
+        Command::Man(args) => completions::man(&args, out),
     }
 }

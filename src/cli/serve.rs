@@ -3,7 +3,8 @@
 //!
 //! ```text
 //!  stderr / journal:  tracing log (journald fields under systemd)
-//!  exit:              0 after a signal; 2 for a bad config; 1 when serving fails
+//!  exit:              0 after a signal; 2 for a bad config; 1 when serving fails (another
+//!                     daemon holds the socket, a listener fails, a robot's worker dies)
 //! ```
 
 use std::path::PathBuf;
@@ -42,6 +43,7 @@ pub fn run(args: &ServeArgs) -> Result<(), Failure> {
     runtime
         .block_on(service::serve(
             &config,
+            Some(&args.config),
             &settings,
             notifier,
             service::shutdown_signal(),

@@ -1,9 +1,7 @@
 //! `linterpd stop`: stop every channel of a robot now, cancelling its queued moves.
 
 use clap::Args;
-use hyper::Method;
 
-use super::client::Client;
 use super::{DaemonArgs, Failure};
 
 /// Arguments of `linterpd stop`.
@@ -19,15 +17,5 @@ pub struct StopArgs {
 
 /// Runs `linterpd stop`.
 pub fn run(args: &StopArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    args.daemon.block_on(async {
-        let client = Client::new(&args.daemon.socket);
-        let robot = client
-            .robot(args.robot.as_deref())
-            .await
-            .map_err(Failure::from_client)?;
-        let answer = client
-            .expect(Method::POST, &format!("/v1/robots/{robot}/stop"), None)
-            .await?;
-        super::print(out, args.daemon.json, &answer, &format!("{robot}: stopped"))
-    })
+    super::robot_command(&args.daemon, args.robot.as_deref(), "stop", "stopped", out)
 }

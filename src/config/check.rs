@@ -137,6 +137,13 @@ impl Shown for i64 {
     }
 }
 
+impl Shown for Vec<Spanned<i64>> {
+    fn shown(&self) -> String {
+        let items: Vec<String> = self.iter().map(|v| v.get_ref().to_string()).collect();
+        format!("[{}]", items.join(", "))
+    }
+}
+
 impl Shown for String {
     fn shown(&self) -> String {
         format!("{self:?}")

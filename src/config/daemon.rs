@@ -6,21 +6,30 @@
 //! socket_mode = "0660"               # its permissions, octal (default "0660")
 //! listen = "127.0.0.1:8420"          # an optional TCP listener, IP:port
 //! token_file = "/etc/linterpd/token" # bearer token; required when listen is not loopback
+//! start_within = "10s"               # a queued move that cannot start this long after its turn
+//!                                    # came ends failed (never runs later)
+//! state_dir = "/var/lib/linterpd"    # move ids (and taught positions) kept across restarts
 //! ```
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::time::Duration;
 
 use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
+use super::duration::parse_duration_s;
 use super::raw::RawDaemon;
 
 /// The API socket when the config names none (deploy/linterpd.service's `RuntimeDirectory`).
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
 /// The socket's permissions when the config gives none: owner and group read/write.
 const DEFAULT_SOCKET_MODE: u32 = 0o660;
+/// The state directory when the config names none (deploy/linterpd.service's `StateDirectory`).
+pub(super) const DEFAULT_STATE_DIR: &str = "/var/lib/linterpd";
+/// How long a queued move may wait for its start after its turn came, by default.
+const DEFAULT_START_WITHIN: Duration = Duration::from_secs(10);
 
 /// How `linterpd serve` offers its API.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -33,6 +42,10 @@ pub struct DaemonSettings {
     pub listen: Option<SocketAddr>,
     /// The file holding the bearer token TCP clients must send, if any.
     pub token_file: Option<PathBuf>,
+    /// A queued move that cannot start this long after its turn came ends failed.
+    pub start_within: Duration,
+    /// Where state kept across restarts lives.
+    pub state_dir: PathBuf,
 }
 
 impl Default for DaemonSettings {
@@ -42,6 +55,8 @@ impl Default for DaemonSettings {
             socket_mode: DEFAULT_SOCKET_MODE,
             listen: None,
             token_file: None,
+            start_within: DEFAULT_START_WITHIN,
+            state_dir: PathBuf::from(DEFAULT_STATE_DIR),
         }
     }
 }
@@ -64,6 +79,17 @@ pub(super) fn settings(
     }
     if let Some(v) = &r.token_file {
         settings.token_file = Some(path(&at.child("token_file"), v)?);
+    }
+    if let Some(v) = &r.start_within {
+        let at = at.child("start_within");
+        let seconds = parse_duration_s(v.get_ref()).map_err(|e| at.invalid(v, e.problem))?;
+        if !(seconds > 0.0 && seconds <= 3_600.0) {
+            return Err(at.invalid(v, "must be longer than 0 s and at most 1 h"));
+        }
+        settings.start_within = Duration::from_secs_f64(seconds);
+    }
+    if let Some(v) = &r.state_dir {
+        settings.state_dir = path(&at.child("state_dir"), v)?;
     }
     if let Some(v) = &r.listen {
         let address = listen(&at.child("listen"), v)?;
@@ -132,13 +158,24 @@ mod tests {
     fn every_key_is_read() {
         let text = with_daemon(
             "socket = \"/tmp/x.sock\"\nsocket_mode = \"0600\"\nlisten = \"0.0.0.0:8420\"\n\
-             token_file = \"/etc/linterpd/token\"",
+             token_file = \"/etc/linterpd/token\"\nstart_within = \"3s\"\nstate_dir = \"/tmp/s\"",
         );
         let d = Config::from_toml(&text).unwrap().daemon;
+        assert_eq!(d.start_within, Duration::from_secs(3));
+        assert_eq!(d.state_dir, PathBuf::from("/tmp/s"));
         assert_eq!(d.socket, PathBuf::from("/tmp/x.sock"));
         assert_eq!(d.socket_mode, 0o600);
         assert_eq!(d.listen, Some("0.0.0.0:8420".parse().unwrap()));
         assert_eq!(d.token_file, Some(PathBuf::from("/etc/linterpd/token")));
+    }
+
+    #[test]
+    fn start_within_names_its_limits() {
+        let m = message(&with_daemon("start_within = \"7200s\""));
+        assert!(
+            m.contains("daemon.start_within = \"7200s\": must be longer than 0 s and at most 1 h"),
+            "{m}"
+        );
     }
 
     #[test]

@@ -37,6 +37,7 @@ mod check;
 mod daemon;
 mod duration;
 mod error;
+mod gateway;
 mod joints;
 mod kinematics;
 mod locate;
@@ -62,6 +63,8 @@ pub struct Config {
     pub robots: Vec<Robot>,
     /// The PLC link of each robot with a `[robots.NAME.plc]` table, by robot name.
     pub links: BTreeMap<String, LinkSettings>,
+    /// The register gateway of each robot with a `[robots.NAME.gateway]` table, by robot name.
+    pub gateways: BTreeMap<String, crate::gateway::GatewaySettings>,
     /// How `linterpd serve` offers its API (`[daemon]`; every default without one).
     pub daemon: DaemonSettings,
 }
@@ -107,6 +110,12 @@ impl Config {
     #[must_use]
     pub fn link(&self, name: &str) -> Option<&LinkSettings> {
         self.links.get(name)
+    }
+
+    /// The register gateway of robot `name`, if its table has a `gateway` section.
+    #[must_use]
+    pub fn gateway(&self, name: &str) -> Option<&crate::gateway::GatewaySettings> {
+        self.gateways.get(name)
     }
 
     fn names(&self) -> String {

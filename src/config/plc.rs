@@ -7,10 +7,14 @@
 //! # or: tcp = { address = "192.168.1.5:9094", connect_timeout = "2s" }   (exactly one of them)
 //! station = 1                        # MEWTOCOL 1..=99 or 238 (EE); Modbus unit 1..=247
 //! header = "auto"                    # MEWTOCOL only: "auto" | "percent" | "angle" [unverified]
-//! timeout = "300ms"                  # per exchange
+//! timeout = "300ms"                  # margin per exchange, beyond its wire time and 2 scans
+//! scan_time = "10ms"                 # the PLC's longest scan
 //! retries = 2                        # 0..=10
 //! heartbeat_timeout = "500ms"
+//! home_counts = [0, 0, 0, 0]         # per joint: the counts `linterpd home` presets
 //! mode_relay = "R9020"               # Modbus only: the RUN flag relay [unverified]
+//! modbus_max_write = 123             # Modbus only: registers a write carries, 1..=123 [unverified]
+//! modbus_max_read = 125              # Modbus only: registers a read asks for, 1..=125 [unverified]
 //! [robots.press-loader.plc.contract] # optional; CONTRACT.md defaults
 //! status_base = 1000
 //! ```
@@ -25,10 +29,12 @@ use super::check::At;
 use super::duration::parse_duration_s;
 use super::raw::{RawContract, RawParity, RawPlc, RawProtocol, RawSerial, RawTcp};
 use crate::contract::{DT_LAST, Layout};
+use crate::kinematics::JOINTS;
 use crate::plc::{
-    HeaderChoice, LinkSettings, Parity, Protocol, STATION_ANY, SerialSettings, TcpSettings,
-    Transport,
+    HeaderChoice, LinkSettings, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, Parity, Protocol,
+    STATION_ANY, SerialSettings, TcpSettings, Transport,
 };
+use crate::robot::Robot;
 
 /// Most retries a link may take.
 const MAX_RETRIES: i64 = 10;
@@ -37,12 +43,13 @@ const MAX_UNIT: i64 = 247;
 /// Highest MEWTOCOL station number.
 const MAX_STATION: i64 = 99;
 
-/// The link a plc table describes; `area_words` is the robot's.
+/// The link a plc table describes, for `robot`.
 pub(super) fn link(
     at: &At,
     raw: &Spanned<RawPlc>,
-    area_words: usize,
+    robot: &Robot,
 ) -> Result<LinkSettings, ConfigError> {
+    let area_words = robot.area_words;
     let r = raw.get_ref();
     let protocol = protocol(r.protocol);
     let transport = transport(at, raw, protocol)?;
@@ -66,6 +73,22 @@ pub(super) fn link(
     )?;
     if let Some(v) = &r.mode_relay {
         settings.mode_relay = mode_relay(&at.child("mode_relay"), v, protocol)?;
+    }
+    if let Some(v) = &r.modbus_max_write {
+        let at = at.child("modbus_max_write");
+        settings.modbus_max_write = request_size(&at, v, protocol, MAX_WRITE_REGISTERS)?;
+    }
+    if let Some(v) = &r.modbus_max_read {
+        let at = at.child("modbus_max_read");
+        settings.modbus_max_read = request_size(&at, v, protocol, MAX_READ_REGISTERS)?;
+    }
+    settings.scan_time = positive_duration(
+        &at.child("scan_time"),
+        r.scan_time.as_ref(),
+        settings.scan_time,
+    )?;
+    if let Some(v) = &r.home_counts {
+        settings.home_counts = home_counts(&at.child("home_counts"), v, robot)?;
     }
     settings.layout = layout(&at.child("contract"), r.contract.as_ref(), area_words)?;
     Ok(settings)
@@ -198,6 +221,53 @@ fn mode_relay(at: &At, value: &Spanned<String>, protocol: Protocol) -> Result<u1
     }
     parse_relay(value.get_ref())
         .ok_or_else(|| at.invalid(value, "must be a relay R0..R999F, as in \"R9020\""))
+}
+
+/// Registers one Modbus request may hold, `1..=limit` (the Modbus spec's; the FP-X's own limit is
+/// unverified).
+fn request_size(
+    at: &At,
+    value: &Spanned<i64>,
+    protocol: Protocol,
+    limit: u16,
+) -> Result<u16, ConfigError> {
+    if protocol == Protocol::Mewtocol {
+        let key = at.key().rsplit('.').next().unwrap_or_default();
+        let reason = format!("{key} is for Modbus; MEWTOCOL sizes its frames by the header");
+        return Err(at.invalid(value, reason));
+    }
+    Ok(at.int_within(value, 1, i64::from(limit))? as u16)
+}
+
+/// One count per joint, in the joints' order, each putting its joint inside its limits.
+fn home_counts(
+    at: &At,
+    value: &Spanned<Vec<Spanned<i64>>>,
+    robot: &Robot,
+) -> Result<[i64; JOINTS], ConfigError> {
+    let counts = value.get_ref();
+    if counts.len() != JOINTS {
+        let reason = format!("needs {JOINTS} counts, one per joint in the joints' order");
+        return Err(at.invalid(value, reason));
+    }
+    let mut out = [0; JOINTS];
+    for (j, (count, joint)) in counts.iter().zip(&robot.joints).enumerate() {
+        let c = *count.get_ref();
+        let v = joint.value_of(c);
+        if c < i64::from(i32::MIN) || c > i64::from(i32::MAX) || v < joint.min || v > joint.max {
+            let unit = joint.kind.user_unit();
+            let reason = format!(
+                "puts joint {} at {:.3} {unit}, outside its limits {:.3}..={:.3} {unit}",
+                joint.name,
+                joint.user(v),
+                joint.user(joint.min),
+                joint.user(joint.max)
+            );
+            return Err(at.index(j).invalid(count, reason));
+        }
+        out[j] = c;
+    }
+    Ok(out)
 }
 
 fn parse_relay(text: &str) -> Option<u16> {

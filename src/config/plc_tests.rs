@@ -37,6 +37,7 @@ fn serial_mewtocol_section_fills_defaults() {
     assert_eq!(link.timeout, Duration::from_millis(300));
     assert_eq!(link.heartbeat_timeout, Duration::from_millis(500));
     assert_eq!(link.layout, Layout::default());
+    assert_eq!((link.modbus_max_write, link.modbus_max_read), (123, 125));
     assert!(config.link("other").is_none());
 }
 
@@ -46,7 +47,7 @@ fn tcp_modbus_section_with_every_key() {
         "protocol = \"modbus-tcp\"\n\
          tcp = { address = \"192.168.1.5:502\", connect_timeout = \"1s\" }\n\
          station = 247\ntimeout = \"1s\"\nretries = 0\nheartbeat_timeout = \"2s\"\n\
-         mode_relay = \"R12A\"\n\
+         mode_relay = \"R12A\"\nmodbus_max_write = 100\nmodbus_max_read = 64\n\
          [robots.r.plc.contract]\nstatus_base = 100\ncommand_base = 140\n",
     );
     let link = Config::from_toml(&text).unwrap().links["r"].clone();
@@ -66,6 +67,7 @@ fn tcp_modbus_section_with_every_key() {
         (100, 140)
     );
     assert_eq!(link.layout.table_base, 2_000);
+    assert_eq!((link.modbus_max_write, link.modbus_max_read), (100, 64));
 }
 
 #[test]
@@ -177,6 +179,41 @@ fn mode_relay_is_for_modbus_and_spelled_as_panasonic_does() {
 }
 
 #[test]
+fn modbus_request_sizes_name_key_value_and_limit() {
+    let rtu = "protocol = \"modbus-rtu\"\nserial = { path = \"/dev/ttyS0\" }\n";
+    let text = with_plc(&format!("{rtu}modbus_max_write = 124"));
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.modbus_max_write = 124: must be within 1..=123"
+    );
+    let text = with_plc(&format!("{rtu}retries = 1\nmodbus_max_read = 0"));
+    assert_eq!(
+        message(&text),
+        "config line 45: robots.r.plc.modbus_max_read = 0: must be within 1..=125"
+    );
+    let text = with_plc(&format!("{rtu}modbus_max_write = 1\nmodbus_max_read = 125"));
+    let link = Config::from_toml(&text).unwrap().links["r"].clone();
+    assert_eq!((link.modbus_max_write, link.modbus_max_read), (1, 125));
+}
+
+#[test]
+fn modbus_request_sizes_are_refused_for_mewtocol() {
+    let mewtocol = "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\n";
+    let text = with_plc(&format!("{mewtocol}modbus_max_write = 100"));
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.modbus_max_write = 100: modbus_max_write is for Modbus; \
+         MEWTOCOL sizes its frames by the header"
+    );
+    let text = with_plc(&format!("{mewtocol}modbus_max_read = 100"));
+    assert!(
+        message(&text).contains("plc.modbus_max_read = 100: modbus_max_read is for Modbus"),
+        "{}",
+        message(&text)
+    );
+}
+
+#[test]
 fn shipped_file_has_a_valid_press_loader_plc_section() {
     let config = Config::from_toml(include_str!("../../config/linterpd.toml")).unwrap();
     let link = config.link("press-loader").unwrap();
@@ -184,4 +221,37 @@ fn shipped_file_has_a_valid_press_loader_plc_section() {
     assert_eq!(link.header, HeaderChoice::Auto);
     assert_eq!(link.layout, Layout::default());
     assert!(matches!(&link.transport, Transport::Serial(s) if s.path == "/dev/ttyUSB0"));
+}
+
+#[test]
+fn home_counts_scan_time_are_read_and_checked_against_the_joints() {
+    let serial = "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\n";
+    let text = with_plc(&format!(
+        "{serial}scan_time = \"5ms\"\nhome_counts = [100, -200, 0, 4]"
+    ));
+    let link = Config::from_toml(&text).unwrap().links["r"].clone();
+    assert_eq!(link.home_counts, [100, -200, 0, 4]);
+    assert_eq!(link.scan_time, Duration::from_millis(5));
+    let defaults = Config::from_toml(&with_plc(serial)).unwrap().links["r"].clone();
+    assert_eq!(defaults.home_counts, [0; 4]);
+    assert_eq!(defaults.scan_time, Duration::from_millis(10));
+    let m = message(&with_plc(&format!(
+        "{serial}home_counts = [0, 20000, 0, 0]"
+    )));
+    assert!(
+        m.starts_with("config line 44: robots.r.plc.home_counts")
+            && m.contains("= 20000: puts joint")
+            && m.contains("at 500.000 mm, outside its limits -50.000..=400.000 mm"),
+        "{m}"
+    );
+    let m = message(&with_plc(&format!("{serial}home_counts = [0, 0]")));
+    assert_eq!(
+        m,
+        "config line 44: robots.r.plc.home_counts = [0, 0]: needs 4 counts, one per joint in the joints' order"
+    );
+    let m = message(&with_plc(&format!("{serial}scan_time = \"0ms\"")));
+    assert!(
+        m.contains("scan_time = \"0ms\": must be longer than 0 s"),
+        "{m}"
+    );
 }

@@ -32,6 +32,8 @@ pub(super) struct RawDaemon {
     pub socket_mode: Option<Spanned<String>>,
     pub listen: Option<Spanned<String>>,
     pub token_file: Option<Spanned<String>>,
+    pub start_within: Option<Spanned<String>>,
+    pub state_dir: Option<Spanned<String>>,
 }
 
 /// `[robots.NAME]`.
@@ -43,6 +45,24 @@ pub(super) struct RawRobot {
     pub motion: Spanned<RawMotion>,
     pub joints: Spanned<Vec<Spanned<RawJoint>>>,
     pub plc: Option<Spanned<RawPlc>>,
+    pub gateway: Option<Spanned<RawGateway>>,
+}
+
+/// `[robots.NAME.gateway]`: the register gateway's access list; checked by `gateway`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawGateway {
+    pub read: Option<Vec<Spanned<String>>>,
+    pub write: Option<Vec<Spanned<String>>>,
+    pub modbus: Option<Spanned<RawModbusFace>>,
+}
+
+/// `gateway.modbus`: the Modbus TCP server face.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawModbusFace {
+    pub listen: Spanned<String>,
+    pub allow: Option<Vec<Spanned<String>>>,
 }
 
 /// `[robots.NAME.plc]`: how to reach the robot's PLC; checked by `plc`.
@@ -58,6 +78,10 @@ pub(super) struct RawPlc {
     pub retries: Option<Spanned<i64>>,
     pub heartbeat_timeout: Option<Spanned<String>>,
     pub mode_relay: Option<Spanned<String>>,
+    pub modbus_max_write: Option<Spanned<i64>>,
+    pub modbus_max_read: Option<Spanned<i64>>,
+    pub scan_time: Option<Spanned<String>>,
+    pub home_counts: Option<Spanned<Vec<Spanned<i64>>>>,
     pub contract: Option<Spanned<RawContract>>,
 }
 

@@ -8,7 +8,7 @@ use super::check::At;
 use super::raw::{RawConfig, RawRobot};
 use std::collections::BTreeMap;
 
-use super::{Config, ConfigError, daemon, joints, kinematics, motion, plc};
+use super::{Config, ConfigError, daemon, gateway, joints, kinematics, motion, plc};
 use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
@@ -25,9 +25,14 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     entries.sort_by_key(|(name, _)| name.span().start);
     let mut robots = Vec::with_capacity(entries.len());
     let mut links = BTreeMap::new();
+    let mut gateways = BTreeMap::new();
     for (name, raw) in &entries {
         let robot = self::robot(text, name, raw)?;
-        if let Some(link) = self::link(text, &robot, raw)? {
+        let link = self::link(text, &robot, raw)?;
+        if let Some(g) = self::gateway(text, &robot, raw, link.as_ref())? {
+            gateways.insert(robot.name.clone(), g);
+        }
+        if let Some(link) = link {
             links.insert(robot.name.clone(), link);
         }
         robots.push(robot);
@@ -39,8 +44,30 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     Ok(Config {
         robots,
         links,
+        gateways,
         daemon,
     })
+}
+
+/// The robot's `[robots.NAME.gateway]` table, if it has one (it needs the plc table).
+fn gateway(
+    text: &str,
+    robot: &Robot,
+    raw: &Spanned<RawRobot>,
+    link: Option<&LinkSettings>,
+) -> Result<Option<crate::gateway::GatewaySettings>, ConfigError> {
+    let Some(table) = &raw.get_ref().gateway else {
+        return Ok(None);
+    };
+    let at = At::new(text, "robots").child(&robot.name).child("gateway");
+    let Some(link) = link else {
+        let reason = format!(
+            "a gateway reaches the PLC through the robot's link: it needs [robots.{}.plc]",
+            robot.name
+        );
+        return Err(at.missing(&table.span(), reason));
+    };
+    gateway::settings(&at, table, &link.layout).map(Some)
 }
 
 /// One robot.
@@ -77,7 +104,7 @@ fn link(
         return Ok(None);
     };
     let at = At::new(text, "robots").child(&robot.name).child("plc");
-    plc::link(&at, plc, robot.area_words).map(Some)
+    plc::link(&at, plc, robot).map(Some)
 }
 
 fn area_words(at: &At, raw: Option<&Spanned<i64>>) -> Result<usize, ConfigError> {

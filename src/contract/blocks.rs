@@ -5,13 +5,22 @@ use thiserror::Error;
 use super::CHANNELS;
 
 /// Words in the status block.
-pub const STATUS_WORDS: usize = 20;
+pub const STATUS_WORDS: usize = 22;
 /// Words in the command block.
-pub const COMMAND_WORDS: usize = 8;
+pub const COMMAND_WORDS: usize = 17;
+/// Offset of the command block's `host` word.
+pub const COMMAND_HOST_OFFSET: u16 = 16;
+
+/// `ready` bit 0: the channels are homed (set by the program's home routine, cleared at power-up).
+pub const READY_HOMED: u16 = 0b001;
+/// `ready` bit 1: the drives are ready (wired by the integrator).
+pub const READY_DRIVES: u16 = 0b010;
+/// `ready` bit 2: the e-stop circuit is closed (wired by the integrator).
+pub const READY_ESTOP_CLEAR: u16 = 0b100;
 
 /// A word that holds no value the contract defines.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
-#[error("{field} = {value} is not a value contract version 1 defines")]
+#[error("{field} = {value} is not a value contract version 2 defines")]
 pub struct UnknownValue {
     /// Which field.
     pub field: &'static str,
@@ -32,6 +41,8 @@ pub enum State {
     Stopped,
     /// A fault is latched (see [`Fault`]).
     Fault,
+    /// The integrator's home routine runs (command 4).
+    Homing,
 }
 
 impl State {
@@ -44,6 +55,7 @@ impl State {
             Self::Done => 2,
             Self::Stopped => 3,
             Self::Fault => 4,
+            Self::Homing => 5,
         }
     }
 
@@ -55,6 +67,7 @@ impl State {
             2 => Self::Done,
             3 => Self::Stopped,
             4 => Self::Fault,
+            5 => Self::Homing,
             _ => {
                 return Err(UnknownValue {
                     field: "state",
@@ -73,6 +86,7 @@ impl State {
             Self::Done => "done",
             Self::Stopped => "stopped",
             Self::Fault => "fault",
+            Self::Homing => "homing",
         }
     }
 }
@@ -90,6 +104,12 @@ pub enum Fault {
     StoppedFromOutside,
     /// A pulse instruction error (e.g. first frequency out of range).
     PulseInstruction,
+    /// A channel's count differed from the start's `from` when the start was acted on.
+    NotAtStart,
+    /// A start while the homed bit is clear.
+    NotHomed,
+    /// The home routine failed (timeout, limit switch, e-stop).
+    HomingFailed,
 }
 
 impl Fault {
@@ -102,6 +122,9 @@ impl Fault {
             Self::ChannelBusy => 2,
             Self::StoppedFromOutside => 3,
             Self::PulseInstruction => 4,
+            Self::NotAtStart => 5,
+            Self::NotHomed => 6,
+            Self::HomingFailed => 7,
         }
     }
 
@@ -113,6 +136,9 @@ impl Fault {
             2 => Self::ChannelBusy,
             3 => Self::StoppedFromOutside,
             4 => Self::PulseInstruction,
+            5 => Self::NotAtStart,
+            6 => Self::NotHomed,
+            7 => Self::HomingFailed,
             _ => {
                 return Err(UnknownValue {
                     field: "fault",
@@ -131,6 +157,9 @@ impl Fault {
             Self::ChannelBusy => "channel busy at start",
             Self::StoppedFromOutside => "stopped from outside (e-stop input)",
             Self::PulseInstruction => "pulse instruction error",
+            Self::NotAtStart => "not at the table's start: a count differed from `from`",
+            Self::NotHomed => "not homed",
+            Self::HomingFailed => "homing failed",
         }
     }
 }
@@ -146,6 +175,8 @@ pub enum Command {
     Stop,
     /// Clear a latched fault.
     ClearFault,
+    /// Run the home routine for the channels in `mask`, presetting each count to `from`.
+    Home,
 }
 
 impl Command {
@@ -157,6 +188,7 @@ impl Command {
             Self::Start => 1,
             Self::Stop => 2,
             Self::ClearFault => 3,
+            Self::Home => 4,
         }
     }
 
@@ -167,6 +199,7 @@ impl Command {
             1 => Self::Start,
             2 => Self::Stop,
             3 => Self::ClearFault,
+            4 => Self::Home,
             _ => {
                 return Err(UnknownValue {
                     field: "command",
@@ -200,6 +233,10 @@ pub struct StatusBlock {
     pub elapsed: [i32; CHANNELS],
     /// Index of the segment each channel runs.
     pub segment: [u16; CHANNELS],
+    /// Copy of the command block's `host` word (0 after the program's first scan).
+    pub host: u16,
+    /// Sequence number of a start waiting behind the running move, 0 when none.
+    pub waiting: u16,
 }
 
 fn dint(words: &[u16], at: usize) -> i32 {
@@ -230,6 +267,8 @@ impl StatusBlock {
             push_dint(&mut w, e);
         }
         w.extend(self.segment);
+        w.push(self.host);
+        w.push(self.waiting);
         w
     }
 
@@ -250,6 +289,8 @@ impl StatusBlock {
             ready: words[7],
             elapsed: std::array::from_fn(|c| dint(words, 8 + 2 * c)),
             segment: std::array::from_fn(|c| words[16 + c]),
+            host: words[20],
+            waiting: words[21],
         })
     }
 }
@@ -267,6 +308,11 @@ pub struct CommandBlock {
     pub bank: u16,
     /// Segments per channel (0-8).
     pub segments: [u16; CHANNELS],
+    /// Start: the count every channel must show when the start is acted on. Home: the count each
+    /// homed channel is set to.
+    pub from: [i32; CHANNELS],
+    /// The host's word (see [`StatusBlock::host`]).
+    pub host: u16,
 }
 
 impl CommandBlock {
@@ -275,6 +321,10 @@ impl CommandBlock {
     pub fn to_words(&self) -> Vec<u16> {
         let mut w = vec![self.command, self.seq, self.mask, self.bank];
         w.extend(self.segments);
+        for f in self.from {
+            push_dint(&mut w, f);
+        }
+        w.push(self.host);
         w
     }
 
@@ -290,6 +340,8 @@ impl CommandBlock {
             mask: words[2],
             bank: words[3],
             segments: std::array::from_fn(|c| words[4 + c]),
+            from: std::array::from_fn(|c| dint(words, 8 + 2 * c)),
+            host: words[16],
         })
     }
 }
@@ -311,12 +363,15 @@ mod tests {
             ready: 0b111,
             elapsed: [-5_000, 1, 70_000, 0],
             segment: [1, 0, 2, 0],
+            host: 0xBEEF,
+            waiting: 4,
         };
         let w = s.to_words();
         assert_eq!(w.len(), STATUS_WORDS);
         assert_eq!(&w[8..10], &[0xEC78, 0xFFFF]);
+        assert_eq!(&w[20..22], &[0xBEEF, 4]);
         assert_eq!(StatusBlock::from_words(&w), Some(s));
-        assert_eq!(StatusBlock::from_words(&w[..19]), None);
+        assert_eq!(StatusBlock::from_words(&w[..21]), None);
     }
 
     #[test]
@@ -327,17 +382,28 @@ mod tests {
             mask: 0b1011,
             bank: 1,
             segments: [1, 2, 0, 8],
+            from: [-5_000, 70_000, 0, 1],
+            host: 0x1234,
         };
-        assert_eq!(CommandBlock::from_words(&c.to_words()), Some(c));
+        let w = c.to_words();
+        assert_eq!(w.len(), COMMAND_WORDS);
+        assert_eq!(&w[8..10], &[0xEC78, 0xFFFF]);
+        assert_eq!(w[usize::from(COMMAND_HOST_OFFSET)], 0x1234);
+        assert_eq!(CommandBlock::from_words(&w), Some(c));
     }
 
     #[test]
     fn unknown_state_is_named() {
         assert_eq!(
             State::from_word(9).unwrap_err().to_string(),
-            "state = 9 is not a value contract version 1 defines"
+            "state = 9 is not a value contract version 2 defines"
         );
+        assert_eq!(State::from_word(5), Ok(State::Homing));
         assert_eq!(Fault::from_word(4), Ok(Fault::PulseInstruction));
+        assert_eq!(Fault::from_word(5), Ok(Fault::NotAtStart));
+        assert_eq!(Fault::from_word(7), Ok(Fault::HomingFailed));
+        assert!(Fault::from_word(8).is_err());
         assert_eq!(Command::from_word(2), Ok(Command::Stop));
+        assert_eq!(Command::from_word(4), Ok(Command::Home));
     }
 }

@@ -1,54 +1,30 @@
-//! The daemon's face to the rest of the program: one handle per robot (submit a move, stop,
-//! clear a fault, read state and reports, follow a move's progress) and the daemon that spawns a
-//! worker per robot and shuts them down.
+//! The daemon's face to the rest of the program: one handle per robot (submit a move, stop, home,
+//! clear a fault, read state and reports, follow a move's progress, teach positions) and the
+//! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use thiserror::Error;
 use tokio::sync::{mpsc, oneshot, watch};
-use tokio::task::JoinHandle;
+use tokio::task::JoinSet;
 
-use super::order::{MoveOrder, OrderError};
-use super::report::{MoveId, MoveReport, Moves, RobotState};
-use super::worker::{Connector, Request, Worker};
+use super::gateway::{self, GatewayError, Job, Values};
+use super::ids::MoveIds;
+use super::order::{MoveOrder, OrderError, plan_order};
+use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
+use super::report::{MoveId, MoveReport, RobotState};
+use super::request::{CommandError, Reply, Request};
+use super::shared::Shared;
+use super::worker::{Channels, Connector, Worker};
+use crate::contract::machine::Blocker;
+use crate::gateway::{Address, GatewaySettings, Range};
 use crate::kinematics::JOINTS;
 use crate::plan::PlanError;
 use crate::plc::contract::ContractSettings;
 use crate::robot::Robot;
-
-/// State shared by a robot's worker and its handle.
-#[derive(Debug)]
-pub(super) struct Shared {
-    state: Mutex<RobotState>,
-    moves: Mutex<Moves>,
-    /// Set when a stop is asked for: an upload in progress gives up at its next write.
-    pub stop_pending: Arc<AtomicBool>,
-    ids: Arc<AtomicU64>,
-    /// Where the last accepted order is planned to end, per joint (for checking the next).
-    planned_end: Mutex<Option<[i64; JOINTS]>>,
-}
-
-impl Shared {
-    pub(super) fn state<T>(&self, f: impl FnOnce(&mut RobotState) -> T) -> T {
-        f(&mut self.state.lock().expect("state lock"))
-    }
-
-    pub(super) fn moves<T>(&self, f: impl FnOnce(&mut Moves) -> T) -> T {
-        f(&mut self.moves.lock().expect("moves lock"))
-    }
-
-    /// Forgets where queued orders were planned to end (after a move that will not get there).
-    pub(super) fn forget_planned_end(&self) {
-        *self.planned_end.lock().expect("lock") = None;
-    }
-
-    pub(super) fn next_id(&self) -> MoveId {
-        self.ids.fetch_add(1, Ordering::SeqCst) + 1
-    }
-}
 
 /// Why a move was not accepted.
 #[derive(Debug, Error)]
@@ -59,23 +35,89 @@ pub enum SubmitError {
     /// The move cannot be planned from where the robot is (or will be).
     #[error(transparent)]
     Plan(#[from] PlanError),
+    /// The robot cannot take a move now (link down, not homed, a fault...).
+    #[error("{blocker}{}", detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
+    NotNow {
+        /// Why.
+        blocker: Blocker,
+        /// The link's last error, when that is why.
+        detail: Option<String>,
+    },
     /// The daemon is shutting down.
     #[error("the daemon is shutting down")]
     ShuttingDown,
 }
 
-/// Why a stop or clear-fault did not reach the PLC.
-#[derive(Debug, Error)]
-#[error("{0}")]
-pub struct CommandError(pub String);
+/// One robot as the daemon runs it.
+pub struct RobotSetup {
+    /// The robot.
+    pub robot: Robot,
+    /// How its contract is run.
+    pub settings: ContractSettings,
+    /// Opens its PLC link (again after every failure).
+    pub connect: Connector,
+    /// The count each joint is set to at its home position.
+    pub home_counts: [i64; JOINTS],
+    /// What the cell may reach of the PLC's registers through the daemon.
+    pub gateway: GatewaySettings,
+}
+
+/// What every robot of one daemon shares.
+#[derive(Debug, Clone)]
+pub struct DaemonOptions {
+    /// The word this daemon writes into every PLC's `host` word (nonzero).
+    pub host: u16,
+    /// Where move ids come from.
+    pub ids: Arc<MoveIds>,
+    /// A queued order that could not start for this long after its turn came ends failed.
+    pub start_within: Duration,
+    /// The robots' taught positions (by default in memory only).
+    pub positions: Arc<TaughtPositions>,
+}
+
+impl Default for DaemonOptions {
+    fn default() -> Self {
+        Self {
+            host: host_word(),
+            ids: Arc::new(MoveIds::counting_from(1)),
+            start_within: Duration::from_secs(10),
+            positions: Arc::new(TaughtPositions::in_memory()),
+        }
+    }
+}
+
+/// A nonzero word that differs from run to run (the clock and the process id, mixed).
+#[must_use]
+pub fn host_word() -> u16 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64);
+    let mut x = nanos ^ (u64::from(std::process::id()) << 32);
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+    x ^= x >> 33;
+    (x as u16).max(1)
+}
 
 /// One robot, as the API and the CLI see it.
 #[derive(Debug, Clone)]
 pub struct RobotHandle {
     robot: Arc<Robot>,
     requests: mpsc::UnboundedSender<Request>,
-    stops: mpsc::UnboundedSender<oneshot::Sender<Result<(), String>>>,
+    stops: mpsc::UnboundedSender<Reply>,
+    gateway: mpsc::UnboundedSender<Job>,
+    gateway_settings: Arc<GatewaySettings>,
     shared: Arc<Shared>,
+    positions: Arc<TaughtPositions>,
+}
+
+/// A position saved from the robot's pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Saved {
+    /// The position.
+    pub position: Position,
+    /// Whether it replaced one of the same name.
+    pub replaced: bool,
 }
 
 impl RobotHandle {
@@ -85,22 +127,41 @@ impl RobotHandle {
         &self.robot
     }
 
-    /// Checks an order, plans it from where the robot will be when its turn comes (refusing it,
-    /// with nothing queued, if that fails), and queues it.
-    ///
-    /// # Panics
-    /// If a lock was poisoned by a panic elsewhere.
+    /// Checks an order, refuses it at once if the robot cannot take a move now (link down, not
+    /// homed, a fault), plans it from where the robot will be when its turn comes (refusing it,
+    /// with nothing queued, if that fails), and queues it. A jog (`by`) behind a queued or running
+    /// move is anchored here, where that move is planned to end; with none it is anchored to the
+    /// PLC's counts when it begins. A `position` is looked up here: a later change of it does
+    /// not move this order.
     pub fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
-        let checked = order.check(self.robot.motion)?;
-        let from = self.shared.planned_end.lock().expect("lock").or_else(|| {
-            let counts = self.shared.state(|s| s.counts)?;
-            Some(std::array::from_fn(|j| {
-                counts[usize::from(self.robot.joints[j].channel)]
-            }))
-        });
+        let taught = self.positions.of(&self.robot.name);
+        let checked = order.check_with(self.robot.motion, &taught)?;
+        if let Some(blocker) = self.shared.refusal() {
+            let detail = match blocker {
+                Blocker::LinkDown => self.shared.state(|s| s.link.error.clone()),
+                Blocker::Stalled if self.state().plc_mode == Some("prog") => {
+                    Some("it reports PROG mode".to_owned())
+                }
+                _ => None,
+            };
+            return Err(SubmitError::NotNow { blocker, detail });
+        }
+        // Behind a move that is queued or running, an order starts where that one is planned
+        // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
+        // none, a jog stays relative and is anchored to the PLC's counts when it begins (the
+        // counts read here may be a poll old); it is checked from them here.
+        let ahead = self
+            .shared
+            .state(|s| s.current_move.is_some() || !s.queued.is_empty());
+        let planned_end = self.shared.planned_end().filter(|_| ahead);
+        let from = planned_end.or_else(|| self.counts_by_joint());
+        let checked = match planned_end {
+            Some(end) => checked.anchored_at(&self.robot, end),
+            None => checked,
+        };
         let mut end = None;
         if let Some(counts) = from {
-            end = Some(super::worker::plan_order(&self.robot, &checked, counts)?.end_counts());
+            end = Some(plan_order(&self.robot, &checked, counts)?.end_counts());
         }
         let id = self.shared.next_id();
         self.shared
@@ -109,35 +170,144 @@ impl RobotHandle {
         self.requests
             .send(Request::Move(id, checked))
             .map_err(|_| SubmitError::ShuttingDown)?;
-        *self.shared.planned_end.lock().expect("lock") = end;
+        self.shared.set_planned_end(end);
         Ok(id)
     }
 
+    /// The counts the PLC last reported, per joint.
+    fn counts_by_joint(&self) -> Option<[i64; JOINTS]> {
+        let counts = self.shared.state(|s| s.counts)?;
+        Some(std::array::from_fn(|j| {
+            counts[usize::from(self.robot.joints[j].channel)]
+        }))
+    }
+
+    /// The robot's taught positions, by name.
+    #[must_use]
+    pub fn positions(&self) -> BTreeMap<String, Position> {
+        self.positions.of(&self.robot.name)
+    }
+
+    /// One taught position.
+    pub fn position(&self, name: &str) -> Result<Position, PositionError> {
+        self.positions.get(&self.robot.name, name)
+    }
+
+    /// What went wrong with the positions file at start (set aside as corrupt, unreadable), if
+    /// anything did.
+    #[must_use]
+    pub fn positions_warning(&self) -> Option<&str> {
+        self.positions.warning()
+    }
+
+    /// Saves the robot's pose, from the counts the PLC last reported, as position `name`
+    /// (replacing one of that name). Refused while the link is down or stalled, the robot is
+    /// not homed or homing (its counts mean nothing), or a move runs or waits.
+    pub fn save_position(&self, name: &str) -> Result<Saved, PositionError> {
+        check_name(name)?;
+        if let Some(
+            blocker @ (Blocker::LinkDown | Blocker::Stalled | Blocker::NotHomed | Blocker::Homing),
+        ) = self.shared.refusal()
+        {
+            return Err(PositionError::NotNow { blocker });
+        }
+        let state = self.state();
+        if state.current_move.is_some() || !state.queued.is_empty() || state.phase != "idle" {
+            return Err(PositionError::Busy {
+                current: state
+                    .current_move
+                    .map_or_else(|| "-".to_owned(), |id| id.to_string()),
+                queued: state.queued.len(),
+            });
+        }
+        let joint_counts = self.counts_by_joint().ok_or(PositionError::NotNow {
+            blocker: Blocker::LinkDown,
+        })?;
+        let position = Position {
+            pose: self.robot.pose_of(&joint_counts).to_mm_deg(),
+            joint_counts,
+            saved_unix_s: unix_now_s(),
+        };
+        let replaced = self
+            .positions
+            .save(&self.robot.name, name, position.clone())?;
+        tracing::info!(robot = %self.robot.name, position = name, pose = ?position.pose, counts = ?joint_counts, replaced, "position saved");
+        Ok(Saved { position, replaced })
+    }
+
+    /// Deletes a taught position; returns it.
+    pub fn delete_position(&self, name: &str) -> Result<Position, PositionError> {
+        let removed = self.positions.delete(&self.robot.name, name)?;
+        tracing::info!(robot = %self.robot.name, position = name, "position deleted");
+        Ok(removed)
+    }
+
     /// Stops every channel and cancels every queued move; returns once the stop is written.
-    ///
-    /// # Panics
-    /// If a lock was poisoned by a panic elsewhere.
     pub async fn stop(&self) -> Result<(), CommandError> {
         self.shared.stop_pending.store(true, Ordering::SeqCst);
-        *self.shared.planned_end.lock().expect("lock") = None;
+        self.shared.forget_planned_end();
         let (tx, rx) = oneshot::channel();
         self.stops
             .send(tx)
-            .map_err(|_| CommandError("the daemon is shutting down".into()))?;
-        rx.await
-            .map_err(|_| CommandError("the daemon is shutting down".into()))?
-            .map_err(CommandError)
+            .map_err(|_| CommandError::ShuttingDown)?;
+        rx.await.map_err(|_| CommandError::ShuttingDown)?
     }
 
-    /// Clears a latched fault on the PLC.
+    /// Homes the robot: every joint's count is set to its home count at its home position.
+    /// Returns once the PLC's home routine has ended.
+    pub async fn home(&self) -> Result<(), CommandError> {
+        self.command(Request::Home).await
+    }
+
+    /// Clears a latched fault on the PLC (refused while a move runs or when there is none).
     pub async fn clear_fault(&self) -> Result<(), CommandError> {
+        self.command(Request::ClearFault).await
+    }
+
+    async fn command(&self, request: fn(Reply) -> Request) -> Result<(), CommandError> {
         let (tx, rx) = oneshot::channel();
         self.requests
-            .send(Request::ClearFault(tx))
-            .map_err(|_| CommandError("the daemon is shutting down".into()))?;
-        rx.await
-            .map_err(|_| CommandError("the daemon is shutting down".into()))?
-            .map_err(CommandError)
+            .send(request(tx))
+            .map_err(|_| CommandError::ShuttingDown)?;
+        rx.await.map_err(|_| CommandError::ShuttingDown)?
+    }
+
+    /// The robot's gateway settings (its access list, its Modbus face).
+    #[must_use]
+    pub fn gateway(&self) -> &GatewaySettings {
+        &self.gateway_settings
+    }
+
+    /// Reads `count` registers (DT words) or bits (X, Y, R) from `start`, if the access list
+    /// allows, through the robot's link.
+    pub async fn read_registers(&self, start: Address, count: u32) -> Result<Values, GatewayError> {
+        let range = gateway::range(start, count)?;
+        self.gateway_settings.access.check_read(&range)?;
+        self.gateway_job(range, None).await
+    }
+
+    /// Writes `values` from `start` (words to DT, bits to Y or R), if the access list allows.
+    pub async fn write_registers(
+        &self,
+        start: Address,
+        values: Values,
+    ) -> Result<(), GatewayError> {
+        gateway::check_values(start.area, &values)?;
+        let range = gateway::range(start, values.len() as u32)?;
+        self.gateway_settings.access.check_write(&range)?;
+        self.gateway_job(range, Some(values)).await.map(|_| ())
+    }
+
+    async fn gateway_job(
+        &self,
+        range: Range,
+        write: Option<Values>,
+    ) -> Result<Values, GatewayError> {
+        let (tx, rx) = oneshot::channel();
+        self.gateway
+            .send(Job::new(range, write, tx))
+            .map_err(|_| GatewayError::ShuttingDown)?;
+        rx.await.map_err(|_| GatewayError::ShuttingDown)?
     }
 
     /// The robot's state as last read.
@@ -170,6 +340,12 @@ impl RobotHandle {
         let _ = tokio::time::timeout(limit, feed.wait_for(|r| r.stage.is_final())).await;
         self.report(id)
     }
+
+    /// How long ago the robot's worker last went round its loop.
+    #[must_use]
+    pub fn since_worker_beat(&self) -> Option<Duration> {
+        self.shared.since_loop_beat()
+    }
 }
 
 /// The daemon: a worker per robot.
@@ -177,49 +353,48 @@ impl RobotHandle {
 pub struct Daemon {
     robots: BTreeMap<String, RobotHandle>,
     shutdown: watch::Sender<bool>,
-    workers: Vec<JoinHandle<()>>,
+    workers: JoinSet<String>,
 }
 
 impl Daemon {
-    /// Spawns a worker for each robot with its link opener and contract settings.
+    /// Spawns a worker for each robot.
     #[must_use]
-    pub fn spawn(robots: Vec<(Robot, ContractSettings, Connector)>) -> Self {
+    pub fn spawn(robots: Vec<RobotSetup>, options: &DaemonOptions) -> Self {
         let (shutdown, _) = watch::channel(false);
-        let ids = Arc::new(AtomicU64::new(0));
         let mut handles = BTreeMap::new();
-        let mut workers = Vec::new();
-        for (robot, settings, connect) in robots {
-            let shared = Arc::new(Shared {
-                state: Mutex::new(RobotState {
-                    name: robot.name.clone(),
-                    ..RobotState::default()
-                }),
-                moves: Mutex::new(Moves::default()),
-                stop_pending: Arc::new(AtomicBool::new(false)),
-                ids: Arc::clone(&ids),
-                planned_end: Mutex::new(None),
-            });
+        let mut workers = JoinSet::new();
+        for setup in robots {
+            let name = setup.robot.name.clone();
+            let shared = Arc::new(Shared::new(&name, Arc::clone(&options.ids)));
             let (requests, requests_rx) = mpsc::unbounded_channel();
             let (stops, stops_rx) = mpsc::unbounded_channel();
+            let (gateway, gateway_rx) = mpsc::unbounded_channel();
+            let handle = RobotHandle {
+                robot: Arc::new(setup.robot.clone()),
+                requests,
+                stops,
+                gateway,
+                gateway_settings: Arc::new(setup.gateway.clone()),
+                shared: Arc::clone(&shared),
+                positions: Arc::clone(&options.positions),
+            };
             let worker = Worker::new(
-                robot.clone(),
-                settings,
-                connect,
-                requests_rx,
-                stops_rx,
-                shutdown.subscribe(),
-                Arc::clone(&shared),
-            );
-            workers.push(tokio::spawn(worker.run()));
-            handles.insert(
-                robot.name.clone(),
-                RobotHandle {
-                    robot: Arc::new(robot),
-                    requests,
-                    stops,
-                    shared,
+                setup,
+                options,
+                Channels {
+                    requests: requests_rx,
+                    stops: stops_rx,
+                    gateway: gateway_rx,
+                    shutdown: shutdown.subscribe(),
                 },
+                shared,
             );
+            let task_name = name.clone();
+            workers.spawn(async move {
+                worker.run().await;
+                task_name
+            });
+            handles.insert(name, handle);
         }
         Self {
             robots: handles,
@@ -240,12 +415,27 @@ impl Daemon {
         self.robots.get(name)
     }
 
+    /// Completes when a worker ends before shutdown (it panicked), with what happened.
+    pub async fn worker_failed(&mut self) -> String {
+        match self.workers.join_next().await {
+            Some(Ok(name)) => format!("the worker of robot {name:?} ended"),
+            Some(Err(e)) if e.is_panic() => format!("a robot's worker panicked: {e}"),
+            Some(Err(e)) => format!("a robot's worker was cancelled: {e}"),
+            None => std::future::pending().await,
+        }
+    }
+
     /// Shuts every worker down cleanly (no half-written bank, no start left waiting) and waits
     /// for them.
-    pub async fn shut_down(self) {
+    pub async fn shut_down(mut self) {
         let _ = self.shutdown.send(true);
-        for w in self.workers {
-            let _ = w.await;
-        }
+        while self.workers.join_next().await.is_some() {}
+    }
+
+    /// Ends every worker at once, as a killed process would (no withdrawal, nothing written):
+    /// for tests of a daemon restart.
+    pub async fn kill(mut self) {
+        self.workers.abort_all();
+        while self.workers.join_next().await.is_some() {}
     }
 }

@@ -2,23 +2,44 @@
 //! (the worker); the rest of the program talks to it through a [`RobotHandle`] per robot.
 //!
 //! ```text
-//! API / CLI --submit/stop/clear/state--> RobotHandle --requests (stops overtake)--> worker task
-//!                                            ^                                          |
-//!                                            +---- RobotState, MoveReport feeds <-------+
+//! API / CLI --submit/stop/home/clear--> RobotHandle --requests (stops overtake)--> worker task
+//!                                           |                                         |
+//!                                           +------------ Shared (state, reports) <---+
 //! ```
-//!
-//! [`notify`] tells systemd the daemon is ready, alive and stopping.
+//! ```text
+//! handle.rs   RobotHandle, Daemon, RobotSetup, DaemonOptions
+//! shared.rs   what a handle and its worker share (neither owns the other)
+//! request.rs  requests to the worker and the typed CommandError
+//! order.rs    a move order (to, by, joints or position), its check, and planning it
+//! positions.rs taught positions per robot, kept in the state directory
+//! report.rs   RobotState, MoveReport, Stage
+//! ids.rs      move ids unique across restarts
+//! gateway.rs  register gateway requests (the cell's other registers, through the same link)
+//! worker/     the link owner: contract::machine drives it
+//! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
+//! ```
 
 pub mod api;
+mod gateway;
 mod handle;
+mod ids;
 pub mod notify;
 mod order;
+pub mod positions;
 mod report;
+mod request;
 pub mod service;
+mod shared;
 mod worker;
 
-pub use handle::{CommandError, Daemon, RobotHandle, SubmitError};
-pub use order::{CheckedOrder, MoveOrder, OrderError};
-pub use report::{LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage};
+pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
+pub use handle::{Daemon, DaemonOptions, RobotHandle, RobotSetup, Saved, SubmitError, host_word};
+pub use ids::{MoveIds, write_atomically};
+pub(crate) use order::plan_order;
+pub use order::{CheckedOrder, MoveOrder, OrderError, Target};
+pub use positions::{Position, PositionError, TaughtPositions};
+pub use report::{
+    GatewayStats, LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage,
+};
+pub use request::CommandError;
 pub use worker::Connector;
-pub(crate) use worker::plan_order;

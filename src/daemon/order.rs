@@ -1,21 +1,47 @@
 //! A move as the cell's software asks for it (API, CLI), and its check into a planner request.
 //! A bad order is refused here, naming the field and the limit, before anything is queued.
+//!
+//! An order has exactly one target: `to` (a pose: a straight line to it), `by` (a jog: a
+//! straight line by an offset from where the move starts), `joints` (a joint-space move to joint
+//! values) or `position` (a straight line to a taught position's pose). [`plan_order`] is the one
+//! place an order becomes a plan.
 
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::positions::{NAME_RULE, Position, check_name};
 use crate::config::parse_duration_s;
 use crate::geometry::Pose;
-use crate::robot::{Method, Motion};
+use crate::kinematics::JOINTS;
+use crate::plan::{
+    JointMoveRequest, MoveRequest, Origin, Plan, PlanError, plan_joint_move, plan_move,
+};
+use crate::robot::{Method, Motion, Robot};
 
-/// A move order: a target pose and optional motion overrides (the robot's defaults otherwise).
+/// A move order: one target (`to`, `by`, `joints` or `position`) and optional motion overrides
+/// (the robot's defaults otherwise).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct MoveOrder {
     /// Target `[x, y, z]` in mm, or `[x, y, z, a]` with the tool angle in degrees (without it the
     /// tool keeps its angle).
-    pub to: Vec<f64>,
-    /// Speed along the line, mm/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub to: Option<Vec<f64>>,
+    /// A jog: `[dx, dy, dz]` in mm, or `[dx, dy, dz, da]` with the tool's turn in degrees, from
+    /// where the move starts (the daemon takes that as where the order before it is planned to
+    /// end, or where the robot is when none is queued or running).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub by: Option<Vec<f64>>,
+    /// A joint-space move: every joint's target in the joints' order, degrees or mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joints: Option<Vec<f64>>,
+    /// A taught position's name: a straight line to its pose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<String>,
+    /// Speed along the path, mm/s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub speed_mm_s: Option<f64>,
     /// Acceleration time, e.g. `"200ms"`.
@@ -74,42 +100,202 @@ fn duration(field: &'static str, text: &str, allow_zero: bool) -> Result<f64, Or
     }
 }
 
-/// A checked order: the target (its tool angle if given) and the motion to plan with.
+/// Checks that `values` has `lengths` finite numbers, naming each by `names`.
+fn finite(
+    field: &'static str,
+    values: &[f64],
+    lengths: std::ops::RangeInclusive<usize>,
+    shape: &str,
+    names: [&'static str; 4],
+) -> Result<(), OrderError> {
+    if !lengths.contains(&values.len()) {
+        return Err(refuse(
+            field,
+            &format!("{values:?}"),
+            format!("must be {shape}"),
+        ));
+    }
+    for (v, name) in values.iter().zip(names) {
+        if !v.is_finite() {
+            return Err(refuse(name, v, "must be a finite number"));
+        }
+    }
+    Ok(())
+}
+
+/// Where a checked order goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// A straight line to a pose; the tool angle is filled in from the start when `a_given` is
+    /// false.
+    Pose {
+        /// The pose.
+        to: Pose,
+        /// Whether the order gave a tool angle.
+        a_given: bool,
+    },
+    /// A straight line by an offset from the start pose.
+    By {
+        /// dx, dy, dz, mm.
+        delta_mm: Vector3<f64>,
+        /// The tool's turn, rad.
+        delta_a_rad: f64,
+    },
+    /// A joint-space move to these joint values, in the user's units (degrees or mm).
+    Joints([f64; JOINTS]),
+}
+
+/// A checked order: its target and the motion to plan with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CheckedOrder {
-    /// Target position; the tool angle is filled in from the start when `a_given` is false.
-    pub to: Pose,
-    /// Whether the order gave a tool angle.
-    pub a_given: bool,
+    /// The target.
+    pub target: Target,
     /// The motion.
     pub motion: Motion,
 }
 
-impl MoveOrder {
-    /// Checks every field against `defaults`, the robot's motion defaults.
-    pub fn check(&self, defaults: Motion) -> Result<CheckedOrder, OrderError> {
-        if !(3..=4).contains(&self.to.len()) {
-            return Err(refuse(
-                "to",
-                &format!("{:?}", self.to),
-                "must be [x, y, z] or [x, y, z, a] (mm, degrees)",
-            ));
+impl CheckedOrder {
+    /// Whether the target is relative to where the move starts.
+    #[must_use]
+    pub fn is_relative(&self) -> bool {
+        matches!(self.target, Target::By { .. })
+    }
+
+    /// The order with a relative target made absolute from `counts` (per joint), where the move
+    /// is to start; any other order as it is.
+    #[must_use]
+    pub fn anchored_at(self, robot: &Robot, counts: [i64; JOINTS]) -> Self {
+        let from = robot.pose_of(&counts);
+        match self.pose_target(&from) {
+            Some(to) if self.is_relative() => Self {
+                target: Target::Pose { to, a_given: true },
+                ..self
+            },
+            _ => self,
         }
-        for (v, name) in self
-            .to
-            .iter()
-            .zip(["to[0] (x)", "to[1] (y)", "to[2] (z)", "to[3] (a)"])
-        {
-            if !v.is_finite() {
-                return Err(refuse(name, v, "must be a finite number"));
+    }
+
+    /// The pose a line order goes to from `from` (`None` for a joint-space move).
+    fn pose_target(&self, from: &Pose) -> Option<Pose> {
+        match self.target {
+            Target::Pose { to, a_given: true } => Some(to),
+            Target::Pose { to, a_given: false } => Some(Pose {
+                a_rad: from.a_rad,
+                ..to
+            }),
+            Target::By {
+                delta_mm,
+                delta_a_rad,
+            } => Some(Pose {
+                position_mm: from.position_mm + delta_mm,
+                a_rad: from.a_rad + delta_a_rad,
+            }),
+            Target::Joints(_) => None,
+        }
+    }
+}
+
+impl MoveOrder {
+    /// Checks every field against `defaults`, the robot's motion defaults, with no taught
+    /// positions.
+    pub fn check(&self, defaults: Motion) -> Result<CheckedOrder, OrderError> {
+        self.check_with(defaults, &BTreeMap::new())
+    }
+
+    /// Checks every field against `defaults` and the robot's `taught` positions.
+    pub fn check_with(
+        &self,
+        defaults: Motion,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<CheckedOrder, OrderError> {
+        Ok(CheckedOrder {
+            target: self.target(taught)?,
+            motion: self.motion(defaults)?,
+        })
+    }
+
+    fn target(&self, taught: &BTreeMap<String, Position>) -> Result<Target, OrderError> {
+        let given: Vec<&'static str> = [
+            ("to", self.to.is_some()),
+            ("by", self.by.is_some()),
+            ("joints", self.joints.is_some()),
+            ("position", self.position.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(field, given)| given.then_some(field))
+        .collect();
+        match given.as_slice() {
+            [] => {
+                return Err(refuse(
+                    "to",
+                    &"null",
+                    "an order needs one of to, by, joints or position",
+                ));
+            }
+            [_] => {}
+            [first, second, ..] => {
+                return Err(refuse(
+                    second,
+                    &"(given)",
+                    format!(
+                        "an order takes one of to, by, joints or position; it also has {first}"
+                    ),
+                ));
             }
         }
-        let a_deg = self.to.get(3).copied();
-        let to = Pose::from_mm_deg(self.to[0], self.to[1], self.to[2], a_deg.unwrap_or(0.0));
-        Ok(CheckedOrder {
-            to,
-            a_given: a_deg.is_some(),
-            motion: self.motion(defaults)?,
+        if let Some(to) = &self.to {
+            finite(
+                "to",
+                to,
+                3..=4,
+                "[x, y, z] or [x, y, z, a] (mm, degrees)",
+                ["to[0] (x)", "to[1] (y)", "to[2] (z)", "to[3] (a)"],
+            )?;
+            let a_deg = to.get(3).copied();
+            return Ok(Target::Pose {
+                to: Pose::from_mm_deg(to[0], to[1], to[2], a_deg.unwrap_or(0.0)),
+                a_given: a_deg.is_some(),
+            });
+        }
+        if let Some(by) = &self.by {
+            finite(
+                "by",
+                by,
+                3..=4,
+                "[dx, dy, dz] or [dx, dy, dz, da] (mm, degrees)",
+                ["by[0] (dx)", "by[1] (dy)", "by[2] (dz)", "by[3] (da)"],
+            )?;
+            return Ok(Target::By {
+                delta_mm: Vector3::new(by[0], by[1], by[2]),
+                delta_a_rad: by.get(3).copied().unwrap_or(0.0).to_radians(),
+            });
+        }
+        if let Some(joints) = &self.joints {
+            finite(
+                "joints",
+                joints,
+                JOINTS..=JOINTS,
+                "4 joint values in the joints' order (degrees or mm)",
+                ["joints[0]", "joints[1]", "joints[2]", "joints[3]"],
+            )?;
+            return Ok(Target::Joints(std::array::from_fn(|j| joints[j])));
+        }
+        let name = self.position.as_deref().unwrap_or_default();
+        let shown = format!("{name:?}");
+        check_name(name).map_err(|_| refuse("position", &shown, NAME_RULE))?;
+        let position = taught.get(name).ok_or_else(|| {
+            let known: Vec<&str> = taught.keys().map(String::as_str).collect();
+            let known = if known.is_empty() {
+                "the robot has no taught positions".to_owned()
+            } else {
+                format!("taught positions: {}", known.join(", "))
+            };
+            refuse("position", &shown, format!("no such position; {known}"))
+        })?;
+        let [x, y, z, a] = position.pose;
+        Ok(Target::Pose {
+            to: Pose::from_mm_deg(x, y, z, a),
+            a_given: true,
         })
     }
 
@@ -161,6 +347,37 @@ impl MoveOrder {
     }
 }
 
+/// Plans `order` for `robot` from `counts` (per joint): a line to a pose (without a tool angle
+/// in the order the tool keeps the angle it has there; a jog is relative to the pose there), or a
+/// joint-space move.
+pub(crate) fn plan_order(
+    robot: &Robot,
+    order: &CheckedOrder,
+    counts: [i64; JOINTS],
+) -> Result<Plan, PlanError> {
+    if let Target::Joints(user) = order.target {
+        return plan_joint_move(
+            robot,
+            &JointMoveRequest {
+                from: Origin::Counts(counts),
+                to: std::array::from_fn(|j| robot.joints[j].kind.from_user(user[j])),
+                motion: order.motion,
+            },
+        );
+    }
+    let from = robot.pose_of(&counts);
+    let to = order.pose_target(&from).expect("a line order has a pose");
+    plan_move(
+        robot,
+        &MoveRequest {
+            from: Origin::Counts(counts),
+            to,
+            motion: order.motion,
+            seed_exact: false,
+        },
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,7 +385,7 @@ mod tests {
 
     fn order(to: Vec<f64>) -> MoveOrder {
         MoveOrder {
-            to,
+            to: Some(to),
             ..MoveOrder::default()
         }
     }
@@ -178,7 +395,7 @@ mod tests {
         let c = order(vec![1.0, 2.0, 3.0])
             .check(seed_robot().motion)
             .unwrap();
-        assert!(!c.a_given);
+        assert!(matches!(c.target, Target::Pose { a_given: false, .. }));
         assert_eq!(c.motion, seed_robot().motion);
     }
 
@@ -227,6 +444,129 @@ mod tests {
         };
         let c = o.check(seed_robot().motion).unwrap();
         assert_eq!(c.motion.method, Method::BoundedError { tolerance_mm: 0.05 });
-        assert!(c.a_given);
+        assert!(matches!(c.target, Target::Pose { a_given: true, .. }));
+    }
+
+    fn taught() -> BTreeMap<String, Position> {
+        BTreeMap::from([(
+            "pick".to_owned(),
+            Position {
+                pose: [10.0, 520.0, 30.0, 5.0],
+                joint_counts: [0; JOINTS],
+                saved_unix_s: 0,
+            },
+        )])
+    }
+
+    #[test]
+    fn an_order_takes_exactly_one_target() {
+        let m = seed_robot().motion;
+        let none = MoveOrder::default().check(m).unwrap_err();
+        assert_eq!(
+            none.to_string(),
+            "to = null: an order needs one of to, by, joints or position"
+        );
+        let two = MoveOrder {
+            by: Some(vec![1.0, 0.0, 0.0]),
+            ..order(vec![1.0, 2.0, 3.0])
+        };
+        let e = two.check(m).unwrap_err();
+        assert_eq!(e.field, "by");
+        assert!(e.reason.contains("it also has to"), "{e}");
+    }
+
+    #[test]
+    fn jog_joints_and_position_are_checked_naming_the_field() {
+        let m = seed_robot().motion;
+        let jog = |by: Vec<f64>| MoveOrder {
+            by: Some(by),
+            ..MoveOrder::default()
+        };
+        assert_eq!(jog(vec![1.0]).check(m).unwrap_err().field, "by");
+        assert_eq!(
+            jog(vec![1.0, 2.0, f64::INFINITY])
+                .check(m)
+                .unwrap_err()
+                .to_string(),
+            "by[2] (dz) = inf: must be a finite number"
+        );
+        let joints = |j: Vec<f64>| MoveOrder {
+            joints: Some(j),
+            ..MoveOrder::default()
+        };
+        let e = joints(vec![1.0, 2.0, 3.0]).check(m).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "joints = [1.0, 2.0, 3.0]: must be 4 joint values in the joints' order (degrees or mm)"
+        );
+        assert_eq!(
+            joints(vec![1.0, 2.0, 3.0, f64::NAN])
+                .check(m)
+                .unwrap_err()
+                .field,
+            "joints[3]"
+        );
+        let at = |name: &str| MoveOrder {
+            position: Some(name.into()),
+            ..MoveOrder::default()
+        };
+        let e = at("a b").check_with(m, &taught()).unwrap_err();
+        assert_eq!(e.to_string(), format!("position = \"a b\": {NAME_RULE}"));
+        let e = at("place").check_with(m, &taught()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "position = \"place\": no such position; taught positions: pick"
+        );
+        let e = at("place").check(m).unwrap_err();
+        assert!(
+            e.reason.ends_with("the robot has no taught positions"),
+            "{e}"
+        );
+        let c = at("pick").check_with(m, &taught()).unwrap();
+        let Target::Pose { to, a_given: true } = c.target else {
+            panic!("{c:?}")
+        };
+        assert_eq!(to, Pose::from_mm_deg(10.0, 520.0, 30.0, 5.0));
+    }
+
+    #[test]
+    fn a_jog_is_anchored_where_its_move_starts() {
+        let robot = seed_robot();
+        let counts = [400, 800, 1_000, 200];
+        let from = robot.pose_of(&counts);
+        let jog = MoveOrder {
+            by: Some(vec![10.0, -5.0, 2.0]),
+            ..MoveOrder::default()
+        }
+        .check(robot.motion)
+        .unwrap();
+        assert!(jog.is_relative());
+        let anchored = jog.anchored_at(&robot, counts);
+        let Target::Pose { to, a_given: true } = anchored.target else {
+            panic!("{anchored:?}")
+        };
+        assert!((to.position_mm - from.position_mm - Vector3::new(10.0, -5.0, 2.0)).norm() < 1e-9);
+        assert!((to.a_rad - from.a_rad).abs() < 1e-12);
+        // Anchored or not, the plan from those counts is the same.
+        let a = plan_order(&robot, &jog, counts).unwrap();
+        let b = plan_order(&robot, &anchored, counts).unwrap();
+        assert_eq!(a.end_counts(), b.end_counts());
+    }
+
+    #[test]
+    fn a_joints_order_plans_a_joint_move_to_those_values() {
+        let robot = seed_robot();
+        let c = MoveOrder {
+            joints: Some(vec![10.0, 30.0, 40.0, -5.0]),
+            ..MoveOrder::default()
+        }
+        .check(robot.motion)
+        .unwrap();
+        let plan = plan_order(&robot, &c, [0; JOINTS]).unwrap();
+        assert!(plan.joint_path.is_some());
+        assert_eq!(
+            plan.end_counts(),
+            [4_000, 1_200, (40.0f64 / 0.013).round() as i64, -2_000]
+        );
     }
 }

@@ -8,7 +8,7 @@ use tokio::sync::watch;
 
 use super::order::MoveOrder;
 
-/// A move's identifier, unique within one daemon run.
+/// A move's identifier, unique across daemon runs (see [`super::MoveIds`]).
 pub type MoveId = u64;
 
 /// Where a move is.
@@ -25,17 +25,38 @@ pub enum Stage {
     Running,
     /// Ended on its target.
     Done,
-    /// Stopped (by a stop request, or cancelled by one while queued).
+    /// Stopped while it ran (a stop request, the e-stop input, PROG mode): see `error`.
     Stopped,
     /// Failed: see `error`; nothing more will happen to it.
     Failed,
+    /// Never ran: nothing moved (a stop came first, the move before it did not end, the PLC
+    /// restarted, the daemon shut down): see `error`.
+    Cancelled,
 }
 
 impl Stage {
     /// Whether nothing more will happen to the move.
     #[must_use]
     pub fn is_final(self) -> bool {
-        matches!(self, Self::Done | Self::Stopped | Self::Failed)
+        matches!(
+            self,
+            Self::Done | Self::Stopped | Self::Failed | Self::Cancelled
+        )
+    }
+
+    /// Its name as the API writes it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Queued => "queued",
+            Self::Uploading => "uploading",
+            Self::Waiting => "waiting",
+            Self::Running => "running",
+            Self::Done => "done",
+            Self::Stopped => "stopped",
+            Self::Failed => "failed",
+            Self::Cancelled => "cancelled",
+        }
     }
 }
 
@@ -67,6 +88,9 @@ pub struct MoveReport {
     pub order: MoveOrder,
     /// Found running on the PLC when the daemon (re)connected, not started by this run.
     pub recovered: bool,
+    /// The longest the move may take from now on before it is given up, s (its planned
+    /// duration and upload plus margins); what `linterpd move` waits for at most.
+    pub deadline_s: Option<f64>,
     /// The contract sequence number of its start.
     pub seq: Option<u16>,
     /// The table bank it uses.
@@ -102,6 +126,7 @@ impl MoveReport {
             stage: Stage::Queued,
             order,
             recovered: false,
+            deadline_s: None,
             seq: None,
             bank: None,
             start_counts: None,
@@ -135,6 +160,13 @@ pub struct RobotState {
     pub name: String,
     /// The PLC link.
     pub link: LinkState,
+    /// Where the daemon and the PLC stand: `link-down`, `stalled`, `unhomed`, `homing`, `idle`,
+    /// `uploading`, `starting`, `running`, `running-chained`, `stopping`.
+    pub phase: &'static str,
+    /// Whether the PLC's homed bit is set (`false` until known).
+    pub homed: bool,
+    /// Why a new move would be refused now (`None`: it would be accepted).
+    pub refuses: Option<String>,
     /// `run` or `prog`, when known.
     pub plc_mode: Option<&'static str>,
     /// Milliseconds since the heartbeat last changed.
@@ -151,6 +183,23 @@ pub struct RobotState {
     pub current_move: Option<MoveId>,
     /// Moves waiting, in order.
     pub queued: Vec<MoveId>,
+    /// The register gateway's work on this robot's link.
+    pub gateway: GatewayStats,
+}
+
+/// What the register gateway did on a robot's link since the daemon started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+pub struct GatewayStats {
+    /// Requests answered (read or write).
+    pub requests: u64,
+    /// Of them, failed (link down, PLC error).
+    pub failed: u64,
+    /// Exchanges with the PLC they took.
+    pub exchanges: u64,
+    /// The longest of those exchanges, ms.
+    pub longest_exchange_ms: u64,
+    /// The longest a due status read waited behind a gateway exchange, ms.
+    pub longest_poll_delay_ms: u64,
 }
 
 /// The moves of one robot: every report (the latest few hundred) and a feed per move.

@@ -26,7 +26,9 @@ use thiserror::Error;
 pub use replay::{Played, cut, replay};
 pub use text::{picture, write_report};
 
-use crate::daemon::{Daemon, MoveOrder, MoveReport, RobotHandle, Stage, SubmitError};
+use crate::daemon::{
+    Daemon, DaemonOptions, MoveOrder, MoveReport, RobotHandle, RobotSetup, Stage, SubmitError,
+};
 use crate::kinematics::JOINTS;
 use crate::plan::Plan;
 use crate::plc::contract::ContractSettings;
@@ -108,7 +110,7 @@ pub struct Step {
 
 fn to(p: [f64; 3]) -> MoveOrder {
     MoveOrder {
-        to: p.to_vec(),
+        to: Some(p.to_vec()),
         ..MoveOrder::default()
     }
 }
@@ -207,11 +209,14 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     robot.motion.frequency_model = options.frequency_model;
     let rig = Rig::start(&robot, P1, options.frequency_model)?;
     let scan_s = rig.mock.scan_s();
-    let daemon = Daemon::spawn(vec![(
-        robot.clone(),
-        ContractSettings::default(),
-        rig.connector(options.baud),
-    )]);
+    let setup = RobotSetup {
+        robot: robot.clone(),
+        settings: ContractSettings::default(),
+        connect: rig.connector(options.baud),
+        home_counts: [0; crate::kinematics::JOINTS],
+        gateway: crate::gateway::GatewaySettings::default(),
+    };
+    let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
     let moves = match daemon.robot(&robot.name) {
         Some(handle) => drive(handle, &rig, scan_s).await,
         None => Err(DemoError::Rig("the daemon has no robot".into())),

@@ -1,7 +1,10 @@
-//! PURE. Poses, the straight line between two poses, and the motion profile along it.
+//! PURE. Poses, the straight line between two poses, the polyline of a curved tool path, and
+//! the motion profile along a path.
 
+mod polyline;
 mod profile;
 
+pub use polyline::Polyline;
 pub use profile::{Profile, ProfileError, ProfileRequest};
 
 use nalgebra::Vector3;
@@ -31,6 +34,18 @@ impl Pose {
         let p = self.position_mm;
         [p.x, p.y, p.z, self.a_rad.to_degrees()]
     }
+}
+
+/// A planned path of the tool point, as the accuracy figures measure an executed move against it.
+pub trait ToolPath {
+    /// Distance from a point to the path, mm.
+    fn distance_mm(&self, p: &Vector3<f64>) -> f64;
+
+    /// Where the path ends, mm.
+    fn end_mm(&self) -> Vector3<f64>;
+
+    /// A new measurement begins (at the path's start): forget where the last one was.
+    fn restart(&self) {}
 }
 
 /// The straight line from one pose to another; the tool angle goes linearly with distance.
@@ -88,6 +103,16 @@ impl Line {
         };
         let nearest = (a + d * u).norm();
         (nearest, a.norm().max(b.norm()))
+    }
+}
+
+impl ToolPath for Line {
+    fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
+        Line::distance_mm(self, p)
+    }
+
+    fn end_mm(&self) -> Vector3<f64> {
+        self.to.position_mm
     }
 }
 

@@ -133,6 +133,21 @@ impl Command {
         }
     }
 
+    /// Characters of the longest reply frame to this command (envelope, `$`, code and data):
+    /// with the command's own frame length, the wire time of one exchange.
+    #[must_use]
+    pub fn reply_chars(&self) -> usize {
+        let data = match self {
+            Self::ReadDt(range) => range.len() * WORD_CHARS,
+            Self::ReadContactWords(range) => range.len() * WORD_CHARS,
+            Self::ReadContact(_) => 1,
+            // CPU type, version, program size, mode, link, error flag, self-diagnostic.
+            Self::Status => 16,
+            Self::WriteDt { .. } | Self::WriteContact { .. } | Self::SetMode(_) => 0,
+        };
+        ENVELOPE_LEN + 3 + data
+    }
+
     /// The two letters a successful reply to this command starts with (after `$`).
     #[must_use]
     pub fn reply_code(&self) -> [u8; 2] {

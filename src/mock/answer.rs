@@ -8,14 +8,19 @@
 //!  RT          status, mode flags bit 0 = RUN
 //!  RMR / RMP   switch RUN / PROG
 //! ```
+//! The `small-requests` variant answers a read or write of more than
+//! [`super::SMALL_MEWTOCOL_WORDS`] words with `! 41` (format error), as a PLC whose buffer is
+//! shorter than the frame might.
+//!
 //! Station rules (PLC.md §1, "Frames"): `FF` is executed and never answered; `EE` is answered by
 //! any station; a numbered station is answered only by that station, or by a mock configured to
 //! answer every station.
 
+use crate::gateway::Area;
 use crate::mewtocol::{
     Command, ContactArea, Mode, PlcError, PlcErrorCode, PlcStatus, Reply, Response, Station,
 };
-use crate::plc::{PlcMode, R9020};
+use crate::plc::PlcMode;
 
 use super::{MemoryError, MockPlc};
 
@@ -79,15 +84,14 @@ fn memory_refusal(error: MemoryError) -> PlcError {
 }
 
 /// The relay number of an R contact (word * 16 + bit), or `None` for X, Y and L.
-fn relay_number(area: ContactArea, word: u16, bit: u8) -> Option<u32> {
-    (area == ContactArea::R).then(|| u32::from(word) * 16 + u32::from(bit))
-}
-
-fn read_relay(mock: &MockPlc, relay: u32) -> Result<bool, MemoryError> {
-    if relay == u32::from(R9020) {
-        return Ok(mock.mode() == PlcMode::Run);
+/// The gateway's area of a MEWTOCOL contact area (L, the link relays, the mock lacks).
+fn bit_area(area: ContactArea) -> Option<Area> {
+    match area {
+        ContactArea::X => Some(Area::X),
+        ContactArea::Y => Some(Area::Y),
+        ContactArea::R => Some(Area::R),
+        ContactArea::L => None,
     }
-    mock.read_relay(relay)
 }
 
 /// The `RT` status the mock reports: only the mode flags mean anything.
@@ -99,9 +103,25 @@ pub fn plc_status(mock: &MockPlc) -> PlcStatus {
     }
 }
 
+/// Words a read or write command carries (0 for other commands).
+fn dt_words(command: &Command) -> usize {
+    match command {
+        Command::ReadDt(range) => range.len(),
+        Command::WriteDt { words, .. } => words.len(),
+        _ => 0,
+    }
+}
+
 /// Executes one MEWTOCOL-COM command on the mock and gives its response.
 pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
+    tracing::trace!(?command, at_s = mock.now_s(), "MEWTOCOL command");
     let address_error = || refuse(PlcErrorCode::AddressError);
+    if let Some(limit) = mock.config().variant.mewtocol_words_limit()
+        && dt_words(command) > limit
+    {
+        tracing::warn!(words = dt_words(command), limit, "small-requests: refused");
+        return refuse(PlcErrorCode::FormatError);
+    }
     match command {
         Command::ReadDt(range) => mock
             .read_words(range.start(), range.len())
@@ -111,27 +131,28 @@ pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
             .write_words(*start, words)
             .map(|()| Reply::WriteDt)
             .map_err(memory_refusal),
-        Command::ReadContact(c) => match relay_number(c.area(), c.word(), c.bit()) {
-            Some(relay) => read_relay(mock, relay)
+        Command::ReadContact(c) => match bit_area(c.area()) {
+            Some(area) => mock
+                .read_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()))
                 .map(Reply::ReadContact)
                 .map_err(memory_refusal),
             None => address_error(),
         },
-        Command::WriteContact { contact: c, on } => {
-            match relay_number(c.area(), c.word(), c.bit()) {
-                Some(relay) => mock
-                    .write_relay(relay, *on)
-                    .map(|()| Reply::WriteContact)
-                    .map_err(memory_refusal),
-                None => address_error(),
-            }
-        }
-        Command::ReadContactWords(words) if words.area() == ContactArea::R => mock
-            .memory()
-            .read_wr(u32::from(words.start()), words.len())
-            .map(|w| Reply::ReadContactWords(w.to_vec()))
-            .map_err(memory_refusal),
-        Command::ReadContactWords(_) => address_error(),
+        Command::WriteContact { contact: c, on } => match bit_area(c.area()) {
+            Some(area) => mock
+                .write_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()), *on)
+                .map(|()| Reply::WriteContact)
+                .map_err(memory_refusal),
+            None => address_error(),
+        },
+        Command::ReadContactWords(words) => match bit_area(words.area()) {
+            Some(area) => mock
+                .memory()
+                .read_bit_words(area, u32::from(words.start()), words.len())
+                .map(|w| Reply::ReadContactWords(w.to_vec()))
+                .map_err(memory_refusal),
+            None => address_error(),
+        },
         Command::Status => Ok(Reply::Status(plc_status(mock))),
         Command::SetMode(mode) => {
             mock.set_mode(match mode {
@@ -179,7 +200,26 @@ mod tests {
             Ok(Reply::ReadContact(true))
         );
         let y0 = Contact::new(ContactArea::Y, 0, 0).unwrap();
-        assert_eq!(code(execute(&mut mock, &Command::ReadContact(y0))), 66);
+        assert_eq!(
+            execute(&mut mock, &Command::ReadContact(y0)),
+            Ok(Reply::ReadContact(false))
+        );
+        let l0 = Contact::new(ContactArea::L, 0, 0).unwrap();
+        assert_eq!(code(execute(&mut mock, &Command::ReadContact(l0))), 66);
+    }
+
+    #[test]
+    fn small_requests_refuse_more_than_64_words_with_a_format_error() {
+        let mut mock = MockPlc::new(MockConfig {
+            variant: crate::mock::MockVariant::SmallRequests,
+            ..MockConfig::default()
+        })
+        .unwrap();
+        let read = |n| Command::ReadDt(DtRange::from_len(2000, n).unwrap());
+        assert!(execute(&mut mock, &read(64)).is_ok());
+        assert_eq!(execute(&mut mock, &read(65)).unwrap_err().code.number(), 41);
+        let write = Command::write_dt(2000, vec![0; 65]).unwrap();
+        assert_eq!(execute(&mut mock, &write).unwrap_err().code.number(), 41);
     }
 
     #[test]

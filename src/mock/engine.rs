@@ -11,6 +11,11 @@
 //!   ([`Anomaly::RunOn`]);
 //! - incremental targets: refused as a pulse instruction error (the mock plays absolute targets
 //!   only).
+//!
+//! A stop command aborts the segment ([`Engine::stop`]), unless the mock is the `stop-pauses`
+//! variant ([`Engine::halt`]): the output then halts with the busy flag OFF, and the next F174 on
+//! the channel resumes the paused segment where it stood (the listing's `H n100` before F174
+//! releases the stop bit) and is itself refused without an error, as F174 on a busy channel is.
 
 use thiserror::Error;
 
@@ -72,6 +77,8 @@ pub(super) struct Engine {
     model: FrequencyModel,
     count: i64,
     playing: Option<Playing>,
+    /// A segment halted by a stop that only pauses, and when it was halted, s.
+    paused: Option<(Playing, f64)>,
 }
 
 impl Engine {
@@ -84,6 +91,7 @@ impl Engine {
             model,
             count: 0,
             playing: None,
+            paused: None,
         }
     }
 
@@ -110,9 +118,28 @@ impl Engine {
         self.playing.as_ref().is_some_and(|p| p.pulses.is_none())
     }
 
-    /// Stops pulse output at once; the count stays where it is.
+    /// Stops pulse output at once and ends the segment (a paused one too); the count stays
+    /// where it is.
     pub(super) fn stop(&mut self) {
         self.playing = None;
+        self.paused = None;
+    }
+
+    /// What a stop command does at `at_s`: ends the segment when `aborts`, else pauses it (the
+    /// busy flag drops; the next F174 resumes it).
+    pub(super) fn halt(&mut self, at_s: f64, aborts: bool) {
+        if aborts {
+            return self.stop();
+        }
+        if let Some(p) = self.playing.take() {
+            tracing::warn!(
+                channel = self.channel,
+                count = self.count,
+                at_s,
+                "stop paused the segment"
+            );
+            self.paused = Some((p, at_s));
+        }
     }
 
     fn allowed(&self, range: FrequencyRange) -> (u32, u32) {
@@ -150,6 +177,18 @@ impl Engine {
         at_s: f64,
         rec: &mut Recorder,
     ) -> Result<(), PulseError> {
+        if let Some((mut p, paused_s)) = self.paused.take() {
+            p.row_start_s += at_s - paused_s;
+            tracing::warn!(
+                channel = self.channel,
+                paused = p.segment,
+                refused = segment,
+                at_s,
+                "F174 resumed the paused segment and refused the new one"
+            );
+            self.playing = Some(p);
+            return Ok(());
+        }
         self.check(seg, segment)?;
         self.playing = None;
         if seg.rows.is_empty() {
@@ -336,6 +375,40 @@ mod tests {
             err,
             PulseError::FirstFrequencyOutOfRange { max_hz: 20_000, .. }
         ));
+    }
+
+    #[test]
+    fn a_pausing_stop_resumes_the_old_segment_at_the_next_start() {
+        let mut e = Engine::new(0, 100_000, FrequencyModel::Ideal);
+        let mut rec = recorder();
+        e.start(&seg(Direction::Up, &[(1_000, 10)]), 1, 0.0, &mut rec)
+            .unwrap();
+        e.advance(0.0035, &mut rec);
+        e.halt(0.0035, false);
+        assert!(!e.busy());
+        e.advance(1.0, &mut rec);
+        assert_eq!(e.count(), 3);
+        e.start(&seg(Direction::Down, &[(1_000, 0)]), 1, 1.0, &mut rec)
+            .unwrap();
+        assert!(e.busy());
+        e.advance(2.0, &mut rec);
+        assert_eq!(e.count(), 10, "the paused segment ran to its own target");
+        let last = rec.pulses.unwrap().last().unwrap().time_s;
+        assert!((last - 1.0065).abs() < 1e-9, "{last}");
+    }
+
+    #[test]
+    fn an_aborting_stop_leaves_nothing_to_resume() {
+        let mut e = Engine::new(0, 100_000, FrequencyModel::Ideal);
+        let mut rec = recorder();
+        e.start(&seg(Direction::Up, &[(1_000, 10)]), 1, 0.0, &mut rec)
+            .unwrap();
+        e.advance(0.0035, &mut rec);
+        e.halt(0.0035, true);
+        e.start(&seg(Direction::Down, &[(1_000, 0)]), 1, 1.0, &mut rec)
+            .unwrap();
+        e.advance(2.0, &mut rec);
+        assert_eq!(e.count(), 0);
     }
 
     #[test]

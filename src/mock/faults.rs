@@ -11,8 +11,9 @@
 //! ACTION@P%                  on each command with probability P percent (link actions only)
 //!
 //! link actions: drop  corrupt  close  delay<ms>  error<NN> (MEWTOCOL)  exception<N> (Modbus)
-//! core actions: freeze  thaw  (the heartbeat)  prog  run  (the mode)
-//! e.g. drop@3,corrupt@5,error61@7,prog@12,freeze@t=0.5,seed=7,corrupt@1%
+//! core actions: freeze  thaw  (the heartbeat)  prog  run  (the mode)  restart (a power cycle:
+//!               counts 0, homed bit clear, first scan)
+//! e.g. drop@3,corrupt@5,error61@7,prog@12,freeze@t=0.5,restart@t=2,seed=7,corrupt@1%
 //! ```
 
 use std::str::FromStr;
@@ -73,6 +74,8 @@ pub enum CoreFault {
     Prog,
     /// Switch back to RUN mode.
     Run,
+    /// Power lost and back: counts 0, homed bit clear, the program's first scan.
+    PowerCycle,
 }
 
 /// A script item's action.
@@ -144,6 +147,7 @@ fn parse_action(name: &str) -> Result<Action, String> {
         "thaw" => core(CoreFault::ThawHeartbeat),
         "prog" => core(CoreFault::Prog),
         "run" => core(CoreFault::Run),
+        "restart" => core(CoreFault::PowerCycle),
         _ => parse_coded_action(name),
     }
 }
@@ -173,7 +177,7 @@ fn parse_coded_action(name: &str) -> Result<Action, String> {
     }
     Err(format!(
         "unknown action `{name}`; expected drop, corrupt, close, delay<ms>, error<NN>, \
-         exception<N>, freeze, thaw, prog or run"
+         exception<N>, freeze, thaw, prog, run or restart"
     ))
 }
 
@@ -353,10 +357,17 @@ mod tests {
 
     #[test]
     fn script_parses_every_kind_of_item() {
-        let s = FaultScript::parse("drop@3, corrupt@5,error61@7,prog@12,freeze@t=0.5,seed=7,delay250ms@2,exception2@4,close@1%")
+        let s = FaultScript::parse("drop@3, corrupt@5,error61@7,prog@12,freeze@t=0.5,seed=7,delay250ms@2,exception2@4,close@1%,restart@t=2")
             .unwrap();
         assert_eq!(s.seed, 7);
-        assert_eq!(s.items.len(), 8);
+        assert_eq!(s.items.len(), 9);
+        assert_eq!(
+            s.items[8],
+            FaultItem {
+                action: Action::Core(CoreFault::PowerCycle),
+                trigger: Trigger::Time(2.0)
+            }
+        );
         assert_eq!(
             s.items[2],
             FaultItem {

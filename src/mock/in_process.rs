@@ -6,7 +6,8 @@ use std::future::{Future, ready};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use super::{Clock, MemoryError, MockPlc, VirtualClock};
-use crate::plc::{Plc, PlcError, PlcMode, Refusal};
+use crate::gateway::Area;
+use crate::plc::{ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
 
 /// An in-process handle on a mock PLC.
 #[derive(Debug)]
@@ -110,6 +111,14 @@ impl Plc for InProcess {
         ready(result.map_err(|e| refused(dt_operation("write", start, words.len()), e)))
     }
 
+    fn write_words_once(
+        &mut self,
+        start: u16,
+        words: &[u16],
+    ) -> impl Future<Output = Result<(), PlcError>> + Send {
+        self.write_words(start, words)
+    }
+
     fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send {
         let result = self.exchange(|m| m.read_relay(u32::from(relay)));
         ready(result.map_err(|e| refused(format!("read relay number {relay}"), e)))
@@ -126,5 +135,37 @@ impl Plc for InProcess {
 
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send {
         ready(Ok(self.exchange(|m| m.mode())))
+    }
+
+    fn read_bits(
+        &mut self,
+        area: Area,
+        start: u32,
+        count: u16,
+    ) -> impl Future<Output = Result<Vec<bool>, PlcError>> + Send {
+        let result = self.exchange(|m| {
+            (start..start + u32::from(count))
+                .map(|bit| m.read_bit(area, bit))
+                .collect::<Result<Vec<bool>, _>>()
+        });
+        ready(result.map_err(|e| refused(format!("read {count} bits of {}", area.name()), e)))
+    }
+
+    fn write_bit(
+        &mut self,
+        area: Area,
+        bit: u32,
+        on: bool,
+    ) -> impl Future<Output = Result<(), PlcError>> + Send {
+        let result = self.exchange(|m| m.write_bit(area, bit, on));
+        ready(result.map_err(|e| refused(format!("write bit {bit} of {}", area.name()), e)))
+    }
+
+    fn exchange_sizes(&self) -> ExchangeSizes {
+        ExchangeSizes {
+            read_words: 509,
+            write_words: 507,
+            read_bits: 2000,
+        }
     }
 }

@@ -1,19 +1,24 @@
-//! The mock PLC's device memory: DT data registers and R internal relays, with range errors a
-//! server turns into MEWTOCOL error 61/66 or Modbus exception 02/03.
+//! The mock PLC's device memory: DT data registers, X inputs, Y outputs and R internal relays,
+//! with range errors a server turns into MEWTOCOL error 61/66 or Modbus exception 02/03.
 //!
 //! ```text
 //! DT0 ..= DT32764          u16 words (FP-X C30/C60, PLC.md §3 "Special registers")
-//! WR0 ..= WR255            u16 words of R relays; relay number = word * 16 + bit (R0 ..= R255F)
+//! WX0 ..= WX109            X inputs, bit = word * 16 + bit (X0 ..= X109F); set by a test
+//! WY0 ..= WY109            Y outputs (Y0 ..= Y109F)
+//! WR0 ..= WR255            R relays (R0 ..= R255F)
 //! ```
 
 use thiserror::Error;
 
 use crate::contract::DT_LAST;
+use crate::gateway::Area;
 
 /// Words of R relays (WR0..=WR255: R0..=R255F, the FP-X's 4096 internal relays).
 pub const RELAY_WORDS: u16 = 256;
 /// The last relay number (R255F).
 pub const RELAY_LAST: u16 = RELAY_WORDS * 16 - 1;
+/// Words of X inputs and of Y outputs (X0..=X109F, Y0..=Y109F on an FP-X C60).
+pub const IO_WORDS: u16 = 110;
 
 /// An access outside the mock's memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
@@ -28,23 +33,33 @@ pub enum MemoryError {
         /// The last DT word.
         last: u16,
     },
-    /// A relay outside R0..=R255F.
-    #[error("relay number {relay} is outside R0..=R{last_word}F", last_word = last / 16)]
-    RelayOutOfRange {
-        /// Relay number asked for (word * 16 + bit).
-        relay: u32,
-        /// The last relay number.
+    /// A bit outside its area.
+    #[error("{area} bit number {bit} is outside {area}0..={area}{last_word}F", last_word = last / 16)]
+    BitOutOfRange {
+        /// `X`, `Y` or `R`.
+        area: &'static str,
+        /// Bit number asked for (word * 16 + bit).
+        bit: u32,
+        /// The area's last bit number.
         last: u16,
     },
-    /// Relay words outside WR0..=WR`last`.
-    #[error("WR{start}..=WR{end} is outside WR0..=WR{last}")]
-    RelayWordOutOfRange {
+    /// Bit words outside their area.
+    #[error("W{area}{start}..=W{area}{end} is outside W{area}0..=W{area}{last}")]
+    BitWordOutOfRange {
+        /// `X`, `Y` or `R`.
+        area: &'static str,
         /// First word asked for.
         start: u32,
         /// Last word asked for.
         end: u32,
-        /// The last relay word.
+        /// The area's last word.
         last: u16,
+    },
+    /// An area that holds no bits (DT).
+    #[error("{area} holds words, not bits")]
+    NotBits {
+        /// The area.
+        area: &'static str,
     },
 }
 
@@ -56,14 +71,14 @@ impl MemoryError {
     pub fn mewtocol_code(&self) -> u8 {
         match *self {
             Self::DtOutOfRange { start, last, .. }
-            | Self::RelayWordOutOfRange { start, last, .. } => {
+            | Self::BitWordOutOfRange { start, last, .. } => {
                 if start > u32::from(last) {
                     66
                 } else {
                     61
                 }
             }
-            Self::RelayOutOfRange { .. } => 66,
+            Self::BitOutOfRange { .. } | Self::NotBits { .. } => 66,
         }
     }
 
@@ -75,10 +90,12 @@ impl MemoryError {
     }
 }
 
-/// DT words and R relays.
+/// DT words and X, Y and R bits.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Memory {
     dt: Vec<u16>,
+    wx: Vec<u16>,
+    wy: Vec<u16>,
     wr: Vec<u16>,
 }
 
@@ -101,6 +118,8 @@ impl Memory {
     pub fn new() -> Self {
         Self {
             dt: vec![0; usize::from(DT_LAST) + 1],
+            wx: vec![0; usize::from(IO_WORDS)],
+            wy: vec![0; usize::from(IO_WORDS)],
             wr: vec![0; usize::from(RELAY_WORDS)],
         }
     }
@@ -130,51 +149,100 @@ impl Memory {
         Ok(self.read_dt(address, 1)?[0])
     }
 
-    fn wr_span(&self, start: u32, count: usize) -> Result<std::ops::Range<usize>, MemoryError> {
-        span(start, count, self.wr.len()).ok_or(MemoryError::RelayWordOutOfRange {
+    fn words(&self, area: Area) -> Result<&Vec<u16>, MemoryError> {
+        match area {
+            Area::X => Ok(&self.wx),
+            Area::Y => Ok(&self.wy),
+            Area::R => Ok(&self.wr),
+            Area::Dt => Err(MemoryError::NotBits { area: "DT" }),
+        }
+    }
+
+    fn words_mut(&mut self, area: Area) -> Result<&mut Vec<u16>, MemoryError> {
+        match area {
+            Area::X => Ok(&mut self.wx),
+            Area::Y => Ok(&mut self.wy),
+            Area::R => Ok(&mut self.wr),
+            Area::Dt => Err(MemoryError::NotBits { area: "DT" }),
+        }
+    }
+
+    fn word_span(
+        &self,
+        area: Area,
+        start: u32,
+        count: usize,
+    ) -> Result<std::ops::Range<usize>, MemoryError> {
+        let len = self.words(area)?.len();
+        span(start, count, len).ok_or(MemoryError::BitWordOutOfRange {
+            area: area.name(),
             start,
             end: (start as usize + count.max(1) - 1) as u32,
-            last: RELAY_WORDS - 1,
+            last: len as u16 - 1,
         })
+    }
+
+    /// Reads `count` bit words of `area` (X, Y or R) from word `start`.
+    pub fn read_bit_words(
+        &self,
+        area: Area,
+        start: u32,
+        count: usize,
+    ) -> Result<&[u16], MemoryError> {
+        let range = self.word_span(area, start, count)?;
+        Ok(&self.words(area)?[range])
     }
 
     /// Reads `count` relay words WR`start`...
     pub fn read_wr(&self, start: u32, count: usize) -> Result<&[u16], MemoryError> {
-        Ok(&self.wr[self.wr_span(start, count)?])
+        self.read_bit_words(Area::R, start, count)
     }
 
     /// Writes relay words from WR`start`; nothing is written if any word is out of range.
     pub fn write_wr(&mut self, start: u32, words: &[u16]) -> Result<(), MemoryError> {
-        let range = self.wr_span(start, words.len())?;
+        let range = self.word_span(Area::R, start, words.len())?;
         self.wr[range].copy_from_slice(words);
         Ok(())
     }
 
-    fn relay_at(relay: u32) -> Result<(usize, u16), MemoryError> {
-        if relay > u32::from(RELAY_LAST) {
-            return Err(MemoryError::RelayOutOfRange {
-                relay,
-                last: RELAY_LAST,
+    fn bit_at(&self, area: Area, bit: u32) -> Result<(usize, u16), MemoryError> {
+        let last = self.words(area)?.len() as u32 * 16 - 1;
+        if bit > last {
+            return Err(MemoryError::BitOutOfRange {
+                area: area.name(),
+                bit,
+                last: last as u16,
             });
         }
-        Ok(((relay / 16) as usize, 1 << (relay % 16)))
+        Ok(((bit / 16) as usize, 1 << (bit % 16)))
+    }
+
+    /// Reads bit `bit` (word * 16 + bit) of `area` (X, Y or R).
+    pub fn bit(&self, area: Area, bit: u32) -> Result<bool, MemoryError> {
+        let (word, mask) = self.bit_at(area, bit)?;
+        Ok(self.words(area)?[word] & mask != 0)
+    }
+
+    /// Writes bit `bit` of `area`.
+    pub fn set_bit(&mut self, area: Area, bit: u32, on: bool) -> Result<(), MemoryError> {
+        let (word, mask) = self.bit_at(area, bit)?;
+        let words = self.words_mut(area)?;
+        if on {
+            words[word] |= mask;
+        } else {
+            words[word] &= !mask;
+        }
+        Ok(())
     }
 
     /// Reads relay R`relay` (`relay` = word * 16 + bit).
     pub fn relay(&self, relay: u32) -> Result<bool, MemoryError> {
-        let (word, bit) = Self::relay_at(relay)?;
-        Ok(self.wr[word] & bit != 0)
+        self.bit(Area::R, relay)
     }
 
     /// Writes relay R`relay`.
     pub fn set_relay(&mut self, relay: u32, on: bool) -> Result<(), MemoryError> {
-        let (word, bit) = Self::relay_at(relay)?;
-        if on {
-            self.wr[word] |= bit;
-        } else {
-            self.wr[word] &= !bit;
-        }
-        Ok(())
+        self.set_bit(Area::R, relay, on)
     }
 }
 
@@ -211,6 +279,22 @@ mod tests {
     }
 
     #[test]
+    fn x_y_and_r_bits_are_three_areas() {
+        let mut m = Memory::new();
+        m.set_bit(Area::Y, 17, true).unwrap();
+        m.set_bit(Area::X, 1, true).unwrap();
+        assert!(m.bit(Area::Y, 17).unwrap() && !m.bit(Area::R, 17).unwrap());
+        assert_eq!(m.read_bit_words(Area::Y, 1, 1).unwrap(), &[2]);
+        assert_eq!(m.read_bit_words(Area::X, 0, 1).unwrap(), &[2]);
+        let e = m.bit(Area::Y, 110 * 16).unwrap_err();
+        assert_eq!(e.to_string(), "Y bit number 1760 is outside Y0..=Y109F");
+        assert!(matches!(
+            m.bit(Area::Dt, 0),
+            Err(MemoryError::NotBits { .. })
+        ));
+    }
+
+    #[test]
     fn relay_number_is_word_times_sixteen_plus_bit() {
         let mut m = Memory::new();
         m.set_relay(0x11, true).unwrap(); // R1.1
@@ -228,7 +312,7 @@ mod tests {
         assert!(e.to_string().contains("R255F"), "{e}");
         assert!(matches!(
             m.read_wr(255, 2),
-            Err(MemoryError::RelayWordOutOfRange { last: 255, .. })
+            Err(MemoryError::BitWordOutOfRange { last: 255, .. })
         ));
     }
 }

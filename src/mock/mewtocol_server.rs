@@ -11,7 +11,8 @@
 //! ```
 //! Link faults per command: drop (no reply), corrupt (one byte of the first frame), delay, close
 //! (the connection ends), error NN (`! NN`); a Modbus exception in the script answers `! 60`.
-//! A command that arrives during a multi-frame reply abandons the rest of it.
+//! A command that arrives during a multi-frame reply abandons the rest of it. The
+//! `angle-refused` variant neither executes nor answers anything that comes with a `<` header.
 
 use std::collections::VecDeque;
 use std::io;
@@ -207,6 +208,15 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
         self.refuse(header, station, code).await
     }
 
+    /// Whether the mock ignores frames with `header` (the `angle-refused` variant and `<`).
+    fn deaf_to(&self, header: Header) -> bool {
+        header == Header::Angle
+            && !self
+                .server
+                .mock
+                .with(|m| m.config().variant.answers_angle())
+    }
+
     async fn refuse(
         &mut self,
         header: Header,
@@ -214,6 +224,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
         code: PlcErrorCode,
     ) -> Result<Step, ServerError> {
         self.pending.clear();
+        if self.deaf_to(header) {
+            return Ok(Step::Continue);
+        }
         match self.server.options.station.route(station) {
             Route::Answer(from) => {
                 self.send(&Frame::new(header, from, encode(&refusal(code))), &[])
@@ -225,6 +238,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
     }
 
     async fn on_request(&mut self, request: Addressed<Request>) -> Result<Step, ServerError> {
+        if self.deaf_to(request.header) {
+            tracing::debug!("angle-refused: a < frame goes unanswered");
+            return Ok(Step::Continue);
+        }
         let route = self.server.options.station.route(request.station);
         match (request.message, route) {
             (_, Route::Ignore) => {

@@ -14,6 +14,7 @@
 //! in_process.rs  a crate::plc::Plc handle on a shared mock
 //! shared.rs      SharedMock: the mock behind Arc<Mutex<_>> with its clock and scan driver
 //! wire.rs        WireStream: serial line timing (11-bit characters at a baud rate)
+//! variant.rs     MockVariant: the listing, or one defect a real unit might have
 //! answer.rs      MEWTOCOL-COM commands executed on the mock; station rules
 //! mewtocol_server.rs  MEWTOCOL-COM server over any byte stream or a TCP listener
 //! modbus_server.rs    Modbus TCP / RTU servers through tokio-modbus
@@ -33,6 +34,7 @@ mod modbus_server;
 mod program;
 mod shared;
 mod trace;
+mod variant;
 mod wire;
 
 use thiserror::Error;
@@ -45,12 +47,13 @@ pub use faults::{
     Trigger,
 };
 pub use in_process::InProcess;
-pub use memory::{Memory, MemoryError, RELAY_LAST, RELAY_WORDS};
+pub use memory::{IO_WORDS, Memory, MemoryError, RELAY_LAST, RELAY_WORDS};
 pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
 pub use modbus_server::{ModbusServer, ModbusServerOptions};
-pub use program::HeaderError;
+pub use program::{HeaderError, StartOutcome, StartRecord};
 pub use shared::SharedMock;
 pub use trace::{Anomaly, PulsePoint, Recorder, write_csv};
+pub use variant::{MockVariant, SMALL_MEWTOCOL_WORDS, SMALL_MODBUS_REGISTERS};
 pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
 use crate::contract::{CHANNELS, Layout, LayoutError, State, StatusBlock};
@@ -64,6 +67,8 @@ pub const DEFAULT_SCAN_S: f64 = 0.002;
 /// Top frequency per channel of an FP-X C60T (PLC.md §3, "Channels"): 100 kHz on 0-1, 20 kHz on
 /// 2-3.
 pub const FPX_C60T_MAX_HZ: [u32; CHANNELS] = [100_000, 100_000, 20_000, 20_000];
+/// Default time the mock's home routine takes, s.
+pub const DEFAULT_HOME_S: f64 = 0.1;
 /// A scan due within this much of `now_s` runs (so clocks stepped by sums of floats do not skip
 /// a scan).
 const SCAN_SLACK_S: f64 = 1e-9;
@@ -75,10 +80,17 @@ pub struct MockConfig {
     pub layout: Layout,
     /// Scan time, s.
     pub scan_s: f64,
-    /// What the channels really output.
+    /// What the channels really output (unless the variant imposes a model).
     pub model: FrequencyModel,
     /// Top frequency per channel, Hz.
     pub channel_max_hz: [u32; CHANNELS],
+    /// Whether the channels are homed at power-up (a machine homed before linterpd came; the
+    /// contract's power-up state is `false`: `linterpd mock-plc --unhomed`).
+    pub homed: bool,
+    /// How long the home routine takes, s.
+    pub home_s: f64,
+    /// The listing, or one defect (`linterpd mock-plc --variant`).
+    pub variant: MockVariant,
 }
 
 impl Default for MockConfig {
@@ -88,6 +100,9 @@ impl Default for MockConfig {
             scan_s: DEFAULT_SCAN_S,
             model: FrequencyModel::default(),
             channel_max_hz: FPX_C60T_MAX_HZ,
+            homed: true,
+            home_s: DEFAULT_HOME_S,
+            variant: MockVariant::Listing,
         }
     }
 }
@@ -125,7 +140,8 @@ pub struct MockPlc {
 }
 
 impl MockPlc {
-    /// A mock in RUN at t = 0, memory zero, counts 0, ready = 0b111, e-stop closed.
+    /// A mock in RUN at t = 0, memory zero, counts 0, drives ready, e-stop closed, homed as the
+    /// config says; its first scan has run (at t = 0).
     pub fn new(config: MockConfig) -> Result<Self, MockError> {
         config.layout.check()?;
         if !(config.scan_s.is_finite() && config.scan_s > 0.0) {
@@ -133,13 +149,14 @@ impl MockPlc {
                 scan_s: config.scan_s,
             });
         }
+        let model = config.variant.model().unwrap_or(config.model);
         let engines =
-            std::array::from_fn(|c| Engine::new(c as u8, config.channel_max_hz[c], config.model));
-        Ok(Self {
+            std::array::from_fn(|c| Engine::new(c as u8, config.channel_max_hz[c], model));
+        let mut mock = Self {
             config,
             memory: Memory::new(),
             engines,
-            program: Program::default(),
+            program: Program::new(config.homed),
             mode: PlcMode::Run,
             now_s: 0.0,
             next_scan: 0,
@@ -149,7 +166,10 @@ impl MockPlc {
             recorder: Recorder::default(),
             faults: FaultInjector::default(),
             commands: 0,
-        })
+        };
+        // The first scan (R9013) runs at power-up, before anybody can write to the PLC.
+        mock.advance_to(0.0);
+        Ok(mock)
     }
 
     /// The configuration.
@@ -208,6 +228,8 @@ impl MockPlc {
                 ready: self.ready,
                 estop_open: self.estop_open,
                 freeze_heartbeat: self.heartbeat_frozen,
+                home_s: self.config.home_s,
+                variant: self.config.variant,
             },
         };
         self.program
@@ -235,7 +257,8 @@ impl MockPlc {
     }
 
     /// Switches mode. Entering PROG stops every channel and the program (a running move ends
-    /// stopped); the status block then holds still, heartbeat included.
+    /// stopped); the status block then holds still, heartbeat included. Back in RUN the program
+    /// begins with a first scan (CONTRACT.md: state idle, seq 0, host 0, homed bit clear).
     pub fn set_mode(&mut self, mode: PlcMode) {
         if mode == PlcMode::Prog && self.mode == PlcMode::Run {
             self.program.enter_prog(&mut self.engines);
@@ -300,9 +323,65 @@ impl MockPlc {
         self.memory.set_relay(relay, on)
     }
 
-    /// Sets the `ready` word's wired bits (bit 0 homed, 1 drives ready, 2 e-stop clear).
+    /// Reads bit `bit` (word * 16 + bit) of X, Y or R; R9020 reads whether the mock runs.
+    pub fn read_bit(&self, area: crate::gateway::Area, bit: u32) -> Result<bool, MemoryError> {
+        if area == crate::gateway::Area::R && bit == u32::from(crate::plc::R9020) {
+            return Ok(self.mode == PlcMode::Run);
+        }
+        self.memory.bit(area, bit)
+    }
+
+    /// Writes bit `bit` of Y or R (an X input is the outside world's: [`Self::set_input`]).
+    pub fn write_bit(
+        &mut self,
+        area: crate::gateway::Area,
+        bit: u32,
+        on: bool,
+    ) -> Result<(), MemoryError> {
+        if area == crate::gateway::Area::X {
+            return Err(MemoryError::BitOutOfRange {
+                area: "X",
+                bit,
+                last: 0,
+            });
+        }
+        self.memory.set_bit(area, bit, on)
+    }
+
+    /// Sets input X`bit` (word * 16 + bit), as the wiring would.
+    pub fn set_input(&mut self, bit: u32, on: bool) -> Result<(), MemoryError> {
+        self.memory.set_bit(crate::gateway::Area::X, bit, on)
+    }
+
+    /// Sets the `ready` word's wired bits (bit 1 drives ready, bit 2 e-stop clear); bit 0,
+    /// homed, is the program's own and is ignored here.
     pub fn set_ready(&mut self, bits: u16) {
-        self.ready = bits;
+        self.ready = bits & !crate::contract::READY_HOMED;
+    }
+
+    /// Whether the program's homed bit is set.
+    #[must_use]
+    pub fn homed(&self) -> bool {
+        self.program.homed()
+    }
+
+    /// Every start command the program acted on, refused or dropped, in order (a start that
+    /// waited is recorded when it is acted on).
+    #[must_use]
+    pub fn starts(&self) -> &[StartRecord] {
+        self.program.starts()
+    }
+
+    /// A power cycle: every channel stops and its count is lost (0), the program starts over with
+    /// a first scan and the homed bit clear. DT memory is kept (the table areas and the command
+    /// block's words are hold registers); the first scan clears the contract's words.
+    pub fn power_cycle(&mut self) {
+        for e in &mut self.engines {
+            e.stop();
+            e.set_count(0);
+        }
+        self.program.power_cycle();
+        tracing::warn!(at_s = self.now_s, "mock PLC power-cycled");
     }
 
     /// Opens (true) or closes the e-stop input. While it is open every scan stops every channel
@@ -401,6 +480,7 @@ impl MockPlc {
             CoreFault::ThawHeartbeat => self.heartbeat_frozen = false,
             CoreFault::Prog => self.set_mode(PlcMode::Prog),
             CoreFault::Run => self.set_mode(PlcMode::Run),
+            CoreFault::PowerCycle => self.power_cycle(),
         }
     }
 }

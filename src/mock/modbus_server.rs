@@ -4,7 +4,9 @@
 //! ```text
 //!  03 read holding registers   DT n = register n, 1..=125 a request
 //!  06 / 16 write register(s)   16: 1..=123 a request
-//!  01 read coils               coil 2048 + 16 w + b = R w.b, 1..=2000; R9020 reads RUN
+//!  01 read coils               coil 16 w + b = Y w.b (below 2048), coil 2048 + 16 w + b = R w.b,
+//!                              1..=2000; R9020 reads RUN
+//!  02 read discrete inputs     input 16 w + b = X w.b, 1..=2000
 //!  05 / 15 write coil(s)       15: 1..=1968
 //!  out of memory: exception 02 (illegal data address); bad quantity: 03 (illegal data value);
 //!  any other function: 01 (illegal function)
@@ -12,6 +14,8 @@
 //! (PLC.md §2; Modbus Application Protocol v1.1b3, §6.) Link faults per request: drop (no reply),
 //! delay, exception N, close (TCP: the connection ends; RTU: no reply), a MEWTOCOL error in the
 //! script answers exception 04; corrupt is not possible through tokio-modbus and drops the reply.
+//! The `small-requests` variant takes at most [`super::SMALL_MODBUS_REGISTERS`] registers a read or
+//! write (exception 03 beyond).
 
 use std::future::Future;
 use std::io;
@@ -29,8 +33,9 @@ use tokio_modbus::{ExceptionCode, Request, Response, SlaveRequest};
 use super::answer::StationFilter;
 use super::shared::SharedMock;
 use super::wire::WireStream;
-use super::{LinkFault, MemoryError, MockPlc, RELAY_LAST};
-use crate::plc::{BoxedLink, PlcMode, R9020, RELAY_COIL_BASE};
+use super::{IO_WORDS, LinkFault, MemoryError, MockPlc, RELAY_LAST};
+use crate::gateway::Area;
+use crate::plc::{BoxedLink, RELAY_COIL_BASE};
 
 /// Registers one read (03) may ask for (Modbus spec).
 const MAX_READ_REGISTERS: u16 = 125;
@@ -207,36 +212,50 @@ fn quantity(n: usize, max: usize) -> Result<(), ExceptionCode> {
     }
 }
 
-/// The relay a coil addresses (coils below 2048 are Y outputs, which the mock lacks).
-fn coil_relay(coil: u32) -> Result<u32, ExceptionCode> {
-    coil.checked_sub(u32::from(RELAY_COIL_BASE))
-        .ok_or(ExceptionCode::IllegalDataAddress)
+/// The area and bit a coil addresses: Y below 2048, R from 2048 (PLC.md §2).
+fn coil_bit(coil: u32) -> (Area, u32) {
+    match coil.checked_sub(u32::from(RELAY_COIL_BASE)) {
+        Some(relay) => (Area::R, relay),
+        None => (Area::Y, coil),
+    }
 }
 
 fn read_coil(mock: &MockPlc, coil: u32) -> Result<bool, ExceptionCode> {
-    let relay = coil_relay(coil)?;
-    if relay == u32::from(R9020) {
-        return Ok(mock.mode() == PlcMode::Run);
-    }
-    mock.read_relay(relay).map_err(address_error)
+    let (area, bit) = coil_bit(coil);
+    mock.read_bit(area, bit).map_err(address_error)
 }
 
 fn write_coils(mock: &mut MockPlc, first: u16, coils: &[bool]) -> Result<(), ExceptionCode> {
-    let start = coil_relay(u32::from(first))?;
-    if start + coils.len() as u32 - 1 > u32::from(RELAY_LAST) {
+    let (area, start) = coil_bit(u32::from(first));
+    let last = coil_bit(u32::from(first) + coils.len() as u32 - 1);
+    let size = if area == Area::R {
+        u32::from(RELAY_LAST)
+    } else {
+        u32::from(IO_WORDS) * 16 - 1
+    };
+    if last.0 != area || last.1 > size {
         return Err(ExceptionCode::IllegalDataAddress);
     }
-    for (relay, on) in (start..).zip(coils) {
-        mock.write_relay(relay, *on).map_err(address_error)?;
+    for (bit, on) in (start..).zip(coils) {
+        mock.write_bit(area, bit, *on).map_err(address_error)?;
     }
     Ok(())
+}
+
+/// Registers one read (03) or write (16) may hold on this mock.
+fn registers_limit(mock: &MockPlc, spec: usize) -> usize {
+    let variant = mock.config().variant;
+    variant
+        .modbus_registers_limit()
+        .map_or(spec, |n| n.min(spec))
 }
 
 /// Executes one Modbus request on the mock.
 fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, ExceptionCode> {
     match request {
         Request::ReadHoldingRegisters(start, n) => {
-            quantity(usize::from(*n), usize::from(MAX_READ_REGISTERS))?;
+            let most = registers_limit(mock, usize::from(MAX_READ_REGISTERS));
+            quantity(usize::from(*n), most)?;
             mock.read_words(u32::from(*start), usize::from(*n))
                 .map(Response::ReadHoldingRegisters)
                 .map_err(address_error)
@@ -246,7 +265,7 @@ fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, Except
             .map(|()| Response::WriteSingleRegister(*at, *word))
             .map_err(address_error),
         Request::WriteMultipleRegisters(start, words) => {
-            quantity(words.len(), MAX_WRITE_REGISTERS)?;
+            quantity(words.len(), registers_limit(mock, MAX_WRITE_REGISTERS))?;
             mock.write_words(u32::from(*start), words)
                 .map(|()| Response::WriteMultipleRegisters(*start, words.len() as u16))
                 .map_err(address_error)
@@ -255,6 +274,16 @@ fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, Except
             quantity(usize::from(*n), usize::from(MAX_READ_COILS))?;
             let coils = (0..u32::from(*n)).map(|i| read_coil(mock, u32::from(*first) + i));
             coils.collect::<Result<_, _>>().map(Response::ReadCoils)
+        }
+        Request::ReadDiscreteInputs(first, n) => {
+            quantity(usize::from(*n), usize::from(MAX_READ_COILS))?;
+            let inputs = (0..u32::from(*n)).map(|i| {
+                mock.read_bit(Area::X, u32::from(*first) + i)
+                    .map_err(address_error)
+            });
+            inputs
+                .collect::<Result<_, _>>()
+                .map(Response::ReadDiscreteInputs)
         }
         Request::WriteSingleCoil(coil, on) => {
             write_coils(mock, *coil, &[*on]).map(|()| Response::WriteSingleCoil(*coil, *on))
@@ -338,6 +367,22 @@ mod tests {
     }
 
     #[test]
+    fn small_requests_take_at_most_100_registers() {
+        let mut m = MockPlc::new(MockConfig {
+            variant: crate::mock::MockVariant::SmallRequests,
+            ..MockConfig::default()
+        })
+        .unwrap();
+        assert!(execute(&mut m, &Request::ReadHoldingRegisters(2000, 100)).is_ok());
+        assert_eq!(
+            execute(&mut m, &Request::ReadHoldingRegisters(2000, 101)),
+            Err(ExceptionCode::IllegalDataValue)
+        );
+        let big = Request::WriteMultipleRegisters(2000, vec![0; 101].into());
+        assert_eq!(execute(&mut m, &big), Err(ExceptionCode::IllegalDataValue));
+    }
+
+    #[test]
     fn addresses_outside_memory_are_illegal_data_addresses() {
         let mut m = mock();
         let past = Request::ReadHoldingRegisters(32_760, 10);
@@ -345,8 +390,11 @@ mod tests {
             execute(&mut m, &past),
             Err(ExceptionCode::IllegalDataAddress)
         );
-        let y0 = Request::ReadCoils(0, 1);
-        assert_eq!(execute(&mut m, &y0), Err(ExceptionCode::IllegalDataAddress));
+        let past_y109f = Request::ReadCoils(110 * 16, 1);
+        assert_eq!(
+            execute(&mut m, &past_y109f),
+            Err(ExceptionCode::IllegalDataAddress)
+        );
         let past_r255f = Request::WriteMultipleCoils(2048 + 4095, vec![true; 2].into());
         assert_eq!(
             execute(&mut m, &past_r255f),
@@ -360,7 +408,27 @@ mod tests {
         let r1a = 2048 + 16 + 0xA;
         execute(&mut m, &Request::WriteSingleCoil(r1a, true)).unwrap();
         assert!(m.read_relay(0x1A).unwrap());
-        let run = Request::ReadCoils(2048 + R9020, 1);
+        let run = Request::ReadCoils(2048 + crate::plc::R9020, 1);
         assert_eq!(execute(&mut m, &run), Ok(Response::ReadCoils(vec![true])));
+    }
+
+    #[test]
+    fn coils_below_2048_are_y_outputs_and_discrete_inputs_are_x() {
+        let mut m = mock();
+        execute(&mut m, &Request::WriteSingleCoil(17, true)).unwrap();
+        assert!(m.read_bit(Area::Y, 17).unwrap());
+        m.set_input(3, true).unwrap();
+        assert_eq!(
+            execute(&mut m, &Request::ReadDiscreteInputs(2, 3)),
+            Ok(Response::ReadDiscreteInputs(vec![false, true, false]))
+        );
+        assert_eq!(
+            execute(
+                &mut m,
+                &Request::WriteMultipleCoils(2040, std::borrow::Cow::Borrowed(&[true; 10]))
+            ),
+            Err(ExceptionCode::IllegalDataAddress),
+            "a write from Y into R"
+        );
     }
 }

@@ -251,3 +251,22 @@ async fn at_9600_baud_the_reply_leaves_after_the_scan_boundary() {
         shared.now_s()
     );
 }
+
+#[tokio::test(start_paused = true)]
+async fn angle_refused_leaves_angle_frames_unanswered_and_answers_percent() {
+    let mock = MockPlc::new(MockConfig {
+        variant: MockVariant::AngleRefused,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    let shared = SharedMock::new(mock);
+    let (mut ours, theirs) = tokio::io::duplex(8192);
+    let server = MewtocolServer::new(shared, MewtocolServerOptions::default());
+    tokio::spawn(async move { server.serve(theirs).await });
+    ours.write_all(&framed("<01#RDD0100001000")).await.unwrap();
+    let mut byte = [0_u8];
+    let silent = tokio::time::timeout(Duration::from_secs(1), ours.read_exact(&mut byte)).await;
+    assert!(silent.is_err(), "no answer to <");
+    let reply = raw_exchange(&mut ours, &framed("%01#RDD0100001000")).await;
+    assert!(reply.starts_with(b"%01$RD494C"), "{reply:?}");
+}

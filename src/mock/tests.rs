@@ -54,13 +54,26 @@ fn image(segments: &[Segment]) -> Vec<u16> {
     w
 }
 
-/// Writes the channels' areas of `bank`, then the command block with `command = 1`.
+/// Writes the channels' areas of `bank`, then the command block with `command = 1` and `from`
+/// the counts the channels hold now.
 fn start(m: &mut MockPlc, bank: u16, seq: u16, channels: &[(usize, Vec<Segment>)]) {
+    let from = std::array::from_fn(|c| m.count(c) as i32);
+    start_from(m, bank, seq, from, channels);
+}
+
+fn start_from(
+    m: &mut MockPlc,
+    bank: u16,
+    seq: u16,
+    from: [i32; 4],
+    channels: &[(usize, Vec<Segment>)],
+) {
     let layout = m.config().layout;
     let mut block = CommandBlock {
         command: 1,
         seq,
         bank,
+        from,
         ..CommandBlock::default()
     };
     for (c, segments) in channels {
@@ -72,9 +85,11 @@ fn start(m: &mut MockPlc, bank: u16, seq: u16, channels: &[(usize, Vec<Segment>)
     write_block(m, block);
 }
 
+/// Writes the command block as a host does: words 1..16 (not the host word), then the command.
 fn write_block(m: &mut MockPlc, block: CommandBlock) {
     let base = u32::from(m.config().layout.command_base);
-    m.write_words(base + 1, &block.to_words()[1..]).unwrap();
+    let host = usize::from(crate::contract::COMMAND_HOST_OFFSET);
+    m.write_words(base + 1, &block.to_words()[1..host]).unwrap();
     m.write_words(base, &[block.command]).unwrap();
 }
 
@@ -107,7 +122,7 @@ fn heartbeat_counts_scans_and_freezes_on_request() {
     let s = m.status();
     assert_eq!(
         (s.magic, s.version, s.heartbeat),
-        (crate::contract::MAGIC, 1, 10)
+        (crate::contract::MAGIC, 2, 10)
     );
     assert_eq!(s.ready, 0b111);
     m.set_faults("freeze@t=0.05".parse().unwrap());
@@ -144,8 +159,13 @@ fn prog_mode_stops_the_program_and_its_heartbeat() {
     assert_eq!(m.count(0), count, "pulse output stops in PROG");
     m.set_mode(PlcMode::Run);
     m.advance_to(0.5 + SCAN);
-    assert_eq!(m.state(), State::Stopped);
-    assert_eq!(m.status().heartbeat, before.heartbeat + 1);
+    // Back in RUN the program starts with a first scan: idle, seq 0, host 0, not homed.
+    let after = m.status();
+    assert_eq!(
+        (after.state, after.seq, after.host, after.ready & 1),
+        (State::Idle.word(), 0, 0, 0)
+    );
+    assert_eq!(after.heartbeat, before.heartbeat + 1);
 }
 
 fn seed_plan() -> crate::plan::Plan {
@@ -192,6 +212,7 @@ fn seed_move_gives_exactly_the_execution_models_pulses() {
     for t in &tables {
         let c = usize::from(t.table().channel);
         m.set_count(c, t.table().start);
+        block.from[c] = t.table().start as i32;
         m.write_words(u32::from(layout.area(0, c)), &crate::table::encode(t))
             .unwrap();
         block.mask |= 1 << c;
@@ -226,10 +247,11 @@ fn next_segment_starts_in_the_first_scan_after_the_previous_ends() {
     start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 3)]), down])]);
     m.advance_to(0.1);
     let t = times(&m.take_pulses(), 0);
-    // Started at the scan at 0 ms: segment 1 ends at 3 ms, the next scan is at 4 ms.
+    // Started at the scan at 2 ms (the first after the write): segment 1 ends at 5 ms, the
+    // next scan is at 6 ms.
     assert_eq!(t.len(), 5);
     assert!(
-        close(t[2], 0.003) && close(t[3], 0.005) && close(t[4], 0.006),
+        close(t[2], 0.005) && close(t[3], 0.007) && close(t[4], 0.008),
         "{t:?}"
     );
     assert_eq!(m.count(0), 1);
@@ -242,14 +264,15 @@ fn start_while_running_waits_and_runs_right_after_done() {
     let mut m = mock(FrequencyModel::Ideal);
     start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 9)])])]);
     m.advance_to(0.005);
-    start(&mut m, 1, 2, &[(0, vec![up(&[(1_000, 12)])])]);
+    start_from(&mut m, 1, 2, [9, 0, 0, 0], &[(0, vec![up(&[(1_000, 12)])])]);
     m.advance_to(0.0105);
     assert_eq!(command_word(&m), 1, "the start waits while running");
     assert_eq!(m.status().seq, 1);
     m.advance_to(0.1);
     let t = times(&m.take_pulses(), 0);
-    // Move 1 ends at 9 ms; the 10 ms scan sees it done; the 12 ms scan starts move 2.
-    assert!(close(t[8], 0.009) && close(t[9], 0.013), "{t:?}");
+    // Move 1 starts at 2 ms and ends at 11 ms; the 12 ms scan sees it done; the 14 ms scan
+    // starts move 2.
+    assert!(close(t[8], 0.011) && close(t[9], 0.015), "{t:?}");
     assert_eq!(
         (m.status().seq, m.state(), m.count(0)),
         (2, State::Done, 12)
@@ -271,7 +294,7 @@ fn stop_halts_every_channel() {
     m.advance_to(0.022);
     let counts = (m.count(0), m.count(3));
     assert!(
-        (21..=22).contains(&counts.0) && (10..=11).contains(&counts.1),
+        (20..=21).contains(&counts.0) && (10..=11).contains(&counts.1),
         "{counts:?}"
     );
     m.advance_to(0.5);
@@ -305,7 +328,7 @@ fn estop_input_stops_everything_clears_a_waiting_start_and_latches_fault_three()
 fn estop_open_drops_ready_bit_two() {
     let mut m = mock(FrequencyModel::Ideal);
     m.set_ready(0b011);
-    m.advance_to(0.0);
+    m.advance_to(SCAN);
     assert_eq!(m.status().ready, 0b011);
     m.set_ready(0b111);
     m.set_estop_open(true);
@@ -326,6 +349,7 @@ fn bad_command_block_latches_fault_one() {
                     m,
                     CommandBlock {
                         command: 1,
+                        seq: 3,
                         ..CommandBlock::default()
                     },
                 );
@@ -359,6 +383,7 @@ fn bad_command_block_latches_fault_one() {
                     m,
                     CommandBlock {
                         command: 1,
+                        seq: 3,
                         mask: 0b10,
                         ..CommandBlock::default()
                     },
@@ -389,6 +414,7 @@ fn fault_state_ignores_start_until_cleared() {
         &mut m,
         CommandBlock {
             command: 1,
+            seq: 3,
             ..CommandBlock::default()
         },
     );
@@ -553,7 +579,7 @@ fn elapsed_and_busy_in_the_status_block_match_the_engines_at_every_scan() {
         1,
         &[(0, vec![up(&[(2_345, 60)])]), (1, vec![down])],
     );
-    for k in 0..60 {
+    for k in 1..60 {
         m.advance_to(f64::from(k) * SCAN);
         let s = m.status();
         for c in 0..2 {
@@ -590,7 +616,7 @@ fn pulse_trace_writes_csv() {
     write_csv(&m.take_pulses(), &mut out).unwrap();
     assert_eq!(
         String::from_utf8(out).unwrap(),
-        "time_s,channel,count\n0.001000000,0,1\n0.002000000,0,2\n"
+        "time_s,channel,count\n0.003000000,0,1\n0.004000000,0,2\n"
     );
 }
 
@@ -613,6 +639,8 @@ fn in_process_handle_runs_a_move_through_the_plc_trait() {
             mask: 1,
             bank: 0,
             segments: [1, 0, 0, 0],
+            from: [0; 4],
+            host: 0,
         };
         plc.write_words(1_033, &block.to_words()[1..])
             .await
@@ -620,7 +648,8 @@ fn in_process_handle_runs_a_move_through_the_plc_trait() {
         plc.write_words(1_032, &[1]).await.unwrap();
         let mut status = StatusBlock::default();
         for _ in 0..100 {
-            status = StatusBlock::from_words(&plc.read_words(1_000, 20).await.unwrap()).unwrap();
+            let words = plc.read_words(1_000, crate::contract::STATUS_WORDS as u16);
+            status = StatusBlock::from_words(&words.await.unwrap()).unwrap();
             if status.state == State::Done.word() {
                 break;
             }
@@ -653,4 +682,258 @@ fn in_process_mode_reports_prog_after_a_scripted_switch() {
         .build()
         .unwrap();
     assert_eq!(rt.block_on(plc.mode()).unwrap(), PlcMode::Prog);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contract version 2: from, repeated seq, waiting, host word, homing, restarts
+
+fn outcomes(m: &MockPlc) -> Vec<(u16, StartOutcome)> {
+    m.starts()
+        .iter()
+        .map(|r| (r.block.seq, r.outcome))
+        .collect()
+}
+
+#[test]
+fn a_start_from_other_counts_is_refused_with_fault_five_and_nothing_moves() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_count(2, 7);
+    start_from(&mut m, 0, 1, [0; 4], &[(0, vec![up(&[(1_000, 50)])])]);
+    m.advance_to(0.1);
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault, s.seq),
+        (State::Fault.word(), Fault::NotAtStart.word(), 0),
+        "channel 2 is not in the mask but is checked all the same"
+    );
+    assert!(m.take_pulses().is_empty());
+    assert!(m.last_fault().unwrap().contains("channel 2 is at 7"));
+    let record = m.starts()[0];
+    assert_eq!(record.outcome, StartOutcome::Refused(Fault::NotAtStart));
+    assert!(record.from_mismatch());
+}
+
+#[test]
+fn a_repeated_start_runs_once() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 4, &[(0, vec![up(&[(1_000, 10)])])]);
+    m.advance_to(0.05);
+    assert_eq!((m.state(), m.count(0)), (State::Done, 10));
+    // The same command again (a retried write): from its old `from` it would run away.
+    write_command(&mut m, 1);
+    m.advance_to(0.1);
+    assert_eq!(
+        (m.state(), m.count(0), command_word(&m)),
+        (State::Done, 10, 0)
+    );
+    assert_eq!(
+        outcomes(&m),
+        [(4, StartOutcome::Started), (4, StartOutcome::Dropped)]
+    );
+    assert!(m.anomalies().is_empty());
+}
+
+#[test]
+fn a_waiting_start_shows_in_the_status_block_and_a_stop_drops_it() {
+    let mut m = mock(FrequencyModel::Ideal);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 30)])])]);
+    m.advance_to(0.005);
+    start_from(
+        &mut m,
+        1,
+        2,
+        [30, 0, 0, 0],
+        &[(0, vec![up(&[(1_000, 40)])])],
+    );
+    m.advance_to(0.009);
+    assert_eq!((m.status().seq, m.status().waiting), (1, 2));
+    write_command(&mut m, 2);
+    m.advance_to(0.1);
+    let s = m.status();
+    assert_eq!((s.state, s.waiting, s.seq), (State::Stopped.word(), 0, 1));
+    assert!(m.count(0) < 30);
+    assert_eq!(outcomes(&m), [(1, StartOutcome::Started)], "2 never ran");
+}
+
+#[test]
+fn a_waiting_start_behind_a_move_that_faults_is_dropped() {
+    let mut m = mock(FrequencyModel::Ideal);
+    let bad_second = up(&[(0, 20)]);
+    let mut second = bad_second.clone();
+    second.rows[0].freq_hz = 200_000; // out of range: F174 refuses segment 2
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 10)]), second])]);
+    m.advance_to(0.004);
+    start_from(
+        &mut m,
+        1,
+        2,
+        [10, 0, 0, 0],
+        &[(0, vec![up(&[(1_000, 40)])])],
+    );
+    m.advance_to(0.1);
+    let s = m.status();
+    assert_eq!((s.state, s.fault, s.waiting), (State::Fault.word(), 4, 0));
+    assert_eq!(command_word(&m), 0);
+    assert_eq!(outcomes(&m), [(1, StartOutcome::Started)]);
+}
+
+#[test]
+fn host_word_is_echoed_and_cleared_by_a_power_cycle_with_the_counts_and_homed_bit() {
+    let mut m = mock(FrequencyModel::Ideal);
+    let host = u32::from(m.config().layout.command_base + crate::contract::COMMAND_HOST_OFFSET);
+    m.write_words(host, &[0xBEEF]).unwrap();
+    start(&mut m, 0, 3, &[(0, vec![up(&[(1_000, 100)])])]);
+    m.advance_to(0.02);
+    let s = m.status();
+    assert_eq!((s.host, s.ready & 1, s.seq), (0xBEEF, 1, 3));
+    m.set_faults("restart@t=0.03".parse().unwrap());
+    m.advance_to(0.05);
+    let s = m.status();
+    assert_eq!(
+        (s.host, s.ready & 1, s.seq, s.state, s.busy),
+        (0, 0, 0, State::Idle.word(), 0)
+    );
+    assert_eq!(s.elapsed, [0; 4]);
+    assert_eq!(m.read_words(host, 1).unwrap(), [0]);
+}
+
+#[test]
+fn a_start_while_not_homed_is_refused_with_fault_six() {
+    let mut m = MockPlc::new(MockConfig {
+        homed: false,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    assert_eq!(m.status().ready, 0b110);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 5)])])]);
+    m.advance_to(0.02);
+    assert_eq!(
+        (m.state(), m.status().fault, m.count(0)),
+        (State::Fault, Fault::NotHomed.word(), 0)
+    );
+}
+
+#[test]
+fn home_presets_the_masked_counts_to_from_and_sets_the_homed_bit() {
+    let mut m = MockPlc::new(MockConfig {
+        homed: false,
+        home_s: 0.05,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    m.set_count(0, 1_234);
+    m.set_count(3, 99);
+    let block = CommandBlock {
+        command: 4,
+        mask: 0b0011,
+        from: [10, -20, 30, 40],
+        ..CommandBlock::default()
+    };
+    write_block(&mut m, block);
+    m.advance_to(0.01);
+    assert_eq!((m.state(), m.homed()), (State::Homing, false));
+    m.advance_to(0.1);
+    assert_eq!((m.state(), m.homed()), (State::Done, true));
+    assert_eq!(
+        [m.count(0), m.count(1), m.count(2), m.count(3)],
+        [10, -20, 0, 99],
+        "only the masked channels"
+    );
+    assert_eq!(m.status().ready, 0b111);
+    // Now a start from those counts runs.
+    start(&mut m, 1, 1, &[(0, vec![up(&[(1_000, 15)])])]);
+    m.advance_to(0.2);
+    assert_eq!((m.state(), m.count(0)), (State::Done, 15));
+}
+
+#[test]
+fn the_estop_input_during_homing_fails_it_with_fault_seven() {
+    let mut m = MockPlc::new(MockConfig {
+        homed: false,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    write_block(
+        &mut m,
+        CommandBlock {
+            command: 4,
+            mask: 1,
+            ..CommandBlock::default()
+        },
+    );
+    m.advance_to(0.01);
+    m.set_estop_open(true);
+    m.advance_to(0.02);
+    assert_eq!(
+        (m.state(), m.status().fault, m.homed()),
+        (State::Fault, Fault::HomingFailed.word(), false)
+    );
+}
+
+#[test]
+fn a_start_while_the_estop_input_is_open_starts_nothing_and_latches_no_seq() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_estop_open(true);
+    start(&mut m, 0, 5, &[(0, vec![up(&[(1_000, 5)])])]);
+    m.advance_to(0.02);
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault, s.seq),
+        (State::Stopped.word(), Fault::StoppedFromOutside.word(), 0)
+    );
+    assert!(m.take_pulses().is_empty());
+    assert_eq!(
+        outcomes(&m),
+        [(5, StartOutcome::Refused(Fault::StoppedFromOutside))]
+    );
+}
+
+fn variant_mock(variant: MockVariant) -> MockPlc {
+    let mut m = MockPlc::new(MockConfig {
+        model: FrequencyModel::Ideal,
+        variant,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    m.record_pulses(true);
+    m
+}
+
+#[test]
+fn busy_never_rises_keeps_the_busy_word_zero_but_still_chains_by_the_count() {
+    let mut m = variant_mock(MockVariant::BusyNeverRises);
+    let down = seg(Direction::Down, FrequencyRange::High, &[(1_000, 1)]);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 3)]), down])]);
+    let mut busy_seen = 0;
+    for k in 1..50 {
+        m.advance_to(f64::from(k) * SCAN);
+        busy_seen |= m.status().busy;
+    }
+    assert_eq!(busy_seen, 0);
+    assert!(m.busy(0) || m.count(0) == 1, "the engine itself did run");
+    assert_eq!(
+        (m.count(0), m.status().segment[0], m.state()),
+        (1, 2, State::Done)
+    );
+}
+
+#[test]
+fn stop_pauses_halts_the_table_and_the_next_start_resumes_it() {
+    let mut m = variant_mock(MockVariant::StopPauses);
+    start(&mut m, 0, 1, &[(0, vec![up(&[(1_000, 100)])])]);
+    m.advance_to(0.021);
+    write_command(&mut m, 2);
+    m.advance_to(0.030);
+    let held = m.count(0);
+    assert!((18..=21).contains(&held), "{held}");
+    let s = m.status();
+    assert_eq!((s.state, s.busy), (State::Stopped.word(), 0));
+    m.advance_to(0.1);
+    assert_eq!(m.count(0), held, "paused: nothing goes out");
+    // The next start plays back down to 0, but the paused table resumes instead.
+    let down = seg(Direction::Down, FrequencyRange::High, &[(1_000, 0)]);
+    start(&mut m, 1, 2, &[(0, vec![down])]);
+    m.advance_to(0.5);
+    assert_eq!(m.count(0), 100);
+    assert_eq!((m.state(), m.status().seq), (State::Done, 2));
 }

@@ -5,10 +5,28 @@
 //! passes through are bounded by the sampled counts: checking every sample checks every position
 //! the PLC will command.
 
-use crate::kinematics::JOINTS;
+use crate::kinematics::{JOINTS, Joints};
 use crate::robot::Robot;
 
 use super::{PlanError, Samples};
+
+/// Checks a joint move's target values against every joint's position limits (half a pulse of
+/// slack, as for samples); a value that is not a number is beyond any limit.
+pub(super) fn check_target(robot: &Robot, to: &Joints) -> Result<(), PlanError> {
+    for (joint, &value) in robot.joints.iter().zip(to) {
+        let slack = joint.step.abs() / 2.0;
+        if !(joint.min - slack..=joint.max + slack).contains(&value) {
+            return Err(PlanError::TargetOutOfLimit {
+                joint: joint.name.clone(),
+                value: joint.user(value),
+                min: joint.user(joint.min),
+                max: joint.user(joint.max),
+                unit: joint.kind.user_unit(),
+            });
+        }
+    }
+    Ok(())
+}
 
 /// Checks every joint's count at every sample against its position limits.
 pub(super) fn check_positions(

@@ -5,10 +5,18 @@
 //! request -> line P1P2 -> profile s(t) -> samples (IK, absolute counts) -> limits
 //!         -> spans per joint (constant-period) -> segments (direction, range, duty, frequencies)
 //!         -> validation -> sim -> figures
+//! joint request -> joint-space path -> profile s(t) -> samples (joints in proportion) -> ...
 //! ```
+//!
+//! A joint-space move ([`plan_joint_move`]) goes through the same profile, limits, rows,
+//! segments, frequencies and bounded-error method as a line; only its samples come from the
+//! joints in proportion instead of inverse kinematics (`course.rs`). Its figures measure the tool
+//! against the tool's own path under the planned joints (forward kinematics), so a bounded-error
+//! joint move's tolerance is the tool point's largest distance from that path, as for a line.
 
 mod bounded;
 mod constant_period;
+mod course;
 mod limits;
 mod samples;
 mod seed_exact;
@@ -17,11 +25,13 @@ pub mod segments;
 use thiserror::Error;
 
 use crate::geometry::{Line, Pose, Profile, ProfileError, ProfileRequest};
-use crate::kinematics::{JOINTS, Kinematics, KinematicsError};
+use crate::kinematics::{JOINTS, Joints, Kinematics, KinematicsError};
 use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::sim::{self, Execution, Figures, Settings};
 use crate::table::{ChannelTable, TableProblem, ValidTable};
 
+use course::Course;
+pub use course::JointPath;
 pub use samples::Samples;
 
 /// Where a move starts.
@@ -44,6 +54,18 @@ pub struct MoveRequest {
     pub motion: Motion,
     /// Plan the paper as printed (comparison only, never valid for a PLC).
     pub seed_exact: bool,
+}
+
+/// One joint-space move to plan: every joint from where it starts to its target value, all on
+/// one trapezoid (they reach their targets together).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointMoveRequest {
+    /// Where the move starts.
+    pub from: Origin,
+    /// Every joint's target value, rad or mm, in the joints' order.
+    pub to: Joints,
+    /// The motion settings: the speed is the tool's along its path (see the module `course`).
+    pub motion: Motion,
 }
 
 /// Why a move cannot be planned.
@@ -84,6 +106,29 @@ pub enum PlanError {
         unit: &'static str,
         /// When, s.
         t_s: f64,
+    },
+    /// A joint move's target is beyond a joint's position limits.
+    #[error("joint {joint} target {value:.4} {unit} is beyond its limits {min} to {max} {unit}")]
+    TargetOutOfLimit {
+        /// Joint name.
+        joint: String,
+        /// The target, user units.
+        value: f64,
+        /// Lower limit, user units.
+        min: f64,
+        /// Upper limit, user units.
+        max: f64,
+        /// deg or mm.
+        unit: &'static str,
+    },
+    /// A joint move whose every target count is its start count.
+    #[error(
+        "the joint move ends where it starts (counts {counts:?}); a joint move needs a joint to \
+         move at least one pulse"
+    )]
+    NoTravel {
+        /// The start (and target) counts, per joint.
+        counts: [i64; JOINTS],
     },
     /// A joint would need its channel faster than allowed.
     #[error(
@@ -130,8 +175,10 @@ pub enum PlanError {
 /// A planned move: tables, profile, and how the execution model says they will run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
-    /// The line, P1 to P2.
+    /// The line, P1 to P2 (a joint move's chord from its start pose to its end pose).
     pub line: Line,
+    /// A joint move's path in joint space (`None` for a line move).
+    pub joint_path: Option<JointPath>,
     /// The profile actually used.
     pub profile: Profile,
     /// The motion settings actually used (speed lowered by `slow-down` if it had to).
@@ -170,7 +217,11 @@ impl Plan {
     /// The planned position at time `t_s`.
     #[must_use]
     pub fn planned_position_mm(&self, t_s: f64) -> nalgebra::Vector3<f64> {
-        self.line.at(self.profile.distance_mm(t_s)).position_mm
+        let s_mm = self.profile.distance_mm(t_s);
+        match &self.joint_path {
+            Some(path) => path.pose_at(s_mm / self.profile.length_mm).position_mm,
+            None => self.line.at(s_mm).position_mm,
+        }
     }
 
     /// The validated tables of the joints that move, for encoding; `None` for an invalid plan.
@@ -204,9 +255,62 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
             z: p.z,
         });
     }
-    let mut motion = req.motion;
+    let start = Start {
+        values: start_values,
+        counts: start_counts,
+    };
+    plan_course(
+        robot,
+        &Course::Line(line),
+        &start,
+        req.motion,
+        req.seed_exact,
+    )
+}
+
+/// Plans one joint-space move for `robot`: the target is checked against every joint's limits
+/// (the joints move in proportion, so the start and the target bound every position between).
+pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, PlanError> {
+    let start = match req.from {
+        Origin::Pose(from) => {
+            let values = robot.kinematics.ik(&from, None)?;
+            Start {
+                values,
+                counts: robot.counts_of(&values),
+            }
+        }
+        Origin::Counts(counts) => Start {
+            values: robot.values_of(&counts),
+            counts,
+        },
+    };
+    limits::check_target(robot, &req.to)?;
+    let course = Course::joints(robot, start.values, req.to);
+    if robot.counts_of(&req.to) == start.counts || course.length_mm() < 1e-9 {
+        return Err(PlanError::NoTravel {
+            counts: start.counts,
+        });
+    }
+    plan_course(robot, &course, &start, req.motion, false)
+}
+
+/// Where a move starts: joint values and the counts that stand for them.
+struct Start {
+    values: Joints,
+    counts: [i64; JOINTS],
+}
+
+/// Plans a move along `course` from `start`.
+fn plan_course(
+    robot: &Robot,
+    course: &Course,
+    start: &Start,
+    asked: Motion,
+    seed_exact: bool,
+) -> Result<Plan, PlanError> {
+    let mut motion = asked;
     let bounded = match motion.method {
-        Method::BoundedError { tolerance_mm } if !req.seed_exact => Some(tolerance_mm),
+        Method::BoundedError { tolerance_mm } if !seed_exact => Some(tolerance_mm),
         _ => None,
     };
     let grid_s = if bounded.is_some() {
@@ -216,18 +320,18 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
     };
     let sampler = Sampler {
         robot,
-        line: &line,
+        course,
         grid_s,
         continuous: bounded.is_some(),
-        start_values: &start_values,
-        start_counts,
+        start_values: &start.values,
+        start_counts: start.counts,
     };
     let (profile, samples) = sampler.fast_enough(&mut motion)?;
-    let speed_factor = motion.speed_mm_s / req.motion.speed_mm_s;
+    let speed_factor = motion.speed_mm_s / asked.speed_mm_s;
     let (tables, problems, execution, figures, floor_mm) = if let Some(tolerance_mm) = bounded {
         let m = bounded::Move {
             robot,
-            line: &line,
+            course,
             profile: &profile,
             samples: &samples,
             motion: &motion,
@@ -241,17 +345,18 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
             Some(v.floor_mm),
         )
     } else {
-        let tables = build_tables(robot, &samples, &profile, &motion, req.seed_exact);
-        let problems = check_tables(robot, &tables, req.seed_exact)?;
-        let (execution, figures) = simulate(robot, &tables, &line, &profile, &motion);
+        let tables = build_tables(robot, &samples, &profile, &motion, seed_exact);
+        let problems = check_tables(robot, &tables, seed_exact)?;
+        let (execution, figures) = simulate(robot, &tables, course, &profile, &motion);
         (tables, problems, execution, figures, None)
     };
     Ok(Plan {
-        line,
+        line: course.chord(),
+        joint_path: course.joint_path().cloned(),
         profile,
         motion,
         speed_factor,
-        seed_exact: req.seed_exact,
+        seed_exact,
         samples,
         tables,
         problems,
@@ -261,22 +366,22 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
     })
 }
 
-/// Plays `tables` in the execution model and measures them against the line and profile.
+/// Plays `tables` in the execution model and measures them against the course and profile.
 fn simulate(
     robot: &Robot,
     tables: &[ChannelTable],
-    line: &Line,
+    course: &Course,
     profile: &Profile,
     motion: &Motion,
 ) -> (Execution, Figures) {
-    simulate_within(robot, tables, line, profile, motion, f64::INFINITY).expect("no limit")
+    simulate_within(robot, tables, course, profile, motion, f64::INFINITY).expect("no limit")
 }
 
 /// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`.
 fn simulate_within(
     robot: &Robot,
     tables: &[ChannelTable],
-    line: &Line,
+    course: &Course,
     profile: &Profile,
     motion: &Motion,
     path_limit_mm: f64,
@@ -287,13 +392,13 @@ fn simulate_within(
         segment_gap_s: 0.0,
     };
     let execution = sim::execute(tables, &max_hz, settings);
-    let planned = |t: f64| line.at(profile.distance_mm(t)).position_mm;
+    let planned = |t: f64| course.position_mm(profile.distance_mm(t));
     let duration_s = profile.duration_s();
     let figures = sim::measure_within(
         robot,
         tables,
         &execution,
-        line,
+        course.tool_path(),
         &planned,
         duration_s,
         path_limit_mm,
@@ -324,10 +429,10 @@ fn resolve_line(robot: &Robot, req: &MoveRequest) -> Result<Resolved, PlanError>
     }
 }
 
-/// Samples the line for one motion: the profile, the samples, and the fastest channel's load.
+/// Samples the course for one motion: the profile, the samples, and the fastest channel's load.
 struct Sampler<'a> {
     robot: &'a Robot,
-    line: &'a Line,
+    course: &'a Course,
     grid_s: f64,
     continuous: bool,
     start_values: &'a crate::kinematics::Joints,
@@ -337,18 +442,14 @@ struct Sampler<'a> {
 impl Sampler<'_> {
     fn at(&self, motion: &Motion) -> Result<(Profile, Samples, limits::Peak), PlanError> {
         let profile = Profile::new(ProfileRequest {
-            length_mm: self.line.length_mm(),
+            length_mm: self.course.length_mm(),
             speed_mm_s: motion.speed_mm_s,
             accel_s: motion.accel_s,
             period_s: self.grid_s,
         })?;
-        let samples = samples::sample(
-            self.robot,
-            self.line,
-            &profile,
-            self.start_values,
-            self.start_counts,
-        )?;
+        let samples =
+            self.course
+                .sample(self.robot, &profile, self.start_values, self.start_counts)?;
         limits::check_positions(self.robot, &samples.counts, profile.period_s)?;
         let peak = limits::peak(self.robot, &samples, profile.period_s, self.continuous);
         Ok((profile, samples, peak))

@@ -1,12 +1,14 @@
-//! The constant-period samples of a line: the pose at every interpolation point (eq. 6-7), its
-//! joint values by inverse kinematics (revolute joints kept continuous from the start), and each
-//! joint's absolute count, rounded from the absolute joint value so nothing drifts.
+//! The samples of a move at every interpolation point: on a line, the pose at every point (eq.
+//! 6-7) and its joint values by inverse kinematics (revolute joints kept continuous from the
+//! start); on a joint-space path, the joint values in proportion. Each joint's absolute count is
+//! rounded from its absolute value, so nothing drifts.
 
 use crate::geometry::{Line, Profile};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
 use super::PlanError;
+use super::course::JointPath;
 
 /// Counts of every joint at every interpolation point 0..=N.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,4 +50,31 @@ pub(super) fn sample(
         near = q;
     }
     Ok(Samples { counts, values })
+}
+
+/// Samples a joint-space path at every period of the profile: every joint at the same fraction
+/// of its way (the profile's distance over its length). Point 0 takes `start_counts`, point N is
+/// exactly the path's end.
+pub(super) fn sample_joints(
+    robot: &Robot,
+    path: &JointPath,
+    profile: &Profile,
+    start_counts: [i64; JOINTS],
+) -> Samples {
+    let n = profile.periods();
+    let mut counts = Vec::with_capacity(n as usize + 1);
+    let mut values = Vec::with_capacity(n as usize + 1);
+    counts.push(start_counts);
+    values.push(path.from);
+    for i in 1..=n {
+        let u = if i == n {
+            1.0
+        } else {
+            profile.distance_at_point_mm(i) / profile.length_mm
+        };
+        let q = path.joints_at(u);
+        counts.push(robot.counts_of(&q));
+        values.push(q);
+    }
+    Samples { counts, values }
 }

@@ -176,3 +176,144 @@ fn tolerance_below_the_pulse_grid_is_refused_naming_one_that_works() {
         "{err}"
     );
 }
+
+/// A joint move of the seed's robot from the counts of its P1 to `to` (deg, mm, mm, deg).
+fn joint_request(to_user: [f64; 4], method: crate::robot::Method) -> JointMoveRequest {
+    let robot = seed_robot();
+    let Origin::Pose(from) = seed_request(FrequencyModel::FpxDivider, false).from else {
+        unreachable!()
+    };
+    let q = robot.kinematics.ik(&from, None).unwrap();
+    JointMoveRequest {
+        from: Origin::Counts(robot.counts_of(&q)),
+        to: std::array::from_fn(|j| robot.joints[j].kind.from_user(to_user[j])),
+        motion: Motion {
+            method,
+            ..robot.motion
+        },
+    }
+}
+
+#[test]
+fn joint_move_ends_exactly_on_its_target_counts_with_every_joint_together() {
+    let robot = seed_robot();
+    let req = joint_request(
+        [130.0, 180.0, 820.0, 15.0],
+        crate::robot::Method::ConstantPeriod,
+    );
+    let plan = plan_joint_move(&robot, &req).unwrap();
+    assert!(plan.valid(), "{:?}", plan.problems);
+    assert_eq!(plan.end_counts(), robot.counts_of(&req.to));
+    for (j, table) in plan.tables.iter().enumerate() {
+        assert!(
+            crate::table::problems(table, robot.channel_limits(j)).is_empty(),
+            "joint {j}"
+        );
+    }
+    // One trapezoid: every joint is at the same fraction of its way at every sample.
+    let path = plan.joint_path.as_ref().unwrap();
+    let start = plan.samples.values[0];
+    for q in &plan.samples.values {
+        let u = (q[2] - start[2]) / (path.to[2] - start[2]);
+        for j in [0, 1, 3] {
+            let uj = (q[j] - start[j]) / (path.to[j] - start[j]);
+            assert!((uj - u).abs() < 1e-9, "joint {j} at {uj}, d3 at {u}");
+        }
+    }
+    assert!(plan.figures.end_skew_ms < 1.0, "{:?}", plan.figures);
+    // The tool is measured against its own path, not the chord.
+    assert!(plan.figures.path_deviation_mm < 0.5, "{:?}", plan.figures);
+    assert!(
+        plan.line
+            .distance_mm(&plan.planned_position_mm(plan.profile.duration_s() / 2.0))
+            > 5.0
+    );
+}
+
+#[test]
+fn bounded_error_joint_move_keeps_the_tool_within_its_tolerance_of_the_tool_path() {
+    let robot = seed_robot();
+    let method = crate::robot::Method::BoundedError { tolerance_mm: 0.1 };
+    let req = joint_request([130.0, 180.0, 820.0, 15.0], method);
+    let plan = plan_joint_move(&robot, &req).unwrap();
+    assert!(plan.valid());
+    assert_eq!(plan.end_counts(), robot.counts_of(&req.to));
+    assert!(plan.figures.path_deviation_mm <= 0.1, "{:?}", plan.figures);
+    assert!(plan.figures.tracking_error_mm <= 0.2, "{:?}", plan.figures);
+    let constant = plan_joint_move(
+        &robot,
+        &joint_request(
+            [130.0, 180.0, 820.0, 15.0],
+            crate::robot::Method::ConstantPeriod,
+        ),
+    )
+    .unwrap();
+    assert!(
+        plan.figures.rows < constant.figures.rows,
+        "{} rows",
+        plan.figures.rows
+    );
+}
+
+#[test]
+fn joint_target_beyond_a_limit_is_refused_naming_the_joint_and_the_limit() {
+    let robot = seed_robot();
+    let req = joint_request(
+        [130.0, 180.0, 1_200.0, 15.0],
+        crate::robot::Method::ConstantPeriod,
+    );
+    let err = plan_joint_move(&robot, &req).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "joint d3 target 1200.0000 mm is beyond its limits 0 to 1000 mm"
+    );
+    let req = joint_request(
+        [-171.0, 180.0, 800.0, 15.0],
+        crate::robot::Method::ConstantPeriod,
+    );
+    let msg = plan_joint_move(&robot, &req).unwrap_err().to_string();
+    assert!(
+        msg.starts_with("joint theta1 target -171.0000 deg") && msg.contains("-170 to 170 deg"),
+        "{msg}"
+    );
+    let req = joint_request(
+        [f64::NAN, 180.0, 800.0, 15.0],
+        crate::robot::Method::ConstantPeriod,
+    );
+    assert!(matches!(
+        plan_joint_move(&robot, &req),
+        Err(PlanError::TargetOutOfLimit { .. })
+    ));
+}
+
+#[test]
+fn joint_move_to_where_it_stands_is_refused_and_the_wrist_alone_turns() {
+    let robot = seed_robot();
+    let req = joint_request([0.0; 4], crate::robot::Method::ConstantPeriod);
+    let Origin::Counts(counts) = req.from else {
+        unreachable!()
+    };
+    let here = JointMoveRequest {
+        to: robot.values_of(&counts),
+        ..req
+    };
+    assert!(matches!(
+        plan_joint_move(&robot, &here),
+        Err(PlanError::NoTravel { .. })
+    ));
+    // Only the wrist turns: the tool point stands still, the move lasts 30 deg at 20 "mm"/s.
+    let mut wrist = here;
+    wrist.to[3] += 30f64.to_radians();
+    wrist.motion.speed_mm_s = 20.0;
+    let plan = plan_joint_move(&robot, &wrist).unwrap();
+    assert_eq!(plan.end_counts(), robot.counts_of(&wrist.to));
+    assert!((plan.profile.length_mm - 30.0).abs() < 1e-6);
+    assert!(plan.figures.path_deviation_mm < 1e-9, "{:?}", plan.figures);
+    // At the robot's 240 mm/s the wrist's channel would be too fast: refused, naming it.
+    wrist.motion.speed_mm_s = 240.0;
+    let msg = plan_joint_move(&robot, &wrist).unwrap_err().to_string();
+    assert!(
+        msg.starts_with("joint wrist would need") && msg.contains("channel 3 allows 20000 Hz"),
+        "{msg}"
+    );
+}

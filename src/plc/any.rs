@@ -5,7 +5,8 @@ use super::link::{BoxedLink, open_serial, open_tcp};
 use super::mewtocol::{MewtocolClient, MewtocolOptions};
 use super::modbus::{ModbusClient, ModbusOptions};
 use super::settings::{LinkSettings, Protocol, Transport};
-use super::{Plc, PlcError, PlcMode};
+use super::{ExchangeSizes, Plc, PlcError, PlcMode};
+use crate::gateway::Area;
 
 /// One of the PLC clients over an opened link; implements [`Plc`] by delegation.
 #[derive(Debug)]
@@ -49,6 +50,13 @@ impl Plc for AnyPlc {
         }
     }
 
+    async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+        match self {
+            Self::Mewtocol(c) => c.write_words_once(start, words).await,
+            Self::Modbus(c) => c.write_words_once(start, words).await,
+        }
+    }
+
     async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
         match self {
             Self::Mewtocol(c) => c.read_relay(relay).await,
@@ -67,6 +75,32 @@ impl Plc for AnyPlc {
         match self {
             Self::Mewtocol(c) => c.mode().await,
             Self::Modbus(c) => c.mode().await,
+        }
+    }
+
+    async fn read_bits(
+        &mut self,
+        area: Area,
+        start: u32,
+        count: u16,
+    ) -> Result<Vec<bool>, PlcError> {
+        match self {
+            Self::Mewtocol(c) => c.read_bits(area, start, count).await,
+            Self::Modbus(c) => c.read_bits(area, start, count).await,
+        }
+    }
+
+    async fn write_bit(&mut self, area: Area, bit: u32, on: bool) -> Result<(), PlcError> {
+        match self {
+            Self::Mewtocol(c) => c.write_bit(area, bit, on).await,
+            Self::Modbus(c) => c.write_bit(area, bit, on).await,
+        }
+    }
+
+    fn exchange_sizes(&self) -> ExchangeSizes {
+        match self {
+            Self::Mewtocol(c) => c.exchange_sizes(),
+            Self::Modbus(c) => c.exchange_sizes(),
         }
     }
 }

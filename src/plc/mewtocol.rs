@@ -3,11 +3,13 @@
 //!
 //! ```text
 //!  read_words / write_words        chunked to one frame each: % RD <= 27 words, WD <= 24;
-//!      |                                                      < RD <= 509 words, WD <= 507
-//!  exchange  -- retries (timeout, garbled reply, ! 40 BCC, ! 41 format) up to `retries` times
-//!      |       every linterpd command is idempotent: the same words to the same addresses
+//!      |                           < RD <= 509 words, WD <= 507, fewer on a slow serial line
+//!      |                           (at most 250 ms of wire time an exchange)
+//!  exchange  -- retries (timeout, garbled reply, ! 40 BCC, ! 41 format) up to `retries` times;
+//!      |        write_words_once never retries (a start command is not safe to repeat)
 //!  attempt   -- drains late bytes first if the last attempt failed, then one timeout around
-//!      |        send, any "next frame please" (**&) round trips, and the whole reply
+//!      |        send, any "next frame please" (**&) round trips, and the whole reply: the
+//!      |        wire time of both frames at the line's baud, two PLC scans and the margin
 //!  Framed<T, ClientCodec>
 //! ```
 //! A `!` reply other than 40 / 41 is the PLC's answer and goes up unchanged as
@@ -23,39 +25,77 @@ use tokio::io::{AsyncRead, AsyncWrite};
 use tokio_util::codec::Framed;
 
 use super::link::drain;
-use super::settings::{HeaderChoice, LinkSettings};
-use super::{Plc, PlcError, PlcMode, Refusal};
+use super::settings::{HeaderChoice, LinkSettings, Timing};
+use super::{ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
+use crate::gateway::Area;
 use crate::mewtocol::{
-    Addressed, ClientCodec, ClientEvent, CodecError, Command, Contact, ContactArea, DtRange,
-    Header, PlcErrorCode, Reply, Request, Response, Station, max_read_reply_words, max_write_words,
+    Addressed, ClientCodec, ClientEvent, CodecError, Command, Contact, ContactArea, ContactWords,
+    DtRange, Header, PlcErrorCode, Reply, Request, Response, Station, max_read_reply_words,
+    max_write_words,
 };
 
 /// Station number that means `EE` (answered by any PLC \[practice\]) in the config.
 pub const STATION_ANY: u8 = 0xEE;
 
-/// How the client talks: station, header, timeout and retries.
+/// Wire time one exchange is kept within on a slow line (the frame sizes are cut to fit), so a
+/// stop never waits long behind an upload; a frame never gets smaller than `%` allows.
+const EXCHANGE_BUDGET: Duration = Duration::from_millis(250);
+
+/// How the client talks: station, header, timing and retries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MewtocolOptions {
     /// The PLC's station.
     pub station: Station,
     /// The header, or `Auto` to probe.
     pub header: HeaderChoice,
-    /// Longest wait for one exchange (send, all reply frames).
+    /// The margin one exchange may take beyond its wire time and two scans.
     pub timeout: Duration,
+    /// One character's time on a serial line (`None`: a network link or a test stream).
+    pub char_time: Option<Duration>,
+    /// The PLC's longest scan.
+    pub scan_time: Duration,
     /// Further attempts after a retryable failure.
     pub retries: u8,
 }
 
 impl MewtocolOptions {
-    /// Options with a 300 ms timeout and 2 retries.
+    /// Options for a network link: a 300 ms margin, a 10 ms scan and 2 retries.
     #[must_use]
     pub fn new(station: Station, header: HeaderChoice) -> Self {
+        let timing = Timing::network(Duration::from_millis(300));
         Self {
             station,
             header,
-            timeout: Duration::from_millis(300),
+            timeout: timing.margin,
+            char_time: timing.char_time,
+            scan_time: timing.scan_time,
             retries: 2,
         }
+    }
+
+    /// The exchange timing.
+    #[must_use]
+    pub fn timing(&self) -> Timing {
+        Timing {
+            char_time: self.char_time,
+            scan_time: self.scan_time,
+            margin: self.timeout,
+        }
+    }
+
+    /// Words one exchange carries under `header`: the frame's most, or fewer on a slow line
+    /// (`overhead` characters plus 4 a word within [`EXCHANGE_BUDGET`] of wire time).
+    fn words_per_exchange(&self, header: Header, most: usize, overhead: usize) -> usize {
+        let Some(char_time) = self.char_time.filter(|c| !c.is_zero()) else {
+            return most;
+        };
+        let chars = (EXCHANGE_BUDGET.as_secs_f64() / char_time.as_secs_f64()) as usize;
+        let fit = chars.saturating_sub(overhead) / 4;
+        let floor = match header {
+            Header::Percent => most,
+            Header::Angle => max_write_words(Header::Percent),
+        };
+        fit.clamp(floor.min(most), most)
     }
 
     /// The options a link's settings describe (station 238 is `EE`).
@@ -68,10 +108,13 @@ impl MewtocolOptions {
                 detail: e.to_string(),
             })?
         };
+        let timing = settings.timing();
         Ok(Self {
             station,
             header: settings.header,
-            timeout: settings.timeout,
+            timeout: timing.margin,
+            char_time: timing.char_time,
+            scan_time: timing.scan_time,
             retries: settings.retries,
         })
     }
@@ -200,24 +243,48 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         command: &Command,
         operation: &str,
     ) -> Result<Reply, PlcError> {
+        self.exchange_tries(header, command, operation, self.options.retries)
+            .await
+    }
+
+    /// Sends `command` and returns its reply, trying again up to `retries` times.
+    async fn exchange_tries(
+        &mut self,
+        header: Header,
+        command: &Command,
+        operation: &str,
+        retries: u8,
+    ) -> Result<Reply, PlcError> {
         let mut attempt = 0;
         loop {
             let failure = match self.attempt(header, command).await {
                 Ok(reply) => return Ok(reply),
                 Err(failure) => failure,
             };
-            if !failure.is_retryable() || attempt >= self.options.retries {
-                return Err(failure.into_error(operation, self.options.timeout));
+            if !failure.is_retryable() || attempt >= retries {
+                let timeout = self.exchange_timeout(header, command);
+                return Err(failure.into_error(operation, timeout));
             }
             attempt += 1;
             tracing::warn!(operation, attempt, %failure, "retrying a MEWTOCOL exchange");
         }
     }
 
+    /// The longest `command` may take: its frame and its reply on the wire, two scans, the
+    /// margin.
+    fn exchange_timeout(&self, header: Header, command: &Command) -> Duration {
+        let request = command
+            .to_frame(header, self.options.station)
+            .map_or(0, |f| f.encoded_len());
+        self.options
+            .timing()
+            .exchange(request, command.reply_chars())
+    }
+
     /// One try: settle the link, then one timeout around the whole round trip.
     async fn attempt(&mut self, header: Header, command: &Command) -> Result<Reply, Failure> {
         self.settle().await?;
-        let timeout = self.options.timeout;
+        let timeout = self.exchange_timeout(header, command);
         let result = tokio::time::timeout(timeout, self.round_trip(header, command))
             .await
             .unwrap_or(Err(Failure::Timeout));
@@ -234,7 +301,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         }
         self.framed.codec_mut().reset();
         self.framed.read_buffer_mut().clear();
-        drain(self.framed.get_mut(), self.options.timeout)
+        drain(self.framed.get_mut(), self.options.timing().quiet())
             .await
             .map(|_| ())
             .map_err(Failure::Link)
@@ -324,11 +391,12 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         header: Header,
         start: u32,
         words: &[u16],
+        retries: u8,
     ) -> Result<(), PlcError> {
         let operation = dt_operation("write", start, words.len());
         let command =
             Command::write_dt(start, words.to_vec()).map_err(|e| invalid(&operation, &e))?;
-        self.exchange(header, &command, &operation)
+        self.exchange_tries(header, &command, &operation, retries)
             .await
             .map(|_| ())
     }
@@ -338,7 +406,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
     async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
         let header = self.resolve_header().await?;
         let mut words = Vec::with_capacity(usize::from(count));
-        for (from, len) in chunks(start, usize::from(count), max_read_reply_words(header)) {
+        let size = self
+            .options
+            .words_per_exchange(header, max_read_reply_words(header), 9);
+        for (from, len) in chunks(start, usize::from(count), size) {
             words.extend(self.read_chunk(header, from, len).await?);
         }
         Ok(words)
@@ -346,31 +417,118 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
 
     async fn write_words(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
         let header = self.resolve_header().await?;
-        let size = max_write_words(header);
+        let size = self
+            .options
+            .words_per_exchange(header, max_write_words(header), 20);
         for (from, chunk) in (u32::from(start)..).step_by(size).zip(words.chunks(size)) {
-            self.write_chunk(header, from, chunk).await?;
+            self.write_chunk(header, from, chunk, self.options.retries)
+                .await?;
         }
         Ok(())
     }
 
-    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
-        let operation = format!("read relay {}", relay_name(relay));
-        let command = Command::ReadContact(relay_contact(relay, &operation)?);
+    async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
         let header = self.resolve_header().await?;
-        match self.exchange(header, &command, &operation).await? {
-            Reply::ReadContact(on) => Ok(on),
-            other => Err(unexpected(&operation, &other)),
+        if words.len() > max_write_words(header) {
+            return Err(invalid(
+                &dt_operation("write", u32::from(start), words.len()),
+                &format!(
+                    "a single write carries at most {} words",
+                    max_write_words(header)
+                ),
+            ));
         }
+        self.write_chunk(header, u32::from(start), words, 0).await
+    }
+
+    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
+        Ok(self.read_bits(Area::R, u32::from(relay), 1).await?[0])
     }
 
     async fn write_relay(&mut self, relay: u16, on: bool) -> Result<(), PlcError> {
-        let operation = format!("write relay {} = {}", relay_name(relay), u8::from(on));
-        let contact = relay_contact(relay, &operation)?;
+        self.write_bit(Area::R, u32::from(relay), on).await
+    }
+
+    async fn read_bits(
+        &mut self,
+        area: Area,
+        start: u32,
+        count: u16,
+    ) -> Result<Vec<bool>, PlcError> {
+        let operation = bits_operation("read", area, start, count);
+        let contact_area = contact_area(area).ok_or_else(|| super::not_bits(operation.clone()))?;
+        if count == 0 {
+            return Ok(Vec::new());
+        }
+        let header = self.resolve_header().await?;
+        if count == 1 {
+            // One contact: RCS, which every FP answers.
+            let word =
+                u16::try_from(start / 16).map_err(|_| invalid(&operation, &"word too large"))?;
+            let contact = Contact::new(contact_area, word, (start % 16) as u8)
+                .map_err(|e| invalid(&operation, &e))?;
+            return match self
+                .exchange(header, &Command::ReadContact(contact), &operation)
+                .await?
+            {
+                Reply::ReadContact(on) => Ok(vec![on]),
+                other => Err(unexpected(&operation, &other)),
+            };
+        }
+        let per = self
+            .options
+            .words_per_exchange(header, max_read_reply_words(header), 9);
+        let (first, last) = (start / 16, (start + u32::from(count) - 1) / 16);
+        let mut words = Vec::new();
+        let mut word = first;
+        while word <= last {
+            let end = last.min(word + per as u32 - 1);
+            let range = ContactWords::new(contact_area, word as u16, end as u16)
+                .map_err(|e| invalid(&operation, &e))?;
+            match self
+                .exchange(header, &Command::ReadContactWords(range), &operation)
+                .await?
+            {
+                Reply::ReadContactWords(w) => words.extend(w),
+                other => return Err(unexpected(&operation, &other)),
+            }
+            word = end + 1;
+        }
+        let offset = start - first * 16;
+        Ok((0..u32::from(count))
+            .map(|i| {
+                let at = offset + i;
+                words[(at / 16) as usize] & (1 << (at % 16)) != 0
+            })
+            .collect())
+    }
+
+    async fn write_bit(&mut self, area: Area, bit: u32, on: bool) -> Result<(), PlcError> {
+        let operation = format!("write {} = {}", bit_name(area, bit), u8::from(on));
+        let contact_area = contact_area(area).ok_or_else(|| super::not_bits(operation.clone()))?;
+        let word = u16::try_from(bit / 16).map_err(|_| invalid(&operation, &"word too large"))?;
+        let contact = Contact::new(contact_area, word, (bit % 16) as u8)
+            .map_err(|e| invalid(&operation, &e))?;
         let command = Command::write_contact(contact, on).map_err(|e| invalid(&operation, &e))?;
         let header = self.resolve_header().await?;
         self.exchange(header, &command, &operation)
             .await
             .map(|_| ())
+    }
+
+    fn exchange_sizes(&self) -> ExchangeSizes {
+        let header = self.header.unwrap_or(Header::Percent);
+        let read = self
+            .options
+            .words_per_exchange(header, max_read_reply_words(header), 9);
+        ExchangeSizes {
+            read_words: read as u16,
+            write_words: self
+                .options
+                .words_per_exchange(header, max_write_words(header), 20)
+                as u16,
+            read_bits: (read * 16).min(usize::from(u16::MAX)) as u16,
+        }
     }
 
     async fn mode(&mut self) -> Result<PlcMode, PlcError> {
@@ -405,8 +563,28 @@ pub fn relay_name(relay: u16) -> String {
     format!("R{}{:X}", relay / 16, relay % 16)
 }
 
-fn relay_contact(relay: u16, operation: &str) -> Result<Contact, PlcError> {
-    Contact::new(ContactArea::R, relay / 16, (relay % 16) as u8).map_err(|e| invalid(operation, &e))
+/// MEWTOCOL's contact area of a gateway area (none for DT).
+fn contact_area(area: Area) -> Option<ContactArea> {
+    match area {
+        Area::X => Some(ContactArea::X),
+        Area::Y => Some(ContactArea::Y),
+        Area::R => Some(ContactArea::R),
+        Area::Dt => None,
+    }
+}
+
+/// A bit as Panasonic writes it (R9020, X1F).
+fn bit_name(area: Area, bit: u32) -> String {
+    crate::gateway::Address { area, index: bit }.to_string()
+}
+
+fn bits_operation(verb: &str, area: Area, start: u32, count: u16) -> String {
+    let last = start + u32::from(count.max(1)) - 1;
+    format!(
+        "{verb} {}..={}",
+        bit_name(area, start),
+        bit_name(area, last)
+    )
 }
 
 fn invalid(operation: &str, error: &impl fmt::Display) -> PlcError {

@@ -66,6 +66,17 @@ impl State {
                 Ok(Reply::WriteDt)
             }
             Command::ReadContact(c) => Ok(Reply::ReadContact(self.relays[index(*c)])),
+            Command::ReadContactWords(range) if range.area() == ContactArea::R => {
+                let first = usize::from(range.start()) * 16;
+                let words = (0..range.len())
+                    .map(|w| {
+                        (0..16).fold(0_u16, |word, b| {
+                            word | (u16::from(self.relays[first + w * 16 + b]) << b)
+                        })
+                    })
+                    .collect();
+                Ok(Reply::ReadContactWords(words))
+            }
             Command::WriteContact { contact, on } => {
                 self.relays[index(*contact)] = *on;
                 Ok(Reply::WriteContact)
@@ -285,8 +296,9 @@ async fn silent_plc_gives_a_timeout_after_the_retries() {
     assert!(
         matches!(
             e,
+            // The 300 ms margin and two 10 ms scans (no wire time on a network link).
             PlcError::Timeout {
-                timeout_ms: 300,
+                timeout_ms: 320,
                 ..
             }
         ),
@@ -314,6 +326,14 @@ async fn relays_are_written_and_read_through_rcs_and_wcs() {
     plc.write_relay(r12a, true).await.unwrap();
     assert!(plc.read_relay(r12a).await.unwrap());
     assert!(state.lock().unwrap().relays[usize::from(r12a)]);
+    // Many bits at once: contact words (RCC), cut to the bits asked for.
+    plc.write_bit(Area::R, 195, true).await.unwrap();
+    let bits = plc.read_bits(Area::R, 190, 20).await.unwrap();
+    assert_eq!(bits.len(), 20);
+    assert!(bits[5] && bits[usize::from(r12a) - 190]);
+    assert_eq!(bits.iter().filter(|b| **b).count(), 2);
+    let e = plc.read_bits(Area::Dt, 0, 2).await.unwrap_err();
+    assert!(e.to_string().contains("DT holds words, not bits"), "{e}");
 }
 
 #[tokio::test(start_paused = true)]
@@ -361,4 +381,26 @@ async fn connect_opens_a_tcp_link_to_what_the_settings_name() {
     plc.write_words(1_032, &[1, 2, 3]).await.unwrap();
     assert_eq!(plc.read_words(1_032, 3).await.unwrap(), [1, 2, 3]);
     assert_eq!(plc.mode().await.unwrap(), PlcMode::Run);
+}
+
+#[tokio::test(start_paused = true)]
+async fn on_a_19200_baud_line_frames_are_cut_to_a_quarter_second_and_timeouts_grow_with_them() {
+    let state = fake();
+    let (ours, theirs) = tokio::io::duplex(4096);
+    tokio::spawn(serve(Arc::clone(&state), theirs));
+    let mut options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Angle);
+    options.char_time = Some(Duration::from_secs_f64(11.0 / 19_200.0));
+    let mut plc = MewtocolClient::new(ours, options);
+    let words = ramp(340);
+    plc.write_words(2_000, &words).await.unwrap();
+    assert_eq!(plc.read_words(2_000, 340).await.unwrap(), words);
+    let s = state.lock().unwrap();
+    // 250 ms at 19200 baud is 436 characters: 104 words a write, 106 a read reply.
+    assert_eq!(s.count(Header::Angle, true), 4, "340 words in 4 writes");
+    assert_eq!(s.count(Header::Angle, false), 4, "340 words in 4 reads");
+    // A read of 106 words: 20 characters out, 433 back, at 0.57 ms each, two scans, the margin.
+    let read = Command::ReadDt(DtRange::from_len(0, 106).unwrap());
+    let t = plc.exchange_timeout(Header::Angle, &read).as_secs_f64();
+    let expected = (20.0 + 433.0) * 11.0 / 19_200.0 + 0.020 + 0.300;
+    assert!((t - expected).abs() < 1e-3, "{t} s, expected {expected} s");
 }

@@ -23,13 +23,31 @@ pub mod contract;
 
 use thiserror::Error;
 
+use crate::gateway::Area;
+
 pub use any::{AnyPlc, connect};
 pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_serial, open_tcp};
 pub use mewtocol::{MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
-pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
-pub use settings::{
-    HeaderChoice, LinkSettings, Parity, Protocol, R9020, SerialSettings, TcpSettings, Transport,
+pub use modbus::{
+    MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, ModbusClient, ModbusFraming, ModbusOptions,
+    RELAY_COIL_BASE, exception_meaning,
 };
+pub use settings::{
+    HeaderChoice, LinkSettings, Parity, Protocol, R9020, SerialSettings, TcpSettings, Timing,
+    Transport,
+};
+
+/// How much one exchange carries: the most DT words one read and one write, and the most bits
+/// one read of X, Y or R.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ExchangeSizes {
+    /// DT words one read carries.
+    pub read_words: u16,
+    /// DT words one write carries.
+    pub write_words: u16,
+    /// Bits one read carries.
+    pub read_bits: u16,
+}
 
 /// RUN or PROG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -133,6 +151,15 @@ pub trait Plc: Send {
         start: u16,
         words: &[u16],
     ) -> impl Future<Output = Result<(), PlcError>> + Send;
+    /// Writes a few words (one request) and sends it once: a lost or garbled reply is never
+    /// retried, because a repeated write may not be safe (a start command). Any error but
+    /// [`PlcError::Refused`] leaves it unknown whether the PLC took it; the caller must learn that
+    /// from the PLC.
+    fn write_words_once(
+        &mut self,
+        start: u16,
+        words: &[u16],
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads relay R`relay` (`relay` = word * 16 + bit).
     fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send;
     /// Writes relay R`relay`.
@@ -143,4 +170,28 @@ pub trait Plc: Send {
     ) -> impl Future<Output = Result<(), PlcError>> + Send;
     /// Reads whether the PLC is in RUN or PROG mode.
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send;
+    /// Reads `count` bits of `area` (X, Y or R) from bit `start` (word * 16 + bit).
+    fn read_bits(
+        &mut self,
+        area: Area,
+        start: u32,
+        count: u16,
+    ) -> impl Future<Output = Result<Vec<bool>, PlcError>> + Send;
+    /// Writes bit `bit` (word * 16 + bit) of `area` (Y or R).
+    fn write_bit(
+        &mut self,
+        area: Area,
+        bit: u32,
+        on: bool,
+    ) -> impl Future<Output = Result<(), PlcError>> + Send;
+    /// How much one exchange carries (to cut a request into single exchanges).
+    fn exchange_sizes(&self) -> ExchangeSizes;
+}
+
+/// The refusal of a bit request for an area that holds words.
+pub(crate) fn not_bits(operation: String) -> PlcError {
+    PlcError::InvalidRequest {
+        operation,
+        detail: "DT holds words, not bits".to_owned(),
+    }
 }

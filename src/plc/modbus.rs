@@ -3,6 +3,7 @@
 //!
 //! ```text
 //!  DT n      <-> holding register n        read 03 <= 125 registers, write 16 <= 123 a request
+//!                                          (fewer if ModbusOptions says so: some peers take less)
 //!  R w.b     <-> coil 2048 + 16 w + b      read 01, write 05
 //!  RUN flag  <-  a configurable relay      default R9020 [unverified]: FP-X documents no
 //!                                          Modbus register for RUN / PROG
@@ -25,19 +26,23 @@ use tokio_modbus::client::{Client, Context, rtu, tcp};
 use tokio_modbus::{ExceptionCode, Request, Response, Slave};
 
 use super::link::{SharedStream, drain};
-use super::mewtocol::relay_name;
-use super::settings::{LinkSettings, Protocol};
-use super::{Plc, PlcError, PlcMode, Refusal};
+use super::settings::{LinkSettings, Protocol, Timing};
+use super::{ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
 use crate::contract::DT_LAST;
+use crate::gateway::{Address, Area};
 
 /// Coil of relay R0 (PLC.md §2: coil 2048 + 16 w + b = R w.b).
 pub const RELAY_COIL_BASE: u16 = 2048;
-/// Registers one read (function 03) asks for at most (Modbus spec; FP-X maxima \[unverified\]).
-const MAX_READ_REGISTERS: usize = 125;
-/// Registers one write (function 16) carries at most.
-const MAX_WRITE_REGISTERS: usize = 123;
+/// Registers one read (function 03) may ask for (Modbus Application Protocol v1.1b3, §6.3; the
+/// FP-X's own maximum is \[unverified\]).
+pub const MAX_READ_REGISTERS: u16 = 125;
+/// Registers one write (function 16) may carry (Modbus Application Protocol v1.1b3, §6.12; the
+/// FP-X's own maximum is \[unverified\]).
+pub const MAX_WRITE_REGISTERS: u16 = 123;
 /// Highest relay number: R999F.
 const RELAY_MAX: u16 = 999 * 16 + 15;
+/// Coils or inputs one read (01, 02) asks for at most (Modbus spec).
+const MAX_READ_BITS: u16 = 2000;
 
 /// The framing on the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,31 +53,47 @@ pub enum ModbusFraming {
     Tcp,
 }
 
-/// How the client talks: framing, unit id, timeout, retries and the RUN relay.
+/// How the client talks: framing, unit id, timeout, retries, the RUN relay and request sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ModbusOptions {
     /// RTU or TCP.
     pub framing: ModbusFraming,
     /// The PLC's unit id (1..=247).
     pub unit: u8,
-    /// Longest wait for one call.
+    /// The margin one call may take beyond its wire time and two scans.
     pub timeout: Duration,
+    /// One character's time on a serial line (`None`: a network link or a test stream).
+    pub char_time: Option<Duration>,
+    /// The PLC's longest scan.
+    pub scan_time: Duration,
     /// Further attempts after a timeout or a garbled reply.
     pub retries: u8,
     /// Relay whose state is the RUN flag (default R9020, \[unverified\]).
     pub mode_relay: u16,
+    /// Registers one read (03) asks for at most: 1..=[`MAX_READ_REGISTERS`] (taken as the
+    /// nearest bound when outside).
+    pub max_read_registers: u16,
+    /// Registers one write (16) carries at most: 1..=[`MAX_WRITE_REGISTERS`] (taken as the
+    /// nearest bound when outside). Some peers take fewer than the spec's 123.
+    pub max_write_registers: u16,
 }
 
 impl ModbusOptions {
-    /// Options with a 300 ms timeout, 2 retries and R9020 as the RUN relay.
+    /// Options for a network link: a 300 ms margin, a 10 ms scan, 2 retries, R9020 as the RUN
+    /// relay and the Modbus spec's request sizes.
     #[must_use]
     pub fn new(framing: ModbusFraming, unit: u8) -> Self {
+        let timing = Timing::network(Duration::from_millis(300));
         Self {
             framing,
             unit,
-            timeout: Duration::from_millis(300),
+            timeout: timing.margin,
+            char_time: timing.char_time,
+            scan_time: timing.scan_time,
             retries: 2,
             mode_relay: super::settings::R9020,
+            max_read_registers: MAX_READ_REGISTERS,
+            max_write_registers: MAX_WRITE_REGISTERS,
         }
     }
 
@@ -83,13 +104,38 @@ impl ModbusOptions {
             Protocol::ModbusTcp => ModbusFraming::Tcp,
             Protocol::ModbusRtu | Protocol::Mewtocol => ModbusFraming::Rtu,
         };
+        let timing = settings.timing();
         Self {
             framing,
             unit: settings.station,
-            timeout: settings.timeout,
+            timeout: timing.margin,
+            char_time: timing.char_time,
+            scan_time: timing.scan_time,
             retries: settings.retries,
             mode_relay: settings.mode_relay,
+            max_read_registers: settings.modbus_max_read,
+            max_write_registers: settings.modbus_max_write,
         }
+    }
+
+    /// The exchange timing.
+    #[must_use]
+    pub fn timing(&self) -> Timing {
+        Timing {
+            char_time: self.char_time,
+            scan_time: self.scan_time,
+            margin: self.timeout,
+        }
+    }
+
+    /// Registers one read asks for at most, within the spec's bounds.
+    fn read_size(&self) -> u16 {
+        self.max_read_registers.clamp(1, MAX_READ_REGISTERS)
+    }
+
+    /// Registers one write carries at most, within the spec's bounds.
+    fn write_size(&self) -> u16 {
+        self.max_write_registers.clamp(1, MAX_WRITE_REGISTERS)
     }
 }
 
@@ -210,7 +256,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
     async fn context(&mut self) -> Result<&mut Context, Failure> {
         if self.context.is_none() {
             let mut handle = self.stream.clone();
-            drain(&mut handle, self.options.timeout)
+            drain(&mut handle, self.options.timing().quiet())
                 .await
                 .map_err(Failure::Link)?;
             self.reattached += 1;
@@ -220,7 +266,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
     }
 
     async fn attempt(&mut self, request: Request<'_>) -> Result<Response, Failure> {
-        let timeout = self.options.timeout;
+        let timeout = self.call_timeout(&request);
         let context = self.context().await?;
         let outcome = match tokio::time::timeout(timeout, context.call(request)).await {
             Err(_) => Err(Failure::Timeout),
@@ -243,16 +289,36 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
         outcome
     }
 
+    /// The longest `request` may take: its RTU frames on the wire (with their silent intervals),
+    /// two scans, the margin. (Over TCP there is no wire time.)
+    fn call_timeout(&self, request: &Request<'_>) -> Duration {
+        let (out, back) = rtu_bytes(request);
+        // 3.5 characters of silence end each RTU frame.
+        self.options.timing().exchange(out + 4, back + 4)
+    }
+
     /// One request with retries; exceptions and IO errors are never retried.
     async fn call(&mut self, operation: &str, request: Request<'_>) -> Result<Response, PlcError> {
+        self.call_tries(operation, request, self.options.retries)
+            .await
+    }
+
+    /// One request, tried again up to `retries` times after a timeout or a garbled reply.
+    async fn call_tries(
+        &mut self,
+        operation: &str,
+        request: Request<'_>,
+        retries: u8,
+    ) -> Result<Response, PlcError> {
         let mut attempt = 0;
         loop {
             let failure = match self.attempt(request.clone()).await {
                 Ok(response) => return Ok(response),
                 Err(failure) => failure,
             };
-            if !failure.is_retryable() || attempt >= self.options.retries {
-                return Err(failure.into_error(operation, self.options.timeout));
+            if !failure.is_retryable() || attempt >= retries {
+                let timeout = self.call_timeout(&request);
+                return Err(failure.into_error(operation, timeout));
             }
             attempt += 1;
             tracing::warn!(operation, attempt, %failure, "retrying a Modbus call");
@@ -268,10 +334,15 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
         }
     }
 
-    async fn write_chunk(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+    async fn write_chunk(
+        &mut self,
+        start: u16,
+        words: &[u16],
+        retries: u8,
+    ) -> Result<(), PlcError> {
         let operation = dt_operation("write", start, words.len());
         let request = Request::WriteMultipleRegisters(start, words.into());
-        match self.call(&operation, request).await? {
+        match self.call_tries(&operation, request, retries).await? {
             Response::WriteMultipleRegisters(..) => Ok(()),
             other => Err(unexpected(&operation, &other)),
         }
@@ -282,8 +353,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> Plc for Mo
     async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
         check_dt(start, usize::from(count), "read")?;
         let mut words = Vec::with_capacity(usize::from(count));
-        for offset in (0..count).step_by(MAX_READ_REGISTERS) {
-            let len = (count - offset).min(MAX_READ_REGISTERS as u16);
+        let most = self.options.read_size();
+        for offset in (0..count).step_by(usize::from(most)) {
+            let len = (count - offset).min(most);
             words.extend(self.read_chunk(start + offset, len).await?);
         }
         Ok(words)
@@ -291,25 +363,74 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> Plc for Mo
 
     async fn write_words(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
         check_dt(start, words.len(), "write")?;
-        for (index, chunk) in words.chunks(MAX_WRITE_REGISTERS).enumerate() {
-            let offset = (index * MAX_WRITE_REGISTERS) as u16;
-            self.write_chunk(start + offset, chunk).await?;
+        let most = usize::from(self.options.write_size());
+        for (index, chunk) in words.chunks(most).enumerate() {
+            let offset = (index * most) as u16;
+            self.write_chunk(start + offset, chunk, self.options.retries)
+                .await?;
         }
         Ok(())
     }
 
-    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
-        let operation = format!("read relay {}", relay_name(relay));
-        let coil = relay_coil(relay, &operation)?;
-        match self.call(&operation, Request::ReadCoils(coil, 1)).await? {
-            Response::ReadCoils(bits) if !bits.is_empty() => Ok(bits[0]),
-            other => Err(unexpected(&operation, &other)),
+    async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+        check_dt(start, words.len(), "write")?;
+        let most = self.options.write_size();
+        if words.len() > usize::from(most) {
+            return Err(PlcError::InvalidRequest {
+                operation: dt_operation("write", start, words.len()),
+                detail: format!("a single write carries at most {most} registers"),
+            });
         }
+        self.write_chunk(start, words, 0).await
+    }
+
+    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
+        Ok(self.read_bits(Area::R, u32::from(relay), 1).await?[0])
     }
 
     async fn write_relay(&mut self, relay: u16, on: bool) -> Result<(), PlcError> {
-        let operation = format!("write relay {} = {}", relay_name(relay), u8::from(on));
-        let coil = relay_coil(relay, &operation)?;
+        self.write_bit(Area::R, u32::from(relay), on).await
+    }
+
+    async fn read_bits(
+        &mut self,
+        area: Area,
+        start: u32,
+        count: u16,
+    ) -> Result<Vec<bool>, PlcError> {
+        let mut bits = Vec::with_capacity(usize::from(count));
+        let mut at = start;
+        let end = start + u32::from(count);
+        while at < end {
+            let n = (end - at).min(u32::from(MAX_READ_BITS)) as u16;
+            let operation = bits_operation("read", area, at, n);
+            let first = bit_address(area, at, n, &operation)?;
+            let request = match area {
+                Area::X => Request::ReadDiscreteInputs(first, n),
+                _ => Request::ReadCoils(first, n),
+            };
+            match self.call(&operation, request).await? {
+                Response::ReadCoils(read) | Response::ReadDiscreteInputs(read)
+                    if read.len() >= usize::from(n) =>
+                {
+                    bits.extend(&read[..usize::from(n)]);
+                }
+                other => return Err(unexpected(&operation, &other)),
+            }
+            at += u32::from(n);
+        }
+        Ok(bits)
+    }
+
+    async fn write_bit(&mut self, area: Area, bit: u32, on: bool) -> Result<(), PlcError> {
+        let operation = format!("write {} = {}", Address { area, index: bit }, u8::from(on));
+        if area == Area::X {
+            return Err(PlcError::InvalidRequest {
+                operation,
+                detail: "X inputs cannot be written".to_owned(),
+            });
+        }
+        let coil = bit_address(area, bit, 1, &operation)?;
         match self
             .call(&operation, Request::WriteSingleCoil(coil, on))
             .await?
@@ -319,9 +440,27 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> Plc for Mo
         }
     }
 
+    fn exchange_sizes(&self) -> ExchangeSizes {
+        ExchangeSizes {
+            read_words: self.options.read_size(),
+            write_words: self.options.write_size(),
+            read_bits: MAX_READ_BITS,
+        }
+    }
+
     async fn mode(&mut self) -> Result<PlcMode, PlcError> {
         let running = self.read_relay(self.options.mode_relay).await?;
         Ok(if running { PlcMode::Run } else { PlcMode::Prog })
+    }
+}
+
+/// Bytes of an RTU request and of its reply (unit, function, data, CRC).
+fn rtu_bytes(request: &Request<'_>) -> (usize, usize) {
+    match request {
+        Request::ReadHoldingRegisters(_, n) => (8, 5 + 2 * usize::from(*n)),
+        Request::WriteMultipleRegisters(_, words) => (9 + 2 * words.len(), 8),
+        Request::ReadCoils(_, n) => (8, 5 + usize::from(*n).div_ceil(8)),
+        _ => (8, 8),
     }
 }
 
@@ -341,14 +480,36 @@ fn check_dt(start: u16, len: usize, verb: &str) -> Result<(), PlcError> {
     })
 }
 
-fn relay_coil(relay: u16, operation: &str) -> Result<u16, PlcError> {
-    if relay > RELAY_MAX {
+/// The first coil (Y, R) or discrete input (X) of `count` bits of `area` from `bit` (PLC.md §2:
+/// coil 16 w + b = Y w.b below 2048, coil 2048 + 16 w + b = R w.b, input 16 w + b = X w.b).
+fn bit_address(area: Area, bit: u32, count: u16, operation: &str) -> Result<u16, PlcError> {
+    let last = bit + u32::from(count.max(1)) - 1;
+    let (base, limit) = match area {
+        Area::X => (0, u32::from(u16::MAX)),
+        Area::Y => (0, u32::from(RELAY_COIL_BASE) - 1),
+        Area::R => (u32::from(RELAY_COIL_BASE), u32::from(RELAY_MAX)),
+        Area::Dt => return Err(super::not_bits(operation.to_owned())),
+    };
+    if last > limit || base + last > u32::from(u16::MAX) {
         return Err(PlcError::InvalidRequest {
             operation: operation.to_owned(),
-            detail: format!("relay number {relay} is past R999F ({RELAY_MAX})"),
+            detail: format!(
+                "{} is past {}",
+                Address { area, index: last },
+                Address { area, index: limit }
+            ),
         });
     }
-    Ok(RELAY_COIL_BASE + relay)
+    Ok((base + bit) as u16)
+}
+
+fn bits_operation(verb: &str, area: Area, start: u32, count: u16) -> String {
+    let last = start + u32::from(count.max(1)) - 1;
+    format!(
+        "{verb} {}..={}",
+        Address { area, index: start },
+        Address { area, index: last }
+    )
 }
 
 fn unexpected(operation: &str, response: &Response) -> PlcError {

@@ -176,6 +176,58 @@ async fn rtu_round_trip_of_300_registers() {
     assert_eq!(plc.read_words(10_000, 300).await.unwrap(), ramp(300));
 }
 
+/// A TCP client whose requests carry at most `max_write` and ask for at most `max_read` registers.
+async fn sized_client(memory: &Memory, max_write: u16, max_read: u16) -> ModbusClient<TcpStream> {
+    let stream = TcpStream::connect(serve_tcp(memory).await).await.unwrap();
+    let mut options = ModbusOptions::new(ModbusFraming::Tcp, 1);
+    options.timeout = Duration::from_secs(5);
+    (options.max_write_registers, options.max_read_registers) = (max_write, max_read);
+    ModbusClient::new(stream, options)
+}
+
+#[tokio::test]
+async fn configured_request_sizes_split_reads_and_writes() {
+    let memory = Memory::new();
+    let mut plc = sized_client(&memory, 100, 60).await;
+    plc.write_words(2_000, &ramp(250)).await.unwrap();
+    assert_eq!(plc.read_words(2_000, 250).await.unwrap(), ramp(250));
+    assert_eq!(memory.count("WriteMultipleRegisters(2000,"), 1);
+    assert_eq!(memory.count("WriteMultipleRegisters(2100,"), 1);
+    assert_eq!(memory.count("WriteMultipleRegisters"), 3); // 100 + 100 + 50
+    assert_eq!(memory.count("ReadHoldingRegisters(2240, 10)"), 1);
+    assert_eq!(memory.count("ReadHoldingRegisters"), 5); // 4 x 60 + 10
+}
+
+#[tokio::test]
+async fn request_sizes_outside_the_spec_are_taken_as_its_bounds() {
+    let memory = Memory::new();
+    let mut plc = sized_client(&memory, 0, 1_000).await;
+    plc.write_words(2_000, &ramp(3)).await.unwrap();
+    assert_eq!(memory.count("WriteMultipleRegisters"), 3); // 0 is taken as 1
+    plc.read_words(2_000, 300).await.unwrap();
+    assert_eq!(memory.count("ReadHoldingRegisters"), 3); // 125 + 125 + 50
+}
+
+#[test]
+fn options_from_settings_carry_the_request_sizes() {
+    let tcp = crate::plc::TcpSettings {
+        address: "127.0.0.1:502".into(),
+        connect_timeout: Duration::from_secs(1),
+    };
+    let mut settings = LinkSettings::new(Protocol::ModbusTcp, crate::plc::Transport::Tcp(tcp));
+    let defaults = ModbusOptions::from_settings(&settings);
+    assert_eq!(
+        (defaults.max_write_registers, defaults.max_read_registers),
+        (123, 125)
+    );
+    (settings.modbus_max_write, settings.modbus_max_read) = (100, 64);
+    let options = ModbusOptions::from_settings(&settings);
+    assert_eq!(
+        (options.max_write_registers, options.max_read_registers),
+        (100, 64)
+    );
+}
+
 #[tokio::test]
 async fn relays_map_to_coils_from_2048() {
     let memory = Memory::new();
@@ -276,4 +328,30 @@ async fn connect_opens_modbus_tcp_from_settings() {
     assert!(matches!(plc, crate::plc::AnyPlc::Modbus(_)));
     plc.write_words(1_000, &[7, 8]).await.unwrap();
     assert_eq!(plc.read_words(1_000, 2).await.unwrap(), [7, 8]);
+}
+
+#[test]
+fn an_rtu_call_at_19200_baud_waits_for_its_frames_two_scans_and_the_margin() {
+    let mut options = ModbusOptions::new(ModbusFraming::Rtu, 1);
+    options.char_time = Some(Duration::from_secs_f64(11.0 / 19_200.0));
+    let (ours, _theirs) = tokio::io::duplex(64);
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    let _guard = rt.enter();
+    let client = ModbusClient::new(ours, options);
+    // 125 registers: 8 bytes out, 255 back, each frame followed by its silence.
+    let t = client.call_timeout(&Request::ReadHoldingRegisters(0, 125));
+    let expected = (12.0 + 259.0) * 11.0 / 19_200.0 + 0.020 + 0.300;
+    assert!((t.as_secs_f64() - expected).abs() < 1e-3, "{t:?}");
+    // Over TCP (no line) only the scans and the margin.
+    let tcp = ModbusClient::new(
+        tokio::io::duplex(64).0,
+        ModbusOptions::new(ModbusFraming::Tcp, 1),
+    );
+    assert_eq!(
+        tcp.call_timeout(&Request::ReadHoldingRegisters(0, 125)),
+        Duration::from_millis(320)
+    );
 }

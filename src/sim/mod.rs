@@ -1,5 +1,5 @@
 //! PURE. The execution model: what a PLC does with a start's tables, and how close that comes to
-//! the planned line (`../shared/spec/ACCURACY.md`).
+//! the planned line (`docs/ACCURACY.md`).
 //!
 //! - every channel of a start begins at t = 0 from its start count;
 //! - a row `(f_set, target)` emits |target - count| pulses at the real frequency

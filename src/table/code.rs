@@ -1,6 +1,6 @@
 //! The F174 control code: output method and direction, absolute targets, range, duty.
 //!
-//! Source: Panasonic FP-X user's manual, F174 (SP0H), control code (`../shared/spec/PLC.md` §3):
+//! Source: Panasonic FP-X user's manual, F174 (SP0H), control code (`docs/PLC.md` §3):
 //! ```text
 //! digit 3   digit 2   digit 1    digit 0
 //! duty      range     0=inc      output method + counting direction

@@ -1,7 +1,7 @@
 //! F174 frequency ranges and the frequency models that say what a channel really outputs.
 //!
 //! Source: Panasonic FP-X user's manual, F174 (SP0H) "pulse output with data table", control code
-//! digit 2; the divider model is our own derivation (`../shared/spec/PLC.md`, "Actual output
+//! digit 2; the divider model is our own derivation (`docs/PLC.md`, "Actual output
 //! frequency").
 
 use serde::{Deserialize, Serialize};

@@ -7,7 +7,12 @@ use linterpd::kinematics::JOINTS;
 use linterpd::mock::{MockConfig, MockPlc, SharedMock};
 use linterpd::plan::{MoveRequest, Origin, Plan, plan_move};
 use linterpd::plc::Plc;
-use linterpd::plc::contract::{Contract, ContractError, ContractSettings, VerifiedBank};
+use std::time::Duration;
+
+use linterpd::contract::machine::{Machine, Planned};
+use linterpd::plc::contract::{
+    Contract, ContractError, ContractSettings, VerifiedBank, planned_bounds,
+};
 use linterpd::robot::{Robot, seed_robot};
 
 /// The seed's P1 and P2 (mm).
@@ -47,24 +52,47 @@ pub fn plan_from(robot: &Robot, elapsed: [i32; 4]) -> Plan {
     plan_move(robot, &req).unwrap()
 }
 
-/// Checks the PLC, plans from its counts, uploads into bank 0 with sequence `seq`.
+/// A machine for a test host.
+pub fn machine() -> Machine {
+    Machine::new(settings().watch, 0x7E57)
+}
+
+/// Checks the PLC (the host word written and echoed, the heartbeat moving), plans from its
+/// counts, uploads into bank 0 with sequence `seq`.
 pub async fn upload<P: Plc>(
     c: &mut Contract<P>,
+    m: &mut Machine,
     seq: u16,
-) -> Result<(Plan, VerifiedBank), ContractError> {
+) -> Result<(Plan, VerifiedBank, Planned), ContractError> {
     let robot = seed_robot();
-    let status = c.check_alive().await?;
+    let status = c.ready(m).await?;
     let plan = plan_from(&robot, status.block.elapsed);
     let tables = plan.valid_tables(&robot).expect("a valid plan");
-    let bank = c.upload(0, seq, &tables).await?;
-    Ok((plan, bank))
+    let from = status.block.elapsed;
+    let bank = c.upload(0, seq, from, &tables).await?;
+    let segments: Vec<(usize, &[linterpd::table::Segment])> = plan
+        .tables
+        .iter()
+        .map(|t| (usize::from(t.channel), t.segments.as_slice()))
+        .collect();
+    let (envelope, targets) = planned_bounds(from, &segments);
+    let planned = Planned {
+        tag: u64::from(seq),
+        seq,
+        bank: 0,
+        from,
+        targets: Some(targets),
+        envelope,
+        duration: Duration::from_secs_f64(plan.profile.duration_s()),
+    };
+    Ok((plan, bank, planned))
 }
 
 /// The whole exchange: upload, start, follow to done, final counts equal the plan's.
 pub async fn exchange<P: Plc>(c: &mut Contract<P>, seq: u16) -> Result<(), ContractError> {
-    let (plan, bank) = upload(c, seq).await?;
-    c.start(bank).await?;
-    let done = c.follow(seq, |_| {}).await?;
+    let mut m = machine();
+    let (plan, bank, planned) = upload(c, &mut m, seq).await?;
+    let done = c.run(&mut m, &bank, planned, |_| {}).await?;
     let robot = seed_robot();
     let end = plan.end_counts();
     for (j, joint) in robot.joints.iter().enumerate() {
@@ -76,6 +104,28 @@ pub async fn exchange<P: Plc>(c: &mut Contract<P>, seq: u16) -> Result<(), Contr
         );
     }
     Ok(())
+}
+
+/// Homes every channel at the counts it holds (after a restart cleared the homed bit) and waits
+/// for the homed bit.
+pub async fn home_where_it_stands<P: Plc>(c: &mut Contract<P>) -> Result<(), ContractError> {
+    // Once the PLC scans again (a command written before its first scan would be cleared).
+    let first = c.status().await?.block.heartbeat;
+    while c.status().await?.block.heartbeat == first {
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+    let counts = c.status().await?.block.elapsed;
+    c.home(0b1111, counts).await?;
+    for _ in 0..200 {
+        let s = c.status().await?;
+        if s.block.ready & linterpd::contract::READY_HOMED != 0
+            && s.state == linterpd::contract::State::Done
+        {
+            return Ok(());
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    panic!("the mock did not home within 2 s: {:?}", c.status().await);
 }
 
 /// Contract settings for tests: the defaults.

@@ -19,8 +19,12 @@ pub fn config_for(address: &str, socket: &std::path::Path) -> String {
         .expect("the shipped config has a robot");
     format!(
         "{robot}[robots.press-loader.plc]\nprotocol = \"mewtocol\"\ntcp = {{ address = \"{address}\" }}\n\
-         [daemon]\nsocket = \"{}\"\n",
-        socket.display()
+         [daemon]\nsocket = \"{}\"\nstate_dir = \"{}\"\n",
+        socket.display(),
+        socket
+            .parent()
+            .expect("the socket is in a directory")
+            .display()
     )
 }
 
@@ -32,11 +36,18 @@ pub struct Running {
     pub serve: Spawned,
     /// The daemon's API socket.
     pub socket: PathBuf,
+    /// Its config file.
+    pub config: PathBuf,
     _dir: TempDir,
 }
 
 /// Starts `linterpd mock-plc` on a free port and `linterpd serve` on it.
 pub fn start() -> Running {
+    start_with(&[])
+}
+
+/// As [`start`], with more `linterpd mock-plc` arguments (`--unhomed`, `--faults ...`).
+pub fn start_with(mock_args: &[&str]) -> Running {
     let bin = env!("CARGO_BIN_EXE_linterpd");
     let mut mock_command = Command::new(bin);
     mock_command.args([
@@ -46,6 +57,7 @@ pub fn start() -> Running {
         "--protocol",
         "mewtocol",
     ]);
+    mock_command.args(mock_args);
     let mut mock = Spawned::spawn("linterpd mock-plc", mock_command);
     let address = mock.first_line_after("listening on ", READY);
     let dir = TempDir::new("serve");
@@ -61,6 +73,7 @@ pub fn start() -> Running {
         mock,
         serve,
         socket,
+        config,
         _dir: dir,
     }
 }

@@ -60,7 +60,7 @@ struct Entry {
 
 /// Runs `linterpd plan --compare`.
 pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result<(), Failure> {
-    if args.format == Format::Csv {
+    if args.output() == Format::Csv {
         return Err(Failure::BadInput(anyhow!(
             "--compare writes --format text or json, not csv"
         )));
@@ -89,7 +89,7 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
         // No way plans it: the move itself is the problem.
         return Err(Failure::BadInput(first.clone().into()));
     }
-    write(robot, &base, &entries, args.format, out)
+    write(robot, &base, &entries, args.output(), out)
         .context("writing the comparison")
         .map_err(Failure::Runtime)?;
     match &args.svg {

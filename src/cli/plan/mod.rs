@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use super::args::{PoseArg, parse_pose};
+use super::args::{MethodArg, PoseArg, parse_length_mm, parse_pose, parse_speed_mm_s};
 use super::{Failure, bad_input};
 use crate::config::{Config, parse_duration_s};
 use crate::geometry::Pose;
@@ -39,7 +39,7 @@ pub struct PlanArgs {
     /// Target pose: X,Y,Z or X,Y,Z,A in mm and degrees. Without A the tool keeps the start angle.
     #[arg(long, allow_hyphen_values = true)]
     pub to: String,
-    /// Speed along the line, mm/s (default: the robot's).
+    /// Speed along the line, e.g. `240mm/s` or `240` (mm/s; default: the robot's).
     #[arg(long, allow_hyphen_values = true)]
     pub speed: Option<String>,
     /// Acceleration time, e.g. `200ms` (default: the robot's).
@@ -51,7 +51,8 @@ pub struct PlanArgs {
     /// Planning method.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
-    /// Largest path deviation a bounded-error plan may have, e.g. `0.05mm` (default: the robot's).
+    /// Largest path deviation a bounded-error plan may have, e.g. `0.05mm` (a plain number is
+    /// mm; default: the robot's).
     #[arg(long, allow_hyphen_values = true)]
     pub tolerance: Option<String>,
     /// Reproduce the paper as printed (comparison only; never valid for a PLC).
@@ -66,6 +67,9 @@ pub struct PlanArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
+    /// Print JSON: the same as `--format json`.
+    #[arg(long, conflicts_with = "format")]
+    pub json: bool,
     /// Plan the move seed-exact, constant-period and bounded-error, each under both frequency
     /// models, and print their figures side by side (text or json).
     #[arg(long, conflicts_with_all = ["method", "seed_exact", "frequency_model"])]
@@ -73,15 +77,6 @@ pub struct PlanArgs {
     /// Also write an SVG of the path (XY, XZ) and its deviation along the line to this file.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
-}
-
-/// `--method`.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum MethodArg {
-    /// The seed's constant time period method.
-    ConstantPeriod,
-    /// Rows of any length, as few as keep the path within `--tolerance`.
-    BoundedError,
 }
 
 /// `--frequency-model`.
@@ -113,6 +108,14 @@ pub enum Format {
     Csv,
 }
 
+impl PlanArgs {
+    /// The output format `--format` or `--json` asks for.
+    #[must_use]
+    pub fn output(&self) -> Format {
+        if self.json { Format::Json } else { self.format }
+    }
+}
+
 /// Runs `linterpd plan`.
 pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let config = Config::load(&args.config).map_err(bad_input)?;
@@ -122,7 +125,7 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     }
     let request = request(robot, args).map_err(Failure::BadInput)?;
     let plan = plan_move(robot, &request).map_err(bad_input)?;
-    write(robot, &request, &plan, args.format, out)
+    write(robot, &request, &plan, args.output(), out)
         .context("writing the plan")
         .map_err(Failure::Runtime)?;
     match &args.svg {
@@ -212,21 +215,11 @@ fn base_request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     })
 }
 
-/// A length in mm, written `0.05mm` or `0.05`; above 0.
-fn parse_mm(text: &str) -> anyhow::Result<f64> {
-    let number = text.trim().strip_suffix("mm").unwrap_or(text.trim());
-    let value = super::args::parse_number(number)?;
-    if value <= 0.0 {
-        anyhow::bail!("'{text}' must be above 0 mm");
-    }
-    Ok(value)
-}
-
 /// `--tolerance`, if given.
 fn tolerance(args: &PlanArgs) -> anyhow::Result<Option<f64>> {
     args.tolerance
         .as_deref()
-        .map(parse_mm)
+        .map(parse_length_mm)
         .transpose()
         .context("--tolerance")
 }
@@ -235,7 +228,7 @@ fn tolerance(args: &PlanArgs) -> anyhow::Result<Option<f64>> {
 fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
     let mut m = defaults;
     if let Some(text) = &args.speed {
-        m.speed_mm_s = super::args::parse_number(text).context("--speed")?;
+        m.speed_mm_s = parse_speed_mm_s(text).context("--speed")?;
     }
     if let Some(text) = &args.accel_time {
         m.accel_s = parse_duration_s(text).context("--accel-time")?;

@@ -7,7 +7,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::daemon::SubmitError;
+use crate::contract::machine::Blocker;
+use crate::daemon::{CommandError, GatewayError, PositionError, SubmitError};
 
 /// Why a request failed.
 #[derive(Debug, Error)]
@@ -28,12 +29,34 @@ pub enum ApiError {
         /// The field to blame, when one is.
         field: Option<String>,
     },
+    /// A register the robot's gateway access list does not let through (403).
+    #[error("{0}")]
+    Forbidden(String),
     /// An order that cannot be planned from where the robot is or will be (422).
     #[error("{0}")]
     Unplannable(String),
-    /// A command that did not reach the PLC (502).
+    /// The robot's state does not allow it now: not homed, a fault, a move running... (409).
+    #[error("{message}")]
+    Conflict {
+        /// What is in the way.
+        message: String,
+        /// A word for programs: `not-homed`, `homing`, `faulted`, `not-ready`, `busy`.
+        reason: &'static str,
+    },
+    /// The PLC cannot be reached, or its heartbeat stands still (503).
+    #[error("{message}")]
+    Unavailable {
+        /// Why.
+        message: String,
+        /// `link-down`, `stalled` or `shutting-down`.
+        reason: &'static str,
+    },
+    /// The PLC refused a command or failed to carry it out (502).
     #[error("{0}")]
-    PlcUnreachable(String),
+    Plc(String),
+    /// The daemon's own state could not be kept (a file in the state directory) (500).
+    #[error("{0}")]
+    Storage(String),
     /// The daemon is shutting down (503).
     #[error("the daemon is shutting down")]
     ShuttingDown,
@@ -51,6 +74,8 @@ struct ErrorBody<'a> {
     error: String,
     #[serde(skip_serializing_if = "Option::is_none")]
     field: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<&'static str>,
 }
 
 impl ApiError {
@@ -61,8 +86,11 @@ impl ApiError {
             Self::NotFound { .. } => StatusCode::NOT_FOUND,
             Self::BadRequest { .. } => StatusCode::BAD_REQUEST,
             Self::Unplannable(_) => StatusCode::UNPROCESSABLE_ENTITY,
-            Self::PlcUnreachable(_) => StatusCode::BAD_GATEWAY,
-            Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
+            Self::Forbidden(_) => StatusCode::FORBIDDEN,
+            Self::Conflict { .. } => StatusCode::CONFLICT,
+            Self::Plc(_) => StatusCode::BAD_GATEWAY,
+            Self::Storage(_) => StatusCode::INTERNAL_SERVER_ERROR,
+            Self::Unavailable { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             Self::Unauthorized => StatusCode::UNAUTHORIZED,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
         }
@@ -75,6 +103,74 @@ impl ApiError {
             _ => None,
         }
     }
+
+    /// The word for programs, where there is one.
+    #[must_use]
+    pub fn reason(&self) -> Option<&'static str> {
+        match self {
+            Self::Conflict { reason, .. } | Self::Unavailable { reason, .. } => Some(reason),
+            Self::ShuttingDown => Some("shutting-down"),
+            Self::Plc(_) => Some("plc"),
+            Self::Forbidden(_) => Some("not-allowed"),
+            Self::Storage(_) => Some("storage"),
+            _ => None,
+        }
+    }
+
+    /// The error for a robot that cannot take a move now.
+    fn not_now(blocker: Blocker, message: String) -> Self {
+        let reason = match blocker {
+            Blocker::LinkDown => "link-down",
+            Blocker::Stalled => "stalled",
+            Blocker::NotHomed => "not-homed",
+            Blocker::Homing => "homing",
+            Blocker::Faulted { .. } => "faulted",
+            Blocker::NotReady { .. } => "not-ready",
+            _ => "busy",
+        };
+        if matches!(blocker, Blocker::LinkDown | Blocker::Stalled) {
+            Self::Unavailable { message, reason }
+        } else {
+            Self::Conflict { message, reason }
+        }
+    }
+}
+
+impl From<CommandError> for ApiError {
+    fn from(e: CommandError) -> Self {
+        let message = e.to_string();
+        match e {
+            CommandError::LinkDown { .. } => Self::Unavailable {
+                message,
+                reason: "link-down",
+            },
+            CommandError::Conflict(_) => Self::Conflict {
+                message,
+                reason: "conflict",
+            },
+            CommandError::Plc(_) => Self::Plc(message),
+            CommandError::ShuttingDown => Self::ShuttingDown,
+        }
+    }
+}
+
+impl From<GatewayError> for ApiError {
+    fn from(e: GatewayError) -> Self {
+        let message = e.to_string();
+        match e {
+            GatewayError::Denied(_) => Self::Forbidden(message),
+            GatewayError::BadRequest(_) => Self::BadRequest {
+                message,
+                field: None,
+            },
+            GatewayError::LinkDown { .. } => Self::Unavailable {
+                message,
+                reason: "link-down",
+            },
+            GatewayError::Plc(_) => Self::Plc(message),
+            GatewayError::ShuttingDown => Self::ShuttingDown,
+        }
+    }
 }
 
 impl From<SubmitError> for ApiError {
@@ -85,7 +181,30 @@ impl From<SubmitError> for ApiError {
                 field: Some(order.field.to_owned()),
             },
             SubmitError::Plan(plan) => Self::Unplannable(plan.to_string()),
+            e @ SubmitError::NotNow { blocker, .. } => Self::not_now(blocker, e.to_string()),
             SubmitError::ShuttingDown => Self::ShuttingDown,
+        }
+    }
+}
+
+impl From<PositionError> for ApiError {
+    fn from(e: PositionError) -> Self {
+        let message = e.to_string();
+        match e {
+            PositionError::BadName { .. } => Self::BadRequest {
+                message,
+                field: Some("position".to_owned()),
+            },
+            PositionError::NotFound { .. } => Self::NotFound {
+                message,
+                field: Some("position"),
+            },
+            PositionError::NotNow { blocker } => Self::not_now(blocker, message),
+            PositionError::Busy { .. } => Self::Conflict {
+                message,
+                reason: "busy",
+            },
+            PositionError::Write { .. } | PositionError::ReadOnly { .. } => Self::Storage(message),
         }
     }
 }
@@ -95,6 +214,7 @@ impl IntoResponse for ApiError {
         let body = ErrorBody {
             error: self.to_string(),
             field: self.field(),
+            reason: self.reason(),
         };
         let mut response = (self.status(), Json(body)).into_response();
         if matches!(self, Self::Unauthorized) {
@@ -128,6 +248,7 @@ mod tests {
         let body = ErrorBody {
             error: "x".into(),
             field: None,
+            reason: None,
         };
         assert_eq!(serde_json::to_string(&body).unwrap(), r#"{"error":"x"}"#);
     }

@@ -16,7 +16,7 @@ use tokio_util::sync::CancellationToken;
 use super::Api;
 use super::error::ApiError;
 use super::metrics::{self, RobotSample};
-use crate::daemon::{MoveId, MoveOrder, MoveReport, RobotHandle, RobotState};
+use crate::daemon::{MoveId, MoveOrder, MoveReport, Position, RobotHandle, RobotState};
 
 /// `POST .../moves` accepted.
 #[derive(Debug, Serialize)]
@@ -85,10 +85,7 @@ pub(super) async fn stop(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "stop requested");
-    robot
-        .stop()
-        .await
-        .map_err(|e| ApiError::PlcUnreachable(e.to_string()))?;
+    robot.stop().await?;
     Ok(Json(serde_json::json!({ "stopped": true })))
 }
 
@@ -98,11 +95,82 @@ pub(super) async fn clear_fault(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "fault clear requested");
-    robot
-        .clear_fault()
-        .await
-        .map_err(|e| ApiError::PlcUnreachable(e.to_string()))?;
+    robot.clear_fault().await?;
     Ok(Json(serde_json::json!({ "cleared": true })))
+}
+
+pub(super) async fn home(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let robot = api.robot(&name)?;
+    tracing::info!(robot = %name, "home requested");
+    robot.home().await?;
+    Ok(Json(serde_json::json!({ "homed": true })))
+}
+
+/// A taught position with its name, as the API shows it.
+#[derive(Debug, Serialize)]
+pub(super) struct NamedPosition {
+    name: String,
+    #[serde(flatten)]
+    position: Position,
+}
+
+pub(super) async fn positions(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let robot = api.robot(&name)?;
+    let list: Vec<NamedPosition> = robot
+        .positions()
+        .into_iter()
+        .map(|(name, position)| NamedPosition { name, position })
+        .collect();
+    let mut body = serde_json::json!({ "positions": list });
+    if let Some(warning) = robot.positions_warning() {
+        body["warning"] = warning.into();
+    }
+    Ok(Json(body))
+}
+
+pub(super) async fn position(
+    State(api): State<Api>,
+    Path((name, pos)): Path<(String, String)>,
+) -> Result<Json<NamedPosition>, ApiError> {
+    let position = api.robot(&name)?.position(&pos)?;
+    Ok(Json(NamedPosition {
+        name: pos,
+        position,
+    }))
+}
+
+pub(super) async fn save_position(
+    State(api): State<Api>,
+    Path((name, pos)): Path<(String, String)>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let robot = api.robot(&name)?;
+    let saved = robot.save_position(&pos)?;
+    let mut body = serde_json::to_value(NamedPosition {
+        name: pos,
+        position: saved.position,
+    })
+    .unwrap_or_default();
+    body["replaced"] = saved.replaced.into();
+    if let Some(warning) = robot.positions_warning() {
+        body["warning"] = warning.into();
+    }
+    Ok(Json(body))
+}
+
+pub(super) async fn delete_position(
+    State(api): State<Api>,
+    Path((name, pos)): Path<(String, String)>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let position = api.robot(&name)?.delete_position(&pos)?;
+    Ok(Json(
+        serde_json::json!({ "deleted": NamedPosition { name: pos, position } }),
+    ))
 }
 
 pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {
@@ -237,7 +305,6 @@ mod tests {
             field_of(r#"{"to":[1,2,3],"colour":1}"#).as_deref(),
             Some("colour")
         );
-        assert_eq!(field_of(r#"{"speed_mm_s":1}"#).as_deref(), Some("to"));
         assert_eq!(field_of(r#"{"to":"here"}"#).as_deref(), Some("to"));
         assert_eq!(field_of(r#"{"to":[1,"x",3]}"#).as_deref(), Some("to[1]"));
         assert_eq!(field_of("not json"), None);
@@ -247,6 +314,13 @@ mod tests {
     #[test]
     fn a_good_body_parses() {
         let order = parse_order(br#"{"to":[1,2,3],"speed_mm_s":100}"#).unwrap();
-        assert_eq!(order.to, [1.0, 2.0, 3.0]);
+        assert_eq!(order.to, Some(vec![1.0, 2.0, 3.0]));
+        let jog = parse_order(br#"{"by":[0,5,0]}"#).unwrap();
+        assert_eq!(jog.by, Some(vec![0.0, 5.0, 0.0]));
+        assert_eq!(
+            field_of(r#"{"joints":[1,2,"x",4]}"#).as_deref(),
+            Some("joints[2]")
+        );
+        assert_eq!(field_of(r#"{"position":7}"#).as_deref(), Some("position"));
     }
 }

@@ -27,10 +27,11 @@ pub struct RobotSample {
 }
 
 /// The final stages counted, with their `outcome` label.
-const OUTCOMES: [(Stage, &str); 3] = [
+const OUTCOMES: [(Stage, &str); 4] = [
     (Stage::Done, "done"),
     (Stage::Stopped, "stopped"),
     (Stage::Failed, "failed"),
+    (Stage::Cancelled, "cancelled"),
 ];
 
 /// The whole exposition.

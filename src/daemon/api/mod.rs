@@ -7,16 +7,27 @@
 //! POST /v1/robots/{name}/moves             202 {"id", "report"}          | 400 | 404 | 422
 //! GET  /v1/robots/{name}/moves/{id}        MoveReport                    | 404
 //! GET  /v1/robots/{name}/moves/{id}/events application/x-ndjson reports  | 404
-//! POST /v1/robots/{name}/stop              {"stopped": true}             | 404 | 502
-//! POST /v1/robots/{name}/clear-fault       {"cleared": true}             | 404 | 502
+//! POST /v1/robots/{name}/stop              {"stopped": true}             | 404 | 502 | 503
+//! POST /v1/robots/{name}/home              {"homed": true}               | 404 | 409 | 502 | 503
+//! POST /v1/robots/{name}/clear-fault       {"cleared": true}             | 404 | 409 | 502 | 503
+//! GET  /v1/robots/{name}/registers/{addr}  {"address","count","values"}  | 400 | 403 | 502 | 503
+//! PUT  /v1/robots/{name}/registers/{addr}  {"address","count","values"}  | 400 | 403 | 502 | 503
+//! GET  /v1/robots/{name}/positions         {"positions": [..], "warning"?}   | 404
+//! GET  /v1/robots/{name}/positions/{pos}   NamedPosition                 | 400 | 404
+//! PUT  /v1/robots/{name}/positions/{pos}   NamedPosition + "replaced"    | 400 | 404 | 409 | 500 | 503
+//!      (POST the same: the robot's pose now saved as {pos})
+//! DELETE /v1/robots/{name}/positions/{pos} {"deleted": NamedPosition}    | 400 | 404 | 500
 //! GET  /metrics                            Prometheus text
 //! ```
-//! Every error is JSON with at least `error` (see [`ApiError`]).
+//! Every error is JSON with at least `error` (see [`ApiError`]), and `reason` (a word for
+//! programs) for 403 (`not-allowed`), 409, 502 and 503; `POST .../moves` answers 409 (`not-homed`, `homing`,
+//! `faulted`, `not-ready`) or 503 (`link-down`, `stalled`) when the robot cannot take a move now.
 
 mod auth;
 mod error;
 mod handlers;
 pub mod metrics;
+mod registers;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -67,6 +78,19 @@ impl Api {
             )
             .route(&format!("{robot}/stop"), post(handlers::stop))
             .route(&format!("{robot}/clear-fault"), post(handlers::clear_fault))
+            .route(&format!("{robot}/home"), post(handlers::home))
+            .route(
+                &format!("{robot}/registers/{{address}}"),
+                get(registers::read).put(registers::write),
+            )
+            .route(&format!("{robot}/positions"), get(handlers::positions))
+            .route(
+                &format!("{robot}/positions/{{pos}}"),
+                get(handlers::position)
+                    .put(handlers::save_position)
+                    .post(handlers::save_position)
+                    .delete(handlers::delete_position),
+            )
             .route("/metrics", get(handlers::metrics))
             .fallback(handlers::no_route)
             .method_not_allowed_fallback(handlers::wrong_method)

@@ -1,7 +1,7 @@
 //! The `bounded-error` method: rows of any length, as few as keep the executed path within a
-//! stated tolerance of the line, with no period grid.
+//! stated tolerance of the planned path (the line; a joint move's tool path), with no period grid.
 //!
-//! 1. The line is sampled finely ([`SAMPLE_S`]) and solved to every joint's fractional count.
+//! 1. The path is sampled finely ([`SAMPLE_S`]) and solved to every joint's fractional count.
 //! 2. The Cartesian tolerance becomes a per-joint pulse budget through the Jacobian: a joint whose
 //!    pulse moves the tool `s_j` mm may be `delta_j` pulses off where `s_j * delta_j` is its
 //!    share of the tolerance left above the pulse grid's own floor.
@@ -15,12 +15,13 @@
 mod pulses;
 mod rows;
 
-use crate::geometry::{Line, Profile};
+use crate::geometry::Profile;
 use crate::kinematics::{JOINTS, Kinematics};
 use crate::robot::{Motion, Robot};
 use crate::sim::{Execution, Figures, PulseEvent};
 use crate::table::ChannelTable;
 
+use super::course::Course;
 use super::{PlanError, Samples, simulate_within};
 use pulses::{Run, Track};
 use rows::Channel;
@@ -50,7 +51,7 @@ pub(super) struct Verified {
 /// Everything the method needs about one move.
 pub(super) struct Move<'a> {
     pub robot: &'a Robot,
-    pub line: &'a Line,
+    pub course: &'a Course,
     pub profile: &'a Profile,
     pub samples: &'a Samples,
     pub motion: &'a Motion,
@@ -129,12 +130,12 @@ impl Move<'_> {
             rows: Vec::new(),
             finish_s: vec![None; JOINTS],
         };
-        let planned = |t: f64| self.line.at(self.profile.distance_mm(t)).position_mm;
+        let planned = |t: f64| self.course.position_mm(self.profile.distance_mm(t));
         crate::sim::measure(
             self.robot,
             &tables,
             &exec,
-            self.line,
+            self.course.tool_path(),
             &planned,
             self.profile.duration_s(),
         )
@@ -199,7 +200,7 @@ impl Move<'_> {
             let run = simulate_within(
                 self.robot,
                 &tables,
-                self.line,
+                self.course,
                 self.profile,
                 self.motion,
                 tolerance_mm,

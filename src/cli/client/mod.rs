@@ -1,11 +1,13 @@
 //! The daemon's API as the CLI reaches it: HTTP/1.1 over the daemon's Unix socket (hyper's
 //! client on one connection per request), JSON in and out, and the NDJSON progress feed.
 
+mod access;
+
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, anyhow};
 use http_body_util::{BodyExt, Full};
-use hyper::body::Bytes;
+use hyper::body::{Bytes, Incoming};
 use hyper::{Method, Request, StatusCode};
 use hyper_util::rt::TokioIo;
 use serde_json::Value;
@@ -14,19 +16,7 @@ use tokio::net::UnixStream;
 /// Where the daemon listens unless told otherwise.
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
 
-/// The daemon could not be reached at all.
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "the linterpd daemon is not running (nothing answers at {socket}): start it with \
-     `systemctl start linterpd`, or give its socket with --socket or LINTERPD_SOCKET"
-)]
-pub struct NotRunning {
-    /// The socket tried.
-    pub socket: PathBuf,
-    /// Why connecting failed.
-    #[source]
-    pub source: std::io::Error,
-}
+pub use access::{NoPermission, NotRunning};
 
 /// A client for the daemon at one socket.
 #[derive(Debug, Clone)]
@@ -44,7 +34,8 @@ pub struct Answer {
 }
 
 impl Answer {
-    /// The API's error text for an error answer.
+    /// The API's error text for an error answer: the field to blame first when the message does
+    /// not name it, the `reason` word last when there is one.
     #[must_use]
     pub fn error(&self) -> String {
         let msg = self
@@ -52,10 +43,20 @@ impl Answer {
             .get("error")
             .and_then(Value::as_str)
             .unwrap_or("no error text");
-        match self.body.get("field").and_then(Value::as_str) {
+        let text = match self.body.get("field").and_then(Value::as_str) {
             Some(field) if !msg.contains(field) => format!("{field}: {msg}"),
             _ => msg.to_owned(),
+        };
+        match self.reason() {
+            Some(reason) => format!("{text} (reason: {reason})"),
+            None => text,
         }
+    }
+
+    /// The API's word for programs (`not-homed`, `link-down`, ...), when it gave one.
+    #[must_use]
+    pub fn reason(&self) -> Option<&str> {
+        self.body.get("reason").and_then(Value::as_str)
     }
 }
 
@@ -73,10 +74,7 @@ impl Client {
     async fn connect(&self) -> anyhow::Result<Sender> {
         let stream = UnixStream::connect(&self.socket)
             .await
-            .map_err(|source| NotRunning {
-                socket: self.socket.clone(),
-                source,
-            })?;
+            .map_err(|source| access::connect_error(&self.socket, source))?;
         let (sender, connection) = hyper::client::conn::http1::handshake(TokioIo::new(stream))
             .await
             .context("HTTP handshake with the daemon")?;
@@ -127,8 +125,8 @@ impl Client {
     }
 
     /// Sends a request and returns the body of a success; a failed call or an error answer
-    /// becomes the [`super::Failure`] it calls for (4xx: bad input; daemon not there:
-    /// unreachable; anything else: runtime).
+    /// becomes the [`super::Failure`] it calls for ([`super::Failure::from_status`]; daemon not
+    /// there: unreachable; anything else: runtime).
     pub async fn expect(
         &self,
         method: Method,
@@ -149,13 +147,8 @@ impl Client {
         }
     }
 
-    /// Reads an NDJSON feed, calling `each` with every JSON line until the feed ends or `each`
-    /// returns `false`.
-    pub async fn feed(
-        &self,
-        path: &str,
-        mut each: impl FnMut(&Value) -> bool,
-    ) -> anyhow::Result<StatusCode> {
+    /// Opens an NDJSON feed: an error answer is returned as it is, a success as a [`Feed`].
+    pub async fn feed(&self, path: &str) -> anyhow::Result<Result<Feed, Answer>> {
         let mut sender = self.connect().await?;
         let response = sender
             .send_request(Self::request(Method::GET, path, None)?)
@@ -163,29 +156,46 @@ impl Client {
             .context("request to the daemon")?;
         let status = response.status();
         if !status.is_success() {
-            return Ok(status);
+            let bytes = response.into_body().collect().await?.to_bytes();
+            let body = serde_json::from_slice(&bytes).unwrap_or(Value::Null);
+            return Ok(Err(Answer { status, body }));
         }
-        let mut body = response.into_body();
-        let mut pending = Vec::new();
-        while let Some(frame) = body.frame().await {
-            let frame = frame.context("reading the progress feed")?;
-            let Some(data) = frame.data_ref() else {
-                continue;
-            };
-            pending.extend_from_slice(data);
-            while let Some(end) = pending.iter().position(|b| *b == b'\n') {
-                let line: Vec<u8> = pending.drain(..=end).collect();
+        Ok(Ok(Feed {
+            body: response.into_body(),
+            pending: Vec::new(),
+        }))
+    }
+}
+
+/// An NDJSON feed being read: one JSON value per line.
+#[derive(Debug)]
+pub struct Feed {
+    body: Incoming,
+    pending: Vec<u8>,
+}
+
+impl Feed {
+    /// The next JSON line, or `None` once the feed has ended. Cancel-safe: what was read before
+    /// a cancelled call is kept for the next.
+    pub async fn next(&mut self) -> anyhow::Result<Option<Value>> {
+        loop {
+            while let Some(end) = self.pending.iter().position(|b| *b == b'\n') {
+                let line: Vec<u8> = self.pending.drain(..=end).collect();
                 if line.iter().all(u8::is_ascii_whitespace) {
                     continue;
                 }
-                let value: Value =
+                let value =
                     serde_json::from_slice(&line).context("a progress line that is not JSON")?;
-                if !each(&value) {
-                    return Ok(status);
-                }
+                return Ok(Some(value));
+            }
+            let Some(frame) = self.body.frame().await else {
+                return Ok(None);
+            };
+            let frame = frame.context("reading the progress feed")?;
+            if let Some(data) = frame.data_ref() {
+                self.pending.extend_from_slice(data);
             }
         }
-        Ok(status)
     }
 }
 

@@ -1,0 +1,306 @@
+//! `linterpd move`: ask the daemon for a move, then follow it (a progress bar from the move's
+//! feed: upload, then motion) to a one-line summary. The target is one of `--to X,Y,Z[,A]` (a
+//! line to a pose), `--to @NAME` (a line to a taught position), `--by DX,DY,DZ[,DA]` (a jog: a
+//! line by an offset from where the move starts) or `--joints J1,J2,J3,J4` (a joint-space move).
+//!
+//! ```text
+//!  stdout:  the summary (or the final report, --json); with --no-wait, the id (or the 202 body)
+//!  stderr:  the progress bar on a terminal; a PLC link that goes down while it waits, once
+//!  exit:    0 done; 2 bad arguments or a move the daemon refuses as impossible (400/404/422);
+//!           3 refused for the robot's state (409: not-homed, faulted, ...), ended stopped,
+//!           failed or cancelled, or --timeout ran out; 4 no daemon, or it cannot reach the
+//!           PLC (503: link-down, stalled)
+//! ```
+
+mod follow;
+mod wait;
+
+use std::fmt::Write as _;
+
+use anyhow::{Context, anyhow};
+use clap::Args;
+use hyper::Method;
+use serde_json::{Value, json};
+
+use super::args::{
+    MethodArg, parse_duration, parse_joints, parse_length_mm, parse_offset, parse_pose,
+    parse_speed_mm_s,
+};
+use super::client::Client;
+use super::{DaemonArgs, Failure};
+
+/// Arguments of `linterpd move`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["to", "by", "joints"])))]
+pub struct MoveArgs {
+    /// Target pose: X,Y,Z or X,Y,Z,A in mm and degrees (without A the tool keeps its angle); or
+    /// @NAME, a position taught with `linterpd pos save NAME`.
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<String>,
+    /// A jog: a straight line by DX,DY,DZ or DX,DY,DZ,DA (mm and degrees) from where the move
+    /// starts (where the move before it ends, or where the robot is).
+    #[arg(long, allow_hyphen_values = true)]
+    pub by: Option<String>,
+    /// A joint-space move: J1,J2,J3,J4, every joint's target in the joints' order (degrees or
+    /// mm); the joints move together on one trapezoid.
+    #[arg(long, allow_hyphen_values = true)]
+    pub joints: Option<String>,
+    /// The robot (needed when the daemon runs several).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Speed along the path, e.g. `240mm/s` or `240` (mm/s; default: the robot's). A joint move
+    /// takes as long as a line as long as its tool path (or its tool turn, degrees as mm).
+    #[arg(long, allow_hyphen_values = true)]
+    pub speed: Option<String>,
+    /// Acceleration time, e.g. `200ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub accel_time: Option<String>,
+    /// Planning method (default: the robot's; `--tolerance` alone means bounded-error).
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Interpolation period, e.g. `50ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub period: Option<String>,
+    /// Path tolerance of a bounded-error move, e.g. `0.05mm` (a plain number is mm).
+    #[arg(long, alias = "tolerance-mm", allow_hyphen_values = true)]
+    pub tolerance: Option<String>,
+    /// The longest to wait for the move's end, e.g. `30s` (default: the daemon's deadline for
+    /// the move, its planned duration and upload plus margins, and 2 s more). Running out
+    /// exits 3 saying what the move waits for; the move is not stopped.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
+    pub timeout: Option<String>,
+    /// Return once the move is accepted, printing its id.
+    #[arg(long)]
+    pub no_wait: bool,
+    /// The daemon and output options.
+    #[command(flatten)]
+    pub daemon: DaemonArgs,
+}
+
+/// The API's move order for the arguments; every value is checked here first, naming its flag.
+fn order(args: &MoveArgs) -> anyhow::Result<Value> {
+    let mut order = target(args)?;
+    if let Some(text) = &args.speed {
+        order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
+    }
+    for (key, flag, text) in [
+        ("accel_time", "--accel-time", &args.accel_time),
+        ("period", "--period", &args.period),
+    ] {
+        if let Some(text) = text {
+            parse_duration(text).context(flag)?;
+            order[key] = text.as_str().into();
+        }
+    }
+    if let Some(method) = args.method {
+        order["method"] = method.name().into();
+    }
+    if let Some(text) = &args.tolerance {
+        order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
+    }
+    Ok(order)
+}
+
+/// The order's target, from whichever of `--to`, `--by` and `--joints` was given (clap lets
+/// exactly one through).
+fn target(args: &MoveArgs) -> anyhow::Result<Value> {
+    if let Some(text) = &args.by {
+        return Ok(json!({ "by": parse_offset(text).context("--by")? }));
+    }
+    if let Some(text) = &args.joints {
+        return Ok(json!({ "joints": parse_joints(text).context("--joints")? }));
+    }
+    let text = args.to.as_deref().unwrap_or_default();
+    if let Some(name) = text.strip_prefix('@') {
+        return Ok(json!({ "position": name }));
+    }
+    let pose = parse_pose(text).context("--to")?;
+    let mut to: Vec<f64> = pose.xyz_mm.to_vec();
+    to.extend(pose.a_deg);
+    Ok(json!({ "to": to }))
+}
+
+/// Runs `linterpd move`.
+pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let order = order(args).map_err(Failure::BadInput)?;
+    let timeout = args
+        .timeout
+        .as_deref()
+        .map(|t| parse_duration(t).context("--timeout"))
+        .transpose()
+        .map_err(Failure::BadInput)?;
+    args.daemon.block_on(async {
+        let client = Client::new(&args.daemon.socket);
+        let robot = client
+            .robot(args.robot.as_deref())
+            .await
+            .map_err(Failure::from_client)?;
+        let accepted = client
+            .expect(
+                Method::POST,
+                &format!("/v1/robots/{robot}/moves"),
+                Some(&order),
+            )
+            .await?;
+        let id = accepted["id"]
+            .as_u64()
+            .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
+        if args.no_wait {
+            return super::print(
+                out,
+                args.daemon.json,
+                &accepted,
+                &format!("move {id} accepted"),
+            );
+        }
+        let follow = follow::Follow {
+            client: &client,
+            robot: &robot,
+            id,
+            timeout,
+            quiet: args.daemon.json,
+        };
+        let last = follow.run().await?;
+        // The verdict counts even when the summary cannot be written (a closed pipe).
+        let printed = super::print(out, args.daemon.json, &last, &summary(&last));
+        verdict(&last).and(printed)
+    })
+}
+
+/// Done, or exit 3 with how the move ended.
+fn verdict(last: &Value) -> Result<(), Failure> {
+    let stage = last["stage"].as_str().unwrap_or("?");
+    if stage == "done" {
+        return Ok(());
+    }
+    let why = last["error"]
+        .as_str()
+        .map(|e| format!(": {e}"))
+        .unwrap_or_default();
+    Err(Failure::NotDone(anyhow!(
+        "move {} ended {stage}{why}",
+        last["id"]
+    )))
+}
+
+/// One line: what happened, how long it took, how far from the target it ended.
+fn summary(r: &Value) -> String {
+    let num = |k: &str| {
+        r[k].as_f64()
+            .map_or("-".to_owned(), |v| format!("{v:.3} s"))
+    };
+    let mut line = format!(
+        "move {} {}: upload {}, motion {}",
+        r["id"],
+        r["stage"].as_str().unwrap_or("?"),
+        num("upload_s"),
+        num("motion_s")
+    );
+    if let Some(e) = r["final_error_pulses"].as_array() {
+        let _ = write!(line, ", final error {} pulses", Value::Array(e.clone()));
+    }
+    if let Some(d) = r["predicted"]["path_deviation_mm"].as_f64() {
+        let _ = write!(line, ", predicted path deviation {d:.4} mm");
+    }
+    if let Some(e) = r["error"].as_str() {
+        let _ = write!(line, ": {e}");
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn move_args(line: &[&str]) -> MoveArgs {
+        let mut all = vec!["linterpd", "move"];
+        all.extend(line);
+        match crate::cli::Cli::try_parse_from(all).unwrap().command {
+            crate::cli::Command::Move(args) => args,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn order_takes_one_spelling_and_the_deprecated_one() {
+        let args = move_args(&[
+            "--to",
+            "1,2,3,45",
+            "--speed",
+            "120mm/s",
+            "--method",
+            "bounded-error",
+            "--tolerance",
+            "0.05mm",
+            "--accel-time",
+            "200ms",
+        ]);
+        assert_eq!(
+            order(&args).unwrap(),
+            json!({"to": [1.0, 2.0, 3.0, 45.0], "speed_mm_s": 120.0,
+                "method": "bounded-error", "tolerance_mm": 0.05, "accel_time": "200ms"})
+        );
+        let old = move_args(&["--to", "1,2,3", "--tolerance-mm", "0.1"]);
+        assert_eq!(order(&old).unwrap()["tolerance_mm"], 0.1);
+    }
+
+    #[test]
+    fn a_jog_joints_or_a_taught_position_is_the_target() {
+        assert_eq!(
+            order(&move_args(&["--by", "0,-5,2"])).unwrap(),
+            json!({"by": [0.0, -5.0, 2.0]})
+        );
+        assert_eq!(
+            order(&move_args(&["--joints", "10,20,30,-45", "--speed", "50"])).unwrap(),
+            json!({"joints": [10.0, 20.0, 30.0, -45.0], "speed_mm_s": 50.0})
+        );
+        assert_eq!(
+            order(&move_args(&["--to", "@pick"])).unwrap(),
+            json!({"position": "pick"})
+        );
+        let e = format!("{:#}", order(&move_args(&["--by", "1,2"])).unwrap_err());
+        assert!(e.starts_with("--by: '1,2' has 2 values"), "{e}");
+        for line in [
+            &["linterpd", "move"][..],
+            &["linterpd", "move", "--to", "1,2,3", "--by", "1,0,0"],
+            &["linterpd", "move", "--joints", "1,2,3,4", "--by", "1,0,0"],
+        ] {
+            assert!(crate::cli::Cli::try_parse_from(line).is_err(), "{line:?}");
+        }
+    }
+
+    #[test]
+    fn bad_values_name_their_flag() {
+        for (flag, value, named) in [
+            (
+                "--tolerance",
+                "-1mm",
+                "--tolerance: '-1mm' must be above 0 mm",
+            ),
+            ("--period", "50", "--period: duration \"50\": no unit"),
+            ("--speed", "fast", "--speed: 'fast' is not a number"),
+        ] {
+            let e = format!(
+                "{:#}",
+                order(&move_args(&["--to", "1,2,3", flag, value])).unwrap_err()
+            );
+            assert!(e.contains(named), "{e}");
+        }
+        assert!(
+            crate::cli::Cli::try_parse_from([
+                "linterpd", "move", "--to", "1,2,3", "--method", "fast"
+            ])
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn a_move_that_did_not_end_done_says_how_it_ended() {
+        assert!(verdict(&json!({"id": 3, "stage": "done"})).is_ok());
+        let e = verdict(&json!({"id": 3, "stage": "cancelled", "error": "cancelled by a stop"}))
+            .unwrap_err();
+        assert_eq!(e.exit_code(), crate::cli::EXIT_NOT_DONE);
+        assert_eq!(e.to_string(), "move 3 ended cancelled: cancelled by a stop");
+    }
+}

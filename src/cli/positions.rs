@@ -1,0 +1,190 @@
+//! `linterpd pos`: a robot's taught positions (`/v1/robots/{name}/positions`). `save NAME` takes
+//! the robot's pose now (from the PLC's counts), `list`, `show NAME` and `delete NAME`; a taught
+//! position is a move's target with `linterpd move --to @NAME`.
+//!
+//! ```text
+//!  stdout:  a line per position (or the API's answer, --json)
+//!  stderr:  the daemon's warning about its positions file (set aside as corrupt), if any
+//!  exit:    0 done; 2 a bad name or no such position (400/404); 3 refused for the robot's state
+//!           (409: not-homed, busy); 4 no daemon, or its PLC link is down (503); 1 the daemon
+//!           could not write its positions file (500)
+//! ```
+
+use anyhow::anyhow;
+use clap::{Args, Subcommand};
+use hyper::Method;
+use serde_json::Value;
+
+use super::client::Client;
+use super::{DaemonArgs, Failure};
+use crate::daemon::positions::check_name;
+
+/// Arguments of `linterpd pos`.
+#[derive(Debug, Args)]
+pub struct PosArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub action: PosAction,
+}
+
+/// The `pos` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum PosAction {
+    /// Save the robot's pose now (from the PLC's counts) as NAME, replacing one of that name.
+    Save(Named),
+    /// List the robot's taught positions.
+    List(Robot),
+    /// Show one taught position.
+    Show(Named),
+    /// Delete a taught position.
+    Delete(Named),
+}
+
+/// A position of a robot.
+#[derive(Debug, Args)]
+pub struct Named {
+    /// The position's name: 1 to 32 letters, digits, '_' or '-', not starting with '-'.
+    pub name: String,
+    /// The robot and the daemon.
+    #[command(flatten)]
+    pub robot: Robot,
+}
+
+/// A robot of the daemon.
+#[derive(Debug, Args)]
+pub struct Robot {
+    /// The robot (needed when the daemon runs several).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// The daemon and output options.
+    #[command(flatten)]
+    pub daemon: DaemonArgs,
+}
+
+/// Runs `linterpd pos`.
+pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let (method, name, target) = match &args.action {
+        PosAction::Save(n) => (Method::PUT, Some(n.name.as_str()), &n.robot),
+        PosAction::List(r) => (Method::GET, None, r),
+        PosAction::Show(n) => (Method::GET, Some(n.name.as_str()), &n.robot),
+        PosAction::Delete(n) => (Method::DELETE, Some(n.name.as_str()), &n.robot),
+    };
+    if let Some(name) = name {
+        check_name(name).map_err(super::bad_input)?;
+    }
+    let daemon = &target.daemon;
+    daemon.block_on(async {
+        let client = Client::new(&daemon.socket);
+        let robot = client
+            .robot(target.robot.as_deref())
+            .await
+            .map_err(Failure::from_client)?;
+        let path = match name {
+            Some(name) => format!("/v1/robots/{robot}/positions/{name}"),
+            None => format!("/v1/robots/{robot}/positions"),
+        };
+        let answer = client.expect(method, &path, None).await?;
+        if let Some(warning) = answer["warning"].as_str() {
+            eprintln!("warning: {warning}");
+        }
+        let text = match &args.action {
+            PosAction::Save(_) => saved_text(&robot, &answer),
+            PosAction::List(_) => list_text(&robot, &answer)?,
+            PosAction::Show(_) => position_text(&answer),
+            PosAction::Delete(_) => format!(
+                "{robot}: deleted {}",
+                answer["deleted"]["name"].as_str().unwrap_or("?")
+            ),
+        };
+        super::print(out, daemon.json, &answer, &text)
+    })
+}
+
+/// `pick: x 0.000, y 520.000, z 20.000 mm, a 0.000 deg; joint counts [0, 800, 1538, 0]`.
+fn position_text(p: &Value) -> String {
+    let v = |i: usize| {
+        p["pose"][i].as_f64().map_or("?".to_owned(), |v| {
+            let text = format!("{v:.3}");
+            // No "-0.000" for a value that rounds to zero.
+            if text == "-0.000" {
+                "0.000".to_owned()
+            } else {
+                text
+            }
+        })
+    };
+    format!(
+        "{}: x {}, y {}, z {} mm, a {} deg; joint counts {}",
+        p["name"].as_str().unwrap_or("?"),
+        v(0),
+        v(1),
+        v(2),
+        v(3),
+        p["joint_counts"]
+    )
+}
+
+fn saved_text(robot: &str, answer: &Value) -> String {
+    let replaced = if answer["replaced"] == true {
+        " (replacing the one of that name)"
+    } else {
+        ""
+    };
+    format!("{robot}: saved {}{replaced}", position_text(answer))
+}
+
+fn list_text(robot: &str, answer: &Value) -> Result<String, Failure> {
+    let list = answer["positions"]
+        .as_array()
+        .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no list of positions")))?;
+    if list.is_empty() {
+        return Ok(format!("{robot}: no taught positions"));
+    }
+    Ok(list
+        .iter()
+        .map(position_text)
+        .collect::<Vec<_>>()
+        .join("\n"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use serde_json::json;
+
+    #[test]
+    fn positions_print_one_line_each() {
+        let p = json!({"name": "pick", "pose": [-0.0, 520.0, 20.0, -0.0001],
+            "joint_counts": [0, 800, 1538, 0], "saved_unix_s": 1});
+        assert_eq!(
+            position_text(&p),
+            "pick: x 0.000, y 520.000, z 20.000 mm, a 0.000 deg; joint counts [0,800,1538,0]"
+        );
+        let list = json!({"positions": [p.clone(), p]});
+        assert_eq!(list_text("r", &list).unwrap().lines().count(), 2);
+        assert_eq!(
+            list_text("r", &json!({"positions": []})).unwrap(),
+            "r: no taught positions"
+        );
+    }
+
+    #[test]
+    fn subcommands_parse_and_a_bad_name_is_refused_before_asking() {
+        let cli =
+            crate::cli::Cli::try_parse_from(["linterpd", "pos", "save", "pick", "--json"]).unwrap();
+        let crate::cli::Command::Pos(args) = cli.command else {
+            panic!()
+        };
+        assert!(
+            matches!(&args.action, PosAction::Save(n) if n.name == "pick" && n.robot.daemon.json)
+        );
+        let cli = crate::cli::Cli::try_parse_from(["linterpd", "pos", "show", "a b"]).unwrap();
+        let crate::cli::Command::Pos(args) = cli.command else {
+            panic!()
+        };
+        let e = run(&args, &mut Vec::new()).unwrap_err();
+        assert_eq!(e.exit_code(), crate::cli::EXIT_BAD_INPUT);
+        assert!(e.to_string().contains("not starting with '-'"), "{e}");
+    }
+}

@@ -1,0 +1,281 @@
+//! MEWTOCOL-COM: which headers the PLC answers, then the largest read and write with each one
+//! that answered; the client to go on with.
+
+use tokio::time::Instant;
+
+use super::check;
+use super::sizes::{probe_timeout, sizes};
+use crate::commission::report::HeaderProbe;
+use crate::commission::{Halt, Session};
+use crate::mewtocol::{
+    Command, Header, Reply, Station, max_read_reply_words, max_write_words, response_frames,
+};
+use crate::plc::{
+    AnyPlc, BoxedLink, HeaderChoice, LinkSettings, MewtocolClient, MewtocolOptions, Plc, PlcError,
+    drain,
+};
+
+/// What one probe got.
+#[derive(Debug)]
+enum Probe {
+    Answered(f64),
+    NotAnswered(String),
+    LinkFailed(String),
+}
+
+fn probe_outcome<T>(result: &Result<T, PlcError>, took_s: f64) -> Probe {
+    match result {
+        Ok(_) => Probe::Answered(took_s),
+        Err(e @ (PlcError::Link { .. } | PlcError::InvalidRequest { .. })) => {
+            Probe::LinkFailed(format!("{e:#}"))
+        }
+        Err(PlcError::Refused { refusal, .. }) => Probe::NotAnswered(refusal.to_string()),
+        Err(PlcError::Timeout { timeout_ms, .. }) => {
+            Probe::NotAnswered(format!("no reply within {timeout_ms} ms"))
+        }
+        Err(PlcError::BadReply { detail, .. }) => {
+            Probe::NotAnswered(format!("bad reply: {detail}"))
+        }
+    }
+}
+
+fn mewtocol_options(settings: &LinkSettings, header: Header) -> Result<MewtocolOptions, PlcError> {
+    let mut options = MewtocolOptions::from_settings(settings)?;
+    options.header = match header {
+        Header::Percent => HeaderChoice::Percent,
+        Header::Angle => HeaderChoice::Angle,
+    };
+    Ok(options)
+}
+
+fn header_name(header: Header) -> &'static str {
+    match header {
+        Header::Percent => "%",
+        Header::Angle => "<",
+    }
+}
+
+/// A 1-word read of the status block's first word with `header`; the stream comes back drained
+/// when the read failed.
+async fn probe_header(
+    link: BoxedLink,
+    settings: &LinkSettings,
+    header: Header,
+) -> Result<(BoxedLink, Probe), PlcError> {
+    let mut client = MewtocolClient::new(link, mewtocol_options(settings, header)?);
+    let began = Instant::now();
+    let result = client.read_words(settings.layout.status_base, 1).await;
+    let outcome = probe_outcome(&result, began.elapsed().as_secs_f64());
+    let mut link = client.into_inner();
+    if result.is_err() {
+        let _ = drain(&mut link, settings.timeout).await;
+    }
+    Ok((link, outcome))
+}
+
+fn tries(settings: &LinkSettings) -> String {
+    match settings.retries {
+        0 => String::new(),
+        n => format!(", tried {} times", u32::from(n) + 1),
+    }
+}
+
+/// MEWTOCOL-COM: headers, then request sizes with each header that answered.
+pub(super) async fn step(
+    s: &mut Session<'_>,
+    link: BoxedLink,
+    settings: &LinkSettings,
+) -> Result<AnyPlc, Halt> {
+    let c = check(
+        "headers %, <",
+        &format!(
+            "which MEWTOCOL-COM headers the PLC answers: a 1-word read of DT{} with % and with <",
+            settings.layout.status_base
+        ),
+    );
+    let mut link = link;
+    let mut works = Vec::new();
+    let mut said = Vec::new();
+    for header in [Header::Percent, Header::Angle] {
+        let (back, outcome) = match probe_header(link, settings, header).await {
+            Ok(done) => done,
+            Err(e) => {
+                s.record(c.fail(format!("{e:#}"), "check the station number in the config"))?;
+                return Err(Halt);
+            }
+        };
+        link = back;
+        let name = header_name(header);
+        let text = match &outcome {
+            Probe::Answered(took_s) => format!("answered in {:.1} ms", took_s * 1e3),
+            Probe::NotAnswered(why) => format!("{why}{}", tries(settings)),
+            Probe::LinkFailed(why) => format!("link failed: {why}"),
+        };
+        said.push(format!("{name} {text}"));
+        s.findings.headers.push(HeaderProbe {
+            header: name.to_owned(),
+            answered: matches!(outcome, Probe::Answered(_)),
+            outcome: text,
+        });
+        match outcome {
+            Probe::Answered(_) => works.push(header),
+            Probe::NotAnswered(_) => {}
+            Probe::LinkFailed(_) => {
+                s.record(c.fail(
+                    said.join("; "),
+                    "the link itself failed: check the cable, port and its settings",
+                ))?;
+                return Err(Halt);
+            }
+        }
+    }
+    let saw = said.join("; ");
+    let configured = settings.header;
+    let wanted = match configured {
+        HeaderChoice::Angle => Header::Angle,
+        HeaderChoice::Auto if works.contains(&Header::Angle) => Header::Angle,
+        HeaderChoice::Percent | HeaderChoice::Auto => Header::Percent,
+    };
+    let Some(&fallback) = works.first() else {
+        s.record(c.fail(
+            saw,
+            "the PLC answers no MEWTOCOL-COM frame: check that its port is in computer link mode, \
+             the station number, baud rate, parity and the cable (deploy/plc/README.md, \"The COM port\")",
+        ))?;
+        return Err(Halt);
+    };
+    let header = if works.contains(&wanted) {
+        let note = match configured {
+            HeaderChoice::Auto => Some(format!(
+                "header = \"auto\" settles on {} here",
+                header_name(wanted)
+            )),
+            _ => None,
+        };
+        let report = match note {
+            Some(note) => c.pass_noting(saw, note),
+            None => c.pass(saw),
+        };
+        s.record(report)?;
+        wanted
+    } else {
+        s.record(c.config(
+            saw,
+            format!(
+                "the config asks for {} frames, which this PLC does not answer: set header = \"{}\"",
+                header_name(wanted),
+                header_config(fallback)
+            ),
+        ))?;
+        fallback
+    };
+    let (link, header) = mewtocol_sizes(s, link, settings, &works, header).await?;
+    s.findings.header_used = Some(header_name(header).to_owned());
+    let options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    Ok(AnyPlc::Mewtocol(MewtocolClient::new(link, options)))
+}
+
+fn header_config(header: Header) -> &'static str {
+    match header {
+        Header::Percent => "percent",
+        Header::Angle => "angle",
+    }
+}
+
+/// The longest frame of a read of `read` words and a write of `write` words under `header`.
+fn largest_frame(header: Header, station: Station, read: usize, write: usize) -> Option<usize> {
+    let write_chars = Command::write_dt(0, vec![0; write.max(1)])
+        .ok()?
+        .to_frame(header, station)
+        .ok()?
+        .to_bytes()
+        .ok()?
+        .len();
+    let reply = Ok(Reply::ReadDt(vec![0; read.max(1)]));
+    let read_chars = response_frames(header, station, &reply)
+        .first()?
+        .to_bytes()
+        .ok()?
+        .len();
+    Some(write_chars.max(read_chars))
+}
+
+/// Request sizes with every header that answered; the header to go on with (`<` only if it
+/// carries linterpd's frames, else `%`).
+async fn mewtocol_sizes(
+    s: &mut Session<'_>,
+    mut link: BoxedLink,
+    settings: &LinkSettings,
+    works: &[Header],
+    wanted: Header,
+) -> Result<(BoxedLink, Header), Halt> {
+    let c = check(
+        "largest frame/read/write",
+        "the largest read and write one MEWTOCOL-COM frame may hold, with each header that \
+         answered (reads and writes back of bank 1's channel 0 table area; the maximum first, \
+         then halving)",
+    );
+    let station = mewtocol_options(settings, Header::Percent)
+        .map(|o| o.station)
+        .map_err(|_| Halt)?;
+    let mut fits = Vec::new();
+    let mut said = Vec::new();
+    for &header in works {
+        let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+        options.timeout = probe_timeout(settings, header.max_frame_len());
+        let mut client = MewtocolClient::new(link, options);
+        let (max_read, max_write) = (max_read_reply_words(header), max_write_words(header));
+        let probed = sizes(&mut client, settings, (max_read, max_write)).await;
+        link = client.into_inner();
+        let (read, write) = match probed {
+            Ok(found) => found,
+            Err(e) => {
+                s.record(c.fail(
+                    format!("{e:#}"),
+                    "the link failed while probing request sizes",
+                ))?;
+                return Err(Halt);
+            }
+        };
+        let frame = largest_frame(
+            header,
+            station,
+            read.bisect.largest(),
+            write.bisect.largest(),
+        );
+        said.push(format!(
+            "{}: reads up to {} of {max_read} words{}, writes up to {} of {max_write}{}{}",
+            header_name(header),
+            read.bisect.largest(),
+            read.refused_at(),
+            write.bisect.largest(),
+            write.refused_at(),
+            frame.map_or(String::new(), |n| format!(", frames up to {n} characters")),
+        ));
+        if read.carries(max_read, settings.timeout) && write.carries(max_write, settings.timeout) {
+            fits.push(header);
+        }
+        s.findings
+            .sizes
+            .push(read.sizes(&write, header_name(header), frame));
+    }
+    let saw = said.join("; ");
+    if fits.contains(&wanted) {
+        s.record(c.pass(saw))?;
+        return Ok((link, wanted));
+    }
+    if fits.contains(&Header::Percent) {
+        s.record(c.config(
+            saw,
+            "linterpd fills each < frame (509 words a read, 507 a write): more than this PLC \
+             takes, or longer on the line than the config's timeout: set header = \"percent\"",
+        ))?;
+        return Ok((link, Header::Percent));
+    }
+    s.record(c.fail(
+        saw,
+        "linterpd fills each % frame (27 words a read, 24 a write) and this PLC takes fewer: \
+         linterpd cannot talk to it over MEWTOCOL-COM as it is (try Modbus RTU)",
+    ))?;
+    Err(Halt)
+}

@@ -1,0 +1,351 @@
+//! `linterpd serve` as a library function: a worker per configured robot on its PLC link, the API
+//! on the Unix socket (and a TCP listener when configured), and the conversation with systemd.
+//!
+//! ```text
+//! lock the socket -> bind socket(s) -> spawn Daemon -> READY=1 -> serve ...
+//!   STATUS= on change, WATCHDOG=1 while every worker makes progress (supervise.rs)
+//!   SIGHUP: the config is read again and checked; what changed is logged (not applied)
+//!   a worker that dies: the daemon exits non-zero (systemd restarts it)
+//!   shutdown signal -> STOPPING=1 -> stop accepting, end event streams -> Daemon::shut_down
+//! ```
+
+mod socket;
+mod supervise;
+
+pub use socket::{bind_unix, lock, lock_path};
+pub use supervise::{healthy, status_line};
+
+use std::future::Future;
+use std::io;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+use thiserror::Error;
+use tokio::net::TcpListener;
+use tokio::task::JoinSet;
+
+use super::api::{Api, BearerToken, TokenError};
+use super::notify::Notifier;
+use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
+use crate::config::{Config, DaemonSettings};
+use crate::contract::machine::WatchSettings;
+use crate::plc::contract::ContractSettings;
+use crate::plc::{self, LinkSettings};
+
+/// Longest wait for open connections after the daemon has shut down.
+const DRAIN: Duration = Duration::from_secs(3);
+
+/// Why the daemon could not start or keep serving.
+#[derive(Debug, Error)]
+pub enum ServeError {
+    /// A robot has no `[robots.NAME.plc]` table.
+    #[error("robot {robot:?} has no [robots.{robot}.plc] table: the daemon cannot reach its PLC")]
+    NoLink {
+        /// The robot.
+        robot: String,
+    },
+    /// The token file cannot be used.
+    #[error(transparent)]
+    Token(#[from] TokenError),
+    /// A socket could not be set up.
+    #[error("cannot {operation} {}", target.display())]
+    Socket {
+        /// What was being done (`bind`, `remove the stale socket`, `set the mode of`).
+        operation: &'static str,
+        /// The socket path or address.
+        target: PathBuf,
+        /// Why.
+        #[source]
+        source: io::Error,
+    },
+    /// Another daemon holds the socket's lock.
+    #[error(
+        "another linterpd daemon already serves {} (it holds {}): stop it first, or give this one \
+         another socket",
+        socket.display(),
+        lock.display()
+    )]
+    AlreadyRunning {
+        /// The socket.
+        socket: PathBuf,
+        /// Its lock file.
+        lock: PathBuf,
+    },
+    /// A listener failed while serving.
+    #[error("the API listener failed")]
+    Serve(#[source] io::Error),
+    /// A robot's worker ended (it panicked): the daemon cannot go on without it.
+    #[error("{0}")]
+    WorkerFailed(String),
+}
+
+/// The daemon's robots with their contract settings and link openers, from a config; every robot
+/// needs a PLC link.
+pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError> {
+    config
+        .robots
+        .iter()
+        .map(|robot| {
+            let link = config.link(&robot.name).ok_or_else(|| ServeError::NoLink {
+                robot: robot.name.clone(),
+            })?;
+            Ok(RobotSetup {
+                robot: robot.clone(),
+                settings: contract_settings(link),
+                connect: connector(link.clone()),
+                home_counts: link.home_counts,
+                gateway: config.gateway(&robot.name).cloned().unwrap_or_default(),
+            })
+        })
+        .collect()
+}
+
+/// The contract settings a link implies: its layout and heartbeat timeout, verify on.
+#[must_use]
+pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
+    let defaults = ContractSettings::default();
+    ContractSettings {
+        layout: link.layout,
+        verify: true,
+        watch: WatchSettings {
+            heartbeat_timeout: link.heartbeat_timeout,
+            ..defaults.watch
+        },
+        scan_time: link.scan_time,
+        ..defaults
+    }
+}
+
+/// The daemon-wide options `settings` describe: move ids counted on in the state directory (from
+/// the clock when it cannot be used), taught positions kept there, a fresh host word.
+#[must_use]
+pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
+    let ids = match MoveIds::in_state_dir(&settings.state_dir) {
+        Ok(ids) => ids,
+        Err(e) => {
+            tracing::warn!(
+                state_dir = %settings.state_dir.display(),
+                error = %e,
+                "cannot keep move ids in the state directory; taking them from the clock"
+            );
+            MoveIds::from_clock()
+        }
+    };
+    DaemonOptions {
+        host: host_word(),
+        ids: Arc::new(ids),
+        start_within: settings.start_within,
+        positions: Arc::new(TaughtPositions::in_state_dir(&settings.state_dir)),
+    }
+}
+
+/// Opens `link` anew on every call.
+#[must_use]
+pub fn connector(link: LinkSettings) -> Connector {
+    let link = Arc::new(link);
+    Box::new(move || {
+        let link = Arc::clone(&link);
+        Box::pin(async move { plc::connect(&link).await })
+    })
+}
+
+async fn bind_tcp(address: SocketAddr) -> Result<TcpListener, ServeError> {
+    TcpListener::bind(address)
+        .await
+        .map_err(|source| ServeError::Socket {
+            operation: "bind",
+            target: PathBuf::from(address.to_string()),
+            source,
+        })
+}
+
+/// Runs the daemon for `config` with `settings` (the config's `[daemon]`, possibly overridden)
+/// until `shutdown` completes, then shuts it down cleanly. `config_path` is read again on SIGHUP.
+pub async fn serve(
+    config: &Config,
+    config_path: Option<&Path>,
+    settings: &DaemonSettings,
+    notifier: Notifier,
+    shutdown: impl Future<Output = ()>,
+) -> Result<(), ServeError> {
+    let robots = robots_from_config(config)?;
+    let token = settings
+        .token_file
+        .as_deref()
+        .map(BearerToken::read)
+        .transpose()?;
+    let _lock = lock(&settings.socket)?;
+    let unix = bind_unix(&settings.socket, settings.socket_mode)?;
+    let tcp = match settings.listen {
+        Some(address) => Some(bind_tcp(address).await?),
+        None => None,
+    };
+    let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
+    let api = Api::new(daemon.robots().clone());
+    let closing = api.closing();
+    let mut servers = JoinSet::new();
+    let stop = closing.clone();
+    let router = api.router(None);
+    servers.spawn(async move {
+        axum::serve(unix, router)
+            .with_graceful_shutdown(stop.cancelled_owned())
+            .await
+    });
+    if let Some(tcp) = tcp {
+        let stop = closing.clone();
+        let router = api.router(token);
+        servers.spawn(async move {
+            axum::serve(tcp, router)
+                .with_graceful_shutdown(stop.cancelled_owned())
+                .await
+        });
+    }
+    tracing::info!(socket = %settings.socket.display(), listen = ?settings.listen, "API listening");
+    log_notify(notifier.ready(), "READY=1");
+    let supervisor = tokio::spawn(supervise::supervise(
+        daemon.robots().clone(),
+        notifier,
+        closing.clone(),
+    ));
+    let mut hangups = hangup_signals();
+    tokio::pin!(shutdown);
+    let failed = loop {
+        tokio::select! {
+            () = &mut shutdown => break None,
+            Some(done) = servers.join_next() => {
+                break match done {
+                    Ok(Err(e)) => Some(ServeError::Serve(e)),
+                    _ => None,
+                };
+            }
+            why = daemon.worker_failed() => {
+                tracing::error!("{why}; the daemon exits");
+                break Some(ServeError::WorkerFailed(why));
+            }
+            Some(()) = hangups.recv() => recheck(config, config_path),
+        }
+    };
+    tracing::info!("shutting down");
+    log_notify(notifier.stopping(), "STOPPING=1");
+    closing.cancel();
+    daemon.shut_down().await;
+    tracing::info!("workers stopped");
+    let _ = supervisor.await;
+    let _ = tokio::time::timeout(DRAIN, async {
+        while servers.join_next().await.is_some() {}
+    })
+    .await;
+    servers.abort_all();
+    let _ = std::fs::remove_file(&settings.socket);
+    failed.map_or(Ok(()), Err)
+}
+
+/// SIGHUP as a stream (nothing comes if its handler cannot be installed).
+fn hangup_signals() -> tokio::sync::mpsc::Receiver<()> {
+    let (tx, rx) = tokio::sync::mpsc::channel(1);
+    match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()) {
+        Ok(mut hup) => {
+            tokio::spawn(async move {
+                while hup.recv().await.is_some() {
+                    if tx.send(()).await.is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        Err(e) => tracing::warn!(error = %e, "cannot handle SIGHUP"),
+    }
+    rx
+}
+
+/// SIGHUP: reads the config again and says what changed. The running daemon keeps its config
+/// (a change is applied by restarting the service): a mistake in the file never stops it.
+fn recheck(running: &Config, path: Option<&Path>) {
+    let Some(path) = path else {
+        tracing::info!("SIGHUP: no config file to read again");
+        return;
+    };
+    match Config::load(path) {
+        Err(e) => tracing::error!(
+            config = %path.display(),
+            error = %e,
+            "SIGHUP: the config has an error; the daemon goes on with the one it started with"
+        ),
+        Ok(new) => {
+            let changed = changes(running, &new);
+            if changed.is_empty() {
+                tracing::info!(config = %path.display(), "SIGHUP: the config is unchanged");
+            } else {
+                tracing::warn!(
+                    config = %path.display(),
+                    changed = %changed.join(", "),
+                    "SIGHUP: the config changed; restart the service to apply it (systemctl restart linterpd)"
+                );
+            }
+        }
+    }
+}
+
+/// What differs between two configs: robots by name, and the `[daemon]` table.
+fn changes(old: &Config, new: &Config) -> Vec<String> {
+    let mut out = Vec::new();
+    for robot in &new.robots {
+        let before = old.robots.iter().find(|r| r.name == robot.name);
+        match before {
+            None => out.push(format!("robot {} added", robot.name)),
+            Some(b) if b != robot || old.link(&b.name) != new.link(&robot.name) => {
+                out.push(format!("robot {} changed", robot.name));
+            }
+            Some(_) => {}
+        }
+    }
+    for robot in &old.robots {
+        if !new.robots.iter().any(|r| r.name == robot.name) {
+            out.push(format!("robot {} removed", robot.name));
+        }
+    }
+    if old.daemon != new.daemon {
+        out.push("[daemon] changed".to_owned());
+    }
+    out
+}
+
+fn log_notify(result: io::Result<()>, what: &str) {
+    if let Err(e) = result {
+        tracing::warn!(error = %e, "cannot tell systemd {what}");
+    }
+}
+
+/// Completes on SIGTERM or SIGINT.
+///
+/// # Panics
+/// If the SIGTERM handler cannot be installed (no signal support in this process).
+pub async fn shutdown_signal() {
+    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+        .expect("SIGTERM handler");
+    tokio::select! {
+        _ = term.recv() => tracing::info!("SIGTERM"),
+        _ = tokio::signal::ctrl_c() => tracing::info!("SIGINT"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SHIPPED: &str = include_str!("../../../config/linterpd.toml");
+
+    #[test]
+    fn a_reread_config_names_what_changed() {
+        let old = Config::from_toml(SHIPPED).unwrap();
+        assert!(changes(&old, &old).is_empty());
+        let faster = SHIPPED.replace("speed_mm_s = 240.0", "speed_mm_s = 200.0");
+        let new = Config::from_toml(&faster).unwrap();
+        assert_eq!(changes(&old, &new), ["robot press-loader changed"]);
+        let other_port = SHIPPED.replace("/dev/ttyUSB0", "/dev/ttyUSB1");
+        let new = Config::from_toml(&other_port).unwrap();
+        assert_eq!(changes(&old, &new), ["robot press-loader changed"]);
+    }
+}

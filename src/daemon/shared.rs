@@ -1,0 +1,88 @@
+//! What a robot's worker and its handle share: the robot's state as last read, the move
+//! reports, the flag a stop raises before it is taken, and why a new order would be refused now.
+//! Neither side owns the other: both hold this.
+
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+
+use super::ids::MoveIds;
+use super::report::{MoveId, Moves, RobotState};
+use crate::contract::machine::Blocker;
+use crate::kinematics::JOINTS;
+use crate::plc::contract::Beat;
+
+/// State shared by a robot's worker and its handle.
+#[derive(Debug)]
+pub(super) struct Shared {
+    state: Mutex<RobotState>,
+    moves: Mutex<Moves>,
+    /// Set when a stop is asked for: an upload in progress gives up at its next write.
+    pub stop_pending: Arc<AtomicBool>,
+    ids: Arc<MoveIds>,
+    /// Where the last accepted order is planned to end, per joint (for checking the next).
+    planned_end: Mutex<Option<[i64; JOINTS]>>,
+    /// Why a new order would be refused now (`None`: it would be queued).
+    refusal: Mutex<Option<Blocker>>,
+    /// When the worker last made progress (went round its loop, or an exchange of an upload).
+    pub beat: Arc<Beat>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // A panic elsewhere leaves plain data behind: keep serving it.
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+impl Shared {
+    pub(super) fn new(name: &str, ids: Arc<MoveIds>) -> Self {
+        Self {
+            state: Mutex::new(RobotState {
+                name: name.to_owned(),
+                ..RobotState::default()
+            }),
+            moves: Mutex::new(Moves::default()),
+            stop_pending: Arc::new(AtomicBool::new(false)),
+            ids,
+            planned_end: Mutex::new(None),
+            refusal: Mutex::new(Some(Blocker::LinkDown)),
+            beat: Arc::new(Beat::default()),
+        }
+    }
+
+    pub(super) fn state<T>(&self, f: impl FnOnce(&mut RobotState) -> T) -> T {
+        f(&mut lock(&self.state))
+    }
+
+    pub(super) fn moves<T>(&self, f: impl FnOnce(&mut Moves) -> T) -> T {
+        f(&mut lock(&self.moves))
+    }
+
+    pub(super) fn planned_end(&self) -> Option<[i64; JOINTS]> {
+        *lock(&self.planned_end)
+    }
+
+    pub(super) fn set_planned_end(&self, end: Option<[i64; JOINTS]>) {
+        *lock(&self.planned_end) = end;
+    }
+
+    /// Forgets where queued orders were planned to end (after a move that will not get there).
+    pub(super) fn forget_planned_end(&self) {
+        self.set_planned_end(None);
+    }
+
+    pub(super) fn refusal(&self) -> Option<Blocker> {
+        *lock(&self.refusal)
+    }
+
+    pub(super) fn set_refusal(&self, refusal: Option<Blocker>) {
+        *lock(&self.refusal) = refusal;
+    }
+
+    pub(super) fn next_id(&self) -> MoveId {
+        self.ids.next()
+    }
+
+    /// How long ago the worker last made progress (`None` before the first time).
+    pub(super) fn since_loop_beat(&self) -> Option<std::time::Duration> {
+        self.beat.since()
+    }
+}

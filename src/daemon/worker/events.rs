@@ -1,0 +1,345 @@
+//! Reading the status block into the machine, and applying what the machine says: the one place
+//! where the daemon's reports follow the PLC, and where the machine's requests (the host word, a
+//! stop, a start written again, a withdrawal, a start found running) become exchanges.
+
+use super::{Worker, describe, link_broken, now};
+use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
+use crate::contract::{CHANNELS, Fault};
+use crate::daemon::order::MoveOrder;
+use crate::daemon::report::{MoveId, MoveReport, Stage};
+use crate::daemon::request::CommandError;
+use crate::plc::contract::{CommandWrite, ContractError, describe_outcome, fault_meaning};
+
+/// A stop asked for this recently stopped the moves that end stopped.
+const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);
+/// Planned duration given to a start found running whose tables could not be read.
+const UNKNOWN_DURATION: std::time::Duration = std::time::Duration::from_secs(60);
+
+impl Worker {
+    /// Reads the status block and applies what it means.
+    pub(super) async fn poll(&mut self) -> Result<(), ContractError> {
+        let link = self.link.as_mut().expect("connected");
+        let status = match link.status().await {
+            Ok(s) => s,
+            Err(e) if link_broken(&e) => return Err(e),
+            Err(e) => {
+                self.contract_unusable(&e);
+                return Ok(());
+            }
+        };
+        self.read(status).await
+    }
+
+    /// Applies a status block just read.
+    pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
+        let events = self.machine.on_status(&status, now());
+        self.publish_refusal();
+        self.note_status(&status);
+        let result = self.apply(events).await;
+        self.publish_refusal();
+        self.publish_phase();
+        result
+    }
+
+    fn note_status(&self, status: &Status) {
+        let counts = status.block.elapsed.map(i64::from);
+        let pose = self.robot.pose_of(&self.by_joint(counts)).to_mm_deg();
+        let heartbeat_age = self.machine.heartbeat_age(now());
+        let homed = self.machine.homed();
+        self.shared.state(|s| {
+            s.link.connected = true;
+            s.link.error = None;
+            s.counts = Some(counts);
+            s.pose = Some(pose);
+            s.state = Some(status.state.name());
+            s.fault = (status.block.fault != 0).then_some(status.block.fault);
+            s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
+            s.homed = homed;
+        });
+    }
+
+    /// Publishes why a new order would be refused now.
+    pub(super) fn publish_refusal(&self) {
+        let blocker = if self.link.is_none() {
+            Some(Blocker::LinkDown)
+        } else {
+            self.machine.blocker(now())
+        };
+        let refusal = blocker.filter(Blocker::refuses_orders);
+        self.shared.set_refusal(refusal);
+        let text = refusal.map(|b| b.to_string());
+        self.shared.state(|s| s.refuses = text);
+    }
+
+    pub(super) fn publish_phase(&self) {
+        let phase = self.machine.phase().name();
+        self.shared.state(|s| s.phase = phase);
+    }
+
+    /// Applies the machine's events, carrying out the exchanges they ask for.
+    pub(super) async fn apply(&mut self, events: Vec<Event>) -> Result<(), ContractError> {
+        for event in events {
+            if let Err(e) = self.apply_one(event).await {
+                if link_broken(&e) {
+                    return Err(e);
+                }
+                self.note_error(&e);
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies events when no exchange is possible (the link is down).
+    pub(super) fn apply_offline(&mut self, events: Vec<Event>) {
+        for event in events {
+            self.report_event(event);
+        }
+    }
+
+    async fn apply_one(&mut self, event: Event) -> Result<(), ContractError> {
+        tracing::debug!(robot = %self.robot.name, ?event, phase = self.machine.phase().name(), "machine event");
+        let Some(link) = self.link.as_mut() else {
+            self.report_event(event);
+            return Ok(());
+        };
+        match event {
+            Event::WriteHost => link.write_host(self.machine.host()).await,
+            Event::WriteStop => {
+                tracing::warn!(robot = %self.robot.name, "writing a stop (a watchdog tripped)");
+                link.stop().await
+            }
+            Event::Withdraw { tag } => {
+                tracing::warn!(robot = %self.robot.name, id = tag, "withdrawing a start the PLC never showed waiting");
+                link.withdraw().await
+            }
+            Event::FoundWaiting { seq } => {
+                tracing::warn!(robot = %self.robot.name, seq, "withdrawing a start this run did not write");
+                link.withdraw().await
+            }
+            Event::RewriteStart { tag } => self.rewrite_start(tag).await,
+            Event::FoundRunning { seq } => self.adopt(seq).await,
+            Event::Stalled { .. } => {
+                self.report_event(event);
+                self.read_mode().await
+            }
+            other => {
+                self.report_event(other);
+                Ok(())
+            }
+        }
+    }
+
+    /// Writes a start's command word again after its reply was lost and the PLC did not show
+    /// it taken (the PLC ignores a repeated `seq` anyway).
+    async fn rewrite_start(&mut self, tag: MoveId) -> Result<(), ContractError> {
+        let link = self.link.as_mut().expect("connected");
+        let written = match &self.last_start {
+            Some((id, bank)) if *id == tag => link.start(bank).await,
+            _ => Ok(CommandWrite::Unconfirmed(
+                crate::plc::PlcError::InvalidRequest {
+                    operation: "write the start again".into(),
+                    detail: "its bank is no longer known".into(),
+                },
+            )),
+        };
+        let confirmed = matches!(written, Ok(CommandWrite::Confirmed));
+        tracing::warn!(robot = %self.robot.name, id = tag, confirmed, "start written again after a lost reply");
+        self.machine.start_rewritten(now(), confirmed);
+        written.map(|_| ())
+    }
+
+    /// Follows a start found running that this run did not give: described from its bank read
+    /// back, reported as a recovered move.
+    async fn adopt(&mut self, seq: u16) -> Result<(), ContractError> {
+        let Some(status) = self.machine.last().copied() else {
+            return Ok(());
+        };
+        let id = self.shared.next_id();
+        let link = self.link.as_mut().expect("connected");
+        let planned = match link.describe_running(seq, id, &status).await {
+            Ok(p) => p,
+            Err(e) if link_broken(&e) => return Err(e),
+            Err(e) => {
+                tracing::warn!(robot = %self.robot.name, seq, error = %describe(&e), "cannot read the running start's tables; following it unbounded");
+                unknown_start(id, seq, &status)
+            }
+        };
+        let mut report = MoveReport::new(id, &self.robot.name, MoveOrder::default());
+        report.recovered = true;
+        report.stage = Stage::Running;
+        report.seq = Some(seq);
+        report.bank = Some(planned.bank);
+        report.start_counts = Some(planned.from.map(i64::from));
+        report.target_counts = planned.targets.map(|t| t.map(i64::from));
+        report.deadline_s = Some(
+            self.machine
+                .settings()
+                .run_limit(planned.duration)
+                .as_secs_f64(),
+        );
+        self.shared.moves(|m| m.insert(report));
+        self.shared.state(|s| s.current_move = Some(id));
+        self.started.insert(id, now());
+        self.next_seq = seq.wrapping_add(1).max(1);
+        self.next_bank = 1 - planned.bank.min(1);
+        self.machine.adopt(planned, now());
+        tracing::info!(robot = %self.robot.name, id, seq, bank = planned.bank, "following a move this run did not start");
+        Ok(())
+    }
+
+    /// What an event changes in the reports and the robot's state (no exchanges).
+    fn report_event(&mut self, event: Event) {
+        match event {
+            Event::Started { tag } => {
+                self.started.insert(tag, now());
+                let deadline_s = self.run_deadline(tag).map(|d| d.as_secs_f64());
+                self.shared.moves(|m| {
+                    m.update(tag, |r| {
+                        r.stage = Stage::Running;
+                        // From its start on: its run limit and the grace of a lost link (a move
+                        // chained behind another waited for that one first).
+                        r.deadline_s = deadline_s.or(r.deadline_s);
+                    });
+                });
+                self.shared.state(|s| {
+                    s.current_move = Some(tag);
+                    s.queued.retain(|q| *q != tag);
+                });
+            }
+            Event::Waiting { tag } => {
+                self.shared
+                    .moves(|m| m.update(tag, |r| r.stage = Stage::Waiting));
+            }
+            Event::Progress {
+                tag,
+                elapsed,
+                fraction,
+            } => self.shared.moves(|m| {
+                m.update(tag, |r| {
+                    r.counts = Some(elapsed.map(i64::from));
+                    r.progress = fraction;
+                });
+            }),
+            Event::Done { tag, elapsed } => self.done(tag, elapsed),
+            Event::Ended { tag, outcome } => self.ended(tag, outcome),
+            Event::Restarted => {
+                tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
+                self.cancel_queue("cancelled: the PLC restarted");
+                self.last_start = None;
+            }
+            Event::Stalled { still } => {
+                tracing::error!(robot = %self.robot.name, still_ms = still.as_millis() as u64, "the PLC heartbeat stands still");
+                self.cancel_queue("cancelled: the PLC heartbeat stood still");
+            }
+            Event::Homed => {
+                tracing::info!(robot = %self.robot.name, "homed");
+                for reply in std::mem::take(&mut self.homing) {
+                    let _ = reply.send(Ok(()));
+                }
+            }
+            Event::HomeFailed { fault } => {
+                let why = if fault == 0 {
+                    "the home routine did not end with the homed bit set".to_owned()
+                } else {
+                    format!(
+                        "the home routine failed: fault {fault} ({})",
+                        fault_meaning(fault)
+                    )
+                };
+                tracing::error!(robot = %self.robot.name, "{why}");
+                for reply in std::mem::take(&mut self.homing) {
+                    let _ = reply.send(Err(CommandError::Plc(why.clone())));
+                }
+            }
+            Event::WriteHost
+            | Event::WriteStop
+            | Event::RewriteStart { .. }
+            | Event::Withdraw { .. }
+            | Event::FoundRunning { .. }
+            | Event::FoundWaiting { .. } => {}
+        }
+    }
+
+    /// The longest move `id` can take from its start until the daemon ends it.
+    fn run_deadline(&self, id: MoveId) -> Option<std::time::Duration> {
+        let planned = self.machine.given().into_iter().find(|p| p.tag == id)?;
+        let watch = self.machine.settings();
+        Some(watch.run_limit(planned.duration) + watch.link_grace)
+    }
+
+    fn done(&mut self, id: MoveId, elapsed: Option<[i32; CHANNELS]>) {
+        let motion_s = self
+            .started
+            .remove(&id)
+            .map(|t| now().saturating_duration_since(t).as_secs_f64());
+        let target = self
+            .shared
+            .moves(|m| m.get(id))
+            .and_then(|r| r.target_counts);
+        let error = elapsed
+            .zip(target)
+            .map(|(e, t)| std::array::from_fn(|c| i64::from(e[c]) - t[c]));
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                r.motion_s = motion_s;
+                r.progress = 1.0;
+                if let Some(e) = elapsed {
+                    r.counts = Some(e.map(i64::from));
+                }
+            });
+        });
+        self.finish(id, Stage::Done, None, error);
+        tracing::info!(robot = %self.robot.name, id, ?error, "move done");
+    }
+
+    fn ended(&mut self, id: MoveId, outcome: Outcome) {
+        self.started.remove(&id);
+        let seq = self.shared.moves(|m| m.get(id)).and_then(|r| r.seq);
+        let start = seq.map_or_else(|| "the start".to_owned(), |s| format!("start {s}"));
+        let asked = self
+            .stop_asked
+            .is_some_and(|t| now().saturating_duration_since(t) < STOP_ASKED_WINDOW);
+        let (stage, why) = match outcome {
+            Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
+                (Stage::Stopped, "stopped by the e-stop input".to_owned())
+            }
+            Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),
+            Outcome::Stopped { .. } => (
+                Stage::Stopped,
+                "stopped by the PLC (PROG mode, or its program)".to_owned(),
+            ),
+            Outcome::Dropped if asked => (Stage::Cancelled, "cancelled by a stop request".into()),
+            Outcome::Dropped => (
+                Stage::Cancelled,
+                format!("{start} {}", describe_outcome(&outcome)),
+            ),
+            _ => (
+                Stage::Failed,
+                format!("{start} {}", describe_outcome(&outcome)),
+            ),
+        };
+        tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
+        self.finish(id, stage, Some(why), None);
+        self.cancel_queue("cancelled: the move before it did not end done");
+    }
+}
+
+/// A start found running whose tables could not be read: bounded only in time.
+fn unknown_start(tag: MoveId, seq: u16, status: &Status) -> Planned {
+    Planned {
+        tag,
+        seq,
+        bank: 0,
+        from: status.block.elapsed,
+        targets: None,
+        envelope: [(i32::MIN, i32::MAX); CHANNELS],
+        duration: UNKNOWN_DURATION,
+    }
+}
+
+impl Worker {
+    /// Per-joint counts from per-channel ones.
+    pub(super) fn by_joint(&self, channels: [i64; CHANNELS]) -> [i64; crate::kinematics::JOINTS] {
+        std::array::from_fn(|j| channels[usize::from(self.robot.joints[j].channel)])
+    }
+}

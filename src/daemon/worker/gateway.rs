@@ -1,0 +1,116 @@
+//! The register gateway's side of the worker: one exchange of the oldest request at a time, put
+//! between the worker's own exchanges, so a status read or a start waits behind one gateway
+//! exchange at most.
+
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::Worker;
+use crate::daemon::gateway::{GatewayError, Piece, Values};
+use crate::plc::contract::ContractError;
+use crate::plc::{AnyPlc, Plc, PlcError};
+
+impl Worker {
+    /// Carries out the next piece of the oldest gateway request; answers it when it is done or
+    /// failed. A link failure also fails the link (the caller reconnects).
+    pub(super) async fn gateway_exchange(&mut self) -> Result<(), ContractError> {
+        let Some(link) = self.link.as_mut() else {
+            self.gateway_link_down();
+            return Ok(());
+        };
+        let plc = link.plc();
+        let sizes = plc.exchange_sizes();
+        let Some(job) = self.gateway.front_mut() else {
+            return Ok(());
+        };
+        let Some(piece) = job.next_piece(sizes) else {
+            let job = self.gateway.pop_front().expect("front");
+            job.finish();
+            return Ok(());
+        };
+        let began = Instant::now();
+        let result = exchange(plc, &piece).await;
+        let ended = Instant::now();
+        // How long a status read that fell due meanwhile waited for this exchange.
+        let held = ended.saturating_duration_since(began.max(self.next_poll));
+        self.shared.state(|s| {
+            s.gateway.exchanges += 1;
+            s.gateway.longest_exchange_ms =
+                s.gateway.longest_exchange_ms.max(millis(ended - began));
+            s.gateway.longest_poll_delay_ms = s.gateway.longest_poll_delay_ms.max(millis(held));
+        });
+        match result {
+            Ok(read) => {
+                let job = self.gateway.front_mut().expect("front");
+                job.piece_done(&piece, read);
+                if job.next_piece(sizes).is_none() {
+                    let job = self.gateway.pop_front().expect("front");
+                    self.shared.state(|s| s.gateway.requests += 1);
+                    job.finish();
+                }
+                Ok(())
+            }
+            Err(e) => {
+                let job = self.gateway.pop_front().expect("front");
+                self.shared.state(|s| {
+                    s.gateway.requests += 1;
+                    s.gateway.failed += 1;
+                });
+                if e.is_link_failure() {
+                    let _ = job.reply.send(Err(GatewayError::LinkDown {
+                        detail: Some(e.to_string()),
+                    }));
+                    Err(ContractError::Plc(e))
+                } else {
+                    let _ = job.reply.send(Err(GatewayError::Plc(e.to_string())));
+                    Ok(())
+                }
+            }
+        }
+    }
+
+    /// Answers every gateway request waiting: the link is down.
+    pub(super) fn gateway_link_down(&mut self) {
+        while let Ok(job) = self.gateway_rx.try_recv() {
+            self.gateway.push_back(job);
+        }
+        if self.gateway.is_empty() {
+            return;
+        }
+        let detail = self.shared.state(|s| s.link.error.clone());
+        for job in std::mem::take(&mut self.gateway) {
+            self.shared.state(|s| {
+                s.gateway.requests += 1;
+                s.gateway.failed += 1;
+            });
+            let _ = job.reply.send(Err(GatewayError::LinkDown {
+                detail: detail.clone(),
+            }));
+        }
+    }
+}
+
+fn millis(d: Duration) -> u64 {
+    u64::try_from(d.as_millis()).unwrap_or(u64::MAX)
+}
+
+/// One exchange of a piece; what it read, if it reads.
+async fn exchange(plc: &mut AnyPlc, piece: &Piece) -> Result<Option<Values>, PlcError> {
+    Ok(match piece {
+        Piece::ReadWords { start, count } => {
+            Some(Values::Words(plc.read_words(*start, *count).await?))
+        }
+        Piece::WriteWords { start, words } => {
+            plc.write_words(*start, words).await?;
+            None
+        }
+        Piece::ReadBits { area, start, count } => {
+            Some(Values::Bits(plc.read_bits(*area, *start, *count).await?))
+        }
+        Piece::WriteBit { area, bit, on } => {
+            plc.write_bit(*area, *bit, *on).await?;
+            None
+        }
+    })
+}

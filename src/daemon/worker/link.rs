@@ -1,0 +1,114 @@
+//! The link: (re)connecting with backoff, a link that fails, and a PLC program that answers but
+//! not as the contract says (wrong magic or version): then the link is kept, nothing moves, and
+//! the reason is what every order is refused with.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use super::{Worker, describe, now};
+use crate::contract::machine::Blocker;
+use crate::plc::contract::{Contract, ContractError};
+
+/// Reconnection backoff bounds.
+pub(super) const BACKOFF_MIN: Duration = Duration::from_millis(100);
+const BACKOFF_MAX: Duration = Duration::from_secs(5);
+
+impl Worker {
+    pub(super) async fn reconnect(&mut self) {
+        self.expire_offline();
+        match (self.connect)().await {
+            Ok(plc) => {
+                let mut contract = Contract::new(plc, self.settings);
+                contract.set_abort(Arc::clone(&self.shared.stop_pending));
+                contract.set_beat(Arc::clone(&self.shared.beat));
+                self.link = Some(contract);
+                self.backoff = BACKOFF_MIN;
+                // The first opening is a connection, not a reconnection.
+                let again = std::mem::replace(&mut self.opened_before, true);
+                self.shared.state(|s| s.link.reconnects += u64::from(again));
+                tracing::info!(robot = %self.robot.name, "PLC link opened");
+                self.mode_read = None;
+                if let Err(e) = self.poll().await {
+                    self.link_failed(&e);
+                }
+            }
+            Err(e) => {
+                let text = describe(&e);
+                let changed = self.shared.state(|s| {
+                    s.link.connected = false;
+                    let changed = s.link.error.as_deref() != Some(text.as_str());
+                    s.link.error = Some(text.clone());
+                    changed
+                });
+                if changed {
+                    tracing::warn!(robot = %self.robot.name, error = %text, "cannot open the PLC link");
+                }
+                self.publish_refusal();
+                let wait = self.backoff;
+                self.backoff = (self.backoff * 2).min(BACKOFF_MAX);
+                self.wait(wait).await;
+                self.offline_requests().await;
+            }
+        }
+    }
+
+    /// While the link is down: stops and commands are answered at once (the link is down),
+    /// queued moves are cancelled by a stop and expire after `start_within`.
+    async fn offline_requests(&mut self) {
+        if !self.pending_stops.is_empty() {
+            let _ = self.take_stops().await;
+        }
+        for command in std::mem::take(&mut self.commands) {
+            let detail = self.shared.state(|s| s.link.error.clone());
+            super::answer(command, Err(super::CommandError::LinkDown { detail }));
+        }
+        self.expire_queue();
+        self.gateway_link_down();
+    }
+
+    /// Starts in flight past their planned end while the link is down end as unknown.
+    fn expire_offline(&mut self) {
+        let events = self.machine.tick(now());
+        self.apply_offline(events);
+        self.publish_phase();
+    }
+
+    pub(super) fn link_failed(&mut self, e: &ContractError) {
+        tracing::warn!(robot = %self.robot.name, error = %describe(e), "PLC link failed; reconnecting");
+        self.link = None;
+        // The moves in flight are kept: after the reconnection the status block says whether the
+        // PLC went on with them (same host word) or restarted.
+        self.machine.link_lost(now());
+        self.shared.state(|s| {
+            s.link.connected = false;
+            s.link.error = Some(describe(e));
+            // Unknown until the link is back; the rest stays as last read.
+            s.heartbeat_age_ms = None;
+        });
+        self.publish_refusal();
+        self.publish_phase();
+    }
+
+    /// The PLC answered, but not as the contract says (wrong magic or version, a word the
+    /// contract does not define): nothing moves until it does.
+    pub(super) fn contract_unusable(&mut self, e: &ContractError) {
+        let text = describe(e);
+        let changed = self.shared.state(|s| {
+            let changed = s.link.error.as_deref() != Some(text.as_str());
+            s.link.connected = false;
+            s.link.error = Some(text.clone());
+            changed
+        });
+        if changed {
+            tracing::error!(robot = %self.robot.name, error = %text, "the PLC program does not answer as the contract says");
+        }
+        self.machine.link_lost(now());
+        self.shared.set_refusal(Some(Blocker::LinkDown));
+        self.publish_phase();
+    }
+
+    pub(super) fn note_error(&self, e: &ContractError) {
+        tracing::warn!(robot = %self.robot.name, error = %describe(e), "PLC exchange failed");
+        self.shared.state(|s| s.link.error = Some(describe(e)));
+    }
+}

@@ -1,0 +1,511 @@
+//! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
+//! the contract (docs/CONTRACT.md, "What the host does for one move") with the pure
+//! [`Machine`] deciding what every status block means, and applies what the machine says in one
+//! place ([`events`]).
+//!
+//! ```text
+//! run: loop { stops first | link down: reconnect | requests, queue expiry | begin a move | poll }
+//!   mod.rs     the loop, waiting on requests, stops, home and clear-fault, shutdown
+//!   link.rs    (re)connecting, a link that fails or a PLC program that does not answer right
+//!   events.rs  reading the status block into the machine; applying its events to the reports
+//!   moves.rs   the queue (start_within), planning, upload, the start written once
+//! ```
+//!
+//! A stop overtakes everything: it is taken between any two exchanges (an upload in progress is
+//! abandoned between two of its writes, never mid-frame) and cancels every queued move. A request
+//! wakes the worker at once: nothing waits for the next poll.
+
+mod events;
+mod gateway;
+mod link;
+mod moves;
+
+use std::collections::{HashMap, VecDeque};
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use tokio::sync::{mpsc, watch};
+
+use super::handle::{DaemonOptions, RobotSetup};
+use super::order::CheckedOrder;
+use super::report::{MoveId, Stage};
+use super::request::{CommandError, Reply, Request};
+use super::shared::Shared;
+use crate::contract::machine::{Machine, Phase};
+use crate::contract::{CHANNELS, State};
+use crate::kinematics::JOINTS;
+use crate::plc::contract::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
+use crate::plc::{AnyPlc, Plc, PlcError};
+use crate::robot::Robot;
+
+/// Opens the robot's PLC link (called again after every link failure).
+pub type Connector =
+    Box<dyn FnMut() -> Pin<Box<dyn Future<Output = Result<AnyPlc, PlcError>> + Send>> + Send>;
+
+/// Polling while nothing is in flight (the heartbeat's freshness comes from these reads).
+const IDLE_POLL: Duration = Duration::from_millis(250);
+/// How often the PLC's mode (RUN / PROG) is read while nothing is in flight.
+const MODE_POLL: Duration = Duration::from_secs(10);
+
+/// What a worker receives on.
+pub(super) struct Channels {
+    /// Moves, homes, clear-faults.
+    pub requests: mpsc::UnboundedReceiver<Request>,
+    /// Stops (they overtake everything).
+    pub stops: mpsc::UnboundedReceiver<Reply>,
+    /// Register gateway requests.
+    pub gateway: mpsc::UnboundedReceiver<super::gateway::Job>,
+    /// The daemon shutting down.
+    pub shutdown: watch::Receiver<bool>,
+}
+
+/// An order waiting its turn.
+#[derive(Debug)]
+struct Queued {
+    id: MoveId,
+    order: CheckedOrder,
+    accepted: std::time::Instant,
+}
+
+/// The time now, on tokio's clock (paused in tests), as the pure core takes it.
+fn now() -> std::time::Instant {
+    tokio::time::Instant::now().into_std()
+}
+
+/// An error and every cause under it, in one line (`link failed during stop: the PLC link is
+/// down`): what reports and replies say.
+pub(super) fn describe(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(cause) = source {
+        let more = cause.to_string();
+        if !text.contains(&more) {
+            text = format!("{text}: {more}");
+        }
+        source = cause.source();
+    }
+    text
+}
+
+/// Whether an error means the link must be reopened.
+fn link_broken(e: &ContractError) -> bool {
+    matches!(e, ContractError::Plc(p) if p.is_link_failure())
+}
+
+/// One robot's link owner.
+pub(super) struct Worker {
+    robot: Robot,
+    settings: ContractSettings,
+    connect: Connector,
+    home_counts: [i64; JOINTS],
+    start_within: Duration,
+    requests: mpsc::UnboundedReceiver<Request>,
+    stops: mpsc::UnboundedReceiver<Reply>,
+    gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
+    shutdown: watch::Receiver<bool>,
+    shared: Arc<Shared>,
+    link: Option<Contract<AnyPlc>>,
+    /// Register gateway requests, served one exchange at a time between the worker's own.
+    gateway: VecDeque<super::gateway::Job>,
+    /// When the status block is next to be read.
+    next_poll: tokio::time::Instant,
+    /// Whether a gateway exchange goes before the next status read, if both are due.
+    gateway_turn: bool,
+    machine: Machine,
+    queue: VecDeque<Queued>,
+    /// Since when the head of the queue could have been given to the PLC but for a problem.
+    room_since: Option<std::time::Instant>,
+    next_seq: u16,
+    next_bank: u16,
+    backoff: Duration,
+    /// Stops taken while waiting, answered by the next `take_stops`.
+    pending_stops: Vec<Reply>,
+    /// Home and clear-fault requests taken while waiting.
+    commands: Vec<Request>,
+    /// Answers waiting for the home routine's end.
+    homing: Vec<Reply>,
+    /// The last start written and its bank, for writing it again after a lost reply.
+    last_start: Option<(MoveId, VerifiedBank)>,
+    /// When each running move was seen starting.
+    started: HashMap<MoveId, std::time::Instant>,
+    /// When the last stop was asked for (a move stopped soon after was stopped by request).
+    stop_asked: Option<std::time::Instant>,
+    /// When the PLC's mode was last read.
+    mode_read: Option<std::time::Instant>,
+    /// Whether the link was ever opened (a later opening is a reconnection).
+    opened_before: bool,
+}
+
+impl Worker {
+    pub(super) fn new(
+        setup: RobotSetup,
+        options: &DaemonOptions,
+        channels: Channels,
+        shared: Arc<Shared>,
+    ) -> Self {
+        let machine = Machine::new(setup.settings.watch, options.host);
+        Self {
+            robot: setup.robot,
+            settings: setup.settings,
+            connect: setup.connect,
+            home_counts: setup.home_counts,
+            start_within: options.start_within,
+            requests: channels.requests,
+            stops: channels.stops,
+            gateway_rx: channels.gateway,
+            shutdown: channels.shutdown,
+            shared,
+            link: None,
+            gateway: VecDeque::new(),
+            next_poll: tokio::time::Instant::now(),
+            gateway_turn: false,
+            machine,
+            queue: VecDeque::new(),
+            room_since: None,
+            next_seq: 1,
+            next_bank: 0,
+            backoff: link::BACKOFF_MIN,
+            pending_stops: Vec::new(),
+            commands: Vec::new(),
+            homing: Vec::new(),
+            last_start: None,
+            started: HashMap::new(),
+            stop_asked: None,
+            mode_read: None,
+            opened_before: false,
+        }
+    }
+
+    /// Runs until shutdown.
+    pub(super) async fn run(mut self) {
+        loop {
+            self.shared.beat.mark();
+            if *self.shutdown.borrow() {
+                self.shut_down().await;
+                return;
+            }
+            if self.link.is_none() {
+                self.reconnect().await;
+                continue;
+            }
+            if let Err(e) = self.step().await {
+                if link_broken(&e) {
+                    self.link_failed(&e);
+                } else {
+                    self.note_error(&e);
+                }
+            }
+        }
+    }
+
+    /// One round: a stop first, then commands, the queue, a move to begin, the status block when
+    /// its read is due, else one register gateway exchange; then a wait for what comes next.
+    async fn step(&mut self) -> Result<(), ContractError> {
+        // Requests come in here too: a busy gateway never leaves the worker without a wait.
+        while let Ok(request) = self.requests.try_recv() {
+            self.take_request(request);
+        }
+        self.take_stops().await?;
+        self.run_commands().await?;
+        self.expire_queue();
+        if self.machine.blocker(now()).is_none() && !self.queue.is_empty() {
+            let queued = self.queue.pop_front().expect("not empty");
+            self.next_poll = tokio::time::Instant::now();
+            return self.begin(queued).await;
+        }
+        let poll_due = tokio::time::Instant::now() >= self.next_poll;
+        // Gateway exchanges go between the worker's own, one at a time; when the status read is
+        // due too they take turns, so neither waits behind more than one of the other.
+        if !self.gateway.is_empty() && (!poll_due || self.gateway_turn) {
+            self.gateway_turn = false;
+            return self.gateway_exchange().await;
+        }
+        if poll_due {
+            self.poll().await?;
+            self.gateway_turn = true;
+            self.expire_queue();
+            let idle = matches!(self.machine.phase(), Phase::Idle | Phase::Unhomed);
+            if idle
+                && self
+                    .mode_read
+                    .is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL)
+            {
+                self.read_mode().await?;
+            }
+            self.next_poll = tokio::time::Instant::now() + self.poll_pause();
+        }
+        if self.gateway.is_empty() {
+            self.wait_until(self.next_poll).await;
+        }
+        Ok(())
+    }
+
+    /// How long until the next status read: short while anything is in flight or queued.
+    fn poll_pause(&self) -> Duration {
+        let busy = !matches!(
+            self.machine.phase(),
+            Phase::Idle | Phase::Unhomed | Phase::Stalled
+        ) || !self.queue.is_empty();
+        if busy {
+            self.settings.poll_interval
+        } else {
+            IDLE_POLL
+        }
+    }
+
+    /// Reads the PLC's mode (RUN / PROG) for the robot's state; a PLC that cannot say is not a
+    /// failure (over Modbus the RUN relay is unverified).
+    pub(super) async fn read_mode(&mut self) -> Result<(), ContractError> {
+        self.mode_read = Some(now());
+        let link = self.link.as_mut().expect("connected");
+        match link.plc().mode().await {
+            Ok(mode) => {
+                let name = match mode {
+                    crate::plc::PlcMode::Run => "run",
+                    crate::plc::PlcMode::Prog => "prog",
+                };
+                self.shared.state(|s| s.plc_mode = Some(name));
+                Ok(())
+            }
+            Err(e) if e.is_link_failure() => Err(ContractError::Plc(e)),
+            Err(e) => {
+                tracing::debug!(robot = %self.robot.name, error = %e, "cannot read the PLC's mode");
+                Ok(())
+            }
+        }
+    }
+
+    /// Waits up to `pause`; a request, a stop or shutdown ends the wait at once.
+    async fn wait(&mut self, pause: Duration) {
+        self.wait_until(tokio::time::Instant::now() + pause).await;
+    }
+
+    /// Waits until `until`; a request, a stop, a gateway request or shutdown ends the wait.
+    async fn wait_until(&mut self, until: tokio::time::Instant) {
+        tokio::select! {
+            biased;
+            _ = self.shutdown.changed() => {}
+            stop = self.stops.recv() => {
+                if let Some(reply) = stop {
+                    self.pending_stops.push(reply);
+                }
+            }
+            request = self.requests.recv() => {
+                if let Some(request) = request {
+                    self.take_request(request);
+                }
+            }
+            job = self.gateway_rx.recv() => {
+                if let Some(job) = job {
+                    self.gateway.push_back(job);
+                }
+            }
+            () = tokio::time::sleep_until(until) => {}
+        }
+    }
+
+    fn take_request(&mut self, request: Request) {
+        // Something to do: the status block is read at once, not at the next idle poll.
+        self.next_poll = tokio::time::Instant::now();
+        match request {
+            Request::Move(id, order) => self.queue.push_back(Queued {
+                id,
+                order,
+                accepted: now(),
+            }),
+            command => self.commands.push(command),
+        }
+    }
+
+    /// Writes a stop if one was asked for; the moves given to the PLC end as it shows, every
+    /// queued move is cancelled.
+    async fn take_stops(&mut self) -> Result<(), ContractError> {
+        let mut replies = std::mem::take(&mut self.pending_stops);
+        while let Ok(reply) = self.stops.try_recv() {
+            replies.push(reply);
+        }
+        if replies.is_empty() {
+            return Ok(());
+        }
+        self.next_poll = tokio::time::Instant::now();
+        let result = match self.link.as_mut() {
+            Some(link) => link.stop().await,
+            None => Err(ContractError::Blocked(
+                crate::contract::machine::Blocker::LinkDown,
+            )),
+        };
+        self.shared.stop_pending.store(false, Ordering::SeqCst);
+        self.stop_asked = Some(now());
+        // Orders sent before this stop join the queue, to be cancelled with it.
+        while let Ok(request) = self.requests.try_recv() {
+            self.take_request(request);
+        }
+        for command in std::mem::take(&mut self.commands) {
+            answer(
+                command,
+                Err(CommandError::Conflict(
+                    "a stop came first; ask again".into(),
+                )),
+            );
+        }
+        self.cancel_queue("cancelled by a stop request");
+        if result.is_ok() {
+            self.machine.stop_written(now());
+        }
+        let answer_for = match &result {
+            Ok(()) => Ok(()),
+            Err(_) if self.link.is_none() => Err(CommandError::LinkDown {
+                detail: self.shared.state(|s| s.link.error.clone()),
+            }),
+            Err(e) if link_broken(e) => Err(CommandError::LinkDown {
+                detail: Some(describe(e)),
+            }),
+            Err(e) => Err(CommandError::Plc(describe(e))),
+        };
+        for reply in replies {
+            let _ = reply.send(answer_for.clone());
+        }
+        tracing::info!(robot = %self.robot.name, ok = result.is_ok(), "stop taken");
+        match result {
+            Err(e) if link_broken(&e) => Err(e),
+            _ => Ok(()),
+        }
+    }
+
+    /// Home and clear-fault requests, each checked against what the PLC shows.
+    async fn run_commands(&mut self) -> Result<(), ContractError> {
+        for command in std::mem::take(&mut self.commands) {
+            let checked = self.command_allowed(&command);
+            match (command, checked) {
+                (command, Err(e)) => answer(command, Err(e)),
+                (Request::ClearFault(reply), Ok(())) => {
+                    let link = self.link.as_mut().expect("checked: connected");
+                    match link.clear_fault().await {
+                        Ok(()) => {
+                            tracing::info!(robot = %self.robot.name, "fault cleared");
+                            let _ = reply.send(Ok(()));
+                        }
+                        Err(e) => {
+                            let _ = reply.send(Err(CommandError::Plc(describe(&e))));
+                            if link_broken(&e) {
+                                return Err(e);
+                            }
+                        }
+                    }
+                }
+                (Request::Home(reply), Ok(())) => self.home(reply).await?,
+                (Request::Move(..), Ok(())) => unreachable!("moves are queued, not commands"),
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether `command` may be written now: a link, and a PLC in a state that takes it.
+    fn command_allowed(&self, command: &Request) -> Result<(), CommandError> {
+        let last = match (&self.link, self.machine.last()) {
+            (Some(_), Some(last)) if !matches!(self.machine.phase(), Phase::LinkDown { .. }) => {
+                *last
+            }
+            _ => {
+                return Err(CommandError::LinkDown {
+                    detail: self.shared.state(|s| s.link.error.clone()),
+                });
+            }
+        };
+        let in_flight = !self.machine.given().is_empty();
+        match command {
+            Request::ClearFault(_) if matches!(last.state, State::Running | State::Homing) => {
+                Err(CommandError::Conflict(format!(
+                    "the PLC is {}: stop it first; a fault is cleared only when nothing runs",
+                    last.state.name()
+                )))
+            }
+            Request::ClearFault(_) if last.state != State::Fault && last.block.fault == 0 => {
+                Err(CommandError::Conflict("the PLC reports no fault".into()))
+            }
+            Request::Home(_) if in_flight || last.state == State::Running => Err(
+                CommandError::Conflict("a move runs: stop it before homing".into()),
+            ),
+            Request::Home(_) if last.state == State::Homing => {
+                Err(CommandError::Conflict("the robot is already homing".into()))
+            }
+            Request::Home(_) if last.state == State::Fault => Err(CommandError::Conflict(format!(
+                "the PLC reports fault {}: clear it before homing",
+                last.block.fault
+            ))),
+            _ => Ok(()),
+        }
+    }
+
+    /// Writes the home command for every joint's channel, each preset to its home count; the
+    /// reply is answered when the home routine ends.
+    async fn home(&mut self, reply: Reply) -> Result<(), ContractError> {
+        let mut mask = 0;
+        let mut from = [0_i32; CHANNELS];
+        for (joint, count) in self.robot.joints.iter().zip(self.home_counts) {
+            mask |= 1 << joint.channel;
+            from[usize::from(joint.channel)] = count as i32;
+        }
+        let link = self.link.as_mut().expect("checked: connected");
+        match link.home(mask, from).await {
+            Ok(write) => {
+                if let CommandWrite::Unconfirmed(e) = &write {
+                    tracing::warn!(robot = %self.robot.name, error = %e, "home command unconfirmed");
+                }
+                self.machine.home_written(now());
+                self.homing.push(reply);
+                tracing::info!(robot = %self.robot.name, ?from, "homing");
+                Ok(())
+            }
+            Err(e) => {
+                let _ = reply.send(Err(CommandError::Plc(describe(&e))));
+                if link_broken(&e) { Err(e) } else { Ok(()) }
+            }
+        }
+    }
+
+    /// On shutdown: a start still waiting on the PLC is withdrawn (command back to 0), so no
+    /// start is left pending; a running move runs on to its end under the PLC program.
+    async fn shut_down(&mut self) {
+        if let Phase::Chained { next, .. } = self.machine.phase().clone()
+            && let Some(link) = self.link.as_mut()
+        {
+            let result = link.withdraw().await;
+            tracing::info!(robot = %self.robot.name, id = next.tag, ?result, "withdrew the waiting start");
+            self.finish(
+                next.tag,
+                Stage::Cancelled,
+                Some("withdrawn: the daemon shut down".into()),
+                None,
+            );
+        }
+        self.cancel_queue("cancelled: the daemon shut down");
+        for command in std::mem::take(&mut self.commands) {
+            answer(command, Err(CommandError::ShuttingDown));
+        }
+        for reply in std::mem::take(&mut self.homing) {
+            let _ = reply.send(Err(CommandError::ShuttingDown));
+        }
+        while let Ok(job) = self.gateway_rx.try_recv() {
+            self.gateway.push_back(job);
+        }
+        for job in std::mem::take(&mut self.gateway) {
+            let _ = job
+                .reply
+                .send(Err(super::gateway::GatewayError::ShuttingDown));
+        }
+    }
+}
+
+/// Answers a command request.
+fn answer(command: Request, result: Result<(), CommandError>) {
+    match command {
+        Request::Home(reply) | Request::ClearFault(reply) => {
+            let _ = reply.send(result);
+        }
+        Request::Move(..) => {}
+    }
+}

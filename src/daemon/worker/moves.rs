@@ -1,0 +1,267 @@
+//! One move from the queue to the PLC: its turn (`start_within`), planned from the counts the PLC
+//! reports (or from the running move's targets, to chain behind it), uploaded into the bank that
+//! is not running, checked once more against a fresh status block, and started with one write.
+
+use std::time::Duration;
+
+use super::{Queued, Worker, describe, link_broken, now};
+use crate::contract::CHANNELS;
+use crate::contract::machine::{Blocker, Planned};
+use crate::daemon::order::plan_order;
+use crate::daemon::report::{MoveId, Predicted, Stage};
+use crate::plan::Plan;
+use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
+
+/// Slack added to a move's deadline on top of its planned time and upload.
+const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
+
+impl Worker {
+    /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
+    pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
+        // A fresh status block: the counts to plan from, and whether the PLC takes a start. Until
+        // the plan is made the order stays at the head of the queue.
+        let polled = self.poll().await;
+        if polled.is_err() || self.machine.blocker(now()).is_some() {
+            self.queue.push_front(queued);
+            return polled;
+        }
+        let id = queued.id;
+        let chain = self.machine.chain_behind().copied();
+        let from = match (chain, self.machine.last()) {
+            (Some(running), _) => running.targets.expect("chained only behind known targets"),
+            (None, Some(last)) => last.block.elapsed,
+            (None, None) => unreachable!("no blocker without a status block"),
+        };
+        let plan = match plan_order(
+            &self.robot,
+            &queued.order,
+            self.by_joint(from.map(i64::from)),
+        ) {
+            Ok(plan) => plan,
+            Err(e) => {
+                self.finish(id, Stage::Failed, Some(describe(&e)), None);
+                self.cancel_queue("cancelled: the move before it could not be planned");
+                return Ok(());
+            }
+        };
+        let planned = self.planned(id, &plan, from, chain.map(|c| c.bank));
+        let targets = planned.targets.expect("a plan knows its targets");
+        self.record_plan(id, &plan, &planned);
+        if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
+            // Within a pulse of where it is: nothing to start.
+            let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
+            self.finish(id, Stage::Done, None, Some(error));
+            tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
+            return Ok(());
+        }
+        let tables = plan
+            .valid_tables(&self.robot)
+            .expect("plan_move returns valid tables");
+        self.machine.upload_begun();
+        self.publish_phase();
+        let began = tokio::time::Instant::now();
+        let link = self.link.as_mut().expect("connected");
+        let bank = match link
+            .upload(planned.bank, planned.seq, planned.from, &tables)
+            .await
+        {
+            Ok(bank) => bank,
+            Err(e) => return self.not_started(id, e),
+        };
+        let upload_s = began.elapsed().as_secs_f64();
+        self.shared
+            .moves(|m| m.update(id, |r| r.upload_s = Some(upload_s)));
+        // The contract's first step once more, after the upload: the bank is started only once
+        // the heartbeat is seen moving, while the PLC takes it and every count is the plan's
+        // `from` (or it chains behind the start whose targets are its `from`).
+        loop {
+            let link = self.link.as_mut().expect("connected");
+            let status = match link.status().await {
+                Ok(status) => status,
+                Err(e) => return self.not_started(id, e),
+            };
+            if let Err(e) = self.read(status).await {
+                return self.not_started(id, e);
+            }
+            match self.machine.may_start(&planned, now()) {
+                Ok(()) => break,
+                Err(Blocker::Unproven) => {
+                    tokio::time::sleep(self.settings.scan_time / 2).await;
+                }
+                Err(blocker) => return self.not_started(id, ContractError::Blocked(blocker)),
+            }
+        }
+        let link = self.link.as_mut().expect("connected");
+        let written = link.start(&bank).await;
+        // Whatever became of the write, its sequence number is spent: a start whose fate is not
+        // known yet must never share it with the next.
+        self.next_seq = planned.seq.wrapping_add(1).max(1);
+        self.next_bank = 1 - planned.bank;
+        let written = match written {
+            Ok(written) => written,
+            Err(e) => return self.not_started(id, e),
+        };
+        let confirmed = matches!(written, CommandWrite::Confirmed);
+        self.machine.start_written(planned, now(), confirmed);
+        self.last_start = Some((id, bank));
+        if chain.is_some() {
+            self.shared
+                .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
+        }
+        self.publish_phase();
+        tracing::info!(robot = %self.robot.name, id, seq = planned.seq, bank = planned.bank, upload_s, confirmed, chained = chain.is_some(), "start written");
+        match written {
+            CommandWrite::Unconfirmed(e) if e.is_link_failure() => {
+                // Whether it was taken is learnt from the status block once the link is back.
+                Err(ContractError::Plc(e))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The contract's description of a plan: its sequence number, bank, counts and envelope.
+    fn planned(
+        &self,
+        id: MoveId,
+        plan: &Plan,
+        from: [i32; CHANNELS],
+        running_bank: Option<u16>,
+    ) -> Planned {
+        let tables: Vec<(usize, &[crate::table::Segment])> = plan
+            .tables
+            .iter()
+            .map(|t| (usize::from(t.channel), t.segments.as_slice()))
+            .collect();
+        let (envelope, targets) = planned_bounds(from, &tables);
+        // Never the PLC's latched seq: it would take the start for one already acted on.
+        let latched = self.machine.last().map(|s| s.block.seq);
+        let seq = if latched == Some(self.next_seq) {
+            self.next_seq.wrapping_add(1).max(1)
+        } else {
+            self.next_seq
+        };
+        Planned {
+            tag: id,
+            seq,
+            // Always the bank that is not running.
+            bank: running_bank.map_or(self.next_bank, |b| 1 - b),
+            from,
+            targets: Some(targets),
+            envelope,
+            duration: Duration::from_secs_f64(plan.profile.duration_s()),
+        }
+    }
+
+    fn record_plan(&self, id: MoveId, plan: &Plan, planned: &Planned) {
+        let predicted = Predicted {
+            rows: plan.figures.rows,
+            words: plan.figures.words,
+            duration_s: plan.profile.duration_s(),
+            path_deviation_mm: plan.figures.path_deviation_mm,
+            tracking_error_mm: plan.figures.tracking_error_mm,
+        };
+        let watch = self.machine.settings();
+        // The longest the daemon can take to end it: its run limit, the grace a lost link gets.
+        let limit = watch.run_limit(planned.duration) + watch.link_grace;
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                r.stage = Stage::Uploading;
+                r.seq = Some(planned.seq);
+                r.bank = Some(planned.bank);
+                r.start_counts = Some(planned.from.map(i64::from));
+                r.target_counts = planned.targets.map(|t| t.map(i64::from));
+                r.predicted = Some(predicted);
+                r.deadline_s = Some((limit + self.start_within + DEADLINE_MARGIN).as_secs_f64());
+            });
+        });
+    }
+
+    /// Ends move `id`, whose start was not written, by `e`; a link failure goes on up.
+    fn not_started(&mut self, id: MoveId, e: ContractError) -> Result<(), ContractError> {
+        self.machine.upload_ended();
+        self.publish_phase();
+        let stage = if matches!(e, ContractError::Aborted) {
+            Stage::Cancelled
+        } else {
+            Stage::Failed
+        };
+        let why = match &e {
+            ContractError::Aborted => "cancelled by a stop request during its upload".to_owned(),
+            other => format!("not started: {}", describe(other)),
+        };
+        tracing::warn!(robot = %self.robot.name, id, "{why}");
+        self.finish(id, stage, Some(why), None);
+        self.cancel_queue("cancelled: the move before it did not start");
+        if link_broken(&e) { Err(e) } else { Ok(()) }
+    }
+
+    /// Fails the head of the queue once it could not start for `start_within` after its turn
+    /// came (its turn comes when the PLC has room for it; the time a move ahead of it runs does
+    /// not count), and cancels the rest behind it.
+    pub(super) fn expire_queue(&mut self) {
+        let now = now();
+        let blocker = if self.link.is_none() {
+            Some(Blocker::LinkDown)
+        } else {
+            self.machine.blocker(now)
+        };
+        if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) {
+            self.room_since = None;
+            return;
+        }
+        let room = *self.room_since.get_or_insert(now);
+        let Some(head) = self.queue.front() else {
+            return;
+        };
+        let turn = head.accepted.max(room);
+        if now.saturating_duration_since(turn) <= self.start_within {
+            return;
+        }
+        let id = head.id;
+        self.queue.pop_front();
+        let why = format!(
+            "did not start within {:.0} s{}",
+            self.start_within.as_secs_f64(),
+            blocker.map(|b| format!(": {b}")).unwrap_or_default()
+        );
+        tracing::warn!(robot = %self.robot.name, id, "{why}");
+        self.finish(id, Stage::Failed, Some(why), None);
+        self.cancel_queue("cancelled: the move before it did not start");
+    }
+
+    /// Cancels every queued move (never given to the PLC).
+    pub(super) fn cancel_queue(&mut self, why: &str) {
+        for queued in std::mem::take(&mut self.queue) {
+            self.finish(queued.id, Stage::Cancelled, Some(why.to_owned()), None);
+        }
+    }
+
+    pub(super) fn finish(
+        &self,
+        id: MoveId,
+        stage: Stage,
+        error: Option<String>,
+        final_error: Option<[i64; CHANNELS]>,
+    ) {
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                if !r.stage.is_final() {
+                    r.stage = stage;
+                    r.error = error;
+                    r.final_error_pulses = final_error;
+                }
+            });
+        });
+        self.shared.state(|s| {
+            s.queued.retain(|q| *q != id);
+            if s.current_move == Some(id) {
+                s.current_move = None;
+            }
+        });
+        if stage != Stage::Done {
+            // Later orders are checked from where the robot really is, not from a target this
+            // move will not reach.
+            self.shared.forget_planned_end();
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! What a move follows: a straight line in Cartesian space (the tool point on the line P1P2, the
+//! joints by inverse kinematics at every sample) or a straight line in joint space (every joint
+//! from its start value to its target on the same trapezoid, so all reach it together, and the
+//! tool wherever forward kinematics puts it).
+//!
+//! A joint-space path's length, which the profile runs over, is the larger of the tool point's
+//! path length (mm) and the tool angle's turn (degrees counted as mm): a joint move takes as long
+//! as a line of that length at the move's speed, and a move that only turns the wrist still has
+//! a length. The tool point's path is kept as a polyline of chords at most [`TRACE_CHORD_MM`]
+//! long, for the accuracy figures to measure against.
+
+use nalgebra::Vector3;
+
+use crate::geometry::{Line, Polyline, Pose, Profile, ToolPath};
+use crate::kinematics::{JOINTS, Joints, Kinematics, Model};
+use crate::robot::Robot;
+
+use super::{PlanError, Samples, samples};
+
+/// The longest chord of a joint-space path's tool polyline, mm.
+const TRACE_CHORD_MM: f64 = 0.25;
+/// Chords of the first, coarse measurement of a joint-space path's length.
+const COARSE_CHORDS: usize = 64;
+/// The most chords a tool polyline gets.
+const MAX_CHORDS: usize = 16_384;
+
+/// A straight line in joint space: every joint moves in proportion, from `from` to `to`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointPath {
+    /// Joint values at the start, rad or mm.
+    pub from: Joints,
+    /// Joint values at the end, rad or mm.
+    pub to: Joints,
+    /// The robot's kinematics, for where the tool is along the way.
+    model: Model,
+}
+
+impl JointPath {
+    /// The path from `from` to `to` for a robot of kinematics `model`.
+    #[must_use]
+    pub fn new(model: &Model, from: Joints, to: Joints) -> Self {
+        Self {
+            from,
+            to,
+            model: model.clone(),
+        }
+    }
+
+    /// Joint values at fraction `u` (0 to 1) of the way; exactly `to` at 1.
+    #[must_use]
+    pub fn joints_at(&self, u: f64) -> Joints {
+        if u >= 1.0 {
+            return self.to;
+        }
+        std::array::from_fn(|j| self.from[j] + (self.to[j] - self.from[j]) * u.max(0.0))
+    }
+
+    /// The tool's pose at fraction `u` of the way.
+    #[must_use]
+    pub fn pose_at(&self, u: f64) -> Pose {
+        self.model.fk(&self.joints_at(u))
+    }
+
+    /// The tool point's path as a polyline of `chords` equal steps of the joints.
+    fn trace(&self, chords: usize) -> Polyline {
+        Polyline::new(
+            (0..=chords)
+                .map(|i| self.pose_at(i as f64 / chords as f64).position_mm)
+                .collect(),
+        )
+    }
+}
+
+/// A move's path as the planner follows it.
+pub(super) enum Course {
+    /// The tool point on a straight line.
+    Line(Line),
+    /// Every joint on a straight line in joint space.
+    Joints {
+        /// The joints' path.
+        path: JointPath,
+        /// Its length for the profile: the tool point's path (mm) or the tool angle's turn
+        /// (degrees as mm), whichever is larger.
+        length_mm: f64,
+        /// The tool point's path.
+        trace: Polyline,
+    },
+}
+
+impl Course {
+    /// The joint-space course from `from` to `to` for `robot`.
+    pub(super) fn joints(robot: &Robot, from: Joints, to: Joints) -> Self {
+        let path = JointPath::new(&robot.kinematics, from, to);
+        let coarse = path.trace(COARSE_CHORDS).length_mm();
+        let chords = ((coarse / TRACE_CHORD_MM).ceil() as usize).clamp(COARSE_CHORDS, MAX_CHORDS);
+        let trace = path.trace(chords);
+        let turn_deg = (path.pose_at(1.0).a_rad - path.pose_at(0.0).a_rad)
+            .to_degrees()
+            .abs();
+        Self::Joints {
+            length_mm: trace.length_mm().max(turn_deg),
+            path,
+            trace,
+        }
+    }
+
+    /// The length the profile runs over, mm.
+    pub(super) fn length_mm(&self) -> f64 {
+        match self {
+            Self::Line(line) => line.length_mm(),
+            Self::Joints { length_mm, .. } => *length_mm,
+        }
+    }
+
+    /// The planned tool position at distance `s_mm` along the profile.
+    pub(super) fn position_mm(&self, s_mm: f64) -> Vector3<f64> {
+        match self {
+            Self::Line(line) => line.at(s_mm).position_mm,
+            Self::Joints {
+                path, length_mm, ..
+            } => path.pose_at(s_mm / length_mm).position_mm,
+        }
+    }
+
+    /// What the executed path is measured against.
+    pub(super) fn tool_path(&self) -> &dyn ToolPath {
+        match self {
+            Self::Line(line) => line,
+            Self::Joints { trace, .. } => trace,
+        }
+    }
+
+    /// The line from the start pose to the end pose (a joint move's chord, for reports).
+    pub(super) fn chord(&self) -> Line {
+        match self {
+            Self::Line(line) => *line,
+            Self::Joints { path, .. } => Line {
+                from: path.pose_at(0.0),
+                to: path.pose_at(1.0),
+            },
+        }
+    }
+
+    /// The joint-space path, for a joint move.
+    pub(super) fn joint_path(&self) -> Option<&JointPath> {
+        match self {
+            Self::Line(_) => None,
+            Self::Joints { path, .. } => Some(path),
+        }
+    }
+
+    /// Samples the course at every point of `profile`; point 0 takes `start_counts`.
+    pub(super) fn sample(
+        &self,
+        robot: &Robot,
+        profile: &Profile,
+        start_values: &Joints,
+        start_counts: [i64; JOINTS],
+    ) -> Result<Samples, PlanError> {
+        match self {
+            Self::Line(line) => samples::sample(robot, line, profile, start_values, start_counts),
+            Self::Joints { path, .. } => {
+                Ok(samples::sample_joints(robot, path, profile, start_counts))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // the path's ends are exact by construction
+mod tests {
+    use super::*;
+    use crate::robot::seed_robot;
+
+    #[test]
+    fn a_joint_path_ends_exactly_on_its_target() {
+        let robot = seed_robot();
+        let from = [0.1, 10.0, 20.0, 0.0];
+        let to = [0.3f64.next_up(), 50.0, 25.0, -0.2];
+        let path = JointPath::new(&robot.kinematics, from, to);
+        assert_eq!(path.joints_at(1.0), to);
+        assert_eq!(path.joints_at(0.0), from);
+        let mid = path.joints_at(0.5);
+        assert!((mid[1] - 30.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_joint_course_is_as_long_as_the_tool_path_or_the_turn() {
+        let robot = seed_robot();
+        // theta1 through 90 degrees at a radius of 500 mm: a quarter circle.
+        let arc = Course::joints(
+            &robot,
+            [0.0; 4],
+            [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0],
+        );
+        let quarter = 250.0 * std::f64::consts::PI;
+        assert!(
+            (arc.length_mm() - quarter).abs() < 1e-3,
+            "{}",
+            arc.length_mm()
+        );
+        // The tool point halfway, and the path it is measured against.
+        let half = arc.position_mm(quarter / 2.0);
+        let r = 500.0 / 2f64.sqrt();
+        assert!((half - Vector3::new(-r, r, 0.0)).norm() < 1e-3);
+        assert!(arc.tool_path().distance_mm(&(half * 1.01)) < 5.01);
+        // The wrist alone: the tool point stands still, the tool turns 90 degrees.
+        let wrist = Course::joints(
+            &robot,
+            [0.0; 4],
+            [0.0, 0.0, 0.0, std::f64::consts::FRAC_PI_2],
+        );
+        assert!((wrist.length_mm() - 90.0).abs() < 1e-9);
+        assert!(wrist.chord().length_mm() < 1e-9);
+    }
+}

@@ -1,0 +1,688 @@
+//! The register contract's exchanges on top of any [`Plc`] (docs/CONTRACT.md, "What the host does
+//! for one move"): read the status block, write a bank and the command block and read them back,
+//! write the command word (a start once, never blindly again), stop, clear a fault, home, the
+//! host word; read a bank back to describe a start found running. What the status blocks mean is
+//! the pure [`Machine`]'s business; [`Contract::follow`] drives one start with it.
+//!
+//! A start can only be given a [`VerifiedBank`], which only [`Contract::upload`] makes, after
+//! every word of the bank and the command block is written and (unless switched off) read back
+//! equal: no start can point at a partly written or unverified bank. Every start carries the
+//! counts it was planned from (`from`), and the PLC refuses it (fault 5) from any others.
+
+mod describe;
+#[cfg(test)]
+mod tests;
+
+pub use describe::planned_bounds;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use thiserror::Error;
+
+use super::{Plc, PlcError};
+use crate::contract::machine::{Blocker, Event, Machine, Outcome, Planned, Status, WatchSettings};
+use crate::contract::{
+    CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, Layout, MAGIC,
+    STATUS_WORDS, State, StatusBlock, UnknownValue, VERSION,
+};
+use crate::table::{DIRECTORY_WORDS, ValidTable, encode};
+
+/// How the exchanges behave.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContractSettings {
+    /// Where the blocks and areas are.
+    pub layout: Layout,
+    /// Read back every written word and compare (on by default).
+    pub verify: bool,
+    /// How closely starts are watched.
+    pub watch: WatchSettings,
+    /// Time between status polls while a start runs.
+    pub poll_interval: Duration,
+    /// The PLC's longest scan (reads meant to see the heartbeat move are this far apart).
+    pub scan_time: Duration,
+}
+
+impl Default for ContractSettings {
+    fn default() -> Self {
+        Self {
+            layout: Layout::default(),
+            verify: true,
+            watch: WatchSettings::default(),
+            poll_interval: Duration::from_millis(20),
+            scan_time: Duration::from_millis(10),
+        }
+    }
+}
+
+/// Why the contract refuses to go on.
+#[derive(Debug, Error)]
+pub enum ContractError {
+    /// The exchange with the PLC failed.
+    #[error(transparent)]
+    Plc(#[from] PlcError),
+    /// The program is not there (or not ours).
+    #[error(
+        "status block magic is {found:#06x}, expected {MAGIC:#06x}: the linterpd PLC program is not running at DT{base}"
+    )]
+    BadMagic {
+        /// What was read.
+        found: u16,
+        /// Status block address.
+        base: u16,
+    },
+    /// The program speaks another contract version.
+    #[error("the PLC program speaks contract version {found}; this linterpd speaks {VERSION}")]
+    WrongVersion {
+        /// What was read.
+        found: u16,
+    },
+    /// A word the contract does not define.
+    #[error("status block: {0}")]
+    Unknown(#[from] UnknownValue),
+    /// The PLC cannot take a start now.
+    #[error("{0}")]
+    Blocked(Blocker),
+    /// The heartbeat stood still while the host waited for the PLC.
+    #[error(
+        "the PLC heartbeat stood still for {still_ms} ms (limit {limit_ms} ms): the PLC is stalled{mode}"
+    )]
+    Stalled {
+        /// For how long.
+        still_ms: u64,
+        /// The limit.
+        limit_ms: u64,
+        /// ", and in PROG mode" when the PLC says so.
+        mode: &'static str,
+    },
+    /// Read-back differs from what was written.
+    #[error(
+        "read-back of DT{address} gave {read:#06x}, wrote {wrote:#06x}: the bank is not verified and will not be started"
+    )]
+    CompareFailed {
+        /// DT address.
+        address: u16,
+        /// Written.
+        wrote: u16,
+        /// Read.
+        read: u16,
+    },
+    /// A table does not fit its channel's area.
+    #[error("channel {channel} table is {words} words; its area holds {area_words}")]
+    TooLarge {
+        /// Channel.
+        channel: u8,
+        /// Words.
+        words: usize,
+        /// Area size.
+        area_words: u16,
+    },
+    /// Two tables for one channel, or a channel beyond 3.
+    #[error("channel {channel} appears twice or is not 0-3")]
+    BadChannel {
+        /// Channel.
+        channel: u8,
+    },
+    /// A bank number other than 0 or 1.
+    #[error("bank {bank} does not exist; banks are 0 and 1")]
+    BadBank {
+        /// Bank.
+        bank: u16,
+    },
+    /// The counts are not those the tables were planned from: the start is not written.
+    #[error(
+        "channel {channel} is at {count}, the tables were planned from {from}: the start is not written"
+    )]
+    NotAtFrom {
+        /// Pulse channel.
+        channel: usize,
+        /// Its count.
+        count: i32,
+        /// The plan's `from`.
+        from: i32,
+    },
+    /// A bank read back does not decode.
+    #[error("bank {bank} channel {channel} does not decode: {detail}")]
+    BadTable {
+        /// Bank.
+        bank: u16,
+        /// Channel.
+        channel: usize,
+        /// Why.
+        detail: String,
+    },
+    /// The upload was abandoned between two exchanges (a stop overtook it); nothing was started.
+    #[error("upload abandoned before it was complete; nothing was started")]
+    Aborted,
+    /// A start ended without getting done.
+    #[error("start {seq} {}", describe_outcome(outcome))]
+    Ended {
+        /// Sequence number.
+        seq: u16,
+        /// How it ended.
+        outcome: Outcome,
+    },
+}
+
+impl std::fmt::Display for Blocker {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Self::LinkDown => write!(f, "the PLC link is down"),
+            Self::Stalled => write!(
+                f,
+                "the PLC heartbeat stands still: the PLC is stalled or in PROG mode"
+            ),
+            Self::NotHomed => write!(
+                f,
+                "the robot is not homed (the PLC's homed bit is clear): run `linterpd home`"
+            ),
+            Self::Homing => write!(f, "the robot is homing"),
+            Self::Faulted { fault } => write!(
+                f,
+                "the PLC program reports fault {fault} ({}); clear it first",
+                fault_meaning(fault)
+            ),
+            Self::NotReady { ready, required } => write!(
+                f,
+                "the PLC is not ready: ready bits {ready:#05b}, need {required:#05b} (bit 0 homed, 1 drives ready, 2 e-stop clear)"
+            ),
+            Self::HostUnconfirmed => write!(f, "the PLC has not yet echoed this host's word"),
+            Self::Stopping => write!(f, "a stop is being carried out"),
+            Self::Full => write!(f, "a move runs and another waits behind it"),
+            Self::Unproven => write!(
+                f,
+                "the PLC heartbeat has not been seen moving since the upload"
+            ),
+            Self::NotAtFrom {
+                channel,
+                count,
+                from,
+            } => write!(
+                f,
+                "channel {channel} is at {count}, not at {from} where the tables were planned from"
+            ),
+        }
+    }
+}
+
+/// The meaning of a fault word.
+#[must_use]
+pub fn fault_meaning(fault: u16) -> &'static str {
+    Fault::from_word(fault).map_or("a fault this contract does not define", Fault::meaning)
+}
+
+/// Lower-case words for how a start ended, after "start N".
+#[must_use]
+pub fn describe_outcome(outcome: &Outcome) -> String {
+    match *outcome {
+        Outcome::Stopped { fault: 0 } => "was stopped".to_owned(),
+        Outcome::Stopped { fault } => {
+            format!("was stopped: fault {fault} ({})", fault_meaning(fault))
+        }
+        Outcome::Faulted { fault } => {
+            format!("ended in fault {fault} ({})", fault_meaning(fault))
+        }
+        Outcome::Refused { fault } => format!(
+            "was refused by the PLC with fault {fault} ({}); nothing moved",
+            fault_meaning(fault)
+        ),
+        Outcome::Dropped => {
+            "was dropped by the PLC: the move before it did not end done; nothing moved".to_owned()
+        }
+        Outcome::NotTaken { scans } => {
+            format!("was not taken by the PLC within {scans} scans; a stop was written")
+        }
+        Outcome::Stalled { still } => format!(
+            "was given up: the PLC heartbeat stood still for {} ms; a stop was written",
+            still.as_millis()
+        ),
+        Outcome::Restarted => {
+            "was given up: the PLC restarted (its host word or sequence number changed)".to_owned()
+        }
+        Outcome::OutsideEnvelope {
+            channel,
+            count,
+            min,
+            max,
+        } => format!(
+            "ran away: channel {channel} reached {count}, outside its planned {min}..={max}; a stop was written"
+        ),
+        Outcome::Overrun { ran, limit } => format!(
+            "ran {:.1} s, past its limit of {:.1} s; a stop was written",
+            ran.as_secs_f64(),
+            limit.as_secs_f64()
+        ),
+        Outcome::LinkLost { down } => format!(
+            "is unknown: the PLC link was down for {:.1} s, past its planned end",
+            down.as_secs_f64()
+        ),
+        Outcome::WentIdle => "was lost: the PLC went idle without ending it".to_owned(),
+    }
+}
+
+/// A bank whose every word was written and verified, ready for one start.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[must_use = "an uploaded bank does nothing until it is started"]
+pub struct VerifiedBank {
+    /// The command block as written (command word still 0).
+    pub block: CommandBlock,
+    /// Words written (tables and command block).
+    pub words: usize,
+}
+
+/// What became of a command word written once.
+#[derive(Debug)]
+pub enum CommandWrite {
+    /// The PLC acknowledged the write.
+    Confirmed,
+    /// No acknowledgement: the reply was lost or garbled, the link failed, or the PLC answered
+    /// with an error. Whether it acted on the command is learnt from the status block, never
+    /// assumed (a reply can be an error for a command that was carried out).
+    Unconfirmed(PlcError),
+}
+
+/// When an owner of a link last saw it make progress (an exchange done, a loop gone round): what
+/// a watchdog reads.
+/// On tokio's clock (paused in tests).
+#[derive(Debug)]
+pub struct Beat {
+    epoch: tokio::time::Instant,
+    ms: std::sync::atomic::AtomicU64,
+}
+
+impl Default for Beat {
+    fn default() -> Self {
+        Self {
+            epoch: tokio::time::Instant::now(),
+            ms: std::sync::atomic::AtomicU64::new(0),
+        }
+    }
+}
+
+impl Beat {
+    /// Progress, now.
+    pub fn mark(&self) {
+        let ms = self.epoch.elapsed().as_millis() as u64;
+        self.ms.store(ms.max(1), Ordering::Relaxed);
+    }
+
+    /// How long ago the last progress was (`None` before any).
+    #[must_use]
+    pub fn since(&self) -> Option<Duration> {
+        let ms = self.ms.load(Ordering::Relaxed);
+        let now = self.epoch.elapsed().as_millis() as u64;
+        (ms > 0).then(|| Duration::from_millis(now.saturating_sub(ms)))
+    }
+}
+
+/// The contract's exchanges over one PLC link.
+#[derive(Debug)]
+pub struct Contract<P> {
+    plc: P,
+    settings: ContractSettings,
+    abort: Option<Arc<AtomicBool>>,
+    beat: Option<Arc<Beat>>,
+}
+
+impl<P: Plc> Contract<P> {
+    /// The exchanges over `plc`.
+    pub fn new(plc: P, settings: ContractSettings) -> Self {
+        Self {
+            plc,
+            settings,
+            abort: None,
+            beat: None,
+        }
+    }
+
+    /// A flag that, once set, makes [`Self::upload`] give up between two exchanges.
+    pub fn set_abort(&mut self, flag: Arc<AtomicBool>) {
+        self.abort = Some(flag);
+    }
+
+    /// A beat marked between the exchanges of a long upload.
+    pub fn set_beat(&mut self, beat: Arc<Beat>) {
+        self.beat = Some(beat);
+    }
+
+    /// Between two exchanges of an upload: progress is marked, and a stop asked for ends it.
+    fn aborted(&self) -> Result<(), ContractError> {
+        if let Some(beat) = &self.beat {
+            beat.mark();
+        }
+        match &self.abort {
+            Some(flag) if flag.load(Ordering::SeqCst) => Err(ContractError::Aborted),
+            _ => Ok(()),
+        }
+    }
+
+    /// The link, for other requests.
+    pub fn plc(&mut self) -> &mut P {
+        &mut self.plc
+    }
+
+    /// The settings.
+    #[must_use]
+    pub fn settings(&self) -> &ContractSettings {
+        &self.settings
+    }
+
+    /// Reads and decodes the status block; refuses a wrong magic or version.
+    pub async fn status(&mut self) -> Result<Status, ContractError> {
+        let words = self
+            .plc
+            .read_words(self.settings.layout.status_base, STATUS_WORDS as u16)
+            .await?;
+        let block = StatusBlock::from_words(&words).ok_or_else(|| PlcError::BadReply {
+            operation: "read status block".into(),
+            detail: format!("{} words, expected {STATUS_WORDS}", words.len()),
+        })?;
+        if block.magic != MAGIC {
+            return Err(ContractError::BadMagic {
+                found: block.magic,
+                base: self.settings.layout.status_base,
+            });
+        }
+        if block.version != VERSION {
+            return Err(ContractError::WrongVersion {
+                found: block.version,
+            });
+        }
+        Ok(Status {
+            block,
+            state: State::from_word(block.state)?,
+            fault: Fault::from_word(block.fault)?,
+        })
+    }
+
+    /// The command block as it stands in the PLC.
+    pub async fn command_block(&mut self) -> Result<CommandBlock, ContractError> {
+        let words = self
+            .plc
+            .read_words(self.settings.layout.command_base, COMMAND_WORDS as u16)
+            .await?;
+        CommandBlock::from_words(&words).ok_or_else(|| {
+            ContractError::Plc(PlcError::BadReply {
+                operation: "read command block".into(),
+                detail: format!("{} words, expected {COMMAND_WORDS}", words.len()),
+            })
+        })
+    }
+
+    /// Writes every table into `bank`, then the command block except its command and host words
+    /// (`from` = the counts the tables were planned from), then reads all of it back and
+    /// compares. Only a complete, verified upload yields the bank.
+    pub async fn upload(
+        &mut self,
+        bank: u16,
+        seq: u16,
+        from: [i32; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<VerifiedBank, ContractError> {
+        if bank >= crate::contract::BANKS {
+            return Err(ContractError::BadBank { bank });
+        }
+        let mut block = CommandBlock {
+            command: Command::None.word(),
+            seq,
+            bank,
+            from,
+            ..CommandBlock::default()
+        };
+        let mut writes: Vec<(u16, Vec<u16>)> = Vec::with_capacity(tables.len() + 1);
+        for t in tables {
+            let channel = t.table().channel;
+            let c = usize::from(channel);
+            if c >= CHANNELS || block.mask & (1 << c) != 0 {
+                return Err(ContractError::BadChannel { channel });
+            }
+            let words = encode(t);
+            let area_words = self.settings.layout.area_words;
+            if words.len() > usize::from(area_words) || words.len() < DIRECTORY_WORDS {
+                return Err(ContractError::TooLarge {
+                    channel,
+                    words: words.len(),
+                    area_words,
+                });
+            }
+            block.mask |= 1 << c;
+            block.segments[c] = t.table().segments.len() as u16;
+            writes.push((self.settings.layout.area(bank, c), words));
+        }
+        writes.push(self.block_write(&block));
+        for (address, words) in &writes {
+            self.aborted()?;
+            self.plc.write_words(*address, words).await?;
+        }
+        if self.settings.verify {
+            for (address, words) in &writes {
+                self.aborted()?;
+                self.compare(*address, words).await?;
+            }
+        }
+        Ok(VerifiedBank {
+            block,
+            words: writes.iter().map(|(_, w)| w.len()).sum(),
+        })
+    }
+
+    /// The write of a command block's words 1..16 (everything but the command and host words).
+    fn block_write(&self, block: &CommandBlock) -> (u16, Vec<u16>) {
+        let words = block.to_words()[1..usize::from(COMMAND_HOST_OFFSET)].to_vec();
+        (self.settings.layout.command_base + 1, words)
+    }
+
+    async fn compare(&mut self, address: u16, wrote: &[u16]) -> Result<(), ContractError> {
+        let read = self.plc.read_words(address, wrote.len() as u16).await?;
+        for (i, (w, r)) in wrote
+            .iter()
+            .zip(read.iter().chain(std::iter::repeat(&0)))
+            .enumerate()
+        {
+            if w != r {
+                return Err(ContractError::CompareFailed {
+                    address: address + i as u16,
+                    wrote: *w,
+                    read: *r,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes `command = 1` for a verified bank, once. Anything but an acknowledgement (a lost,
+    /// garbled or error reply) comes back as [`CommandWrite::Unconfirmed`]: read the status block
+    /// to learn whether the start was taken.
+    pub async fn start(&mut self, bank: &VerifiedBank) -> Result<CommandWrite, ContractError> {
+        let _ = bank;
+        self.command_once(Command::Start).await
+    }
+
+    async fn command_once(&mut self, command: Command) -> Result<CommandWrite, ContractError> {
+        let address = self.settings.layout.command_base;
+        match self.plc.write_words_once(address, &[command.word()]).await {
+            Ok(()) => Ok(CommandWrite::Confirmed),
+            // Never sent.
+            Err(e @ PlcError::InvalidRequest { .. }) => Err(ContractError::Plc(e)),
+            Err(e) => Ok(CommandWrite::Unconfirmed(e)),
+        }
+    }
+
+    /// Writes `command = 4` to home the channels in `mask`, each preset to `from[c]` at its home
+    /// position (the block's mask and `from` first, read back, then the command word once).
+    pub async fn home(
+        &mut self,
+        mask: u16,
+        from: [i32; CHANNELS],
+    ) -> Result<CommandWrite, ContractError> {
+        let block = CommandBlock {
+            mask,
+            from,
+            ..self.command_block().await?
+        };
+        let (address, words) = self.block_write(&block);
+        self.plc.write_words(address, &words).await?;
+        if self.settings.verify {
+            self.compare(address, &words).await?;
+        }
+        self.command_once(Command::Home).await
+    }
+
+    /// Stops every channel and drops any waiting start. Safe to write again.
+    pub async fn stop(&mut self) -> Result<(), ContractError> {
+        self.command(Command::Stop).await
+    }
+
+    /// Clears a latched fault.
+    pub async fn clear_fault(&mut self) -> Result<(), ContractError> {
+        self.command(Command::ClearFault).await
+    }
+
+    /// Withdraws a start that waits (`command = 0`): it never runs. Harmless if the PLC has
+    /// already acted on it.
+    pub async fn withdraw(&mut self) -> Result<(), ContractError> {
+        self.command(Command::None).await
+    }
+
+    async fn command(&mut self, command: Command) -> Result<(), ContractError> {
+        self.plc
+            .write_words(self.settings.layout.command_base, &[command.word()])
+            .await?;
+        Ok(())
+    }
+
+    /// Writes the host's word into the command block.
+    pub async fn write_host(&mut self, host: u16) -> Result<(), ContractError> {
+        let address = self.settings.layout.command_base + COMMAND_HOST_OFFSET;
+        self.plc.write_words(address, &[host]).await?;
+        Ok(())
+    }
+
+    /// Reads the status block into `machine` (carrying out the host word and stop it asks for)
+    /// until a start can be written, as long as the heartbeat stands still no longer than its
+    /// limit: the heartbeat seen moving, the host word echoed, no fault, the ready bits set.
+    pub async fn ready(&mut self, machine: &mut Machine) -> Result<Status, ContractError> {
+        let limit = machine.settings().heartbeat_timeout;
+        let began = tokio::time::Instant::now();
+        let mut first = None;
+        loop {
+            let status = self.status().await?;
+            let now = tokio::time::Instant::now().into_std();
+            for event in machine.on_status(&status, now) {
+                self.carry_out(&event, machine).await?;
+            }
+            let moved = *first.get_or_insert(status.block.heartbeat) != status.block.heartbeat;
+            let still = machine.heartbeat_age(now).unwrap_or_default();
+            match machine.blocker(now) {
+                None if moved => return Ok(status),
+                Some(
+                    b @ (Blocker::Faulted { .. } | Blocker::NotReady { .. } | Blocker::NotHomed),
+                ) => return Err(ContractError::Blocked(b)),
+                _ if still > limit => return Err(self.stalled(still, limit).await),
+                Some(b) if began.elapsed() > limit * 4 => return Err(ContractError::Blocked(b)),
+                _ => tokio::time::sleep(self.settings.scan_time.min(limit / 4)).await,
+            }
+        }
+    }
+
+    /// A stalled PLC, named with its mode when it says PROG.
+    pub async fn stalled(&mut self, still: Duration, limit: Duration) -> ContractError {
+        let prog = matches!(self.plc.mode().await, Ok(super::PlcMode::Prog));
+        ContractError::Stalled {
+            still_ms: still.as_millis() as u64,
+            limit_ms: limit.as_millis() as u64,
+            mode: if prog { ", and in PROG mode" } else { "" },
+        }
+    }
+
+    /// Carries out what the machine asks for that needs only the link: the host word, a stop.
+    /// Other events are the caller's.
+    pub async fn carry_out(
+        &mut self,
+        event: &Event,
+        machine: &Machine,
+    ) -> Result<(), ContractError> {
+        match event {
+            Event::WriteHost => self.write_host(machine.host()).await,
+            Event::WriteStop => self.stop().await,
+            _ => Ok(()),
+        }
+    }
+
+    /// Starts a verified bank planned as `start` and follows it to its end with `machine`
+    /// (made [`Self::ready`] before the upload), calling `progress` with every status read. The
+    /// start is written only once the heartbeat is seen moving after the upload, the PLC takes a
+    /// start and every count is `start.from`. Done: the last status block; anything else: an
+    /// error ([`ContractError::Ended`] once the start was written).
+    pub async fn run(
+        &mut self,
+        machine: &mut Machine,
+        bank: &VerifiedBank,
+        start: Planned,
+        mut progress: impl FnMut(&Status),
+    ) -> Result<Status, ContractError> {
+        machine.upload_begun();
+        loop {
+            let status = self.status().await?;
+            let now = tokio::time::Instant::now().into_std();
+            for event in machine.on_status(&status, now) {
+                self.carry_out(&event, machine).await?;
+            }
+            match machine.may_start(&start, now) {
+                Ok(()) => break,
+                Err(Blocker::Unproven) => tokio::time::sleep(self.settings.scan_time / 2).await,
+                Err(Blocker::NotAtFrom {
+                    channel,
+                    count,
+                    from,
+                }) => {
+                    machine.upload_ended();
+                    return Err(ContractError::NotAtFrom {
+                        channel,
+                        count,
+                        from,
+                    });
+                }
+                Err(Blocker::Stalled) => {
+                    machine.upload_ended();
+                    let limit = machine.settings().heartbeat_timeout;
+                    let still = machine.heartbeat_age(now).unwrap_or_default();
+                    return Err(self.stalled(still, limit).await);
+                }
+                Err(blocker) => {
+                    machine.upload_ended();
+                    return Err(ContractError::Blocked(blocker));
+                }
+            }
+        }
+        let confirmed = matches!(self.start(bank).await?, CommandWrite::Confirmed);
+        machine.start_written(start, tokio::time::Instant::now().into_std(), confirmed);
+        loop {
+            tokio::time::sleep(self.settings.poll_interval).await;
+            let status = self.status().await?;
+            progress(&status);
+            let now = tokio::time::Instant::now().into_std();
+            let mut end = None;
+            for event in machine.on_status(&status, now) {
+                match event {
+                    Event::Done { tag, .. } if tag == start.tag => end = Some(Ok(status)),
+                    Event::Ended { tag, outcome } if tag == start.tag => {
+                        end = Some(Err(ContractError::Ended {
+                            seq: start.seq,
+                            outcome,
+                        }));
+                    }
+                    Event::RewriteStart { .. } => {
+                        let confirmed = matches!(self.start(bank).await?, CommandWrite::Confirmed);
+                        machine.start_rewritten(tokio::time::Instant::now().into_std(), confirmed);
+                    }
+                    other => self.carry_out(&other, machine).await?,
+                }
+            }
+            if let Some(end) = end {
+                return end;
+            }
+        }
+    }
+}

@@ -1,0 +1,359 @@
+use super::*;
+use crate::contract::machine::WatchSettings;
+use crate::plc::PlcMode;
+use crate::table::{
+    ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row,
+    Segment, validate,
+};
+
+/// DT memory whose status block a test sets; every read of the status block ticks the
+/// heartbeat unless frozen; a write log; an optional corruption of one address on read.
+#[derive(Debug, Default)]
+struct FakePlc {
+    dt: std::collections::HashMap<u16, u16>,
+    frozen: bool,
+    prog: bool,
+    corrupt: Option<u16>,
+    /// Writes of one word that land but whose reply is lost (a timeout), by address.
+    lose_reply_at: Option<u16>,
+    /// Writes the PLC refuses (an error reply), by address.
+    refuse_at: Option<u16>,
+    writes: Vec<(u16, usize)>,
+}
+
+impl FakePlc {
+    fn running() -> Self {
+        let mut f = Self::default();
+        let status = StatusBlock {
+            magic: MAGIC,
+            version: VERSION,
+            ready: 0b111,
+            ..StatusBlock::default()
+        };
+        f.put(1_000, &status.to_words());
+        f
+    }
+    fn put(&mut self, at: u16, words: &[u16]) {
+        for (i, w) in words.iter().enumerate() {
+            self.dt.insert(at + i as u16, *w);
+        }
+    }
+}
+
+impl Plc for FakePlc {
+    async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
+        if start == 1_000 && !self.frozen {
+            let hb = self.dt.get(&1_002).copied().unwrap_or(0);
+            self.dt.insert(1_002, hb.wrapping_add(1));
+            // The program copies the command block's host word every scan.
+            let host = self.dt.get(&1_048).copied().unwrap_or(0);
+            self.dt.insert(1_020, host);
+        }
+        Ok((start..start + count)
+            .map(|a| {
+                let w = self.dt.get(&a).copied().unwrap_or(0);
+                if self.corrupt == Some(a) { w ^ 1 } else { w }
+            })
+            .collect())
+    }
+    async fn write_words(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+        if self.refuse_at == Some(start) {
+            return Err(PlcError::Refused {
+                operation: format!("write DT{start}"),
+                refusal: crate::plc::Refusal::Mewtocol {
+                    code: 61,
+                    meaning: "data error",
+                },
+            });
+        }
+        self.writes.push((start, words.len()));
+        self.put(start, words);
+        if self.lose_reply_at == Some(start) {
+            return Err(PlcError::Timeout {
+                operation: format!("write DT{start}"),
+                timeout_ms: 300,
+            });
+        }
+        Ok(())
+    }
+    async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
+        self.write_words(start, words).await
+    }
+    async fn read_relay(&mut self, _relay: u16) -> Result<bool, PlcError> {
+        Ok(false)
+    }
+    async fn write_relay(&mut self, _relay: u16, _on: bool) -> Result<(), PlcError> {
+        Ok(())
+    }
+    async fn read_bits(
+        &mut self,
+        _area: crate::gateway::Area,
+        _start: u32,
+        count: u16,
+    ) -> Result<Vec<bool>, PlcError> {
+        Ok(vec![false; usize::from(count)])
+    }
+    async fn write_bit(
+        &mut self,
+        _area: crate::gateway::Area,
+        _bit: u32,
+        _on: bool,
+    ) -> Result<(), PlcError> {
+        Ok(())
+    }
+    fn exchange_sizes(&self) -> crate::plc::ExchangeSizes {
+        crate::plc::ExchangeSizes {
+            read_words: 27,
+            write_words: 24,
+            read_bits: 432,
+        }
+    }
+    async fn mode(&mut self) -> Result<PlcMode, PlcError> {
+        Ok(if self.prog {
+            PlcMode::Prog
+        } else {
+            PlcMode::Run
+        })
+    }
+}
+
+fn table(channel: u8) -> ValidTable {
+    let control = ControlCode {
+        output: OutputMethod::PulseSign,
+        direction: Direction::Up,
+        absolute: true,
+        range: FrequencyRange::High,
+        duty: Duty::Half,
+    };
+    let t = ChannelTable {
+        channel,
+        start: 0,
+        segments: vec![Segment {
+            control,
+            rows: vec![Row {
+                freq_hz: 1_000,
+                target: 500,
+            }],
+        }],
+    };
+    validate(
+        t,
+        ChannelLimits {
+            max_freq_hz: 20_000,
+            area_words: 2_000,
+        },
+    )
+    .unwrap()
+}
+
+const FROM: [i32; CHANNELS] = [0, 0, 0, 0];
+
+#[tokio::test(start_paused = true)]
+async fn upload_writes_tables_then_the_command_block_with_from_but_not_command_or_host() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let from = [0, 7, 0, -9];
+    let bank = c.upload(1, 7, from, &[table(0), table(2)]).await.unwrap();
+    assert_eq!(bank.block.mask, 0b101);
+    assert_eq!(bank.block.segments, [1, 0, 1, 0]);
+    assert_eq!(bank.block.from, from);
+    let plc = c.plc();
+    assert_eq!(plc.writes[0], (10_000, 16));
+    assert_eq!(plc.writes[1], (14_000, 16));
+    assert_eq!(plc.writes[2], (1_033, 15), "seq..from, not the host word");
+    assert!(
+        !plc.writes.iter().any(|(a, _)| *a == 1_032 || *a == 1_048),
+        "command or host word written by upload"
+    );
+    assert_eq!(plc.dt[&1_033], 7);
+    assert_eq!(plc.dt[&1_035], 1);
+    assert_eq!((plc.dt[&1_042], plc.dt[&1_043]), (7, 0), "from[1]");
+    assert_eq!(
+        (plc.dt[&1_046], plc.dt[&1_047]),
+        (0xFFF7, 0xFFFF),
+        "from[3]"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn failed_read_back_yields_no_bank_and_no_start() {
+    let mut plc = FakePlc::running();
+    plc.corrupt = Some(2_010);
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let err = c.upload(0, 1, FROM, &[table(0)]).await.unwrap_err();
+    assert!(
+        matches!(err, ContractError::CompareFailed { address: 2_010, .. }),
+        "{err}"
+    );
+    assert!(!c.plc().writes.iter().any(|(a, _)| *a == 1_032));
+}
+
+#[tokio::test(start_paused = true)]
+async fn start_writes_exactly_one_command_word() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let bank = c.upload(0, 1, FROM, &[table(1)]).await.unwrap();
+    assert!(matches!(
+        c.start(&bank).await.unwrap(),
+        CommandWrite::Confirmed
+    ));
+    assert_eq!(c.plc().writes.last(), Some(&(1_032, 1)));
+    assert_eq!(c.plc().dt[&1_032], 1);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_start_whose_reply_is_lost_is_not_written_again() {
+    let mut plc = FakePlc::running();
+    plc.lose_reply_at = Some(1_032);
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let bank = c.upload(0, 1, FROM, &[table(1)]).await.unwrap();
+    let written = c.start(&bank).await.unwrap();
+    assert!(matches!(
+        written,
+        CommandWrite::Unconfirmed(PlcError::Timeout { .. })
+    ));
+    let starts = c.plc().writes.iter().filter(|(a, _)| *a == 1_032).count();
+    assert_eq!(starts, 1, "the start was sent once");
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_start_answered_with_an_error_is_unconfirmed_not_refused() {
+    // An error reply does not prove the PLC did not act: what it did is read from its status.
+    let mut plc = FakePlc::running();
+    plc.refuse_at = Some(1_032);
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let bank = c.upload(0, 1, FROM, &[table(1)]).await.unwrap();
+    let written = c.start(&bank).await.unwrap();
+    assert!(
+        matches!(written, CommandWrite::Unconfirmed(PlcError::Refused { .. })),
+        "{written:?}"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn wrong_magic_and_wrong_version_are_refused_naming_the_values() {
+    let mut plc = FakePlc::running();
+    plc.dt.insert(1_000, 0x1234);
+    let err = Contract::new(plc, ContractSettings::default())
+        .status()
+        .await
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "status block magic is 0x1234, expected 0x4c49: the linterpd PLC program is not running at DT1000"
+    );
+    let mut plc = FakePlc::running();
+    plc.dt.insert(1_001, 1);
+    let err = Contract::new(plc, ContractSettings::default())
+        .status()
+        .await
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "the PLC program speaks contract version 1; this linterpd speaks 2"
+    );
+}
+
+fn machine() -> Machine {
+    Machine::new(WatchSettings::default(), 0xBEEF)
+}
+
+#[tokio::test(start_paused = true)]
+async fn ready_writes_the_host_word_and_waits_for_its_echo() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let mut m = machine();
+    let status = c.ready(&mut m).await.unwrap();
+    assert_eq!(c.plc().dt[&1_048], 0xBEEF);
+    assert_eq!(status.block.host, 0xBEEF);
+    assert_eq!(m.blocker(tokio::time::Instant::now().into_std()), None);
+}
+
+#[tokio::test(start_paused = true)]
+async fn frozen_heartbeat_in_prog_mode_is_refused_after_the_timeout() {
+    let mut plc = FakePlc::running();
+    plc.frozen = true;
+    plc.prog = true;
+    let err = Contract::new(plc, ContractSettings::default())
+        .ready(&mut machine())
+        .await
+        .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("limit 500 ms") && msg.ends_with("stalled, and in PROG mode"),
+        "{msg}"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn latched_fault_missing_ready_bits_and_no_homing_are_refused() {
+    let cases: [(u16, u16, u16, &str); 3] = [
+        (
+            State::Fault.word(),
+            2,
+            0b111,
+            "fault 2 (channel busy at start)",
+        ),
+        (State::Idle.word(), 0, 0b011, "ready bits 0b011, need 0b111"),
+        (State::Idle.word(), 0, 0b110, "not homed"),
+    ];
+    for (state, fault, ready, want) in cases {
+        let mut plc = FakePlc::running();
+        plc.dt.insert(1_003, state);
+        plc.dt.insert(1_005, fault);
+        plc.dt.insert(1_007, ready);
+        let err = Contract::new(plc, ContractSettings::default())
+            .ready(&mut machine())
+            .await
+            .unwrap_err();
+        assert!(err.to_string().contains(want), "{err}");
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn run_refuses_to_write_a_start_from_other_counts() {
+    let mut plc = FakePlc::running();
+    plc.put(1_008, &[5, 0]);
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let mut m = machine();
+    c.ready(&mut m).await.unwrap();
+    let bank = c.upload(0, 1, FROM, &[table(0)]).await.unwrap();
+    let start = Planned {
+        tag: 1,
+        seq: 1,
+        bank: 0,
+        from: FROM,
+        targets: Some([500, 0, 0, 0]),
+        envelope: [(0, 500), (0, 0), (0, 0), (0, 0)],
+        duration: Duration::from_millis(500),
+    };
+    let err = c.run(&mut m, &bank, start, |_| {}).await.unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "channel 0 is at 5, the tables were planned from 0: the start is not written"
+    );
+    assert!(!c.plc().writes.iter().any(|(a, _)| *a == 1_032));
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_bank_read_back_describes_a_start_found_running() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let from = [0, 0, 0, 0];
+    let bank = c.upload(1, 5, from, &[table(2)]).await.unwrap();
+    assert_eq!(bank.block.bank, 1);
+    let mut status = c.status().await.unwrap();
+    status.block.elapsed[2] = 200;
+    status.block.busy = 0b100;
+    let planned = c.describe_running(5, 42, &status).await.unwrap();
+    assert_eq!(planned.bank, 1);
+    assert_eq!(planned.targets, Some([0, 0, 500, 0]));
+    assert_eq!(planned.envelope[2], (0, 500));
+    assert_eq!(planned.envelope[0], (0, 0));
+    assert_eq!(planned.duration, Duration::from_millis(500));
+    // A later start written into the other bank: the running one's bank is still found.
+    c.plc().put(1_033, &[6, 0, 0]);
+    let planned = c.describe_running(5, 42, &status).await.unwrap();
+    assert_eq!((planned.bank, planned.targets), (1, None));
+    assert_eq!(
+        planned.envelope[2],
+        (200, 500),
+        "from unknown: bounded from where it is"
+    );
+}

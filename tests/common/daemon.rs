@@ -1,0 +1,62 @@
+//! The daemon in process on a mock PLC: a connector that opens a fresh MEWTOCOL `duplex`
+//! connection to the mock for every (re)connection, and spawning a daemon for the seed's robot.
+
+use linterpd::daemon::{Connector, Daemon, DaemonOptions, RobotHandle, RobotSetup};
+use linterpd::kinematics::JOINTS;
+use linterpd::mewtocol::Station;
+use linterpd::mock::{MewtocolServer, MewtocolServerOptions, SharedMock};
+use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
+use linterpd::robot::seed_robot;
+
+/// MEWTOCOL options of the test links: station 1, `%` frames.
+pub fn mewtocol_options() -> MewtocolOptions {
+    MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent)
+}
+
+/// Opens a fresh `duplex` connection to the mock for every (re)connection, served at `baud`.
+pub fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
+    let shared = shared.clone();
+    Box::new(move || {
+        let shared = shared.clone();
+        Box::pin(async move {
+            let (ours, theirs) = tokio::io::duplex(4_096);
+            let server = MewtocolServer::new(
+                shared,
+                MewtocolServerOptions {
+                    baud,
+                    ..MewtocolServerOptions::default()
+                },
+            );
+            tokio::spawn(async move { server.serve(theirs).await });
+            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
+                Box::new(ours) as BoxedLink,
+                mewtocol_options(),
+            )))
+        })
+    })
+}
+
+/// A daemon for the seed's robot on `connect`, homed at counts 0.
+pub fn spawn(connect: Connector, settings: ContractSettings) -> (Daemon, RobotHandle) {
+    spawn_with(connect, settings, &DaemonOptions::default(), [0; JOINTS])
+}
+
+/// As [`spawn`], with daemon options and the counts each joint is homed to.
+pub fn spawn_with(
+    connect: Connector,
+    settings: ContractSettings,
+    options: &DaemonOptions,
+    home_counts: [i64; JOINTS],
+) -> (Daemon, RobotHandle) {
+    let setup = RobotSetup {
+        robot: seed_robot(),
+        settings,
+        connect,
+        home_counts,
+        gateway: linterpd::gateway::GatewaySettings::default(),
+    };
+    let d = Daemon::spawn(vec![setup], options);
+    let h = d.robot("press-loader").unwrap().clone();
+    (d, h)
+}

@@ -1,0 +1,15 @@
+//! A short soak in the test suite (the full one is `cargo bench --bench soak`): 100 moves over
+//! MEWTOCOL-COM on paused time through replies corrupted, dropped and delayed at random.
+
+#[path = "../benches/soak.rs"]
+#[allow(dead_code, unreachable_pub)]
+mod soak;
+
+#[tokio::test(start_paused = true)]
+async fn a_hundred_moves_through_a_lossy_link_keep_every_invariant() {
+    let summary = soak::soak(soak::SoakLink::Mewtocol, 100).await;
+    let text = soak::report(soak::SoakLink::Mewtocol, &summary);
+    println!("{text}");
+    assert!(soak::clean(&summary), "{text}");
+    assert!(summary.starts > 50, "most moves ran: {text}");
+}
