@@ -19,13 +19,19 @@ pub(super) fn check_target(robot: &Robot, to: &Joints) -> Result<(), PlanError> 
             return Err(PlanError::TargetOutOfLimit {
                 joint: joint.name.clone(),
                 value: joint.user(value),
-                min: joint.user(joint.min),
-                max: joint.user(joint.max),
+                min: shown(joint.user(joint.min)),
+                max: shown(joint.user(joint.max)),
                 unit: joint.kind.user_unit(),
             });
         }
     }
     Ok(())
+}
+
+/// A limit as the user wrote it: the config's degrees went to radians and back, which leaves
+/// `-701.0000000000001`; a micro-unit is far below any limit's meaning.
+fn shown(limit: f64) -> f64 {
+    (limit * 1e6).round() / 1e6
 }
 
 /// Checks every joint's count at every sample against its position limits.
@@ -43,8 +49,8 @@ pub(super) fn check_positions(
                 return Err(PlanError::OutOfLimit {
                     joint: joint.name.clone(),
                     value: joint.user(value),
-                    min: joint.user(joint.min),
-                    max: joint.user(joint.max),
+                    min: shown(joint.user(joint.min)),
+                    max: shown(joint.user(joint.max)),
                     unit: joint.kind.user_unit(),
                     t_s: i as f64 * period_s,
                 });

@@ -287,6 +287,22 @@ fn joint_target_beyond_a_limit_is_refused_naming_the_joint_and_the_limit() {
 }
 
 #[test]
+fn a_limit_is_named_as_the_config_wrote_it_not_after_a_trip_through_radians() {
+    let mut robot = seed_robot();
+    let wrist = &mut robot.joints[3];
+    // -701 deg comes back from radians as -701.0000000000001.
+    wrist.min = wrist.kind.from_user(-701.0);
+    wrist.max = wrist.kind.from_user(701.0);
+    let mut req = joint_request(
+        [130.0, 180.0, 800.0, 0.0],
+        crate::robot::Method::ConstantPeriod,
+    );
+    req.to[3] = robot.joints[3].kind.from_user(720.0);
+    let msg = plan_joint_move(&robot, &req).unwrap_err().to_string();
+    assert!(msg.ends_with("beyond its limits -701 to 701 deg"), "{msg}");
+}
+
+#[test]
 fn joint_move_to_where_it_stands_is_refused_and_the_wrist_alone_turns() {
     let robot = seed_robot();
     let req = joint_request([0.0; 4], crate::robot::Method::ConstantPeriod);
