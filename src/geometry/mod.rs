@@ -1,9 +1,15 @@
-//! PURE. Poses, the straight line between two poses, the polyline of a curved tool path, and
-//! the motion profile along a path.
+//! PURE. Poses, the straight line between two poses, paths of lines and arcs through waypoints
+//! (corners blended or stopped at), the polyline of a curved tool path, and the motion profile
+//! along a path.
 
+mod path;
 mod polyline;
 mod profile;
 
+pub use path::{
+    Arc, ArcBy, ArcFault, Corner, Element, Path, PathError, PathSpec, Piece, Primitive,
+    RADIUS_SLACK_MM,
+};
 pub use polyline::Polyline;
 pub use profile::{Profile, ProfileError, ProfileRequest};
 

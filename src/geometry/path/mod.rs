@@ -1,0 +1,501 @@
+//! PURE. A path of the tool through waypoints: lines and circular arcs, each waypoint either a
+//! stop or a blended corner, built into the primitives the planner follows.
+//!
+//! A blend of radius `r` at a waypoint replaces the corner by an arc tangent to both neighbours,
+//! starting and ending no further than `r` from the waypoint along them (less where a
+//! neighbour is shorter than `2 r`: a blend takes at most half of each neighbour, so two blends
+//! never overlap). Blends join two lines; a corner next to an arc is a stop or a tangent join
+//! (where the arc leaves in the direction the line came in, no blend is needed).
+
+mod arc;
+
+pub use arc::{Arc, ArcFault, RADIUS_SLACK_MM};
+
+use nalgebra::Vector3;
+use thiserror::Error;
+
+use super::{Line, Pose, ToolPath};
+
+/// The turn (radians) below which a corner is no corner: the path goes straight on.
+const STRAIGHT_RAD: f64 = 1e-6;
+/// The turn (radians) beyond which a corner goes back the way it came: no arc can round it.
+const REVERSAL_RAD: f64 = std::f64::consts::PI - 1e-3;
+
+/// How the path goes on from one element to the next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Corner {
+    /// The tool comes to rest at the waypoint.
+    Stop,
+    /// The corner is rounded by an arc leaving each neighbour at most this far from it, mm.
+    Blend(f64),
+}
+
+/// How an arc element is given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ArcBy {
+    /// Through this point (three points make the circle).
+    Via(Vector3<f64>),
+    /// About this centre, in the plane square to `axis` through it.
+    Centre {
+        /// The centre, mm.
+        centre_mm: Vector3<f64>,
+        /// The plane's normal (z for an arc in a horizontal plane).
+        axis: Vector3<f64>,
+        /// Clockwise seen from the axis' tip (else counter-clockwise).
+        clockwise: bool,
+    },
+}
+
+/// One element of a path: to a pose, on a line or an arc.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Element {
+    /// A straight line to a pose.
+    Line {
+        /// Where it ends.
+        to: Pose,
+    },
+    /// A circular arc to a pose.
+    Arc {
+        /// Where it ends.
+        to: Pose,
+        /// Which circle.
+        by: ArcBy,
+    },
+}
+
+impl Element {
+    /// Where it ends.
+    #[must_use]
+    pub fn to(&self) -> Pose {
+        match self {
+            Self::Line { to } | Self::Arc { to, .. } => *to,
+        }
+    }
+}
+
+/// A path as written: a start, elements, and how each waypoint between two elements is passed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathSpec {
+    /// Where the tool starts.
+    pub start: Pose,
+    /// The elements, in order, with the corner at each one's end (the last one's is a stop,
+    /// whatever it says).
+    pub elements: Vec<(Element, Corner)>,
+}
+
+/// Why a path cannot be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PathError {
+    /// No elements.
+    #[error("a path needs at least one element")]
+    Empty,
+    /// An element that does not move the tool point (and is not a full circle).
+    #[error("element {element} ends where it starts ({x:.3}, {y:.3}, {z:.3} mm): it has no length")]
+    NoLength {
+        /// Element number, from 1.
+        element: usize,
+        /// Where, mm.
+        x: f64,
+        /// y, mm.
+        y: f64,
+        /// z, mm.
+        z: f64,
+    },
+    /// An arc element's points make no circle.
+    #[error("element {element} (arc): {reason}")]
+    Arc {
+        /// Element number, from 1.
+        element: usize,
+        /// Why.
+        reason: String,
+    },
+    /// A blend radius that is not a number above 0.
+    #[error("waypoint {waypoint}: blend {radius_mm} mm must be a number above 0")]
+    BlendRadius {
+        /// Waypoint number (the end of element n), from 1.
+        waypoint: usize,
+        /// The radius given, mm.
+        radius_mm: f64,
+    },
+    /// A blend next to an arc that the arc does not meet tangentially.
+    #[error(
+        "waypoint {waypoint}: a blend joins two lines, and element {element} is an arc; make the \
+         corner a stop, or end the line where the arc leaves along it"
+    )]
+    BlendNextToArc {
+        /// Waypoint number, from 1.
+        waypoint: usize,
+        /// The arc's element number, from 1.
+        element: usize,
+    },
+    /// A corner that turns the path back on itself cannot be blended.
+    #[error("waypoint {waypoint}: the path turns back by {turn_deg:.1} deg there; it must stop")]
+    Reversal {
+        /// Waypoint number, from 1.
+        waypoint: usize,
+        /// The turn, degrees.
+        turn_deg: f64,
+    },
+}
+
+/// One primitive of a built path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Primitive {
+    /// A straight line.
+    Line(Line),
+    /// A circular arc.
+    Arc(Arc),
+}
+
+impl Primitive {
+    /// Its length, mm.
+    #[must_use]
+    pub fn length_mm(&self) -> f64 {
+        match self {
+            Self::Line(l) => l.length_mm(),
+            Self::Arc(a) => a.length_mm(),
+        }
+    }
+
+    /// The pose at `s_mm` from its start.
+    #[must_use]
+    pub fn at(&self, s_mm: f64) -> Pose {
+        match self {
+            Self::Line(l) => l.at(s_mm),
+            Self::Arc(a) => a.at(s_mm),
+        }
+    }
+
+    /// The unit direction of travel at `s_mm` from its start (a line without length: zero).
+    #[must_use]
+    pub fn direction(&self, s_mm: f64) -> Vector3<f64> {
+        match self {
+            Self::Line(l) => (l.to.position_mm - l.from.position_mm)
+                .try_normalize(0.0)
+                .unwrap_or_else(Vector3::zeros),
+            Self::Arc(a) => a.direction(s_mm),
+        }
+    }
+
+    /// Its curvature, 1/mm (0 on a line).
+    #[must_use]
+    pub fn curvature_per_mm(&self) -> f64 {
+        match self {
+            Self::Line(_) => 0.0,
+            Self::Arc(a) => 1.0 / a.radius_mm,
+        }
+    }
+
+    /// Distance from a point to it, mm.
+    #[must_use]
+    pub fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
+        match self {
+            Self::Line(l) => l.distance_mm(p),
+            Self::Arc(a) => a.distance_mm(p),
+        }
+    }
+
+    /// Where it starts.
+    #[must_use]
+    pub fn from(&self) -> Pose {
+        match self {
+            Self::Line(l) => l.from,
+            Self::Arc(a) => a.from,
+        }
+    }
+
+    /// Where it ends.
+    #[must_use]
+    pub fn to(&self) -> Pose {
+        match self {
+            Self::Line(l) => l.to,
+            Self::Arc(a) => a.to,
+        }
+    }
+}
+
+/// A primitive in place on its path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Piece {
+    /// The primitive.
+    pub primitive: Primitive,
+    /// Its start's distance along the path, mm.
+    pub start_mm: f64,
+    /// The element it comes from (from 1), or `None` for a blend's corner arc.
+    pub element: Option<usize>,
+}
+
+/// A built path: pieces end to end, and where along it the tool comes to rest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Path {
+    pieces: Vec<Piece>,
+    /// Distances along the path of every stop, ascending; the last is the path's end.
+    stops_mm: Vec<f64>,
+}
+
+impl Path {
+    /// Builds `spec` into its primitives, corners blended where asked.
+    ///
+    /// # Errors
+    /// When an element has no length or no circle, or a blend cannot be made (see
+    /// [`PathError`]).
+    pub fn build(spec: &PathSpec) -> Result<Self, PathError> {
+        if spec.elements.is_empty() {
+            return Err(PathError::Empty);
+        }
+        let mut raw = Vec::with_capacity(spec.elements.len());
+        let mut from = spec.start;
+        for (i, (element, _)) in spec.elements.iter().enumerate() {
+            raw.push(primitive(i + 1, from, element)?);
+            from = element.to();
+        }
+        let last = raw.len() - 1;
+        let mut passes = Vec::with_capacity(last);
+        for (i, (_, corner)) in spec.elements.iter().enumerate().take(last) {
+            passes.push(pass(i + 1, *corner, &raw[i], &raw[i + 1])?);
+        }
+        let mut pieces = Vec::new();
+        let mut stops_mm = Vec::new();
+        let mut s = 0.0;
+        for (i, prim) in raw.iter().enumerate() {
+            let reach = |w: Option<&Pass>| match w {
+                Some(Pass::Blend { reach_mm, .. }) => *reach_mm,
+                _ => 0.0,
+            };
+            let cut_start = if i > 0 { reach(passes.get(i - 1)) } else { 0.0 };
+            let cut_end = reach(passes.get(i));
+            let own = match *prim {
+                Primitive::Line(line) => Primitive::Line(Line {
+                    from: if cut_start > 0.0 {
+                        line.at(cut_start)
+                    } else {
+                        line.from
+                    },
+                    to: if cut_end > 0.0 {
+                        line.at(line.length_mm() - cut_end)
+                    } else {
+                        line.to
+                    },
+                }),
+                // Blends never cut an arc.
+                arc @ Primitive::Arc(_) => arc,
+            };
+            // A line two blends took whole leaves nothing between their arcs.
+            if own.length_mm() > 1e-9 {
+                pieces.push(Piece {
+                    primitive: own,
+                    start_mm: s,
+                    element: Some(i + 1),
+                });
+                s += own.length_mm();
+            }
+            match passes.get(i) {
+                Some(&Pass::Blend {
+                    reach_mm,
+                    turn_rad,
+                    t_in,
+                    t_out,
+                }) => {
+                    let corner = Arc::tangent(
+                        own.to(),
+                        raw[i + 1].at(reach_mm),
+                        t_in,
+                        t_out,
+                        reach_mm / (turn_rad / 2.0).tan(),
+                    );
+                    pieces.push(Piece {
+                        primitive: Primitive::Arc(corner),
+                        start_mm: s,
+                        element: None,
+                    });
+                    s += corner.length_mm();
+                }
+                Some(Pass::Stop) => stops_mm.push(s),
+                Some(Pass::Straight) | None => {}
+            }
+        }
+        stops_mm.push(s);
+        Ok(Self { pieces, stops_mm })
+    }
+
+    /// Its pieces, in order.
+    #[must_use]
+    pub fn pieces(&self) -> &[Piece] {
+        &self.pieces
+    }
+
+    /// Its length, mm.
+    #[must_use]
+    pub fn length_mm(&self) -> f64 {
+        self.pieces
+            .last()
+            .map_or(0.0, |p| p.start_mm + p.primitive.length_mm())
+    }
+
+    /// Distances along it where the tool comes to rest, ascending; the last is its end.
+    #[must_use]
+    pub fn stops_mm(&self) -> &[f64] {
+        &self.stops_mm
+    }
+
+    /// The piece holding distance `s_mm` and the distance into it.
+    fn locate(&self, s_mm: f64) -> (&Piece, f64) {
+        let i = self
+            .pieces
+            .partition_point(|p| p.start_mm <= s_mm)
+            .saturating_sub(1);
+        let piece = &self.pieces[i];
+        (piece, s_mm - piece.start_mm)
+    }
+
+    /// The pose at distance `s_mm` along it (clamped to its ends).
+    #[must_use]
+    pub fn at(&self, s_mm: f64) -> Pose {
+        if s_mm >= self.length_mm() {
+            return self.pieces[self.pieces.len() - 1].primitive.to();
+        }
+        let (piece, into) = self.locate(s_mm.max(0.0));
+        piece.primitive.at(into)
+    }
+
+    /// The unit direction of travel at distance `s_mm`.
+    #[must_use]
+    pub fn direction(&self, s_mm: f64) -> Vector3<f64> {
+        let (piece, into) = self.locate(s_mm.clamp(0.0, self.length_mm()));
+        piece.primitive.direction(into)
+    }
+
+    /// The curvature at distance `s_mm`, 1/mm.
+    #[must_use]
+    pub fn curvature_per_mm(&self, s_mm: f64) -> f64 {
+        self.locate(s_mm.clamp(0.0, self.length_mm()))
+            .0
+            .primitive
+            .curvature_per_mm()
+    }
+}
+
+impl ToolPath for Path {
+    fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
+        self.pieces
+            .iter()
+            .map(|piece| piece.primitive.distance_mm(p))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn end_mm(&self) -> Vector3<f64> {
+        self.pieces[self.pieces.len() - 1]
+            .primitive
+            .to()
+            .position_mm
+    }
+}
+
+/// How the path passes a waypoint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Pass {
+    /// It comes to rest there.
+    Stop,
+    /// Its neighbours meet in line (a blend asked there has nothing to round).
+    Straight,
+    /// A corner arc reaching `reach_mm` along both neighbours.
+    Blend {
+        reach_mm: f64,
+        turn_rad: f64,
+        t_in: Vector3<f64>,
+        t_out: Vector3<f64>,
+    },
+}
+
+/// How the path passes `waypoint`, between primitives `a` and `b`, asked for `corner`.
+fn pass(waypoint: usize, corner: Corner, a: &Primitive, b: &Primitive) -> Result<Pass, PathError> {
+    let Corner::Blend(r) = corner else {
+        return Ok(Pass::Stop);
+    };
+    if !(r.is_finite() && r > 0.0) {
+        return Err(PathError::BlendRadius {
+            waypoint,
+            radius_mm: r,
+        });
+    }
+    let t_in = a.direction(a.length_mm());
+    let t_out = b.direction(0.0);
+    let turn_rad = t_in.dot(&t_out).clamp(-1.0, 1.0).acos();
+    if turn_rad <= STRAIGHT_RAD {
+        return Ok(Pass::Straight);
+    }
+    for (p, element) in [(a, waypoint), (b, waypoint + 1)] {
+        if matches!(p, Primitive::Arc(_)) {
+            return Err(PathError::BlendNextToArc { waypoint, element });
+        }
+    }
+    if turn_rad >= REVERSAL_RAD {
+        return Err(PathError::Reversal {
+            waypoint,
+            turn_deg: turn_rad.to_degrees(),
+        });
+    }
+    Ok(Pass::Blend {
+        reach_mm: r.min(a.length_mm() / 2.0).min(b.length_mm() / 2.0),
+        turn_rad,
+        t_in,
+        t_out,
+    })
+}
+
+/// Element `n`'s primitive from `from`.
+fn primitive(n: usize, from: Pose, element: &Element) -> Result<Primitive, PathError> {
+    let to = element.to();
+    let full_circle = matches!(
+        element,
+        Element::Arc {
+            by: ArcBy::Centre { .. },
+            ..
+        }
+    );
+    if !full_circle && (to.position_mm - from.position_mm).norm() <= 1e-9 {
+        let p = to.position_mm;
+        return Err(PathError::NoLength {
+            element: n,
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        });
+    }
+    match *element {
+        Element::Line { to } => Ok(Primitive::Line(Line { from, to })),
+        Element::Arc { to, by } => {
+            let arc = match by {
+                ArcBy::Via(via) => Arc::through(from, via, to),
+                ArcBy::Centre {
+                    centre_mm,
+                    axis,
+                    clockwise,
+                } => Arc::centred(from, to, centre_mm, axis, clockwise),
+            };
+            arc.map(Primitive::Arc).map_err(|fault| PathError::Arc {
+                element: n,
+                reason: describe(&fault),
+            })
+        }
+    }
+}
+
+/// An arc fault in words.
+fn describe(fault: &ArcFault) -> String {
+    match fault {
+        ArcFault::Collinear => "the start, the via point and the end lie on one line".to_owned(),
+        ArcFault::Radii { from_mm, to_mm } => format!(
+            "the start is {from_mm:.3} mm from the centre and the end {to_mm:.3} mm; they must \
+             be within {RADIUS_SLACK_MM} mm of one radius"
+        ),
+        ArcFault::OffPlane { off_mm } => format!(
+            "an end is {off_mm:.3} mm off the arc's plane (through the centre, square to the \
+             axis); at most {RADIUS_SLACK_MM} mm"
+        ),
+        ArcFault::NoRadius => "the start is on the centre".to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests;

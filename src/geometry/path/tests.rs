@@ -1,0 +1,214 @@
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use super::*;
+
+fn pose(x: f64, y: f64, z: f64) -> Pose {
+    Pose::from_mm_deg(x, y, z, 0.0)
+}
+
+fn line(to: Pose, corner: Corner) -> (Element, Corner) {
+    (Element::Line { to }, corner)
+}
+
+/// Walks the path in steps of `step_mm`: no jump in position, no kink in direction.
+fn assert_smooth(path: &Path, step_mm: f64, max_turn_rad: f64) {
+    let n = (path.length_mm() / step_mm).ceil() as usize;
+    let mut last = path.at(0.0);
+    let mut last_dir = path.direction(0.0);
+    for i in 1..=n {
+        let s = (i as f64 * step_mm).min(path.length_mm());
+        let here = path.at(s);
+        let moved = (here.position_mm - last.position_mm).norm();
+        assert!(moved <= step_mm + 1e-9, "a jump of {moved} mm at s = {s}");
+        let dir = path.direction(s);
+        let turn = last_dir.dot(&dir).clamp(-1.0, 1.0).acos();
+        assert!(turn <= max_turn_rad, "a kink of {turn} rad at s = {s}");
+        last = here;
+        last_dir = dir;
+    }
+}
+
+#[test]
+fn a_right_angle_blended_at_20_mm_is_rounded_by_a_quarter_circle_of_20_mm() {
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(20.0)),
+            line(pose(100.0, 100.0, 0.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    let pieces = path.pieces();
+    assert_eq!(pieces.len(), 3);
+    let Primitive::Arc(corner) = pieces[1].primitive else {
+        panic!("{pieces:?}")
+    };
+    assert_eq!(pieces[1].element, None);
+    assert!((corner.radius_mm - 20.0).abs() < 1e-9);
+    assert!((corner.sweep_rad - FRAC_PI_2).abs() < 1e-12);
+    assert!((corner.centre_mm - Vector3::new(80.0, 20.0, 0.0)).norm() < 1e-9);
+    let expected = 80.0 + 20.0 * FRAC_PI_2 + 80.0;
+    assert!((path.length_mm() - expected).abs() < 1e-9);
+    // Rests only at the end; passes the corner 20 (sqrt 2 - 1) mm inside it.
+    assert_eq!(path.stops_mm(), [path.length_mm()]);
+    let corner_point = Vector3::new(100.0, 0.0, 0.0);
+    let miss = path.distance_mm(&corner_point);
+    assert!((miss - 20.0 * (2f64.sqrt() - 1.0)).abs() < 1e-9, "{miss}");
+    assert_smooth(&path, 0.5, 0.5 / 20.0 + 1e-9);
+    assert_eq!(path.at(path.length_mm()), pose(100.0, 100.0, 0.0));
+    assert!((path.curvature_per_mm(81.0) - 1.0 / 20.0).abs() < 1e-12);
+    assert!(path.curvature_per_mm(10.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_blend_takes_at_most_half_of_a_short_neighbour() {
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(30.0)),
+            line(pose(100.0, 10.0, 5.0), Corner::Blend(30.0)),
+            line(pose(0.0, 10.0, 5.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    // line, corner, corner, line: nothing is left of the short middle element.
+    let elements: Vec<_> = path.pieces().iter().map(|p| p.element).collect();
+    assert_eq!(elements, [Some(1), None, None, Some(3)]);
+    let short = 125f64.sqrt();
+    for corner in [path.pieces()[1], path.pieces()[2]] {
+        let Primitive::Arc(a) = corner.primitive else {
+            panic!()
+        };
+        // Tangent points half the short element away from its waypoints.
+        let from_waypoint = |p: Vector3<f64>| {
+            (p - Vector3::new(100.0, 0.0, 0.0))
+                .norm()
+                .min((p - Vector3::new(100.0, 10.0, 5.0)).norm())
+        };
+        assert!((from_waypoint(a.from.position_mm) - short / 2.0).abs() < 1e-9);
+        assert!((from_waypoint(a.to.position_mm) - short / 2.0).abs() < 1e-9);
+    }
+    assert_smooth(&path, 0.1, 0.1 / 1.0);
+}
+
+#[test]
+fn a_stop_corner_is_a_rest_and_a_straight_blend_is_neither_rest_nor_arc() {
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(50.0, 0.0, 0.0), Corner::Blend(5.0)),
+            line(pose(100.0, 0.0, 0.0), Corner::Stop),
+            line(pose(100.0, 50.0, 0.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    assert_eq!(path.pieces().len(), 3);
+    assert_eq!(path.stops_mm(), [100.0, 150.0]);
+}
+
+#[test]
+fn a_line_into_an_arc_along_its_tangent_needs_no_blend_and_does_not_stop() {
+    let spec = PathSpec {
+        start: pose(0.0, -50.0, 0.0),
+        elements: vec![
+            line(pose(100.0, -50.0, 0.0), Corner::Blend(10.0)),
+            (
+                Element::Arc {
+                    to: pose(100.0, 50.0, 0.0),
+                    by: ArcBy::Centre {
+                        centre_mm: Vector3::new(100.0, 0.0, 0.0),
+                        axis: Vector3::z(),
+                        clockwise: false,
+                    },
+                },
+                Corner::Stop,
+            ),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    assert_eq!(path.stops_mm().len(), 1);
+    assert!((path.length_mm() - (100.0 + 50.0 * PI)).abs() < 1e-9);
+    assert_smooth(&path, 0.5, 0.5 / 50.0 + 1e-9);
+}
+
+#[test]
+fn refusals_name_the_element_or_waypoint() {
+    let at = |elements| {
+        Path::build(&PathSpec {
+            start: pose(0.0, 0.0, 0.0),
+            elements,
+        })
+        .unwrap_err()
+        .to_string()
+    };
+    assert_eq!(at(vec![]), "a path needs at least one element");
+    assert_eq!(
+        at(vec![
+            line(pose(10.0, 0.0, 0.0), Corner::Stop),
+            line(pose(10.0, 0.0, 0.0), Corner::Stop),
+        ]),
+        "element 2 ends where it starts (10.000, 0.000, 0.000 mm): it has no length"
+    );
+    assert_eq!(
+        at(vec![
+            line(pose(10.0, 0.0, 0.0), Corner::Blend(f64::NAN)),
+            line(pose(10.0, 10.0, 0.0), Corner::Stop),
+        ]),
+        "waypoint 1: blend NaN mm must be a number above 0"
+    );
+    assert_eq!(
+        at(vec![
+            line(pose(10.0, 0.0, 0.0), Corner::Blend(2.0)),
+            line(pose(0.0, 0.0, 0.0), Corner::Stop),
+        ]),
+        "waypoint 1: the path turns back by 180.0 deg there; it must stop"
+    );
+    let msg = at(vec![
+        line(pose(10.0, 0.0, 0.0), Corner::Blend(2.0)),
+        (
+            Element::Arc {
+                to: pose(20.0, 10.0, 0.0),
+                by: ArcBy::Via(Vector3::new(15.0, 8.0, 0.0)),
+            },
+            Corner::Stop,
+        ),
+    ]);
+    assert!(
+        msg.starts_with("waypoint 1: a blend joins two lines, and element 2 is an arc"),
+        "{msg}"
+    );
+    let msg = at(vec![(
+        Element::Arc {
+            to: pose(20.0, 0.0, 0.0),
+            by: ArcBy::Via(Vector3::new(10.0, 0.0, 0.0)),
+        },
+        Corner::Stop,
+    )]);
+    assert_eq!(
+        msg,
+        "element 1 (arc): the start, the via point and the end lie on one line"
+    );
+}
+
+#[test]
+fn the_tool_angle_goes_with_distance_along_each_element() {
+    let spec = PathSpec {
+        start: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+        elements: vec![(
+            Element::Arc {
+                to: Pose::from_mm_deg(-10.0, 0.0, 0.0, 90.0),
+                by: ArcBy::Centre {
+                    centre_mm: Vector3::new(-5.0, 0.0, 0.0),
+                    axis: Vector3::z(),
+                    clockwise: true,
+                },
+            },
+            Corner::Stop,
+        )],
+    };
+    let path = Path::build(&spec).unwrap();
+    let half = path.at(path.length_mm() / 2.0);
+    assert!((half.a_rad - 45f64.to_radians()).abs() < 1e-12);
+    // Clockwise seen from above: from the east of the centre through its south.
+    assert!((half.position_mm - Vector3::new(-5.0, -5.0, 0.0)).norm() < 1e-9);
+}
