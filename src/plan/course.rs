@@ -11,7 +11,7 @@
 
 use nalgebra::Vector3;
 
-use crate::geometry::{Line, Polyline, Pose, Profile, ToolPath};
+use crate::geometry::{Line, Path, Polyline, Pose, Profile, ToolPath};
 use crate::kinematics::{JOINTS, Joints, Kinematics, Model};
 use crate::robot::Robot;
 
@@ -75,6 +75,9 @@ impl JointPath {
 pub(super) enum Course {
     /// The tool point on a straight line.
     Line(Line),
+    /// The tool point on a section of a path (lines, arcs, blended corners) it runs through
+    /// without a stop.
+    Path(Path),
     /// Every joint on a straight line in joint space.
     Joints {
         /// The joints' path.
@@ -108,6 +111,7 @@ impl Course {
     pub(super) fn length_mm(&self) -> f64 {
         match self {
             Self::Line(line) => line.length_mm(),
+            Self::Path(path) => path.length_mm(),
             Self::Joints { length_mm, .. } => *length_mm,
         }
     }
@@ -116,6 +120,7 @@ impl Course {
     pub(super) fn position_mm(&self, s_mm: f64) -> Vector3<f64> {
         match self {
             Self::Line(line) => line.at(s_mm).position_mm,
+            Self::Path(path) => path.at(s_mm).position_mm,
             Self::Joints {
                 path, length_mm, ..
             } => path.pose_at(s_mm / length_mm).position_mm,
@@ -126,14 +131,20 @@ impl Course {
     pub(super) fn tool_path(&self) -> &dyn ToolPath {
         match self {
             Self::Line(line) => line,
+            Self::Path(path) => path,
             Self::Joints { trace, .. } => trace,
         }
     }
 
-    /// The line from the start pose to the end pose (a joint move's chord, for reports).
+    /// The line from the start pose to the end pose (a joint move's or a path's chord, for
+    /// reports).
     pub(super) fn chord(&self) -> Line {
         match self {
             Self::Line(line) => *line,
+            Self::Path(path) => Line {
+                from: path.at(0.0),
+                to: path.at(path.length_mm()),
+            },
             Self::Joints { path, .. } => Line {
                 from: path.pose_at(0.0),
                 to: path.pose_at(1.0),
@@ -141,10 +152,18 @@ impl Course {
         }
     }
 
+    /// The path, for a path section.
+    pub(super) fn path(&self) -> Option<&Path> {
+        match self {
+            Self::Path(path) => Some(path),
+            Self::Line(_) | Self::Joints { .. } => None,
+        }
+    }
+
     /// The joint-space path, for a joint move.
     pub(super) fn joint_path(&self) -> Option<&JointPath> {
         match self {
-            Self::Line(_) => None,
+            Self::Line(_) | Self::Path(_) => None,
             Self::Joints { path, .. } => Some(path),
         }
     }
@@ -158,7 +177,12 @@ impl Course {
         start_counts: [i64; JOINTS],
     ) -> Result<Samples, PlanError> {
         match self {
-            Self::Line(line) => samples::sample(robot, line, profile, start_values, start_counts),
+            Self::Line(line) => {
+                samples::sample(robot, &|s| line.at(s), profile, start_values, start_counts)
+            }
+            Self::Path(path) => {
+                samples::sample(robot, &|s| path.at(s), profile, start_values, start_counts)
+            }
             Self::Joints { path, .. } => {
                 Ok(samples::sample_joints(robot, path, profile, start_counts))
             }

@@ -18,13 +18,14 @@ mod bounded;
 mod constant_period;
 mod course;
 mod limits;
+mod path;
 mod samples;
 mod seed_exact;
 pub mod segments;
 
 use thiserror::Error;
 
-use crate::geometry::{Line, Pose, Profile, ProfileError, ProfileRequest};
+use crate::geometry::{Line, Path, PathError, Pose, Profile, ProfileError, ProfileRequest};
 use crate::kinematics::{JOINTS, Joints, Kinematics, KinematicsError};
 use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::sim::{self, Execution, Figures, Settings};
@@ -32,6 +33,7 @@ use crate::table::{ChannelTable, TableProblem, ValidTable};
 
 use course::Course;
 pub use course::JointPath;
+pub use path::{PathPlan, PathRequest, plan_path};
 pub use samples::Samples;
 
 /// Where a move starts.
@@ -77,6 +79,38 @@ pub enum PlanError {
     /// The speed, acceleration time or period is unusable.
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    /// A path cannot be built from its elements.
+    #[error(transparent)]
+    Path(#[from] PathError),
+    /// A path's acceleration limit is unusable.
+    #[error("the path acceleration {accel_mm_s2} mm/s^2 must be a number above 0")]
+    PathAccel {
+        /// The limit given, mm/s^2.
+        accel_mm_s2: f64,
+    },
+    /// A joint that first moves too late into a path section for one table to hold it back.
+    #[error(
+        "joint {joint} first moves {at_s:.2} s into the section, and an F174 table cannot hold \
+         a channel back that long within the tolerance (its first pulse lands after one period \
+         of a whole-hertz frequency: 1/1.5, 1/2, 1/3 s ...); stop at the waypoint before it \
+         moves, or blend a corner where every joint is already moving"
+    )]
+    LateStart {
+        /// The joint.
+        joint: String,
+        /// When it first moves, s into the section.
+        at_s: f64,
+    },
+    /// A section of a path (between two stops) cannot be planned.
+    #[error("path section {section} (element {elements}): {source}")]
+    Section {
+        /// Section number, from 1.
+        section: usize,
+        /// The elements it covers, "2" or "2-4".
+        elements: String,
+        /// Why.
+        source: Box<PlanError>,
+    },
     /// The target is the start.
     #[error(
         "the move from ({x:.3}, {y:.3}, {z:.3}) mm has length 0; a line move needs a distance above 0"
@@ -179,6 +213,9 @@ pub struct Plan {
     pub line: Line,
     /// A joint move's path in joint space (`None` for a line move).
     pub joint_path: Option<JointPath>,
+    /// A path section's path (lines, arcs, blends), measured from its start (`None` for a
+    /// line or joint move).
+    pub path: Option<Path>,
     /// The profile actually used.
     pub profile: Profile,
     /// The motion settings actually used (speed lowered by `slow-down` if it had to).
@@ -218,6 +255,9 @@ impl Plan {
     #[must_use]
     pub fn planned_position_mm(&self, t_s: f64) -> nalgebra::Vector3<f64> {
         let s_mm = self.profile.distance_mm(t_s);
+        if let Some(path) = &self.path {
+            return path.at(s_mm).position_mm;
+        }
         match &self.joint_path {
             Some(path) => path.pose_at(s_mm / self.profile.length_mm).position_mm,
             None => self.line.at(s_mm).position_mm,
@@ -353,6 +393,7 @@ fn plan_course(
     Ok(Plan {
         line: course.chord(),
         joint_path: course.joint_path().cloned(),
+        path: course.path().cloned(),
         profile,
         motion,
         speed_factor,

@@ -3,7 +3,7 @@
 //! start); on a joint-space path, the joint values in proportion. Each joint's absolute count is
 //! rounded from its absolute value, so nothing drifts.
 
-use crate::geometry::{Line, Profile};
+use crate::geometry::{Pose, Profile};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
@@ -27,11 +27,11 @@ impl Samples {
     }
 }
 
-/// Samples the line at every period of the profile. Point 0 takes `start_counts` (where the robot
-/// is), point N is exactly P2.
+/// Samples a Cartesian path (`pose_at` a distance along it) at every period of the profile.
+/// Point 0 takes `start_counts` (where the robot is), point N is exactly the path's end.
 pub(super) fn sample(
     robot: &Robot,
-    line: &Line,
+    pose_at: &dyn Fn(f64) -> Pose,
     profile: &Profile,
     start_values: &Joints,
     start_counts: [i64; JOINTS],
@@ -43,7 +43,7 @@ pub(super) fn sample(
     values.push(*start_values);
     let mut near = *start_values;
     for i in 1..=n {
-        let pose = line.at(profile.distance_at_point_mm(i as u32));
+        let pose = pose_at(profile.distance_at_point_mm(i as u32));
         let q = robot.kinematics.ik(&pose, Some(&near))?;
         counts.push(robot.counts_of(&q));
         values.push(q);

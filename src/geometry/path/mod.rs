@@ -338,6 +338,40 @@ impl Path {
         &self.stops_mm
     }
 
+    /// The path cut at every stop: sections the tool runs through without coming to rest, each
+    /// measured from its own start.
+    #[must_use]
+    pub fn sections(&self) -> Vec<Path> {
+        let mut sections = Vec::with_capacity(self.stops_mm.len());
+        let mut pieces = Vec::new();
+        let mut base_mm = 0.0;
+        let mut stops = self.stops_mm.iter().peekable();
+        for piece in &self.pieces {
+            pieces.push(Piece {
+                start_mm: piece.start_mm - base_mm,
+                ..*piece
+            });
+            let end_mm = piece.start_mm + piece.primitive.length_mm();
+            if stops.next_if(|&&stop| stop <= end_mm + 1e-9).is_some() {
+                sections.push(Path {
+                    pieces: std::mem::take(&mut pieces),
+                    stops_mm: vec![end_mm - base_mm],
+                });
+                base_mm = end_mm;
+            }
+        }
+        sections
+    }
+
+    /// The largest curvature of any piece, 1/mm (0 for lines only).
+    #[must_use]
+    pub fn max_curvature_per_mm(&self) -> f64 {
+        self.pieces
+            .iter()
+            .map(|p| p.primitive.curvature_per_mm())
+            .fold(0.0, f64::max)
+    }
+
     /// The piece holding distance `s_mm` and the distance into it.
     fn locate(&self, s_mm: f64) -> (&Piece, f64) {
         let i = self

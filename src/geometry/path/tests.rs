@@ -1,3 +1,4 @@
+#![allow(clippy::float_cmp)] // lengths and stops here are sums of exact values
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use super::*;
@@ -104,6 +105,13 @@ fn a_stop_corner_is_a_rest_and_a_straight_blend_is_neither_rest_nor_arc() {
     let path = Path::build(&spec).unwrap();
     assert_eq!(path.pieces().len(), 3);
     assert_eq!(path.stops_mm(), [100.0, 150.0]);
+    let sections = path.sections();
+    assert_eq!(sections.len(), 2);
+    assert_eq!(sections[0].length_mm(), 100.0);
+    assert_eq!(sections[0].pieces().len(), 2);
+    assert_eq!(sections[1].pieces()[0].start_mm, 0.0);
+    assert_eq!(sections[1].at(50.0), pose(100.0, 50.0, 0.0));
+    assert_eq!(sections[1].stops_mm(), [50.0]);
 }
 
 #[test]

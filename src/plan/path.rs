@@ -1,0 +1,345 @@
+//! Paths through waypoints: the path is built (lines, arcs, blended corners), cut at every stop
+//! into sections, and each section planned as one move along it, each starting from the counts
+//! the one before it ends on, so the PLC can chain them through its waiting start.
+//!
+//! A section runs on one trapezoid over its length. Its speed is lowered, for the whole section,
+//! to what the tightest arc in it allows under the path's centripetal acceleration limit
+//! (`v = sqrt(a r)`), and then, as for a line, to what the channels' frequencies allow under
+//! `slow-down`.
+
+use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
+use crate::kinematics::Kinematics;
+use crate::robot::{Motion, Robot};
+
+use super::course::Course;
+use super::{Origin, Plan, PlanError, Start, plan_course};
+
+/// A path to plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathRequest {
+    /// Where the path starts.
+    pub from: Origin,
+    /// Its elements, each with the corner at its end.
+    pub elements: Vec<(Element, Corner)>,
+    /// The motion settings: the speed is the tool point's along the path.
+    pub motion: Motion,
+    /// The largest acceleration across the path (centripetal, on arcs and blends), mm/s^2.
+    pub path_accel_mm_s2: f64,
+}
+
+/// A planned path: the path as built and one plan per section between stops.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathPlan {
+    /// The path as planned (blends included).
+    pub path: Path,
+    /// One plan per section, in order; each starts from the previous one's end counts.
+    pub sections: Vec<Plan>,
+}
+
+impl PathPlan {
+    /// Whether every section's tables may be sent.
+    #[must_use]
+    pub fn valid(&self) -> bool {
+        self.sections.iter().all(Plan::valid)
+    }
+
+    /// Its duration, s (sections back to back, without the PLC's time between them).
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        self.sections.iter().map(|p| p.profile.duration_s()).sum()
+    }
+
+    /// The largest path deviation of any section, mm.
+    #[must_use]
+    pub fn max_deviation_mm(&self) -> f64 {
+        self.sections
+            .iter()
+            .map(|p| p.figures.path_deviation_mm)
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Plans `req` for `robot`.
+///
+/// # Errors
+/// When the path cannot be built ([`PlanError::Path`]) or a section cannot be planned (the
+/// section's error, naming the elements it covers).
+pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError> {
+    if !(req.path_accel_mm_s2.is_finite() && req.path_accel_mm_s2 > 0.0) {
+        return Err(PlanError::PathAccel {
+            accel_mm_s2: req.path_accel_mm_s2,
+        });
+    }
+    let mut start = match req.from {
+        Origin::Pose(pose) => {
+            let values = robot.kinematics.ik(&pose, None)?;
+            Start {
+                values,
+                counts: robot.counts_of(&values),
+            }
+        }
+        Origin::Counts(counts) => Start {
+            values: robot.values_of(&counts),
+            counts,
+        },
+    };
+    for (element, _) in &req.elements {
+        check_pose(&element.to())?;
+    }
+    let spec = PathSpec {
+        start: robot.kinematics.fk(&start.values),
+        elements: req.elements.clone(),
+    };
+    let path = Path::build(&spec)?;
+    let mut sections = Vec::new();
+    for (n, section) in path.sections().into_iter().enumerate() {
+        let elements = covered(&section);
+        let mut motion = req.motion;
+        let curvature = section.max_curvature_per_mm();
+        if curvature > 0.0 {
+            motion.speed_mm_s = motion
+                .speed_mm_s
+                .min((req.path_accel_mm_s2 / curvature).sqrt());
+        }
+        let course = Course::Path(section);
+        let plan = plan_course(robot, &course, &start, motion, false).map_err(|source| {
+            let late = matches!(source, PlanError::ToleranceTooSmall { .. })
+                .then(|| late_joint(robot, &course, &start, motion))
+                .flatten();
+            let source = match late {
+                Some((joint, at_s)) => PlanError::LateStart { joint, at_s },
+                None => source,
+            };
+            PlanError::Section {
+                section: n + 1,
+                elements: elements.clone(),
+                source: Box::new(source),
+            }
+        })?;
+        let end = plan.end_counts();
+        start = Start {
+            values: robot.values_of(&end),
+            counts: end,
+        };
+        sections.push(plan);
+    }
+    Ok(PathPlan { path, sections })
+}
+
+/// The first joint (in the joints' order) that first moves later than [`LATE_START_S`] into a
+/// section: F174 cannot hold a
+/// channel back that long with the precision a bounded-error plan needs (the first pulse of a
+/// table lands one period of a whole-hertz frequency after the start: 1/1.5, 1/2, 1/3 s ...).
+fn late_joint(
+    robot: &Robot,
+    course: &Course,
+    start: &Start,
+    motion: Motion,
+) -> Option<(String, f64)> {
+    let profile = crate::geometry::Profile::new(crate::geometry::ProfileRequest {
+        length_mm: course.length_mm(),
+        speed_mm_s: motion.speed_mm_s,
+        accel_s: motion.accel_s,
+        period_s: LATE_SAMPLE_S,
+    })
+    .ok()?;
+    let samples = course
+        .sample(robot, &profile, &start.values, start.counts)
+        .ok()?;
+    (0..robot.joints.len()).find_map(|j| {
+        let first = samples
+            .counts
+            .iter()
+            .position(|c| c[j] != start.counts[j])?;
+        let at_s = first as f64 * LATE_SAMPLE_S;
+        (at_s > LATE_START_S).then(|| (robot.joints[j].name.clone(), at_s))
+    })
+}
+
+/// How late into a section a joint may first move before a failed bounded-error plan is put
+/// down to it, s.
+const LATE_START_S: f64 = 0.1;
+/// Sampling for that check, s.
+const LATE_SAMPLE_S: f64 = 0.005;
+
+/// A waypoint's coordinates must be numbers.
+fn check_pose(pose: &Pose) -> Result<(), PlanError> {
+    crate::kinematics::check_finite(pose)?;
+    Ok(())
+}
+
+/// The elements a section covers, as "3" or "2-4".
+fn covered(section: &Path) -> String {
+    let mut numbers = section.pieces().iter().filter_map(|p| p.element);
+    let first = numbers.next();
+    let last = numbers.next_back().or(first);
+    match (first, last) {
+        (Some(a), Some(b)) if a == b => a.to_string(),
+        (Some(a), Some(b)) => format!("{a}-{b}"),
+        _ => "(a blend)".to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector3;
+
+    use super::*;
+    use crate::geometry::ArcBy;
+    use crate::robot::{Method, seed_robot};
+    use crate::table::FrequencyModel;
+
+    const P1: [f64; 3] = [-926.57, 535.03, 50.0];
+    const P2: [f64; 3] = [-1144.43, 659.60, 186.60];
+
+    fn pose(p: [f64; 3], dz: f64) -> Pose {
+        Pose::from_mm_deg(p[0], p[1], p[2] + dz, 0.0)
+    }
+
+    fn motion(robot: &Robot, method: Method, model: FrequencyModel) -> Motion {
+        Motion {
+            method,
+            frequency_model: model,
+            ..robot.motion
+        }
+    }
+
+    /// A pick and place on the seed robot through `waypoints` (then down to P2), every
+    /// waypoint `corner`.
+    fn cycle(
+        waypoints: &[Pose],
+        corner: Corner,
+        method: Method,
+        model: FrequencyModel,
+    ) -> Result<PathPlan, PlanError> {
+        let robot = seed_robot();
+        let mut elements: Vec<_> = waypoints
+            .iter()
+            .map(|&to| (Element::Line { to }, corner))
+            .collect();
+        elements.push((Element::Line { to: pose(P2, 0.0) }, Corner::Stop));
+        let req = PathRequest {
+            from: Origin::Pose(pose(P1, 0.0)),
+            elements,
+            motion: motion(&robot, method, model),
+            path_accel_mm_s2: 5_000.0,
+        };
+        plan_path(&robot, &req)
+    }
+
+    #[test]
+    fn a_blended_cycle_is_one_section_within_tolerance_ends_on_p2_and_beats_stops() {
+        let robot = seed_robot();
+        let target = robot.counts_of(&robot.kinematics.ik(&pose(P2, 0.0), None).unwrap());
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        // Up and across at once to above P2, then down.
+        let above = [pose(P2, 100.0)];
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let blended = cycle(&above, Corner::Blend(20.0), bounded, model).unwrap();
+            assert_eq!(blended.sections.len(), 1);
+            assert!(blended.valid());
+            let deviation = blended.max_deviation_mm();
+            assert!(deviation <= 0.05, "{model:?}: {deviation} mm");
+            assert_eq!(blended.sections[0].end_counts(), target);
+            // The blend is an arc of the planned path.
+            let arcs = blended.path.pieces().iter().filter(|p| p.element.is_none());
+            assert_eq!(arcs.count(), 1);
+            let stopped = cycle(&above, Corner::Stop, bounded, model).unwrap();
+            assert_eq!(stopped.sections.len(), 2);
+            assert_eq!(stopped.sections[1].end_counts(), target);
+            // The second section starts from the counts the first ends on.
+            assert_eq!(
+                stopped.sections[1].samples.counts[0],
+                stopped.sections[0].end_counts()
+            );
+            assert!(
+                blended.duration_s() < stopped.duration_s(),
+                "{} s blended, {} s stopped",
+                blended.duration_s(),
+                stopped.duration_s()
+            );
+        }
+    }
+
+    #[test]
+    fn a_straight_lift_blended_into_the_traverse_is_refused_naming_the_joint_that_starts_late() {
+        // Straight up from P1: the base joint stands still until the blend, longer than one
+        // table can hold it back within 0.05 mm.
+        let lift = [pose(P1, 100.0), pose(P2, 100.0)];
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let msg = cycle(&lift, Corner::Blend(20.0), bounded, FrequencyModel::Ideal)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.starts_with("path section 1 (element 1-3): joint theta1 first moves 0."),
+            "{msg}"
+        );
+        // Stopped at the top of the lift, it plans.
+        let stopped = cycle(&lift, Corner::Stop, bounded, FrequencyModel::Ideal).unwrap();
+        assert_eq!(stopped.sections.len(), 3);
+        assert!(stopped.max_deviation_mm() <= 0.05);
+    }
+
+    #[test]
+    fn a_half_circle_is_planned_within_tolerance_and_slowed_for_its_radius() {
+        let robot = seed_robot();
+        let from = pose(P1, 0.0);
+        let centre = from.position_mm - Vector3::new(100.0, 0.0, 0.0);
+        let to = Pose {
+            position_mm: centre - Vector3::new(100.0, 0.0, 0.0),
+            a_rad: 0.0,
+        };
+        let req = |method, accel| PathRequest {
+            from: Origin::Pose(from),
+            elements: vec![(
+                Element::Arc {
+                    to,
+                    by: ArcBy::Centre {
+                        centre_mm: centre,
+                        axis: Vector3::z(),
+                        clockwise: false,
+                    },
+                },
+                Corner::Stop,
+            )],
+            motion: motion(&robot, method, FrequencyModel::FpxDivider),
+            path_accel_mm_s2: accel,
+        };
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let plan = plan_path(&robot, &req(bounded, 1_000.0)).unwrap();
+        assert!(
+            plan.max_deviation_mm() <= 0.05,
+            "{}",
+            plan.max_deviation_mm()
+        );
+        assert!((plan.path.length_mm() - 100.0 * std::f64::consts::PI).abs() < 1e-9);
+        assert!((plan.sections[0].motion.speed_mm_s - 240.0).abs() < 1e-9);
+        // 100 mm/s^2 on r = 100 mm allows 100 mm/s.
+        let slow = plan_path(&robot, &req(bounded, 100.0)).unwrap();
+        let speed = slow.sections[0].motion.speed_mm_s;
+        assert!((speed - 100.0).abs() < 1e-9, "{speed} mm/s");
+        let err = plan_path(&robot, &req(bounded, 0.0)).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the path acceleration 0 mm/s^2 must be a number above 0"
+        );
+    }
+
+    #[test]
+    fn a_section_that_leaves_a_joint_limit_is_refused_naming_its_elements() {
+        let robot = seed_robot();
+        let line = |to| Element::Line { to };
+        let req = PathRequest {
+            from: Origin::Pose(pose(P1, 0.0)),
+            elements: vec![
+                (line(pose(P1, 100.0)), Corner::Stop),
+                (line(pose(P2, 100.0)), Corner::Blend(10.0)),
+                (line(pose(P2, 2_000.0)), Corner::Stop),
+            ],
+            motion: motion(&robot, Method::ConstantPeriod, FrequencyModel::Ideal),
+            path_accel_mm_s2: 2_000.0,
+        };
+        let msg = plan_path(&robot, &req).unwrap_err().to_string();
+        assert!(msg.starts_with("path section 2 (element 2-3): "), "{msg}");
+    }
+}
