@@ -182,3 +182,78 @@ fn json_flag_is_format_json_and_speed_takes_its_unit() {
     let out = linterpd(&args);
     assert_eq!(out.status.code(), Some(2), "--json and --format conflict");
 }
+
+#[test]
+fn a_path_file_plans_its_blended_cycle_within_the_tolerance_and_names_a_bad_element() {
+    let example = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/config/examples/pick-and-place.toml"
+    );
+    let config = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    let out = linterpd(&[
+        "plan",
+        "--config",
+        config,
+        "--path",
+        example,
+        "--tolerance",
+        "0.05mm",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let kinds: Vec<&str> = doc["path"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["line", "arc", "line"]);
+    assert!(doc["path"][1]["element"].is_null());
+    assert_eq!(doc["sections"].as_array().unwrap().len(), 1);
+    assert!(doc["valid"].as_bool().unwrap());
+    let deviation = doc["path_deviation_mm"].as_f64().unwrap();
+    assert!(deviation <= 0.05, "{deviation} mm");
+    // The text form says the same.
+    let out = linterpd(&[
+        "plan",
+        "--config",
+        config,
+        "--path",
+        example,
+        "--tolerance",
+        "0.05mm",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("blend       arc"), "{text}");
+    assert!(text.contains("valid    yes"), "{text}");
+
+    let dir = std::env::temp_dir().join(format!("linterpd-path-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[[element]]\nline = [1, 2, 3]\n[[element]]\narc = [4, 5, 6]\n",
+    )
+    .unwrap();
+    let out = linterpd(&[
+        "plan",
+        "--config",
+        config,
+        "--path",
+        bad.to_str().unwrap(),
+        "--from",
+        "-926.57,535.03,50",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("element 2: an arc needs `via = [x, y, z]` or `centre = [x, y, z]`"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -42,6 +42,7 @@ mod joints;
 mod kinematics;
 mod locate;
 mod motion;
+mod path_file;
 mod plc;
 mod raw;
 mod validate;
@@ -52,6 +53,7 @@ use std::path::Path;
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use duration::{DurationError, DurationProblem, parse_duration_s};
 pub use error::ConfigError;
+pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
 
 use crate::plc::LinkSettings;
 use crate::robot::Robot;

@@ -5,6 +5,7 @@
 mod compare;
 mod csv;
 mod json;
+mod path;
 mod text;
 
 use std::path::{Path, PathBuf};
@@ -34,11 +35,16 @@ pub struct PlanArgs {
     #[arg(long)]
     pub robot: Option<String>,
     /// Start pose: X,Y,Z or X,Y,Z,A in mm and degrees. Without A the wrist joint sits at 0.
-    #[arg(long, allow_hyphen_values = true)]
-    pub from: String,
+    /// (With `--path`, only when the file gives no `start`.)
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "path")]
+    pub from: Option<String>,
     /// Target pose: X,Y,Z or X,Y,Z,A in mm and degrees. Without A the tool keeps the start angle.
-    #[arg(long, allow_hyphen_values = true)]
-    pub to: String,
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "path")]
+    pub to: Option<String>,
+    /// Plan a path file (lines, arcs, blended corners; see config/examples/) instead of one
+    /// line.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["to", "compare", "seed_exact", "svg"])]
+    pub path: Option<PathBuf>,
     /// Speed along the line, e.g. `240mm/s` or `240` (mm/s; default: the robot's).
     #[arg(long, allow_hyphen_values = true)]
     pub speed: Option<String>,
@@ -123,6 +129,9 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     if args.compare {
         return compare::run(robot, args, out);
     }
+    if let Some(file) = &args.path {
+        return path::run(robot, args, file, out);
+    }
     let request = request(robot, args).map_err(Failure::BadInput)?;
     let plan = plan_move(robot, &request).map_err(bad_input)?;
     write(robot, &request, &plan, args.output(), out)
@@ -194,13 +203,8 @@ fn variant(
 /// policy; the method and frequency model are the robot's, and the plan is not seed-exact.
 fn base_request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     let motion = motion(robot.motion, args)?;
-    let from_arg: PoseArg = parse_pose(&args.from).context("--from")?;
-    let to_arg: PoseArg = parse_pose(&args.to).context("--to")?;
-    let [x, y, z] = from_arg.xyz_mm;
-    let from = match from_arg.a_deg {
-        Some(a) => Pose::from_mm_deg(x, y, z, a),
-        None => robot.pose_with_wrist_at_zero(x, y, z).context("--from")?,
-    };
+    let from = start_pose(robot, args.from.as_deref().unwrap_or_default())?;
+    let to_arg: PoseArg = parse_pose(args.to.as_deref().unwrap_or_default()).context("--to")?;
     let [x, y, z] = to_arg.xyz_mm;
     let to = Pose::from_mm_deg(x, y, z, 0.0);
     let to = Pose {
@@ -213,6 +217,16 @@ fn base_request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
         motion,
         seed_exact: false,
     })
+}
+
+/// `--from`: the pose written, or with the wrist at 0 when no angle is given.
+fn start_pose(robot: &Robot, text: &str) -> anyhow::Result<Pose> {
+    let from_arg: PoseArg = parse_pose(text).context("--from")?;
+    let [x, y, z] = from_arg.xyz_mm;
+    match from_arg.a_deg {
+        Some(a) => Ok(Pose::from_mm_deg(x, y, z, a)),
+        None => robot.pose_with_wrist_at_zero(x, y, z).context("--from"),
+    }
 }
 
 /// `--tolerance`, if given.
