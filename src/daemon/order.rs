@@ -7,6 +7,7 @@
 //! place an order becomes a plan.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -14,10 +15,11 @@ use thiserror::Error;
 
 use super::positions::{NAME_RULE, Position, check_name};
 use crate::config::parse_duration_s;
-use crate::geometry::Pose;
+use crate::geometry::{Path, Pose};
 use crate::kinematics::JOINTS;
 use crate::plan::{
     JointMoveRequest, MoveRequest, Origin, Plan, PlanError, plan_joint_move, plan_move,
+    plan_section,
 };
 use crate::robot::{Method, Motion, Robot};
 
@@ -124,7 +126,7 @@ fn finite(
 }
 
 /// Where a checked order goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Target {
     /// A straight line to a pose; the tool angle is filled in from the start when `a_given` is
     /// false.
@@ -143,10 +145,22 @@ pub enum Target {
     },
     /// A joint-space move to these joint values, in the user's units (degrees or mm).
     Joints([f64; JOINTS]),
+    /// One section of a path (between two stops), planned from the counts where it starts,
+    /// which must be where the section begins.
+    Section(Arc<SectionOrder>),
+}
+
+/// A path section to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionOrder {
+    /// The section, measured from its start.
+    pub path: Path,
+    /// The path's acceleration limit across it, mm/s^2.
+    pub path_accel_mm_s2: f64,
 }
 
 /// A checked order: its target and the motion to plan with.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CheckedOrder {
     /// The target.
     pub target: Target,
@@ -190,7 +204,7 @@ impl CheckedOrder {
                 position_mm: from.position_mm + delta_mm,
                 a_rad: from.a_rad + delta_a_rad,
             }),
-            Target::Joints(_) => None,
+            Target::Joints(_) | Target::Section(_) => None,
         }
     }
 }
@@ -355,6 +369,15 @@ pub(crate) fn plan_order(
     order: &CheckedOrder,
     counts: [i64; JOINTS],
 ) -> Result<Plan, PlanError> {
+    if let Target::Section(section) = &order.target {
+        return plan_section(
+            robot,
+            &section.path,
+            order.motion,
+            section.path_accel_mm_s2,
+            counts,
+        );
+    }
     if let Target::Joints(user) = order.target {
         return plan_joint_move(
             robot,
@@ -541,7 +564,7 @@ mod tests {
         .check(robot.motion)
         .unwrap();
         assert!(jog.is_relative());
-        let anchored = jog.anchored_at(&robot, counts);
+        let anchored = jog.clone().anchored_at(&robot, counts);
         let Target::Pose { to, a_given: true } = anchored.target else {
             panic!("{anchored:?}")
         };

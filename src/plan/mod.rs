@@ -33,7 +33,7 @@ use crate::table::{ChannelTable, TableProblem, ValidTable};
 
 use course::Course;
 pub use course::JointPath;
-pub use path::{PathPlan, PathRequest, plan_path};
+pub use path::{PathPlan, PathRequest, SECTION_START_SLACK_MM, plan_path, plan_section};
 pub use samples::Samples;
 
 /// Where a move starts.
@@ -100,6 +100,17 @@ pub enum PlanError {
         joint: String,
         /// When it first moves, s into the section.
         at_s: f64,
+    },
+    /// The robot is not where a path section starts.
+    #[error(
+        "the robot is {off_mm:.3} mm from where the path section starts (at most {slack_mm} mm): \
+         the move before it did not end where it was planned to"
+    )]
+    NotAtSectionStart {
+        /// How far, mm.
+        off_mm: f64,
+        /// The most allowed, mm.
+        slack_mm: f64,
     },
     /// A section of a path (between two stops) cannot be planned.
     #[error("path section {section} (element {elements}): {source}")]

@@ -93,29 +93,13 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
     let path = Path::build(&spec)?;
     let mut sections = Vec::new();
     for (n, section) in path.sections().into_iter().enumerate() {
-        let elements = covered(&section);
-        let mut motion = req.motion;
-        let curvature = section.max_curvature_per_mm();
-        if curvature > 0.0 {
-            motion.speed_mm_s = motion
-                .speed_mm_s
-                .min((req.path_accel_mm_s2 / curvature).sqrt());
-        }
-        let course = Course::Path(section);
-        let plan = plan_course(robot, &course, &start, motion, false).map_err(|source| {
-            let late = matches!(source, PlanError::ToleranceTooSmall { .. })
-                .then(|| late_joint(robot, &course, &start, motion))
-                .flatten();
-            let source = match late {
-                Some((joint, at_s)) => PlanError::LateStart { joint, at_s },
-                None => source,
-            };
-            PlanError::Section {
+        let plan = section_plan(robot, section, &start, req.motion, req.path_accel_mm_s2).map_err(
+            |(elements, source)| PlanError::Section {
                 section: n + 1,
-                elements: elements.clone(),
+                elements,
                 source: Box::new(source),
-            }
-        })?;
+            },
+        )?;
         let end = plan.end_counts();
         start = Start {
             values: robot.values_of(&end),
@@ -124,6 +108,66 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
         sections.push(plan);
     }
     Ok(PathPlan { path, sections })
+}
+
+/// How far the robot may be from a section's start when the section is planned from its
+/// counts, mm: a section chained behind the one before starts within half a pulse of it.
+pub const SECTION_START_SLACK_MM: f64 = 0.1;
+
+/// Plans one section of a path from `counts`, where the robot will be when it starts (the end
+/// counts of the section before it).
+///
+/// # Errors
+/// [`PlanError::NotAtSectionStart`] when the counts' pose is more than
+/// [`SECTION_START_SLACK_MM`] from the section's start; else as [`plan_path`].
+pub fn plan_section(
+    robot: &Robot,
+    section: &Path,
+    motion: Motion,
+    path_accel_mm_s2: f64,
+    counts: [i64; crate::kinematics::JOINTS],
+) -> Result<Plan, PlanError> {
+    let start = Start {
+        values: robot.values_of(&counts),
+        counts,
+    };
+    let here = robot.kinematics.fk(&start.values).position_mm;
+    let off_mm = (here - section.at(0.0).position_mm).norm();
+    if off_mm > SECTION_START_SLACK_MM {
+        return Err(PlanError::NotAtSectionStart {
+            off_mm,
+            slack_mm: SECTION_START_SLACK_MM,
+        });
+    }
+    section_plan(robot, section.clone(), &start, motion, path_accel_mm_s2)
+        .map_err(|(_, source)| source)
+}
+
+/// Plans `section` from `start`; an error comes with the elements the section covers.
+fn section_plan(
+    robot: &Robot,
+    section: Path,
+    start: &Start,
+    asked: Motion,
+    path_accel_mm_s2: f64,
+) -> Result<Plan, (String, PlanError)> {
+    let elements = covered(&section);
+    let mut motion = asked;
+    let curvature = section.max_curvature_per_mm();
+    if curvature > 0.0 {
+        motion.speed_mm_s = motion.speed_mm_s.min((path_accel_mm_s2 / curvature).sqrt());
+    }
+    let course = Course::Path(section);
+    plan_course(robot, &course, start, motion, false).map_err(|source| {
+        let late = matches!(source, PlanError::ToleranceTooSmall { .. })
+            .then(|| late_joint(robot, &course, start, motion))
+            .flatten();
+        let source = match late {
+            Some((joint, at_s)) => PlanError::LateStart { joint, at_s },
+            None => source,
+        };
+        (elements, source)
+    })
 }
 
 /// The first joint (in the joints' order) that first moves later than [`LATE_START_S`] into a
