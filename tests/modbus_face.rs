@@ -4,6 +4,9 @@
 //! access list does not allow (the contract's command block above all) is exception 02 and never
 //! reaches the PLC; a link that is down is 0x0B; a client not allowed is closed at once.
 //!
+//! And once end to end: `linterpd serve` with `[robots.press-loader.gateway.modbus]` on a real
+//! `linterpd mock-plc` starts the face, serves it, and ends it with the daemon.
+//!
 //! rmodbus 0.13 maps exception codes 0x0A and 0x0B to `UnknownError` (it matches 0x09 and 0x10),
 //! so the tests read the exception code from the reply's PDU: the byte after the function code.
 
@@ -394,4 +397,60 @@ async fn a_client_not_allowed_is_closed_at_once() {
     let mut client = Client::connect(f.address).await;
     assert!(client.read_holdings(0, 1).await.is_ok());
     f.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn serve_starts_the_face_from_the_config_and_ends_it_with_the_daemon() {
+    let gateway = "[robots.press-loader.gateway]\nread = [\"DT0-DT999\"]\n\
+                   write = [\"DT100-DT199\"]\nmodbus = { listen = \"127.0.0.1:0\" }\n";
+    let mut running = common::serve::start_with_config(&[], gateway);
+    let line = running
+        .serve
+        .wait_for("the Modbus face's address", common::serve::READY, |out| {
+            out.stderr
+                .iter()
+                .find(|l| l.contains("Modbus face listening"))
+                .cloned()
+        });
+    let address: std::net::SocketAddr = without_ansi(&line)
+        .split_whitespace()
+        .find_map(|field| field.strip_prefix("listen="))
+        .unwrap_or_else(|| panic!("no listen= in {line:?}"))
+        .parse()
+        .unwrap();
+    let mut client = Client::connect(address).await;
+    assert_eq!(client.write_holdings(100, &[11, 22, 33]).await, Ok(()));
+    assert_eq!(client.read_holdings(100, 3).await, Ok(vec![11, 22, 33]));
+    assert_eq!(
+        client.write_holding(1_032, 1).await,
+        Err(0x02),
+        "the command block"
+    );
+
+    let status = running.serve.terminate(common::serve::READY);
+    assert!(status.success(), "{status:?}");
+    let mut byte = [0; 1];
+    let end = tokio::time::timeout(WAIT, client.stream.read(&mut byte)).await;
+    assert!(
+        matches!(end, Ok(Ok(0) | Err(_))),
+        "the connection ended with the daemon: {end:?}"
+    );
+    assert!(
+        TcpStream::connect(address).await.is_err(),
+        "nothing listens any more"
+    );
+}
+
+/// `line` without ANSI colour sequences (`ESC [ ... m`), whether or not the log has them.
+fn without_ansi(line: &str) -> String {
+    let mut out = String::new();
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            chars.by_ref().find(|c| *c == 'm');
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
