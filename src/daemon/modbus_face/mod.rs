@@ -1,7 +1,7 @@
 //! The register gateway's Modbus TCP face (`[robots.NAME.gateway.modbus]`): a tokio-modbus server
 //! per robot whose every request goes through the robot's [`RobotHandle`] gateway, like the API's:
 //! the same access list, the same refusal of the contract's words, the same turn-taking with the
-//! worker's motion exchanges. What maps where, and the exceptions, are in [`map`].
+//! worker's motion exchanges. What maps where, and the exceptions, are in `map.rs` (and docs/API.md).
 //!
 //! ```text
 //!  HMI / SCADA --Modbus TCP--> accept: peer in gateway.modbus.allow? (else closed, logged)
