@@ -24,7 +24,8 @@
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
 //! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
-//! gateway/     PURE  the register gateway's addresses (DT, X, Y, R) and access lists
+//! gateway/     PURE  the register gateway's addresses (DT, X, Y, R), access lists, and who may use
+//!                    its Modbus face (IPs, CIDR networks)
 //! contract/    PURE  the register contract: DT layout, status and command blocks, and the host's
 //!                    side as one state machine over the status block (machine/)
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
@@ -35,7 +36,8 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
-//!                    handles, taught positions, the HTTP/JSON API, systemd notification
+//!                    handles, taught positions, the HTTP/JSON API, the register gateway and its
+//!                    Modbus TCP face, systemd notification
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
 //! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
 //!                    a pure part (rate fits, frequency models), reported with config lines

@@ -30,6 +30,7 @@ fn every_client_command_says_clearly_that_the_daemon_is_not_running() {
         vec!["stop"],
         vec!["home"],
         vec!["clear-fault"],
+        vec!["io", "read", "DT0"],
         vec!["move", "--to", "1,2,3"],
     ] {
         let mut all = args.clone();

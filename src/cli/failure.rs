@@ -10,8 +10,8 @@ pub const EXIT_OK: u8 = 0;
 /// Exit code for a failure that is not the input's fault (IO, a bug, the PLC refused or failed
 /// a command); for `status`, a robot that reports a fault.
 pub const EXIT_FAILURE: u8 = 1;
-/// Exit code for bad input: config, arguments, an impossible move (400, 404, 422 from the
-/// daemon). Nothing was done.
+/// Exit code for bad input: config, arguments, an impossible move, a register outside the
+/// gateway's access list (400, 403, 404, 422 from the daemon). Nothing was done.
 pub const EXIT_BAD_INPUT: u8 = 2;
 /// Exit code when the robot did not do what was asked: refused for its state (409), a move that
 /// ended stopped, failed or cancelled, a `move --timeout` that ran out; for `status`, a robot
@@ -129,6 +129,7 @@ mod tests {
         assert_eq!(code(StatusCode::SERVICE_UNAVAILABLE), EXIT_UNREACHABLE);
         for s in [
             StatusCode::BAD_REQUEST,
+            StatusCode::FORBIDDEN,
             StatusCode::NOT_FOUND,
             StatusCode::UNPROCESSABLE_ENTITY,
         ] {

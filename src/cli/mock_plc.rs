@@ -60,8 +60,8 @@ pub struct MockPlcArgs {
     /// Fault script, items separated by commas, e.g. `drop@3,corrupt@1%,prog@t=5,seed=7`.
     /// `ACTION@K` at command number K (the first is 1), `ACTION@t=S` at S seconds (core actions
     /// only), `ACTION@P%` on each command with probability P percent (link actions only),
-    /// `seed=N`. Link actions: drop, corrupt, close, delay<ms>, error<NN> (MEWTOCOL-COM),
-    /// exception<N> (Modbus). Core actions: freeze, thaw (the heartbeat), prog, run (the mode),
+    /// `seed=N`. Link actions: drop, corrupt, close, `delay<ms>`, `error<NN>` (MEWTOCOL-COM),
+    /// `exception<N>` (Modbus). Core actions: freeze, thaw (the heartbeat), prog, run (the mode),
     /// restart (a power cycle: counts 0, homed bit clear, first scan; e.g. `restart@t=2`).
     #[arg(long, allow_hyphen_values = true)]
     pub faults: Option<String>,

@@ -5,8 +5,8 @@
 //!  0  done (for `status`: every robot's link is up and no fault is latched)
 //!  1  any other failure (IO, the PLC refused or failed a command: a 502); `status`: a robot
 //!     reports a fault
-//!  2  bad input, nothing was done: arguments, config, a move the daemon refuses as impossible
-//!     (400, 404, 422)
+//!  2  bad input, nothing was done: arguments, config, a move the daemon refuses as impossible,
+//!     a register outside the robot's gateway access list (400, 403, 404, 422)
 //!  3  the robot did not do it: refused for its state now (409: not-homed, homing, faulted,
 //!     not-ready, busy, no fault to clear), a move that ended stopped, failed or cancelled, or
 //!     `move --timeout` ran out; `status`: a robot's PLC link is down or stalled (as
@@ -26,6 +26,7 @@ pub mod completions;
 pub mod demo;
 mod failure;
 pub mod home;
+pub mod io;
 pub mod logging;
 pub mod mock_plc;
 pub mod moves;
@@ -77,6 +78,9 @@ pub enum Command {
     /// Show each robot's link, PLC state, pose and moves; exit 3 when a robot's PLC link is
     /// down or stalled, 1 when a robot reports a fault.
     Status(status::StatusArgs),
+    /// Read or write the PLC's other registers (DT words; X, Y, R bits) through the daemon's
+    /// register gateway, as the robot's access list allows.
+    Io(io::IoArgs),
     /// Stop every channel of a robot now (queued moves are cancelled).
     Stop(stop::StopArgs),
     /// Home a robot: the PLC's home routine sets every joint to its home count
@@ -181,6 +185,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Move(args) => moves::run(&args, out),
         Command::Pos(args) => positions::run(&args, out),
         Command::Status(args) => status::run(&args, out),
+        Command::Io(args) => io::run(&args, out),
         Command::Stop(args) => stop::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),

@@ -5,12 +5,15 @@
 //! [robots.press-loader.gateway]
 //! read = ["DT0-DT999", "X0-X1F"]     # DT words, X / Y / R bits (X1F: word 1, bit F)
 //! write = ["DT100-DT199", "R10-R1F"] # never X, never a word of the contract
-//! modbus = { listen = "127.0.0.1:5020", allow = ["10.0.0.5"] }   # optional Modbus TCP face
+//! modbus = { listen = "0.0.0.0:5020", allow = ["10.0.0.5", "10.0.1.0/24"] }  # optional
 //! ```
-//! Without the table nothing is reachable. A writable range over the contract's status block,
+//! Without the table nothing is reachable. The Modbus TCP face listens on loopback
+//! (`127.0.0.1:5020`) unless told otherwise, and beyond loopback only with `allow`, the IPs or
+//! CIDR networks it serves (Modbus has no authentication); with `allow` it serves those and no
+//! other client. A writable range over the contract's status block,
 //! command block or table areas is refused, naming the overlap (docs/CONTRACT.md).
 
-use std::net::IpAddr;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 
 use toml::Spanned;
 
@@ -18,7 +21,7 @@ use super::ConfigError;
 use super::check::At;
 use super::raw::{RawGateway, RawModbusFace};
 use crate::contract::Layout;
-use crate::gateway::{AccessList, GatewaySettings, ModbusFace, Range};
+use crate::gateway::{AccessList, ClientNet, GatewaySettings, ModbusFace, Range};
 
 /// The gateway a table describes, for a robot whose contract sits at `layout`.
 pub(super) fn settings(
@@ -48,6 +51,11 @@ pub(super) fn settings(
     Ok(GatewaySettings { access, modbus })
 }
 
+/// Where the Modbus TCP face listens unless `listen` says: loopback, port 5020 (502 needs
+/// privileges the service does not have).
+pub(super) const DEFAULT_MODBUS_LISTEN: SocketAddr =
+    SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 5020);
+
 fn ranges(at: &At, raw: Option<&[Spanned<String>]>) -> Result<Vec<Range>, ConfigError> {
     raw.unwrap_or_default()
         .iter()
@@ -62,27 +70,37 @@ fn ranges(at: &At, raw: Option<&[Spanned<String>]>) -> Result<Vec<Range>, Config
 
 fn modbus_face(at: &At, raw: &Spanned<RawModbusFace>) -> Result<ModbusFace, ConfigError> {
     let r = raw.get_ref();
-    let listen = r.listen.get_ref().parse().map_err(|_| {
-        at.child("listen").invalid(
-            &r.listen,
-            "must be an IP address and port, e.g. \"127.0.0.1:5020\"",
-        )
-    })?;
+    let listen = match &r.listen {
+        None => DEFAULT_MODBUS_LISTEN,
+        Some(text) => text.get_ref().parse().map_err(|_| {
+            at.child("listen").invalid(
+                text,
+                "must be an IP address and port, e.g. \"127.0.0.1:5020\"",
+            )
+        })?,
+    };
     let mut allow = Vec::new();
     for (i, text) in r.allow.as_deref().unwrap_or_default().iter().enumerate() {
-        let ip: IpAddr = text.get_ref().parse().map_err(|_| {
-            at.child("allow")
-                .index(i)
-                .invalid(text, "must be an IP address, e.g. \"10.0.0.5\"")
-        })?;
-        allow.push(ip);
+        let net: ClientNet =
+            text.get_ref()
+                .parse()
+                .map_err(|e: crate::gateway::ClientNetError| {
+                    at.child("allow").index(i).invalid(text, e.reason)
+                })?;
+        allow.push(net);
     }
     let face = ModbusFace { listen, allow };
-    if !face.listen.ip().is_loopback() && face.allow.is_empty() {
+    if let Some(text) = &r.listen
+        && face.allow.is_empty()
+        && !face.listen.ip().to_canonical().is_loopback()
+    {
         return Err(at.child("listen").invalid(
-            &r.listen,
-            "Modbus has no authentication: a listener beyond loopback needs gateway.modbus.allow, \
-             the client addresses it serves",
+            text,
+            format!(
+                "{} is beyond loopback and Modbus has no authentication: it needs \
+                 gateway.modbus.allow, the client IPs or CIDR networks it serves",
+                face.listen.ip()
+            ),
         ));
     }
     Ok(face)
@@ -115,7 +133,10 @@ mod tests {
         assert!(g.access.check_write(&dt("DT200")).is_err());
         let face = g.modbus.as_ref().unwrap();
         assert!(face.admits("10.0.0.5".parse().unwrap()));
-        assert!(face.admits("127.0.0.1".parse().unwrap()));
+        assert!(
+            !face.admits("127.0.0.1".parse().unwrap()),
+            "with an allow-list, only whom it lists"
+        );
         assert!(!face.admits("10.0.0.6".parse().unwrap()));
         assert!(Config::from_toml(MINIMAL).unwrap().gateway("r").is_none());
     }
@@ -141,7 +162,35 @@ mod tests {
     #[test]
     fn a_modbus_face_beyond_loopback_needs_an_allow_list() {
         let m = message(&with_gateway("modbus = { listen = \"0.0.0.0:5020\" }"));
-        assert!(m.contains("needs gateway.modbus.allow"), "{m}");
+        assert!(
+            m.contains("gateway.modbus.listen = \"0.0.0.0:5020\": 0.0.0.0 is beyond loopback")
+                && m.contains("needs gateway.modbus.allow"),
+            "{m}"
+        );
+        let m = message(&with_gateway(
+            "modbus = { listen = \"0.0.0.0:5020\", allow = [\"10.0.0.0/33\"] }",
+        ));
+        assert!(
+            m.contains("allow[0] = \"10.0.0.0/33\": has a prefix length outside 0..=32"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn a_modbus_face_listens_on_loopback_unless_told() {
+        let config = Config::from_toml(&with_gateway("read = [\"DT0\"]\nmodbus = {}")).unwrap();
+        let face = config.gateway("r").unwrap().modbus.clone().unwrap();
+        assert_eq!(face.listen, super::DEFAULT_MODBUS_LISTEN);
+        assert!(face.admits("127.0.0.1".parse().unwrap()));
+        assert!(!face.admits("10.0.0.5".parse().unwrap()));
+        let text = with_gateway(
+            "modbus = { listen = \"0.0.0.0:5020\", allow = [\"10.0.1.0/24\", \"127.0.0.1\"] }",
+        );
+        let config = Config::from_toml(&text).unwrap();
+        let face = config.gateway("r").unwrap().modbus.clone().unwrap();
+        assert!(face.admits("10.0.1.77".parse().unwrap()));
+        assert!(face.admits("127.0.0.1".parse().unwrap()));
+        assert!(!face.admits("10.0.2.1".parse().unwrap()));
     }
 
     #[test]

@@ -61,7 +61,7 @@ pub(super) struct RawGateway {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawModbusFace {
-    pub listen: Spanned<String>,
+    pub listen: Option<Spanned<String>>,
     pub allow: Option<Vec<Spanned<String>>>,
 }
 

@@ -15,6 +15,7 @@
 //! report.rs   RobotState, MoveReport, Stage
 //! ids.rs      move ids unique across restarts
 //! gateway.rs  register gateway requests (the cell's other registers, through the same link)
+//! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
 //! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
 //! ```
@@ -23,6 +24,7 @@ pub mod api;
 mod gateway;
 mod handle;
 mod ids;
+pub mod modbus_face;
 pub mod notify;
 mod order;
 pub mod positions;

@@ -12,6 +12,10 @@
 //! read through the gateway but never written, whatever the access list says: a config that tries
 //! is refused, naming the overlap.
 
+mod clients;
+
+pub use clients::{ClientNet, ClientNetError};
+
 use std::fmt;
 use std::net::{IpAddr, SocketAddr};
 use std::str::FromStr;
@@ -303,20 +307,26 @@ pub struct GatewaySettings {
     pub modbus: Option<ModbusFace>,
 }
 
-/// The gateway's Modbus TCP server: where it listens, and who may connect beyond loopback.
+/// The gateway's Modbus TCP server: where it listens, and who may connect.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ModbusFace {
     /// IP and port.
     pub listen: SocketAddr,
-    /// Clients allowed besides loopback (required, and checked, when `listen` is not loopback).
-    pub allow: Vec<IpAddr>,
+    /// The clients it serves (IPs or CIDR networks): required, and checked, when `listen` is not
+    /// loopback. Without one, loopback clients only.
+    pub allow: Vec<ClientNet>,
 }
 
 impl ModbusFace {
-    /// Whether a client at `peer` may connect: loopback always, others only when listed.
+    /// Whether a client at `peer` may connect: without an allow-list, a loopback client; with
+    /// one, a client it lists, and no other (loopback clients too only when listed, e.g.
+    /// `127.0.0.1`).
     #[must_use]
     pub fn admits(&self, peer: IpAddr) -> bool {
-        peer.is_loopback() || self.allow.contains(&peer)
+        if self.allow.is_empty() {
+            return peer.to_canonical().is_loopback();
+        }
+        self.allow.iter().any(|net| net.contains(peer))
     }
 }
 

@@ -48,6 +48,11 @@ pub fn start() -> Running {
 
 /// As [`start`], with more `linterpd mock-plc` arguments (`--unhomed`, `--faults ...`).
 pub fn start_with(mock_args: &[&str]) -> Running {
+    start_with_config(mock_args, "")
+}
+
+/// As [`start_with`], with `extra` TOML at the end of the daemon's config (a robot's gateway).
+pub fn start_with_config(mock_args: &[&str], extra: &str) -> Running {
     let bin = env!("CARGO_BIN_EXE_linterpd");
     let mut mock_command = Command::new(bin);
     mock_command.args([
@@ -63,7 +68,7 @@ pub fn start_with(mock_args: &[&str]) -> Running {
     let dir = TempDir::new("serve");
     let socket = dir.path().join("api.sock");
     let config = dir.path().join("linterpd.toml");
-    std::fs::write(&config, config_for(&address, &socket)).unwrap();
+    std::fs::write(&config, config_for(&address, &socket) + extra).unwrap();
     let mut serve_command = Command::new(bin);
     serve_command.arg("serve").arg("--config").arg(&config);
     let mut serve = Spawned::spawn("linterpd serve", serve_command);

@@ -2,7 +2,7 @@
 //! on the Unix socket (and a TCP listener when configured), and the conversation with systemd.
 //!
 //! ```text
-//! lock the socket -> bind socket(s) -> spawn Daemon -> READY=1 -> serve ...
+//! lock the socket -> bind socket(s), Modbus faces -> spawn Daemon -> READY=1 -> serve ...
 //!   STATUS= on change, WATCHDOG=1 while every worker makes progress (supervise.rs)
 //!   SIGHUP: the config is read again and checked; what changed is logged (not applied)
 //!   a worker that dies: the daemon exits non-zero (systemd restarts it)
@@ -27,6 +27,7 @@ use tokio::net::TcpListener;
 use tokio::task::JoinSet;
 
 use super::api::{Api, BearerToken, TokenError};
+use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
 use crate::config::{Config, DaemonSettings};
@@ -161,6 +162,32 @@ async fn bind_tcp(address: SocketAddr) -> Result<TcpListener, ServeError> {
         })
 }
 
+/// Binds the Modbus face of every robot whose gateway has one.
+async fn bind_modbus_faces(config: &Config) -> Result<Vec<(String, ModbusFaceServer)>, ServeError> {
+    let mut faces = Vec::new();
+    for robot in &config.robots {
+        let Some(face) = config.gateway(&robot.name).and_then(|g| g.modbus.as_ref()) else {
+            continue;
+        };
+        let server = ModbusFaceServer::bind(face)
+            .await
+            .map_err(|source| ServeError::Socket {
+                operation: "bind the Modbus face on",
+                target: PathBuf::from(face.listen.to_string()),
+                source,
+            })?;
+        let allow: Vec<String> = face.allow.iter().map(ToString::to_string).collect();
+        tracing::info!(
+            robot = %robot.name,
+            listen = %server.local_addr().unwrap_or(face.listen),
+            allow = %if allow.is_empty() { "loopback".to_owned() } else { allow.join(", ") },
+            "Modbus face listening"
+        );
+        faces.push((robot.name.clone(), server));
+    }
+    Ok(faces)
+}
+
 /// Runs the daemon for `config` with `settings` (the config's `[daemon]`, possibly overridden)
 /// until `shutdown` completes, then shuts it down cleanly. `config_path` is read again on SIGHUP.
 pub async fn serve(
@@ -182,6 +209,7 @@ pub async fn serve(
         Some(address) => Some(bind_tcp(address).await?),
         None => None,
     };
+    let faces = bind_modbus_faces(config).await?;
     let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
@@ -201,6 +229,13 @@ pub async fn serve(
                 .with_graceful_shutdown(stop.cancelled_owned())
                 .await
         });
+    }
+    for (name, face) in faces {
+        let Some(robot) = daemon.robot(&name).cloned() else {
+            continue;
+        };
+        let stop = closing.clone();
+        servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
     }
     tracing::info!(socket = %settings.socket.display(), listen = ?settings.listen, "API listening");
     log_notify(notifier.ready(), "READY=1");

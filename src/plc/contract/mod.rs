@@ -2,7 +2,7 @@
 //! for one move"): read the status block, write a bank and the command block and read them back,
 //! write the command word (a start once, never blindly again), stop, clear a fault, home, the
 //! host word; read a bank back to describe a start found running. What the status blocks mean is
-//! the pure [`Machine`]'s business; [`Contract::follow`] drives one start with it.
+//! the pure [`Machine`]'s business; [`Contract::run`] drives one start with it.
 //!
 //! A start can only be given a [`VerifiedBank`], which only [`Contract::upload`] makes, after
 //! every word of the bank and the command block is written and (unless switched off) read back
