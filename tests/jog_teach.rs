@@ -3,95 +3,15 @@
 
 mod common;
 
-use std::path::Path;
-use std::sync::Arc;
-use std::time::Duration;
-
-use common::daemon::{duplex_connector, spawn_with};
 use common::exchange::{P1, P2, mock_at_seed_start};
-use common::http::{Answer, Endpoint};
 use common::process::TempDir;
+use common::served::{LIMIT, ROBOT, Served};
 use hyper::StatusCode;
-use linterpd::daemon::api::Api;
-use linterpd::daemon::{
-    Daemon, DaemonOptions, MoveOrder, MoveReport, RobotHandle, Stage, TaughtPositions,
-};
+use linterpd::daemon::{MoveOrder, MoveReport, RobotHandle, Stage, TaughtPositions};
 use linterpd::geometry::Pose;
 use linterpd::kinematics::{JOINTS, Kinematics};
-use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
 use linterpd::robot::seed_robot;
-use serde_json::{Value, json};
-use tokio::net::UnixListener;
-
-const LIMIT: Duration = Duration::from_secs(15);
-const ROBOT: &str = "/v1/robots/press-loader";
-
-/// The daemon on `shared`, its positions in `state` (in memory without one), its API on a Unix
-/// socket in `dir`.
-struct Served {
-    daemon: Daemon,
-    handle: RobotHandle,
-    api: Endpoint,
-}
-
-impl Served {
-    async fn start(shared: &SharedMock, state: Option<&Path>, dir: &Path, socket: &str) -> Self {
-        let positions =
-            state.map_or_else(TaughtPositions::in_memory, TaughtPositions::in_state_dir);
-        let options = DaemonOptions {
-            positions: Arc::new(positions),
-            ..DaemonOptions::default()
-        };
-        let (daemon, handle) = spawn_with(
-            duplex_connector(shared, None),
-            ContractSettings::default(),
-            &options,
-            [0; JOINTS],
-        );
-        let path = dir.join(socket);
-        let listener = UnixListener::bind(&path).unwrap();
-        let router = Api::new(daemon.robots().clone()).router(None);
-        tokio::spawn(async move { axum::serve(listener, router).await });
-        wait_connected(&handle, shared).await;
-        Self {
-            daemon,
-            handle,
-            api: Endpoint::unix(&path),
-        }
-    }
-
-    /// Posts an order and waits for its end.
-    async fn run(&self, order: &Value) -> MoveReport {
-        let answer = self
-            .api
-            .post(&format!("{ROBOT}/moves"), &order.to_string())
-            .await;
-        assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
-        let id = answer.json()["id"].as_u64().unwrap();
-        self.handle.wait(id, LIMIT).await.unwrap()
-    }
-
-    async fn call(&self, method: &str, path: &str) -> Answer {
-        self.api
-            .call(method, &format!("{ROBOT}/{path}"), None, None)
-            .await
-    }
-}
-
-/// Until the daemon takes moves: connected, nothing refusing them, the mock's counts read.
-async fn wait_connected(h: &RobotHandle, shared: &SharedMock) {
-    for _ in 0..500 {
-        let s = h.state();
-        let counts = shared.with(|m| m.status().elapsed.map(i64::from));
-        if s.link.connected && s.refuses.is_none() && s.counts == Some(counts) && s.phase == "idle"
-        {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("never connected: {:?}", h.state());
-}
+use serde_json::json;
 
 /// Done, on exactly its target counts.
 fn assert_exactly_on_target(r: &MoveReport) {

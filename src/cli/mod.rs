@@ -73,6 +73,9 @@ pub enum Command {
     /// Ask the daemon for a move and follow it to its end: a straight line to a pose (--to), to a
     /// taught position (--to @NAME) or by an offset (--by), or a joint-space move (--joints).
     Move(moves::MoveArgs),
+    /// Run a path file through the daemon (lines, arcs, blended corners; every section planned
+    /// before anything moves) and follow its sections to their ends.
+    Run(moves::RunArgs),
     /// Teach and manage the robot's named positions: save (the pose now), list, show, delete.
     Pos(positions::PosArgs),
     /// Show each robot's link, PLC state, pose and moves; exit 3 when a robot's PLC link is
@@ -183,6 +186,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Plan(args) => plan::run(&args, out),
         Command::MockPlc(args) => mock_plc::run(&args, out),
         Command::Move(args) => moves::run(&args, out),
+        Command::Run(args) => moves::run_path(&args, out),
         Command::Pos(args) => positions::run(&args, out),
         Command::Status(args) => status::run(&args, out),
         Command::Io(args) => io::run(&args, out),

@@ -13,16 +13,20 @@ use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
 use super::ids::MoveIds;
-use super::order::{MoveOrder, OrderError, plan_order};
+use super::order::{
+    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, Target, path_refused, plan_order,
+};
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::report::{MoveId, MoveReport, RobotState};
 use super::request::{CommandError, Reply, Request};
 use super::shared::Shared;
 use super::worker::{Channels, Connector, Worker};
+use crate::config::{PathDoc, PathFileError};
 use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
+use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
-use crate::plan::PlanError;
+use crate::plan::{Origin, PathRequest, PlanError, SECTION_START_SLACK_MM, plan_path};
 use crate::plc::contract::ContractSettings;
 use crate::robot::Robot;
 
@@ -136,16 +140,7 @@ impl RobotHandle {
     pub fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
         let taught = self.positions.of(&self.robot.name);
         let checked = order.check_with(self.robot.motion, &taught)?;
-        if let Some(blocker) = self.shared.refusal() {
-            let detail = match blocker {
-                Blocker::LinkDown => self.shared.state(|s| s.link.error.clone()),
-                Blocker::Stalled if self.state().plc_mode == Some("prog") => {
-                    Some("it reports PROG mode".to_owned())
-                }
-                _ => None,
-            };
-            return Err(SubmitError::NotNow { blocker, detail });
-        }
+        self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
         // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
         // none, a jog stays relative and is anchored to the PLC's counts when it begins (the
@@ -172,6 +167,108 @@ impl RobotHandle {
             .map_err(|_| SubmitError::ShuttingDown)?;
         self.shared.set_planned_end(end);
         Ok(id)
+    }
+
+    /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
+    fn can_move_now(&self) -> Result<(), SubmitError> {
+        let Some(blocker) = self.shared.refusal() else {
+            return Ok(());
+        };
+        let detail = match blocker {
+            Blocker::LinkDown => self.shared.state(|s| s.link.error.clone()),
+            Blocker::Stalled if self.state().plc_mode == Some("prog") => {
+                Some("it reports PROG mode".to_owned())
+            }
+            _ => None,
+        };
+        Err(SubmitError::NotNow { blocker, detail })
+    }
+
+    /// Checks a path, plans every section of it from where the robot will be when it starts
+    /// (behind the moves queued or running, or where it is), refusing it whole if any section
+    /// cannot be planned; then queues the sections, one move each, in order. Each is planned
+    /// again from the counts where it begins, and only if the robot is there: a section whose
+    /// move before it did not end done is cancelled with it. Returns the sections' move ids.
+    pub fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
+        let motion = order.motion(self.robot.motion)?;
+        let doc = PathDoc::from_json(order.path.clone())
+            .map_err(|e| path_refused("(the document)", e.to_string()))?;
+        self.can_move_now()?;
+        let ahead = self
+            .shared
+            .state(|s| s.current_move.is_some() || !s.queued.is_empty());
+        let counts = self
+            .shared
+            .planned_end()
+            .filter(|_| ahead)
+            .or_else(|| self.counts_by_joint())
+            .ok_or(SubmitError::NotNow {
+                blocker: Blocker::LinkDown,
+                detail: Some("no counts read from the PLC yet".to_owned()),
+            })?;
+        let here = self.robot.pose_of(&counts);
+        let taught = self.positions.of(&self.robot.name);
+        let lookup = |name: &str| {
+            taught.get(name).map(|p| {
+                let [x, y, z, a] = p.pose;
+                Pose::from_mm_deg(x, y, z, a)
+            })
+        };
+        let refused = |e: PathFileError| path_refused("(the document)", e.to_string());
+        if let Some(start) = doc.start_pose(here.a_rad, &lookup).map_err(refused)? {
+            let off_mm = (start.position_mm - here.position_mm).norm();
+            if off_mm > SECTION_START_SLACK_MM {
+                let [x, y, z, _] = start.to_mm_deg();
+                return Err(path_refused(
+                    &format!("start [{x:.3}, {y:.3}, {z:.3}]"),
+                    format!(
+                        "the robot will be {off_mm:.3} mm from it when the path begins (at most \
+                         {SECTION_START_SLACK_MM} mm): move there first"
+                    ),
+                )
+                .into());
+            }
+        }
+        let elements = doc.resolve(here, &lookup).map_err(refused)?;
+        let path_accel_mm_s2 = doc
+            .path_accel_mm_s2
+            .unwrap_or(motion.speed_mm_s / motion.accel_s);
+        let planned = plan_path(
+            &self.robot,
+            &PathRequest {
+                from: Origin::Counts(counts),
+                elements,
+                motion,
+                path_accel_mm_s2,
+            },
+        )?;
+        let sections = planned.path.sections();
+        let mut ids = Vec::with_capacity(sections.len());
+        for (section, plan) in sections.into_iter().zip(&planned.sections) {
+            let end = section.at(section.length_mm());
+            let checked = CheckedOrder {
+                target: Target::Section(Arc::new(SectionOrder {
+                    path: section,
+                    path_accel_mm_s2,
+                })),
+                motion,
+            };
+            let id = self.shared.next_id();
+            self.shared.moves(|m| {
+                m.insert(MoveReport::new(
+                    id,
+                    &self.robot.name,
+                    order.section_report(&end),
+                ));
+            });
+            self.shared.state(|s| s.queued.push(id));
+            self.requests
+                .send(Request::Move(id, checked))
+                .map_err(|_| SubmitError::ShuttingDown)?;
+            self.shared.set_planned_end(Some(plan.end_counts()));
+            ids.push(id);
+        }
+        Ok(ids)
     }
 
     /// The counts the PLC last reported, per joint.

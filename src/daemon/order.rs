@@ -60,6 +60,66 @@ pub struct MoveOrder {
     pub tolerance_mm: Option<f64>,
 }
 
+/// A path to run, as the API takes it (`POST /v1/robots/{name}/paths`): the path document
+/// (the path file's keys, as JSON: `start`, `path_accel`, `element`) and the motion, as for a
+/// move.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PathOrder {
+    /// The path document.
+    pub path: serde_json::Value,
+    /// Speed along the path, mm/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_mm_s: Option<f64>,
+    /// Acceleration time, e.g. `"200ms"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accel_time: Option<String>,
+    /// `"constant-period"` or `"bounded-error"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Interpolation period, e.g. `"50ms"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period: Option<String>,
+    /// Path tolerance of a bounded-error path, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance_mm: Option<f64>,
+}
+
+impl PathOrder {
+    /// The motion the order asks for, the robot's `defaults` filling the gaps.
+    pub fn motion(&self, defaults: Motion) -> Result<Motion, OrderError> {
+        MoveOrder {
+            speed_mm_s: self.speed_mm_s,
+            accel_time: self.accel_time.clone(),
+            method: self.method.clone(),
+            period: self.period.clone(),
+            tolerance_mm: self.tolerance_mm,
+            ..MoveOrder::default()
+        }
+        .motion(defaults)
+    }
+
+    /// The move order a section's report shows: a line to where the section ends, with this
+    /// order's motion.
+    #[must_use]
+    pub fn section_report(&self, end: &Pose) -> MoveOrder {
+        MoveOrder {
+            to: Some(end.to_mm_deg().to_vec()),
+            speed_mm_s: self.speed_mm_s,
+            accel_time: self.accel_time.clone(),
+            method: self.method.clone(),
+            period: self.period.clone(),
+            tolerance_mm: self.tolerance_mm,
+            ..MoveOrder::default()
+        }
+    }
+}
+
+/// A path document that is wrong, as an order error on its `path` field.
+pub(crate) fn path_refused(value: &str, reason: impl Into<String>) -> OrderError {
+    refuse("path", &value, reason)
+}
+
 /// Why an order is refused: the field, the value and what it must be.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("{field} = {value}: {reason}")]

@@ -8,6 +8,7 @@ pub mod http;
 pub mod moves;
 pub mod process;
 pub mod serve;
+pub mod served;
 
 use linterpd::kinematics::{Cartesian, Elbow, JointKind, Model, Scara};
 use linterpd::robot::{Joint, Method, Motion, OverSpeed, Robot, seed_robot};

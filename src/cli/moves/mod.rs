@@ -13,7 +13,10 @@
 //! ```
 
 mod follow;
+mod path;
 mod wait;
+
+pub use path::{RunArgs, run as run_path};
 
 use std::fmt::Write as _;
 

@@ -16,13 +16,20 @@ use tokio_util::sync::CancellationToken;
 use super::Api;
 use super::error::ApiError;
 use super::metrics::{self, RobotSample};
-use crate::daemon::{MoveId, MoveOrder, MoveReport, Position, RobotHandle, RobotState};
+use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHandle, RobotState};
 
 /// `POST .../moves` accepted.
 #[derive(Debug, Serialize)]
 pub(super) struct Accepted {
     id: MoveId,
     report: MoveReport,
+}
+
+/// `POST .../paths` accepted: one move per section, in order.
+#[derive(Debug, Serialize)]
+pub(super) struct PathAccepted {
+    ids: Vec<MoveId>,
+    reports: Vec<MoveReport>,
 }
 
 pub(super) async fn robots(State(api): State<Api>) -> Json<Vec<RobotState>> {
@@ -47,6 +54,22 @@ pub(super) async fn submit(
     tracing::info!(robot = %name, move_id = id, "move accepted");
     let report = robot.report(id).ok_or(ApiError::ShuttingDown)?;
     Ok((StatusCode::ACCEPTED, Json(Accepted { id, report })))
+}
+
+pub(super) async fn submit_path(
+    State(api): State<Api>,
+    Path(name): Path<String>,
+    body: Bytes,
+) -> Result<(StatusCode, Json<PathAccepted>), ApiError> {
+    let robot = api.robot(&name)?;
+    let order: PathOrder = parse_body(&body)?;
+    let ids = robot.submit_path(&order)?;
+    tracing::info!(robot = %name, sections = ids.len(), first_move_id = ids.first().copied().unwrap_or(0), "path accepted");
+    let reports = ids
+        .iter()
+        .map(|&id| robot.report(id).ok_or(ApiError::ShuttingDown))
+        .collect::<Result<_, _>>()?;
+    Ok((StatusCode::ACCEPTED, Json(PathAccepted { ids, reports })))
 }
 
 pub(super) async fn report(
@@ -250,6 +273,11 @@ async fn next_line(feed: Feed, closing: &CancellationToken) -> Option<(Bytes, Fe
 
 /// A move order from a request body, or a 400 naming the field serde blames.
 fn parse_order(body: &[u8]) -> Result<MoveOrder, ApiError> {
+    parse_body(body)
+}
+
+/// A JSON body, an error naming the field that is wrong.
+fn parse_body<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiError> {
     let mut de = serde_json::Deserializer::from_slice(body);
     let order = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();

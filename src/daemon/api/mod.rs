@@ -71,6 +71,7 @@ impl Api {
             .route("/v1/robots", get(handlers::robots))
             .route(robot, get(handlers::robot))
             .route(&format!("{robot}/moves"), post(handlers::submit))
+            .route(&format!("{robot}/paths"), post(handlers::submit_path))
             .route(&format!("{robot}/moves/{{id}}"), get(handlers::report))
             .route(
                 &format!("{robot}/moves/{{id}}/events"),

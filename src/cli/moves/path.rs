@@ -1,0 +1,148 @@
+//! `linterpd run FILE`: send a path file (lines, arcs, blended corners) to the daemon, which
+//! plans every section before anything moves and queues one move per section, then follow the
+//! sections to their ends, one summary line each.
+//!
+//! ```text
+//!  stdout:  a line per section (or a JSON array of their final reports, --json); with
+//!           --no-wait, the ids (or the 202 body)
+//!  exit:    as `linterpd move`: 0 every section done; 2 a file or path the daemon refuses;
+//!           3 refused for the robot's state, or a section ended other than done; 4 no daemon
+//! ```
+
+use std::path::PathBuf;
+
+use anyhow::{Context, anyhow};
+use clap::Args;
+use hyper::Method;
+use serde_json::{Value, json};
+
+use super::super::args::{MethodArg, parse_duration, parse_length_mm, parse_speed_mm_s};
+use super::super::client::Client;
+use super::super::{DaemonArgs, Failure};
+use super::{follow, summary, verdict};
+use crate::config::PathDoc;
+
+/// Arguments of `linterpd run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The path file (config/examples/pick-and-place.toml shows every key). Without a `start`
+    /// it begins where the robot is (or where the move before it ends); with one, the robot
+    /// must be there.
+    pub file: PathBuf,
+    /// The robot (needed when the daemon runs several).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Speed along the path, e.g. `240mm/s` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub speed: Option<String>,
+    /// Acceleration time, e.g. `200ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub accel_time: Option<String>,
+    /// Planning method (default: the robot's; `--tolerance` alone means bounded-error).
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Interpolation period, e.g. `50ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub period: Option<String>,
+    /// Path tolerance of a bounded-error path, e.g. `0.05mm`, against the path as planned
+    /// (blends included).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tolerance: Option<String>,
+    /// The longest to wait for each section's end, e.g. `30s` (default: the daemon's deadline).
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
+    pub timeout: Option<String>,
+    /// Return once the path is accepted, printing its sections' ids.
+    #[arg(long)]
+    pub no_wait: bool,
+    /// The daemon and output options.
+    #[command(flatten)]
+    pub daemon: DaemonArgs,
+}
+
+/// The API's path order: the file (checked here first, naming the key) and the flags.
+fn order(args: &RunArgs) -> anyhow::Result<Value> {
+    let text = std::fs::read_to_string(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
+    let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
+    let mut order = json!({ "path": path });
+    if let Some(text) = &args.speed {
+        order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
+    }
+    for (key, flag, text) in [
+        ("accel_time", "--accel-time", &args.accel_time),
+        ("period", "--period", &args.period),
+    ] {
+        if let Some(text) = text {
+            parse_duration(text).context(flag)?;
+            order[key] = text.as_str().into();
+        }
+    }
+    if let Some(method) = args.method {
+        order["method"] = method.name().into();
+    }
+    if let Some(text) = &args.tolerance {
+        order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
+    }
+    Ok(order)
+}
+
+/// Runs `linterpd run`.
+pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let order = order(args).map_err(Failure::BadInput)?;
+    let timeout = args
+        .timeout
+        .as_deref()
+        .map(|t| parse_duration(t).context("--timeout"))
+        .transpose()
+        .map_err(Failure::BadInput)?;
+    args.daemon.block_on(async {
+        let client = Client::new(&args.daemon.socket);
+        let robot = client
+            .robot(args.robot.as_deref())
+            .await
+            .map_err(Failure::from_client)?;
+        let accepted = client
+            .expect(
+                Method::POST,
+                &format!("/v1/robots/{robot}/paths"),
+                Some(&order),
+            )
+            .await?;
+        let ids: Vec<u64> = accepted["ids"]
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_u64).collect())
+            .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move ids")))?;
+        if args.no_wait {
+            let list: Vec<String> = ids.iter().map(u64::to_string).collect();
+            return super::super::print(
+                out,
+                args.daemon.json,
+                &accepted,
+                &format!("path accepted: moves {}", list.join(", ")),
+            );
+        }
+        let mut finals = Vec::with_capacity(ids.len());
+        let mut outcome = Ok(());
+        for (n, &id) in ids.iter().enumerate() {
+            let follow = follow::Follow {
+                client: &client,
+                robot: &robot,
+                id,
+                timeout,
+                quiet: args.daemon.json,
+            };
+            let last = follow.run().await?;
+            if !args.daemon.json {
+                writeln!(out, "section {}/{}: {}", n + 1, ids.len(), summary(&last))
+                    .map_err(|e| Failure::Runtime(e.into()))?;
+            }
+            outcome = outcome.and(verdict(&last));
+            finals.push(last);
+        }
+        if args.daemon.json {
+            super::super::print(out, true, &Value::Array(finals), "")?;
+        }
+        outcome
+    })
+}

@@ -1,0 +1,102 @@
+//! Paths through the daemon, end to end in process: `POST .../paths` on the mock PLC, every
+//! section planned before anything moves, one move per section chained by the PLC.
+
+mod common;
+
+use common::exchange::{P1, P2, mock_at_seed_start};
+use common::process::TempDir;
+use common::served::{LIMIT, ROBOT, Served};
+use hyper::StatusCode;
+use linterpd::daemon::{PathOrder, Stage};
+use linterpd::geometry::Pose;
+use linterpd::kinematics::{JOINTS, Kinematics};
+use linterpd::robot::seed_robot;
+use serde_json::json;
+
+/// The seed robot's counts at `xyz` with the tool at `a_rad`.
+fn counts_at(xyz: [f64; 3], a_rad: f64) -> [i64; JOINTS] {
+    let robot = seed_robot();
+    let pose = Pose {
+        position_mm: xyz.into(),
+        a_rad,
+    };
+    robot.counts_of(&robot.kinematics.ik(&pose, None).unwrap())
+}
+
+#[tokio::test]
+async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_target() {
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    // The path keeps the tool's angle where it starts.
+    let a_rad = seed_robot().pose_of(&s.handle.state().counts.unwrap()).a_rad;
+    let above = [P2[0], P2[1], P2[2] + 100.0];
+    // Up and across to above P2 (blended into the descent), down to P2, stop, back up 50 mm.
+    let body = json!({
+        "path": {
+            "start": [P1[0], P1[1], P1[2]],
+            "path_accel": "5000mm/s2",
+            "element": [
+                {"line": above, "blend": "20mm"},
+                {"line": P2, "stop": true},
+                {"line": [P2[0], P2[1], P2[2] + 50.0]},
+            ]
+        },
+        "tolerance_mm": 0.05
+    });
+    let answer = s.api.post(&format!("{ROBOT}/paths"), &body.to_string()).await;
+    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
+    let ids: Vec<u64> = answer.json()["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(ids.len(), 2, "two sections: before and after the stop");
+    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
+    let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
+    assert_eq!(first.stage, Stage::Done, "{first:?}");
+    assert_eq!(second.stage, Stage::Done, "{second:?}");
+    // The second section was chained behind the first, from the first's targets.
+    assert_eq!(first.target_counts, Some(counts_at(P2, a_rad)));
+    assert_eq!(second.start_counts, first.target_counts);
+    assert_eq!(second.final_error_pulses, Some([0; 4]), "{second:?}");
+    let top = counts_at([P2[0], P2[1], P2[2] + 50.0], a_rad);
+    assert_eq!(second.target_counts, Some(top));
+    assert_eq!(s.handle.state().counts, Some(top));
+    // The mock started each table from exactly the counts it was planned from.
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert!(!starts.is_empty());
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_path_that_cannot_run_is_refused_whole_and_nothing_moves() {
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths-refused");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let before = s.handle.state().counts;
+    let refuse = |body: serde_json::Value| {
+        let order: PathOrder = serde_json::from_value(body).unwrap();
+        s.handle.submit_path(&order).unwrap_err().to_string()
+    };
+    // A start the robot is not at.
+    let e = refuse(json!({"path": {"start": P2, "element": [{"line": P1}]}}));
+    assert!(e.contains("mm from it when the path begins"), "{e}");
+    // Its second section leaves d3's limits: nothing of the first runs either.
+    let e = refuse(json!({"path": {"element": [
+        {"line": [P1[0], P1[1], P1[2] + 50.0]},
+        {"line": [P1[0], P1[1], P1[2] + 5000.0]},
+    ]}}));
+    assert!(e.starts_with("path section 2 (element 2): joint"), "{e}");
+    // A document that is wrong names its element and key.
+    let e = refuse(json!({"path": {"element": [{"arc": P2}]}}));
+    assert!(e.contains("element 1: an arc needs `via"), "{e}");
+    let e = refuse(json!({"path": {"element": [{"line": "@nowhere"}]}}));
+    assert!(e.contains("no taught position named 'nowhere'"), "{e}");
+    assert_eq!(s.handle.state().queued, Vec::<u64>::new());
+    assert_eq!(s.handle.state().counts, before);
+    assert!(shared.with(|m| m.starts().is_empty()));
+    s.daemon.shut_down().await;
+}
