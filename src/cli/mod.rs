@@ -66,7 +66,8 @@ pub enum Command {
     /// Run the seed's move and a few others through the daemon against a mock PLC in process,
     /// and report how closely they followed the line (no hardware, no config file).
     Demo(demo::DemoArgs),
-    /// Plan one straight-line move and print its pulse tables and accuracy figures.
+    /// Plan one straight-line move (or a path of lines, arcs and blends, --path) and print its
+    /// pulse tables and accuracy figures.
     Plan(plan::PlanArgs),
     /// Serve the mock PLC (MEWTOCOL-COM or Modbus, TCP or serial) until SIGINT / SIGTERM.
     MockPlc(mock_plc::MockPlcArgs),
