@@ -29,7 +29,9 @@ async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_t
     let dir = TempDir::new("paths");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
     // The path keeps the tool's angle where it starts.
-    let a_rad = seed_robot().pose_of(&s.handle.state().counts.unwrap()).a_rad;
+    let a_rad = seed_robot()
+        .pose_of(&s.handle.state().counts.unwrap())
+        .a_rad;
     let above = [P2[0], P2[1], P2[2] + 100.0];
     // Up and across to above P2 (blended into the descent), down to P2, stop, back up 50 mm.
     let body = json!({
@@ -44,7 +46,10 @@ async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_t
         },
         "tolerance_mm": 0.05
     });
-    let answer = s.api.post(&format!("{ROBOT}/paths"), &body.to_string()).await;
+    let answer = s
+        .api
+        .post(&format!("{ROBOT}/paths"), &body.to_string())
+        .await;
     assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
     let ids: Vec<u64> = answer.json()["ids"]
         .as_array()

@@ -7,7 +7,8 @@
 //! gives (time, count). A least-squares line through the samples strictly inside the run (the
 //! first and last pulse are blurred by the start and end of F174) gives the rate and its standard
 //! error. A model fits when its predicted rate lies within three standard errors, but never
-//! closer than [`RATE_FLOOR`] of the rate (the PLC's and the PC's clocks may disagree that much).
+//! closer than [`RATE_FLOOR`] of the rate (the PLC's and the PC's clocks may disagree that much)
+//! or [`MODEL_GAP_SHARE`] of the gap between the two models (the PC's read times jitter).
 
 use serde::{Deserialize, Serialize};
 
@@ -15,6 +16,9 @@ use crate::table::{FrequencyModel, FrequencyRange};
 
 /// Relative rate difference that is always within the measurement (clock tolerances), 2e-4.
 pub const RATE_FLOOR: f64 = 2e-4;
+/// The share of the gap between the two models' rates within which a measurement fits a model
+/// whatever its standard error.
+pub const MODEL_GAP_SHARE: f64 = 0.25;
 /// Samples strictly inside a run needed for a rate fit.
 pub const MIN_RATE_SAMPLES: usize = 5;
 
@@ -150,7 +154,12 @@ pub fn fit_rate(
         predict(FrequencyModel::Ideal),
         predict(FrequencyModel::FpxDivider),
     );
-    let tolerance_hz = (3.0 * se_hz).max(RATE_FLOOR * measured_hz.abs());
+    // The PC's read times carry its own scheduling jitter, which the residuals do not show
+    // when it shifts a whole stretch of reads: a measurement within a quarter of the gap between
+    // the models is taken as the nearer one (it can never fit both that way).
+    let tolerance_hz = (3.0 * se_hz)
+        .max(RATE_FLOOR * measured_hz.abs())
+        .max(MODEL_GAP_SHARE * (ideal_hz - divider_hz).abs());
     let fits = |hz: f64| (measured_hz - hz).abs() <= tolerance_hz.max(RATE_FLOOR * hz);
     let fit = match (fits(ideal_hz), fits(divider_hz)) {
         (true, true) => Fit::Undecided,
@@ -373,6 +382,19 @@ mod tests {
         assert_eq!(fit.fit, Fit::Ideal, "{fit:?}");
         assert!(fit.fit.admits(FrequencyModel::Ideal));
         assert!(!fit.fit.admits(FrequencyModel::FpxDivider));
+    }
+
+    #[test]
+    fn a_rate_shifted_by_read_jitter_fits_the_nearer_model_within_a_quarter_of_their_gap() {
+        // Seen under load: 1878 Hz set, ideal 1878, divider 1842.57, measured 1847.13 with a
+        // standard error that does not cover the 4.6 Hz (the reads' times shifted together).
+        let range = FrequencyRange::Low;
+        let fit = fit_rate(&run(1_847.13, 500, 0.002), 500, 1_878, range, 1e5).unwrap();
+        assert!((fit.divider_hz - 1_842.57).abs() < 0.01, "{fit:?}");
+        assert_eq!(fit.fit, Fit::FpxDivider, "{fit:?}");
+        // Halfway between the two is neither.
+        let fit = fit_rate(&run(1_860.3, 500, 0.002), 500, 1_878, range, 1e5).unwrap();
+        assert_eq!(fit.fit, Fit::Neither, "{fit:?}");
     }
 
     #[test]
