@@ -231,7 +231,7 @@ impl RobotHandle {
         let replaced = self
             .positions
             .save(&self.robot.name, name, position.clone())?;
-        tracing::info!(robot = %self.robot.name, position = name, pose = ?position.pose, counts = ?joint_counts, replaced, "position saved");
+        tracing::info!(robot = %self.robot.name, position = name, pose = %position.pose.map(|v| format!("{v:.3}")).join(","), counts = %joint_counts.map(|c| c.to_string()).join(","), replaced, "position saved");
         Ok(Saved { position, replaced })
     }
 

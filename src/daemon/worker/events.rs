@@ -289,7 +289,8 @@ impl Worker {
             });
         });
         self.finish(id, Stage::Done, None, error);
-        tracing::info!(robot = %self.robot.name, id, ?error, "move done");
+        let end_error_pulses = error.map(|e| e.map(|p| p.to_string()).join(","));
+        tracing::info!(robot = %self.robot.name, id, end_error_pulses, "move done");
     }
 
     fn ended(&mut self, id: MoveId, outcome: Outcome) {
