@@ -328,6 +328,12 @@ impl RobotHandle {
         self.shared.moves(|m| m.all())
     }
 
+    /// The daemon's metrics (shared by every robot of one daemon).
+    #[must_use]
+    pub fn metrics(&self) -> &super::metrics::Metrics {
+        self.shared.metrics.daemon()
+    }
+
     /// A move's progress feed: every change of its report.
     #[must_use]
     pub fn subscribe(&self, id: MoveId) -> Option<watch::Receiver<MoveReport>> {
@@ -363,9 +369,14 @@ impl Daemon {
         let (shutdown, _) = watch::channel(false);
         let mut handles = BTreeMap::new();
         let mut workers = JoinSet::new();
+        let metrics = super::metrics::Metrics::new();
         for setup in robots {
             let name = setup.robot.name.clone();
-            let shared = Arc::new(Shared::new(&name, Arc::clone(&options.ids)));
+            let shared = Arc::new(Shared::new(
+                &name,
+                Arc::clone(&options.ids),
+                metrics.robot(&name),
+            ));
             let (requests, requests_rx) = mpsc::unbounded_channel();
             let (stops, stops_rx) = mpsc::unbounded_channel();
             let (gateway, gateway_rx) = mpsc::unbounded_channel();

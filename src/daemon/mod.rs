@@ -23,6 +23,7 @@ pub mod api;
 mod gateway;
 mod handle;
 mod ids;
+pub mod metrics;
 pub mod notify;
 mod order;
 pub mod positions;

@@ -272,6 +272,9 @@ impl Worker {
             .started
             .remove(&id)
             .map(|t| now().saturating_duration_since(t).as_secs_f64());
+        if let Some(seconds) = motion_s {
+            self.shared.metrics.moved(seconds);
+        }
         let target = self
             .shared
             .moves(|m| m.get(id))

@@ -17,7 +17,8 @@ impl Worker {
     pub(super) async fn reconnect(&mut self) {
         self.expire_offline();
         match (self.connect)().await {
-            Ok(plc) => {
+            Ok(mut plc) => {
+                plc.set_exchange_counts(self.shared.metrics.exchange_counts());
                 let mut contract = Contract::new(plc, self.settings);
                 contract.set_abort(Arc::clone(&self.shared.stop_pending));
                 contract.set_beat(Arc::clone(&self.shared.beat));
@@ -26,6 +27,9 @@ impl Worker {
                 // The first opening is a connection, not a reconnection.
                 let again = std::mem::replace(&mut self.opened_before, true);
                 self.shared.state(|s| s.link.reconnects += u64::from(again));
+                if again {
+                    self.shared.metrics.reconnected();
+                }
                 tracing::info!(robot = %self.robot.name, "PLC link opened");
                 self.mode_read = None;
                 if let Err(e) = self.poll().await {
