@@ -20,4 +20,4 @@ mkdir -p "$out/completions" "$out/man"
 "$bin" completions fish > "$out/completions/linterpd.fish"
 "$bin" man --dir "$out/man"
 gzip -9n "$out"/man/*.1
-cargo deb --no-build --locked "$@"
+cargo deb --no-build --strip --locked "$@"
