@@ -7,7 +7,7 @@ mod common;
 use std::time::Duration;
 
 use common::daemon::duplex_connector;
-use common::exchange::{P2, mock_at_seed_start};
+use common::exchange::{P1, P2, mock_at_seed_start};
 use common::http::{Answer, Endpoint};
 use common::process::TempDir;
 use hyper::StatusCode;
@@ -224,36 +224,81 @@ async fn stop_answers_200_and_the_move_ends_stopped() {
     s.daemon.shut_down().await;
 }
 
+/// Every sample line of an `OpenMetrics` text whose series starts with `series`, as
+/// (series, value).
+fn samples(text: &str, series: &str) -> Vec<(String, f64)> {
+    text.lines()
+        .filter(|l| l.starts_with(series))
+        .filter_map(|l| l.rsplit_once(' '))
+        .map(|(k, v)| (k.to_owned(), v.parse().unwrap()))
+        .collect()
+}
+
 #[tokio::test]
-async fn metrics_count_the_done_move() {
+async fn metrics_are_lifetime_counters_that_only_go_up() {
     let s = Served::start().await;
-    let id = s.submit(P2).await;
-    assert_done_on_target(s.events(id).await.last().unwrap());
-    let metrics = s.api.get("/metrics").await;
-    assert_eq!(metrics.status, StatusCode::OK);
+    let before = s.api.get("/metrics").await;
+    assert_eq!(before.status, StatusCode::OK);
     assert!(
-        metrics.content_type.starts_with("text/plain"),
+        before
+            .content_type
+            .starts_with("application/openmetrics-text"),
         "{}",
-        metrics.content_type
+        before.content_type
     );
-    let text = metrics.text();
-    for line in [
-        "linterpd_moves_total{robot=\"press-loader\",outcome=\"done\"} 1",
-        "linterpd_moves_total{robot=\"press-loader\",outcome=\"stopped\"} 0",
-        "linterpd_upload_seconds_count{robot=\"press-loader\"} 1",
-        "linterpd_motion_seconds_count{robot=\"press-loader\"} 1",
-        "linterpd_link_up{robot=\"press-loader\"} 1",
-    ] {
-        assert!(text.lines().any(|l| l == line), "no {line:?} in\n{text}");
+    let mut before = before.text();
+    // The first connection is not a reconnection.
+    let reconnects = "linterpd_link_reconnects_total{robot=\"press-loader\"}";
+    assert_eq!(samples(&before, reconnects), [(reconnects.to_owned(), 0.0)]);
+    assert!(
+        samples(&before, "linterpd_build_info{version=")
+            .iter()
+            .any(|(k, v)| k.contains("commit=") && (*v - 1.0).abs() < f64::EPSILON),
+        "{before}"
+    );
+    assert!(!before.contains(" -0"), "{before}");
+
+    for (i, to) in [P2, P1, P2].into_iter().enumerate() {
+        let id = s.submit(to).await;
+        assert_done_on_target(s.events(id).await.last().unwrap());
+        let text = s.api.get("/metrics").await.text();
+        for line in [
+            format!(
+                "linterpd_moves_total{{robot=\"press-loader\",outcome=\"done\"}} {}",
+                i + 1
+            ),
+            "linterpd_moves_total{robot=\"press-loader\",outcome=\"stopped\"} 0".to_owned(),
+            format!(
+                "linterpd_upload_seconds_count{{robot=\"press-loader\"}} {}",
+                i + 1
+            ),
+            format!(
+                "linterpd_motion_seconds_count{{robot=\"press-loader\"}} {}",
+                i + 1
+            ),
+            "linterpd_link_up{robot=\"press-loader\"} 1".to_owned(),
+            "linterpd_plc_fault{robot=\"press-loader\"} 0".to_owned(),
+            format!("{reconnects} 0"),
+        ] {
+            assert!(text.lines().any(|l| l == line), "no {line:?} in\n{text}");
+        }
+        assert!(
+            text.contains("linterpd_heartbeat_age_seconds{robot=\"press-loader\"} "),
+            "{text}"
+        );
+        // Every counter and every histogram's count and sum are at least what they were.
+        for (series, was) in samples(&before, "linterpd_")
+            .into_iter()
+            .filter(|(k, _)| k.contains("_total{") || k.contains("_count{") || k.contains("_sum{"))
+        {
+            let now = samples(&text, &series);
+            assert!(
+                now.iter().any(|(k, v)| *k == series && *v >= was),
+                "{series} went from {was} to {now:?}"
+            );
+        }
+        before = text;
     }
-    assert!(
-        text.contains("linterpd_heartbeat_age_seconds{robot=\"press-loader\"} "),
-        "{text}"
-    );
-    assert!(
-        text.contains("linterpd_link_reconnects_total{robot=\"press-loader\"} "),
-        "{text}"
-    );
     s.daemon.shut_down().await;
 }
 

@@ -144,8 +144,7 @@ fn notify_is_a_no_op_without_notify_socket() {
 // The systemd unit
 
 const UNIT: &str = "deploy/linterpd.service";
-const EXEC_START: &str =
-    "ExecStart=/usr/local/bin/linterpd serve --config /etc/linterpd/linterpd.toml";
+const EXEC_START: &str = "ExecStart=/usr/bin/linterpd serve --config /etc/linterpd/linterpd.toml";
 
 /// `systemd-analyze verify` on `unit_text`, saved as `linterpd.service` in a temp dir. Its
 /// warnings go to stderr with exit status 0, so any stderr line counts as a failure.
@@ -177,7 +176,7 @@ fn unit_for_verify() -> String {
         "{UNIT} must have exactly one line `{EXEC_START}`"
     );
     unit.replace(
-        "ExecStart=/usr/local/bin/linterpd ",
+        "ExecStart=/usr/bin/linterpd ",
         &format!("ExecStart={} ", env!("CARGO_BIN_EXE_linterpd")),
     )
 }
@@ -214,6 +213,36 @@ fn verify_check_catches_a_bad_line() {
     }
 }
 
+/// The most `systemd-analyze security` may score the unit (issue 9: at most 1.5).
+const MAX_EXPOSURE: f64 = 1.5;
+
+#[test]
+#[cfg_attr(
+    not(feature = "third-party-peers"),
+    ignore = "needs systemd's tools: cargo test --features third-party-peers (.ci/run)"
+)]
+fn unit_exposure_is_at_most_one_and_a_half() {
+    let output = Command::new("systemd-analyze")
+        .args(["security", "--offline=yes", "--no-pager"])
+        .arg(repo_file(UNIT))
+        .output()
+        .unwrap_or_else(|e| {
+            panic!("systemd-analyze is required to score {UNIT} (.ci/run installs systemd): {e}")
+        });
+    let text = String::from_utf8_lossy(&output.stdout);
+    // "→ Overall exposure level for linterpd.service: 1.5 OK 🙂"
+    let exposure: f64 = text
+        .lines()
+        .find_map(|l| l.split_once("Overall exposure level for linterpd.service: "))
+        .and_then(|(_, rest)| rest.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no exposure level in\n{}", describe(&output)));
+    assert!(
+        exposure <= MAX_EXPOSURE,
+        "{UNIT} scores {exposure}, more than {MAX_EXPOSURE}:\n{text}"
+    );
+}
+
 /// `(section, key, value)` for every assignment in a unit file.
 fn directives(unit: &str) -> Vec<(String, String, String)> {
     let mut section = String::new();
@@ -247,7 +276,7 @@ fn unit_runs_as_linterpd_with_dialout_and_the_expected_hardening() {
         ("RuntimeDirectoryMode", "0750"),
         ("StateDirectory", "linterpd"),
         ("StateDirectoryMode", "0750"),
-        ("UMask", "0007"),
+        ("UMask", "0027"),
         ("ProtectSystem", "strict"),
         ("ProtectHome", "yes"),
         ("PrivateTmp", "yes"),
@@ -271,6 +300,12 @@ fn unit_runs_as_linterpd_with_dialout_and_the_expected_hardening() {
         ("MemoryDenyWriteExecute", "yes"),
         ("SystemCallArchitectures", "native"),
         ("SystemCallFilter", "@system-service"),
+        ("SystemCallFilter", "~@privileged @resources"),
+        ("RestartPreventExitStatus", "2"),
+        ("ProtectProc", "invisible"),
+        ("ProcSubset", "pid"),
+        ("RemoveIPC", "yes"),
+        ("PrivateMounts", "yes"),
         ("CapabilityBoundingSet", ""),
         ("ReadOnlyPaths", "/etc/linterpd"),
     ];
@@ -1114,4 +1149,128 @@ fn readme_has_install_and_plc_sections() {
     ] {
         assert!(readme.contains(needle), "README.md lacks {needle:?}");
     }
+}
+
+// ------------------------------------------------------------------------------------------------
+// The Debian package (cargo deb)
+
+const PACKAGE_SCRIPT: &str = "deploy/package.sh";
+
+/// `[package.metadata.deb]`'s assets as (source, destination).
+fn deb_assets() -> Vec<(String, String)> {
+    let manifest: toml::Table = toml::from_str(&read("Cargo.toml")).unwrap();
+    let deb = &manifest["package"]["metadata"]["deb"];
+    deb["assets"]
+        .as_array()
+        .expect("assets")
+        .iter()
+        .map(|a| {
+            let a = a.as_array().expect("[source, destination, mode]");
+            (
+                a[0].as_str().unwrap().to_owned(),
+                a[1].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn deb_installs_the_unit_sysusers_conffile_completions_and_man_pages() {
+    let assets = deb_assets();
+    let dest = |source: &str| {
+        assets
+            .iter()
+            .find(|(s, _)| s == source)
+            .map_or_else(|| panic!("no asset {source}"), |(_, d)| d.as_str())
+    };
+    assert_eq!(dest("target/release/linterpd"), "usr/bin/");
+    assert_eq!(
+        dest(UNIT),
+        "usr/lib/systemd/system/linterpd.service",
+        "the unit's ExecStart is /usr/bin/linterpd"
+    );
+    assert!(read(UNIT).contains(EXEC_START));
+    assert_eq!(
+        dest("deploy/linterpd.sysusers"),
+        "usr/lib/sysusers.d/linterpd.conf"
+    );
+    assert_eq!(dest("config/linterpd.toml"), "etc/linterpd/linterpd.toml");
+    let manifest: toml::Table = toml::from_str(&read("Cargo.toml")).unwrap();
+    let conf_files = manifest["package"]["metadata"]["deb"]["conf-files"]
+        .as_array()
+        .expect("conf-files");
+    assert!(
+        conf_files
+            .iter()
+            .any(|c| c.as_str() == Some("/etc/linterpd/linterpd.toml"))
+    );
+    for wanted in [
+        "usr/share/bash-completion/completions/linterpd",
+        "usr/share/zsh/vendor-completions/_linterpd",
+        "usr/share/fish/vendor_completions.d/linterpd.fish",
+        "usr/share/man/man1/",
+    ] {
+        assert!(
+            assets.iter().any(|(_, d)| d == wanted),
+            "nothing installed to {wanted}"
+        );
+    }
+}
+
+#[test]
+fn deb_assets_exist_in_the_repository_or_are_made_by_the_package_script() {
+    let script = read(PACKAGE_SCRIPT);
+    for (source, _) in deb_assets() {
+        if source == "target/release/linterpd" {
+            continue; // built by cargo
+        }
+        if let Some(generated) = source.strip_prefix("target/release/package/") {
+            // The script writes `$out/<generated>` ($out = target/release/package); a man page
+            // glob matches the pages `linterpd man --dir "$out/man"` writes, gzipped.
+            let made = if generated == "man/*.1.gz" {
+                script.contains("man --dir \"$out/man\"")
+                    && script.contains("gzip -9n \"$out\"/man/*.1")
+            } else {
+                script.contains(&format!("> \"$out/{generated}\""))
+            };
+            assert!(made, "{PACKAGE_SCRIPT} does not make {source}");
+            continue;
+        }
+        assert!(
+            repo_file(&source).is_file(),
+            "asset {source} is not in the repository"
+        );
+    }
+    for script in ["deploy/debian/postinst", "deploy/debian/postrm"] {
+        assert!(read(script).contains("#DEBHELPER#"), "{script}");
+    }
+}
+
+#[test]
+fn package_script_writes_every_completion_and_man_page_the_cli_generates() {
+    // What the script asks the binary for, the binary gives: run it as the script does.
+    let dir = TempDir::new("package");
+    let bin = env!("CARGO_BIN_EXE_linterpd");
+    for shell in ["bash", "zsh", "fish"] {
+        let out = Command::new(bin)
+            .args(["completions", shell])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success() && !out.stdout.is_empty(),
+            "{shell}: {}",
+            describe(&out)
+        );
+        assert!(read(PACKAGE_SCRIPT).contains(&format!("completions {shell} >")));
+    }
+    let man = dir.path().join("man");
+    std::fs::create_dir_all(&man).unwrap();
+    let out = Command::new(bin)
+        .arg("man")
+        .arg("--dir")
+        .arg(&man)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", describe(&out));
+    assert!(man.join("linterpd.1").is_file());
 }

@@ -135,6 +135,20 @@ async fn listed_registers_are_read_and_written_in_the_plcs_memory() {
         stats.exchanges > 7,
         "the 600-word read took several exchanges: {stats:?}"
     );
+    // The lifetime counters of /metrics count the same requests; one more adds one.
+    let metric = |name: &str| -> u64 {
+        let text = h.metrics().encode();
+        let line = format!("{name}{{robot=\"press-loader\"}} ");
+        text.lines()
+            .find_map(|l| l.strip_prefix(line.as_str()))
+            .unwrap_or_else(|| panic!("no {line:?} in\n{text}"))
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(metric("linterpd_gateway_requests_total"), 7);
+    assert_eq!(metric("linterpd_gateway_errors_total"), 0);
+    h.read_registers(at("DT5"), 1).await.unwrap();
+    assert_eq!(metric("linterpd_gateway_requests_total"), 8);
     d.shut_down().await;
 }
 

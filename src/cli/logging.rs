@@ -1,5 +1,8 @@
 //! Logging: `tracing` to the systemd journal with structured fields when systemd started the
-//! process (`JOURNAL_STREAM` set), readable text on stderr otherwise; `RUST_LOG` filters either.
+//! process (`JOURNAL_STREAM` set), readable text on stderr otherwise (coloured only when stderr
+//! is a terminal, so a log file or a pipe gets no escape codes); `RUST_LOG` filters either.
+
+use std::io::IsTerminal;
 
 use tracing_subscriber::EnvFilter;
 use tracing_subscriber::layer::SubscriberExt;
@@ -17,7 +20,11 @@ pub fn init(default_level: &str) {
     match journald {
         Some(layer) => registry.with(layer).init(),
         None => registry
-            .with(tracing_subscriber::fmt::layer().with_writer(std::io::stderr))
+            .with(
+                tracing_subscriber::fmt::layer()
+                    .with_ansi(std::io::stderr().is_terminal())
+                    .with_writer(std::io::stderr),
+            )
             .init(),
     }
 }

@@ -120,6 +120,15 @@ pub enum ProtocolArg {
     Modbus,
 }
 
+impl std::fmt::Display for ProtocolArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Mewtocol => "mewtocol",
+            Self::Modbus => "modbus",
+        })
+    }
+}
+
 /// Where the mock listens.
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Endpoint {
@@ -230,9 +239,9 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         .context("cannot write to stdout")
         .map_err(Failure::Runtime)?;
     tracing::info!(
-        protocol = ?settings.protocol,
-        station = ?settings.station,
-        baud = ?settings.baud,
+        protocol = %settings.protocol,
+        station = %settings.station,
+        baud = %settings.baud.map_or_else(|| "none".to_owned(), |b| b.to_string()),
         scan_s = settings.config.scan_s,
         variant = settings.config.variant.name(),
         "mock PLC in RUN, listening on {shown}"

@@ -328,7 +328,7 @@ impl RobotHandle {
         let replaced = self
             .positions
             .save(&self.robot.name, name, position.clone())?;
-        tracing::info!(robot = %self.robot.name, position = name, pose = ?position.pose, counts = ?joint_counts, replaced, "position saved");
+        tracing::info!(robot = %self.robot.name, position = name, pose = %position.pose.map(|v| format!("{v:.3}")).join(","), counts = %joint_counts.map(|c| c.to_string()).join(","), replaced, "position saved");
         Ok(Saved { position, replaced })
     }
 
@@ -425,6 +425,12 @@ impl RobotHandle {
         self.shared.moves(|m| m.all())
     }
 
+    /// The daemon's metrics (shared by every robot of one daemon).
+    #[must_use]
+    pub fn metrics(&self) -> &super::metrics::Metrics {
+        self.shared.metrics.daemon()
+    }
+
     /// A move's progress feed: every change of its report.
     #[must_use]
     pub fn subscribe(&self, id: MoveId) -> Option<watch::Receiver<MoveReport>> {
@@ -460,9 +466,14 @@ impl Daemon {
         let (shutdown, _) = watch::channel(false);
         let mut handles = BTreeMap::new();
         let mut workers = JoinSet::new();
+        let metrics = super::metrics::Metrics::new();
         for setup in robots {
             let name = setup.robot.name.clone();
-            let shared = Arc::new(Shared::new(&name, Arc::clone(&options.ids)));
+            let shared = Arc::new(Shared::new(
+                &name,
+                Arc::clone(&options.ids),
+                metrics.robot(&name),
+            ));
             let (requests, requests_rx) = mpsc::unbounded_channel();
             let (stops, stops_rx) = mpsc::unbounded_channel();
             let (gateway, gateway_rx) = mpsc::unbounded_channel();

@@ -24,6 +24,7 @@ pub mod api;
 mod gateway;
 mod handle;
 mod ids;
+pub mod metrics;
 pub mod modbus_face;
 pub mod notify;
 mod order;

@@ -35,6 +35,9 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// The final stages, in the order metrics list them.
+    pub const FINAL: [Self; 4] = [Self::Done, Self::Stopped, Self::Failed, Self::Cancelled];
+
     /// Whether nothing more will happen to the move.
     #[must_use]
     pub fn is_final(self) -> bool {

@@ -6,6 +6,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use super::ids::MoveIds;
+use super::metrics::RobotMetrics;
 use super::report::{MoveId, Moves, RobotState};
 use crate::contract::machine::Blocker;
 use crate::kinematics::JOINTS;
@@ -25,6 +26,8 @@ pub(super) struct Shared {
     refusal: Mutex<Option<Blocker>>,
     /// When the worker last made progress (went round its loop, or an exchange of an upload).
     pub beat: Arc<Beat>,
+    /// The robot's lifetime counters and histograms.
+    pub metrics: RobotMetrics,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -33,7 +36,7 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Shared {
-    pub(super) fn new(name: &str, ids: Arc<MoveIds>) -> Self {
+    pub(super) fn new(name: &str, ids: Arc<MoveIds>, metrics: RobotMetrics) -> Self {
         Self {
             state: Mutex::new(RobotState {
                 name: name.to_owned(),
@@ -45,6 +48,7 @@ impl Shared {
             planned_end: Mutex::new(None),
             refusal: Mutex::new(Some(Blocker::LinkDown)),
             beat: Arc::new(Beat::default()),
+            metrics,
         }
     }
 

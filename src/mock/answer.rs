@@ -33,6 +33,16 @@ pub enum StationFilter {
     Only(u8),
 }
 
+/// `any`, or the station number, as logs show it.
+impl std::fmt::Display for StationFilter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Any => f.write_str("any"),
+            Self::Only(n) => write!(f, "{n}"),
+        }
+    }
+}
+
 /// What to do with a command sent to some station.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Route {

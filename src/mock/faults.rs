@@ -63,6 +63,22 @@ impl LinkFault {
     }
 }
 
+/// The fault script's own spelling (`drop`, `delay250`, `error61`, ...), as logs show it.
+impl std::fmt::Display for LinkFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Drop => f.write_str("drop"),
+            Self::Corrupt { position, xor } => {
+                write!(f, "corrupt (byte {position}, xor {xor:#04x})")
+            }
+            Self::Delay { ms } => write!(f, "delay{ms}"),
+            Self::Close => f.write_str("close"),
+            Self::MewtocolError { code } => write!(f, "error{code:02}"),
+            Self::ModbusException { code } => write!(f, "exception{code}"),
+        }
+    }
+}
+
 /// What the core does to itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CoreFault {
@@ -76,6 +92,19 @@ pub enum CoreFault {
     Run,
     /// Power lost and back: counts 0, homed bit clear, the program's first scan.
     PowerCycle,
+}
+
+/// The fault script's own spelling (`freeze`, `restart`, ...), as logs show it.
+impl std::fmt::Display for CoreFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::FreezeHeartbeat => "freeze",
+            Self::ThawHeartbeat => "thaw",
+            Self::Prog => "prog",
+            Self::Run => "run",
+            Self::PowerCycle => "restart",
+        })
+    }
 }
 
 /// A script item's action.

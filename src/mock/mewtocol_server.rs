@@ -245,7 +245,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
         let route = self.server.options.station.route(request.station);
         match (request.message, route) {
             (_, Route::Ignore) => {
-                tracing::debug!(station = ?request.station, "command for another station");
+                tracing::debug!(
+                    station = %String::from_utf8_lossy(&request.station.to_ascii()),
+                    "command for another station"
+                );
                 Ok(Step::Continue)
             }
             (Request::NextFrame, Route::Silent) => Ok(Step::Continue),
@@ -297,7 +300,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
         faults: &[LinkFault],
     ) -> Result<Step, ServerError> {
         for fault in faults {
-            tracing::warn!(?fault, "injecting link fault");
+            tracing::warn!(%fault, "injecting link fault");
             match *fault {
                 LinkFault::Drop => return Ok(Step::Continue),
                 LinkFault::Close => return Ok(Step::Close),

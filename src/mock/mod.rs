@@ -474,7 +474,7 @@ impl MockPlc {
     }
 
     fn apply_core_fault(&mut self, fault: CoreFault) {
-        tracing::warn!(?fault, at_s = self.now_s, "injected fault");
+        tracing::warn!(%fault, at_s = self.now_s, "injected fault");
         match fault {
             CoreFault::FreezeHeartbeat => self.heartbeat_frozen = true,
             CoreFault::ThawHeartbeat => self.heartbeat_frozen = false,

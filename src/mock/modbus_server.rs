@@ -180,7 +180,7 @@ impl MockService {
         }
         let (faults, mut result) = mock.with(|m| (m.on_command(), execute(m, &request.request)));
         for fault in faults {
-            tracing::warn!(?fault, "injecting link fault");
+            tracing::warn!(%fault, "injecting link fault");
             match fault {
                 LinkFault::Drop | LinkFault::Corrupt { .. } => return Ok(None),
                 LinkFault::Close => {

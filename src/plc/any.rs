@@ -35,6 +35,17 @@ pub async fn connect(settings: &LinkSettings) -> Result<AnyPlc, PlcError> {
     })
 }
 
+impl AnyPlc {
+    /// Counts the client's retries and timeouts into `counts`, which outlives the client (the
+    /// link's owner hands the same counts to every client it opens).
+    pub fn set_exchange_counts(&mut self, counts: std::sync::Arc<super::ExchangeCounts>) {
+        match self {
+            Self::Mewtocol(c) => c.set_exchange_counts(counts),
+            Self::Modbus(c) => c.set_exchange_counts(counts),
+        }
+    }
+}
+
 impl Plc for AnyPlc {
     async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
         match self {

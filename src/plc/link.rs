@@ -30,9 +30,14 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + Debug> ByteStream for T {}
 /// An opened link: a serial port or a TCP stream.
 pub type BoxedLink = Box<dyn ByteStream>;
 
+/// How [`open_serial`] names its operation in an error.
+const OPEN_SERIAL: &str = "open serial port";
+/// How [`open_tcp`] names its operation in an error.
+const CONNECT: &str = "connect to";
+
 /// Opens a serial port with the settings' framing.
 pub fn open_serial(settings: &SerialSettings) -> Result<BoxedLink, PlcError> {
-    let operation = || format!("open serial port {}", settings.path);
+    let operation = || format!("{OPEN_SERIAL} {}", settings.path);
     let data_bits = match settings.data_bits {
         7 => tokio_serial::DataBits::Seven,
         _ => tokio_serial::DataBits::Eight,
@@ -60,7 +65,7 @@ pub fn open_serial(settings: &SerialSettings) -> Result<BoxedLink, PlcError> {
 
 /// Connects to a TCP peer within the settings' connect timeout.
 pub async fn open_tcp(settings: &TcpSettings) -> Result<BoxedLink, PlcError> {
-    let operation = || format!("connect to {}", settings.address);
+    let operation = || format!("{CONNECT} {}", settings.address);
     let connect = TcpStream::connect(settings.address.as_str());
     let stream = tokio::time::timeout(settings.connect_timeout, connect)
         .await
@@ -77,6 +82,43 @@ pub async fn open_tcp(settings: &TcpSettings) -> Result<BoxedLink, PlcError> {
         source,
     })?;
     Ok(Box::new(stream))
+}
+
+/// What an operator can do about a link that would not open, for the log line that reports it:
+/// a serial port refused to the service user (EACCES), a serial path that is not there (ENOENT; the
+/// serial library reports a port another program holds the same way), a TCP peer that refused or
+/// did not answer. `None` for anything else.
+#[must_use]
+pub fn open_hint(e: &PlcError) -> Option<&'static str> {
+    match e {
+        PlcError::Link { operation, source } if operation.starts_with(OPEN_SERIAL) => {
+            match source.kind() {
+                io::ErrorKind::PermissionDenied => Some(
+                    "add the service user to the `dialout` group (or the group that owns the port)",
+                ),
+                io::ErrorKind::NotFound => Some(
+                    "no such serial port (or another program holds it): check `path` against ls /dev/serial/by-id/",
+                ),
+                _ => None,
+            }
+        }
+        PlcError::Link { operation, source }
+            if operation.starts_with(CONNECT)
+                && matches!(
+                    source.kind(),
+                    io::ErrorKind::ConnectionRefused
+                        | io::ErrorKind::TimedOut
+                        | io::ErrorKind::HostUnreachable
+                        | io::ErrorKind::NetworkUnreachable
+                ) =>
+        {
+            Some("is the PLC (or gateway) reachable and in RUN?")
+        }
+        PlcError::Timeout { operation, .. } if operation.starts_with(CONNECT) => {
+            Some("is the PLC (or gateway) reachable and in RUN?")
+        }
+        _ => None,
+    }
 }
 
 /// Reads and throws away whatever arrives until the stream stays quiet for `quiet`: a late reply
@@ -162,6 +204,77 @@ impl<T: AsyncWrite + Unpin> AsyncWrite for SharedStream<T> {
 mod tests {
     use super::*;
     use tokio::io::AsyncWriteExt;
+
+    fn link_error(operation: &str, kind: io::ErrorKind) -> PlcError {
+        PlcError::Link {
+            operation: operation.to_owned(),
+            source: kind.into(),
+        }
+    }
+
+    #[test]
+    fn open_hints_name_the_fix_for_each_open_failure() {
+        let serial = "open serial port /dev/ttyUSB0";
+        let dialout = open_hint(&link_error(serial, io::ErrorKind::PermissionDenied));
+        assert!(dialout.unwrap().contains("`dialout` group"));
+        let missing = open_hint(&link_error(serial, io::ErrorKind::NotFound));
+        assert!(missing.unwrap().starts_with("no such serial port"));
+        let tcp = "connect to 10.0.0.5:9094";
+        for kind in [io::ErrorKind::ConnectionRefused, io::ErrorKind::TimedOut] {
+            let hint = open_hint(&link_error(tcp, kind));
+            assert_eq!(hint, Some("is the PLC (or gateway) reachable and in RUN?"));
+        }
+        let timeout = PlcError::Timeout {
+            operation: tcp.to_owned(),
+            timeout_ms: 3000,
+        };
+        assert!(open_hint(&timeout).is_some());
+        // Failures after the link opened get no open hint.
+        assert_eq!(
+            open_hint(&link_error("read DT1000", io::ErrorKind::PermissionDenied)),
+            None
+        );
+        assert_eq!(
+            open_hint(&link_error(serial, io::ErrorKind::InvalidInput)),
+            None
+        );
+    }
+
+    #[test]
+    fn a_serial_path_that_is_not_there_gets_the_no_such_port_hint() {
+        let settings = SerialSettings {
+            path: "/dev/linterpd-no-such-tty".into(),
+            baud: 19200,
+            data_bits: 8,
+            parity: Parity::Odd,
+            stop_bits: 1,
+        };
+        let e = open_serial(&settings).expect_err("no such device");
+        assert!(
+            open_hint(&e).unwrap().starts_with("no such serial port"),
+            "{e}"
+        );
+    }
+
+    #[tokio::test]
+    async fn a_refused_tcp_connection_gets_the_reachable_hint() {
+        // A port that was just free: nothing listens there any more.
+        let address = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .to_string();
+        let settings = TcpSettings {
+            address,
+            connect_timeout: Duration::from_secs(2),
+        };
+        let e = open_tcp(&settings).await.expect_err("refused");
+        assert_eq!(
+            open_hint(&e),
+            Some("is the PLC (or gateway) reachable and in RUN?"),
+            "{e}"
+        );
+    }
 
     #[tokio::test(start_paused = true)]
     async fn drain_drops_bytes_until_the_line_is_quiet() {

@@ -18,6 +18,7 @@
 
 use std::fmt;
 use std::io;
+use std::sync::Arc;
 use std::time::Duration;
 
 use futures_util::{SinkExt, StreamExt};
@@ -26,7 +27,7 @@ use tokio_util::codec::Framed;
 
 use super::link::drain;
 use super::settings::{HeaderChoice, LinkSettings, Timing};
-use super::{ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
+use super::{ExchangeCounts, ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
 use crate::gateway::Area;
 use crate::mewtocol::{
     Addressed, ClientCodec, ClientEvent, CodecError, Command, Contact, ContactArea, ContactWords,
@@ -182,6 +183,7 @@ pub struct MewtocolClient<T> {
     options: MewtocolOptions,
     header: Option<Header>,
     stale: bool,
+    counts: Arc<ExchangeCounts>,
 }
 
 impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
@@ -197,7 +199,13 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
             options,
             header,
             stale: false,
+            counts: Arc::default(),
         }
+    }
+
+    /// Counts this client's retries and timeouts into `counts` (shared with the link's owner).
+    pub fn set_exchange_counts(&mut self, counts: Arc<ExchangeCounts>) {
+        self.counts = counts;
     }
 
     /// The header in use, once chosen (`None` before an `Auto` probe).
@@ -266,6 +274,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
                 return Err(failure.into_error(operation, timeout));
             }
             attempt += 1;
+            self.counts.retried();
             tracing::warn!(operation, attempt, %failure, "retrying a MEWTOCOL exchange");
         }
     }
@@ -288,6 +297,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         let result = tokio::time::timeout(timeout, self.round_trip(header, command))
             .await
             .unwrap_or(Err(Failure::Timeout));
+        if matches!(result, Err(Failure::Timeout)) {
+            self.counts.timed_out();
+        }
         if matches!(result, Err(Failure::Timeout | Failure::Garbled(_))) {
             self.stale = true;
         }
@@ -337,7 +349,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
                     return Err(Failure::Garbled(e.to_string()));
                 }
                 Some(Ok(ClientEvent::Skipped(bytes))) => {
-                    tracing::warn!(?bytes, "skipped bytes that start no MEWTOCOL frame");
+                    tracing::warn!(
+                        bytes = %String::from_utf8_lossy(&bytes).escape_debug(),
+                        "skipped bytes that start no MEWTOCOL frame"
+                    );
                 }
                 Some(Ok(ClientEvent::MoreFollows { header, station })) => {
                     self.send(header, station, Request::NextFrame).await?;

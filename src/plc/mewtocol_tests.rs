@@ -292,7 +292,11 @@ async fn silent_plc_gives_a_timeout_after_the_retries() {
     let state = fake();
     state.lock().unwrap().silent = true;
     let mut plc = client(&state, HeaderChoice::Percent);
+    let counts = std::sync::Arc::new(crate::plc::ExchangeCounts::default());
+    plc.set_exchange_counts(std::sync::Arc::clone(&counts));
     let e = plc.read_words(0, 4).await.unwrap_err();
+    // Three attempts timed out, two of them were retries.
+    assert_eq!((counts.timeouts(), counts.retries()), (3, 2));
     assert!(
         matches!(
             e,

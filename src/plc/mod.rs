@@ -12,6 +12,7 @@
 //! ```
 
 mod any;
+mod counts;
 mod link;
 mod mewtocol;
 mod modbus;
@@ -26,7 +27,8 @@ use thiserror::Error;
 use crate::gateway::Area;
 
 pub use any::{AnyPlc, connect};
-pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_serial, open_tcp};
+pub use counts::ExchangeCounts;
+pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_hint, open_serial, open_tcp};
 pub use mewtocol::{MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
 pub use modbus::{
     MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, ModbusClient, ModbusFraming, ModbusOptions,

@@ -19,6 +19,7 @@
 
 use std::fmt;
 use std::io;
+use std::sync::Arc;
 use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncWrite};
@@ -27,7 +28,7 @@ use tokio_modbus::{ExceptionCode, Request, Response, Slave};
 
 use super::link::{SharedStream, drain};
 use super::settings::{LinkSettings, Protocol, Timing};
-use super::{ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
+use super::{ExchangeCounts, ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
 use crate::contract::DT_LAST;
 use crate::gateway::{Address, Area};
 
@@ -210,6 +211,7 @@ pub struct ModbusClient<T> {
     context: Option<Context>,
     options: ModbusOptions,
     reattached: usize,
+    counts: Arc<ExchangeCounts>,
 }
 
 impl<T: fmt::Debug> fmt::Debug for ModbusClient<T> {
@@ -243,7 +245,13 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
             context,
             options,
             reattached: 0,
+            counts: Arc::default(),
         }
+    }
+
+    /// Counts this client's retries and timeouts into `counts` (shared with the link's owner).
+    pub fn set_exchange_counts(&mut self, counts: Arc<ExchangeCounts>) {
+        self.counts = counts;
     }
 
     /// How often the client has drained its stream and attached a fresh context.
@@ -269,7 +277,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
         let timeout = self.call_timeout(&request);
         let context = self.context().await?;
         let outcome = match tokio::time::timeout(timeout, context.call(request)).await {
-            Err(_) => Err(Failure::Timeout),
+            Err(_) => {
+                self.counts.timed_out();
+                Err(Failure::Timeout)
+            }
             Ok(Err(tokio_modbus::Error::Transport(e)))
                 if e.kind() == io::ErrorKind::InvalidData =>
             {
@@ -321,6 +332,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
                 return Err(failure.into_error(operation, timeout));
             }
             attempt += 1;
+            self.counts.retried();
             tracing::warn!(operation, attempt, %failure, "retrying a Modbus call");
         }
     }

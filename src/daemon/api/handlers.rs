@@ -15,7 +15,7 @@ use tokio_util::sync::CancellationToken;
 
 use super::Api;
 use super::error::ApiError;
-use super::metrics::{self, RobotSample};
+use super::metrics;
 use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHandle, RobotState};
 
 /// `POST .../moves` accepted.
@@ -197,18 +197,13 @@ pub(super) async fn delete_position(
 }
 
 pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {
-    let samples: Vec<RobotSample> = api
-        .robots
-        .values()
-        .map(|r| RobotSample {
-            state: r.state(),
-            reports: r.reports(),
-        })
-        .collect();
-    (
-        [(header::CONTENT_TYPE, metrics::CONTENT_TYPE)],
-        metrics::render(&samples),
-    )
+    let states: Vec<_> = api.robots.values().map(RobotHandle::state).collect();
+    // Every robot of a daemon shares one set of metrics; with no robot there is only build info.
+    let text = match api.robots.values().next() {
+        Some(robot) => metrics::render(robot.metrics(), &states),
+        None => metrics::render(&crate::daemon::metrics::Metrics::new(), &states),
+    };
+    ([(header::CONTENT_TYPE, metrics::CONTENT_TYPE)], text)
 }
 
 pub(super) async fn no_route() -> ApiError {

@@ -237,7 +237,8 @@ pub async fn serve(
         let stop = closing.clone();
         servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
     }
-    tracing::info!(socket = %settings.socket.display(), listen = ?settings.listen, "API listening");
+    let listen = settings.listen.map(tracing::field::display);
+    tracing::info!(socket = %settings.socket.display(), listen, "API listening");
     log_notify(notifier.ready(), "READY=1");
     let supervisor = tokio::spawn(supervise::supervise(
         daemon.robots().clone(),

@@ -272,6 +272,9 @@ impl Worker {
             .started
             .remove(&id)
             .map(|t| now().saturating_duration_since(t).as_secs_f64());
+        if let Some(seconds) = motion_s {
+            self.shared.metrics.moved(seconds);
+        }
         let target = self
             .shared
             .moves(|m| m.get(id))
@@ -289,7 +292,8 @@ impl Worker {
             });
         });
         self.finish(id, Stage::Done, None, error);
-        tracing::info!(robot = %self.robot.name, id, ?error, "move done");
+        let end_error_pulses = error.map(|e| e.map(|p| p.to_string()).join(","));
+        tracing::info!(robot = %self.robot.name, id, end_error_pulses, "move done");
     }
 
     fn ended(&mut self, id: MoveId, outcome: Outcome) {

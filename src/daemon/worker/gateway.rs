@@ -40,6 +40,11 @@ impl Worker {
                 s.gateway.longest_exchange_ms.max(millis(ended - began));
             s.gateway.longest_poll_delay_ms = s.gateway.longest_poll_delay_ms.max(millis(held));
         });
+        if self.next_poll <= ended {
+            self.shared
+                .metrics
+                .waited_behind_gateway(held.as_secs_f64());
+        }
         match result {
             Ok(read) => {
                 let job = self.gateway.front_mut().expect("front");
@@ -47,6 +52,7 @@ impl Worker {
                 if job.next_piece(sizes).is_none() {
                     let job = self.gateway.pop_front().expect("front");
                     self.shared.state(|s| s.gateway.requests += 1);
+                    self.shared.metrics.gateway_request(false);
                     job.finish();
                 }
                 Ok(())
@@ -57,6 +63,7 @@ impl Worker {
                     s.gateway.requests += 1;
                     s.gateway.failed += 1;
                 });
+                self.shared.metrics.gateway_request(true);
                 if e.is_link_failure() {
                     let _ = job.reply.send(Err(GatewayError::LinkDown {
                         detail: Some(e.to_string()),
@@ -84,6 +91,7 @@ impl Worker {
                 s.gateway.requests += 1;
                 s.gateway.failed += 1;
             });
+            self.shared.metrics.gateway_request(true);
             let _ = job.reply.send(Err(GatewayError::LinkDown {
                 detail: detail.clone(),
             }));

@@ -17,7 +17,8 @@ impl Worker {
     pub(super) async fn reconnect(&mut self) {
         self.expire_offline();
         match (self.connect)().await {
-            Ok(plc) => {
+            Ok(mut plc) => {
+                plc.set_exchange_counts(self.shared.metrics.exchange_counts());
                 let mut contract = Contract::new(plc, self.settings);
                 contract.set_abort(Arc::clone(&self.shared.stop_pending));
                 contract.set_beat(Arc::clone(&self.shared.beat));
@@ -26,6 +27,9 @@ impl Worker {
                 // The first opening is a connection, not a reconnection.
                 let again = std::mem::replace(&mut self.opened_before, true);
                 self.shared.state(|s| s.link.reconnects += u64::from(again));
+                if again {
+                    self.shared.metrics.reconnected();
+                }
                 tracing::info!(robot = %self.robot.name, "PLC link opened");
                 self.mode_read = None;
                 if let Err(e) = self.poll().await {
@@ -40,8 +44,10 @@ impl Worker {
                     s.link.error = Some(text.clone());
                     changed
                 });
+                // Once per change, not once per retry: the journal keeps the first and the news.
                 if changed {
-                    tracing::warn!(robot = %self.robot.name, error = %text, "cannot open the PLC link");
+                    let hint = crate::plc::open_hint(&e);
+                    tracing::warn!(robot = %self.robot.name, error = %text, hint, "cannot open the PLC link");
                 }
                 self.publish_refusal();
                 let wait = self.backoff;
@@ -74,14 +80,23 @@ impl Worker {
     }
 
     pub(super) fn link_failed(&mut self, e: &ContractError) {
-        tracing::warn!(robot = %self.robot.name, error = %describe(e), "PLC link failed; reconnecting");
+        let text = describe(e);
+        // A link that opens and fails at once fails again on every retry: say it once.
+        if self
+            .shared
+            .state(|s| s.link.error.as_deref() != Some(text.as_str()))
+        {
+            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
+        } else {
+            tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
+        }
         self.link = None;
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
         self.machine.link_lost(now());
         self.shared.state(|s| {
             s.link.connected = false;
-            s.link.error = Some(describe(e));
+            s.link.error = Some(text);
             // Unknown until the link is back; the rest stays as last read.
             s.heartbeat_age_ms = None;
         });

@@ -457,7 +457,7 @@ impl Worker {
                 }
                 self.machine.home_written(now());
                 self.homing.push(reply);
-                tracing::info!(robot = %self.robot.name, ?from, "homing");
+                tracing::info!(robot = %self.robot.name, from = %from.map(|c| c.to_string()).join(","), "homing");
                 Ok(())
             }
             Err(e) => {
@@ -474,7 +474,14 @@ impl Worker {
             && let Some(link) = self.link.as_mut()
         {
             let result = link.withdraw().await;
-            tracing::info!(robot = %self.robot.name, id = next.tag, ?result, "withdrew the waiting start");
+            match &result {
+                Ok(()) => {
+                    tracing::info!(robot = %self.robot.name, id = next.tag, "withdrew the waiting start");
+                }
+                Err(e) => {
+                    tracing::warn!(robot = %self.robot.name, id = next.tag, error = %describe(e), "could not withdraw the waiting start");
+                }
+            }
             self.finish(
                 next.tag,
                 Stage::Cancelled,

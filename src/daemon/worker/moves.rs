@@ -69,6 +69,7 @@ impl Worker {
             Err(e) => return self.not_started(id, e),
         };
         let upload_s = began.elapsed().as_secs_f64();
+        self.shared.metrics.uploaded(upload_s);
         self.shared
             .moves(|m| m.update(id, |r| r.upload_s = Some(upload_s)));
         // The contract's first step once more, after the upload: the bank is started only once
@@ -243,15 +244,20 @@ impl Worker {
         error: Option<String>,
         final_error: Option<[i64; CHANNELS]>,
     ) {
+        let mut ended = false;
         self.shared.moves(|m| {
             m.update(id, |r| {
                 if !r.stage.is_final() {
                     r.stage = stage;
                     r.error = error;
                     r.final_error_pulses = final_error;
+                    ended = true;
                 }
             });
         });
+        if ended {
+            self.shared.metrics.move_ended(stage);
+        }
         self.shared.state(|s| {
             s.queued.retain(|q| *q != id);
             if s.current_move == Some(id) {

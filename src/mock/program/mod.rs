@@ -324,7 +324,7 @@ impl Program {
         self.homing = None;
         self.homed = true;
         self.state = State::Done;
-        tracing::info!(mask = homing.mask, from = ?homing.from, "homed");
+        tracing::info!(mask = homing.mask, from = %homing.from.map(|c| c.to_string()).join(","), "homed");
     }
 
     /// Stops everything for PROG mode: a running move ends stopped. Back in RUN the program

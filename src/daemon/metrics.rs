@@ -1,0 +1,428 @@
+//! The daemon's metrics as lifetime state (`prometheus-client`): counters and histograms kept from
+//! the daemon's start, fed where things happen (a move ends, the link reopens, a gateway request
+//! is answered), never recomputed from the kept reports, so a counter never goes down. Gauges
+//! that only restate a robot's state are set from it when `/metrics` is read
+//! ([`crate::daemon::api::metrics`]).
+//!
+//! One [`Metrics`] per daemon, shared by every robot (a label per robot); docs/API.md lists every
+//! metric.
+
+use std::sync::atomic::AtomicU64;
+use std::sync::{Arc, Mutex, PoisonError};
+
+use prometheus_client::collector::Collector;
+use prometheus_client::encoding::{DescriptorEncoder, EncodeLabelSet, EncodeMetric};
+use prometheus_client::metrics::counter::{ConstCounter, Counter};
+use prometheus_client::metrics::family::Family;
+use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::Histogram;
+use prometheus_client::metrics::info::Info;
+use prometheus_client::registry::Registry;
+
+use super::report::Stage;
+use crate::plc::ExchangeCounts;
+
+/// The label every per-robot series carries.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+pub struct RobotLabel {
+    /// The robot's name in the config.
+    pub robot: String,
+}
+
+/// A move's end, by outcome.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct OutcomeLabels {
+    robot: String,
+    outcome: &'static str,
+}
+
+type Histograms = Family<RobotLabel, Histogram, fn() -> Histogram>;
+
+/// Upload time buckets, s: a small move over a fast link takes tens of ms, a long table over
+/// 9600 baud several seconds.
+fn upload_histogram() -> Histogram {
+    Histogram::new([0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0])
+}
+
+/// Motion time buckets, s.
+fn motion_histogram() -> Histogram {
+    Histogram::new([0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0])
+}
+
+/// How long a due status read waited behind one gateway exchange, s.
+fn wait_histogram() -> Histogram {
+    Histogram::new([0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5])
+}
+
+/// The daemon's metrics: a registry and the families in it. Clones share them.
+#[derive(Debug, Clone)]
+pub struct Metrics {
+    inner: Arc<Inner>,
+}
+
+#[derive(Debug)]
+struct Inner {
+    registry: Registry,
+    moves: Family<OutcomeLabels, Counter>,
+    reconnects: Family<RobotLabel, Counter>,
+    gateway_requests: Family<RobotLabel, Counter>,
+    gateway_errors: Family<RobotLabel, Counter>,
+    upload: Histograms,
+    motion: Histograms,
+    gateway_wait: Histograms,
+    /// Set from the robots' state at every read of `/metrics`.
+    link_up: Family<RobotLabel, Gauge>,
+    fault: Family<RobotLabel, Gauge>,
+    heartbeat_age: Family<RobotLabel, Gauge<f64, AtomicU64>>,
+    exchanges: Arc<ExchangeCollector>,
+}
+
+/// A counter family read from [`ExchangeCounts`]: name, help, value.
+type ExchangeFamily = (&'static str, &'static str, fn(&ExchangeCounts) -> u64);
+
+/// Every robot's link exchange counts, read at each scrape.
+#[derive(Debug, Default)]
+struct ExchangeCollector {
+    links: Mutex<Vec<(RobotLabel, Arc<ExchangeCounts>)>>,
+}
+
+impl Collector for ExchangeCollector {
+    fn encode(&self, mut encoder: DescriptorEncoder<'_>) -> Result<(), std::fmt::Error> {
+        let links = self.links.lock().unwrap_or_else(PoisonError::into_inner);
+        let families: [ExchangeFamily; 2] = [
+            (
+                "linterpd_link_exchange_retries",
+                "Exchanges with the PLC tried again (after a timeout or a garbled reply).",
+                ExchangeCounts::retries,
+            ),
+            (
+                "linterpd_link_exchange_timeouts",
+                "Exchange attempts that got no complete reply in time.",
+                ExchangeCounts::timeouts,
+            ),
+        ];
+        for (name, help, value) in families {
+            let kind = ConstCounter::new(0_u64).metric_type();
+            let mut family = encoder.encode_descriptor(name, help, None, kind)?;
+            for (label, counts) in links.iter() {
+                ConstCounter::new(value(counts)).encode(family.encode_family(label)?)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for Metrics {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Metrics {
+    /// Empty metrics, with `linterpd_build_info`.
+    #[must_use]
+    pub fn new() -> Self {
+        let mut registry = Registry::default();
+        let build = Info::new(vec![
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("commit", env!("LINTERPD_COMMIT")),
+        ]);
+        registry.register(
+            "linterpd_build",
+            "The running linterpd's version and commit.",
+            build,
+        );
+        let inner = Inner {
+            moves: Family::default(),
+            reconnects: Family::default(),
+            gateway_requests: Family::default(),
+            gateway_errors: Family::default(),
+            upload: Family::new_with_constructor(upload_histogram),
+            motion: Family::new_with_constructor(motion_histogram),
+            gateway_wait: Family::new_with_constructor(wait_histogram),
+            link_up: Family::default(),
+            fault: Family::default(),
+            heartbeat_age: Family::default(),
+            exchanges: Arc::default(),
+            registry,
+        };
+        Self {
+            inner: Arc::new(inner.registered()),
+        }
+    }
+
+    /// The per-robot handle for `robot`: its series start at 0 (a counter is there before its
+    /// first event).
+    #[must_use]
+    pub fn robot(&self, robot: &str) -> RobotMetrics {
+        let label = RobotLabel {
+            robot: robot.to_owned(),
+        };
+        let i = &self.inner;
+        for outcome in Stage::FINAL.map(Stage::name) {
+            drop(i.moves.get_or_create(&OutcomeLabels {
+                robot: robot.to_owned(),
+                outcome,
+            }));
+        }
+        for family in [&i.reconnects, &i.gateway_requests, &i.gateway_errors] {
+            drop(family.get_or_create(&label));
+        }
+        for family in [&i.upload, &i.motion, &i.gateway_wait] {
+            drop(family.get_or_create(&label));
+        }
+        let exchanges = Arc::new(ExchangeCounts::default());
+        i.exchanges
+            .links
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push((label.clone(), Arc::clone(&exchanges)));
+        RobotMetrics {
+            metrics: self.clone(),
+            label,
+            exchanges,
+        }
+    }
+
+    /// Sets the gauges that restate a robot's state: link up, fault code, heartbeat age (no
+    /// series while the age is unknown).
+    pub fn set_state(&self, robot: &str, link_up: bool, fault: u16, heartbeat_age_s: Option<f64>) {
+        let label = RobotLabel {
+            robot: robot.to_owned(),
+        };
+        let i = &self.inner;
+        i.link_up.get_or_create(&label).set(i64::from(link_up));
+        i.fault.get_or_create(&label).set(i64::from(fault));
+        match heartbeat_age_s {
+            Some(age) => {
+                i.heartbeat_age.get_or_create(&label).set(age);
+            }
+            None => {
+                i.heartbeat_age.remove(&label);
+            }
+        }
+    }
+
+    /// The `OpenMetrics` text of everything.
+    ///
+    /// # Panics
+    /// Never: writing into a `String` cannot fail.
+    #[must_use]
+    pub fn encode(&self) -> String {
+        let mut out = String::new();
+        prometheus_client::encoding::text::encode(&mut out, &self.inner.registry)
+            .expect("writing to a String cannot fail");
+        out
+    }
+}
+
+impl Inner {
+    fn registered(mut self) -> Self {
+        let r = &mut self.registry;
+        r.register(
+            "linterpd_moves",
+            "Moves that ended, by outcome.",
+            self.moves.clone(),
+        );
+        r.register(
+            "linterpd_link_reconnects",
+            "PLC link reopened after it was lost (the first opening is not counted).",
+            self.reconnects.clone(),
+        );
+        r.register(
+            "linterpd_gateway_requests",
+            "Register gateway requests answered (read or write).",
+            self.gateway_requests.clone(),
+        );
+        r.register(
+            "linterpd_gateway_errors",
+            "Register gateway requests that failed (link down, PLC error).",
+            self.gateway_errors.clone(),
+        );
+        r.register(
+            "linterpd_upload_seconds",
+            "Time to write and verify a move's bank.",
+            self.upload.clone(),
+        );
+        r.register(
+            "linterpd_motion_seconds",
+            "Time from a move's start to its end on the PLC (moves that ended done).",
+            self.motion.clone(),
+        );
+        r.register(
+            "linterpd_gateway_motion_wait_seconds",
+            "How long a due status read waited behind a gateway exchange.",
+            self.gateway_wait.clone(),
+        );
+        r.register(
+            "linterpd_link_up",
+            "1 while the PLC link is up and the contract answers.",
+            self.link_up.clone(),
+        );
+        r.register(
+            "linterpd_plc_fault",
+            "The PLC program's fault code (0: none), as last read.",
+            self.fault.clone(),
+        );
+        r.register(
+            "linterpd_heartbeat_age_seconds",
+            "Time since the PLC program's heartbeat last changed.",
+            self.heartbeat_age.clone(),
+        );
+        r.register_collector(Box::new(Arc::clone(&self.exchanges)));
+        self
+    }
+}
+
+/// One robot's side of the metrics, fed by its worker.
+#[derive(Debug, Clone)]
+pub struct RobotMetrics {
+    metrics: Metrics,
+    label: RobotLabel,
+    exchanges: Arc<ExchangeCounts>,
+}
+
+impl RobotMetrics {
+    /// A move reached its final stage.
+    pub fn move_ended(&self, stage: Stage) {
+        let labels = OutcomeLabels {
+            robot: self.label.robot.clone(),
+            outcome: stage.name(),
+        };
+        self.metrics.inner.moves.get_or_create(&labels).inc();
+    }
+
+    /// The link was opened again after it was lost.
+    pub fn reconnected(&self) {
+        self.metrics
+            .inner
+            .reconnects
+            .get_or_create(&self.label)
+            .inc();
+    }
+
+    /// A gateway request was answered; `failed` when with an error.
+    pub fn gateway_request(&self, failed: bool) {
+        let i = &self.metrics.inner;
+        i.gateway_requests.get_or_create(&self.label).inc();
+        if failed {
+            i.gateway_errors.get_or_create(&self.label).inc();
+        }
+    }
+
+    /// A move's bank took `seconds` to write and verify.
+    pub fn uploaded(&self, seconds: f64) {
+        self.metrics
+            .inner
+            .upload
+            .get_or_create(&self.label)
+            .observe(seconds);
+    }
+
+    /// A move ran `seconds` on the PLC.
+    pub fn moved(&self, seconds: f64) {
+        self.metrics
+            .inner
+            .motion
+            .get_or_create(&self.label)
+            .observe(seconds);
+    }
+
+    /// A due status read waited `seconds` behind a gateway exchange.
+    pub fn waited_behind_gateway(&self, seconds: f64) {
+        let i = &self.metrics.inner;
+        i.gateway_wait.get_or_create(&self.label).observe(seconds);
+    }
+
+    /// The counts every client of this robot's link counts into.
+    #[must_use]
+    pub fn exchange_counts(&self) -> Arc<ExchangeCounts> {
+        Arc::clone(&self.exchanges)
+    }
+
+    /// The daemon's metrics this belongs to.
+    #[must_use]
+    pub fn daemon(&self) -> &Metrics {
+        &self.metrics
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line<'a>(text: &'a str, start: &str) -> &'a str {
+        text.lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no {start:?} in\n{text}"))
+    }
+
+    #[test]
+    fn series_start_at_zero_and_only_count_up() {
+        let metrics = Metrics::new();
+        let a = metrics.robot("a");
+        let text = metrics.encode();
+        assert_eq!(
+            line(&text, "linterpd_moves_total{robot=\"a\",outcome=\"done\"}"),
+            "linterpd_moves_total{robot=\"a\",outcome=\"done\"} 0"
+        );
+        assert!(
+            text.contains("linterpd_link_reconnects_total{robot=\"a\"} 0"),
+            "{text}"
+        );
+        assert!(
+            text.contains("linterpd_upload_seconds_sum{robot=\"a\"} 0.0"),
+            "{text}"
+        );
+        assert!(!text.contains("-0"), "{text}");
+        a.move_ended(Stage::Done);
+        a.move_ended(Stage::Failed);
+        a.reconnected();
+        a.gateway_request(true);
+        a.uploaded(0.3);
+        a.exchange_counts().retried();
+        let text = metrics.encode();
+        for want in [
+            "linterpd_moves_total{robot=\"a\",outcome=\"done\"} 1",
+            "linterpd_moves_total{robot=\"a\",outcome=\"failed\"} 1",
+            "linterpd_link_reconnects_total{robot=\"a\"} 1",
+            "linterpd_gateway_requests_total{robot=\"a\"} 1",
+            "linterpd_gateway_errors_total{robot=\"a\"} 1",
+            "linterpd_upload_seconds_count{robot=\"a\"} 1",
+            "linterpd_link_exchange_retries_total{robot=\"a\"} 1",
+            "linterpd_link_exchange_timeouts_total{robot=\"a\"} 0",
+        ] {
+            assert!(text.lines().any(|l| l == want), "no {want:?} in\n{text}");
+        }
+        assert!(text.ends_with("# EOF\n"));
+    }
+
+    #[test]
+    fn build_info_names_version_and_commit() {
+        let text = Metrics::new().encode();
+        let info = line(&text, "linterpd_build_info{");
+        assert!(
+            info.contains(&format!("version=\"{}\"", env!("CARGO_PKG_VERSION"))),
+            "{info}"
+        );
+        assert!(info.contains("commit=\""), "{info}");
+        assert!(info.ends_with(" 1"), "{info}");
+    }
+
+    #[test]
+    fn state_gauges_follow_the_state_and_an_unknown_age_has_no_series() {
+        let metrics = Metrics::new();
+        metrics.set_state("a", true, 5, Some(0.02));
+        let text = metrics.encode();
+        assert!(text.contains("linterpd_plc_fault{robot=\"a\"} 5"), "{text}");
+        assert!(text.contains("linterpd_link_up{robot=\"a\"} 1"), "{text}");
+        assert!(
+            text.contains("linterpd_heartbeat_age_seconds{robot=\"a\"} 0.02"),
+            "{text}"
+        );
+        metrics.set_state("a", false, 0, None);
+        let text = metrics.encode();
+        assert!(text.contains("linterpd_link_up{robot=\"a\"} 0"), "{text}");
+        assert!(!text.contains("linterpd_heartbeat_age_seconds{"), "{text}");
+    }
+}
