@@ -45,6 +45,12 @@ const NARROWING: f64 = 0.8;
 /// The widest window, pulses each side (also for joints that do not move the tool point).
 const MAX_DELTA_PULSES: f64 = 8.0;
 
+/// The first try's window scale, relative to the budget left above the floor
+/// ([`FIRST_BUDGET`]).
+fn first_scale(tolerance_mm: f64, floor_mm: f64) -> f64 {
+    FIRST_BUDGET * (tolerance_mm - floor_mm / 2.0) / (tolerance_mm - floor_mm)
+}
+
 /// A verified bounded-error plan's tables and how they ran.
 pub(super) struct Verified {
     pub tables: Vec<ChannelTable>,
@@ -202,21 +208,48 @@ impl Move<'_> {
         floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
         let reach = self.pulse_reach_mm();
-        let first = FIRST_BUDGET * (tolerance_mm - floor_mm / 2.0) / (tolerance_mm - floor_mm);
+        let first = first_scale(tolerance_mm, floor_mm);
         let narrowing = (0..TRIES).map(|k| FIRST_SCALE * NARROWING.powi(k as i32));
         for scale in std::iter::once(first).chain(narrowing) {
-            let deltas = reach.map(|r| {
-                if r > 0.0 {
-                    ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
-                } else {
-                    MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
-                }
-            });
-            if let Some(v) = self.verify(tracks, &deltas, tolerance_mm, floor_mm)? {
+            let deltas_at = |reach: &[f64; JOINTS], scale: f64| {
+                reach.map(|r| {
+                    if r > 0.0 {
+                        ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
+                    } else {
+                        MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
+                    }
+                })
+            };
+            if let Some(v) =
+                self.verify(tracks, &deltas_at(&reach, scale), tolerance_mm, floor_mm)?
+            {
                 return Ok(Some(v));
             }
         }
         Ok(None)
+    }
+
+    /// Whether the first try alone (no narrowing) gives rows the execution model accepts
+    /// (`None`: the tolerance is below the pulse grid's floor).
+    #[cfg(test)]
+    pub(super) fn first_try_accepted(&self, tolerance_mm: f64) -> Result<Option<bool>, PlanError> {
+        let tracks = self.tracks();
+        let floor_mm = self.floor_mm(&tracks);
+        if floor_mm >= tolerance_mm {
+            return Ok(None);
+        }
+        let scale = first_scale(tolerance_mm, floor_mm);
+        let deltas = self.pulse_reach_mm().map(|r| {
+            if r > 0.0 {
+                ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
+            } else {
+                MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
+            }
+        });
+        Ok(Some(
+            self.verify(&tracks, &deltas, tolerance_mm, floor_mm)?
+                .is_some(),
+        ))
     }
 
     /// Rows for windows `deltas` pulses wide, if the execution model finds them within the
