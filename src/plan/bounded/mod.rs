@@ -51,6 +51,18 @@ fn first_scale(tolerance_mm: f64, floor_mm: f64) -> f64 {
     FIRST_BUDGET * (tolerance_mm - floor_mm / 2.0) / (tolerance_mm - floor_mm)
 }
 
+/// Every joint's window, pulses each side: `budget_mm * scale` over its reach, at most
+/// [`MAX_DELTA_PULSES`] (a joint that cannot move the tool gets that much times the scale).
+fn deltas(reach: &[f64; JOINTS], scale: f64, budget_mm: f64) -> [f64; JOINTS] {
+    reach.map(|r| {
+        if r > 0.0 {
+            (budget_mm * scale / r).min(MAX_DELTA_PULSES)
+        } else {
+            MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
+        }
+    })
+}
+
 /// A verified bounded-error plan's tables and how they ran.
 pub(super) struct Verified {
     pub tables: Vec<ChannelTable>,
@@ -88,29 +100,31 @@ impl Move<'_> {
         self.samples.counts[0]
     }
 
-    /// How far one pulse of each joint can take the tool point off the path, mm: the largest
-    /// over the path of the pulse's move across the path, or half its move along the path,
-    /// whichever is larger. Only the move across the path counts towards the path deviation;
-    /// the move along it counts towards the tracking error, whose limit is twice the tolerance.
-    fn pulse_reach_mm(&self) -> [f64; JOINTS] {
+    /// How far one pulse of each joint moves the tool point at most, mm: `(whole, off)`, its
+    /// whole move, and how far it can take the tool off the path (its move across the path, or
+    /// half its move along it, whichever is larger). Only the move across the path counts
+    /// towards the path deviation; the move along it counts towards the tracking error, whose
+    /// limit is twice the tolerance.
+    fn pulse_reach_mm(&self) -> ([f64; JOINTS], [f64; JOINTS]) {
         let n = self.samples.values.len();
         let fk = |q: &crate::kinematics::Joints| self.robot.kinematics.fk(q).position_mm;
-        let mut reach = [0.0f64; JOINTS];
+        let (mut whole, mut off) = ([0.0f64; JOINTS], [0.0f64; JOINTS]);
         for i in (0..n).step_by((n / 32).max(1)).chain([n - 1]) {
             let q = self.samples.values[i];
             let p = fk(&q);
             let (before, after) = (i.saturating_sub(1), (i + 1).min(n - 1));
             let chord = fk(&self.samples.values[after]) - fk(&self.samples.values[before]);
             let tangent = chord.try_normalize(1e-12);
-            for (j, r) in reach.iter_mut().enumerate() {
+            for j in 0..JOINTS {
                 let mut moved = q;
                 moved[j] += self.robot.joints[j].step;
                 let d = fk(&moved) - p;
                 let across = tangent.map_or(d.norm(), |t| (d - t * d.dot(&t)).norm());
-                *r = r.max(across.max(d.norm() / 2.0));
+                whole[j] = whole[j].max(d.norm());
+                off[j] = off[j].max(across.max(d.norm() / 2.0));
             }
         }
-        reach
+        (whole, off)
     }
 
     fn runs(&self, tracks: &[Vec<f64>], deltas: &[f64; JOINTS]) -> Vec<Vec<Run>> {
@@ -199,30 +213,21 @@ impl Move<'_> {
         }
     }
 
-    /// One try at the budget that usually holds, then narrowing windows until the execution
-    /// model agrees (`None` if it never does).
+    /// One try at the budget that holds on the seed's move, with windows sized by how far a
+    /// pulse takes the tool off the path; then the narrowing search, with windows sized by a
+    /// pulse's whole move as before the first try existed (`None` if nothing is accepted).
     fn try_plan(
         &self,
         tracks: &[Vec<f64>],
         tolerance_mm: f64,
         floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
-        let reach = self.pulse_reach_mm();
-        let first = first_scale(tolerance_mm, floor_mm);
-        let narrowing = (0..TRIES).map(|k| FIRST_SCALE * NARROWING.powi(k as i32));
-        for scale in std::iter::once(first).chain(narrowing) {
-            let deltas_at = |reach: &[f64; JOINTS], scale: f64| {
-                reach.map(|r| {
-                    if r > 0.0 {
-                        ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
-                    } else {
-                        MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
-                    }
-                })
-            };
-            if let Some(v) =
-                self.verify(tracks, &deltas_at(&reach, scale), tolerance_mm, floor_mm)?
-            {
+        let (whole, off) = self.pulse_reach_mm();
+        let first = (off, first_scale(tolerance_mm, floor_mm));
+        let narrowing = (0..TRIES).map(|k| (whole, FIRST_SCALE * NARROWING.powi(k as i32)));
+        for (reach, scale) in std::iter::once(first).chain(narrowing) {
+            let deltas = deltas(&reach, scale, tolerance_mm - floor_mm);
+            if let Some(v) = self.verify(tracks, &deltas, tolerance_mm, floor_mm)? {
                 return Ok(Some(v));
             }
         }
@@ -239,13 +244,7 @@ impl Move<'_> {
             return Ok(None);
         }
         let scale = first_scale(tolerance_mm, floor_mm);
-        let deltas = self.pulse_reach_mm().map(|r| {
-            if r > 0.0 {
-                ((tolerance_mm - floor_mm) * scale / r).min(MAX_DELTA_PULSES)
-            } else {
-                MAX_DELTA_PULSES.min(scale * MAX_DELTA_PULSES)
-            }
-        });
+        let deltas = deltas(&self.pulse_reach_mm().1, scale, tolerance_mm - floor_mm);
         Ok(Some(
             self.verify(&tracks, &deltas, tolerance_mm, floor_mm)?
                 .is_some(),
