@@ -1,12 +1,19 @@
-//! Planning time: the seed's move (50 ms period) and a 1 m move at a 10 ms period, each planned,
-//! validated and simulated (`plan_move` does all three), under the `fpx-divider` model.
+//! Planning time: the seed's move (50 ms period, bounded-error 0.05 and 0.10 mm) and lines of
+//! 0.1, 0.5, 1, 2 and 4 m, each planned, validated and simulated (`plan_move` does all three),
+//! under the `fpx-divider` model. Before timing, the row count of every case is printed.
 //!
-//! Run: `cargo bench --bench plan`
+//! The seed's cylindrical robot cannot reach a 4 m line (its radius stays within 500..1500 mm),
+//! so the lengths run on it up to 2 m and on a cartesian gantry (0.01 mm steps, +-2.5 m) at all
+//! five.
+//!
+//! Run: `cargo bench --bench plan` (one case: `cargo bench --bench plan -- "seed move"`)
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use linterpd::geometry::Pose;
+use linterpd::kinematics::{Cartesian, JointKind, Model};
 use linterpd::plan::{MoveRequest, Origin, plan_move};
-use linterpd::robot::{Robot, seed_robot};
+use linterpd::robot::{Joint, Method, Robot, seed_robot};
+use linterpd::table::{FrequencyModel, OutputMethod};
 use std::hint::black_box;
 
 fn request(robot: &Robot, from: [f64; 3], to: [f64; 3], period_s: f64) -> MoveRequest {
@@ -25,6 +32,63 @@ fn request(robot: &Robot, from: [f64; 3], to: [f64; 3], period_s: f64) -> MoveRe
     }
 }
 
+fn bounded(req: &MoveRequest, tolerance_mm: f64) -> MoveRequest {
+    let mut r = *req;
+    r.motion.method = Method::BoundedError { tolerance_mm };
+    r
+}
+
+/// A cartesian gantry: x, y 0.01 mm, z 0.02 mm, a 0.01 deg, +-2500 mm.
+fn gantry() -> Robot {
+    let joint =
+        |name: &str, channel: u8, kind: JointKind, step: f64, limit: f64, max_freq_hz: u32| Joint {
+            name: String::from(name),
+            channel,
+            kind,
+            step: kind.from_user(step),
+            offset: 0.0,
+            min: kind.from_user(-limit),
+            max: kind.from_user(limit),
+            max_freq_hz,
+            output: OutputMethod::PulseSign,
+        };
+    let mut robot = seed_robot();
+    robot.name = "gantry".into();
+    robot.kinematics = Model::Cartesian(Cartesian);
+    robot.joints = [
+        joint("x", 0, JointKind::Prismatic, 0.01, 2_500.0, 100_000),
+        joint("y", 1, JointKind::Prismatic, 0.01, 2_500.0, 100_000),
+        joint("z", 2, JointKind::Prismatic, 0.02, 2_500.0, 20_000),
+        joint("a", 3, JointKind::Revolute, 0.01, 720.0, 20_000),
+    ];
+    robot
+}
+
+/// A line of `length_mm` centred on `mid` along the unit vector `dir`.
+fn line(mid: [f64; 3], dir: [f64; 3], length_mm: f64) -> ([f64; 3], [f64; 3]) {
+    let h = length_mm / 2.0;
+    (
+        std::array::from_fn(|i| mid[i] - dir[i] * h),
+        std::array::from_fn(|i| mid[i] + dir[i] * h),
+    )
+}
+
+const LENGTHS_MM: [f64; 5] = [100.0, 500.0, 1_000.0, 2_000.0, 4_000.0];
+
+fn rows(robot: &Robot, req: &MoveRequest) -> String {
+    let mut out = Vec::new();
+    for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+        let mut r = *req;
+        r.motion.frequency_model = model;
+        let p = plan_move(robot, &r).expect("plans");
+        out.push(format!(
+            "{model:?} {} rows, path dev. {:.4} mm",
+            p.figures.rows, p.figures.path_deviation_mm
+        ));
+    }
+    out.join("; ")
+}
+
 fn bench(c: &mut Criterion) {
     let robot = seed_robot();
     let seed = request(
@@ -41,14 +105,12 @@ fn bench(c: &mut Criterion) {
         0.01,
     );
     assert!((plan_move(&robot, &metre).expect("plans").line.length_mm() - 1000.0).abs() < 0.5);
-    let bounded = |tolerance_mm| {
-        let mut r = seed;
-        r.motion.method = linterpd::robot::Method::BoundedError { tolerance_mm };
-        r
-    };
-    let (b05, b10) = (bounded(0.05), bounded(0.10));
+    let (b05, b10) = (bounded(&seed, 0.05), bounded(&seed, 0.10));
     let mut seed_exact = seed;
     seed_exact.seed_exact = true;
+    for (name, r) in [("0.05 mm", &b05), ("0.10 mm", &b10)] {
+        eprintln!("seed move bounded-error {name}: {}", rows(&robot, r));
+    }
     c.bench_function("plan seed move seed-exact", |b| {
         b.iter(|| plan_move(&robot, black_box(&seed_exact)).unwrap());
     });
@@ -64,6 +126,50 @@ fn bench(c: &mut Criterion) {
     c.bench_function("plan 1 m move (10 ms period)", |b| {
         b.iter(|| plan_move(&robot, black_box(&metre)).unwrap());
     });
+    lengths(c);
+}
+
+/// A robot's name, the robot, a line's middle, its direction, the longest length it reaches.
+type Case<'a> = (&'a str, &'a Robot, [f64; 3], [f64; 3], f64);
+
+/// Time and rows against length: the seed robot on a line 800 mm from its axis (up to 2 m),
+/// the gantry on a diagonal (up to 4 m).
+fn lengths(c: &mut Criterion) {
+    let seed = seed_robot();
+    let gantry = gantry();
+    let cases: [Case; 2] = [
+        ("seed", &seed, [0.0, 800.0, 150.0], [1.0, 0.0, 0.0], 2_000.0),
+        (
+            "gantry",
+            &gantry,
+            [0.0, 0.0, 0.0],
+            [2.0 / 3.0, 2.0 / 3.0, 1.0 / 3.0],
+            4_000.0,
+        ),
+    ];
+    let mut group = c.benchmark_group("plan length");
+    group
+        .sample_size(20)
+        .warm_up_time(std::time::Duration::from_secs(1))
+        .measurement_time(std::time::Duration::from_secs(3));
+    for (robot_name, robot, mid, dir, longest) in cases {
+        for length_mm in LENGTHS_MM.into_iter().filter(|&l| l <= longest) {
+            let (from, to) = line(mid, dir, length_mm);
+            let cp = request(robot, from, to, 0.05);
+            let b05 = bounded(&cp, 0.05);
+            let m = length_mm / 1e3;
+            for (method, r) in [
+                ("constant-period 50 ms", &cp),
+                ("bounded-error 0.05 mm", &b05),
+            ] {
+                eprintln!("{robot_name} {m} m {method}: {}", rows(robot, r));
+                group.bench_function(format!("{robot_name} {m} m {method}"), |b| {
+                    b.iter(|| plan_move(robot, black_box(r)).unwrap());
+                });
+            }
+        }
+    }
+    group.finish();
 }
 
 criterion_group!(benches, bench);

@@ -10,10 +10,12 @@
 
 mod cartesian;
 mod cylindrical;
+mod positions;
 mod scara;
 
 pub use cartesian::Cartesian;
 pub use cylindrical::Cylindrical;
+pub use positions::Positions;
 pub use scara::{Elbow, Scara};
 
 use thiserror::Error;

@@ -127,6 +127,22 @@ impl Course {
         }
     }
 
+    /// The planned tool position as a function of the distance along the profile, with what it
+    /// can compute once computed once (the same values as [`Course::position_mm`]).
+    pub(super) fn positions(&self) -> impl Fn(f64) -> Vector3<f64> + '_ {
+        let line = match self {
+            Self::Line(line) => {
+                let d = line.to.position_mm - line.from.position_mm;
+                Some((line.from.position_mm, d, d.norm()))
+            }
+            Self::Path(_) | Self::Joints { .. } => None,
+        };
+        move |s_mm| match line {
+            Some((from, d, len)) => from + d * if len > 0.0 { s_mm / len } else { 1.0 },
+            None => self.position_mm(s_mm),
+        }
+    }
+
     /// What the executed path is measured against.
     pub(super) fn tool_path(&self) -> &dyn ToolPath {
         match self {

@@ -444,7 +444,8 @@ fn simulate_within(
         segment_gap_s: 0.0,
     };
     let execution = sim::execute(tables, &max_hz, settings);
-    let planned = |t: f64| course.position_mm(profile.distance_mm(t));
+    let position = course.positions();
+    let planned = |t: f64| position(profile.distance_mm(t));
     let duration_s = profile.duration_s();
     let figures = sim::measure_within(
         robot,

@@ -3,9 +3,9 @@
 
 use nalgebra::Vector3;
 
-use super::Execution;
-use crate::geometry::ToolPath;
-use crate::kinematics::{JOINTS, Kinematics};
+use super::{Execution, PulseEvent};
+use crate::geometry::{LineDistance, ToolPath};
+use crate::kinematics::{JOINTS, Positions};
 use crate::robot::Robot;
 use crate::table::{ChannelTable, encoded_words};
 
@@ -71,12 +71,17 @@ pub fn measure_within(
     planned_duration_s: f64,
     path_limit_mm: f64,
 ) -> Option<Figures> {
-    let mut counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
-    let position = |c: &[i64; JOINTS]| robot.kinematics.fk(&robot.values_of(c)).position_mm;
+    let counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
+    // One joint changes per event: only its value is converted, and the kinematics' sines and
+    // cosines are reused while their angles hold (bit for bit what forward kinematics gives).
+    let mut q = robot.values_of(&counts);
+    let mut positions = Positions::new(&robot.kinematics);
     path.restart();
-    let mut p = position(&counts);
-    let mut deviation = path.distance_mm(&p);
-    let mut tracking = (p - planned(0.0)).norm();
+    let mut p = positions.at(&q);
+    let mut deviation = Deviation::new(path);
+    deviation.see(&p);
+    // Squared, the root taken once at the end (the root is monotonic: the same maximum).
+    let mut tracking2 = (p - planned(0.0)).norm_squared();
     let mut sampled: f64 = 0.0;
     let mut next_sample = 0.0;
     for e in &exec.events {
@@ -86,17 +91,16 @@ pub fn measure_within(
         }
         // The planned pose moves while the executed one holds: check both ends of the hold.
         let target = planned(e.t_s);
-        tracking = tracking.max((p - target).norm());
-        counts[e.table] = e.count;
-        p = position(&counts);
-        deviation = deviation.max(path.distance_mm(&p));
-        if deviation > path_limit_mm {
+        tracking2 = tracking2.max((p - target).norm_squared());
+        q[e.table] = robot.joints[e.table].value_of(e.count);
+        p = positions.at(&q);
+        if deviation.see(&p) > path_limit_mm {
             return None;
         }
-        tracking = tracking.max((p - target).norm());
+        tracking2 = tracking2.max((p - target).norm_squared());
     }
     let finish_s = exec.events.last().map_or(0.0, |e| e.t_s);
-    tracking = tracking.max((p - planned(planned_duration_s.max(finish_s))).norm());
+    tracking2 = tracking2.max((p - planned(planned_duration_s.max(finish_s))).norm_squared());
     while next_sample <= planned_duration_s.max(finish_s) + 1e-12 {
         sampled = sampled.max(path.distance_mm(&p));
         next_sample += SAMPLE_PERIOD_S;
@@ -105,8 +109,8 @@ pub fn measure_within(
     let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - finishes.iter().copied().fold(f64::INFINITY, f64::min);
     Some(Figures {
-        path_deviation_mm: deviation,
-        tracking_error_mm: tracking,
+        path_deviation_mm: deviation.max_mm,
+        tracking_error_mm: tracking2.sqrt(),
         sampled_deviation_mm: sampled,
         end_skew_ms: if finishes.is_empty() { 0.0 } else { skew * 1e3 },
         end_error_mm: (p - path.end_mm()).norm(),
@@ -118,4 +122,60 @@ pub fn measure_within(
             .map(encoded_words)
             .sum(),
     })
+}
+
+/// The path deviation alone (see [`measure`]) of `events` played from counts `start`: the
+/// largest distance from the tool to `path` at the start and after every event, mm.
+#[must_use]
+pub fn path_deviation_mm(
+    robot: &Robot,
+    start: &[i64; JOINTS],
+    events: &[PulseEvent],
+    path: &dyn ToolPath,
+) -> f64 {
+    let mut q = robot.values_of(start);
+    let mut positions = Positions::new(&robot.kinematics);
+    path.restart();
+    let mut deviation = Deviation::new(path);
+    deviation.see(&positions.at(&q));
+    for e in events {
+        q[e.table] = robot.joints[e.table].value_of(e.count);
+        deviation.see(&positions.at(&q));
+    }
+    deviation.max_mm
+}
+
+/// The largest distance from a run of points to a path. On a straight segment it compares
+/// squared distances and takes a square root only for a new largest (the same value
+/// `distance_mm` gives: the root is monotonic).
+struct Deviation<'a> {
+    path: &'a dyn ToolPath,
+    line: Option<LineDistance>,
+    max_mm: f64,
+    max_mm2: f64,
+}
+
+impl<'a> Deviation<'a> {
+    fn new(path: &'a dyn ToolPath) -> Self {
+        Self {
+            path,
+            line: path.as_line().map(LineDistance::new),
+            max_mm: 0.0,
+            max_mm2: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Takes `p` into account; returns the largest distance so far, mm.
+    fn see(&mut self, p: &Vector3<f64>) -> f64 {
+        if let Some(line) = &self.line {
+            let d2 = line.squared_mm2(p);
+            if d2 > self.max_mm2 {
+                self.max_mm2 = d2;
+                self.max_mm = self.max_mm.max(d2.sqrt());
+            }
+        } else {
+            self.max_mm = self.max_mm.max(self.path.distance_mm(p));
+        }
+        self.max_mm
+    }
 }

@@ -15,7 +15,7 @@
 
 mod figures;
 
-pub use figures::{Figures, SAMPLE_PERIOD_S, measure, measure_within};
+pub use figures::{Figures, SAMPLE_PERIOD_S, measure, measure_within, path_deviation_mm};
 
 use crate::table::{ChannelTable, FrequencyModel, FrequencyRange};
 
@@ -104,22 +104,46 @@ pub fn execute(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) -> E
     exec
 }
 
-/// Merges per-channel event lists (each already in time order) into one, ties in table order.
-fn merge(channels: &[Vec<PulseEvent>]) -> Vec<PulseEvent> {
+/// Merges per-channel event lists (each already in time order, the list's index being the
+/// table) into one, ties in table order: a k-way merge that keeps every channel's next time at hand.
+#[must_use]
+pub fn merge(channels: &[Vec<PulseEvent>]) -> Vec<PulseEvent> {
     let mut out = Vec::with_capacity(channels.iter().map(Vec::len).sum());
     let mut heads = vec![0usize; channels.len()];
+    let next_t = |c: usize, at: usize| channels[c].get(at).map_or(f64::INFINITY, |e| e.t_s);
+    let mut times: Vec<f64> = (0..channels.len()).map(|c| next_t(c, 0)).collect();
     loop {
-        let next = (0..channels.len())
-            .filter(|&c| heads[c] < channels[c].len())
-            .min_by(|&a, &b| {
-                channels[a][heads[a]]
-                    .t_s
-                    .total_cmp(&channels[b][heads[b]].t_s)
-                    .then(a.cmp(&b))
-            });
-        let Some(c) = next else { return out };
-        out.push(channels[c][heads[c]]);
-        heads[c] += 1;
+        // The first channel with the earliest next event, and the earliest of the others.
+        let (mut c, mut t) = (usize::MAX, f64::INFINITY);
+        for (i, &ti) in times.iter().enumerate() {
+            if ti < t {
+                (c, t) = (i, ti);
+            }
+        }
+        if c == usize::MAX {
+            // Only channels whose events have no finite time (none in a valid table) are left.
+            for (i, ch) in channels.iter().enumerate() {
+                out.extend_from_slice(&ch[heads[i]..]);
+            }
+            return out;
+        }
+        let (mut other, mut t2) = (usize::MAX, f64::INFINITY);
+        for (i, &ti) in times.iter().enumerate() {
+            if i != c && ti < t2 {
+                (other, t2) = (i, ti);
+            }
+        }
+        // Channel c's events up to the others' next one go out in one run (an event at the
+        // same time as the other's goes first when c is the lower table).
+        let run = &channels[c][heads[c]..];
+        let n = run
+            .iter()
+            .position(|e| e.t_s.total_cmp(&t2).then(c.cmp(&other)).is_gt())
+            .unwrap_or(run.len())
+            .max(1);
+        out.extend_from_slice(&run[..n]);
+        heads[c] += n;
+        times[c] = next_t(c, heads[c]);
     }
 }
 
@@ -265,6 +289,34 @@ mod tests {
         };
         let exec = execute(&[t], &[100_000], settings);
         assert!((exec.finish_s[0].unwrap() - 98.0 / 97.656_25).abs() < 1e-9);
+    }
+
+    #[test]
+    fn merge_keeps_time_order_and_breaks_ties_by_table() {
+        // Three channels on grids that meet: 1/3, 1/4 and 1/6 ms apart, with shared instants.
+        let channel = |table: usize, step_s: f64, n: i64| -> Vec<PulseEvent> {
+            (1..=n)
+                .map(|k| PulseEvent {
+                    t_s: (k as f64 * step_s * 1e6).round() / 1e6,
+                    table,
+                    count: k,
+                })
+                .collect()
+        };
+        let channels = [
+            channel(0, 0.003, 40),
+            channel(1, 0.004, 30),
+            channel(2, 0.006, 20),
+        ];
+        let merged = merge(&channels);
+        let mut expected: Vec<PulseEvent> = channels.concat();
+        expected.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.table.cmp(&b.table)));
+        assert_eq!(merged, expected);
+        assert!(
+            merged
+                .windows(2)
+                .any(|w| w[0].t_s.total_cmp(&w[1].t_s).is_eq())
+        );
     }
 
     #[test]

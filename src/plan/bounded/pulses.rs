@@ -85,6 +85,29 @@ impl Track<'_> {
         }
     }
 
+    /// When each of the joint's pulses from count `start` lands exactly on time (the trajectory
+    /// crosses the half count), and the count after it, in time order.
+    pub(super) fn on_time(&self, start: i64) -> Vec<(f64, i64)> {
+        let mut out = Vec::new();
+        let mut count = start;
+        for i in 0..self.u.len().saturating_sub(1) {
+            let b = self.u[i + 1];
+            loop {
+                let d = if b > count as f64 + 0.5 {
+                    1
+                } else if b < count as f64 - 0.5 {
+                    -1
+                } else {
+                    break;
+                };
+                let h = count as f64 + 0.5 * f64::from(d);
+                count += i64::from(d);
+                out.push((self.at(i, h), count));
+            }
+        }
+        out
+    }
+
     /// The joint's pulses from count `start`, with windows `delta` pulses wide each side.
     pub(super) fn runs(&self, start: i64, delta: f64) -> Vec<Run> {
         let mut runs: Vec<Run> = Vec::new();
