@@ -322,19 +322,7 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
 /// Plans one joint-space move for `robot`: the target is checked against every joint's limits
 /// (the joints move in proportion, so the start and the target bound every position between).
 pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, PlanError> {
-    let start = match req.from {
-        Origin::Pose(from) => {
-            let values = robot.kinematics.ik(&from, None)?;
-            Start {
-                values,
-                counts: robot.counts_of(&values),
-            }
-        }
-        Origin::Counts(counts) => Start {
-            values: robot.values_of(&counts),
-            counts,
-        },
-    };
+    let start = Start::at(robot, req.from)?;
     limits::check_target(robot, &req.to)?;
     let course = Course::joints(robot, start.values, req.to);
     if robot.counts_of(&req.to) == start.counts || course.length_mm() < 1e-9 {
@@ -349,6 +337,26 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
 struct Start {
     values: Joints,
     counts: [i64; JOINTS],
+}
+
+impl Start {
+    /// The start `origin` gives: a pose's joint values and their nearest counts, or counts and
+    /// the values they stand for.
+    fn at(robot: &Robot, origin: Origin) -> Result<Self, PlanError> {
+        Ok(match origin {
+            Origin::Pose(pose) => {
+                let values = robot.kinematics.ik(&pose, None)?;
+                Self {
+                    values,
+                    counts: robot.counts_of(&values),
+                }
+            }
+            Origin::Counts(counts) => Self {
+                values: robot.values_of(&counts),
+                counts,
+            },
+        })
+    }
 }
 
 /// Plans a move along `course` from `start`.

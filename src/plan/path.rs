@@ -70,19 +70,7 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
             accel_mm_s2: req.path_accel_mm_s2,
         });
     }
-    let mut start = match req.from {
-        Origin::Pose(pose) => {
-            let values = robot.kinematics.ik(&pose, None)?;
-            Start {
-                values,
-                counts: robot.counts_of(&values),
-            }
-        }
-        Origin::Counts(counts) => Start {
-            values: robot.values_of(&counts),
-            counts,
-        },
-    };
+    let mut start = Start::at(robot, req.from)?;
     for (element, _) in &req.elements {
         check_pose(&element.to())?;
     }
@@ -127,10 +115,7 @@ pub fn plan_section(
     path_accel_mm_s2: f64,
     counts: [i64; crate::kinematics::JOINTS],
 ) -> Result<Plan, PlanError> {
-    let start = Start {
-        values: robot.values_of(&counts),
-        counts,
-    };
+    let start = Start::at(robot, Origin::Counts(counts))?;
     let here = robot.kinematics.fk(&start.values).position_mm;
     let off_mm = (here - section.at(0.0).position_mm).norm();
     if off_mm > SECTION_START_SLACK_MM {

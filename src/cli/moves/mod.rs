@@ -51,22 +51,9 @@ pub struct MoveArgs {
     /// The robot (needed when the daemon runs several).
     #[arg(long)]
     pub robot: Option<String>,
-    /// Speed along the path, e.g. `240mm/s` or `240` (mm/s; default: the robot's). A joint move
-    /// takes as long as a line as long as its tool path (or its tool turn, degrees as mm).
-    #[arg(long, allow_hyphen_values = true)]
-    pub speed: Option<String>,
-    /// Acceleration time, e.g. `200ms` (default: the robot's).
-    #[arg(long, allow_hyphen_values = true)]
-    pub accel_time: Option<String>,
-    /// Planning method (default: the robot's; `--tolerance` alone means bounded-error).
-    #[arg(long, value_enum)]
-    pub method: Option<MethodArg>,
-    /// Interpolation period, e.g. `50ms` (default: the robot's).
-    #[arg(long, allow_hyphen_values = true)]
-    pub period: Option<String>,
-    /// Path tolerance of a bounded-error move, e.g. `0.05mm` (a plain number is mm).
-    #[arg(long, alias = "tolerance-mm", allow_hyphen_values = true)]
-    pub tolerance: Option<String>,
+    /// Speed, acceleration, method, period and tolerance.
+    #[command(flatten)]
+    pub motion: MotionFlags,
     /// The longest to wait for the move's end, e.g. `30s` (default: the daemon's deadline for
     /// the move, its planned duration and upload plus margins, and 2 s more). Running out
     /// exits 3 saying what the move waits for; the move is not stopped.
@@ -83,25 +70,55 @@ pub struct MoveArgs {
 /// The API's move order for the arguments; every value is checked here first, naming its flag.
 fn order(args: &MoveArgs) -> anyhow::Result<Value> {
     let mut order = target(args)?;
-    if let Some(text) = &args.speed {
-        order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
-    }
-    for (key, flag, text) in [
-        ("accel_time", "--accel-time", &args.accel_time),
-        ("period", "--period", &args.period),
-    ] {
-        if let Some(text) = text {
-            parse_duration(text).context(flag)?;
-            order[key] = text.as_str().into();
-        }
-    }
-    if let Some(method) = args.method {
-        order["method"] = method.name().into();
-    }
-    if let Some(text) = &args.tolerance {
-        order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
-    }
+    args.motion.add_to(&mut order)?;
     Ok(order)
+}
+
+/// The motion flags `move` and `run` share.
+#[derive(Debug, Args)]
+pub struct MotionFlags {
+    /// Speed along the path, e.g. `240mm/s` or `240` (mm/s; default: the robot's). A joint move
+    /// takes as long as a line as long as its tool path (or its tool turn, degrees as mm).
+    #[arg(long, allow_hyphen_values = true)]
+    pub speed: Option<String>,
+    /// Acceleration time, e.g. `200ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub accel_time: Option<String>,
+    /// Planning method (default: the robot's; `--tolerance` alone means bounded-error).
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Interpolation period, e.g. `50ms` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub period: Option<String>,
+    /// Path tolerance of a bounded-error move, e.g. `0.05mm` (a plain number is mm), against
+    /// the path as planned (a path's blends included).
+    #[arg(long, alias = "tolerance-mm", allow_hyphen_values = true)]
+    pub tolerance: Option<String>,
+}
+
+impl MotionFlags {
+    /// Adds the flags given to an API order, each checked here first, naming its flag.
+    fn add_to(&self, order: &mut Value) -> anyhow::Result<()> {
+        if let Some(text) = &self.speed {
+            order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
+        }
+        for (key, flag, text) in [
+            ("accel_time", "--accel-time", &self.accel_time),
+            ("period", "--period", &self.period),
+        ] {
+            if let Some(text) = text {
+                parse_duration(text).context(flag)?;
+                order[key] = text.as_str().into();
+            }
+        }
+        if let Some(method) = self.method {
+            order["method"] = method.name().into();
+        }
+        if let Some(text) = &self.tolerance {
+            order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
+        }
+        Ok(())
+    }
 }
 
 /// The order's target, from whichever of `--to`, `--by` and `--joints` was given (clap lets

@@ -16,10 +16,10 @@ use clap::Args;
 use hyper::Method;
 use serde_json::{Value, json};
 
-use super::super::args::{MethodArg, parse_duration, parse_length_mm, parse_speed_mm_s};
+use super::super::args::parse_duration;
 use super::super::client::Client;
 use super::super::{DaemonArgs, Failure};
-use super::{follow, summary, verdict};
+use super::{MotionFlags, follow, summary, verdict};
 use crate::config::PathDoc;
 
 /// Arguments of `linterpd run`.
@@ -32,22 +32,9 @@ pub struct RunArgs {
     /// The robot (needed when the daemon runs several).
     #[arg(long)]
     pub robot: Option<String>,
-    /// Speed along the path, e.g. `240mm/s` (default: the robot's).
-    #[arg(long, allow_hyphen_values = true)]
-    pub speed: Option<String>,
-    /// Acceleration time, e.g. `200ms` (default: the robot's).
-    #[arg(long, allow_hyphen_values = true)]
-    pub accel_time: Option<String>,
-    /// Planning method (default: the robot's; `--tolerance` alone means bounded-error).
-    #[arg(long, value_enum)]
-    pub method: Option<MethodArg>,
-    /// Interpolation period, e.g. `50ms` (default: the robot's).
-    #[arg(long, allow_hyphen_values = true)]
-    pub period: Option<String>,
-    /// Path tolerance of a bounded-error path, e.g. `0.05mm`, against the path as planned
-    /// (blends included).
-    #[arg(long, allow_hyphen_values = true)]
-    pub tolerance: Option<String>,
+    /// Speed, acceleration, method, period and tolerance.
+    #[command(flatten)]
+    pub motion: MotionFlags,
     /// The longest to wait for each section's end, e.g. `30s` (default: the daemon's deadline).
     #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
     pub timeout: Option<String>,
@@ -66,24 +53,7 @@ fn order(args: &RunArgs) -> anyhow::Result<Value> {
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
     let mut order = json!({ "path": path });
-    if let Some(text) = &args.speed {
-        order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
-    }
-    for (key, flag, text) in [
-        ("accel_time", "--accel-time", &args.accel_time),
-        ("period", "--period", &args.period),
-    ] {
-        if let Some(text) = text {
-            parse_duration(text).context(flag)?;
-            order[key] = text.as_str().into();
-        }
-    }
-    if let Some(method) = args.method {
-        order["method"] = method.name().into();
-    }
-    if let Some(text) = &args.tolerance {
-        order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
-    }
+    args.motion.add_to(&mut order)?;
     Ok(order)
 }
 
