@@ -394,3 +394,47 @@ fn operator_jogs_moves_joints_and_teaches_positions_through_the_cli() {
     assert_eq!(code, Some(0));
     assert_eq!(out.trim(), "press-loader: no taught positions");
 }
+
+#[test]
+fn operator_runs_a_path_file_through_the_cli_section_by_section() {
+    let running = common::serve::start();
+    let socket = running.socket.as_path();
+    let dir = socket.parent().unwrap();
+    // The mock starts at counts 0: the tool at (0, 500, 0) mm. Out and up with a blended
+    // corner, a stop, then up again: two sections.
+    let file = dir.join("cycle.toml");
+    std::fs::write(
+        &file,
+        "[[element]]\nline = [0, 520, 10]\nblend = \"5mm\"\n\
+         [[element]]\nline = [20, 520, 10]\nstop = true\n\
+         [[element]]\nline = [20, 520, 30]\n",
+    )
+    .unwrap();
+    let (code, out, err) = linterpd(socket, &["run", file.to_str().unwrap(), "--speed", "100"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert!(lines[0].starts_with("section 1/2: move 1 done: "), "{out}");
+    assert!(lines[1].starts_with("section 2/2: move 2 done: "), "{out}");
+    assert!(lines[1].contains("final error [0,0,0,0] pulses"), "{out}");
+
+    // A file with a mistake is refused before the daemon sees it, naming the element and key.
+    std::fs::write(&file, "[[element]]\narc = [0, 520, 10]\n").unwrap();
+    let (code, out, err) = linterpd(socket, &["run", file.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(err.contains("element 1: an arc needs `via"), "{err}");
+    // A path the robot cannot follow is refused by the daemon whole (exit 2, 422).
+    std::fs::write(&file, "[[element]]\nline = [0, 520, 5000]\n").unwrap();
+    let (code, out, err) = linterpd(socket, &["run", file.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(err.contains("path section 1 (element 1): joint"), "{err}");
+    assert_eq!(counts(socket), json!(counts_after_cycle()));
+}
+
+/// Where the cycle above leaves the mock: (20, 520, 30) with the tool angle kept at 0.
+fn counts_after_cycle() -> [i64; 4] {
+    let robot = linterpd::robot::seed_robot();
+    let pose = linterpd::geometry::Pose::from_mm_deg(20.0, 520.0, 30.0, 0.0);
+    let q = linterpd::kinematics::Kinematics::ik(&robot.kinematics, &pose, None).unwrap();
+    robot.counts_of(&q)
+}
