@@ -88,23 +88,20 @@ pub struct PathOrder {
 impl PathOrder {
     /// The motion the order asks for, the robot's `defaults` filling the gaps.
     pub fn motion(&self, defaults: Motion) -> Result<Motion, OrderError> {
-        MoveOrder {
-            speed_mm_s: self.speed_mm_s,
-            accel_time: self.accel_time.clone(),
-            method: self.method.clone(),
-            period: self.period.clone(),
-            tolerance_mm: self.tolerance_mm,
-            ..MoveOrder::default()
-        }
-        .motion(defaults)
+        self.as_move(None).motion(defaults)
     }
 
     /// The move order a section's report shows: a line to where the section ends, with this
     /// order's motion.
     #[must_use]
     pub fn section_report(&self, end: &Pose) -> MoveOrder {
+        self.as_move(Some(end))
+    }
+
+    /// A move order with this order's motion fields, to `to` if given.
+    fn as_move(&self, to: Option<&Pose>) -> MoveOrder {
         MoveOrder {
-            to: Some(end.to_mm_deg().to_vec()),
+            to: to.map(|p| p.to_mm_deg().to_vec()),
             speed_mm_s: self.speed_mm_s,
             accel_time: self.accel_time.clone(),
             method: self.method.clone(),

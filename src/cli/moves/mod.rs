@@ -143,25 +143,10 @@ fn target(args: &MoveArgs) -> anyhow::Result<Value> {
 /// Runs `linterpd move`.
 pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let order = order(args).map_err(Failure::BadInput)?;
-    let timeout = args
-        .timeout
-        .as_deref()
-        .map(|t| parse_duration(t).context("--timeout"))
-        .transpose()
-        .map_err(Failure::BadInput)?;
+    let timeout = timeout(args.timeout.as_deref())?;
     args.daemon.block_on(async {
         let client = Client::new(&args.daemon.socket);
-        let robot = client
-            .robot(args.robot.as_deref())
-            .await
-            .map_err(Failure::from_client)?;
-        let accepted = client
-            .expect(
-                Method::POST,
-                &format!("/v1/robots/{robot}/moves"),
-                Some(&order),
-            )
-            .await?;
+        let (robot, accepted) = post(&client, args.robot.as_deref(), "moves", &order).await?;
         let id = accepted["id"]
             .as_u64()
             .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
@@ -185,6 +170,31 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         let printed = super::print(out, args.daemon.json, &last, &summary(&last));
         verdict(&last).and(printed)
     })
+}
+
+/// `--timeout`, if given.
+fn timeout(text: Option<&str>) -> Result<Option<std::time::Duration>, Failure> {
+    text.map(|t| parse_duration(t).context("--timeout"))
+        .transpose()
+        .map_err(Failure::BadInput)
+}
+
+/// Posts `order` to the robot's `endpoint` (`moves`, `paths`); the robot's name and the 202 body.
+async fn post(
+    client: &Client,
+    robot: Option<&str>,
+    endpoint: &str,
+    order: &Value,
+) -> Result<(String, Value), Failure> {
+    let robot = client.robot(robot).await.map_err(Failure::from_client)?;
+    let accepted = client
+        .expect(
+            Method::POST,
+            &format!("/v1/robots/{robot}/{endpoint}"),
+            Some(order),
+        )
+        .await?;
+    Ok((robot, accepted))
 }
 
 /// Done, or exit 3 with how the move ended.

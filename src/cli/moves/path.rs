@@ -13,13 +13,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, anyhow};
 use clap::Args;
-use hyper::Method;
 use serde_json::{Value, json};
 
-use super::super::args::parse_duration;
 use super::super::client::Client;
 use super::super::{DaemonArgs, Failure};
-use super::{MotionFlags, follow, summary, verdict};
+use super::{MotionFlags, follow, post, summary, timeout, verdict};
 use crate::config::PathDoc;
 
 /// Arguments of `linterpd run`.
@@ -60,25 +58,10 @@ fn order(args: &RunArgs) -> anyhow::Result<Value> {
 /// Runs `linterpd run`.
 pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let order = order(args).map_err(Failure::BadInput)?;
-    let timeout = args
-        .timeout
-        .as_deref()
-        .map(|t| parse_duration(t).context("--timeout"))
-        .transpose()
-        .map_err(Failure::BadInput)?;
+    let timeout = timeout(args.timeout.as_deref())?;
     args.daemon.block_on(async {
         let client = Client::new(&args.daemon.socket);
-        let robot = client
-            .robot(args.robot.as_deref())
-            .await
-            .map_err(Failure::from_client)?;
-        let accepted = client
-            .expect(
-                Method::POST,
-                &format!("/v1/robots/{robot}/paths"),
-                Some(&order),
-            )
-            .await?;
+        let (robot, accepted) = post(&client, args.robot.as_deref(), "paths", &order).await?;
         let ids: Vec<u64> = accepted["ids"]
             .as_array()
             .map(|a| a.iter().filter_map(Value::as_u64).collect())
