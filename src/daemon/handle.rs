@@ -3,8 +3,8 @@
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::sync::atomic::Ordering;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use thiserror::Error;
@@ -14,7 +14,8 @@ use tokio::task::JoinSet;
 use super::gateway::{self, GatewayError, Job, Values};
 use super::ids::MoveIds;
 use super::order::{
-    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, Target, path_refused, plan_order,
+    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, SectionPart, Target,
+    path_refused, plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::report::{MoveId, MoveReport, RobotState};
@@ -242,31 +243,39 @@ impl RobotHandle {
                 path_accel_mm_s2,
             },
         )?;
-        let sections = planned.path.sections();
-        let mut ids = Vec::with_capacity(sections.len());
-        for (section, plan) in sections.into_iter().zip(&planned.sections) {
-            let end = section.at(section.length_mm());
-            let checked = CheckedOrder {
-                target: Target::Section(Arc::new(SectionOrder {
-                    path: section,
-                    path_accel_mm_s2,
-                })),
-                motion,
-            };
-            let id = self.shared.next_id();
-            self.shared.moves(|m| {
-                m.insert(MoveReport::new(
-                    id,
-                    &self.robot.name,
-                    order.section_report(&end),
-                ));
+        let mut ids = Vec::new();
+        for section in planned.sections {
+            let shared = Arc::new(SectionOrder {
+                path: section.path,
+                path_accel_mm_s2,
+                planned: OnceLock::new(),
             });
-            self.shared.state(|s| s.queued.push(id));
-            self.requests
-                .send(Request::Move(id, checked))
-                .map_err(|_| SubmitError::ShuttingDown)?;
-            self.shared.set_planned_end(Some(plan.end_counts()));
-            ids.push(id);
+            let parts = section.starts.len();
+            for (part, plan) in section.starts.iter().enumerate() {
+                let end = self.robot.pose_of(&plan.end_counts());
+                let checked = CheckedOrder {
+                    target: Target::Section(SectionPart {
+                        section: Arc::clone(&shared),
+                        part,
+                        parts,
+                    }),
+                    motion,
+                };
+                let id = self.shared.next_id();
+                self.shared.moves(|m| {
+                    m.insert(MoveReport::new(
+                        id,
+                        &self.robot.name,
+                        order.section_report(&end),
+                    ));
+                });
+                self.shared.state(|s| s.queued.push(id));
+                self.requests
+                    .send(Request::Move(id, checked))
+                    .map_err(|_| SubmitError::ShuttingDown)?;
+                self.shared.set_planned_end(Some(plan.end_counts()));
+                ids.push(id);
+            }
         }
         Ok(ids)
     }

@@ -39,7 +39,9 @@ pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
 pub use handle::{Daemon, DaemonOptions, RobotHandle, RobotSetup, Saved, SubmitError, host_word};
 pub use ids::{MoveIds, write_atomically};
 pub(crate) use order::plan_order;
-pub use order::{CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, Target};
+pub use order::{
+    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, SectionPart, Target,
+};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
     GatewayStats, LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage,

@@ -7,7 +7,7 @@
 //! place an order becomes a plan.
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -202,9 +202,9 @@ pub enum Target {
     },
     /// A joint-space move to these joint values, in the user's units (degrees or mm).
     Joints([f64; JOINTS]),
-    /// One section of a path (between two stops), planned from the counts where it starts,
-    /// which must be where the section begins.
-    Section(Arc<SectionOrder>),
+    /// One start of a path section (between two stops): the section is planned from the
+    /// counts where its first start begins, which must be where the section begins.
+    Section(SectionPart),
 }
 
 /// A path section to run.
@@ -214,6 +214,71 @@ pub struct SectionOrder {
     pub path: Path,
     /// The path's acceleration limit across it, mm/s^2.
     pub path_accel_mm_s2: f64,
+    /// Its starts, planned once, when the first of them begins, from the counts where it
+    /// really begins; every later part takes its plan from here.
+    pub planned: OnceLock<Vec<Plan>>,
+}
+
+/// One start of a path section: the section's only start, or one of its parts chained at
+/// speed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionPart {
+    /// The section, shared by its parts.
+    pub section: Arc<SectionOrder>,
+    /// Which start, from 0.
+    pub part: usize,
+    /// How many starts the section was planned with when the path was accepted.
+    pub parts: usize,
+}
+
+impl SectionPart {
+    /// Whether it begins at speed, chained behind the part before it.
+    #[must_use]
+    pub fn begins_at_speed(&self) -> bool {
+        self.part > 0
+    }
+
+    /// Its plan from `counts`, where it begins: the first part plans the section (it must need
+    /// as many starts as when the path was accepted); every part must begin on exactly the
+    /// counts it was planned from.
+    fn plan(
+        &self,
+        robot: &Robot,
+        motion: Motion,
+        counts: [i64; JOINTS],
+    ) -> Result<Plan, PlanError> {
+        let starts = match self.section.planned.get() {
+            Some(starts) => starts,
+            None => {
+                let starts = plan_section(
+                    robot,
+                    &self.section.path,
+                    motion,
+                    self.section.path_accel_mm_s2,
+                    counts,
+                )?;
+                if starts.len() != self.parts || self.part != 0 {
+                    return Err(PlanError::PartsChanged {
+                        accepted: self.parts,
+                        now: starts.len(),
+                    });
+                }
+                self.section.planned.get_or_init(|| starts)
+            }
+        };
+        let plan = starts.get(self.part).ok_or(PlanError::PartsChanged {
+            accepted: self.parts,
+            now: starts.len(),
+        })?;
+        if plan.start_counts() != counts {
+            return Err(PlanError::NotAtPartStart {
+                part: self.part + 1,
+                counts,
+                planned: plan.start_counts(),
+            });
+        }
+        Ok(plan.clone())
+    }
 }
 
 /// A checked order: its target and the motion to plan with.
@@ -226,6 +291,13 @@ pub struct CheckedOrder {
 }
 
 impl CheckedOrder {
+    /// Whether it is a part of a path section that begins at speed, chained behind the part
+    /// before it.
+    #[must_use]
+    pub fn begins_at_speed(&self) -> bool {
+        matches!(&self.target, Target::Section(part) if part.begins_at_speed())
+    }
+
     /// Whether the target is relative to where the move starts.
     #[must_use]
     pub fn is_relative(&self) -> bool {
@@ -426,14 +498,8 @@ pub(crate) fn plan_order(
     order: &CheckedOrder,
     counts: [i64; JOINTS],
 ) -> Result<Plan, PlanError> {
-    if let Target::Section(section) = &order.target {
-        return plan_section(
-            robot,
-            &section.path,
-            order.motion,
-            section.path_accel_mm_s2,
-            counts,
-        );
+    if let Target::Section(part) = &order.target {
+        return part.plan(robot, order.motion, counts);
     }
     if let Target::Joints(user) = order.target {
         return plan_joint_move(

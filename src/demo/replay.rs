@@ -84,7 +84,7 @@ pub fn replay(robot: &Robot, plan: &Plan, run: &[PulsePoint], scan_s: f64) -> Pl
         &execution,
         &plan.line,
         &planned,
-        plan.profile.duration_s(),
+        plan.duration_s(),
     );
     Played {
         execution,

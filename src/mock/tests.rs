@@ -221,7 +221,7 @@ fn seed_move_gives_exactly_the_execution_models_pulses() {
     m.advance_to(0.001);
     write_block(&mut m, block);
     let start_s = SCAN; // the first scan after the write
-    m.advance_to(plan.profile.duration_s() + 0.1);
+    m.advance_to(plan.duration_s() + 0.1);
     assert_eq!(m.state(), State::Done);
     assert_eq!(m.status().seq, 5);
     let mut pulses = m.take_pulses();

@@ -33,7 +33,9 @@ use crate::table::{ChannelTable, TableProblem, ValidTable};
 
 use course::Course;
 pub use course::JointPath;
-pub use path::{PathPlan, PathRequest, SECTION_START_SLACK_MM, plan_path, plan_section};
+pub use path::{
+    MIN_PART_S, PathPlan, PathRequest, SECTION_START_SLACK_MM, SectionPlan, plan_path, plan_section,
+};
 pub use samples::Samples;
 
 /// Where a move starts.
@@ -111,6 +113,33 @@ pub enum PlanError {
         off_mm: f64,
         /// The most allowed, mm.
         slack_mm: f64,
+    },
+    /// A part of a path section chained at speed would begin from counts other than those it
+    /// was planned from.
+    #[error(
+        "part {part} of the path section would begin from counts {counts:?}, not {planned:?} \
+         where it was planned to begin; a part chained at speed starts only from the counts it \
+         was planned from"
+    )]
+    NotAtPartStart {
+        /// The part, from 1.
+        part: usize,
+        /// Where it would begin, per joint.
+        counts: [i64; JOINTS],
+        /// Where it was planned to begin, per joint.
+        planned: [i64; JOINTS],
+    },
+    /// A path section planned again where it begins needs another number of starts than when
+    /// the path was accepted.
+    #[error(
+        "the path section planned again where it begins needs {now} start(s), not the \
+         {accepted} it was accepted with"
+    )]
+    PartsChanged {
+        /// Starts when the path was accepted.
+        accepted: usize,
+        /// Starts now.
+        now: usize,
     },
     /// A section of a path (between two stops) cannot be planned.
     #[error("path section {section} (element {elements}): {source}")]
@@ -247,6 +276,46 @@ pub struct Plan {
     pub figures: Figures,
     /// Bounded-error plans: the path deviation with every pulse exactly on time, mm.
     pub floor_mm: Option<f64>,
+    /// The stretch of the profile this start plays: the whole of it, or one part of a path
+    /// section cut into several chained starts.
+    pub window: Window,
+}
+
+/// The stretch of a profile one start plays, s: `samples` point 0 is at `from_s`, and the
+/// start's own time 0 is `from_s` of the profile's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Window {
+    /// Where the start begins on the profile's time, s.
+    pub from_s: f64,
+    /// Where it ends, s.
+    pub to_s: f64,
+    /// Whether it ends at speed, chained into the next part (every part of a cut section but
+    /// its last).
+    pub ends_at_speed: bool,
+}
+
+impl Window {
+    /// The whole of `profile`.
+    #[must_use]
+    pub fn whole(profile: &Profile) -> Self {
+        Self {
+            from_s: 0.0,
+            to_s: profile.duration_s(),
+            ends_at_speed: false,
+        }
+    }
+
+    /// Whether it begins at speed, behind another part of the same section.
+    #[must_use]
+    pub fn begins_at_speed(&self) -> bool {
+        self.from_s > 0.0
+    }
+
+    /// Its length, s.
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        self.to_s - self.from_s
+    }
 }
 
 impl Plan {
@@ -262,10 +331,22 @@ impl Plan {
         std::array::from_fn(|j| self.tables[j].end())
     }
 
-    /// The planned position at time `t_s`.
+    /// The counts it starts from, joint by joint.
+    #[must_use]
+    pub fn start_counts(&self) -> [i64; JOINTS] {
+        std::array::from_fn(|j| self.tables[j].start)
+    }
+
+    /// How long the start runs as planned, s.
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        self.window.duration_s()
+    }
+
+    /// The planned position at time `t_s` of this start.
     #[must_use]
     pub fn planned_position_mm(&self, t_s: f64) -> nalgebra::Vector3<f64> {
-        let s_mm = self.profile.distance_mm(t_s);
+        let s_mm = self.profile.distance_mm(self.window.from_s + t_s);
         if let Some(path) = &self.path {
             return path.at(s_mm).position_mm;
         }
@@ -359,7 +440,7 @@ impl Start {
     }
 }
 
-/// Plans a move along `course` from `start`.
+/// Plans a move along `course` from `start`: one start over the whole profile.
 fn plan_course(
     robot: &Robot,
     course: &Course,
@@ -367,82 +448,179 @@ fn plan_course(
     asked: Motion,
     seed_exact: bool,
 ) -> Result<Plan, PlanError> {
-    let mut motion = asked;
-    let bounded = match motion.method {
-        Method::BoundedError { tolerance_mm } if !seed_exact => Some(tolerance_mm),
-        _ => None,
-    };
-    let grid_s = if bounded.is_some() {
-        bounded::SAMPLE_S
-    } else {
-        motion.period_s
-    };
-    let sampler = Sampler {
-        robot,
-        course,
-        grid_s,
-        continuous: bounded.is_some(),
-        start_values: &start.values,
-        start_counts: start.counts,
-    };
-    let (profile, samples) = sampler.fast_enough(&mut motion)?;
-    let speed_factor = motion.speed_mm_s / asked.speed_mm_s;
-    let (tables, problems, execution, figures, floor_mm) = if let Some(tolerance_mm) = bounded {
-        let m = bounded::Move {
-            robot,
-            course,
-            profile: &profile,
-            samples: &samples,
-            motion: &motion,
-        };
-        let v = m.plan(tolerance_mm)?;
-        (
-            v.tables,
-            Vec::new(),
-            v.execution,
-            v.figures,
-            Some(v.floor_mm),
-        )
-    } else {
-        let tables = build_tables(robot, &samples, &profile, &motion, seed_exact);
-        let problems = check_tables(robot, &tables, seed_exact)?;
-        let (execution, figures) = simulate(robot, &tables, course, &profile, &motion);
-        (tables, problems, execution, figures, None)
-    };
-    Ok(Plan {
-        line: course.chord(),
-        joint_path: course.joint_path().cloned(),
-        path: course.path().cloned(),
-        profile,
-        motion,
-        speed_factor,
-        seed_exact,
-        samples,
-        tables,
-        problems,
-        execution,
-        figures,
-        floor_mm,
-    })
+    let sampled = Sampled::new(robot, course, start, asked, seed_exact)?;
+    sampled.plan(0, sampled.last_point(), start.counts)
 }
 
-/// Plays `tables` in the execution model and measures them against the course and profile.
+/// A course sampled for one motion: the profile and the samples every start along it is planned
+/// from (one start over the whole of it, or a path section cut into parts).
+struct Sampled<'a> {
+    robot: &'a Robot,
+    course: &'a Course,
+    /// The motion used (speed lowered by `slow-down` if it had to).
+    motion: Motion,
+    speed_factor: f64,
+    seed_exact: bool,
+    /// The bounded-error tolerance, mm (`None`: constant-period, or the paper as printed).
+    bounded: Option<f64>,
+    profile: Profile,
+    samples: Samples,
+}
+
+impl<'a> Sampled<'a> {
+    fn new(
+        robot: &'a Robot,
+        course: &'a Course,
+        start: &Start,
+        asked: Motion,
+        seed_exact: bool,
+    ) -> Result<Self, PlanError> {
+        let mut motion = asked;
+        let bounded = match motion.method {
+            Method::BoundedError { tolerance_mm } if !seed_exact => Some(tolerance_mm),
+            _ => None,
+        };
+        let grid_s = if bounded.is_some() {
+            bounded::SAMPLE_S
+        } else {
+            motion.period_s
+        };
+        let sampler = Sampler {
+            robot,
+            course,
+            grid_s,
+            continuous: bounded.is_some(),
+            start_values: &start.values,
+            start_counts: start.counts,
+        };
+        let (profile, samples) = sampler.fast_enough(&mut motion)?;
+        Ok(Self {
+            robot,
+            course,
+            speed_factor: motion.speed_mm_s / asked.speed_mm_s,
+            motion,
+            seed_exact,
+            bounded,
+            profile,
+            samples,
+        })
+    }
+
+    /// The index of the last sample point (the course's end).
+    fn last_point(&self) -> usize {
+        self.samples.counts.len() - 1
+    }
+
+    /// The profile's time at sample point `i`, s.
+    fn time_s(&self, i: usize) -> f64 {
+        if i == self.last_point() {
+            self.profile.duration_s()
+        } else {
+            i as f64 * self.profile.period_s
+        }
+    }
+
+    /// Plans the start from sample point `first` to `last`, from `counts` (where the start
+    /// before it ends, or where the move begins).
+    fn plan(&self, first: usize, last: usize, counts: [i64; JOINTS]) -> Result<Plan, PlanError> {
+        let robot = self.robot;
+        let window = Window {
+            from_s: self.time_s(first),
+            to_s: self.time_s(last),
+            ends_at_speed: last != self.last_point(),
+        };
+        let mut samples = Samples {
+            counts: self.samples.counts[first..=last].to_vec(),
+            values: self.samples.values[first..=last].to_vec(),
+        };
+        samples.counts[0] = counts;
+        let (tables, problems, execution, figures, floor_mm) =
+            if let Some(tolerance_mm) = self.bounded {
+                let m = bounded::Move {
+                    robot,
+                    course: self.course,
+                    profile: &self.profile,
+                    window: &window,
+                    samples: &samples,
+                    motion: &self.motion,
+                };
+                let v = m.plan(tolerance_mm)?;
+                (
+                    v.tables,
+                    Vec::new(),
+                    v.execution,
+                    v.figures,
+                    Some(v.floor_mm),
+                )
+            } else {
+                let tables = build_tables(
+                    robot,
+                    &samples,
+                    &self.profile,
+                    &self.motion,
+                    self.seed_exact,
+                );
+                let problems = check_tables(robot, &tables, self.seed_exact)?;
+                let (execution, figures) = simulate(
+                    robot,
+                    &tables,
+                    self.course,
+                    &self.profile,
+                    &window,
+                    &self.motion,
+                );
+                (tables, problems, execution, figures, None)
+            };
+        Ok(Plan {
+            line: self.course.chord(),
+            joint_path: self.course.joint_path().cloned(),
+            path: self.course.path().cloned(),
+            profile: self.profile,
+            motion: self.motion,
+            speed_factor: self.speed_factor,
+            seed_exact: self.seed_exact,
+            samples,
+            tables,
+            problems,
+            execution,
+            figures,
+            floor_mm,
+            window,
+        })
+    }
+}
+
+/// Plays `tables` in the execution model and measures them against the course and profile
+/// over `window`.
 fn simulate(
     robot: &Robot,
     tables: &[ChannelTable],
     course: &Course,
     profile: &Profile,
+    window: &Window,
     motion: &Motion,
 ) -> (Execution, Figures) {
-    simulate_within(robot, tables, course, profile, motion, f64::INFINITY).expect("no limit")
+    simulate_within(
+        robot,
+        tables,
+        course,
+        profile,
+        window,
+        motion,
+        f64::INFINITY,
+    )
+    .expect("no limit")
 }
 
-/// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`.
+/// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`. A start that
+/// ends at speed (a part of a cut path section) has its end error measured against where the
+/// profile is when it ends, not against the course's end.
 fn simulate_within(
     robot: &Robot,
     tables: &[ChannelTable],
     course: &Course,
     profile: &Profile,
+    window: &Window,
     motion: &Motion,
     path_limit_mm: f64,
 ) -> Option<(Execution, Figures)> {
@@ -453,9 +631,9 @@ fn simulate_within(
     };
     let execution = sim::execute(tables, &max_hz, settings);
     let position = course.positions();
-    let planned = |t: f64| position(profile.distance_mm(t));
-    let duration_s = profile.duration_s();
-    let figures = sim::measure_within(
+    let planned = |t: f64| position(profile.distance_mm(window.from_s + t));
+    let duration_s = window.duration_s();
+    let mut figures = sim::measure_within(
         robot,
         tables,
         &execution,
@@ -464,6 +642,11 @@ fn simulate_within(
         duration_s,
         path_limit_mm,
     )?;
+    if window.ends_at_speed {
+        let end: [i64; JOINTS] = std::array::from_fn(|j| tables[j].end());
+        let there = robot.pose_of(&end).position_mm;
+        figures.end_error_mm = (there - planned(duration_s)).norm();
+    }
     Some((execution, figures))
 }
 

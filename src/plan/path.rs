@@ -6,13 +6,23 @@
 //! to what the tightest arc in it allows under the path's centripetal acceleration limit
 //! (`v = sqrt(a r)`), and then, as for a line, to what the channels' frequencies allow under
 //! `slow-down`.
+//!
+//! A section may need more than one start ("parts", chained at speed through the PLC's waiting
+//! start): where its tables would not fit a channel's area or 8 segments (cut in halves until
+//! they do), and where a bounded-error plan fails because a joint first moves too late into it
+//! for one table to hold its channel back (cut just before that joint moves). Every
+//! cut falls on a sample point, where every channel's row ends at the same planned instant;
+//! each part is planned from exactly the counts the one before it ends on and judged by the
+//! execution model on its own, against the same path and the same profile.
 
 use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
 use crate::kinematics::Kinematics;
 use crate::robot::{Motion, Robot};
 
+use crate::table::TableProblem;
+
 use super::course::Course;
-use super::{Origin, Plan, PlanError, Start, plan_course};
+use super::{Origin, Plan, PlanError, Sampled, Start};
 
 /// A path to plan.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,33 +37,55 @@ pub struct PathRequest {
     pub path_accel_mm_s2: f64,
 }
 
-/// A planned path: the path as built and one plan per section between stops.
+/// A planned path: the path as built and its sections between stops.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathPlan {
     /// The path as planned (blends included).
     pub path: Path,
-    /// One plan per section, in order; each starts from the previous one's end counts.
-    pub sections: Vec<Plan>,
+    /// The sections, in order; each starts from the previous one's end counts.
+    pub sections: Vec<SectionPlan>,
+}
+
+/// One section of a path (from a stop to the next) as planned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionPlan {
+    /// The section, measured from its start.
+    pub path: Path,
+    /// Its starts: one, or several parts chained at speed, each from the counts the one before
+    /// it ends on.
+    pub starts: Vec<Plan>,
+}
+
+impl SectionPlan {
+    /// The counts it ends on.
+    #[must_use]
+    pub fn end_counts(&self) -> [i64; crate::kinematics::JOINTS] {
+        self.starts[self.starts.len() - 1].end_counts()
+    }
 }
 
 impl PathPlan {
-    /// Whether every section's tables may be sent.
+    /// Every start, in order, over all sections.
+    pub fn starts(&self) -> impl Iterator<Item = &Plan> {
+        self.sections.iter().flat_map(|s| s.starts.iter())
+    }
+
+    /// Whether every start's tables may be sent.
     #[must_use]
     pub fn valid(&self) -> bool {
-        self.sections.iter().all(Plan::valid)
+        self.starts().all(Plan::valid)
     }
 
-    /// Its duration, s (sections back to back, without the PLC's time between them).
+    /// Its duration, s (starts back to back, without the PLC's time between them).
     #[must_use]
     pub fn duration_s(&self) -> f64 {
-        self.sections.iter().map(|p| p.profile.duration_s()).sum()
+        self.starts().map(Plan::duration_s).sum()
     }
 
-    /// The largest path deviation of any section, mm.
+    /// The largest path deviation of any start, mm.
     #[must_use]
     pub fn max_deviation_mm(&self) -> f64 {
-        self.sections
-            .iter()
+        self.starts()
             .map(|p| p.figures.path_deviation_mm)
             .fold(0.0, f64::max)
     }
@@ -81,19 +113,22 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
     let path = Path::build(&spec)?;
     let mut sections = Vec::new();
     for (n, section) in path.sections().into_iter().enumerate() {
-        let plan = section_plan(robot, section, &start, req.motion, req.path_accel_mm_s2).map_err(
-            |(elements, source)| PlanError::Section {
+        let starts = section_plan(robot, &section, &start, req.motion, req.path_accel_mm_s2)
+            .map_err(|(elements, source)| PlanError::Section {
                 section: n + 1,
                 elements,
                 source: Box::new(source),
-            },
-        )?;
-        let end = plan.end_counts();
+            })?;
+        let planned = SectionPlan {
+            path: section,
+            starts,
+        };
+        let end = planned.end_counts();
         start = Start {
             values: robot.values_of(&end),
             counts: end,
         };
-        sections.push(plan);
+        sections.push(planned);
     }
     Ok(PathPlan { path, sections })
 }
@@ -103,7 +138,7 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
 pub const SECTION_START_SLACK_MM: f64 = 0.1;
 
 /// Plans one section of a path from `counts`, where the robot will be when it starts (the end
-/// counts of the section before it).
+/// counts of the section before it): its starts, one or several parts chained at speed.
 ///
 /// # Errors
 /// [`PlanError::NotAtSectionStart`] when the counts' pose is more than
@@ -114,7 +149,7 @@ pub fn plan_section(
     motion: Motion,
     path_accel_mm_s2: f64,
     counts: [i64; crate::kinematics::JOINTS],
-) -> Result<Plan, PlanError> {
+) -> Result<Vec<Plan>, PlanError> {
     let start = Start::at(robot, Origin::Counts(counts))?;
     let here = robot.kinematics.fk(&start.values).position_mm;
     let off_mm = (here - section.at(0.0).position_mm).norm();
@@ -124,26 +159,26 @@ pub fn plan_section(
             slack_mm: SECTION_START_SLACK_MM,
         });
     }
-    section_plan(robot, section.clone(), &start, motion, path_accel_mm_s2)
-        .map_err(|(_, source)| source)
+    section_plan(robot, section, &start, motion, path_accel_mm_s2).map_err(|(_, source)| source)
 }
 
-/// Plans `section` from `start`; an error comes with the elements the section covers.
+/// Plans `section` from `start` into its starts; an error comes with the elements the section
+/// covers.
 fn section_plan(
     robot: &Robot,
-    section: Path,
+    section: &Path,
     start: &Start,
     asked: Motion,
     path_accel_mm_s2: f64,
-) -> Result<Plan, (String, PlanError)> {
-    let elements = covered(&section);
+) -> Result<Vec<Plan>, (String, PlanError)> {
+    let elements = covered(section);
     let mut motion = asked;
     let curvature = section.max_curvature_per_mm();
     if curvature > 0.0 {
         motion.speed_mm_s = motion.speed_mm_s.min((path_accel_mm_s2 / curvature).sqrt());
     }
-    let course = Course::Path(section);
-    plan_course(robot, &course, start, motion, false).map_err(|source| {
+    let course = Course::Path(section.clone());
+    parts(robot, &course, start, motion).map_err(|source| {
         let late = matches!(source, PlanError::ToleranceTooSmall { .. })
             .then(|| late_joint(robot, &course, start, motion))
             .flatten();
@@ -153,6 +188,84 @@ fn section_plan(
         };
         (elements, source)
     })
+}
+
+/// The shortest part a section is cut into, s: chaining needs the next part uploaded while one
+/// runs.
+pub const MIN_PART_S: f64 = 0.1;
+/// How long before a late joint's first pulse the part that starts it begins, s: its first row
+/// then lands its first pulse within this of the start, where a whole-hertz frequency is fine
+/// enough.
+const LEAD_S: f64 = 0.05;
+
+/// Plans `course` from `start` into one start or, where it must be cut, several parts chained
+/// at speed (see the module's docs).
+fn parts(
+    robot: &Robot,
+    course: &Course,
+    start: &Start,
+    motion: Motion,
+) -> Result<Vec<Plan>, PlanError> {
+    let sampled = Sampled::new(robot, course, start, motion, false)?;
+    let min_points = (MIN_PART_S / sampled.profile.period_s).ceil() as usize;
+    let mut todo = vec![(0, sampled.last_point())];
+    let mut plans = Vec::new();
+    let mut counts = start.counts;
+    while let Some((first, end)) = todo.pop() {
+        let split = match sampled.plan(first, end, counts) {
+            Ok(plan) => {
+                counts = plan.end_counts();
+                plans.push(plan);
+                continue;
+            }
+            Err(e) if too_big(&e) && end - first >= 2 * min_points => first + (end - first) / 2,
+            Err(e @ PlanError::ToleranceTooSmall { .. }) => {
+                match late_cut(robot, &sampled, first, end, min_points) {
+                    Some(cut) => cut,
+                    None => return Err(e),
+                }
+            }
+            Err(e) => return Err(e),
+        };
+        todo.push((split, end));
+        todo.push((first, split));
+    }
+    Ok(plans)
+}
+
+/// Whether a start's tables are refused only for their size (more than a channel's area, or
+/// than 8 segments): a shorter start would fit.
+fn too_big(e: &PlanError) -> bool {
+    matches!(
+        e,
+        PlanError::InvalidTable {
+            first: TableProblem::TooManySegments { .. } | TableProblem::AreaOverflow { .. },
+            ..
+        }
+    )
+}
+
+/// Where to cut the course between sample points `from` and `to`, if a joint first moves more
+/// than [`LATE_START_S`] after `from`: [`LEAD_S`] before that joint's first pulse (the earliest
+/// such cut over the joints), when both sides keep at least `min_points`.
+fn late_cut(
+    robot: &Robot,
+    sampled: &Sampled,
+    from: usize,
+    to: usize,
+    min_points: usize,
+) -> Option<usize> {
+    let counts = &sampled.samples.counts;
+    let dt_s = sampled.profile.period_s;
+    let lead = (LEAD_S / dt_s).round() as usize;
+    (0..robot.joints.len())
+        .filter_map(|j| {
+            let moved = (from + 1..=to).find(|&i| counts[i][j] != counts[from][j])?;
+            let late = (moved - from) as f64 * dt_s > LATE_START_S;
+            let cut = moved.saturating_sub(lead);
+            (late && cut >= from + min_points && cut + min_points <= to).then_some(cut)
+        })
+        .min()
 }
 
 /// The first joint (in the joints' order) that first moves later than [`LATE_START_S`] into a
@@ -278,7 +391,7 @@ mod tests {
             assert_eq!(stopped.sections[1].end_counts(), target);
             // The second section starts from the counts the first ends on.
             assert_eq!(
-                stopped.sections[1].samples.counts[0],
+                stopped.sections[1].starts[0].samples.counts[0],
                 stopped.sections[0].end_counts()
             );
             assert!(
@@ -291,22 +404,122 @@ mod tests {
     }
 
     #[test]
-    fn a_straight_lift_blended_into_the_traverse_is_refused_naming_the_joint_that_starts_late() {
-        // Straight up from P1: the base joint stands still until the blend, longer than one
-        // table can hold it back within 0.05 mm.
+    fn a_straight_lift_blended_into_the_traverse_is_cut_where_a_joint_starts_late_and_chains_exactly()
+     {
+        // Straight up from P1: the base and radial joints stand still until the blend, longer
+        // than one table can hold them back within 0.05 mm, so the section is cut just before
+        // the first of them moves.
+        let robot = seed_robot();
         let lift = [pose(P1, 100.0), pose(P2, 100.0)];
+        let target = robot.counts_of(&robot.kinematics.ik(&pose(P2, 0.0), None).unwrap());
         let bounded = Method::BoundedError { tolerance_mm: 0.05 };
-        let msg = cycle(&lift, Corner::Blend(20.0), bounded, FrequencyModel::Ideal)
-            .unwrap_err()
-            .to_string();
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let blended = cycle(&lift, Corner::Blend(20.0), bounded, model).unwrap();
+            assert_eq!(blended.sections.len(), 1);
+            let starts = &blended.sections[0].starts;
+            assert!(starts.len() >= 2, "{model:?}: {} starts", starts.len());
+            assert!(blended.valid());
+            assert!(
+                blended.max_deviation_mm() <= 0.05,
+                "{model:?}: {} mm",
+                blended.max_deviation_mm()
+            );
+            // The first part is the lift alone: the base and radial joints have nothing to play
+            // in it.
+            assert!(starts[0].tables[0].segments.is_empty());
+            assert!(starts[0].tables[2].segments.is_empty());
+            assert!(!starts[1].tables[0].segments.is_empty());
+            for pair in starts.windows(2) {
+                // Every part begins on exactly the counts the one before ends on, at the
+                // instant it ends, and only the last ends at rest.
+                assert_eq!(pair[1].start_counts(), pair[0].end_counts());
+                assert!((pair[1].window.from_s - pair[0].window.to_s).abs() < 1e-12);
+                assert!(pair[0].window.ends_at_speed && pair[1].window.begins_at_speed());
+                assert!(pair[0].duration_s() >= MIN_PART_S - 1e-9);
+            }
+            assert!(!starts[starts.len() - 1].window.ends_at_speed);
+            assert_eq!(blended.sections[0].end_counts(), target);
+            let stopped = cycle(&lift, Corner::Stop, bounded, model).unwrap();
+            assert_eq!(stopped.sections.len(), 3);
+            assert!(stopped.max_deviation_mm() <= 0.05);
+            assert!(
+                blended.duration_s() < stopped.duration_s(),
+                "{} s blended, {} s stopped",
+                blended.duration_s(),
+                stopped.duration_s()
+            );
+        }
+    }
+
+    #[test]
+    fn a_section_too_long_for_one_table_area_is_split_into_parts_that_fit() {
+        let mut robot = seed_robot();
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let whole = cycle(
+            &[pose(P2, 100.0)],
+            Corner::Blend(20.0),
+            bounded,
+            FrequencyModel::Ideal,
+        )
+        .unwrap();
+        assert_eq!(whole.sections[0].starts.len(), 1);
+        let words = whole.sections[0].starts[0]
+            .tables
+            .iter()
+            .map(crate::table::encoded_words)
+            .max()
+            .unwrap();
+        // Areas a little over a third of what the one start needs.
+        let area = words / 3 + 10;
+        robot.area_words = area;
+        let req = PathRequest {
+            from: Origin::Pose(pose(P1, 0.0)),
+            elements: vec![
+                (
+                    Element::Line {
+                        to: pose(P2, 100.0),
+                    },
+                    Corner::Blend(20.0),
+                ),
+                (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
+            ],
+            motion: motion(&robot, bounded, FrequencyModel::Ideal),
+            path_accel_mm_s2: 5_000.0,
+        };
+        let split = plan_path(&robot, &req).unwrap();
+        let starts = &split.sections[0].starts;
+        assert!(starts.len() >= 3, "{} starts", starts.len());
+        for (k, plan) in starts.iter().enumerate() {
+            for (j, table) in plan.tables.iter().enumerate() {
+                if !table.segments.is_empty() {
+                    let used = crate::table::encoded_words(table);
+                    assert!(used <= area, "start {k} joint {j}: {used} words > {area}");
+                }
+            }
+        }
+        for pair in starts.windows(2) {
+            assert_eq!(pair[1].start_counts(), pair[0].end_counts());
+        }
         assert!(
-            msg.starts_with("path section 1 (element 1-3): joint theta1 first moves 0."),
+            split.max_deviation_mm() <= 0.05,
+            "{}",
+            split.max_deviation_mm()
+        );
+        assert_eq!(
+            split.sections[0].end_counts(),
+            whole.sections[0].end_counts()
+        );
+        // An area too small for any part of at least MIN_PART_S is refused naming the joint.
+        robot.area_words = 30;
+        let req = PathRequest {
+            motion: motion(&robot, bounded, FrequencyModel::Ideal),
+            ..req
+        };
+        let msg = plan_path(&robot, &req).unwrap_err().to_string();
+        assert!(
+            msg.starts_with("path section 1 (element 1-2): joint "),
             "{msg}"
         );
-        // Stopped at the top of the lift, it plans.
-        let stopped = cycle(&lift, Corner::Stop, bounded, FrequencyModel::Ideal).unwrap();
-        assert_eq!(stopped.sections.len(), 3);
-        assert!(stopped.max_deviation_mm() <= 0.05);
     }
 
     #[test]
@@ -342,10 +555,10 @@ mod tests {
             plan.max_deviation_mm()
         );
         assert!((plan.path.length_mm() - 100.0 * std::f64::consts::PI).abs() < 1e-9);
-        assert!((plan.sections[0].motion.speed_mm_s - 240.0).abs() < 1e-9);
+        assert!((plan.sections[0].starts[0].motion.speed_mm_s - 240.0).abs() < 1e-9);
         // 100 mm/s^2 on r = 100 mm allows 100 mm/s.
         let slow = plan_path(&robot, &req(bounded, 100.0)).unwrap();
-        let speed = slow.sections[0].motion.speed_mm_s;
+        let speed = slow.sections[0].starts[0].motion.speed_mm_s;
         assert!((speed - 100.0).abs() < 1e-9, "{speed} mm/s");
         let err = plan_path(&robot, &req(bounded, 0.0)).unwrap_err();
         assert_eq!(

@@ -392,10 +392,12 @@ fn first_try_accepted(
     };
     let mut motion = req.motion;
     let (profile, samples) = sampler.fast_enough(&mut motion).ok()?;
+    let window = Window::whole(&profile);
     let m = bounded::Move {
         robot: &robot,
         course: &course,
         profile: &profile,
+        window: &window,
         samples: &samples,
         motion: &motion,
     };

@@ -83,7 +83,7 @@ pub async fn upload<P: Plc>(
         from,
         targets: Some(targets),
         envelope,
-        duration: Duration::from_secs_f64(plan.profile.duration_s()),
+        duration: Duration::from_secs_f64(plan.duration_s()),
     };
     Ok((plan, bank, planned))
 }

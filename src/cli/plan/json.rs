@@ -120,7 +120,7 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             accel_mm_s2: plan.profile.accel_mm_s2,
             period_s: plan.profile.period_s,
             periods: plan.profile.periods(),
-            duration_s: plan.profile.duration_s(),
+            duration_s: plan.duration_s(),
         },
         channels: plan
             .tables

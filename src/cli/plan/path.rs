@@ -40,7 +40,7 @@ pub(super) fn run(
     match args.output() {
         Format::Json => {
             let mut sections = Vec::with_capacity(planned.sections.len());
-            for plan in &planned.sections {
+            for plan in planned.starts() {
                 let one = MoveRequest {
                     from: Origin::Counts(plan.samples.counts[0]),
                     to: plan.line.to,
@@ -54,7 +54,7 @@ pub(super) fn run(
                 path: primitives(&planned.path),
                 duration_s: planned.duration_s(),
                 path_deviation_mm: planned.max_deviation_mm(),
-                rows: planned.sections.iter().map(|p| p.figures.rows).sum(),
+                rows: planned.starts().map(|p| p.figures.rows).sum(),
                 valid: planned.valid(),
                 sections,
             };
@@ -165,7 +165,7 @@ fn primitives(path: &Path) -> Vec<PrimitiveDoc> {
 }
 
 fn write_text(robot: &Robot, planned: &PathPlan, out: &mut dyn Write) -> std::io::Result<()> {
-    let first = planned.sections.first().map(|p| p.motion);
+    let first = planned.starts().next().map(|p| p.motion);
     writeln!(out, "robot    {}", robot.name)?;
     if let Some(m) = first {
         writeln!(
@@ -204,19 +204,36 @@ fn write_text(robot: &Robot, planned: &PathPlan, out: &mut dyn Write) -> std::io
         }
     }
     writeln!(out, "sections")?;
-    for (i, plan) in planned.sections.iter().enumerate() {
-        let f = &plan.figures;
+    for (i, section) in planned.sections.iter().enumerate() {
+        let plan = &section.starts[0];
         writeln!(
             out,
-            "  {}: {:.3} mm at {:.1} mm/s, {:.3} s, {} rows, path deviation {:.4} mm{}",
+            "  {}: {:.3} mm at {:.1} mm/s, {:.3} s, {} start(s)",
             i + 1,
             plan.profile.length_mm,
             plan.profile.speed_mm_s,
             plan.profile.duration_s(),
-            f.rows,
-            f.path_deviation_mm,
-            if plan.valid() { "" } else { ", NOT VALID" }
+            section.starts.len(),
         )?;
+        for (k, plan) in section.starts.iter().enumerate() {
+            let f = &plan.figures;
+            writeln!(
+                out,
+                "     {}.{}: {:.3} to {:.3} s{}, {} rows, path deviation {:.4} mm{}",
+                i + 1,
+                k + 1,
+                plan.window.from_s,
+                plan.window.to_s,
+                if plan.window.ends_at_speed {
+                    ", chained at speed into the next"
+                } else {
+                    ""
+                },
+                f.rows,
+                f.path_deviation_mm,
+                if plan.valid() { "" } else { ", NOT VALID" }
+            )?;
+        }
     }
     writeln!(
         out,

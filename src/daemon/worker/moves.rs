@@ -27,6 +27,11 @@ impl Worker {
         }
         let id = queued.id;
         let chain = self.machine.chain_behind().copied();
+        let at_speed = queued.order.begins_at_speed();
+        if at_speed && chain.is_none() {
+            self.fail_at_speed(id);
+            return Ok(());
+        }
         let from = match (chain, self.machine.last()) {
             (Some(running), _) => running.targets.expect("chained only behind known targets"),
             (None, Some(last)) => last.block.elapsed,
@@ -92,6 +97,12 @@ impl Worker {
                 Err(blocker) => return self.not_started(id, ContractError::Blocked(blocker)),
             }
         }
+        if at_speed && self.machine.chain_behind().map(|c| c.seq) != chain.map(|c| c.seq) {
+            // The part before it ended while this one was uploaded: started now, it would
+            // start at speed from rest.
+            self.fail_at_speed(id);
+            return Ok(());
+        }
         let link = self.link.as_mut().expect("connected");
         let written = link.start(&bank).await;
         // Whatever became of the write, its sequence number is spent: a start whose fate is not
@@ -118,6 +129,25 @@ impl Worker {
             }
             _ => Ok(()),
         }
+    }
+
+    /// A part of a path section that begins at speed found the part before it no longer
+    /// running: it is not started (from rest it would start at speed), and the queue behind it
+    /// is cancelled.
+    fn fail_at_speed(&mut self, id: MoveId) {
+        self.finish(
+            id,
+            Stage::Failed,
+            Some(
+                "this part of the path begins at speed and must wait behind the part before it \
+                 while that one runs, but that one had ended (the robot stopped there at speed): \
+                 its upload took longer than the part before it runs; use a faster link, or \
+                 stop at a waypoint"
+                    .to_owned(),
+            ),
+            None,
+        );
+        self.cancel_queue("cancelled: a part of the path before it could not be chained");
     }
 
     /// The contract's description of a plan: its sequence number, bank, counts and envelope.
@@ -149,7 +179,7 @@ impl Worker {
             from,
             targets: Some(targets),
             envelope,
-            duration: Duration::from_secs_f64(plan.profile.duration_s()),
+            duration: Duration::from_secs_f64(plan.duration_s()),
         }
     }
 
@@ -157,7 +187,7 @@ impl Worker {
         let predicted = Predicted {
             rows: plan.figures.rows,
             words: plan.figures.words,
-            duration_s: plan.profile.duration_s(),
+            duration_s: plan.duration_s(),
             path_deviation_mm: plan.figures.path_deviation_mm,
             tracking_error_mm: plan.figures.tracking_error_mm,
         };

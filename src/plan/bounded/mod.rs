@@ -22,7 +22,7 @@ use crate::sim::{Execution, Figures, PulseEvent};
 use crate::table::ChannelTable;
 
 use super::course::Course;
-use super::{PlanError, Samples, simulate_within};
+use super::{PlanError, Samples, Window, simulate_within};
 use pulses::{Run, Track};
 use rows::Channel;
 
@@ -77,6 +77,8 @@ pub(super) struct Move<'a> {
     pub robot: &'a Robot,
     pub course: &'a Course,
     pub profile: &'a Profile,
+    /// The stretch of the profile the samples cover (their point 0 is its start).
+    pub window: &'a Window,
     pub samples: &'a Samples,
     pub motion: &'a Motion,
 }
@@ -267,6 +269,7 @@ impl Move<'_> {
             &tables,
             self.course,
             self.profile,
+            self.window,
             self.motion,
             tolerance_mm,
         );
