@@ -105,3 +105,86 @@ async fn a_path_that_cannot_run_is_refused_whole_and_nothing_moves() {
     assert!(shared.with(|m| m.starts().is_empty()));
     s.daemon.shut_down().await;
 }
+
+/// The demo's pick and place: from P1 up 100 mm, across to 100 mm above P2, down to P2, 20 mm
+/// blends; the lift leaves two joints standing still, so its section is cut into parts.
+fn lift_and_place() -> serde_json::Value {
+    json!({
+        "path": {
+            "start": [P1[0], P1[1], P1[2]],
+            "path_accel": "5000mm/s2",
+            "element": [
+                {"line": [P1[0], P1[1], P1[2] + 100.0], "blend": "20mm"},
+                {"line": [P2[0], P2[1], P2[2] + 100.0], "blend": "20mm"},
+                {"line": P2, "stop": true},
+            ]
+        },
+        "tolerance_mm": 0.05
+    })
+}
+
+async fn post_path(s: &Served, body: &serde_json::Value) -> Vec<u64> {
+    let answer = s
+        .api
+        .post(&format!("{ROBOT}/paths"), &body.to_string())
+        .await;
+    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
+    answer.json()["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect()
+}
+
+#[tokio::test]
+async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without_a_pause() {
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths-parts");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let a_rad = seed_robot()
+        .pose_of(&s.handle.state().counts.unwrap())
+        .a_rad;
+    let ids = post_path(&s, &lift_and_place()).await;
+    assert_eq!(ids.len(), 2, "one section, cut into two parts");
+    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
+    let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
+    assert_eq!(first.stage, Stage::Done, "{first:?}");
+    assert_eq!(second.stage, Stage::Done, "{second:?}");
+    assert_eq!(second.start_counts, first.target_counts);
+    assert_eq!(second.target_counts, Some(counts_at(P2, a_rad)));
+    assert_eq!(second.final_error_pulses, Some([0; 4]), "{second:?}");
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 2, "{starts:?}");
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    // The second part was waiting: the PLC took it in the scan after the first ended, at the
+    // first part's planned duration (the mock plays tables to the pulse) plus at most a scan
+    // or two.
+    let planned_s = first.predicted.as_ref().unwrap().duration_s;
+    let gap_s = starts[1].at_s - starts[0].at_s - planned_s;
+    assert!(
+        (-0.01..0.03).contains(&gap_s),
+        "{gap_s} s between the parts"
+    );
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_part_whose_upload_outlasts_the_part_before_it_never_starts_from_rest() {
+    // Every reply 80 ms late: the second part's upload takes longer than the 0.39 s lift.
+    let shared = mock_at_seed_start("delay80@100%");
+    let dir = TempDir::new("paths-slow");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let ids = post_path(&s, &lift_and_place()).await;
+    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
+    let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
+    assert_eq!(first.stage, Stage::Done, "{first:?}");
+    assert_eq!(second.stage, Stage::Failed, "{second:?}");
+    let why = second.error.unwrap_or_default();
+    assert!(why.contains("begins at speed"), "{why}");
+    // Only the first part was ever started.
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 1, "{starts:?}");
+    assert_eq!(s.handle.state().counts, first.target_counts);
+    s.daemon.shut_down().await;
+}

@@ -482,6 +482,18 @@ impl Machine {
         }
     }
 
+    /// While a bank is written: the start still running that the new one chains behind, if
+    /// the status block still shows it running.
+    #[must_use]
+    pub fn uploading_behind(&self) -> Option<&Planned> {
+        match &self.phase {
+            Phase::Uploading {
+                current: Some(current),
+            } => Some(&current.start),
+            _ => None,
+        }
+    }
+
     /// The caller begins writing a bank (nothing is given to the PLC yet).
     pub fn upload_begun(&mut self) {
         self.since_upload = (0, false);

@@ -97,9 +97,11 @@ impl Worker {
                 Err(blocker) => return self.not_started(id, ContractError::Blocked(blocker)),
             }
         }
-        if at_speed && self.machine.chain_behind().map(|c| c.seq) != chain.map(|c| c.seq) {
+        if at_speed && self.machine.uploading_behind().map(|c| c.seq) != chain.map(|c| c.seq) {
             // The part before it ended while this one was uploaded: started now, it would
             // start at speed from rest.
+            self.machine.upload_ended();
+            self.publish_phase();
             self.fail_at_speed(id);
             return Ok(());
         }
