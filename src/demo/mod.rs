@@ -15,6 +15,7 @@
 //! line P1P2, so one picture shows them all (the seed's Figs. 6 and 7: the path, and the
 //! deviation along it).
 
+mod cycle;
 mod replay;
 mod rig;
 mod text;
@@ -23,6 +24,7 @@ use std::time::Duration;
 
 use thiserror::Error;
 
+pub use cycle::{CYCLE_BLEND_MM, CYCLE_TOLERANCE_MM, Cycle};
 pub use replay::{Played, cut, replay};
 pub use text::{picture, write_report};
 
@@ -199,6 +201,8 @@ pub struct Demo {
     pub scan_s: f64,
     /// Every move, in order.
     pub moves: Vec<DemoMove>,
+    /// The pick-and-place cycle, blended and stopped.
+    pub cycles: Vec<Cycle>,
     /// The picture, when asked for.
     pub svg: Option<String>,
 }
@@ -217,13 +221,13 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
         gateway: crate::gateway::GatewaySettings::default(),
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
-    let moves = match daemon.robot(&robot.name) {
+    let driven = match daemon.robot(&robot.name) {
         Some(handle) => drive(handle, &rig, scan_s).await,
         None => Err(DemoError::Rig("the daemon has no robot".into())),
     };
     daemon.shut_down().await;
     rig.stop();
-    let moves = moves?;
+    let (moves, cycles) = driven?;
     let svg = if options.svg {
         Some(picture(&robot, &moves)?)
     } else {
@@ -234,18 +238,24 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
         options,
         scan_s,
         moves,
+        cycles,
         svg,
     })
 }
 
-/// Runs every batch in turn.
-async fn drive(handle: &RobotHandle, rig: &Rig, scan_s: f64) -> Result<Vec<DemoMove>, DemoError> {
+/// Runs every batch in turn, then the cycles.
+async fn drive(
+    handle: &RobotHandle,
+    rig: &Rig,
+    scan_s: f64,
+) -> Result<(Vec<DemoMove>, Vec<Cycle>), DemoError> {
     rig::connected(handle).await?;
     let mut moves = Vec::new();
     for batch in steps() {
         moves.extend(run_batch(handle, rig, &batch, scan_s).await?);
     }
-    Ok(moves)
+    let cycles = cycle::run_cycles(handle, rig, scan_s).await?;
+    Ok((moves, cycles))
 }
 
 /// Queues a batch, waits for every move of it, and measures each from the trace.

@@ -7,6 +7,7 @@
 //! it: the mock emits a start's first pulse exactly when the execution model does, so the offset
 //! between the two first pulses, rounded to a whole scan, is the start time.
 
+use crate::geometry::ToolPath;
 use crate::kinematics::JOINTS;
 use crate::mock::PulsePoint;
 use crate::plan::Plan;
@@ -78,11 +79,15 @@ pub fn replay(robot: &Robot, plan: &Plan, run: &[PulsePoint], scan_s: f64) -> Pl
         finish_s,
     };
     let planned = |t: f64| plan.planned_position_mm(t);
+    let tool_path: &dyn ToolPath = match &plan.path {
+        Some(path) => path,
+        None => &plan.line,
+    };
     let figures = measure(
         robot,
         &plan.tables,
         &execution,
-        &plan.line,
+        tool_path,
         &planned,
         plan.duration_s(),
     );
