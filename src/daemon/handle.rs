@@ -17,7 +17,7 @@ use super::order::{
     CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, Target, path_refused, plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::report::{MoveId, MoveReport, RobotState};
+use super::report::{MoveId, MoveReport, RobotState, SectionReport};
 use super::request::{CommandError, Reply, Request};
 use super::shared::Shared;
 use super::worker::{Channels, Connector, Worker};
@@ -243,9 +243,11 @@ impl RobotHandle {
             },
         )?;
         let sections = planned.path.sections();
-        let mut ids = Vec::with_capacity(sections.len());
-        for (section, plan) in sections.into_iter().zip(&planned.sections) {
+        let of = sections.len();
+        let mut ids = Vec::with_capacity(of);
+        for (n, (section, plan)) in sections.into_iter().zip(&planned.sections).enumerate() {
             let end = section.at(section.length_mm());
+            let shown = SectionReport::new(n + 1, of, &section, &plan.profile);
             let checked = CheckedOrder {
                 target: Target::Section(Arc::new(SectionOrder {
                     path: section,
@@ -255,11 +257,9 @@ impl RobotHandle {
             };
             let id = self.shared.next_id();
             self.shared.moves(|m| {
-                m.insert(MoveReport::new(
-                    id,
-                    &self.robot.name,
-                    order.section_report(&end),
-                ));
+                let mut report = MoveReport::new(id, &self.robot.name, order.section_report(&end));
+                report.section = Some(shown);
+                m.insert(report);
             });
             self.shared.state(|s| s.queued.push(id));
             self.requests

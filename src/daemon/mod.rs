@@ -42,7 +42,8 @@ pub(crate) use order::plan_order;
 pub use order::{CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, Target};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage,
+    GatewayStats, LinkState, MoveId, MoveReport, Moves, PieceReport, Predicted, RobotState,
+    SectionReport, Stage,
 };
 pub use request::CommandError;
 pub use worker::Connector;
