@@ -414,8 +414,15 @@ fn operator_runs_a_path_file_through_the_cli_section_by_section() {
     assert_eq!(code, Some(0), "{out}{err}");
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(lines.len(), 2, "{out}");
-    assert!(lines[0].starts_with("section 1/2: move 1 done: "), "{out}");
-    assert!(lines[1].starts_with("section 2/2: move 2 done: "), "{out}");
+    // Each names the elements it ran: 1 and 2 through the blend, then 3.
+    assert!(
+        lines[0].starts_with("section 1/2 (element 1-2): move 1 done: "),
+        "{out}"
+    );
+    assert!(
+        lines[1].starts_with("section 2/2 (element 3): move 2 done: "),
+        "{out}"
+    );
     assert!(lines[1].contains("final error [0,0,0,0] pulses"), "{out}");
 
     // A file with a mistake is refused before the daemon sees it, naming the element and key.

@@ -229,7 +229,8 @@ fn a_path_file_plans_its_blended_cycle_within_the_tolerance_and_names_a_bad_elem
         "0.05mm",
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("blend       arc"), "{text}");
+    assert!(text.contains("blend 1     arc"), "{text}");
+    assert!(text.contains("1 (section 1, element 1-2): "), "{text}");
     assert!(text.contains("valid    yes"), "{text}");
 
     let dir = std::env::temp_dir().join(format!("linterpd-path-{}", std::process::id()));
@@ -255,5 +256,148 @@ fn a_path_file_plans_its_blended_cycle_within_the_tolerance_and_names_a_bad_elem
         err.contains("element 2: an arc needs `via = [x, y, z]` or `centre = [x, y, z]`"),
         "{err}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+const EXAMPLE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/config/examples/pick-and-place.toml"
+);
+const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+
+/// `linterpd plan --path FILE --tolerance 0.05mm` with `extra`, which must succeed.
+fn plan_path(file: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "plan",
+        "--config",
+        CONFIG,
+        "--path",
+        file,
+        "--tolerance",
+        "0.05mm",
+    ];
+    args.extend(extra);
+    let out = linterpd(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("{v} is no number"))
+}
+
+#[test]
+fn a_paths_json_lists_its_blend_as_the_arc_paths_md_gives_with_figures_measured_against_it() {
+    let doc: Value = serde_json::from_slice(&plan_path(EXAMPLE, &["--json"]).stdout).unwrap();
+    let path = doc["path"].as_array().unwrap();
+    // docs/PATHS.md: the 20 mm blend is an arc of radius 8.63 mm turning 133.3 deg.
+    let blend = &path[1];
+    assert_eq!(blend["kind"], "arc");
+    assert_eq!(blend["waypoint"], 1);
+    assert!((num(&blend["radius_mm"]) - 8.63).abs() < 0.005, "{blend}");
+    assert!((num(&blend["sweep_deg"]) - 133.3).abs() < 0.05, "{blend}");
+    assert_eq!(path[0]["element"], 1);
+    assert!(path[0]["waypoint"].is_null());
+    // The arc's centre is one radius from both its ends.
+    let centre: Vec<f64> = blend["centre"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(num)
+        .collect();
+    for end in ["from", "to"] {
+        let p: Vec<f64> = blend[end].as_array().unwrap().iter().map(num).collect();
+        let r = (0..3)
+            .map(|i| (p[i] - centre[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((r - num(&blend["radius_mm"])).abs() < 1e-6, "{end}: {r} mm");
+    }
+    // Each primitive in time, one after the other, the last ending with the path.
+    let mut t = 0.0;
+    for p in path {
+        assert!((num(&p["start_s"]) - t).abs() < 1e-9, "{p}");
+        t = num(&p["end_s"]);
+        assert!(t > num(&p["start_s"]), "{p}");
+        assert_eq!(p["section"], 1);
+    }
+    assert!((t - num(&doc["duration_s"])).abs() < 1e-9);
+    // The worst primitive holds the path's deviation, and the blend is within the tolerance.
+    let worst = path
+        .iter()
+        .map(|p| num(&p["path_deviation_mm"]))
+        .fold(0.0, f64::max);
+    assert!(
+        (worst - num(&doc["path_deviation_mm"])).abs() < 1e-9,
+        "{worst}"
+    );
+    assert!(num(&blend["path_deviation_mm"]) > 0.0);
+    assert!(num(&blend["path_deviation_mm"]) <= 0.05);
+    // One start, its figures beside the plan document's.
+    let start = &doc["starts"][0];
+    assert_eq!(start["elements"], "1-2");
+    assert_eq!(start["rows"], doc["sections"][0]["figures"]["rows"]);
+    assert_eq!(
+        start["tracking_error_mm"],
+        doc["sections"][0]["figures"]["tracking_error_mm"]
+    );
+    assert_eq!(start["tracking_error_mm"], doc["tracking_error_mm"]);
+}
+
+#[test]
+fn a_path_with_a_stop_gives_one_csv_of_every_starts_rows_and_an_svg_of_its_arc() {
+    let dir = std::env::temp_dir().join(format!("linterpd-path-csv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The example with a stop after the first line: element 1, then 2 with a blend, then 3.
+    let file = dir.join("stopped.toml");
+    std::fs::write(
+        &file,
+        "start = [-926.57, 535.03, 50.0]\npath_accel = \"5000mm/s2\"\n\
+         [[element]]\nline = [-926.57, 535.03, 60.0]\n\
+         [[element]]\nline = [-1144.43, 659.60, 286.60]\nblend = \"20mm\"\n\
+         [[element]]\nline = [-1144.43, 659.60, 186.60]\n",
+    )
+    .unwrap();
+    let file = file.to_str().unwrap();
+    let doc: Value = serde_json::from_slice(&plan_path(file, &["--json"]).stdout).unwrap();
+    assert_eq!(doc["starts"].as_array().unwrap().len(), 2);
+    assert_eq!(doc["starts"][1]["elements"], "2-3");
+    let svg = dir.join("path.svg");
+    let out = plan_path(file, &["--format", "csv", "--svg", svg.to_str().unwrap()]);
+    let csv = String::from_utf8(out.stdout).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "start,section,channel,joint,segment,row,frequency_hz,target,start_s,end_s,\
+         path_start_s,path_end_s"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // As many lines as the plans' tables have rows, each start's under its number.
+    for (n, start) in doc["starts"].as_array().unwrap().iter().enumerate() {
+        let mine = rows.iter().filter(|r| r[0] == (n + 1).to_string()).count();
+        assert_eq!(mine as u64, start["rows"].as_u64().unwrap());
+    }
+    assert_eq!(rows.len() as u64, doc["rows"].as_u64().unwrap());
+    // The second start's rows run after the first start ends, on the path's clock.
+    let second_begins = num(&doc["starts"][1]["begins_s"]);
+    for r in rows.iter().filter(|r| r[0] == "2") {
+        let own: f64 = r[8].parse().unwrap();
+        let on_path: f64 = r[10].parse().unwrap();
+        assert!((on_path - own - second_begins).abs() < 1e-5, "{r:?}");
+    }
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    for text in [
+        "blend at waypoint 2, radius 8.",
+        "planned path",
+        "distance along the path (mm)",
+        "tolerance 0.05 mm",
+    ] {
+        assert!(svg.contains(text), "no {text:?}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -18,7 +18,7 @@ use super::order::{
     path_refused, plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::report::{MoveId, MoveReport, RobotState};
+use super::report::{MoveId, MoveReport, RobotState, SectionReport};
 use super::request::{CommandError, Reply, Request};
 use super::shared::Shared;
 use super::worker::{Channels, Connector, Worker};
@@ -243,8 +243,9 @@ impl RobotHandle {
                 path_accel_mm_s2,
             },
         )?;
+        let of = planned.sections.len();
         let mut ids = Vec::new();
-        for section in planned.sections {
+        for (n, section) in planned.sections.into_iter().enumerate() {
             let shared = Arc::new(SectionOrder {
                 path: section.path,
                 path_accel_mm_s2,
@@ -261,13 +262,14 @@ impl RobotHandle {
                     }),
                     motion,
                 };
+                let shown =
+                    SectionReport::new(n + 1, of, &shared.path, &plan.profile, &plan.window);
                 let id = self.shared.next_id();
                 self.shared.moves(|m| {
-                    m.insert(MoveReport::new(
-                        id,
-                        &self.robot.name,
-                        order.section_report(&end),
-                    ));
+                    let mut report =
+                        MoveReport::new(id, &self.robot.name, order.section_report(&end));
+                    report.section = Some(shown);
+                    m.insert(report);
                 });
                 self.shared.state(|s| s.queued.push(id));
                 self.requests

@@ -44,7 +44,8 @@ pub use order::{
 };
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, LinkState, MoveId, MoveReport, Moves, Predicted, RobotState, Stage,
+    GatewayStats, LinkState, MoveId, MoveReport, Moves, PieceReport, Predicted, RobotState,
+    SectionReport, Stage,
 };
 pub use request::CommandError;
 pub use worker::Connector;

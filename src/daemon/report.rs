@@ -7,6 +7,7 @@ use serde::Serialize;
 use tokio::sync::watch;
 
 use super::order::MoveOrder;
+use crate::geometry::{Path, Primitive, Profile};
 
 /// A move's identifier, unique across daemon runs (see [`super::MoveIds`]).
 pub type MoveId = u64;
@@ -117,6 +118,69 @@ pub struct MoveReport {
     pub final_error_pulses: Option<[i64; 4]>,
     /// Why it failed or stopped.
     pub error: Option<String>,
+    /// A path section's move: which section, and when it runs each of the path's pieces.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub section: Option<SectionReport>,
+}
+
+/// Which section of a path a move runs, and when it runs each piece of it, so that a client can
+/// tell from a move's `progress` which element (or blend) the robot is on.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SectionReport {
+    /// The section, from 1.
+    pub number: usize,
+    /// How many sections the path has.
+    pub of: usize,
+    /// Its pieces, in order.
+    pub pieces: Vec<PieceReport>,
+}
+
+/// One piece of a section, and when the move runs it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PieceReport {
+    /// `"line"` or `"arc"`.
+    pub kind: &'static str,
+    /// The element it comes from (from 1); none for a blend.
+    pub element: Option<usize>,
+    /// A blend: the waypoint it rounds (the end of element n); none for an element's piece.
+    pub waypoint: Option<usize>,
+    /// Share of the move's planned duration when it is entered (0 to 1), as `progress` counts.
+    pub begins: f64,
+    /// Share of the move's planned duration when it is left.
+    pub ends: f64,
+}
+
+impl SectionReport {
+    /// Section `number` of `of`, its path `section` (measured from its start) run on `profile`,
+    /// of which this start plays `window` (a part of a section cut into several starts shows
+    /// the pieces before it done and those after it not begun).
+    #[must_use]
+    pub fn new(
+        number: usize,
+        of: usize,
+        section: &Path,
+        profile: &Profile,
+        window: &crate::plan::Window,
+    ) -> Self {
+        let duration_s = window.duration_s();
+        let share =
+            |s_mm: f64| ((profile.time_at_mm(s_mm) - window.from_s) / duration_s).clamp(0.0, 1.0);
+        let pieces = section
+            .pieces()
+            .iter()
+            .map(|p| PieceReport {
+                kind: match p.primitive {
+                    Primitive::Line(_) => "line",
+                    Primitive::Arc(_) => "arc",
+                },
+                element: p.element,
+                waypoint: p.waypoint,
+                begins: share(p.start_mm),
+                ends: share(p.start_mm + p.primitive.length_mm()),
+            })
+            .collect();
+        Self { number, of, pieces }
+    }
 }
 
 impl MoveReport {
@@ -141,6 +205,7 @@ impl MoveReport {
             counts: None,
             final_error_pulses: None,
             error: None,
+            section: None,
         }
     }
 }
@@ -251,5 +316,61 @@ impl Moves {
     #[must_use]
     pub fn all(&self) -> Vec<MoveReport> {
         self.order.iter().filter_map(|id| self.get(*id)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Corner, Element, PathSpec, Pose, ProfileRequest};
+
+    #[test]
+    fn a_sections_report_gives_each_piece_its_share_of_the_planned_time() {
+        let to = |x, y| Element::Line {
+            to: Pose::from_mm_deg(x, y, 0.0, 0.0),
+        };
+        let path = Path::build(&PathSpec {
+            start: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+            elements: vec![
+                (to(100.0, 0.0), Corner::Blend(20.0)),
+                (to(100.0, 100.0), Corner::Stop),
+            ],
+        })
+        .unwrap();
+        let profile = Profile::new(ProfileRequest {
+            length_mm: path.length_mm(),
+            speed_mm_s: 100.0,
+            accel_s: 0.2,
+            period_s: 0.01,
+        })
+        .unwrap();
+        let report =
+            SectionReport::new(2, 3, &path, &profile, &crate::plan::Window::whole(&profile));
+        assert_eq!((report.number, report.of), (2, 3));
+        let names: Vec<_> = report
+            .pieces
+            .iter()
+            .map(|p| (p.kind, p.element, p.waypoint))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("line", Some(1), None),
+                ("arc", None, Some(1)),
+                ("line", Some(2), None)
+            ]
+        );
+        // Back to back from 0 to 1; the blend's share is its time on the cruise.
+        assert!(report.pieces[0].begins.abs() < 1e-12);
+        assert!((report.pieces[2].ends - 1.0).abs() < 1e-12);
+        for w in report.pieces.windows(2) {
+            assert!((w[0].ends - w[1].begins).abs() < 1e-12);
+        }
+        let blend_s = (report.pieces[1].ends - report.pieces[1].begins) * profile.duration_s();
+        let blend_mm = path.pieces()[1].primitive.length_mm();
+        assert!(
+            (blend_s - blend_mm / profile.speed_mm_s).abs() < 1e-6,
+            "{blend_s}"
+        );
     }
 }

@@ -138,7 +138,10 @@ async fn run_cycle(
     let plans = replan(handle.robot(), name, &order, &reports)?;
     let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
     let runs = cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
-        DemoError::Trace(format!("{name}: {} pulses do not match the plans", trace.len()))
+        DemoError::Trace(format!(
+            "{name}: {} pulses do not match the plans",
+            trace.len()
+        ))
     })?;
     let starts: Vec<DemoMove> = reports
         .into_iter()

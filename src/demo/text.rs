@@ -155,7 +155,11 @@ fn cycles(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
         "measured on the trace (cycle = the PLC's first start to the last pulse):"
     )?;
     for c in &demo.cycles {
-        let chained = c.starts.iter().filter(|m| m.plan.window.begins_at_speed()).count();
+        let chained = c
+            .starts
+            .iter()
+            .filter(|m| m.plan.window.begins_at_speed())
+            .count();
         writeln!(
             out,
             "  {}: {} starts ({chained} chained at speed), cycle {:.3} s, path deviation {:.4} mm",

@@ -179,6 +179,28 @@ impl Profile {
         }
     }
 
+    /// The time at which the profile reaches `s_mm` from P1 (clamped to the ends), s: the
+    /// inverse of [`Self::distance_mm`], found by bisection (the distance never falls).
+    #[must_use]
+    pub fn time_at_mm(&self, s_mm: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0, self.duration_s());
+        if s_mm <= 0.0 {
+            return lo;
+        }
+        if s_mm >= self.length_mm {
+            return hi;
+        }
+        for _ in 0..60 {
+            let mid = f64::midpoint(lo, hi);
+            if self.distance_mm(mid) < s_mm {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        f64::midpoint(lo, hi)
+    }
+
     /// Distance from P1 at interpolation point `i` (0..=N), mm. Point N is exactly the length.
     #[must_use]
     pub fn distance_at_point_mm(&self, i: u32) -> f64 {
@@ -262,6 +284,17 @@ mod tests {
         assert!(p.accel_mm_s2 <= 1200.0 + 1e-9);
         assert!((p.distance_mm(p.duration_s()) - 12.0).abs() < 1e-9);
         assert!((p.distance_mm(0.1) - 6.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn time_at_a_distance_inverts_the_distance_at_a_time() {
+        let p = seed();
+        for t in [0.0, 0.05, 0.2, 0.7, p.duration_s() - 0.1, p.duration_s()] {
+            let back = p.time_at_mm(p.distance_mm(t));
+            assert!((back - t).abs() < 1e-9, "{t} s -> {back} s");
+        }
+        assert!(p.time_at_mm(-1.0).abs() < 1e-12);
+        assert!((p.time_at_mm(1e6) - p.duration_s()).abs() < 1e-12);
     }
 
     #[test]

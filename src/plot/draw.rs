@@ -9,7 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::Series;
 use super::track::TrackPoint;
-use crate::geometry::Line;
+use crate::geometry::{Path, Primitive};
 
 /// Width of the picture, px.
 pub const WIDTH_PX: u32 = 1280;
@@ -25,6 +25,9 @@ const AXIS_GREY: RGBColor = RGBColor(90, 90, 90);
 const GRID: RGBColor = RGBColor(232, 232, 232);
 const GRID_BOLD: RGBColor = RGBColor(205, 205, 205);
 const TOLERANCE: RGBColor = RGBColor(190, 0, 160);
+const BLEND: RGBColor = RGBColor(230, 120, 0);
+/// The largest turn between two points of a drawn arc, degrees.
+const ARC_STEP_DEG: f64 = 2.0;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 type Failed = Box<dyn std::error::Error + Send + Sync>;
@@ -32,14 +35,17 @@ type Failed = Box<dyn std::error::Error + Send + Sync>;
 /// Everything the drawing needs, prepared.
 pub(super) struct Picture<'a> {
     pub(super) title: String,
-    pub(super) line: Line,
-    /// Factor on every offset from the line in the path panels.
+    /// The planned path: a line, or lines and arcs (blends included).
+    pub(super) path: Path,
+    /// What the planned path is called: "line" or "path".
+    pub(super) noun: &'static str,
+    /// Factor on every offset from the planned path in the path panels.
     pub(super) magnify: f64,
     /// Per series: the thinned executed path.
     pub(super) paths: Vec<Vec<TrackPoint>>,
-    /// Length of the stretches of the line the deviation panel takes the largest of, mm.
+    /// Length of the stretches of the path the deviation panel takes the largest of, mm.
     pub(super) stretch_mm: f64,
-    /// Per series: (distance along the line, largest deviation) of each stretch.
+    /// Per series: (distance along the path, largest deviation) of each stretch.
     pub(super) envelopes: Vec<Vec<(f64, f64)>>,
     pub(super) series: &'a [Series],
     pub(super) tolerances_mm: Vec<f64>,
@@ -68,14 +74,46 @@ pub(super) fn svg(picture: &Picture<'_>) -> Result<String, Failed> {
     Ok(out)
 }
 
-/// A position in the panel's plane: the foot on the line plus the magnified offset.
+/// A position in the panel's plane: the foot on the planned path plus the magnified offset.
 fn projected(picture: &Picture<'_>, p: &TrackPoint, axes: [usize; 2]) -> (f64, f64) {
-    let v = foot(&picture.line, p.along_mm) + p.offset_mm * picture.magnify;
+    let v = picture.path.at(p.along_mm).position_mm + p.offset_mm * picture.magnify;
     (v[axes[0]], v[axes[1]])
 }
 
-fn foot(line: &Line, along_mm: f64) -> Vector3<f64> {
-    line.at(along_mm).position_mm
+/// Points along a primitive close enough together for their chords to draw it: a line's ends,
+/// an arc every [`ARC_STEP_DEG`] at most.
+pub(super) fn outline(primitive: &Primitive) -> Vec<Vector3<f64>> {
+    match primitive {
+        Primitive::Line(l) => vec![l.from.position_mm, l.to.position_mm],
+        Primitive::Arc(a) => {
+            let steps = (a.sweep_rad.to_degrees() / ARC_STEP_DEG).ceil().max(1.0) as usize;
+            (0..=steps)
+                .map(|i| a.at(a.length_mm() * i as f64 / steps as f64).position_mm)
+                .collect()
+        }
+    }
+}
+
+/// The whole planned path as points, piece after piece.
+fn path_outline(path: &Path) -> Vec<Vector3<f64>> {
+    let mut points: Vec<Vector3<f64>> = Vec::new();
+    for piece in path.pieces() {
+        let more = outline(&piece.primitive);
+        let skip = usize::from(!points.is_empty());
+        points.extend(more.into_iter().skip(skip));
+    }
+    points
+}
+
+/// Every blend's corner arc: the waypoint it rounds, its radius and its points.
+fn blends(path: &Path) -> Vec<(usize, f64, Vec<Vector3<f64>>)> {
+    path.pieces()
+        .iter()
+        .filter_map(|piece| match (piece.waypoint, piece.primitive) {
+            (Some(w), Primitive::Arc(a)) => Some((w, a.radius_mm, outline(&piece.primitive))),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The range of `values` with a margin of `pad` of its width (at least 1 mm) each side.
@@ -103,7 +141,7 @@ fn path_panel(
     axes: [usize; 2],
     names: [&str; 2],
 ) -> Result<(), Failed> {
-    let ends = [picture.line.from.position_mm, picture.line.to.position_mm];
+    let planned = path_outline(&picture.path);
     let points: Vec<Vec<(f64, f64)>> = picture
         .paths
         .iter()
@@ -114,7 +152,7 @@ fn path_panel(
             .iter()
             .flatten()
             .copied()
-            .chain(ends.iter().map(|e| (e[axes[0]], e[axes[1]])))
+            .chain(planned.iter().map(|e| (e[axes[0]], e[axes[1]])))
     };
     let (w, h) = area.dim_in_pixel();
     let (x, y) = equal_scale(
@@ -124,9 +162,10 @@ fn path_panel(
         f64::from(h) - 110.0,
     );
     let caption = format!(
-        "path in {}{} plane (offsets from the line x{})",
+        "path in {}{} plane (offsets from the {} x{})",
         &names[0][..1],
         &names[1][..1],
+        picture.noun,
         picture.magnify
     );
     let mut chart = ChartBuilder::on(area)
@@ -152,13 +191,19 @@ fn path_panel(
     for (pts, s) in points.into_iter().zip(picture.series) {
         chart.draw_series(LineSeries::new(pts, colour(s.rgb).stroke_width(2)))?;
     }
-    let planned = ends.iter().map(|e| (e[axes[0]], e[axes[1]]));
-    chart.draw_series(LineSeries::new(planned, BLACK.stroke_width(1)))?;
+    let flat = |v: &Vector3<f64>| (v[axes[0]], v[axes[1]]);
+    chart.draw_series(LineSeries::new(
+        planned.iter().map(flat),
+        BLACK.stroke_width(1),
+    ))?;
+    for (_, _, arc) in blends(&picture.path) {
+        chart.draw_series(LineSeries::new(arc.iter().map(flat), BLEND.stroke_width(1)))?;
+    }
     Ok(())
 }
 
 fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
-    let length_mm = picture.line.length_mm();
+    let length_mm = picture.path.length_mm();
     let top = picture
         .envelopes
         .iter()
@@ -170,8 +215,9 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
     let mut chart = ChartBuilder::on(area)
         .caption(
             format!(
-                "deviation from the line, true scale (largest in each {:.2} mm of the line)",
-                picture.stretch_mm
+                "deviation from the {noun}, true scale (largest in each {:.2} mm of the {noun})",
+                picture.stretch_mm,
+                noun = picture.noun
             ),
             (FONT, 16),
         )
@@ -181,7 +227,7 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
         .build_cartesian_2d(0.0..length_mm, 0.0..top)?;
     chart
         .configure_mesh()
-        .x_desc("distance along the line (mm)")
+        .x_desc(format!("distance along the {} (mm)", picture.noun))
         .y_desc("deviation (mm)")
         .x_labels(10)
         .y_labels(8)
@@ -211,8 +257,8 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
     Ok(())
 }
 
-/// The legend: a line sample and the label of every series, then the planned line and the
-/// tolerance.
+/// The legend: a line sample and the label of every series, then the planned line or path, its
+/// blends and the tolerance.
 fn legend_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
     let mut y = 60;
     let entry = |y: i32, rgb: RGBColor, width: u32, text: &str| -> Result<(), Failed> {
@@ -239,7 +285,12 @@ fn legend_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
         entry(y, colour(s.rgb), 3, &s.label)?;
         y += 26;
     }
-    entry(y, BLACK, 1, "planned line")?;
+    entry(y, BLACK, 1, &format!("planned {}", picture.noun))?;
+    for (waypoint, radius_mm, _) in blends(&picture.path) {
+        y += 26;
+        let text = format!("blend at waypoint {waypoint}, radius {radius_mm:.2} mm");
+        entry(y, BLEND, 1, &text)?;
+    }
     for &tolerance in &picture.tolerances_mm {
         y += 26;
         entry(y, TOLERANCE, 1, &format!("tolerance {tolerance} mm"))?;

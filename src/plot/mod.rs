@@ -1,20 +1,23 @@
-//! PURE. An SVG picture of one move planned one or more ways ([`svg`]), or of several executed
-//! moves along one line ([`svg_paths`]: the demo's moves replayed from the mock PLC's pulse
-//! trace), built as a string (no IO): `plan --svg` and `demo` write it to a file.
+//! PURE. An SVG picture of one move planned one or more ways ([`svg`]), of a path of lines and
+//! arcs planned start by start ([`svg_path`]), or of several executed moves along one line
+//! ([`svg_paths`]: the demo's moves replayed from the mock PLC's pulse trace), built as a string
+//! (no IO): `plan --svg` and `demo` write it to a file.
 //!
 //! ```text
 //! +---------------------------- title: robot, P1 -> P2, speed --------------------------+
 //! | path in XY (deviation x k)              | path in XZ (deviation x k)                |
-//! |   planned line + every executed path    |   planned line + every executed path      |
+//! |   planned path + every executed path    |   planned path + every executed path      |
 //! +-----------------------------------------+-------------------------------------------+
-//! | deviation from the line against distance along it, tolerance     | legend           |
+//! | deviation from the planned path against distance along it, tol.  | legend           |
 //! +------------------------------------------------------------------+------------------+
 //! ```
-//! The executed path is the tool position after every pulse event (forward kinematics of the
-//! counts the execution model produces). It strays from the line by hundredths of a millimetre, so
-//! the path panels magnify each position's offset from the line by one factor `k` (a 1-2-5 value,
-//! the same for every plan, said in the panel titles); the deviation panel plots the offset's
-//! length unmagnified, the largest in each short stretch of the line.
+//! The planned path is a line, or lines and arcs with every blend's corner arc in its own
+//! colour. The executed path is the tool position after every pulse event (forward kinematics
+//! of the counts the execution model produces; a path's starts one after the other). It strays
+//! from the planned path by hundredths of a millimetre, so the path panels magnify each
+//! position's offset from it by one factor `k` (a 1-2-5 value, the same for every plan, said in
+//! the panel titles); the deviation panel plots the offset's length unmagnified, the largest in
+//! each short stretch of the path.
 //!
 //! Drawn with plotters' SVG backend only: text is SVG `<text>`, laid out with plotters' built-in
 //! estimate, so no font library is needed.
@@ -24,7 +27,7 @@ mod track;
 
 use thiserror::Error;
 
-use crate::geometry::Line;
+use crate::geometry::{Line, Path as PlannedPath};
 use crate::kinematics::JOINTS;
 use crate::plan::Plan;
 use crate::robot::{Method, Robot};
@@ -51,7 +54,7 @@ struct Series {
     label: String,
     /// Red, green, blue.
     rgb: (u8, u8, u8),
-    /// Every executed position, placed against the line.
+    /// Every executed position, placed against the planned path.
     track: Vec<track::TrackPoint>,
 }
 
@@ -93,7 +96,7 @@ fn tolerances(plans: &[&Plan]) -> Vec<f64> {
     out
 }
 
-/// The largest 1-2-5 factor that keeps the largest offset within `share` of the line's length.
+/// The largest 1-2-5 factor that keeps the largest offset within `share` of the path's length.
 fn magnification(length_mm: f64, largest_offset_mm: f64, share: f64) -> f64 {
     if largest_offset_mm <= 0.0 || length_mm <= 0.0 {
         return 1.0;
@@ -132,7 +135,7 @@ const DEVIATION_STRETCHES: usize = 300;
 /// name it), drawn in the order given (the last on top).
 pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
     let first = plans.first().ok_or(PlotError::NoPlan)?;
-    let line = first.line;
+    let line = PlannedPath::from(first.line);
     let series: Vec<Series> = plans
         .iter()
         .map(|plan| Series {
@@ -147,7 +150,52 @@ pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
             ),
         })
         .collect();
-    render(title(robot, first), line, &series, tolerances(plans))
+    let frame = Frame {
+        path: line,
+        noun: "line",
+    };
+    render(title(robot, first), frame, &series, tolerances(plans))
+}
+
+/// The SVG of a path planned as `starts` (its PLC starts in order, each starting where the one
+/// before ends): the planned path (blends included) and the executed one, every start's pulses
+/// one after the other, measured against the whole path.
+pub fn svg_path(robot: &Robot, path: &PlannedPath, starts: &[&Plan]) -> Result<String, PlotError> {
+    let first = starts.first().ok_or(PlotError::NoPlan)?;
+    let mut points = Vec::new();
+    for plan in starts {
+        let run = track::executed(
+            robot,
+            path,
+            path,
+            start_counts(plan),
+            &plan.execution.events,
+        );
+        points.extend(run);
+    }
+    let series = [Series {
+        label: label(first),
+        rgb: rgb(first),
+        track: points,
+    }];
+    let p = |pose: crate::geometry::Pose| {
+        let v = pose.to_mm_deg();
+        format!("({:.2}, {:.2}, {:.2})", v[0], v[1], v[2])
+    };
+    let title = format!(
+        "{}: path {} to {} mm, {} pieces, {:.1} mm, {} mm/s",
+        robot.name,
+        p(path.at(0.0)),
+        p(path.at(path.length_mm())),
+        path.pieces().len(),
+        path.length_mm(),
+        first.motion.speed_mm_s
+    );
+    let frame = Frame {
+        path: path.clone(),
+        noun: "path",
+    };
+    render(title, frame, &series, tolerances(starts))
 }
 
 /// Counts per joint a plan starts from.
@@ -192,36 +240,50 @@ pub fn svg_paths(
     if paths.is_empty() {
         return Err(PlotError::NoPlan);
     }
+    let frame = PlannedPath::from(frame);
     let series: Vec<Series> = paths
         .iter()
         .zip(PALETTE.iter().cycle())
         .map(|(p, rgb)| Series {
             label: p.label.to_owned(),
             rgb: *rgb,
-            track: track::executed(robot, &p.line, &frame, p.start, p.events),
+            track: track::executed(robot, &PlannedPath::from(p.line), &frame, p.start, p.events),
         })
         .collect();
     let mut tolerances: Vec<f64> = paths.iter().filter_map(|p| p.tolerance_mm).collect();
     tolerances.sort_by(f64::total_cmp);
     tolerances.dedup();
+    let frame = Frame {
+        path: frame,
+        noun: "line",
+    };
     render(title.to_owned(), frame, &series, tolerances)
 }
 
-/// Draws `series` against `line`.
+/// The planned path a picture is drawn against, and what it is called.
+struct Frame {
+    /// A line, or lines and arcs.
+    path: PlannedPath,
+    /// "line" or "path".
+    noun: &'static str,
+}
+
+/// Draws `series` against `frame`.
 fn render(
     title: String,
-    line: Line,
+    frame: Frame,
     series: &[Series],
     tolerances_mm: Vec<f64>,
 ) -> Result<String, PlotError> {
-    let length_mm = line.length_mm();
+    let length_mm = frame.path.length_mm();
     let largest = series
         .iter()
         .flat_map(|s| s.track.iter().map(track::TrackPoint::deviation_mm))
         .fold(0.0, f64::max);
     let picture = draw::Picture {
         title,
-        line,
+        path: frame.path,
+        noun: frame.noun,
         magnify: magnification(length_mm, largest, 0.08),
         paths: series
             .iter()

@@ -1,37 +1,38 @@
 //! An executed path (a plan's run in the execution model, or a PLC's pulse trace replayed): the
 //! tool position after every pulse event (forward kinematics of the counts), placed against the
-//! line, and thinned for drawing.
+//! planned path (a line, or lines and arcs), and thinned for drawing.
 
 use nalgebra::Vector3;
 
-use crate::geometry::Line;
+use crate::geometry::Path;
 use crate::kinematics::JOINTS;
 use crate::robot::Robot;
 use crate::sim::PulseEvent;
 
-/// One executed position, placed against the line.
+/// One executed position, placed against the planned path.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct TrackPoint {
-    /// Distance from P1 of the nearest point of the segment P1P2, mm.
+    /// Distance along the path of its nearest point, mm.
     pub(super) along_mm: f64,
     /// From that nearest point to the executed position, mm (its norm is the path deviation).
     pub(super) offset_mm: Vector3<f64>,
 }
 
 impl TrackPoint {
-    /// Distance from the executed position to the segment, mm.
+    /// Distance from the executed position to the path, mm.
     pub(super) fn deviation_mm(&self) -> f64 {
         self.offset_mm.norm()
     }
 }
 
 /// The tool position at the start and after every pulse event of a run from `start` (counts per
-/// joint): its offset measured from `own`, the line the move was planned on, and its place along
-/// `frame`, the line the picture is drawn on (the same line, or one it runs back and forth on).
+/// joint): its offset measured from `own`, the path the move was planned on, and its place along
+/// `frame`, the path the picture is drawn on (the same path, or a line it runs back and forth
+/// on).
 pub(super) fn executed(
     robot: &Robot,
-    own: &Line,
-    frame: &Line,
+    own: &Path,
+    frame: &Path,
     start: [i64; JOINTS],
     events: &[PulseEvent],
 ) -> Vec<TrackPoint> {
@@ -46,29 +47,22 @@ pub(super) fn executed(
     out
 }
 
-/// `p` offset from the segment of `own`, its foot there placed along the segment of `frame`.
-fn place_on(own: &Line, frame: &Line, p: &Vector3<f64>) -> TrackPoint {
+/// `p` offset from `own`, its foot there placed along `frame`.
+fn place_on(own: &Path, frame: &Path, p: &Vector3<f64>) -> TrackPoint {
     let on_own = place(own, p);
     let foot = p - on_own.offset_mm;
     TrackPoint {
-        along_mm: place(frame, &foot).along_mm,
+        along_mm: frame.nearest_mm(&foot),
         offset_mm: on_own.offset_mm,
     }
 }
 
-/// `p` against the segment of `line`.
-fn place(line: &Line, p: &Vector3<f64>) -> TrackPoint {
-    let from = line.from.position_mm;
-    let d = line.to.position_mm - from;
-    let len2 = d.norm_squared();
-    let u = if len2 > 0.0 {
-        ((p - from).dot(&d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+/// `p` against `path`.
+fn place(path: &Path, p: &Vector3<f64>) -> TrackPoint {
+    let along_mm = path.nearest_mm(p);
     TrackPoint {
-        along_mm: u * len2.sqrt(),
-        offset_mm: p - (from + d * u),
+        along_mm,
+        offset_mm: p - path.at(along_mm).position_mm,
     }
 }
 
@@ -124,13 +118,17 @@ pub(super) fn envelope(points: &[TrackPoint], length_mm: f64, buckets: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Pose;
+    use crate::geometry::{Line, Pose};
 
-    fn line() -> Line {
+    fn segment() -> Line {
         Line {
             from: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
             to: Pose::from_mm_deg(10.0, 0.0, 0.0, 0.0),
         }
+    }
+
+    fn line() -> Path {
+        Path::from(segment())
     }
 
     #[test]
@@ -142,10 +140,10 @@ mod tests {
 
     #[test]
     fn a_move_back_along_the_line_is_placed_from_the_frames_start() {
-        let back = Line {
-            from: line().to,
-            to: line().from,
-        };
+        let back = Path::from(Line {
+            from: segment().to,
+            to: segment().from,
+        });
         let p = place_on(&back, &line(), &Vector3::new(3.0, 0.25, 0.0));
         assert!((p.along_mm - 3.0).abs() < 1e-12);
         assert!((p.deviation_mm() - 0.25).abs() < 1e-12);

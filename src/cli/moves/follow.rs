@@ -1,4 +1,4 @@
-//! Following a move to its end: its progress feed (a bar on a terminal), the robot's state read
+//! Following a move to its end: its progress feed (bars on a terminal, `bars.rs`), the robot's state read
 //! beside it (a link that goes down is said once on stderr, with what the move waits for), and
 //! the deadline of [`super::wait`].
 
@@ -6,9 +6,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::anyhow;
 use hyper::Method;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::Value;
 
+use super::bars::Bars;
 use super::wait::{Deadline, link_down, waiting_for};
 use crate::cli::Failure;
 use crate::cli::client::{Client, Feed};
@@ -40,7 +40,7 @@ impl Follow<'_> {
     /// is a failure saying what the move was waiting for.
     pub(super) async fn run(&self) -> Result<Value, Failure> {
         let mut feed = self.open_feed().await?;
-        let bar = progress_bar(self.quiet);
+        let mut bars = Bars::new(self.quiet);
         let mut deadline = Deadline::new(Instant::now(), self.timeout);
         let (mut last, mut state) = (Value::Null, Value::Null);
         let mut polls = tokio::time::interval(STATE_POLL);
@@ -51,10 +51,10 @@ impl Follow<'_> {
                 line = feed.next() => {
                     let report = self.feed_line(line, &last)?;
                     deadline.report(&report, Instant::now());
-                    show(&bar, &report);
+                    bars.show(&report);
                     last = report;
                     if is_final(last["stage"].as_str().unwrap_or("")) {
-                        bar.finish_and_clear();
+                        bars.clear();
                         return Ok(last);
                     }
                 }
@@ -63,12 +63,12 @@ impl Follow<'_> {
                     deadline.state(&now_state, self.id, Instant::now());
                     if link_down(&now_state) && !link_down(&state) {
                         let waiting = waiting_for(&last, &now_state);
-                        bar.suspend(|| eprintln!("move {}: waiting for {waiting}", self.id));
+                        bars.say(&format!("move {}: waiting for {waiting}", self.id));
                     }
                     state = now_state;
                 }
                 () = tokio::time::sleep_until(give_up) => {
-                    bar.finish_and_clear();
+                    bars.clear();
                     return Err(Failure::NotDone(anyhow!(
                         "move {} did not end within {}: it was {}, waiting for {}; it was not \
                          stopped (`linterpd stop` stops it)",
@@ -122,29 +122,4 @@ impl Follow<'_> {
         let answer = self.client.call(Method::GET, &path, None).await.ok()?;
         answer.status.is_success().then_some(answer.body)
     }
-}
-
-fn progress_bar(quiet: bool) -> ProgressBar {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1_000)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>10} [{bar:40}] {percent:>3}%")
-            .expect("template")
-            .progress_chars("=> "),
-    );
-    bar
-}
-
-fn show(bar: &ProgressBar, report: &Value) {
-    let stage = report["stage"].as_str().unwrap_or("?");
-    let progress = report["progress"].as_f64().unwrap_or(0.0);
-    bar.set_message(stage.to_owned());
-    bar.set_position(if matches!(stage, "uploading" | "queued") {
-        0
-    } else {
-        (progress * 1_000.0) as u64
-    });
 }

@@ -12,6 +12,7 @@
 //!           PLC (503: link-down, stalled)
 //! ```
 
+mod bars;
 mod follow;
 mod path;
 mod wait;

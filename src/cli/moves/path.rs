@@ -1,6 +1,7 @@
 //! `linterpd run FILE`: send a path file (lines, arcs, blended corners) to the daemon, which
 //! plans every section before anything moves and queues one move per section, then follow the
-//! sections to their ends, one summary line each.
+//! sections to their ends (on a terminal, a bar per section and one per element and blend of
+//! it, `bars.rs`), one summary line each, naming the elements it ran.
 //!
 //! ```text
 //!  stdout:  a line per section (or a JSON array of their final reports, --json); with
@@ -17,7 +18,7 @@ use serde_json::{Value, json};
 
 use super::super::client::Client;
 use super::super::{DaemonArgs, Failure};
-use super::{MotionFlags, follow, post, summary, timeout, verdict};
+use super::{MotionFlags, bars, follow, post, summary, timeout, verdict};
 use crate::config::PathDoc;
 
 /// Arguments of `linterpd run`.
@@ -87,8 +88,17 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
             };
             let last = follow.run().await?;
             if !args.daemon.json {
-                writeln!(out, "section {}/{}: {}", n + 1, ids.len(), summary(&last))
-                    .map_err(|e| Failure::Runtime(e.into()))?;
+                let elements = bars::elements(&last)
+                    .map(|e| format!(" (element {e})"))
+                    .unwrap_or_default();
+                writeln!(
+                    out,
+                    "section {}/{}{elements}: {}",
+                    n + 1,
+                    ids.len(),
+                    summary(&last)
+                )
+                .map_err(|e| Failure::Runtime(e.into()))?;
             }
             outcome = outcome.and(verdict(&last));
             finals.push(last);

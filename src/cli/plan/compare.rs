@@ -98,7 +98,7 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
                 .iter()
                 .filter_map(|e| e.outcome.as_ref().ok())
                 .collect();
-            write_svg(path, robot, &plans)
+            write_svg(path, || crate::plot::svg(robot, &plans))
         }
         None => Ok(()),
     }

@@ -6,6 +6,7 @@ mod compare;
 mod csv;
 mod json;
 mod path;
+mod path_json;
 mod text;
 
 use std::path::{Path, PathBuf};
@@ -43,7 +44,7 @@ pub struct PlanArgs {
     pub to: Option<String>,
     /// Plan a path file (lines, arcs, blended corners; see config/examples/) instead of one
     /// line.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["to", "compare", "seed_exact", "svg"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["to", "compare", "seed_exact"])]
     pub path: Option<PathBuf>,
     /// Speed along the line, e.g. `240mm/s` or `240` (mm/s; default: the robot's).
     #[arg(long, allow_hyphen_values = true)]
@@ -80,7 +81,8 @@ pub struct PlanArgs {
     /// models, and print their figures side by side (text or json).
     #[arg(long, conflicts_with_all = ["method", "seed_exact", "frequency_model"])]
     pub compare: bool,
-    /// Also write an SVG of the path (XY, XZ) and its deviation along the line to this file.
+    /// Also write an SVG of the planned path and the executed one (XY, XZ) and its deviation
+    /// along the path to this file.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
 }
@@ -138,14 +140,17 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         .context("writing the plan")
         .map_err(Failure::Runtime)?;
     match &args.svg {
-        Some(path) => write_svg(path, robot, &[&plan]),
+        Some(path) => write_svg(path, || crate::plot::svg(robot, &[&plan])),
         None => Ok(()),
     }
 }
 
-/// Draws `plans` (of one move) and writes the SVG to `path`.
-fn write_svg(path: &Path, robot: &Robot, plans: &[&Plan]) -> Result<(), Failure> {
-    let svg = crate::plot::svg(robot, plans)
+/// Draws the SVG and writes it to `path`.
+fn write_svg(
+    path: &Path,
+    draw: impl FnOnce() -> Result<String, crate::plot::PlotError>,
+) -> Result<(), Failure> {
+    let svg = draw()
         .context("drawing the svg")
         .map_err(Failure::Runtime)?;
     std::fs::write(path, svg)

@@ -1,18 +1,18 @@
 //! `linterpd plan --path FILE`: a path of lines, arcs and blended corners, planned section by
-//! section between its stops; text or JSON (the path's primitives as planned, then one plan
-//! document per section).
+//! section between its stops; text, JSON (`path_json.rs`: the path's primitives as planned with
+//! their figures, then one plan document per start) or CSV (every start's rows), and `--svg`
+//! (the planned path and the executed one).
 
 use std::io::Write;
 use std::path::Path as FilePath;
 
 use anyhow::Context;
-use serde::Serialize;
 
-use super::{Failure, Format, PlanArgs, json, method, motion, start_pose, tolerance};
+use super::{Failure, Format, PlanArgs, csv, method, motion, path_json, start_pose, tolerance};
 use crate::config::PathDoc;
 use crate::geometry::{Path, Primitive};
 use crate::kinematics::Kinematics;
-use crate::plan::{MoveRequest, Origin, PathPlan, PathRequest, plan_path};
+use crate::plan::{Origin, PathPlan, PathRequest, Plan, plan_path};
 use crate::robot::Robot;
 use crate::table::FrequencyModel;
 
@@ -24,11 +24,6 @@ pub(super) fn run(
     out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let bad = Failure::BadInput;
-    if args.output() == Format::Csv {
-        return Err(bad(anyhow::anyhow!(
-            "--format csv covers one move; for a path use --json (one plan document per section)"
-        )));
-    }
     let text = std::fs::read_to_string(file)
         .with_context(|| format!("reading {}", file.display()))
         .map_err(bad)?;
@@ -37,39 +32,119 @@ pub(super) fn run(
         .map_err(bad)?;
     let req = request(robot, args, &doc).map_err(bad)?;
     let planned = plan_path(robot, &req).map_err(|e| bad(e.into()))?;
-    match args.output() {
-        Format::Json => {
-            let mut sections = Vec::with_capacity(planned.sections.len());
-            for plan in planned.starts() {
-                let one = MoveRequest {
-                    from: Origin::Counts(plan.samples.counts[0]),
-                    to: plan.line.to,
-                    motion: req.motion,
-                    seed_exact: false,
-                };
-                sections.push(json::document(robot, &one, plan));
-            }
-            let document = PathDocument {
-                linterpd_plan: 1,
-                path: primitives(&planned.path),
-                duration_s: planned.duration_s(),
-                path_deviation_mm: planned.max_deviation_mm(),
-                rows: planned.starts().map(|p| p.figures.rows).sum(),
-                valid: planned.valid(),
-                sections,
-            };
-            let written: anyhow::Result<()> = (|| {
-                serde_json::to_writer_pretty(&mut *out, &document)?;
-                writeln!(out)?;
-                Ok(())
-            })();
-            written
-                .context("writing the plan")
-                .map_err(Failure::Runtime)
+    let starts = starts(&planned);
+    let written: anyhow::Result<()> = match args.output() {
+        Format::Json => (|| {
+            let document = path_json::document(robot, &req, &planned, &starts);
+            serde_json::to_writer_pretty(&mut *out, &document)?;
+            writeln!(out)?;
+            Ok(())
+        })(),
+        Format::Csv => csv::write_starts(robot, &starts, out).map_err(Into::into),
+        Format::Text => write_text(robot, &planned, &starts, out).map_err(Into::into),
+    };
+    written
+        .context("writing the plan")
+        .map_err(Failure::Runtime)?;
+    match &args.svg {
+        Some(svg) => super::write_svg(svg, || {
+            let plans: Vec<&Plan> = starts.iter().map(|s| s.plan).collect();
+            crate::plot::svg_path(robot, &planned.path, &plans)
+        }),
+        None => Ok(()),
+    }
+}
+
+/// One PLC start of a planned path, placed along the path and in time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Start<'a> {
+    /// Its number, from 1.
+    pub(super) number: usize,
+    /// The section (between two stops) it runs, from 1.
+    pub(super) section: usize,
+    /// Its plan.
+    pub(super) plan: &'a Plan,
+    /// Where along the whole path its section begins, mm (its plan's path and profile are
+    /// measured from there).
+    pub(super) section_mm: f64,
+    /// Where along the whole path it begins, mm.
+    pub(super) begins_mm: f64,
+    /// When it begins, s from the path's start (the starts back to back, without the PLC's
+    /// scan between them).
+    pub(super) begins_s: f64,
+}
+
+impl Start<'_> {
+    /// Where along the whole path it ends, mm.
+    pub(super) fn ends_mm(&self) -> f64 {
+        self.section_mm + self.plan.profile.distance_mm(self.plan.window.to_s)
+    }
+
+    /// When the planned motion reaches `s_mm` along the whole path, s from the path's start.
+    fn time_at_mm(&self, s_mm: f64) -> f64 {
+        self.begins_s + self.plan.profile.time_at_mm(s_mm - self.section_mm)
+            - self.plan.window.from_s
+    }
+
+    /// The path it was planned on, measured from its own start.
+    pub(super) fn own_path(&self) -> Path {
+        self.plan
+            .path
+            .clone()
+            .unwrap_or_else(|| Path::from(self.plan.line))
+    }
+}
+
+/// Every start of `planned`, in order: the one place this command reads the plans out of a
+/// [`PathPlan`] (one start per section, or several parts of a section cut into starts).
+pub(super) fn starts(planned: &PathPlan) -> Vec<Start<'_>> {
+    let (mut section_mm, mut s) = (0.0, 0.0);
+    let mut out = Vec::with_capacity(planned.sections.len());
+    for (i, section) in planned.sections.iter().enumerate() {
+        for plan in &section.starts {
+            out.push(Start {
+                number: out.len() + 1,
+                section: i + 1,
+                plan,
+                section_mm,
+                begins_mm: section_mm + plan.profile.distance_mm(plan.window.from_s),
+                begins_s: s,
+            });
+            s += plan.duration_s();
         }
-        _ => write_text(robot, &planned, out)
-            .context("writing the plan")
-            .map_err(Failure::Runtime),
+        section_mm += section.path.length_mm();
+    }
+    out
+}
+
+/// The start that runs distance `s_mm` along the path (the later one at a boundary).
+pub(super) fn holding<'a>(starts: &'a [Start<'a>], s_mm: f64) -> &'a Start<'a> {
+    let i = starts
+        .partition_point(|s| s.begins_mm <= s_mm)
+        .saturating_sub(1);
+    &starts[i]
+}
+
+/// When the planned motion reaches `s_mm` along the path, s from the path's start.
+pub(super) fn time_at_mm(starts: &[Start<'_>], s_mm: f64) -> f64 {
+    holding(starts, s_mm).time_at_mm(s_mm)
+}
+
+/// The elements the pieces of `path` between `from_mm` and `to_mm` come from, as "3" or
+/// "2-4" (blends between them included; "(a blend)" when only a blend).
+pub(super) fn elements_between(path: &Path, from_mm: f64, to_mm: f64) -> String {
+    let mut numbers = path.pieces().iter().filter_map(|p| {
+        let mid = p.start_mm + p.primitive.length_mm() / 2.0;
+        (from_mm..to_mm)
+            .contains(&mid)
+            .then_some(p.element)
+            .flatten()
+    });
+    let first = numbers.next();
+    match (first, numbers.next_back().or(first)) {
+        (Some(a), Some(b)) if a == b => a.to_string(),
+        (Some(a), Some(b)) => format!("{a}-{b}"),
+        _ => "(a blend)".to_owned(),
     }
 }
 
@@ -108,64 +183,13 @@ fn request(robot: &Robot, args: &PlanArgs, doc: &PathDoc) -> anyhow::Result<Path
     })
 }
 
-#[derive(Debug, Serialize)]
-struct PathDocument {
-    linterpd_plan: u32,
-    /// The primitives as planned (blends as arcs).
-    path: Vec<PrimitiveDoc>,
-    duration_s: f64,
-    path_deviation_mm: f64,
-    rows: usize,
-    valid: bool,
-    sections: Vec<json::Document>,
-}
-
-#[derive(Debug, Serialize)]
-struct PrimitiveDoc {
-    kind: &'static str,
-    /// The element it comes from (from 1); none for a blend.
-    element: Option<usize>,
-    from: [f64; 4],
-    to: [f64; 4],
-    length_mm: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    centre: Option<[f64; 3]>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    radius_mm: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    sweep_deg: Option<f64>,
-}
-
-fn primitives(path: &Path) -> Vec<PrimitiveDoc> {
-    path.pieces()
-        .iter()
-        .map(|piece| {
-            let p = &piece.primitive;
-            let (kind, centre, radius_mm, sweep_deg) = match p {
-                Primitive::Line(_) => ("line", None, None, None),
-                Primitive::Arc(a) => (
-                    "arc",
-                    Some(a.centre_mm.into()),
-                    Some(a.radius_mm),
-                    Some(a.sweep_rad.to_degrees()),
-                ),
-            };
-            PrimitiveDoc {
-                kind,
-                element: piece.element,
-                from: p.from().to_mm_deg(),
-                to: p.to().to_mm_deg(),
-                length_mm: p.length_mm(),
-                centre,
-                radius_mm,
-                sweep_deg,
-            }
-        })
-        .collect()
-}
-
-fn write_text(robot: &Robot, planned: &PathPlan, out: &mut dyn Write) -> std::io::Result<()> {
-    let first = planned.starts().next().map(|p| p.motion);
+fn write_text(
+    robot: &Robot,
+    planned: &PathPlan,
+    starts: &[Start<'_>],
+    out: &mut dyn Write,
+) -> std::io::Result<()> {
+    let first = starts.first().map(|s| s.plan.motion);
     writeln!(out, "robot    {}", robot.name)?;
     if let Some(m) = first {
         writeln!(
@@ -180,13 +204,15 @@ fn write_text(robot: &Robot, planned: &PathPlan, out: &mut dyn Write) -> std::io
         "path     {:.3} mm in {} primitives, {} section(s) between stops",
         planned.path.length_mm(),
         planned.path.pieces().len(),
-        planned.sections.len()
+        starts.last().map_or(0, |s| s.section)
     )?;
     for piece in planned.path.pieces() {
         let p = &piece.primitive;
-        let source = piece
-            .element
-            .map_or_else(|| "blend".to_owned(), |e| format!("element {e}"));
+        let source = match (piece.element, piece.waypoint) {
+            (Some(e), _) => format!("element {e}"),
+            (None, Some(w)) => format!("blend {w}"),
+            (None, None) => "blend".to_owned(),
+        };
         let [x, y, z, _] = p.to().to_mm_deg();
         match p {
             Primitive::Line(_) => writeln!(
@@ -203,37 +229,29 @@ fn write_text(robot: &Robot, planned: &PathPlan, out: &mut dyn Write) -> std::io
             )?,
         }
     }
-    writeln!(out, "sections")?;
-    for (i, section) in planned.sections.iter().enumerate() {
-        let plan = &section.starts[0];
+    writeln!(out, "starts")?;
+    for start in starts {
+        let (plan, f) = (start.plan, &start.plan.figures);
         writeln!(
             out,
-            "  {}: {:.3} mm at {:.1} mm/s, {:.3} s, {} start(s)",
-            i + 1,
-            plan.profile.length_mm,
+            "  {} (section {}, element {}){}: {:.3} mm at {:.1} mm/s, {:.3} s, {} rows, path \
+             deviation {:.4} mm, tracking error {:.4} mm{}",
+            start.number,
+            start.section,
+            elements_between(&planned.path, start.begins_mm, start.ends_mm()),
+            if plan.window.begins_at_speed() {
+                ", chained at speed"
+            } else {
+                ""
+            },
+            start.ends_mm() - start.begins_mm,
             plan.profile.speed_mm_s,
-            plan.profile.duration_s(),
-            section.starts.len(),
+            plan.duration_s(),
+            f.rows,
+            f.path_deviation_mm,
+            f.tracking_error_mm,
+            if plan.valid() { "" } else { ", NOT VALID" }
         )?;
-        for (k, plan) in section.starts.iter().enumerate() {
-            let f = &plan.figures;
-            writeln!(
-                out,
-                "     {}.{}: {:.3} to {:.3} s{}, {} rows, path deviation {:.4} mm{}",
-                i + 1,
-                k + 1,
-                plan.window.from_s,
-                plan.window.to_s,
-                if plan.window.ends_at_speed {
-                    ", chained at speed into the next"
-                } else {
-                    ""
-                },
-                f.rows,
-                f.path_deviation_mm,
-                if plan.valid() { "" } else { ", NOT VALID" }
-            )?;
-        }
     }
     writeln!(
         out,

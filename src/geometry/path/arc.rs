@@ -194,6 +194,32 @@ impl Arc {
         self.v * theta.cos() - self.u * theta.sin()
     }
 
+    /// Distance from the start of its point nearest to `p`, mm (its centre: the start).
+    #[must_use]
+    pub fn nearest_mm(&self, p: &Vector3<f64>) -> f64 {
+        let w = p - self.centre_mm;
+        let n = self.normal();
+        let in_plane = w - n * w.dot(&n);
+        if in_plane.norm() <= 1e-12 {
+            return 0.0;
+        }
+        let mut angle = in_plane.dot(&self.v).atan2(in_plane.dot(&self.u));
+        if angle < 0.0 {
+            angle += TAU;
+        }
+        if angle <= self.sweep_rad {
+            return angle * self.radius_mm;
+        }
+        // Outside the sweep: the nearer end.
+        let to_start = (p - self.from.position_mm).norm();
+        let to_end = (p - self.to.position_mm).norm();
+        if to_start <= to_end {
+            0.0
+        } else {
+            self.length_mm()
+        }
+    }
+
     /// Distance from a point to the arc, mm.
     #[must_use]
     pub fn distance_mm(&self, p: &Vector3<f64>) -> f64 {

@@ -195,6 +195,23 @@ impl Primitive {
         }
     }
 
+    /// Distance from its start of its point nearest to `p`, mm.
+    #[must_use]
+    pub fn nearest_mm(&self, p: &Vector3<f64>) -> f64 {
+        match self {
+            Self::Line(l) => {
+                let d = l.to.position_mm - l.from.position_mm;
+                let len2 = d.norm_squared();
+                if len2 > 0.0 {
+                    ((p - l.from.position_mm).dot(&d) / len2).clamp(0.0, 1.0) * len2.sqrt()
+                } else {
+                    0.0
+                }
+            }
+            Self::Arc(a) => a.nearest_mm(p),
+        }
+    }
+
     /// Where it starts.
     #[must_use]
     pub fn from(&self) -> Pose {
@@ -223,6 +240,9 @@ pub struct Piece {
     pub start_mm: f64,
     /// The element it comes from (from 1), or `None` for a blend's corner arc.
     pub element: Option<usize>,
+    /// A blend's corner arc: the waypoint it rounds (the end of element n, from 1); `None` for
+    /// an element's own piece.
+    pub waypoint: Option<usize>,
 }
 
 /// A built path: pieces end to end, and where along it the tool comes to rest.
@@ -286,6 +306,7 @@ impl Path {
                     primitive: own,
                     start_mm: s,
                     element: Some(i + 1),
+                    waypoint: None,
                 });
                 s += own.length_mm();
             }
@@ -307,6 +328,7 @@ impl Path {
                         primitive: Primitive::Arc(corner),
                         start_mm: s,
                         element: None,
+                        waypoint: Some(i + 1),
                     });
                     s += corner.length_mm();
                 }
@@ -363,6 +385,24 @@ impl Path {
         sections
     }
 
+    /// Distance along it of its point nearest to `p`, mm (the first such point where several are
+    /// as near).
+    #[must_use]
+    pub fn nearest_mm(&self, p: &Vector3<f64>) -> f64 {
+        self.pieces
+            .iter()
+            .map(|piece| {
+                let into = piece.primitive.nearest_mm(p);
+                let d = (piece.primitive.at(into).position_mm - p).norm();
+                (d, piece.start_mm + into)
+            })
+            .fold(
+                (f64::INFINITY, 0.0),
+                |best, c| if c.0 < best.0 { c } else { best },
+            )
+            .1
+    }
+
     /// The largest curvature of any piece, 1/mm (0 for lines only).
     #[must_use]
     pub fn max_curvature_per_mm(&self) -> f64 {
@@ -406,6 +446,21 @@ impl Path {
             .0
             .primitive
             .curvature_per_mm()
+    }
+}
+
+impl From<Line> for Path {
+    /// A line as a path of one piece (element 1), stopped at its end.
+    fn from(line: Line) -> Self {
+        Self {
+            pieces: vec![Piece {
+                primitive: Primitive::Line(line),
+                start_mm: 0.0,
+                element: Some(1),
+                waypoint: None,
+            }],
+            stops_mm: vec![line.length_mm()],
+        }
     }
 }
 

@@ -45,6 +45,7 @@ fn a_right_angle_blended_at_20_mm_is_rounded_by_a_quarter_circle_of_20_mm() {
         panic!("{pieces:?}")
     };
     assert_eq!(pieces[1].element, None);
+    assert_eq!(pieces[1].waypoint, Some(1));
     assert!((corner.radius_mm - 20.0).abs() < 1e-9);
     assert!((corner.sweep_rad - FRAC_PI_2).abs() < 1e-12);
     assert!((corner.centre_mm - Vector3::new(80.0, 20.0, 0.0)).norm() < 1e-9);
@@ -75,6 +76,8 @@ fn a_blend_takes_at_most_half_of_a_short_neighbour() {
     // line, corner, corner, line: nothing is left of the short middle element.
     let elements: Vec<_> = path.pieces().iter().map(|p| p.element).collect();
     assert_eq!(elements, [Some(1), None, None, Some(3)]);
+    let waypoints: Vec<_> = path.pieces().iter().map(|p| p.waypoint).collect();
+    assert_eq!(waypoints, [None, Some(1), Some(2), None]);
     let short = 125f64.sqrt();
     for corner in [path.pieces()[1], path.pieces()[2]] {
         let Primitive::Arc(a) = corner.primitive else {
@@ -219,4 +222,42 @@ fn the_tool_angle_goes_with_distance_along_each_element() {
     assert!((half.a_rad - 45f64.to_radians()).abs() < 1e-12);
     // Clockwise seen from above: from the east of the centre through its south.
     assert!((half.position_mm - Vector3::new(-5.0, -5.0, 0.0)).norm() < 1e-9);
+}
+
+#[test]
+fn the_nearest_point_is_found_on_lines_and_on_the_blends_arc() {
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(20.0)),
+            line(pose(100.0, 100.0, 0.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    // Beside the first line, above the second, and outside the corner arc's middle.
+    assert!((path.nearest_mm(&Vector3::new(30.0, -2.0, 1.0)) - 30.0).abs() < 1e-9);
+    let quarter = 20.0 * FRAC_PI_2;
+    let s = path.nearest_mm(&Vector3::new(101.0, 50.0, 0.0));
+    assert!((s - (80.0 + quarter + 30.0)).abs() < 1e-9, "{s}");
+    let mid = path.at(80.0 + quarter / 2.0).position_mm;
+    let outward = (mid - Vector3::new(80.0, 20.0, 0.0)).normalize();
+    let s = path.nearest_mm(&(mid + outward * 0.3));
+    assert!((s - (80.0 + quarter / 2.0)).abs() < 1e-9, "{s}");
+    // Past the ends: the ends.
+    assert!(path.nearest_mm(&Vector3::new(-5.0, 0.0, 0.0)).abs() < 1e-12);
+    let end = path.nearest_mm(&Vector3::new(100.0, 130.0, 0.0));
+    assert!((end - path.length_mm()).abs() < 1e-9);
+}
+
+#[test]
+fn a_line_is_a_path_of_one_piece_stopped_at_its_end() {
+    let l = Line {
+        from: pose(0.0, 0.0, 0.0),
+        to: pose(3.0, 4.0, 0.0),
+    };
+    let path = Path::from(l);
+    assert_eq!(path.pieces().len(), 1);
+    assert_eq!(path.pieces()[0].element, Some(1));
+    assert_eq!(path.stops_mm(), [5.0]);
+    assert!((path.nearest_mm(&Vector3::new(3.0, 4.0, 9.0)) - 5.0).abs() < 1e-12);
 }
