@@ -207,13 +207,17 @@ impl Move<'_> {
             first_scale(tolerance_mm, floor_mm),
             tolerance_mm - floor_mm,
         );
-        let worst_case = budget.widest(tolerance_mm, MAX_DELTA_PULSES);
         let whole = budget.whole_mm();
+        // Searched only if the fitted try is refused.
+        let worst_case =
+            std::iter::once_with(move || budget.widest(tolerance_mm, MAX_DELTA_PULSES));
         let narrowing = (0..TRIES).map(move |k| {
             let scale = FIRST_SCALE * NARROWING.powi(k as i32);
             deltas(&whole, scale, tolerance_mm - floor_mm)
         });
-        std::iter::once(fitted).chain(worst_case).chain(narrowing)
+        std::iter::once(fitted)
+            .chain(worst_case.flatten())
+            .chain(narrowing)
     }
 
     /// The first windows of [`Self::windows`] the execution model accepts (`None` if none).
