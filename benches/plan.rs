@@ -6,14 +6,18 @@
 //! so the lengths run on it up to 2 m and on a cartesian gantry (0.01 mm steps, +-2.5 m) at all
 //! five.
 //!
+//! An arc: a half circle of radius 100 mm from the seed's P1 at 240 mm/s (path acceleration
+//! 1000 mm/s^2), planned with `plan_path`, bounded-error 0.05 mm and constant-period 50 ms.
+//!
 //! Run: `cargo bench --bench plan` (one case: `cargo bench --bench plan -- "seed move"`)
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use linterpd::geometry::Pose;
+use linterpd::geometry::{ArcBy, Corner, Element, Pose};
 use linterpd::kinematics::{Cartesian, JointKind, Model};
-use linterpd::plan::{MoveRequest, Origin, plan_move};
+use linterpd::plan::{MoveRequest, Origin, PathRequest, plan_move, plan_path};
 use linterpd::robot::{Joint, Method, Robot, seed_robot};
 use linterpd::table::{FrequencyModel, OutputMethod};
+use nalgebra::Vector3;
 use std::hint::black_box;
 
 fn request(robot: &Robot, from: [f64; 3], to: [f64; 3], period_s: f64) -> MoveRequest {
@@ -127,6 +131,70 @@ fn bench(c: &mut Criterion) {
         b.iter(|| plan_move(&robot, black_box(&metre)).unwrap());
     });
     lengths(c);
+    arc(c);
+}
+
+/// A half circle of radius 100 mm from the seed's P1 (centre 100 mm towards -x, about the
+/// z axis, counter-clockwise), 240 mm/s, path acceleration 1000 mm/s^2.
+fn half_circle(robot: &Robot, method: Method) -> PathRequest {
+    let from = Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0);
+    let centre = from.position_mm - Vector3::new(100.0, 0.0, 0.0);
+    let to = Pose {
+        position_mm: centre - Vector3::new(100.0, 0.0, 0.0),
+        a_rad: 0.0,
+    };
+    let mut motion = robot.motion;
+    motion.method = method;
+    motion.period_s = 0.05;
+    motion.frequency_model = FrequencyModel::FpxDivider;
+    PathRequest {
+        from: Origin::Pose(from),
+        elements: vec![(
+            Element::Arc {
+                to,
+                by: ArcBy::Centre {
+                    centre_mm: centre,
+                    axis: Vector3::z(),
+                    clockwise: false,
+                },
+            },
+            Corner::Stop,
+        )],
+        motion,
+        path_accel_mm_s2: 1_000.0,
+    }
+}
+
+/// The half circle, bounded-error 0.05 mm and constant-period 50 ms: rows, path deviation and
+/// duration under both models printed, then timed (`fpx-divider`).
+fn arc(c: &mut Criterion) {
+    let robot = seed_robot();
+    let cases = [
+        (
+            "bounded-error 0.05 mm",
+            Method::BoundedError { tolerance_mm: 0.05 },
+        ),
+        ("constant-period 50 ms", Method::ConstantPeriod),
+    ];
+    for (name, method) in cases {
+        let req = half_circle(&robot, method);
+        let mut out = Vec::new();
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let mut r = req.clone();
+            r.motion.frequency_model = model;
+            let p = plan_path(&robot, &r).expect("plans");
+            let rows: usize = p.sections.iter().map(|s| s.figures.rows).sum();
+            out.push(format!(
+                "{model:?} {rows} rows, path dev. {:.4} mm, {:.3} s",
+                p.max_deviation_mm(),
+                p.duration_s()
+            ));
+        }
+        eprintln!("arc r 100 mm 180 deg {name}: {}", out.join("; "));
+        c.bench_function(&format!("plan arc r 100 mm 180 deg {name}"), |b| {
+            b.iter(|| plan_path(&robot, black_box(&req)).unwrap());
+        });
+    }
 }
 
 /// A robot's name, the robot, a line's middle, its direction, the longest length it reaches.

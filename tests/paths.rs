@@ -171,8 +171,9 @@ async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without
 
 #[tokio::test]
 async fn a_part_whose_upload_outlasts_the_part_before_it_never_starts_from_rest() {
-    // Every reply 80 ms late: the second part's upload takes longer than the 0.39 s lift.
-    let shared = mock_at_seed_start("delay80@100%");
+    // Every reply 250 ms late: even the second part's command block (its tables were written
+    // before the lift began) takes longer to write and check than the 0.39 s lift.
+    let shared = mock_at_seed_start("delay250@100%");
     let dir = TempDir::new("paths-slow");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
     let ids = post_path(&s, &lift_and_place()).await;

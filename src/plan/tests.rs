@@ -352,15 +352,11 @@ fn bounded_error_seed_move_needs_at_most_28_rows_at_a_tenth_and_45_at_five_hundr
     }
 }
 
-/// Whether the bounded-error method's first try (no narrowing) is accepted by the execution
-/// model on the line `from` -> `to` of the seed robot (`None`: the robot cannot take that line,
-/// or the tolerance is below its pulse grid's floor).
-fn first_try_accepted(
-    from: [f64; 3],
-    to: [f64; 3],
-    model: FrequencyModel,
-    tol_mm: f64,
-) -> Option<bool> {
+/// Which of the bounded-error method's tries (from 1: the fitted first, the worst-case second,
+/// then the narrowing search) the execution model accepts on the line `from` -> `to` of the seed
+/// robot (`None`: the robot cannot take that line, or the tolerance is below its pulse grid's
+/// floor).
+fn accepted_try(from: [f64; 3], to: [f64; 3], model: FrequencyModel, tol_mm: f64) -> Option<usize> {
     let robot = seed_robot();
     let start_pose = robot
         .pose_with_wrist_at_zero(from[0], from[1], from[2])
@@ -401,7 +397,7 @@ fn first_try_accepted(
         samples: &samples,
         motion: &motion,
     };
-    m.first_try_accepted(tol_mm).unwrap()
+    m.accepted_try(tol_mm).unwrap()
 }
 
 #[test]
@@ -410,8 +406,8 @@ fn bounded_error_first_try_is_accepted_on_the_seed_move_under_both_models() {
     for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
         for tol_mm in [0.05, 0.10] {
             assert_eq!(
-                first_try_accepted(p1, p2, model, tol_mm),
-                Some(true),
+                accepted_try(p1, p2, model, tol_mm),
+                Some(1),
                 "{model:?} {tol_mm} mm"
             );
         }
@@ -419,10 +415,10 @@ fn bounded_error_first_try_is_accepted_on_the_seed_move_under_both_models() {
 }
 
 #[test]
-#[ignore = "a measurement, not a guarantee: how often the first try holds on random lines"]
-fn bounded_error_first_try_rate_on_random_seed_robot_lines() {
+fn bounded_error_never_narrows_on_random_seed_robot_lines() {
     // A fixed pseudo-random set of lines (radius 600..1400 mm, theta1 0..120 deg, z 0..300 mm),
-    // 0.05 and 0.10 mm, both frequency models. Run with --ignored --nocapture.
+    // 0.05 and 0.10 mm, both frequency models: the worst-case windows (the second try) are
+    // accepted wherever the fitted first is not, so the narrowing search never runs.
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = move || {
         state ^= state << 13;
@@ -438,7 +434,7 @@ fn bounded_error_first_try_rate_on_random_seed_robot_lines() {
         );
         [-r * a.sin(), r * a.cos(), z]
     };
-    let (mut accepted, mut tried, mut skipped) = (0, 0, 0);
+    let (mut tries, mut skipped) = (Vec::new(), 0);
     for i in 0..40 {
         let (from, to) = (point(), point());
         let model = if i % 2 == 0 {
@@ -447,16 +443,18 @@ fn bounded_error_first_try_rate_on_random_seed_robot_lines() {
             FrequencyModel::FpxDivider
         };
         for tol_mm in [0.05, 0.10] {
-            match first_try_accepted(from, to, model, tol_mm) {
+            match accepted_try(from, to, model, tol_mm) {
                 None => skipped += 1,
-                Some(ok) => {
-                    tried += 1;
-                    accepted += usize::from(ok);
-                }
+                Some(k) => tries.push(k),
             }
         }
     }
+    let first = tries.iter().filter(|&&k| k == 1).count();
     eprintln!(
-        "first try accepted on {accepted} of {tried} ({skipped} unreachable or below the floor)"
+        "accepted at the first try on {first} of {}, at the second on the rest ({skipped} \
+         unreachable or below the floor)",
+        tries.len()
     );
+    assert!(tries.len() >= 60 && skipped <= 20, "{skipped} skipped");
+    assert!(tries.iter().all(|&k| k <= 2), "{tries:?}");
 }

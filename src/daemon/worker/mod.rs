@@ -129,6 +129,9 @@ pub(super) struct Worker {
     homing: Vec<Reply>,
     /// The last start written and its bank, for writing it again after a lost reply.
     last_start: Option<(MoveId, VerifiedBank)>,
+    /// A queued part of a path whose tables were written and read back ahead of its turn, and
+    /// the bank they are in.
+    preloaded: Option<(MoveId, u16)>,
     /// When each running move was seen starting.
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
@@ -172,6 +175,7 @@ impl Worker {
             commands: Vec::new(),
             homing: Vec::new(),
             last_start: None,
+            preloaded: None,
             started: HashMap::new(),
             stop_asked: None,
             mode_read: None,

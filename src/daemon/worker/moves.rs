@@ -65,11 +65,21 @@ impl Worker {
         self.machine.upload_begun();
         self.publish_phase();
         let began = tokio::time::Instant::now();
+        let preloaded = self.preloaded.take() == Some((id, planned.bank));
+        if chain.is_none() {
+            if let Err(e) = self.preload_next(targets, 1 - planned.bank).await {
+                return self.not_started(id, e);
+            }
+        }
         let link = self.link.as_mut().expect("connected");
-        let bank = match link
-            .upload(planned.bank, planned.seq, planned.from, &tables)
-            .await
-        {
+        let uploaded = if preloaded {
+            link.upload_preloaded(planned.bank, planned.seq, planned.from, &tables)
+                .await
+        } else {
+            link.upload(planned.bank, planned.seq, planned.from, &tables)
+                .await
+        };
+        let bank = match uploaded {
             Ok(bank) => bank,
             Err(e) => return self.not_started(id, e),
         };
@@ -131,6 +141,41 @@ impl Worker {
             }
             _ => Ok(()),
         }
+    }
+
+    /// Before a start written while nothing runs: when the next move in the queue is a part of
+    /// a path that begins at speed behind it, its tables are written into `bank` (the one
+    /// this start does not use) and read back now, so that while this start runs only its
+    /// command block is left to write. Nothing runs from `bank`: this start is written while
+    /// nothing runs. A next part that cannot be planned is left to fail at its own turn.
+    async fn preload_next(
+        &mut self,
+        ends_on: [i32; CHANNELS],
+        bank: u16,
+    ) -> Result<(), ContractError> {
+        // The parts of a path are sent together: take in any not queued yet.
+        while let Ok(request) = self.requests.try_recv() {
+            self.take_request(request);
+        }
+        let Some(next) = self.queue.front().filter(|q| q.order.begins_at_speed()) else {
+            return Ok(());
+        };
+        let next_id = next.id;
+        let Ok(plan) = plan_order(
+            &self.robot,
+            &next.order,
+            self.by_joint(ends_on.map(i64::from)),
+        ) else {
+            return Ok(());
+        };
+        let Some(tables) = plan.valid_tables(&self.robot) else {
+            return Ok(());
+        };
+        let link = self.link.as_mut().expect("connected");
+        let words = link.preload(bank, &tables).await?;
+        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, "part chained at speed preloaded");
+        self.preloaded = Some((next_id, bank));
+        Ok(())
     }
 
     /// A part of a path section that begins at speed found the part before it no longer

@@ -420,6 +420,54 @@ impl<P: Plc> Contract<P> {
         from: [i32; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<VerifiedBank, ContractError> {
+        let (block, mut writes) = self.table_writes(bank, seq, from, tables)?;
+        writes.push(self.block_write(&block));
+        self.write_and_verify(&writes).await?;
+        Ok(VerifiedBank {
+            block,
+            words: writes.iter().map(|(_, w)| w.len()).sum(),
+        })
+    }
+
+    /// Writes every table into `bank` and reads them back, without the command block: a part
+    /// of a path that will start at speed behind the start about to be written, uploaded before
+    /// that start while nothing runs (see [`Self::upload_preloaded`]). Returns the words written.
+    pub async fn preload(
+        &mut self,
+        bank: u16,
+        tables: &[ValidTable],
+    ) -> Result<usize, ContractError> {
+        let (_, writes) = self.table_writes(bank, 0, [0; CHANNELS], tables)?;
+        self.write_and_verify(&writes).await?;
+        Ok(writes.iter().map(|(_, w)| w.len()).sum())
+    }
+
+    /// [`Self::upload`] for tables already written into `bank` and read back by
+    /// [`Self::preload`]: only the command block is written and compared.
+    pub async fn upload_preloaded(
+        &mut self,
+        bank: u16,
+        seq: u16,
+        from: [i32; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<VerifiedBank, ContractError> {
+        let (block, _) = self.table_writes(bank, seq, from, tables)?;
+        let writes = [self.block_write(&block)];
+        self.write_and_verify(&writes).await?;
+        Ok(VerifiedBank {
+            block,
+            words: writes[0].1.len(),
+        })
+    }
+
+    /// The command block for `tables` in `bank` and the writes of their areas.
+    fn table_writes(
+        &self,
+        bank: u16,
+        seq: u16,
+        from: [i32; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<(CommandBlock, Vec<(u16, Vec<u16>)>), ContractError> {
         if bank >= crate::contract::BANKS {
             return Err(ContractError::BadBank { bank });
         }
@@ -450,21 +498,22 @@ impl<P: Plc> Contract<P> {
             block.segments[c] = t.table().segments.len() as u16;
             writes.push((self.settings.layout.area(bank, c), words));
         }
-        writes.push(self.block_write(&block));
-        for (address, words) in &writes {
+        Ok((block, writes))
+    }
+
+    /// Writes every `(address, words)`, then (when verifying) reads each back and compares.
+    async fn write_and_verify(&mut self, writes: &[(u16, Vec<u16>)]) -> Result<(), ContractError> {
+        for (address, words) in writes {
             self.aborted()?;
             self.plc.write_words(*address, words).await?;
         }
         if self.settings.verify {
-            for (address, words) in &writes {
+            for (address, words) in writes {
                 self.aborted()?;
                 self.compare(*address, words).await?;
             }
         }
-        Ok(VerifiedBank {
-            block,
-            words: writes.iter().map(|(_, w)| w.len()).sum(),
-        })
+        Ok(())
     }
 
     /// The write of a command block's words 1..16 (everything but the command and host words).
