@@ -1,0 +1,608 @@
+//! Property tests of path planning over random reachable paths (lines and arcs through
+//! waypoints, corners blended or stopped at) for every kinematics, both methods and both
+//! frequency models. For every plan that succeeds:
+//!
+//! - every start's tables keep the F174 rules (`table::problems` with the robot's channel
+//!   limits) and the execution model really ends each channel on its table's last target;
+//! - every start begins on exactly the counts the one before it ends on (within a section and
+//!   across sections), the first on the counts of the path's start, and every section ends on
+//!   the counts of the waypoint it stops at (the last: the path's end);
+//! - a section is cut only into parts chained at speed, back to back on its profile;
+//! - the executed path (every pulse event of the execution model, re-measured here with the
+//!   planned path's own `distance_mm`) is what the plan's figures say, and for bounded-error
+//!   within the tolerance of the path as planned, blends included.
+//!
+//! Paths the planner rightly refuses (a pose out of reach or a joint limit, a tolerance below
+//! what the pulse grid reaches, a joint that starts too late into a blended section) are
+//! counted by reason and printed; each test requires most of its cases to be planned.
+
+mod common;
+
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use linterpd::geometry::{ArcBy, Corner, Element, Path, PathSpec, Pose, ToolPath};
+use linterpd::kinematics::{JOINTS, Kinematics};
+use linterpd::plan::{Origin, PathPlan, PathRequest, Plan, PlanError, plan_path};
+use linterpd::robot::{Method, Robot};
+use linterpd::table::{FrequencyModel, TableProblem, problems};
+use nalgebra::Vector3;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+
+/// Cases per kinematics.
+const CASES: u32 = 48;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kin {
+    Cylindrical,
+    Gantry,
+    Scara,
+}
+
+impl Kin {
+    fn robot(self) -> Robot {
+        match self {
+            Self::Cylindrical => common::cylindrical(),
+            Self::Gantry => common::gantry(),
+            Self::Scara => common::scara(),
+        }
+    }
+
+    /// Whether the tool point may be at `p` (with a margin inside the robot's reach and joint
+    /// limits): the region the waypoints are generated in, checked along the built path.
+    fn reachable(self, p: &Vector3<f64>) -> bool {
+        let r = p.x.hypot(p.y);
+        match self {
+            // d3 = r - 500 in 0..1000, d2 = z in -50..400, theta1 = atan2(-x, y) in +-170 deg.
+            Self::Cylindrical => {
+                (530.0..=1_480.0).contains(&r)
+                    && (-40.0..=390.0).contains(&p.z)
+                    && (-p.x).atan2(p.y).to_degrees().abs() <= 160.0
+            }
+            // Every axis +-2000 mm.
+            Self::Gantry => p.iter().all(|c| c.abs() <= 1_900.0),
+            // l1 = 400, l2 = 300: the annulus 100..700 mm, z +-1000.
+            Self::Scara => (120.0..=680.0).contains(&r) && p.z.abs() <= 900.0,
+        }
+    }
+}
+
+/// One waypoint as generated: where the element ends, whether it is an arc (its via point
+/// `bulge` chords off the chord's middle, at angle `phi` about the chord) and, when both
+/// neighbours are lines, the corner's blend radius (`None`: a stop).
+#[derive(Debug, Clone, Copy)]
+struct Waypoint {
+    to: Pose,
+    arc: Option<(f64, f64)>,
+    blend_mm: Option<f64>,
+}
+
+/// A random path: its start and waypoints.
+#[derive(Debug, Clone)]
+struct Route {
+    start: Pose,
+    waypoints: Vec<Waypoint>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Settings {
+    /// `Some(tolerance)`: bounded-error; `None`: constant-period at `period_s`.
+    tolerance_mm: Option<f64>,
+    period_s: f64,
+    ideal: bool,
+    speed_mm_s: f64,
+    accel_s: f64,
+    path_accel_mm_s2: f64,
+    /// Words in each channel's table area: the robots' 2000, or a small area that makes the
+    /// planner cut sections into parts chained at speed.
+    area_words: usize,
+}
+
+fn polar(radius_mm: f64, angle_deg: f64, z: f64, a_deg: f64) -> Pose {
+    let t = angle_deg.to_radians();
+    Pose::from_mm_deg(radius_mm * t.cos(), radius_mm * t.sin(), z, a_deg)
+}
+
+/// Per waypoint: the step (three coordinates' changes), the tool angle, arc or line, the arc's
+/// bulge and its plane, stop or blend, the blend's radius.
+/// A step may be vertical only (`true`): the joints that do not lift then stand still until a
+/// blend, where a section must be cut for them to start late.
+type Step = ((f64, f64, f64), f64, (bool, f64, f64), (bool, f64), bool);
+
+fn steps(d: (f64, f64, f64)) -> impl Strategy<Value = Vec<Step>> {
+    prop::collection::vec(
+        (
+            (-d.0..d.0, -d.1..d.1, -d.2..d.2),
+            -45.0..45.0f64,
+            (
+                prop::bool::weighted(0.35),
+                0.08..0.4f64,
+                -std::f64::consts::PI..std::f64::consts::PI,
+            ),
+            (prop::bool::weighted(0.7), 2.0..30.0f64),
+            prop::bool::weighted(0.2),
+        ),
+        2..=4,
+    )
+}
+
+/// A step's changes, the first two none for a vertical step.
+fn lift(s: Step) -> (f64, f64, f64) {
+    let (a, b, dz) = s.0;
+    if s.4 { (0.0, 0.0, dz) } else { (a, b, dz) }
+}
+
+fn waypoint(to: Pose, (_, _, (arc, bulge, phi), (blend, r), _): Step) -> Waypoint {
+    Waypoint {
+        to,
+        arc: arc.then_some((bulge, phi)),
+        blend_mm: blend.then_some(r),
+    }
+}
+
+/// Cylindrical: waypoints in the band 700-1400 mm from the axis, +-60 deg about the y axis,
+/// z 0-300 mm, each a step of at most 350 mm radially, 15 deg around and 150 mm up or down from
+/// the one before (a chord then stays outside the d3 = 0 cylinder).
+fn cylindrical_route() -> impl Strategy<Value = Route> {
+    (
+        (
+            700.0..1400.0f64,
+            -60.0..60.0f64,
+            0.0..300.0f64,
+            -45.0..45.0f64,
+        ),
+        steps((350.0, 15.0, 150.0)),
+    )
+        .prop_map(|((r, t, z, a), steps)| {
+            let start = polar(r, t + 90.0, z, a);
+            let (mut r, mut t, mut z) = (r, t, z);
+            let waypoints = steps
+                .into_iter()
+                .map(|s| {
+                    let (dr, dt, dz) = lift(s);
+                    r = (r + dr).clamp(700.0, 1400.0);
+                    t = (t + dt).clamp(-60.0, 60.0);
+                    z = (z + dz).clamp(0.0, 300.0);
+                    waypoint(polar(r, t + 90.0, z, s.1), s)
+                })
+                .collect();
+            Route { start, waypoints }
+        })
+}
+
+/// Gantry: waypoints in the cube +-800 mm, z +-300 mm, each a step of at most 400 mm per axis.
+fn gantry_route() -> impl Strategy<Value = Route> {
+    (
+        (
+            -800.0..800.0f64,
+            -800.0..800.0f64,
+            -300.0..300.0f64,
+            -45.0..45.0f64,
+        ),
+        steps((400.0, 400.0, 200.0)),
+    )
+        .prop_map(|((x, y, z, a), steps)| {
+            let start = Pose::from_mm_deg(x, y, z, a);
+            let (mut x, mut y, mut z) = (x, y, z);
+            let waypoints = steps
+                .into_iter()
+                .map(|s| {
+                    let (dx, dy, dz) = lift(s);
+                    x = (x + dx).clamp(-800.0, 800.0);
+                    y = (y + dy).clamp(-800.0, 800.0);
+                    z = (z + dz).clamp(-300.0, 300.0);
+                    waypoint(Pose::from_mm_deg(x, y, z, s.1), s)
+                })
+                .collect();
+            Route { start, waypoints }
+        })
+}
+
+/// SCARA: waypoints 300-650 mm out, +-30 deg, z +-100 mm, each a step of at most 200 mm out,
+/// 20 deg around and 100 mm up or down (a chord then stays inside the annulus).
+fn scara_route() -> impl Strategy<Value = Route> {
+    (
+        (
+            300.0..650.0f64,
+            -30.0..30.0f64,
+            -100.0..100.0f64,
+            -45.0..45.0f64,
+        ),
+        steps((200.0, 20.0, 100.0)),
+    )
+        .prop_map(|((r, t, z, a), steps)| {
+            let start = polar(r, t, z, a);
+            let (mut r, mut t, mut z) = (r, t, z);
+            let waypoints = steps
+                .into_iter()
+                .map(|s| {
+                    let (dr, dt, dz) = lift(s);
+                    r = (r + dr).clamp(300.0, 650.0);
+                    t = (t + dt).clamp(-30.0, 30.0);
+                    z = (z + dz).clamp(-100.0, 100.0);
+                    waypoint(polar(r, t, z, s.1), s)
+                })
+                .collect();
+            Route { start, waypoints }
+        })
+}
+
+fn settings() -> impl Strategy<Value = Settings> {
+    (
+        prop::option::of(0.05..0.2f64),
+        0.02..0.1f64,
+        any::<bool>(),
+        80.0..400.0f64,
+        0.05..0.4f64,
+        1_000.0..10_000.0f64,
+        prop_oneof![Just(2_000usize), Just(120usize)],
+    )
+        .prop_map(
+            |(tolerance_mm, period_s, ideal, speed_mm_s, accel_s, path_accel_mm_s2, area_words)| {
+                Settings {
+                    tolerance_mm,
+                    period_s,
+                    ideal,
+                    speed_mm_s,
+                    accel_s,
+                    path_accel_mm_s2,
+                    area_words,
+                }
+            },
+        )
+}
+
+impl Route {
+    /// The path's elements: arcs through a via point off the chord's middle; a waypoint
+    /// between two lines blended or stopped at as generated, one next to an arc a stop.
+    fn elements(&self) -> Vec<(Element, Corner)> {
+        let n = self.waypoints.len();
+        let mut from = self.start.position_mm;
+        let mut out = Vec::with_capacity(n);
+        for (i, w) in self.waypoints.iter().enumerate() {
+            let to = w.to.position_mm;
+            let element = match w.arc {
+                None => Element::Line { to: w.to },
+                Some((bulge, phi)) => {
+                    let chord = to - from;
+                    // Two unit vectors square to the chord and to each other.
+                    let side = chord
+                        .cross(&Vector3::z())
+                        .try_normalize(1e-9)
+                        .unwrap_or_else(Vector3::x);
+                    let up = chord.cross(&side).normalize();
+                    let off = (side * phi.cos() + up * phi.sin()) * bulge * chord.norm();
+                    Element::Arc {
+                        to: w.to,
+                        by: ArcBy::Via((from + to) / 2.0 + off),
+                    }
+                }
+            };
+            let next_is_arc = self.waypoints.get(i + 1).is_some_and(|w| w.arc.is_some());
+            let corner = match w.blend_mm {
+                Some(r) if i + 1 < n && w.arc.is_none() && !next_is_arc => Corner::Blend(r),
+                _ => Corner::Stop,
+            };
+            out.push((element, corner));
+            from = to;
+        }
+        out
+    }
+
+    /// Whether every element is at least 10 mm long and the built path (blends included)
+    /// stays in `kin`'s region; a path that cannot be built is kept (the planner must refuse
+    /// it as a path error).
+    fn fits(&self, kin: Kin) -> bool {
+        let mut from = self.start.position_mm;
+        for w in &self.waypoints {
+            if (w.to.position_mm - from).norm() < 10.0 {
+                return false;
+            }
+            from = w.to.position_mm;
+        }
+        let spec = PathSpec {
+            start: self.start,
+            elements: self.elements(),
+        };
+        let Ok(path) = Path::build(&spec) else {
+            return true;
+        };
+        let n = (path.length_mm() / 2.0).ceil() as usize;
+        (0..=n).all(|i| kin.reachable(&path.at(path.length_mm() * i as f64 / n as f64).position_mm))
+    }
+}
+
+fn route(kin: Kin) -> BoxedStrategy<Route> {
+    let s = match kin {
+        Kin::Cylindrical => cylindrical_route().boxed(),
+        Kin::Gantry => gantry_route().boxed(),
+        Kin::Scara => scara_route().boxed(),
+    };
+    s.prop_filter(
+        "path leaves the reachable region or has a short element",
+        move |r| r.fits(kin),
+    )
+    .boxed()
+}
+
+fn request(robot: &Robot, route: &Route, s: &Settings) -> PathRequest {
+    let mut motion = robot.motion;
+    motion.method = match s.tolerance_mm {
+        Some(tolerance_mm) => Method::BoundedError { tolerance_mm },
+        None => Method::ConstantPeriod,
+    };
+    motion.period_s = s.period_s;
+    motion.speed_mm_s = s.speed_mm_s;
+    motion.accel_s = s.accel_s;
+    motion.frequency_model = if s.ideal {
+        FrequencyModel::Ideal
+    } else {
+        FrequencyModel::FpxDivider
+    };
+    PathRequest {
+        from: Origin::Pose(route.start),
+        elements: route.elements(),
+        motion,
+        path_accel_mm_s2: s.path_accel_mm_s2,
+    }
+}
+
+/// What the cases came to, for the report and the coverage asserts.
+#[derive(Debug, Default)]
+struct Tally {
+    cases: usize,
+    planned_bounded: usize,
+    planned_constant: usize,
+    /// Planned paths with more than one section (a stop between elements).
+    multi_section: usize,
+    /// Planned paths with a section cut into parts chained at speed.
+    multi_part: usize,
+    /// Planned paths with a blended corner / an arc element.
+    with_blend: usize,
+    with_arc: usize,
+    /// Refusals by reason.
+    skipped: BTreeMap<String, usize>,
+    /// The largest re-measured deviation over the tolerance, of every bounded-error plan.
+    worst_ratio: f64,
+    /// The largest re-measured deviation of a constant-period plan, mm.
+    worst_constant_mm: f64,
+    events: usize,
+}
+
+/// The refusals that mean "this random path cannot be planned": the reason's name, or `None`
+/// for an error that must not happen on a reachable path.
+fn refusal(e: &PlanError, s: &Settings) -> Option<String> {
+    let tolerance_mm = s.tolerance_mm;
+    match e {
+        PlanError::Section { source, .. } => refusal(source, s),
+        // Only the small area: a part of MIN_PART_S that still does not fit.
+        PlanError::InvalidTable {
+            first: TableProblem::AreaOverflow { .. } | TableProblem::TooManySegments { .. },
+            ..
+        } if s.area_words < 2_000 => Some("small area: even a short part does not fit".into()),
+        PlanError::Kinematics(_) => Some("unreachable (Kinematics)".into()),
+        PlanError::OutOfLimit { .. } => Some("joint limit (OutOfLimit)".into()),
+        PlanError::Path(p) => Some(format!("path cannot be built (Path: {p})")),
+        PlanError::OverSpeed { .. } => Some("OverSpeed".into()),
+        PlanError::ToleranceTooSmall { floor_mm, .. } => {
+            let tol = tolerance_mm.unwrap_or(f64::NAN);
+            // The floor is the grid's own deviation: a refusal with the floor within the
+            // tolerance is the planner failing to find tables that exist in principle.
+            Some(if *floor_mm > tol {
+                "ToleranceTooSmall, floor above the tolerance".into()
+            } else {
+                "ToleranceTooSmall, floor within the tolerance".into()
+            })
+        }
+        PlanError::LateStart { .. } => {
+            Some("LateStart (from ToleranceTooSmall: a joint starts late)".into())
+        }
+        _ => None,
+    }
+}
+
+/// The largest distance from the tool to `path` at the start of `plan` and after every pulse
+/// event of its execution, computed here from the counts with forward kinematics.
+fn executed_deviation_mm(robot: &Robot, plan: &Plan, path: &Path) -> f64 {
+    let mut counts = plan.start_counts();
+    let mut worst = path.distance_mm(&robot.pose_of(&counts).position_mm);
+    for e in &plan.execution.events {
+        counts[e.table] = e.count;
+        worst = worst.max(path.distance_mm(&robot.pose_of(&counts).position_mm));
+    }
+    worst
+}
+
+fn counts_at(robot: &Robot, pose: &Pose) -> [i64; JOINTS] {
+    robot.counts_of(&robot.kinematics.ik(pose, None).expect("waypoint reachable"))
+}
+
+fn check(
+    robot: &Robot,
+    route: &Route,
+    s: &Settings,
+    req: &PathRequest,
+    planned: &PathPlan,
+    tally: &mut Tally,
+) -> Result<(), TestCaseError> {
+    let starts: Vec<&Plan> = planned.starts().collect();
+    prop_assert!(!starts.is_empty());
+    prop_assert!(planned.valid());
+
+    // Chaining: from the path's start, each start from the one before, across sections.
+    prop_assert_eq!(starts[0].start_counts(), counts_at(robot, &route.start));
+    for (k, pair) in starts.windows(2).enumerate() {
+        prop_assert_eq!(
+            pair[1].start_counts(),
+            pair[0].end_counts(),
+            "start {} does not begin where start {} ends",
+            k + 2,
+            k + 1
+        );
+    }
+
+    // One section per stop; every section ends on the counts of its stop waypoint.
+    let stops: Vec<usize> = req
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|(i, (_, c))| *i + 1 == req.elements.len() || *c == Corner::Stop)
+        .map(|(i, _)| i)
+        .collect();
+    prop_assert_eq!(planned.sections.len(), stops.len());
+    for (section, &w) in planned.sections.iter().zip(&stops) {
+        prop_assert_eq!(
+            section.end_counts(),
+            counts_at(robot, &route.waypoints[w].to),
+            "section ending at waypoint {} ends elsewhere",
+            w + 1
+        );
+        let parts = &section.starts;
+        prop_assert!(!parts.is_empty());
+        prop_assert!(!parts[0].window.begins_at_speed());
+        prop_assert!(!parts[parts.len() - 1].window.ends_at_speed);
+        for pair in parts.windows(2) {
+            prop_assert!(pair[0].window.ends_at_speed && pair[1].window.begins_at_speed());
+            prop_assert!((pair[1].window.from_s - pair[0].window.to_s).abs() < 1e-9);
+        }
+        for part in parts {
+            prop_assert_eq!(part.path.as_ref(), Some(&section.path));
+        }
+    }
+    let last = route.waypoints[route.waypoints.len() - 1].to;
+    prop_assert_eq!(
+        starts[starts.len() - 1].end_counts(),
+        counts_at(robot, &last)
+    );
+
+    for (k, plan) in starts.iter().enumerate() {
+        // The F174 rules, and the execution reaches every table's end.
+        prop_assert!(plan.valid(), "start {}: {:?}", k + 1, plan.problems);
+        prop_assert!(plan.valid_tables(robot).is_some());
+        for (j, table) in plan.tables.iter().enumerate() {
+            let found = problems(table, robot.channel_limits(j));
+            prop_assert!(found.is_empty(), "start {} joint {j}: {found:?}", k + 1);
+            let executed = plan
+                .execution
+                .events
+                .iter()
+                .rev()
+                .find(|e| e.table == j)
+                .map_or(table.start, |e| e.count);
+            prop_assert_eq!(executed, table.end());
+        }
+
+        // The executed path against the path as planned (blends included), measured here.
+        let path = plan
+            .path
+            .as_ref()
+            .expect("a path section's start has its path");
+        let measured = executed_deviation_mm(robot, plan, path);
+        tally.events += plan.execution.events.len();
+        prop_assert!(
+            (measured - plan.figures.path_deviation_mm).abs() <= 1e-9,
+            "start {}: the execution deviates {measured} mm, the figures say {} mm",
+            k + 1,
+            plan.figures.path_deviation_mm
+        );
+        match s.tolerance_mm {
+            Some(tol) => {
+                prop_assert!(
+                    plan.figures.path_deviation_mm <= tol,
+                    "start {}: {} mm > {tol} mm",
+                    k + 1,
+                    plan.figures.path_deviation_mm
+                );
+                prop_assert!(measured <= tol, "start {}: {measured} mm > {tol} mm", k + 1);
+                tally.worst_ratio = tally.worst_ratio.max(measured / tol);
+            }
+            None => tally.worst_constant_mm = tally.worst_constant_mm.max(measured),
+        }
+    }
+    Ok(())
+}
+
+fn run(kin: Kin) {
+    let began = Instant::now();
+    let robot = kin.robot();
+    let tally = RefCell::new(Tally::default());
+    let mut runner = TestRunner::new(Config {
+        cases: CASES,
+        source_file: Some(file!()),
+        ..Config::default()
+    });
+    let result = runner.run(&(route(kin), settings()), |(route, s)| {
+        let mut robot = robot.clone();
+        robot.area_words = s.area_words;
+        let robot = &robot;
+        let req = request(robot, &route, &s);
+        let outcome = plan_path(robot, &req);
+        let mut t = tally.borrow_mut();
+        t.cases += 1;
+        match outcome {
+            Ok(planned) => {
+                check(robot, &route, &s, &req, &planned, &mut t)?;
+                if s.tolerance_mm.is_some() {
+                    t.planned_bounded += 1;
+                } else {
+                    t.planned_constant += 1;
+                }
+                t.multi_section += usize::from(planned.sections.len() > 1);
+                t.multi_part += usize::from(planned.sections.iter().any(|s| s.starts.len() > 1));
+                t.with_blend += usize::from(
+                    req.elements
+                        .iter()
+                        .any(|(_, c)| matches!(c, Corner::Blend(_))),
+                );
+                t.with_arc += usize::from(
+                    req.elements
+                        .iter()
+                        .any(|(e, _)| matches!(e, Element::Arc { .. })),
+                );
+                Ok(())
+            }
+            Err(e) => match refusal(&e, &s) {
+                Some(reason) => {
+                    *t.skipped.entry(reason).or_default() += 1;
+                    Ok(())
+                }
+                None => Err(TestCaseError::fail(format!("{e}"))),
+            },
+        }
+    });
+    let t = tally.into_inner();
+    println!("{kin:?}: {} s, {:#?}", began.elapsed().as_secs_f64(), t);
+    if let Err(e) = result {
+        panic!("{kin:?}: {e}");
+    }
+    let planned = t.planned_bounded + t.planned_constant;
+    // Most random reachable paths plan, under both methods, with blends and arcs among them.
+    assert!(
+        2 * planned >= t.cases,
+        "{kin:?}: {planned} of {} planned",
+        t.cases
+    );
+    assert!(
+        t.planned_bounded > 0 && t.planned_constant > 0,
+        "{kin:?}: {t:?}"
+    );
+    assert!(t.with_blend > 0 && t.with_arc > 0, "{kin:?}: {t:?}");
+    assert!(t.multi_section > 0 && t.multi_part > 0, "{kin:?}: {t:?}");
+}
+
+#[test]
+fn cylindrical_paths_chain_keep_the_rules_and_stay_within_tolerance() {
+    run(Kin::Cylindrical);
+}
+
+#[test]
+fn gantry_paths_chain_keep_the_rules_and_stay_within_tolerance() {
+    run(Kin::Gantry);
+}
+
+#[test]
+fn scara_paths_chain_keep_the_rules_and_stay_within_tolerance() {
+    run(Kin::Scara);
+}
