@@ -4,7 +4,7 @@
 use std::process::Command;
 
 use linterpd::daemon::Stage;
-use linterpd::demo::{Demo, DemoOptions, run};
+use linterpd::demo::{CYCLE_TOLERANCE_MM, Demo, DemoOptions, run};
 
 /// How far the measured path deviation of the seed's move may be from the prediction, mm.
 ///
@@ -48,6 +48,50 @@ async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
         "measured {measured} mm, predicted {predicted} mm"
     );
     assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_some());
+    // The pick-and-place cycle: blended, the lift's section runs as two starts, the second
+    // chained at speed from exactly the counts the first ended on; both cycles end on P2's
+    // counts, within the tolerance as planned, and the blended one is shorter on the trace.
+    let [blended, stopped] = d.cycles.as_slice() else {
+        panic!("two cycles: {:?}", d.cycles.len());
+    };
+    assert!(
+        blended
+            .starts
+            .iter()
+            .any(|m| m.plan.window.begins_at_speed())
+    );
+    assert!(
+        stopped
+            .starts
+            .iter()
+            .all(|m| !m.plan.window.begins_at_speed())
+    );
+    for cycle in [blended, stopped] {
+        for pair in cycle.starts.windows(2) {
+            assert_eq!(pair[1].plan.start_counts(), pair[0].played.end_counts);
+        }
+        for m in &cycle.starts {
+            assert_eq!(
+                m.report.stage,
+                Stage::Done,
+                "{}: {:?}",
+                cycle.name,
+                m.report
+            );
+            assert_eq!(m.played.end_counts, m.plan.end_counts(), "{}", cycle.name);
+            assert!(m.plan.figures.path_deviation_mm <= CYCLE_TOLERANCE_MM);
+        }
+    }
+    assert_eq!(
+        blended.starts.last().unwrap().played.end_counts,
+        stopped.starts.last().unwrap().played.end_counts
+    );
+    assert!(
+        blended.cycle_s < stopped.cycle_s,
+        "{} s blended, {} s stopped",
+        blended.cycle_s,
+        stopped.cycle_s
+    );
     let svg = d.svg.as_deref().expect("asked for");
     assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(80)]);
     assert!(svg.trim_end().ends_with("</svg>"));
