@@ -6,7 +6,7 @@
 
 use serde_json::json;
 
-use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, cut, replay};
+use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, replay};
 use crate::config::PathDoc;
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle, Stage};
 use crate::kinematics::JOINTS;
@@ -204,12 +204,10 @@ fn replan(
     .map_err(|e| trace_error(e.to_string()))?;
     let plans: Vec<Plan> = planned.starts().cloned().collect();
     let same = plans.len() == reports.len()
-        && plans.iter().zip(reports).all(|(plan, report)| {
-            report.predicted.is_some_and(|p| {
-                p.rows == plan.figures.rows
-                    && p.path_deviation_mm.to_bits() == plan.figures.path_deviation_mm.to_bits()
-            })
-        });
+        && plans
+            .iter()
+            .zip(reports)
+            .all(|(plan, report)| as_reported(plan, report));
     if !same {
         return Err(trace_error(
             "planned again, the path differs from the daemon's plan".into(),

@@ -315,6 +315,15 @@ async fn run_batch(
         .collect())
 }
 
+/// Whether `plan`, made again, is the one the daemon reported (its rows and path deviation, to
+/// the bit).
+fn as_reported(plan: &Plan, report: &MoveReport) -> bool {
+    report.predicted.is_some_and(|p| {
+        p.rows == plan.figures.rows
+            && p.path_deviation_mm.to_bits() == plan.figures.path_deviation_mm.to_bits()
+    })
+}
+
 /// The daemon's plan of a move, made again from the counts it was planned from.
 fn replan(robot: &Robot, step: &Step, report: &MoveReport) -> Result<Plan, DemoError> {
     let trace_error = |why: String| DemoError::Trace(format!("{}: {why}", step.name));
@@ -329,11 +338,7 @@ fn replan(robot: &Robot, step: &Step, report: &MoveReport) -> Result<Plan, DemoE
         .map_err(|e| trace_error(e.to_string()))?;
     let plan = crate::daemon::plan_order(robot, &checked, counts)
         .map_err(|e| trace_error(e.to_string()))?;
-    let same = report.predicted.is_some_and(|p| {
-        p.rows == plan.figures.rows
-            && p.path_deviation_mm.to_bits() == plan.figures.path_deviation_mm.to_bits()
-    });
-    if !same {
+    if !as_reported(&plan, report) {
         return Err(trace_error(
             "planned again, it differs from the daemon's plan".into(),
         ));
