@@ -183,7 +183,7 @@ fn arc(c: &mut Criterion) {
             let mut r = req.clone();
             r.motion.frequency_model = model;
             let p = plan_path(&robot, &r).expect("plans");
-            let rows: usize = p.sections.iter().map(|s| s.figures.rows).sum();
+            let rows: usize = p.starts().map(|s| s.figures.rows).sum();
             out.push(format!(
                 "{model:?} {rows} rows, path dev. {:.4} mm, {:.3} s",
                 p.max_deviation_mm(),

@@ -247,24 +247,23 @@ impl SectionPart {
         motion: Motion,
         counts: [i64; JOINTS],
     ) -> Result<Plan, PlanError> {
-        let starts = match self.section.planned.get() {
-            Some(starts) => starts,
-            None => {
-                let starts = plan_section(
-                    robot,
-                    &self.section.path,
-                    motion,
-                    self.section.path_accel_mm_s2,
-                    counts,
-                )?;
-                if starts.len() != self.parts || self.part != 0 {
-                    return Err(PlanError::PartsChanged {
-                        accepted: self.parts,
-                        now: starts.len(),
-                    });
-                }
-                self.section.planned.get_or_init(|| starts)
+        let starts = if let Some(starts) = self.section.planned.get() {
+            starts
+        } else {
+            let starts = plan_section(
+                robot,
+                &self.section.path,
+                motion,
+                self.section.path_accel_mm_s2,
+                counts,
+            )?;
+            if starts.len() != self.parts || self.part != 0 {
+                return Err(PlanError::PartsChanged {
+                    accepted: self.parts,
+                    now: starts.len(),
+                });
             }
+            self.section.planned.get_or_init(|| starts)
         };
         let plan = starts.get(self.part).ok_or(PlanError::PartsChanged {
             accepted: self.parts,

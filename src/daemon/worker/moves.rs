@@ -65,21 +65,10 @@ impl Worker {
         self.machine.upload_begun();
         self.publish_phase();
         let began = tokio::time::Instant::now();
-        let preloaded = self.preloaded.take() == Some((id, planned.bank));
-        if chain.is_none() {
-            if let Err(e) = self.preload_next(targets, 1 - planned.bank).await {
-                return self.not_started(id, e);
-            }
-        }
-        let link = self.link.as_mut().expect("connected");
-        let uploaded = if preloaded {
-            link.upload_preloaded(planned.bank, planned.seq, planned.from, &tables)
-                .await
-        } else {
-            link.upload(planned.bank, planned.seq, planned.from, &tables)
-                .await
-        };
-        let bank = match uploaded {
+        let bank = match self
+            .write_bank(id, &planned, &tables, chain.is_none())
+            .await
+        {
             Ok(bank) => bank,
             Err(e) => return self.not_started(id, e),
         };
@@ -107,12 +96,7 @@ impl Worker {
                 Err(blocker) => return self.not_started(id, ContractError::Blocked(blocker)),
             }
         }
-        if at_speed && self.machine.uploading_behind().map(|c| c.seq) != chain.map(|c| c.seq) {
-            // The part before it ended while this one was uploaded: started now, it would
-            // start at speed from rest.
-            self.machine.upload_ended();
-            self.publish_phase();
-            self.fail_at_speed(id);
+        if at_speed && self.lost_its_chain(id, chain.map(|c| c.seq)) {
             return Ok(());
         }
         let link = self.link.as_mut().expect("connected");
@@ -140,6 +124,31 @@ impl Worker {
                 Err(ContractError::Plc(e))
             }
             _ => Ok(()),
+        }
+    }
+
+    /// Writes `tables` and the command block of `planned` (move `id`) into its bank and reads
+    /// them back; only the block when the tables were preloaded. A start written while nothing
+    /// runs (`from_rest`) first preloads the next part of a path that begins at speed behind it.
+    async fn write_bank(
+        &mut self,
+        id: MoveId,
+        planned: &Planned,
+        tables: &[crate::table::ValidTable],
+        from_rest: bool,
+    ) -> Result<crate::plc::contract::VerifiedBank, ContractError> {
+        let preloaded = self.preloaded.take() == Some((id, planned.bank));
+        if from_rest {
+            let ends_on = planned.targets.expect("a plan knows its targets");
+            self.preload_next(ends_on, 1 - planned.bank).await?;
+        }
+        let link = self.link.as_mut().expect("connected");
+        if preloaded {
+            link.upload_preloaded(planned.bank, planned.seq, planned.from, tables)
+                .await
+        } else {
+            link.upload(planned.bank, planned.seq, planned.from, tables)
+                .await
         }
     }
 
@@ -176,6 +185,18 @@ impl Worker {
         tracing::info!(robot = %self.robot.name, id = next_id, bank, words, "part chained at speed preloaded");
         self.preloaded = Some((next_id, bank));
         Ok(())
+    }
+
+    /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`
+    /// was uploaded: started now, it would start at speed from rest, so it fails instead.
+    fn lost_its_chain(&mut self, id: MoveId, running: Option<u16>) -> bool {
+        if self.machine.uploading_behind().map(|c| c.seq) == running {
+            return false;
+        }
+        self.machine.upload_ended();
+        self.publish_phase();
+        self.fail_at_speed(id);
+        true
     }
 
     /// A part of a path section that begins at speed found the part before it no longer

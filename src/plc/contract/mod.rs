@@ -261,6 +261,9 @@ pub fn describe_outcome(outcome: &Outcome) -> String {
     }
 }
 
+/// One write of words at a DT address.
+type Write = (u16, Vec<u16>);
+
 /// A bank whose every word was written and verified, ready for one start.
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[must_use = "an uploaded bank does nothing until it is started"]
@@ -467,7 +470,7 @@ impl<P: Plc> Contract<P> {
         seq: u16,
         from: [i32; CHANNELS],
         tables: &[ValidTable],
-    ) -> Result<(CommandBlock, Vec<(u16, Vec<u16>)>), ContractError> {
+    ) -> Result<(CommandBlock, Vec<Write>), ContractError> {
         if bank >= crate::contract::BANKS {
             return Err(ContractError::BadBank { bank });
         }
@@ -478,7 +481,7 @@ impl<P: Plc> Contract<P> {
             from,
             ..CommandBlock::default()
         };
-        let mut writes: Vec<(u16, Vec<u16>)> = Vec::with_capacity(tables.len() + 1);
+        let mut writes: Vec<Write> = Vec::with_capacity(tables.len() + 1);
         for t in tables {
             let channel = t.table().channel;
             let c = usize::from(channel);
@@ -502,7 +505,7 @@ impl<P: Plc> Contract<P> {
     }
 
     /// Writes every `(address, words)`, then (when verifying) reads each back and compares.
-    async fn write_and_verify(&mut self, writes: &[(u16, Vec<u16>)]) -> Result<(), ContractError> {
+    async fn write_and_verify(&mut self, writes: &[Write]) -> Result<(), ContractError> {
         for (address, words) in writes {
             self.aborted()?;
             self.plc.write_words(*address, words).await?;
