@@ -351,6 +351,15 @@ async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
         first.shut_down().await;
         let (second, h2) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h2).await;
+        // Connected (with counts) can come a status block before the running move is taken
+        // over (the phase still "link-down" while the host word is confirmed): wait for it.
+        for _ in 0..500 {
+            let s = h2.state();
+            if s.current_move.is_some() || s.phase != "link-down" {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(2)).await;
+        }
         let state = h2.state();
         let found = state
             .current_move
