@@ -178,16 +178,7 @@ fn section_plan(
         motion.speed_mm_s = motion.speed_mm_s.min((path_accel_mm_s2 / curvature).sqrt());
     }
     let course = Course::Path(section.clone());
-    parts(robot, &course, start, motion).map_err(|source| {
-        let late = matches!(source, PlanError::ToleranceTooSmall { .. })
-            .then(|| late_joint(robot, &course, start, motion))
-            .flatten();
-        let source = match late {
-            Some((joint, at_s)) => PlanError::LateStart { joint, at_s },
-            None => source,
-        };
-        (elements, source)
-    })
+    parts(robot, &course, start, motion).map_err(|source| (elements, source))
 }
 
 /// The shortest part a section is cut into, s: chaining needs the next part uploaded while one
@@ -220,9 +211,9 @@ fn parts(
             }
             Err(e) if too_big(&e) && end - first >= 2 * min_points => first + (end - first) / 2,
             Err(e @ PlanError::ToleranceTooSmall { .. }) => {
-                match late_cut(robot, &sampled, first, end, min_points) {
+                match late_cut(&sampled, first, end, min_points) {
                     Some(cut) => cut,
-                    None => return Err(e),
+                    None => return Err(late_start(robot, &sampled, first, end).unwrap_or(e)),
                 }
             }
             Err(e) => return Err(e),
@@ -245,64 +236,48 @@ fn too_big(e: &PlanError) -> bool {
     )
 }
 
-/// Where to cut the course between sample points `from` and `to`, if a joint first moves more
-/// than [`LATE_START_S`] after `from`: [`LEAD_S`] before that joint's first pulse (the earliest
-/// such cut over the joints), when both sides keep at least `min_points`.
-fn late_cut(
-    robot: &Robot,
-    sampled: &Sampled,
+/// Every joint that first moves more than [`LATE_START_S`] after sample point `from` (and by
+/// `to`), with the point where its count first changes, in the joints' order: F174 cannot hold
+/// a channel back that long with the precision a bounded-error plan needs (the first pulse of a
+/// table lands one period of a whole-hertz frequency after the start: 1/1.5, 1/2, 1/3 s ...).
+fn late_joints<'s>(
+    sampled: &'s Sampled<'_>,
     from: usize,
     to: usize,
-    min_points: usize,
-) -> Option<usize> {
+) -> impl Iterator<Item = (usize, usize)> + 's {
     let counts = &sampled.samples.counts;
     let dt_s = sampled.profile.period_s;
-    let lead = (LEAD_S / dt_s).round() as usize;
-    (0..robot.joints.len())
-        .filter_map(|j| {
-            let moved = (from + 1..=to).find(|&i| counts[i][j] != counts[from][j])?;
-            let late = (moved - from) as f64 * dt_s > LATE_START_S;
-            let cut = moved.saturating_sub(lead);
-            (late && cut >= from + min_points && cut + min_points <= to).then_some(cut)
-        })
+    (0..crate::kinematics::JOINTS).filter_map(move |j| {
+        let moved = (from + 1..=to).find(|&i| counts[i][j] != counts[from][j])?;
+        ((moved - from) as f64 * dt_s > LATE_START_S).then_some((j, moved))
+    })
+}
+
+/// Where to cut the course between sample points `from` and `to`: [`LEAD_S`] before the first
+/// pulse of a joint that starts late (the earliest such cut over the joints), when both sides
+/// keep at least `min_points`.
+fn late_cut(sampled: &Sampled, from: usize, to: usize, min_points: usize) -> Option<usize> {
+    let lead = (LEAD_S / sampled.profile.period_s).round() as usize;
+    late_joints(sampled, from, to)
+        .map(|(_, moved)| moved.saturating_sub(lead))
+        .filter(|&cut| cut >= from + min_points && cut + min_points <= to)
         .min()
 }
 
-/// The first joint (in the joints' order) that first moves later than [`LATE_START_S`] into a
-/// section: F174 cannot hold a
-/// channel back that long with the precision a bounded-error plan needs (the first pulse of a
-/// table lands one period of a whole-hertz frequency after the start: 1/1.5, 1/2, 1/3 s ...).
-fn late_joint(
-    robot: &Robot,
-    course: &Course,
-    start: &Start,
-    motion: Motion,
-) -> Option<(String, f64)> {
-    let profile = crate::geometry::Profile::new(crate::geometry::ProfileRequest {
-        length_mm: course.length_mm(),
-        speed_mm_s: motion.speed_mm_s,
-        accel_s: motion.accel_s,
-        period_s: LATE_SAMPLE_S,
-    })
-    .ok()?;
-    let samples = course
-        .sample(robot, &profile, &start.values, start.counts)
-        .ok()?;
-    (0..robot.joints.len()).find_map(|j| {
-        let first = samples
-            .counts
-            .iter()
-            .position(|c| c[j] != start.counts[j])?;
-        let at_s = first as f64 * LATE_SAMPLE_S;
-        (at_s > LATE_START_S).then(|| (robot.joints[j].name.clone(), at_s))
+/// A failed bounded-error plan between sample points `from` and `to` that no cut could mend,
+/// put down to the first joint that starts late in it (when one does), with when it first moves
+/// into the section.
+fn late_start(robot: &Robot, sampled: &Sampled, from: usize, to: usize) -> Option<PlanError> {
+    let (j, moved) = late_joints(sampled, from, to).next()?;
+    Some(PlanError::LateStart {
+        joint: robot.joints[j].name.clone(),
+        at_s: moved as f64 * sampled.profile.period_s,
     })
 }
 
-/// How late into a section a joint may first move before a failed bounded-error plan is put
-/// down to it, s.
+/// How late into a part a joint may first move before the part is cut there (or a failed
+/// bounded-error plan put down to it), s.
 const LATE_START_S: f64 = 0.1;
-/// Sampling for that check, s.
-const LATE_SAMPLE_S: f64 = 0.005;
 
 /// A waypoint's coordinates must be numbers.
 fn check_pose(pose: &Pose) -> Result<(), PlanError> {

@@ -209,9 +209,7 @@ impl Worker {
     /// its read is due, else one register gateway exchange; then a wait for what comes next.
     async fn step(&mut self) -> Result<(), ContractError> {
         // Requests come in here too: a busy gateway never leaves the worker without a wait.
-        while let Ok(request) = self.requests.try_recv() {
-            self.take_request(request);
-        }
+        self.take_pending_requests();
         self.take_stops().await?;
         self.run_commands().await?;
         self.expire_queue();
@@ -308,6 +306,13 @@ impl Worker {
                 }
             }
             () = tokio::time::sleep_until(until) => {}
+        }
+    }
+
+    /// Takes every request already sent, without waiting.
+    pub(super) fn take_pending_requests(&mut self) {
+        while let Ok(request) = self.requests.try_recv() {
+            self.take_request(request);
         }
     }
 

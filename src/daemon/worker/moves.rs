@@ -163,9 +163,7 @@ impl Worker {
         bank: u16,
     ) -> Result<(), ContractError> {
         // The parts of a path are sent together: take in any not queued yet.
-        while let Ok(request) = self.requests.try_recv() {
-            self.take_request(request);
-        }
+        self.take_pending_requests();
         let Some(next) = self.queue.front().filter(|q| q.order.begins_at_speed()) else {
             return Ok(());
         };
