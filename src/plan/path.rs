@@ -414,6 +414,20 @@ mod tests {
             }
             assert!(!starts[starts.len() - 1].window.ends_at_speed);
             assert_eq!(blended.sections[0].end_counts(), target);
+            // A channel's segments change only where the joint reverses: the radial joint
+            // starts from rest in the second part and reaches 18 kHz, past range 0's 9.8 kHz,
+            // in one segment (a second one would start up to a PLC scan late, at speed).
+            for start in starts {
+                for table in &start.tables {
+                    for pair in table.segments.windows(2) {
+                        assert_ne!(
+                            pair[0].control.direction, pair[1].control.direction,
+                            "{model:?}: channel {} splits a run of one direction",
+                            table.channel
+                        );
+                    }
+                }
+            }
             let stopped = cycle(&lift, Corner::Stop, bounded, model).unwrap();
             assert_eq!(stopped.sections.len(), 3);
             assert!(stopped.max_deviation_mm() <= 0.05);

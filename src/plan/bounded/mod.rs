@@ -45,6 +45,14 @@ const FIRST_BUDGET: f64 = 0.6;
 const FIRST_SCALE: f64 = 2.5;
 /// Tries with narrower windows before giving up on a tolerance.
 const TRIES: usize = 14;
+/// Pulses a run may leave off their windows to stay one F174 segment, per round of tries: every
+/// try first lets a run keep one segment at the cost of a couple of pulses played as near their
+/// windows as its range allows (the execution model judges them), and only if no try is accepted
+/// so are the tries made again splitting wherever no range plays a run within its windows. A
+/// channel's later segment starts up to a PLC scan late (ACCURACY.md), holding the rest of its
+/// run back by that much at whatever speed it reaches: at 18 kHz a 2 ms scan is 36 pulses.
+const OFF_WINDOW_TRIES: [usize; 2] = [2, 0];
+
 /// Each retry narrows every window to this fraction.
 const NARROWING: f64 = 0.8;
 /// The widest window, pulses each side (also for joints that do not move the tool point).
@@ -155,7 +163,12 @@ impl Move<'_> {
         )
     }
 
-    fn tables(&self, tracks: &[Vec<f64>], deltas: &[f64; JOINTS]) -> Vec<ChannelTable> {
+    fn tables(
+        &self,
+        tracks: &[Vec<f64>],
+        deltas: &[f64; JOINTS],
+        off_window: usize,
+    ) -> Vec<ChannelTable> {
         let start = self.start_counts();
         self.runs(tracks, deltas)
             .iter()
@@ -165,6 +178,7 @@ impl Move<'_> {
                 let channel = Channel {
                     joint,
                     model: self.motion.frequency_model,
+                    off_window,
                 };
                 let (mut t_s, mut count, mut segments) = (0.0, start[j], Vec::new());
                 for (i, run) in runs.iter().enumerate() {
@@ -229,9 +243,11 @@ impl Move<'_> {
         tolerance_mm: f64,
         floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
-        for deltas in self.windows(tolerance_mm, floor_mm) {
-            if let Some(v) = self.verify(tracks, &deltas, tolerance_mm, floor_mm)? {
-                return Ok(Some(v));
+        for off_window in OFF_WINDOW_TRIES {
+            for deltas in self.windows(tolerance_mm, floor_mm) {
+                if let Some(v) = self.verify(tracks, &deltas, off_window, tolerance_mm, floor_mm)? {
+                    return Ok(Some(v));
+                }
             }
         }
         Ok(None)
@@ -248,7 +264,13 @@ impl Move<'_> {
         }
         for (k, deltas) in self.windows(tolerance_mm, floor_mm).enumerate() {
             if self
-                .verify(&tracks, &deltas, tolerance_mm, floor_mm)?
+                .verify(
+                    &tracks,
+                    &deltas,
+                    OFF_WINDOW_TRIES[0],
+                    tolerance_mm,
+                    floor_mm,
+                )?
                 .is_some()
             {
                 return Ok(Some(k + 1));
@@ -263,10 +285,11 @@ impl Move<'_> {
         &self,
         tracks: &[Vec<f64>],
         deltas: &[f64; JOINTS],
+        off_window: usize,
         tolerance_mm: f64,
         floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
-        let tables = self.tables(tracks, deltas);
+        let tables = self.tables(tracks, deltas, off_window);
         super::check_tables(self.robot, &tables, false)?;
         let run = simulate_within(
             self.robot,

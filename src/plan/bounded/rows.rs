@@ -15,6 +15,9 @@ pub(super) struct Channel<'a> {
     pub joint: &'a Joint,
     /// The frequency model.
     pub model: FrequencyModel,
+    /// Pulses a run may leave off their windows (played as near as its range allows) to stay
+    /// one segment where no range plays it all; the execution model judges the result.
+    pub off_window: usize,
 }
 
 /// Rows for a stretch of pulses in one range.
@@ -177,6 +180,15 @@ impl Channel<'_> {
                 return (range, a);
             }
             prefixes.push((range, a));
+        }
+        // One segment with a few pulses off their windows rather than two: the PLC starts a
+        // channel's next segment at its next scan (ACCURACY.md), which holds the rest of the
+        // joint's run back by up to a scan's worth of pulses at whatever speed it reaches.
+        for range in FrequencyRange::FINEST_FIRST {
+            let a = self.attempt(range, pulses, t_s, false);
+            if a.broken <= self.off_window {
+                return (range, a);
+            }
         }
         let (range, best) = prefixes
             .into_iter()
