@@ -170,22 +170,27 @@ async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without
 }
 
 #[tokio::test]
-async fn a_part_whose_upload_outlasts_the_part_before_it_never_starts_from_rest() {
-    // Every reply 250 ms late: even the second part's command block (its tables were written
-    // before the lift began) takes longer to write and check than the 0.39 s lift.
+async fn a_section_whose_parts_cannot_chain_over_a_slow_link_is_refused_before_anything_moves() {
+    // Every reply 250 ms late: even the second part's command block (its tables are written
+    // before the lift begins) would take longer to write, check and start than the 0.39 s
+    // lift, which would end at speed with nothing waiting. The pace the link shows while the
+    // second part's tables are preloaded says so before the lift is started.
     let shared = mock_at_seed_start("delay250@100%");
     let dir = TempDir::new("paths-slow");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let before = s.handle.state().counts;
     let ids = post_path(&s, &lift_and_place()).await;
     let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
     let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
-    assert_eq!(first.stage, Stage::Done, "{first:?}");
-    assert_eq!(second.stage, Stage::Failed, "{second:?}");
-    let why = second.error.unwrap_or_default();
-    assert!(why.contains("begins at speed"), "{why}");
-    // Only the first part was ever started.
-    let starts = shared.with(|m| m.starts().to_vec());
-    assert_eq!(starts.len(), 1, "{starts:?}");
-    assert_eq!(s.handle.state().counts, first.target_counts);
+    assert_eq!(first.stage, Stage::Failed, "{first:?}");
+    let why = first.error.unwrap_or_default();
+    assert!(
+        why.contains("part 2 of 2") && why.contains("runs only 0.39 s"),
+        "{why}"
+    );
+    assert_eq!(second.stage, Stage::Cancelled, "{second:?}");
+    // Nothing was started; the robot stands where it stood.
+    assert!(shared.with(|m| m.starts().is_empty()));
+    assert_eq!(s.handle.state().counts, before);
     s.daemon.shut_down().await;
 }

@@ -31,6 +31,9 @@ pub struct DemoArgs {
     /// Speed of the emulated serial line to the mock, baud.
     #[arg(long, default_value_t = DEFAULT_BAUD, value_parser = clap::value_parser!(u32).range(300..))]
     pub baud: u32,
+    /// Speak MEWTOCOL-COM in `<` frames (up to 2048 characters) rather than `%` frames (118).
+    #[arg(long)]
+    pub long_frames: bool,
 }
 
 /// Runs `linterpd demo`.
@@ -39,6 +42,7 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
         baud: Some(args.baud),
         frequency_model: args.frequency_model.into(),
         svg: !args.no_svg,
+        long_frames: args.long_frames,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

@@ -297,6 +297,15 @@ impl CheckedOrder {
         matches!(&self.target, Target::Section(part) if part.begins_at_speed())
     }
 
+    /// The path section it is a part of, if it is one.
+    #[must_use]
+    pub fn section(&self) -> Option<&Arc<SectionOrder>> {
+        match &self.target {
+            Target::Section(part) => Some(&part.section),
+            _ => None,
+        }
+    }
+
     /// Whether the target is relative to where the move starts.
     #[must_use]
     pub fn is_relative(&self) -> bool {

@@ -56,6 +56,9 @@ pub struct DemoOptions {
     pub frequency_model: FrequencyModel,
     /// Whether to draw the SVG.
     pub svg: bool,
+    /// MEWTOCOL-COM `<` frames (up to 2048 characters) instead of `%` frames (118), as a
+    /// shipped config's `header = "auto"` ends up with when the PLC takes them.
+    pub long_frames: bool,
 }
 
 impl Default for DemoOptions {
@@ -64,6 +67,7 @@ impl Default for DemoOptions {
             baud: Some(DEFAULT_BAUD),
             frequency_model: seed_robot().motion.frequency_model,
             svg: true,
+            long_frames: false,
         }
     }
 }
@@ -216,7 +220,7 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     let setup = RobotSetup {
         robot: robot.clone(),
         settings: ContractSettings::default(),
-        connect: rig.connector(options.baud),
+        connect: rig.connector(options.baud, options.long_frames),
         home_counts: [0; crate::kinematics::JOINTS],
         gateway: crate::gateway::GatewaySettings::default(),
     };

@@ -49,8 +49,13 @@ impl Rig {
     }
 
     /// Opens a fresh pipe to the mock for every (re)connection, served at `baud` (`None`: as fast
-    /// as the pipe).
-    pub(super) fn connector(&self, baud: Option<u32>) -> Connector {
+    /// as the pipe), spoken in `<` frames if `long_frames`, else `%` frames.
+    pub(super) fn connector(&self, baud: Option<u32>, long_frames: bool) -> Connector {
+        let header = if long_frames {
+            HeaderChoice::Angle
+        } else {
+            HeaderChoice::Percent
+        };
         let shared = self.mock.clone();
         Box::new(move || {
             let shared = shared.clone();
@@ -63,9 +68,15 @@ impl Rig {
                 let server = MewtocolServer::new(shared, options);
                 tokio::spawn(async move { server.serve(theirs).await });
                 let station = Station::new(1).expect("station 1 exists");
+                // As a serial config's client: its timeouts count the frames' wire time (11-bit
+                // characters, as the mock emulates) and `<` frames are cut to fit the line.
+                let options = MewtocolOptions {
+                    char_time: baud.map(|b| Duration::from_secs_f64(11.0 / f64::from(b))),
+                    ..MewtocolOptions::new(station, header)
+                };
                 Ok(AnyPlc::Mewtocol(MewtocolClient::new(
                     Box::new(ours) as BoxedLink,
-                    MewtocolOptions::new(station, HeaderChoice::Percent),
+                    options,
                 )))
             })
         })

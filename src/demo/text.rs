@@ -39,7 +39,10 @@ fn stage(stage: crate::daemon::Stage) -> String {
 fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     let link = demo.options.baud.map_or_else(
         || "MEWTOCOL-COM, no line speed emulated".to_owned(),
-        |b| format!("MEWTOCOL-COM over an emulated {b}-baud serial line"),
+        |b| {
+            let frames = if demo.options.long_frames { "<" } else { "%" };
+            format!("MEWTOCOL-COM ({frames} frames) over an emulated {b}-baud serial line")
+        },
     );
     writeln!(
         out,

@@ -19,6 +19,7 @@ mod events;
 mod gateway;
 mod link;
 mod moves;
+mod pace;
 
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;

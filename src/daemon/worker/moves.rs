@@ -4,6 +4,7 @@
 
 use std::time::Duration;
 
+use super::pace::{Pace, Part};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Planned};
@@ -20,7 +21,9 @@ impl Worker {
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
         // A fresh status block: the counts to plan from, and whether the PLC takes a start. Until
         // the plan is made the order stays at the head of the queue.
+        let polled_at = tokio::time::Instant::now();
         let polled = self.poll().await;
+        let exchange = polled_at.elapsed();
         if polled.is_err() || self.machine.blocker(now()).is_some() {
             self.queue.push_front(queued);
             return polled;
@@ -66,7 +69,7 @@ impl Worker {
         self.publish_phase();
         let began = tokio::time::Instant::now();
         let bank = match self
-            .write_bank(id, &planned, &tables, chain.is_none())
+            .write_bank(id, &planned, &tables, chain.is_none(), exchange)
             .await
         {
             Ok(bank) => bank,
@@ -129,18 +132,21 @@ impl Worker {
 
     /// Writes `tables` and the command block of `planned` (move `id`) into its bank and reads
     /// them back; only the block when the tables were preloaded. A start written while nothing
-    /// runs (`from_rest`) first preloads the next part of a path that begins at speed behind it.
+    /// runs (`from_rest`) first preloads the next part of a path that begins at speed behind it
+    /// (`exchange`: how long a status read just took).
     async fn write_bank(
         &mut self,
         id: MoveId,
         planned: &Planned,
         tables: &[crate::table::ValidTable],
         from_rest: bool,
+        exchange: Duration,
     ) -> Result<crate::plc::contract::VerifiedBank, ContractError> {
         let preloaded = self.preloaded.take() == Some((id, planned.bank));
         if from_rest {
             let ends_on = planned.targets.expect("a plan knows its targets");
-            self.preload_next(ends_on, 1 - planned.bank).await?;
+            self.preload_next(ends_on, 1 - planned.bank, exchange)
+                .await?;
         }
         let link = self.link.as_mut().expect("connected");
         if preloaded {
@@ -156,11 +162,15 @@ impl Worker {
     /// a path that begins at speed behind it, its tables are written into `bank` (the one
     /// this start does not use) and read back now, so that while this start runs only its
     /// command block is left to write. Nothing runs from `bank`: this start is written while
-    /// nothing runs. A next part that cannot be planned is left to fail at its own turn.
+    /// nothing runs. A next part that cannot be planned is left to fail at its own turn. Then,
+    /// at the pace the link just showed (`exchange`, a status read, and the preload), every
+    /// part of the section must be ready to start before the part ahead of it ends: if not,
+    /// this start is refused before anything moves ([`Pace::check`]).
     async fn preload_next(
         &mut self,
         ends_on: [i32; CHANNELS],
         bank: u16,
+        exchange: Duration,
     ) -> Result<(), ContractError> {
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
@@ -168,6 +178,7 @@ impl Worker {
             return Ok(());
         };
         let next_id = next.id;
+        let section = next.order.section().cloned();
         let Ok(plan) = plan_order(
             &self.robot,
             &next.order,
@@ -179,10 +190,22 @@ impl Worker {
             return Ok(());
         };
         let link = self.link.as_mut().expect("connected");
+        let began = tokio::time::Instant::now();
         let words = link.preload(bank, &tables).await?;
-        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, "part chained at speed preloaded");
+        let pace = Pace {
+            exchange,
+            preload: began.elapsed(),
+            preload_words: words,
+        };
+        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, preload_s = pace.preload.as_secs_f64(), exchange_s = exchange.as_secs_f64(), "part chained at speed preloaded");
         self.preloaded = Some((next_id, bank));
-        Ok(())
+        // Planned by `plan_order` above, if not before.
+        let parts: Vec<Part> = section
+            .as_ref()
+            .and_then(|s| s.planned.get())
+            .map(|starts| starts.iter().map(Part::of).collect())
+            .unwrap_or_default();
+        pace.check(&parts)
     }
 
     /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`

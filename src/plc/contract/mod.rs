@@ -108,6 +108,21 @@ pub enum ContractError {
         /// Read.
         read: u16,
     },
+    /// A part of a path that begins at speed could not be made ready while the part before it
+    /// runs: that part would end at speed with nothing to chain, stopping the robot abruptly.
+    #[error(
+        "part {part} of {parts} of the path needs about {need_s:.2} s to be written, read back and started over this link (at the pace it showed just now), but the part before it runs only {runs_s:.2} s: the robot would stop at speed where that part ends, so the path is not started; use a faster link (higher baud, `<` frames, Modbus RTU), a lower speed, or a stop at a waypoint"
+    )]
+    ChainOutrunsLink {
+        /// The part, from 1.
+        part: usize,
+        /// The section's parts.
+        parts: usize,
+        /// Its estimated time to be ready, s.
+        need_s: f64,
+        /// How long the part before it runs, s.
+        runs_s: f64,
+    },
     /// A table does not fit its channel's area.
     #[error("channel {channel} table is {words} words; its area holds {area_words}")]
     TooLarge {
