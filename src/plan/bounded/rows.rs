@@ -184,10 +184,13 @@ impl Channel<'_> {
         // One segment with a few pulses off their windows rather than two: the PLC starts a
         // channel's next segment at its next scan (ACCURACY.md), which holds the rest of the
         // joint's run back by up to a scan's worth of pulses at whatever speed it reaches.
-        for range in FrequencyRange::FINEST_FIRST {
-            let a = self.attempt(range, pulses, t_s, false);
-            if a.broken <= self.off_window {
-                return (range, a);
+        // (With none allowed off, the loop above already found that no range plays them all.)
+        if self.off_window > 0 {
+            for range in FrequencyRange::FINEST_FIRST {
+                let a = self.attempt(range, pulses, t_s, false);
+                if a.broken <= self.off_window {
+                    return (range, a);
+                }
             }
         }
         let (range, best) = prefixes
