@@ -139,7 +139,21 @@ async fn post_path(s: &Served, body: &serde_json::Value) -> Vec<u64> {
 
 #[tokio::test]
 async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without_a_pause() {
-    let shared = mock_at_seed_start("");
+    chains_at_speed("").await;
+}
+
+#[tokio::test]
+async fn a_link_whose_every_exchange_takes_50_ms_still_chains_the_parts() {
+    // The second part starts on five exchanges after the first is seen running (that read, its
+    // block written and read back, one more status read, the start write): about 0.25 s of
+    // the 0.39 s lift, 0.32 s with the pace check's margin.
+    chains_at_speed("delay50@100%").await;
+}
+
+/// The lift and place over a mock with fault `script`: both parts done, the second waiting
+/// behind the first and taken as it ended, from exactly its end counts.
+async fn chains_at_speed(script: &str) {
+    let shared = mock_at_seed_start(script);
     let dir = TempDir::new("paths-parts");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
     let a_rad = seed_robot()

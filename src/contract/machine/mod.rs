@@ -275,7 +275,8 @@ pub enum Blocker {
     Stopping,
     /// Room for no more starts: one runs and one waits (or an upload is under way).
     Full,
-    /// The heartbeat has not been seen moving between two reads since the upload began.
+    /// The heartbeat has not been seen moving between two reads since the upload began (behind
+    /// a running start: since the read just before it).
     Unproven,
     /// A channel is not at the count the tables were planned from.
     NotAtFrom {
@@ -314,8 +315,11 @@ pub struct Machine {
     /// The heartbeat last read and when it last changed.
     heartbeat: Option<(u16, Instant)>,
     last: Option<Status>,
-    /// Since the upload began: status blocks read, and whether the heartbeat changed between two
-    /// of them (the PLC scans now, not only before the upload).
+    /// When the last status block was read.
+    read_at: Option<Instant>,
+    /// Since the upload began: status blocks read, and whether the heartbeat was seen changing
+    /// between two of them (behind a running start: between the read before the upload and
+    /// one after it).
     since_upload: (u8, bool),
 }
 
@@ -334,6 +338,7 @@ impl Machine {
             host_written: None,
             heartbeat: None,
             last: None,
+            read_at: None,
             since_upload: (0, false),
         }
     }
@@ -690,11 +695,23 @@ impl Machine {
     }
 
     fn note_heartbeat(&mut self, value: u16, now: Instant) {
-        if matches!(self.phase, Phase::Uploading { .. }) {
+        if let Phase::Uploading { current } = &self.phase {
             let (reads, moved) = self.since_upload;
             let changed = self.heartbeat.is_some_and(|(last, _)| last != value);
-            self.since_upload = (reads.saturating_add(1), moved || (reads >= 1 && changed));
+            // Two reads after the upload began must show the heartbeat changing: the PLC scans
+            // now, not only before the upload (a start written to a PLC that froze during it
+            // would wait there, to be acted on whenever the PLC resumes). Behind a running
+            // start, which is watched until it ends and stopped if the heartbeat stands still,
+            // the read before the upload (the one that saw it running) counts as the first, if
+            // no further back than the heartbeat timeout: a chained part's turn is short.
+            let first = reads >= 1
+                || (current.is_some()
+                    && self.read_at.is_some_and(|at| {
+                        now.saturating_duration_since(at) <= self.settings.heartbeat_timeout
+                    }));
+            self.since_upload = (reads.saturating_add(1), moved || (first && changed));
         }
+        self.read_at = Some(now);
         match self.heartbeat {
             Some((last, _)) if last == value => {}
             _ => self.heartbeat = Some((value, now)),

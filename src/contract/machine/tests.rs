@@ -807,16 +807,33 @@ fn a_start_is_written_only_from_the_counts_it_was_planned_from() {
         Err(Blocker::Unproven)
     );
 
-    // Chained: only from the running start's targets, while the PLC shows it running.
+    // Chained: only from the running start's targets, while the PLC shows it running. The read
+    // that saw it running (10 ms before) counts as the first: one read after the upload will do.
     let mut bed = Bed::running();
     bed.m.upload_begun();
     let run = status(State::Running, 8, 0, FROM);
-    let _ = bed.feed(run);
     let _ = bed.feed(run);
     assert_eq!(bed.m.may_start(&planned(2, 9, TO, FROM), bed.now), Ok(()));
     assert_eq!(
         bed.m.may_start(&planned(2, 9, FROM, TO), bed.now),
         Err(Blocker::Full)
+    );
+    // ... but not a read before it further back than the heartbeat timeout, nor a heartbeat
+    // that stood still.
+    let mut late = Bed::running();
+    late.m.upload_begun();
+    late.now += Duration::from_millis(600);
+    let _ = late.feed(run);
+    assert_eq!(
+        late.m.may_start(&planned(2, 9, TO, FROM), late.now),
+        Err(Blocker::Unproven)
+    );
+    let mut still = Bed::running();
+    still.m.upload_begun();
+    let _ = still.feed_after(0, run);
+    assert_eq!(
+        still.m.may_start(&planned(2, 9, TO, FROM), still.now),
+        Err(Blocker::Unproven)
     );
     let _ = bed.feed(with(run, |s| s.block.waiting = 33));
     assert_eq!(

@@ -19,8 +19,12 @@ impl Worker {
     /// Reads the status block and applies what it means.
     pub(super) async fn poll(&mut self) -> Result<(), ContractError> {
         let link = self.link.as_mut().expect("connected");
+        let asked = tokio::time::Instant::now();
         let status = match link.status().await {
-            Ok(s) => s,
+            Ok(s) => {
+                self.exchange = asked.elapsed();
+                s
+            }
             Err(e) if link_broken(&e) => return Err(e),
             Err(e) => {
                 self.contract_unusable(&e);
@@ -32,6 +36,7 @@ impl Worker {
 
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
+        self.read_at = Some(tokio::time::Instant::now());
         let events = self.machine.on_status(&status, now());
         self.publish_refusal();
         self.note_status(&status);

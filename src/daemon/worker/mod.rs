@@ -137,6 +137,10 @@ pub(super) struct Worker {
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
     stop_asked: Option<std::time::Instant>,
+    /// When the last status block was read ...
+    read_at: Option<tokio::time::Instant>,
+    /// ... and how long the last poll's read took.
+    exchange: Duration,
     /// When the PLC's mode was last read.
     mode_read: Option<std::time::Instant>,
     /// Whether the link was ever opened (a later opening is a reconnection).
@@ -179,6 +183,8 @@ impl Worker {
             preloaded: None,
             started: HashMap::new(),
             stop_asked: None,
+            read_at: None,
+            exchange: Duration::ZERO,
             mode_read: None,
             opened_before: false,
         }
@@ -239,6 +245,11 @@ impl Worker {
                 self.read_mode().await?;
             }
             self.next_poll = tokio::time::Instant::now() + self.poll_pause();
+            if self.machine.blocker(now()).is_none() && !self.queue.is_empty() {
+                // The PLC has room now (the move before was just seen running): begin at once,
+                // on this status block.
+                return Ok(());
+            }
         }
         if self.gateway.is_empty() {
             self.wait_until(self.next_poll).await;

@@ -19,11 +19,14 @@ const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 impl Worker {
     /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
-        // A fresh status block: the counts to plan from, and whether the PLC takes a start. Until
-        // the plan is made the order stays at the head of the queue.
-        let polled_at = tokio::time::Instant::now();
-        let polled = self.poll().await;
-        let exchange = polled_at.elapsed();
+        // A fresh status block: the counts to plan from, and whether the PLC takes a start (the
+        // one just read, if read within a poll interval). Until the plan is made the order stays
+        // at the head of the queue.
+        let fresh = self
+            .read_at
+            .is_some_and(|at| at.elapsed() < self.settings.poll_interval);
+        let polled = if fresh { Ok(()) } else { self.poll().await };
+        let exchange = self.exchange;
         if polled.is_err() || self.machine.blocker(now()).is_some() {
             self.queue.push_front(queued);
             return polled;
@@ -79,25 +82,8 @@ impl Worker {
         self.shared.metrics.uploaded(upload_s);
         self.shared
             .moves(|m| m.update(id, |r| r.upload_s = Some(upload_s)));
-        // The contract's first step once more, after the upload: the bank is started only once
-        // the heartbeat is seen moving, while the PLC takes it and every count is the plan's
-        // `from` (or it chains behind the start whose targets are its `from`).
-        loop {
-            let link = self.link.as_mut().expect("connected");
-            let status = match link.status().await {
-                Ok(status) => status,
-                Err(e) => return self.not_started(id, e),
-            };
-            if let Err(e) = self.read(status).await {
-                return self.not_started(id, e);
-            }
-            match self.machine.may_start(&planned, now()) {
-                Ok(()) => break,
-                Err(Blocker::Unproven) => {
-                    tokio::time::sleep(self.settings.scan_time / 2).await;
-                }
-                Err(blocker) => return self.not_started(id, ContractError::Blocked(blocker)),
-            }
+        if let Err(e) = self.until_it_may_start(&planned).await {
+            return self.not_started(id, e);
         }
         if at_speed && self.lost_its_chain(id, chain.map(|c| c.seq)) {
             return Ok(());
@@ -120,13 +106,37 @@ impl Worker {
                 .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
         }
         self.publish_phase();
-        tracing::info!(robot = %self.robot.name, id, seq = planned.seq, bank = planned.bank, upload_s, confirmed, chained = chain.is_some(), "start written");
+        // Chained: how long after the move before was seen running this start was written, of
+        // the time that move runs (the chain's slack, as the pace check estimates it).
+        let behind_s = chain
+            .and_then(|c| self.started.get(&c.tag))
+            .map(|seen| now().saturating_duration_since(*seen).as_secs_f64());
+        let runs_s = chain.map(|c| c.duration.as_secs_f64());
+        tracing::info!(robot = %self.robot.name, id, seq = planned.seq, bank = planned.bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
         match written {
             CommandWrite::Unconfirmed(e) if e.is_link_failure() => {
                 // Whether it was taken is learnt from the status block once the link is back.
                 Err(ContractError::Plc(e))
             }
             _ => Ok(()),
+        }
+    }
+
+    /// The contract's first step once more, after the upload: the bank is started only once
+    /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
+    /// (or it chains behind the start whose targets are its `from`).
+    async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
+        loop {
+            let link = self.link.as_mut().expect("connected");
+            let status = link.status().await?;
+            self.read(status).await?;
+            match self.machine.may_start(planned, now()) {
+                Ok(()) => return Ok(()),
+                Err(Blocker::Unproven) => {
+                    tokio::time::sleep(self.settings.scan_time / 2).await;
+                }
+                Err(blocker) => return Err(ContractError::Blocked(blocker)),
+            }
         }
     }
 
@@ -163,7 +173,8 @@ impl Worker {
     /// this start does not use) and read back now, so that while this start runs only its
     /// command block is left to write. Nothing runs from `bank`: this start is written while
     /// nothing runs. A next part that cannot be planned is left to fail at its own turn. Then,
-    /// at the pace the link just showed (`exchange`, a status read, and the preload), every
+    /// at the pace the link just showed (`exchange`, a status read; a one-word read; the
+    /// preload), every
     /// part of the section must be ready to start before the part ahead of it ends: if not,
     /// this start is refused before anything moves ([`Pace::check`]).
     async fn preload_next(
@@ -192,12 +203,14 @@ impl Worker {
         let link = self.link.as_mut().expect("connected");
         let began = tokio::time::Instant::now();
         let words = link.preload(bank, &tables).await?;
+        let preload = began.elapsed();
         let pace = Pace {
-            exchange,
-            preload: began.elapsed(),
+            status: exchange,
+            word: link.one_word_exchange().await?,
+            preload,
             preload_words: words,
         };
-        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, preload_s = pace.preload.as_secs_f64(), exchange_s = exchange.as_secs_f64(), "part chained at speed preloaded");
+        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, preload_s = preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "part chained at speed preloaded");
         self.preloaded = Some((next_id, bank));
         // Planned by `plan_order` above, if not before.
         let parts: Vec<Part> = section

@@ -15,6 +15,9 @@ mod tests;
 
 pub use describe::planned_bounds;
 
+/// Words of a start's command block written before its start (all but `command` and `host`).
+pub const BLOCK_WRITE_WORDS: usize = COMMAND_HOST_OFFSET as usize - 1;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -375,6 +378,16 @@ impl<P: Plc> Contract<P> {
         }
     }
 
+    /// How long the shortest exchange takes on this link just now: the command word read once
+    /// (reading it changes nothing). With a status read, it paces a chain of starts at speed.
+    pub async fn one_word_exchange(&mut self) -> Result<Duration, ContractError> {
+        let asked = tokio::time::Instant::now();
+        self.plc
+            .read_words(self.settings.layout.command_base, 1)
+            .await?;
+        Ok(asked.elapsed())
+    }
+
     /// The link, for other requests.
     pub fn plc(&mut self) -> &mut P {
         &mut self.plc
@@ -536,7 +549,7 @@ impl<P: Plc> Contract<P> {
 
     /// The write of a command block's words 1..16 (everything but the command and host words).
     fn block_write(&self, block: &CommandBlock) -> (u16, Vec<u16>) {
-        let words = block.to_words()[1..usize::from(COMMAND_HOST_OFFSET)].to_vec();
+        let words = block.to_words()[1..=BLOCK_WRITE_WORDS].to_vec();
         (self.settings.layout.command_base + 1, words)
     }
 
