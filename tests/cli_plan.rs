@@ -214,7 +214,9 @@ fn a_path_file_plans_its_blended_cycle_within_the_tolerance_and_names_a_bad_elem
         .collect();
     assert_eq!(kinds, ["line", "arc", "line"]);
     assert!(doc["path"][1]["element"].is_null());
-    assert_eq!(doc["sections"].as_array().unwrap().len(), 1);
+    // One section between stops, planned as two starts: cut where d2 reverses at the top of
+    // the blend while the other joints move.
+    assert_eq!(doc["sections"].as_array().unwrap().len(), 2);
     assert!(doc["valid"].as_bool().unwrap());
     let deviation = doc["path_deviation_mm"].as_f64().unwrap();
     assert!(deviation <= 0.05, "{deviation} mm");
@@ -230,7 +232,11 @@ fn a_path_file_plans_its_blended_cycle_within_the_tolerance_and_names_a_bad_elem
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("blend 1     arc"), "{text}");
-    assert!(text.contains("1 (section 1, element 1-2): "), "{text}");
+    assert!(text.contains("1 (section 1, element 1): "), "{text}");
+    assert!(
+        text.contains("2 (section 1, element 2), chained at speed: "),
+        "{text}"
+    );
     assert!(text.contains("valid    yes"), "{text}");
 
     let dir = std::env::temp_dir().join(format!("linterpd-path-{}", std::process::id()));
@@ -337,15 +343,22 @@ fn a_paths_json_lists_its_blend_as_the_arc_paths_md_gives_with_figures_measured_
     );
     assert!(num(&blend["path_deviation_mm"]) > 0.0);
     assert!(num(&blend["path_deviation_mm"]) <= 0.05);
-    // One start, its figures beside the plan document's.
-    let start = &doc["starts"][0];
-    assert_eq!(start["elements"], "1-2");
-    assert_eq!(start["rows"], doc["sections"][0]["figures"]["rows"]);
-    assert_eq!(
-        start["tracking_error_mm"],
-        doc["sections"][0]["figures"]["tracking_error_mm"]
-    );
-    assert_eq!(start["tracking_error_mm"], doc["tracking_error_mm"]);
+    // Two starts (cut at d2's reversal), each with its figures beside the plan document's.
+    let starts = doc["starts"].as_array().unwrap();
+    assert_eq!(starts.len(), 2);
+    for (k, (start, elements)) in starts.iter().zip(["1", "2"]).enumerate() {
+        assert_eq!(start["elements"], elements);
+        assert_eq!(start["rows"], doc["sections"][k]["figures"]["rows"]);
+        assert_eq!(
+            start["tracking_error_mm"],
+            doc["sections"][k]["figures"]["tracking_error_mm"]
+        );
+    }
+    let tracking = starts
+        .iter()
+        .map(|s| num(&s["tracking_error_mm"]))
+        .fold(0.0, f64::max);
+    assert_eq!(tracking, num(&doc["tracking_error_mm"]));
 }
 
 #[test]
@@ -364,8 +377,10 @@ fn a_path_with_a_stop_gives_one_csv_of_every_starts_rows_and_an_svg_of_its_arc()
     .unwrap();
     let file = file.to_str().unwrap();
     let doc: Value = serde_json::from_slice(&plan_path(file, &["--json"]).stdout).unwrap();
-    assert_eq!(doc["starts"].as_array().unwrap().len(), 2);
-    assert_eq!(doc["starts"][1]["elements"], "2-3");
+    // The stop after element 1, then element 2 cut where d2 reverses at the top of the blend.
+    assert_eq!(doc["starts"].as_array().unwrap().len(), 3);
+    assert_eq!(doc["starts"][1]["elements"], "2");
+    assert_eq!(doc["starts"][2]["elements"], "3");
     let svg = dir.join("path.svg");
     let out = plan_path(file, &["--format", "csv", "--svg", svg.to_str().unwrap()]);
     let csv = String::from_utf8(out.stdout).unwrap();

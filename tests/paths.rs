@@ -57,11 +57,17 @@ async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_t
         .iter()
         .map(|v| v.as_u64().unwrap())
         .collect();
-    assert_eq!(ids.len(), 2, "two sections: before and after the stop");
-    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
-    let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
-    assert_eq!(first.stage, Stage::Done, "{first:?}");
-    assert_eq!(second.stage, Stage::Done, "{second:?}");
+    // Two sections, before and after the stop; the first cut in two where d2 reverses at the
+    // top of the blend while the other joints move.
+    assert_eq!(ids.len(), 3, "{ids:?}");
+    let mut reports = Vec::new();
+    for id in &ids {
+        let report = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        reports.push(report);
+    }
+    assert_eq!(reports[1].start_counts, reports[0].target_counts);
+    let (first, second) = (&reports[1], &reports[2]);
     // The second section was chained behind the first, from the first's targets.
     assert_eq!(first.target_counts, Some(counts_at(P2, a_rad)));
     assert_eq!(second.start_counts, first.target_counts);
@@ -143,15 +149,18 @@ async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without
 }
 
 #[tokio::test]
-async fn a_link_whose_every_exchange_takes_50_ms_still_chains_the_parts() {
+async fn a_link_whose_every_exchange_takes_40_ms_still_chains_the_parts() {
     // The second part starts on five exchanges after the first is seen running (that read, its
-    // block written and read back, one more status read, the start write): about 0.25 s of
-    // the 0.39 s lift, 0.32 s with the pace check's margin.
-    chains_at_speed("delay50@100%").await;
+    // block written and read back, one more status read, the start write): about 0.21 s of
+    // the 0.39 s lift, 0.26 s with the pace check's margin. The third part's tables (frames of
+    // about 25 words, each 40 ms late) are written and read back while the second runs 1.25 s.
+    chains_at_speed("delay40@100%").await;
 }
 
-/// The lift and place over a mock with fault `script`: both parts done, the second waiting
-/// behind the first and taken as it ended, from exactly its end counts.
+/// The lift and place over a mock with fault `script`: every part done, each waiting behind
+/// the one before and taken as it ended, from exactly its end counts. The section is cut where
+/// the base and radial joints start late (after the lift) and where d2 reverses while they move
+/// (at the top of the second blend).
 async fn chains_at_speed(script: &str) {
     let shared = mock_at_seed_start(script);
     let dir = TempDir::new("paths-parts");
@@ -160,26 +169,34 @@ async fn chains_at_speed(script: &str) {
         .pose_of(&s.handle.state().counts.unwrap())
         .a_rad;
     let ids = post_path(&s, &lift_and_place()).await;
-    assert_eq!(ids.len(), 2, "one section, cut into two parts");
-    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
-    let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
-    assert_eq!(first.stage, Stage::Done, "{first:?}");
-    assert_eq!(second.stage, Stage::Done, "{second:?}");
-    assert_eq!(second.start_counts, first.target_counts);
-    assert_eq!(second.target_counts, Some(counts_at(P2, a_rad)));
-    assert_eq!(second.final_error_pulses, Some([0; 4]), "{second:?}");
+    assert_eq!(ids.len(), 3, "one section, cut into three parts");
+    let mut parts = Vec::new();
+    for id in &ids {
+        let report = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        parts.push(report);
+    }
+    for pair in parts.windows(2) {
+        assert_eq!(pair[1].start_counts, pair[0].target_counts);
+    }
+    let last = &parts[parts.len() - 1];
+    assert_eq!(last.target_counts, Some(counts_at(P2, a_rad)));
+    assert_eq!(last.final_error_pulses, Some([0; 4]), "{last:?}");
     let starts = shared.with(|m| m.starts().to_vec());
-    assert_eq!(starts.len(), 2, "{starts:?}");
+    assert_eq!(starts.len(), parts.len(), "{starts:?}");
     assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
-    // The second part was waiting: the PLC took it in the scan after the first ended, at the
-    // first part's planned duration (the mock plays tables to the pulse) plus at most a scan
-    // or two.
-    let planned_s = first.predicted.as_ref().unwrap().duration_s;
-    let gap_s = starts[1].at_s - starts[0].at_s - planned_s;
-    assert!(
-        (-0.01..0.03).contains(&gap_s),
-        "{gap_s} s between the parts"
-    );
+    // Each part was waiting: the PLC took it in the scan after the one before ended, at that
+    // one's planned duration (the mock plays tables to the pulse) plus at most a scan or two.
+    for (k, report) in parts.iter().enumerate().take(parts.len() - 1) {
+        let planned_s = report.predicted.as_ref().unwrap().duration_s;
+        let gap_s = starts[k + 1].at_s - starts[k].at_s - planned_s;
+        assert!(
+            (-0.01..0.03).contains(&gap_s),
+            "{gap_s} s between parts {} and {}",
+            k + 1,
+            k + 2
+        );
+    }
     s.daemon.shut_down().await;
 }
 
@@ -199,10 +216,12 @@ async fn a_section_whose_parts_cannot_chain_over_a_slow_link_is_refused_before_a
     assert_eq!(first.stage, Stage::Failed, "{first:?}");
     let why = first.error.unwrap_or_default();
     assert!(
-        why.contains("part 2 of 2") && why.contains("runs only 0.39 s"),
+        why.contains("part 2 of 3") && why.contains("runs only 0.39 s"),
         "{why}"
     );
     assert_eq!(second.stage, Stage::Cancelled, "{second:?}");
+    let third = s.handle.wait(ids[2], LIMIT).await.unwrap();
+    assert_eq!(third.stage, Stage::Cancelled, "{third:?}");
     // Nothing was started; the robot stands where it stood.
     assert!(shared.with(|m| m.starts().is_empty()));
     assert_eq!(s.handle.state().counts, before);

@@ -14,7 +14,7 @@ use clap::Args;
 
 use super::Failure;
 use super::plan::ModelArg;
-use crate::demo::{DEFAULT_BAUD, DemoOptions, run as run_demo, write_report};
+use crate::demo::{DEFAULT_BAUD, DemoLink, DemoOptions, run as run_demo, write_report};
 
 /// Arguments of `linterpd demo`.
 #[derive(Debug, Args)]
@@ -34,6 +34,9 @@ pub struct DemoArgs {
     /// Speak MEWTOCOL-COM in `<` frames (up to 2048 characters) rather than `%` frames (118).
     #[arg(long)]
     pub long_frames: bool,
+    /// Speak Modbus RTU (binary frames) rather than MEWTOCOL-COM.
+    #[arg(long, conflicts_with = "long_frames")]
+    pub modbus_rtu: bool,
 }
 
 /// Runs `linterpd demo`.
@@ -42,7 +45,13 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
         baud: Some(args.baud),
         frequency_model: args.frequency_model.into(),
         svg: !args.no_svg,
-        long_frames: args.long_frames,
+        link: if args.modbus_rtu {
+            DemoLink::ModbusRtu
+        } else {
+            DemoLink::Mewtocol {
+                long_frames: args.long_frames,
+            }
+        },
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

@@ -26,6 +26,7 @@ use thiserror::Error;
 
 pub use cycle::{CYCLE_BLEND_MM, CYCLE_TOLERANCE_MM, Cycle};
 pub use replay::{Played, cut, replay};
+pub use rig::DemoLink;
 pub use text::{picture, write_report};
 
 use crate::daemon::{
@@ -56,9 +57,9 @@ pub struct DemoOptions {
     pub frequency_model: FrequencyModel,
     /// Whether to draw the SVG.
     pub svg: bool,
-    /// MEWTOCOL-COM `<` frames (up to 2048 characters) instead of `%` frames (118), as a
-    /// shipped config's `header = "auto"` ends up with when the PLC takes them.
-    pub long_frames: bool,
+    /// The protocol: MEWTOCOL-COM in `%` frames by default; in `<` frames as a shipped
+    /// config's `header = "auto"` ends up with when the PLC takes them; or Modbus RTU.
+    pub link: DemoLink,
 }
 
 impl Default for DemoOptions {
@@ -67,7 +68,7 @@ impl Default for DemoOptions {
             baud: Some(DEFAULT_BAUD),
             frequency_model: seed_robot().motion.frequency_model,
             svg: true,
-            long_frames: false,
+            link: DemoLink::Mewtocol { long_frames: false },
         }
     }
 }
@@ -220,7 +221,7 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     let setup = RobotSetup {
         robot: robot.clone(),
         settings: ContractSettings::default(),
-        connect: rig.connector(options.baud, options.long_frames),
+        connect: rig.connector(options.baud, options.link),
         home_counts: [0; crate::kinematics::JOINTS],
         gateway: crate::gateway::GatewaySettings::default(),
     };

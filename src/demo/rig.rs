@@ -9,8 +9,14 @@ use super::DemoError;
 use crate::daemon::{Connector, RobotHandle};
 use crate::kinematics::Kinematics;
 use crate::mewtocol::Station;
-use crate::mock::{MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock};
-use crate::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
+use crate::mock::{
+    MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, ModbusServer, ModbusServerOptions,
+    SharedMock,
+};
+use crate::plc::{
+    AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming,
+    ModbusOptions, PlcError,
+};
 use crate::robot::Robot;
 use crate::table::FrequencyModel;
 
@@ -18,6 +24,92 @@ use crate::table::FrequencyModel;
 const PIPE_BYTES: usize = 4_096;
 /// The longest wait for the daemon's first status read.
 const CONNECT_LIMIT: Duration = Duration::from_secs(5);
+
+/// How the demo's daemon speaks to the mock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DemoLink {
+    /// MEWTOCOL-COM, in `<` frames (up to 2048 characters) if `long_frames`, else `%` (118).
+    Mewtocol {
+        /// `<` frames.
+        long_frames: bool,
+    },
+    /// Modbus RTU (binary frames, up to 125 registers a read, 123 a write).
+    ModbusRtu,
+}
+
+impl DemoLink {
+    /// How the report names it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mewtocol { long_frames: true } => "MEWTOCOL-COM (< frames)",
+            Self::Mewtocol { long_frames: false } => "MEWTOCOL-COM (% frames)",
+            Self::ModbusRtu => "Modbus RTU",
+        }
+    }
+}
+
+/// One 11-bit character's time at `baud`, as the mock's line emulation counts it.
+fn char_time(baud: Option<u32>) -> Option<Duration> {
+    baud.map(|b| Duration::from_secs_f64(11.0 / f64::from(b)))
+}
+
+/// MEWTOCOL-COM over an in-process pipe, the mock serving it at `baud`.
+fn mewtocol(shared: SharedMock, baud: Option<u32>, long_frames: bool) -> AnyPlc {
+    let header = if long_frames {
+        HeaderChoice::Angle
+    } else {
+        HeaderChoice::Percent
+    };
+    let (ours, theirs) = tokio::io::duplex(PIPE_BYTES);
+    let options = MewtocolServerOptions {
+        baud,
+        ..MewtocolServerOptions::default()
+    };
+    let server = MewtocolServer::new(shared, options);
+    tokio::spawn(async move { server.serve(theirs).await });
+    let station = Station::new(1).expect("station 1 exists");
+    // As a serial config's client: its timeouts count the frames' wire time (11-bit
+    // characters, as the mock emulates) and `<` frames are cut to fit the line.
+    let options = MewtocolOptions {
+        char_time: char_time(baud),
+        ..MewtocolOptions::new(station, header)
+    };
+    AnyPlc::Mewtocol(MewtocolClient::new(Box::new(ours) as BoxedLink, options))
+}
+
+/// Modbus RTU framing over a loopback TCP connection (tokio-modbus serves RTU on nothing else
+/// but a serial port), the mock serving it at `baud`.
+async fn modbus_rtu(shared: SharedMock, baud: Option<u32>) -> Result<AnyPlc, PlcError> {
+    let link_error = |e: std::io::Error| PlcError::Link {
+        operation: "open the demo's Modbus RTU link".into(),
+        source: e,
+    };
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0")
+        .await
+        .map_err(link_error)?;
+    let address = listener.local_addr().map_err(link_error)?;
+    let server = ModbusServer::new(
+        shared,
+        ModbusServerOptions {
+            baud,
+            ..ModbusServerOptions::default()
+        },
+    );
+    tokio::spawn(server.serve_rtu_over_tcp(listener));
+    let stream = tokio::net::TcpStream::connect(address)
+        .await
+        .map_err(link_error)?;
+    let _ = stream.set_nodelay(true);
+    let options = ModbusOptions {
+        char_time: char_time(baud),
+        ..ModbusOptions::new(ModbusFraming::Rtu, 1)
+    };
+    Ok(AnyPlc::Modbus(ModbusClient::new(
+        Box::new(stream) as BoxedLink,
+        options,
+    )))
+}
 
 /// A running mock PLC: the shared mock and its scan driver.
 pub(super) struct Rig {
@@ -49,35 +141,16 @@ impl Rig {
     }
 
     /// Opens a fresh pipe to the mock for every (re)connection, served at `baud` (`None`: as fast
-    /// as the pipe), spoken in `<` frames if `long_frames`, else `%` frames.
-    pub(super) fn connector(&self, baud: Option<u32>, long_frames: bool) -> Connector {
-        let header = if long_frames {
-            HeaderChoice::Angle
-        } else {
-            HeaderChoice::Percent
-        };
+    /// as the pipe), spoken as `link` says.
+    pub(super) fn connector(&self, baud: Option<u32>, link: DemoLink) -> Connector {
         let shared = self.mock.clone();
         Box::new(move || {
             let shared = shared.clone();
             Box::pin(async move {
-                let (ours, theirs) = tokio::io::duplex(PIPE_BYTES);
-                let options = MewtocolServerOptions {
-                    baud,
-                    ..MewtocolServerOptions::default()
-                };
-                let server = MewtocolServer::new(shared, options);
-                tokio::spawn(async move { server.serve(theirs).await });
-                let station = Station::new(1).expect("station 1 exists");
-                // As a serial config's client: its timeouts count the frames' wire time (11-bit
-                // characters, as the mock emulates) and `<` frames are cut to fit the line.
-                let options = MewtocolOptions {
-                    char_time: baud.map(|b| Duration::from_secs_f64(11.0 / f64::from(b))),
-                    ..MewtocolOptions::new(station, header)
-                };
-                Ok(AnyPlc::Mewtocol(MewtocolClient::new(
-                    Box::new(ours) as BoxedLink,
-                    options,
-                )))
+                match link {
+                    DemoLink::Mewtocol { long_frames } => Ok(mewtocol(shared, baud, long_frames)),
+                    DemoLink::ModbusRtu => modbus_rtu(shared, baud).await,
+                }
             })
         })
     }

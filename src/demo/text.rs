@@ -37,12 +37,10 @@ fn stage(stage: crate::daemon::Stage) -> String {
 }
 
 fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
+    let name = demo.options.link.name();
     let link = demo.options.baud.map_or_else(
-        || "MEWTOCOL-COM, no line speed emulated".to_owned(),
-        |b| {
-            let frames = if demo.options.long_frames { "<" } else { "%" };
-            format!("MEWTOCOL-COM ({frames} frames) over an emulated {b}-baud serial line")
-        },
+        || format!("{name}, no line speed emulated"),
+        |b| format!("{name} over an emulated {b}-baud serial line"),
     );
     writeln!(
         out,

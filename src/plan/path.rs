@@ -9,8 +9,10 @@
 //!
 //! A section may need more than one start ("parts", chained at speed through the PLC's waiting
 //! start): where its tables would not fit a channel's area or 8 segments (cut in halves until
-//! they do), and where a bounded-error plan fails because a joint first moves too late into it
-//! for one table to hold its channel back (cut just before that joint moves). Every
+//! they do), where a bounded-error plan fails because a joint first moves too late into it
+//! for one table to hold its channel back (cut just before that joint moves), and, in a
+//! bounded-error plan, where a joint reverses while another moves (its next segment would start
+//! up to a PLC scan late, off the path; cut at its extreme count). Every
 //! cut falls on a sample point, where every channel's row ends at the same planned instant;
 //! each part is planned from exactly the counts the one before it ends on and judged by the
 //! execution model on its own, against the same path and the same profile.
@@ -203,6 +205,13 @@ fn parts(
     let mut plans = Vec::new();
     let mut counts = start.counts;
     while let Some((first, end)) = todo.pop() {
+        if sampled.bounded.is_some()
+            && let Some(cut) = reversal_cut(&sampled, first, end, min_points)
+        {
+            todo.push((cut, end));
+            todo.push((first, cut));
+            continue;
+        }
         let split = match sampled.plan(first, end, counts) {
             Ok(plan) => {
                 counts = plan.end_counts();
@@ -234,6 +243,36 @@ fn too_big(e: &PlanError) -> bool {
             ..
         }
     )
+}
+
+/// Where to cut the course between sample points `from` and `to` so that no joint reverses
+/// inside a part while another joint moves: at the first such reversal (the last point at the
+/// joint's extreme count), when both sides keep at least `min_points`. A reversal needs a new
+/// F174 segment, which the PLC starts in the scan after the one before ends: up to a scan late,
+/// while the other channels run on, which leaves the path. At a cut every channel stops and
+/// restarts together in the scan after the part ends: a pause on the path, no deviation.
+fn reversal_cut(sampled: &Sampled, from: usize, to: usize, min_points: usize) -> Option<usize> {
+    let counts = &sampled.samples.counts;
+    let others_move = |j: usize, i: usize| {
+        (0..crate::kinematics::JOINTS)
+            .any(|k| k != j && counts[i.saturating_sub(1)][k] != counts[(i + 1).min(to)][k])
+    };
+    (0..crate::kinematics::JOINTS)
+        .filter_map(|j| {
+            let mut direction = 0_i64;
+            (from + 1..=to).find_map(|i| {
+                let step = (counts[i][j] - counts[i - 1][j]).signum();
+                if step == 0 {
+                    return None;
+                }
+                let reverses = direction != 0 && step != direction;
+                direction = step;
+                // Point i - 1 is the last at the extreme count.
+                (reverses && others_move(j, i - 1)).then_some(i - 1)
+            })
+        })
+        .filter(|&cut| cut >= from + min_points && cut + min_points <= to)
+        .min()
 }
 
 /// Every joint that first moves more than [`LATE_START_S`] after sample point `from` (and by
@@ -414,20 +453,25 @@ mod tests {
             }
             assert!(!starts[starts.len() - 1].window.ends_at_speed);
             assert_eq!(blended.sections[0].end_counts(), target);
-            // A channel's segments change only where the joint reverses: the radial joint
-            // starts from rest in the second part and reaches 18 kHz, past range 0's 9.8 kHz,
-            // in one segment (a second one would start up to a PLC scan late, at speed).
-            for start in starts {
+            // Every channel plays each part in one segment (a later one would start up to a PLC
+            // scan late, while the others run on): the radial joint starts from rest in the
+            // second part and reaches 18 kHz, past range 0's 9.8 kHz, in one; d2 reverses at the
+            // top of the second blend, where the section is cut.
+            for (k, start) in starts.iter().enumerate() {
                 for table in &start.tables {
-                    for pair in table.segments.windows(2) {
-                        assert_ne!(
-                            pair[0].control.direction, pair[1].control.direction,
-                            "{model:?}: channel {} splits a run of one direction",
-                            table.channel
-                        );
-                    }
+                    assert!(
+                        table.segments.len() <= 1,
+                        "{model:?}: part {k} channel {} has {} segments",
+                        table.channel,
+                        table.segments.len()
+                    );
                 }
             }
+            assert_eq!(
+                starts.len(),
+                3,
+                "{model:?}: the lift, to d2's reversal, the rest"
+            );
             let stopped = cycle(&lift, Corner::Stop, bounded, model).unwrap();
             assert_eq!(stopped.sections.len(), 3);
             assert!(stopped.max_deviation_mm() <= 0.05);
@@ -451,15 +495,18 @@ mod tests {
             FrequencyModel::Ideal,
         )
         .unwrap();
-        assert_eq!(whole.sections[0].starts.len(), 1);
-        let words = whole.sections[0].starts[0]
-            .tables
+        // Up and across, then down: d2 reverses at the top of the blend while the others move,
+        // so the section is two parts.
+        let whole_starts = whole.sections[0].starts.len();
+        assert_eq!(whole_starts, 2);
+        let words = whole.sections[0]
+            .starts
             .iter()
-            .map(crate::table::encoded_words)
+            .flat_map(|start| start.tables.iter().map(crate::table::encoded_words))
             .max()
             .unwrap();
-        // Areas a little over a third of what the one start needs.
-        let area = words / 3 + 10;
+        // Areas a little over half of what the largest table needs.
+        let area = words / 2 + 10;
         robot.area_words = area;
         let req = PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
@@ -475,9 +522,9 @@ mod tests {
             motion: motion(&robot, bounded, FrequencyModel::Ideal),
             path_accel_mm_s2: 5_000.0,
         };
-        let split = plan_path(&robot, &req).unwrap();
+        let split = plan_path(&robot, &req).unwrap_or_else(|e| panic!("area {area}: {e}"));
         let starts = &split.sections[0].starts;
-        assert!(starts.len() >= 3, "{} starts", starts.len());
+        assert!(starts.len() > whole_starts + 1, "{} starts", starts.len());
         for (k, plan) in starts.iter().enumerate() {
             for (j, table) in plan.tables.iter().enumerate() {
                 if !table.segments.is_empty() {

@@ -142,7 +142,8 @@ fn blended_path() -> crate::plan::PathPlan {
 fn a_path_is_drawn_with_its_blend_arc_and_every_starts_pulses() {
     let planned = blended_path();
     let starts: Vec<&Plan> = planned.starts().collect();
-    assert_eq!(starts.len(), 2);
+    // Two sections; the second cut where d2 reverses at the top of the blend.
+    assert_eq!(starts.len(), 3);
     let svg = svg_path(&seed_robot(), &planned.path, &starts).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     for text in [
