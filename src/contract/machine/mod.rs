@@ -367,6 +367,12 @@ impl Machine {
         self.last.as_ref()
     }
 
+    /// When the last status block was read (`None` before any).
+    #[must_use]
+    pub fn read_at(&self) -> Option<Instant> {
+        self.read_at
+    }
+
     /// How long the heartbeat has stood still at `now` (`None` before any status).
     #[must_use]
     pub fn heartbeat_age(&self, now: Instant) -> Option<Duration> {

@@ -36,7 +36,6 @@ impl Worker {
 
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
-        self.read_at = Some(tokio::time::Instant::now());
         let events = self.machine.on_status(&status, now());
         self.publish_refusal();
         self.note_status(&status);

@@ -137,9 +137,7 @@ pub(super) struct Worker {
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
     stop_asked: Option<std::time::Instant>,
-    /// When the last status block was read ...
-    read_at: Option<tokio::time::Instant>,
-    /// ... and how long the last poll's read took.
+    /// How long the last poll's status read took.
     exchange: Duration,
     /// When the PLC's mode was last read.
     mode_read: Option<std::time::Instant>,
@@ -183,7 +181,6 @@ impl Worker {
             preloaded: None,
             started: HashMap::new(),
             stop_asked: None,
-            read_at: None,
             exchange: Duration::ZERO,
             mode_read: None,
             opened_before: false,

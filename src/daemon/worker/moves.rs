@@ -23,8 +23,9 @@ impl Worker {
         // one just read, if read within a poll interval). Until the plan is made the order stays
         // at the head of the queue.
         let fresh = self
-            .read_at
-            .is_some_and(|at| at.elapsed() < self.settings.poll_interval);
+            .machine
+            .read_at()
+            .is_some_and(|at| now().saturating_duration_since(at) < self.settings.poll_interval);
         let polled = if fresh { Ok(()) } else { self.poll().await };
         let exchange = self.exchange;
         if polled.is_err() || self.machine.blocker(now()).is_some() {
