@@ -1,4 +1,5 @@
-//! Plans the seed's move with bounded-error 0.05 mm a few hundred times (for profilers).
+//! Plans the seed's move a few hundred times (for profilers): bounded-error 0.05 mm, or
+//! constant-period at the robot's period with `cp` as the second argument.
 use linterpd::geometry::Pose;
 use linterpd::plan::{MoveRequest, Origin, plan_move};
 use linterpd::robot::{Method, seed_robot};
@@ -11,7 +12,9 @@ fn main() {
     let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
     to.a_rad = from.a_rad;
     let mut motion = robot.motion;
-    motion.method = Method::BoundedError { tolerance_mm: 0.05 };
+    if std::env::args().nth(2).as_deref() != Some("cp") {
+        motion.method = Method::BoundedError { tolerance_mm: 0.05 };
+    }
     let req = MoveRequest {
         from: Origin::Pose(from),
         to,
