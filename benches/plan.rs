@@ -9,6 +9,10 @@
 //! An arc: a half circle of radius 100 mm from the seed's P1 at 240 mm/s (path acceleration
 //! 1000 mm/s^2), planned with `plan_path`, bounded-error 0.05 mm and constant-period 50 ms.
 //!
+//! A blended path: ten lines of 200 mm zig-zagging up and down across the seed robot's front
+//! (2 m), every waypoint on the way blended by 20 mm, bounded-error 0.05 mm and constant-period
+//! 50 ms.
+//!
 //! Run: `cargo bench --bench plan` (one case: `cargo bench --bench plan -- "seed move"`)
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -132,6 +136,70 @@ fn bench(c: &mut Criterion) {
     });
     lengths(c);
     arc(c);
+    zigzag(c);
+}
+
+/// Ten lines of 200 mm (160 mm along x, 120 mm up or down) from (-800, 900, 100), every
+/// waypoint but the last blended by 20 mm: 2 m on the seed robot, 240 mm/s, Ta 200 ms, path
+/// acceleration 5000 mm/s^2.
+fn zigzag_path(robot: &Robot, method: Method) -> PathRequest {
+    let from = Pose::from_mm_deg(-800.0, 900.0, 100.0, 0.0);
+    let elements = (1..=10)
+        .map(|k| {
+            let z = if k % 2 == 1 { 220.0 } else { 100.0 };
+            let to = Pose::from_mm_deg(-800.0 + 160.0 * f64::from(k), 900.0, z, 0.0);
+            let corner = if k == 10 {
+                Corner::Stop
+            } else {
+                Corner::Blend(20.0)
+            };
+            (Element::Line { to }, corner)
+        })
+        .collect();
+    let mut motion = robot.motion;
+    motion.method = method;
+    motion.period_s = 0.05;
+    motion.frequency_model = FrequencyModel::FpxDivider;
+    PathRequest {
+        from: Origin::Pose(from),
+        elements,
+        motion,
+        path_accel_mm_s2: 5_000.0,
+    }
+}
+
+/// The ten-element blended path: starts, rows, path deviation and duration under both models
+/// printed, then timed (`fpx-divider`).
+fn zigzag(c: &mut Criterion) {
+    let robot = seed_robot();
+    let cases = [
+        (
+            "bounded-error 0.05 mm",
+            Method::BoundedError { tolerance_mm: 0.05 },
+        ),
+        ("constant-period 50 ms", Method::ConstantPeriod),
+    ];
+    for (name, method) in cases {
+        let req = zigzag_path(&robot, method);
+        let mut out = Vec::new();
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let mut r = req.clone();
+            r.motion.frequency_model = model;
+            let p = plan_path(&robot, &r).expect("plans");
+            let rows: usize = p.starts().map(|s| s.figures.rows).sum();
+            out.push(format!(
+                "{model:?} {} mm, {} starts, {rows} rows, path dev. {:.4} mm, {:.3} s",
+                p.path.length_mm().round(),
+                p.starts().count(),
+                p.max_deviation_mm(),
+                p.duration_s()
+            ));
+        }
+        eprintln!("10 elements 2 m blended {name}: {}", out.join("; "));
+        c.bench_function(&format!("plan 10 elements 2 m blended {name}"), |b| {
+            b.iter(|| plan_path(&robot, black_box(&req)).unwrap());
+        });
+    }
 }
 
 /// A half circle of radius 100 mm from the seed's P1 (centre 100 mm towards -x, about the

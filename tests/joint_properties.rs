@@ -116,7 +116,7 @@ fn check(robot: &Robot, req: &JointMoveRequest, plan: &Plan) -> Result<(), TestC
     for (j, table) in plan.tables.iter().enumerate() {
         prop_assert!(problems(table, robot.channel_limits(j)).is_empty());
         let executed = plan
-            .execution
+            .execution()
             .events
             .iter()
             .rev()

@@ -408,7 +408,7 @@ fn refusal(e: &PlanError, s: &Settings) -> Option<String> {
 fn executed_deviation_mm(robot: &Robot, plan: &Plan, path: &Path) -> f64 {
     let mut counts = plan.start_counts();
     let mut worst = path.distance_mm(&robot.pose_of(&counts).position_mm);
-    for e in &plan.execution.events {
+    for e in &plan.execution().events {
         counts[e.table] = e.count;
         worst = worst.max(path.distance_mm(&robot.pose_of(&counts).position_mm));
     }
@@ -485,7 +485,7 @@ fn check(
             let found = problems(table, robot.channel_limits(j));
             prop_assert!(found.is_empty(), "start {} joint {j}: {found:?}", k + 1);
             let executed = plan
-                .execution
+                .execution()
                 .events
                 .iter()
                 .rev()
@@ -500,7 +500,7 @@ fn check(
             .as_ref()
             .expect("a path section's start has its path");
         let measured = executed_deviation_mm(robot, plan, path);
-        tally.events += plan.execution.events.len();
+        tally.events += plan.execution().events.len();
         prop_assert!(
             (measured - plan.figures.path_deviation_mm).abs() <= 1e-9,
             "start {}: the execution deviates {measured} mm, the figures say {} mm",

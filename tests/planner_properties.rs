@@ -88,7 +88,8 @@ fn check_grid(plan: &Plan, j: usize) -> Result<(), TestCaseError> {
     let last_point = counts.len() - 1;
     let mut point = 0;
     let mut prev = plan.tables[j].start;
-    let timings = plan.execution.rows.iter().filter(|r| r.table == j);
+    let rows = plan.row_timings();
+    let timings = rows.iter().filter(|r| r.table == j);
     let rows = plan.tables[j]
         .segments
         .iter()

@@ -37,14 +37,15 @@ pub fn cut(trace: &[PulsePoint], plans: &[&Plan]) -> Option<Vec<Vec<PulsePoint>>
             .total_cmp(&b.time_s)
             .then(a.channel.cmp(&b.channel))
     });
-    let wanted: usize = plans.iter().map(|p| p.execution.events.len()).sum();
+    let lengths: Vec<usize> = plans.iter().map(|p| p.execution().events.len()).collect();
+    let wanted: usize = lengths.iter().sum();
     if wanted != sorted.len() {
         return None;
     }
     let mut rest = sorted.as_slice();
     let mut out = Vec::with_capacity(plans.len());
-    for plan in plans {
-        let (run, after) = rest.split_at(plan.execution.events.len());
+    for length in lengths {
+        let (run, after) = rest.split_at(length);
         out.push(run.to_vec());
         rest = after;
     }
@@ -102,7 +103,8 @@ pub fn replay(robot: &Robot, plan: &Plan, run: &[PulsePoint], scan_s: f64) -> Pl
 /// The scan at which the PLC started `plan`'s run: the first traced pulse less the first
 /// planned one, to the nearest scan.
 fn start_time(plan: &Plan, run: &[PulsePoint], scan_s: f64) -> f64 {
-    let (Some(traced), Some(planned)) = (run.first(), plan.execution.events.first()) else {
+    let first = plan.execution().events.first().copied();
+    let (Some(traced), Some(planned)) = (run.first(), first) else {
         return run.first().map_or(0.0, |p| p.time_s);
     };
     ((traced.time_s - planned.t_s) / scan_s).round() * scan_s
@@ -128,7 +130,7 @@ mod tests {
 
     /// The plan's own events as a trace started at `start_s`.
     fn traced(plan: &Plan, start_s: f64) -> Vec<PulsePoint> {
-        plan.execution
+        plan.execution()
             .events
             .iter()
             .map(|e| PulsePoint {
@@ -155,7 +157,7 @@ mod tests {
         let mut trace = traced(&p, 5.0);
         trace.extend(traced(&p, 0.5));
         let runs = cut(&trace, &[&p, &p]).unwrap();
-        assert_eq!(runs[0].len(), p.execution.events.len());
+        assert_eq!(runs[0].len(), p.execution().events.len());
         assert!(runs[0].last().unwrap().time_s < runs[1][0].time_s);
         assert!(cut(&trace[1..], &[&p, &p]).is_none());
     }

@@ -230,7 +230,8 @@ fn seed_move_gives_exactly_the_execution_models_pulses() {
             .total_cmp(&b.time_s)
             .then(a.channel.cmp(&b.channel))
     });
-    let events = &plan.execution.events;
+    let execution = plan.execution();
+    let events = &execution.events;
     assert_eq!(pulses.len(), events.len());
     for (p, e) in pulses.iter().zip(events) {
         assert_eq!(usize::from(p.channel), e.table);

@@ -270,9 +270,9 @@ pub struct Plan {
     pub tables: Vec<ChannelTable>,
     /// Why the tables must not be sent (empty for a valid plan).
     pub problems: Vec<String>,
-    /// The execution model's run of the tables.
-    pub execution: Execution,
-    /// The accuracy figures of that run.
+    /// Every channel's top frequency, Hz (the execution model clamps to it).
+    pub max_hz: [u32; JOINTS],
+    /// The accuracy figures of the execution model's run of the tables ([`Plan::execution`]).
     pub figures: Figures,
     /// Bounded-error plans: the path deviation with every pulse exactly on time, mm.
     pub floor_mm: Option<f64>,
@@ -341,6 +341,21 @@ impl Plan {
     #[must_use]
     pub fn duration_s(&self) -> f64 {
         self.window.duration_s()
+    }
+
+    /// The execution model's run of the tables, every pulse and row timed: the run the
+    /// figures were measured on. Planning reads it once as it is made and keeps none of it;
+    /// this plays it again (a few milliseconds), for a plot, a CSV or a replay.
+    #[must_use]
+    pub fn execution(&self) -> Execution {
+        sim::execute(&self.tables, &self.max_hz, settings(&self.motion))
+    }
+
+    /// When every row of the tables runs in the execution model, table by table (the rows of
+    /// [`Plan::execution`], without its pulses).
+    #[must_use]
+    pub fn row_timings(&self) -> Vec<sim::RowTiming> {
+        sim::row_timings(&self.tables, &self.max_hz, settings(&self.motion))
     }
 
     /// The planned position at time `t_s` of this start.
@@ -534,43 +549,36 @@ impl<'a> Sampled<'a> {
             values: self.samples.values[first..=last].to_vec(),
         };
         samples.counts[0] = counts;
-        let (tables, problems, execution, figures, floor_mm) =
-            if let Some(tolerance_mm) = self.bounded {
-                let m = bounded::Move {
-                    robot,
-                    course: self.course,
-                    profile: &self.profile,
-                    window: &window,
-                    samples: &samples,
-                    motion: &self.motion,
-                };
-                let v = m.plan(tolerance_mm)?;
-                (
-                    v.tables,
-                    Vec::new(),
-                    v.execution,
-                    v.figures,
-                    Some(v.floor_mm),
-                )
-            } else {
-                let tables = build_tables(
-                    robot,
-                    &samples,
-                    &self.profile,
-                    &self.motion,
-                    self.seed_exact,
-                );
-                let problems = check_tables(robot, &tables, self.seed_exact)?;
-                let (execution, figures) = simulate(
-                    robot,
-                    &tables,
-                    self.course,
-                    &self.profile,
-                    &window,
-                    &self.motion,
-                );
-                (tables, problems, execution, figures, None)
+        let (tables, problems, figures, floor_mm) = if let Some(tolerance_mm) = self.bounded {
+            let m = bounded::Move {
+                robot,
+                course: self.course,
+                profile: &self.profile,
+                window: &window,
+                samples: &samples,
+                motion: &self.motion,
             };
+            let v = m.plan(tolerance_mm)?;
+            (v.tables, Vec::new(), v.figures, Some(v.floor_mm))
+        } else {
+            let tables = build_tables(
+                robot,
+                &samples,
+                &self.profile,
+                &self.motion,
+                self.seed_exact,
+            );
+            let problems = check_tables(robot, &tables, self.seed_exact)?;
+            let figures = simulate(
+                robot,
+                &tables,
+                self.course,
+                &self.profile,
+                &window,
+                &self.motion,
+            );
+            (tables, problems, figures, None)
+        };
         Ok(Plan {
             line: self.course.chord(),
             joint_path: self.course.joint_path().cloned(),
@@ -582,7 +590,7 @@ impl<'a> Sampled<'a> {
             samples,
             tables,
             problems,
-            execution,
+            max_hz: max_hz(robot),
             figures,
             floor_mm,
             window,
@@ -599,7 +607,7 @@ fn simulate(
     profile: &Profile,
     window: &Window,
     motion: &Motion,
-) -> (Execution, Figures) {
+) -> Figures {
     simulate_within(
         robot,
         tables,
@@ -612,9 +620,24 @@ fn simulate(
     .expect("no limit")
 }
 
-/// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`. A start that
-/// ends at speed (a part of a cut path section) has its end error measured against where the
-/// profile is when it ends, not against the course's end.
+/// Every joint's channel's top frequency, Hz.
+fn max_hz(robot: &Robot) -> [u32; JOINTS] {
+    std::array::from_fn(|j| robot.joints[j].max_freq_hz)
+}
+
+/// How the planner plays its own tables: the motion's frequency model, no time between a
+/// channel's segments (its report; the mock PLC adds its scan).
+fn settings(motion: &Motion) -> Settings {
+    Settings {
+        model: motion.frequency_model,
+        segment_gap_s: 0.0,
+    }
+}
+
+/// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`. The run is
+/// measured as it is played, pulse by pulse, and not kept. A start that ends at speed (a part
+/// of a cut path section) has its end error measured against where the profile is when it
+/// ends, not against the course's end.
 fn simulate_within(
     robot: &Robot,
     tables: &[ChannelTable],
@@ -623,20 +646,17 @@ fn simulate_within(
     window: &Window,
     motion: &Motion,
     path_limit_mm: f64,
-) -> Option<(Execution, Figures)> {
-    let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
-    let settings = Settings {
-        model: motion.frequency_model,
-        segment_gap_s: 0.0,
-    };
-    let execution = sim::execute(tables, &max_hz, settings);
+) -> Option<Figures> {
+    let max_hz = max_hz(robot);
+    let settings = settings(motion);
     let position = course.positions();
     let planned = |t: f64| position(profile.distance_mm(window.from_s + t));
     let duration_s = window.duration_s();
     let mut figures = sim::measure_within(
         robot,
         tables,
-        &execution,
+        sim::pulses(tables, &max_hz, settings),
+        &sim::finish_times(tables, &max_hz, settings),
         course.tool_path(),
         &planned,
         duration_s,
@@ -647,7 +667,7 @@ fn simulate_within(
         let there = robot.pose_of(&end).position_mm;
         figures.end_error_mm = (there - planned(duration_s)).norm();
     }
-    Some((execution, figures))
+    Some(figures)
 }
 
 type Resolved = (Line, crate::kinematics::Joints, [i64; JOINTS]);

@@ -146,7 +146,7 @@ pub fn svg(robot: &Robot, plans: &[&Plan]) -> Result<String, PlotError> {
                 &line,
                 &line,
                 start_counts(plan),
-                &plan.execution.events,
+                &plan.execution().events,
             ),
         })
         .collect();
@@ -169,7 +169,7 @@ pub fn svg_path(robot: &Robot, path: &PlannedPath, starts: &[&Plan]) -> Result<S
             path,
             path,
             start_counts(plan),
-            &plan.execution.events,
+            &plan.execution().events,
         );
         points.extend(run);
     }

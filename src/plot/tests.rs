@@ -4,6 +4,7 @@ use super::*;
 use crate::geometry::Pose;
 use crate::plan::{MoveRequest, Origin, plan_move};
 use crate::robot::seed_robot;
+use crate::sim::PulseEvent;
 
 fn plan(method: Method, seed_exact: bool) -> Plan {
     let robot = seed_robot();
@@ -72,12 +73,12 @@ fn magnification_is_a_1_2_5_value_keeping_offsets_within_their_share() {
     assert!((magnification(10.0, 5.0, 0.04) - 1.0).abs() < 1e-9);
 }
 
-fn path<'a>(label: &'a str, p: &'a Plan) -> Path<'a> {
+fn path<'a>(label: &'a str, p: &'a Plan, events: &'a [PulseEvent]) -> Path<'a> {
     Path {
         label,
         line: p.line,
         start: start_counts(p),
-        events: &p.execution.events,
+        events,
         tolerance_mm: None,
     }
 }
@@ -95,11 +96,12 @@ fn executed_paths_back_and_forth_on_one_line_are_drawn_with_their_tolerance() {
         seed_exact: false,
     };
     let back = plan_move(&seed_robot(), &back_request).unwrap();
+    let (there_run, back_run) = (there.execution(), back.execution());
     let paths = [
-        path("there", &there),
+        path("there", &there, &there_run.events),
         Path {
             tolerance_mm: Some(0.05),
-            ..path("back", &back)
+            ..path("back", &back, &back_run.events)
         },
     ];
     let svg = svg_paths(&seed_robot(), "two moves", there.line, &paths).unwrap();
@@ -175,9 +177,9 @@ fn the_executed_path_runs_every_start_along_the_whole_path_within_the_tolerance(
             path,
             path,
             start_counts(plan),
-            &plan.execution.events,
+            &plan.execution().events,
         );
-        assert_eq!(run.len(), plan.execution.events.len() + 1);
+        assert_eq!(run.len(), plan.execution().events.len() + 1);
         track.extend(run);
     }
     // From the path's start to its end, never farther from it than the plans say.

@@ -51,7 +51,8 @@ pub fn measure(
     measure_within(
         robot,
         tables,
-        exec,
+        exec.events.iter().copied(),
+        &exec.finish_s,
         path,
         planned,
         planned_duration_s,
@@ -60,12 +61,16 @@ pub fn measure(
     .expect("no limit")
 }
 
-/// [`measure`], giving up (`None`) as soon as the path deviation passes `path_limit_mm`.
+/// [`measure`] of a run given as its `events` in time order (read once, as they come: see
+/// [`super::pulses`]) and when each table finished, giving up (`None`) as soon as the path
+/// deviation passes `path_limit_mm`.
 #[must_use]
+#[allow(clippy::too_many_arguments)]
 pub fn measure_within(
     robot: &Robot,
     tables: &[ChannelTable],
-    exec: &Execution,
+    events: impl IntoIterator<Item = PulseEvent>,
+    finish_s: &[Option<f64>],
     path: &dyn ToolPath,
     planned: &dyn Fn(f64) -> Vector3<f64>,
     planned_duration_s: f64,
@@ -84,7 +89,9 @@ pub fn measure_within(
     let mut tracking2 = (p - planned(0.0)).norm_squared();
     let mut sampled: f64 = 0.0;
     let mut next_sample = 0.0;
-    for e in &exec.events {
+    let mut last_finish_s = 0.0;
+    for e in events {
+        last_finish_s = e.t_s;
         while next_sample < e.t_s {
             sampled = sampled.max(path.distance_mm(&p));
             next_sample += SAMPLE_PERIOD_S;
@@ -99,13 +106,12 @@ pub fn measure_within(
         }
         tracking2 = tracking2.max((p - target).norm_squared());
     }
-    let finish_s = exec.events.last().map_or(0.0, |e| e.t_s);
-    tracking2 = tracking2.max((p - planned(planned_duration_s.max(finish_s))).norm_squared());
-    while next_sample <= planned_duration_s.max(finish_s) + 1e-12 {
+    tracking2 = tracking2.max((p - planned(planned_duration_s.max(last_finish_s))).norm_squared());
+    while next_sample <= planned_duration_s.max(last_finish_s) + 1e-12 {
         sampled = sampled.max(path.distance_mm(&p));
         next_sample += SAMPLE_PERIOD_S;
     }
-    let finishes: Vec<f64> = exec.finish_s.iter().flatten().copied().collect();
+    let finishes: Vec<f64> = finish_s.iter().flatten().copied().collect();
     let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - finishes.iter().copied().fold(f64::INFINITY, f64::min);
     Some(Figures {
@@ -114,7 +120,7 @@ pub fn measure_within(
         sampled_deviation_mm: sampled,
         end_skew_ms: if finishes.is_empty() { 0.0 } else { skew * 1e3 },
         end_error_mm: (p - path.end_mm()).norm(),
-        finish_s,
+        finish_s: last_finish_s,
         rows: tables.iter().map(ChannelTable::rows).sum(),
         words: tables
             .iter()
@@ -130,7 +136,7 @@ pub fn measure_within(
 pub fn path_deviation_mm(
     robot: &Robot,
     start: &[i64; JOINTS],
-    events: &[PulseEvent],
+    events: impl IntoIterator<Item = PulseEvent>,
     path: &dyn ToolPath,
 ) -> f64 {
     let mut q = robot.values_of(start);

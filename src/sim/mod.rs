@@ -14,8 +14,10 @@
 //! The planner's report and the mock PLC both use it.
 
 mod figures;
+mod play;
 
 pub use figures::{Figures, SAMPLE_PERIOD_S, measure, measure_within, path_deviation_mm};
+pub use play::{ChannelPulses, Merged, PlayedRow, Rows, finish_times, pulses};
 
 use crate::table::{ChannelTable, FrequencyModel, FrequencyRange};
 
@@ -90,103 +92,21 @@ pub struct Execution {
 /// Executes a start: `tables[i]` runs with channel limit `max_hz[i]`.
 #[must_use]
 pub fn execute(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) -> Execution {
-    let mut exec = Execution {
-        finish_s: vec![None; tables.len()],
-        ..Execution::default()
-    };
-    let mut channels = Vec::with_capacity(tables.len());
-    for (i, table) in tables.iter().enumerate() {
-        let limit = max_hz.get(i).copied().map_or(f64::INFINITY, f64::from);
-        run_channel(i, table, limit, settings, &mut exec);
-        channels.push(std::mem::take(&mut exec.events));
+    Execution {
+        events: pulses(tables, max_hz, settings).collect(),
+        rows: row_timings(tables, max_hz, settings),
+        finish_s: finish_times(tables, max_hz, settings),
     }
-    exec.events = merge(&channels);
-    exec
 }
 
-/// Merges per-channel event lists (each already in time order, the list's index being the
-/// table) into one, ties in table order: a k-way merge that keeps every channel's next time at hand.
+/// When every row of `tables` runs (see [`execute`]), table by table.
 #[must_use]
-pub fn merge(channels: &[Vec<PulseEvent>]) -> Vec<PulseEvent> {
-    let mut out = Vec::with_capacity(channels.iter().map(Vec::len).sum());
-    let mut heads = vec![0usize; channels.len()];
-    let next_t = |c: usize, at: usize| channels[c].get(at).map_or(f64::INFINITY, |e| e.t_s);
-    let mut times: Vec<f64> = (0..channels.len()).map(|c| next_t(c, 0)).collect();
-    loop {
-        // The first channel with the earliest next event, and the earliest of the others.
-        let (mut c, mut t) = (usize::MAX, f64::INFINITY);
-        for (i, &ti) in times.iter().enumerate() {
-            if ti < t {
-                (c, t) = (i, ti);
-            }
-        }
-        if c == usize::MAX {
-            // Only channels whose events have no finite time (none in a valid table) are left.
-            for (i, ch) in channels.iter().enumerate() {
-                out.extend_from_slice(&ch[heads[i]..]);
-            }
-            return out;
-        }
-        let (mut other, mut t2) = (usize::MAX, f64::INFINITY);
-        for (i, &ti) in times.iter().enumerate() {
-            if i != c && ti < t2 {
-                (other, t2) = (i, ti);
-            }
-        }
-        // Channel c's events up to the others' next one go out in one run (an event at the
-        // same time as the other's goes first when c is the lower table).
-        let run = &channels[c][heads[c]..];
-        let n = run
-            .iter()
-            .position(|e| e.t_s.total_cmp(&t2).then(c.cmp(&other)).is_gt())
-            .unwrap_or(run.len())
-            .max(1);
-        out.extend_from_slice(&run[..n]);
-        heads[c] += n;
-        times[c] = next_t(c, heads[c]);
+pub fn row_timings(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) -> Vec<RowTiming> {
+    let mut rows = Vec::with_capacity(tables.iter().map(ChannelTable::rows).sum());
+    for (i, table) in tables.iter().enumerate() {
+        rows.extend(Rows::new(i, table, play::limit_hz(max_hz, i), settings).map(|r| r.timing));
     }
-}
-
-fn run_channel(
-    index: usize,
-    table: &ChannelTable,
-    limit_hz: f64,
-    settings: Settings,
-    exec: &mut Execution,
-) {
-    let mut t = 0.0;
-    let mut count = table.start;
-    for (si, seg) in table.segments.iter().enumerate() {
-        if si > 0 {
-            t += settings.segment_gap_s;
-        }
-        for (ri, row) in seg.rows.iter().enumerate() {
-            let actual_hz = row_actual_hz(settings.model, row.freq_hz, seg.control.range, limit_hz);
-            let step = (row.target - count).signum();
-            let pulses = (row.target - count).abs();
-            let start_s = t;
-            for k in 1..=pulses {
-                count += step;
-                exec.events.push(PulseEvent {
-                    t_s: pulse_time_s(start_s, k, actual_hz),
-                    table: index,
-                    count,
-                });
-            }
-            t = pulse_time_s(start_s, pulses, actual_hz);
-            exec.rows.push(RowTiming {
-                table: index,
-                segment: si,
-                row: ri,
-                actual_hz,
-                start_s,
-                end_s: t,
-            });
-            if pulses > 0 {
-                exec.finish_s[index] = Some(t);
-            }
-        }
-    }
+    rows
 }
 
 #[cfg(test)]
@@ -308,7 +228,8 @@ mod tests {
             channel(1, 0.004, 30),
             channel(2, 0.006, 20),
         ];
-        let merged = merge(&channels);
+        let merged: Vec<PulseEvent> =
+            Merged::new(channels.iter().map(|c| c.iter().copied())).collect();
         let mut expected: Vec<PulseEvent> = channels.concat();
         expected.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.table.cmp(&b.table)));
         assert_eq!(merged, expected);

@@ -99,7 +99,7 @@ pub fn check_tables_and_ends(robot: &Robot, plan: &Plan) -> Result<(), TestCaseE
             joint.name
         );
         let executed = plan
-            .execution
+            .execution()
             .events
             .iter()
             .rev()

@@ -28,7 +28,7 @@ pub(super) fn write_starts(
     writeln!(out, "start,section,{ROW_COLUMNS},path_start_s,path_end_s")?;
     for s in starts {
         let lead = format!("{},{},", s.number, s.section);
-        for timing in &s.plan.execution.rows {
+        for timing in &s.plan.row_timings() {
             write_row(robot, s.plan, timing, &lead, out)?;
             writeln!(
                 out,
@@ -43,7 +43,7 @@ pub(super) fn write_starts(
 
 /// One line per row of `plan`, each led by `lead`.
 fn write_rows(robot: &Robot, plan: &Plan, lead: &str, out: &mut dyn Write) -> std::io::Result<()> {
-    for timing in &plan.execution.rows {
+    for timing in &plan.row_timings() {
         write_row(robot, plan, timing, lead, out)?;
         writeln!(out)?;
     }

@@ -185,7 +185,7 @@ fn deviation_by_piece(robot: &Robot, path: &Path, starts: &[Start<'_>]) -> Vec<f
             worst[i] = worst[i].max(off);
         };
         measure(&counts);
-        for e in &start.plan.execution.events {
+        for e in &start.plan.execution().events {
             counts[e.table] = e.count;
             measure(&counts);
         }

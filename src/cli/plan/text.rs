@@ -5,6 +5,7 @@ use std::io::{self, Write};
 use crate::kinematics::Kinematics;
 use crate::plan::Plan;
 use crate::robot::Robot;
+use crate::sim::RowTiming;
 use crate::table::{Direction, Duty, FrequencyRange};
 
 fn range_text(range: FrequencyRange) -> &'static str {
@@ -50,8 +51,9 @@ pub(super) fn write(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> io::Resu
         plan.motion.frequency_model.name()
     )?;
     write_profile(plan, out)?;
+    let timings = plan.row_timings();
     for (j, table) in plan.tables.iter().enumerate() {
-        write_channel(robot, plan, j, out)?;
+        write_channel(robot, plan, &timings, j, out)?;
         if table.segments.is_empty() {
             writeln!(out, "  (does not move: no table)")?;
         }
@@ -82,7 +84,13 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
     Ok(())
 }
 
-fn write_channel(robot: &Robot, plan: &Plan, j: usize, out: &mut dyn Write) -> io::Result<()> {
+fn write_channel(
+    robot: &Robot,
+    plan: &Plan,
+    timings: &[RowTiming],
+    j: usize,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     let table = &plan.tables[j];
     let joint = &robot.joints[j];
     writeln!(
@@ -121,11 +129,7 @@ fn write_channel(robot: &Robot, plan: &Plan, j: usize, out: &mut dyn Write) -> i
             "    {:>4} {:>9} {:>12} {:>9} {:>9}",
             "row", "freq Hz", "target", "start s", "end s"
         )?;
-        let timings = plan
-            .execution
-            .rows
-            .iter()
-            .filter(|r| r.table == j && r.segment == si);
+        let timings = timings.iter().filter(|r| r.table == j && r.segment == si);
         for (row, timing) in seg.rows.iter().zip(timings) {
             writeln!(
                 out,

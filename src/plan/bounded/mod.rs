@@ -21,7 +21,7 @@ mod rows;
 use crate::geometry::Profile;
 use crate::kinematics::JOINTS;
 use crate::robot::{Motion, Robot};
-use crate::sim::{Execution, Figures, PulseEvent};
+use crate::sim::{Figures, PulseEvent};
 use crate::table::ChannelTable;
 
 use super::course::Course;
@@ -79,7 +79,6 @@ fn deltas(reach: &[f64; JOINTS], scale: f64, budget_mm: f64) -> [f64; JOINTS] {
 /// A verified bounded-error plan's tables and how they ran.
 pub(super) struct Verified {
     pub tables: Vec<ChannelTable>,
-    pub execution: Execution,
     pub figures: Figures,
     /// The path deviation with every pulse exactly on time (the pulse grid's floor), mm.
     pub floor_mm: f64,
@@ -138,27 +137,24 @@ impl Move<'_> {
     /// order (each joint's are already in order).
     fn floor_mm(&self, tracks: &[Vec<f64>]) -> f64 {
         let start = self.start_counts();
-        let channels: Vec<Vec<PulseEvent>> = (0..JOINTS)
-            .map(|j| {
-                let track = Track {
-                    u: &tracks[j],
-                    dt_s: self.profile.period_s,
-                };
-                track
-                    .on_time(start[j])
-                    .into_iter()
-                    .map(|(t_s, count)| PulseEvent {
-                        t_s,
-                        table: j,
-                        count,
-                    })
-                    .collect()
-            })
-            .collect();
+        let channels = (0..JOINTS).map(|j| {
+            let track = Track {
+                u: &tracks[j],
+                dt_s: self.profile.period_s,
+            };
+            track
+                .on_time(start[j])
+                .into_iter()
+                .map(move |(t_s, count)| PulseEvent {
+                    t_s,
+                    table: j,
+                    count,
+                })
+        });
         crate::sim::path_deviation_mm(
             self.robot,
             &start,
-            &crate::sim::merge(&channels),
+            crate::sim::Merged::new(channels),
             self.course.tool_path(),
         )
     }
@@ -301,14 +297,11 @@ impl Move<'_> {
             tolerance_mm,
         );
         Ok(match run {
-            Some((execution, figures)) if figures.tracking_error_mm <= 2.0 * tolerance_mm => {
-                Some(Verified {
-                    tables,
-                    execution,
-                    figures,
-                    floor_mm,
-                })
-            }
+            Some(figures) if figures.tracking_error_mm <= 2.0 * tolerance_mm => Some(Verified {
+                tables,
+                figures,
+                floor_mm,
+            }),
             _ => None,
         })
     }
