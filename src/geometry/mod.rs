@@ -50,6 +50,16 @@ pub trait ToolPath {
     /// Where the path ends, mm.
     fn end_mm(&self) -> Vector3<f64>;
 
+    /// The distance from `p` to the path when it is more than `floor_mm` (`None` when it is
+    /// not), mm: what a running maximum needs. `hint` is the path's own note of where it found
+    /// the last point nearest (0 to begin with): a path of many pieces measures that piece
+    /// first, and a point within `floor_mm` of it is done.
+    fn distance_beyond_mm(&self, p: &Vector3<f64>, floor_mm: f64, hint: &mut usize) -> Option<f64> {
+        let _ = hint;
+        let d = self.distance_mm(p);
+        (d > floor_mm).then_some(d)
+    }
+
     /// A new measurement begins (at the path's start): forget where the last one was.
     fn restart(&self) {}
 

@@ -153,12 +153,15 @@ pub fn path_deviation_mm(
 
 /// The largest distance from a run of points to a path. On a straight segment it compares
 /// squared distances and takes a square root only for a new largest (the same value
-/// `distance_mm` gives: the root is monotonic).
+/// `distance_mm` gives: the root is monotonic). On a path of many pieces a point nearer to the
+/// piece the last one was nearest than the largest so far is not measured further: it cannot
+/// be a new largest.
 struct Deviation<'a> {
     path: &'a dyn ToolPath,
     line: Option<LineDistance>,
     max_mm: f64,
     max_mm2: f64,
+    hint: usize,
 }
 
 impl<'a> Deviation<'a> {
@@ -168,6 +171,7 @@ impl<'a> Deviation<'a> {
             line: path.as_line().map(LineDistance::new),
             max_mm: 0.0,
             max_mm2: f64::NEG_INFINITY,
+            hint: 0,
         }
     }
 
@@ -179,8 +183,8 @@ impl<'a> Deviation<'a> {
                 self.max_mm2 = d2;
                 self.max_mm = self.max_mm.max(d2.sqrt());
             }
-        } else {
-            self.max_mm = self.max_mm.max(self.path.distance_mm(p));
+        } else if let Some(d) = self.path.distance_beyond_mm(p, self.max_mm, &mut self.hint) {
+            self.max_mm = d;
         }
         self.max_mm
     }

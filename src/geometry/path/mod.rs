@@ -8,6 +8,7 @@
 //! (where the arc leaves in the direction the line came in, no blend is needed).
 
 mod arc;
+mod bounds;
 
 pub use arc::{Arc, ArcFault, RADIUS_SLACK_MM};
 
@@ -15,6 +16,7 @@ use nalgebra::Vector3;
 use thiserror::Error;
 
 use super::{Line, Pose, ToolPath};
+use bounds::Bounds;
 
 /// The turn (radians) below which a corner is no corner: the path goes straight on.
 const STRAIGHT_RAD: f64 = 1e-6;
@@ -251,9 +253,19 @@ pub struct Path {
     pieces: Vec<Piece>,
     /// Distances along the path of every stop, ascending; the last is the path's end.
     stops_mm: Vec<f64>,
+    /// Bounding spheres over the pieces, for the distance from a point to the path.
+    bounds: Bounds,
 }
 
 impl Path {
+    fn new(pieces: Vec<Piece>, stops_mm: Vec<f64>) -> Self {
+        Self {
+            bounds: Bounds::new(&pieces),
+            pieces,
+            stops_mm,
+        }
+    }
+
     /// Builds `spec` into its primitives, corners blended where asked.
     ///
     /// # Errors
@@ -337,7 +349,7 @@ impl Path {
             }
         }
         stops_mm.push(s);
-        Ok(Self { pieces, stops_mm })
+        Ok(Self::new(pieces, stops_mm))
     }
 
     /// Its pieces, in order.
@@ -375,10 +387,10 @@ impl Path {
             });
             let end_mm = piece.start_mm + piece.primitive.length_mm();
             if stops.next_if(|&&stop| stop <= end_mm + 1e-9).is_some() {
-                sections.push(Path {
-                    pieces: std::mem::take(&mut pieces),
-                    stops_mm: vec![end_mm - base_mm],
-                });
+                sections.push(Path::new(
+                    std::mem::take(&mut pieces),
+                    vec![end_mm - base_mm],
+                ));
                 base_mm = end_mm;
             }
         }
@@ -452,24 +464,35 @@ impl Path {
 impl From<Line> for Path {
     /// A line as a path of one piece (element 1), stopped at its end.
     fn from(line: Line) -> Self {
-        Self {
-            pieces: vec![Piece {
+        Self::new(
+            vec![Piece {
                 primitive: Primitive::Line(line),
                 start_mm: 0.0,
                 element: Some(1),
                 waypoint: None,
             }],
-            stops_mm: vec![line.length_mm()],
-        }
+            vec![line.length_mm()],
+        )
     }
 }
 
 impl ToolPath for Path {
+    /// The smallest distance to any piece; only the pieces that could be the nearest are
+    /// measured.
     fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
-        self.pieces
-            .iter()
-            .map(|piece| piece.primitive.distance_mm(p))
-            .fold(f64::INFINITY, f64::min)
+        self.bounds.nearest(&self.pieces, p).0
+    }
+
+    fn distance_beyond_mm(&self, p: &Vector3<f64>, floor_mm: f64, hint: &mut usize) -> Option<f64> {
+        if let Some(piece) = self.pieces.get(*hint)
+            && piece.primitive.distance_mm(p) <= floor_mm
+        {
+            // The path is at least as near as that piece.
+            return None;
+        }
+        let (d, nearest) = self.bounds.nearest(&self.pieces, p);
+        *hint = nearest;
+        (d > floor_mm).then_some(d)
     }
 
     fn end_mm(&self) -> Vector3<f64> {

@@ -261,3 +261,50 @@ fn a_line_is_a_path_of_one_piece_stopped_at_its_end() {
     assert_eq!(path.stops_mm(), [5.0]);
     assert!((path.nearest_mm(&Vector3::new(3.0, 4.0, 9.0)) - 5.0).abs() < 1e-12);
 }
+
+/// Every piece's distance to `p`, the smallest (what the bounding spheres must find).
+fn every_piece_mm(path: &Path, p: &Vector3<f64>) -> f64 {
+    path.pieces()
+        .iter()
+        .map(|piece| piece.primitive.distance_mm(p))
+        .fold(f64::INFINITY, f64::min)
+}
+
+proptest::proptest! {
+    /// The distance to a path through the bounding spheres is exactly the smallest over every
+    /// piece, for paths of blended zig-zags and arcs (some crossing back near themselves) and
+    /// points near them, on them and far away.
+    #[test]
+    fn the_distance_to_a_path_is_exactly_the_nearest_pieces(
+        turns in proptest::collection::vec((-300.0..300.0_f64, -300.0..300.0_f64, -80.0..80.0_f64), 2..14),
+        blend in 1.0..40.0_f64,
+        with_arc in proptest::bool::ANY,
+        points in proptest::collection::vec((-400.0..400.0_f64, -400.0..400.0_f64, -150.0..150.0_f64), 40),
+    ) {
+        let mut elements: Vec<(Element, Corner)> = turns
+            .iter()
+            .map(|&(x, y, z)| line(pose(x, y, z), Corner::Blend(blend)))
+            .collect();
+        if with_arc {
+            let (x, y, z) = turns[turns.len() - 1];
+            elements.push((
+                Element::Arc {
+                    to: pose(x + 100.0, y, z),
+                    by: ArcBy::Via(Vector3::new(x + 50.0, y + 50.0, z)),
+                },
+                Corner::Stop,
+            ));
+        }
+        let spec = PathSpec { start: pose(0.0, 0.0, 0.0), elements };
+        let Ok(path) = Path::build(&spec) else { return Ok(()) };
+        for &(x, y, z) in &points {
+            let p = Vector3::new(x, y, z);
+            proptest::prop_assert_eq!(path.distance_mm(&p), every_piece_mm(&path, &p));
+        }
+        // On the path itself (where the nearest piece is a hair away and neighbours tie).
+        for k in 0..=50 {
+            let p = path.at(path.length_mm() * f64::from(k) / 50.0).position_mm;
+            proptest::prop_assert_eq!(path.distance_mm(&p), every_piece_mm(&path, &p));
+        }
+    }
+}
