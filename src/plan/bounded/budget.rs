@@ -43,6 +43,21 @@ fn gram(v: &[Vector3<f64>; JOINTS]) -> [[f64; JOINTS]; JOINTS] {
 }
 
 /// `|sum_j e_j v_j|^2` from the vectors' products.
+/// The corners of the box of joint errors `1/2 + delta_j` pulses each side; the norm is even,
+/// so those with the first joint's error positive suffice.
+fn corners(deltas: &[f64; JOINTS]) -> [[f64; JOINTS]; 1 << (JOINTS - 1)] {
+    let half = deltas.map(|d| 0.5 + d);
+    std::array::from_fn(|corner| {
+        std::array::from_fn(|j| {
+            if j > 0 && corner & (1 << (j - 1)) != 0 {
+                -half[j]
+            } else {
+                half[j]
+            }
+        })
+    })
+}
+
 fn norm2(gram: &[[f64; JOINTS]; JOINTS], e: &[f64; JOINTS]) -> f64 {
     let mut sum = 0.0;
     for j in 0..JOINTS {
@@ -122,21 +137,14 @@ impl Budget {
 
     /// The worst path deviation and tracking error, mm, of joints each at most `1/2 + delta_j`
     /// pulses off (linearised): the largest over the points and the corners of the box.
+    #[cfg(test)]
     pub(super) fn worst_mm(&self, deltas: &[f64; JOINTS]) -> (f64, f64) {
-        let half = deltas.map(|d| 0.5 + d);
+        let corners = corners(deltas);
         let (mut across2, mut whole2) = (0.0f64, 0.0f64);
         for point in &self.points {
-            // The norm is even: the corners with the first joint's error positive suffice.
-            for corner in 0..1u32 << (JOINTS - 1) {
-                let e: [f64; JOINTS] = std::array::from_fn(|j| {
-                    if j > 0 && corner & (1 << (j - 1)) != 0 {
-                        -half[j]
-                    } else {
-                        half[j]
-                    }
-                });
-                across2 = across2.max(norm2(&point.across, &e));
-                whole2 = whole2.max(norm2(&point.whole, &e));
+            for e in &corners {
+                across2 = across2.max(norm2(&point.across, e));
+                whole2 = whole2.max(norm2(&point.whole, e));
             }
         }
         (across2.sqrt(), whole2.sqrt())
@@ -160,9 +168,31 @@ impl Budget {
 
     /// Whether windows `deltas` keep the worst path deviation within [`MARGIN`] of
     /// `tolerance_mm` and the worst tracking error within it of twice that.
+    /// The same decision as comparing the worst case (`worst_mm`, in the tests) with both
+    /// limits, made at the first point past either.
     fn fits(&self, deltas: &[f64; JOINTS], tolerance_mm: f64) -> bool {
-        let (path, tracking) = self.worst_mm(deltas);
-        path <= MARGIN * tolerance_mm && tracking <= 2.0 * MARGIN * tolerance_mm
+        let (path_limit, tracking_limit) = (MARGIN * tolerance_mm, 2.0 * MARGIN * tolerance_mm);
+        let corners = corners(deltas);
+        let (mut across2, mut whole2) = (0.0f64, 0.0f64);
+        for point in &self.points {
+            for e in &corners {
+                let a = norm2(&point.across, e);
+                if a > across2 {
+                    across2 = a;
+                    if across2.sqrt() > path_limit {
+                        return false;
+                    }
+                }
+                let w = norm2(&point.whole, e);
+                if w > whole2 {
+                    whole2 = w;
+                    if whole2.sqrt() > tracking_limit {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// The widest windows that fit ([`Self::fits`]): shaped ([`Self::shaped`]) as wide as they
@@ -251,6 +281,25 @@ mod tests {
             (path - quadrature).abs() < 0.01 * quadrature,
             "{path} {quadrature}"
         );
+    }
+
+    #[test]
+    fn fits_decides_as_the_worst_case_compared_with_both_limits() {
+        let (robot, values) = moving_out(1_000.0, 0.5, 8);
+        let budget = Budget::new(&robot, &values);
+        let (mut fitting, mut not) = (0, 0);
+        for k in 0..200 {
+            let d = f64::from(k) * 0.05;
+            let deltas = [d, d * 0.5, d * 1.5, d];
+            for tolerance_mm in [0.02, 0.05, 0.1] {
+                let (path, tracking) = budget.worst_mm(&deltas);
+                let expected =
+                    path <= MARGIN * tolerance_mm && tracking <= 2.0 * MARGIN * tolerance_mm;
+                assert_eq!(budget.fits(&deltas, tolerance_mm), expected, "{deltas:?}");
+                if expected { fitting += 1 } else { not += 1 }
+            }
+        }
+        assert!(fitting > 0 && not > 0, "{fitting} fit, {not} do not");
     }
 
     #[test]
