@@ -15,6 +15,8 @@
 //! of them: one pass, no retry, as long as the linearisation holds (the pulses are small against
 //! the robot) and the samples of the vectors catch their largest.
 
+use std::cell::Cell;
+
 use nalgebra::Vector3;
 
 use crate::kinematics::{JOINTS, Joints, Kinematics};
@@ -79,6 +81,8 @@ pub(super) struct Budget {
     whole_mm: [f64; JOINTS],
     /// How many pulses every joint makes along the path.
     pulses: [f64; JOINTS],
+    /// The point that last put windows past a limit: the next probe looks at it first.
+    binding: Cell<usize>,
 }
 
 impl Budget {
@@ -122,6 +126,7 @@ impl Budget {
             reach_mm,
             whole_mm,
             pulses,
+            binding: Cell::new(0),
         }
     }
 
@@ -169,17 +174,22 @@ impl Budget {
     /// Whether windows `deltas` keep the worst path deviation within [`MARGIN`] of
     /// `tolerance_mm` and the worst tracking error within it of twice that.
     /// The same decision as comparing the worst case (`worst_mm`, in the tests) with both
-    /// limits, made at the first point past either.
+    /// limits, made at the first point past either, the point that was past one last time
+    /// looked at first (a bisection's refused probes are refused at once).
     fn fits(&self, deltas: &[f64; JOINTS], tolerance_mm: f64) -> bool {
         let (path_limit, tracking_limit) = (MARGIN * tolerance_mm, 2.0 * MARGIN * tolerance_mm);
         let corners = corners(deltas);
         let (mut across2, mut whole2) = (0.0f64, 0.0f64);
-        for point in &self.points {
+        let first = self.binding.get().min(self.points.len().saturating_sub(1));
+        let order = std::iter::once(first).chain((0..self.points.len()).filter(|&i| i != first));
+        for i in order {
+            let point = &self.points[i];
             for e in &corners {
                 let a = norm2(&point.across, e);
                 if a > across2 {
                     across2 = a;
                     if across2.sqrt() > path_limit {
+                        self.binding.set(i);
                         return false;
                     }
                 }
@@ -187,6 +197,7 @@ impl Budget {
                 if w > whole2 {
                     whole2 = w;
                     if whole2.sqrt() > tracking_limit {
+                        self.binding.set(i);
                         return false;
                     }
                 }
