@@ -142,68 +142,43 @@ impl Iterator for ChannelPulses<'_> {
 }
 
 /// Channels' events (each already in time order, the channel's place in the list being its
-/// table) merged into one time order as they are read, ties in table order. A channel's events
-/// go out in one run up to the next event of another channel, so most reads compare one time.
+/// table) merged into one time order as they are read, ties in table order: every read takes
+/// the earliest of the channels' next events (a start has at most four channels).
 #[derive(Debug, Clone)]
 pub struct Merged<I: Iterator<Item = PulseEvent>> {
-    channels: Vec<(Option<PulseEvent>, I)>,
-    /// The channel whose run goes out, and the (time, table) its events must stay before.
-    run: Option<(usize, Option<(f64, usize)>)>,
+    /// Every channel's next event (`None` once it has no more).
+    heads: Vec<Option<PulseEvent>>,
+    channels: Vec<I>,
 }
 
 impl<I: Iterator<Item = PulseEvent>> Merged<I> {
     /// Merges `channels`, channel `c` holding table `c`'s events.
     pub fn new(channels: impl IntoIterator<Item = I>) -> Self {
+        let mut channels: Vec<I> = channels.into_iter().collect();
         Self {
-            channels: channels.into_iter().map(|mut it| (it.next(), it)).collect(),
-            run: None,
+            heads: channels.iter_mut().map(Iterator::next).collect(),
+            channels,
         }
     }
-
-    /// The channel with the earliest next event, and the earliest next (time, table) of the
-    /// others.
-    fn choose(&self) -> Option<(usize, Option<(f64, usize)>)> {
-        let mut first: Option<(f64, usize)> = None;
-        let mut second: Option<(f64, usize)> = None;
-        for (c, (head, _)) in self.channels.iter().enumerate() {
-            let Some(e) = head else { continue };
-            let key = (e.t_s, c);
-            if first.is_none_or(|f| before(key, f)) {
-                second = first;
-                first = Some(key);
-            } else if second.is_none_or(|s| before(key, s)) {
-                second = Some(key);
-            }
-        }
-        first.map(|(_, c)| (c, second))
-    }
-}
-
-/// Whether event key `a` (time, table) goes before `b`.
-fn before(a: (f64, usize), b: (f64, usize)) -> bool {
-    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt()
 }
 
 impl<I: Iterator<Item = PulseEvent>> Iterator for Merged<I> {
     type Item = PulseEvent;
 
     fn next(&mut self) -> Option<PulseEvent> {
-        if let Some((c, limit)) = self.run {
-            if let (Some(e), _) = &self.channels[c]
-                && limit.is_none_or(|l| before((e.t_s, c), l))
+        // The first channel, in table order, whose next event is the earliest.
+        let mut first: Option<(f64, usize)> = None;
+        for (c, head) in self.heads.iter().enumerate() {
+            if let Some(e) = head
+                && first.is_none_or(|f| e.t_s.total_cmp(&f.0).is_lt())
             {
-                let e = *e;
-                let (head, it) = &mut self.channels[c];
-                *head = it.next();
-                return Some(e);
+                first = Some((e.t_s, c));
             }
         }
-        let (c, limit) = self.choose()?;
-        self.run = Some((c, limit));
-        let (head, it) = &mut self.channels[c];
-        let e = head.take()?;
-        *head = it.next();
-        Some(e)
+        let (_, c) = first?;
+        let e = self.heads[c].take();
+        self.heads[c] = self.channels[c].next();
+        e
     }
 }
 
