@@ -22,6 +22,7 @@
 //! within a few scans is written again only if its reply was lost, else it ends as not taken.
 
 mod phase;
+mod progress;
 #[cfg(test)]
 mod tests;
 
@@ -30,6 +31,7 @@ use std::time::{Duration, Instant};
 use super::{CHANNELS, Fault, READY_HOMED, State, StatusBlock};
 
 pub use phase::{Phase, Running, Written};
+pub use progress::{MIN_SCALE, ProgressCurve, THIN};
 
 /// The status block with its words decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
