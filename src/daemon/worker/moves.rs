@@ -2,16 +2,18 @@
 //! reports (or from the running move's targets, to chain behind it), uploaded into the bank that
 //! is not running, checked once more against a fresh status block, and started with one write.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::pace::{Pace, Part};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
-use crate::contract::machine::{Blocker, Planned};
+use crate::contract::machine::{Blocker, Planned, ProgressCurve};
 use crate::daemon::order::plan_order;
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
 use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
+use crate::robot::Robot;
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -285,7 +287,7 @@ impl Worker {
             targets: Some(targets),
             envelope,
             duration: Duration::from_secs_f64(plan.duration_s()),
-            curve: None,
+            curve: progress_curve(&self.robot, plan, from).map(Arc::new),
         }
     }
 
@@ -406,4 +408,28 @@ impl Worker {
             self.shared.forget_planned_end();
         }
     }
+}
+
+/// The plan's counts per channel at each of its sample points over the start's own time (equally
+/// spaced by the profile's period from the start's 0, the last at its end; a channel without a
+/// joint stays at `from`), for the machine to follow the start's progress by its counts.
+fn progress_curve(robot: &Robot, plan: &Plan, from: [i32; CHANNELS]) -> Option<ProgressCurve> {
+    let period_s = plan.profile.period_s;
+    let duration_s = plan.duration_s();
+    let points: Vec<(Duration, [i32; CHANNELS])> = plan
+        .samples
+        .counts
+        .iter()
+        .enumerate()
+        .map(|(k, joints)| {
+            let at_s = (k as f64 * period_s).min(duration_s);
+            let mut counts = from;
+            for (joint, &count) in robot.joints.iter().zip(joints) {
+                counts[usize::from(joint.channel)] =
+                    count.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+            }
+            (Duration::from_secs_f64(at_s.max(0.0)), counts)
+        })
+        .collect();
+    ProgressCurve::new(&points)
 }
