@@ -84,6 +84,7 @@ pub async fn upload<P: Plc>(
         targets: Some(targets),
         envelope,
         duration: Duration::from_secs_f64(plan.duration_s()),
+        curve: None,
     };
     Ok((plan, bank, planned))
 }

@@ -22,14 +22,17 @@
 //! within a few scans is written again only if its reply was lost, else it ends as not taken.
 
 mod phase;
+mod progress;
 #[cfg(test)]
 mod tests;
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::{CHANNELS, Fault, READY_HOMED, State, StatusBlock};
 
-pub use phase::{Phase, Running, Written};
+pub use phase::{AHEAD, Phase, Running, Written};
+pub use progress::{MIN_SCALE, ProgressCurve, THIN};
 
 /// The status block with its words decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,8 +45,9 @@ pub struct Status {
     pub fault: Fault,
 }
 
-/// What one start was planned to do: what the host checks the PLC against.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What one start was planned to do: what the host checks the PLC against, and follows its
+/// progress by.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Planned {
     /// The caller's name for it (the daemon's move id).
     pub tag: u64,
@@ -59,6 +63,10 @@ pub struct Planned {
     pub envelope: [(i32, i32); CHANNELS],
     /// How long it is planned to take.
     pub duration: Duration,
+    /// Its planned counts over its time, to tell how far along it is from the counts read
+    /// ([`Running::progress`]); `None` for a start whose plan the host does not have (found
+    /// running after a restart): its progress is then the clock's.
+    pub curve: Option<Arc<ProgressCurve>>,
 }
 
 /// How closely a start is watched.
@@ -623,7 +631,7 @@ impl Machine {
     pub fn adopt(&mut self, start: Planned, now: Instant) {
         if matches!(self.phase, Phase::Idle | Phase::Unhomed) {
             self.phase = Phase::Running {
-                current: Running { start, since: now },
+                current: Running::new(start, now),
             };
         }
     }

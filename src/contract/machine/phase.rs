@@ -5,13 +5,55 @@ use std::time::{Duration, Instant};
 use super::{Event, Machine, Outcome, Planned, Status, WatchSettings};
 use crate::contract::{CHANNELS, READY_HOMED, State};
 
+/// How far past the host's own clock (the time since it saw a start running) its plan is
+/// searched for the counts read: the PLC plays the tables no faster than planned, but it began
+/// them up to a status read before the host saw it (a read over a slow link takes a few hundred
+/// ms). It keeps a plan that passes again near where it was (a path that comes back on itself)
+/// from being found at its second pass.
+pub const AHEAD: Duration = Duration::from_millis(500);
+
 /// A start the PLC runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Running {
     /// What it was planned to do.
     pub start: Planned,
     /// When the host saw it start.
     pub since: Instant,
+    /// Where along its plan's [`Planned::curve`] its counts were last found (zero without one).
+    pub reached: Duration,
+}
+
+impl Running {
+    /// `start`, seen running at `since`.
+    #[must_use]
+    pub fn new(start: Planned, since: Instant) -> Self {
+        Self {
+            start,
+            since,
+            reached: Duration::ZERO,
+        }
+    }
+
+    /// Share of its planned duration at which its plan reaches the counts read (`elapsed`, at
+    /// `now`), 0 to 1, moving [`Self::reached`] on: the instant of its [`Planned::curve`] whose
+    /// counts are nearest, searched forward from where it was last found (so it never goes back)
+    /// up to [`AHEAD`] past the time since it was seen running. A robot held back, or a PLC that
+    /// runs slow, shows where it is, not where the clock says it should be.
+    ///
+    /// Without a curve (a start found running after the daemon restarted, whose plan it does
+    /// not have), the clock: the time since it was seen running over its planned duration.
+    pub fn progress(&mut self, elapsed: &[i32; CHANNELS], now: Instant) -> f64 {
+        let ran = now.saturating_duration_since(self.since);
+        if let Some(curve) = &self.start.curve {
+            self.reached = curve.locate(elapsed, self.reached, ran + AHEAD);
+            return curve.share(self.reached);
+        }
+        let planned = self.start.duration.as_secs_f64();
+        if planned <= 0.0 {
+            return 1.0;
+        }
+        (ran.as_secs_f64() / planned).min(1.0)
+    }
 }
 
 /// A command word the host wrote and waits to see acted on.
@@ -127,13 +169,13 @@ impl Phase {
             Self::Uploading {
                 current: Some(current),
             }
-            | Self::Running { current } => vec![current.start],
-            Self::Starting { start, .. } => vec![*start],
-            Self::Chained { current, next, .. } => vec![current.start, *next],
+            | Self::Running { current } => vec![current.start.clone()],
+            Self::Starting { start, .. } => vec![start.clone()],
+            Self::Chained { current, next, .. } => vec![current.start.clone(), next.clone()],
             Self::Stopping { current, next, .. } => current
                 .iter()
-                .map(|c| c.start)
-                .chain(next.iter().copied())
+                .map(|c| c.start.clone())
+                .chain(next.iter().cloned())
                 .collect(),
             _ => Vec::new(),
         }
@@ -141,37 +183,43 @@ impl Phase {
 
     /// Takes the starts in flight out of the phase (leaving it without them).
     pub(super) fn take_given(&mut self) -> (Option<Planned>, Option<Planned>) {
-        let taken = match self {
+        match self {
             Self::LinkDown { was, .. } => return was.take_given(),
-            Self::Uploading { current } => (current.take().map(|c| c.start), None),
-            Self::Starting { start, .. } => (Some(*start), None),
-            Self::Running { current } => (Some(current.start), None),
-            Self::Chained { current, next, .. } => (Some(current.start), Some(*next)),
-            Self::Stopping { current, next, .. } => (current.take().map(|c| c.start), next.take()),
-            _ => return (None, None),
-        };
-        if !matches!(self, Self::Uploading { .. } | Self::Stopping { .. }) {
-            *self = Self::Idle;
+            Self::Uploading { current } => return (current.take().map(|c| c.start), None),
+            Self::Stopping { current, next, .. } => {
+                return (current.take().map(|c| c.start), next.take());
+            }
+            _ => {}
         }
-        taken
+        match std::mem::replace(self, Self::Idle) {
+            Self::Starting { start, .. } => (Some(start), None),
+            Self::Running { current } => (Some(current.start), None),
+            Self::Chained { current, next, .. } => (Some(current.start), Some(next)),
+            other => {
+                *self = other;
+                (None, None)
+            }
+        }
     }
 
     /// Takes the starts in flight out of the phase as a stop sees them: the one seen running,
     /// and one written but not yet seen running.
     pub(super) fn take_in_flight(&mut self) -> (Option<Running>, Option<Planned>) {
-        let taken = match self {
+        match self {
             Self::LinkDown { was, .. } => return was.take_in_flight(),
-            Self::Uploading { current } => (current.take(), None),
-            Self::Starting { start, .. } => (None, Some(*start)),
-            Self::Running { current } => (Some(*current), None),
-            Self::Chained { current, next, .. } => (Some(*current), Some(*next)),
-            Self::Stopping { current, next, .. } => (current.take(), next.take()),
-            _ => return (None, None),
-        };
-        if !matches!(self, Self::Uploading { .. } | Self::Stopping { .. }) {
-            *self = Self::Idle;
+            Self::Uploading { current } => return (current.take(), None),
+            Self::Stopping { current, next, .. } => return (current.take(), next.take()),
+            _ => {}
         }
-        taken
+        match std::mem::replace(self, Self::Idle) {
+            Self::Starting { start, .. } => (None, Some(start)),
+            Self::Running { current } => (Some(current), None),
+            Self::Chained { current, next, .. } => (Some(current), Some(next)),
+            other => {
+                *self = other;
+                (None, None)
+            }
+        }
     }
 
     /// The write of a start still waiting to be seen.
@@ -317,7 +365,7 @@ fn starting(
 ) -> Phase {
     if status.block.seq == start.seq {
         events.push(Event::Started { tag: start.tag });
-        let current = Running { start, since: now };
+        let current = Running::new(start, now);
         return running(current, status, now, m, events);
     }
     if status.state == State::Fault {
@@ -357,7 +405,7 @@ fn starting(
 
 /// A start runs: done, stopped, faulted, or still running inside its envelope and its time.
 fn running(
-    current: Running,
+    mut current: Running,
     status: &Status,
     now: Instant,
     m: &Machine,
@@ -397,10 +445,11 @@ fn running(
         events.push(Event::WriteStop);
         return halt(now);
     }
+    let fraction = current.progress(&elapsed, now);
     events.push(Event::Progress {
         tag,
         elapsed,
-        fraction: fraction(&current, now),
+        fraction,
     });
     Phase::Running { current }
 }
@@ -439,14 +488,6 @@ fn watch(
     (ran > limit).then_some(Outcome::Overrun { ran, limit })
 }
 
-fn fraction(current: &Running, now: Instant) -> f64 {
-    let planned = current.start.duration.as_secs_f64();
-    if planned <= 0.0 {
-        return 1.0;
-    }
-    (now.saturating_duration_since(current.since).as_secs_f64() / planned).min(1.0)
-}
-
 /// A start runs and the next was written behind it.
 #[allow(clippy::too_many_arguments)]
 fn chained(
@@ -468,10 +509,7 @@ fn chained(
             elapsed: None,
         });
         events.push(Event::Started { tag: next.tag });
-        let current = Running {
-            start: next,
-            since: now,
-        };
+        let current = Running::new(next, now);
         return running(current, status, now, m, events);
     }
     if seq != current.start.seq {
@@ -534,40 +572,50 @@ fn waiting_next(
     m: &Machine,
     events: &mut Vec<Event>,
 ) -> Phase {
+    let tag = next.tag;
     let waiting = status.block.waiting == next.seq;
     if waiting && !seen_waiting {
-        events.push(Event::Waiting { tag: next.tag });
+        events.push(Event::Waiting { tag });
     }
-    let chained = |written, seen_waiting| Phase::Chained {
-        current,
-        next,
-        written,
-        seen_waiting,
-    };
     if waiting {
-        return chained(written, true);
+        return Phase::Chained {
+            current,
+            next,
+            written,
+            seen_waiting: true,
+        };
     }
     if seen_waiting {
         // It waited and is gone while the running start goes on: somebody withdrew it.
         events.push(Event::Ended {
-            tag: next.tag,
+            tag,
             outcome: Outcome::Dropped,
         });
         return Phase::Running { current };
     }
     let scans = written.scans(status);
     if scans < m.settings.start_scans {
-        return chained(written, false);
+        return Phase::Chained {
+            current,
+            next,
+            written,
+            seen_waiting: false,
+        };
     }
     if !written.confirmed && written.attempts < 2 {
-        events.push(Event::RewriteStart { tag: next.tag });
-        return chained(written, false);
+        events.push(Event::RewriteStart { tag });
+        return Phase::Chained {
+            current,
+            next,
+            written,
+            seen_waiting: false,
+        };
     }
     events.push(Event::Ended {
-        tag: next.tag,
+        tag,
         outcome: Outcome::NotTaken { scans },
     });
-    events.push(Event::Withdraw { tag: next.tag });
+    events.push(Event::Withdraw { tag });
     Phase::Running { current }
 }
 
@@ -583,9 +631,7 @@ fn stopping(
 ) -> Phase {
     let seq = status.block.seq;
     let (mut current, mut next) = (current, next);
-    if let Some(n) = next
-        && seq == n.seq
-    {
+    if let Some(n) = next.take_if(|n| n.seq == seq) {
         if let Some(c) = current.take() {
             events.push(Event::Done {
                 tag: c.start.tag,
@@ -593,11 +639,7 @@ fn stopping(
             });
         }
         events.push(Event::Started { tag: n.tag });
-        current = Some(Running {
-            start: n,
-            since: now,
-        });
-        next = None;
+        current = Some(Running::new(n, now));
     }
     if status.state == State::Running {
         if written.scans(status) >= m.settings.start_scans {

@@ -3,6 +3,7 @@
 //! Every transition of the host's machine, table-driven: a machine brought into a phase, one
 //! status block, the events and the phase that must follow.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::*;
@@ -51,6 +52,7 @@ fn planned(tag: u64, seq: u16, from: [i32; CHANNELS], to: [i32; CHANNELS]) -> Pl
         targets: Some(to),
         envelope: std::array::from_fn(|c| (from[c].min(to[c]), from[c].max(to[c]))),
         duration: Duration::from_secs(1),
+        curve: None,
     }
 }
 
@@ -261,7 +263,7 @@ fn starting_transitions() {
     ];
     for (what, confirmed, scans, s, want, phase) in cases {
         let mut bed = Bed::idle();
-        bed.start(p, confirmed);
+        bed.start(p.clone(), confirmed);
         assert_eq!(name(&bed.m), "starting", "{what}");
         // Scans are counted from the first status block read after the write.
         assert_eq!(bed.feed(old), [], "{what}");
@@ -841,4 +843,152 @@ fn a_start_is_written_only_from_the_counts_it_was_planned_from() {
         Err(Blocker::Full),
         "something already waits"
     );
+}
+
+/// The counts planned `t_s` into a 1 s start from FROM: channel 0 out 1000 pulses and back,
+/// channel 1 on 2000 and channel 3 on 500 at a steady pace, channel 2 still.
+fn out_and_back(t_s: f64) -> [i32; CHANNELS] {
+    let t = t_s.clamp(0.0, 1.0);
+    let offset = [
+        1_000.0 * (1.0 - (2.0 * t - 1.0).abs()),
+        2_000.0 * t,
+        0.0,
+        500.0 * t,
+    ];
+    std::array::from_fn(|c| FROM[c] + offset[c].round() as i32)
+}
+
+/// Start 8 (tag 1) along [`out_and_back`], its curve sampled every 10 ms.
+fn out_and_back_start() -> Planned {
+    let points: Vec<(Duration, [i32; CHANNELS])> = (0..=100_u32)
+        .map(|i| {
+            let at = Duration::from_millis(u64::from(i) * 10);
+            (at, out_and_back(at.as_secs_f64()))
+        })
+        .collect();
+    let curve = ProgressCurve::new(&points).unwrap();
+    let to = out_and_back(1.0);
+    Planned {
+        envelope: std::array::from_fn(|c| {
+            let along = points.iter().map(|(_, p)| p[c]);
+            (along.clone().min().unwrap(), along.max().unwrap())
+        }),
+        curve: Some(Arc::new(curve)),
+        ..planned(1, 8, FROM, to)
+    }
+}
+
+/// A machine running `p`, seen running at FROM, and when it was seen.
+fn along(p: Planned) -> (Bed, Instant) {
+    let mut bed = Bed::idle();
+    bed.start(p, true);
+    let events = bed.feed(status(State::Running, 8, 0, FROM));
+    assert!(events.contains(&Event::Started { tag: 1 }), "{events:?}");
+    let since = bed.now;
+    (bed, since)
+}
+
+/// The progress shown for `counts` read `ms` after the start was seen running.
+fn progress_at(bed: &mut Bed, since: Instant, ms: u64, counts: [i32; CHANNELS]) -> f64 {
+    // `feed_after` reads 10 ms on.
+    bed.now = since + Duration::from_millis(ms - 10);
+    let events = bed.feed_after(1, status(State::Running, 8, 0, counts));
+    match events[..] {
+        [Event::Progress { fraction, .. }] => fraction,
+        _ => panic!("{events:?}"),
+    }
+}
+
+#[test]
+fn a_start_whose_counts_stand_still_shows_no_progress_as_time_goes_on() {
+    let (mut bed, since) = along(out_and_back_start());
+    let held = out_and_back(0.3);
+    let shown: Vec<f64> = [300, 500, 800, 1_200, 1_800, 2_200]
+        .into_iter()
+        .map(|ms| progress_at(&mut bed, since, ms, held))
+        .collect();
+    assert!(shown.iter().all(|f| (f - 0.3).abs() < 0.005), "{shown:?}");
+    // Released, it goes on from there.
+    let f = progress_at(&mut bed, since, 2_240, out_and_back(0.4));
+    assert!((f - 0.4).abs() < 0.005, "{f}");
+}
+
+#[test]
+fn counts_half_way_along_the_plan_show_about_one_half_whatever_the_clock() {
+    for ms in [100, 500, 900, 2_000] {
+        let (mut bed, since) = along(out_and_back_start());
+        let f = progress_at(&mut bed, since, ms, out_and_back(0.5));
+        assert!((f - 0.5).abs() < 0.005, "{ms} ms: {f}");
+    }
+    // Between two points of the curve too.
+    let (mut bed, since) = along(out_and_back_start());
+    let f = progress_at(&mut bed, since, 600, out_and_back(0.555));
+    assert!((f - 0.555).abs() < 0.005, "{f}");
+}
+
+#[test]
+fn a_start_is_never_shown_further_ahead_of_its_clock_than_a_read_can_be_late() {
+    // Counts at 0.9 s, read 0.1 s after the start was seen: the PLC cannot be that far ahead
+    // (a path that passes again near where it was is not taken for its second pass).
+    let (mut bed, since) = along(out_and_back_start());
+    let f = progress_at(&mut bed, since, 100, out_and_back(0.9));
+    let ahead = (Duration::from_millis(100) + AHEAD).as_secs_f64();
+    assert!((f - ahead).abs() < 0.005, "{f}");
+    let f = progress_at(&mut bed, since, 400, out_and_back(0.9));
+    assert!((f - 0.9).abs() < 0.005, "{f}");
+}
+
+#[test]
+fn a_joint_that_reverses_does_not_take_the_progress_back() {
+    // Channel 0 is at +500 both 0.25 s and 0.75 s in, going out and coming back: the other
+    // channels tell the two apart.
+    let (mut bed, since) = along(out_and_back_start());
+    assert_eq!(out_and_back(0.25)[0], out_and_back(0.75)[0]);
+    let f = progress_at(&mut bed, since, 250, out_and_back(0.25));
+    assert!((f - 0.25).abs() < 0.005, "{f}");
+    let f = progress_at(&mut bed, since, 750, out_and_back(0.75));
+    assert!((f - 0.75).abs() < 0.005, "{f}");
+    // A read with channel 0 where it was on the way out, the others a little behind: the plan
+    // is searched only on from where the start was found, so it holds there.
+    let mut behind = out_and_back(0.7);
+    behind[0] = out_and_back(0.2)[0];
+    let f = progress_at(&mut bed, since, 800, behind);
+    assert!((f - 0.75).abs() < 0.005, "{f}");
+    // Channel 0 on its way back alone tells nothing of where the start is (its share of its
+    // way falls); the share shown goes on with the others.
+    let f = progress_at(&mut bed, since, 900, out_and_back(0.9));
+    assert!((f - 0.9).abs() < 0.005, "{f}");
+}
+
+#[test]
+fn the_progress_never_decreases_on_a_slow_and_unsteady_plc() {
+    // The PLC plays the plan at a pace that wanders between standing still and the planned
+    // pace, with reads a couple of pulses off; the progress follows the plan's time, and never
+    // goes back.
+    let (mut bed, since) = along(out_and_back_start());
+    let mut random = 0x2545_F491_u32;
+    let mut next = move || {
+        random ^= random << 13;
+        random ^= random >> 17;
+        random ^= random << 5;
+        random
+    };
+    let envelope = out_and_back_start().envelope;
+    let (mut planned_s, mut last) = (0.0_f64, 0.0_f64);
+    for read in 1..=200_u64 {
+        planned_s = (planned_s + f64::from(next() % 11) / 1_000.0).min(1.0);
+        let mut counts = out_and_back(planned_s);
+        for (c, count) in counts.iter_mut().enumerate() {
+            let noise = (next() % 5) as i32 - 2;
+            *count = (*count + noise).clamp(envelope[c].0, envelope[c].1);
+        }
+        let f = progress_at(&mut bed, since, read * 10, counts);
+        assert!(f >= last, "read {read}: {f} after {last}");
+        assert!(
+            (f - planned_s).abs() < 0.01,
+            "read {read}: {f} at {planned_s}"
+        );
+        last = f;
+    }
+    assert!(planned_s > 0.8, "{planned_s}");
 }

@@ -186,8 +186,9 @@ impl Worker {
         self.started.insert(id, now());
         self.next_seq = seq.wrapping_add(1).max(1);
         self.next_bank = 1 - planned.bank.min(1);
+        let bank = planned.bank;
         self.machine.adopt(planned, now());
-        tracing::info!(robot = %self.robot.name, id, seq, bank = planned.bank, "following a move this run did not start");
+        tracing::info!(robot = %self.robot.name, id, seq, bank, "following a move this run did not start");
         Ok(())
     }
 
@@ -342,6 +343,7 @@ fn unknown_start(tag: MoveId, seq: u16, status: &Status) -> Planned {
         targets: None,
         envelope: [(i32::MIN, i32::MAX); CHANNELS],
         duration: UNKNOWN_DURATION,
+        curve: None,
     }
 }
 

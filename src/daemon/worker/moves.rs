@@ -2,16 +2,18 @@
 //! reports (or from the running move's targets, to chain behind it), uploaded into the bank that
 //! is not running, checked once more against a fresh status block, and started with one write.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::pace::{Pace, Part};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
-use crate::contract::machine::{Blocker, Planned};
+use crate::contract::machine::{Blocker, Planned, ProgressCurve};
 use crate::daemon::order::plan_order;
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
 use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
+use crate::robot::Robot;
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -33,13 +35,13 @@ impl Worker {
             return polled;
         }
         let id = queued.id;
-        let chain = self.machine.chain_behind().copied();
+        let chain = self.machine.chain_behind().cloned();
         let at_speed = queued.order.begins_at_speed();
         if at_speed && chain.is_none() {
             self.fail_at_speed(id);
             return Ok(());
         }
-        let from = match (chain, self.machine.last()) {
+        let from = match (&chain, self.machine.last()) {
             (Some(running), _) => running.targets.expect("chained only behind known targets"),
             (None, Some(last)) => last.block.elapsed,
             (None, None) => unreachable!("no blocker without a status block"),
@@ -56,7 +58,7 @@ impl Worker {
                 return Ok(());
             }
         };
-        let planned = self.planned(id, &plan, from, chain.map(|c| c.bank));
+        let planned = self.planned(id, &plan, from, chain.as_ref().map(|c| c.bank));
         let targets = planned.targets.expect("a plan knows its targets");
         self.record_plan(id, &plan, &planned);
         if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
@@ -86,7 +88,7 @@ impl Worker {
         if let Err(e) = self.until_it_may_start(&planned).await {
             return self.not_started(id, e);
         }
-        if at_speed && self.lost_its_chain(id, chain.map(|c| c.seq)) {
+        if at_speed && self.lost_its_chain(id, chain.as_ref().map(|c| c.seq)) {
             return Ok(());
         }
         let link = self.link.as_mut().expect("connected");
@@ -100,6 +102,7 @@ impl Worker {
             Err(e) => return self.not_started(id, e),
         };
         let confirmed = matches!(written, CommandWrite::Confirmed);
+        let (seq, planned_bank) = (planned.seq, planned.bank);
         self.machine.start_written(planned, now(), confirmed);
         self.last_start = Some((id, bank));
         if chain.is_some() {
@@ -110,10 +113,11 @@ impl Worker {
         // Chained: how long after the move before was seen running this start was written, of
         // the time that move runs (the chain's slack, as the pace check estimates it).
         let behind_s = chain
+            .as_ref()
             .and_then(|c| self.started.get(&c.tag))
             .map(|seen| now().saturating_duration_since(*seen).as_secs_f64());
-        let runs_s = chain.map(|c| c.duration.as_secs_f64());
-        tracing::info!(robot = %self.robot.name, id, seq = planned.seq, bank = planned.bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
+        let runs_s = chain.as_ref().map(|c| c.duration.as_secs_f64());
+        tracing::info!(robot = %self.robot.name, id, seq, bank = planned_bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
         match written {
             CommandWrite::Unconfirmed(e) if e.is_link_failure() => {
                 // Whether it was taken is learnt from the status block once the link is back.
@@ -283,6 +287,7 @@ impl Worker {
             targets: Some(targets),
             envelope,
             duration: Duration::from_secs_f64(plan.duration_s()),
+            curve: progress_curve(&self.robot, plan, from).map(Arc::new),
         }
     }
 
@@ -403,4 +408,28 @@ impl Worker {
             self.shared.forget_planned_end();
         }
     }
+}
+
+/// The plan's counts per channel at each of its sample points over the start's own time (equally
+/// spaced by the profile's period from the start's 0, the last at its end; a channel without a
+/// joint stays at `from`), for the machine to follow the start's progress by its counts.
+fn progress_curve(robot: &Robot, plan: &Plan, from: [i32; CHANNELS]) -> Option<ProgressCurve> {
+    let period_s = plan.profile.period_s;
+    let duration_s = plan.duration_s();
+    let points: Vec<(Duration, [i32; CHANNELS])> = plan
+        .samples
+        .counts
+        .iter()
+        .enumerate()
+        .map(|(k, joints)| {
+            let at_s = (k as f64 * period_s).min(duration_s);
+            let mut counts = from;
+            for (joint, &count) in robot.joints.iter().zip(joints) {
+                counts[usize::from(joint.channel)] =
+                    count.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+            }
+            (Duration::from_secs_f64(at_s.max(0.0)), counts)
+        })
+        .collect();
+    ProgressCurve::new(&points)
 }

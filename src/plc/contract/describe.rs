@@ -78,6 +78,8 @@ impl<P: Plc> Contract<P> {
             targets: None,
             envelope: std::array::from_fn(|c| (elapsed[c], elapsed[c])),
             duration: Duration::ZERO,
+            // Its plan is not known here: its progress is the clock's.
+            curve: None,
         };
         let mut targets = planned.from;
         for c in 0..CHANNELS {

@@ -737,7 +737,11 @@ impl<P: Plc> Contract<P> {
             }
         }
         let confirmed = matches!(self.start(bank).await?, CommandWrite::Confirmed);
-        machine.start_written(start, tokio::time::Instant::now().into_std(), confirmed);
+        machine.start_written(
+            start.clone(),
+            tokio::time::Instant::now().into_std(),
+            confirmed,
+        );
         loop {
             tokio::time::sleep(self.settings.poll_interval).await;
             let status = self.status().await?;

@@ -323,6 +323,7 @@ async fn run_refuses_to_write_a_start_from_other_counts() {
         targets: Some([500, 0, 0, 0]),
         envelope: [(0, 500), (0, 0), (0, 0), (0, 0)],
         duration: Duration::from_millis(500),
+        curve: None,
     };
     let err = c.run(&mut m, &bank, start, |_| {}).await.unwrap_err();
     assert_eq!(
