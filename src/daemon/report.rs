@@ -109,7 +109,9 @@ pub struct MoveReport {
     pub upload_s: Option<f64>,
     /// Time from its start to its end on the PLC, as polled, s.
     pub motion_s: Option<f64>,
-    /// Share of its planned duration elapsed (0 to 1).
+    /// How far along its plan it is, as a share of its planned duration (0 to 1): the planned
+    /// instant whose counts come nearest the counts last read from the PLC (it never goes
+    /// back); by the clock only for a move the daemon found running without its plan.
     pub progress: f64,
     /// The latest counts per channel read while it ran.
     pub counts: Option<[i64; 4]>,
