@@ -184,6 +184,7 @@ impl<I: Iterator<Item = PulseEvent>> Iterator for Merged<I> {
 
 /// Every pulse of a start's `tables` (channel limits `max_hz[i]`, none past the list) in time
 /// order, ties in table order, made as they are read.
+#[must_use]
 pub fn pulses<'a>(
     tables: &'a [ChannelTable],
     max_hz: &[u32],
