@@ -262,8 +262,13 @@ impl RobotHandle {
                     }),
                     motion,
                 };
-                let shown =
-                    SectionReport::new(n + 1, of, &shared.path, &plan.profile, &plan.window);
+                let shown = SectionReport::new(
+                    n + 1,
+                    of,
+                    &shared.path,
+                    &|s| plan.time_at_course_mm(s),
+                    &plan.window,
+                );
                 let id = self.shared.next_id();
                 self.shared.moves(|m| {
                     let mut report =

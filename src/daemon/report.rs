@@ -7,7 +7,7 @@ use serde::Serialize;
 use tokio::sync::watch;
 
 use super::order::MoveOrder;
-use crate::geometry::{Path, Primitive, Profile};
+use crate::geometry::{Path, Primitive};
 
 /// A move's identifier, unique across daemon runs (see [`super::MoveIds`]).
 pub type MoveId = u64;
@@ -153,20 +153,19 @@ pub struct PieceReport {
 }
 
 impl SectionReport {
-    /// Section `number` of `of`, its path `section` (measured from its start) run on `profile`,
-    /// of which this start plays `window` (a part of a section cut into several starts shows
+    /// Section `number` of `of`, its path `section` (measured from its start) reached at
+    /// distance `s` at `time_at_mm(s)` on its profile's time, of which this start plays `window` (a part of a section cut into several starts shows
     /// the pieces before it done and those after it not begun).
     #[must_use]
     pub fn new(
         number: usize,
         of: usize,
         section: &Path,
-        profile: &Profile,
+        time_at_mm: &dyn Fn(f64) -> f64,
         window: &crate::plan::Window,
     ) -> Self {
         let duration_s = window.duration_s();
-        let share =
-            |s_mm: f64| ((profile.time_at_mm(s_mm) - window.from_s) / duration_s).clamp(0.0, 1.0);
+        let share = |s_mm: f64| ((time_at_mm(s_mm) - window.from_s) / duration_s).clamp(0.0, 1.0);
         let pieces = section
             .pieces()
             .iter()
@@ -324,7 +323,7 @@ impl Moves {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Corner, Element, PathSpec, Pose, ProfileRequest};
+    use crate::geometry::{Corner, Element, PathSpec, Pose, Profile, ProfileRequest};
 
     #[test]
     fn a_sections_report_gives_each_piece_its_share_of_the_planned_time() {
@@ -346,8 +345,13 @@ mod tests {
             period_s: 0.01,
         })
         .unwrap();
-        let report =
-            SectionReport::new(2, 3, &path, &profile, &crate::plan::Window::whole(&profile));
+        let report = SectionReport::new(
+            2,
+            3,
+            &path,
+            &|s| profile.time_at_mm(s),
+            &crate::plan::Window::whole(&profile),
+        );
         assert_eq!((report.number, report.of), (2, 3));
         let names: Vec<_> = report
             .pieces

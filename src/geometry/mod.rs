@@ -1,11 +1,13 @@
 //! PURE. Poses, the straight line between two poses, paths of lines and arcs through waypoints
-//! (corners blended or stopped at), the polyline of a curved tool path, and the motion profile
-//! along a path.
+//! (corners blended or stopped at), the polyline of a curved tool path, the motion profile
+//! along a path, and the pace at which a path's profile slows for its tight arcs.
 
+mod pace;
 mod path;
 mod polyline;
 mod profile;
 
+pub use pace::Pace;
 pub use path::{
     Arc, ArcBy, ArcFault, Corner, Element, Path, PathError, PathSpec, Piece, Primitive,
     RADIUS_SLACK_MM,

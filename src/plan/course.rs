@@ -11,7 +11,7 @@
 
 use nalgebra::Vector3;
 
-use crate::geometry::{Line, Path, Polyline, Pose, Profile, ToolPath};
+use crate::geometry::{Line, Pace, Path, Polyline, Pose, Profile, ToolPath};
 use crate::kinematics::{JOINTS, Joints, Kinematics, Model};
 use crate::robot::Robot;
 
@@ -76,8 +76,13 @@ pub(super) enum Course {
     /// The tool point on a straight line.
     Line(Line),
     /// The tool point on a section of a path (lines, arcs, blended corners) it runs through
-    /// without a stop.
-    Path(Path),
+    /// without a stop, the profile running along it at its pace (slower on tight arcs).
+    Path {
+        /// The section.
+        path: Path,
+        /// Where the profile's distance falls on it.
+        pace: Pace,
+    },
     /// Every joint on a straight line in joint space.
     Joints {
         /// The joints' path.
@@ -111,7 +116,7 @@ impl Course {
     pub(super) fn length_mm(&self) -> f64 {
         match self {
             Self::Line(line) => line.length_mm(),
-            Self::Path(path) => path.length_mm(),
+            Self::Path { pace, .. } => pace.profile_length_mm(),
             Self::Joints { length_mm, .. } => *length_mm,
         }
     }
@@ -120,7 +125,7 @@ impl Course {
     pub(super) fn position_mm(&self, s_mm: f64) -> Vector3<f64> {
         match self {
             Self::Line(line) => line.at(s_mm).position_mm,
-            Self::Path(path) => path.at(s_mm).position_mm,
+            Self::Path { path, pace } => path.at(pace.path_mm(s_mm)).position_mm,
             Self::Joints {
                 path, length_mm, ..
             } => path.pose_at(s_mm / length_mm).position_mm,
@@ -135,7 +140,7 @@ impl Course {
                 let d = line.to.position_mm - line.from.position_mm;
                 Some((line.from.position_mm, d, d.norm()))
             }
-            Self::Path(_) | Self::Joints { .. } => None,
+            Self::Path { .. } | Self::Joints { .. } => None,
         };
         move |s_mm| match line {
             Some((from, d, len)) => from + d * if len > 0.0 { s_mm / len } else { 1.0 },
@@ -147,7 +152,7 @@ impl Course {
     pub(super) fn tool_path(&self) -> &dyn ToolPath {
         match self {
             Self::Line(line) => line,
-            Self::Path(path) => path,
+            Self::Path { path, .. } => path,
             Self::Joints { trace, .. } => trace,
         }
     }
@@ -157,7 +162,7 @@ impl Course {
     pub(super) fn chord(&self) -> Line {
         match self {
             Self::Line(line) => *line,
-            Self::Path(path) => Line {
+            Self::Path { path, .. } => Line {
                 from: path.at(0.0),
                 to: path.at(path.length_mm()),
             },
@@ -171,7 +176,15 @@ impl Course {
     /// The path, for a path section.
     pub(super) fn path(&self) -> Option<&Path> {
         match self {
-            Self::Path(path) => Some(path),
+            Self::Path { path, .. } => Some(path),
+            Self::Line(_) | Self::Joints { .. } => None,
+        }
+    }
+
+    /// Where the profile's distance falls on the path, for a path section.
+    pub(super) fn pace(&self) -> Option<&Pace> {
+        match self {
+            Self::Path { pace, .. } => Some(pace),
             Self::Line(_) | Self::Joints { .. } => None,
         }
     }
@@ -179,7 +192,7 @@ impl Course {
     /// The joint-space path, for a joint move.
     pub(super) fn joint_path(&self) -> Option<&JointPath> {
         match self {
-            Self::Line(_) | Self::Path(_) => None,
+            Self::Line(_) | Self::Path { .. } => None,
             Self::Joints { path, .. } => Some(path),
         }
     }
@@ -196,9 +209,13 @@ impl Course {
             Self::Line(line) => {
                 samples::sample(robot, &|s| line.at(s), profile, start_values, start_counts)
             }
-            Self::Path(path) => {
-                samples::sample(robot, &|s| path.at(s), profile, start_values, start_counts)
-            }
+            Self::Path { path, pace } => samples::sample(
+                robot,
+                &|s| path.at(pace.path_mm(s)),
+                profile,
+                start_values,
+                start_counts,
+            ),
             Self::Joints { path, .. } => {
                 Ok(samples::sample_joints(robot, path, profile, start_counts))
             }

@@ -25,7 +25,7 @@ pub mod segments;
 
 use thiserror::Error;
 
-use crate::geometry::{Line, Path, PathError, Pose, Profile, ProfileError, ProfileRequest};
+use crate::geometry::{Line, Pace, Path, PathError, Pose, Profile, ProfileError, ProfileRequest};
 use crate::kinematics::{JOINTS, Joints, Kinematics, KinematicsError};
 use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::sim::{self, Execution, Figures, Settings};
@@ -256,7 +256,11 @@ pub struct Plan {
     /// A path section's path (lines, arcs, blends), measured from its start (`None` for a
     /// line or joint move).
     pub path: Option<Path>,
-    /// The profile actually used.
+    /// A path section's pace: where the profile's distance falls on the path, slower on tight
+    /// arcs (`None` for a line or joint move, whose profile runs along the course as it is).
+    pub pace: Option<Pace>,
+    /// The profile actually used (for a path section, over the pace's distance: see
+    /// [`Plan::course_mm`]).
     pub profile: Profile,
     /// The motion settings actually used (speed lowered by `slow-down` if it had to).
     pub motion: Motion,
@@ -358,13 +362,44 @@ impl Plan {
         sim::row_timings(&self.tables, &self.max_hz, settings(&self.motion))
     }
 
+    /// How far along its course (its line, or its section's path) the profile is at its own
+    /// time `profile_s` (not the start's: see [`Window`]), mm.
+    #[must_use]
+    pub fn course_mm(&self, profile_s: f64) -> f64 {
+        let s_mm = self.profile.distance_mm(profile_s);
+        self.pace.as_ref().map_or(s_mm, |pace| pace.path_mm(s_mm))
+    }
+
+    /// When, on the profile's own time, the planned motion reaches `s_mm` along its course, s.
+    #[must_use]
+    pub fn time_at_course_mm(&self, s_mm: f64) -> f64 {
+        let sigma_mm = self
+            .pace
+            .as_ref()
+            .map_or(s_mm, |pace| pace.profile_mm(s_mm));
+        self.profile.time_at_mm(sigma_mm)
+    }
+
+    /// The tool's slowest planned speed between `from_mm` and `to_mm` along its course while
+    /// the profile cruises, mm/s: the profile's speed, lowered on a path's tight arcs.
+    #[must_use]
+    pub fn cruise_mm_s(&self, from_mm: f64, to_mm: f64) -> f64 {
+        self.profile.speed_mm_s
+            * self
+                .pace
+                .as_ref()
+                .map_or(1.0, |pace| pace.slowest(from_mm, to_mm))
+    }
+
     /// The planned position at time `t_s` of this start.
     #[must_use]
     pub fn planned_position_mm(&self, t_s: f64) -> nalgebra::Vector3<f64> {
-        let s_mm = self.profile.distance_mm(self.window.from_s + t_s);
         if let Some(path) = &self.path {
-            return path.at(s_mm).position_mm;
+            return path
+                .at(self.course_mm(self.window.from_s + t_s))
+                .position_mm;
         }
+        let s_mm = self.profile.distance_mm(self.window.from_s + t_s);
         match &self.joint_path {
             Some(path) => path.pose_at(s_mm / self.profile.length_mm).position_mm,
             None => self.line.at(s_mm).position_mm,
@@ -583,6 +618,7 @@ impl<'a> Sampled<'a> {
             line: self.course.chord(),
             joint_path: self.course.joint_path().cloned(),
             path: self.course.path().cloned(),
+            pace: self.course.pace().cloned(),
             profile: self.profile,
             motion: self.motion,
             speed_factor: self.speed_factor,

@@ -2,10 +2,11 @@
 //! into sections, and each section planned as one move along it, each starting from the counts
 //! the one before it ends on, so the PLC can chain them through its waiting start.
 //!
-//! A section runs on one trapezoid over its length. Its speed is lowered, for the whole section,
-//! to what the tightest arc in it allows under the path's centripetal acceleration limit
-//! (`v = sqrt(a r)`), and then, as for a line, to what the channels' frequencies allow under
-//! `slow-down`.
+//! A section runs on one trapezoid, at its pace ([`Pace`]): at the speed asked on lines, and on
+//! an arc too tight for it at what the path's centripetal acceleration limit allows
+//! (`v = sqrt(a r)`), for that arc alone, slowing before it and speeding up after it at the
+//! profile's own acceleration (speed / acceleration time). As for a line, the whole section's
+//! speed is then lowered to what the channels' frequencies allow under `slow-down`.
 //!
 //! A section may need more than one start ("parts", chained at speed through the PLC's waiting
 //! start): where its tables would not fit a channel's area or 8 segments (cut in halves until
@@ -17,7 +18,7 @@
 //! each part is planned from exactly the counts the one before it ends on and judged by the
 //! execution model on its own, against the same path and the same profile.
 
-use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
+use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose};
 use crate::kinematics::Kinematics;
 use crate::robot::{Motion, Robot};
 
@@ -174,13 +175,17 @@ fn section_plan(
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
-    let mut motion = asked;
-    let curvature = section.max_curvature_per_mm();
-    if curvature > 0.0 {
-        motion.speed_mm_s = motion.speed_mm_s.min((path_accel_mm_s2 / curvature).sqrt());
-    }
-    let course = Course::Path(section.clone());
-    parts(robot, &course, start, motion).map_err(|source| (elements, source))
+    let pace = Pace::new(
+        section,
+        asked.speed_mm_s,
+        path_accel_mm_s2,
+        asked.speed_mm_s / asked.accel_s,
+    );
+    let course = Course::Path {
+        path: section.clone(),
+        pace,
+    };
+    parts(robot, &course, start, asked).map_err(|source| (elements, source))
 }
 
 /// The shortest part a section is cut into, s: chaining needs the next part uploaded while one
@@ -591,16 +596,72 @@ mod tests {
             plan.max_deviation_mm()
         );
         assert!((plan.path.length_mm() - 100.0 * std::f64::consts::PI).abs() < 1e-9);
-        assert!((plan.sections[0].starts[0].motion.speed_mm_s - 240.0).abs() < 1e-9);
-        // 100 mm/s^2 on r = 100 mm allows 100 mm/s.
+        let whole = plan.path.length_mm();
+        let cruise = plan.sections[0].starts[0].cruise_mm_s(0.0, whole);
+        assert!(cruise > 239.0 && cruise <= 240.0, "{cruise} mm/s");
+        // 100 mm/s^2 on r = 100 mm allows 100 mm/s, all the way round.
         let slow = plan_path(&robot, &req(bounded, 100.0)).unwrap();
-        let speed = slow.sections[0].starts[0].motion.speed_mm_s;
-        assert!((speed - 100.0).abs() < 1e-9, "{speed} mm/s");
+        let start = &slow.sections[0].starts[0];
+        let speed = start.cruise_mm_s(0.0, whole);
+        assert!(speed > 99.0 && speed <= 100.0 + 1e-9, "{speed} mm/s");
+        assert!(slow.duration_s() > whole / 100.0);
         let err = plan_path(&robot, &req(bounded, 0.0)).unwrap_err();
         assert_eq!(
             err.to_string(),
             "the path acceleration 0 mm/s^2 must be a number above 0"
         );
+    }
+
+    #[test]
+    fn a_tight_blend_slows_the_tool_on_it_alone_within_the_centripetal_limit() {
+        // Up and across to above P2, a 20 mm blend turning 133 deg (radius 8.6 mm), down to P2:
+        // 5000 mm/s^2 allows 207.7 mm/s on the blend; the lines run at 240 mm/s.
+        let accel = 5_000.0;
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+            let plan = cycle(&[pose(P2, 100.0)], Corner::Blend(20.0), bounded, model).unwrap();
+            assert!(plan.valid());
+            assert!(plan.max_deviation_mm() <= 0.05, "{model:?}");
+            let blend = plan.path.pieces()[1];
+            assert!(blend.element.is_none());
+            let r = 1.0 / blend.primitive.curvature_per_mm();
+            let allowed = (accel * r).sqrt();
+            let (b0, b1) = (blend.start_mm, blend.start_mm + blend.primitive.length_mm());
+            // The planned tool speed, by finite differences of the planned positions along every
+            // start's time.
+            let mut fastest_on_blend: f64 = 0.0;
+            let mut fastest: f64 = 0.0;
+            let dt = 1e-4;
+            for start in plan.starts() {
+                let steps = (start.duration_s() / dt) as usize;
+                for i in 0..steps {
+                    let t = i as f64 * dt;
+                    let (p, q) = (
+                        start.planned_position_mm(t),
+                        start.planned_position_mm(t + dt),
+                    );
+                    let speed = (q - p).norm() / dt;
+                    let s = start.course_mm(start.window.from_s + t);
+                    if s > b0 && s < b1 {
+                        fastest_on_blend = fastest_on_blend.max(speed);
+                    }
+                    fastest = fastest.max(speed);
+                }
+            }
+            assert!(
+                fastest_on_blend <= allowed * (1.0 + 1e-6),
+                "{model:?}: {fastest_on_blend} mm/s on the blend, {allowed} allowed"
+            );
+            assert!(fastest_on_blend > allowed * 0.99, "{fastest_on_blend}");
+            assert!(fastest > 239.0, "{model:?}: the lines at {fastest} mm/s");
+            // The whole section slowed to the blend's speed would take longer.
+            let length = plan.path.length_mm();
+            assert!(
+                plan.duration_s() < length / allowed,
+                "{} s for {length} mm",
+                plan.duration_s()
+            );
+        }
     }
 
     #[test]

@@ -77,13 +77,20 @@ pub(super) struct Start<'a> {
 impl Start<'_> {
     /// Where along the whole path it ends, mm.
     pub(super) fn ends_mm(&self) -> f64 {
-        self.section_mm + self.plan.profile.distance_mm(self.plan.window.to_s)
+        self.section_mm + self.plan.course_mm(self.plan.window.to_s)
     }
 
     /// When the planned motion reaches `s_mm` along the whole path, s from the path's start.
     fn time_at_mm(&self, s_mm: f64) -> f64 {
-        self.begins_s + self.plan.profile.time_at_mm(s_mm - self.section_mm)
+        self.begins_s + self.plan.time_at_course_mm(s_mm - self.section_mm)
             - self.plan.window.from_s
+    }
+
+    /// The slowest planned speed between `from_mm` and `to_mm` along the whole path while its
+    /// profile cruises, mm/s.
+    pub(super) fn cruise_mm_s(&self, from_mm: f64, to_mm: f64) -> f64 {
+        self.plan
+            .cruise_mm_s(from_mm - self.section_mm, to_mm - self.section_mm)
     }
 
     /// The path it was planned on, measured from its own start.
@@ -107,7 +114,7 @@ pub(super) fn starts(planned: &PathPlan) -> Vec<Start<'_>> {
                 section: i + 1,
                 plan,
                 section_mm,
-                begins_mm: section_mm + plan.profile.distance_mm(plan.window.from_s),
+                begins_mm: section_mm + plan.course_mm(plan.window.from_s),
                 begins_s: s,
             });
             s += plan.duration_s();
@@ -208,6 +215,17 @@ fn write_text(
     )?;
     for piece in planned.path.pieces() {
         let p = &piece.primitive;
+        let end_mm = piece.start_mm + p.length_mm();
+        let start = holding(starts, piece.start_mm + p.length_mm() / 2.0);
+        let (slowest, cruise) = (
+            start.cruise_mm_s(piece.start_mm, end_mm),
+            start.plan.profile.speed_mm_s,
+        );
+        let slowed = if slowest < cruise - 0.05 {
+            format!(", slowed to {slowest:.1} mm/s")
+        } else {
+            String::new()
+        };
         let source = match (piece.element, piece.waypoint) {
             (Some(e), _) => format!("element {e}"),
             (None, Some(w)) => format!("blend {w}"),
@@ -217,12 +235,12 @@ fn write_text(
         match p {
             Primitive::Line(_) => writeln!(
                 out,
-                "  {source:<11} line {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3})",
+                "  {source:<11} line {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}){slowed}",
                 p.length_mm()
             )?,
             Primitive::Arc(a) => writeln!(
                 out,
-                "  {source:<11} arc  {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}), radius {:.3} mm, {:.1} deg",
+                "  {source:<11} arc  {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}), radius {:.3} mm, {:.1} deg{slowed}",
                 p.length_mm(),
                 a.radius_mm,
                 a.sweep_rad.to_degrees()

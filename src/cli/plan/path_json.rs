@@ -5,7 +5,9 @@
 //! A primitive's `path_deviation_mm` is the largest distance from the planned path of the
 //! executed positions (after every pulse event) whose nearest point of the path lies on it; its
 //! `start_s` and `end_s` are when the planned motion enters and leaves it, from the path's start
-//! with the starts back to back.
+//! with the starts back to back; its `cruise_mm_s` is the slowest the tool is planned to go on it
+//! while the profile cruises (a tight arc's `sqrt(path_accel * r)`). A start's `speed_mm_s` is
+//! its profile's cruising speed, the tool's on lines away from tight arcs.
 
 use serde::Serialize;
 
@@ -51,6 +53,9 @@ struct PrimitiveDoc {
     sweep_deg: Option<f64>,
     start_s: f64,
     end_s: f64,
+    /// The slowest planned speed on it while the profile cruises (lower on a tight arc and
+    /// where the tool slows for one), mm/s.
+    cruise_mm_s: f64,
     path_deviation_mm: f64,
 }
 
@@ -161,6 +166,8 @@ fn primitive_doc(piece: &Piece, starts: &[Start<'_>], deviation_mm: f64) -> Prim
         sweep_deg,
         start_s: time_at_mm(starts, piece.start_mm),
         end_s: time_at_mm(starts, end_mm),
+        cruise_mm_s: holding(starts, piece.start_mm + p.length_mm() / 2.0)
+            .cruise_mm_s(piece.start_mm, end_mm),
         path_deviation_mm: deviation_mm,
     }
 }

@@ -1,0 +1,370 @@
+//! PURE. How a section's profile runs along its path: at the profile's own speed on lines, and
+//! slower on an arc too tight for that speed under the path's centripetal limit (`v = sqrt(a r)`,
+//! for that arc alone), slowing down before it and speeding up after it at the profile's own
+//! acceleration.
+//!
+//! The profile (one trapezoid) runs over a distance σ; the pace maps σ to the distance `s` along
+//! the path. Its ratio `w = ds/dσ` (the tool's speed over the profile's) is 1 where nothing is
+//! tight and `sqrt(a r) / V` on a tight arc. Between the two, `w²` changes linearly with `s`, by
+//! `2 a_t / V²` per mm: while the profile cruises at `V` that is a constant tangential
+//! acceleration `a_t` (`v² = v0² + 2 a_t s`). The limits meet as the lower envelope of every
+//! arc's: a short line between two tight arcs is run at what both allow.
+//!
+//! On a stretch where `w²` is linear in `s`, `w` is linear in σ (`dw/dσ = c / 2` for
+//! `w² = w0² + c (s - s0)`), so both ways are closed forms:
+//! `σ - σ0 = 2 (s - s0) / (w0 + w)`, and `s - s0 = (σ - σ0) (w0 + w) / 2`.
+
+use super::Path;
+
+/// The steepest change of `w²` per mm: a speed that steps (no ramp) does so within a nanometre.
+const MAX_SLOPE_PER_MM: f64 = 1e6;
+
+/// One corner of the piecewise-linear `w²(s)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Knot {
+    /// Distance along the path, mm.
+    s_mm: f64,
+    /// Distance along the profile, mm.
+    sigma_mm: f64,
+    /// The speed ratio `w` here.
+    w: f64,
+}
+
+/// Where a section's profile distance falls on its path (see the module's docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pace {
+    /// At least two; `s_mm` and `sigma_mm` ascending, the first at 0, the last at the ends.
+    knots: Vec<Knot>,
+}
+
+impl Pace {
+    /// The profile run along a path of `length_mm` as it is (every ratio 1).
+    #[must_use]
+    pub fn uniform(length_mm: f64) -> Self {
+        Self {
+            knots: vec![
+                Knot {
+                    s_mm: 0.0,
+                    sigma_mm: 0.0,
+                    w: 1.0,
+                },
+                Knot {
+                    s_mm: length_mm,
+                    sigma_mm: length_mm,
+                    w: 1.0,
+                },
+            ],
+        }
+    }
+
+    /// The pace of a profile cruising at `speed_mm_s` along `path`: every arc run at no more than
+    /// `sqrt(centripetal_mm_s2 * r)`, slowing and speeding up at `tangential_mm_s2`.
+    #[must_use]
+    pub fn new(
+        path: &Path,
+        speed_mm_s: f64,
+        centripetal_mm_s2: f64,
+        tangential_mm_s2: f64,
+    ) -> Self {
+        let v2 = speed_mm_s * speed_mm_s;
+        // Every piece's length and its limit on w².
+        let pieces: Vec<(f64, f64)> = path
+            .pieces()
+            .iter()
+            .map(|p| {
+                let k = p.primitive.curvature_per_mm();
+                let limit = if k > 0.0 {
+                    (centripetal_mm_s2 / k / v2).min(1.0)
+                } else {
+                    1.0
+                };
+                (p.primitive.length_mm(), limit)
+            })
+            .collect();
+        // Without a ramp (an acceleration time of 0) the speed steps at the arc's ends.
+        let slope = (2.0 * tangential_mm_s2 / v2).min(MAX_SLOPE_PER_MM);
+        if slope.is_nan() || slope <= 0.0 || pieces.iter().all(|&(_, l)| l >= 1.0 || l.is_nan()) {
+            return Self::uniform(path.length_mm());
+        }
+        // The envelope at every boundary between pieces: the lowest of every piece's limit
+        // plus the slope times the distance to it, from the left and from the right.
+        let n = pieces.len();
+        let mut at = vec![1.0_f64; n + 1];
+        let mut left = f64::INFINITY;
+        for j in 1..=n {
+            let (len, limit) = pieces[j - 1];
+            left = (left + slope * len).min(limit);
+            at[j] = at[j].min(left);
+        }
+        let mut right = f64::INFINITY;
+        for j in (0..n).rev() {
+            let (len, limit) = pieces[j];
+            right = (right + slope * len).min(limit);
+            at[j] = at[j].min(right);
+        }
+        // Inside a piece the envelope is its own limit, or the slope from one of its ends.
+        let mut corners: Vec<(f64, f64)> = vec![(0.0, at[0])];
+        for (i, (&(len, limit), piece)) in pieces.iter().zip(path.pieces()).enumerate() {
+            // As the path measures its own length, so that the last corner is its end exactly.
+            let (s0, s1) = (piece.start_mm, piece.start_mm + len);
+            let (u0, u1) = (at[i], at[i + 1]);
+            let rise = s0 + (limit - u0) / slope;
+            let fall = s1 - (limit - u1) / slope;
+            if rise <= fall {
+                corners.push((rise, limit));
+                corners.push((fall, limit));
+            } else {
+                let meet = ((u1 - u0) / slope + s0 + s1) / 2.0;
+                corners.push((meet.clamp(s0, s1), u0 + slope * (meet - s0).max(0.0)));
+            }
+            corners.push((s1, u1));
+        }
+        let length_mm = path.length_mm();
+        let mut knots = vec![Knot {
+            s_mm: 0.0,
+            sigma_mm: 0.0,
+            w: at[0].sqrt(),
+        }];
+        for &(s_mm, u) in &corners[1..] {
+            let last = knots[knots.len() - 1];
+            let s_mm = s_mm.clamp(last.s_mm, length_mm);
+            if s_mm <= last.s_mm {
+                continue;
+            }
+            let w = u.sqrt();
+            knots.push(Knot {
+                s_mm,
+                sigma_mm: last.sigma_mm + 2.0 * (s_mm - last.s_mm) / (last.w + w),
+                w,
+            });
+        }
+        if knots.len() < 2 {
+            return Self::uniform(length_mm);
+        }
+        Self { knots }
+    }
+
+    /// The profile's length: the distance it runs to reach the path's end, mm.
+    #[must_use]
+    pub fn profile_length_mm(&self) -> f64 {
+        self.knots[self.knots.len() - 1].sigma_mm
+    }
+
+    /// The path's length, mm.
+    #[must_use]
+    pub fn path_length_mm(&self) -> f64 {
+        self.knots[self.knots.len() - 1].s_mm
+    }
+
+    /// Whether the profile runs along the path as it is.
+    #[must_use]
+    pub fn is_uniform(&self) -> bool {
+        self.knots.iter().all(|k| k.w >= 1.0)
+    }
+
+    /// The stretch holding profile distance `sigma_mm` (its first knot's index).
+    fn stretch_of_sigma(&self, sigma_mm: f64) -> usize {
+        self.knots
+            .partition_point(|k| k.sigma_mm <= sigma_mm)
+            .clamp(1, self.knots.len() - 1)
+            - 1
+    }
+
+    /// The stretch holding path distance `s_mm` (its first knot's index).
+    fn stretch_of_s(&self, s_mm: f64) -> usize {
+        self.knots
+            .partition_point(|k| k.s_mm <= s_mm)
+            .clamp(1, self.knots.len() - 1)
+            - 1
+    }
+
+    /// The ratio `w` and the path distance at profile distance `sigma_mm` (clamped to the ends;
+    /// the path's end exactly at the profile's).
+    fn at_sigma(&self, sigma_mm: f64) -> (f64, f64) {
+        let last = self.knots[self.knots.len() - 1];
+        if sigma_mm >= last.sigma_mm {
+            return (last.s_mm, last.w);
+        }
+        let sigma_mm = sigma_mm.max(0.0);
+        let i = self.stretch_of_sigma(sigma_mm);
+        let (a, b) = (self.knots[i], self.knots[i + 1]);
+        let t = (sigma_mm - a.sigma_mm) / (b.sigma_mm - a.sigma_mm);
+        let w = a.w + (b.w - a.w) * t;
+        let s_mm = a.s_mm + (sigma_mm - a.sigma_mm) * (a.w + w) / 2.0;
+        (s_mm.min(b.s_mm), w)
+    }
+
+    /// The distance along the path at profile distance `sigma_mm`, mm.
+    #[must_use]
+    pub fn path_mm(&self, sigma_mm: f64) -> f64 {
+        self.at_sigma(sigma_mm).0
+    }
+
+    /// The profile distance at which it reaches `s_mm` along the path, mm.
+    #[must_use]
+    pub fn profile_mm(&self, s_mm: f64) -> f64 {
+        let last = self.knots[self.knots.len() - 1];
+        if s_mm >= last.s_mm {
+            return last.sigma_mm;
+        }
+        let s_mm = s_mm.max(0.0);
+        let i = self.stretch_of_s(s_mm);
+        let (a, b) = (self.knots[i], self.knots[i + 1]);
+        let u = a.w * a.w + (b.w * b.w - a.w * a.w) * (s_mm - a.s_mm) / (b.s_mm - a.s_mm);
+        let w = u.max(0.0).sqrt();
+        (a.sigma_mm + 2.0 * (s_mm - a.s_mm) / (a.w + w)).min(b.sigma_mm)
+    }
+
+    /// The tool's speed over the profile's at `s_mm` along the path.
+    #[must_use]
+    pub fn ratio_at(&self, s_mm: f64) -> f64 {
+        self.at_sigma(self.profile_mm(s_mm)).1
+    }
+
+    /// The lowest ratio between `from_mm` and `to_mm` along the path.
+    #[must_use]
+    pub fn slowest(&self, from_mm: f64, to_mm: f64) -> f64 {
+        self.knots
+            .iter()
+            .filter(|k| k.s_mm > from_mm && k.s_mm < to_mm)
+            .map(|k| k.w)
+            .fold(self.ratio_at(from_mm).min(self.ratio_at(to_mm)), f64::min)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // a uniform pace is the identity, bit for bit
+mod tests {
+    use super::*;
+    use crate::geometry::{Corner, Element, PathSpec, Pose};
+
+    /// 200 mm along x, a blend of `blend_mm`, 200 mm along y.
+    fn corner(blend_mm: f64) -> Path {
+        let to = |x, y| Element::Line {
+            to: Pose::from_mm_deg(x, y, 0.0, 0.0),
+        };
+        Path::build(&PathSpec {
+            start: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+            elements: vec![
+                (to(200.0, 0.0), Corner::Blend(blend_mm)),
+                (to(200.0, 200.0), Corner::Stop),
+            ],
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn lines_alone_or_wide_arcs_leave_the_profile_on_the_path() {
+        let path = corner(20.0);
+        let pace = Pace::new(&path, 100.0, 1e9, 1_000.0);
+        assert!(pace.is_uniform());
+        for s in [0.0, 1.5, 100.0, 333.3] {
+            assert_eq!(pace.path_mm(s), s);
+            assert_eq!(pace.profile_mm(s), s);
+        }
+        assert_eq!(pace.profile_length_mm(), path.length_mm());
+    }
+
+    #[test]
+    fn a_tight_blend_is_run_at_its_centripetal_speed_and_reached_at_the_tangential_acceleration() {
+        let path = corner(20.0);
+        let arc = path.pieces()[1];
+        let r = 1.0 / arc.primitive.curvature_per_mm();
+        let (v, a_c, a_t) = (240.0, 1_000.0, 1_200.0);
+        let pace = Pace::new(&path, v, a_c, a_t);
+        let on_arc = (a_c * r).sqrt() / v;
+        assert!(on_arc < 1.0);
+        // Across the whole arc, the arc's speed.
+        let (a0, a1) = (arc.start_mm, arc.start_mm + arc.primitive.length_mm());
+        for f in [0.0, 0.3, 1.0] {
+            let w = pace.ratio_at(a0 + f * (a1 - a0));
+            assert!((w - on_arc).abs() < 1e-12, "{f}: {w}");
+        }
+        assert!((pace.slowest(0.0, path.length_mm()) - on_arc).abs() < 1e-12);
+        // Full speed again (v² - v_arc²) / (2 a_t) from the arc.
+        let reach = v * v * (1.0 - on_arc * on_arc) / (2.0 * a_t);
+        assert!((pace.ratio_at(a1 + reach) - 1.0).abs() < 1e-12);
+        assert!(pace.ratio_at(a1 + reach * 0.9) < 1.0);
+        assert!((pace.ratio_at(a0 - reach) - 1.0).abs() < 1e-12);
+        // Half-way in, v² half-way between.
+        let w2 = pace.ratio_at(a1 + reach / 2.0).powi(2);
+        assert!(
+            (w2 - f64::midpoint(1.0, on_arc * on_arc)).abs() < 1e-12,
+            "{w2}"
+        );
+        // Longer in time than the path: the profile runs farther than the path is long.
+        assert!(pace.profile_length_mm() > path.length_mm());
+        assert_eq!(pace.path_mm(pace.profile_length_mm()), path.length_mm());
+    }
+
+    #[test]
+    fn without_a_ramp_the_speed_steps_at_the_arc_and_still_honours_it() {
+        let path = corner(20.0);
+        let arc = path.pieces()[1];
+        let r = 1.0 / arc.primitive.curvature_per_mm();
+        let pace = Pace::new(&path, 240.0, 1_000.0, f64::INFINITY);
+        let on_arc = (1_000.0 * r).sqrt() / 240.0;
+        let (a0, a1) = (arc.start_mm, arc.start_mm + arc.primitive.length_mm());
+        assert!((pace.ratio_at(f64::midpoint(a0, a1)) - on_arc).abs() < 1e-12);
+        assert!((pace.ratio_at(a0 - 0.01) - 1.0).abs() < 1e-12);
+        assert!((pace.ratio_at(a1 + 0.01) - 1.0).abs() < 1e-12);
+        assert_eq!(pace.path_mm(pace.profile_length_mm()), path.length_mm());
+    }
+
+    #[test]
+    fn profile_and_path_distances_map_both_ways_and_match_the_ratio() {
+        let path = corner(30.0);
+        let pace = Pace::new(&path, 300.0, 500.0, 800.0);
+        let total = pace.profile_length_mm();
+        let mut last = 0.0;
+        for i in 0..=2_000 {
+            let sigma = total * f64::from(i) / 2_000.0;
+            let s = pace.path_mm(sigma);
+            assert!(s >= last, "path distance goes back at {sigma}");
+            assert!((pace.profile_mm(s) - sigma).abs() < 1e-9, "{sigma}");
+            // ds/dσ is the ratio (numerically).
+            let h = 1e-4;
+            if sigma > h && sigma < total - h {
+                let slope = (pace.path_mm(sigma + h) - pace.path_mm(sigma - h)) / (2.0 * h);
+                assert!((slope - pace.ratio_at(s)).abs() < 1e-6, "{sigma}: {slope}");
+            }
+            last = s;
+        }
+    }
+
+    #[test]
+    fn two_tight_arcs_close_together_share_one_slow_stretch() {
+        // Two blends 20 mm apart: the line between them is too short to reach full speed.
+        let to = |x, y| Element::Line {
+            to: Pose::from_mm_deg(x, y, 0.0, 0.0),
+        };
+        let path = Path::build(&PathSpec {
+            start: Pose::from_mm_deg(0.0, 0.0, 0.0, 0.0),
+            elements: vec![
+                (to(200.0, 0.0), Corner::Blend(10.0)),
+                (to(200.0, 40.0), Corner::Blend(10.0)),
+                (to(0.0, 40.0), Corner::Stop),
+            ],
+        })
+        .unwrap();
+        let pace = Pace::new(&path, 240.0, 1_000.0, 1_200.0);
+        let between = path.pieces()[2];
+        let mid = between.start_mm + between.primitive.length_mm() / 2.0;
+        assert!(pace.ratio_at(mid) < 1.0);
+        // Never faster than any arc's limit plus the slope from it.
+        let slope = 2.0 * 1_200.0 / (240.0 * 240.0);
+        for i in 0..=400 {
+            let s = path.length_mm() * f64::from(i) / 400.0;
+            let w2 = pace.ratio_at(s).powi(2);
+            for p in path.pieces() {
+                let k = p.primitive.curvature_per_mm();
+                if k > 0.0 {
+                    let limit = (1_000.0 / k / (240.0 * 240.0)).min(1.0);
+                    let end = p.start_mm + p.primitive.length_mm();
+                    let dist = (p.start_mm - s).max(s - end).max(0.0);
+                    assert!(w2 <= limit + slope * dist + 1e-12, "at {s}: {w2}");
+                }
+            }
+        }
+    }
+}
