@@ -10,7 +10,9 @@
 //! - a section is cut only into parts chained at speed, back to back on its profile;
 //! - the executed path (every pulse event of the execution model, re-measured here with the
 //!   planned path's own `distance_mm`) is what the plan's figures say, and for bounded-error
-//!   within the tolerance of the path as planned, blends included.
+//!   within the tolerance of the path as planned, blends included;
+//! - the planned speed on every arc (finite differences of the planned positions) is within
+//!   `sqrt(path_accel * r)`, the section slowing for its tight arcs alone.
 //!
 //! Paths the planner rightly refuses (a pose out of reach or a joint limit, a tolerance below
 //! what the pulse grid reaches, a joint that starts too late into a blended section) are
@@ -369,6 +371,8 @@ struct Tally {
     /// The largest re-measured deviation of a constant-period plan, mm.
     worst_constant_mm: f64,
     events: usize,
+    /// Planned speeds checked on arcs.
+    arc_speeds: usize,
 }
 
 /// The refusals that mean "this random path cannot be planned": the reason's name, or `None`
@@ -520,6 +524,39 @@ fn check(
             }
             None => tally.worst_constant_mm = tally.worst_constant_mm.max(measured),
         }
+
+        // The planned speed on every arc (finite differences of the planned positions, every
+        // millisecond) within what the centripetal limit allows for its radius.
+        let dt = 1e-3;
+        let steps = (plan.duration_s() / dt).floor() as usize;
+        for i in 0..steps {
+            let t = i as f64 * dt;
+            let (a, b) = (
+                plan.course_mm(plan.window.from_s + t),
+                plan.course_mm(plan.window.from_s + t + dt),
+            );
+            let curvature = path.curvature_per_mm(a).max(path.curvature_per_mm(b));
+            if curvature <= 0.0 {
+                continue;
+            }
+            let on_arc = path
+                .pieces()
+                .iter()
+                .any(|p| p.start_mm <= a && b <= p.start_mm + p.primitive.length_mm());
+            if !on_arc {
+                continue;
+            }
+            let speed =
+                (plan.planned_position_mm(t + dt) - plan.planned_position_mm(t)).norm() / dt;
+            let allowed = (s.path_accel_mm_s2 / curvature).sqrt();
+            prop_assert!(
+                speed <= allowed * (1.0 + 1e-6) + 1e-6,
+                "start {}: {speed} mm/s on an arc of radius {} mm, {allowed} mm/s allowed",
+                k + 1,
+                1.0 / curvature
+            );
+            tally.arc_speeds += 1;
+        }
     }
     Ok(())
 }
@@ -589,6 +626,10 @@ fn run(kin: Kin) {
         "{kin:?}: {t:?}"
     );
     assert!(t.with_blend > 0 && t.with_arc > 0, "{kin:?}: {t:?}");
+    assert!(
+        t.arc_speeds > 0,
+        "{kin:?}: no planned speed on an arc checked"
+    );
     assert!(t.multi_section > 0 && t.multi_part > 0, "{kin:?}: {t:?}");
 }
 
