@@ -27,7 +27,7 @@ use std::time::Instant;
 use linterpd::geometry::{ArcBy, Corner, Element, Path, PathSpec, Pose, ToolPath};
 use linterpd::kinematics::{JOINTS, Kinematics};
 use linterpd::plan::{Origin, PathPlan, PathRequest, Plan, PlanError, plan_path};
-use linterpd::robot::{Method, Robot};
+use linterpd::robot::{Method, OverSpeed, Robot};
 use linterpd::table::{FrequencyModel, TableProblem, problems};
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -97,6 +97,8 @@ struct Settings {
     speed_mm_s: f64,
     accel_s: f64,
     path_accel_mm_s2: f64,
+    /// `slow-down` (the section slowed where a joint would be too fast) or `reject`.
+    slow_down: bool,
     /// Words in each channel's table area: the robots' 2000, or a small area that makes the
     /// planner cut sections into parts chained at speed.
     area_words: usize,
@@ -240,9 +242,19 @@ fn settings() -> impl Strategy<Value = Settings> {
         0.05..0.4f64,
         1_000.0..10_000.0f64,
         prop_oneof![Just(2_000usize), Just(120usize)],
+        any::<bool>(),
     )
         .prop_map(
-            |(tolerance_mm, period_s, ideal, speed_mm_s, accel_s, path_accel_mm_s2, area_words)| {
+            |(
+                tolerance_mm,
+                period_s,
+                ideal,
+                speed_mm_s,
+                accel_s,
+                path_accel_mm_s2,
+                area_words,
+                slow_down,
+            )| {
                 Settings {
                     tolerance_mm,
                     period_s,
@@ -250,6 +262,7 @@ fn settings() -> impl Strategy<Value = Settings> {
                     speed_mm_s,
                     accel_s,
                     path_accel_mm_s2,
+                    slow_down,
                     area_words,
                 }
             },
@@ -338,6 +351,11 @@ fn request(robot: &Robot, route: &Route, s: &Settings) -> PathRequest {
     motion.period_s = s.period_s;
     motion.speed_mm_s = s.speed_mm_s;
     motion.accel_s = s.accel_s;
+    motion.over_speed = if s.slow_down {
+        OverSpeed::SlowDown
+    } else {
+        OverSpeed::Reject
+    };
     motion.frequency_model = if s.ideal {
         FrequencyModel::Ideal
     } else {
@@ -525,38 +543,48 @@ fn check(
             None => tally.worst_constant_mm = tally.worst_constant_mm.max(measured),
         }
 
-        // The planned speed on every arc (finite differences of the planned positions, every
-        // millisecond) within what the centripetal limit allows for its radius.
-        let dt = 1e-3;
-        let steps = (plan.duration_s() / dt).floor() as usize;
-        for i in 0..steps {
-            let t = i as f64 * dt;
-            let (a, b) = (
-                plan.course_mm(plan.window.from_s + t),
-                plan.course_mm(plan.window.from_s + t + dt),
-            );
-            let curvature = path.curvature_per_mm(a).max(path.curvature_per_mm(b));
-            if curvature <= 0.0 {
-                continue;
-            }
-            let on_arc = path
-                .pieces()
-                .iter()
-                .any(|p| p.start_mm <= a && b <= p.start_mm + p.primitive.length_mm());
-            if !on_arc {
-                continue;
-            }
-            let speed =
-                (plan.planned_position_mm(t + dt) - plan.planned_position_mm(t)).norm() / dt;
-            let allowed = (s.path_accel_mm_s2 / curvature).sqrt();
-            prop_assert!(
-                speed <= allowed * (1.0 + 1e-6) + 1e-6,
-                "start {}: {speed} mm/s on an arc of radius {} mm, {allowed} mm/s allowed",
-                k + 1,
-                1.0 / curvature
-            );
-            tally.arc_speeds += 1;
+        check_arc_speeds(plan, path, s, k, tally)?;
+    }
+    Ok(())
+}
+
+/// The planned speed on every arc of `plan`'s `path` (finite differences of the planned
+/// positions, every millisecond) within what the centripetal limit allows for its radius.
+fn check_arc_speeds(
+    plan: &Plan,
+    path: &Path,
+    s: &Settings,
+    k: usize,
+    tally: &mut Tally,
+) -> Result<(), TestCaseError> {
+    let dt = 1e-3;
+    let steps = (plan.duration_s() / dt).floor() as usize;
+    for i in 0..steps {
+        let t = i as f64 * dt;
+        let (a, b) = (
+            plan.course_mm(plan.window.from_s + t),
+            plan.course_mm(plan.window.from_s + t + dt),
+        );
+        let curvature = path.curvature_per_mm(a).max(path.curvature_per_mm(b));
+        if curvature <= 0.0 {
+            continue;
         }
+        let on_arc = path
+            .pieces()
+            .iter()
+            .any(|p| p.start_mm <= a && b <= p.start_mm + p.primitive.length_mm());
+        if !on_arc {
+            continue;
+        }
+        let speed = (plan.planned_position_mm(t + dt) - plan.planned_position_mm(t)).norm() / dt;
+        let allowed = (s.path_accel_mm_s2 / curvature).sqrt();
+        prop_assert!(
+            speed <= allowed * (1.0 + 1e-6) + 1e-6,
+            "start {}: {speed} mm/s on an arc of radius {} mm, {allowed} mm/s allowed",
+            k + 1,
+            1.0 / curvature
+        );
+        tally.arc_speeds += 1;
     }
     Ok(())
 }

@@ -7,7 +7,7 @@ mod path;
 mod polyline;
 mod profile;
 
-pub use pace::Pace;
+pub use pace::{Pace, SpeedCap};
 pub use path::{
     Arc, ArcBy, ArcFault, Corner, Element, Path, PathError, PathSpec, Piece, Primitive,
     RADIUS_SLACK_MM,

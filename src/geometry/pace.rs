@@ -1,7 +1,8 @@
 //! PURE. How a section's profile runs along its path: at the profile's own speed on lines, and
 //! slower on an arc too tight for that speed under the path's centripetal limit (`v = sqrt(a r)`,
 //! for that arc alone), slowing down before it and speeding up after it at the profile's own
-//! acceleration.
+//! acceleration. Stretches may be capped as well ([`SpeedCap`]: where a joint's channel would
+//! pass its top frequency, under `slow-down`), and are slowed for in the same way.
 //!
 //! The profile (one trapezoid) runs over a distance σ; the pace maps σ to the distance `s` along
 //! the path. Its ratio `w = ds/dσ` (the tool's speed over the profile's) is 1 where nothing is
@@ -18,6 +19,78 @@ use super::Path;
 
 /// The steepest change of `w²` per mm: a speed that steps (no ramp) does so within a nanometre.
 const MAX_SLOPE_PER_MM: f64 = 1e6;
+
+/// A stretch of a path the tool must not run faster than `speed_mm_s` along (where a joint's
+/// channel would pass its top frequency, say).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpeedCap {
+    /// Where it begins along the path, mm.
+    pub from_mm: f64,
+    /// Where it ends, mm.
+    pub to_mm: f64,
+    /// The fastest the tool may go there, mm/s.
+    pub speed_mm_s: f64,
+}
+
+/// `path` cut where a piece or a cap begins or ends: every stretch `(from, to, limit on w²)`,
+/// back to back from 0 to the path's length, its limit the lower of its piece's (an arc's
+/// centripetal speed over `v2`) and its cap's (`caps` in order along the path, none
+/// overlapping).
+fn stretches(
+    path: &Path,
+    v2: f64,
+    centripetal_mm_s2: f64,
+    caps: &[SpeedCap],
+) -> Vec<(f64, f64, f64)> {
+    let length_mm = path.length_mm();
+    let pieces = path.pieces();
+    let mut cuts: Vec<f64> = pieces
+        .iter()
+        .map(|p| p.start_mm)
+        .chain(caps.iter().flat_map(|c| [c.from_mm, c.to_mm]))
+        .chain([length_mm])
+        .filter(|s| s.is_finite())
+        .map(|s| s.clamp(0.0, length_mm))
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let piece_limit = |m: f64| {
+        let i = pieces
+            .partition_point(|p| p.start_mm <= m)
+            .saturating_sub(1);
+        let k = pieces[i].primitive.curvature_per_mm();
+        if k > 0.0 {
+            (centripetal_mm_s2 / k / v2).min(1.0)
+        } else {
+            1.0
+        }
+    };
+    cuts.windows(2)
+        .filter(|w| w[1] > w[0])
+        .map(|w| {
+            let m = f64::midpoint(w[0], w[1]);
+            let c = caps.partition_point(|c| c.from_mm <= m).checked_sub(1);
+            let capped = c
+                .map(|c| caps[c])
+                .filter(|c| m < c.to_mm)
+                .map_or(1.0, |c| (c.speed_mm_s * c.speed_mm_s / v2).min(1.0));
+            (w[0], w[1], piece_limit(m).min(capped))
+        })
+        .collect()
+}
+
+/// `knots` without those between two of the very same ratio (no corner: a flat stretch).
+#[allow(clippy::float_cmp)] // the same value, not a near one
+fn without_flat_knots(knots: &[Knot]) -> Vec<Knot> {
+    let mut kept: Vec<Knot> = Vec::with_capacity(knots.len());
+    for (i, k) in knots.iter().enumerate() {
+        let flat = i > 0 && i + 1 < knots.len() && knots[i - 1].w == k.w && knots[i + 1].w == k.w;
+        if !flat {
+            kept.push(*k);
+        }
+    }
+    kept
+}
 
 /// One corner of the piecewise-linear `w²(s)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,55 +131,45 @@ impl Pace {
     }
 
     /// The pace of a profile cruising at `speed_mm_s` along `path`: every arc run at no more than
-    /// `sqrt(centripetal_mm_s2 * r)`, slowing and speeding up at `tangential_mm_s2`.
+    /// `sqrt(centripetal_mm_s2 * r)`, every stretch of `caps` (in order along the path, none
+    /// overlapping) at no more than its speed, slowing and speeding up at `tangential_mm_s2`.
     #[must_use]
     pub fn new(
         path: &Path,
         speed_mm_s: f64,
         centripetal_mm_s2: f64,
         tangential_mm_s2: f64,
+        caps: &[SpeedCap],
     ) -> Self {
         let v2 = speed_mm_s * speed_mm_s;
-        // Every piece's length and its limit on w².
-        let pieces: Vec<(f64, f64)> = path
-            .pieces()
-            .iter()
-            .map(|p| {
-                let k = p.primitive.curvature_per_mm();
-                let limit = if k > 0.0 {
-                    (centripetal_mm_s2 / k / v2).min(1.0)
-                } else {
-                    1.0
-                };
-                (p.primitive.length_mm(), limit)
-            })
-            .collect();
+        let stretches = stretches(path, v2, centripetal_mm_s2, caps);
         // Without a ramp (an acceleration time of 0) the speed steps at the arc's ends.
         let slope = (2.0 * tangential_mm_s2 / v2).min(MAX_SLOPE_PER_MM);
-        if slope.is_nan() || slope <= 0.0 || pieces.iter().all(|&(_, l)| l >= 1.0 || l.is_nan()) {
+        if slope.is_nan()
+            || slope <= 0.0
+            || stretches.iter().all(|&(_, _, l)| l >= 1.0 || l.is_nan())
+        {
             return Self::uniform(path.length_mm());
         }
-        // The envelope at every boundary between pieces: the lowest of every piece's limit
+        // The envelope at every boundary between stretches: the lowest of every stretch's limit
         // plus the slope times the distance to it, from the left and from the right.
-        let n = pieces.len();
+        let n = stretches.len();
         let mut at = vec![1.0_f64; n + 1];
         let mut left = f64::INFINITY;
         for j in 1..=n {
-            let (len, limit) = pieces[j - 1];
-            left = (left + slope * len).min(limit);
+            let (s0, s1, limit) = stretches[j - 1];
+            left = (left + slope * (s1 - s0)).min(limit);
             at[j] = at[j].min(left);
         }
         let mut right = f64::INFINITY;
         for j in (0..n).rev() {
-            let (len, limit) = pieces[j];
-            right = (right + slope * len).min(limit);
+            let (s0, s1, limit) = stretches[j];
+            right = (right + slope * (s1 - s0)).min(limit);
             at[j] = at[j].min(right);
         }
-        // Inside a piece the envelope is its own limit, or the slope from one of its ends.
+        // Inside a stretch the envelope is its own limit, or the slope from one of its ends.
         let mut corners: Vec<(f64, f64)> = vec![(0.0, at[0])];
-        for (i, (&(len, limit), piece)) in pieces.iter().zip(path.pieces()).enumerate() {
-            // As the path measures its own length, so that the last corner is its end exactly.
-            let (s0, s1) = (piece.start_mm, piece.start_mm + len);
+        for (i, &(s0, s1, limit)) in stretches.iter().enumerate() {
             let (u0, u1) = (at[i], at[i + 1]);
             let rise = s0 + (limit - u0) / slope;
             let fall = s1 - (limit - u1) / slope;
@@ -138,10 +201,11 @@ impl Pace {
                 w,
             });
         }
-        if knots.len() < 2 {
+        let kept = without_flat_knots(&knots);
+        if kept.len() < 2 {
             return Self::uniform(length_mm);
         }
-        Self { knots }
+        Self { knots: kept }
     }
 
     /// The profile's length: the distance it runs to reach the path's end, mm.
@@ -256,7 +320,7 @@ mod tests {
     #[test]
     fn lines_alone_or_wide_arcs_leave_the_profile_on_the_path() {
         let path = corner(20.0);
-        let pace = Pace::new(&path, 100.0, 1e9, 1_000.0);
+        let pace = Pace::new(&path, 100.0, 1e9, 1_000.0, &[]);
         assert!(pace.is_uniform());
         for s in [0.0, 1.5, 100.0, 333.3] {
             assert_eq!(pace.path_mm(s), s);
@@ -271,7 +335,7 @@ mod tests {
         let arc = path.pieces()[1];
         let r = 1.0 / arc.primitive.curvature_per_mm();
         let (v, a_c, a_t) = (240.0, 1_000.0, 1_200.0);
-        let pace = Pace::new(&path, v, a_c, a_t);
+        let pace = Pace::new(&path, v, a_c, a_t, &[]);
         let on_arc = (a_c * r).sqrt() / v;
         assert!(on_arc < 1.0);
         // Across the whole arc, the arc's speed.
@@ -298,11 +362,35 @@ mod tests {
     }
 
     #[test]
+    fn a_capped_stretch_of_a_line_is_run_at_its_cap_and_left_at_the_tangential_acceleration() {
+        let path = corner(20.0);
+        let cap = SpeedCap {
+            from_mm: 100.0,
+            to_mm: 150.0,
+            speed_mm_s: 120.0,
+        };
+        let (v, a_t) = (240.0, 1_200.0);
+        let pace = Pace::new(&path, v, 1e9, a_t, &[cap]);
+        for s in [100.0, 125.0, 149.999] {
+            assert!((pace.ratio_at(s) - 0.5).abs() < 1e-12, "{s}");
+        }
+        // (240^2 - 120^2) / (2 * 1200) = 18 mm either side.
+        assert!((pace.ratio_at(150.0 + 18.0) - 1.0).abs() < 1e-12);
+        assert!((pace.ratio_at(100.0 - 18.0) - 1.0).abs() < 1e-12);
+        assert!(pace.ratio_at(150.0 + 17.0) < 1.0);
+        assert!(pace.ratio_at(100.0 - 17.0) < 1.0);
+        // The blend's arc is wide enough under 1e9 mm/s^2: full speed there.
+        let arc = path.pieces()[1];
+        assert!((pace.ratio_at(arc.start_mm + 1.0) - 1.0).abs() < 1e-12);
+        assert_eq!(pace.path_mm(pace.profile_length_mm()), path.length_mm());
+    }
+
+    #[test]
     fn without_a_ramp_the_speed_steps_at_the_arc_and_still_honours_it() {
         let path = corner(20.0);
         let arc = path.pieces()[1];
         let r = 1.0 / arc.primitive.curvature_per_mm();
-        let pace = Pace::new(&path, 240.0, 1_000.0, f64::INFINITY);
+        let pace = Pace::new(&path, 240.0, 1_000.0, f64::INFINITY, &[]);
         let on_arc = (1_000.0 * r).sqrt() / 240.0;
         let (a0, a1) = (arc.start_mm, arc.start_mm + arc.primitive.length_mm());
         assert!((pace.ratio_at(f64::midpoint(a0, a1)) - on_arc).abs() < 1e-12);
@@ -314,7 +402,7 @@ mod tests {
     #[test]
     fn profile_and_path_distances_map_both_ways_and_match_the_ratio() {
         let path = corner(30.0);
-        let pace = Pace::new(&path, 300.0, 500.0, 800.0);
+        let pace = Pace::new(&path, 300.0, 500.0, 800.0, &[]);
         let total = pace.profile_length_mm();
         let mut last = 0.0;
         for i in 0..=2_000 {
@@ -347,7 +435,7 @@ mod tests {
             ],
         })
         .unwrap();
-        let pace = Pace::new(&path, 240.0, 1_000.0, 1_200.0);
+        let pace = Pace::new(&path, 240.0, 1_000.0, 1_200.0, &[]);
         let between = path.pieces()[2];
         let mid = between.start_mm + between.primitive.length_mm() / 2.0;
         assert!(pace.ratio_at(mid) < 1.0);

@@ -5,8 +5,10 @@
 //! A section runs on one trapezoid, at its pace ([`Pace`]): at the speed asked on lines, and on
 //! an arc too tight for it at what the path's centripetal acceleration limit allows
 //! (`v = sqrt(a r)`), for that arc alone, slowing before it and speeding up after it at the
-//! profile's own acceleration (speed / acceleration time). As for a line, the whole section's
-//! speed is then lowered to what the channels' frequencies allow under `slow-down`.
+//! profile's own acceleration (speed / acceleration time). Under `slow-down`, the stretches
+//! where a joint's channel would pass its top frequency are slowed for in the same way
+//! ([`frequency_caps`]); what that misses, the sampled check lowers the whole section's speed
+//! for, as for a line. Under `reject` such a section is refused.
 //!
 //! A section may need more than one start ("parts", chained at speed through the PLC's waiting
 //! start): where its tables would not fit a channel's area or 8 segments (cut in halves until
@@ -18,9 +20,9 @@
 //! each part is planned from exactly the counts the one before it ends on and judged by the
 //! execution model on its own, against the same path and the same profile.
 
-use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose};
+use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose, SpeedCap};
 use crate::kinematics::Kinematics;
-use crate::robot::{Motion, Robot};
+use crate::robot::{Motion, OverSpeed, Robot};
 
 use crate::table::TableProblem;
 
@@ -175,17 +177,73 @@ fn section_plan(
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
+    let caps = match asked.over_speed {
+        OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),
+        OverSpeed::Reject => Vec::new(),
+    };
     let pace = Pace::new(
         section,
         asked.speed_mm_s,
         path_accel_mm_s2,
         asked.speed_mm_s / asked.accel_s,
+        &caps,
     );
     let course = Course::Path {
         path: section.clone(),
         pace,
     };
     parts(robot, &course, start, asked).map_err(|source| (elements, source))
+}
+
+/// The stretches a section is cut into to find where a joint would be too fast, mm.
+const CAP_STRETCH_MM: f64 = 2.0;
+/// The most such stretches in one section.
+const MAX_CAP_STRETCHES: usize = 4_096;
+/// The share of a channel's top frequency a capped stretch is planned to (the rest is left for
+/// the joints' rates changing within a stretch, and for the rows' rounding).
+const FREQUENCY_MARGIN: f64 = 0.97;
+
+/// Under `slow-down`: every stretch (about [`CAP_STRETCH_MM`]) of `section` where a joint's
+/// channel would pass [`FREQUENCY_MARGIN`] of its top frequency at `speed_mm_s`, capped at the
+/// speed that keeps every channel within it, from the joints' pulses over the stretch (inverse
+/// kinematics at its ends). Empty when a pose is out of reach: sampling the section says where.
+/// Whatever the caps miss, the sampled check lowers the whole section's speed for, as before.
+fn frequency_caps(robot: &Robot, section: &Path, start: &Start, speed_mm_s: f64) -> Vec<SpeedCap> {
+    let length_mm = section.length_mm();
+    let n = ((length_mm / CAP_STRETCH_MM).ceil() as usize).clamp(1, MAX_CAP_STRETCHES);
+    let Ok(mut q) = robot.kinematics.ik(&section.at(0.0), Some(&start.values)) else {
+        return Vec::new();
+    };
+    let mut caps = Vec::new();
+    let mut from_mm = 0.0;
+    for i in 1..=n {
+        let to_mm = length_mm * i as f64 / n as f64;
+        let Ok(next) = robot.kinematics.ik(&section.at(to_mm), Some(&q)) else {
+            return Vec::new();
+        };
+        let fastest = robot
+            .joints
+            .iter()
+            .zip(q.iter().zip(&next))
+            .map(|(joint, (a, b))| {
+                let pulses = (b - a).abs() / joint.step.abs();
+                if pulses > 0.0 {
+                    FREQUENCY_MARGIN * f64::from(joint.max_freq_hz) * (to_mm - from_mm) / pulses
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .fold(f64::INFINITY, f64::min);
+        if fastest < speed_mm_s {
+            caps.push(SpeedCap {
+                from_mm,
+                to_mm,
+                speed_mm_s: fastest,
+            });
+        }
+        (q, from_mm) = (next, to_mm);
+    }
+    caps
 }
 
 /// The shortest part a section is cut into, s: chaining needs the next part uploaded while one
@@ -662,6 +720,67 @@ mod tests {
                 plan.duration_s()
             );
         }
+    }
+
+    #[test]
+    fn under_slow_down_a_joint_too_fast_on_one_stretch_slows_the_tool_there_alone() {
+        // d2 (the lift, 40 pulses/mm) limited to 6 kHz: 150 mm/s straight up. A lift of 100 mm
+        // blended into a level traverse of about 250 mm, at 240 mm/s asked.
+        let mut robot = seed_robot();
+        robot.joints[1].max_freq_hz = 6_000;
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
+        let req = |over_speed| PathRequest {
+            from: Origin::Pose(pose(P1, 0.0)),
+            elements: vec![
+                (
+                    Element::Line {
+                        to: pose(P1, 100.0),
+                    },
+                    Corner::Blend(20.0),
+                ),
+                (Element::Line { to: level }, Corner::Stop),
+            ],
+            motion: Motion {
+                over_speed,
+                ..motion(&robot, bounded, FrequencyModel::FpxDivider)
+            },
+            path_accel_mm_s2: 5_000.0,
+        };
+        let err = plan_path(&robot, &req(OverSpeed::Reject)).unwrap_err();
+        assert!(err.to_string().contains("d2"), "{err}");
+        let plan = plan_path(&robot, &req(OverSpeed::SlowDown)).unwrap();
+        assert!(plan.valid());
+        assert!(
+            plan.max_deviation_mm() <= 0.05,
+            "{}",
+            plan.max_deviation_mm()
+        );
+        // No channel past its top frequency in the execution model.
+        for start in plan.starts() {
+            for row in start.row_timings() {
+                let limit = f64::from(robot.joints[row.table].max_freq_hz);
+                assert!(row.actual_hz <= limit, "{row:?}");
+            }
+            // The whole section was not slowed: its profile cruises at the speed asked.
+            assert!(start.speed_factor > 0.99, "{}", start.speed_factor);
+        }
+        let first = plan.starts().next().unwrap();
+        let lift = first.cruise_mm_s(0.0, 50.0);
+        assert!(lift < 150.0 && lift > 140.0, "the lift at {lift} mm/s");
+        let length = plan.path.length_mm();
+        let traverse = plan
+            .starts()
+            .last()
+            .unwrap()
+            .cruise_mm_s(length - 100.0, length - 50.0);
+        assert!(traverse > 239.0, "the traverse at {traverse} mm/s");
+        // Faster than the whole section slowed to the lift's speed could be.
+        assert!(
+            plan.duration_s() < length / 150.0,
+            "{} s",
+            plan.duration_s()
+        );
     }
 
     #[test]
