@@ -57,7 +57,11 @@ struct MoveDoc {
 
 #[derive(Debug, Serialize)]
 struct ProfileDoc {
+    /// The distance the profile runs: its course's length, or, for a path section run at its
+    /// pace (slower on tight arcs), more than its path's.
     length_mm: f64,
+    /// The course's length: the line's, or the section path's, mm.
+    course_length_mm: f64,
     speed_mm_s: f64,
     accel_s: f64,
     accel_mm_s2: f64,
@@ -115,6 +119,10 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
         },
         profile: ProfileDoc {
             length_mm: plan.profile.length_mm,
+            course_length_mm: plan
+                .pace
+                .as_ref()
+                .map_or(plan.profile.length_mm, |pace| pace.path_length_mm()),
             speed_mm_s: plan.profile.speed_mm_s,
             accel_s: plan.profile.accel_s,
             accel_mm_s2: plan.profile.accel_mm_s2,
