@@ -119,10 +119,10 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
         },
         profile: ProfileDoc {
             length_mm: plan.profile.length_mm,
-            course_length_mm: plan
-                .pace
-                .as_ref()
-                .map_or(plan.profile.length_mm, |pace| pace.path_length_mm()),
+            course_length_mm: plan.pace.as_ref().map_or(
+                plan.profile.length_mm,
+                crate::geometry::Pace::path_length_mm,
+            ),
             speed_mm_s: plan.profile.speed_mm_s,
             accel_s: plan.profile.accel_s,
             accel_mm_s2: plan.profile.accel_mm_s2,
