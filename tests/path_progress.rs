@@ -118,29 +118,38 @@ async fn a_running_parts_progress_names_the_planned_instant_of_the_counts_it_was
             predicted.duration_s
         );
         assert_eq!(last.start_counts, Some(plan.start_counts()));
-        let mut before = 0.0;
-        for r in seen.iter().filter(|r| r.stage == Stage::Running) {
-            let Some(counts) = r.counts else { continue };
-            assert!(r.progress >= before, "part {}: progress went back", k + 1);
-            before = r.progress;
-            let samples = &plan.samples.counts;
-            let at = (r.progress * plan.duration_s() / 0.001).round() as usize;
-            let window = &samples
-                [at.saturating_sub(WINDOW_POINTS)..=(at + WINDOW_POINTS).min(samples.len() - 1)];
-            for j in 0..4 {
-                let lo = window.iter().map(|c| c[j]).min().unwrap() - SLACK_PULSES;
-                let hi = window.iter().map(|c| c[j]).max().unwrap() + SLACK_PULSES;
-                assert!(
-                    (lo..=hi).contains(&counts[j]),
-                    "part {}: progress {:.4} puts channel {j} at {lo}..={hi}, the PLC read {}",
-                    k + 1,
-                    r.progress,
-                    counts[j]
-                );
-            }
-            checked += 1;
-        }
+        checked += check_running(k, plan, &seen);
     }
     assert!(checked >= 5, "only {checked} running reports checked");
     s.daemon.shut_down().await;
+}
+
+/// Checks every report of running part `k` (from 0) in `seen` against its `plan`: progress never
+/// goes back, and the plan at that share of its duration has the robot at the counts read.
+/// Returns how many reports it checked.
+fn check_running(k: usize, plan: &Plan, seen: &[MoveReport]) -> usize {
+    let mut checked = 0;
+    let mut before = 0.0;
+    for r in seen.iter().filter(|r| r.stage == Stage::Running) {
+        let Some(counts) = r.counts else { continue };
+        assert!(r.progress >= before, "part {}: progress went back", k + 1);
+        before = r.progress;
+        let samples = &plan.samples.counts;
+        let at = (r.progress * plan.duration_s() / 0.001).round() as usize;
+        let window = &samples
+            [at.saturating_sub(WINDOW_POINTS)..=(at + WINDOW_POINTS).min(samples.len() - 1)];
+        for j in 0..4 {
+            let lo = window.iter().map(|c| c[j]).min().unwrap() - SLACK_PULSES;
+            let hi = window.iter().map(|c| c[j]).max().unwrap() + SLACK_PULSES;
+            assert!(
+                (lo..=hi).contains(&counts[j]),
+                "part {}: progress {:.4} puts channel {j} at {lo}..={hi}, the PLC read {}",
+                k + 1,
+                r.progress,
+                counts[j]
+            );
+        }
+        checked += 1;
+    }
+    checked
 }
