@@ -93,9 +93,31 @@ impl LineDistance {
         }
     }
 
+    /// The squared distance from `p` to the segment when it may be more than `floor_mm2`
+    /// (`None` when it is surely not), mm²: the same value as [`Self::squared_mm2`]. A point
+    /// whose projection falls inside the segment is first judged without a division, by its
+    /// squared distance to the line times the squared length (`|w|² len² - (w.d)²`), with a
+    /// margin of eight roundings of the terms that cancel in it.
+    #[must_use]
+    #[inline]
+    pub fn squared_beyond_mm2(&self, p: &Vector3<f64>, floor_mm2: f64) -> Option<f64> {
+        let w = p - self.from;
+        let dot = w.dot(&self.d);
+        if self.len2 > 0.0 && dot >= 0.0 && dot <= self.len2 {
+            let whole = w.norm_squared() * self.len2;
+            let margin = 8.0 * f64::EPSILON * whole;
+            if whole - dot * dot + margin <= floor_mm2 * self.len2 {
+                return None;
+            }
+        }
+        let d2 = self.squared_mm2(p);
+        (d2 > floor_mm2).then_some(d2)
+    }
+
     /// The squared distance from `p` to the segment, mm²: `Line::distance_mm(p)` is its
     /// square root, bit for bit.
     #[must_use]
+    #[inline]
     pub fn squared_mm2(&self, p: &Vector3<f64>) -> f64 {
         let u = if self.len2 > 0.0 {
             ((p - self.from).dot(&self.d) / self.len2).clamp(0.0, 1.0)

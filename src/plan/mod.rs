@@ -683,27 +683,102 @@ fn simulate_within(
     motion: &Motion,
     path_limit_mm: f64,
 ) -> Option<Figures> {
-    let max_hz = max_hz(robot);
-    let settings = settings(motion);
-    let position = course.positions();
-    let planned = |t: f64| position(profile.distance_mm(window.from_s + t));
-    let duration_s = window.duration_s();
-    let mut figures = sim::measure_within(
+    let run = Run {
         robot,
         tables,
-        sim::pulses(tables, &max_hz, settings),
-        &sim::finish_times(tables, &max_hz, settings),
-        course.tool_path(),
-        &planned,
-        duration_s,
+        course,
+        window,
+        motion,
         path_limit_mm,
-    )?;
-    if window.ends_at_speed {
-        let end: [i64; JOINTS] = std::array::from_fn(|j| tables[j].end());
-        let there = robot.pose_of(&end).position_mm;
-        figures.end_error_mm = (there - planned(duration_s)).norm();
+    };
+    if let Course::Line(line) = course {
+        run.measure(&OnLine::new(line, profile, window.from_s))
+    } else {
+        let position = course.positions();
+        run.measure(&|t: f64| position(profile.distance_mm(window.from_s + t)))
     }
-    Some(figures)
+}
+
+/// A start's tables played and measured by [`simulate_within`].
+struct Run<'a> {
+    robot: &'a Robot,
+    tables: &'a [ChannelTable],
+    course: &'a Course,
+    window: &'a Window,
+    motion: &'a Motion,
+    path_limit_mm: f64,
+}
+
+impl Run<'_> {
+    /// Measures the run against the planned position `planned` (the start's own time).
+    fn measure(&self, planned: &impl sim::Planned) -> Option<Figures> {
+        let (robot, tables) = (self.robot, self.tables);
+        let max_hz = max_hz(robot);
+        let settings = settings(self.motion);
+        let duration_s = self.window.duration_s();
+        let mut figures = sim::measure_within(
+            robot,
+            tables,
+            sim::pulses(tables, &max_hz, settings),
+            &sim::finish_times(tables, &max_hz, settings),
+            self.course.tool_path(),
+            planned,
+            duration_s,
+            self.path_limit_mm,
+        )?;
+        if self.window.ends_at_speed {
+            let end: [i64; JOINTS] = std::array::from_fn(|j| tables[j].end());
+            let there = robot.pose_of(&end).position_mm;
+            figures.end_error_mm = (there - planned.at(duration_s)).norm();
+        }
+        Some(figures)
+    }
+}
+
+/// The planned position of a start on a line: the profile's distance from `from_s` on, along
+/// the line (the same values as [`Course::positions`]), and near it without a division.
+struct OnLine<'a> {
+    profile: &'a Profile,
+    from_s: f64,
+    from: nalgebra::Vector3<f64>,
+    d: nalgebra::Vector3<f64>,
+    len: f64,
+    inv_len: f64,
+    /// How far the position made with `inv_len` may be from the one made with `len`, mm: a
+    /// few roundings of the largest coordinates involved.
+    off_mm: f64,
+}
+
+impl<'a> OnLine<'a> {
+    fn new(line: &Line, profile: &'a Profile, from_s: f64) -> Self {
+        let from = line.from.position_mm;
+        let d = line.to.position_mm - from;
+        let len = d.norm();
+        Self {
+            profile,
+            from_s,
+            from,
+            d,
+            len,
+            inv_len: if len > 0.0 { 1.0 / len } else { 0.0 },
+            off_mm: 16.0 * f64::EPSILON * (from.norm() + len),
+        }
+    }
+}
+
+impl sim::Planned for OnLine<'_> {
+    fn at(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        let s_mm = self.profile.distance_mm(self.from_s + t_s);
+        self.from + self.d * if self.len > 0.0 { s_mm / self.len } else { 1.0 }
+    }
+
+    fn near(&self, t_s: f64) -> (nalgebra::Vector3<f64>, f64) {
+        if self.len <= 0.0 {
+            return (self.at(t_s), 0.0);
+        }
+        let s_mm = self.profile.distance_mm(self.from_s + t_s);
+        (self.from + self.d * (s_mm * self.inv_len), self.off_mm)
+    }
 }
 
 type Resolved = (Line, crate::kinematics::Joints, [i64; JOINTS]);

@@ -16,7 +16,7 @@
 mod figures;
 mod play;
 
-pub use figures::{Figures, SAMPLE_PERIOD_S, measure, measure_within, path_deviation_mm};
+pub use figures::{Figures, Planned, SAMPLE_PERIOD_S, measure, measure_within, path_deviation_mm};
 pub use play::{ChannelPulses, Merged, PlayedRow, Rows, finish_times, pulses};
 
 use crate::table::{ChannelTable, FrequencyModel, FrequencyRange};

@@ -146,17 +146,27 @@ impl Iterator for ChannelPulses<'_> {
 /// the earliest of the channels' next events (a start has at most four channels).
 #[derive(Debug, Clone)]
 pub struct Merged<I: Iterator<Item = PulseEvent>> {
-    /// Every channel's next event (`None` once it has no more).
-    heads: Vec<Option<PulseEvent>>,
+    /// Every channel's next event; an ended channel's stays with its time at infinity.
+    heads: Vec<PulseEvent>,
     channels: Vec<I>,
 }
+
+/// The head of a channel that has no more events.
+const ENDED: PulseEvent = PulseEvent {
+    t_s: f64::INFINITY,
+    table: usize::MAX,
+    count: 0,
+};
 
 impl<I: Iterator<Item = PulseEvent>> Merged<I> {
     /// Merges `channels`, channel `c` holding table `c`'s events.
     pub fn new(channels: impl IntoIterator<Item = I>) -> Self {
         let mut channels: Vec<I> = channels.into_iter().collect();
         Self {
-            heads: channels.iter_mut().map(Iterator::next).collect(),
+            heads: channels
+                .iter_mut()
+                .map(|c| c.next().unwrap_or(ENDED))
+                .collect(),
             channels,
         }
     }
@@ -166,19 +176,21 @@ impl<I: Iterator<Item = PulseEvent>> Iterator for Merged<I> {
     type Item = PulseEvent;
 
     fn next(&mut self) -> Option<PulseEvent> {
-        // The first channel, in table order, whose next event is the earliest.
-        let mut first: Option<(f64, usize)> = None;
-        for (c, head) in self.heads.iter().enumerate() {
-            if let Some(e) = head
-                && first.is_none_or(|f| e.t_s.total_cmp(&f.0).is_lt())
-            {
-                first = Some((e.t_s, c));
+        // The first channel, in table order, whose next event is the earliest (an event's time
+        // is never NaN: a row's frequency is above zero).
+        let mut c = 0;
+        for (i, head) in self.heads.iter().enumerate().skip(1) {
+            if head.t_s < self.heads[c].t_s {
+                c = i;
             }
         }
-        let (_, c) = first?;
-        let e = self.heads[c].take();
-        self.heads[c] = self.channels[c].next();
-        e
+        let head = self.heads.get_mut(c)?;
+        if head.t_s.is_infinite() {
+            return None;
+        }
+        let e = *head;
+        *head = self.channels[c].next().unwrap_or(ENDED);
+        Some(e)
     }
 }
 
