@@ -175,6 +175,10 @@ impl<I: Iterator<Item = PulseEvent>> Merged<I> {
 impl<I: Iterator<Item = PulseEvent>> Iterator for Merged<I> {
     type Item = PulseEvent;
 
+    // Inlined into the measurement's loop, the event stays in registers (returned through
+    // memory, it was read back from a store not yet done).
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
     fn next(&mut self) -> Option<PulseEvent> {
         // The first channel, in table order, whose next event is the earliest (an event's time
         // is never NaN: a row's frequency is above zero).
