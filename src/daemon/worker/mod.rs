@@ -131,8 +131,8 @@ pub(super) struct Worker {
     /// The last start written and its bank, for writing it again after a lost reply.
     last_start: Option<(MoveId, VerifiedBank)>,
     /// A queued part of a path whose tables were written and read back ahead of its turn, and
-    /// the bank they are in.
-    preloaded: Option<(MoveId, u16)>,
+    /// what was written (the bank and the words, which its start must match).
+    preloaded: Option<(MoveId, crate::plc::contract::Preload)>,
     /// When each running move was seen starting.
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).

@@ -157,15 +157,18 @@ impl Worker {
         from_rest: bool,
         exchange: Duration,
     ) -> Result<crate::plc::contract::VerifiedBank, ContractError> {
-        let preloaded = self.preloaded.take() == Some((id, planned.bank));
+        let preloaded = self
+            .preloaded
+            .take()
+            .filter(|(of, preload)| *of == id && preload.bank() == planned.bank);
         if from_rest {
             let ends_on = planned.targets.expect("a plan knows its targets");
             self.preload_next(ends_on, 1 - planned.bank, exchange)
                 .await?;
         }
         let link = self.link.as_mut().expect("connected");
-        if preloaded {
-            link.upload_preloaded(planned.bank, planned.seq, planned.from, tables)
+        if let Some((_, preload)) = preloaded {
+            link.upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
                 .await
         } else {
             link.upload(planned.bank, planned.seq, planned.from, tables)
@@ -207,8 +210,8 @@ impl Worker {
         };
         let link = self.link.as_mut().expect("connected");
         let began = tokio::time::Instant::now();
-        let words = link.preload(bank, &tables).await?;
-        let preload = began.elapsed();
+        let preloaded = link.preload(bank, &tables).await?;
+        let (preload, words) = (began.elapsed(), preloaded.words());
         let pace = Pace {
             status: exchange,
             word: link.one_word_exchange().await?,
@@ -216,7 +219,7 @@ impl Worker {
             preload_words: words,
         };
         tracing::info!(robot = %self.robot.name, id = next_id, bank, words, preload_s = preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "part chained at speed preloaded");
-        self.preloaded = Some((next_id, bank));
+        self.preloaded = Some((next_id, preloaded));
         // Planned by `plan_order` above, if not before.
         let parts: Vec<Part> = section
             .as_ref()

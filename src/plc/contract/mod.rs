@@ -292,6 +292,28 @@ pub struct VerifiedBank {
     pub words: usize,
 }
 
+/// Tables written into a bank and read back ahead of their start ([`Contract::preload`]): the
+/// words as written, so that the start can prove it plays exactly them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Preload {
+    bank: u16,
+    writes: Vec<Write>,
+}
+
+impl Preload {
+    /// The bank they are in.
+    #[must_use]
+    pub fn bank(&self) -> u16 {
+        self.bank
+    }
+
+    /// Words written.
+    #[must_use]
+    pub fn words(&self) -> usize {
+        self.writes.iter().map(|(_, w)| w.len()).sum()
+    }
+}
+
 /// What became of a command word written once.
 #[derive(Debug)]
 pub enum CommandWrite {
@@ -462,27 +484,39 @@ impl<P: Plc> Contract<P> {
 
     /// Writes every table into `bank` and reads them back, without the command block: a part
     /// of a path that will start at speed behind the start about to be written, uploaded before
-    /// that start while nothing runs (see [`Self::upload_preloaded`]). Returns the words written.
+    /// that start while nothing runs (see [`Self::upload_preloaded`]).
     pub async fn preload(
         &mut self,
         bank: u16,
         tables: &[ValidTable],
-    ) -> Result<usize, ContractError> {
+    ) -> Result<Preload, ContractError> {
         let (_, writes) = self.table_writes(bank, 0, [0; CHANNELS], tables)?;
         self.write_and_verify(&writes).await?;
-        Ok(writes.iter().map(|(_, w)| w.len()).sum())
+        Ok(Preload { bank, writes })
     }
 
     /// [`Self::upload`] for tables already written into `bank` and read back by
-    /// [`Self::preload`]: only the command block is written and compared.
+    /// [`Self::preload`]: only the command block is written and compared, when `tables` are
+    /// word for word those preloaded there; otherwise (another bank, other tables) everything
+    /// is written and compared as by [`Self::upload`]. A start never rests on a preload that is
+    /// not proven to be its own.
     pub async fn upload_preloaded(
         &mut self,
         bank: u16,
         seq: u16,
         from: [i32; CHANNELS],
         tables: &[ValidTable],
+        preload: &Preload,
     ) -> Result<VerifiedBank, ContractError> {
-        let (block, _) = self.table_writes(bank, seq, from, tables)?;
+        let (block, tables_writes) = self.table_writes(bank, seq, from, tables)?;
+        if preload.bank != bank || preload.writes != tables_writes {
+            tracing::warn!(
+                bank,
+                preloaded_bank = preload.bank,
+                "tables differ from those preloaded: writing them whole"
+            );
+            return self.upload(bank, seq, from, tables).await;
+        }
         let writes = [self.block_write(&block)];
         self.write_and_verify(&writes).await?;
         Ok(VerifiedBank {

@@ -174,6 +174,59 @@ async fn upload_writes_tables_then_the_command_block_with_from_but_not_command_o
     );
 }
 
+/// `table(channel)` ending on `target` instead.
+fn table_to(channel: u8, target: i64) -> ValidTable {
+    let mut t = table(channel).table().clone();
+    t.segments[0].rows[0].target = target;
+    validate(
+        t,
+        ChannelLimits {
+            max_freq_hz: 20_000,
+            area_words: 2_000,
+        },
+    )
+    .unwrap()
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are_the_ones_preloaded()
+ {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let preload = c.preload(1, &[table(0), table(2)]).await.unwrap();
+    assert_eq!(preload.words(), 32);
+    // The same tables: the command block alone.
+    let before = c.plc().writes.len();
+    let bank = c
+        .upload_preloaded(1, 7, FROM, &[table(0), table(2)], &preload)
+        .await
+        .unwrap();
+    assert_eq!(c.plc().writes[before..], [(1_033, 15)]);
+    assert_eq!(bank.block.mask, 0b101);
+    // Other tables: written whole, and the area holds them (the target word of row 1).
+    let before = c.plc().writes.len();
+    let whole = c
+        .upload_preloaded(1, 8, FROM, &[table(0), table_to(2, 900)], &preload)
+        .await
+        .unwrap();
+    assert_eq!(whole.words, 47);
+    assert_eq!(
+        c.plc().writes[before..],
+        [(10_000, 16), (14_000, 16), (1_033, 15)]
+    );
+    assert_eq!(c.plc().dt[&(14_000 + 8 + 4)], 900);
+    // Another bank: written whole into it.
+    let before = c.plc().writes.len();
+    let other = c
+        .upload_preloaded(0, 9, FROM, &[table(0), table(2)], &preload)
+        .await
+        .unwrap();
+    assert_eq!(other.block.bank, 0);
+    assert_eq!(
+        c.plc().writes[before..],
+        [(2_000, 16), (6_000, 16), (1_033, 15)]
+    );
+}
+
 #[tokio::test(start_paused = true)]
 async fn failed_read_back_yields_no_bank_and_no_start() {
     let mut plc = FakePlc::running();
