@@ -6,8 +6,7 @@ mod common;
 
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;
-use common::served::{LIMIT, ROBOT, Served};
-use hyper::StatusCode;
+use common::served::{LIMIT, Served};
 use linterpd::daemon::{MoveReport, Stage};
 use linterpd::geometry::{Corner, Element, Pose};
 use linterpd::plan::{Origin, PathRequest, Plan, plan_path};
@@ -62,17 +61,7 @@ async fn a_running_parts_progress_names_the_planned_instant_of_the_counts_it_was
     let planned = plan_path(&robot, &req).unwrap();
     let plans: Vec<&Plan> = planned.starts().collect();
 
-    let answer = s
-        .api
-        .post(&format!("{ROBOT}/paths"), &body.to_string())
-        .await;
-    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
-    let ids: Vec<u64> = answer.json()["ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_u64().unwrap())
-        .collect();
+    let ids = s.post_path(&body).await;
     assert_eq!(
         ids.len(),
         plans.len(),

@@ -5,8 +5,7 @@ mod common;
 
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;
-use common::served::{LIMIT, ROBOT, Served};
-use hyper::StatusCode;
+use common::served::{LIMIT, Served};
 use linterpd::daemon::{PathOrder, Stage};
 use linterpd::geometry::Pose;
 use linterpd::kinematics::{JOINTS, Kinematics};
@@ -46,17 +45,7 @@ async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_t
         },
         "tolerance_mm": 0.05
     });
-    let answer = s
-        .api
-        .post(&format!("{ROBOT}/paths"), &body.to_string())
-        .await;
-    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
-    let ids: Vec<u64> = answer.json()["ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_u64().unwrap())
-        .collect();
+    let ids = s.post_path(&body).await;
     // Two sections, before and after the stop; the first cut in two where d2 reverses at the
     // top of the blend while the other joints move.
     assert_eq!(ids.len(), 3, "{ids:?}");
@@ -129,20 +118,6 @@ fn lift_and_place() -> serde_json::Value {
     })
 }
 
-async fn post_path(s: &Served, body: &serde_json::Value) -> Vec<u64> {
-    let answer = s
-        .api
-        .post(&format!("{ROBOT}/paths"), &body.to_string())
-        .await;
-    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
-    answer.json()["ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_u64().unwrap())
-        .collect()
-}
-
 #[tokio::test]
 async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without_a_pause() {
     chains_at_speed("").await;
@@ -168,7 +143,7 @@ async fn chains_at_speed(script: &str) {
     let a_rad = seed_robot()
         .pose_of(&s.handle.state().counts.unwrap())
         .a_rad;
-    let ids = post_path(&s, &lift_and_place()).await;
+    let ids = s.post_path(&lift_and_place()).await;
     assert_eq!(ids.len(), 3, "one section, cut into three parts");
     let mut parts = Vec::new();
     for id in &ids {
@@ -210,7 +185,7 @@ async fn a_section_whose_parts_cannot_chain_over_a_slow_link_is_refused_before_a
     let dir = TempDir::new("paths-slow");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
     let before = s.handle.state().counts;
-    let ids = post_path(&s, &lift_and_place()).await;
+    let ids = s.post_path(&lift_and_place()).await;
     let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
     let second = s.handle.wait(ids[1], LIMIT).await.unwrap();
     assert_eq!(first.stage, Stage::Failed, "{first:?}");

@@ -61,6 +61,22 @@ impl Served {
         }
     }
 
+    /// Posts a path (`POST .../paths`) and returns the ids of its moves, one per start.
+    #[allow(dead_code)] // not every test binary posts paths
+    pub async fn post_path(&self, body: &Value) -> Vec<u64> {
+        let answer = self
+            .api
+            .post(&format!("{ROBOT}/paths"), &body.to_string())
+            .await;
+        assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
+        answer.json()["ids"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect()
+    }
+
     /// Posts an order and waits for its end.
     pub async fn run(&self, order: &Value) -> MoveReport {
         let answer = self
