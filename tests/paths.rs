@@ -132,11 +132,26 @@ async fn a_link_whose_every_exchange_takes_40_ms_still_chains_the_parts() {
     chains_at_speed("delay40@100%").await;
 }
 
+#[tokio::test]
+async fn a_later_part_preloaded_behind_the_first_chains_over_a_link_too_slow_to_write_it_whole() {
+    // Every exchange 55 ms late. Written whole while the second part runs 1.25 s, the third
+    // part's tables (seven frames written, seven read back) and its start (five exchanges)
+    // would take about 1.05 s, 1.3 s with the pace check's margin: refused. Its tables went in
+    // with the first part's, past them in the same bank: its start writes only the directories
+    // of the channels the first part's tables come before, and its block, each read back.
+    let parts = chains_at_speed("delay55@100%").await;
+    let third = parts[2].upload_s.unwrap();
+    assert!(
+        third < 0.55,
+        "the third part's upload took {third} s: more than ten exchanges, its tables were written whole"
+    );
+}
+
 /// The lift and place over a mock with fault `script`: every part done, each waiting behind
 /// the one before and taken as it ended, from exactly its end counts. The section is cut where
 /// the base and radial joints start late (after the lift) and where d2 reverses while they move
 /// (at the top of the second blend).
-async fn chains_at_speed(script: &str) {
+async fn chains_at_speed(script: &str) -> Vec<linterpd::daemon::MoveReport> {
     let shared = mock_at_seed_start(script);
     let dir = TempDir::new("paths-parts");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
@@ -173,6 +188,7 @@ async fn chains_at_speed(script: &str) {
         );
     }
     s.daemon.shut_down().await;
+    parts
 }
 
 #[tokio::test]

@@ -20,10 +20,23 @@ fn push_dint(words: &mut Vec<u16>, value: u32) {
 /// The words to write at the start of the channel's table area.
 #[must_use]
 pub fn encode(table: &ValidTable) -> Vec<u16> {
+    let (directory, segments) = encode_at(table, DIRECTORY_WORDS);
+    let mut words = directory.to_vec();
+    words.extend(segments);
+    words
+}
+
+/// The channel's table placed with its first segment `base` words from the area's start
+/// (the directory's end, or past other tables kept in the same area): its directory, and the
+/// segments' words to write at `base`. Directory entries past the table's segments are 0.
+#[must_use]
+pub fn encode_at(table: &ValidTable, base: usize) -> ([u16; DIRECTORY_WORDS], Vec<u16>) {
     let table = table.table();
-    let mut words = vec![0u16; DIRECTORY_WORDS];
+    let mut directory = [0u16; DIRECTORY_WORDS];
+    let mut words = Vec::with_capacity(encoded_words(table) - DIRECTORY_WORDS);
     for (i, seg) in table.segments.iter().enumerate() {
-        words[i] = words.len() as u16;
+        // Validation bounds a table by its area, and a caller its base: an offset fits a word.
+        directory[i] = (base + words.len()) as u16;
         push_dint(&mut words, seg.control.value());
         for row in &seg.rows {
             push_dint(&mut words, row.freq_hz);
@@ -32,7 +45,7 @@ pub fn encode(table: &ValidTable) -> Vec<u16> {
         }
         push_dint(&mut words, 0);
     }
-    words
+    (directory, words)
 }
 
 /// Why a word image is not a table.
@@ -193,6 +206,29 @@ mod tests {
         let words = encode(&validate(t.clone(), limits()).unwrap());
         assert_eq!(words.len(), encoded_words(&t));
         assert_eq!(decode(&words, 2).unwrap(), t.segments);
+    }
+
+    #[test]
+    fn a_table_placed_past_another_decodes_through_its_directory_alone() {
+        // Two tables kept in one area: the first from the directory's end, the second after
+        // its words. With the second's directory in place the area decodes to the second.
+        let limits = limits();
+        let first = validate(sample(), limits).unwrap();
+        let mut other = sample();
+        other.segments[0].rows[0].freq_hz = 2_000;
+        let second = validate(other.clone(), limits).unwrap();
+        let mut area = encode(&first);
+        let base = area.len();
+        let (directory, words) = encode_at(&second, base);
+        assert_eq!(directory[0] as usize, base);
+        assert_eq!(directory[2..], [0; 6]);
+        area.extend(&words);
+        assert_eq!(decode(&area, 2).unwrap(), sample().segments);
+        area[..DIRECTORY_WORDS].copy_from_slice(&directory);
+        assert_eq!(decode(&area, 2).unwrap(), other.segments);
+        // At the directory's end, it is `encode` split in two.
+        let (directory, words) = encode_at(&second, DIRECTORY_WORDS);
+        assert_eq!([&directory[..], &words[..]].concat(), encode(&second));
     }
 
     #[test]

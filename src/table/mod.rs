@@ -15,7 +15,7 @@ mod range;
 use std::fmt;
 
 pub use code::{ControlCode, Direction, Duty, OutputMethod, quarter_duty_from_hz};
-pub use image::{DecodeError, decode, encode, encoded_words};
+pub use image::{DecodeError, decode, encode, encode_at, encoded_words};
 pub use range::{FrequencyModel, FrequencyRange};
 
 /// Segments one channel may hold in one start (CONTRACT.md: offsets of segment 1..8).

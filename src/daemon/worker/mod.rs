@@ -130,9 +130,10 @@ pub(super) struct Worker {
     homing: Vec<Reply>,
     /// The last start written and its bank, for writing it again after a lost reply.
     last_start: Option<(MoveId, VerifiedBank)>,
-    /// A queued part of a path whose tables were written and read back ahead of its turn, and
-    /// what was written (the bank and the words, which its start must match).
-    preloaded: Option<(MoveId, crate::plc::contract::Preload)>,
+    /// The queued parts of a path whose tables were written and read back ahead of their
+    /// turns, and what was written (the bank, where, the words, which each start must match).
+    /// Emptied by every bank written whole, which may overwrite them.
+    preloaded: Vec<(MoveId, crate::plc::contract::Preload)>,
     /// When each running move was seen starting.
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
@@ -178,7 +179,7 @@ impl Worker {
             commands: Vec::new(),
             homing: Vec::new(),
             last_start: None,
-            preloaded: None,
+            preloaded: Vec::new(),
             started: HashMap::new(),
             stop_asked: None,
             exchange: Duration::ZERO,

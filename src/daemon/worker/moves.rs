@@ -9,11 +9,13 @@ use super::pace::{Pace, Part};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Planned, ProgressCurve};
+use crate::daemon::order::CheckedOrder;
 use crate::daemon::order::plan_order;
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
 use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
 use crate::robot::Robot;
+use crate::table::{DIRECTORY_WORDS, ValidTable, encoded_words};
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -146,85 +148,150 @@ impl Worker {
     }
 
     /// Writes `tables` and the command block of `planned` (move `id`) into its bank and reads
-    /// them back; only the block when the tables were preloaded. A start written while nothing
-    /// runs (`from_rest`) first preloads the next part of a path that begins at speed behind it
-    /// (`exchange`: how long a status read just took).
+    /// them back; only the directories left and the block when the tables were preloaded. A
+    /// start written while nothing runs (`from_rest`) first preloads the parts of a path that
+    /// begin at speed behind it (`exchange`: how long a status read just took).
     async fn write_bank(
         &mut self,
         id: MoveId,
         planned: &Planned,
-        tables: &[crate::table::ValidTable],
+        tables: &[ValidTable],
         from_rest: bool,
         exchange: Duration,
     ) -> Result<crate::plc::contract::VerifiedBank, ContractError> {
-        let preloaded = self
-            .preloaded
-            .take()
-            .filter(|(of, preload)| *of == id && preload.bank() == planned.bank);
-        if from_rest {
-            let ends_on = planned.targets.expect("a plan knows its targets");
-            self.preload_next(ends_on, 1 - planned.bank, exchange)
-                .await?;
-        }
+        let own = if from_rest {
+            // Nothing preloaded before outlives a start from rest: its section's parts are
+            // preloaded afresh around it.
+            self.preloaded.clear();
+            self.preload_section(planned, tables, exchange).await?;
+            None
+        } else {
+            self.preloaded
+                .iter()
+                .position(|(of, preload)| *of == id && preload.bank() == planned.bank)
+                .map(|at| self.preloaded.remove(at).1)
+        };
         let link = self.link.as_mut().expect("connected");
-        if let Some((_, preload)) = preloaded {
+        let bank = if let Some(preload) = own {
             link.upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
-                .await
+                .await?
         } else {
             link.upload(planned.bank, planned.seq, planned.from, tables)
-                .await
+                .await?
+        };
+        if !bank.on_preload && !from_rest {
+            // Written whole from the directory's end: it may lie over tables preloaded past
+            // its own, which no later start may rest on.
+            self.preloaded.clear();
         }
+        Ok(bank)
     }
 
-    /// Before a start written while nothing runs: when the next move in the queue is a part of
-    /// a path that begins at speed behind it, its tables are written into `bank` (the one
-    /// this start does not use) and read back now, so that while this start runs only its
-    /// command block is left to write. Nothing runs from `bank`: this start is written while
-    /// nothing runs. A next part that cannot be planned is left to fail at its own turn. Then,
-    /// at the pace the link just showed (`exchange`, a status read; a one-word read; the
-    /// preload), every
-    /// part of the section must be ready to start before the part ahead of it ends: if not,
-    /// this start is refused before anything moves ([`Pace::check`]).
-    async fn preload_next(
+    /// Before a start written while nothing runs (`first`, its `tables`): when the moves queued
+    /// behind it are the parts of a path that begin at speed, their tables are written and read
+    /// back now, in the banks they will start from (alternating, the second part in the bank
+    /// `first` does not use), each channel's after the tables placed in its area before it
+    /// (after `first`'s own), for as many parts in a row as the areas hold. While the parts
+    /// run, each part's start is then left with its directories (past the first in each bank)
+    /// and its command block to write. Nothing runs from either bank: `first` is written while
+    /// nothing runs, and every preloaded word lies outside its tables. A part that cannot be
+    /// planned is left to fail at its own turn. Then, at the pace the link just showed
+    /// (`exchange`, a status read; a one-word read; the preloads), every part of the section
+    /// must be ready to start before the part ahead of it ends: if not, this start is refused
+    /// before anything moves ([`Pace::check`]).
+    async fn preload_section(
         &mut self,
-        ends_on: [i32; CHANNELS],
-        bank: u16,
+        first: &Planned,
+        tables: &[ValidTable],
         exchange: Duration,
     ) -> Result<(), ContractError> {
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
-        let Some(next) = self.queue.front().filter(|q| q.order.begins_at_speed()) else {
+        let Some(section) = self
+            .queue
+            .front()
+            .filter(|q| q.order.begins_at_speed())
+            .and_then(|q| q.order.section().cloned())
+        else {
             return Ok(());
         };
-        let next_id = next.id;
-        let section = next.order.section().cloned();
-        let Ok(plan) = plan_order(
-            &self.robot,
-            &next.order,
-            self.by_joint(ends_on.map(i64::from)),
-        ) else {
-            return Ok(());
-        };
-        let Some(tables) = plan.valid_tables(&self.robot) else {
-            return Ok(());
-        };
+        let behind: Vec<(MoveId, CheckedOrder)> = self
+            .queue
+            .iter()
+            .take_while(|q| {
+                q.order.begins_at_speed()
+                    && q.order.section().is_some_and(|s| Arc::ptr_eq(s, &section))
+            })
+            .map(|q| (q.id, q.order.clone()))
+            .collect();
         let link = self.link.as_mut().expect("connected");
-        let began = tokio::time::Instant::now();
-        let preloaded = link.preload(bank, &tables).await?;
-        let (preload, words) = (began.elapsed(), preloaded.words());
+        let area_words = usize::from(link.settings().layout.area_words);
+        // Per bank and channel, the first word no table placed so far takes.
+        let mut free = [[DIRECTORY_WORDS; CHANNELS]; 2];
+        place(&mut free[usize::from(first.bank)], tables);
+        let mut ends_on = first.targets.expect("a plan knows its targets");
+        let mut bank = 1 - first.bank;
+        let (mut preload, mut preload_words) = (Duration::ZERO, 0);
+        let mut directories = Vec::new();
+        for (id, order) in behind {
+            let Ok(plan) = plan_order(&self.robot, &order, self.by_joint(ends_on.map(i64::from)))
+            else {
+                break;
+            };
+            let Some(tables) = plan.valid_tables(&self.robot) else {
+                break;
+            };
+            let base = free[usize::from(bank)];
+            let mut after = base;
+            place(&mut after, &tables);
+            if after.iter().any(|&end| end > area_words) {
+                tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
+                break;
+            }
+            let link = self.link.as_mut().expect("connected");
+            let began = tokio::time::Instant::now();
+            let preloaded = link.preload(bank, base, &tables).await?;
+            preload += began.elapsed();
+            preload_words += preloaded.words();
+            tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = began.elapsed().as_secs_f64(), "part chained at speed preloaded");
+            directories.push(
+                tables
+                    .iter()
+                    .filter(|t| base[usize::from(t.table().channel)] > DIRECTORY_WORDS)
+                    .count(),
+            );
+            self.preloaded.push((id, preloaded));
+            free[usize::from(bank)] = after;
+            ends_on = end_counts(&plan, ends_on);
+            bank = 1 - bank;
+        }
+        if directories.is_empty() {
+            return Ok(());
+        }
+        let link = self.link.as_mut().expect("connected");
         let pace = Pace {
             status: exchange,
             word: link.one_word_exchange().await?,
             preload,
-            preload_words: words,
+            preload_words,
         };
-        tracing::info!(robot = %self.robot.name, id = next_id, bank, words, preload_s = preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "part chained at speed preloaded");
-        self.preloaded = Some((next_id, preloaded));
+        tracing::info!(robot = %self.robot.name, parts = directories.len(), words = preload_words, preload_s = preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
         // Planned by `plan_order` above, if not before.
         let parts: Vec<Part> = section
-            .as_ref()
-            .and_then(|s| s.planned.get())
-            .map(|starts| starts.iter().map(Part::of).collect())
+            .planned
+            .get()
+            .map(|starts| {
+                starts
+                    .iter()
+                    .enumerate()
+                    .map(|(k, plan)| {
+                        Part::of(
+                            plan,
+                            k.checked_sub(1).and_then(|k| directories.get(k).copied()),
+                        )
+                    })
+                    .collect()
+            })
             .unwrap_or_default();
         pace.check(&parts)
     }
@@ -268,12 +335,7 @@ impl Worker {
         from: [i32; CHANNELS],
         running_bank: Option<u16>,
     ) -> Planned {
-        let tables: Vec<(usize, &[crate::table::Segment])> = plan
-            .tables
-            .iter()
-            .map(|t| (usize::from(t.channel), t.segments.as_slice()))
-            .collect();
-        let (envelope, targets) = planned_bounds(from, &tables);
+        let (envelope, targets) = planned_bounds(from, &channel_tables(plan));
         // Never the PLC's latched seq: it would take the start for one already acted on.
         let latched = self.machine.last().map(|s| s.block.seq);
         let seq = if latched == Some(self.next_seq) {
@@ -411,6 +473,26 @@ impl Worker {
             self.shared.forget_planned_end();
         }
     }
+}
+
+/// Moves each channel's first free word in `free` past its table in `tables` (segments alone).
+fn place(free: &mut [usize; CHANNELS], tables: &[ValidTable]) {
+    for t in tables {
+        free[usize::from(t.table().channel)] += encoded_words(t.table()) - DIRECTORY_WORDS;
+    }
+}
+
+/// The counts per channel where `plan`, started from `from`, ends.
+fn end_counts(plan: &Plan, from: [i32; CHANNELS]) -> [i32; CHANNELS] {
+    planned_bounds(from, &channel_tables(plan)).1
+}
+
+/// Each of `plan`'s tables with its pulse channel.
+fn channel_tables(plan: &Plan) -> Vec<(usize, &[crate::table::Segment])> {
+    plan.tables
+        .iter()
+        .map(|t| (usize::from(t.channel), t.segments.as_slice()))
+        .collect()
 }
 
 /// The plan's counts per channel at each of its sample points over the start's own time (equally

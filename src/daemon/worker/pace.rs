@@ -2,19 +2,24 @@
 //! first must be written, read back and started while the part before it runs, or the part
 //! before ends at speed with nothing waiting and the robot stops there abruptly. Judged before
 //! the section's first part starts, from the pace the link showed just then: a status read, a
-//! one-word read, and the second part's tables written and read back into the idle bank.
+//! one-word read, and the later parts' tables written and read back (preloaded) into the banks
+//! they will start from.
 //!
 //! A part's start, once the part before it is seen running, takes (as the worker makes them):
-//! the status read that sees the part before running (its turn begins on it), its command block
-//! written and read back, the status read before the start, and the one-word start write. An
-//! exchange of `w` words is taken on the line through the two reads measured (one word, and
-//! the status block's [`STATUS_WORDS`]): a fixed cost per exchange and a cost per word.
+//! the status read that sees the part before running (its turn begins on it), its directories
+//! left to write (one per channel whose tables lie past another part's in the same bank) and
+//! its command block written and read back, the status read before the start, and the one-word
+//! start write; a part not preloaded (the areas were full) has its tables written and read
+//! back too, at the preloads' pace per word. An exchange of `w` words is taken on the line
+//! through the two reads measured (one word, and the status block's [`STATUS_WORDS`]): a fixed
+//! cost per exchange and a cost per word.
 
 use std::time::Duration;
 
 use crate::contract::STATUS_WORDS;
 use crate::plan::Plan;
 use crate::plc::contract::{BLOCK_WRITE_WORDS, ContractError};
+use crate::table::DIRECTORY_WORDS;
 
 /// The estimate must fit the part before it this many times over (a link's pace varies).
 const MARGIN: f64 = 1.25;
@@ -26,7 +31,7 @@ pub(super) struct Pace {
     pub status: Duration,
     /// One one-word read.
     pub word: Duration,
-    /// The second part's tables written and read back ...
+    /// The later parts' tables written and read back ...
     pub preload: Duration,
     /// ... that many words.
     pub preload_words: usize,
@@ -39,13 +44,17 @@ pub(super) struct Part {
     pub words: usize,
     /// Its planned duration, s.
     pub runs_s: f64,
+    /// Preloaded: how many directories its start still writes. `None`: its tables too.
+    pub preloaded: Option<usize>,
 }
 
 impl Part {
-    pub(super) fn of(plan: &Plan) -> Self {
+    /// `plan` as a part, preloaded with `directories` left to write, or not preloaded.
+    pub(super) fn of(plan: &Plan, preloaded: Option<usize>) -> Self {
         Self {
             words: plan.figures.words,
             runs_s: plan.duration_s(),
+            preloaded,
         }
     }
 }
@@ -67,14 +76,18 @@ impl Pace {
             + self.exchange_s(1)
     }
 
-    /// About how long part `k` (from 0) takes to be ready to start once its bank is free: the
-    /// second part's tables are already written (preloaded), a later part's are not.
+    /// About how long part `k` (from 0) takes to be ready to start once its bank is free: a
+    /// preloaded part's directories written and read back, a part not preloaded its tables
+    /// at the preloads' pace, then its start.
     fn need_s(&self, parts: &[Part], k: usize) -> f64 {
-        if k == 1 {
-            return self.start_s();
-        }
-        let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
-        parts[k].words as f64 * per_word_s + self.start_s()
+        let tables_s = match parts[k].preloaded {
+            Some(directories) => directories as f64 * 2.0 * self.exchange_s(DIRECTORY_WORDS),
+            None => {
+                let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
+                parts[k].words as f64 * per_word_s
+            }
+        };
+        tables_s + self.start_s()
     }
 
     /// Refuses a section's `parts` (the first about to start from rest) if a part after the
@@ -110,8 +123,22 @@ mod tests {
         }
     }
 
+    /// A part not preloaded.
     fn part(words: usize, runs_s: f64) -> Part {
-        Part { words, runs_s }
+        Part {
+            words,
+            runs_s,
+            preloaded: None,
+        }
+    }
+
+    /// A part preloaded, its start left with `directories` to write.
+    fn preloaded(words: usize, runs_s: f64, directories: usize) -> Part {
+        Part {
+            words,
+            runs_s,
+            preloaded: Some(directories),
+        }
     }
 
     #[test]
@@ -149,9 +176,9 @@ mod tests {
         let p = pace(72, 20, 6_000, 1_000);
         let need = 0.144 + 2.0 * (0.020 + 0.052 * 14.0 / 21.0) + 0.020;
         assert!((p.start_s() - need).abs() < 1e-12, "{}", p.start_s());
-        let fits = [part(150, need * MARGIN + 0.001), part(5_000, 1.0)];
+        let fits = [part(150, need * MARGIN + 0.001), preloaded(5_000, 1.0, 0)];
         assert!(p.check(&fits).is_ok());
-        let short = [part(150, need * MARGIN - 0.001), part(200, 1.0)];
+        let short = [part(150, need * MARGIN - 0.001), preloaded(200, 1.0, 0)];
         assert!(matches!(
             p.check(&short),
             Err(ContractError::ChainOutrunsLink {
@@ -168,7 +195,7 @@ mod tests {
         // 1.5 s.
         let p = pace(20, 20, 1_200, 200);
         assert!((p.start_s() - 0.1).abs() < 1e-12);
-        let parts = [part(150, 0.5), part(200, 1.5), part(300, 1.0)];
+        let parts = [part(150, 0.5), preloaded(200, 1.5, 0), part(300, 1.0)];
         let refused = p.check(&parts).unwrap_err();
         let ContractError::ChainOutrunsLink {
             part: which,
@@ -183,7 +210,16 @@ mod tests {
         assert!((need_s - 1.9).abs() < 1e-9, "{need_s}");
         assert!((runs_s - 1.5).abs() < 1e-12);
         // Run slower, it fits.
-        let slower = [part(150, 0.5), part(200, 2.5), part(300, 1.0)];
+        let slower = [part(150, 0.5), preloaded(200, 2.5, 0), part(300, 1.0)];
         assert!(p.check(&slower).is_ok());
+        // Preloaded too, past the first part's tables in its bank: its start writes three
+        // directories of 8 words and reads them back (6 x 20 ms at this link's pace).
+        let later = [
+            part(150, 0.5),
+            preloaded(200, 1.5, 0),
+            preloaded(300, 1.0, 3),
+        ];
+        assert!((p.need_s(&later, 2) - (0.1 + 0.12)).abs() < 1e-9);
+        assert!(p.check(&later).is_ok());
     }
 }

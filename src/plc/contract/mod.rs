@@ -30,7 +30,7 @@ use crate::contract::{
     CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, Layout, MAGIC,
     STATUS_WORDS, State, StatusBlock, UnknownValue, VERSION,
 };
-use crate::table::{DIRECTORY_WORDS, ValidTable, encode};
+use crate::table::{DIRECTORY_WORDS, ValidTable, encode_at};
 
 /// How the exchanges behave.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -290,13 +290,18 @@ pub struct VerifiedBank {
     pub block: CommandBlock,
     /// Words written (tables and command block).
     pub words: usize,
+    /// Whether its tables were proven to be the ones preloaded ([`Contract::upload_preloaded`]),
+    /// so that only directories and the command block were written now. A bank written whole
+    /// may have overwritten tables preloaded past its own.
+    pub on_preload: bool,
 }
 
-/// Tables written into a bank and read back ahead of their start ([`Contract::preload`]): the
-/// words as written, so that the start can prove it plays exactly them.
+/// Tables written into a bank and read back ahead of their start ([`Contract::preload`]): where
+/// they were placed and the words as written, so that the start can prove it plays exactly them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Preload {
     bank: u16,
+    base: [usize; CHANNELS],
     writes: Vec<Write>,
 }
 
@@ -473,33 +478,41 @@ impl<P: Plc> Contract<P> {
         from: [i32; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<VerifiedBank, ContractError> {
-        let (block, mut writes) = self.table_writes(bank, seq, from, tables)?;
+        let (block, mut writes, _) =
+            self.placed(bank, seq, from, tables, [DIRECTORY_WORDS; CHANNELS])?;
         writes.push(self.block_write(&block));
         self.write_and_verify(&writes).await?;
         Ok(VerifiedBank {
             block,
             words: writes.iter().map(|(_, w)| w.len()).sum(),
+            on_preload: false,
         })
     }
 
     /// Writes every table into `bank` and reads them back, without the command block: a part
-    /// of a path that will start at speed behind the start about to be written, uploaded before
-    /// that start while nothing runs (see [`Self::upload_preloaded`]).
+    /// of a path that will start at speed later, uploaded while nothing runs from `bank` (see
+    /// [`Self::upload_preloaded`]). Channel `c`'s segments are placed from word `base[c]` of
+    /// its area: the directory's end ([`DIRECTORY_WORDS`]), where the directory is written
+    /// with them, or past tables kept before them in the same area (a part that starts after
+    /// another from the same bank), where the directory is left for the start to write, when
+    /// the tables before are done.
     pub async fn preload(
         &mut self,
         bank: u16,
+        base: [usize; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<Preload, ContractError> {
-        let (_, writes) = self.table_writes(bank, 0, [0; CHANNELS], tables)?;
+        let (_, writes, _) = self.placed(bank, 0, [0; CHANNELS], tables, base)?;
         self.write_and_verify(&writes).await?;
-        Ok(Preload { bank, writes })
+        Ok(Preload { bank, base, writes })
     }
 
     /// [`Self::upload`] for tables already written into `bank` and read back by
-    /// [`Self::preload`]: only the command block is written and compared, when `tables` are
-    /// word for word those preloaded there; otherwise (another bank, other tables) everything
-    /// is written and compared as by [`Self::upload`]. A start never rests on a preload that is
-    /// not proven to be its own.
+    /// [`Self::preload`]: only the directories left for the start and the command block are
+    /// written and compared, when `tables`, placed as preloaded, are word for word those
+    /// preloaded there; otherwise (another bank, other tables) everything is written and
+    /// compared as by [`Self::upload`]. A start never rests on a preload that is not proven to
+    /// be its own.
     pub async fn upload_preloaded(
         &mut self,
         bank: u16,
@@ -508,7 +521,8 @@ impl<P: Plc> Contract<P> {
         tables: &[ValidTable],
         preload: &Preload,
     ) -> Result<VerifiedBank, ContractError> {
-        let (block, tables_writes) = self.table_writes(bank, seq, from, tables)?;
+        let (block, tables_writes, mut writes) =
+            self.placed(bank, seq, from, tables, preload.base)?;
         if preload.bank != bank || preload.writes != tables_writes {
             tracing::warn!(
                 bank,
@@ -517,22 +531,26 @@ impl<P: Plc> Contract<P> {
             );
             return self.upload(bank, seq, from, tables).await;
         }
-        let writes = [self.block_write(&block)];
+        writes.push(self.block_write(&block));
         self.write_and_verify(&writes).await?;
         Ok(VerifiedBank {
             block,
-            words: writes[0].1.len(),
+            words: writes.iter().map(|(_, w)| w.len()).sum(),
+            on_preload: true,
         })
     }
 
-    /// The command block for `tables` in `bank` and the writes of their areas.
-    fn table_writes(
+    /// The command block for `tables` in `bank`, each channel's segments placed from word
+    /// `base[c]` of its area: the writes of the tables, and of the directories not among them
+    /// (those of the channels placed past the directory's end).
+    fn placed(
         &self,
         bank: u16,
         seq: u16,
         from: [i32; CHANNELS],
         tables: &[ValidTable],
-    ) -> Result<(CommandBlock, Vec<Write>), ContractError> {
+        base: [usize; CHANNELS],
+    ) -> Result<(CommandBlock, Vec<Write>, Vec<Write>), ContractError> {
         if bank >= crate::contract::BANKS {
             return Err(ContractError::BadBank { bank });
         }
@@ -544,26 +562,34 @@ impl<P: Plc> Contract<P> {
             ..CommandBlock::default()
         };
         let mut writes: Vec<Write> = Vec::with_capacity(tables.len() + 1);
+        let mut directories: Vec<Write> = Vec::new();
         for t in tables {
             let channel = t.table().channel;
             let c = usize::from(channel);
             if c >= CHANNELS || block.mask & (1 << c) != 0 {
                 return Err(ContractError::BadChannel { channel });
             }
-            let words = encode(t);
+            let (directory, words) = encode_at(t, base[c].max(DIRECTORY_WORDS));
             let area_words = self.settings.layout.area_words;
-            if words.len() > usize::from(area_words) || words.len() < DIRECTORY_WORDS {
+            let end = base[c].max(DIRECTORY_WORDS) + words.len();
+            if end > usize::from(area_words) {
                 return Err(ContractError::TooLarge {
                     channel,
-                    words: words.len(),
+                    words: end,
                     area_words,
                 });
             }
             block.mask |= 1 << c;
             block.segments[c] = t.table().segments.len() as u16;
-            writes.push((self.settings.layout.area(bank, c), words));
+            let area = self.settings.layout.area(bank, c);
+            if base[c] <= DIRECTORY_WORDS {
+                writes.push((area, [&directory[..], &words[..]].concat()));
+            } else {
+                writes.push((area + base[c] as u16, words));
+                directories.push((area, directory.to_vec()));
+            }
         }
-        Ok((block, writes))
+        Ok((block, writes, directories))
     }
 
     /// Writes every `(address, words)`, then (when verifying) reads each back and compares.

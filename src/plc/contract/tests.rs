@@ -192,7 +192,10 @@ fn table_to(channel: u8, target: i64) -> ValidTable {
 async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are_the_ones_preloaded()
  {
     let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
-    let preload = c.preload(1, &[table(0), table(2)]).await.unwrap();
+    let preload = c
+        .preload(1, [DIRECTORY_WORDS; CHANNELS], &[table(0), table(2)])
+        .await
+        .unwrap();
     assert_eq!(preload.words(), 32);
     // The same tables: the command block alone.
     let before = c.plc().writes.len();
@@ -225,6 +228,89 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
         c.plc().writes[before..],
         [(2_000, 16), (6_000, 16), (1_033, 15)]
     );
+}
+
+/// Channel `c`'s area of bank 1, as the PLC holds it, decoded to its first segment.
+fn area_of(c: &mut Contract<FakePlc>, channel: u16) -> Vec<Segment> {
+    let start = 10_000 + channel * 2_000;
+    let words: Vec<u16> = (start..start + 2_000)
+        .map(|a| c.plc().dt.get(&a).copied().unwrap_or(0))
+        .collect();
+    crate::table::decode(&words, 1).unwrap()
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_table_preloaded_past_another_in_its_bank_is_started_on_its_directories_and_block() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    // The first part's tables at the directory's end, a later part's past them (16 words on).
+    let first = c
+        .preload(1, [DIRECTORY_WORDS; CHANNELS], &[table(0), table(2)])
+        .await
+        .unwrap();
+    let later_tables = [table_to(0, 700), table_to(2, 900)];
+    let later = c.preload(1, [16; CHANNELS], &later_tables).await.unwrap();
+    assert_eq!(later.words(), 16, "segments alone: the directories wait");
+    assert_eq!(c.plc().writes[2..], [(10_016, 8), (14_016, 8)]);
+    // The area still plays the first part.
+    assert_eq!(area_of(&mut c, 0), table(0).table().segments);
+    let bank = c
+        .upload_preloaded(1, 7, FROM, &[table(0), table(2)], &first)
+        .await
+        .unwrap();
+    assert!(bank.on_preload);
+    // The later part, once the first is done: its directories and its block, read back.
+    let before = c.plc().writes.len();
+    let bank = c
+        .upload_preloaded(1, 8, FROM, &later_tables, &later)
+        .await
+        .unwrap();
+    assert!(bank.on_preload);
+    assert_eq!(bank.words, 8 + 8 + 15);
+    assert_eq!(
+        c.plc().writes[before..],
+        [(10_000, 8), (14_000, 8), (1_033, 15)]
+    );
+    assert_eq!(area_of(&mut c, 0), later_tables[0].table().segments);
+    assert_eq!(area_of(&mut c, 2), later_tables[1].table().segments);
+    // Placed elsewhere than preloaded, the same tables are not proven: written whole.
+    let moved = Preload {
+        base: [24; CHANNELS],
+        ..later.clone()
+    };
+    let whole = c
+        .upload_preloaded(1, 9, FROM, &later_tables, &moved)
+        .await
+        .unwrap();
+    assert!(!whole.on_preload);
+    assert_eq!(whole.words, 16 + 16 + 15);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_preloaded_start_whose_directory_reads_back_wrong_is_not_started() {
+    let mut plc = FakePlc::running();
+    // The word the later part's directory puts at channel 2's first entry.
+    plc.corrupt = Some(14_000);
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let later = c
+        .preload(1, [16; CHANNELS], &[table(0), table(2)])
+        .await
+        .unwrap();
+    let err = c
+        .upload_preloaded(1, 8, FROM, &[table(0), table(2)], &later)
+        .await
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ContractError::CompareFailed {
+                address: 14_000,
+                wrote: 16,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(!c.plc().writes.iter().any(|(a, _)| *a == 1_032));
 }
 
 #[tokio::test(start_paused = true)]
