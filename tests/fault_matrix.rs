@@ -1,6 +1,7 @@
 //! The fault matrix: the daemon against the mock PLC through a scripted fault at every exchange
-//! position of four flows (one move; two moves chained; a stop during a chained pair; homing, then
-//! a move), for every fault a cable, a PLC or a restart can cause. After each case the invariants
+//! position of five flows (one move; two moves chained; a stop during a chained pair; homing, then
+//! a move; a blended path cut into three parts chained at speed, the later two preloaded), for
+//! every fault a cable, a PLC or a restart can cause. After each case the invariants
 //! hold:
 //!
 //! - I1 no table starts from counts other than its `from` (the mock records every start it acted
@@ -39,6 +40,28 @@ const A: [f64; 3] = [-926.57, 535.03, 50.0];
 /// Short moves out from A and back (about 0.4 s each), so a flow has few exchanges.
 const B: [f64; 3] = [-950.0, 560.0, 80.0];
 const C: [f64; 3] = [-900.0, 520.0, 30.0];
+/// The path goes from A up 100 mm, across to 100 mm above D (half way to the seed's P2), and
+/// down to it.
+const D: [f64; 3] = [-1035.5, 597.3, 118.3];
+
+/// A pick and place from A to D with 20 mm blends: one section cut into three parts (where
+/// the base and radial joints start, where d2 reverses), the second and third preloaded
+/// before the first starts, the third past the first's tables in the same bank.
+fn pick_and_place() -> linterpd::daemon::PathOrder {
+    serde_json::from_value(serde_json::json!({
+        "path": {
+            "start": A,
+            "path_accel": "5000mm/s2",
+            "element": [
+                {"line": [A[0], A[1], A[2] + 100.0], "blend": "20mm"},
+                {"line": [D[0], D[1], D[2] + 100.0], "blend": "20mm"},
+                {"line": D, "stop": true},
+            ]
+        },
+        "tolerance_mm": 0.05
+    }))
+    .unwrap()
+}
 
 /// The faults.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,6 +113,7 @@ enum Flow {
     Chained,
     StopChained,
     Home,
+    Path,
 }
 
 /// A stream that freezes (no more bytes either way) once the client has written `after`
@@ -205,6 +229,15 @@ fn counts_at_a() -> [i64; JOINTS] {
     robot.counts_of(&q)
 }
 
+/// The counts at A, per pulse channel.
+fn channel_counts_at_a() -> [i64; 4] {
+    let mut counts = [0; 4];
+    for (joint, count) in seed_robot().joints.iter().zip(counts_at_a()) {
+        counts[usize::from(joint.channel)] = count;
+    }
+    counts
+}
+
 /// The daemon on `connect`, homing the robot to A.
 fn spawn(connect: Connector) -> (linterpd::daemon::Daemon, RobotHandle) {
     common::daemon::spawn_with(
@@ -282,6 +315,20 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             tokio::time::sleep(Duration::from_millis(250)).await;
             let stop = tokio::time::timeout(BOUND, h.stop()).await;
             v.check(stop.is_ok(), || "I3: the stop did not answer".into());
+        }
+        Flow::Path => {
+            // A path is planned when it is accepted, from the counts last read: wait until the
+            // daemon has read them after the mock's first scans.
+            for _ in 0..500 {
+                if h.state().counts == Some(channel_counts_at_a()) {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(10)).await;
+            }
+            match h.submit_path(&pick_and_place()) {
+                Ok(parts) => ids.extend(parts),
+                Err(e) => v.0.push(format!("the path was refused: {e}")),
+            }
         }
         Flow::Home => {
             let home = tokio::time::timeout(BOUND, h.home()).await;
@@ -460,6 +507,9 @@ async fn positions(flow: Flow) -> u64 {
     let ids = run_flow(flow, &h, &mut v).await;
     settle(&h, &shared, &ids, &mut v).await;
     assert!(v.0.is_empty(), "{flow:?} without a fault: {:?}", v.0);
+    if flow == Flow::Path {
+        assert_eq!(ids.len(), 3, "the path is one section cut into three parts");
+    }
     if flow != Flow::StopChained {
         for id in ids {
             assert_eq!(h.report(id).unwrap().stage, Stage::Done, "{flow:?}");
@@ -471,11 +521,11 @@ async fn positions(flow: Flow) -> u64 {
     n
 }
 
-async fn matrix(flow: Flow) -> (usize, Vec<String>) {
+async fn matrix(flow: Flow, faults: &[Fault]) -> (usize, Vec<String>) {
     let n = positions(flow).await;
     let mut cases = 0;
     let mut broken = Vec::new();
-    for fault in FAULTS {
+    for &fault in faults {
         for k in 1..=n {
             cases += 1;
             let v = case(flow, fault, k).await;
@@ -487,14 +537,18 @@ async fn matrix(flow: Flow) -> (usize, Vec<String>) {
     }
     println!(
         "fault matrix {flow:?}: {n} exchange positions x {} faults = {cases} cases, {} invariant violations",
-        FAULTS.len(),
+        faults.len(),
         broken.len()
     );
     (cases, broken)
 }
 
 async fn run_matrix(flow: Flow) {
-    let (cases, broken) = matrix(flow).await;
+    run_matrix_of(flow, &FAULTS).await;
+}
+
+async fn run_matrix_of(flow: Flow, faults: &[Fault]) {
+    let (cases, broken) = matrix(flow, faults).await;
     assert!(cases > 0);
     assert!(
         broken.is_empty(),
@@ -524,9 +578,27 @@ async fn homing_then_a_move_under_every_fault_at_every_exchange() {
     run_matrix(Flow::Home).await;
 }
 
+// A path's case plans it (twice: when accepted, when its first part begins) and runs 2 s of
+// motion: its faults are split in three tests, which the test harness runs side by side.
+
+#[tokio::test(start_paused = true)]
+async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_1_of_3() {
+    run_matrix_of(Flow::Path, &FAULTS[..3]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_2_of_3() {
+    run_matrix_of(Flow::Path, &FAULTS[3..6]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
+    run_matrix_of(Flow::Path, &FAULTS[6..]).await;
+}
+
 /// One case with the daemon's and the mock's log, to see what happened in it:
 /// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test fault_matrix one_case -- --ignored
-/// --nocapture` (flows: single, chained, stop, home).
+/// --nocapture` (flows: single, chained, stop, home, path).
 #[tokio::test(start_paused = true)]
 #[ignore = "a diagnostic for one case of the matrix: set MATRIX_CASE=flow:Fault:position"]
 async fn one_case_with_its_log() {
@@ -540,6 +612,7 @@ async fn one_case_with_its_log() {
         "single" => Flow::Single,
         "chained" => Flow::Chained,
         "stop" => Flow::StopChained,
+        "path" => Flow::Path,
         _ => Flow::Home,
     };
     let fault = FAULTS

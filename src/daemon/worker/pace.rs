@@ -80,12 +80,11 @@ impl Pace {
     /// preloaded part's directories written and read back, a part not preloaded its tables
     /// at the preloads' pace, then its start.
     fn need_s(&self, parts: &[Part], k: usize) -> f64 {
-        let tables_s = match parts[k].preloaded {
-            Some(directories) => directories as f64 * 2.0 * self.exchange_s(DIRECTORY_WORDS),
-            None => {
-                let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
-                parts[k].words as f64 * per_word_s
-            }
+        let tables_s = if let Some(directories) = parts[k].preloaded {
+            directories as f64 * 2.0 * self.exchange_s(DIRECTORY_WORDS)
+        } else {
+            let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
+            parts[k].words as f64 * per_word_s
         };
         tables_s + self.start_s()
     }
