@@ -218,3 +218,49 @@ async fn a_section_whose_parts_cannot_chain_over_a_slow_link_is_refused_before_a
     assert_eq!(s.handle.state().counts, before);
     s.daemon.shut_down().await;
 }
+
+#[tokio::test]
+async fn a_section_cut_into_parts_behind_a_running_move_waits_for_rest_and_is_checked_before_it_moves()
+ {
+    // Moves down 30 mm and back, and behind them a path cut into parts. Chained behind the
+    // second move, the path's first part would start before the parts behind it could be
+    // preloaded (that move runs from one of the two banks) and before the link's pace was
+    // checked. It waits for the move to end instead; then, every reply 100 ms late, the check
+    // refuses the path before any of it moves (the second part's start would take 0.5 s, 0.63 s
+    // with the margin, of the lift's 0.39 s).
+    let shared = mock_at_seed_start("delay100@100%");
+    let dir = TempDir::new("paths-behind");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let mut moves = Vec::new();
+    for to in [[P1[0], P1[1], P1[2] - 30.0], P1] {
+        let answer = s
+            .api
+            .post(
+                "/v1/robots/press-loader/moves",
+                &json!({"to": to, "tolerance_mm": 0.05}).to_string(),
+            )
+            .await;
+        assert_eq!(answer.status.as_u16(), 202, "{}", answer.text());
+        moves.push(answer.json()["id"].as_u64().unwrap());
+    }
+    let ids = s.post_path(&lift_and_place()).await;
+    assert_eq!(ids.len(), 3, "one section, cut into three parts");
+    let mut last = None;
+    for id in moves {
+        let report = s.handle.wait(id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        last = report.target_counts;
+    }
+    let first = s.handle.wait(ids[0], LIMIT).await.unwrap();
+    assert_eq!(first.stage, Stage::Failed, "{first:?}");
+    let why = first.error.unwrap_or_default();
+    assert!(why.contains("part 2 of 3"), "{why}");
+    for id in &ids[1..] {
+        let part = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(part.stage, Stage::Cancelled, "{part:?}");
+    }
+    // The two moves alone were started; the robot stands where the second ended.
+    assert_eq!(shared.with(|m| m.starts().len()), 2);
+    assert_eq!(s.handle.state().counts.map(|c| c.map(i64::from)), last);
+    s.daemon.shut_down().await;
+}

@@ -297,6 +297,14 @@ impl CheckedOrder {
         matches!(&self.target, Target::Section(part) if part.begins_at_speed())
     }
 
+    /// Whether it is the first part of a path section cut into several parts. The parts behind
+    /// it are written into both banks and the link's pace is checked before it starts, so it
+    /// starts only from rest, never chained behind a running move.
+    #[must_use]
+    pub fn leads_parts(&self) -> bool {
+        matches!(&self.target, Target::Section(p) if p.part == 0 && p.parts > 1)
+    }
+
     /// The path section it is a part of, if it is one.
     #[must_use]
     pub fn section(&self) -> Option<&Arc<SectionOrder>> {

@@ -218,7 +218,7 @@ impl Worker {
         self.take_stops().await?;
         self.run_commands().await?;
         self.expire_queue();
-        if self.machine.blocker(now()).is_none() && !self.queue.is_empty() {
+        if self.has_room() {
             let queued = self.queue.pop_front().expect("not empty");
             self.next_poll = tokio::time::Instant::now();
             return self.begin(queued).await;
@@ -243,7 +243,7 @@ impl Worker {
                 self.read_mode().await?;
             }
             self.next_poll = tokio::time::Instant::now() + self.poll_pause();
-            if self.machine.blocker(now()).is_none() && !self.queue.is_empty() {
+            if self.has_room() {
                 // The PLC has room now (the move before was just seen running): begin at once,
                 // on this status block.
                 return Ok(());
@@ -253,6 +253,16 @@ impl Worker {
             self.wait_until(self.next_poll).await;
         }
         Ok(())
+    }
+
+    /// Whether the head of the queue can begin now: the PLC takes a start, and the head is not
+    /// the first part of a section cut into parts while a move runs (it begins from rest).
+    fn has_room(&self) -> bool {
+        let Some(head) = self.queue.front() else {
+            return false;
+        };
+        self.machine.blocker(now()).is_none()
+            && !(head.order.leads_parts() && self.machine.chain_behind().is_some())
     }
 
     /// How long until the next status read: short while anything is in flight or queued.

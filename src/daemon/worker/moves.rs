@@ -38,6 +38,11 @@ impl Worker {
         }
         let id = queued.id;
         let chain = self.machine.chain_behind().cloned();
+        if queued.order.leads_parts() && chain.is_some() {
+            // Its parts are preloaded and paced from rest ([`Worker::has_room`] waits for it).
+            self.queue.push_front(queued);
+            return Ok(());
+        }
         let at_speed = queued.order.begins_at_speed();
         if at_speed && chain.is_none() {
             self.fail_at_speed(id);
@@ -409,7 +414,11 @@ impl Worker {
         } else {
             self.machine.blocker(now)
         };
-        if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) {
+        let behind_a_move = self
+            .queue
+            .front()
+            .is_some_and(|q| q.order.leads_parts() && self.machine.chain_behind().is_some());
+        if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) || behind_a_move {
             self.room_since = None;
             return;
         }
