@@ -68,11 +68,7 @@ impl Worker {
         let planned = self.planned(id, &plan, from, chain.as_ref().map(|c| c.bank));
         let targets = planned.targets.expect("a plan knows its targets");
         self.record_plan(id, &plan, &planned);
-        if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
-            // Within a pulse of where it is: nothing to start.
-            let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
-            self.finish(id, Stage::Done, None, Some(error));
-            tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
+        if self.done_in_place(id, from, targets) {
             return Ok(());
         }
         let tables = plan
@@ -132,6 +128,18 @@ impl Worker {
             }
             _ => Ok(()),
         }
+    }
+
+    /// Ends move `id` done without a start when its `targets` are within a pulse of `from`,
+    /// where it is: nothing to start.
+    fn done_in_place(&self, id: MoveId, from: [i32; CHANNELS], targets: [i32; CHANNELS]) -> bool {
+        if (0..CHANNELS).any(|c| (targets[c] - from[c]).abs() > 1) {
+            return false;
+        }
+        let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
+        self.finish(id, Stage::Done, None, Some(error));
+        tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
+        true
     }
 
     /// The contract's first step once more, after the upload: the bank is started only once
