@@ -20,6 +20,7 @@ mod gateway;
 mod link;
 mod moves;
 mod pace;
+mod placement;
 
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::pace::{Pace, Part};
+use super::placement::{Placement, directories_left};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Planned, ProgressCurve};
@@ -15,7 +16,7 @@ use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
 use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
 use crate::robot::Robot;
-use crate::table::{DIRECTORY_WORDS, ValidTable, encoded_words};
+use crate::table::ValidTable;
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -239,9 +240,7 @@ impl Worker {
             .collect();
         let link = self.link.as_mut().expect("connected");
         let area_words = usize::from(link.settings().layout.area_words);
-        // Per bank and channel, the first word no table placed so far takes.
-        let mut free = [[DIRECTORY_WORDS; CHANNELS]; 2];
-        place(&mut free[usize::from(first.bank)], tables);
+        let mut placement = Placement::new(first.bank, tables, area_words);
         let mut ends_on = first.targets.expect("a plan knows its targets");
         let mut bank = 1 - first.bank;
         let (mut preload, mut preload_words) = (Duration::ZERO, 0);
@@ -254,27 +253,30 @@ impl Worker {
             let Some(tables) = plan.valid_tables(&self.robot) else {
                 break;
             };
-            let base = free[usize::from(bank)];
-            let mut after = base;
-            place(&mut after, &tables);
-            if after.iter().any(|&end| end > area_words) {
-                tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
-                break;
-            }
+            let base = match placement.place(bank, &tables) {
+                Ok(base) => base,
+                // Not even into an empty bank: it could never be written, and the part before
+                // it would end at speed.
+                Err((channel, words)) if directories.is_empty() => {
+                    return Err(ContractError::TooLarge {
+                        channel,
+                        words,
+                        area_words: area_words as u16,
+                    });
+                }
+                Err(_) => {
+                    tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
+                    break;
+                }
+            };
             let link = self.link.as_mut().expect("connected");
             let began = tokio::time::Instant::now();
             let preloaded = link.preload(bank, base, &tables).await?;
             preload += began.elapsed();
             preload_words += preloaded.words();
             tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = began.elapsed().as_secs_f64(), "part chained at speed preloaded");
-            directories.push(
-                tables
-                    .iter()
-                    .filter(|t| base[usize::from(t.table().channel)] > DIRECTORY_WORDS)
-                    .count(),
-            );
+            directories.push(directories_left(&base, &tables));
             self.preloaded.push((id, preloaded));
-            free[usize::from(bank)] = after;
             ends_on = end_counts(&plan, ends_on);
             bank = 1 - bank;
         }
@@ -489,13 +491,6 @@ impl Worker {
             // move will not reach.
             self.shared.forget_planned_end();
         }
-    }
-}
-
-/// Moves each channel's first free word in `free` past its table in `tables` (segments alone).
-fn place(free: &mut [usize; CHANNELS], tables: &[ValidTable]) {
-    for t in tables {
-        free[usize::from(t.table().channel)] += encoded_words(t.table()) - DIRECTORY_WORDS;
     }
 }
 
