@@ -264,3 +264,54 @@ async fn a_section_cut_into_parts_behind_a_running_move_waits_for_rest_and_is_ch
     assert_eq!(s.handle.state().counts.map(|c| c.map(i64::from)), last);
     s.daemon.shut_down().await;
 }
+
+#[tokio::test]
+async fn a_path_stopped_while_its_second_part_runs_leaves_nothing_behind_and_runs_again_whole() {
+    // Stopped while the second part runs: the third (preloaded, waiting) never runs, and the
+    // stop leaves no preload behind for the next path. Back to P1, the same path runs again,
+    // its parts preloaded afresh and chained, and ends on P2.
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths-stopped");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let ids = s.post_path(&lift_and_place()).await;
+    assert_eq!(ids.len(), 3);
+    let running = tokio::time::timeout(LIMIT, async {
+        while s
+            .handle
+            .report(ids[1])
+            .is_none_or(|r| r.stage != Stage::Running)
+        {
+            tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+        }
+    })
+    .await;
+    assert!(running.is_ok(), "{:?}", s.handle.report(ids[1]));
+    s.handle.stop().await.unwrap();
+    assert_eq!(
+        s.handle.wait(ids[0], LIMIT).await.unwrap().stage,
+        Stage::Done
+    );
+    assert_eq!(
+        s.handle.wait(ids[1], LIMIT).await.unwrap().stage,
+        Stage::Stopped
+    );
+    let third = s.handle.wait(ids[2], LIMIT).await.unwrap();
+    assert!(
+        matches!(third.stage, Stage::Cancelled | Stage::Failed),
+        "{third:?}"
+    );
+    let started = shared.with(|m| m.starts().len());
+    assert_eq!(started, 2, "the third part never ran");
+    let back = s.run(&json!({"to": P1, "tolerance_mm": 0.05})).await;
+    assert_eq!(back.stage, Stage::Done, "{back:?}");
+    let again = s.post_path(&lift_and_place()).await;
+    for id in &again {
+        let report = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+    }
+    let last = s.handle.report(again[2]).unwrap();
+    assert_eq!(last.final_error_pulses, Some([0; 4]), "{last:?}");
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    s.daemon.shut_down().await;
+}
