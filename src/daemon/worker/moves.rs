@@ -10,8 +10,8 @@ use super::placement::{Placement, directories_left};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Planned, ProgressCurve};
-use crate::daemon::order::CheckedOrder;
 use crate::daemon::order::plan_order;
+use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
 use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
@@ -205,14 +205,15 @@ impl Worker {
     /// behind it are the parts of a path that begin at speed, their tables are written and read
     /// back now, in the banks they will start from (alternating, the second part in the bank
     /// `first` does not use), each channel's after the tables placed in its area before it
-    /// (after `first`'s own), for as many parts in a row as the areas hold. While the parts
-    /// run, each part's start is then left with its directories (past the first in each bank)
-    /// and its command block to write. Nothing runs from either bank: `first` is written while
-    /// nothing runs, and every preloaded word lies outside its tables. A part that cannot be
-    /// planned is left to fail at its own turn. Then, at the pace the link just showed
-    /// (`exchange`, a status read; a one-word read; the preloads), every part of the section
-    /// must be ready to start before the part ahead of it ends: if not, this start is refused
-    /// before anything moves ([`Pace::check`]).
+    /// (after `first`'s own). The second part always is; each later one only while, at the
+    /// pace the link has shown (`exchange`, a status read; a one-word read; the preloads so
+    /// far), the parts not preloaded could not all be written whole while the part before each
+    /// runs, and only as long as the areas hold them. A preloaded part's start is then left
+    /// with its directories (past the first in each bank) and its command block to write.
+    /// Nothing runs from either bank: `first` is written while nothing runs, and every
+    /// preloaded word lies outside its tables. A part that cannot be planned is left to fail
+    /// at its own turn. Then every part of the section must be ready to start before the part
+    /// ahead of it ends: if not, this start is refused before anything moves ([`Pace::check`]).
     async fn preload_section(
         &mut self,
         first: &Planned,
@@ -243,9 +244,15 @@ impl Worker {
         let mut placement = Placement::new(first.bank, tables, area_words);
         let mut ends_on = first.targets.expect("a plan knows its targets");
         let mut bank = 1 - first.bank;
-        let (mut preload, mut preload_words) = (Duration::ZERO, 0);
+        let mut pace: Option<Pace> = None;
         let mut directories = Vec::new();
         for (id, order) in behind {
+            if let Some(pace) = &pace
+                && pace.check(&parts(&section, &directories)).is_ok()
+            {
+                // The rest can be written whole while the part before each runs.
+                break;
+            }
             let Ok(plan) = plan_order(&self.robot, &order, self.by_joint(ends_on.map(i64::from)))
             else {
                 break;
@@ -272,43 +279,29 @@ impl Worker {
             let link = self.link.as_mut().expect("connected");
             let began = tokio::time::Instant::now();
             let preloaded = link.preload(bank, base, &tables).await?;
-            preload += began.elapsed();
-            preload_words += preloaded.words();
-            tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = began.elapsed().as_secs_f64(), "part chained at speed preloaded");
+            let took = began.elapsed();
+            tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
+            let pace = match &mut pace {
+                Some(pace) => pace,
+                None => pace.insert(Pace {
+                    status: exchange,
+                    word: link.one_word_exchange().await?,
+                    preload: Duration::ZERO,
+                    preload_words: 0,
+                }),
+            };
+            pace.preload += took;
+            pace.preload_words += preloaded.words();
             directories.push(directories_left(&base, &tables));
             self.preloaded.push((id, preloaded));
             ends_on = end_counts(&plan, ends_on);
             bank = 1 - bank;
         }
-        if directories.is_empty() {
+        let Some(pace) = pace else {
             return Ok(());
-        }
-        let link = self.link.as_mut().expect("connected");
-        let pace = Pace {
-            status: exchange,
-            word: link.one_word_exchange().await?,
-            preload,
-            preload_words,
         };
-        tracing::info!(robot = %self.robot.name, parts = directories.len(), words = preload_words, preload_s = preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
-        // Planned by `plan_order` above, if not before.
-        let parts: Vec<Part> = section
-            .planned
-            .get()
-            .map(|starts| {
-                starts
-                    .iter()
-                    .enumerate()
-                    .map(|(k, plan)| {
-                        Part::of(
-                            plan,
-                            k.checked_sub(1).and_then(|k| directories.get(k).copied()),
-                        )
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
-        pace.check(&parts)
+        tracing::info!(robot = %self.robot.name, parts = directories.len(), words = pace.preload_words, preload_s = pace.preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
+        pace.check(&parts(&section, &directories))
     }
 
     /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`
@@ -492,6 +485,28 @@ impl Worker {
             self.shared.forget_planned_end();
         }
     }
+}
+
+/// The parts of `section` (planned) as the pace check sees them: the first
+/// `directories.len()` after its first preloaded, each with that many directories left for its
+/// start, the rest written whole at their turns.
+fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
+    section
+        .planned
+        .get()
+        .map(|starts| {
+            starts
+                .iter()
+                .enumerate()
+                .map(|(k, plan)| {
+                    Part::of(
+                        plan,
+                        k.checked_sub(1).and_then(|k| directories.get(k).copied()),
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// The counts per channel where `plan`, started from `from`, ends.
