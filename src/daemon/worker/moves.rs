@@ -188,17 +188,18 @@ impl Worker {
         let link = self.link.as_mut().expect("connected");
         let bank = if let Some(preload) = own {
             link.upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
-                .await?
+                .await
         } else {
             link.upload(planned.bank, planned.seq, planned.from, tables)
-                .await?
+                .await
         };
-        if !bank.on_preload && !from_rest {
-            // Written whole from the directory's end: it may lie over tables preloaded past
-            // its own, which no later start may rest on.
+        // Written whole from the directory's end (or partly, when it failed), a bank may lie
+        // over tables preloaded past its own, which no later start may rest on. Only a start
+        // from rest, whose section's parts were placed around it, keeps them.
+        if !matches!(&bank, Ok(bank) if bank.on_preload || from_rest) {
             self.preloaded.clear();
         }
-        Ok(bank)
+        bank
     }
 
     /// Before a start written while nothing runs (`first`, its `tables`): when the moves queued
