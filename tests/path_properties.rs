@@ -31,10 +31,12 @@ use linterpd::robot::{Method, OverSpeed, Robot};
 use linterpd::table::{FrequencyModel, TableProblem, problems};
 use nalgebra::Vector3;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestRunner};
+use proptest::test_runner::{Config, RngSeed, TestRunner};
 
 /// Cases per kinematics.
 const CASES: u32 = 48;
+/// The seed of the cases drawn.
+const SEED: u64 = 20_261_125;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kin {
@@ -596,6 +598,12 @@ fn run(kin: Kin) {
     let mut runner = TestRunner::new(Config {
         cases: CASES,
         source_file: Some(file!()),
+        // The same cases on every run, so that the coverage asserted below is the same too
+        // (`PROPTEST_RNG_SEED=N` explores others).
+        rng_seed: std::env::var("PROPTEST_RNG_SEED")
+            .ok()
+            .and_then(|seed| seed.parse().ok())
+            .map_or(RngSeed::Fixed(SEED), RngSeed::Fixed),
         ..Config::default()
     });
     let result = runner.run(&(route(kin), settings()), |(route, s)| {
@@ -643,10 +651,12 @@ fn run(kin: Kin) {
         panic!("{kin:?}: {e}");
     }
     let planned = t.planned_bounded + t.planned_constant;
-    // Most random reachable paths plan, under both methods, with blends and arcs among them.
+    // Most random reachable paths plan, under both methods, with blends and arcs among them;
+    // under `reject` a path too fast for a joint is refused, as it must be.
+    let over_speed = t.skipped.get("OverSpeed").copied().unwrap_or(0);
     assert!(
-        2 * planned >= t.cases,
-        "{kin:?}: {planned} of {} planned",
+        2 * planned >= t.cases - over_speed,
+        "{kin:?}: {planned} of {} planned ({over_speed} refused for over-speed)",
         t.cases
     );
     assert!(
