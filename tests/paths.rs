@@ -315,3 +315,44 @@ async fn a_path_stopped_while_its_second_part_runs_leaves_nothing_behind_and_run
     assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
     s.daemon.shut_down().await;
 }
+
+#[tokio::test]
+async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting() {
+    // Every move gets 1 s to start once the PLC has room for it. A path's first part queued
+    // behind a running move (the seed's, 1.39 s) waits for it to end before it begins: the
+    // PLC has no room for it while it waits, so the wait does not count.
+    let shared = mock_at_seed_start("");
+    let options = linterpd::daemon::DaemonOptions {
+        start_within: std::time::Duration::from_secs(1),
+        ..linterpd::daemon::DaemonOptions::default()
+    };
+    let (daemon, h) = common::daemon::spawn_with(
+        common::daemon::duplex_connector(&shared, None),
+        linterpd::plc::contract::ContractSettings::default(),
+        &options,
+        [0; JOINTS],
+    );
+    common::served::wait_connected(&h, &shared).await;
+    let over = h
+        .submit(linterpd::daemon::MoveOrder {
+            to: Some(P2.to_vec()),
+            tolerance_mm: Some(0.05),
+            ..linterpd::daemon::MoveOrder::default()
+        })
+        .unwrap();
+    let back = h
+        .submit(linterpd::daemon::MoveOrder {
+            to: Some(P1.to_vec()),
+            tolerance_mm: Some(0.05),
+            ..linterpd::daemon::MoveOrder::default()
+        })
+        .unwrap();
+    let order: PathOrder = serde_json::from_value(lift_and_place()).unwrap();
+    let ids = h.submit_path(&order).unwrap();
+    assert_eq!(ids.len(), 3);
+    for id in [over, back].into_iter().chain(ids) {
+        let report = h.wait(id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+    }
+    daemon.shut_down().await;
+}
