@@ -360,6 +360,36 @@ fn segment_problems(
     }
 }
 
+/// For tests elsewhere in the crate: a valid table on `channel` of one rising segment (pulse and
+/// sign, high range), a row at 1 kHz to each of `targets`, within 20 kHz and 2000 words.
+#[cfg(test)]
+pub(crate) fn rising(channel: u8, targets: &[i64]) -> ValidTable {
+    let control = ControlCode {
+        output: OutputMethod::PulseSign,
+        direction: Direction::Up,
+        absolute: true,
+        range: FrequencyRange::High,
+        duty: Duty::Half,
+    };
+    let rows = targets
+        .iter()
+        .map(|&target| Row {
+            freq_hz: 1_000,
+            target,
+        })
+        .collect();
+    let table = ChannelTable {
+        channel,
+        start: 0,
+        segments: vec![Segment { control, rows }],
+    };
+    let limits = ChannelLimits {
+        max_freq_hz: 20_000,
+        area_words: 2_000,
+    };
+    validate(table, limits).expect("a rising table is valid")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -256,14 +256,19 @@ impl Worker {
         Ok(())
     }
 
-    /// Whether the head of the queue can begin now: the PLC takes a start, and the head is not
-    /// the first part of a section cut into parts while a move runs (it begins from rest).
+    /// Whether the head of the queue can begin now: the PLC takes a start, and the head does
+    /// not wait for the running move to end ([`Self::waits_for_rest`]).
     fn has_room(&self) -> bool {
         let Some(head) = self.queue.front() else {
             return false;
         };
-        self.machine.blocker(now()).is_none()
-            && !(head.order.leads_parts() && self.machine.chain_behind().is_some())
+        self.machine.blocker(now()).is_none() && !self.waits_for_rest(&head.order)
+    }
+
+    /// Whether `order` must wait for the running move to end: the first part of a section cut
+    /// into parts begins only from rest (its parts are preloaded and paced before it starts).
+    fn waits_for_rest(&self, order: &CheckedOrder) -> bool {
+        order.leads_parts() && self.machine.chain_behind().is_some()
     }
 
     /// How long until the next status read: short while anything is in flight or queued.

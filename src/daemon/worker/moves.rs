@@ -39,7 +39,7 @@ impl Worker {
         }
         let id = queued.id;
         let chain = self.machine.chain_behind().cloned();
-        if queued.order.leads_parts() && chain.is_some() {
+        if self.waits_for_rest(&queued.order) {
             // Its parts are preloaded and paced from rest ([`Worker::has_room`] waits for it).
             self.queue.push_front(queued);
             return Ok(());
@@ -421,7 +421,7 @@ impl Worker {
         let behind_a_move = self
             .queue
             .front()
-            .is_some_and(|q| q.order.leads_parts() && self.machine.chain_behind().is_some());
+            .is_some_and(|q| self.waits_for_rest(&q.order));
         if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) || behind_a_move {
             self.room_since = None;
             return;

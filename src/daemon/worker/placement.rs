@@ -66,39 +66,12 @@ pub(super) fn directories_left(base: &[usize; CHANNELS], tables: &[ValidTable]) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::{
-        ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyRange, OutputMethod,
-        Row, Segment, validate,
-    };
 
     /// A table on `channel` of `rows` rows: 4 words a row, 2 for the control code, 2 for the
     /// end marker.
     fn table(channel: u8, rows: usize) -> ValidTable {
-        let control = ControlCode {
-            output: OutputMethod::PulseSign,
-            direction: Direction::Up,
-            absolute: true,
-            range: FrequencyRange::High,
-            duty: Duty::Half,
-        };
-        let rows = (1..=rows)
-            .map(|k| Row {
-                freq_hz: 1_000,
-                target: 100 * k as i64,
-            })
-            .collect();
-        validate(
-            ChannelTable {
-                channel,
-                start: 0,
-                segments: vec![Segment { control, rows }],
-            },
-            ChannelLimits {
-                max_freq_hz: 20_000,
-                area_words: 2_000,
-            },
-        )
-        .unwrap()
+        let targets: Vec<i64> = (1..=rows).map(|k| 100 * k as i64).collect();
+        crate::table::rising(channel, &targets)
     }
 
     #[test]

@@ -569,9 +569,10 @@ impl<P: Plc> Contract<P> {
             if c >= CHANNELS || block.mask & (1 << c) != 0 {
                 return Err(ContractError::BadChannel { channel });
             }
-            let (directory, words) = encode_at(t, base[c].max(DIRECTORY_WORDS));
+            let at = base[c].max(DIRECTORY_WORDS);
+            let (directory, words) = encode_at(t, at);
             let area_words = self.settings.layout.area_words;
-            let end = base[c].max(DIRECTORY_WORDS) + words.len();
+            let end = at + words.len();
             if end > usize::from(area_words) {
                 return Err(ContractError::TooLarge {
                     channel,
@@ -582,10 +583,10 @@ impl<P: Plc> Contract<P> {
             block.mask |= 1 << c;
             block.segments[c] = t.table().segments.len() as u16;
             let area = self.settings.layout.area(bank, c);
-            if base[c] <= DIRECTORY_WORDS {
+            if at == DIRECTORY_WORDS {
                 writes.push((area, [&directory[..], &words[..]].concat()));
             } else {
-                writes.push((area + base[c] as u16, words));
+                writes.push((area + at as u16, words));
                 directories.push((area, directory.to_vec()));
             }
         }

@@ -1,10 +1,7 @@
 use super::*;
 use crate::contract::machine::WatchSettings;
 use crate::plc::PlcMode;
-use crate::table::{
-    ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row,
-    Segment, validate,
-};
+use crate::table::{ChannelLimits, Segment, validate};
 
 /// DT memory whose status block a test sets; every read of the status block ticks the
 /// heartbeat unless frozen; a write log; an optional corruption of one address on read.
@@ -118,32 +115,7 @@ impl Plc for FakePlc {
 }
 
 fn table(channel: u8) -> ValidTable {
-    let control = ControlCode {
-        output: OutputMethod::PulseSign,
-        direction: Direction::Up,
-        absolute: true,
-        range: FrequencyRange::High,
-        duty: Duty::Half,
-    };
-    let t = ChannelTable {
-        channel,
-        start: 0,
-        segments: vec![Segment {
-            control,
-            rows: vec![Row {
-                freq_hz: 1_000,
-                target: 500,
-            }],
-        }],
-    };
-    validate(
-        t,
-        ChannelLimits {
-            max_freq_hz: 20_000,
-            area_words: 2_000,
-        },
-    )
-    .unwrap()
+    crate::table::rising(channel, &[500])
 }
 
 const FROM: [i32; CHANNELS] = [0, 0, 0, 0];
