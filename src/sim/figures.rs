@@ -99,7 +99,7 @@ pub fn measure_within(
         }
         // The planned pose moves while the executed one holds: check both ends of the hold.
         let held = p;
-        q[e.table] = robot.joints[e.table].value_of(e.count);
+        set_joint(&mut q, e.table, robot.joints[e.table].value_of(e.count));
         p = positions.at(&q);
         if deviation.see(&p) > path_limit_mm {
             return None;
@@ -141,6 +141,14 @@ pub fn measure_within(
     })
 }
 
+/// `q` with joint `j` set to `value`, every joint chosen without an indexed store: `q` stays in
+/// registers (stored at an index and read back whole, it stalled every event on the store).
+#[allow(clippy::inline_always)]
+#[inline(always)]
+fn set_joint(q: &mut [f64; JOINTS], j: usize, value: f64) {
+    *q = std::array::from_fn(|i| if i == j { value } else { q[i] });
+}
+
 /// The planned position of a start at its own time, as the measurement reads it.
 pub trait Planned {
     /// The planned position at `t_s`, mm.
@@ -174,7 +182,7 @@ pub fn path_deviation_mm(
     let mut deviation = Deviation::new(path);
     deviation.see(&positions.at(&q));
     for e in events {
-        q[e.table] = robot.joints[e.table].value_of(e.count);
+        set_joint(&mut q, e.table, robot.joints[e.table].value_of(e.count));
         deviation.see(&positions.at(&q));
     }
     deviation.max_mm
