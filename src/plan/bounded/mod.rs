@@ -144,7 +144,6 @@ impl Move<'_> {
             };
             track
                 .on_time(start[j])
-                .into_iter()
                 .map(move |(t_s, count)| PulseEvent {
                     t_s,
                     table: j,

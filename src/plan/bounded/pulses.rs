@@ -31,6 +31,7 @@ pub(super) struct Run {
 }
 
 /// A joint's fractional count sampled every `dt_s` from t = 0.
+#[derive(Clone, Copy)]
 pub(super) struct Track<'a> {
     /// `u[i]` at `i * dt_s`.
     pub u: &'a [f64],
@@ -38,7 +39,7 @@ pub(super) struct Track<'a> {
     pub dt_s: f64,
 }
 
-impl Track<'_> {
+impl<'a> Track<'a> {
     fn t(&self, i: usize) -> f64 {
         i as f64 * self.dt_s
     }
@@ -85,67 +86,96 @@ impl Track<'_> {
         }
     }
 
-    /// When each of the joint's pulses from count `start` lands exactly on time (the trajectory
-    /// crosses the half count), and the count after it, in time order.
-    pub(super) fn on_time(&self, start: i64) -> Vec<(f64, i64)> {
-        let mut out = Vec::new();
-        let mut count = start;
-        for i in 0..self.u.len().saturating_sub(1) {
-            let b = self.u[i + 1];
-            loop {
-                let d = if b > count as f64 + 0.5 {
-                    1
-                } else if b < count as f64 - 0.5 {
-                    -1
-                } else {
-                    break;
-                };
-                let h = count as f64 + 0.5 * f64::from(d);
-                count += i64::from(d);
-                out.push((self.at(i, h), count));
-            }
+    /// Every half count the trajectory crosses from count `start`, in time order, made as they
+    /// are read.
+    fn crossings(&self, start: i64) -> Crossings<'a> {
+        Crossings {
+            u: self.u,
+            i: 0,
+            count: start,
         }
-        out
+    }
+
+    /// When each of the joint's pulses from count `start` lands exactly on time (the trajectory
+    /// crosses the half count), and the count after it, in time order, made as they are read.
+    pub(super) fn on_time(self, start: i64) -> impl Iterator<Item = (f64, i64)> + 'a {
+        self.crossings(start)
+            .map(move |c| (self.at(c.interval, c.half), c.count))
     }
 
     /// The joint's pulses from count `start`, with windows `delta` pulses wide each side.
     pub(super) fn runs(&self, start: i64, delta: f64) -> Vec<Run> {
         let mut runs: Vec<Run> = Vec::new();
-        let mut count = start;
-        for i in 0..self.u.len().saturating_sub(1) {
-            let b = self.u[i + 1];
-            loop {
-                let d = if b > count as f64 + 0.5 {
-                    1
-                } else if b < count as f64 - 0.5 {
-                    -1
-                } else {
-                    break;
-                };
-                let h = count as f64 + 0.5 * f64::from(d);
-                let df = f64::from(d);
-                count += i64::from(d);
-                let pulse = Pulse {
-                    count,
-                    ideal_s: self.at(i, h),
-                    lo_s: self.since(i, h - df * delta, df),
-                    hi_s: self.until(i, h + df * delta, df),
-                };
-                let direction = if d > 0 {
-                    Direction::Up
-                } else {
-                    Direction::Down
-                };
-                match runs.last_mut() {
-                    Some(r) if r.direction == direction => r.pulses.push(pulse),
-                    _ => runs.push(Run {
-                        direction,
-                        pulses: vec![pulse],
-                    }),
-                }
+        for c in self.crossings(start) {
+            let (i, h, df) = (c.interval, c.half, c.direction);
+            let pulse = Pulse {
+                count: c.count,
+                ideal_s: self.at(i, h),
+                lo_s: self.since(i, h - df * delta, df),
+                hi_s: self.until(i, h + df * delta, df),
+            };
+            let direction = if df > 0.0 {
+                Direction::Up
+            } else {
+                Direction::Down
+            };
+            match runs.last_mut() {
+                Some(r) if r.direction == direction => r.pulses.push(pulse),
+                _ => runs.push(Run {
+                    direction,
+                    pulses: vec![pulse],
+                }),
             }
         }
         runs
+    }
+}
+
+/// A half count the trajectory crosses ([`Track::crossings`]).
+struct Crossing {
+    /// The sample interval it is crossed in.
+    interval: usize,
+    /// The half count.
+    half: f64,
+    /// +1 counting up, -1 down.
+    direction: f64,
+    /// The count after the pulse.
+    count: i64,
+}
+
+/// The half counts a track crosses, from a start count: the count follows the trajectory,
+/// a pulse each time it passes the half count above or below.
+struct Crossings<'a> {
+    u: &'a [f64],
+    /// The interval being crossed: `u[i]` to `u[i + 1]`.
+    i: usize,
+    count: i64,
+}
+
+impl Iterator for Crossings<'_> {
+    type Item = Crossing;
+
+    fn next(&mut self) -> Option<Crossing> {
+        while self.i + 1 < self.u.len() {
+            let b = self.u[self.i + 1];
+            let d = if b > self.count as f64 + 0.5 {
+                1
+            } else if b < self.count as f64 - 0.5 {
+                -1
+            } else {
+                self.i += 1;
+                continue;
+            };
+            let half = self.count as f64 + 0.5 * f64::from(d);
+            self.count += i64::from(d);
+            return Some(Crossing {
+                interval: self.i,
+                half,
+                direction: f64::from(d),
+                count: self.count,
+            });
+        }
+        None
     }
 }
 
