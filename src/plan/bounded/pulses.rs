@@ -35,8 +35,25 @@ pub(super) struct Run {
 pub(super) struct Track<'a> {
     /// `u[i]` at `i * dt_s`.
     pub u: &'a [f64],
+    /// Every interval's `1 / (u[i + 1] - u[i])` ([`slopes`]).
+    pub per_count: &'a [f64],
     /// Sample spacing, s.
     pub dt_s: f64,
+}
+
+/// Every interval's reciprocal change of `u`, for [`Track::per_count`] (0 where `u` holds):
+/// made once per plan, so that finding when `u` passes a count is a product, not a division.
+pub(super) fn slopes(u: &[f64]) -> Vec<f64> {
+    u.windows(2)
+        .map(|w| {
+            let du = w[1] - w[0];
+            if du.abs() <= f64::MIN_POSITIVE {
+                0.0
+            } else {
+                1.0 / du
+            }
+        })
+        .collect()
 }
 
 impl<'a> Track<'a> {
@@ -46,12 +63,7 @@ impl<'a> Track<'a> {
 
     /// Time in sample interval `i` at which `u` passes `level` (linear between samples).
     fn at(&self, i: usize, level: f64) -> f64 {
-        let (a, b) = (self.u[i], self.u[i + 1]);
-        let f = if (b - a).abs() <= f64::MIN_POSITIVE {
-            0.0
-        } else {
-            ((level - a) / (b - a)).clamp(0.0, 1.0)
-        };
+        let f = ((level - self.u[i]) * self.per_count[i]).clamp(0.0, 1.0);
         self.t(i) + f * self.dt_s
     }
 
@@ -187,7 +199,13 @@ mod tests {
     fn steady_motion_gives_evenly_spaced_pulses_with_symmetric_windows() {
         // u = 10 t, sampled every 0.1 s: pulses cross 0.5, 1.5, ... at 0.05, 0.15, ...
         let u: Vec<f64> = (0..=10).map(f64::from).collect();
-        let runs = Track { u: &u, dt_s: 0.1 }.runs(0, 0.25);
+        let per_count = slopes(&u);
+        let runs = Track {
+            u: &u,
+            per_count: &per_count,
+            dt_s: 0.1,
+        }
+        .runs(0, 0.25);
         assert_eq!(runs.len(), 1);
         let p = &runs[0].pulses;
         assert_eq!(p.len(), 10);
@@ -199,7 +217,13 @@ mod tests {
     #[test]
     fn reversal_starts_a_new_run_and_bounds_the_window_at_the_turn() {
         let u = [0.0, 1.0, 2.0, 1.0, 0.0];
-        let runs = Track { u: &u, dt_s: 1.0 }.runs(0, 3.0);
+        let per_count = slopes(&u);
+        let runs = Track {
+            u: &u,
+            per_count: &per_count,
+            dt_s: 1.0,
+        }
+        .runs(0, 3.0);
         assert_eq!(runs.len(), 2);
         assert_eq!(runs[0].direction, Direction::Up);
         assert_eq!(runs[1].pulses.last().unwrap().count, 0);
