@@ -6,18 +6,29 @@
 //! next. The search walks along the chords while the distance falls. Stopping at a local minimum
 //! can only over-estimate the distance, never under-estimate it: on the safe side for a bound.
 
-use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::Vector3;
 
 use super::ToolPath;
 
 /// A tool path through `points`, in order.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Polyline {
     points: Vec<Vector3<f64>>,
-    /// The chord where the last search ended.
-    cursor: Cell<usize>,
+    /// The chord where the last search ended. Atomic so that a course holding a polyline can be
+    /// shared between threads; a search's answer depends on where it starts, so one polyline is
+    /// measured on one thread at a time (the planner plans parts side by side only on paths).
+    cursor: AtomicUsize,
+}
+
+impl Clone for Polyline {
+    fn clone(&self) -> Self {
+        Self {
+            points: self.points.clone(),
+            cursor: AtomicUsize::new(self.cursor.load(Ordering::Relaxed)),
+        }
+    }
 }
 
 impl Polyline {
@@ -30,7 +41,7 @@ impl Polyline {
         assert!(!points.is_empty(), "a polyline needs a point");
         Self {
             points,
-            cursor: Cell::new(0),
+            cursor: AtomicUsize::new(0),
         }
     }
 
@@ -66,7 +77,7 @@ impl Polyline {
 impl ToolPath for Polyline {
     fn distance_mm(&self, p: &Vector3<f64>) -> f64 {
         let chords = self.points.len().saturating_sub(1).max(1);
-        let mut i = self.cursor.get().min(chords - 1);
+        let mut i = self.cursor.load(Ordering::Relaxed).min(chords - 1);
         let mut d = self.chord_distance_mm(i, p);
         while i + 1 < chords {
             let next = self.chord_distance_mm(i + 1, p);
@@ -82,7 +93,7 @@ impl ToolPath for Polyline {
             }
             (i, d) = (i - 1, next);
         }
-        self.cursor.set(i);
+        self.cursor.store(i, Ordering::Relaxed);
         d
     }
 
@@ -91,7 +102,7 @@ impl ToolPath for Polyline {
     }
 
     fn restart(&self) {
-        self.cursor.set(0);
+        self.cursor.store(0, Ordering::Relaxed);
     }
 }
 

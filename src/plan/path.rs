@@ -21,10 +21,12 @@
 //! execution model on its own, against the same path and the same profile.
 
 use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose, SpeedCap};
-use crate::kinematics::Kinematics;
+use crate::kinematics::{JOINTS, Kinematics};
 use crate::robot::{Motion, OverSpeed, Robot};
 
 use crate::table::TableProblem;
+
+use rayon::prelude::*;
 
 use super::course::Course;
 use super::{Origin, Plan, PlanError, Sampled, Start};
@@ -264,6 +266,7 @@ fn parts(
 ) -> Result<Vec<Plan>, PlanError> {
     let sampled = Sampled::new(robot, course, start, motion, false)?;
     let min_points = (MIN_PART_S / sampled.profile.period_s).ceil() as usize;
+    let mut ahead = planned_ahead(&sampled, start.counts, min_points);
     let mut todo = vec![(0, sampled.last_point())];
     let mut plans = Vec::new();
     let mut counts = start.counts;
@@ -275,7 +278,14 @@ fn parts(
             todo.push((first, cut));
             continue;
         }
-        let split = match sampled.plan(first, end, counts) {
+        let planned = match ahead
+            .iter()
+            .position(|a| a.first == first && a.end == end && a.counts == counts)
+        {
+            Some(i) => ahead.swap_remove(i).plan,
+            None => sampled.plan(first, end, counts),
+        };
+        let split = match planned {
             Ok(plan) => {
                 counts = plan.end_counts();
                 plans.push(plan);
@@ -294,6 +304,56 @@ fn parts(
         todo.push((first, split));
     }
     Ok(plans)
+}
+
+/// A part planned ahead of its turn ([`planned_ahead`]).
+struct Ahead {
+    first: usize,
+    end: usize,
+    /// The counts it was planned from.
+    counts: [i64; JOINTS],
+    plan: Result<Plan, PlanError>,
+}
+
+/// The parts a bounded-error section is cut into at reversals ([`reversal_cut`], before any is
+/// planned), planned side by side on the machine's cores, each from the counts the samples give
+/// at its first point (the first from `start`): [`parts`] takes such a plan only when the part
+/// before did end on those counts, so the result is the one planning them in turn gives. Empty
+/// when there is nothing to plan side by side.
+fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS], min_points: usize) -> Vec<Ahead> {
+    // A joint move's polyline remembers where its last search ended: not measured side by side.
+    if sampled.bounded.is_none() || sampled.course.path().is_none() {
+        return Vec::new();
+    }
+    let mut cut = Vec::new();
+    let mut todo = vec![(0, sampled.last_point())];
+    while let Some((first, end)) = todo.pop() {
+        match reversal_cut(sampled, first, end, min_points) {
+            Some(at) => {
+                todo.push((at, end));
+                todo.push((first, at));
+            }
+            None => cut.push((first, end)),
+        }
+    }
+    if cut.len() < 2 {
+        return Vec::new();
+    }
+    cut.into_par_iter()
+        .map(|(first, end)| {
+            let counts = if first == 0 {
+                start
+            } else {
+                sampled.samples.counts[first]
+            };
+            Ahead {
+                first,
+                end,
+                counts,
+                plan: sampled.plan(first, end, counts),
+            }
+        })
+        .collect()
 }
 
 /// Whether a start's tables are refused only for their size (more than a channel's area, or
