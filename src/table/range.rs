@@ -136,7 +136,7 @@ impl FrequencyModel {
             }
             Self::FpxDivider => {
                 let clock = range.divider_clock_hz();
-                let divisor = (clock / f64::from(set_hz)).ceil();
+                let divisor = ceil_of(clock / f64::from(set_hz));
                 clock / divisor.clamp(f64::from(range.min_divisor()), 65_535.0)
             }
         }
@@ -156,13 +156,13 @@ impl FrequencyModel {
         let lo = range.min_set_hz();
         let hi = range.max_set_hz().min(max_set_hz).max(lo);
         let wanted = wanted_hz.clamp(f64::from(lo), f64::from(hi));
-        let mut candidates = [wanted.floor(), wanted.ceil(), 0.0, 0.0];
+        let mut candidates = [floor_of(wanted), ceil_of(wanted), 0.0, 0.0];
         if self == Self::FpxDivider {
             // The values that land exactly on the two divisors around the wanted frequency.
             let clock = range.divider_clock_hz();
             let k = clock / wanted;
-            candidates[2] = (clock / k.floor().max(1.0)).ceil();
-            candidates[3] = (clock / k.ceil().max(1.0)).ceil();
+            candidates[2] = ceil_of(clock / floor_of(k).max(1.0));
+            candidates[3] = ceil_of(clock / ceil_of(k).max(1.0));
         }
         let want_s = pulses as f64 / wanted_hz.max(f64::MIN_POSITIVE);
         let mut best = lo;
@@ -210,19 +210,19 @@ impl FrequencyModel {
         };
         let candidates: [f64; 7] = match self {
             Self::Ideal => {
-                let (a, b) = ((1.0 / hi_s).ceil(), (1.0 / lo_s).floor());
-                let w = (1.0 / want_s).round().clamp(a, b.max(a));
+                let (a, b) = (ceil_of(1.0 / hi_s), floor_of(1.0 / lo_s));
+                let w = round_of(1.0 / want_s).clamp(a, b.max(a));
                 [a, b, w, 1.0, f64::NAN, f64::NAN, f64::NAN]
             }
             Self::FpxDivider => {
                 // The real frequency is clock / k: find divisors k in the window, then the
                 // smallest value that selects each.
                 let clock = range.divider_clock_hz();
-                let (ka, kb) = ((clock * lo_s).ceil(), (clock * hi_s).floor());
-                let kw = (clock * want_s).round().clamp(ka, kb.max(ka));
+                let (ka, kb) = (ceil_of(clock * lo_s), floor_of(clock * hi_s));
+                let kw = round_of(clock * want_s).clamp(ka, kb.max(ka));
                 [ka, kb, kw, kw - 1.0, kw + 1.0, ka + 1.0, kb - 1.0].map(|k| {
                     if (1.0..=65_535.0).contains(&k) {
-                        (clock / k).ceil()
+                        ceil_of(clock / k)
                     } else {
                         f64::NAN
                     }
@@ -238,9 +238,78 @@ impl FrequencyModel {
     }
 }
 
+/// Above this every `f64` is a whole number, and below it a positive one truncates exactly.
+const WHOLE_FROM: f64 = 4_503_599_627_370_496.0; // 2^52
+
+/// `x.ceil()`, made inline for the positive values the frequencies give (the build's baseline
+/// CPU has no rounding instruction, and the C library's call cost the planner ~5 %); the same
+/// value bit for bit, std's own elsewhere.
+#[inline]
+fn ceil_of(x: f64) -> f64 {
+    if x > 0.0 && x < WHOLE_FROM {
+        let t = x as i64 as f64;
+        if t < x { t + 1.0 } else { t }
+    } else {
+        x.ceil()
+    }
+}
+
+/// `x.floor()`, as [`ceil_of`].
+#[inline]
+fn floor_of(x: f64) -> f64 {
+    if x > 0.0 && x < WHOLE_FROM {
+        x as i64 as f64
+    } else {
+        x.floor()
+    }
+}
+
+/// `x.round()` (halves away from zero), as [`ceil_of`]: the fraction `x - trunc(x)` is exact
+/// below 2^52.
+#[inline]
+fn round_of(x: f64) -> f64 {
+    if x > 0.0 && x < WHOLE_FROM {
+        let t = x as i64 as f64;
+        if x - t >= 0.5 { t + 1.0 } else { t }
+    } else {
+        x.round()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_inline_roundings_are_std_s_bit_for_bit() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            1.5,
+            2.5,
+            0.499_999_999_999_999_94,
+            1.0 - f64::EPSILON / 2.0,
+            f64::MIN_POSITIVE,
+            4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            9.0e15,
+            -1.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        // Quotients like the divider's, and their neighbours.
+        for set in 1..20_000u32 {
+            let q = 12_500_000.0 / f64::from(set);
+            values.extend([q, q.next_up(), q.next_down(), 97_656.25 / f64::from(set)]);
+        }
+        for x in values {
+            assert_eq!(ceil_of(x).to_bits(), x.ceil().to_bits(), "ceil {x}");
+            assert_eq!(floor_of(x).to_bits(), x.floor().to_bits(), "floor {x}");
+            assert_eq!(round_of(x).to_bits(), x.round().to_bits(), "round {x}");
+        }
+    }
 
     #[test]
     fn set_for_period_finds_a_value_inside_the_window_or_none() {
