@@ -114,6 +114,22 @@ impl LineDistance {
         (d2 > floor_mm2).then_some(d2)
     }
 
+    /// Whether `Line::distance_mm(p)` is surely at most `limit_mm`, judged without a division
+    /// or a root (as [`Self::squared_beyond_mm2`], with a further margin for the limit's square
+    /// and the distance's own roundings); `false` when it cannot tell.
+    #[must_use]
+    #[inline]
+    pub fn surely_within(&self, p: &Vector3<f64>, limit_mm: f64) -> bool {
+        let w = p - self.from;
+        let dot = w.dot(&self.d);
+        if self.len2 > 0.0 && dot >= 0.0 && dot <= self.len2 {
+            let whole = w.norm_squared() * self.len2;
+            let margin = 8.0 * f64::EPSILON * whole;
+            return whole - dot * dot + margin <= limit_mm * limit_mm * self.len2 * (1.0 - 1e-12);
+        }
+        false
+    }
+
     /// The squared distance from `p` to the segment, mm²: `Line::distance_mm(p)` is its
     /// square root, bit for bit.
     #[must_use]

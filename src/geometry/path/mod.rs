@@ -15,7 +15,7 @@ pub use arc::{Arc, ArcFault, RADIUS_SLACK_MM};
 use nalgebra::Vector3;
 use thiserror::Error;
 
-use super::{Line, Pose, ToolPath};
+use super::{Line, LineDistance, Pose, ToolPath};
 use bounds::Bounds;
 
 /// The turn (radians) below which a corner is no corner: the path goes straight on.
@@ -255,12 +255,21 @@ pub struct Path {
     stops_mm: Vec<f64>,
     /// Bounding spheres over the pieces, for the distance from a point to the path.
     bounds: Bounds,
+    /// Every line piece's distance, made once (`None` for an arc).
+    lines: Vec<Option<LineDistance>>,
 }
 
 impl Path {
     fn new(pieces: Vec<Piece>, stops_mm: Vec<f64>) -> Self {
         Self {
             bounds: Bounds::new(&pieces),
+            lines: pieces
+                .iter()
+                .map(|p| match &p.primitive {
+                    Primitive::Line(l) => Some(LineDistance::new(l)),
+                    Primitive::Arc(_) => None,
+                })
+                .collect(),
             pieces,
             stops_mm,
         }
@@ -484,11 +493,15 @@ impl ToolPath for Path {
     }
 
     fn distance_beyond_mm(&self, p: &Vector3<f64>, floor_mm: f64, hint: &mut usize) -> Option<f64> {
-        if let Some(piece) = self.pieces.get(*hint)
-            && piece.primitive.distance_mm(p) <= floor_mm
-        {
-            // The path is at least as near as that piece.
-            return None;
+        if let Some(piece) = self.pieces.get(*hint) {
+            let within = match &self.lines[*hint] {
+                Some(line) if line.surely_within(p, floor_mm) => true,
+                _ => piece.primitive.distance_mm(p) <= floor_mm,
+            };
+            if within {
+                // The path is at least as near as that piece.
+                return None;
+            }
         }
         let (d, nearest) = self.bounds.nearest(&self.pieces, p);
         *hint = nearest;
