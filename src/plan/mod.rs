@@ -693,6 +693,14 @@ fn simulate_within(
     };
     if let Course::Line(line) = course {
         run.measure(&OnLine::new(line, profile, window.from_s))
+    } else if let (Some(path), Some(pace)) = (course.path(), course.pace()) {
+        run.measure(&OnPath {
+            path,
+            pace,
+            profile,
+            from_s: window.from_s,
+            hint: std::cell::Cell::new(0),
+        })
     } else {
         let position = course.positions();
         run.measure(&|t: f64| position(profile.distance_mm(window.from_s + t)))
@@ -778,6 +786,39 @@ impl sim::Planned for OnLine<'_> {
         }
         let s_mm = self.profile.distance_mm(self.from_s + t_s);
         (self.from + self.d * (s_mm * self.inv_len), self.off_mm)
+    }
+}
+
+/// The planned position of a start on a path section: the profile's distance from `from_s` on,
+/// through the pace, along the path (the same values as [`Course::positions`]), and near it
+/// without a root or a division on a line piece ([`Path::near`]).
+struct OnPath<'a> {
+    path: &'a crate::geometry::Path,
+    pace: &'a crate::geometry::Pace,
+    profile: &'a Profile,
+    from_s: f64,
+    /// The piece the last position fell on.
+    hint: std::cell::Cell<usize>,
+}
+
+impl OnPath<'_> {
+    fn path_mm(&self, t_s: f64) -> f64 {
+        self.pace
+            .path_mm(self.profile.distance_mm(self.from_s + t_s))
+    }
+}
+
+impl sim::Planned for OnPath<'_> {
+    fn at(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        self.path.at(self.path_mm(t_s)).position_mm
+    }
+
+    fn near(&self, t_s: f64) -> (nalgebra::Vector3<f64>, f64) {
+        let s_mm = self.path_mm(t_s);
+        let mut hint = self.hint.get();
+        let near = self.path.near(s_mm, &mut hint);
+        self.hint.set(hint);
+        near.unwrap_or_else(|| (self.path.at(s_mm).position_mm, 0.0))
     }
 }
 

@@ -255,8 +255,39 @@ pub struct Path {
     stops_mm: Vec<f64>,
     /// Bounding spheres over the pieces, for the distance from a point to the path.
     bounds: Bounds,
-    /// Every line piece's distance, made once (`None` for an arc).
-    lines: Vec<Option<LineDistance>>,
+    /// Every line piece's figures, made once (`None` for an arc).
+    lines: Vec<Option<LinePiece>>,
+}
+
+/// What a line piece's distance and quick position ([`Path::near`]) need, made once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct LinePiece {
+    distance: LineDistance,
+    from: Vector3<f64>,
+    d: Vector3<f64>,
+    /// One over its length, 1/mm.
+    per_mm: f64,
+    /// Where it ends along the path, mm (as [`Path::length_mm`] makes it for the last piece).
+    end_mm: f64,
+    /// How far a position made with `per_mm` may be from the one [`Line::at`] makes, mm: a few
+    /// roundings of the largest coordinates involved.
+    off_mm: f64,
+}
+
+impl LinePiece {
+    fn new(line: &Line, start_mm: f64) -> Self {
+        let from = line.from.position_mm;
+        let d = line.to.position_mm - from;
+        let len = line.length_mm();
+        Self {
+            distance: LineDistance::new(line),
+            from,
+            d,
+            per_mm: if len > 0.0 { 1.0 / len } else { 0.0 },
+            end_mm: start_mm + len,
+            off_mm: 16.0 * f64::EPSILON * (from.norm() + len),
+        }
+    }
 }
 
 impl Path {
@@ -266,7 +297,7 @@ impl Path {
             lines: pieces
                 .iter()
                 .map(|p| match &p.primitive {
-                    Primitive::Line(l) => Some(LineDistance::new(l)),
+                    Primitive::Line(l) => Some(LinePiece::new(l, p.start_mm)),
                     Primitive::Arc(_) => None,
                 })
                 .collect(),
@@ -453,6 +484,33 @@ impl Path {
         piece.primitive.at(into)
     }
 
+    /// A position within the returned distance (mm) of [`Self::at`]'s at `s_mm`, made without a
+    /// root or a division, on a line piece strictly inside the path (`None` elsewhere: an arc,
+    /// an end). `hint` is the piece the last call found, looked at first.
+    #[must_use]
+    pub fn near(&self, s_mm: f64, hint: &mut usize) -> Option<(Vector3<f64>, f64)> {
+        let holds = |i: usize| {
+            self.pieces.get(i).is_some_and(|p| p.start_mm <= s_mm)
+                && self
+                    .pieces
+                    .get(i + 1)
+                    .is_none_or(|next| s_mm < next.start_mm)
+        };
+        if !holds(*hint) {
+            *hint = self
+                .pieces
+                .partition_point(|p| p.start_mm <= s_mm)
+                .saturating_sub(1);
+        }
+        let line = self.lines.get(*hint)?.as_ref()?;
+        let piece = &self.pieces[*hint];
+        if !(s_mm > 0.0 && s_mm >= piece.start_mm && s_mm < line.end_mm) {
+            return None;
+        }
+        let into = s_mm - piece.start_mm;
+        Some((line.from + line.d * (into * line.per_mm), line.off_mm))
+    }
+
     /// The unit direction of travel at distance `s_mm`.
     #[must_use]
     pub fn direction(&self, s_mm: f64) -> Vector3<f64> {
@@ -495,7 +553,7 @@ impl ToolPath for Path {
     fn distance_beyond_mm(&self, p: &Vector3<f64>, floor_mm: f64, hint: &mut usize) -> Option<f64> {
         if let Some(piece) = self.pieces.get(*hint) {
             let within = match &self.lines[*hint] {
-                Some(line) if line.surely_within(p, floor_mm) => true,
+                Some(line) if line.distance.surely_within(p, floor_mm) => true,
                 _ => piece.primitive.distance_mm(p) <= floor_mm,
             };
             if within {

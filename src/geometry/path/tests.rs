@@ -308,3 +308,48 @@ proptest::proptest! {
         }
     }
 }
+
+#[test]
+fn a_near_position_is_within_its_bound_on_lines_and_none_on_arcs_and_at_the_ends() {
+    let spec = PathSpec {
+        start: pose(-800.0, 900.0, 100.0),
+        elements: vec![
+            line(pose(-640.0, 900.0, 220.0), Corner::Blend(20.0)),
+            line(pose(-480.0, 900.0, 100.0), Corner::Blend(20.0)),
+            line(pose(-320.0, 910.0, 220.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    let length = path.length_mm();
+    let (mut on_lines, mut elsewhere) = (0, 0);
+    // The hint left by the last call, and a stale one, must both give the same answer.
+    let mut hint = 0;
+    for i in 0..=20_000 {
+        let s = length * f64::from(i) / 20_000.0;
+        for h in [hint, (i % 5) as usize] {
+            let mut h = h;
+            let exact = path.at(s).position_mm;
+            match path.near(s, &mut h) {
+                Some((near, off)) => {
+                    assert!(
+                        (near - exact).norm() <= off,
+                        "{s}: {} > {off}",
+                        (near - exact).norm()
+                    );
+                    assert!(off < 1e-9);
+                    let piece = &path.pieces()[h];
+                    assert!(matches!(piece.primitive, Primitive::Line(_)), "{s}");
+                    on_lines += 1;
+                }
+                None => elsewhere += 1,
+            }
+            hint = h;
+        }
+    }
+    assert!(path.near(0.0, &mut hint).is_none() && path.near(length, &mut hint).is_none());
+    // Two blends of about 40 mm of a path of about 600 mm.
+    assert!(
+        on_lines > 30_000 && elsewhere > 1_000,
+        "{on_lines} {elsewhere}"
+    );
+}
