@@ -244,6 +244,7 @@ impl Pace {
 
     /// The ratio `w` and the path distance at profile distance `sigma_mm` (clamped to the ends;
     /// the path's end exactly at the profile's).
+    #[allow(clippy::float_cmp)] // the same ratio, not a near one
     fn at_sigma(&self, sigma_mm: f64) -> (f64, f64) {
         let last = self.knots[self.knots.len() - 1];
         if sigma_mm >= last.sigma_mm {
@@ -252,8 +253,14 @@ impl Pace {
         let sigma_mm = sigma_mm.max(0.0);
         let i = self.stretch_of_sigma(sigma_mm);
         let (a, b) = (self.knots[i], self.knots[i + 1]);
-        let t = (sigma_mm - a.sigma_mm) / (b.sigma_mm - a.sigma_mm);
-        let w = a.w + (b.w - a.w) * t;
+        // A flat stretch (most of a path) keeps its ratio: what the division would give there,
+        // `a.w + 0 * t`, without it.
+        let w = if a.w == b.w && b.sigma_mm > a.sigma_mm {
+            a.w
+        } else {
+            let t = (sigma_mm - a.sigma_mm) / (b.sigma_mm - a.sigma_mm);
+            a.w + (b.w - a.w) * t
+        };
         let s_mm = a.s_mm + (sigma_mm - a.sigma_mm) * (a.w + w) / 2.0;
         (s_mm.min(b.s_mm), w)
     }

@@ -70,6 +70,18 @@ fn norm2(gram: &[[f64; JOINTS]; JOINTS], e: &[f64; JOINTS]) -> f64 {
     sum
 }
 
+/// At least [`norm2`] of every corner of the box `|e_j| <= half[j]`: each product taken at
+/// its largest (`|g_jk| half_j half_k`), exact when the vectors are square to each other.
+fn above_every_corner(gram: &[[f64; JOINTS]; JOINTS], half: &[f64; JOINTS]) -> f64 {
+    let mut sum = 0.0;
+    for j in 0..JOINTS {
+        for k in 0..JOINTS {
+            sum += gram[j][k].abs() * half[j] * half[k];
+        }
+    }
+    sum
+}
+
 /// Every joint's pulse vectors along the path.
 #[derive(Debug, Clone)]
 pub(super) struct Budget {
@@ -179,11 +191,23 @@ impl Budget {
     fn fits(&self, deltas: &[f64; JOINTS], tolerance_mm: f64) -> bool {
         let (path_limit, tracking_limit) = (MARGIN * tolerance_mm, 2.0 * MARGIN * tolerance_mm);
         let corners = corners(deltas);
+        let half = corners[0];
+        // Below these (with room for the roundings) a point's every corner is within both
+        // limits: it cannot decide.
+        let (path_clear, tracking_clear) = (
+            path_limit * path_limit * (1.0 - 1e-9),
+            tracking_limit * tracking_limit * (1.0 - 1e-9),
+        );
         let (mut across2, mut whole2) = (0.0f64, 0.0f64);
         let first = self.binding.get().min(self.points.len().saturating_sub(1));
         let order = std::iter::once(first).chain((0..self.points.len()).filter(|&i| i != first));
         for i in order {
             let point = &self.points[i];
+            if above_every_corner(&point.across, &half) * (1.0 + 1e-9) <= path_clear
+                && above_every_corner(&point.whole, &half) * (1.0 + 1e-9) <= tracking_clear
+            {
+                continue;
+            }
             for e in &corners {
                 let a = norm2(&point.across, e);
                 if a > across2 {
