@@ -63,13 +63,14 @@ impl Channel<'_> {
         range: FrequencyRange,
         pulses: &[Pulse],
         t_s: f64,
+        bounds: &mut Vec<(f64, f64)>,
     ) -> Option<(usize, u32, f64)> {
         let fastest = self
             .model
             .actual_hz(self.fastest_set(range), range)
             .min(f64::from(self.joint.max_freq_hz));
         let (mut lo, mut hi) = (1.0 / fastest, 1.0 / range.min_actual_hz());
-        let mut bounds = Vec::new();
+        bounds.clear();
         for (i, p) in pulses.iter().enumerate() {
             let n = (i + 1) as f64;
             lo = lo.max((p.lo_s - t_s) / n);
@@ -126,8 +127,11 @@ impl Channel<'_> {
             broken: 0,
         };
         let mut k = 0;
+        // Every row's period bounds, in one buffer for the whole stretch.
+        let mut bounds = Vec::new();
         while k < pulses.len() {
-            let (m, set, f) = if let Some(row) = self.longest(range, &pulses[k..], t_s) {
+            let (m, set, f) = if let Some(row) = self.longest(range, &pulses[k..], t_s, &mut bounds)
+            {
                 row
             } else {
                 if a.broken == 0 {
