@@ -24,6 +24,10 @@ use linterpd::table::{FrequencyModel, OutputMethod};
 use nalgebra::Vector3;
 use std::hint::black_box;
 
+#[path = "common/zigzag.rs"]
+mod zigzag_path;
+use zigzag_path::zigzag_path;
+
 fn request(robot: &Robot, from: [f64; 3], to: [f64; 3], period_s: f64) -> MoveRequest {
     let start = robot
         .pose_with_wrist_at_zero(from[0], from[1], from[2])
@@ -137,35 +141,6 @@ fn bench(c: &mut Criterion) {
     lengths(c);
     arc(c);
     zigzag(c);
-}
-
-/// Ten lines of 200 mm (160 mm along x, 120 mm up or down) from (-800, 900, 100), every
-/// waypoint but the last blended by 20 mm: 2 m on the seed robot, 240 mm/s, Ta 200 ms, path
-/// acceleration 5000 mm/s^2.
-fn zigzag_path(robot: &Robot, method: Method) -> PathRequest {
-    let from = Pose::from_mm_deg(-800.0, 900.0, 100.0, 0.0);
-    let elements = (1..=10)
-        .map(|k| {
-            let z = if k % 2 == 1 { 220.0 } else { 100.0 };
-            let to = Pose::from_mm_deg(-800.0 + 160.0 * f64::from(k), 900.0, z, 0.0);
-            let corner = if k == 10 {
-                Corner::Stop
-            } else {
-                Corner::Blend(20.0)
-            };
-            (Element::Line { to }, corner)
-        })
-        .collect();
-    let mut motion = robot.motion;
-    motion.method = method;
-    motion.period_s = 0.05;
-    motion.frequency_model = FrequencyModel::FpxDivider;
-    PathRequest {
-        from: Origin::Pose(from),
-        elements,
-        motion,
-        path_accel_mm_s2: 5_000.0,
-    }
 }
 
 /// The ten-element blended path: starts, rows, path deviation and duration under both models
