@@ -79,55 +79,76 @@ pub struct LineDistance {
     from: Vector3<f64>,
     d: Vector3<f64>,
     len2: f64,
+    /// A bound of how far a distance computed to the segment (its foot point rounded, and
+    /// `p - from`) may be from the point's true distance, mm: sixteen roundings of the largest
+    /// coordinates involved.
+    round_mm: f64,
 }
 
 impl LineDistance {
     /// For the segment P1P2 of `line`.
     #[must_use]
     pub fn new(line: &Line) -> Self {
-        let d = line.to.position_mm - line.from.position_mm;
+        let from = line.from.position_mm;
+        let d = line.to.position_mm - from;
         Self {
-            from: line.from.position_mm,
+            from,
             d,
             len2: d.norm_squared(),
+            round_mm: 16.0 * f64::EPSILON * (from.norm() + d.norm()),
         }
     }
 
-    /// The squared distance from `p` to the segment when it may be more than `floor_mm2`
-    /// (`None` when it is surely not), mm²: the same value as [`Self::squared_mm2`]. A point
-    /// whose projection falls inside the segment is first judged without a division, by its
-    /// squared distance to the line times the squared length (`|w|² len² - (w.d)²`), with a
-    /// margin of eight roundings of the terms that cancel in it.
+    /// What a point's `|w|² len² - (w.d)²` (its squared distance to the line times the squared
+    /// length, `w = p - from`) must stay within for [`Self::squared_mm2`] to be surely at most
+    /// `limit_mm` squared: the limit less the distance's roundings ([`Self::round_mm`]), squared,
+    /// times the squared length, less a share for the products' roundings. No point is clear of
+    /// a limit within the roundings.
     #[must_use]
+    pub fn clear(&self, limit_mm: f64) -> f64 {
+        let limit = limit_mm - self.round_mm;
+        if limit > 0.0 {
+            limit * limit * self.len2 * (1.0 - 1e-12)
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+
+    /// Whether `p` is surely clear ([`Self::clear`]): judged without a division or a root, when
+    /// its projection falls inside the segment, with a margin of eight roundings of the terms
+    /// that cancel in `|w|² len² - (w.d)²`; `false` when it cannot tell.
     #[inline]
-    pub fn squared_beyond_mm2(&self, p: &Vector3<f64>, floor_mm2: f64) -> Option<f64> {
+    fn surely_clear(&self, p: &Vector3<f64>, clear: f64) -> bool {
         let w = p - self.from;
         let dot = w.dot(&self.d);
         if self.len2 > 0.0 && dot >= 0.0 && dot <= self.len2 {
             let whole = w.norm_squared() * self.len2;
             let margin = 8.0 * f64::EPSILON * whole;
-            if whole - dot * dot + margin <= floor_mm2 * self.len2 {
-                return None;
-            }
+            return whole - dot * dot + margin <= clear;
+        }
+        false
+    }
+
+    /// The squared distance from `p` to the segment when it may be more than `floor_mm2`
+    /// (`None` when it is surely not), mm²: the same value as [`Self::squared_mm2`]. `clear` is
+    /// [`Self::clear`] of the root of `floor_mm2` (made once per floor): a point surely clear of
+    /// it is not measured.
+    #[must_use]
+    #[inline]
+    pub fn squared_beyond_mm2(&self, p: &Vector3<f64>, floor_mm2: f64, clear: f64) -> Option<f64> {
+        if self.surely_clear(p, clear) {
+            return None;
         }
         let d2 = self.squared_mm2(p);
         (d2 > floor_mm2).then_some(d2)
     }
 
-    /// Whether `Line::distance_mm(p)` is surely at most `limit_mm`, judged without a division
-    /// or a root (as [`Self::squared_beyond_mm2`], with a further margin for the limit's square
-    /// and the distance's own roundings); `false` when it cannot tell.
+    /// Whether `Line::distance_mm(p)` is surely at most `limit_mm` ([`Self::clear`]), judged
+    /// without a division or a root; `false` when it cannot tell.
     #[must_use]
     #[inline]
     pub fn surely_within(&self, p: &Vector3<f64>, limit_mm: f64) -> bool {
-        let w = p - self.from;
-        let dot = w.dot(&self.d);
-        if self.len2 > 0.0 && dot >= 0.0 && dot <= self.len2 {
-            let whole = w.norm_squared() * self.len2;
-            let margin = 8.0 * f64::EPSILON * whole;
-            return whole - dot * dot + margin <= limit_mm * limit_mm * self.len2 * (1.0 - 1e-12);
-        }
-        false
+        self.surely_clear(p, self.clear(limit_mm))
     }
 
     /// The squared distance from `p` to the segment, mm²: `Line::distance_mm(p)` is its
@@ -219,6 +240,39 @@ impl ToolPath for Line {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_point_surely_within_a_limit_of_a_line_is_within_it_by_its_distance() {
+        // The seed's line, points scattered about it (a fixed generator), and limits at the
+        // point's own distance give or take a few roundings: where rounding could fool it.
+        let line = Line {
+            from: Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0),
+            to: Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0),
+        };
+        let near = LineDistance::new(&line);
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut said = 0;
+        for _ in 0..200_000 {
+            let along = line.at(next() * line.length_mm()).position_mm;
+            let off = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 0.2;
+            let p = along + off;
+            let d = line.distance_mm(&p);
+            for limit in [d, d.next_up(), d.next_down(), d * (1.0 + 1e-9), d * 1.001] {
+                if near.surely_within(&p, limit) {
+                    assert!(d <= limit, "{p:?}: {d} > {limit}");
+                    said += 1;
+                }
+            }
+        }
+        // It does say so, for most points and limits (never wrongly: above).
+        assert!(said > 200_000, "{said}");
+    }
 
     #[test]
     fn line_interpolates_position_and_angle() {

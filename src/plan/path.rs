@@ -265,14 +265,30 @@ fn parts(
     motion: Motion,
 ) -> Result<Vec<Plan>, PlanError> {
     let sampled = Sampled::new(robot, course, start, motion, false)?;
-    let min_points = (MIN_PART_S / sampled.profile.period_s).ceil() as usize;
-    let mut ahead = planned_ahead(&sampled, start.counts, min_points);
+    let ahead = planned_ahead(&sampled, start.counts, min_points(&sampled));
+    parts_in_turn(robot, &sampled, start, ahead)
+}
+
+/// Sample points in the shortest part ([`MIN_PART_S`]).
+fn min_points(sampled: &Sampled) -> usize {
+    (MIN_PART_S / sampled.profile.period_s).ceil() as usize
+}
+
+/// [`parts`] of `sampled`, one after the other, each from the counts the one before ended on,
+/// taking a plan of `ahead` where it was made from those very counts.
+fn parts_in_turn(
+    robot: &Robot,
+    sampled: &Sampled,
+    start: &Start,
+    mut ahead: Vec<Ahead>,
+) -> Result<Vec<Plan>, PlanError> {
+    let min_points = min_points(sampled);
     let mut todo = vec![(0, sampled.last_point())];
     let mut plans = Vec::new();
     let mut counts = start.counts;
     while let Some((first, end)) = todo.pop() {
         if sampled.bounded.is_some()
-            && let Some(cut) = reversal_cut(&sampled, first, end, min_points)
+            && let Some(cut) = reversal_cut(sampled, first, end, min_points)
         {
             todo.push((cut, end));
             todo.push((first, cut));
@@ -293,9 +309,9 @@ fn parts(
             }
             Err(e) if too_big(&e) && end - first >= 2 * min_points => first + (end - first) / 2,
             Err(e @ PlanError::ToleranceTooSmall { .. }) => {
-                match late_cut(&sampled, first, end, min_points) {
+                match late_cut(sampled, first, end, min_points) {
                     Some(cut) => cut,
-                    None => return Err(late_start(robot, &sampled, first, end).unwrap_or(e)),
+                    None => return Err(late_start(robot, sampled, first, end).unwrap_or(e)),
                 }
             }
             Err(e) => return Err(e),
@@ -859,5 +875,70 @@ mod tests {
         };
         let msg = plan_path(&robot, &req).unwrap_err().to_string();
         assert!(msg.starts_with("path section 2 (element 2-3): "), "{msg}");
+    }
+
+    #[test]
+    fn parts_planned_side_by_side_are_the_parts_planned_in_turn() {
+        let robot = seed_robot();
+        // Up and down three times, blended: d2 reverses at every blend, so the section is cut
+        // into parts there.
+        let elements = (1..=4)
+            .map(|k| {
+                let z = if k % 2 == 1 { 220.0 } else { 100.0 };
+                let to = Pose::from_mm_deg(-800.0 + 160.0 * f64::from(k), 900.0, z, 0.0);
+                let corner = if k == 4 {
+                    Corner::Stop
+                } else {
+                    Corner::Blend(20.0)
+                };
+                (Element::Line { to }, corner)
+            })
+            .collect();
+        let from = Pose::from_mm_deg(-800.0, 900.0, 100.0, 0.0);
+        let start = Start::at(&robot, Origin::Pose(from)).unwrap();
+        let spec = PathSpec {
+            start: robot.kinematics.fk(&start.values),
+            elements,
+        };
+        let section = Path::build(&spec).unwrap().sections().remove(0);
+        let asked = motion(
+            &robot,
+            Method::BoundedError { tolerance_mm: 0.05 },
+            FrequencyModel::FpxDivider,
+        );
+        let pace = Pace::new(
+            &section,
+            asked.speed_mm_s,
+            5_000.0,
+            asked.speed_mm_s / asked.accel_s,
+            &[],
+        );
+        let course = Course::Path {
+            path: section,
+            pace,
+        };
+        let sampled = Sampled::new(&robot, &course, &start, asked, false).unwrap();
+        let ahead = planned_ahead(&sampled, start.counts, min_points(&sampled));
+        assert!(ahead.len() >= 3, "{} parts planned ahead", ahead.len());
+
+        let in_turn = parts_in_turn(&robot, &sampled, &start, Vec::new()).unwrap();
+        let side_by_side = parts_in_turn(&robot, &sampled, &start, ahead).unwrap();
+        assert_eq!(side_by_side, in_turn);
+
+        // Parts planned ahead from counts the part before does not end on are planned again.
+        let mut wrong = planned_ahead(&sampled, start.counts, min_points(&sampled));
+        for a in &mut wrong {
+            a.counts[1] += 1;
+            a.plan = sampled.plan(a.first, a.end, a.counts);
+        }
+        assert!(
+            wrong
+                .iter()
+                .any(|a| a.plan.as_ref().is_ok_and(|p| !in_turn.contains(p)))
+        );
+        assert_eq!(
+            parts_in_turn(&robot, &sampled, &start, wrong).unwrap(),
+            in_turn
+        );
     }
 }

@@ -202,6 +202,9 @@ struct Deviation<'a> {
     line: Option<LineDistance>,
     max_mm: f64,
     max_mm2: f64,
+    /// On a line: what a point must stay within to be surely no new largest
+    /// ([`LineDistance::clear`] of `max_mm`).
+    clear: f64,
     hint: usize,
 }
 
@@ -212,6 +215,7 @@ impl<'a> Deviation<'a> {
             line: path.as_line().map(LineDistance::new),
             max_mm: 0.0,
             max_mm2: f64::NEG_INFINITY,
+            clear: f64::NEG_INFINITY,
             hint: 0,
         }
     }
@@ -223,9 +227,10 @@ impl<'a> Deviation<'a> {
     #[inline(always)]
     fn see(&mut self, p: &Vector3<f64>) -> f64 {
         if let Some(line) = &self.line {
-            if let Some(d2) = line.squared_beyond_mm2(p, self.max_mm2) {
+            if let Some(d2) = line.squared_beyond_mm2(p, self.max_mm2, self.clear) {
                 self.max_mm2 = d2;
                 self.max_mm = self.max_mm.max(d2.sqrt());
+                self.clear = line.clear(d2.sqrt());
             }
             self.max_mm
         } else {
