@@ -228,9 +228,10 @@ impl<'a> Deviation<'a> {
     fn see(&mut self, p: &Vector3<f64>) -> f64 {
         if let Some(line) = &self.line {
             if let Some(d2) = line.squared_beyond_mm2(p, self.max_mm2, self.clear) {
+                let d = d2.sqrt();
                 self.max_mm2 = d2;
-                self.max_mm = self.max_mm.max(d2.sqrt());
-                self.clear = line.clear(d2.sqrt());
+                self.max_mm = self.max_mm.max(d);
+                self.clear = line.clear(d);
             }
             self.max_mm
         } else {

@@ -27,7 +27,7 @@ use crate::table::ChannelTable;
 use super::course::Course;
 use super::{PlanError, Samples, Window, simulate_within};
 use budget::Budget;
-use pulses::{Run, Track};
+use pulses::{Counts, Run, Track};
 use rows::Channel;
 
 /// Sample spacing of the trajectory, s.
@@ -96,30 +96,24 @@ pub(super) struct Move<'a> {
 }
 
 impl Move<'_> {
-    /// Every joint's fractional count at every sample, joint by joint, with the reciprocal of
-    /// its change over every interval ([`pulses::slopes`]).
-    fn tracks(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+    /// Every joint's fractional count at every sample ([`Counts`]), joint by joint.
+    fn tracks(&self) -> Vec<Counts> {
         (0..JOINTS)
             .map(|j| {
                 let joint = &self.robot.joints[j];
-                let u: Vec<f64> = self
-                    .samples
-                    .values
-                    .iter()
-                    .map(|q| (q[j] - joint.offset) / joint.step)
-                    .collect();
-                let per_count = pulses::slopes(&u);
-                (u, per_count)
+                Counts::new(
+                    self.samples
+                        .values
+                        .iter()
+                        .map(|q| (q[j] - joint.offset) / joint.step)
+                        .collect(),
+                )
             })
             .collect()
     }
 
-    fn track<'t>(&self, tracks: &'t [(Vec<f64>, Vec<f64>)], j: usize) -> Track<'t> {
-        Track {
-            u: &tracks[j].0,
-            per_count: &tracks[j].1,
-            dt_s: self.profile.period_s,
-        }
+    fn track<'t>(&self, tracks: &'t [Counts], j: usize) -> Track<'t> {
+        tracks[j].track(self.profile.period_s)
     }
 
     fn start_counts(&self) -> [i64; JOINTS] {
@@ -131,7 +125,7 @@ impl Move<'_> {
         Budget::new(self.robot, &self.samples.values)
     }
 
-    fn runs(&self, tracks: &[(Vec<f64>, Vec<f64>)], deltas: &[f64; JOINTS]) -> Vec<Vec<Run>> {
+    fn runs(&self, tracks: &[Counts], deltas: &[f64; JOINTS]) -> Vec<Vec<Run>> {
         let start = self.start_counts();
         (0..JOINTS)
             .map(|j| self.track(tracks, j).runs(start[j], deltas[j]))
@@ -141,7 +135,7 @@ impl Move<'_> {
     /// The path deviation with every pulse landing exactly on time. It does not depend on the
     /// tolerance: computed once per plan, from every joint's on-time pulses merged in time
     /// order (each joint's are already in order).
-    fn floor_mm(&self, tracks: &[(Vec<f64>, Vec<f64>)]) -> f64 {
+    fn floor_mm(&self, tracks: &[Counts]) -> f64 {
         let start = self.start_counts();
         let channels = (0..JOINTS).map(|j| {
             self.track(tracks, j)
@@ -162,7 +156,7 @@ impl Move<'_> {
 
     fn tables(
         &self,
-        tracks: &[(Vec<f64>, Vec<f64>)],
+        tracks: &[Counts],
         deltas: &[f64; JOINTS],
         off_window: usize,
     ) -> Vec<ChannelTable> {
@@ -236,7 +230,7 @@ impl Move<'_> {
     /// The first windows of [`Self::windows`] the execution model accepts (`None` if none).
     fn try_plan(
         &self,
-        tracks: &[(Vec<f64>, Vec<f64>)],
+        tracks: &[Counts],
         tolerance_mm: f64,
         floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
@@ -280,7 +274,7 @@ impl Move<'_> {
     /// tolerance (and the tracking error within twice it).
     fn verify(
         &self,
-        tracks: &[(Vec<f64>, Vec<f64>)],
+        tracks: &[Counts],
         deltas: &[f64; JOINTS],
         off_window: usize,
         tolerance_mm: f64,
@@ -308,12 +302,7 @@ impl Move<'_> {
     }
 
     /// The refusal of a tolerance, naming the smallest one that does work on this move.
-    fn too_tight(
-        &self,
-        tracks: &[(Vec<f64>, Vec<f64>)],
-        tolerance_mm: f64,
-        floor_mm: f64,
-    ) -> PlanError {
+    fn too_tight(&self, tracks: &[Counts], tolerance_mm: f64, floor_mm: f64) -> PlanError {
         let works = [1.05, 1.1, 1.25, 1.5, 2.0, 3.0]
             .iter()
             .map(|k| (floor_mm * k * 1e4).ceil() / 1e4)

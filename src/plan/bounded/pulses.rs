@@ -30,30 +30,50 @@ pub(super) struct Run {
     pub pulses: Vec<Pulse>,
 }
 
-/// A joint's fractional count sampled every `dt_s` from t = 0.
+/// A joint's fractional count at every sample, with every interval's reciprocal change (0
+/// where it holds): made once per plan, so that finding when the count passes a level is a
+/// product, not a division.
+pub(super) struct Counts {
+    u: Vec<f64>,
+    per_count: Vec<f64>,
+}
+
+impl Counts {
+    /// The counts `u`, one per sample.
+    pub(super) fn new(u: Vec<f64>) -> Self {
+        let per_count = u
+            .windows(2)
+            .map(|w| {
+                let du = w[1] - w[0];
+                if du.abs() <= f64::MIN_POSITIVE {
+                    0.0
+                } else {
+                    1.0 / du
+                }
+            })
+            .collect();
+        Self { u, per_count }
+    }
+
+    /// The counts as a track sampled every `dt_s` from t = 0.
+    pub(super) fn track(&self, dt_s: f64) -> Track<'_> {
+        Track {
+            u: &self.u,
+            per_count: &self.per_count,
+            dt_s,
+        }
+    }
+}
+
+/// A joint's fractional count sampled every `dt_s` from t = 0 ([`Counts::track`]).
 #[derive(Clone, Copy)]
 pub(super) struct Track<'a> {
     /// `u[i]` at `i * dt_s`.
-    pub u: &'a [f64],
-    /// Every interval's `1 / (u[i + 1] - u[i])` ([`slopes`]).
-    pub per_count: &'a [f64],
+    u: &'a [f64],
+    /// Every interval's `1 / (u[i + 1] - u[i])`.
+    per_count: &'a [f64],
     /// Sample spacing, s.
-    pub dt_s: f64,
-}
-
-/// Every interval's reciprocal change of `u`, for [`Track::per_count`] (0 where `u` holds):
-/// made once per plan, so that finding when `u` passes a count is a product, not a division.
-pub(super) fn slopes(u: &[f64]) -> Vec<f64> {
-    u.windows(2)
-        .map(|w| {
-            let du = w[1] - w[0];
-            if du.abs() <= f64::MIN_POSITIVE {
-                0.0
-            } else {
-                1.0 / du
-            }
-        })
-        .collect()
+    dt_s: f64,
 }
 
 impl<'a> Track<'a> {
@@ -199,13 +219,7 @@ mod tests {
     fn steady_motion_gives_evenly_spaced_pulses_with_symmetric_windows() {
         // u = 10 t, sampled every 0.1 s: pulses cross 0.5, 1.5, ... at 0.05, 0.15, ...
         let u: Vec<f64> = (0..=10).map(f64::from).collect();
-        let per_count = slopes(&u);
-        let runs = Track {
-            u: &u,
-            per_count: &per_count,
-            dt_s: 0.1,
-        }
-        .runs(0, 0.25);
+        let runs = Counts::new(u).track(0.1).runs(0, 0.25);
         assert_eq!(runs.len(), 1);
         let p = &runs[0].pulses;
         assert_eq!(p.len(), 10);
@@ -216,14 +230,9 @@ mod tests {
 
     #[test]
     fn reversal_starts_a_new_run_and_bounds_the_window_at_the_turn() {
-        let u = [0.0, 1.0, 2.0, 1.0, 0.0];
-        let per_count = slopes(&u);
-        let runs = Track {
-            u: &u,
-            per_count: &per_count,
-            dt_s: 1.0,
-        }
-        .runs(0, 3.0);
+        let runs = Counts::new(vec![0.0, 1.0, 2.0, 1.0, 0.0])
+            .track(1.0)
+            .runs(0, 3.0);
         assert_eq!(runs.len(), 2);
         assert_eq!(runs[0].direction, Direction::Up);
         assert_eq!(runs[1].pulses.last().unwrap().count, 0);
