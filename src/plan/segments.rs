@@ -157,6 +157,12 @@ impl Frequencies<'_> {
     }
 
     fn choose(&self) -> Vec<u32> {
+        self.choose_searching::<true>()
+    }
+
+    /// [`Self::choose`], values leading where the one before led searched again unless
+    /// `SKIP_REPEATS`.
+    fn choose_searching<const SKIP_REPEATS: bool>(&self) -> Vec<u32> {
         let n = self.spans.len();
         let tail = n.min(TAIL_ROWS);
         let mut freqs = Vec::with_capacity(n);
@@ -171,7 +177,12 @@ impl Frequencies<'_> {
                 freqs: Vec::new(),
                 end_err_s: f64::INFINITY,
             };
-            self.search_tail(n - tail, t_s, &mut Vec::with_capacity(tail), &mut best);
+            self.search_tail::<SKIP_REPEATS>(
+                n - tail,
+                t_s,
+                &mut Vec::with_capacity(tail),
+                &mut best,
+            );
             freqs.extend(best.freqs);
         }
         freqs
@@ -180,7 +191,13 @@ impl Frequencies<'_> {
     /// Tries values around each tail row's aim (the last row always aims), keeping every inner
     /// boundary within a grid period (and half its row) of its planned time, for the combination that ends nearest
     /// the planned end.
-    fn search_tail(&self, i: usize, t_s: f64, chosen: &mut Vec<u32>, best: &mut Tail) {
+    fn search_tail<const SKIP_REPEATS: bool>(
+        &self,
+        i: usize,
+        t_s: f64,
+        chosen: &mut Vec<u32>,
+        best: &mut Tail,
+    ) {
         let last = self.spans.len() - 1;
         let aim = self.aim(i, t_s);
         if i == last {
@@ -200,13 +217,20 @@ impl Frequencies<'_> {
             .min(self.joint.max_freq_hz);
         let span_s = self.spans[i].end_s - self.spans[i].start_s;
         let slack_s = (span_s / 2.0).min(self.grid_s);
+        // Neighbouring values often select the same divisor: a value ending where the one
+        // searched before it ended leads to the same rows after it, which cannot end strictly
+        // nearer, so it is not searched again.
+        let mut searched_end = f64::NAN;
         for f in lo..=hi {
             let end = t_s + self.duration_s(i, f);
-            if f != aim && (end - self.spans[i].end_s).abs() > slack_s {
+            if f != aim && (end - self.spans[i].end_s).abs() > slack_s
+                || SKIP_REPEATS && end.to_bits() == searched_end.to_bits()
+            {
                 continue;
             }
+            searched_end = end;
             chosen.push(f);
-            self.search_tail(i + 1, end, chosen, best);
+            self.search_tail::<SKIP_REPEATS>(i + 1, end, chosen, best);
             chosen.pop();
         }
     }
@@ -298,6 +322,61 @@ mod tests {
                 end_s: (i + 1) as f64 * period_s,
             })
             .collect()
+    }
+
+    #[test]
+    fn the_tail_searched_once_per_end_is_the_tail_searched_in_full() {
+        // Random decelerating tails in every range: values that select the same divisor are
+        // searched once, and the choice is the same as searching every value.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut repeats = 0;
+        for case in 0..300 {
+            let top_hz = [150.0, 2_000.0, 40_000.0][case % 3] * (0.5 + next());
+            let period_s = [0.01, 0.05][case % 2];
+            let (mut target, mut t_s) = (0i64, 0.0);
+            let spans: Vec<Span> = (0..6)
+                .map(|k| {
+                    let hz = top_hz * (1.0 - f64::from(k) / 7.0) * (0.9 + 0.2 * next());
+                    target += (hz * period_s).round().max(1.0) as i64;
+                    let span = Span {
+                        target,
+                        start_s: t_s,
+                        end_s: t_s + period_s,
+                    };
+                    t_s += period_s;
+                    span
+                })
+                .collect();
+            for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+                for range in FrequencyRange::FINEST_FIRST {
+                    let ranges = vec![range; spans.len()];
+                    let j = joint(0, 100_000);
+                    let f = Frequencies {
+                        joint: &j,
+                        model,
+                        start: 0,
+                        spans: &spans,
+                        ranges: &ranges,
+                        grid_s: period_s,
+                    };
+                    let (once, full) =
+                        (f.choose_searching::<true>(), f.choose_searching::<false>());
+                    assert_eq!(once, full, "{model:?} {range:?} {spans:?}");
+                    // How often two neighbouring values of a tail row select one divisor.
+                    let t = spans.len() - TAIL_ROWS;
+                    repeats += usize::from(
+                        (f.duration_s(t, once[t]) - f.duration_s(t, once[t] + 1)).abs() == 0.0,
+                    );
+                }
+            }
+        }
+        assert!(repeats > 50, "{repeats} tails with a repeated end");
     }
 
     #[test]

@@ -20,6 +20,43 @@ pub(super) struct Channel<'a> {
     pub off_window: usize,
 }
 
+/// Pulses a row's windows are first scanned over ([`Channel::longest`]).
+const SCAN_FIRST: usize = 4096;
+
+/// A row's period bounds from its start, pulse by pulse: pulse `i` (from 0) lands at
+/// `t_s + (i + 1) * period`, so the period lies within every earlier pulse's window over its
+/// number.
+struct Scan<'a> {
+    pulses: &'a [Pulse],
+    t_s: f64,
+    lo: f64,
+    hi: f64,
+    /// False once the bounds cross or the pulses run out.
+    open: bool,
+}
+
+impl Scan<'_> {
+    /// Extends `bounds` to `reach` pulses, or as far as they stay open; returns their length.
+    fn extend(&mut self, bounds: &mut Vec<(f64, f64)>, reach: usize) -> usize {
+        while self.open && bounds.len() < reach {
+            let i = bounds.len();
+            let Some(p) = self.pulses.get(i) else {
+                self.open = false;
+                break;
+            };
+            let n = (i + 1) as f64;
+            self.lo = self.lo.max((p.lo_s - self.t_s) / n);
+            self.hi = self.hi.min((p.hi_s - self.t_s) / n);
+            if self.lo > self.hi {
+                self.open = false;
+                break;
+            }
+            bounds.push((self.lo, self.hi));
+        }
+        bounds.len()
+    }
+}
+
 /// Rows for a stretch of pulses in one range.
 struct Attempt {
     rows: Vec<Row>,
@@ -58,6 +95,13 @@ impl Channel<'_> {
     }
 
     /// The longest row from `t_s` over `pulses`, or `None` when not even one pulse fits.
+    ///
+    /// The window only widens as the row gets shorter, so whether a value fits is monotonic in
+    /// the row's length: the longest that fits is searched for. The windows are scanned up to
+    /// where they run out, or, on a stretch where they stay open for long (a cruise, where the
+    /// row ends at the frequency step nearest its speed, not where its windows close), only as
+    /// far as a doubling search needs: scanning every row to the cruise's end made the rows'
+    /// time grow with the square of its length.
     fn longest(
         &self,
         range: FrequencyRange,
@@ -65,39 +109,56 @@ impl Channel<'_> {
         t_s: f64,
         bounds: &mut Vec<(f64, f64)>,
     ) -> Option<(usize, u32, f64)> {
+        self.longest_scanning(range, pulses, t_s, bounds, SCAN_FIRST)
+    }
+
+    /// [`Self::longest`], the windows first scanned over `first_reach` pulses.
+    fn longest_scanning(
+        &self,
+        range: FrequencyRange,
+        pulses: &[Pulse],
+        t_s: f64,
+        bounds: &mut Vec<(f64, f64)>,
+        first_reach: usize,
+    ) -> Option<(usize, u32, f64)> {
         let fastest = self
             .model
             .actual_hz(self.fastest_set(range), range)
             .min(f64::from(self.joint.max_freq_hz));
-        let (mut lo, mut hi) = (1.0 / fastest, 1.0 / range.min_actual_hz());
+        let mut scan = Scan {
+            pulses,
+            t_s,
+            lo: 1.0 / fastest,
+            hi: 1.0 / range.min_actual_hz(),
+            open: true,
+        };
         bounds.clear();
-        for (i, p) in pulses.iter().enumerate() {
-            let n = (i + 1) as f64;
-            lo = lo.max((p.lo_s - t_s) / n);
-            hi = hi.min((p.hi_s - t_s) / n);
-            if lo > hi {
-                break;
-            }
-            bounds.push((lo, hi));
-        }
-        // The window only widens as the row gets shorter, so whether a value fits is monotonic
-        // in the row's length: search for the longest that fits.
-        let fit = |m: usize| {
+        let fit = |bounds: &[(f64, f64)], m: usize| {
             let (lo, hi) = bounds[m - 1];
             let want = (pulses[m - 1].ideal_s - t_s) / m as f64;
             self.realise(range, lo, hi, want)
                 .map(|(set, f)| (m, set, f))
         };
-        if bounds.is_empty() {
-            return None;
-        }
-        if let Some(found) = fit(bounds.len()) {
-            return Some(found);
-        }
-        let (mut good, mut bad, mut best) = (0usize, bounds.len(), None);
+        let (mut good, mut best, mut reach) = (0usize, None, first_reach.max(1));
+        let bad = loop {
+            let n = scan.extend(bounds, reach);
+            if n <= good {
+                // The windows closed right after the longest that fits.
+                return best;
+            }
+            match fit(bounds, n) {
+                Some(found) if !scan.open => return Some(found),
+                Some(found) => {
+                    (good, best) = (n, Some(found));
+                    reach *= 2;
+                }
+                None => break n,
+            }
+        };
+        let mut bad = bad;
         while bad - good > 1 {
             let mid = usize::midpoint(good, bad);
-            match fit(mid) {
+            match fit(bounds, mid) {
                 Some(found) => {
                     good = mid;
                     best = Some(found);
@@ -235,5 +296,78 @@ impl Channel<'_> {
             pulses = &pulses[played.max(1).min(pulses.len())..];
         }
         (out, t_s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::pulses::Counts;
+    use super::*;
+    use crate::robot::seed_robot;
+
+    /// A joint speeding up to `hz` pulses a second in 0.2 s, then cruising for `cruise_s`
+    /// with a slight waver (so that no one frequency plays the cruise), sampled every ms.
+    fn cruise(hz: f64, cruise_s: f64) -> Vec<Pulse> {
+        let n = ((0.2 + cruise_s) * 1e3) as usize;
+        let u = (0..=n)
+            .map(|i| {
+                let t = i as f64 * 1e-3;
+                if t < 0.2 {
+                    hz * t * t / 0.4
+                } else {
+                    hz * (t - 0.1) + 3.0 * (t * 2.0).sin()
+                }
+            })
+            .collect();
+        let runs = Counts::new(u).track(1e-3).runs(0, 2.0);
+        runs.into_iter().next().expect("one run").pulses
+    }
+
+    #[test]
+    fn a_row_scanned_as_far_as_the_search_needs_is_the_row_scanned_to_its_windows_end() {
+        let joint = seed_robot().joints[1].clone();
+        let pulses = cruise(9_000.0, 3.0);
+        let mut bounds = Vec::new();
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let channel = Channel {
+                joint: &joint,
+                model,
+                off_window: 0,
+            };
+            for range in FrequencyRange::FINEST_FIRST {
+                // Rows from every 97th pulse: scanned first over 1, 7, 64 and 4096 pulses,
+                // and all the way (what the search did before).
+                let (mut rows, mut longer_than_first) = (0, 0);
+                for k in (0..pulses.len()).step_by(97) {
+                    let t_s = pulses[k].ideal_s - 1e-4;
+                    let whole =
+                        channel.longest_scanning(range, &pulses[k..], t_s, &mut bounds, usize::MAX);
+                    for first in [1, 7, 64, SCAN_FIRST] {
+                        let row =
+                            channel.longest_scanning(range, &pulses[k..], t_s, &mut bounds, first);
+                        assert_eq!(
+                            row, whole,
+                            "{model:?} {range:?} from pulse {k}, first {first}"
+                        );
+                        // Scanned no further than a doubling past the row.
+                        let m = row.map_or(0, |r| r.0);
+                        assert!(
+                            bounds.len() <= (2 * m + 1).max(first),
+                            "{m} {}",
+                            bounds.len()
+                        );
+                    }
+                    rows += 1;
+                    longer_than_first += usize::from(whole.is_some_and(|r| r.0 > 64));
+                }
+                assert!(rows > 100, "{rows}");
+                if range != FrequencyRange::Low {
+                    assert!(
+                        longer_than_first > 10,
+                        "{model:?} {range:?} {longer_than_first}"
+                    );
+                }
+            }
+        }
     }
 }
