@@ -278,8 +278,6 @@ pub struct Plan {
     pub max_hz: [u32; JOINTS],
     /// The accuracy figures of the execution model's run of the tables ([`Plan::execution`]).
     pub figures: Figures,
-    /// Bounded-error plans: the path deviation with every pulse exactly on time, mm.
-    pub floor_mm: Option<f64>,
     /// The stretch of the profile this start plays: the whole of it, or one part of a path
     /// section cut into several chained starts.
     pub window: Window,
@@ -584,7 +582,7 @@ impl<'a> Sampled<'a> {
             values: self.samples.values[first..=last].to_vec(),
         };
         samples.counts[0] = counts;
-        let (tables, problems, figures, floor_mm) = if let Some(tolerance_mm) = self.bounded {
+        let (tables, problems, figures) = if let Some(tolerance_mm) = self.bounded {
             let m = bounded::Move {
                 robot,
                 course: self.course,
@@ -594,7 +592,7 @@ impl<'a> Sampled<'a> {
                 motion: &self.motion,
             };
             let v = m.plan(tolerance_mm)?;
-            (v.tables, Vec::new(), v.figures, Some(v.floor_mm))
+            (v.tables, Vec::new(), v.figures)
         } else {
             let tables = build_tables(
                 robot,
@@ -612,7 +610,7 @@ impl<'a> Sampled<'a> {
                 &window,
                 &self.motion,
             );
-            (tables, problems, figures, None)
+            (tables, problems, figures)
         };
         Ok(Plan {
             line: self.course.chord(),
@@ -628,7 +626,6 @@ impl<'a> Sampled<'a> {
             problems,
             max_hz: max_hz(robot),
             figures,
-            floor_mm,
             window,
         })
     }

@@ -154,7 +154,6 @@ impl Budget {
 
     /// The worst path deviation and tracking error, mm, of joints each at most `1/2 + delta_j`
     /// pulses off (linearised): the largest over the points and the corners of the box.
-    #[cfg(test)]
     pub(super) fn worst_mm(&self, deltas: &[f64; JOINTS]) -> (f64, f64) {
         let corners = corners(deltas);
         let (mut across2, mut whole2) = (0.0f64, 0.0f64);

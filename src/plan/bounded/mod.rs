@@ -13,6 +13,10 @@
 //!    (or whose tracking error exceeds twice it) is not returned. The windows of step 2 make
 //!    that rare (the linearisation is the only gap); when it happens the windows narrow and it
 //!    is planned again, and a tolerance the grid cannot reach is refused with one that works.
+//!
+//! The pulse grid's floor (the path deviation with every pulse on time) is played only when the
+//! first try is refused: that try is sized by the grid's linearised worst case
+//! ([`Budget::worst_mm`]), which needs no pulse played.
 
 mod budget;
 mod pulses;
@@ -32,13 +36,14 @@ use rows::Channel;
 
 /// Sample spacing of the trajectory, s.
 pub(super) const SAMPLE_S: f64 = 0.001;
-/// The first try: every joint's window may take the tool this fraction of `tolerance - floor / 2`
-/// off the path. Not a bound: the windows' errors and the pulse grid's rarely peak at the same
-/// instant or point the same way, so the grid's floor is counted half and every joint gets the
-/// whole share. Fitted on the seed's move, where it holds with the fewest rows; on most other
-/// moves the execution model refuses it, and the second try, sized by the worst case
+/// The first try: every joint's window may take the tool this fraction of `tolerance - grid / 2`
+/// off the path, `grid` the pulse grid's linearised worst case ([`Budget::worst_mm`] of windows
+/// of width 0). Not a bound: the windows' errors and the pulse grid's rarely peak at the same
+/// instant or point the same way, so the grid is counted half and every joint gets the whole
+/// share. Fitted on the seed's move, where it holds with the fewest rows; on most other moves
+/// the execution model refuses it, and the second try, sized by the worst case
 /// ([`Budget::widest`]), takes over.
-const FIRST_BUDGET: f64 = 0.6;
+const FIRST_BUDGET: f64 = 0.62;
 /// The narrowing search's first windows, relative to the budget left above the floor: the
 /// budget adds every joint's error at its worst as if they all pointed the same way, which they
 /// rarely do, so the search starts wider and lets the execution model judge.
@@ -58,12 +63,6 @@ const NARROWING: f64 = 0.8;
 /// The widest window, pulses each side (also for joints that do not move the tool point).
 const MAX_DELTA_PULSES: f64 = 8.0;
 
-/// The first try's window scale, relative to the budget left above the floor
-/// ([`FIRST_BUDGET`]).
-fn first_scale(tolerance_mm: f64, floor_mm: f64) -> f64 {
-    FIRST_BUDGET * (tolerance_mm - floor_mm / 2.0) / (tolerance_mm - floor_mm)
-}
-
 /// Every joint's window, pulses each side: `budget_mm * scale` over its reach, at most
 /// [`MAX_DELTA_PULSES`] (a joint that cannot move the tool gets that much times the scale).
 fn deltas(reach: &[f64; JOINTS], scale: f64, budget_mm: f64) -> [f64; JOINTS] {
@@ -80,8 +79,48 @@ fn deltas(reach: &[f64; JOINTS], scale: f64, budget_mm: f64) -> [f64; JOINTS] {
 pub(super) struct Verified {
     pub tables: Vec<ChannelTable>,
     pub figures: Figures,
-    /// The path deviation with every pulse exactly on time (the pulse grid's floor), mm.
-    pub floor_mm: f64,
+}
+
+/// What the tries are sized by: the path's pulse vectors, and the pulse grid's floor, played
+/// once and only when a try past the first needs it.
+struct Sizing<'a> {
+    budget: Budget,
+    tracks: &'a [Counts],
+    floor_mm: std::cell::OnceCell<f64>,
+}
+
+impl Sizing<'_> {
+    /// The fitted first try ([`FIRST_BUDGET`]), if the grid's worst case leaves it room.
+    fn fitted(&self, tolerance_mm: f64) -> Option<[f64; JOINTS]> {
+        let grid_mm = self.budget.worst_mm(&[0.0; JOINTS]).0;
+        (grid_mm < tolerance_mm).then(|| {
+            deltas(
+                &self.budget.reach_mm(),
+                FIRST_BUDGET,
+                tolerance_mm - grid_mm / 2.0,
+            )
+        })
+    }
+
+    /// The tries after the first: the widest windows whose worst case keeps the tool within
+    /// the tolerance ([`Budget::widest`]), then, should the execution model refuse even those,
+    /// the narrowing search with windows sized by a pulse's whole move and the budget left
+    /// above the floor.
+    fn later_windows(
+        &self,
+        tolerance_mm: f64,
+        floor_mm: f64,
+    ) -> impl Iterator<Item = [f64; JOINTS]> + '_ {
+        let whole = self.budget.whole_mm();
+        // Searched only if the fitted try is refused.
+        let worst_case =
+            std::iter::once_with(move || self.budget.widest(tolerance_mm, MAX_DELTA_PULSES));
+        let narrowing = (0..TRIES).map(move |k| {
+            let scale = FIRST_SCALE * NARROWING.powi(k as i32);
+            deltas(&whole, scale, tolerance_mm - floor_mm)
+        });
+        worst_case.flatten().chain(narrowing)
+    }
 }
 
 /// Everything the method needs about one move.
@@ -132,10 +171,10 @@ impl Move<'_> {
             .collect()
     }
 
-    /// The path deviation with every pulse landing exactly on time. It does not depend on the
-    /// tolerance: computed once per plan, from every joint's on-time pulses merged in time
-    /// order (each joint's are already in order).
-    fn floor_mm(&self, tracks: &[Counts]) -> f64 {
+    /// The path deviation with every pulse landing exactly on time (the pulse grid's floor).
+    /// It does not depend on the tolerance: played at most once per plan ([`Sizing`]), from
+    /// every joint's on-time pulses merged in time order (each joint's are already in order).
+    fn play_floor_mm(&self, tracks: &[Counts]) -> f64 {
         let start = self.start_counts();
         let channels = (0..JOINTS).map(|j| {
             self.track(tracks, j)
@@ -190,53 +229,47 @@ impl Move<'_> {
             .collect()
     }
 
+    fn sizing<'t>(&self, tracks: &'t [Counts]) -> Sizing<'t> {
+        Sizing {
+            budget: self.budget(),
+            tracks,
+            floor_mm: std::cell::OnceCell::new(),
+        }
+    }
+
+    fn floor_mm(&self, sizing: &Sizing) -> f64 {
+        *sizing
+            .floor_mm
+            .get_or_init(|| self.play_floor_mm(sizing.tracks))
+    }
+
     /// Plans at `tolerance_mm`, narrowing the windows until the execution model agrees.
     pub(super) fn plan(&self, tolerance_mm: f64) -> Result<Verified, PlanError> {
         let tracks = self.tracks();
-        let floor_mm = self.floor_mm(&tracks);
-        if floor_mm >= tolerance_mm {
-            return Err(self.too_tight(&tracks, tolerance_mm, floor_mm));
-        }
-        match self.try_plan(&tracks, tolerance_mm, floor_mm)? {
+        let sizing = self.sizing(&tracks);
+        match self.try_plan(&sizing, tolerance_mm)? {
             Some(v) => Ok(v),
-            None => Err(self.too_tight(&tracks, tolerance_mm, floor_mm)),
+            None => Err(self.too_tight(&sizing, tolerance_mm)),
         }
     }
 
-    /// The tries in order: the fitted first ([`FIRST_BUDGET`]), then the widest windows whose
-    /// worst case keeps the tool within the tolerance ([`Budget::widest`]), then, should the
-    /// execution model refuse even those, the narrowing search with windows sized by a pulse's
-    /// whole move. Every one is judged by the execution model ([`Self::verify`]).
-    fn windows(&self, tolerance_mm: f64, floor_mm: f64) -> impl Iterator<Item = [f64; JOINTS]> {
-        let budget = self.budget();
-        let fitted = deltas(
-            &budget.reach_mm(),
-            first_scale(tolerance_mm, floor_mm),
-            tolerance_mm - floor_mm,
-        );
-        let whole = budget.whole_mm();
-        // Searched only if the fitted try is refused.
-        let worst_case =
-            std::iter::once_with(move || budget.widest(tolerance_mm, MAX_DELTA_PULSES));
-        let narrowing = (0..TRIES).map(move |k| {
-            let scale = FIRST_SCALE * NARROWING.powi(k as i32);
-            deltas(&whole, scale, tolerance_mm - floor_mm)
-        });
-        std::iter::once(fitted)
-            .chain(worst_case.flatten())
-            .chain(narrowing)
-    }
-
-    /// The first windows of [`Self::windows`] the execution model accepts (`None` if none).
-    fn try_plan(
-        &self,
-        tracks: &[Counts],
-        tolerance_mm: f64,
-        floor_mm: f64,
-    ) -> Result<Option<Verified>, PlanError> {
+    /// The tries in order, every one judged by the execution model ([`Self::verify`]): the
+    /// fitted first ([`Sizing::fitted`]), then, past the pulse grid's floor (a tolerance at or
+    /// below it is refused without them), the later ones ([`Sizing::later_windows`]). The
+    /// first accepted (`None` if none).
+    fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
         for off_window in OFF_WINDOW_TRIES {
-            for deltas in self.windows(tolerance_mm, floor_mm) {
-                if let Some(v) = self.verify(tracks, &deltas, off_window, tolerance_mm, floor_mm)? {
+            if let Some(deltas) = sizing.fitted(tolerance_mm)
+                && let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)?
+            {
+                return Ok(Some(v));
+            }
+            let floor_mm = self.floor_mm(sizing);
+            if floor_mm >= tolerance_mm {
+                return Ok(None);
+            }
+            for deltas in sizing.later_windows(tolerance_mm, floor_mm) {
+                if let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)? {
                     return Ok(Some(v));
                 }
             }
@@ -244,27 +277,30 @@ impl Move<'_> {
         Ok(None)
     }
 
-    /// Which of the tries ([`Self::windows`]) the execution model accepts first, from 1
+    /// Which of the tries ([`Self::try_plan`]) the execution model accepts first, from 1
     /// (`None`: the tolerance is below the pulse grid's floor, or nothing is accepted).
     #[cfg(test)]
     pub(super) fn accepted_try(&self, tolerance_mm: f64) -> Result<Option<usize>, PlanError> {
         let tracks = self.tracks();
-        let floor_mm = self.floor_mm(&tracks);
+        let sizing = self.sizing(&tracks);
+        let off_window = OFF_WINDOW_TRIES[0];
+        if let Some(deltas) = sizing.fitted(tolerance_mm)
+            && self
+                .verify(&tracks, &deltas, off_window, tolerance_mm)?
+                .is_some()
+        {
+            return Ok(Some(1));
+        }
+        let floor_mm = self.floor_mm(&sizing);
         if floor_mm >= tolerance_mm {
             return Ok(None);
         }
-        for (k, deltas) in self.windows(tolerance_mm, floor_mm).enumerate() {
+        for (k, deltas) in sizing.later_windows(tolerance_mm, floor_mm).enumerate() {
             if self
-                .verify(
-                    &tracks,
-                    &deltas,
-                    OFF_WINDOW_TRIES[0],
-                    tolerance_mm,
-                    floor_mm,
-                )?
+                .verify(&tracks, &deltas, off_window, tolerance_mm)?
                 .is_some()
             {
-                return Ok(Some(k + 1));
+                return Ok(Some(k + 2));
             }
         }
         Ok(None)
@@ -278,7 +314,6 @@ impl Move<'_> {
         deltas: &[f64; JOINTS],
         off_window: usize,
         tolerance_mm: f64,
-        floor_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
         let tables = self.tables(tracks, deltas, off_window);
         super::check_tables(self.robot, &tables, false)?;
@@ -292,23 +327,20 @@ impl Move<'_> {
             tolerance_mm,
         );
         Ok(match run {
-            Some(figures) if figures.tracking_error_mm <= 2.0 * tolerance_mm => Some(Verified {
-                tables,
-                figures,
-                floor_mm,
-            }),
+            Some(figures) if figures.tracking_error_mm <= 2.0 * tolerance_mm => {
+                Some(Verified { tables, figures })
+            }
             _ => None,
         })
     }
 
     /// The refusal of a tolerance, naming the smallest one that does work on this move.
-    fn too_tight(&self, tracks: &[Counts], tolerance_mm: f64, floor_mm: f64) -> PlanError {
+    fn too_tight(&self, sizing: &Sizing, tolerance_mm: f64) -> PlanError {
+        let floor_mm = self.floor_mm(sizing);
         let works = [1.05, 1.1, 1.25, 1.5, 2.0, 3.0]
             .iter()
             .map(|k| (floor_mm * k * 1e4).ceil() / 1e4)
-            .find(|&t| {
-                t > tolerance_mm && matches!(self.try_plan(tracks, t, floor_mm), Ok(Some(_)))
-            });
+            .find(|&t| t > tolerance_mm && matches!(self.try_plan(sizing, t), Ok(Some(_))));
         PlanError::ToleranceTooSmall {
             tolerance_mm,
             floor_mm,
