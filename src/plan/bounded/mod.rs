@@ -18,6 +18,8 @@
 //! first try is refused: that try is sized by the grid's linearised worst case
 //! ([`Budget::worst_mm`]), which needs no pulse played.
 
+use std::cell::RefCell;
+
 mod budget;
 mod pulses;
 mod rows;
@@ -31,7 +33,7 @@ use crate::table::ChannelTable;
 use super::course::Course;
 use super::{PlanError, Samples, Window, simulate_within};
 use budget::Budget;
-use pulses::{Counts, Run, Track};
+use pulses::{Counts, Pulse, Run, Track, runs};
 use rows::Channel;
 
 /// Sample spacing of the trajectory, s.
@@ -62,6 +64,27 @@ const OFF_WINDOW_TRIES: [usize; 2] = [2, 0];
 const NARROWING: f64 = 0.8;
 /// The widest window, pulses each side (also for joints that do not move the tool point).
 const MAX_DELTA_PULSES: f64 = 8.0;
+
+/// Buffers kept on a thread between tries and plans: one channel's pulses run to a megabyte
+/// on the seed's move, and buffers that large, handed back to the system at the end of every
+/// plan, came back as page faults on the next (a fifth of its planning time in the bench).
+struct Scratch {
+    /// One channel's pulses ([`Track::pulses_into`]).
+    pulses: RefCell<Vec<Pulse>>,
+    /// A row's period bounds ([`rows::Channel`]).
+    bounds: RefCell<Vec<(f64, f64)>>,
+}
+
+thread_local! {
+    static SCRATCH: Scratch = const {
+        Scratch {
+            pulses: RefCell::new(Vec::new()),
+            bounds: RefCell::new(Vec::new()),
+        }
+    };
+}
+/// The most pulses [`SCRATCH`] keeps after a plan (32 bytes each; as many bounds, 16 bytes).
+const SCRATCH_KEPT: usize = 1 << 20;
 
 /// Every joint's window, pulses each side: `budget_mm * scale` over its reach, at most
 /// [`MAX_DELTA_PULSES`] (a joint that cannot move the tool gets that much times the scale).
@@ -164,13 +187,6 @@ impl Move<'_> {
         Budget::new(self.robot, &self.samples.values)
     }
 
-    fn runs(&self, tracks: &[Counts], deltas: &[f64; JOINTS]) -> Vec<Vec<Run>> {
-        let start = self.start_counts();
-        (0..JOINTS)
-            .map(|j| self.track(tracks, j).runs(start[j], deltas[j]))
-            .collect()
-    }
-
     /// The path deviation with every pulse landing exactly on time (the pulse grid's floor).
     /// It does not depend on the tolerance: played at most once per plan ([`Sizing`]), from
     /// every joint's on-time pulses merged in time order (each joint's are already in order).
@@ -193,6 +209,8 @@ impl Move<'_> {
         )
     }
 
+    /// Every channel's table for windows `deltas` pulses wide, one channel's pulses at a
+    /// time in the thread's [`SCRATCH`].
     fn tables(
         &self,
         tracks: &[Counts],
@@ -200,33 +218,58 @@ impl Move<'_> {
         off_window: usize,
     ) -> Vec<ChannelTable> {
         let start = self.start_counts();
-        self.runs(tracks, deltas)
-            .iter()
-            .enumerate()
-            .map(|(j, runs)| {
-                let joint = &self.robot.joints[j];
-                let channel = Channel {
-                    joint,
-                    model: self.motion.frequency_model,
-                    off_window,
-                };
-                let (mut t_s, mut count, mut segments) = (0.0, start[j], Vec::new());
-                for (i, run) in runs.iter().enumerate() {
-                    let left = crate::table::MAX_SEGMENTS
-                        .saturating_sub(segments.len() + runs.len() - i - 1)
-                        .max(1);
-                    let (segs, end) = channel.run(run, t_s, count, left);
-                    count = run.pulses.last().map_or(count, |p| p.count);
-                    t_s = end;
-                    segments.extend(segs);
-                }
-                ChannelTable {
-                    channel: joint.channel,
-                    start: start[j],
-                    segments,
-                }
-            })
-            .collect()
+        SCRATCH.with(|scratch| {
+            let mut pulses = scratch.pulses.borrow_mut();
+            let tables = (0..JOINTS)
+                .map(|j| {
+                    let starts =
+                        self.track(tracks, j)
+                            .pulses_into(start[j], deltas[j], &mut pulses);
+                    self.table(j, &runs(&pulses, &starts), off_window, &scratch.bounds)
+                })
+                .collect();
+            if pulses.capacity() > SCRATCH_KEPT {
+                *pulses = Vec::new();
+            }
+            let mut bounds = scratch.bounds.borrow_mut();
+            if bounds.capacity() > SCRATCH_KEPT {
+                *bounds = Vec::new();
+            }
+            tables
+        })
+    }
+
+    /// Joint `j`'s table playing `runs` from the start counts.
+    fn table(
+        &self,
+        j: usize,
+        runs: &[Run],
+        off_window: usize,
+        bounds: &RefCell<Vec<(f64, f64)>>,
+    ) -> ChannelTable {
+        let start = self.start_counts()[j];
+        let joint = &self.robot.joints[j];
+        let channel = Channel {
+            joint,
+            model: self.motion.frequency_model,
+            off_window,
+            bounds,
+        };
+        let (mut t_s, mut count, mut segments) = (0.0, start, Vec::new());
+        for (i, run) in runs.iter().enumerate() {
+            let left = crate::table::MAX_SEGMENTS
+                .saturating_sub(segments.len() + runs.len() - i - 1)
+                .max(1);
+            let (segs, end) = channel.run(run, t_s, count, left);
+            count = run.pulses.last().map_or(count, |p| p.count);
+            t_s = end;
+            segments.extend(segs);
+        }
+        ChannelTable {
+            channel: joint.channel,
+            start,
+            segments,
+        }
     }
 
     fn sizing<'t>(&self, tracks: &'t [Counts]) -> Sizing<'t> {

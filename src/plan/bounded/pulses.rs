@@ -22,12 +22,24 @@ pub(super) struct Pulse {
 }
 
 /// Pulses in one direction, back to back.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) struct Run {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Run<'a> {
     /// Their direction.
     pub direction: Direction,
     /// The pulses, in order.
-    pub pulses: Vec<Pulse>,
+    pub pulses: &'a [Pulse],
+}
+
+/// A joint's pulses ([`Track::pulses_into`]) cut where the direction changes.
+pub(super) fn runs<'a>(pulses: &'a [Pulse], starts: &[(usize, Direction)]) -> Vec<Run<'a>> {
+    starts
+        .iter()
+        .enumerate()
+        .map(|(k, &(from, direction))| Run {
+            direction,
+            pulses: &pulses[from..starts.get(k + 1).map_or(pulses.len(), |s| s.0)],
+        })
+        .collect()
 }
 
 /// A joint's fractional count at every sample, with every interval's reciprocal change (0
@@ -135,9 +147,17 @@ impl<'a> Track<'a> {
             .map(move |c| (self.at(c.interval, c.half), c.count))
     }
 
-    /// The joint's pulses from count `start`, with windows `delta` pulses wide each side.
-    pub(super) fn runs(&self, start: i64, delta: f64) -> Vec<Run> {
-        let mut runs: Vec<Run> = Vec::new();
+    /// The joint's pulses from count `start`, with windows `delta` pulses wide each side,
+    /// written over `pulses` (a buffer kept between plans: see `super::SCRATCH`); returns where
+    /// each run of one direction starts ([`runs`] cuts them).
+    pub(super) fn pulses_into(
+        &self,
+        start: i64,
+        delta: f64,
+        pulses: &mut Vec<Pulse>,
+    ) -> Vec<(usize, Direction)> {
+        pulses.clear();
+        let mut starts: Vec<(usize, Direction)> = Vec::new();
         for c in self.crossings(start) {
             let (i, h, df) = (c.interval, c.half, c.direction);
             let pulse = Pulse {
@@ -151,15 +171,12 @@ impl<'a> Track<'a> {
             } else {
                 Direction::Down
             };
-            match runs.last_mut() {
-                Some(r) if r.direction == direction => r.pulses.push(pulse),
-                _ => runs.push(Run {
-                    direction,
-                    pulses: vec![pulse],
-                }),
+            if starts.last().is_none_or(|s| s.1 != direction) {
+                starts.push((pulses.len(), direction));
             }
+            pulses.push(pulse);
         }
-        runs
+        starts
     }
 }
 
@@ -219,7 +236,9 @@ mod tests {
     fn steady_motion_gives_evenly_spaced_pulses_with_symmetric_windows() {
         // u = 10 t, sampled every 0.1 s: pulses cross 0.5, 1.5, ... at 0.05, 0.15, ...
         let u: Vec<f64> = (0..=10).map(f64::from).collect();
-        let runs = Counts::new(u).track(0.1).runs(0, 0.25);
+        let mut pulses = Vec::new();
+        let starts = Counts::new(u).track(0.1).pulses_into(0, 0.25, &mut pulses);
+        let runs = runs(&pulses, &starts);
         assert_eq!(runs.len(), 1);
         let p = &runs[0].pulses;
         assert_eq!(p.len(), 10);
@@ -230,9 +249,11 @@ mod tests {
 
     #[test]
     fn reversal_starts_a_new_run_and_bounds_the_window_at_the_turn() {
-        let runs = Counts::new(vec![0.0, 1.0, 2.0, 1.0, 0.0])
+        let mut pulses = Vec::new();
+        let starts = Counts::new(vec![0.0, 1.0, 2.0, 1.0, 0.0])
             .track(1.0)
-            .runs(0, 3.0);
+            .pulses_into(0, 3.0, &mut pulses);
+        let runs = runs(&pulses, &starts);
         assert_eq!(runs.len(), 2);
         assert_eq!(runs[0].direction, Direction::Up);
         assert_eq!(runs[1].pulses.last().unwrap().count, 0);

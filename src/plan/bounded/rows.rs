@@ -4,6 +4,8 @@
 //! direction becomes segments in the finest frequency range that plays it without breaking a
 //! window, split where no range can.
 
+use std::cell::RefCell;
+
 use super::pulses::{Pulse, Run};
 use crate::plan::segments::segment;
 use crate::robot::Joint;
@@ -18,6 +20,8 @@ pub(super) struct Channel<'a> {
     /// Pulses a run may leave off their windows (played as near as its range allows) to stay
     /// one segment where no range plays it all; the execution model judges the result.
     pub off_window: usize,
+    /// A buffer for a row's period bounds ([`Channel::longest`]), kept between rows.
+    pub bounds: &'a RefCell<Vec<(f64, f64)>>,
 }
 
 /// Pulses a row's windows are first scanned over ([`Channel::longest`]).
@@ -188,8 +192,7 @@ impl Channel<'_> {
             broken: 0,
         };
         let mut k = 0;
-        // Every row's period bounds, in one buffer for the whole stretch.
-        let mut bounds = Vec::new();
+        let mut bounds = self.bounds.borrow_mut();
         while k < pulses.len() {
             let (m, set, f) = if let Some(row) = self.longest(range, &pulses[k..], t_s, &mut bounds)
             {
@@ -276,13 +279,13 @@ impl Channel<'_> {
     /// time the last pulse lands. `segments_left` bounds the splitting.
     pub(super) fn run(
         &self,
-        run: &Run,
+        run: &Run<'_>,
         mut t_s: f64,
         mut count: i64,
         segments_left: usize,
     ) -> (Vec<Segment>, f64) {
         let mut out = Vec::new();
-        let mut pulses = &run.pulses[..];
+        let mut pulses = run.pulses;
         while !pulses.is_empty() {
             let last_chance = out.len() + 1 >= segments_left.min(MAX_SEGMENTS);
             let (range, a) = self.next_segment(pulses, t_s, last_chance);
@@ -319,8 +322,10 @@ mod tests {
                 }
             })
             .collect();
-        let runs = Counts::new(u).track(1e-3).runs(0, 2.0);
-        runs.into_iter().next().expect("one run").pulses
+        let mut pulses = Vec::new();
+        let starts = Counts::new(u).track(1e-3).pulses_into(0, 2.0, &mut pulses);
+        assert_eq!(starts.len(), 1, "one run");
+        pulses
     }
 
     #[test]
@@ -329,10 +334,12 @@ mod tests {
         let pulses = cruise(9_000.0, 3.0);
         let mut bounds = Vec::new();
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let spare = RefCell::new(Vec::new());
             let channel = Channel {
                 joint: &joint,
                 model,
                 off_window: 0,
+                bounds: &spare,
             };
             for range in FrequencyRange::FINEST_FIRST {
                 // Rows from every 97th pulse: scanned first over 1, 7, 64 and 4096 pulses,
