@@ -15,8 +15,8 @@
 //!    is planned again, and a tolerance the grid cannot reach is refused with one that works.
 //!
 //! The pulse grid's floor (the path deviation with every pulse on time) is played only when the
-//! first try is refused: that try is sized by the grid's linearised worst case
-//! ([`Budget::worst_mm`]), which needs no pulse played.
+//! narrowing search needs it, after the first two tries (sized by the pulse vectors alone) are
+//! refused, or to refuse a tolerance below it.
 
 use std::cell::RefCell;
 
@@ -125,24 +125,24 @@ impl Sizing<'_> {
         })
     }
 
-    /// The tries after the first: the widest windows whose worst case keeps the tool within
-    /// the tolerance ([`Budget::widest`]), then, should the execution model refuse even those,
-    /// the narrowing search with windows sized by a pulse's whole move and the budget left
-    /// above the floor.
-    fn later_windows(
+    /// The second try: the widest windows whose worst case keeps the tool within the
+    /// tolerance ([`Budget::widest`]; `None` when not even the grid's does).
+    fn worst_case(&self, tolerance_mm: f64) -> Option<[f64; JOINTS]> {
+        self.budget.widest(tolerance_mm, MAX_DELTA_PULSES)
+    }
+
+    /// The narrowing search, should the execution model refuse the first two: windows sized by
+    /// a pulse's whole move and the budget left above the floor.
+    fn narrowing(
         &self,
         tolerance_mm: f64,
         floor_mm: f64,
-    ) -> impl Iterator<Item = [f64; JOINTS]> + '_ {
+    ) -> impl Iterator<Item = [f64; JOINTS]> + use<> {
         let whole = self.budget.whole_mm();
-        // Searched only if the fitted try is refused.
-        let worst_case =
-            std::iter::once_with(move || self.budget.widest(tolerance_mm, MAX_DELTA_PULSES));
-        let narrowing = (0..TRIES).map(move |k| {
+        (0..TRIES).map(move |k| {
             let scale = FIRST_SCALE * NARROWING.powi(k as i32);
             deltas(&whole, scale, tolerance_mm - floor_mm)
-        });
-        worst_case.flatten().chain(narrowing)
+        })
     }
 }
 
@@ -297,21 +297,22 @@ impl Move<'_> {
     }
 
     /// The tries in order, every one judged by the execution model ([`Self::verify`]): the
-    /// fitted first ([`Sizing::fitted`]), then, past the pulse grid's floor (a tolerance at or
-    /// below it is refused without them), the later ones ([`Sizing::later_windows`]). The
-    /// first accepted (`None` if none).
+    /// fitted first ([`Sizing::fitted`]), the worst case's ([`Sizing::worst_case`]), then,
+    /// past the pulse grid's floor (a tolerance at or below it is refused without them), the
+    /// narrowing search ([`Sizing::narrowing`]). The first accepted (`None` if none).
     fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
         for off_window in OFF_WINDOW_TRIES {
-            if let Some(deltas) = sizing.fitted(tolerance_mm)
-                && let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)?
-            {
-                return Ok(Some(v));
+            let first_two = [sizing.fitted(tolerance_mm), sizing.worst_case(tolerance_mm)];
+            for deltas in first_two.iter().flatten() {
+                if let Some(v) = self.verify(sizing.tracks, deltas, off_window, tolerance_mm)? {
+                    return Ok(Some(v));
+                }
             }
             let floor_mm = self.floor_mm(sizing);
             if floor_mm >= tolerance_mm {
                 return Ok(None);
             }
-            for deltas in sizing.later_windows(tolerance_mm, floor_mm) {
+            for deltas in sizing.narrowing(tolerance_mm, floor_mm) {
                 if let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)? {
                     return Ok(Some(v));
                 }
@@ -327,23 +328,28 @@ impl Move<'_> {
         let tracks = self.tracks();
         let sizing = self.sizing(&tracks);
         let off_window = OFF_WINDOW_TRIES[0];
-        if let Some(deltas) = sizing.fitted(tolerance_mm)
-            && self
-                .verify(&tracks, &deltas, off_window, tolerance_mm)?
-                .is_some()
-        {
-            return Ok(Some(1));
+        let first_two = [sizing.fitted(tolerance_mm), sizing.worst_case(tolerance_mm)];
+        for (k, deltas) in first_two.iter().enumerate() {
+            if let Some(deltas) = deltas
+                && self
+                    .verify(&tracks, deltas, off_window, tolerance_mm)?
+                    .is_some()
+            {
+                return Ok(Some(k + 1));
+            }
         }
+        let mut tried = first_two.len();
         let floor_mm = self.floor_mm(&sizing);
         if floor_mm >= tolerance_mm {
             return Ok(None);
         }
-        for (k, deltas) in sizing.later_windows(tolerance_mm, floor_mm).enumerate() {
+        for deltas in sizing.narrowing(tolerance_mm, floor_mm) {
+            tried += 1;
             if self
                 .verify(&tracks, &deltas, off_window, tolerance_mm)?
                 .is_some()
             {
-                return Ok(Some(k + 2));
+                return Ok(Some(tried));
             }
         }
         Ok(None)
