@@ -125,10 +125,13 @@ impl Sizing<'_> {
         })
     }
 
-    /// The second try: the widest windows whose worst case keeps the tool within the
-    /// tolerance ([`Budget::widest`]; `None` when not even the grid's does).
-    fn worst_case(&self, tolerance_mm: f64) -> Option<[f64; JOINTS]> {
-        self.budget.widest(tolerance_mm, MAX_DELTA_PULSES)
+    /// The first two tries, each made only when asked for: the fitted ([`Self::fitted`]),
+    /// then the widest windows whose worst case keeps the tool within the tolerance
+    /// ([`Budget::widest`]; `None` when not even the grid's does).
+    fn first_two(&self, tolerance_mm: f64) -> impl Iterator<Item = Option<[f64; JOINTS]>> + '_ {
+        std::iter::once_with(move || self.fitted(tolerance_mm)).chain(std::iter::once_with(
+            move || self.budget.widest(tolerance_mm, MAX_DELTA_PULSES),
+        ))
     }
 
     /// The narrowing search, should the execution model refuse the first two: windows sized by
@@ -297,14 +300,13 @@ impl Move<'_> {
     }
 
     /// The tries in order, every one judged by the execution model ([`Self::verify`]): the
-    /// fitted first ([`Sizing::fitted`]), the worst case's ([`Sizing::worst_case`]), then,
-    /// past the pulse grid's floor (a tolerance at or below it is refused without them), the
-    /// narrowing search ([`Sizing::narrowing`]). The first accepted (`None` if none).
+    /// first two ([`Sizing::first_two`]), then, past the pulse grid's floor (a tolerance at or
+    /// below it is refused without them), the narrowing search ([`Sizing::narrowing`]). The
+    /// first accepted (`None` if none).
     fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
         for off_window in OFF_WINDOW_TRIES {
-            let first_two = [sizing.fitted(tolerance_mm), sizing.worst_case(tolerance_mm)];
-            for deltas in first_two.iter().flatten() {
-                if let Some(v) = self.verify(sizing.tracks, deltas, off_window, tolerance_mm)? {
+            for deltas in sizing.first_two(tolerance_mm).flatten() {
+                if let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)? {
                     return Ok(Some(v));
                 }
             }
@@ -328,17 +330,16 @@ impl Move<'_> {
         let tracks = self.tracks();
         let sizing = self.sizing(&tracks);
         let off_window = OFF_WINDOW_TRIES[0];
-        let first_two = [sizing.fitted(tolerance_mm), sizing.worst_case(tolerance_mm)];
-        for (k, deltas) in first_two.iter().enumerate() {
+        for (k, deltas) in sizing.first_two(tolerance_mm).enumerate() {
             if let Some(deltas) = deltas
                 && self
-                    .verify(&tracks, deltas, off_window, tolerance_mm)?
+                    .verify(&tracks, &deltas, off_window, tolerance_mm)?
                     .is_some()
             {
                 return Ok(Some(k + 1));
             }
         }
-        let mut tried = first_two.len();
+        let mut tried = 2;
         let floor_mm = self.floor_mm(&sizing);
         if floor_mm >= tolerance_mm {
             return Ok(None);
