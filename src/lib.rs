@@ -60,3 +60,5 @@ pub mod plot;
 pub mod robot;
 pub mod sim;
 pub mod table;
+#[cfg(test)]
+mod testing;

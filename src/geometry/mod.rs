@@ -250,13 +250,7 @@ mod tests {
             to: Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0),
         };
         let near = LineDistance::new(&line);
-        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1d);
         let mut said = 0;
         for _ in 0..200_000 {
             let along = line.at(next() * line.length_mm()).position_mm;

@@ -328,13 +328,7 @@ mod tests {
     fn the_tail_searched_once_per_end_is_the_tail_searched_in_full() {
         // Random decelerating tails in every range: values that select the same divisor are
         // searched once, and the choice is the same as searching every value.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::testing::uniform(0x9e37_79b9_7f4a_7c15u64);
         let mut repeats = 0;
         for case in 0..300 {
             let top_hz = [150.0, 2_000.0, 40_000.0][case % 3] * (0.5 + next());

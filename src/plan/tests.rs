@@ -417,13 +417,7 @@ fn bounded_error_never_narrows_on_random_seed_robot_lines() {
     // A fixed pseudo-random set of lines (radius 600..1400 mm, theta1 0..120 deg, z 0..300 mm),
     // 0.05 and 0.10 mm, both frequency models: the worst-case windows (the second try) are
     // accepted wherever the fitted first is not, so the narrowing search never runs.
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1du64);
     let mut point = || {
         let (r, a, z) = (
             600.0 + 800.0 * next(),
