@@ -105,7 +105,7 @@ pub(super) struct Verified {
 }
 
 /// What the tries are sized by: the path's pulse vectors, and the pulse grid's floor, played
-/// once and only when a try past the first needs it.
+/// once and only when the narrowing search or a refusal needs it.
 struct Sizing<'a> {
     budget: Budget,
     tracks: &'a [Counts],

@@ -144,7 +144,7 @@ impl Channel<'_> {
                 .map(|(set, f)| (m, set, f))
         };
         let (mut good, mut best, mut reach) = (0usize, None, first_reach.max(1));
-        let bad = loop {
+        let mut bad = loop {
             let n = scan.extend(bounds, reach);
             if n <= good {
                 // The windows closed right after the longest that fits.
@@ -159,7 +159,6 @@ impl Channel<'_> {
                 None => break n,
             }
         };
-        let mut bad = bad;
         while bad - good > 1 {
             let mid = usize::midpoint(good, bad);
             match fit(bounds, mid) {
