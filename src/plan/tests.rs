@@ -155,6 +155,47 @@ fn bounded_error_seed_move_stays_within_its_tolerance_under_both_models() {
 }
 
 #[test]
+fn a_thread_that_planned_before_plans_as_a_fresh_one() {
+    // The bounded-error planner keeps its pulse buffers on the thread between plans: a plan
+    // made after longer and other ones is the plan a fresh thread makes.
+    let robot = seed_robot();
+    let long = |length_mm: f64| {
+        let from = robot
+            .pose_with_wrist_at_zero(-length_mm / 2.0, 800.0, 150.0)
+            .unwrap();
+        let mut to = Pose::from_mm_deg(length_mm / 2.0, 800.0, 150.0, 0.0);
+        to.a_rad = from.a_rad;
+        let mut motion = robot.motion;
+        motion.method = crate::robot::Method::BoundedError { tolerance_mm: 0.05 };
+        MoveRequest {
+            from: Origin::Pose(from),
+            to,
+            motion,
+            seed_exact: false,
+        }
+    };
+    let fresh = |req: MoveRequest| {
+        std::thread::spawn(move || plan_move(&seed_robot(), &req).unwrap().tables)
+            .join()
+            .unwrap()
+    };
+    let seed = {
+        let mut req = seed_request(FrequencyModel::FpxDivider, false);
+        req.motion.method = crate::robot::Method::BoundedError { tolerance_mm: 0.05 };
+        req
+    };
+    let (fresh_seed, fresh_short) = (fresh(seed), fresh(long(100.0)));
+    for req in [long(2_000.0), seed, long(100.0), long(1_000.0), seed] {
+        let tables = plan_move(&robot, &req).unwrap().tables;
+        if req.to == seed.to {
+            assert_eq!(tables, fresh_seed);
+        } else if req.to == long(100.0).to {
+            assert_eq!(tables, fresh_short);
+        }
+    }
+}
+
+#[test]
 fn tolerance_below_the_pulse_grid_is_refused_naming_one_that_works() {
     let err = bounded(FrequencyModel::FpxDivider, 0.01).unwrap_err();
     let PlanError::ToleranceTooSmall {
