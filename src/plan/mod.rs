@@ -804,6 +804,7 @@ struct OnPath<'a> {
 }
 
 impl OnPath<'_> {
+    #[inline]
     fn path_mm(&self, t_s: f64) -> f64 {
         self.pace
             .path_mm(self.profile.distance_mm(self.from_s + t_s))
@@ -815,6 +816,8 @@ impl sim::Planned for OnPath<'_> {
         self.path.at(self.path_mm(t_s)).position_mm
     }
 
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
     fn near(&self, t_s: f64) -> (nalgebra::Vector3<f64>, f64) {
         let s_mm = self.path_mm(t_s);
         let mut hint = self.hint.get();

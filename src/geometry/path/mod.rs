@@ -488,6 +488,7 @@ impl Path {
     /// root or a division, on a line piece strictly inside the path (`None` elsewhere: an arc,
     /// an end). `hint` is the piece the last call found, looked at first.
     #[must_use]
+    #[inline]
     pub fn near(&self, s_mm: f64, hint: &mut usize) -> Option<(Vector3<f64>, f64)> {
         let holds = |i: usize| {
             self.pieces.get(i).is_some_and(|p| p.start_mm <= s_mm)
