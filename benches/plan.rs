@@ -25,7 +25,7 @@ use std::hint::black_box;
 
 #[path = "common/zigzag.rs"]
 mod zigzag_path;
-use zigzag_path::zigzag_path;
+use zigzag_path::{path_motion, zigzag_path};
 #[path = "common/lines.rs"]
 mod lines;
 use lines::{bounded, gantry, line, request};
@@ -131,10 +131,6 @@ fn half_circle(robot: &Robot, method: Method) -> PathRequest {
         position_mm: centre - Vector3::new(100.0, 0.0, 0.0),
         a_rad: 0.0,
     };
-    let mut motion = robot.motion;
-    motion.method = method;
-    motion.period_s = 0.05;
-    motion.frequency_model = FrequencyModel::FpxDivider;
     PathRequest {
         from: Origin::Pose(from),
         elements: vec![(
@@ -148,7 +144,7 @@ fn half_circle(robot: &Robot, method: Method) -> PathRequest {
             },
             Corner::Stop,
         )],
-        motion,
+        motion: path_motion(robot, method),
         path_accel_mm_s2: 1_000.0,
     }
 }

@@ -3,7 +3,7 @@
 
 use linterpd::geometry::{Corner, Element, Pose};
 use linterpd::plan::{Origin, PathRequest};
-use linterpd::robot::{Method, Robot};
+use linterpd::robot::{Method, Motion, Robot};
 use linterpd::table::FrequencyModel;
 
 /// Ten lines of 200 mm (160 mm along x, 120 mm up or down) from (-800, 900, 100), every
@@ -23,14 +23,19 @@ pub(crate) fn zigzag_path(robot: &Robot, method: Method) -> PathRequest {
             (Element::Line { to }, corner)
         })
         .collect();
+    PathRequest {
+        from: Origin::Pose(from),
+        elements,
+        motion: path_motion(robot, method),
+        path_accel_mm_s2: 5_000.0,
+    }
+}
+
+/// The robot's motion as the bench's paths run it: `method`, a 50 ms period, `fpx-divider`.
+pub(crate) fn path_motion(robot: &Robot, method: Method) -> Motion {
     let mut motion = robot.motion;
     motion.method = method;
     motion.period_s = 0.05;
     motion.frequency_model = FrequencyModel::FpxDivider;
-    PathRequest {
-        from: Origin::Pose(from),
-        elements,
-        motion,
-        path_accel_mm_s2: 5_000.0,
-    }
+    motion
 }
