@@ -18,6 +18,7 @@ mod bounded;
 mod constant_period;
 mod course;
 mod limits;
+mod line_parts;
 mod path;
 mod samples;
 mod seed_exact;
@@ -33,6 +34,7 @@ use crate::table::{ChannelTable, TableProblem, ValidTable};
 
 use course::Course;
 pub use course::JointPath;
+pub use line_parts::{MovePlan, line_as_path, plan_line};
 pub use path::{
     MIN_PART_S, PathPlan, PathRequest, SECTION_START_SLACK_MM, SectionPlan, plan_path, plan_section,
 };
@@ -102,6 +104,22 @@ pub enum PlanError {
         joint: String,
         /// When it first moves, s into the section.
         at_s: f64,
+    },
+    /// A bounded-error line on which a joint reverses while another moves: one start cannot
+    /// hold the tolerance through it, so the line runs as a path cut there ([`plan_line`]).
+    #[error(
+        "joint {joint} reverses {at_mm:.1} mm along the {length_mm:.1} mm line while other \
+         joints move: in one start its next F174 segment would begin up to a PLC scan late, \
+         off the line by more than the tolerance; the line runs as a path cut there into \
+         starts chained at speed (`linterpd plan --path`, `linterpd run`)"
+    )]
+    ReversesOnLine {
+        /// The joint.
+        joint: String,
+        /// Where it reverses, mm along the line.
+        at_mm: f64,
+        /// The line's length, mm.
+        length_mm: f64,
     },
     /// The robot is not where a path section starts.
     #[error(
@@ -497,6 +515,21 @@ fn plan_course(
     seed_exact: bool,
 ) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked, seed_exact)?;
+    if let Course::Line(line) = course
+        && sampled.bounded.is_some()
+        && let Some((cut, joint)) = path::reversal(
+            &sampled,
+            0,
+            sampled.last_point(),
+            path::min_points(&sampled),
+        )
+    {
+        return Err(PlanError::ReversesOnLine {
+            joint: robot.joints[joint].name.clone(),
+            at_mm: sampled.profile.distance_at_point_mm(cut as u32),
+            length_mm: line.length_mm(),
+        });
+    }
     sampled.plan(0, sampled.last_point(), start.counts)
 }
 

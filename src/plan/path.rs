@@ -270,7 +270,7 @@ fn parts(
 }
 
 /// Sample points in the shortest part ([`MIN_PART_S`]).
-fn min_points(sampled: &Sampled) -> usize {
+pub(super) fn min_points(sampled: &Sampled) -> usize {
     (MIN_PART_S / sampled.profile.period_s).ceil() as usize
 }
 
@@ -390,7 +390,22 @@ fn too_big(e: &PlanError) -> bool {
 /// F174 segment, which the PLC starts in the scan after the one before ends: up to a scan late,
 /// while the other channels run on, which leaves the path. At a cut every channel stops and
 /// restarts together in the scan after the part ends: a pause on the path, no deviation.
-fn reversal_cut(sampled: &Sampled, from: usize, to: usize, min_points: usize) -> Option<usize> {
+pub(super) fn reversal_cut(
+    sampled: &Sampled,
+    from: usize,
+    to: usize,
+    min_points: usize,
+) -> Option<usize> {
+    reversal(sampled, from, to, min_points).map(|(cut, _)| cut)
+}
+
+/// [`reversal_cut`] with the joint that reverses there.
+pub(super) fn reversal(
+    sampled: &Sampled,
+    from: usize,
+    to: usize,
+    min_points: usize,
+) -> Option<(usize, usize)> {
     let counts = &sampled.samples.counts;
     let others_move = |j: usize, i: usize| {
         (0..crate::kinematics::JOINTS)
@@ -407,10 +422,10 @@ fn reversal_cut(sampled: &Sampled, from: usize, to: usize, min_points: usize) ->
                 let reverses = direction != 0 && step != direction;
                 direction = step;
                 // Point i - 1 is the last at the extreme count.
-                (reverses && others_move(j, i - 1)).then_some(i - 1)
+                (reverses && others_move(j, i - 1)).then_some((i - 1, j))
             })
         })
-        .filter(|&cut| cut >= from + min_points && cut + min_points <= to)
+        .filter(|&(cut, _)| cut >= from + min_points && cut + min_points <= to)
         .min()
 }
 
