@@ -54,6 +54,28 @@ fn operator_moves_checks_status_and_stops_through_the_cli() {
         "{last}"
     );
 
+    // A bounded-error line past the point nearest the robot's axis: the radial joint d3
+    // reverses halfway while theta1 turns, so the line runs as two starts cut there, each
+    // followed to its end.
+    let (code, out, err) = linterpd(socket, &["move", "--to=-150,560,40"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    let (code, out, err) = linterpd(
+        socket,
+        &["move", "--to", "150,560,40", "--tolerance", "0.05"],
+    );
+    assert_eq!(code, Some(0), "{out}{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert!(
+        lines[0].starts_with("start 1/2: move ") && lines[0].contains(" done: upload "),
+        "{out}"
+    );
+    assert!(
+        lines[1].starts_with("start 2/2: move ") && lines[1].contains(" done: upload "),
+        "{out}"
+    );
+    assert!(lines[1].contains("final error ["), "{out}");
+
     let (code, out, err) = linterpd(socket, &["status", "--json"]);
     assert_eq!(code, Some(0), "{err}");
     let robots: Value = serde_json::from_str(out.trim()).unwrap();

@@ -5,7 +5,7 @@ mod common;
 
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;
-use common::served::{LIMIT, Served};
+use common::served::{LIMIT, ROBOT, Served};
 use linterpd::daemon::{PathOrder, Stage};
 use linterpd::geometry::Pose;
 use linterpd::kinematics::{JOINTS, Kinematics};
@@ -355,4 +355,78 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
         assert_eq!(report.stage, Stage::Done, "{report:?}");
     }
     daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_bounded_line_past_a_reversal_runs_as_starts_cut_there_and_holds_its_tolerance() {
+    // From P1 to P1 turned 30 degrees about the robot's axis: the radial joint d3 shortens to
+    // halfway, then lengthens, while theta1 turns. One start would begin d3's second segment
+    // up to a scan late (the mock's 2 ms), 0.16 mm off the line; cut there, every channel
+    // restarts together.
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.record_pulses(true));
+    let dir = TempDir::new("paths-reversal");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let from = s.handle.state().counts.unwrap();
+    let robot = seed_robot();
+    let a_rad = robot.pose_of(&from).a_rad;
+    let (sin, cos) = (-30_f64).to_radians().sin_cos();
+    let to = [P1[0] * cos - P1[1] * sin, P1[0] * sin + P1[1] * cos, P1[2]];
+    let answer = s
+        .api
+        .post(
+            &format!("{ROBOT}/moves"),
+            &json!({"to": to, "tolerance_mm": 0.05}).to_string(),
+        )
+        .await;
+    assert_eq!(
+        answer.status,
+        hyper::StatusCode::ACCEPTED,
+        "{}",
+        answer.text()
+    );
+    let body = answer.json();
+    let ids: Vec<u64> = body["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert!(ids.len() >= 2, "{body}");
+    assert_eq!(body["id"].as_u64(), ids.last().copied(), "{body}");
+    let mut reports = Vec::new();
+    for id in &ids {
+        let report = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        reports.push(report);
+    }
+    for pair in reports.windows(2) {
+        assert_eq!(pair[1].start_counts, pair[0].target_counts);
+    }
+    let target = counts_at(to, a_rad);
+    assert_eq!(reports[reports.len() - 1].target_counts, Some(target));
+    assert_eq!(s.handle.state().counts, Some(target));
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), ids.len());
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    // The mock's pulses, played from where the robot stood, stay within the tolerance of the
+    // line (joint j is on channel j).
+    let mut pulses = shared.with(linterpd::mock::MockPlc::take_pulses);
+    // Recorded channel by channel between scans: in time order.
+    pulses.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let events = pulses.iter().map(|p| linterpd::sim::PulseEvent {
+        t_s: p.time_s,
+        table: usize::from(p.channel),
+        count: p.count,
+    });
+    let line = linterpd::geometry::Line {
+        from: robot.pose_of(&from),
+        to: Pose {
+            position_mm: to.into(),
+            a_rad,
+        },
+    };
+    let deviation = linterpd::sim::path_deviation_mm(&robot, &from, events, &line);
+    assert!(deviation <= 0.05, "{deviation} mm off the line");
+    s.daemon.shut_down().await;
 }

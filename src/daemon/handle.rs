@@ -27,9 +27,12 @@ use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
-use crate::plan::{Origin, PathRequest, PlanError, SECTION_START_SLACK_MM, plan_path};
+use crate::plan::{
+    MoveRequest, Origin, PathPlan, PathRequest, PlanError, SECTION_START_SLACK_MM, line_as_path,
+    plan_path,
+};
 use crate::plc::contract::ContractSettings;
-use crate::robot::Robot;
+use crate::robot::{Motion, Robot};
 
 /// Why a move was not accepted.
 #[derive(Debug, Error)]
@@ -138,7 +141,19 @@ impl RobotHandle {
     /// move is anchored here, where that move is planned to end; with none it is anchored to the
     /// PLC's counts when it begins. A `position` is looked up here: a later change of it does
     /// not move this order.
+    ///
+    /// Returns the id of the move's last start: the move has ended when it has (see
+    /// [`RobotHandle::submit_starts`]).
     pub fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
+        let ids = self.submit_starts(order)?;
+        Ok(ids[ids.len() - 1])
+    }
+
+    /// [`RobotHandle::submit`], returning the id of every start the move runs as, in order. A
+    /// bounded-error line on which a joint reverses while another moves is queued as the starts
+    /// of a path of that one line, cut at the reversal and chained at speed
+    /// ([`crate::plan::plan_line`]); any other order is one start.
+    pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
         let taught = self.positions.of(&self.robot.name);
         let checked = order.check_with(self.robot.motion, &taught)?;
         self.can_move_now()?;
@@ -157,7 +172,13 @@ impl RobotHandle {
         };
         let mut end = None;
         if let Some(counts) = from {
-            end = Some(plan_order(&self.robot, &checked, counts)?.end_counts());
+            match plan_order(&self.robot, &checked, counts) {
+                Ok(plan) => end = Some(plan.end_counts()),
+                Err(PlanError::ReversesOnLine { .. }) => {
+                    return self.submit_line_in_parts(&order, &checked, counts);
+                }
+                Err(e) => return Err(e.into()),
+            }
         }
         let id = self.shared.next_id();
         self.shared
@@ -167,7 +188,31 @@ impl RobotHandle {
             .send(Request::Move(id, checked))
             .map_err(|_| SubmitError::ShuttingDown)?;
         self.shared.set_planned_end(end);
-        Ok(id)
+        Ok(vec![id])
+    }
+
+    /// A line order from `counts` that one start cannot run ([`PlanError::ReversesOnLine`]),
+    /// planned as a path of that one line and queued as its starts: their ids, in order. Each
+    /// start's report is the order with its target at the pose where that start ends.
+    fn submit_line_in_parts(
+        &self,
+        order: &MoveOrder,
+        checked: &CheckedOrder,
+        counts: [i64; JOINTS],
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        let to = checked
+            .pose_target(&self.robot.pose_of(&counts))
+            .expect("only a line is refused for a reversal");
+        let req = line_as_path(&MoveRequest {
+            from: Origin::Counts(counts),
+            to,
+            motion: checked.motion,
+            seed_exact: false,
+        });
+        let planned = plan_path(&self.robot, &req)?;
+        self.queue_sections(planned, req.path_accel_mm_s2, checked.motion, |end| {
+            order.ending_at(end)
+        })
     }
 
     /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
@@ -243,6 +288,20 @@ impl RobotHandle {
                 path_accel_mm_s2,
             },
         )?;
+        self.queue_sections(planned, path_accel_mm_s2, motion, |end| {
+            order.section_report(end)
+        })
+    }
+
+    /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the
+    /// order a start's report shows, from the pose where that start ends.
+    fn queue_sections(
+        &self,
+        planned: PathPlan,
+        path_accel_mm_s2: f64,
+        motion: Motion,
+        report: impl Fn(&Pose) -> MoveOrder,
+    ) -> Result<Vec<MoveId>, SubmitError> {
         let of = planned.sections.len();
         let mut ids = Vec::new();
         for (n, section) in planned.sections.into_iter().enumerate() {
@@ -271,8 +330,7 @@ impl RobotHandle {
                 );
                 let id = self.shared.next_id();
                 self.shared.moves(|m| {
-                    let mut report =
-                        MoveReport::new(id, &self.robot.name, order.section_report(&end));
+                    let mut report = MoveReport::new(id, &self.robot.name, report(&end));
                     report.section = Some(shown);
                     m.insert(report);
                 });

@@ -335,7 +335,7 @@ impl CheckedOrder {
     }
 
     /// The pose a line order goes to from `from` (`None` for a joint-space move).
-    fn pose_target(&self, from: &Pose) -> Option<Pose> {
+    pub(crate) fn pose_target(&self, from: &Pose) -> Option<Pose> {
         match self.target {
             Target::Pose { to, a_given: true } => Some(to),
             Target::Pose { to, a_given: false } => Some(Pose {
@@ -355,6 +355,19 @@ impl CheckedOrder {
 }
 
 impl MoveOrder {
+    /// The order as one start of it shows it: a line to `end`, where that start ends, with
+    /// this order's motion fields (a line cut into starts at a joint's reversal).
+    #[must_use]
+    pub fn ending_at(&self, end: &Pose) -> Self {
+        Self {
+            to: Some(end.to_mm_deg().to_vec()),
+            by: None,
+            joints: None,
+            position: None,
+            ..self.clone()
+        }
+    }
+
     /// Checks every field against `defaults`, the robot's motion defaults, with no taught
     /// positions.
     pub fn check(&self, defaults: Motion) -> Result<CheckedOrder, OrderError> {

@@ -272,12 +272,21 @@ async fn run_batch(
 ) -> Result<Vec<DemoMove>, DemoError> {
     let mut ids = Vec::new();
     for step in batch {
-        let id = handle
-            .submit(step.order.clone())
-            .map_err(|source| DemoError::Refused {
+        let started =
+            handle
+                .submit_starts(step.order.clone())
+                .map_err(|source| DemoError::Refused {
+                    name: step.name,
+                    source,
+                })?;
+        // Each step is measured as one start: none of the demo's lines passes a reversal.
+        let [id] = started[..] else {
+            return Err(DemoError::NotDone {
                 name: step.name,
-                source,
-            })?;
+                stage: Stage::Queued,
+                why: format!("planned as {} starts, measured as one", started.len()),
+            });
+        };
         ids.push(id);
     }
     let mut reports = Vec::new();

@@ -18,7 +18,14 @@ pub enum MovePlan {
     One(Box<Plan>),
     /// A bounded-error line cut where a joint reverses while another moves
     /// ([`PlanError::ReversesOnLine`]): one section, its starts chained at speed.
-    Parts(PathPlan),
+    Parts {
+        /// The line as a path of one element, and its starts.
+        path: PathPlan,
+        /// The joint whose reversal the line is cut at (the first, if several).
+        joint: String,
+        /// Where it reverses, mm along the line.
+        at_mm: f64,
+    },
 }
 
 impl MovePlan {
@@ -26,7 +33,7 @@ impl MovePlan {
     pub fn starts(&self) -> impl Iterator<Item = &Plan> {
         let (one, parts) = match self {
             Self::One(plan) => (Some(plan.as_ref()), None),
-            Self::Parts(path) => (None, Some(path.starts())),
+            Self::Parts { path, .. } => (None, Some(path.starts())),
         };
         one.into_iter().chain(parts.into_iter().flatten())
     }
@@ -51,8 +58,8 @@ pub fn line_as_path(req: &MoveRequest) -> PathRequest {
 /// As [`plan_move`] and [`plan_path`].
 pub fn plan_line(robot: &crate::robot::Robot, req: &MoveRequest) -> Result<MovePlan, PlanError> {
     match plan_move(robot, req) {
-        Err(PlanError::ReversesOnLine { .. }) => {
-            plan_path(robot, &line_as_path(req)).map(MovePlan::Parts)
+        Err(PlanError::ReversesOnLine { joint, at_mm, .. }) => {
+            plan_path(robot, &line_as_path(req)).map(|path| MovePlan::Parts { path, joint, at_mm })
         }
         planned => planned.map(|plan| MovePlan::One(Box::new(plan))),
     }
@@ -115,9 +122,10 @@ mod tests {
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
             let mut req = past_the_axis(&robot, 500.0, BOUNDED);
             req.motion.frequency_model = model;
-            let MovePlan::Parts(path) = plan_line(&robot, &req).unwrap() else {
+            let MovePlan::Parts { path, joint, .. } = plan_line(&robot, &req).unwrap() else {
                 panic!("{model:?}: planned as one start");
             };
+            assert_eq!(joint, "d3");
             let starts: Vec<&Plan> = path.starts().collect();
             assert!(starts.len() >= 2, "{model:?}");
             assert!(path.valid(), "{model:?}");

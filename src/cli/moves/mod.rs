@@ -151,25 +151,50 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         let id = accepted["id"]
             .as_u64()
             .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
+        // A bounded-error line cut where a joint reverses runs as several starts (an older
+        // daemon gives only `id`).
+        let ids: Vec<u64> = accepted["ids"].as_array().map_or_else(
+            || vec![id],
+            |a| a.iter().filter_map(Value::as_u64).collect(),
+        );
         if args.no_wait {
-            return super::print(
-                out,
-                args.daemon.json,
-                &accepted,
-                &format!("move {id} accepted"),
-            );
+            let accepted_line = if ids.len() > 1 {
+                let list: Vec<String> = ids.iter().map(u64::to_string).collect();
+                format!(
+                    "move {id} accepted: a line cut into {} starts, moves {}",
+                    ids.len(),
+                    list.join(", ")
+                )
+            } else {
+                format!("move {id} accepted")
+            };
+            return super::print(out, args.daemon.json, &accepted, &accepted_line);
         }
-        let follow = follow::Follow {
-            client: &client,
-            robot: &robot,
-            id,
-            timeout,
-            quiet: args.daemon.json,
-        };
-        let last = follow.run().await?;
-        // The verdict counts even when the summary cannot be written (a closed pipe).
-        let printed = super::print(out, args.daemon.json, &last, &summary(&last));
-        verdict(&last).and(printed)
+        let mut outcome = Ok(());
+        for (n, &id) in ids.iter().enumerate() {
+            let follow = follow::Follow {
+                client: &client,
+                robot: &robot,
+                id,
+                timeout,
+                quiet: args.daemon.json,
+            };
+            let last = follow.run().await?;
+            let line = if ids.len() > 1 {
+                format!("start {}/{}: {}", n + 1, ids.len(), summary(&last))
+            } else {
+                summary(&last)
+            };
+            // The JSON is the last start's report; a start before it is summed up in text only.
+            let printed = if args.daemon.json && n + 1 < ids.len() {
+                Ok(())
+            } else {
+                super::print(out, args.daemon.json, &last, &line)
+            };
+            // The verdict counts even when the summary cannot be written (a closed pipe).
+            outcome = outcome.and(verdict(&last)).and(printed);
+        }
+        outcome
     })
 }
 

@@ -18,7 +18,7 @@ use super::args::{MethodArg, PoseArg, parse_length_mm, parse_pose, parse_speed_m
 use super::{Failure, bad_input};
 use crate::config::{Config, parse_duration_s};
 use crate::geometry::Pose;
-use crate::plan::{MoveRequest, Origin, Plan, plan_move};
+use crate::plan::{MovePlan, MoveRequest, Origin, Plan, line_as_path, plan_line};
 use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::table::FrequencyModel;
 
@@ -135,7 +135,27 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         return path::run(robot, args, file, out);
     }
     let request = request(robot, args).map_err(Failure::BadInput)?;
-    let plan = plan_move(robot, &request).map_err(bad_input)?;
+    let plan = match plan_line(robot, &request).map_err(bad_input)? {
+        MovePlan::One(plan) => plan,
+        // A bounded-error line cut where a joint reverses: shown as the path it runs as.
+        MovePlan::Parts {
+            path: planned,
+            joint,
+            at_mm,
+        } => {
+            if args.output() == Format::Text {
+                let note = format!(
+                    "cut      where joint {joint} reverses, {at_mm:.1} mm along the line, while \
+                     the others move: in one start its next F174 segment would begin up to a \
+                     PLC scan late, off the line"
+                );
+                writeln!(out, "{note}")
+                    .context("writing the plan")
+                    .map_err(Failure::Runtime)?;
+            }
+            return path::write_planned(robot, args, &line_as_path(&request), &planned, out);
+        }
+    };
     write(robot, &request, &plan, args.output(), out)
         .context("writing the plan")
         .map_err(Failure::Runtime)?;

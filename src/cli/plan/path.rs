@@ -32,16 +32,27 @@ pub(super) fn run(
         .map_err(bad)?;
     let req = request(robot, args, &doc).map_err(bad)?;
     let planned = plan_path(robot, &req).map_err(|e| bad(e.into()))?;
-    let starts = starts(&planned);
+    write_planned(robot, args, &req, &planned, out)
+}
+
+/// Writes the path `planned` from `req` in the format `args` asks for, and its SVG.
+pub(super) fn write_planned(
+    robot: &Robot,
+    args: &PlanArgs,
+    req: &PathRequest,
+    planned: &PathPlan,
+    out: &mut dyn Write,
+) -> Result<(), Failure> {
+    let starts = starts(planned);
     let written: anyhow::Result<()> = match args.output() {
         Format::Json => (|| {
-            let document = path_json::document(robot, &req, &planned, &starts);
+            let document = path_json::document(robot, req, planned, &starts);
             serde_json::to_writer_pretty(&mut *out, &document)?;
             writeln!(out)?;
             Ok(())
         })(),
         Format::Csv => csv::write_starts(robot, &starts, out).map_err(Into::into),
-        Format::Text => write_text(robot, &planned, &starts, out).map_err(Into::into),
+        Format::Text => write_text(robot, planned, &starts, out).map_err(Into::into),
     };
     written
         .context("writing the plan")
@@ -138,7 +149,8 @@ pub(super) fn time_at_mm(starts: &[Start<'_>], s_mm: f64) -> f64 {
 }
 
 /// The elements the pieces of `path` between `from_mm` and `to_mm` come from, as "3" or
-/// "2-4" (blends between them included; "(a blend)" when only a blend).
+/// "2-4" (blends between them included): those whose middle lies between. With none, the
+/// piece holding the stretch's own middle: its element, or "(a blend)".
 pub(super) fn elements_between(path: &Path, from_mm: f64, to_mm: f64) -> String {
     let mut numbers = path.pieces().iter().filter_map(|p| {
         let mid = p.start_mm + p.primitive.length_mm() / 2.0;
@@ -151,7 +163,14 @@ pub(super) fn elements_between(path: &Path, from_mm: f64, to_mm: f64) -> String 
     match (first, numbers.next_back().or(first)) {
         (Some(a), Some(b)) if a == b => a.to_string(),
         (Some(a), Some(b)) => format!("{a}-{b}"),
-        _ => "(a blend)".to_owned(),
+        _ => {
+            let mid = f64::midpoint(from_mm, to_mm);
+            path.pieces()
+                .iter()
+                .find(|p| (p.start_mm..=p.start_mm + p.primitive.length_mm()).contains(&mid))
+                .and_then(|p| p.element)
+                .map_or_else(|| "(a blend)".to_owned(), |e| e.to_string())
+        }
     }
 }
 

@@ -21,7 +21,10 @@ use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHan
 /// `POST .../moves` accepted.
 #[derive(Debug, Serialize)]
 pub(super) struct Accepted {
+    /// The move's last start: the move has ended when it has.
     id: MoveId,
+    /// Every start, in order: one, or a bounded-error line cut at a joint's reversal.
+    ids: Vec<MoveId>,
     report: MoveReport,
 }
 
@@ -50,10 +53,11 @@ pub(super) async fn submit(
 ) -> Result<(StatusCode, Json<Accepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
-    let id = robot.submit(order)?;
-    tracing::info!(robot = %name, move_id = id, "move accepted");
+    let ids = robot.submit_starts(order)?;
+    let id = ids[ids.len() - 1];
+    tracing::info!(robot = %name, move_id = id, starts = ids.len(), "move accepted");
     let report = robot.report(id).ok_or(ApiError::ShuttingDown)?;
-    Ok((StatusCode::ACCEPTED, Json(Accepted { id, report })))
+    Ok((StatusCode::ACCEPTED, Json(Accepted { id, ids, report })))
 }
 
 pub(super) async fn submit_path(
