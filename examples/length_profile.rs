@@ -9,7 +9,7 @@
 #[path = "../benches/common/lines.rs"]
 mod lines;
 
-use linterpd::plan::plan_move;
+use linterpd::plan::plan_line;
 use linterpd::robot::seed_robot;
 use std::hash::{DefaultHasher, Hash, Hasher};
 
@@ -30,10 +30,12 @@ fn main() {
     let t = std::time::Instant::now();
     let (mut rows, mut digest) = (0, 0);
     for _ in 0..n {
-        let plan = plan_move(&robot, &req).unwrap();
-        rows = plan.figures.rows;
+        let planned = plan_line(&robot, &req).unwrap();
+        rows = planned.starts().map(|p| p.figures.rows).sum();
         let mut h = DefaultHasher::new();
-        format!("{:?}", plan.tables).hash(&mut h);
+        for plan in planned.starts() {
+            format!("{:?}", plan.tables).hash(&mut h);
+        }
         digest = h.finish();
     }
     println!(

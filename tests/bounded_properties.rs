@@ -7,12 +7,12 @@
 mod common;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, scara_move};
-use linterpd::geometry::Pose;
 use linterpd::geometry::Line;
+use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
-use linterpd::sim::{self, Settings};
 use linterpd::robot::{Method, Robot};
+use linterpd::sim::{self, Settings};
 use linterpd::table::{FrequencyModel, TableProblem};
 use proptest::prelude::*;
 
@@ -107,7 +107,19 @@ fn check(
             let run = sim::execute(&plan.tables, &plan.max_hz, settings);
             let events = run.events.iter().copied();
             let d = sim::path_deviation_mm(robot, &plan.start_counts(), events, &line);
-            prop_assert!(d <= tolerance_mm, "{d} > {tolerance_mm} with {gap_s} s between segments");
+            prop_assert!(
+                d <= tolerance_mm,
+                "{d} > {tolerance_mm} with {gap_s} s between segments; DEBUG {:?} starts {}",
+                plan.tables
+                    .iter()
+                    .map(|t| t
+                        .segments
+                        .iter()
+                        .map(|s| (s.control.direction, s.control.range, s.rows.len()))
+                        .collect::<Vec<_>>())
+                    .collect::<Vec<_>>(),
+                starts.len()
+            );
         }
     }
     for pair in starts.windows(2) {

@@ -174,7 +174,7 @@ impl RobotHandle {
         if let Some(counts) = from {
             match plan_order(&self.robot, &checked, counts) {
                 Ok(plan) => end = Some(plan.end_counts()),
-                Err(PlanError::ReversesOnLine { .. }) => {
+                Err(PlanError::LaterSegment { .. }) => {
                     return self.submit_line_in_parts(&order, &checked, counts);
                 }
                 Err(e) => return Err(e.into()),
@@ -191,7 +191,7 @@ impl RobotHandle {
         Ok(vec![id])
     }
 
-    /// A line order from `counts` that one start cannot run ([`PlanError::ReversesOnLine`]),
+    /// A line order from `counts` that one start cannot run ([`PlanError::LaterSegment`]),
     /// planned as a path of that one line and queued as its starts: their ids, in order. Each
     /// start's report is the order with its target at the pose where that start ends.
     fn submit_line_in_parts(

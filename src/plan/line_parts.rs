@@ -17,13 +17,15 @@ pub enum MovePlan {
     /// One start.
     One(Box<Plan>),
     /// A bounded-error line cut where a joint reverses while another moves
-    /// ([`PlanError::ReversesOnLine`]): one section, its starts chained at speed.
+    /// ([`PlanError::LaterSegment`]): one section, its starts chained at speed.
     Parts {
         /// The line as a path of one element, and its starts.
         path: PathPlan,
-        /// The joint whose reversal the line is cut at (the first, if several).
+        /// The joint whose later segment the line is cut for (the first, if several).
         joint: String,
-        /// Where it reverses, mm along the line.
+        /// Whether it reverses there (else its run changes frequency range).
+        reverses: bool,
+        /// Where, mm along the line.
         at_mm: f64,
     },
 }
@@ -55,12 +57,26 @@ pub fn line_as_path(req: &MoveRequest) -> PathRequest {
 /// joint reverses on the line while another moves, the line as a path ([`line_as_path`]).
 ///
 /// # Errors
-/// As [`plan_move`] and [`plan_path`].
+/// As [`plan_move`], and as [`plan_section`](super::plan_section) for a line cut into starts.
 pub fn plan_line(robot: &crate::robot::Robot, req: &MoveRequest) -> Result<MovePlan, PlanError> {
     match plan_move(robot, req) {
-        Err(PlanError::ReversesOnLine { joint, at_mm, .. }) => {
-            plan_path(robot, &line_as_path(req)).map(|path| MovePlan::Parts { path, joint, at_mm })
-        }
+        Err(PlanError::LaterSegment {
+            joint,
+            reverses,
+            at_mm,
+            ..
+        }) => plan_path(robot, &line_as_path(req))
+            .map(|path| MovePlan::Parts {
+                path,
+                joint,
+                reverses,
+                at_mm,
+            })
+            // The line is the path's one section: its error is the line's.
+            .map_err(|e| match e {
+                PlanError::Section { source, .. } => *source,
+                e => e,
+            }),
         planned => planned.map(|plan| MovePlan::One(Box::new(plan))),
     }
 }
@@ -98,8 +114,9 @@ mod tests {
     fn one_start_through_a_reversal_is_refused_naming_the_joint_and_where() {
         let robot = seed_robot();
         let err = plan_move(&robot, &past_the_axis(&robot, 500.0, BOUNDED)).unwrap_err();
-        let PlanError::ReversesOnLine {
+        let PlanError::LaterSegment {
             joint,
+            reverses: true,
             at_mm,
             length_mm,
         } = &err
@@ -122,7 +139,13 @@ mod tests {
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
             let mut req = past_the_axis(&robot, 500.0, BOUNDED);
             req.motion.frequency_model = model;
-            let MovePlan::Parts { path, joint, .. } = plan_line(&robot, &req).unwrap() else {
+            let MovePlan::Parts {
+                path,
+                joint,
+                reverses: true,
+                ..
+            } = plan_line(&robot, &req).unwrap()
+            else {
                 panic!("{model:?}: planned as one start");
             };
             assert_eq!(joint, "d3");

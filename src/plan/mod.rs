@@ -105,18 +105,23 @@ pub enum PlanError {
         /// When it first moves, s into the section.
         at_s: f64,
     },
-    /// A bounded-error line on which a joint reverses while another moves: one start cannot
-    /// hold the tolerance through it, so the line runs as a path cut there ([`plan_line`]).
+    /// A bounded-error line on which a joint's channel needs a second F174 segment (it
+    /// reverses, or its run changes frequency range) while another joint moves: one start
+    /// cannot hold the tolerance through it, so the line runs as a path cut there
+    /// ([`plan_line`]).
     #[error(
-        "joint {joint} reverses {at_mm:.1} mm along the {length_mm:.1} mm line while other \
-         joints move: in one start its next F174 segment would begin up to a PLC scan late, \
-         off the line by more than the tolerance; the line runs as a path cut there into \
-         starts chained at speed (`linterpd plan --path`, `linterpd run`)"
+        "joint {joint} {} {at_mm:.1} mm along the {length_mm:.1} mm line while other joints \
+         move: in one start its next F174 segment would begin up to a PLC scan late, off the \
+         line by more than the tolerance; the line runs as a path cut there into starts \
+         chained at speed (`linterpd plan --path`, `linterpd run`)",
+        if *reverses { "reverses" } else { "changes frequency range" }
     )]
-    ReversesOnLine {
+    LaterSegment {
         /// The joint.
         joint: String,
-        /// Where it reverses, mm along the line.
+        /// Whether it reverses there (else its run changes frequency range).
+        reverses: bool,
+        /// Where, mm along the line.
         at_mm: f64,
         /// The line's length, mm.
         length_mm: f64,
@@ -371,6 +376,19 @@ impl Plan {
         sim::execute(&self.tables, &self.max_hz, settings(&self.motion))
     }
 
+    /// The first later F174 segment of any channel, as the execution model plays it: the
+    /// joint, and when the segment begins, s from the start. The PLC begins it in the scan
+    /// after the segment before it ends, up to a scan late (ACCURACY.md), while the other
+    /// channels run on.
+    #[must_use]
+    pub fn later_segment(&self) -> Option<(usize, f64)> {
+        self.row_timings()
+            .into_iter()
+            .filter(|r| r.segment > 0 && r.row == 0)
+            .map(|r| (r.table, r.start_s))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
     /// When every row of the tables runs in the execution model, table by table (the rows of
     /// [`Plan::execution`], without its pulses).
     #[must_use]
@@ -515,22 +533,28 @@ fn plan_course(
     seed_exact: bool,
 ) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked, seed_exact)?;
-    if let Course::Line(line) = course
-        && sampled.bounded.is_some()
-        && let Some((cut, joint)) = path::reversal(
-            &sampled,
-            0,
-            sampled.last_point(),
-            path::min_points(&sampled),
-        )
+    let (first, last) = (0, sampled.last_point());
+    let Course::Line(line) = course else {
+        return sampled.plan(first, last, start.counts);
+    };
+    let later = |joint: usize, reverses: bool, at_s: f64| PlanError::LaterSegment {
+        joint: robot.joints[joint].name.clone(),
+        reverses,
+        at_mm: sampled.profile.distance_mm(at_s),
+        length_mm: line.length_mm(),
+    };
+    if sampled.bounded.is_some()
+        && let Some((cut, joint)) = path::reversal(&sampled, first, last)
     {
-        return Err(PlanError::ReversesOnLine {
-            joint: robot.joints[joint].name.clone(),
-            at_mm: sampled.profile.distance_at_point_mm(cut as u32),
-            length_mm: line.length_mm(),
-        });
+        return Err(later(joint, true, sampled.time_s(cut)));
     }
-    sampled.plan(0, sampled.last_point(), start.counts)
+    let plan = sampled.plan(first, last, start.counts)?;
+    if sampled.bounded.is_some()
+        && let Some((joint, at_s)) = plan.later_segment()
+    {
+        return Err(later(joint, false, at_s));
+    }
+    Ok(plan)
 }
 
 /// A course sampled for one motion: the profile and the samples every start along it is planned

@@ -22,7 +22,7 @@
 
 use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose, SpeedCap};
 use crate::kinematics::{JOINTS, Kinematics};
-use crate::robot::{Motion, OverSpeed, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Robot};
 
 use crate::table::TableProblem;
 
@@ -104,6 +104,59 @@ impl PathPlan {
 /// When the path cannot be built ([`PlanError::Path`]) or a section cannot be planned (the
 /// section's error, naming the elements it covers).
 pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError> {
+    let planned = plan_path_once(robot, req);
+    let Err(PlanError::Section {
+        section,
+        elements,
+        source,
+    }) = &planned
+    else {
+        return planned;
+    };
+    let PlanError::ToleranceTooSmall {
+        tolerance_mm,
+        floor_mm,
+        works_mm: Some(mut works_mm),
+    } = **source
+    else {
+        return planned;
+    };
+    // The tolerance named to work is the one that worked for the refusing start: the whole
+    // path is planned again with it (and with what a later refusal names) before it is named.
+    let refused = |works_mm| PlanError::Section {
+        section: *section,
+        elements: elements.clone(),
+        source: Box::new(PlanError::ToleranceTooSmall {
+            tolerance_mm,
+            floor_mm,
+            works_mm,
+        }),
+    };
+    for _ in 0..WORKS_TRIES {
+        let mut again = req.clone();
+        again.motion.method = Method::BoundedError {
+            tolerance_mm: works_mm,
+        };
+        match plan_path_once(robot, &again) {
+            Ok(_) => return Err(refused(Some(works_mm))),
+            Err(PlanError::Section { source, .. }) => match *source {
+                PlanError::ToleranceTooSmall {
+                    works_mm: Some(more),
+                    ..
+                } if more > works_mm => works_mm = more,
+                _ => break,
+            },
+            Err(_) => break,
+        }
+    }
+    Err(refused(None))
+}
+
+/// Plans of the whole path made to check a tolerance named to work ([`plan_path`]).
+const WORKS_TRIES: usize = 4;
+
+/// [`plan_path`], with a refused tolerance's suggestion as its start found it.
+fn plan_path_once(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError> {
     if !(req.path_accel_mm_s2.is_finite() && req.path_accel_mm_s2 > 0.0) {
         return Err(PlanError::PathAccel {
             accel_mm_s2: req.path_accel_mm_s2,
@@ -265,7 +318,7 @@ fn parts(
     motion: Motion,
 ) -> Result<Vec<Plan>, PlanError> {
     let sampled = Sampled::new(robot, course, start, motion, false)?;
-    let ahead = planned_ahead(&sampled, start.counts, min_points(&sampled));
+    let ahead = planned_ahead(&sampled, start.counts);
     parts_in_turn(robot, &sampled, start, ahead)
 }
 
@@ -288,7 +341,7 @@ fn parts_in_turn(
     let mut counts = start.counts;
     while let Some((first, end)) = todo.pop() {
         if sampled.bounded.is_some()
-            && let Some(cut) = reversal_cut(sampled, first, end, min_points)
+            && let Some(cut) = reversal_cut(sampled, first, end)
         {
             todo.push((cut, end));
             todo.push((first, cut));
@@ -302,6 +355,16 @@ fn parts_in_turn(
             None => sampled.plan(first, end, counts),
         };
         let split = match planned {
+            Ok(plan) if sampled.bounded.is_some() => {
+                match segment_cut(sampled, &plan, first, end) {
+                    Some(cut) => cut,
+                    None => {
+                        counts = plan.end_counts();
+                        plans.push(plan);
+                        continue;
+                    }
+                }
+            }
             Ok(plan) => {
                 counts = plan.end_counts();
                 plans.push(plan);
@@ -336,7 +399,7 @@ struct Ahead {
 /// at its first point (the first from `start`): [`parts`] takes such a plan only when the part
 /// before did end on those counts, so the result is the one planning them in turn gives. Empty
 /// when there is nothing to plan side by side.
-fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS], min_points: usize) -> Vec<Ahead> {
+fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS]) -> Vec<Ahead> {
     // A joint move's polyline remembers where its last search ended: not measured side by side.
     if sampled.bounded.is_none() || sampled.course.path().is_none() {
         return Vec::new();
@@ -344,7 +407,7 @@ fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS], min_points: usize) -> 
     let mut cut = Vec::new();
     let mut todo = vec![(0, sampled.last_point())];
     while let Some((first, end)) = todo.pop() {
-        match reversal_cut(sampled, first, end, min_points) {
+        match reversal_cut(sampled, first, end) {
             Some(at) => {
                 todo.push((at, end));
                 todo.push((first, at));
@@ -386,26 +449,17 @@ fn too_big(e: &PlanError) -> bool {
 
 /// Where to cut the course between sample points `from` and `to` so that no joint reverses
 /// inside a part while another joint moves: at the first such reversal (the last point at the
-/// joint's extreme count), when both sides keep at least `min_points`. A reversal needs a new
-/// F174 segment, which the PLC starts in the scan after the one before ends: up to a scan late,
-/// while the other channels run on, which leaves the path. At a cut every channel stops and
-/// restarts together in the scan after the part ends: a pause on the path, no deviation.
-pub(super) fn reversal_cut(
-    sampled: &Sampled,
-    from: usize,
-    to: usize,
-    min_points: usize,
-) -> Option<usize> {
-    reversal(sampled, from, to, min_points).map(|(cut, _)| cut)
+/// joint's extreme count), wherever it falls between them. A reversal needs a new F174
+/// segment, which the PLC starts in the scan after the one before ends: up to a scan late,
+/// while the other channels run on, which leaves the path for the rest of the joint's run
+/// (near a part's start as much as in its middle). At a cut every channel stops and restarts
+/// together in the scan after the part ends: a pause on the path, no deviation.
+pub(super) fn reversal_cut(sampled: &Sampled, from: usize, to: usize) -> Option<usize> {
+    reversal(sampled, from, to).map(|(cut, _)| cut)
 }
 
 /// [`reversal_cut`] with the joint that reverses there.
-pub(super) fn reversal(
-    sampled: &Sampled,
-    from: usize,
-    to: usize,
-    min_points: usize,
-) -> Option<(usize, usize)> {
+pub(super) fn reversal(sampled: &Sampled, from: usize, to: usize) -> Option<(usize, usize)> {
     let counts = &sampled.samples.counts;
     let others_move = |j: usize, i: usize| {
         (0..crate::kinematics::JOINTS)
@@ -425,8 +479,23 @@ pub(super) fn reversal(
                 (reverses && others_move(j, i - 1)).then_some((i - 1, j))
             })
         })
-        .filter(|&(cut, _)| cut >= from + min_points && cut + min_points <= to)
+        .filter(|&(cut, _)| cut > from && cut < to)
         .min()
+}
+
+/// Where to cut a bounded-error part from sample point `first` to `end` whose `plan` gives a
+/// channel a later F174 segment (a run that no one frequency range plays within its windows):
+/// at the last sample point before the segment begins, for the same reason as at a reversal
+/// ([`reversal_cut`]), or at the first point after `first` when it begins before that. `None`
+/// when it has none, or the part is one sample interval long.
+fn segment_cut(sampled: &Sampled, plan: &Plan, first: usize, end: usize) -> Option<usize> {
+    let (_, at_s) = plan.later_segment()?;
+    let at_s = plan.window.from_s + at_s;
+    let cut = (first + 1..end)
+        .rev()
+        .find(|&i| sampled.time_s(i) <= at_s)
+        .unwrap_or(first + 1);
+    (cut < end).then_some(cut)
 }
 
 /// Every joint that first moves more than [`LATE_START_S`] after sample point `from` (and by
@@ -933,7 +1002,7 @@ mod tests {
             pace,
         };
         let sampled = Sampled::new(&robot, &course, &start, asked, false).unwrap();
-        let ahead = planned_ahead(&sampled, start.counts, min_points(&sampled));
+        let ahead = planned_ahead(&sampled, start.counts);
         assert!(ahead.len() >= 3, "{} parts planned ahead", ahead.len());
 
         let in_turn = parts_in_turn(&robot, &sampled, &start, Vec::new()).unwrap();
@@ -941,7 +1010,7 @@ mod tests {
         assert_eq!(side_by_side, in_turn);
 
         // Parts planned ahead from counts the part before does not end on are planned again.
-        let mut wrong = planned_ahead(&sampled, start.counts, min_points(&sampled));
+        let mut wrong = planned_ahead(&sampled, start.counts);
         for a in &mut wrong {
             a.counts[1] += 1;
             a.plan = sampled.plan(a.first, a.end, a.counts);

@@ -141,13 +141,19 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         MovePlan::Parts {
             path: planned,
             joint,
+            reverses,
             at_mm,
         } => {
             if args.output() == Format::Text {
+                let what = if reverses {
+                    "reverses"
+                } else {
+                    "changes frequency range"
+                };
                 let note = format!(
-                    "cut      where joint {joint} reverses, {at_mm:.1} mm along the line, while \
-                     the others move: in one start its next F174 segment would begin up to a \
-                     PLC scan late, off the line"
+                    "cut      where joint {joint} {what}, {at_mm:.1} mm along the line, while the \
+                     others move: in one start its next F174 segment would begin up to a PLC \
+                     scan late, off the line"
                 );
                 writeln!(out, "{note}")
                     .context("writing the plan")
