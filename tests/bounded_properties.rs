@@ -109,16 +109,7 @@ fn check(
             let d = sim::path_deviation_mm(robot, &plan.start_counts(), events, &line);
             prop_assert!(
                 d <= tolerance_mm,
-                "{d} > {tolerance_mm} with {gap_s} s between segments; DEBUG {:?} starts {}",
-                plan.tables
-                    .iter()
-                    .map(|t| t
-                        .segments
-                        .iter()
-                        .map(|s| (s.control.direction, s.control.range, s.rows.len()))
-                        .collect::<Vec<_>>())
-                    .collect::<Vec<_>>(),
-                starts.len()
+                "{d} > {tolerance_mm} with {gap_s} s between segments"
             );
         }
     }
