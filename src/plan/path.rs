@@ -355,15 +355,13 @@ fn parts_in_turn(
             None => sampled.plan(first, end, counts),
         };
         let split = match planned {
-            Ok(plan) if sampled.bounded.is_some() => {
-                match segment_cut(sampled, &plan, first, end) {
-                    Some(cut) => cut,
-                    None => {
-                        counts = plan.end_counts();
-                        plans.push(plan);
-                        continue;
-                    }
-                }
+            // A bounded-error part holds its tolerance only with one segment per channel.
+            Ok(plan)
+                if let Some(cut) = sampled
+                    .bounded
+                    .and_then(|_| segment_cut(sampled, &plan, first, end)) =>
+            {
+                cut
             }
             Ok(plan) => {
                 counts = plan.end_counts();

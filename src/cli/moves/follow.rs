@@ -35,6 +35,24 @@ pub(super) struct Follow<'a> {
     pub quiet: bool,
 }
 
+/// Follows move `id` to its final report ([`Follow::run`]).
+pub(super) async fn to_end(
+    client: &Client,
+    robot: &str,
+    id: u64,
+    timeout: Option<Duration>,
+    quiet: bool,
+) -> Result<Value, Failure> {
+    let follow = Follow {
+        client,
+        robot,
+        id,
+        timeout,
+        quiet,
+    };
+    follow.run().await
+}
+
 impl Follow<'_> {
     /// Follows the move to a final report; a deadline that runs out, or a feed that ends first,
     /// is a failure saying what the move was waiting for.

@@ -172,14 +172,7 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         }
         let mut outcome = Ok(());
         for (n, &id) in ids.iter().enumerate() {
-            let follow = follow::Follow {
-                client: &client,
-                robot: &robot,
-                id,
-                timeout,
-                quiet: args.daemon.json,
-            };
-            let last = follow.run().await?;
+            let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
             let line = if ids.len() > 1 {
                 format!("start {}/{}: {}", n + 1, ids.len(), summary(&last))
             } else {

@@ -79,14 +79,7 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
         let mut finals = Vec::with_capacity(ids.len());
         let mut outcome = Ok(());
         for (n, &id) in ids.iter().enumerate() {
-            let follow = follow::Follow {
-                client: &client,
-                robot: &robot,
-                id,
-                timeout,
-                quiet: args.daemon.json,
-            };
-            let last = follow.run().await?;
+            let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
             if !args.daemon.json {
                 let elements = bars::elements(&last)
                     .map(|e| format!(" (element {e})"))
