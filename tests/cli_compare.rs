@@ -163,3 +163,47 @@ fn svg_of_one_plan_draws_only_that_plan() {
     assert!(svg.contains("bounded-error 0.05 mm, fpx-divider"));
     assert!(!svg.contains("constant-period"));
 }
+
+/// `linterpd plan` on a line from the seed's P1, turned 30 degrees about the robot's axis: it
+/// passes the point nearest the axis halfway, where the radial joint d3 reverses.
+fn past_the_axis(extra: &[&str]) -> Output {
+    let mut args: Vec<&str> = SEED.to_vec();
+    args[3] = "-534.92,926.63,50";
+    let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
+        .arg("plan")
+        .args(&args)
+        .args(extra)
+        .output()
+        .expect("linterpd runs");
+    assert!(
+        out.status.success(),
+        "{extra:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+#[test]
+fn a_bounded_error_line_past_a_reversal_is_shown_as_the_starts_it_runs_as() {
+    let text = String::from_utf8(past_the_axis(&["--tolerance", "0.05"]).stdout).unwrap();
+    assert!(
+        text.starts_with("cut      where joint d3 reverses, 2"),
+        "{text}"
+    );
+    assert!(text.contains("chained at speed"), "{text}");
+    let doc: Value =
+        serde_json::from_slice(&past_the_axis(&["--tolerance", "0.05", "--json"]).stdout).unwrap();
+    let starts = doc["starts"].as_array().unwrap();
+    assert_eq!(starts.len(), 2, "{doc}");
+    assert!(doc["path_deviation_mm"].as_f64().unwrap() <= 0.05, "{doc}");
+    // --compare: each bounded-error row is the two starts together; constant-period one start.
+    let doc: Value =
+        serde_json::from_slice(&past_the_axis(&["--compare", "--format", "json"]).stdout).unwrap();
+    for model in ["ideal", "fpx-divider"] {
+        let bounded = find(&doc, "bounded-error", model);
+        assert_eq!(bounded["valid"], true, "{bounded}");
+        assert_eq!(bounded["starts"], 2, "{bounded}");
+        assert!(path_deviation(bounded) <= 0.05, "{bounded}");
+        assert!(find(&doc, "constant-period", model).get("starts").is_none());
+    }
+}

@@ -4,6 +4,8 @@
 //! period) and bounded-error (`--tolerance`, else the robot's, else [`DEFAULT_TOLERANCE_MM`]),
 //! each under both frequency models. A way that cannot be planned (say a tolerance below the
 //! pulse grid's floor) shows its error in its row; only a move that no way can plan is bad input.
+//! A bounded-error line cut into starts where a joint reverses (`plan::plan_line`) is one row:
+//! rows, words and bytes over its starts, the worst of their deviations, and how many starts.
 //!
 //! **Upload bytes** are the bytes of the MEWTOCOL-COM command frames that write a plan's table
 //! images: every moving channel's words (directory and segments) in `%` frames of at most 24 words
@@ -20,8 +22,9 @@ use super::json::FiguresDoc;
 use super::{Format, PlanArgs, base_request, tolerance, variant, write_svg};
 use crate::cli::Failure;
 use crate::mewtocol::{Command, Header, Station, max_write_words};
-use crate::plan::{MoveRequest, Origin, Plan, PlanError, plan_move};
+use crate::plan::{MoveRequest, Origin, Plan, PlanError, plan_line, plan_move};
 use crate::robot::{Method, Robot};
+use crate::sim::Figures;
 use crate::table::{ChannelTable, FrequencyModel, encoded_words};
 
 /// The bounded-error tolerance when neither `--tolerance` nor the robot gives one, mm.
@@ -55,7 +58,40 @@ impl Way {
 /// A way and what planning it gave.
 struct Entry {
     way: Way,
-    outcome: Result<Plan, PlanError>,
+    outcome: Result<Planned, PlanError>,
+}
+
+/// What one way planned: its starts, and their figures as one.
+struct Planned {
+    starts: Vec<Plan>,
+    figures: Figures,
+}
+
+impl Planned {
+    /// `starts` (at least one) with their figures together: rows, words and time added up, the
+    /// worst deviation, error and skew of any, the end error of the last.
+    fn new(starts: Vec<Plan>) -> Self {
+        let mut figures = starts[0].figures;
+        for f in starts[1..].iter().map(|p| p.figures) {
+            figures.path_deviation_mm = figures.path_deviation_mm.max(f.path_deviation_mm);
+            figures.tracking_error_mm = figures.tracking_error_mm.max(f.tracking_error_mm);
+            figures.sampled_deviation_mm = figures.sampled_deviation_mm.max(f.sampled_deviation_mm);
+            figures.end_skew_ms = figures.end_skew_ms.max(f.end_skew_ms);
+            figures.end_error_mm = f.end_error_mm;
+            figures.finish_s += f.finish_s;
+            figures.rows += f.rows;
+            figures.words += f.words;
+        }
+        Self { starts, figures }
+    }
+
+    fn valid(&self) -> bool {
+        self.starts.iter().all(Plan::valid)
+    }
+
+    fn upload_bytes(&self) -> usize {
+        self.starts.iter().map(upload_bytes).sum()
+    }
 }
 
 /// Runs `linterpd plan --compare`.
@@ -75,12 +111,17 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
         .unwrap_or(DEFAULT_TOLERANCE_MM);
     let entries: Vec<Entry> = ways(tolerance_mm)
         .into_iter()
-        .map(|way| Entry {
-            way,
-            outcome: plan_move(
-                robot,
-                &variant(&base, way.method, way.model, way.seed_exact),
-            ),
+        .map(|way| {
+            let req = variant(&base, way.method, way.model, way.seed_exact);
+            let outcome = if way.seed_exact {
+                plan_move(robot, &req).map(|plan| vec![plan])
+            } else {
+                plan_line(robot, &req).map(|planned| planned.starts().cloned().collect())
+            };
+            Entry {
+                way,
+                outcome: outcome.map(Planned::new),
+            }
         })
         .collect();
     if let Some(Err(first)) = entries.first().map(|e| &e.outcome)
@@ -94,9 +135,11 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
         .map_err(Failure::Runtime)?;
     match &args.svg {
         Some(path) => {
+            // A line cut into starts is drawn by `plan --to` (the path it runs as), not here.
             let plans: Vec<&Plan> = entries
                 .iter()
                 .filter_map(|e| e.outcome.as_ref().ok())
+                .filter_map(|p| (p.starts.len() == 1).then(|| &p.starts[0]))
                 .collect();
             write_svg(path, || crate::plot::svg(robot, &plans))
         }
@@ -181,7 +224,11 @@ fn write_text(
 ) -> std::io::Result<()> {
     let m = base.motion;
     writeln!(out, "robot    {}", robot.name)?;
-    if let Some(plan) = entries.iter().find_map(|e| e.outcome.as_ref().ok()) {
+    if let Some(plan) = entries
+        .iter()
+        .find_map(|e| e.outcome.as_ref().ok())
+        .map(|p| &p.starts[0])
+    {
         writeln!(
             out,
             "move     {} -> {}, {:.3} mm",
@@ -230,23 +277,27 @@ fn write_row(entry: &Entry, out: &mut dyn Write) -> std::io::Result<()> {
         entry.way.name(),
         entry.way.model.name()
     )?;
-    let plan = match &entry.outcome {
-        Ok(plan) => plan,
+    let planned = match &entry.outcome {
+        Ok(planned) => planned,
         Err(e) => return writeln!(out, "error: {e}"),
     };
-    let f = plan.figures;
+    let f = planned.figures;
+    let starts = match planned.starts.len() {
+        1 => String::new(),
+        n => format!(" ({n} starts chained at speed)"),
+    };
     writeln!(
         out,
-        "{:>5} {:>5} {:>8} {:>9.4} {:>9.4} {:>9.4} {:>9.3} {:>8.4} {:>5}",
+        "{:>5} {:>5} {:>8} {:>9.4} {:>9.4} {:>9.4} {:>9.3} {:>8.4} {:>5}{starts}",
         f.rows,
         f.words,
-        upload_bytes(plan),
+        planned.upload_bytes(),
         f.path_deviation_mm,
         f.tracking_error_mm,
         f.sampled_deviation_mm,
         f.end_skew_ms,
         f.end_error_mm,
-        if plan.valid() { "yes" } else { "NO" }
+        if planned.valid() { "yes" } else { "NO" }
     )
 }
 
@@ -297,6 +348,9 @@ struct PlanDoc {
     figures: Option<FiguresDoc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     upload_bytes: Option<usize>,
+    /// PLC starts, when more than one (a bounded-error line cut where a joint reverses).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    starts: Option<usize>,
 }
 
 fn document(robot: &Robot, base: &MoveRequest, entries: &[Entry]) -> Document {
@@ -337,14 +391,20 @@ fn plan_doc(entry: &Entry) -> PlanDoc {
         speed_factor: None,
         figures: None,
         upload_bytes: None,
+        starts: None,
     };
     match &entry.outcome {
-        Ok(plan) => {
-            doc.valid = plan.valid();
-            doc.problems.clone_from(&plan.problems);
-            doc.speed_factor = Some(plan.speed_factor);
-            doc.figures = Some(FiguresDoc::from(plan.figures));
-            doc.upload_bytes = Some(upload_bytes(plan));
+        Ok(planned) => {
+            doc.valid = planned.valid();
+            doc.problems = planned
+                .starts
+                .iter()
+                .flat_map(|p| p.problems.iter().cloned())
+                .collect();
+            doc.speed_factor = Some(planned.starts[0].speed_factor);
+            doc.figures = Some(FiguresDoc::from(planned.figures));
+            doc.upload_bytes = Some(planned.upload_bytes());
+            doc.starts = (planned.starts.len() > 1).then_some(planned.starts.len());
         }
         Err(e) => doc.error = Some(e.to_string()),
     }
