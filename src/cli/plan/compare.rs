@@ -139,7 +139,8 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
             let plans: Vec<&Plan> = entries
                 .iter()
                 .filter_map(|e| e.outcome.as_ref().ok())
-                .filter_map(|p| (p.starts.len() == 1).then(|| &p.starts[0]))
+                .filter(|p| p.starts.len() == 1)
+                .map(|p| &p.starts[0])
                 .collect();
             write_svg(path, || crate::plot::svg(robot, &plans))
         }
