@@ -1,10 +1,11 @@
 //! How far a bounded-error line leaves its path when the PLC starts a channel's later F174
 //! segment up to a scan late (ACCURACY.md), for the bench's seed-robot lines (800 mm from its
 //! axis, passing the point nearest it halfway, where its radial joint reverses), bounded-error
-//! 0.05 mm under `fpx-divider`: every start of the plan, played with 0, 2 and 10 ms between a
-//! channel's segments. Prints one line per start:
+//! 0.05 mm (or constant-period 50 ms with `cp` as the argument) under `fpx-divider`: every start
+//! of the plan, played with 0, 2 and 10 ms between a channel's segments. Prints one line per
+//! start:
 //!
-//! `cargo run --release --example scan_gap`
+//! `cargo run --release --example scan_gap [cp]`
 #[allow(dead_code)] // the gantry is not used here
 #[path = "../benches/common/lines.rs"]
 mod lines;
@@ -18,7 +19,10 @@ fn main() {
     let robot = seed_robot();
     for length_mm in [300.0, 500.0, 1_000.0, 2_000.0] {
         let (from, to) = lines::line([0.0, 800.0, 150.0], [1.0, 0.0, 0.0], length_mm);
-        let req = lines::bounded(&lines::request(&robot, from, to, 0.05), 0.05);
+        let mut req = lines::request(&robot, from, to, 0.05);
+        if std::env::args().nth(1).as_deref() != Some("cp") {
+            req = lines::bounded(&req, 0.05);
+        }
         let Origin::Pose(from) = req.from else {
             unreachable!("the bench's lines start at a pose")
         };
