@@ -1,21 +1,23 @@
 //! Property tests of the planner over random reachable moves, for every kinematics: FK(IK(p)) = p,
-//! every plan ends on its target, every table obeys the F174 rules, and no channel drifts more
-//! than one period from the grid.
+//! every plan ends on its target, every table obeys the F174 rules, no channel drifts more than
+//! one period from the grid, and every start plays as planned whatever the PLC's scan between a
+//! channel's segments (a line is cut into starts where a joint would need a later segment).
 
 mod common;
 
 use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
-use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_move};
+use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
 use linterpd::robot::Robot;
+use linterpd::sim::{self, Settings};
 use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem};
 use proptest::prelude::*;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
 
-/// Plans the move; `None` when it is refused only because its rows do not fit one table area
-/// (slow-down can stretch a move that far; that refusal has its own test).
-fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Option<Plan> {
+/// Plans the move, every start of it; `None` when it is refused only because its rows do not
+/// fit one table area (slow-down can stretch a move that far; that refusal has its own test).
+fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Option<Vec<Plan>> {
     let mut motion = robot.motion;
     // At most ~400 periods, so every channel's rows fit its 2000-word area (a longer move is
     // refused with an area error, tested elsewhere).
@@ -34,8 +36,8 @@ fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Option<Plan> {
         motion,
         seed_exact: false,
     };
-    match plan_move(robot, &req) {
-        Ok(plan) => Some(plan),
+    match plan_line(robot, &req) {
+        Ok(planned) => Some(planned.starts().cloned().collect()),
         Err(PlanError::InvalidTable {
             first: TableProblem::AreaOverflow { .. },
             ..
@@ -60,11 +62,31 @@ fn check_fk_ik(robot: &Robot, pose: Pose) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-fn check_plan(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
-    prop_assert!(plan.valid(), "{:?}", plan.problems);
-    common::moves::check_tables_and_ends(robot, plan)?;
-    for j in 0..plan.tables.len() {
-        check_grid(plan, j)?;
+fn check_plan(robot: &Robot, starts: &[Plan]) -> Result<(), TestCaseError> {
+    for plan in starts {
+        prop_assert!(plan.valid(), "{:?}", plan.problems);
+        common::moves::check_tables_and_ends(robot, plan)?;
+        for j in 0..plan.tables.len() {
+            check_grid(plan, j)?;
+        }
+        // The same pulses, hence the same figures, with a 10 ms scan between segments.
+        let late = sim::execute(
+            &plan.tables,
+            &plan.max_hz,
+            Settings {
+                model: plan.motion.frequency_model,
+                segment_gap_s: 0.010,
+            },
+        );
+        let on_time = plan.execution();
+        prop_assert!(
+            late.events.iter().zip(&on_time.events).all(|(a, b)| a == b),
+            "a later segment: {:?}",
+            plan.later_segment()
+        );
+    }
+    for pair in starts.windows(2) {
+        prop_assert_eq!(pair[1].start_counts(), pair[0].end_counts());
     }
     Ok(())
 }

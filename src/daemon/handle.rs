@@ -150,7 +150,7 @@ impl RobotHandle {
     }
 
     /// [`RobotHandle::submit`], returning the id of every start the move runs as, in order. A
-    /// bounded-error line on which a joint reverses while another moves is queued as the starts
+    /// line on which a joint reverses while another moves is queued as the starts
     /// of a path of that one line, cut at the reversal and chained at speed
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {

@@ -105,15 +105,14 @@ pub enum PlanError {
         /// When it first moves, s into the section.
         at_s: f64,
     },
-    /// A bounded-error line on which a joint's channel needs a second F174 segment (it
-    /// reverses, or its run changes frequency range) while another joint moves: one start
-    /// cannot hold the tolerance through it, so the line runs as a path cut there
-    /// ([`plan_line`]).
+    /// A line on which a joint's channel needs a second F174 segment (it reverses, or its run
+    /// changes frequency range) while another joint moves: one start would not play as
+    /// planned through it, so the line runs as a path cut there ([`plan_line`]).
     #[error(
         "joint {joint} {} {at_mm:.1} mm along the {length_mm:.1} mm line while other joints \
          move: in one start its next F174 segment would begin up to a PLC scan late, off the \
-         line by more than the tolerance; the line runs as a path cut there into starts \
-         chained at speed (`linterpd plan --path`, `linterpd run`)",
+         line by as much as the joint moves in a scan; the line runs as a path cut there into \
+         starts chained at speed (`linterpd plan --path`, `linterpd run`)",
         if *reverses { "reverses" } else { "changes frequency range" }
     )]
     LaterSegment {
@@ -543,13 +542,13 @@ fn plan_course(
         at_mm: sampled.profile.distance_mm(at_s),
         length_mm: line.length_mm(),
     };
-    if sampled.bounded.is_some()
+    if sampled.cut_for_segments()
         && let Some((cut, joint)) = path::reversal(&sampled, first, last)
     {
         return Err(later(joint, true, sampled.time_s(cut)));
     }
     let plan = sampled.plan(first, last, start.counts)?;
-    if sampled.bounded.is_some()
+    if sampled.cut_for_segments()
         && let Some((joint, at_s)) = plan.later_segment()
     {
         return Err(later(joint, false, at_s));
@@ -617,6 +616,14 @@ impl<'a> Sampled<'a> {
     }
 
     /// The profile's time at sample point `i`, s.
+    /// Whether a start is cut where a channel would need a later segment (a reversal, a run
+    /// no one range plays): the PLC begins that segment up to a scan late while the other
+    /// channels run on, which the execution model does not play. Every plan meant for a PLC;
+    /// not the paper as printed.
+    fn cut_for_segments(&self) -> bool {
+        !self.seed_exact
+    }
+
     fn time_s(&self, i: usize) -> f64 {
         if i == self.last_point() {
             self.profile.duration_s()

@@ -340,7 +340,7 @@ fn parts_in_turn(
     let mut plans = Vec::new();
     let mut counts = start.counts;
     while let Some((first, end)) = todo.pop() {
-        if sampled.bounded.is_some()
+        if sampled.cut_for_segments()
             && let Some(cut) = reversal_cut(sampled, first, end)
         {
             todo.push((cut, end));
@@ -355,11 +355,10 @@ fn parts_in_turn(
             None => sampled.plan(first, end, counts),
         };
         let split = match planned {
-            // A bounded-error part holds its tolerance only with one segment per channel.
+            // A part plays as planned only with one segment per channel.
             Ok(plan)
-                if let Some(cut) = sampled
-                    .bounded
-                    .and_then(|_| segment_cut(sampled, &plan, first, end)) =>
+                if sampled.cut_for_segments()
+                    && let Some(cut) = segment_cut(sampled, &plan, first, end) =>
             {
                 cut
             }
@@ -481,7 +480,7 @@ pub(super) fn reversal(sampled: &Sampled, from: usize, to: usize) -> Option<(usi
         .min()
 }
 
-/// Where to cut a bounded-error part from sample point `first` to `end` whose `plan` gives a
+/// Where to cut a part from sample point `first` to `end` whose `plan` gives a
 /// channel a later F174 segment (a run that no one frequency range plays within its windows):
 /// at the last sample point before the segment begins, for the same reason as at a reversal
 /// ([`reversal_cut`]), or at the first point after `first` when it begins before that. `None`

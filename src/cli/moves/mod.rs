@@ -151,7 +151,7 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         let id = accepted["id"]
             .as_u64()
             .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
-        // A bounded-error line cut where a joint reverses runs as several starts (an older
+        // A line cut where a joint reverses runs as several starts (an older
         // daemon gives only `id`).
         let ids: Vec<u64> = accepted["ids"].as_array().map_or_else(
             || vec![id],

@@ -4,7 +4,7 @@
 //! period) and bounded-error (`--tolerance`, else the robot's, else [`DEFAULT_TOLERANCE_MM`]),
 //! each under both frequency models. A way that cannot be planned (say a tolerance below the
 //! pulse grid's floor) shows its error in its row; only a move that no way can plan is bad input.
-//! A bounded-error line cut into starts where a joint reverses (`plan::plan_line`) is one row:
+//! A line cut into starts where a joint reverses (`plan::plan_line`) is one row:
 //! rows, words and bytes over its starts, the worst of their deviations, and how many starts.
 //!
 //! **Upload bytes** are the bytes of the MEWTOCOL-COM command frames that write a plan's table
@@ -349,7 +349,7 @@ struct PlanDoc {
     figures: Option<FiguresDoc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     upload_bytes: Option<usize>,
-    /// PLC starts, when more than one (a bounded-error line cut where a joint reverses).
+    /// PLC starts, when more than one (a line cut where a joint reverses).
     #[serde(skip_serializing_if = "Option::is_none")]
     starts: Option<usize>,
 }

@@ -137,7 +137,7 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     let request = request(robot, args).map_err(Failure::BadInput)?;
     let plan = match plan_line(robot, &request).map_err(bad_input)? {
         MovePlan::One(plan) => plan,
-        // A bounded-error line cut where a joint reverses: shown as the path it runs as.
+        // A line cut where a joint reverses: shown as the path it runs as.
         MovePlan::Parts {
             path: planned,
             joint,

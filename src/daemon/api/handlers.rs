@@ -23,7 +23,7 @@ use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHan
 pub(super) struct Accepted {
     /// The move's last start: the move has ended when it has.
     id: MoveId,
-    /// Every start, in order: one, or a bounded-error line cut at a joint's reversal.
+    /// Every start, in order: one, or a line cut where a joint reverses.
     ids: Vec<MoveId>,
     report: MoveReport,
 }
