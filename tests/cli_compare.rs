@@ -8,9 +8,14 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 fn linterpd(extra: &[&str]) -> Output {
+    plan(&SEED, extra)
+}
+
+/// `linterpd plan` with `args` and `extra`, which must succeed.
+fn plan(args: &[&str], extra: &[&str]) -> Output {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
         .arg("plan")
-        .args(SEED)
+        .args(args)
         .args(extra)
         .output()
         .expect("linterpd runs");
@@ -167,20 +172,9 @@ fn svg_of_one_plan_draws_only_that_plan() {
 /// `linterpd plan` on a line from the seed's P1, turned 30 degrees about the robot's axis: it
 /// passes the point nearest the axis halfway, where the radial joint d3 reverses.
 fn past_the_axis(extra: &[&str]) -> Output {
-    let mut args: Vec<&str> = SEED.to_vec();
+    let mut args = SEED;
     args[3] = "-534.92,926.63,50";
-    let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
-        .arg("plan")
-        .args(&args)
-        .args(extra)
-        .output()
-        .expect("linterpd runs");
-    assert!(
-        out.status.success(),
-        "{extra:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    plan(&args, extra)
 }
 
 #[test]
