@@ -174,8 +174,11 @@ impl RobotHandle {
         if let Some(counts) = from {
             match plan_order(&self.robot, &checked, counts) {
                 Ok(plan) => end = Some(plan.end_counts()),
-                Err(PlanError::LaterSegment { .. }) => {
-                    return self.submit_line_in_parts(&order, &checked, counts);
+                Err(e @ PlanError::LaterSegment { .. }) => {
+                    return match checked.pose_target(&self.robot.pose_of(&counts)) {
+                        Some(to) => self.submit_line_in_parts(&order, &checked, counts, to),
+                        None => Err(e.into()),
+                    };
                 }
                 Err(e) => return Err(e.into()),
             }
@@ -191,18 +194,17 @@ impl RobotHandle {
         Ok(vec![id])
     }
 
-    /// A line order from `counts` that one start cannot run ([`PlanError::LaterSegment`]),
-    /// planned as a path of that one line and queued as its starts: their ids, in order. Each
-    /// start's report is the order with its target at the pose where that start ends.
+    /// A line order from `counts` to `to` that one start cannot run
+    /// ([`PlanError::LaterSegment`]), planned as a path of that one line and queued as its
+    /// starts: their ids, in order. Each start's report is the order with its target at the
+    /// pose where that start ends.
     fn submit_line_in_parts(
         &self,
         order: &MoveOrder,
         checked: &CheckedOrder,
         counts: [i64; JOINTS],
+        to: Pose,
     ) -> Result<Vec<MoveId>, SubmitError> {
-        let to = checked
-            .pose_target(&self.robot.pose_of(&counts))
-            .expect("only a line is refused for a reversal");
         let req = line_as_path(&MoveRequest {
             from: Origin::Counts(counts),
             to,

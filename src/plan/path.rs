@@ -323,7 +323,7 @@ fn parts(
 }
 
 /// Sample points in the shortest part ([`MIN_PART_S`]).
-pub(super) fn min_points(sampled: &Sampled) -> usize {
+fn min_points(sampled: &Sampled) -> usize {
     (MIN_PART_S / sampled.profile.period_s).ceil() as usize
 }
 
