@@ -13,7 +13,7 @@ mod lines;
 use linterpd::geometry::Line;
 use linterpd::plan::{Origin, plan_line};
 use linterpd::robot::seed_robot;
-use linterpd::sim::{self, Settings};
+use linterpd::sim;
 
 fn main() {
     let robot = seed_robot();
@@ -32,11 +32,7 @@ fn main() {
         for (k, plan) in starts.iter().enumerate() {
             let segments: Vec<usize> = plan.tables.iter().map(|t| t.segments.len()).collect();
             let deviation = |gap_s: f64| {
-                let settings = Settings {
-                    model: req.motion.frequency_model,
-                    segment_gap_s: gap_s,
-                };
-                let run = sim::execute(&plan.tables, &plan.max_hz, settings);
+                let run = plan.execution_with_scan(gap_s);
                 sim::path_deviation_mm(
                     &robot,
                     &plan.start_counts(),

@@ -12,7 +12,7 @@ use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
 use linterpd::robot::{Method, Robot};
-use linterpd::sim::{self, Settings};
+use linterpd::sim;
 use linterpd::table::{FrequencyModel, TableProblem};
 use proptest::prelude::*;
 
@@ -100,11 +100,7 @@ fn check(
         prop_assert!(plan.figures.tracking_error_mm <= 2.0 * tolerance_mm);
         common::moves::check_tables_and_ends(robot, plan)?;
         for gap_s in SCANS_S {
-            let settings = Settings {
-                model: plan.motion.frequency_model,
-                segment_gap_s: gap_s,
-            };
-            let run = sim::execute(&plan.tables, &plan.max_hz, settings);
+            let run = plan.execution_with_scan(gap_s);
             let events = run.events.iter().copied();
             let d = sim::path_deviation_mm(robot, &plan.start_counts(), events, &line);
             prop_assert!(

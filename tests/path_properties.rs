@@ -29,7 +29,6 @@ use linterpd::geometry::{ArcBy, Corner, Element, Path, PathSpec, Pose, ToolPath}
 use linterpd::kinematics::{JOINTS, Kinematics};
 use linterpd::plan::{Origin, PathPlan, PathRequest, Plan, PlanError, plan_path};
 use linterpd::robot::{Method, OverSpeed, Robot};
-use linterpd::sim;
 use linterpd::table::{FrequencyModel, TableProblem, problems};
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -433,13 +432,9 @@ fn refusal(e: &PlanError, s: &Settings) -> Option<String> {
 /// event of its execution with `gap_s` between a channel's segments (the PLC's scan; the plan's
 /// own figures take 0), computed here from the counts with forward kinematics.
 fn executed_deviation_mm(robot: &Robot, plan: &Plan, path: &Path, gap_s: f64) -> f64 {
-    let settings = sim::Settings {
-        model: plan.motion.frequency_model,
-        segment_gap_s: gap_s,
-    };
     let mut counts = plan.start_counts();
     let mut worst = path.distance_mm(&robot.pose_of(&counts).position_mm);
-    for e in &sim::execute(&plan.tables, &plan.max_hz, settings).events {
+    for e in &plan.execution_with_scan(gap_s).events {
         counts[e.table] = e.count;
         worst = worst.max(path.distance_mm(&robot.pose_of(&counts).position_mm));
     }

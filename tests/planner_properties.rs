@@ -9,7 +9,6 @@ use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
 use linterpd::robot::Robot;
-use linterpd::sim::{self, Settings};
 use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem};
 use proptest::prelude::*;
 
@@ -70,14 +69,7 @@ fn check_plan(robot: &Robot, starts: &[Plan]) -> Result<(), TestCaseError> {
             check_grid(plan, j)?;
         }
         // The same pulses, hence the same figures, with a 10 ms scan between segments.
-        let late = sim::execute(
-            &plan.tables,
-            &plan.max_hz,
-            Settings {
-                model: plan.motion.frequency_model,
-                segment_gap_s: 0.010,
-            },
-        );
+        let late = plan.execution_with_scan(0.010);
         let on_time = plan.execution();
         prop_assert!(
             late.events.iter().zip(&on_time.events).all(|(a, b)| a == b),

@@ -88,7 +88,7 @@ mod tests {
     use crate::geometry::{Line, Pose};
     use crate::kinematics::Kinematics;
     use crate::robot::{Method, Motion, Robot, seed_robot};
-    use crate::sim::{self, Settings};
+    use crate::sim;
     use crate::table::FrequencyModel;
 
     /// A line 800 mm from the seed robot's axis, `length_mm` long, passing the point nearest
@@ -164,11 +164,7 @@ mod tests {
             assert_eq!(starts[starts.len() - 1].end_counts(), robot.counts_of(&q));
             for (k, plan) in starts.iter().enumerate() {
                 for gap_s in [0.0, 0.002, 0.010] {
-                    let settings = Settings {
-                        model,
-                        segment_gap_s: gap_s,
-                    };
-                    let run = sim::execute(&plan.tables, &plan.max_hz, settings);
+                    let run = plan.execution_with_scan(gap_s);
                     let d = sim::path_deviation_mm(
                         &robot,
                         &plan.start_counts(),

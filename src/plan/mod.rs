@@ -375,12 +375,27 @@ impl Plan {
         sim::execute(&self.tables, &self.max_hz, settings(&self.motion))
     }
 
+    /// [`Plan::execution`] with `scan_s` between the end of a channel's segment and the start
+    /// of its next, as a PLC scan may put there (ACCURACY.md).
+    #[must_use]
+    pub fn execution_with_scan(&self, scan_s: f64) -> Execution {
+        let settings = Settings {
+            segment_gap_s: scan_s,
+            ..settings(&self.motion)
+        };
+        sim::execute(&self.tables, &self.max_hz, settings)
+    }
+
     /// The first later F174 segment of any channel, as the execution model plays it: the
     /// joint, and when the segment begins, s from the start. The PLC begins it in the scan
     /// after the segment before it ends, up to a scan late (ACCURACY.md), while the other
     /// channels run on.
     #[must_use]
     pub fn later_segment(&self) -> Option<(usize, f64)> {
+        // Most plans have none: no rows timed for them.
+        if self.tables.iter().all(|t| t.segments.len() <= 1) {
+            return None;
+        }
         self.row_timings()
             .into_iter()
             .filter(|r| r.segment > 0 && r.row == 0)
