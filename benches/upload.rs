@@ -11,13 +11,13 @@
 use std::time::{Duration, Instant};
 
 use linterpd::geometry::Pose;
-use linterpd::mewtocol::{Header, Station, max_read_reply_words, max_write_words};
+use linterpd::mewtocol::{Header, Station, max_read_reply_words, max_write_words, reply_wire};
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, ModbusServer, ModbusServerOptions,
     SharedMock,
 };
 use linterpd::plan::{MoveRequest, Origin, plan_move};
-use linterpd::plc::contract::{Contract, ContractSettings};
+use linterpd::plc::contract::{BLOCK_WRITE_WORDS, Contract, ContractSettings};
 use linterpd::plc::{
     HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming, ModbusOptions, Plc,
 };
@@ -54,16 +54,27 @@ impl Link {
         chunks(words, per).fold((0, 0), |(bytes, e), n| (bytes + a + b * n + reply, e + 1))
     }
 
-    /// (bytes both ways, exchanges) to read `words` back.
+    /// (bytes both ways, scans waited) to read `words` back.
     fn read_cost(self, words: usize) -> (usize, usize) {
-        // (words a frame, command bytes, reply bytes = a + b * n)
-        let (per, cmd, a, b) = match self {
-            // % 01 # RDD sssss eeeee BCC CR ; reply % 01 $ RD data BCC CR
-            Self::Mewtocol(h) => (max_read_reply_words(h), 20, 9, 4),
+        match self {
+            // % 01 # RDD sssss eeeee BCC CR; the reply in as many frames as it needs (under %
+            // up to 509 words, each frame after the first asked for with % 01 ** & CR, each
+            // answered after a scan).
+            Self::Mewtocol(h) => {
+                let per = match h {
+                    Header::Percent => max_read_reply_words(Header::Angle),
+                    Header::Angle => max_read_reply_words(h),
+                };
+                chunks(words, per).fold((0, 0), |(bytes, e), n| {
+                    let wire = reply_wire(h, 3 + 4 * n);
+                    (bytes + 20 + wire.chars, e + wire.frames)
+                })
+            }
             // unit fc start qty crc ; reply unit fc count data crc
-            Self::ModbusRtu => (125, 8, 5, 2),
-        };
-        chunks(words, per).fold((0, 0), |(bytes, e), n| (bytes + cmd + a + b * n, e + 1))
+            Self::ModbusRtu => {
+                chunks(words, 125).fold((0, 0), |(bytes, e), n| (bytes + 8 + 5 + 2 * n, e + 1))
+            }
+        }
     }
 }
 
@@ -92,7 +103,8 @@ fn seed_tables() -> Vec<ValidTable> {
         .unwrap()
 }
 
-/// The floor for writing every block (tables and the 7-word command block) and reading them back.
+/// The floor for writing every block (tables and the command block's words) and reading them back:
+/// the bytes both ways at the baud rate, and a scan for every reply frame.
 fn floor_s(link: Link, blocks: &[usize], baud: u32, verify: bool) -> (f64, usize) {
     let mut bytes = 0;
     let mut exchanges = 0;
@@ -184,7 +196,7 @@ async fn measure(link: Link, baud: u32, verify: bool, tables: &[ValidTable]) -> 
 async fn main() {
     let tables = seed_tables();
     let mut blocks: Vec<usize> = tables.iter().map(|t| encode(t).len()).collect();
-    blocks.push(7);
+    blocks.push(BLOCK_WRITE_WORDS);
     println!(
         "seed's tables: {} words in {} blocks ({blocks:?})",
         blocks.iter().sum::<usize>(),

@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::daemon::{duplex_connector_with, mewtocol_options};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;
 use common::served::{LIMIT, ROBOT, Served};
@@ -120,7 +121,7 @@ fn lift_and_place() -> serde_json::Value {
 
 #[tokio::test]
 async fn a_section_cut_into_parts_chains_them_at_speed_from_exact_counts_without_a_pause() {
-    chains_at_speed("").await;
+    chains_at_speed("", true).await;
 }
 
 #[tokio::test]
@@ -129,17 +130,21 @@ async fn a_link_whose_every_exchange_takes_40_ms_still_chains_the_parts() {
     // block written and read back, one more status read, the start write): about 0.21 s of
     // the 0.39 s lift, 0.26 s with the pace check's margin. The third part's tables (frames of
     // about 25 words, each 40 ms late) are written and read back while the second runs 1.25 s.
-    chains_at_speed("delay40@100%").await;
+    chains_at_speed("delay40@100%", true).await;
+    chains_at_speed("delay40@100%", false).await;
 }
 
 #[tokio::test]
 async fn a_later_part_preloaded_behind_the_first_chains_over_a_link_too_slow_to_write_it_whole() {
-    // Every exchange 55 ms late. Written whole while the second part runs 1.25 s, the third
-    // part's tables (seven frames written, seven read back) and its start (five exchanges)
-    // would take about 1.05 s, 1.3 s with the pace check's margin: refused. Its tables went in
-    // with the first part's, past them in the same bank: its start writes only the directories
-    // of the channels the first part's tables come before, and its block, each read back.
-    let parts = chains_at_speed("delay55@100%").await;
+    // Every exchange 55 ms late, reads one frame at a time (`multi_frame_reads = false`, or a
+    // PLC without multi-frame replies). Written whole while the second part runs 1.25 s, the
+    // third part's tables (seven frames written, seven read back) and its start (five
+    // exchanges) would take about 1.05 s, 1.3 s with the pace check's margin: refused. Its
+    // tables went in with the first part's, past them in the same bank: its start writes only
+    // the directories of the channels the first part's tables come before, and its block,
+    // each read back. (With multi-frame reads its tables are read back in three exchanges,
+    // and written whole in time.)
+    let parts = chains_at_speed("delay55@100%", false).await;
     let third = parts[2].upload_s.unwrap();
     assert!(
         third < 0.55,
@@ -150,11 +155,18 @@ async fn a_later_part_preloaded_behind_the_first_chains_over_a_link_too_slow_to_
 /// The lift and place over a mock with fault `script`: every part done, each waiting behind
 /// the one before and taken as it ended, from exactly its end counts. The section is cut where
 /// the base and radial joints start late (after the lift) and where d2 reverses while they move
-/// (at the top of the second blend).
-async fn chains_at_speed(script: &str) -> Vec<linterpd::daemon::MoveReport> {
+/// (at the top of the second blend). The daemon reads several frames in one read when
+/// `multi_frame_reads`, else one frame a read.
+async fn chains_at_speed(
+    script: &str,
+    multi_frame_reads: bool,
+) -> Vec<linterpd::daemon::MoveReport> {
     let shared = mock_at_seed_start(script);
     let dir = TempDir::new("paths-parts");
-    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let mut options = mewtocol_options();
+    options.multi_frame_reads = multi_frame_reads;
+    let connect = duplex_connector_with(&shared, None, options);
+    let s = Served::start_on(connect, &shared, None, dir.path(), "api.sock").await;
     let a_rad = seed_robot()
         .pose_of(&s.handle.state().counts.unwrap())
         .a_rad;

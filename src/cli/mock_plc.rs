@@ -86,6 +86,8 @@ pub enum VariantArg {
     StopPauses,
     /// `<` frames get no answer.
     AngleRefused,
+    /// MEWTOCOL replies longer than one frame get no answer (no multi-frame replies).
+    OneFrameReplies,
     /// MEWTOCOL reads/writes above 64 words get `! 41`, Modbus requests above 100 registers
     /// exception 03.
     SmallRequests,
@@ -104,6 +106,7 @@ impl VariantArg {
             Self::BusyNeverRises => MockVariant::BusyNeverRises,
             Self::StopPauses => MockVariant::StopPauses,
             Self::AngleRefused => MockVariant::AngleRefused,
+            Self::OneFrameReplies => MockVariant::OneFrameReplies,
             Self::SmallRequests => MockVariant::SmallRequests,
             Self::DividerClock => MockVariant::DividerClock,
             Self::IdealClock => MockVariant::IdealClock,

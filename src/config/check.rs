@@ -144,6 +144,12 @@ impl Shown for Vec<Spanned<i64>> {
     }
 }
 
+impl Shown for bool {
+    fn shown(&self) -> String {
+        self.to_string()
+    }
+}
+
 impl Shown for String {
     fn shown(&self) -> String {
         format!("{self:?}")

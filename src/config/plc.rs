@@ -7,6 +7,7 @@
 //! # or: tcp = { address = "192.168.1.5:9094", connect_timeout = "2s" }   (exactly one of them)
 //! station = 1                        # MEWTOCOL 1..=99 or 238 (EE); Modbus unit 1..=247
 //! header = "auto"                    # MEWTOCOL only: "auto" | "percent" | "angle" [unverified]
+//! multi_frame_reads = true           # MEWTOCOL only: % reads past one frame in one RD [practice]
 //! timeout = "300ms"                  # margin per exchange, beyond its wire time and 2 scans
 //! scan_time = "10ms"                 # the PLC's longest scan
 //! retries = 2                        # 0..=10
@@ -59,6 +60,13 @@ pub(super) fn link(
     }
     if let Some(v) = &r.header {
         settings.header = header(&at.child("header"), v, protocol)?;
+    }
+    if let Some(v) = &r.multi_frame_reads {
+        if protocol != Protocol::Mewtocol {
+            let at = at.child("multi_frame_reads");
+            return Err(at.invalid(v, "only MEWTOCOL replies come in frames"));
+        }
+        settings.multi_frame_reads = *v.get_ref();
     }
     settings.timeout =
         positive_duration(&at.child("timeout"), r.timeout.as_ref(), settings.timeout)?;

@@ -214,11 +214,34 @@ fn modbus_request_sizes_are_refused_for_mewtocol() {
 }
 
 #[test]
+fn multi_frame_reads_are_on_by_default_can_be_turned_off_and_are_refused_for_modbus() {
+    let mewtocol = "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyS0\" }\n";
+    let link = |text: &str| Config::from_toml(text).unwrap().link("r").unwrap().clone();
+    assert!(link(&with_plc(mewtocol)).multi_frame_reads);
+    let off = with_plc(&format!("{mewtocol}multi_frame_reads = false"));
+    assert!(!link(&off).multi_frame_reads);
+    let modbus = "protocol = \"modbus-rtu\"\nserial = { path = \"/dev/ttyS0\" }\n";
+    let text = with_plc(&format!("{modbus}multi_frame_reads = true"));
+    assert_eq!(
+        message(&text),
+        "config line 44: robots.r.plc.multi_frame_reads = true: only MEWTOCOL replies come in \
+         frames"
+    );
+    let text = with_plc(&format!("{mewtocol}multi_frame_reads = \"yes\""));
+    assert!(
+        message(&text).contains("multi_frame_reads"),
+        "{}",
+        message(&text)
+    );
+}
+
+#[test]
 fn shipped_file_has_a_valid_press_loader_plc_section() {
     let config = Config::from_toml(include_str!("../../config/linterpd.toml")).unwrap();
     let link = config.link("press-loader").unwrap();
     assert_eq!(link.protocol, Protocol::Mewtocol);
     assert_eq!(link.header, HeaderChoice::Auto);
+    assert!(link.multi_frame_reads);
     assert_eq!(link.layout, Layout::default());
     assert!(matches!(&link.transport, Transport::Serial(s) if s.path == "/dev/ttyUSB0"));
 }

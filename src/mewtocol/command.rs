@@ -133,10 +133,10 @@ impl Command {
         }
     }
 
-    /// Characters of the longest reply frame to this command (envelope, `$`, code and data):
-    /// with the command's own frame length, the wire time of one exchange.
+    /// Characters of this command's successful reply body (`$`, code and data): with
+    /// [`super::reply_wire`], the reply's frames and their characters on the wire.
     #[must_use]
-    pub fn reply_chars(&self) -> usize {
+    pub fn reply_body_len(&self) -> usize {
         let data = match self {
             Self::ReadDt(range) => range.len() * WORD_CHARS,
             Self::ReadContactWords(range) => range.len() * WORD_CHARS,
@@ -145,7 +145,7 @@ impl Command {
             Self::Status => 16,
             Self::WriteDt { .. } | Self::WriteContact { .. } | Self::SetMode(_) => 0,
         };
-        ENVELOPE_LEN + 3 + data
+        3 + data
     }
 
     /// The two letters a successful reply to this command starts with (after `$`).

@@ -42,7 +42,9 @@ pub use command::{Command, Mode, max_write_words};
 pub use decoder::{Decoded, FrameDecoder};
 pub use error::{CodecError, FrameError, MessageError, PlcError, PlcErrorCode};
 pub use frame::{BccMode, CR, Frame, Header, MORE, NO_CHECK, Station, bcc};
-pub use multi::{Joined, MAX_REPLY_BODY, Progress, ReplyAssembler, response_frames};
+pub use multi::{
+    Joined, MAX_REPLY_BODY, Progress, ReplyAssembler, ReplyWire, reply_wire, response_frames,
+};
 pub use reply::{
     PlcStatus, Reply, Response, encode_response, max_read_reply_words, parse_response,
 };

@@ -15,7 +15,7 @@ use bytes::{Bytes, BytesMut};
 
 use super::address::DT_MAX;
 use super::error::MessageError;
-use super::frame::{Frame, Header, Station};
+use super::frame::{ENVELOPE_LEN, Frame, Header, Station};
 use super::reply::{Response, encode_response};
 use super::words::WORD_CHARS;
 
@@ -41,6 +41,36 @@ pub fn response_frames(header: Header, station: Station, response: &Response) ->
             }
         })
         .collect()
+}
+
+/// A reply on the wire: the frames it comes in and every character both ways.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReplyWire {
+    /// Frames the reply takes ([`response_frames`]'s split).
+    pub frames: usize,
+    /// Characters of those frames, and of the host's "next frame" requests between them.
+    pub chars: usize,
+}
+
+/// How a reply body of `body_len` characters (`$` or `!` first) travels under `header`: in
+/// one frame if it fits, else split as [`response_frames`] splits it, each frame after the
+/// first asked for with a `HDR ST ** & CR` request.
+#[must_use]
+pub fn reply_wire(header: Header, body_len: usize) -> ReplyWire {
+    if body_len <= header.max_body_len(false) {
+        return ReplyWire {
+            frames: 1,
+            chars: ENVELOPE_LEN + body_len,
+        };
+    }
+    let frames = body_len.div_ceil(header.max_body_len(true));
+    let asks = frames - 1;
+    let ask_chars = ENVELOPE_LEN + 1;
+    ReplyWire {
+        frames,
+        // Every frame's envelope, `&` on all but the last, and one request before each of those.
+        chars: body_len + frames * ENVELOPE_LEN + asks * (1 + ask_chars),
+    }
 }
 
 /// A reply body joined from one or more frames.
@@ -174,6 +204,30 @@ mod tests {
             more,
             ..Frame::new(Header::Percent, station(), body)
         }
+    }
+
+    #[test]
+    fn reply_wire_counts_every_frame_and_request_response_frames_make() {
+        for words in [1, 27, 28, 54, 55, 90, 200, 509] {
+            let response = Ok(Reply::ReadDt(vec![0x1234; words]));
+            let body_len = 3 + 4 * words;
+            let frames = response_frames(Header::Percent, station(), &response);
+            let frame_chars: usize = frames.iter().map(|f| f.to_bytes().unwrap().len()).sum();
+            let ask = Frame::next_frame_request(Header::Percent, station());
+            let asks = (frames.len() - 1) * ask.to_bytes().unwrap().len();
+            assert_eq!(
+                reply_wire(Header::Percent, body_len),
+                ReplyWire {
+                    frames: frames.len(),
+                    chars: frame_chars + asks
+                },
+                "{words} words"
+            );
+        }
+        // 27 words fill one % frame; 28 take two; < carries 509 in one.
+        assert_eq!(reply_wire(Header::Percent, 3 + 4 * 27).frames, 1);
+        assert_eq!(reply_wire(Header::Percent, 3 + 4 * 28).frames, 2);
+        assert_eq!(reply_wire(Header::Angle, 3 + 4 * 509).frames, 1);
     }
 
     #[test]

@@ -7,12 +7,15 @@
 //!                       -> Invalid            ! 42 / 41 / 61 / 66 (MessageError::plc_code)
 //!                       -> Request(Command)   route by station, [wait for the scan's end],
 //!                                             on_command() faults, execute, reply frames
-//!                       -> Request(NextFrame) the next frame of a multi-frame reply (%01**&)
+//!                       -> Request(NextFrame) [wait for the scan's end], the next frame of a
+//!                                             multi-frame reply (%01**&)
 //! ```
 //! Link faults per command: drop (no reply), corrupt (one byte of the first frame), delay, close
 //! (the connection ends), error NN (`! NN`); a Modbus exception in the script answers `! 60`.
 //! A command that arrives during a multi-frame reply abandons the rest of it. The
-//! `angle-refused` variant neither executes nor answers anything that comes with a `<` header.
+//! `angle-refused` variant neither executes nor answers anything that comes with a `<` header;
+//! the `one-frame-replies` variant executes a command whose reply needs several frames but
+//! answers nothing.
 
 use std::collections::VecDeque;
 use std::io;
@@ -261,6 +264,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
 
     async fn next_frame(&mut self) -> Result<Step, ServerError> {
         if let Some(frame) = self.pending.pop_front() {
+            // A PLC answers the request for the next frame at the end of a scan, as a command.
+            if self.server.options.baud.is_some() {
+                self.server.mock.wait_scan_end().await;
+            }
             self.send(&frame, &[]).await?;
         } else {
             tracing::warn!("next-frame request without a multi-frame reply in progress");
@@ -315,6 +322,18 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
             }
         }
         let mut frames: VecDeque<Frame> = response_frames(header, from, &response).into();
+        if frames.len() > 1
+            && !self
+                .server
+                .mock
+                .with(|m| m.config().variant.answers_multi_frame())
+        {
+            tracing::debug!(
+                "one-frame-replies: a reply of {} frames goes unanswered",
+                frames.len()
+            );
+            return Ok(Step::Continue);
+        }
         if let Some(first) = frames.pop_front() {
             self.send(&first, faults).await?;
         }

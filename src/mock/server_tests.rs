@@ -270,3 +270,29 @@ async fn angle_refused_leaves_angle_frames_unanswered_and_answers_percent() {
     let reply = raw_exchange(&mut ours, &framed("%01#RDD0100001000")).await;
     assert!(reply.starts_with(b"%01$RD494C"), "{reply:?}");
 }
+
+#[tokio::test(start_paused = true)]
+async fn one_frame_replies_leave_a_multi_frame_read_unanswered_and_the_client_reads_a_frame_at_a_time()
+ {
+    let mock = MockPlc::new(MockConfig {
+        variant: MockVariant::OneFrameReplies,
+        ..MockConfig::default()
+    })
+    .unwrap();
+    let shared = SharedMock::new(mock);
+    shared.with(|m| m.write_words(2_000, &ramp(60)).unwrap());
+    let (mut ours, theirs) = tokio::io::duplex(8192);
+    let server = MewtocolServer::new(shared.clone(), MewtocolServerOptions::default());
+    tokio::spawn(async move { server.serve(theirs).await });
+    // 28 words take two frames: no answer. 27 fit one.
+    ours.write_all(&framed("%01#RDD0200002027")).await.unwrap();
+    let mut byte = [0_u8];
+    let silent = tokio::time::timeout(Duration::from_secs(1), ours.read_exact(&mut byte)).await;
+    assert!(silent.is_err(), "no answer to a read of two frames");
+    let reply = raw_exchange(&mut ours, &framed("%01#RDD0200002026")).await;
+    assert!(reply.starts_with(b"%01$RD5A5A"), "{reply:?}");
+    // linterpd's client gets every word all the same.
+    let mut plc = client(ours, st(1));
+    assert_eq!(plc.read_words(2_000, 60).await.unwrap(), ramp(60));
+    assert_eq!(plc.exchange_sizes().read_words, 27);
+}

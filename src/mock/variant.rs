@@ -11,6 +11,8 @@
 //!                   next F174 on the channel (after the listing's H n100) resumes the paused
 //!                   table and is itself refused without an error     engine.rs
 //! angle-refused     `<` frames get no answer at all                  mewtocol_server.rs
+//! one-frame-replies a MEWTOCOL-COM reply longer than one frame gets no answer at all (a
+//!                   PLC without multi-frame replies)                mewtocol_server.rs
 //! small-requests    MEWTOCOL reads and writes of more than 64 words answer `! 41`, Modbus
 //!                   requests of more than 100 registers exception 03 answer.rs, modbus_server.rs
 //! divider-clock     the channels output per the fpx-divider model, whatever --frequency-model
@@ -36,6 +38,8 @@ pub enum MockVariant {
     StopPauses,
     /// `<` frames get no answer.
     AngleRefused,
+    /// MEWTOCOL-COM replies longer than one frame get no answer.
+    OneFrameReplies,
     /// Reads and writes above 64 MEWTOCOL words or 100 Modbus registers are refused.
     SmallRequests,
     /// The channels follow the fpx-divider model.
@@ -46,11 +50,12 @@ pub enum MockVariant {
 
 impl MockVariant {
     /// Every variant, the default first.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 8] = [
         Self::Listing,
         Self::BusyNeverRises,
         Self::StopPauses,
         Self::AngleRefused,
+        Self::OneFrameReplies,
         Self::SmallRequests,
         Self::DividerClock,
         Self::IdealClock,
@@ -64,6 +69,7 @@ impl MockVariant {
             Self::BusyNeverRises => "busy-never-rises",
             Self::StopPauses => "stop-pauses",
             Self::AngleRefused => "angle-refused",
+            Self::OneFrameReplies => "one-frame-replies",
             Self::SmallRequests => "small-requests",
             Self::DividerClock => "divider-clock",
             Self::IdealClock => "ideal-clock",
@@ -102,6 +108,12 @@ impl MockVariant {
     #[must_use]
     pub fn answers_angle(self) -> bool {
         self != Self::AngleRefused
+    }
+
+    /// Whether a MEWTOCOL-COM reply may come in several frames.
+    #[must_use]
+    pub fn answers_multi_frame(self) -> bool {
+        self != Self::OneFrameReplies
     }
 
     /// Most words one MEWTOCOL-COM read or write may hold, if the variant limits it below the

@@ -4,7 +4,10 @@
 //! ```text
 //!  read_words / write_words        chunked to one frame each: % RD <= 27 words, WD <= 24;
 //!      |                           < RD <= 509 words, WD <= 507, fewer on a slow serial line
-//!      |                           (at most 250 ms of wire time an exchange)
+//!      |                           (at most 250 ms of wire time an exchange); under % a read
+//!      |                           takes up to 509 words in one RD answered in several frames
+//!      |                           (multi-frame reads), or one frame each after the first
+//!      |                           such read goes unanswered
 //!  exchange  -- retries (timeout, garbled reply, ! 40 BCC, ! 41 format) up to `retries` times;
 //!      |        write_words_once never retries (a start command is not safe to repeat)
 //!  attempt   -- drains late bytes first if the last attempt failed, then one timeout around
@@ -32,7 +35,7 @@ use crate::gateway::Area;
 use crate::mewtocol::{
     Addressed, ClientCodec, ClientEvent, CodecError, Command, Contact, ContactArea, ContactWords,
     DtRange, Header, PlcErrorCode, Reply, Request, Response, Station, max_read_reply_words,
-    max_write_words,
+    max_write_words, reply_wire,
 };
 
 /// Station number that means `EE` (answered by any PLC \[practice\]) in the config.
@@ -41,6 +44,10 @@ pub const STATION_ANY: u8 = 0xEE;
 /// Wire time one exchange is kept within on a slow line (the frame sizes are cut to fit), so a
 /// stop never waits long behind an upload; a frame never gets smaller than `%` allows.
 const EXCHANGE_BUDGET: Duration = Duration::from_millis(250);
+
+/// Most words one multi-frame read asks for: what one `<` frame carries, a size a PLC's
+/// communication buffer is known to hold.
+const MULTI_FRAME_READ_WORDS: usize = max_read_reply_words(Header::Angle);
 
 /// How the client talks: station, header, timing and retries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +64,8 @@ pub struct MewtocolOptions {
     pub scan_time: Duration,
     /// Further attempts after a retryable failure.
     pub retries: u8,
+    /// Under `%`, reads longer than one frame as one `RD` with a multi-frame reply.
+    pub multi_frame_reads: bool,
 }
 
 impl MewtocolOptions {
@@ -71,6 +80,7 @@ impl MewtocolOptions {
             char_time: timing.char_time,
             scan_time: timing.scan_time,
             retries: 2,
+            multi_frame_reads: true,
         }
     }
 
@@ -99,6 +109,28 @@ impl MewtocolOptions {
         fit.clamp(floor.min(most), most)
     }
 
+    /// Words one multi-frame read under `%` asks for: [`MULTI_FRAME_READ_WORDS`], or fewer on
+    /// a slow line (its request, reply frames and next-frame requests within
+    /// [`EXCHANGE_BUDGET`] of wire time), never fewer than one frame holds.
+    fn multi_frame_read_words(&self) -> usize {
+        let one_frame = max_read_reply_words(Header::Percent);
+        let Some(char_time) = self.char_time.filter(|c| !c.is_zero()) else {
+            return MULTI_FRAME_READ_WORDS;
+        };
+        let chars = (EXCHANGE_BUDGET.as_secs_f64() / char_time.as_secs_f64()) as usize;
+        let fits = |words: usize| {
+            let command = Command::ReadDt(DtRange::from_len(0, words).expect("a valid range"));
+            let request = command
+                .to_frame(Header::Percent, self.station)
+                .map_or(0, |f| f.encoded_len());
+            request + reply_wire(Header::Percent, command.reply_body_len()).chars <= chars
+        };
+        (one_frame + 1..=MULTI_FRAME_READ_WORDS)
+            .take_while(|&words| fits(words))
+            .last()
+            .unwrap_or(one_frame)
+    }
+
     /// The options a link's settings describe (station 238 is `EE`).
     pub fn from_settings(settings: &LinkSettings) -> Result<Self, PlcError> {
         let station = if settings.station == STATION_ANY {
@@ -117,6 +149,7 @@ impl MewtocolOptions {
             char_time: timing.char_time,
             scan_time: timing.scan_time,
             retries: settings.retries,
+            multi_frame_reads: settings.multi_frame_reads,
         })
     }
 }
@@ -176,12 +209,28 @@ impl fmt::Display for Failure {
     }
 }
 
+/// Where a client stands with multi-frame reads (`%` only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MultiFrame {
+    /// None made yet: the first one that goes unanswered turns them off.
+    Untried,
+    /// The PLC answered one: a later failure is the line's, and only that read is made again
+    /// one frame at a time.
+    Answered,
+    /// Off (configured so, or the first went unanswered): one frame a read.
+    Off,
+}
+
 /// A MEWTOCOL-COM host over the stream `T`.
 #[derive(Debug)]
 pub struct MewtocolClient<T> {
     framed: Framed<T, ClientCodec>,
     options: MewtocolOptions,
     header: Option<Header>,
+    /// Whether reads longer than one frame are made as multi-frame reads.
+    multi_frame: MultiFrame,
+    /// Words one multi-frame read asks for ([`MewtocolOptions::multi_frame_read_words`]).
+    multi_frame_words: usize,
     stale: bool,
     counts: Arc<ExchangeCounts>,
 }
@@ -198,6 +247,12 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
             framed: Framed::new(stream, ClientCodec::new()),
             options,
             header,
+            multi_frame: if options.multi_frame_reads {
+                MultiFrame::Untried
+            } else {
+                MultiFrame::Off
+            },
+            multi_frame_words: options.multi_frame_read_words(),
             stale: false,
             counts: Arc::default(),
         }
@@ -279,15 +334,74 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         }
     }
 
-    /// The longest `command` may take: its frame and its reply on the wire, two scans, the
-    /// margin.
+    /// The longest `command` may take: its frame and its reply on the wire (every frame of a
+    /// multi-frame reply and the requests for them), two scans and one more for every frame
+    /// after the first, the margin.
     fn exchange_timeout(&self, header: Header, command: &Command) -> Duration {
         let request = command
             .to_frame(header, self.options.station)
             .map_or(0, |f| f.encoded_len());
+        let reply = reply_wire(header, command.reply_body_len());
+        let asks = u32::try_from(reply.frames - 1).unwrap_or(u32::MAX);
+        self.options.timing().exchange(request, reply.chars) + self.options.scan_time * asks
+    }
+
+    /// Words one read exchange asks for under `header`: a multi-frame read's under `%` while
+    /// those are in use, else what one frame holds.
+    fn read_words_per_exchange(&self, header: Header) -> usize {
+        if header == Header::Percent && self.multi_frame != MultiFrame::Off {
+            self.multi_frame_words
+        } else {
+            self.one_frame_read_words(header)
+        }
+    }
+
+    fn one_frame_read_words(&self, header: Header) -> usize {
         self.options
-            .timing()
-            .exchange(request, command.reply_chars())
+            .words_per_exchange(header, max_read_reply_words(header), 9)
+    }
+
+    /// `len` words from `start`: one multi-frame read when it takes more than one frame and
+    /// those are in use, else one read a frame. A multi-frame read gets one try; not answered
+    /// (no reply in time, a garbled or `!` reply), its words are read one frame at a time with
+    /// the usual retries, and if the PLC never answered one, multi-frame reads end for this
+    /// client. A failed link is an error.
+    async fn read_span(
+        &mut self,
+        header: Header,
+        start: u32,
+        len: usize,
+    ) -> Result<Vec<u16>, PlcError> {
+        let one_frame = self.one_frame_read_words(header);
+        if len > one_frame && header == Header::Percent && self.multi_frame != MultiFrame::Off {
+            match self.read_chunk(header, start, len, 0).await {
+                Ok(words) => {
+                    self.multi_frame = MultiFrame::Answered;
+                    return Ok(words);
+                }
+                Err(e @ PlcError::Link { .. }) => return Err(e),
+                Err(e) if self.multi_frame == MultiFrame::Answered => {
+                    self.counts.retried();
+                    tracing::warn!(error = %e, "reading those words again one frame at a time");
+                }
+                Err(e) => {
+                    tracing::warn!(
+                        error = %e,
+                        "the PLC did not answer a multi-frame read: reading one frame at a time \
+                         from now on (multi_frame_reads = false skips this try)"
+                    );
+                    self.multi_frame = MultiFrame::Off;
+                }
+            }
+        }
+        let mut words = Vec::with_capacity(len);
+        for (from, n) in chunks(start, len, one_frame) {
+            words.extend(
+                self.read_chunk(header, from, n, self.options.retries)
+                    .await?,
+            );
+        }
+        Ok(words)
     }
 
     /// One try: settle the link, then one timeout around the whole round trip.
@@ -392,10 +506,14 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         header: Header,
         start: u32,
         len: usize,
+        retries: u8,
     ) -> Result<Vec<u16>, PlcError> {
         let operation = dt_operation("read", start, len);
         let command = Command::ReadDt(dt_range(start, len, &operation)?);
-        match self.exchange(header, &command, &operation).await? {
+        match self
+            .exchange_tries(header, &command, &operation, retries)
+            .await?
+        {
             Reply::ReadDt(words) => Ok(words),
             other => Err(unexpected(&operation, &other)),
         }
@@ -421,11 +539,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
     async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
         let header = self.resolve_header().await?;
         let mut words = Vec::with_capacity(usize::from(count));
-        let size = self
-            .options
-            .words_per_exchange(header, max_read_reply_words(header), 9);
-        for (from, len) in chunks(start, usize::from(count), size) {
-            words.extend(self.read_chunk(header, from, len).await?);
+        let size = self.read_words_per_exchange(header);
+        for (from, len) in chunks(u32::from(start), usize::from(count), size) {
+            words.extend(self.read_span(header, from, len).await?);
         }
         Ok(words)
     }
@@ -533,11 +649,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
 
     fn exchange_sizes(&self) -> ExchangeSizes {
         let header = self.header.unwrap_or(Header::Percent);
-        let read = self
-            .options
-            .words_per_exchange(header, max_read_reply_words(header), 9);
+        let read = self.one_frame_read_words(header);
         ExchangeSizes {
-            read_words: read as u16,
+            read_words: self.read_words_per_exchange(header) as u16,
             write_words: self
                 .options
                 .words_per_exchange(header, max_write_words(header), 20)
@@ -558,10 +672,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
 }
 
 /// `(start, len)` pieces of `count` words from `start`, at most `size` words each.
-fn chunks(start: u16, count: usize, size: usize) -> impl Iterator<Item = (u32, usize)> {
+fn chunks(start: u32, count: usize, size: usize) -> impl Iterator<Item = (u32, usize)> {
     (0..count)
         .step_by(size)
-        .map(move |offset| (u32::from(start) + offset as u32, size.min(count - offset)))
+        .map(move |offset| (start + offset as u32, size.min(count - offset)))
 }
 
 fn dt_range(start: u32, len: usize, operation: &str) -> Result<DtRange, PlcError> {

@@ -27,6 +27,8 @@ struct State {
     running: bool,
     angle: Angle,
     silent: bool,
+    /// Replies that need more than one frame go unanswered.
+    one_frame_only: bool,
     refuse_writes: Option<u8>,
     corrupt_replies: usize,
     log: Vec<(Header, Command)>,
@@ -40,6 +42,7 @@ impl State {
             running: true,
             angle: Angle::Accept,
             silent: false,
+            one_frame_only: false,
             refuse_writes: None,
             corrupt_replies: 0,
             log: Vec::new(),
@@ -103,7 +106,22 @@ impl State {
         } else {
             self.execute(command)
         };
-        response_frames(header, station, &response)
+        let frames = response_frames(header, station, &response);
+        if self.one_frame_only && frames.len() > 1 {
+            return Vec::new();
+        }
+        frames
+    }
+
+    /// The reads logged, as (header, words) in order.
+    fn reads(&self) -> Vec<(Header, usize)> {
+        self.log
+            .iter()
+            .filter_map(|(h, c)| match c {
+                Command::ReadDt(range) => Some((*h, range.len())),
+                _ => None,
+            })
+            .collect()
     }
 
     fn count(&self, header: Header, write: bool) -> usize {
@@ -178,7 +196,7 @@ fn ramp(n: u16) -> Vec<u16> {
 }
 
 #[tokio::test(start_paused = true)]
-async fn percent_writes_100_words_in_24_word_chunks_and_reads_them_back() {
+async fn percent_writes_100_words_in_24_word_chunks_and_reads_them_back_in_one_multi_frame_read() {
     let state = fake();
     let mut plc = client(&state, HeaderChoice::Percent);
     plc.write_words(2_000, &ramp(100)).await.unwrap();
@@ -186,7 +204,113 @@ async fn percent_writes_100_words_in_24_word_chunks_and_reads_them_back() {
     let s = state.lock().unwrap();
     assert_eq!(s.memory[2_000..2_100], ramp(100)[..]);
     assert_eq!(s.count(Header::Percent, true), 5); // 24 + 24 + 24 + 24 + 4
-    assert_eq!(s.count(Header::Percent, false), 4); // 27 + 27 + 27 + 19
+    // One RD of 100 words, its reply in 4 frames.
+    assert_eq!(s.reads(), [(Header::Percent, 100)]);
+}
+
+#[tokio::test(start_paused = true)]
+async fn without_multi_frame_reads_percent_reads_27_words_a_frame() {
+    let state = fake();
+    state.lock().unwrap().memory[2_000..2_100].copy_from_slice(&ramp(100));
+    let (ours, theirs) = tokio::io::duplex(4096);
+    tokio::spawn(serve(Arc::clone(&state), theirs));
+    let mut options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
+    options.multi_frame_reads = false;
+    let mut plc = MewtocolClient::new(ours, options);
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    let reads = state.lock().unwrap().reads();
+    assert_eq!(
+        reads.iter().map(|r| r.1).collect::<Vec<_>>(),
+        [27, 27, 27, 19]
+    );
+    assert_eq!(plc.exchange_sizes().read_words, 27);
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_unanswered_multi_frame_read_falls_back_to_one_frame_reads_for_good() {
+    let state = fake();
+    {
+        let mut s = state.lock().unwrap();
+        s.memory[2_000..2_100].copy_from_slice(&ramp(100));
+        s.one_frame_only = true;
+    }
+    let mut plc = client(&state, HeaderChoice::Percent);
+    let counts = std::sync::Arc::new(crate::plc::ExchangeCounts::default());
+    plc.set_exchange_counts(std::sync::Arc::clone(&counts));
+    assert_eq!(plc.exchange_sizes().read_words, 509);
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    // The 100-word read got one try (no retries), then 27-word reads.
+    let words = |s: &State| s.reads().iter().map(|r| r.1).collect::<Vec<_>>();
+    assert_eq!(words(&state.lock().unwrap()), [100, 27, 27, 27, 19]);
+    assert_eq!((counts.timeouts(), counts.retries()), (1, 0));
+    // From then on one frame a read, at once.
+    assert_eq!(plc.read_words(2_000, 30).await.unwrap(), ramp(30));
+    assert_eq!(words(&state.lock().unwrap())[5..], [27, 3]);
+    assert_eq!(plc.exchange_sizes().read_words, 27);
+    assert_eq!(counts.timeouts(), 1);
+}
+
+#[tokio::test(start_paused = true)]
+async fn once_answered_a_garbled_multi_frame_read_is_read_again_a_frame_at_a_time_only() {
+    let state = fake();
+    state.lock().unwrap().memory[2_000..2_100].copy_from_slice(&ramp(100));
+    let mut plc = client(&state, HeaderChoice::Percent);
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    // The next multi-frame reply's first frame arrives with a bad BCC.
+    state.lock().unwrap().corrupt_replies = 1;
+    assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    assert_eq!(plc.read_words(2_000, 60).await.unwrap(), ramp(60));
+    let reads = state.lock().unwrap().reads();
+    assert_eq!(
+        reads.iter().map(|r| r.1).collect::<Vec<_>>(),
+        [100, 100, 27, 27, 27, 19, 60],
+        "the PLC answered one: the line's fault is no reason to stop"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_refused_multi_frame_read_falls_back_and_a_one_frame_read_never_tries_one() {
+    // A PLC that answers a read longer than one frame with `! 41`.
+    let state = fake();
+    state.lock().unwrap().memory[10..70].copy_from_slice(&ramp(60));
+    let (ours, theirs) = tokio::io::duplex(4096);
+    tokio::spawn(serve_refusing_long_reads(Arc::clone(&state), theirs));
+    let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
+    let mut plc = MewtocolClient::new(ours, options);
+    // 27 words fit one frame: an ordinary read.
+    assert_eq!(plc.read_words(10, 27).await.unwrap(), ramp(27));
+    // 60 words: refused once, then read a frame at a time.
+    assert_eq!(plc.read_words(10, 60).await.unwrap(), ramp(60));
+    let reads = state.lock().unwrap().reads();
+    assert_eq!(
+        reads.iter().map(|r| r.1).collect::<Vec<_>>(),
+        [27, 60, 27, 27, 6]
+    );
+}
+
+/// Serves `state`, answering any read longer than one `%` frame holds with `! 41`.
+async fn serve_refusing_long_reads<S: AsyncRead + AsyncWrite + Unpin>(state: Shared, stream: S) {
+    let mut framed = Framed::new(stream, ServerCodec::new());
+    while let Some(event) = framed.next().await {
+        let Ok(ServerEvent::Request(request)) = event else {
+            continue;
+        };
+        let Request::Command(command) = request.message else {
+            continue;
+        };
+        let too_long = matches!(&command, Command::ReadDt(r) if r.len() > 27);
+        let mut frames = state
+            .lock()
+            .unwrap()
+            .answer(request.header, request.station, &command);
+        if too_long {
+            let refusal = Err(Bang {
+                code: PlcErrorCode::FormatError,
+            });
+            frames = response_frames(request.header, request.station, &refusal);
+        }
+        framed.send(frames.remove(0)).await.unwrap();
+    }
 }
 
 #[tokio::test(start_paused = true)]
@@ -406,5 +530,29 @@ async fn on_a_19200_baud_line_frames_are_cut_to_a_quarter_second_and_timeouts_gr
     let read = Command::ReadDt(DtRange::from_len(0, 106).unwrap());
     let t = plc.exchange_timeout(Header::Angle, &read).as_secs_f64();
     let expected = (20.0 + 433.0) * 11.0 / 19_200.0 + 0.020 + 0.300;
+    assert!((t - expected).abs() < 1e-3, "{t} s, expected {expected} s");
+}
+
+#[tokio::test(start_paused = true)]
+async fn on_a_19200_baud_line_a_percent_multi_frame_read_is_cut_to_a_quarter_second() {
+    let state = fake();
+    let (ours, theirs) = tokio::io::duplex(4096);
+    tokio::spawn(serve(Arc::clone(&state), theirs));
+    let mut options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
+    options.char_time = Some(Duration::from_secs_f64(11.0 / 19_200.0));
+    let mut plc = MewtocolClient::new(ours, options);
+    // 436 characters: 91 words take a 20-character request, a reply body of 367 in 4 frames
+    // (6 each, `&` on 3) and 3 requests of 7 for the next frame: 435. 92 words would take 439.
+    assert_eq!(plc.exchange_sizes().read_words, 91);
+    let words = ramp(200);
+    plc.write_words(2_000, &words).await.unwrap();
+    assert_eq!(plc.read_words(2_000, 200).await.unwrap(), words);
+    let reads = state.lock().unwrap().reads();
+    assert_eq!(reads.iter().map(|r| r.1).collect::<Vec<_>>(), [91, 91, 18]);
+    // Its timeout: those characters, two scans and one more for each of the 3 frames asked for,
+    // the margin.
+    let read = Command::ReadDt(DtRange::from_len(0, 91).unwrap());
+    let t = plc.exchange_timeout(Header::Percent, &read).as_secs_f64();
+    let expected = 435.0 * 11.0 / 19_200.0 + 0.050 + 0.300;
     assert!((t - expected).abs() < 1e-3, "{t} s, expected {expected} s");
 }

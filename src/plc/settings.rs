@@ -150,6 +150,10 @@ pub struct LinkSettings {
     pub station: u8,
     /// MEWTOCOL header (ignored by Modbus).
     pub header: HeaderChoice,
+    /// MEWTOCOL under `%`: read more words than one frame holds with one `RD` whose reply comes
+    /// in several frames (PLC.md §1, \[practice\]), falling back to one frame a read for the
+    /// rest of the connection the first time such a read is not answered (ignored by Modbus).
+    pub multi_frame_reads: bool,
     /// The margin every exchange may take beyond its wire time and two PLC scans (see
     /// [`Timing`]).
     pub timeout: Duration,
@@ -196,6 +200,7 @@ impl LinkSettings {
             transport,
             station: 1,
             header: HeaderChoice::Auto,
+            multi_frame_reads: true,
             timeout: Duration::from_millis(300),
             retries: 2,
             heartbeat_timeout: Duration::from_millis(500),

@@ -16,6 +16,15 @@ pub fn mewtocol_options() -> MewtocolOptions {
 
 /// Opens a fresh `duplex` connection to the mock for every (re)connection, served at `baud`.
 pub fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
+    duplex_connector_with(shared, baud, mewtocol_options())
+}
+
+/// [`duplex_connector`] with the client's `options`.
+pub fn duplex_connector_with(
+    shared: &SharedMock,
+    baud: Option<u32>,
+    options: MewtocolOptions,
+) -> Connector {
     let shared = shared.clone();
     Box::new(move || {
         let shared = shared.clone();
@@ -31,7 +40,7 @@ pub fn duplex_connector(shared: &SharedMock, baud: Option<u32>) -> Connector {
             tokio::spawn(async move { server.serve(theirs).await });
             Ok(AnyPlc::Mewtocol(MewtocolClient::new(
                 Box::new(ours) as BoxedLink,
-                mewtocol_options(),
+                options,
             )))
         })
     })

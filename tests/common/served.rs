@@ -7,7 +7,9 @@ use std::time::Duration;
 
 use hyper::StatusCode;
 use linterpd::daemon::api::Api;
-use linterpd::daemon::{Daemon, DaemonOptions, MoveReport, RobotHandle, TaughtPositions};
+use linterpd::daemon::{
+    Connector, Daemon, DaemonOptions, MoveReport, RobotHandle, TaughtPositions,
+};
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
 use linterpd::plc::contract::ContractSettings;
@@ -37,18 +39,25 @@ impl Served {
         dir: &Path,
         socket: &str,
     ) -> Self {
+        Self::start_on(duplex_connector(shared, None), shared, state, dir, socket).await
+    }
+
+    /// [`Self::start`] over `connect`'s links to `shared`.
+    pub async fn start_on(
+        connect: Connector,
+        shared: &SharedMock,
+        state: Option<&Path>,
+        dir: &Path,
+        socket: &str,
+    ) -> Self {
         let positions =
             state.map_or_else(TaughtPositions::in_memory, TaughtPositions::in_state_dir);
         let options = DaemonOptions {
             positions: Arc::new(positions),
             ..DaemonOptions::default()
         };
-        let (daemon, handle) = spawn_with(
-            duplex_connector(shared, None),
-            ContractSettings::default(),
-            &options,
-            [0; JOINTS],
-        );
+        let (daemon, handle) =
+            spawn_with(connect, ContractSettings::default(), &options, [0; JOINTS]);
         let path = dir.join(socket);
         let listener = UnixListener::bind(&path).unwrap();
         let router = Api::new(daemon.robots().clone()).router(None);
