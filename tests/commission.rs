@@ -113,11 +113,27 @@ fn nothing_left_running(report: &Report, shared: &SharedMock) {
     }
 }
 
+/// Asserts `c` passed, or was skipped as it must be: the multi-frame read when the procedure
+/// went on with `<` frames.
+fn passed(report: &Report, c: &CheckReport) {
+    let angle = report.findings.header_used.as_deref() == Some("<");
+    let skipped = angle && c.check == "multi-frame read";
+    let verdict = if skipped {
+        Verdict::Skip
+    } else {
+        Verdict::Pass
+    };
+    assert_eq!(c.verdict, verdict, "{}", line(c));
+}
+
+/// Every check passes (or is skipped where it does not apply: [`passed`]).
 fn all_pass(report: &Report) {
     let failed: Vec<String> = report.failures().map(line).collect();
     assert!(failed.is_empty(), "{failed:#?}");
     assert!(report.passed && report.stopped.is_none());
-    assert!(report.checks.iter().all(|c| c.verdict == Verdict::Pass));
+    for c in &report.checks {
+        passed(report, c);
+    }
 }
 
 #[tokio::test(start_paused = true)]
@@ -125,7 +141,11 @@ async fn the_listing_passes_every_check_and_leaves_the_counts_as_found() {
     let target = target(serial_link(HeaderChoice::Auto), FrequencyModel::FpxDivider);
     let (report, shared) = commission_mewtocol(MockVariant::Listing, &target).await;
     all_pass(&report);
-    assert_eq!(report.checks.len(), 5 + 5 + 7 * 4);
+    assert_eq!(report.checks.len(), 6 + 5 + 7 * 4);
+    assert_eq!(
+        report.findings.multi_frame_reads, None,
+        "< carries 509 words a frame"
+    );
     nothing_left_running(&report, &shared);
     for counts in &report.findings.counts {
         assert_eq!(i64::from(counts.found), START[usize::from(counts.channel)]);
@@ -162,7 +182,7 @@ fn stops_at(report: &Report, shared: &SharedMock, failed: (&str, Option<u8>), hi
     let said = check.hint.as_deref().unwrap_or_default();
     assert!(said.contains(hint), "{}", line(check));
     for c in &report.checks[..at] {
-        assert_eq!(c.verdict, Verdict::Pass, "{}", line(c));
+        passed(report, c);
     }
     for c in &report.checks[at + 1..] {
         assert_ne!(c.verdict, Verdict::Pass, "{}", line(c));
@@ -188,7 +208,7 @@ fn only_config_failures(report: &Report, shared: &SharedMock, failing: &[&str], 
             let said = c.hint.as_deref().unwrap_or_default();
             assert!(said.contains(hint), "{}", line(c));
         } else {
-            assert_eq!(c.verdict, Verdict::Pass, "{}", line(c));
+            passed(report, c);
         }
     }
     assert!(report.stopped.is_none() && !report.passed);
@@ -287,6 +307,58 @@ async fn angle_refused_with_header_angle_fails_the_header_check_and_goes_on_with
         &shared,
         &["headers %, <"],
         "set header = \"percent\"",
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn under_percent_the_listing_answers_a_multi_frame_read_and_the_lines_say_true() {
+    let target = target(
+        serial_link(HeaderChoice::Percent),
+        FrequencyModel::FpxDivider,
+    );
+    let (report, shared) = commission_mewtocol(MockVariant::Listing, &target).await;
+    all_pass(&report);
+    nothing_left_running(&report, &shared);
+    let multi = find(&report, "multi-frame read", None);
+    assert!(
+        multi.saw.contains("54-word read came back"),
+        "{}",
+        line(multi)
+    );
+    assert_eq!(report.findings.multi_frame_reads, Some(true));
+    assert!(
+        report
+            .config_lines
+            .iter()
+            .any(|l| l.starts_with("multi_frame_reads = true")),
+        "{:?}",
+        report.config_lines
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_plc_without_multi_frame_replies_fails_only_the_multi_frame_check_and_says_false() {
+    let target = target(
+        serial_link(HeaderChoice::Percent),
+        FrequencyModel::FpxDivider,
+    );
+    let (report, shared) = commission_mewtocol(MockVariant::OneFrameReplies, &target).await;
+    only_config_failures(
+        &report,
+        &shared,
+        &["multi-frame read"],
+        "set multi_frame_reads = false",
+    );
+    let multi = find(&report, "multi-frame read", None);
+    assert!(multi.saw.contains("got no answer"), "{}", line(multi));
+    assert_eq!(report.findings.multi_frame_reads, Some(false));
+    assert!(
+        report
+            .config_lines
+            .iter()
+            .any(|l| l.starts_with("multi_frame_reads = false")),
+        "{:?}",
+        report.config_lines
     );
 }
 
@@ -461,9 +533,15 @@ async fn commission_modbus(variant: MockVariant) -> (Report, SharedMock) {
 #[tokio::test]
 async fn modbus_listing_passes_every_check_that_applies() {
     let (report, shared) = commission_modbus(MockVariant::Listing).await;
-    let headers = find(&report, "headers %, <", None);
-    assert_eq!(headers.verdict, Verdict::Skip);
-    for c in report.checks.iter().filter(|c| c.check != "headers %, <") {
+    let mewtocol_only = ["headers %, <", "multi-frame read"];
+    for check in mewtocol_only {
+        assert_eq!(find(&report, check, None).verdict, Verdict::Skip);
+    }
+    for c in report
+        .checks
+        .iter()
+        .filter(|c| !mewtocol_only.contains(&c.check.as_str()))
+    {
         assert_eq!(c.verdict, Verdict::Pass, "{}", line(c));
     }
     assert!(report.passed);
@@ -573,7 +651,7 @@ mod cli {
         assert_eq!(done.status.code(), Some(0), "{}", done.describe());
         assert!(
             done.stdout
-                .contains("result: 17 checks: 17 pass, 0 FAIL, 0 skipped")
+                .contains("result: 18 checks: 17 pass, 0 FAIL, 1 skipped")
         );
         assert!(
             done.stdout

@@ -1065,6 +1065,7 @@ const COMMISSION: [(&str, &[&str]); 3] = [
         &[
             "headers %, <",
             "largest frame/read/write",
+            "multi-frame read",
             "round trip",
             "scan time from heartbeat rate",
             "RUN/PROG read",

@@ -43,6 +43,15 @@ fn header_line(findings: &Findings) -> Option<String> {
     })
 }
 
+fn multi_frame_line(findings: &Findings) -> Option<String> {
+    let line = if findings.multi_frame_reads? {
+        "multi_frame_reads = true  # a % read past one frame came back in several frames"
+    } else {
+        "multi_frame_reads = false  # a % read past one frame got no answer"
+    };
+    Some(line.to_owned())
+}
+
 fn modbus_lines(findings: &Findings) -> Vec<String> {
     let Some(sizes) = findings.sizes.iter().find(|s| s.framing == "modbus") else {
         return Vec::new();
@@ -136,6 +145,7 @@ pub fn config_lines(target: &Target, findings: &Findings) -> Vec<String> {
     let mut plc = Vec::new();
     if target.link.protocol == Protocol::Mewtocol {
         plc.extend(header_line(findings));
+        plc.extend(multi_frame_line(findings));
     } else {
         plc.extend(modbus_lines(findings));
     }

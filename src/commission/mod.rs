@@ -5,8 +5,8 @@
 //! Three steps, each a list of checks named as `deploy/plc/README.md`'s "measured by" column
 //! names them:
 //! ```text
-//! link      headers %, <  |  largest frame/read/write  |  round trip  |
-//!           scan time from heartbeat rate  |  RUN/PROG read                    (link.rs)
+//! link      headers %, <  |  largest frame/read/write  |  multi-frame read  |  round trip  |
+//!           scan time from heartbeat rate  |  RUN/PROG read                    (link/)
 //! contract  magic  |  version  |  heartbeat  |  host echo  |  ready bits       (contract.rs)
 //! pulses    per channel, one at a time, tiny tables at a low frequency:      (pulses.rs)
 //!           busy on then off  |  elapsed moves by exactly the table's pulses  |
@@ -54,9 +54,10 @@ use crate::plc::{BoxedLink, LinkSettings, Plc, Protocol, Transport};
 use crate::robot::Robot;
 
 /// The checks of the link step, in order.
-pub const LINK_CHECKS: [&str; 5] = [
+pub const LINK_CHECKS: [&str; 6] = [
     "headers %, <",
     "largest frame/read/write",
+    "multi-frame read",
     "round trip",
     "scan time from heartbeat rate",
     "RUN/PROG read",

@@ -144,6 +144,10 @@ pub struct Findings {
     pub header_used: Option<String>,
     /// Request sizes, per header (MEWTOCOL-COM) or for Modbus.
     pub sizes: Vec<RequestSizes>,
+    /// Whether the PLC answered a MEWTOCOL-COM `%` read longer than one frame in several
+    /// frames (`None`: not tried, `<` or Modbus).
+    #[serde(default)]
+    pub multi_frame_reads: Option<bool>,
     /// Round trip of a 1-word read.
     pub round_trip_word: Option<Spread>,
     /// Round trip of a status-block read.

@@ -33,22 +33,24 @@ fn a_stop_skips_every_later_check_and_names_the_failure() {
     assert_eq!(s.record(c.pass("fine")), Ok(()));
     let c = Check::new(Step::Link, "largest frame/read/write", "x");
     assert_eq!(s.record(c.config("small", "set it")), Ok(()));
+    let c = Check::new(Step::Link, "multi-frame read", "x");
+    assert_eq!(s.record(c.skip("< frames")), Ok(()));
     let c = Check::new(Step::Link, "round trip", "x");
     assert_eq!(s.record(c.fail("dead", "fix it")), Err(Halt));
     s.skip_the_rest();
-    let planned = 5 + 5 + 7 * 4;
+    let planned = 6 + 5 + 7 * 4;
     assert_eq!(s.checks.len(), planned);
-    assert!(s.checks[3..].iter().all(|c| c.verdict == Verdict::Skip));
+    assert!(s.checks[4..].iter().all(|c| c.verdict == Verdict::Skip));
     assert!(
-        s.checks[3].saw.contains("link: round trip failed"),
+        s.checks[4].saw.contains("link: round trip failed"),
         "{}",
-        s.checks[3].saw
+        s.checks[4].saw
     );
     assert_eq!(s.stopped.as_deref(), Some("link: round trip failed"));
-    assert!(!s.checks[1].stopped && s.checks[2].stopped);
+    assert!(!s.checks[1].stopped && s.checks[3].stopped);
     drop(s);
     assert_eq!(seen.len(), planned);
-    assert_eq!(seen[10], "pulses: busy on then off (channel 0)");
+    assert_eq!(seen[11], "pulses: busy on then off (channel 0)");
 }
 
 #[test]

@@ -43,7 +43,7 @@ pub const STATION_ANY: u8 = 0xEE;
 
 /// Wire time one exchange is kept within on a slow line (the frame sizes are cut to fit), so a
 /// stop never waits long behind an upload; a frame never gets smaller than `%` allows.
-const EXCHANGE_BUDGET: Duration = Duration::from_millis(250);
+pub const EXCHANGE_BUDGET: Duration = Duration::from_millis(250);
 
 /// Most words one multi-frame read asks for: what one `<` frame carries, a size a PLC's
 /// communication buffer is known to hold.
@@ -217,7 +217,9 @@ enum MultiFrame {
     /// The PLC answered one: a later failure is the line's, and only that read is made again
     /// one frame at a time.
     Answered,
-    /// Off (configured so, or the first went unanswered): one frame a read.
+    /// The first went unanswered: one frame a read.
+    Unanswered,
+    /// Configured off: one frame a read.
     Off,
 }
 
@@ -267,6 +269,22 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
     #[must_use]
     pub fn header(&self) -> Option<Header> {
         self.header
+    }
+
+    /// Whether the PLC answered a multi-frame read on this client (`Some(true)`), or left the
+    /// first one unanswered (`Some(false)`: one frame a read since); `None` before any was
+    /// made, or with `multi_frame_reads` off.
+    #[must_use]
+    pub fn multi_frame_reads_answered(&self) -> Option<bool> {
+        match self.multi_frame {
+            MultiFrame::Answered => Some(true),
+            MultiFrame::Unanswered => Some(false),
+            MultiFrame::Untried | MultiFrame::Off => None,
+        }
+    }
+
+    fn multi_frame_in_use(&self) -> bool {
+        matches!(self.multi_frame, MultiFrame::Untried | MultiFrame::Answered)
     }
 
     /// Gives the stream back.
@@ -349,7 +367,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
     /// Words one read exchange asks for under `header`: a multi-frame read's under `%` while
     /// those are in use, else what one frame holds.
     fn read_words_per_exchange(&self, header: Header) -> usize {
-        if header == Header::Percent && self.multi_frame != MultiFrame::Off {
+        if header == Header::Percent && self.multi_frame_in_use() {
             self.multi_frame_words
         } else {
             self.one_frame_read_words(header)
@@ -373,7 +391,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         len: usize,
     ) -> Result<Vec<u16>, PlcError> {
         let one_frame = self.one_frame_read_words(header);
-        if len > one_frame && header == Header::Percent && self.multi_frame != MultiFrame::Off {
+        if len > one_frame && header == Header::Percent && self.multi_frame_in_use() {
             match self.read_chunk(header, start, len, 0).await {
                 Ok(words) => {
                     self.multi_frame = MultiFrame::Answered;
@@ -390,7 +408,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
                         "the PLC did not answer a multi-frame read: reading one frame at a time \
                          from now on (multi_frame_reads = false skips this try)"
                     );
-                    self.multi_frame = MultiFrame::Off;
+                    self.multi_frame = MultiFrame::Unanswered;
                 }
             }
         }

@@ -31,7 +31,19 @@ struct State {
     one_frame_only: bool,
     refuse_writes: Option<u8>,
     corrupt_replies: usize,
+    /// The frame (counted from 0 as they are sent) a fault strikes, and how.
+    strike: Option<(usize, Strike)>,
+    frames_sent: usize,
     log: Vec<(Header, Command)>,
+}
+
+/// What a fault does to the frame it strikes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Strike {
+    /// One character of its BCC is wrong.
+    Corrupt,
+    /// It never leaves.
+    Drop,
 }
 
 impl State {
@@ -45,6 +57,8 @@ impl State {
             one_frame_only: false,
             refuse_writes: None,
             corrupt_replies: 0,
+            strike: None,
+            frames_sent: 0,
             log: Vec::new(),
         }
     }
@@ -163,12 +177,20 @@ async fn serve<S: AsyncRead + AsyncWrite + Unpin>(state: Shared, stream: S) {
                 frames.remove(0)
             }
         };
-        let corrupt = {
+        let (corrupt, drop) = {
             let mut s = state.lock().unwrap();
-            let corrupt = s.corrupt_replies > 0;
+            let struck = s
+                .strike
+                .filter(|(at, _)| *at == s.frames_sent)
+                .map(|(_, how)| how);
+            s.frames_sent += 1;
+            let corrupt = s.corrupt_replies > 0 || struck == Some(Strike::Corrupt);
             s.corrupt_replies = s.corrupt_replies.saturating_sub(1);
-            corrupt
+            (corrupt, struck == Some(Strike::Drop))
         };
+        if drop {
+            continue;
+        }
         if corrupt {
             let mut bytes = frame.to_bytes().unwrap();
             let at = bytes.len() - 2;
@@ -238,7 +260,9 @@ async fn an_unanswered_multi_frame_read_falls_back_to_one_frame_reads_for_good()
     let counts = std::sync::Arc::new(crate::plc::ExchangeCounts::default());
     plc.set_exchange_counts(std::sync::Arc::clone(&counts));
     assert_eq!(plc.exchange_sizes().read_words, 509);
+    assert_eq!(plc.multi_frame_reads_answered(), None);
     assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    assert_eq!(plc.multi_frame_reads_answered(), Some(false));
     // The 100-word read got one try (no retries), then 27-word reads.
     let words = |s: &State| s.reads().iter().map(|r| r.1).collect::<Vec<_>>();
     assert_eq!(words(&state.lock().unwrap()), [100, 27, 27, 27, 19]);
@@ -256,6 +280,7 @@ async fn once_answered_a_garbled_multi_frame_read_is_read_again_a_frame_at_a_tim
     state.lock().unwrap().memory[2_000..2_100].copy_from_slice(&ramp(100));
     let mut plc = client(&state, HeaderChoice::Percent);
     assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+    assert_eq!(plc.multi_frame_reads_answered(), Some(true));
     // The next multi-frame reply's first frame arrives with a bad BCC.
     state.lock().unwrap().corrupt_replies = 1;
     assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
@@ -266,6 +291,33 @@ async fn once_answered_a_garbled_multi_frame_read_is_read_again_a_frame_at_a_tim
         [100, 100, 27, 27, 27, 19, 60],
         "the PLC answered one: the line's fault is no reason to stop"
     );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_fault_on_any_frame_of_a_multi_frame_reply_still_gives_every_word_once_and_right() {
+    // The invariant, over every frame a corrupt or lost reply can strike (the first frame of
+    // the 4-frame reply to a 100-word read, a middle one, the last): the read returns exactly
+    // the words in memory, and the words are read again one frame at a time, nothing else.
+    for strike in [Strike::Corrupt, Strike::Drop] {
+        for frame in 0..4 {
+            let state = fake();
+            state.lock().unwrap().memory[2_000..2_100].copy_from_slice(&ramp(100));
+            let mut plc = client(&state, HeaderChoice::Percent);
+            // Answered once (frames 0..=3), so a later failure is the line's.
+            assert_eq!(plc.read_words(2_000, 100).await.unwrap(), ramp(100));
+            state.lock().unwrap().strike = Some((4 + frame, strike));
+            let words = plc.read_words(2_000, 100).await;
+            let words = words.unwrap_or_else(|e| panic!("{strike:?} on frame {frame}: {e}"));
+            assert_eq!(words, ramp(100), "{strike:?} on frame {frame}");
+            let reads = state.lock().unwrap().reads();
+            assert_eq!(
+                reads.iter().map(|r| r.1).collect::<Vec<_>>(),
+                [100, 100, 27, 27, 27, 19],
+                "{strike:?} on frame {frame}"
+            );
+            assert_eq!(plc.multi_frame_reads_answered(), Some(true));
+        }
+    }
 }
 
 #[tokio::test(start_paused = true)]

@@ -29,7 +29,7 @@ use crate::gateway::Area;
 pub use any::{AnyPlc, connect};
 pub use counts::ExchangeCounts;
 pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_hint, open_serial, open_tcp};
-pub use mewtocol::{MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
+pub use mewtocol::{EXCHANGE_BUDGET, MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
 pub use modbus::{
     MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, ModbusClient, ModbusFraming, ModbusOptions,
     RELAY_COIL_BASE, exception_meaning,

@@ -4,15 +4,15 @@
 use tokio::time::Instant;
 
 use super::check;
-use super::sizes::{probe_timeout, sizes};
+use super::sizes::{MULTI_FRAME_CHECKS, probe_timeout, sizes};
 use crate::commission::report::HeaderProbe;
 use crate::commission::{Halt, Session};
 use crate::mewtocol::{
     Command, Header, Reply, Station, max_read_reply_words, max_write_words, response_frames,
 };
 use crate::plc::{
-    AnyPlc, BoxedLink, HeaderChoice, LinkSettings, MewtocolClient, MewtocolOptions, Plc, PlcError,
-    drain,
+    AnyPlc, BoxedLink, EXCHANGE_BUDGET, HeaderChoice, LinkSettings, MewtocolClient,
+    MewtocolOptions, Plc, PlcError, drain,
 };
 
 /// What one probe got.
@@ -170,6 +170,7 @@ pub(super) async fn step(
         fallback
     };
     let (link, header) = mewtocol_sizes(s, link, settings, &works, header).await?;
+    let link = multi_frame_read(s, link, settings, header).await?;
     s.findings.header_used = Some(header_name(header).to_owned());
     let options = mewtocol_options(settings, header).map_err(|_| Halt)?;
     Ok(AnyPlc::Mewtocol(MewtocolClient::new(link, options)))
@@ -278,4 +279,70 @@ async fn mewtocol_sizes(
          linterpd cannot talk to it over MEWTOCOL-COM as it is (try Modbus RTU)",
     ))?;
     Err(Halt)
+}
+
+/// Under `%`: a read of two frames' words of bank 1's channel 0 table area with multi-frame reads
+/// on, and whether the PLC answered it in several frames (the client reads the words one frame
+/// at a time if not). Skipped under `<`, whose one frame carries 509 words.
+async fn multi_frame_read(
+    s: &mut Session<'_>,
+    link: BoxedLink,
+    settings: &LinkSettings,
+    header: Header,
+) -> Result<BoxedLink, Halt> {
+    let c = check("multi-frame read", MULTI_FRAME_CHECKS);
+    if header == Header::Angle {
+        let most = max_read_reply_words(Header::Angle);
+        s.record(c.skip(format!("< frames carry {most} words a read in one frame")))?;
+        return Ok(link);
+    }
+    let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    options.multi_frame_reads = true;
+    let words = 2 * max_read_reply_words(Header::Percent);
+    let mut client = MewtocolClient::new(link, options);
+    let began = Instant::now();
+    let result = client
+        .read_words(settings.layout.area(1, 0), words as u16)
+        .await;
+    let took_ms = began.elapsed().as_secs_f64() * 1e3;
+    let answered = client.multi_frame_reads_answered();
+    let link = client.into_inner();
+    if let Err(e) = result {
+        s.record(c.fail(
+            format!("{e:#}"),
+            "the link failed on a read the size probes had just carried one frame at a time",
+        ))?;
+        return Err(Halt);
+    }
+    s.findings.multi_frame_reads = answered;
+    let report = match (answered, settings.multi_frame_reads) {
+        (None, _) => c.skip(format!(
+            "the line is too slow for a read past one frame within {} ms of wire time",
+            EXCHANGE_BUDGET.as_millis()
+        )),
+        (Some(true), true) => c.pass(format!(
+            "a {words}-word read came back in several frames ({took_ms:.1} ms)"
+        )),
+        (Some(true), false) => c.pass_noting(
+            format!("a {words}-word read came back in several frames ({took_ms:.1} ms)"),
+            "multi_frame_reads = true would shorten the read-back of every upload",
+        ),
+        (Some(false), configured) => {
+            let saw = format!(
+                "a {words}-word read got no answer; one frame at a time its words came back \
+                 ({took_ms:.1} ms in all)"
+            );
+            if configured {
+                c.config(
+                    saw,
+                    "set multi_frame_reads = false: else every connection spends a timeout on its \
+                     first long read before reading one frame at a time",
+                )
+            } else {
+                c.pass_noting(saw, "multi_frame_reads = false fits this PLC")
+            }
+        }
+    };
+    s.record(report)?;
+    Ok(link)
 }

@@ -149,6 +149,11 @@ pub(super) async fn sizes<P: Plc>(
     Ok((read, write))
 }
 
+/// What the multi-frame read check looks at.
+pub(super) const MULTI_FRAME_CHECKS: &str = "whether a MEWTOCOL-COM % read of more words than one \
+     frame holds is answered in several frames, each asked for with %01**& (two frames' words \
+     of bank 1's channel 0 table area)";
+
 /// Modbus: request sizes with a client allowed the specification's maxima.
 pub(super) async fn modbus(
     s: &mut Session<'_>,
@@ -217,5 +222,7 @@ pub(super) async fn modbus(
     } else {
         s.record(c.pass(saw))?;
     }
+    let multi = check("multi-frame read", MULTI_FRAME_CHECKS);
+    s.record(multi.skip("Modbus replies are not split into frames"))?;
     Ok(AnyPlc::Modbus(client))
 }
