@@ -71,33 +71,8 @@ async fn main() {
     while h.state().refuses.is_some() || !h.state().link.connected {
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
-    let (mut to_start, mut uploads) = (Vec::new(), Vec::new());
-    for i in 0..MOVES {
-        // Idle for a while first, as between orders on a line.
-        tokio::time::sleep(Duration::from_millis(400)).await;
-        let to = if i % 2 == 0 { P2 } else { P1 };
-        let accepted_s = shared.now_s();
-        let id = h
-            .submit(MoveOrder {
-                to: Some(to.to_vec()),
-                ..MoveOrder::default()
-            })
-            .unwrap();
-        let r = h.wait(id, Duration::from_secs(10)).await.unwrap();
-        assert_eq!(r.stage, Stage::Done, "{r:?}");
-        let seq = r.seq.unwrap();
-        let acted_s = shared.with(|m| {
-            m.starts()
-                .iter()
-                .find(|s| s.block.seq == seq && s.outcome == StartOutcome::Started)
-                .map(|s| s.at_s)
-                .unwrap()
-        });
-        let upload_s = r.upload_s.unwrap();
-        to_start.push((acted_s - accepted_s - upload_s) * 1e3);
-        uploads.push(upload_s * 1e3);
-    }
-    daemon.shut_down().await;
+    let (mut to_start, uploads, _) = latencies(&h, &shared, [P2, P1], None).await;
+    let mut uploads = uploads;
     to_start.sort_by(f64::total_cmp);
     uploads.sort_by(f64::total_cmp);
     println!(
@@ -114,4 +89,72 @@ async fn main() {
         percentile(&uploads, 0.5),
         uploads[uploads.len() - 1]
     );
+    // A line past a reversal is cut into two starts; its first is started once both are
+    // uploaded and read back. Against the seed's move at the same tolerance, one start.
+    let (sin, cos) = (-30_f64).to_radians().sin_cos();
+    let turned = [P1[0] * cos - P1[1] * sin, P1[0] * sin + P1[1] * cos, P1[2]];
+    for (name, ends) in [
+        ("the seed's move, one start", [P2, P1]),
+        ("P1 and P1 turned 30 deg, cut in two starts", [turned, P1]),
+    ] {
+        let (mut less, mut uploads, mut whole) = latencies(&h, &shared, ends, Some(0.05)).await;
+        for v in [&mut less, &mut uploads, &mut whole] {
+            v.sort_by(f64::total_cmp);
+        }
+        println!("bounded-error 0.05 mm, {name} ({MOVES} moves back and forth):");
+        println!(
+            "  accepted -> first start acted on: median {:.1} ms, max {:.1} ms; less its upload: median {:.1} ms, max {:.1} ms; upload with read-back: median {:.1} ms",
+            percentile(&whole, 0.5),
+            whole[whole.len() - 1],
+            percentile(&less, 0.5),
+            less[less.len() - 1],
+            percentile(&uploads, 0.5),
+        );
+    }
+    daemon.shut_down().await;
+}
+
+/// [`MOVES`] moves to `ends` in turn, each after 0.4 s of idling, at bounded-error `tolerance_mm`
+/// or as configured: for each, from the daemon accepting it to the PLC acting on its first
+/// start, less that start's upload with read-back (ms); the upload (ms); the whole (ms).
+async fn latencies(
+    h: &linterpd::daemon::RobotHandle,
+    shared: &SharedMock,
+    ends: [[f64; 3]; 2],
+    tolerance_mm: Option<f64>,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (mut to_start, mut uploads, mut whole) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..MOVES {
+        // Idle for a while first, as between orders on a line.
+        tokio::time::sleep(Duration::from_millis(400)).await;
+        let to = ends[i % 2];
+        let accepted_s = shared.now_s();
+        let ids = h
+            .submit_starts(MoveOrder {
+                to: Some(to.to_vec()),
+                tolerance_mm,
+                ..MoveOrder::default()
+            })
+            .unwrap();
+        let mut first = None;
+        for id in &ids {
+            let r = h.wait(*id, Duration::from_secs(10)).await.unwrap();
+            assert_eq!(r.stage, Stage::Done, "{r:?}");
+            first.get_or_insert(r);
+        }
+        let r = first.unwrap();
+        let seq = r.seq.unwrap();
+        let acted_s = shared.with(|m| {
+            m.starts()
+                .iter()
+                .find(|s| s.block.seq == seq && s.outcome == StartOutcome::Started)
+                .map(|s| s.at_s)
+                .unwrap()
+        });
+        let upload_s = r.upload_s.unwrap();
+        to_start.push((acted_s - accepted_s - upload_s) * 1e3);
+        uploads.push(upload_s * 1e3);
+        whole.push((acted_s - accepted_s) * 1e3);
+    }
+    (to_start, uploads, whole)
 }
