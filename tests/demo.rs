@@ -28,7 +28,7 @@ async fn demo(svg: bool) -> Demo {
 #[tokio::test(flavor = "multi_thread")]
 async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
     let d = demo(true).await;
-    assert_eq!(d.moves.len(), 5);
+    assert_eq!(d.moves.len(), 6);
     for m in &d.moves {
         assert_eq!(m.report.stage, Stage::Done, "{}: {:?}", m.name, m.report);
         let (error, _) = m.final_error_pulses(&d.robot);
@@ -47,7 +47,22 @@ async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
         (measured - predicted).abs() <= AGREEMENT_MM,
         "measured {measured} mm, predicted {predicted} mm"
     );
-    assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_some());
+    assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_none());
+    assert!(d.moves[5].chained && d.moves[5].report.final_error_pulses.is_some());
+    // At 115200 baud every queued move is uploaded long before the one before it ends: its
+    // start waits in the PLC, which takes it within two scans of that move's last pulse.
+    for m in &d.moves[4..] {
+        let chain = m
+            .chain
+            .unwrap_or_else(|| panic!("{}: no chain measured", m.name));
+        assert!(chain.seen_after_s < 0.0, "{}: {chain:?}", m.name);
+        assert!(
+            (0.0..=2.0 * d.scan_s + 1e-9).contains(&chain.started_after_s),
+            "{}: {chain:?}",
+            m.name
+        );
+    }
+    assert!(d.moves[..4].iter().all(|m| m.chain.is_none()));
     // The pick-and-place cycle: blended, the lift's section runs as two starts, the second
     // chained at speed from exactly the counts the first ended on; both cycles end on P2's
     // counts, within the tolerance as planned, and the blended one is shorter on the trace.
@@ -111,6 +126,8 @@ fn the_binary_runs_the_demo_and_names_the_seeds_move() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("the seed's move, P1 -> P2"), "{stdout}");
-    assert!(stdout.contains("5 moves done"), "{stdout}");
+    assert!(stdout.contains("6 moves done"), "{stdout}");
+    assert!(stdout.contains("no idle time"), "{stdout}");
+    assert!(!stdout.contains("the PLC idled"), "{stdout}");
     assert!(!stdout.contains("Picture:"), "{stdout}");
 }

@@ -6,7 +6,7 @@
 
 use serde_json::json;
 
-use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, replay};
+use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, measure_waits, replay};
 use crate::config::PathDoc;
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle, Stage};
 use crate::kinematics::JOINTS;
@@ -143,7 +143,7 @@ async fn run_cycle(
             trace.len()
         ))
     })?;
-    let starts: Vec<DemoMove> = reports
+    let mut starts: Vec<DemoMove> = reports
         .into_iter()
         .zip(plans)
         .zip(runs)
@@ -151,11 +151,13 @@ async fn run_cycle(
         .map(|(i, ((report, plan), run))| DemoMove {
             name,
             chained: i > 0,
+            chain: None,
             played: replay(handle.robot(), &plan, &run, scan_s),
             report,
             plan,
         })
         .collect();
+    measure_waits(&mut starts, &rig.mock.with(|m| m.starts().to_vec()));
     let first = starts.first().map_or(0.0, |m| m.played.start_s);
     let end = starts
         .last()

@@ -33,6 +33,7 @@ use crate::daemon::{
     Daemon, DaemonOptions, MoveOrder, MoveReport, RobotHandle, RobotSetup, Stage, SubmitError,
 };
 use crate::kinematics::JOINTS;
+use crate::mock::{StartOutcome, StartRecord};
 use crate::plan::Plan;
 use crate::plc::contract::ContractSettings;
 use crate::robot::{Robot, seed_robot};
@@ -157,8 +158,27 @@ pub fn steps() -> Vec<Vec<Step>> {
                     ..to(P2)
                 },
             ),
+            step(
+                "P2 -> P1, bounded, chained behind bounded",
+                MoveOrder {
+                    tolerance_mm: Some(0.05),
+                    ..to(P1)
+                },
+            ),
         ],
     ]
+}
+
+/// How a chained move followed the one before it, on the mock's clock, from that move's last
+/// pulse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainWait {
+    /// Until the PLC program first saw its start command, s: negative when the start was
+    /// waiting in the PLC before that move ended (no idle time); positive, the PLC idled
+    /// that long for its upload.
+    pub seen_after_s: f64,
+    /// Until the PLC started it, s.
+    pub started_after_s: f64,
 }
 
 /// One move as run.
@@ -168,6 +188,8 @@ pub struct DemoMove {
     pub name: &'static str,
     /// Queued while the move before it ran (the PLC started it with no host round trip).
     pub chained: bool,
+    /// For a chained move: how it followed the move before it, on the trace.
+    pub chain: Option<ChainWait>,
     /// The daemon's report.
     pub report: MoveReport,
     /// Its plan (the daemon's, re-planned from the same counts).
@@ -313,7 +335,7 @@ async fn run_batch(
     let runs = cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
         DemoError::Trace(format!("{} pulses do not match the plans", trace.len()))
     })?;
-    Ok(batch
+    let mut moves = batch
         .iter()
         .zip(reports)
         .zip(plans)
@@ -322,11 +344,35 @@ async fn run_batch(
         .map(|(i, (((step, report), plan), run))| DemoMove {
             name: step.name,
             chained: i > 0,
+            chain: None,
             played: replay(handle.robot(), &plan, &run, scan_s),
             report,
             plan,
         })
-        .collect())
+        .collect::<Vec<_>>();
+    measure_waits(&mut moves, &rig.mock.with(|m| m.starts().to_vec()));
+    Ok(moves)
+}
+
+/// Every chained move's [`ChainWait`], for `moves` run one after another, from the trace and
+/// the mock's record of its `starts`.
+fn measure_waits(moves: &mut [DemoMove], starts: &[StartRecord]) {
+    for i in 1..moves.len() {
+        let before = &moves[i - 1].played;
+        let ended_s = before.start_s + before.figures.finish_s;
+        let seen_s = moves[i].report.seq.and_then(|seq| {
+            starts
+                .iter()
+                .find(|s| s.block.seq == seq && s.outcome == StartOutcome::Started)
+                .map(|s| s.seen_s)
+        });
+        if let (true, Some(seen_s)) = (moves[i].chained, seen_s) {
+            moves[i].chain = Some(ChainWait {
+                seen_after_s: seen_s - ended_s,
+                started_after_s: moves[i].played.start_s - ended_s,
+            });
+        }
+    }
 }
 
 /// Whether `plan`, made again, is the one the daemon reported (its rows and path deviation, to

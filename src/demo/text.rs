@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::{CYCLE_BLEND_MM, CYCLE_TOLERANCE_MM, Demo, DemoMove, P1, P2};
+use super::{CYCLE_BLEND_MM, CYCLE_TOLERANCE_MM, ChainWait, Demo, DemoMove, P1, P2};
 use crate::plot::{Path, PlotError, svg_paths};
 use crate::robot::{Method, Motion, Robot};
 
@@ -66,6 +66,22 @@ fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     writeln!(out, "predicted = the planner's execution model.")
 }
 
+/// What a chained move's wait on the trace says: no idle time, or how long the PLC idled.
+fn chain_wait(chain: &ChainWait) -> String {
+    let started_ms = chain.started_after_s * 1e3;
+    if chain.seen_after_s < 0.0 {
+        format!(
+            "waiting in the PLC {:.0} ms before the move before ended; started {started_ms:.1} ms after it: no idle time",
+            -chain.seen_after_s * 1e3
+        )
+    } else {
+        format!(
+            "reached the PLC {:.1} ms after the move before ended (its upload outlasted that move): the PLC idled; started {started_ms:.1} ms after it",
+            chain.seen_after_s * 1e3
+        )
+    }
+}
+
 fn one(robot: &Robot, n: usize, m: &DemoMove, out: &mut dyn Write) -> io::Result<()> {
     let r = &m.report;
     let p = r
@@ -86,11 +102,8 @@ fn one(robot: &Robot, n: usize, m: &DemoMove, out: &mut dyn Write) -> io::Result
         seconds(r.upload_s),
         p.duration_s,
     )?;
-    if m.chained {
-        writeln!(
-            out,
-            "   started by the PLC in the scan after the move before ended"
-        )?;
+    if let Some(chain) = &m.chain {
+        writeln!(out, "   {}", chain_wait(chain))?;
     }
     let measured = m.played.figures.path_deviation_mm;
     writeln!(

@@ -279,6 +279,13 @@ fn start_while_running_waits_and_runs_right_after_done() {
         (2, State::Done, 12)
     );
     assert_eq!(command_word(&m), 0);
+    // The record says when each start was first seen: move 2 at the 6 ms scan, waiting.
+    let starts = m.starts();
+    assert!(close(starts[0].seen_s, starts[0].at_s), "{starts:?}");
+    assert!(
+        close(starts[1].seen_s, 0.006) && close(starts[1].at_s, 0.014),
+        "{starts:?}"
+    );
 }
 
 #[test]

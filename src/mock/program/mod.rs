@@ -105,6 +105,8 @@ pub(super) struct Program {
     first_scan: bool,
     last_fault: Option<String>,
     starts: Vec<StartRecord>,
+    /// The seq of the start waiting behind the running move, and the scan it was first seen.
+    waiting_since: Option<(u16, f64)>,
 }
 
 impl Program {
@@ -122,6 +124,7 @@ impl Program {
             first_scan: true,
             last_fault: None,
             starts: Vec::new(),
+            waiting_since: None,
         }
     }
 

@@ -63,6 +63,9 @@ pub enum StartOutcome {
 pub struct StartRecord {
     /// When, s since the mock started.
     pub at_s: f64,
+    /// The scan the program first saw it, s since the mock started: before `at_s` when it
+    /// waited behind the running move.
+    pub seen_s: f64,
     /// The command block as read.
     pub block: CommandBlock,
     /// Every channel's count at that scan.
@@ -92,11 +95,18 @@ impl Program {
                 Some(self.act(at_s, scan, layout, block, io))
             }
         };
+        let waited = self
+            .waiting_since
+            .take()
+            .filter(|(seq, _)| *seq == block.seq);
         let Some(outcome) = outcome else {
-            return; // waits behind the running move
+            // Waits behind the running move.
+            self.waiting_since = Some(waited.unwrap_or((block.seq, at_s)));
+            return;
         };
         self.starts.push(StartRecord {
             at_s,
+            seen_s: waited.map_or(at_s, |(_, seen_s)| seen_s),
             block,
             counts: std::array::from_fn(|c| io.engines[c].count()),
             outcome,
