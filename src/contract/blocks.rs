@@ -10,6 +10,8 @@ pub const STATUS_WORDS: usize = 22;
 pub const COMMAND_WORDS: usize = 17;
 /// Offset of the command block's `host` word.
 pub const COMMAND_HOST_OFFSET: u16 = 16;
+/// Offset of the status block's `heartbeat` word.
+pub const STATUS_HEARTBEAT_OFFSET: u16 = 2;
 
 /// `ready` bit 0: the channels are homed (set by the program's home routine, cleared at power-up).
 pub const READY_HOMED: u16 = 0b001;
@@ -281,7 +283,7 @@ impl StatusBlock {
         Some(Self {
             magic: words[0],
             version: words[1],
-            heartbeat: words[2],
+            heartbeat: words[usize::from(STATUS_HEARTBEAT_OFFSET)],
             state: words[3],
             seq: words[4],
             fault: words[5],

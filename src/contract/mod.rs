@@ -20,7 +20,8 @@ pub mod machine;
 
 pub use blocks::{
     COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, READY_DRIVES,
-    READY_ESTOP_CLEAR, READY_HOMED, STATUS_WORDS, State, StatusBlock, UnknownValue,
+    READY_ESTOP_CLEAR, READY_HOMED, STATUS_HEARTBEAT_OFFSET, STATUS_WORDS, State, StatusBlock,
+    UnknownValue,
 };
 pub use layout::{Layout, LayoutError};
 

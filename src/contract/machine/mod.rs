@@ -329,6 +329,9 @@ pub struct Machine {
     /// between two of them (behind a running start: between the read before the upload and
     /// one after it).
     since_upload: (u8, bool),
+    /// Whether a whole status block was read since the upload began (a start's checks read
+    /// it, not a heartbeat word alone).
+    status_since_upload: bool,
 }
 
 impl Machine {
@@ -348,6 +351,7 @@ impl Machine {
             last: None,
             read_at: None,
             since_upload: (0, false),
+            status_since_upload: false,
         }
     }
 
@@ -437,7 +441,7 @@ impl Machine {
         let Phase::Uploading { current } = &self.phase else {
             return Err(Blocker::Full);
         };
-        if !self.since_upload.1 {
+        if !(self.since_upload.1 && self.status_since_upload) {
             return Err(Blocker::Unproven);
         }
         match current {
@@ -516,6 +520,7 @@ impl Machine {
     /// The caller begins writing a bank (nothing is given to the PLC yet).
     pub fn upload_begun(&mut self) {
         self.since_upload = (0, false);
+        self.status_since_upload = false;
         let current = match std::mem::replace(&mut self.phase, Phase::Idle) {
             Phase::Running { current } => Some(current),
             other => {
@@ -708,7 +713,41 @@ impl Machine {
         events
     }
 
+    /// The heartbeat word read alone at `now`, while a bank is written or just after: it
+    /// counts toward the proof a start needs ([`Self::may_start`]) as a status read does, and
+    /// tells nothing else (the next status read checks the rest).
+    pub fn heartbeat_read(&mut self, value: u16, now: Instant) {
+        self.observe_heartbeat(value, now);
+    }
+
+    /// Whether the start being uploaded has no read toward its heartbeat proof yet, and the
+    /// read before the upload will not count: two reads are still needed, and the first may be
+    /// of the heartbeat word alone ([`Self::heartbeat_read`]).
+    #[must_use]
+    pub fn proof_wants_two_reads(&self, now: Instant) -> bool {
+        let Phase::Uploading { current } = &self.phase else {
+            return false;
+        };
+        self.since_upload.0 == 0 && !self.before_upload_counts(current.is_some(), now)
+    }
+
+    /// Whether the status read before the upload counts as the first of the proof's two:
+    /// behind a running start (watched until it ends), if no further back than the heartbeat
+    /// timeout.
+    fn before_upload_counts(&self, behind_a_start: bool, now: Instant) -> bool {
+        behind_a_start
+            && self.read_at.is_some_and(|at| {
+                now.saturating_duration_since(at) <= self.settings.heartbeat_timeout
+            })
+    }
+
     fn note_heartbeat(&mut self, value: u16, now: Instant) {
+        self.observe_heartbeat(value, now);
+        self.read_at = Some(now);
+        self.status_since_upload = true;
+    }
+
+    fn observe_heartbeat(&mut self, value: u16, now: Instant) {
         if let Phase::Uploading { current } = &self.phase {
             let (reads, moved) = self.since_upload;
             let changed = self.heartbeat.is_some_and(|(last, _)| last != value);
@@ -718,14 +757,9 @@ impl Machine {
             // start, which is watched until it ends and stopped if the heartbeat stands still,
             // the read before the upload (the one that saw it running) counts as the first, if
             // no further back than the heartbeat timeout: a chained part's turn is short.
-            let first = reads >= 1
-                || (current.is_some()
-                    && self.read_at.is_some_and(|at| {
-                        now.saturating_duration_since(at) <= self.settings.heartbeat_timeout
-                    }));
+            let first = reads >= 1 || self.before_upload_counts(current.is_some(), now);
             self.since_upload = (reads.saturating_add(1), moved || (first && changed));
         }
-        self.read_at = Some(now);
         match self.heartbeat {
             Some((last, _)) if last == value => {}
             _ => self.heartbeat = Some((value, now)),

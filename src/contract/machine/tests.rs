@@ -845,6 +845,47 @@ fn a_start_is_written_only_from_the_counts_it_was_planned_from() {
     );
 }
 
+#[test]
+fn the_first_of_the_two_heartbeat_reads_may_be_of_its_word_alone() {
+    let idle = status(State::Done, 7, 0, FROM);
+    let p = planned(1, 8, FROM, TO);
+    // Nothing ran during the upload: two reads are wanted, the first may be the word alone.
+    let mut bed = Bed::idle();
+    assert!(!bed.m.proof_wants_two_reads(bed.now), "not uploading");
+    bed.m.upload_begun();
+    assert!(bed.m.proof_wants_two_reads(bed.now));
+    bed.beat = bed.beat.wrapping_add(1);
+    bed.m.heartbeat_read(bed.beat, bed.now);
+    assert!(!bed.m.proof_wants_two_reads(bed.now), "one read made");
+    assert_eq!(bed.m.may_start(&p, bed.now), Err(Blocker::Unproven));
+    let _ = bed.feed(idle);
+    assert_eq!(bed.m.may_start(&p, bed.now), Ok(()));
+    // A heartbeat that stood still between the word and the block proves nothing.
+    let mut still = Bed::idle();
+    still.m.upload_begun();
+    still.m.heartbeat_read(still.beat, still.now);
+    let _ = still.feed_after(0, idle);
+    assert_eq!(still.m.may_start(&p, still.now), Err(Blocker::Unproven));
+    // Nor does the word alone, however it moved: a status read must follow.
+    let mut alone = Bed::idle();
+    alone.m.upload_begun();
+    for k in 1..=3 {
+        alone
+            .m
+            .heartbeat_read(alone.beat.wrapping_add(k), alone.now);
+    }
+    assert_eq!(alone.m.may_start(&p, alone.now), Err(Blocker::Unproven));
+    // Behind a running start whose read before the upload is recent, one read will do.
+    let mut bed = Bed::running();
+    bed.m.upload_begun();
+    assert!(!bed.m.proof_wants_two_reads(bed.now));
+    bed.now += Duration::from_millis(600);
+    assert!(
+        bed.m.proof_wants_two_reads(bed.now),
+        "that read is too old now"
+    );
+}
+
 /// The counts planned `t_s` into a 1 s start from FROM: channel 0 out 1000 pulses and back,
 /// channel 1 on 2000 and channel 3 on 500 at a steady pace, channel 2 still.
 fn out_and_back(t_s: f64) -> [i32; CHANNELS] {

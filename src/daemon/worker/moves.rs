@@ -145,8 +145,15 @@ impl Worker {
 
     /// The contract's first step once more, after the upload: the bank is started only once
     /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
-    /// (or it chains behind the start whose targets are its `from`).
+    /// (or it chains behind the start whose targets are its `from`). When two reads are needed
+    /// for the heartbeat, the first is of its word alone.
     async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
+        if self.machine.proof_wants_two_reads(now()) {
+            // The first of the two reads that must see the heartbeat move: its word alone.
+            let link = self.link.as_mut().expect("connected");
+            let beat = link.heartbeat().await?;
+            self.machine.heartbeat_read(beat, now());
+        }
         loop {
             let link = self.link.as_mut().expect("connected");
             let status = link.status().await?;

@@ -28,7 +28,7 @@ use super::{Plc, PlcError};
 use crate::contract::machine::{Blocker, Event, Machine, Outcome, Planned, Status, WatchSettings};
 use crate::contract::{
     CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, Layout, MAGIC,
-    STATUS_WORDS, State, StatusBlock, UnknownValue, VERSION,
+    STATUS_HEARTBEAT_OFFSET, STATUS_WORDS, State, StatusBlock, UnknownValue, VERSION,
 };
 use crate::table::{DIRECTORY_WORDS, ValidTable, encode_at};
 
@@ -413,6 +413,19 @@ impl<P: Plc> Contract<P> {
             .read_words(self.settings.layout.command_base, 1)
             .await?;
         Ok(asked.elapsed())
+    }
+
+    /// The status block's heartbeat word, read alone (nothing else of the block is checked:
+    /// a status read after it does that).
+    pub async fn heartbeat(&mut self) -> Result<u16, ContractError> {
+        let at = self.settings.layout.status_base + STATUS_HEARTBEAT_OFFSET;
+        let words = self.plc.read_words(at, 1).await?;
+        words.first().copied().ok_or_else(|| {
+            ContractError::Plc(PlcError::BadReply {
+                operation: "read the heartbeat word".into(),
+                detail: "no word".into(),
+            })
+        })
     }
 
     /// The link, for other requests.
