@@ -186,7 +186,8 @@ pub struct ChainWait {
 pub struct DemoMove {
     /// Its name.
     pub name: &'static str,
-    /// Queued while the move before it ran (the PLC started it with no host round trip).
+    /// Queued while the move before it ran, its start written to wait behind that move
+    /// (whether it was written in time: [`Self::chain`]).
     pub chained: bool,
     /// For a chained move: how it followed the move before it, on the trace.
     pub chain: Option<ChainWait>,
