@@ -3,8 +3,8 @@
 
 use tokio::time::Instant;
 
-use super::check;
-use super::sizes::{MULTI_FRAME_CHECKS, probe_timeout, sizes};
+use super::sizes::{probe_timeout, sizes};
+use super::{MULTI_FRAME_CHECKS, check};
 use crate::commission::report::HeaderProbe;
 use crate::commission::{Halt, Session};
 use crate::mewtocol::{

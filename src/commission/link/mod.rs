@@ -39,6 +39,11 @@ pub(super) struct Linked {
     pub pace: Pace,
 }
 
+/// What the multi-frame read check looks at (MEWTOCOL `%`; skipped otherwise).
+const MULTI_FRAME_CHECKS: &str = "whether a MEWTOCOL-COM % read of more words than one frame \
+     holds is answered in several frames, each asked for with %01**& (two frames' words of bank \
+     1's channel 0 table area)";
+
 fn check(name: &'static str, checks: &str) -> Check {
     debug_assert!(LINK_CHECKS.contains(&name));
     Check::new(Step::Link, name, checks)

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::check;
+use super::{MULTI_FRAME_CHECKS, check};
 use crate::commission::judge::Bisect;
 use crate::commission::report::RequestSizes;
 use crate::commission::{Halt, Session};
@@ -148,11 +148,6 @@ pub(super) async fn sizes<P: Plc>(
     }
     Ok((read, write))
 }
-
-/// What the multi-frame read check looks at.
-pub(super) const MULTI_FRAME_CHECKS: &str = "whether a MEWTOCOL-COM % read of more words than one \
-     frame holds is answered in several frames, each asked for with %01**& (two frames' words \
-     of bank 1's channel 0 table area)";
 
 /// Modbus: request sizes with a client allowed the specification's maxima.
 pub(super) async fn modbus(

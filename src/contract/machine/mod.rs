@@ -713,13 +713,6 @@ impl Machine {
         events
     }
 
-    /// The heartbeat word read alone at `now`, while a bank is written or just after: it
-    /// counts toward the proof a start needs ([`Self::may_start`]) as a status read does, and
-    /// tells nothing else (the next status read checks the rest).
-    pub fn heartbeat_read(&mut self, value: u16, now: Instant) {
-        self.observe_heartbeat(value, now);
-    }
-
     /// Whether the start being uploaded has no read toward its heartbeat proof yet, and the
     /// read before the upload will not count: two reads are still needed, and the first may be
     /// of the heartbeat word alone ([`Self::heartbeat_read`]).
@@ -741,13 +734,17 @@ impl Machine {
             })
     }
 
+    /// A status block's heartbeat, read at `now`.
     fn note_heartbeat(&mut self, value: u16, now: Instant) {
-        self.observe_heartbeat(value, now);
+        self.heartbeat_read(value, now);
         self.read_at = Some(now);
         self.status_since_upload = true;
     }
 
-    fn observe_heartbeat(&mut self, value: u16, now: Instant) {
+    /// The heartbeat word read at `now`, alone or in a status block. Alone, while a bank is
+    /// written or just after, it counts toward the proof a start needs ([`Self::may_start`]) as
+    /// a status read does, and tells nothing else (the next status read checks the rest).
+    pub fn heartbeat_read(&mut self, value: u16, now: Instant) {
         if let Phase::Uploading { current } = &self.phase {
             let (reads, moved) = self.since_upload;
             let changed = self.heartbeat.is_some_and(|(last, _)| last != value);
