@@ -17,6 +17,7 @@ use super::plan::ModelArg;
 use crate::demo::{DEFAULT_BAUD, DemoLink, DemoOptions, run as run_demo, write_report};
 
 /// Arguments of `linterpd demo`.
+#[allow(clippy::struct_excessive_bools)] // each is a flag on the command line
 #[derive(Debug, Args)]
 pub struct DemoArgs {
     /// Write the picture (paths and deviation along the line) to this file.
@@ -37,6 +38,9 @@ pub struct DemoArgs {
     /// Speak Modbus RTU (binary frames) rather than MEWTOCOL-COM.
     #[arg(long, conflicts_with = "long_frames")]
     pub modbus_rtu: bool,
+    /// Do not read uploads back before their start (a config's `read_back = false`).
+    #[arg(long)]
+    pub no_read_back: bool,
 }
 
 /// Runs `linterpd demo`.
@@ -52,6 +56,7 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
                 long_frames: args.long_frames,
             }
         },
+        read_back: !args.no_read_back,
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()

@@ -8,6 +8,7 @@
 //! station = 1                        # MEWTOCOL 1..=99 or 238 (EE); Modbus unit 1..=247
 //! header = "auto"                    # MEWTOCOL only: "auto" | "percent" | "angle" [unverified]
 //! multi_frame_reads = true           # MEWTOCOL only: % reads past one frame in one RD [practice]
+//! read_back = true                  # read every upload back and compare before its start
 //! timeout = "300ms"                  # margin per exchange, beyond its wire time and 2 scans
 //! scan_time = "10ms"                 # the PLC's longest scan
 //! retries = 2                        # 0..=10
@@ -67,6 +68,9 @@ pub(super) fn link(
             return Err(at.invalid(v, "only MEWTOCOL replies come in frames"));
         }
         settings.multi_frame_reads = *v.get_ref();
+    }
+    if let Some(v) = &r.read_back {
+        settings.read_back = *v.get_ref();
     }
     settings.timeout =
         positive_duration(&at.child("timeout"), r.timeout.as_ref(), settings.timeout)?;

@@ -236,6 +236,23 @@ fn multi_frame_reads_are_on_by_default_can_be_turned_off_and_are_refused_for_mod
 }
 
 #[test]
+fn read_back_is_on_by_default_can_be_turned_off_and_reaches_the_contract() {
+    let mewtocol = "protocol = \"mewtocol\"\nserial = { path = \"/dev/ttyUSB0\" }\n";
+    let modbus = "protocol = \"modbus-tcp\"\ntcp = { address = \"10.0.0.2:502\" }\n";
+    let link = |text: &str| Config::from_toml(text).unwrap().link("r").unwrap().clone();
+    for plc in [mewtocol, modbus] {
+        let on = link(&with_plc(plc));
+        assert!(on.read_back);
+        assert!(crate::daemon::service::contract_settings(&on).verify);
+        let off = link(&with_plc(&format!("{plc}read_back = false")));
+        assert!(!off.read_back);
+        assert!(!crate::daemon::service::contract_settings(&off).verify);
+    }
+    let text = with_plc(&format!("{mewtocol}read_back = 1"));
+    assert!(message(&text).contains("read_back"), "{}", message(&text));
+}
+
+#[test]
 fn shipped_file_has_a_valid_press_loader_plc_section() {
     let config = Config::from_toml(include_str!("../../config/linterpd.toml")).unwrap();
     let link = config.link("press-loader").unwrap();

@@ -75,6 +75,7 @@ pub(super) struct RawPlc {
     pub station: Option<Spanned<i64>>,
     pub header: Option<Spanned<String>>,
     pub multi_frame_reads: Option<Spanned<bool>>,
+    pub read_back: Option<Spanned<bool>>,
     pub timeout: Option<Spanned<String>>,
     pub retries: Option<Spanned<i64>>,
     pub heartbeat_timeout: Option<Spanned<String>>,

@@ -61,6 +61,8 @@ pub struct DemoOptions {
     /// The protocol: MEWTOCOL-COM in `%` frames by default; in `<` frames as a shipped
     /// config's `header = "auto"` ends up with when the PLC takes them; or Modbus RTU.
     pub link: DemoLink,
+    /// Read every upload back before its start (a shipped config's `read_back`, on by default).
+    pub read_back: bool,
 }
 
 impl Default for DemoOptions {
@@ -70,6 +72,7 @@ impl Default for DemoOptions {
             frequency_model: seed_robot().motion.frequency_model,
             svg: true,
             link: DemoLink::Mewtocol { long_frames: false },
+            read_back: true,
         }
     }
 }
@@ -243,7 +246,10 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     let scan_s = rig.mock.scan_s();
     let setup = RobotSetup {
         robot: robot.clone(),
-        settings: ContractSettings::default(),
+        settings: ContractSettings {
+            verify: options.read_back,
+            ..ContractSettings::default()
+        },
         connect: rig.connector(options.baud, options.link),
         home_counts: [0; crate::kinematics::JOINTS],
         gateway: crate::gateway::GatewaySettings::default(),

@@ -38,10 +38,13 @@ fn stage(stage: crate::daemon::Stage) -> String {
 
 fn header(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
     let name = demo.options.link.name();
-    let link = demo.options.baud.map_or_else(
+    let mut link = demo.options.baud.map_or_else(
         || format!("{name}, no line speed emulated"),
         |b| format!("{name} over an emulated {b}-baud serial line"),
     );
+    if !demo.options.read_back {
+        link.push_str(", uploads not read back");
+    }
     writeln!(
         out,
         "linterpd demo: robot {}, run by the daemon's own move path against a mock FP-X in",

@@ -154,6 +154,11 @@ pub struct LinkSettings {
     /// in several frames (PLC.md §1, \[practice\]), falling back to one frame a read for the
     /// rest of the connection the first time such a read is not answered (ignored by Modbus).
     pub multi_frame_reads: bool,
+    /// Read back every word an upload writes (tables, directories, command block) and compare
+    /// before a start (CONTRACT.md: configurable, on by default). Off, a write is trusted on the
+    /// PLC's acknowledgement alone: the PLC checks each frame's BCC (MEWTOCOL) or CRC (Modbus
+    /// RTU) before it writes, and Modbus TCP has TCP's checksum.
+    pub read_back: bool,
     /// The margin every exchange may take beyond its wire time and two PLC scans (see
     /// [`Timing`]).
     pub timeout: Duration,
@@ -201,6 +206,7 @@ impl LinkSettings {
             station: 1,
             header: HeaderChoice::Auto,
             multi_frame_reads: true,
+            read_back: true,
             timeout: Duration::from_millis(300),
             retries: 2,
             heartbeat_timeout: Duration::from_millis(500),

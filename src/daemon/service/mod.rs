@@ -92,6 +92,13 @@ pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError
             let link = config.link(&robot.name).ok_or_else(|| ServeError::NoLink {
                 robot: robot.name.clone(),
             })?;
+            if !link.read_back {
+                tracing::warn!(
+                    robot = %robot.name,
+                    "read_back = false: uploads are not read back before their start; each write \
+                     is trusted on the PLC's acknowledgement (its BCC or CRC check) alone"
+                );
+            }
             Ok(RobotSetup {
                 robot: robot.clone(),
                 settings: contract_settings(link),
@@ -103,13 +110,13 @@ pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError
         .collect()
 }
 
-/// The contract settings a link implies: its layout and heartbeat timeout, verify on.
+/// The contract settings a link implies: its layout, heartbeat timeout and read-back.
 #[must_use]
 pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
     let defaults = ContractSettings::default();
     ContractSettings {
         layout: link.layout,
-        verify: true,
+        verify: link.read_back,
         watch: WatchSettings {
             heartbeat_timeout: link.heartbeat_timeout,
             ..defaults.watch

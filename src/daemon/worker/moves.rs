@@ -296,6 +296,7 @@ impl Worker {
                     word: link.one_word_exchange().await?,
                     preload: Duration::ZERO,
                     preload_words: 0,
+                    read_back: self.settings.verify,
                 }),
             };
             pace.preload += took;

@@ -8,9 +8,9 @@
 //! A part's start, once the part before it is seen running, takes (as the worker makes them):
 //! the status read that sees the part before running (its turn begins on it), its directories
 //! left to write (one per channel whose tables lie past another part's in the same bank) and
-//! its command block written and read back, the status read before the start, and the one-word
-//! start write; a part not preloaded (the areas were full) has its tables written and read
-//! back too, at the preloads' pace per word. An exchange of `w` words is taken on the line
+//! its command block written and read back (written only, with `read_back = false`), the
+//! status read before the start, and the one-word start write; a part not preloaded (the areas
+//! were full) has its tables written and read back too, at the preloads' pace per word. An exchange of `w` words is taken on the line
 //! through the two reads measured (one word, and the status block's [`STATUS_WORDS`]): a fixed
 //! cost per exchange and a cost per word.
 
@@ -35,6 +35,8 @@ pub(super) struct Pace {
     pub preload: Duration,
     /// ... that many words.
     pub preload_words: usize,
+    /// Whether every write is read back (the contract's `verify`).
+    pub read_back: bool,
 }
 
 /// One part of a section as the check sees it: the words its start writes, how long it runs.
@@ -68,20 +70,25 @@ impl Pace {
         one + per_word * words.saturating_sub(1) as f64
     }
 
+    /// Exchanges per block written: the write, and its read-back unless switched off.
+    fn exchanges_per_write(&self) -> f64 {
+        if self.read_back { 2.0 } else { 1.0 }
+    }
+
     /// About how long a part takes to start once the part before it is seen running, s: two
-    /// status reads, its block written and read back, the start write.
+    /// status reads, its block written (and read back), the start write.
     fn start_s(&self) -> f64 {
         2.0 * self.status.as_secs_f64()
-            + 2.0 * self.exchange_s(BLOCK_WRITE_WORDS)
+            + self.exchanges_per_write() * self.exchange_s(BLOCK_WRITE_WORDS)
             + self.exchange_s(1)
     }
 
     /// About how long part `k` (from 0) takes to be ready to start once its bank is free: a
-    /// preloaded part's directories written and read back, a part not preloaded its tables
+    /// preloaded part's directories written (and read back), a part not preloaded its tables
     /// at the preloads' pace, then its start.
     fn need_s(&self, parts: &[Part], k: usize) -> f64 {
         let tables_s = if let Some(directories) = parts[k].preloaded {
-            directories as f64 * 2.0 * self.exchange_s(DIRECTORY_WORDS)
+            directories as f64 * self.exchanges_per_write() * self.exchange_s(DIRECTORY_WORDS)
         } else {
             let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
             parts[k].words as f64 * per_word_s
@@ -119,6 +126,7 @@ mod tests {
             word: Duration::from_millis(word_ms),
             preload: Duration::from_millis(preload_ms),
             preload_words,
+            read_back: true,
         }
     }
 
@@ -220,5 +228,25 @@ mod tests {
         ];
         assert!((p.need_s(&later, 2) - (0.1 + 0.12)).abs() < 1e-9);
         assert!(p.check(&later).is_ok());
+    }
+
+    #[test]
+    fn without_read_back_a_start_writes_its_blocks_once() {
+        // 19200 baud as above, read_back = false: the block and directories written, not read.
+        let on = pace(72, 20, 6_000, 1_000);
+        let off = Pace {
+            read_back: false,
+            ..on
+        };
+        let block = on.exchange_s(BLOCK_WRITE_WORDS);
+        assert!((on.start_s() - off.start_s() - block).abs() < 1e-12);
+        let parts = [part(150, 1.0), preloaded(200, 1.0, 3)];
+        let directories = 3.0 * on.exchange_s(DIRECTORY_WORDS);
+        assert!((on.need_s(&parts, 1) - off.need_s(&parts, 1) - block - directories).abs() < 1e-12);
+        // A part before it that runs between the two estimates chains only without read-back.
+        let runs_s = MARGIN * (off.need_s(&parts, 1) + on.need_s(&parts, 1)) / 2.0;
+        let between = [part(150, runs_s), preloaded(200, 1.0, 3)];
+        assert!(off.check(&between).is_ok());
+        assert!(on.check(&between).is_err());
     }
 }

@@ -16,6 +16,8 @@ struct FakePlc {
     /// Writes the PLC refuses (an error reply), by address.
     refuse_at: Option<u16>,
     writes: Vec<(u16, usize)>,
+    /// Every read, as (start, count).
+    reads: Vec<(u16, usize)>,
 }
 
 impl FakePlc {
@@ -39,6 +41,7 @@ impl FakePlc {
 
 impl Plc for FakePlc {
     async fn read_words(&mut self, start: u16, count: u16) -> Result<Vec<u16>, PlcError> {
+        self.reads.push((start, usize::from(count)));
         if start == 1_000 && !self.frozen {
             let hb = self.dt.get(&1_002).copied().unwrap_or(0);
             self.dt.insert(1_002, hb.wrapping_add(1));
@@ -283,6 +286,42 @@ async fn a_preloaded_start_whose_directory_reads_back_wrong_is_not_started() {
         "{err}"
     );
     assert!(!c.plc().writes.iter().any(|(a, _)| *a == 1_032));
+}
+
+#[tokio::test(start_paused = true)]
+async fn every_word_written_is_read_back_unless_read_back_is_off() {
+    for verify in [true, false] {
+        let settings = ContractSettings {
+            verify,
+            ..ContractSettings::default()
+        };
+        let mut c = Contract::new(FakePlc::running(), settings);
+        let _bank = c.upload(1, 7, FROM, &[table(0), table(2)]).await.unwrap();
+        let plc = c.plc();
+        assert_eq!(plc.writes.len(), 3, "two tables and the block");
+        let read_back: Vec<_> = plc
+            .writes
+            .iter()
+            .filter(|w| plc.reads.contains(w))
+            .collect();
+        if verify {
+            assert_eq!(read_back.len(), plc.writes.len(), "{:?}", plc.reads);
+        } else {
+            assert!(read_back.is_empty(), "{:?}", plc.reads);
+            let written = |a: u16| {
+                plc.writes
+                    .iter()
+                    .any(|&(s, n)| (s..s + n as u16).contains(&a))
+            };
+            assert!(
+                !plc.reads
+                    .iter()
+                    .any(|&(s, n)| (s..s + n as u16).any(written)),
+                "read_back = false read a written word: {:?}",
+                plc.reads
+            );
+        }
+    }
 }
 
 #[tokio::test(start_paused = true)]
