@@ -28,7 +28,7 @@ async fn demo(svg: bool) -> Demo {
 #[tokio::test(flavor = "multi_thread")]
 async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
     let d = demo(true).await;
-    assert_eq!(d.moves.len(), 6);
+    assert_eq!(d.moves.len(), 7);
     for m in &d.moves {
         assert_eq!(m.report.stage, Stage::Done, "{}: {:?}", m.name, m.report);
         let (error, _) = m.final_error_pulses(&d.robot);
@@ -48,7 +48,8 @@ async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
         "measured {measured} mm, predicted {predicted} mm"
     );
     assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_none());
-    assert!(d.moves[5].chained && d.moves[5].report.final_error_pulses.is_some());
+    assert!(d.moves[5].chained && d.moves[5].report.final_error_pulses.is_none());
+    assert!(d.moves[6].chained && d.moves[6].report.final_error_pulses.is_some());
     // At 115200 baud every queued move is uploaded long before the one before it ends: its
     // start waits in the PLC, which takes it within two scans of that move's last pulse.
     for m in &d.moves[4..] {
@@ -126,7 +127,11 @@ fn the_binary_runs_the_demo_and_names_the_seeds_move() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("the seed's move, P1 -> P2"), "{stdout}");
-    assert!(stdout.contains("6 moves done"), "{stdout}");
+    assert!(stdout.contains("7 moves done"), "{stdout}");
+    assert!(
+        stdout.contains("s on the trace (planned 1.400 s; the daemon saw it end after"),
+        "{stdout}"
+    );
     assert!(stdout.contains("no idle time"), "{stdout}");
     assert!(!stdout.contains("the PLC idled"), "{stdout}");
     assert!(!stdout.contains("Picture:"), "{stdout}");

@@ -11,7 +11,9 @@
 //! ```
 //! The moves ([`steps`]): the seed's move P1 -> P2 at the robot's defaults (240 mm/s, Ta 200 ms,
 //! dT 50 ms), back to P1 bounded-error 0.05 mm, to P2 at 120 mm/s, then two moves queued at once
-//! that the PLC chains (back to P1 with dT 20 ms, out to P2 bounded-error 0.05 mm). All run on the
+//! that the PLC chains (back to P1 with dT 20 ms, out to P2 and back bounded-error 0.05 mm, out
+//! to P2 again at dT 50 ms: a bounded-error and a constant-period upload behind a bounded-error
+//! move, each measured on the trace for idle time). All run on the
 //! line P1P2, so one picture shows them all (the seed's Figs. 6 and 7: the path, and the
 //! deviation along it).
 
@@ -168,6 +170,7 @@ pub fn steps() -> Vec<Vec<Step>> {
                     ..to(P1)
                 },
             ),
+            step("P1 -> P2, dT 50 ms, chained behind bounded", to(P2)),
         ],
     ]
 }

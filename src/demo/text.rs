@@ -92,17 +92,19 @@ fn one(robot: &Robot, n: usize, m: &DemoMove, out: &mut dyn Write) -> io::Result
         .unwrap_or_else(|| unreachable!("a done move was planned"));
     writeln!(out)?;
     writeln!(out, "{n}. {}: {}", m.name, motion(&m.plan.motion))?;
-    let motion_s = r.motion_s.map_or_else(
-        || format!("{:.3} s in the trace", m.played.figures.finish_s),
-        |s| format!("{s:.3} s"),
-    );
+    // The trace's motion; the daemon's (`motion_s`) runs to the poll that saw the move end,
+    // later while the next move's upload holds the line.
+    let polled = r.motion_s.map_or_else(String::new, |s| {
+        format!("; the daemon saw it end after {s:.3} s")
+    });
     writeln!(
         out,
-        "   {}: {} rows, {} words, upload {}, motion {motion_s} (planned {:.3} s)",
+        "   {}: {} rows, {} words, upload {}, motion {:.3} s on the trace (planned {:.3} s{polled})",
         stage(r.stage),
         p.rows,
         p.words,
         seconds(r.upload_s),
+        m.played.figures.finish_s,
         p.duration_s,
     )?;
     if let Some(chain) = &m.chain {
