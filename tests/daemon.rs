@@ -491,3 +491,68 @@ async fn a_worker_that_hangs_makes_the_daemon_unhealthy_and_one_that_panics_is_r
         .expect("the failure is reported");
     assert!(why.contains("panicked"), "{why}");
 }
+
+/// A move queued behind a running one is uploaded while that one runs, for seconds on a slow
+/// line (752 words: about 4.7 s at 19200 baud): the running move stays watched through it. Its
+/// heartbeat freezing early in that upload stops it where it is, long before its end (2.6 s
+/// of motion), where a daemon blind until the upload ended would have let it run out; the
+/// queued move never starts.
+#[tokio::test]
+async fn a_running_move_stays_watched_while_the_next_one_uploads() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(
+        duplex_connector(&shared, Some(19_200)),
+        ContractSettings::default(),
+    );
+    wait_connected(&h).await;
+    let a = h
+        .submit(MoveOrder {
+            speed_mm_s: Some(120.0),
+            tolerance_mm: Some(0.05),
+            ..order(P2)
+        })
+        .unwrap();
+    let b = h
+        .submit(MoveOrder {
+            period: Some("20ms".into()),
+            ..order(P1)
+        })
+        .unwrap();
+    // Seen running, `a` has `b`'s upload begin behind it.
+    for _ in 0..1_000 {
+        if h.report(a).is_some_and(|r| r.stage == Stage::Running) {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    assert_eq!(h.report(a).unwrap().stage, Stage::Running);
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    shared.with(|m| m.freeze_heartbeat(true));
+    let ra = h.wait(a, LIMIT).await.unwrap();
+    assert_ne!(ra.stage, Stage::Done, "{ra:?}");
+    // The stop follows the report within an exchange or two.
+    let stopped = linterpd::contract::State::Stopped.word();
+    for _ in 0..100 {
+        if shared.with(|m| m.status().state) == stopped {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let status = shared.with(|m| m.status());
+    assert_eq!(status.state, stopped, "{status:?}");
+    assert_eq!(status.busy, 0);
+    let targets = ra.target_counts.expect("planned");
+    let robot = h.robot();
+    let short = (0..4).any(|j| {
+        let c = usize::from(robot.joints[j].channel);
+        (shared.with(|m| m.count(c)) - targets[j]).abs() > 100
+    });
+    assert!(
+        short,
+        "stopped only at its end: {status:?}, targets {targets:?}"
+    );
+    let rb = h.wait(b, LIMIT).await.unwrap();
+    assert_ne!(rb.stage, Stage::Done, "{rb:?}");
+    assert_ne!(shared.with(|m| m.read_words(1_032, 1).unwrap()[0]), 1);
+    d.shut_down().await;
+}

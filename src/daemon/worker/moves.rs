@@ -14,7 +14,7 @@ use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::Plan;
-use crate::plc::contract::{CommandWrite, ContractError, planned_bounds};
+use crate::plc::contract::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
 
@@ -179,7 +179,7 @@ impl Worker {
         tables: &[ValidTable],
         from_rest: bool,
         exchange: Duration,
-    ) -> Result<crate::plc::contract::VerifiedBank, ContractError> {
+    ) -> Result<VerifiedBank, ContractError> {
         let own = if from_rest {
             // Nothing preloaded before outlives a start from rest: its section's parts are
             // preloaded afresh around it.
@@ -192,13 +192,15 @@ impl Worker {
                 .position(|(of, preload)| *of == id && preload.bank() == planned.bank)
                 .map(|at| self.preloaded.remove(at).1)
         };
-        let link = self.link.as_mut().expect("connected");
-        let bank = if let Some(preload) = own {
-            link.upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
-                .await
+        let link = self.link.as_ref().expect("connected");
+        let upload = if let Some(preload) = own {
+            link.begin_upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
         } else {
-            link.upload(planned.bank, planned.seq, planned.from, tables)
-                .await
+            link.begin_upload(planned.bank, planned.seq, planned.from, tables)
+        };
+        let bank = match upload {
+            Ok(mut upload) => self.upload_watching(&mut upload).await,
+            Err(e) => Err(e),
         };
         // Written whole from the directory's end (or partly, when it failed), a bank may lie
         // over tables preloaded past its own, which no later start may rest on. Only a start
@@ -207,6 +209,30 @@ impl Worker {
             self.preloaded.clear();
         }
         bank
+    }
+
+    /// Makes `upload`'s exchanges. Between two, while a start the PLC was given may run, the
+    /// status block is read whenever the last read is a heartbeat timeout old: the running move
+    /// stays watched (its heartbeat, counts, state, progress) through an upload that lasts
+    /// seconds on a slow line, and is stopped as it would be between uploads.
+    async fn upload_watching(
+        &mut self,
+        upload: &mut Upload,
+    ) -> Result<VerifiedBank, ContractError> {
+        let every = self.machine.settings().heartbeat_timeout;
+        loop {
+            let due = self
+                .machine
+                .read_at()
+                .is_none_or(|at| now().saturating_duration_since(at) >= every);
+            if due && !self.machine.given().is_empty() {
+                self.poll().await?;
+            }
+            let link = self.link.as_mut().expect("connected");
+            if let Some(bank) = link.upload_step(upload).await? {
+                return Ok(bank);
+            }
+        }
     }
 
     /// Before a start written while nothing runs (`first`, its `tables`): when the moves queued
@@ -297,6 +323,7 @@ impl Worker {
                     preload: Duration::ZERO,
                     preload_words: 0,
                     read_back: self.settings.verify,
+                    watch_every: self.machine.settings().heartbeat_timeout,
                 }),
             };
             pace.preload += took;

@@ -37,6 +37,9 @@ pub(super) struct Pace {
     pub preload_words: usize,
     /// Whether every write is read back (the contract's `verify`).
     pub read_back: bool,
+    /// How often a running part is watched (a status read) while the next one is written: the
+    /// heartbeat timeout.
+    pub watch_every: Duration,
 }
 
 /// One part of a section as the check sees it: the words its start writes, how long it runs.
@@ -85,7 +88,8 @@ impl Pace {
 
     /// About how long part `k` (from 0) takes to be ready to start once its bank is free: a
     /// preloaded part's directories written (and read back), a part not preloaded its tables
-    /// at the preloads' pace, then its start.
+    /// at the preloads' pace, with the status reads that watch the part before it meanwhile
+    /// (one each `watch_every`), then its start.
     fn need_s(&self, parts: &[Part], k: usize) -> f64 {
         let tables_s = if let Some(directories) = parts[k].preloaded {
             directories as f64 * self.exchanges_per_write() * self.exchange_s(DIRECTORY_WORDS)
@@ -93,7 +97,9 @@ impl Pace {
             let per_word_s = self.preload.as_secs_f64() / self.preload_words.max(1) as f64;
             parts[k].words as f64 * per_word_s
         };
-        tables_s + self.start_s()
+        let watch_s =
+            (tables_s / self.watch_every.as_secs_f64()).floor() * self.status.as_secs_f64();
+        tables_s + watch_s + self.start_s()
     }
 
     /// Refuses a section's `parts` (the first about to start from rest) if a part after the
@@ -127,6 +133,7 @@ mod tests {
             preload: Duration::from_millis(preload_ms),
             preload_words,
             read_back: true,
+            watch_every: Duration::from_secs(3_600),
         }
     }
 
@@ -228,6 +235,22 @@ mod tests {
         ];
         assert!((p.need_s(&later, 2) - (0.1 + 0.12)).abs() < 1e-9);
         assert!(p.check(&later).is_ok());
+    }
+
+    #[test]
+    fn a_part_written_whole_pays_for_the_reads_that_watch_the_part_before_it() {
+        // 1 ms a word: 1 200 words take 1.2 s, watched every 0.5 s: two status reads of 72 ms.
+        let unwatched = pace(72, 20, 1_000, 1_000);
+        let watched = Pace {
+            watch_every: Duration::from_millis(500),
+            ..unwatched
+        };
+        let parts = [part(150, 5.0), part(1_200, 1.0)];
+        let more = watched.need_s(&parts, 1) - unwatched.need_s(&parts, 1);
+        assert!((more - 0.144).abs() < 1e-9, "{more}");
+        // A preloaded part's start writes too little to be watched meanwhile.
+        let light = [part(150, 5.0), preloaded(1_200, 1.0, 1)];
+        assert!((watched.need_s(&light, 1) - unwatched.need_s(&light, 1)).abs() < 1e-12);
     }
 
     #[test]

@@ -12,8 +12,10 @@
 mod describe;
 #[cfg(test)]
 mod tests;
+mod upload;
 
 pub use describe::planned_bounds;
+pub use upload::Upload;
 
 /// Words of a start's command block written before its start (all but `command` and `host`).
 pub const BLOCK_WRITE_WORDS: usize = COMMAND_HOST_OFFSET as usize - 1;
@@ -491,15 +493,49 @@ impl<P: Plc> Contract<P> {
         from: [i32; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<VerifiedBank, ContractError> {
+        let mut upload = self.begin_upload(bank, seq, from, tables)?;
+        self.finish_upload(&mut upload).await
+    }
+
+    /// [`Self::upload`] cut into exchanges, none made yet: [`Self::upload_step`] makes them.
+    pub fn begin_upload(
+        &self,
+        bank: u16,
+        seq: u16,
+        from: [i32; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<Upload, ContractError> {
         let (block, mut writes, _) =
             self.placed(bank, seq, from, tables, [DIRECTORY_WORDS; CHANNELS])?;
         writes.push(self.block_write(&block));
-        self.write_and_verify(&writes).await?;
-        Ok(VerifiedBank {
-            block,
-            words: writes.iter().map(|(_, w)| w.len()).sum(),
-            on_preload: false,
-        })
+        Ok(Upload::new(block, writes, false, self.settings.verify))
+    }
+
+    /// Makes the next exchange of `upload` (a write, or a read-back compared): the bank once
+    /// the last is done, `None` before. A stop asked for ends it between two exchanges.
+    pub async fn upload_step(
+        &mut self,
+        upload: &mut Upload,
+    ) -> Result<Option<VerifiedBank>, ContractError> {
+        self.aborted()?;
+        match upload.next(self.plc.exchange_sizes()) {
+            Some(upload::Exchange::Write { address, words }) => {
+                self.plc.write_words(address, &words).await?;
+            }
+            Some(upload::Exchange::ReadBack { address, words }) => {
+                self.compare(address, &words).await?;
+            }
+            None => {}
+        }
+        Ok(upload.bank())
+    }
+
+    async fn finish_upload(&mut self, upload: &mut Upload) -> Result<VerifiedBank, ContractError> {
+        loop {
+            if let Some(bank) = self.upload_step(upload).await? {
+                return Ok(bank);
+            }
+        }
     }
 
     /// Writes every table into `bank` and reads them back, without the command block: a part
@@ -534,6 +570,19 @@ impl<P: Plc> Contract<P> {
         tables: &[ValidTable],
         preload: &Preload,
     ) -> Result<VerifiedBank, ContractError> {
+        let mut upload = self.begin_upload_preloaded(bank, seq, from, tables, preload)?;
+        self.finish_upload(&mut upload).await
+    }
+
+    /// [`Self::upload_preloaded`] cut into exchanges, none made yet.
+    pub fn begin_upload_preloaded(
+        &self,
+        bank: u16,
+        seq: u16,
+        from: [i32; CHANNELS],
+        tables: &[ValidTable],
+        preload: &Preload,
+    ) -> Result<Upload, ContractError> {
         let (block, tables_writes, mut writes) =
             self.placed(bank, seq, from, tables, preload.base)?;
         if preload.bank != bank || preload.writes != tables_writes {
@@ -542,15 +591,10 @@ impl<P: Plc> Contract<P> {
                 preloaded_bank = preload.bank,
                 "tables differ from those preloaded: writing them whole"
             );
-            return self.upload(bank, seq, from, tables).await;
+            return self.begin_upload(bank, seq, from, tables);
         }
         writes.push(self.block_write(&block));
-        self.write_and_verify(&writes).await?;
-        Ok(VerifiedBank {
-            block,
-            words: writes.iter().map(|(_, w)| w.len()).sum(),
-            on_preload: true,
-        })
+        Ok(Upload::new(block, writes, true, self.settings.verify))
     }
 
     /// The command block for `tables` in `bank`, each channel's segments placed from word
