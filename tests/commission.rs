@@ -352,6 +352,9 @@ async fn a_plc_without_multi_frame_replies_fails_only_the_multi_frame_check_and_
     let multi = find(&report, "multi-frame read", None);
     assert!(multi.saw.contains("got no answer"), "{}", line(multi));
     assert_eq!(report.findings.multi_frame_reads, Some(false));
+    // The check's read was the only one left unanswered: the rest of the commission read one
+    // frame at a time, as the check had found.
+    assert_eq!(shared.with(|m| m.unanswered_multi_frame()), 1);
     assert!(
         report
             .config_lines

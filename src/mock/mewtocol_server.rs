@@ -332,6 +332,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Connection<'_, T> {
                 "one-frame-replies: a reply of {} frames goes unanswered",
                 frames.len()
             );
+            self.server
+                .mock
+                .with(super::MockPlc::note_unanswered_multi_frame);
             return Ok(Step::Continue);
         }
         if let Some(first) = frames.pop_front() {

@@ -137,6 +137,8 @@ pub struct MockPlc {
     recorder: Recorder,
     faults: FaultInjector,
     commands: u64,
+    /// Replies of several frames left unanswered (the `one-frame-replies` variant).
+    unanswered_multi_frame: u64,
 }
 
 impl MockPlc {
@@ -166,6 +168,7 @@ impl MockPlc {
             recorder: Recorder::default(),
             faults: FaultInjector::default(),
             commands: 0,
+            unanswered_multi_frame: 0,
         };
         // The first scan (R9013) runs at power-up, before anybody can write to the PLC.
         mock.advance_to(0.0);
@@ -447,6 +450,17 @@ impl MockPlc {
     /// Freezes or thaws the heartbeat (scans go on).
     pub fn freeze_heartbeat(&mut self, frozen: bool) {
         self.heartbeat_frozen = frozen;
+    }
+
+    /// Replies of several frames a server left unanswered so far (`one-frame-replies`).
+    #[must_use]
+    pub fn unanswered_multi_frame(&self) -> u64 {
+        self.unanswered_multi_frame
+    }
+
+    /// A server left a reply of several frames unanswered.
+    pub fn note_unanswered_multi_frame(&mut self) {
+        self.unanswered_multi_frame += 1;
     }
 
     /// Commands counted by [`Self::on_command`] so far.

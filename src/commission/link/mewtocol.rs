@@ -172,7 +172,10 @@ pub(super) async fn step(
     let (link, header) = mewtocol_sizes(s, link, settings, &works, header).await?;
     let link = multi_frame_read(s, link, settings, header).await?;
     s.findings.header_used = Some(header_name(header).to_owned());
-    let options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    // The config's choice, unless the check just saw this PLC leave a multi-frame read
+    // unanswered: the rest of the commission does not spend a timeout finding that out again.
+    options.multi_frame_reads &= s.findings.multi_frame_reads != Some(false);
     Ok(AnyPlc::Mewtocol(MewtocolClient::new(link, options)))
 }
 
