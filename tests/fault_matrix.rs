@@ -111,6 +111,9 @@ impl Fault {
 enum Flow {
     Single,
     Chained,
+    /// [`Flow::Chained`] at 19200 baud: the second move's upload outlasts the first move, which
+    /// is watched (status reads) between the upload's exchanges.
+    ChainedSlow,
     StopChained,
     Home,
     Path,
@@ -119,9 +122,9 @@ enum Flow {
 impl Flow {
     /// The emulated serial line the flow runs over: the path's at the shipped 19200 baud, where
     /// its third part cannot be written whole while the second runs and is preloaded past the
-    /// first's tables; the others as fast as the stream.
+    /// first's tables, and a chained pair's there too; the others as fast as the stream.
     fn baud(self) -> Option<u32> {
-        (self == Self::Path).then_some(19_200)
+        matches!(self, Self::Path | Self::ChainedSlow).then_some(19_200)
     }
 }
 
@@ -323,6 +326,20 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
         Flow::Chained => {
             ids.extend(h.submit(order(B)).ok());
             ids.extend(h.submit(order(C)).ok());
+        }
+        Flow::ChainedSlow => {
+            // The first runs about 1.4 s at 40 mm/s; the second, sampled every 20 ms, takes
+            // longer than that to upload at 19200 baud: the first is watched through it.
+            let slow = MoveOrder {
+                speed_mm_s: Some(40.0),
+                ..order(B)
+            };
+            let fine = MoveOrder {
+                period: Some("20ms".into()),
+                ..order(C)
+            };
+            ids.extend(h.submit(slow).ok());
+            ids.extend(h.submit(fine).ok());
         }
         Flow::StopChained => {
             ids.extend(h.submit(order(B)).ok());
@@ -599,6 +616,23 @@ async fn chained_pair_under_every_fault_at_every_exchange() {
     run_matrix(Flow::Chained).await;
 }
 
+// At 19200 baud a case runs seconds of uploads and motion: its faults are split in three tests.
+
+#[tokio::test(start_paused = true)]
+async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_1_of_3() {
+    run_matrix_of(Flow::ChainedSlow, &FAULTS[..3]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_2_of_3() {
+    run_matrix_of(Flow::ChainedSlow, &FAULTS[3..6]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_3_of_3() {
+    run_matrix_of(Flow::ChainedSlow, &FAULTS[6..]).await;
+}
+
 #[tokio::test(start_paused = true)]
 async fn stop_during_a_chained_pair_under_every_fault_at_every_exchange() {
     run_matrix(Flow::StopChained).await;
@@ -629,7 +663,7 @@ async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
 
 /// One case with the daemon's and the mock's log, to see what happened in it:
 /// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test fault_matrix one_case -- --ignored
-/// --nocapture` (flows: single, chained, stop, home, path).
+/// --nocapture` (flows: single, chained, chained-slow, stop, home, path).
 #[tokio::test(start_paused = true)]
 #[ignore = "a diagnostic for one case of the matrix: set MATRIX_CASE=flow:Fault:position"]
 async fn one_case_with_its_log() {
@@ -642,6 +676,7 @@ async fn one_case_with_its_log() {
     let flow = match parts[0] {
         "single" => Flow::Single,
         "chained" => Flow::Chained,
+        "chained-slow" => Flow::ChainedSlow,
         "stop" => Flow::StopChained,
         "path" => Flow::Path,
         _ => Flow::Home,
