@@ -87,6 +87,20 @@ fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
         out.contains("press-loader (cylindrical)") && out.contains("MEWTOCOL-COM on serial"),
         "{out}"
     );
+    assert!(!out.contains("not read back"), "{out}");
+    let unverified =
+        std::env::temp_dir().join(format!("linterpd-no-read-back-{}.toml", std::process::id()));
+    let text = std::fs::read_to_string(shipped)
+        .unwrap()
+        .replace("read_back = true", "read_back = false");
+    std::fs::write(&unverified, text).unwrap();
+    let (code, out, err) = linterpd(&["check-config", "--config", unverified.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&unverified);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        out.contains("uploads not read back (read_back = false)"),
+        "{out}"
+    );
     let (code, out, err) = linterpd(&["check-config", "--config", shipped, "--json"]);
     assert_eq!(code, Some(0), "{err}");
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();

@@ -50,7 +50,15 @@ fn describe(link: &LinkSettings) -> String {
         }
         Transport::Tcp(t) => format!("TCP {}", t.address),
     };
-    format!("{protocol} on {transport}, station {}", link.station)
+    let read_back = if link.read_back {
+        ""
+    } else {
+        "; uploads not read back (read_back = false)"
+    };
+    format!(
+        "{protocol} on {transport}, station {}{read_back}",
+        link.station
+    )
 }
 
 /// Runs `linterpd check-config`.
