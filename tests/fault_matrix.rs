@@ -114,6 +114,8 @@ enum Flow {
     /// [`Flow::Chained`] at 19200 baud: the second move's upload outlasts the first move, which
     /// is watched (status reads) between the upload's exchanges.
     ChainedSlow,
+    /// [`Flow::Chained`] with `read_back = false`: each write trusted on its acknowledgement.
+    ChainedUnread,
     StopChained,
     Home,
     Path,
@@ -125,6 +127,14 @@ impl Flow {
     /// first's tables, and a chained pair's there too; the others as fast as the stream.
     fn baud(self) -> Option<u32> {
         matches!(self, Self::Path | Self::ChainedSlow).then_some(19_200)
+    }
+
+    /// The daemon's contract settings: the defaults, read-back off for [`Flow::ChainedUnread`].
+    fn settings(self) -> ContractSettings {
+        ContractSettings {
+            verify: self != Self::ChainedUnread,
+            ..ContractSettings::default()
+        }
     }
 }
 
@@ -257,10 +267,10 @@ fn channel_counts_at_a() -> [i64; 4] {
 }
 
 /// The daemon on `connect`, homing the robot to A.
-fn spawn(connect: Connector) -> (linterpd::daemon::Daemon, RobotHandle) {
+fn spawn(connect: Connector, flow: Flow) -> (linterpd::daemon::Daemon, RobotHandle) {
     common::daemon::spawn_with(
         connect,
-        ContractSettings::default(),
+        flow.settings(),
         &DaemonOptions::default(),
         counts_at_a(),
     )
@@ -323,7 +333,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
     let mut ids = Vec::new();
     match flow {
         Flow::Single => ids.extend(h.submit(order(B)).ok()),
-        Flow::Chained => {
+        Flow::Chained | Flow::ChainedUnread => {
             ids.extend(h.submit(order(B)).ok());
             ids.extend(h.submit(order(C)).ok());
         }
@@ -494,7 +504,7 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
     } else {
         duplex_connector(&shared, flow.baud())
     };
-    let (daemon, h) = spawn(connect);
+    let (daemon, h) = spawn(connect, flow);
     if let Err(e) = until_ready(&h).await {
         v.0.push(e);
         daemon.shut_down().await;
@@ -524,7 +534,7 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
         tokio::time::sleep(Duration::from_millis(3)).await;
         daemon.kill().await;
         flow_task.abort();
-        let (d, h2) = spawn(duplex_connector(&shared, flow.baud()));
+        let (d, h2) = spawn(duplex_connector(&shared, flow.baud()), flow);
         if let Err(e) = until_ready(&h2).await {
             v.0.push(format!("after the restart: {e}"));
         }
@@ -548,7 +558,7 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
 /// How many exchanges a flow takes without a fault (after the daemon is ready).
 async fn positions(flow: Flow) -> u64 {
     let (shared, driver) = mock_at_a(flow != Flow::Home);
-    let (daemon, h) = spawn(duplex_connector(&shared, flow.baud()));
+    let (daemon, h) = spawn(duplex_connector(&shared, flow.baud()), flow);
     until_ready(&h).await.unwrap();
     let before = shared.with(|m| m.commands());
     let mut v = Violations::default();
@@ -616,6 +626,11 @@ async fn chained_pair_under_every_fault_at_every_exchange() {
     run_matrix(Flow::Chained).await;
 }
 
+#[tokio::test(start_paused = true)]
+async fn a_chained_pair_without_read_back_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::ChainedUnread).await;
+}
+
 // At 19200 baud a case runs seconds of uploads and motion: its faults are split in three tests.
 
 #[tokio::test(start_paused = true)]
@@ -663,7 +678,8 @@ async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
 
 /// One case with the daemon's and the mock's log, to see what happened in it:
 /// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test fault_matrix one_case -- --ignored
-/// --nocapture` (flows: single, chained, chained-slow, stop, home, path).
+/// --nocapture` (flows: single, chained, chained-slow, chained-unread, stop,
+/// home, path).
 #[tokio::test(start_paused = true)]
 #[ignore = "a diagnostic for one case of the matrix: set MATRIX_CASE=flow:Fault:position"]
 async fn one_case_with_its_log() {
@@ -677,6 +693,7 @@ async fn one_case_with_its_log() {
         "single" => Flow::Single,
         "chained" => Flow::Chained,
         "chained-slow" => Flow::ChainedSlow,
+        "chained-unread" => Flow::ChainedUnread,
         "stop" => Flow::StopChained,
         "path" => Flow::Path,
         _ => Flow::Home,
