@@ -530,12 +530,17 @@ impl<P: Plc> Contract<P> {
         Ok(upload.bank())
     }
 
-    async fn finish_upload(&mut self, upload: &mut Upload) -> Result<VerifiedBank, ContractError> {
-        loop {
-            if let Some(bank) = self.upload_step(upload).await? {
-                return Ok(bank);
-            }
+    /// Makes every exchange of `upload` left.
+    async fn exchanges(&mut self, upload: &mut Upload) -> Result<(), ContractError> {
+        while !upload.is_done() {
+            self.upload_step(upload).await?;
         }
+        Ok(())
+    }
+
+    async fn finish_upload(&mut self, upload: &mut Upload) -> Result<VerifiedBank, ContractError> {
+        self.exchanges(upload).await?;
+        Ok(upload.bank().expect("every exchange made"))
     }
 
     /// Writes every table into `bank` and reads them back, without the command block: a part
@@ -551,8 +556,10 @@ impl<P: Plc> Contract<P> {
         base: [usize; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<Preload, ContractError> {
-        let (_, writes, _) = self.placed(bank, 0, [0; CHANNELS], tables, base)?;
-        self.write_and_verify(&writes).await?;
+        let (block, writes, _) = self.placed(bank, 0, [0; CHANNELS], tables, base)?;
+        // The tables alone: no command block is written (the start's upload writes it).
+        let mut upload = Upload::new(block, writes.clone(), false, self.settings.verify);
+        self.exchanges(&mut upload).await?;
         Ok(Preload { bank, base, writes })
     }
 
@@ -648,21 +655,6 @@ impl<P: Plc> Contract<P> {
             }
         }
         Ok((block, writes, directories))
-    }
-
-    /// Writes every `(address, words)`, then (when verifying) reads each back and compares.
-    async fn write_and_verify(&mut self, writes: &[Write]) -> Result<(), ContractError> {
-        for (address, words) in writes {
-            self.aborted()?;
-            self.plc.write_words(*address, words).await?;
-        }
-        if self.settings.verify {
-            for (address, words) in writes {
-                self.aborted()?;
-                self.compare(*address, words).await?;
-            }
-        }
-        Ok(())
     }
 
     /// The write of a command block's words 1..16 (everything but the command and host words).
