@@ -496,7 +496,7 @@ async fn a_worker_that_hangs_makes_the_daemon_unhealthy_and_one_that_panics_is_r
 /// line (752 words: about 4.7 s at 19200 baud): the running move stays watched through it. Its
 /// heartbeat freezing early in that upload stops it where it is, long before its end (2.6 s
 /// of motion), where a daemon blind until the upload ended would have let it run out; the
-/// queued move never starts.
+/// queued move's upload is given up there, and it never starts.
 #[tokio::test]
 async fn a_running_move_stays_watched_while_the_next_one_uploads() {
     let shared = mock_at_seed_start("");
@@ -553,6 +553,10 @@ async fn a_running_move_stays_watched_while_the_next_one_uploads() {
     );
     let rb = h.wait(b, LIMIT).await.unwrap();
     assert_ne!(rb.stage, Stage::Done, "{rb:?}");
+    // Given up at the watch read that saw the PLC stalled, not written to its end first.
+    let why = rb.error.as_deref().unwrap_or_default();
+    assert!(why.contains("heartbeat stands still"), "{rb:?}");
+    assert_eq!(rb.upload_s, None, "{rb:?}");
     assert_ne!(shared.with(|m| m.read_words(1_032, 1).unwrap()[0]), 1);
     d.shut_down().await;
 }

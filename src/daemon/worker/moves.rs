@@ -9,7 +9,7 @@ use super::pace::{Pace, Part};
 use super::placement::{Placement, directories_left};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
-use crate::contract::machine::{Blocker, Planned, ProgressCurve};
+use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
 use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
@@ -214,7 +214,8 @@ impl Worker {
     /// Makes `upload`'s exchanges. Between two, while a start the PLC was given may run, the
     /// status block is read whenever the last read is a heartbeat timeout old: the running move
     /// stays watched (its heartbeat, counts, state, progress) through an upload that lasts
-    /// seconds on a slow line, and is stopped as it would be between uploads.
+    /// seconds on a slow line, and is stopped as it would be between uploads. An upload the
+    /// machine gave up on meanwhile (the PLC stalled or restarted) ends there.
     async fn upload_watching(
         &mut self,
         upload: &mut Upload,
@@ -227,6 +228,12 @@ impl Worker {
                 .is_none_or(|at| now().saturating_duration_since(at) >= every);
             if due && !self.machine.given().is_empty() {
                 self.poll().await?;
+                if !matches!(self.machine.phase(), Phase::Uploading { .. }) {
+                    // Stalled, restarted, ...: this bank will not be started; the link is
+                    // needed for what comes next.
+                    let why = self.machine.blocker(now()).unwrap_or(Blocker::Full);
+                    return Err(ContractError::Blocked(why));
+                }
             }
             let link = self.link.as_mut().expect("connected");
             if let Some(bank) = link.upload_step(upload).await? {
