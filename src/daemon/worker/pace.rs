@@ -10,9 +10,10 @@
 //! left to write (one per channel whose tables lie past another part's in the same bank) and
 //! its command block written and read back (written only, with `read_back = false`), the
 //! status read before the start, and the one-word start write; a part not preloaded (the areas
-//! were full) has its tables written and read back too, at the preloads' pace per word. An exchange of `w` words is taken on the line
-//! through the two reads measured (one word, and the status block's [`STATUS_WORDS`]): a fixed
-//! cost per exchange and a cost per word.
+//! were full) has its tables written and read back too, at the preloads' pace per word, with a
+//! status read each heartbeat timeout that watches the part before it. An exchange of `w` words
+//! is taken on the line through the two reads measured (one word, and the status block's
+//! [`STATUS_WORDS`]): a fixed cost per exchange and a cost per word.
 
 use std::time::Duration;
 

@@ -55,12 +55,12 @@ impl Upload {
     /// The next exchange, at most `sizes` words, and the upload moved past it; `None` when
     /// every write (and read-back) is done.
     pub(super) fn next(&mut self, sizes: ExchangeSizes) -> Option<Exchange> {
-        if self.index == self.writes.len() {
-            if self.reading || !self.verify {
-                return None;
-            }
+        if self.index == self.writes.len() && !self.reading && self.verify {
             self.reading = true;
             self.index = 0;
+        }
+        if self.index == self.writes.len() {
+            return None;
         }
         let (address, all) = &self.writes[self.index];
         let most = if self.reading {
@@ -165,6 +165,21 @@ mod tests {
             let bank = up.bank().unwrap();
             assert_eq!(bank.words, 89);
             assert!(up.next(s).is_none(), "nothing after the end");
+        }
+    }
+
+    #[test]
+    fn nothing_to_write_is_done_at_once() {
+        for verify in [true, false] {
+            let mut up = Upload::new(
+                CommandBlock::default(),
+                block_of(&[(2_000, 0)]),
+                false,
+                verify,
+            );
+            assert!(up.next(sizes(24, 27)).is_none());
+            assert!(up.is_done());
+            assert_eq!(up.bank().unwrap().words, 0);
         }
     }
 
