@@ -146,6 +146,7 @@ fn half_circle(robot: &Robot, method: Method) -> PathRequest {
     };
     PathRequest {
         from: Origin::Pose(from),
+        start: None,
         elements: vec![(
             Element::Arc {
                 to,

@@ -47,6 +47,7 @@ async fn a_running_parts_progress_names_the_planned_instant_of_the_counts_it_was
     let pose = |p: [f64; 3]| Pose::from_mm_deg(p[0], p[1], p[2], a_deg);
     let req = PathRequest {
         from: Origin::Counts(start),
+        start: None,
         elements: vec![
             (Element::Line { to: pose(up) }, Corner::Blend(20.0)),
             (Element::Line { to: pose(above) }, Corner::Blend(20.0)),

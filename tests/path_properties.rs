@@ -366,6 +366,7 @@ fn request(robot: &Robot, route: &Route, s: &Settings) -> PathRequest {
     };
     PathRequest {
         from: Origin::Pose(route.start),
+        start: None,
         elements: route.elements(),
         motion,
         path_accel_mm_s2: s.path_accel_mm_s2,

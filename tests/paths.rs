@@ -84,7 +84,8 @@ async fn a_path_that_cannot_run_is_refused_whole_and_nothing_moves() {
     };
     // A start the robot is not at.
     let e = refuse(json!({"path": {"start": P2, "element": [{"line": P1}]}}));
-    assert!(e.contains("mm from it when the path begins"), "{e}");
+    assert!(e.contains("the path starts at ["), "{e}");
+    assert!(e.contains("move to the path's start first"), "{e}");
     // Its second section leaves d3's limits: nothing of the first runs either.
     let e = refuse(json!({"path": {"element": [
         {"line": [P1[0], P1[1], P1[2] + 50.0]},

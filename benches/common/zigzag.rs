@@ -25,6 +25,7 @@ pub(crate) fn zigzag_path(robot: &Robot, method: Method) -> PathRequest {
         .collect();
     PathRequest {
         from: Origin::Pose(from),
+        start: None,
         elements,
         motion: path_motion(robot, method),
         path_accel_mm_s2: 5_000.0,

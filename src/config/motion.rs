@@ -6,7 +6,7 @@ use super::ConfigError;
 use super::check::At;
 use super::duration::parse_duration_s;
 use super::raw::{RawMethod, RawMotion};
-use crate::robot::{Method, Motion, OverSpeed};
+use crate::robot::{DEFAULT_MAX_SPEED_MM_S, Method, Motion, OverSpeed};
 
 /// The motion defaults a motion table describes.
 pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
@@ -24,6 +24,26 @@ pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
         frequency_model: raw.frequency_model.unwrap_or_default(),
         over_speed: raw.over_speed.map_or(OverSpeed::default(), OverSpeed::from),
     })
+}
+
+/// The fastest an order may ask for (default [`DEFAULT_MAX_SPEED_MM_S`]): above 0 and at least
+/// the default speed.
+pub(super) fn max_speed(at: &At, raw: &RawMotion, motion: &Motion) -> Result<f64, ConfigError> {
+    let Some(max) = &raw.max_speed_mm_s else {
+        return Ok(DEFAULT_MAX_SPEED_MM_S.max(motion.speed_mm_s));
+    };
+    let at = at.child("max_speed_mm_s");
+    let value = at.positive(max)?;
+    if value < motion.speed_mm_s {
+        return Err(at.invalid(
+            max,
+            format!(
+                "must be at least speed_mm_s ({} mm/s), the robot's default speed",
+                motion.speed_mm_s
+            ),
+        ));
+    }
+    Ok(value)
 }
 
 /// The method; `bounded-error` needs `tolerance_mm`, which no other method takes.
@@ -72,6 +92,19 @@ mod tests {
         let text = edited(&[(8, "accel_time = \"0s\"")]);
         let config = super::super::Config::from_toml(&text).unwrap();
         assert!(config.robots[0].motion.accel_s.abs() < f64::EPSILON);
+    }
+
+    #[test]
+    fn max_speed_below_the_default_speed_is_refused_naming_both() {
+        let text = edited(&[(7, "speed_mm_s = 240.0\nmax_speed_mm_s = 100.0")]);
+        assert_eq!(
+            message(&text),
+            "config line 8: robots.r.motion.max_speed_mm_s = 100: must be at least speed_mm_s \
+             (240 mm/s), the robot's default speed"
+        );
+        let text = edited(&[(7, "speed_mm_s = 240.0\nmax_speed_mm_s = 500.0")]);
+        let config = super::super::Config::from_toml(&text).unwrap();
+        assert!((config.robots[0].max_speed_mm_s - 500.0).abs() < f64::EPSILON);
     }
 
     #[test]

@@ -179,6 +179,7 @@ pub(super) struct RawMotion {
     pub frequency_model: Option<FrequencyModel>,
     pub over_speed: Option<RawOverSpeed>,
     pub tolerance_mm: Option<Spanned<f64>>,
+    pub max_speed_mm_s: Option<Spanned<f64>>,
 }
 
 /// `motion.method`.

@@ -84,6 +84,7 @@ fn robot(
     let area_words = area_words(&at.child("area_words"), r.area_words.as_ref())?;
     let kinematics = kinematics::model(&at.child("kinematics"), &r.kinematics)?;
     let motion = motion::motion(&at.child("motion"), r.motion.get_ref())?;
+    let max_speed_mm_s = motion::max_speed(&at.child("motion"), r.motion.get_ref(), &motion)?;
     let joints = joints::joints(&at.child("joints"), &r.joints, &kinematics)?;
     Ok(Robot {
         name: name.get_ref().clone(),
@@ -91,6 +92,7 @@ fn robot(
         joints,
         motion,
         area_words,
+        max_speed_mm_s,
     })
 }
 

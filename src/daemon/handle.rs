@@ -14,23 +14,19 @@ use tokio::task::JoinSet;
 use super::gateway::{self, GatewayError, Job, Values};
 use super::ids::MoveIds;
 use super::order::{
-    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, SectionPart, Target,
-    path_refused, plan_order,
+    CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder, SectionPart, Target,
+    plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::report::{MoveId, MoveReport, RobotState, SectionReport};
+use super::report::{MoveId, MoveReport, RobotState, SectionReport, Stage};
 use super::request::{CommandError, Reply, Request};
 use super::shared::Shared;
 use super::worker::{Channels, Connector, Worker};
-use crate::config::{PathDoc, PathFileError};
 use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
-use crate::plan::{
-    MoveRequest, Origin, PathPlan, PathRequest, PlanError, SECTION_START_SLACK_MM, line_as_path,
-    plan_path,
-};
+use crate::plan::{MoveRequest, Origin, PathPlan, PlanError, SectionPlan, line_as_path, plan_path};
 use crate::plc::contract::ContractSettings;
 use crate::robot::{Motion, Robot};
 
@@ -51,10 +47,30 @@ pub enum SubmitError {
         /// The link's last error, when that is why.
         detail: Option<String>,
     },
+    /// The queue would hold more starts than it takes.
+    #[error(
+        "{queued} starts are queued or running and the order adds {adding}; at most {limit} \
+         at once: wait for some to end"
+    )]
+    QueueFull {
+        /// Starts queued or running now.
+        queued: usize,
+        /// Starts the order would add.
+        adding: usize,
+        /// The most, [`MAX_QUEUED_STARTS`].
+        limit: usize,
+    },
     /// The daemon is shutting down.
     #[error("the daemon is shutting down")]
     ShuttingDown,
 }
+
+/// The most starts a robot's queue holds, the running one included: an order that would pass
+/// it is refused whole.
+pub const MAX_QUEUED_STARTS: usize = 1_000;
+
+/// The most elements a path order may have (checked before anything is planned).
+pub const MAX_PATH_ELEMENTS: usize = 500;
 
 /// One robot as the daemon runs it.
 pub struct RobotSetup {
@@ -155,7 +171,8 @@ impl RobotHandle {
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
         let taught = self.positions.of(&self.robot.name);
-        let checked = order.check_with(self.robot.motion, &taught)?;
+        let checked =
+            order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
         self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
         // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
@@ -174,6 +191,11 @@ impl RobotHandle {
         if let Some(counts) = from {
             match plan_order(&self.robot, &checked, counts) {
                 Ok(plan) => end = Some(plan.end_counts()),
+                // Where it starts already: it ends done there without a start (behind a move,
+                // with that move).
+                Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
+                    end = Some(counts);
+                }
                 Err(e @ PlanError::LaterSegment { .. }) => {
                     return match checked.pose_target(&self.robot.pose_of(&counts)) {
                         Some(to) => self.submit_line_in_parts(&order, &checked, counts, to),
@@ -184,14 +206,62 @@ impl RobotHandle {
             }
         }
         let id = self.shared.next_id();
-        self.shared
-            .moves(|m| m.insert(MoveReport::new(id, &self.robot.name, order)));
-        self.shared.state(|s| s.queued.push(id));
-        self.requests
-            .send(Request::Move(id, checked))
-            .map_err(|_| SubmitError::ShuttingDown)?;
+        let report = MoveReport::new(id, &self.robot.name, order);
+        self.enqueue(vec![(report, checked)], end)
+    }
+
+    /// Queues every start of one order, whole or not at all: refused with nothing queued when
+    /// the queue would pass [`MAX_QUEUED_STARTS`] or the worker is gone. `end`: where the last
+    /// is planned to end, for the next order.
+    fn enqueue(
+        &self,
+        starts: Vec<(MoveReport, CheckedOrder)>,
+        end: Option<[i64; JOINTS]>,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        let queued = self
+            .shared
+            .state(|s| s.queued.len() + usize::from(s.current_move.is_some()));
+        if queued + starts.len() > MAX_QUEUED_STARTS {
+            return Err(SubmitError::QueueFull {
+                queued,
+                adding: starts.len(),
+                limit: MAX_QUEUED_STARTS,
+            });
+        }
+        let ids: Vec<MoveId> = starts.iter().map(|(r, _)| r.id).collect();
+        // Reports first (the worker reports on them from its first step), then the queue.
+        self.shared.moves(|m| {
+            for (report, _) in &starts {
+                m.insert(report.clone());
+            }
+        });
+        self.shared.state(|s| s.queued.extend(&ids));
+        for (report, checked) in starts {
+            if self
+                .requests
+                .send(Request::Move(report.id, checked))
+                .is_err()
+            {
+                // The worker is gone: it took none of them.
+                self.withdraw(&ids);
+                return Err(SubmitError::ShuttingDown);
+            }
+        }
         self.shared.set_planned_end(end);
-        Ok(vec![id])
+        Ok(ids)
+    }
+
+    /// Ends the reports of `ids`, never taken by the worker, cancelled.
+    fn withdraw(&self, ids: &[MoveId]) {
+        self.shared.moves(|m| {
+            for &id in ids {
+                m.update(id, |r| {
+                    r.stage = Stage::Cancelled;
+                    r.error = Some("cancelled: the daemon is shutting down".to_owned());
+                });
+            }
+        });
+        self.shared.state(|s| s.queued.retain(|q| !ids.contains(q)));
     }
 
     /// A line order from `counts` to `to` that one start cannot run
@@ -238,9 +308,9 @@ impl RobotHandle {
     /// again from the counts where it begins, and only if the robot is there: a section whose
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
-        let motion = order.motion(self.robot.motion)?;
-        let doc = PathDoc::from_json(order.path.clone())
-            .map_err(|e| path_refused("(the document)", e.to_string()))?;
+        // Every field is checked before the robot's state: a bad order is a bad order.
+        let limits = OrderLimits::of(&self.robot);
+        order.check(&self.robot, &limits)?;
         self.can_move_now()?;
         let ahead = self
             .shared
@@ -254,7 +324,6 @@ impl RobotHandle {
                 blocker: Blocker::LinkDown,
                 detail: Some("no counts read from the PLC yet".to_owned()),
             })?;
-        let here = self.robot.pose_of(&counts);
         let taught = self.positions.of(&self.robot.name);
         let lookup = |name: &str| {
             taught.get(name).map(|p| {
@@ -262,34 +331,9 @@ impl RobotHandle {
                 Pose::from_mm_deg(x, y, z, a)
             })
         };
-        let refused = |e: PathFileError| path_refused("(the document)", e.to_string());
-        if let Some(start) = doc.start_pose(here.a_rad, &lookup).map_err(refused)? {
-            let off_mm = (start.position_mm - here.position_mm).norm();
-            if off_mm > SECTION_START_SLACK_MM {
-                let [x, y, z, _] = start.to_mm_deg();
-                return Err(path_refused(
-                    &format!("start [{x:.3}, {y:.3}, {z:.3}]"),
-                    format!(
-                        "the robot will be {off_mm:.3} mm from it when the path begins (at most \
-                         {SECTION_START_SLACK_MM} mm): move there first"
-                    ),
-                )
-                .into());
-            }
-        }
-        let elements = doc.resolve(here, &lookup).map_err(refused)?;
-        let path_accel_mm_s2 = doc
-            .path_accel_mm_s2
-            .unwrap_or(motion.speed_mm_s / motion.accel_s);
-        let planned = plan_path(
-            &self.robot,
-            &PathRequest {
-                from: Origin::Counts(counts),
-                elements,
-                motion,
-                path_accel_mm_s2,
-            },
-        )?;
+        let req = order.request(&self.robot, &limits, counts, &lookup)?;
+        let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
+        let planned = plan_path(&self.robot, &req)?;
         self.queue_sections(planned, path_accel_mm_s2, motion, |end| {
             order.section_report(end)
         })
@@ -305,7 +349,8 @@ impl RobotHandle {
         report: impl Fn(&Pose) -> MoveOrder,
     ) -> Result<Vec<MoveId>, SubmitError> {
         let of = planned.sections.len();
-        let mut ids = Vec::new();
+        let end = planned.sections.last().map(SectionPlan::end_counts);
+        let mut starts = Vec::new();
         for (n, section) in planned.sections.into_iter().enumerate() {
             let shared = Arc::new(SectionOrder {
                 path: section.path,
@@ -314,7 +359,6 @@ impl RobotHandle {
             });
             let parts = section.starts.len();
             for (part, plan) in section.starts.iter().enumerate() {
-                let end = self.robot.pose_of(&plan.end_counts());
                 let checked = CheckedOrder {
                     target: Target::Section(SectionPart {
                         section: Arc::clone(&shared),
@@ -331,20 +375,16 @@ impl RobotHandle {
                     &plan.window,
                 );
                 let id = self.shared.next_id();
-                self.shared.moves(|m| {
-                    let mut report = MoveReport::new(id, &self.robot.name, report(&end));
-                    report.section = Some(shown);
-                    m.insert(report);
-                });
-                self.shared.state(|s| s.queued.push(id));
-                self.requests
-                    .send(Request::Move(id, checked))
-                    .map_err(|_| SubmitError::ShuttingDown)?;
-                self.shared.set_planned_end(Some(plan.end_counts()));
-                ids.push(id);
+                let mut report = MoveReport::new(
+                    id,
+                    &self.robot.name,
+                    report(&self.robot.pose_of(&plan.end_counts())),
+                );
+                report.section = Some(shown);
+                starts.push((report, checked));
             }
         }
-        Ok(ids)
+        self.enqueue(starts, end)
     }
 
     /// The counts the PLC last reported, per joint.

@@ -36,15 +36,19 @@ mod shared;
 mod worker;
 
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{Daemon, DaemonOptions, RobotHandle, RobotSetup, Saved, SubmitError, host_word};
+pub use handle::{
+    Daemon, DaemonOptions, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, RobotSetup, Saved,
+    SubmitError, host_word,
+};
 pub use ids::{MoveIds, write_atomically};
 pub(crate) use order::plan_order;
 pub use order::{
-    CheckedOrder, MoveOrder, OrderError, PathOrder, SectionOrder, SectionPart, Target,
+    CheckedOrder, MAX_ACCEL_TIME_S, MoveOrder, OrderError, OrderLimits, PERIOD_RANGE_S, PathOrder,
+    SectionOrder, SectionPart, TOLERANCE_RANGE_MM, Target,
 };
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, LinkState, MoveId, MoveReport, Moves, PieceReport, Predicted, RobotState,
+    GatewayStats, KEPT, LinkState, MoveId, MoveReport, Moves, PieceReport, Predicted, RobotState,
     SectionReport, Stage,
 };
 pub use request::CommandError;

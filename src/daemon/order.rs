@@ -15,11 +15,12 @@ use thiserror::Error;
 
 use super::positions::{NAME_RULE, Position, check_name};
 use crate::config::parse_duration_s;
+use crate::config::{PathDoc, PathFileError};
 use crate::geometry::{Path, Pose};
 use crate::kinematics::JOINTS;
 use crate::plan::{
-    JointMoveRequest, MoveRequest, Origin, Plan, PlanError, plan_joint_move, plan_move,
-    plan_section,
+    JointMoveRequest, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
+    plan_move, plan_section,
 };
 use crate::robot::{Method, Motion, Robot};
 
@@ -86,9 +87,66 @@ pub struct PathOrder {
 }
 
 impl PathOrder {
-    /// The motion the order asks for, the robot's `defaults` filling the gaps.
-    pub fn motion(&self, defaults: Motion) -> Result<Motion, OrderError> {
-        self.as_move(None).motion(defaults)
+    /// The motion the order asks for, the robot's `defaults` filling the gaps, within `limits`.
+    pub fn motion(&self, defaults: Motion, limits: &OrderLimits) -> Result<Motion, OrderError> {
+        self.as_move(None).motion(defaults, limits)
+    }
+
+    /// Checks the order's motion fields against `limits` and reads its document (at most
+    /// [`MAX_PATH_ELEMENTS`](super::MAX_PATH_ELEMENTS) elements), before anything is planned.
+    ///
+    /// # Errors
+    /// The field at fault, its value and the limit.
+    pub fn check(
+        &self,
+        robot: &Robot,
+        limits: &OrderLimits,
+    ) -> Result<(Motion, PathDoc), OrderError> {
+        let motion = self.motion(robot.motion, limits)?;
+        let doc = PathDoc::from_json(self.path.clone())
+            .map_err(|e| path_refused("(the document)", e.to_string()))?;
+        let max = super::MAX_PATH_ELEMENTS;
+        if doc.elements.len() > max {
+            return Err(path_refused(
+                &format!("{} elements", doc.elements.len()),
+                format!("a path order takes at most {max} elements"),
+            ));
+        }
+        Ok((motion, doc))
+    }
+
+    /// The path request this order describes for `robot` beginning at `counts` (per joint),
+    /// taught positions looked up with `lookup`: the path is built from the document's stated
+    /// `start` (the planner refuses counts further from it than the slack) or, without one,
+    /// from the pose of `counts`; waypoints without an angle keep the one before them. The one
+    /// place a path order becomes a plan's request, for the daemon and the demo's check alike.
+    ///
+    /// # Errors
+    /// A motion field out of `limits`, a document that is wrong or has more than
+    /// [`MAX_PATH_ELEMENTS`](super::MAX_PATH_ELEMENTS) elements, an unknown taught position.
+    pub fn request(
+        &self,
+        robot: &Robot,
+        limits: &OrderLimits,
+        counts: [i64; JOINTS],
+        lookup: &dyn Fn(&str) -> Option<Pose>,
+    ) -> Result<PathRequest, OrderError> {
+        let (motion, doc) = self.check(robot, limits)?;
+        let refused = |e: PathFileError| path_refused("(the document)", e.to_string());
+        let here = robot.pose_of(&counts);
+        let start = doc.start_pose(here.a_rad, lookup).map_err(refused)?;
+        let elements = doc
+            .resolve(start.unwrap_or(here), lookup)
+            .map_err(refused)?;
+        Ok(PathRequest {
+            from: Origin::Counts(counts),
+            start,
+            elements,
+            motion,
+            path_accel_mm_s2: doc
+                .path_accel_mm_s2
+                .unwrap_or(motion.speed_mm_s / motion.accel_s),
+        })
     }
 
     /// The move order a section's report shows: a line to where the section ends, with this
@@ -111,6 +169,40 @@ impl PathOrder {
         }
     }
 }
+
+/// The bounds an order's motion fields are checked against before anything is planned: the
+/// robot's fastest speed (`[robots.NAME.motion] max_speed_mm_s`) and the daemon's fixed
+/// ranges ([`MAX_ACCEL_TIME_S`], [`PERIOD_RANGE_S`], [`TOLERANCE_RANGE_MM`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrderLimits {
+    /// The fastest speed an order may ask for, mm/s.
+    pub max_speed_mm_s: f64,
+}
+
+impl OrderLimits {
+    /// The limits of `robot`.
+    #[must_use]
+    pub fn of(robot: &Robot) -> Self {
+        Self {
+            max_speed_mm_s: robot.max_speed_mm_s,
+        }
+    }
+}
+
+impl Default for OrderLimits {
+    fn default() -> Self {
+        Self {
+            max_speed_mm_s: crate::robot::DEFAULT_MAX_SPEED_MM_S,
+        }
+    }
+}
+
+/// The longest acceleration time an order may ask for, s.
+pub const MAX_ACCEL_TIME_S: f64 = 10.0;
+/// The interpolation periods an order may ask for, s (1 ms to 1 s).
+pub const PERIOD_RANGE_S: std::ops::RangeInclusive<f64> = 0.001..=1.0;
+/// The bounded-error tolerances an order may ask for, mm.
+pub const TOLERANCE_RANGE_MM: std::ops::RangeInclusive<f64> = 0.001..=10.0;
 
 /// A path document that is wrong, as an order error on its `path` field.
 pub(crate) fn path_refused(value: &str, reason: impl Into<String>) -> OrderError {
@@ -137,11 +229,38 @@ fn refuse(field: &'static str, value: &impl ToString, reason: impl Into<String>)
     }
 }
 
+/// A number as an error shows it: plainly, or in exponent form when huge or tiny.
+fn number(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 fn positive(field: &'static str, value: f64) -> Result<f64, OrderError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(refuse(field, &value, "must be a number above 0"))
+        Err(refuse(field, &number(value), "must be a number above 0"))
+    }
+}
+
+/// `value` if it lies in `range` (`unit` names it in the error).
+fn within(
+    field: &'static str,
+    value: f64,
+    range: &std::ops::RangeInclusive<f64>,
+    unit: &str,
+) -> Result<f64, OrderError> {
+    if range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(refuse(
+            field,
+            &number(value),
+            format!("must be within {} to {} {unit}", range.start(), range.end()),
+        ))
     }
 }
 
@@ -368,21 +487,22 @@ impl MoveOrder {
         }
     }
 
-    /// Checks every field against `defaults`, the robot's motion defaults, with no taught
-    /// positions.
+    /// Checks every field against `defaults`, the robot's motion defaults, and the default
+    /// limits, with no taught positions.
     pub fn check(&self, defaults: Motion) -> Result<CheckedOrder, OrderError> {
-        self.check_with(defaults, &BTreeMap::new())
+        self.check_with(defaults, &OrderLimits::default(), &BTreeMap::new())
     }
 
-    /// Checks every field against `defaults` and the robot's `taught` positions.
+    /// Checks every field against `defaults`, `limits` and the robot's `taught` positions.
     pub fn check_with(
         &self,
         defaults: Motion,
+        limits: &OrderLimits,
         taught: &BTreeMap<String, Position>,
     ) -> Result<CheckedOrder, OrderError> {
         Ok(CheckedOrder {
             target: self.target(taught)?,
-            motion: self.motion(defaults)?,
+            motion: self.motion(defaults, limits)?,
         })
     }
 
@@ -471,20 +591,51 @@ impl MoveOrder {
         })
     }
 
-    fn motion(&self, defaults: Motion) -> Result<Motion, OrderError> {
+    fn motion(&self, defaults: Motion, limits: &OrderLimits) -> Result<Motion, OrderError> {
         let mut m = defaults;
         if let Some(v) = self.speed_mm_s {
             m.speed_mm_s = positive("speed_mm_s", v)?;
+            if v > limits.max_speed_mm_s {
+                return Err(refuse(
+                    "speed_mm_s",
+                    &number(v),
+                    format!(
+                        "must be at most {} mm/s, the robot's max_speed_mm_s",
+                        limits.max_speed_mm_s
+                    ),
+                ));
+            }
         }
         if let Some(t) = &self.accel_time {
             m.accel_s = duration("accel_time", t, true)?;
+            if m.accel_s > MAX_ACCEL_TIME_S {
+                return Err(refuse(
+                    "accel_time",
+                    &format!("{t:?}"),
+                    format!("must be at most {MAX_ACCEL_TIME_S} s"),
+                ));
+            }
         }
         if let Some(t) = &self.period {
             m.period_s = duration("period", t, false)?;
+            if !PERIOD_RANGE_S.contains(&m.period_s) {
+                return Err(refuse(
+                    "period",
+                    &format!("{t:?}"),
+                    format!(
+                        "must be within {} ms to {} s",
+                        PERIOD_RANGE_S.start() * 1e3,
+                        PERIOD_RANGE_S.end()
+                    ),
+                ));
+            }
         }
         let tolerance = self
             .tolerance_mm
-            .map(|t| positive("tolerance_mm", t))
+            .map(|t| {
+                positive("tolerance_mm", t)
+                    .and_then(|t| within("tolerance_mm", t, &TOLERANCE_RANGE_MM, "mm"))
+            })
             .transpose()?;
         m.method = match (self.method.as_deref(), tolerance, defaults.method) {
             (Some("constant-period"), None, _) => Method::ConstantPeriod,
@@ -611,6 +762,67 @@ mod tests {
         );
     }
 
+    /// Issue 25: `speed_mm_s: 1e308` was accepted and run (2.52 mm tracking error predicted).
+    #[test]
+    fn speed_1e308_is_refused_naming_the_robots_max_speed() {
+        let m = seed_robot().motion;
+        let fast = |v: f64| MoveOrder {
+            speed_mm_s: Some(v),
+            ..order(vec![1.0, 2.0, 3.0])
+        };
+        let limits = OrderLimits { max_speed_mm_s: 800.0 };
+        let e = fast(1e308)
+            .check_with(m, &limits, &BTreeMap::new())
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "speed_mm_s = 1e308: must be at most 800 mm/s, the robot's max_speed_mm_s"
+        );
+        assert!(fast(800.0).check_with(m, &limits, &BTreeMap::new()).is_ok());
+    }
+
+    #[test]
+    fn period_accel_time_and_tolerance_are_bounded_naming_the_limit() {
+        let m = seed_robot().motion;
+        let with = |o: MoveOrder| o.check(m).unwrap_err().to_string();
+        let base = order(vec![1.0, 2.0, 3.0]);
+        assert_eq!(
+            with(MoveOrder {
+                period: Some("2s".into()),
+                ..base.clone()
+            }),
+            "period = \"2s\": must be within 1 ms to 1 s"
+        );
+        assert_eq!(
+            with(MoveOrder {
+                period: Some("100us".into()),
+                ..base.clone()
+            }),
+            "period = \"100us\": must be within 1 ms to 1 s"
+        );
+        assert_eq!(
+            with(MoveOrder {
+                accel_time: Some("20s".into()),
+                ..base.clone()
+            }),
+            "accel_time = \"20s\": must be at most 10 s"
+        );
+        assert_eq!(
+            with(MoveOrder {
+                tolerance_mm: Some(50.0),
+                ..base.clone()
+            }),
+            "tolerance_mm = 50: must be within 0.001 to 10 mm"
+        );
+        assert_eq!(
+            with(MoveOrder {
+                tolerance_mm: Some(1e-6),
+                ..base
+            }),
+            "tolerance_mm = 1e-6: must be within 0.001 to 10 mm"
+        );
+    }
+
     #[test]
     fn tolerance_makes_a_bounded_error_move() {
         let o = MoveOrder {
@@ -685,9 +897,13 @@ mod tests {
             position: Some(name.into()),
             ..MoveOrder::default()
         };
-        let e = at("a b").check_with(m, &taught()).unwrap_err();
+        let e = at("a b")
+            .check_with(m, &OrderLimits::default(), &taught())
+            .unwrap_err();
         assert_eq!(e.to_string(), format!("position = \"a b\": {NAME_RULE}"));
-        let e = at("place").check_with(m, &taught()).unwrap_err();
+        let e = at("place")
+            .check_with(m, &OrderLimits::default(), &taught())
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "position = \"place\": no such position; taught positions: pick"
@@ -697,7 +913,9 @@ mod tests {
             e.reason.ends_with("the robot has no taught positions"),
             "{e}"
         );
-        let c = at("pick").check_with(m, &taught()).unwrap();
+        let c = at("pick")
+            .check_with(m, &OrderLimits::default(), &taught())
+            .unwrap();
         let Target::Pose { to, a_given: true } = c.target else {
             panic!("{c:?}")
         };

@@ -271,26 +271,41 @@ pub struct GatewayStats {
     pub longest_poll_delay_ms: u64,
 }
 
-/// The moves of one robot: every report (the latest few hundred) and a feed per move.
+/// The moves of one robot: the report of every move not ended and of the latest [`KEPT`] ended
+/// ones, and a feed per move.
 #[derive(Debug, Default)]
 pub struct Moves {
     feeds: BTreeMap<MoveId, watch::Sender<MoveReport>>,
     order: VecDeque<MoveId>,
 }
 
-/// Reports kept per robot.
-const KEPT: usize = 500;
+/// Ended moves whose reports are kept per robot (a move not ended is always kept).
+pub const KEPT: usize = 500;
 
 impl Moves {
-    /// Records a new report.
+    /// Records a new report; past [`KEPT`] ended reports, the oldest ended ones are dropped
+    /// (never the report of a move queued or running).
     pub fn insert(&mut self, report: MoveReport) {
         let id = report.id;
         self.feeds.insert(id, watch::channel(report).0);
         self.order.push_back(id);
-        while self.order.len() > KEPT {
-            if let Some(old) = self.order.pop_front() {
+        let ended = |feeds: &BTreeMap<MoveId, watch::Sender<MoveReport>>, id: &MoveId| {
+            feeds.get(id).is_some_and(|f| f.borrow().stage.is_final())
+        };
+        let mut excess = self
+            .order
+            .iter()
+            .filter(|id| ended(&self.feeds, id))
+            .count()
+            .saturating_sub(KEPT);
+        while excess > 0 {
+            let Some(at) = self.order.iter().position(|id| ended(&self.feeds, id)) else {
+                break;
+            };
+            if let Some(old) = self.order.remove(at) {
                 self.feeds.remove(&old);
             }
+            excess -= 1;
         }
     }
 

@@ -7,10 +7,10 @@
 use serde_json::json;
 
 use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, measure_waits, replay};
-use crate::config::PathDoc;
+
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle, Stage};
 use crate::kinematics::JOINTS;
-use crate::plan::{Origin, PathRequest, Plan, plan_path};
+use crate::plan::{Plan, plan_path};
 use crate::robot::Robot;
 
 use super::rig::Rig;
@@ -184,26 +184,15 @@ fn replan(
         .ok_or_else(|| trace_error("no start counts".into()))?;
     let counts: [i64; JOINTS] =
         std::array::from_fn(|j| start[usize::from(robot.joints[j].channel)]);
-    let motion = order
-        .motion(robot.motion)
+    let req = order
+        .request(
+            robot,
+            &crate::daemon::OrderLimits::of(robot),
+            counts,
+            &|_| None,
+        )
         .map_err(|e| trace_error(e.to_string()))?;
-    let doc = PathDoc::from_json(order.path.clone()).map_err(|e| trace_error(e.to_string()))?;
-    let elements = doc
-        .resolve(robot.pose_of(&counts), &|_| None)
-        .map_err(|e| trace_error(e.to_string()))?;
-    let path_accel_mm_s2 = doc
-        .path_accel_mm_s2
-        .unwrap_or(motion.speed_mm_s / motion.accel_s);
-    let planned = plan_path(
-        robot,
-        &PathRequest {
-            from: Origin::Counts(counts),
-            elements,
-            motion,
-            path_accel_mm_s2,
-        },
-    )
-    .map_err(|e| trace_error(e.to_string()))?;
+    let planned = plan_path(robot, &req).map_err(|e| trace_error(e.to_string()))?;
     let plans: Vec<Plan> = planned.starts().cloned().collect();
     let same = plans.len() == reports.len()
         && plans

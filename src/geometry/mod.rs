@@ -9,8 +9,8 @@ mod profile;
 
 pub use pace::{Pace, SpeedCap};
 pub use path::{
-    Arc, ArcBy, ArcFault, Corner, Element, Path, PathError, PathSpec, Piece, Primitive,
-    RADIUS_SLACK_MM,
+    ARC_MIN_BULGE, ARC_MIN_GAP_MM, Arc, ArcBy, ArcFault, Corner, Element, Path, PathError,
+    PathSpec, Piece, Primitive, RADIUS_SLACK_MM,
 };
 pub use polyline::Polyline;
 pub use profile::{Profile, ProfileError, ProfileRequest};

@@ -47,6 +47,7 @@ impl MovePlan {
 pub fn line_as_path(req: &MoveRequest) -> PathRequest {
     PathRequest {
         from: req.from,
+        start: None,
         elements: vec![(Element::Line { to: req.to }, Corner::Stop)],
         motion: req.motion,
         // A line has no arc to turn on: the profile's own acceleration.

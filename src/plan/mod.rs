@@ -125,6 +125,36 @@ pub enum PlanError {
         /// The line's length, mm.
         length_mm: f64,
     },
+    /// A move too long for the samples it would be planned on.
+    #[error(
+        "the move would take {duration_s:.1} s, {:.0} sample points of {:.0} ms; at most {limit}: \
+         ask for a higher speed, a longer period or a shorter move",
+        duration_s / grid_s, grid_s * 1e3
+    )]
+    TooLong {
+        /// Its duration at the speed asked, s.
+        duration_s: f64,
+        /// The sample grid, s.
+        grid_s: f64,
+        /// The most sample points, [`MAX_SAMPLE_POINTS`].
+        limit: usize,
+    },
+    /// The robot is not where the path as written starts.
+    #[error(
+        "the path starts at [{:.3}, {:.3}, {:.3}] mm and the robot is at [{:.3}, {:.3}, {:.3}] \
+         mm, {off_mm:.3} mm from it (at most {slack_mm} mm): move to the path's start first",
+        start[0], start[1], start[2], robot[0], robot[1], robot[2]
+    )]
+    NotAtPathStart {
+        /// The path's start: x, y, z mm, a deg.
+        start: [f64; 4],
+        /// The robot's pose: x, y, z mm, a deg.
+        robot: [f64; 4],
+        /// How far apart, mm.
+        off_mm: f64,
+        /// The most allowed, mm.
+        slack_mm: f64,
+    },
     /// The robot is not where a path section starts.
     #[error(
         "the robot is {off_mm:.3} mm from where the path section starts (at most {slack_mm} mm): \
@@ -468,6 +498,10 @@ impl Plan {
             .collect()
     }
 }
+
+/// The most sample points one move is planned on (the samples, and so its rows, are bounded
+/// before they are made): 600 s of motion on bounded-error's 1 ms grid.
+pub const MAX_SAMPLE_POINTS: usize = 600_000;
 
 /// The most times `slow-down` lowers the speed before giving up.
 const SLOW_DOWN_ATTEMPTS: usize = 24;
@@ -947,6 +981,14 @@ impl Sampler<'_> {
             accel_s: motion.accel_s,
             period_s: self.grid_s,
         })?;
+        let points = profile.duration_s() / self.grid_s;
+        if !(points <= MAX_SAMPLE_POINTS as f64) {
+            return Err(PlanError::TooLong {
+                duration_s: profile.duration_s(),
+                grid_s: self.grid_s,
+                limit: MAX_SAMPLE_POINTS,
+            });
+        }
         let samples =
             self.course
                 .sample(self.robot, &profile, self.start_values, self.start_counts)?;

@@ -34,8 +34,12 @@ use super::{Origin, Plan, PlanError, Sampled, Start};
 /// A path to plan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathRequest {
-    /// Where the path starts.
+    /// Where the robot starts: the first section is planned from its counts.
     pub from: Origin,
+    /// Where the path as written starts (its document's `start`), when it says: the path is
+    /// built from here, never from `from`, which must lie within [`SECTION_START_SLACK_MM`] of
+    /// it. `None`: the path starts at `from`'s pose.
+    pub start: Option<Pose>,
     /// Its elements, each with the corner at its end.
     pub elements: Vec<(Element, Corner)>,
     /// The motion settings: the speed is the tool point's along the path.
@@ -166,8 +170,9 @@ fn plan_path_once(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanErro
     for (element, _) in &req.elements {
         check_pose(&element.to())?;
     }
+    let here = robot.kinematics.fk(&start.values);
     let spec = PathSpec {
-        start: robot.kinematics.fk(&start.values),
+        start: stated_start(req.start, here)?,
         elements: req.elements.clone(),
     };
     let path = Path::build(&spec)?;
@@ -194,8 +199,31 @@ fn plan_path_once(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanErro
 }
 
 /// How far the robot may be from a section's start when the section is planned from its
-/// counts, mm: a section chained behind the one before starts within half a pulse of it.
+/// counts, mm: a section chained behind the one before starts within half a pulse of it. The
+/// same slack holds between a path's stated start and the robot's pose when it begins.
 pub const SECTION_START_SLACK_MM: f64 = 0.1;
+
+/// Where a path is built from: its `stated` start when it has one and the robot's pose `here`
+/// is within [`SECTION_START_SLACK_MM`] of it (the robot's pose never reshapes an element),
+/// else `here`.
+///
+/// # Errors
+/// [`PlanError::NotAtPathStart`] naming both poses and the distance.
+fn stated_start(stated: Option<Pose>, here: Pose) -> Result<Pose, PlanError> {
+    let Some(stated) = stated else {
+        return Ok(here);
+    };
+    let off_mm = (stated.position_mm - here.position_mm).norm();
+    if off_mm.is_nan() || off_mm > SECTION_START_SLACK_MM {
+        return Err(PlanError::NotAtPathStart {
+            start: stated.to_mm_deg(),
+            robot: here.to_mm_deg(),
+            off_mm,
+            slack_mm: SECTION_START_SLACK_MM,
+        });
+    }
+    Ok(stated)
+}
 
 /// Plans one section of a path from `counts`, where the robot will be when it starts (the end
 /// counts of the section before it): its starts, one or several parts chained at speed.
@@ -596,6 +624,7 @@ mod tests {
         elements.push((Element::Line { to: pose(P2, 0.0) }, Corner::Stop));
         let req = PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
+            start: None,
             elements,
             motion: motion(&robot, method, model),
             path_accel_mm_s2: 5_000.0,
@@ -730,6 +759,7 @@ mod tests {
         robot.area_words = area;
         let req = PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
+            start: None,
             elements: vec![
                 (
                     Element::Line {
@@ -789,6 +819,7 @@ mod tests {
         };
         let req = |method, accel| PathRequest {
             from: Origin::Pose(from),
+            start: None,
             elements: vec![(
                 Element::Arc {
                     to,
@@ -889,6 +920,7 @@ mod tests {
         let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
         let req = |over_speed| PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
+            start: None,
             elements: vec![
                 (
                     Element::Line {
@@ -946,6 +978,7 @@ mod tests {
         let line = |to| Element::Line { to };
         let req = PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
+            start: None,
             elements: vec![
                 (line(pose(P1, 100.0)), Corner::Stop),
                 (line(pose(P2, 100.0)), Corner::Blend(10.0)),

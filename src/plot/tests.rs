@@ -126,6 +126,7 @@ fn blended_path() -> crate::plan::PathPlan {
     };
     let req = PathRequest {
         from: Origin::Pose(Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0)),
+        start: None,
         elements: vec![
             (at(-926.57, 535.03, 60.0), Corner::Stop),
             (at(-1144.43, 659.60, 286.60), Corner::Blend(20.0)),

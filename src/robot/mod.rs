@@ -123,7 +123,13 @@ pub struct Robot {
     pub motion: Motion,
     /// Words in each channel's table area (CONTRACT.md default 2000).
     pub area_words: usize,
+    /// The fastest an order may ask the tool to move, mm/s (`[robots.NAME.motion]
+    /// max_speed_mm_s`, default [`DEFAULT_MAX_SPEED_MM_S`]): a faster order is refused.
+    pub max_speed_mm_s: f64,
 }
+
+/// The fastest an order may ask a robot's tool to move when its config does not say, mm/s.
+pub const DEFAULT_MAX_SPEED_MM_S: f64 = 2_000.0;
 
 impl Robot {
     /// Joint values of counts.
@@ -222,5 +228,6 @@ pub fn seed_robot() -> Robot {
             over_speed: OverSpeed::Reject,
         },
         area_words: 2_000,
+        max_speed_mm_s: DEFAULT_MAX_SPEED_MM_S,
     }
 }

@@ -58,6 +58,7 @@ pub fn gantry() -> Robot {
         ],
         motion: motion(),
         area_words: 2_000,
+        max_speed_mm_s: linterpd::robot::DEFAULT_MAX_SPEED_MM_S,
     }
 }
 
@@ -78,6 +79,7 @@ pub fn scara() -> Robot {
         ],
         motion: motion(),
         area_words: 2_000,
+        max_speed_mm_s: linterpd::robot::DEFAULT_MAX_SPEED_MM_S,
     }
 }
 

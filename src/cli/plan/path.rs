@@ -203,6 +203,7 @@ fn request(robot: &Robot, args: &PlanArgs, doc: &PathDoc) -> anyhow::Result<Path
         .context("the path's start")?;
     Ok(PathRequest {
         from: Origin::Pose(from),
+        start: Some(from),
         elements,
         motion,
         path_accel_mm_s2: accel,

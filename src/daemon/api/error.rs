@@ -182,6 +182,10 @@ impl From<SubmitError> for ApiError {
             },
             SubmitError::Plan(plan) => Self::Unplannable(plan.to_string()),
             e @ SubmitError::NotNow { blocker, .. } => Self::not_now(blocker, e.to_string()),
+            e @ SubmitError::QueueFull { .. } => Self::Conflict {
+                message: e.to_string(),
+                reason: "queue-full",
+            },
             SubmitError::ShuttingDown => Self::ShuttingDown,
         }
     }

@@ -53,10 +53,13 @@ pub(super) async fn submit(
 ) -> Result<(StatusCode, Json<Accepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
-    let ids = robot.submit_starts(order)?;
+    let ids = robot.submit_starts(order.clone())?;
     let id = ids[ids.len() - 1];
     tracing::info!(robot = %name, move_id = id, starts = ids.len(), "move accepted");
-    let report = robot.report(id).ok_or(ApiError::ShuttingDown)?;
+    // Queued: the answer is 202 whatever follows (a report of a queued move is never dropped).
+    let report = robot
+        .report(id)
+        .unwrap_or_else(|| MoveReport::new(id, &name, order));
     Ok((StatusCode::ACCEPTED, Json(Accepted { id, ids, report })))
 }
 
@@ -69,10 +72,9 @@ pub(super) async fn submit_path(
     let order: PathOrder = parse_body(&body)?;
     let ids = robot.submit_path(&order)?;
     tracing::info!(robot = %name, sections = ids.len(), first_move_id = ids.first().copied().unwrap_or(0), "path accepted");
-    let reports = ids
-        .iter()
-        .map(|&id| robot.report(id).ok_or(ApiError::ShuttingDown))
-        .collect::<Result<_, _>>()?;
+    // Queued: the answer is 202 whatever follows; a report that ended and was dropped since
+    // (only ended ones are) is left out.
+    let reports = ids.iter().filter_map(|&id| robot.report(id)).collect();
     Ok((StatusCode::ACCEPTED, Json(PathAccepted { ids, reports })))
 }
 

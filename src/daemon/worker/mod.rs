@@ -145,6 +145,8 @@ pub(super) struct Worker {
     mode_read: Option<std::time::Instant>,
     /// Whether the link was ever opened (a later opening is a reconnection).
     opened_before: bool,
+    /// Moves with no motion of their own, each ending with the start ahead of it.
+    followers: Vec<moves::Follower>,
 }
 
 impl Worker {
@@ -186,6 +188,7 @@ impl Worker {
             exchange: Duration::ZERO,
             mode_read: None,
             opened_before: false,
+            followers: Vec::new(),
         }
     }
 
@@ -525,6 +528,7 @@ impl Worker {
             );
         }
         self.cancel_queue("cancelled: the daemon shut down");
+        self.cancel_followers("cancelled: the daemon shut down");
         for command in std::mem::take(&mut self.commands) {
             answer(command, Err(CommandError::ShuttingDown));
         }

@@ -13,7 +13,7 @@ use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
 use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
-use crate::plan::Plan;
+use crate::plan::{Plan, PlanError};
 use crate::plc::contract::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
@@ -54,12 +54,17 @@ impl Worker {
             (None, Some(last)) => last.block.elapsed,
             (None, None) => unreachable!("no blocker without a status block"),
         };
+        let lead = chain.as_ref().map(|c| c.tag);
         let plan = match plan_order(
             &self.robot,
             &queued.order,
             self.by_joint(from.map(i64::from)),
         ) {
             Ok(plan) => plan,
+            Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
+                self.in_place(id, from, from, lead);
+                return Ok(());
+            }
             Err(e) => {
                 self.finish(id, Stage::Failed, Some(describe(&e)), None);
                 self.cancel_queue("cancelled: the move before it could not be planned");
@@ -69,7 +74,8 @@ impl Worker {
         let planned = self.planned(id, &plan, from, chain.as_ref().map(|c| c.bank));
         let targets = planned.targets.expect("a plan knows its targets");
         self.record_plan(id, &plan, &planned);
-        if self.done_in_place(id, from, targets) {
+        if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
+            self.in_place(id, from, targets, lead);
             return Ok(());
         }
         let tables = plan
@@ -131,16 +137,31 @@ impl Worker {
         }
     }
 
-    /// Ends move `id` done without a start when its `targets` are within a pulse of `from`,
-    /// where it is: nothing to start.
-    fn done_in_place(&self, id: MoveId, from: [i32; CHANNELS], targets: [i32; CHANNELS]) -> bool {
-        if (0..CHANNELS).any(|c| (targets[c] - from[c]).abs() > 1) {
-            return false;
+    /// Move `id`, whose `targets` are within a pulse of `from`, where it begins: nothing to
+    /// start. With nothing running (`lead` none) the robot is at `from` now and it ends done;
+    /// behind the running start `lead` it is not there yet, and it ends with that start (done
+    /// only if that one ends done, [`Worker::finish`]).
+    fn in_place(
+        &mut self,
+        id: MoveId,
+        from: [i32; CHANNELS],
+        targets: [i32; CHANNELS],
+        lead: Option<MoveId>,
+    ) {
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                r.start_counts = Some(from.map(i64::from));
+                r.target_counts = Some(targets.map(i64::from));
+            });
+        });
+        if let Some(lead) = lead {
+            tracing::info!(robot = %self.robot.name, id, lead, "no motion of its own: ends with the move ahead");
+            self.followers.push(Follower { id, lead, targets });
+            return;
         }
         let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
         self.finish(id, Stage::Done, None, Some(error));
         tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
-        true
     }
 
     /// The contract's first step once more, after the upload: the bank is started only once
@@ -496,12 +517,13 @@ impl Worker {
     }
 
     pub(super) fn finish(
-        &self,
+        &mut self,
         id: MoveId,
         stage: Stage,
         error: Option<String>,
         final_error: Option<[i64; CHANNELS]>,
     ) {
+        self.end_followers(id, stage, error.as_deref());
         let mut ended = false;
         self.shared.moves(|m| {
             m.update(id, |r| {
@@ -528,6 +550,60 @@ impl Worker {
             self.shared.forget_planned_end();
         }
     }
+}
+
+impl Worker {
+    /// Ends the moves with no motion of their own that end with move `lead`, which ended
+    /// `stage` (`why`): done at their targets only when it ended done at the same counts, else
+    /// cancelled with the reason.
+    fn end_followers(&mut self, lead: MoveId, stage: Stage, why: Option<&str>) {
+        let (ending, rest) = std::mem::take(&mut self.followers)
+            .into_iter()
+            .partition(|f: &Follower| f.lead == lead);
+        self.followers = rest;
+        let counts = self.shared.moves(|m| m.get(lead)).and_then(|r| {
+            r.counts
+                .zip(r.target_counts)
+                .filter(|_| stage == Stage::Done)
+        });
+        for f in ending {
+            let targets = f.targets.map(i64::from);
+            match counts {
+                Some((counts, lead_targets)) if lead_targets == targets => {
+                    let error = std::array::from_fn(|c| counts[c] - targets[c]);
+                    self.finish(f.id, Stage::Done, None, Some(error));
+                }
+                _ => {
+                    let why = format!(
+                        "cancelled: it had no motion of its own and was to end with move {lead}, \
+                         which ended {}{}",
+                        stage.name(),
+                        why.map(|w| format!(" ({w})")).unwrap_or_default()
+                    );
+                    self.finish(f.id, Stage::Cancelled, Some(why), None);
+                }
+            }
+        }
+    }
+
+    /// Cancels every move waiting to end with a start (the daemon shuts down).
+    pub(super) fn cancel_followers(&mut self, why: &str) {
+        for f in std::mem::take(&mut self.followers) {
+            self.finish(f.id, Stage::Cancelled, Some(why.to_owned()), None);
+        }
+    }
+}
+
+/// A move with no motion of its own queued behind a running start (its lead): it ends with
+/// that start.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Follower {
+    /// The move.
+    id: MoveId,
+    /// The start it ends with.
+    lead: MoveId,
+    /// Its targets per channel: the lead's.
+    targets: [i32; CHANNELS],
 }
 
 /// The parts of `section` (planned) as the pace check sees them: the first

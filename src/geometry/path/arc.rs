@@ -30,11 +30,25 @@ pub struct Arc {
     v: Vector3<f64>,
 }
 
-/// Why three points or a centre give no arc.
+/// Why three points or a centre give no arc, or one too ill-conditioned to run: the one rule
+/// `plan --path` and the daemon both apply ([`Arc::through`], [`Arc::centred`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum ArcFault {
-    /// The three points lie on one line (or two coincide): no circle through them.
-    Collinear,
+    /// Two of the arc's defining points lie closer than [`ARC_MIN_GAP_MM`].
+    TooClose {
+        /// The two points, as the message names them (`"the via point and the start"`).
+        points: &'static str,
+        /// Their distance, mm.
+        gap_mm: f64,
+    },
+    /// The via point lies within [`ARC_MIN_BULGE`] of the chord's length from the line through
+    /// the start and the end: no circle, or one whose centre a small error swings far.
+    Flat {
+        /// The via point's distance from that line, mm.
+        off_mm: f64,
+        /// The chord from the start to the end, mm.
+        chord_mm: f64,
+    },
     /// The start and end lie at different distances from the centre.
     Radii {
         /// Start's distance from the centre, mm.
@@ -47,27 +61,60 @@ pub enum ArcFault {
         /// Its distance from that plane, mm.
         off_mm: f64,
     },
-    /// The start is on the centre: no radius.
-    NoRadius,
+    /// The start is within [`ARC_MIN_GAP_MM`] of the centre.
+    NoRadius {
+        /// The start's distance from the centre, mm.
+        radius_mm: f64,
+    },
+    /// The end of an arc about a centre is within [`ARC_MIN_GAP_MM`] of its start without
+    /// being on it (on it: a full circle), so the arc would be a sliver or nearly a whole turn.
+    EndsNear {
+        /// Their distance, mm.
+        gap_mm: f64,
+    },
 }
 
 /// How far apart two distances from the centre may be and still be one radius, mm.
 pub const RADIUS_SLACK_MM: f64 = 0.01;
 
+/// The least distance between two of the points that define an arc (its start, via point and
+/// end; its start and its centre), mm. Closer, an error of a fraction of a millimetre in one of
+/// them (a typing slip, the robot's pose rounded to whole pulses) swings the circle.
+pub const ARC_MIN_GAP_MM: f64 = 0.5;
+
+/// The least distance of an arc's via point from the line through its start and end, as a share
+/// of the chord from the start to the end (the circle's radius is then at most about 500 chords).
+/// Nearer the line, the three points are all but collinear and the circle through them is
+/// decided by their rounding.
+pub const ARC_MIN_BULGE: f64 = 1e-3;
+
 impl Arc {
     /// The arc from `from` through `via` to `to`.
     ///
     /// # Errors
-    /// [`ArcFault::Collinear`] when the three points lie on one line.
+    /// [`ArcFault::TooClose`] when two of the three points are within [`ARC_MIN_GAP_MM`];
+    /// [`ArcFault::Flat`] when the via point is within [`ARC_MIN_BULGE`] chords of the line
+    /// through the ends.
     pub fn through(from: Pose, via: Vector3<f64>, to: Pose) -> Result<Self, ArcFault> {
         let p = from.position_mm;
         let a = via - p;
         let b = to.position_mm - p;
+        for (points, gap_mm) in [
+            ("the via point and the start", a.norm()),
+            ("the end and the start", b.norm()),
+            ("the via point and the end", (via - to.position_mm).norm()),
+        ] {
+            if gap_mm.is_nan() || gap_mm < ARC_MIN_GAP_MM {
+                return Err(ArcFault::TooClose { points, gap_mm });
+            }
+        }
         let n = a.cross(&b);
         let n2 = n.norm_squared();
-        // Twice the triangle's area against its sides: below this the circle is a line.
-        if n2.sqrt() <= 1e-9 * a.norm().max(1.0) * b.norm().max(1.0) {
-            return Err(ArcFault::Collinear);
+        // Twice the triangle's area over the chord: the via point's distance from its line.
+        let chord_mm = b.norm();
+        let off_mm = n2.sqrt() / chord_mm;
+        if off_mm.is_nan() || off_mm < ARC_MIN_BULGE * chord_mm {
+            return Err(ArcFault::Flat { off_mm, chord_mm });
         }
         let centre = p + (b * a.norm_squared() - a * b.norm_squared()).cross(&n) / (2.0 * n2);
         // from -> via -> to turns counter-clockwise about n.
@@ -79,7 +126,8 @@ impl Arc {
     /// circle when `to` is `from`.
     ///
     /// # Errors
-    /// When the ends are not one radius from the centre, or not in the plane.
+    /// When the ends are not one radius from the centre, or not in the plane; when the start is
+    /// within [`ARC_MIN_GAP_MM`] of the centre, or the end within it of the start but not on it.
     pub fn centred(
         from: Pose,
         to: Pose,
@@ -101,6 +149,13 @@ impl Arc {
         if (from_mm - to_mm).abs() > RADIUS_SLACK_MM {
             return Err(ArcFault::Radii { from_mm, to_mm });
         }
+        if from_mm.is_nan() || from_mm < ARC_MIN_GAP_MM {
+            return Err(ArcFault::NoRadius { radius_mm: from_mm });
+        }
+        let gap_mm = (to.position_mm - from.position_mm).norm();
+        if gap_mm > 1e-9 && gap_mm < ARC_MIN_GAP_MM {
+            return Err(ArcFault::EndsNear { gap_mm });
+        }
         Self::about(from, to, centre, n, clockwise)
     }
 
@@ -117,7 +172,7 @@ impl Arc {
         let r0 = from.position_mm - centre;
         let radius_mm = r0.norm();
         if radius_mm <= 1e-9 {
-            return Err(ArcFault::NoRadius);
+            return Err(ArcFault::NoRadius { radius_mm });
         }
         let u = r0 / radius_mm;
         let v = normal.cross(&u).normalize();
@@ -292,14 +347,14 @@ mod tests {
 
     #[test]
     fn collinear_points_give_no_arc() {
-        assert_eq!(
+        assert!(matches!(
             Arc::through(
                 pose(0.0, 0.0, 0.0),
                 Vector3::new(1.0, 1.0, 1.0),
                 pose(2.0, 2.0, 2.0)
             ),
-            Err(ArcFault::Collinear)
-        );
+            Err(ArcFault::Flat { off_mm, .. }) if off_mm < 1e-9
+        ));
     }
 
     #[test]

@@ -10,7 +10,7 @@
 mod arc;
 mod bounds;
 
-pub use arc::{Arc, ArcFault, RADIUS_SLACK_MM};
+pub use arc::{ARC_MIN_BULGE, ARC_MIN_GAP_MM, Arc, ArcFault, RADIUS_SLACK_MM};
 
 use nalgebra::Vector3;
 use thiserror::Error;
@@ -668,7 +668,16 @@ fn primitive(n: usize, from: Pose, element: &Element) -> Result<Primitive, PathE
 /// An arc fault in words.
 fn describe(fault: &ArcFault) -> String {
     match fault {
-        ArcFault::Collinear => "the start, the via point and the end lie on one line".to_owned(),
+        ArcFault::TooClose { points, gap_mm } => format!(
+            "{points} are {gap_mm:.3} mm apart; an arc's points must be at least \
+             {ARC_MIN_GAP_MM} mm apart"
+        ),
+        ArcFault::Flat { off_mm, chord_mm } => format!(
+            "the start, the via point and the end lie on one line, or nearly: the via point is \
+             {off_mm:.3} mm off the line through the ends, {chord_mm:.3} mm apart; at least \
+             {:.3} mm ({ARC_MIN_BULGE} of the chord)",
+            ARC_MIN_BULGE * chord_mm
+        ),
         ArcFault::Radii { from_mm, to_mm } => format!(
             "the start is {from_mm:.3} mm from the centre and the end {to_mm:.3} mm; they must \
              be within {RADIUS_SLACK_MM} mm of one radius"
@@ -677,7 +686,13 @@ fn describe(fault: &ArcFault) -> String {
             "an end is {off_mm:.3} mm off the arc's plane (through the centre, square to the \
              axis); at most {RADIUS_SLACK_MM} mm"
         ),
-        ArcFault::NoRadius => "the start is on the centre".to_owned(),
+        ArcFault::NoRadius { radius_mm } => {
+            format!("the start is {radius_mm:.3} mm from the centre; at least {ARC_MIN_GAP_MM} mm")
+        }
+        ArcFault::EndsNear { gap_mm } => format!(
+            "the end is {gap_mm:.3} mm from the start: on it (a full circle) or at least \
+             {ARC_MIN_GAP_MM} mm away"
+        ),
     }
 }
 

@@ -195,10 +195,69 @@ fn refusals_name_the_element_or_waypoint() {
         },
         Corner::Stop,
     )]);
-    assert_eq!(
-        msg,
-        "element 1 (arc): the start, the via point and the end lie on one line"
+    assert!(
+        msg.starts_with("element 1 (arc): the start, the via point and the end lie on one line"),
+        "{msg}"
     );
+}
+
+/// The arc of issue 25's run: its via point is its start; the daemon, building it from the
+/// robot's pose 0.02 mm off, swung the tool 50 mm sideways.
+#[test]
+fn an_arc_whose_via_point_is_its_start_is_refused_from_near_it_too() {
+    let via = Vector3::new(0.0, 0.0, 0.0);
+    let to = Pose::from_mm_deg(100.0, 0.0, 0.0, 0.0);
+    for start in [pose(0.0, 0.0, 0.0), pose(0.014, 0.014, 0.0)] {
+        let fault = Arc::through(start, via, to).unwrap_err();
+        assert!(
+            matches!(fault, ArcFault::TooClose { points: "the via point and the start", gap_mm } if gap_mm < 0.02),
+            "{fault:?}"
+        );
+    }
+}
+
+#[test]
+fn a_nearly_flat_arc_is_refused_relative_to_its_chord() {
+    let from = pose(0.0, 0.0, 0.0);
+    let to = pose(100.0, 0.0, 0.0);
+    // 0.099 mm off a 100 mm chord: under 1/1000 of it.
+    let fault = Arc::through(from, Vector3::new(50.0, 0.099, 0.0), to).unwrap_err();
+    let ArcFault::Flat { off_mm, chord_mm } = fault else {
+        panic!("{fault:?}")
+    };
+    assert!((off_mm - 0.099).abs() < 1e-9 && (chord_mm - 100.0).abs() < 1e-9);
+    // 0.101 mm off it is an arc (a flat one, radius about 12.4 m).
+    let arc = Arc::through(from, Vector3::new(50.0, 0.101, 0.0), to).unwrap();
+    assert!(
+        arc.radius_mm > 12_000.0 && arc.radius_mm < 13_000.0,
+        "{}",
+        arc.radius_mm
+    );
+    // The same share of a 10 mm chord.
+    let to10 = pose(10.0, 0.0, 0.0);
+    assert!(Arc::through(from, Vector3::new(5.0, 0.0099, 0.0), to10).is_err());
+    assert!(Arc::through(from, Vector3::new(5.0, 0.0101, 0.0), to10).is_ok());
+}
+
+#[test]
+fn an_arc_about_a_centre_needs_a_radius_and_ends_apart_or_equal() {
+    let at = |from: Pose, to: Pose, centre: [f64; 3]| {
+        Arc::centred(from, to, Vector3::from(centre), Vector3::z(), false)
+    };
+    let from = pose(10.0, 0.0, 0.0);
+    assert!(matches!(
+        at(pose(0.3, 0.0, 0.0), pose(0.0, 0.3, 0.0), [0.0, 0.0, 0.0]),
+        Err(ArcFault::NoRadius { .. })
+    ));
+    // 0.1 mm short of a full circle: a sliver or nearly a whole turn, by rounding.
+    let near = pose(10.0 * (0.01f64).cos(), 10.0 * (0.01f64).sin(), 0.0);
+    assert!(matches!(
+        at(from, near, [0.0, 0.0, 0.0]),
+        Err(ArcFault::EndsNear { .. })
+    ));
+    // On the start: the whole circle.
+    let full = at(from, from, [0.0, 0.0, 0.0]).unwrap();
+    assert!((full.sweep_rad - std::f64::consts::TAU).abs() < 1e-12);
 }
 
 #[test]
