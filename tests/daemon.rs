@@ -560,3 +560,98 @@ async fn a_running_move_stays_watched_while_the_next_one_uploads() {
     assert_ne!(shared.with(|m| m.read_words(1_032, 1).unwrap()[0]), 1);
     d.shut_down().await;
 }
+
+/// Counts per channel the mock's engines hold now.
+fn engine_counts(shared: &SharedMock) -> [i64; 4] {
+    shared.with(|m| std::array::from_fn(|c| m.count(c)))
+}
+
+/// Issue 25: a move to the pose the running move will end on, queued behind it (zero length
+/// from the planned end), ended `done` at once while the move ahead was at 1 %, and still said
+/// `done` at the target after the move ahead was stopped far from it.
+#[tokio::test]
+async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
+    // The move ahead ends done: the one behind it ends done with it, at its counts.
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let ahead = h.submit(order(P2)).unwrap();
+    let same = h.submit(order(P2)).unwrap();
+    let mut feed = h.subscribe(ahead).unwrap();
+    feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let behind = h.report(same).unwrap();
+    assert!(
+        !behind.stage.is_final(),
+        "ended while the move ahead runs: {behind:?}"
+    );
+    let ahead = h.wait(ahead, LIMIT).await.unwrap();
+    assert_on_target(&ahead);
+    let behind = h.wait(same, LIMIT).await.unwrap();
+    assert_eq!(behind.stage, Stage::Done, "{behind:?}");
+    assert_eq!(behind.target_counts, ahead.target_counts);
+    assert_eq!(behind.target_counts, Some(engine_counts(&shared)));
+    assert_eq!(behind.final_error_pulses, Some([0; 4]));
+    assert_eq!(shared.with(|m| m.starts().len()), 1, "no start of its own");
+    d.shut_down().await;
+
+    // The move ahead is stopped: the one behind it is not done.
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let ahead = h.submit(order(P2)).unwrap();
+    let same = h.submit(order(P2)).unwrap();
+    let mut feed = h.subscribe(ahead).unwrap();
+    feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
+    h.stop().await.unwrap();
+    let ahead = h.wait(ahead, LIMIT).await.unwrap();
+    assert_eq!(ahead.stage, Stage::Stopped, "{ahead:?}");
+    let behind = h.wait(same, LIMIT).await.unwrap();
+    assert_eq!(behind.stage, Stage::Cancelled, "{behind:?}");
+    assert_ne!(behind.target_counts, Some(engine_counts(&shared)));
+    d.shut_down().await;
+}
+
+/// Issue 25: a move to exactly the current pose was refused 422 "length 0" while one 0.001 mm
+/// away ended done: both end done, without a start.
+#[tokio::test]
+async fn a_move_to_exactly_the_current_pose_ends_done_without_a_start() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    while h.state().counts != Some(engine_counts(&shared)) {
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let here = h.state().pose.unwrap();
+    for to in [
+        here.to_vec(),
+        vec![here[0] + 0.001, here[1], here[2], here[3]],
+    ] {
+        let id = h
+            .submit(MoveOrder {
+                to: Some(to),
+                ..MoveOrder::default()
+            })
+            .unwrap();
+        let report = h.wait(id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        assert_eq!(report.final_error_pulses, Some([0; 4]), "{report:?}");
+    }
+    // A joint move to the joints' values where they stand.
+    let counts = engine_counts(&shared);
+    let joints = linterpd::robot::seed_robot().values_of(&counts);
+    let robot = linterpd::robot::seed_robot();
+    let user: Vec<f64> = (0..4)
+        .map(|j| robot.joints[j].kind.to_user(joints[j]))
+        .collect();
+    let id = h
+        .submit(MoveOrder {
+            joints: Some(user),
+            ..MoveOrder::default()
+        })
+        .unwrap();
+    assert_eq!(h.wait(id, LIMIT).await.unwrap().stage, Stage::Done);
+    assert!(shared.with(|m| m.starts().is_empty()), "nothing started");
+    assert_nothing_written(&shared);
+    d.shut_down().await;
+}

@@ -770,7 +770,9 @@ mod tests {
             speed_mm_s: Some(v),
             ..order(vec![1.0, 2.0, 3.0])
         };
-        let limits = OrderLimits { max_speed_mm_s: 800.0 };
+        let limits = OrderLimits {
+            max_speed_mm_s: 800.0,
+        };
         let e = fast(1e308)
             .check_with(m, &limits, &BTreeMap::new())
             .unwrap_err();

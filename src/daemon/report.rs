@@ -338,6 +338,29 @@ impl Moves {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 25: a path of 1,000 stopped elements got 503 while its moves ran: the reports of
+    /// its first starts, still queued, had been dropped to keep 500 per robot.
+    #[test]
+    fn the_report_of_a_move_not_ended_is_never_dropped() {
+        let mut moves = Moves::default();
+        let count = KEPT as u64 * 2;
+        for id in 1..=count {
+            moves.insert(MoveReport::new(id, "r", MoveOrder::default()));
+        }
+        assert!(
+            (1..=count).all(|id| moves.get(id).is_some()),
+            "a queued report was dropped"
+        );
+        // Once ended, only the latest KEPT ended reports stay, and every one not ended.
+        for id in 1..=KEPT as u64 + 10 {
+            moves.update(id, |r| r.stage = Stage::Done);
+        }
+        moves.insert(MoveReport::new(count + 1, "r", MoveOrder::default()));
+        assert!(moves.get(10).is_none() && moves.get(11).is_some());
+        assert!((KEPT as u64 + 11..=count + 1).all(|id| moves.get(id).is_some()));
+        assert_eq!(moves.all().len(), KEPT + (count as usize - KEPT - 10) + 1);
+    }
     use crate::geometry::{Corner, Element, PathSpec, Pose, Profile, ProfileRequest};
 
     #[test]

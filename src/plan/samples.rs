@@ -49,7 +49,36 @@ pub(super) fn sample(
         values.push(q);
         near = q;
     }
-    Ok(Samples { counts, values })
+    let mut samples = Samples { counts, values };
+    hold_until_the_path_comes(robot, &mut samples);
+    Ok(samples)
+}
+
+/// A start whose counts are a pulse off the rounding of the path's first point (a robot a
+/// fraction of a millimetre from a path's stated start): a joint that is a pulse ahead of where
+/// the path puts it waits there, at its count, until the path comes to it, instead of stepping
+/// a pulse back and then forward (a reversal of one pulse, which would cut the start into a
+/// part of a few milliseconds). Only the samples before the joint is two pulses from its
+/// start are held; the plan's figures then judge the result against the path as ever.
+fn hold_until_the_path_comes(robot: &Robot, samples: &mut Samples) {
+    let Samples { counts, values } = samples;
+    let Some(&from) = counts.first() else {
+        return;
+    };
+    let last = counts.len() - 1;
+    for j in 0..JOINTS {
+        let away = counts
+            .iter()
+            .position(|c| (c[j] - from[j]).abs() >= 2)
+            .unwrap_or(last);
+        let way = (counts[away][j] - from[j]).signum();
+        for k in 1..away {
+            if (counts[k][j] - from[j]) * way < 0 {
+                counts[k][j] = from[j];
+                values[k][j] = robot.joints[j].value_of(from[j]);
+            }
+        }
+    }
 }
 
 /// Samples a joint-space path at every period of the profile: every joint at the same fraction
@@ -77,4 +106,36 @@ pub(super) fn sample_joints(
         values.push(q);
     }
     Samples { counts, values }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::seed_robot;
+
+    fn samples(d3: &[i64]) -> Samples {
+        let robot = seed_robot();
+        let counts: Vec<[i64; JOINTS]> = d3.iter().map(|&c| [7, 8, c, 9]).collect();
+        let values = counts.iter().map(|c| robot.values_of(c)).collect();
+        Samples { counts, values }
+    }
+
+    #[test]
+    fn a_joint_a_pulse_ahead_of_the_path_waits_for_it_instead_of_stepping_back() {
+        let robot = seed_robot();
+        let mut s = samples(&[100, 99, 99, 100, 101, 103, 106]);
+        hold_until_the_path_comes(&robot, &mut s);
+        let d3: Vec<i64> = s.counts.iter().map(|c| c[2]).collect();
+        assert_eq!(d3, [100, 100, 100, 100, 101, 103, 106]);
+        assert_eq!(s.values[1][2], robot.joints[2].value_of(100));
+        // A pulse behind: it steps forward at once, nothing is held.
+        let mut s = samples(&[100, 101, 102, 104]);
+        hold_until_the_path_comes(&robot, &mut s);
+        assert_eq!(s.counts[1][2], 101);
+        // A real reversal further on is the path's own: kept.
+        let mut s = samples(&[100, 102, 104, 102, 99]);
+        hold_until_the_path_comes(&robot, &mut s);
+        let d3: Vec<i64> = s.counts.iter().map(|c| c[2]).collect();
+        assert_eq!(d3, [100, 102, 104, 102, 99]);
+    }
 }
