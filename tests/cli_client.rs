@@ -6,6 +6,7 @@ mod common;
 use std::process::{Command, Stdio};
 
 use common::cli::SEED;
+use common::process::Spawned;
 
 fn linterpd(args: &[&str]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
@@ -76,6 +77,30 @@ fn bad_move_arguments_are_refused_before_any_connection() {
     );
     assert_eq!(code, Some(2));
     assert!(err.contains("constant-period, bounded-error"), "{err}");
+}
+
+#[test]
+fn run_and_plan_path_refuse_dev_zero_at_once_instead_of_reading_it_forever() {
+    let config = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    for args in [
+        vec!["run", "/dev/zero", "--socket", "/nonexistent/api.sock"],
+        vec!["plan", "--config", config, "--path", "/dev/zero"],
+    ] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_linterpd"));
+        command.args(&args).env_remove("LINTERPD_SOCKET");
+        // Before the fix it read /dev/zero until memory ran out: killed (and failed) if it
+        // does not end by itself.
+        let done = Spawned::spawn("linterpd", command).finish(common::serve::READY);
+        assert_eq!(done.status.code(), Some(2), "{args:?}: {}", done.describe());
+        assert!(done.stdout.is_empty(), "{}", done.describe());
+        assert!(
+            done.stderr
+                .contains("/dev/zero is not a regular file (a character device)")
+                && done.stderr.contains("at most 1048576 bytes (1 MiB)"),
+            "{args:?}: {}",
+            done.describe()
+        );
+    }
 }
 
 #[test]

@@ -26,7 +26,7 @@ use crate::config::PathDoc;
 pub struct RunArgs {
     /// The path file (config/examples/pick-and-place.toml shows every key). Without a `start`
     /// it begins where the robot is (or where the move before it ends); with one, the robot
-    /// must be there.
+    /// must be there. A regular file of at most 1 MiB (anything else is refused unread).
     pub file: PathBuf,
     /// The robot (needed when the daemon runs several).
     #[arg(long)]
@@ -47,8 +47,7 @@ pub struct RunArgs {
 
 /// The API's path order: the file (checked here first, naming the key) and the flags.
 fn order(args: &RunArgs) -> anyhow::Result<Value> {
-    let text = std::fs::read_to_string(&args.file)
-        .with_context(|| format!("reading {}", args.file.display()))?;
+    let text = super::super::path_file::read(&args.file)?;
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
     let mut order = json!({ "path": path });
