@@ -149,6 +149,26 @@ fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
 }
 
 #[test]
+fn check_config_refuses_a_socket_mode_that_lets_every_user_move_the_robot() {
+    let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    let open = std::env::temp_dir().join(format!("linterpd-0777-{}.toml", std::process::id()));
+    let text = std::fs::read_to_string(shipped).unwrap() + "\n[daemon]\nsocket_mode = \"0777\"\n";
+    let line = text.lines().count();
+    std::fs::write(&open, text).unwrap();
+    let (code, out, err) = linterpd(&["check-config", "--config", open.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&open);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains(&format!(
+            "config line {line}: daemon.socket_mode = \"0777\": lets every user of the machine \
+             move the robot"
+        )) && err.contains("at most 0770"),
+        "{err}"
+    );
+}
+
+#[test]
 fn version_names_the_commit_it_was_built_from() {
     let (code, out, err) = linterpd(&["--version"]);
     assert_eq!(code, Some(0), "{err}");
