@@ -418,6 +418,19 @@ fn operator_jogs_moves_joints_and_teaches_positions_through_the_cli() {
 }
 
 #[test]
+fn serve_started_by_hand_creates_its_missing_state_dir_so_pos_save_works() {
+    use std::os::unix::fs::PermissionsExt;
+    let running = common::serve::start_with_state_dir("var/lib/linterpd");
+    let socket = running.socket.as_path();
+    let state_dir = socket.parent().unwrap().join("var/lib/linterpd");
+    let mode = std::fs::metadata(&state_dir).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode & !0o750, 0, "{mode:o}");
+    let (code, out, err) = linterpd(socket, &["pos", "save", "pick"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(state_dir.join("positions.json").exists());
+}
+
+#[test]
 fn operator_runs_a_path_file_through_the_cli_section_by_section() {
     let running = common::serve::start();
     let socket = running.socket.as_path();
