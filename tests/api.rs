@@ -330,6 +330,32 @@ async fn tcp_listener_with_a_token_wants_it_as_bearer() {
 }
 
 #[tokio::test]
+async fn a_bearer_scheme_in_lower_case_is_accepted_as_rfc_9110_says() {
+    let s = Served::start().await;
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let tcp = Endpoint::Tcp(listener.local_addr().unwrap());
+    let token = BearerToken::new("s3cret").unwrap();
+    let router = Api::new(s.daemon.robots().clone()).router(Some(token));
+    tokio::spawn(async move { axum::serve(listener, router).await });
+    for value in ["bearer s3cret", "BEARER s3cret", "Bearer s3cret"] {
+        let answer = tcp
+            .request("GET", "/v1/robots", &[("authorization", value)], Vec::new())
+            .await;
+        assert_eq!(answer.status, StatusCode::OK, "{value}: {}", answer.text());
+    }
+    let wrong = tcp
+        .request(
+            "GET",
+            "/v1/robots",
+            &[("authorization", "bearer guess")],
+            Vec::new(),
+        )
+        .await;
+    assert_error(&wrong, StatusCode::UNAUTHORIZED, None);
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
 async fn serve_binary_runs_a_move_on_the_mock_plc_and_exits_0_on_sigterm() {
     let mut running = common::serve::start();
     let socket = running.socket.clone();

@@ -65,19 +65,34 @@ impl Endpoint {
         body: Option<&str>,
         token: Option<&str>,
     ) -> Answer {
+        let authorization = token.map(|token| format!("Bearer {token}"));
+        let mut headers = Vec::new();
+        if let Some(value) = &authorization {
+            headers.push(("authorization", value.as_str()));
+        }
+        if body.is_some() {
+            headers.push(("content-type", "application/json"));
+        }
+        let body = body.unwrap_or("").as_bytes().to_vec();
+        self.request(method, path, &headers, body).await
+    }
+
+    /// `method path` with exactly these headers (and `host`) and body.
+    pub async fn request(
+        &self,
+        method: &str,
+        path: &str,
+        headers: &[(&str, &str)],
+        body: Vec<u8>,
+    ) -> Answer {
         let mut request = Request::builder()
             .method(method)
             .uri(path)
             .header("host", "localhost");
-        if let Some(token) = token {
-            request = request.header("authorization", format!("Bearer {token}"));
+        for (name, value) in headers {
+            request = request.header(*name, *value);
         }
-        if body.is_some() {
-            request = request.header("content-type", "application/json");
-        }
-        let request = request
-            .body(Full::new(Bytes::from(body.unwrap_or("").to_owned())))
-            .unwrap();
+        let request = request.body(Full::new(Bytes::from(body))).unwrap();
         match self {
             Self::Unix(path) => send(UnixStream::connect(path).await.unwrap(), request).await,
             Self::Tcp(address) => send(TcpStream::connect(address).await.unwrap(), request).await,
