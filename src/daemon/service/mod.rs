@@ -26,7 +26,7 @@ use thiserror::Error;
 use tokio::net::TcpListener;
 use tokio::task::JoinSet;
 
-use super::api::{Api, BearerToken, TokenError};
+use super::api::{self, Api, BearerToken, TokenError};
 use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
@@ -255,17 +255,15 @@ pub async fn serve(
     let stop = closing.clone();
     let router = api.router(None);
     servers.spawn(async move {
-        axum::serve(unix, router)
-            .with_graceful_shutdown(stop.cancelled_owned())
-            .await
+        api::serve(unix, router, stop.cancelled_owned()).await;
+        Ok(())
     });
     if let Some(tcp) = tcp {
         let stop = closing.clone();
         let router = api.router(token);
         servers.spawn(async move {
-            axum::serve(tcp, router)
-                .with_graceful_shutdown(stop.cancelled_owned())
-                .await
+            api::serve(tcp, router, stop.cancelled_owned()).await;
+            Ok(())
         });
     }
     for (name, face) in faces {
