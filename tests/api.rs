@@ -8,15 +8,16 @@ use std::time::Duration;
 
 use common::daemon::duplex_connector;
 use common::exchange::{P1, P2, mock_at_seed_start};
-use common::http::{Answer, Endpoint};
+use common::http::{Answer, Endpoint, read_response};
 use common::process::TempDir;
 use hyper::StatusCode;
 use linterpd::config::Config;
-use linterpd::daemon::api::{Api, BearerToken};
+use linterpd::daemon::api::{self, Api, BearerToken};
 use linterpd::daemon::{Daemon, RobotHandle};
 use linterpd::plc::contract::ContractSettings;
 use serde_json::{Value, json};
-use tokio::net::{TcpListener, UnixListener};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::{TcpListener, UnixListener, UnixStream};
 
 const ROBOT: &str = "/v1/robots/press-loader";
 use common::serve::READY;
@@ -38,7 +39,7 @@ impl Served {
         let path = dir.path().join("api.sock");
         let listener = UnixListener::bind(&path).unwrap();
         let router = Api::new(daemon.robots().clone()).router(None);
-        tokio::spawn(async move { axum::serve(listener, router).await });
+        tokio::spawn(api::serve(listener, router, std::future::pending()));
         let served = Self {
             api: Endpoint::unix(&path),
             daemon,
@@ -327,6 +328,142 @@ async fn tcp_listener_with_a_token_wants_it_as_bearer() {
     assert_eq!(right.status, StatusCode::OK, "{}", right.text());
     assert_eq!(right.json()[0]["name"], "press-loader");
     s.daemon.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_bearer_scheme_in_lower_case_is_accepted_as_rfc_9110_says() {
+    let s = Served::start().await;
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let tcp = Endpoint::Tcp(listener.local_addr().unwrap());
+    let token = BearerToken::new("s3cret").unwrap();
+    let router = Api::new(s.daemon.robots().clone()).router(Some(token));
+    tokio::spawn(async move { axum::serve(listener, router).await });
+    for value in ["bearer s3cret", "BEARER s3cret", "Bearer s3cret"] {
+        let answer = tcp
+            .request("GET", "/v1/robots", &[("authorization", value)], Vec::new())
+            .await;
+        assert_eq!(answer.status, StatusCode::OK, "{value}: {}", answer.text());
+    }
+    let wrong = tcp
+        .request(
+            "GET",
+            "/v1/robots",
+            &[("authorization", "bearer guess")],
+            Vec::new(),
+        )
+        .await;
+    assert_error(&wrong, StatusCode::UNAUTHORIZED, None);
+    s.daemon.shut_down().await;
+}
+
+/// The API of a daemon with no robots, served by [`api::serve_with`] on a Unix socket in `dir`
+/// with `header_timeout`.
+fn serve_robotless(dir: &TempDir, header_timeout: Duration) -> std::path::PathBuf {
+    let path = dir.path().join("api.sock");
+    let listener = UnixListener::bind(&path).unwrap();
+    let router = Api::new(std::collections::BTreeMap::new()).router(None);
+    tokio::spawn(api::serve_with(
+        listener,
+        router,
+        header_timeout,
+        std::future::pending(),
+    ));
+    path
+}
+
+#[tokio::test]
+async fn a_10_mb_body_gets_a_json_413_naming_its_size_and_the_limit() {
+    let dir = TempDir::new("api-413");
+    let socket = serve_robotless(&dir, api::HEADER_READ_TIMEOUT);
+    let limit = api::MAX_BODY_BYTES;
+    // Declared: refused on its Content-Length, before the body is read.
+    let mut stream = UnixStream::connect(&socket).await.unwrap();
+    let head = "POST /v1/robots/press-loader/moves HTTP/1.1\r\nhost: localhost\r\n\
+                content-type: application/json\r\ncontent-length: 10485760\r\n\r\n";
+    stream.write_all(head.as_bytes()).await.unwrap();
+    stream.write_all(&[b' '; 65_536]).await.unwrap();
+    let answer = read_response(&mut stream).await;
+    assert_eq!(answer.status, 413);
+    assert_eq!(answer.header("content-type"), Some("application/json"));
+    assert_eq!(
+        answer.json(),
+        json!({
+            "error": format!("the body is 10485760 bytes; at most {limit} bytes"),
+            "reason": "too-large"
+        })
+    );
+    // Chunked, its size unknown: refused once it passes the limit.
+    let stream = UnixStream::connect(&socket).await.unwrap();
+    let (mut rx, mut tx) = stream.into_split();
+    let head = "POST /v1/robots/press-loader/paths HTTP/1.1\r\nhost: localhost\r\n\
+                content-type: application/json\r\ntransfer-encoding: chunked\r\n\r\n";
+    let writer = tokio::spawn(async move {
+        tx.write_all(head.as_bytes()).await?;
+        let chunk = [b' '; 65_536];
+        for _ in 0..(limit / chunk.len() + 8) {
+            tx.write_all(b"10000\r\n").await?;
+            tx.write_all(&chunk).await?;
+            tx.write_all(b"\r\n").await?;
+        }
+        std::io::Result::Ok(())
+    });
+    let answer = read_response(&mut rx).await;
+    assert_eq!(answer.status, 413);
+    assert_eq!(
+        answer.json()["error"],
+        format!("the body is more than {limit} bytes; at most {limit} bytes")
+    );
+    writer.abort();
+}
+
+#[tokio::test]
+async fn rejections_axum_makes_itself_answer_the_json_error_shape() {
+    let dir = TempDir::new("api-rejections");
+    let api = Endpoint::unix(&serve_robotless(&dir, api::HEADER_READ_TIMEOUT));
+    // A robot name that is not UTF-8: the path extractor's rejection, plain text before.
+    let bad_name = api.get("/v1/robots/%FF").await;
+    assert_error(&bad_name, StatusCode::BAD_REQUEST, None);
+    assert_eq!(bad_name.content_type, "application/json");
+    let error = bad_name.json()["error"].as_str().unwrap().to_owned();
+    assert!(error.starts_with(char::is_lowercase), "{error}");
+    assert_error(
+        &api.call("DELETE", "/v1/robots", None, None).await,
+        StatusCode::METHOD_NOT_ALLOWED,
+        None,
+    );
+    assert_error(&api.get("/nowhere").await, StatusCode::NOT_FOUND, None);
+}
+
+#[tokio::test(start_paused = true)]
+async fn half_open_connections_are_closed_after_the_header_timeout() {
+    let dir = TempDir::new("api-half-open");
+    let socket = serve_robotless(&dir, api::HEADER_READ_TIMEOUT);
+    let began = tokio::time::Instant::now();
+    let mut idle = Vec::new();
+    for i in 0..200 {
+        let mut stream = UnixStream::connect(&socket).await.unwrap();
+        if i % 2 == 0 {
+            // Half a request head, never finished.
+            stream
+                .write_all(b"GET /v1/robots HTTP/1.1\r\nhost: localhost\r\n")
+                .await
+                .unwrap();
+        }
+        idle.push(stream);
+    }
+    // On paused time: open until the timeout, closed at it (read: end of stream or reset).
+    let short = api::HEADER_READ_TIMEOUT - Duration::from_secs(1);
+    let mut byte = [0; 1];
+    let open = tokio::time::timeout(short, idle[0].read(&mut byte)).await;
+    assert!(open.is_err(), "closed before the timeout: {open:?}");
+    for (i, stream) in idle.iter_mut().enumerate() {
+        let end = stream.read(&mut byte).await;
+        assert!(matches!(end, Ok(0) | Err(_)), "connection {i}: {end:?}");
+    }
+    assert!(began.elapsed() >= api::HEADER_READ_TIMEOUT);
+    // A client that sends its request is served as before.
+    let robots = Endpoint::unix(&socket).get("/v1/robots").await;
+    assert_eq!(robots.status, StatusCode::OK, "{}", robots.text());
 }
 
 #[tokio::test]

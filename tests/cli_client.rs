@@ -6,6 +6,7 @@ mod common;
 use std::process::{Command, Stdio};
 
 use common::cli::SEED;
+use common::process::Spawned;
 
 fn linterpd(args: &[&str]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
@@ -79,6 +80,30 @@ fn bad_move_arguments_are_refused_before_any_connection() {
 }
 
 #[test]
+fn run_and_plan_path_refuse_dev_zero_at_once_instead_of_reading_it_forever() {
+    let config = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    for args in [
+        vec!["run", "/dev/zero", "--socket", "/nonexistent/api.sock"],
+        vec!["plan", "--config", config, "--path", "/dev/zero"],
+    ] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_linterpd"));
+        command.args(&args).env_remove("LINTERPD_SOCKET");
+        // Before the fix it read /dev/zero until memory ran out: killed (and failed) if it
+        // does not end by itself.
+        let done = Spawned::spawn("linterpd", command).finish(common::serve::READY);
+        assert_eq!(done.status.code(), Some(2), "{args:?}: {}", done.describe());
+        assert!(done.stdout.is_empty(), "{}", done.describe());
+        assert!(
+            done.stderr
+                .contains("/dev/zero is not a regular file (a character device)")
+                && done.stderr.contains("at most 1048576 bytes (1 MiB)"),
+            "{args:?}: {}",
+            done.describe()
+        );
+    }
+}
+
+#[test]
 fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
     let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
     let (code, out, err) = linterpd(&["check-config", "--config", shipped]);
@@ -119,6 +144,26 @@ fn check_config_summarises_a_good_file_and_names_the_line_of_a_bad_one() {
         err.contains("config line")
             && err.contains("max_freq_hz = 200000")
             && err.contains("20000 Hz"),
+        "{err}"
+    );
+}
+
+#[test]
+fn check_config_refuses_a_socket_mode_that_lets_every_user_move_the_robot() {
+    let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/config/linterpd.toml");
+    let open = std::env::temp_dir().join(format!("linterpd-0777-{}.toml", std::process::id()));
+    let text = std::fs::read_to_string(shipped).unwrap() + "\n[daemon]\nsocket_mode = \"0777\"\n";
+    let line = text.lines().count();
+    std::fs::write(&open, text).unwrap();
+    let (code, out, err) = linterpd(&["check-config", "--config", open.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&open);
+    assert_eq!(code, Some(2), "{out}{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains(&format!(
+            "config line {line}: daemon.socket_mode = \"0777\": lets every user of the machine \
+             move the robot"
+        )) && err.contains("at most 0770"),
         "{err}"
     );
 }

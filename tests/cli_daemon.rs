@@ -418,6 +418,19 @@ fn operator_jogs_moves_joints_and_teaches_positions_through_the_cli() {
 }
 
 #[test]
+fn serve_started_by_hand_creates_its_missing_state_dir_so_pos_save_works() {
+    use std::os::unix::fs::PermissionsExt;
+    let running = common::serve::start_with_state_dir("var/lib/linterpd");
+    let socket = running.socket.as_path();
+    let state_dir = socket.parent().unwrap().join("var/lib/linterpd");
+    let mode = std::fs::metadata(&state_dir).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode & !0o750, 0, "{mode:o}");
+    let (code, out, err) = linterpd(socket, &["pos", "save", "pick"]);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(state_dir.join("positions.json").exists());
+}
+
+#[test]
 fn operator_runs_a_path_file_through_the_cli_section_by_section() {
     let running = common::serve::start();
     let socket = running.socket.as_path();
@@ -458,6 +471,44 @@ fn operator_runs_a_path_file_through_the_cli_section_by_section() {
     assert_eq!(code, Some(2), "{out}{err}");
     assert!(err.contains("path section 1 (element 1): joint"), "{err}");
     assert_eq!(counts(socket), json!(counts_after_cycle()));
+}
+
+#[test]
+fn run_numbers_the_sections_the_reports_give_not_the_starts_of_a_section_cut_into_parts() {
+    let running = common::serve::start();
+    let socket = running.socket.as_path();
+    let file = socket.parent().unwrap().join("lift.toml");
+    // The mock starts at counts 0: the tool at (0, 500, 0) mm. A straight lift blended into a
+    // traverse (the base and radial joints stand still until the blend, so a bounded-error
+    // plan cuts that section into parts), a stop, then down: two sections.
+    std::fs::write(
+        &file,
+        "path_accel = \"5000mm/s2\"\n\
+         [[element]]\nline = [0, 500, 100]\nblend = \"20mm\"\n\
+         [[element]]\nline = [60, 560, 100]\nstop = true\n\
+         [[element]]\nline = [60, 560, 80]\n",
+    )
+    .unwrap();
+    let (code, out, err) = linterpd(
+        socket,
+        &["run", file.to_str().unwrap(), "--tolerance", "0.05mm"],
+    );
+    assert_eq!(code, Some(0), "{out}{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(
+        lines.len() > 2,
+        "the first section is cut into parts: {out}"
+    );
+    let parts = lines.len() - 1;
+    for (k, line) in lines[..parts].iter().enumerate() {
+        let label = format!("section 1/2, part {}/{parts} ", k + 1);
+        assert!(line.starts_with(&label), "{label:?} in\n{out}");
+    }
+    assert!(
+        lines[parts].starts_with("section 2/2 (element 3): "),
+        "{out}"
+    );
+    assert!(!out.contains("section 3"), "{out}");
 }
 
 /// Where the cycle above leaves the mock: (20, 520, 30) with the tool angle kept at 0.

@@ -416,3 +416,32 @@ fn a_path_with_a_stop_gives_one_csv_of_every_starts_rows_and_an_svg_of_its_arc()
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn plan_path_refuses_a_blend_on_the_last_element_instead_of_ignoring_it() {
+    let dir = std::env::temp_dir().join(format!("linterpd-last-blend-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("last-blend.toml");
+    std::fs::write(
+        &file,
+        "[[element]]\nline = [-1000, 600, 100]\n[[element]]\nline = [-1100, 650, 150]\n\
+         blend = \"20mm\"\n",
+    )
+    .unwrap();
+    let out = linterpd(&[
+        "plan",
+        "--config",
+        CONFIG,
+        "--path",
+        file.to_str().unwrap(),
+        "--from",
+        "-926.57,535.03,50",
+    ]);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("element 2: blend: 20 mm rounds the corner into the next element"),
+        "{err}"
+    );
+}

@@ -350,6 +350,75 @@ async fn what_the_list_does_not_allow_is_exception_02_and_never_reaches_the_plc(
     f.daemon.shut_down().await;
 }
 
+/// A raw Write Multiple Registers (16) frame of `n` words from `start`, transaction `tr`, with
+/// the byte count a client would send (its low byte past 127 words): rmodbus refuses to build
+/// one over the limit.
+fn raw_write_registers(tr: u16, start: u16, n: u16) -> Vec<u8> {
+    let values = usize::from(n) * 2;
+    let mut frame = tr.to_be_bytes().to_vec();
+    frame.extend_from_slice(&[0, 0]); // protocol 0
+    frame.extend_from_slice(&((7 + values) as u16).to_be_bytes()); // unit + PDU
+    frame.push(1); // unit
+    frame.push(0x10);
+    frame.extend_from_slice(&start.to_be_bytes());
+    frame.extend_from_slice(&n.to_be_bytes());
+    frame.push(values as u8);
+    frame.extend(std::iter::repeat_n(0x55, values));
+    frame
+}
+
+/// A raw Write Multiple Coils (15) frame of `n` coils from `start`.
+fn raw_write_coils(tr: u16, start: u16, n: u16) -> Vec<u8> {
+    let bytes = usize::from(n).div_ceil(8);
+    let mut frame = tr.to_be_bytes().to_vec();
+    frame.extend_from_slice(&[0, 0]);
+    frame.extend_from_slice(&((7 + bytes) as u16).to_be_bytes());
+    frame.extend_from_slice(&[1, 0x0F]);
+    frame.extend_from_slice(&start.to_be_bytes());
+    frame.extend_from_slice(&n.to_be_bytes());
+    frame.push(bytes as u8);
+    frame.extend(std::iter::repeat_n(0, bytes));
+    frame
+}
+
+#[tokio::test]
+async fn a_write_over_the_modbus_quantity_limit_is_exception_03_and_the_connection_stays_open() {
+    let shared = mock_at_seed_start("");
+    let f = start(duplex_connector(&shared, None), &[]).await;
+    wait_connected(&f.handle).await;
+    let mut client = Client::connect(f.address).await;
+    let before = words(&shared, 100, 100);
+    let exchanges = f.handle.state().gateway.exchanges;
+    for (tr, frame, function) in [
+        (0x0701, raw_write_registers(0x0701, 100, 124), 0x10),
+        (0x0702, raw_write_registers(0x0702, 100, 127), 0x10),
+        (0x0703, raw_write_coils(0x0703, 0, 1_969), 0x0F),
+        (0x0704, raw_write_coils(0x0704, 0, 2_000), 0x0F),
+    ] {
+        let reply = client
+            .exchange(&frame)
+            .await
+            .expect("an answer, not a closed connection");
+        // Its transaction, protocol 0, length 3, unit 1, the function with its high bit, 03.
+        let [hi, lo] = u16::to_be_bytes(tr);
+        assert_eq!(
+            reply,
+            [hi, lo, 0, 0, 0, 3, 1, 0x80 | function, 0x03],
+            "{reply:02x?}"
+        );
+    }
+    // Nothing reached the PLC, and the connection goes on.
+    assert_eq!(f.handle.state().gateway.exchanges, exchanges);
+    assert_eq!(words(&shared, 100, 100), before);
+    assert_eq!(client.read_holdings(0, 1).await.map(|w| w.len()), Ok(1));
+    // At the limit the write is decoded and judged by the access list (DT100-DT199 writable).
+    let most: Vec<u16> = (0..123).collect();
+    assert_eq!(client.write_holdings(100, &most).await, Err(0x02));
+    assert_eq!(client.write_holdings(100, &most[..100]).await, Ok(()));
+    assert_eq!(words(&shared, 100, 100), most[..100]);
+    f.daemon.shut_down().await;
+}
+
 #[tokio::test]
 async fn a_link_that_is_down_is_exception_0b() {
     let connect: Connector = Box::new(|| {

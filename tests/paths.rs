@@ -73,6 +73,32 @@ async fn a_path_with_a_blend_and_a_stop_runs_its_sections_in_order_and_ends_on_t
 }
 
 #[tokio::test]
+async fn a_blend_on_the_last_element_is_refused_by_the_daemon_not_ignored() {
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths-last-blend");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let before = s.handle.state().counts;
+    let body = json!({"path": {"element": [
+        {"line": [P1[0], P1[1], P1[2] + 50.0]},
+        {"line": [P2[0], P2[1], P2[2] + 50.0], "blend": "20mm"},
+    ]}});
+    let answer = s
+        .api
+        .post(&format!("{ROBOT}/paths"), &body.to_string())
+        .await;
+    assert_eq!(answer.status.as_u16(), 400, "{}", answer.text());
+    let error = answer.json()["error"].as_str().unwrap().to_owned();
+    assert!(
+        error.contains("element 2: blend: 20 mm rounds the corner"),
+        "{error}"
+    );
+    assert_eq!(s.handle.state().queued, Vec::<u64>::new());
+    assert_eq!(s.handle.state().counts, before);
+    assert!(shared.with(|m| m.starts().is_empty()));
+    s.daemon.shut_down().await;
+}
+
+#[tokio::test]
 async fn a_path_that_cannot_run_is_refused_whole_and_nothing_moves() {
     let shared = mock_at_seed_start("");
     let dir = TempDir::new("paths-refused");

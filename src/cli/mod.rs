@@ -30,6 +30,7 @@ pub mod io;
 pub mod logging;
 pub mod mock_plc;
 pub mod moves;
+pub mod path_file;
 pub mod plan;
 pub mod positions;
 pub mod serve;

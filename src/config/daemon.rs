@@ -3,7 +3,7 @@
 //! ```toml
 //! [daemon]                           # optional, as are all its keys
 //! socket = "/run/linterpd/api.sock"  # the Unix socket (default)
-//! socket_mode = "0660"               # its permissions, octal (default "0660")
+//! socket_mode = "0660"               # its permissions, octal (default "0660"; at most "0770")
 //! listen = "127.0.0.1:8420"          # an optional TCP listener, IP:port
 //! token_file = "/etc/linterpd/token" # bearer token; required when listen is not loopback
 //! start_within = "10s"               # a queued move that cannot start this long after its turn
@@ -26,6 +26,9 @@ use super::raw::RawDaemon;
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
 /// The socket's permissions when the config gives none: owner and group read/write.
 const DEFAULT_SOCKET_MODE: u32 = 0o660;
+/// The socket's "other" bits: any of them lets every user of the machine connect, and so move
+/// the robot (the Unix socket asks for no token).
+const OTHERS: u32 = 0o007;
 /// The state directory when the config names none (deploy/linterpd.service's `StateDirectory`).
 pub(super) const DEFAULT_STATE_DIR: &str = "/var/lib/linterpd";
 /// How long a queued move may wait for its start after its turn came, by default.
@@ -111,12 +114,17 @@ fn path(at: &At, value: &Spanned<String>) -> Result<PathBuf, ConfigError> {
     Ok(PathBuf::from(value.get_ref()))
 }
 
-/// Octal permission bits, `"0660"` or `"660"`.
+/// Octal permission bits, `"0660"` or `"660"`, that let no other user in ([`OTHERS`]).
 fn mode(at: &At, value: &Spanned<String>) -> Result<u32, ConfigError> {
     let text = value.get_ref();
     let digits_ok =
         (3..=4).contains(&text.len()) && text.bytes().all(|b| (b'0'..=b'7').contains(&b));
     match u32::from_str_radix(text, 8) {
+        Ok(bits) if digits_ok && bits & OTHERS != 0 => Err(at.invalid(
+            value,
+            "lets every user of the machine move the robot (an \"other\" bit is set); at most \
+             0770: give the robot's users the socket's group instead",
+        )),
         Ok(bits) if digits_ok && bits <= 0o777 => Ok(bits),
         _ => Err(at.invalid(value, "must be octal permission bits, e.g. \"0660\"")),
     }
@@ -197,6 +205,27 @@ mod tests {
                 first_key_line()
             )
         );
+    }
+
+    #[test]
+    fn a_socket_mode_that_lets_every_user_in_is_refused() {
+        let line = first_key_line();
+        for mode in ["0777", "0666", "0661", "0004", "0662"] {
+            assert_eq!(
+                message(&with_daemon(&format!("socket_mode = \"{mode}\""))),
+                format!(
+                    "config line {line}: daemon.socket_mode = \"{mode}\": lets every user of the \
+                     machine move the robot (an \"other\" bit is set); at most 0770: give the \
+                     robot's users the socket's group instead"
+                )
+            );
+        }
+        for mode in ["0770", "0660", "0600", "770"] {
+            assert!(
+                Config::from_toml(&with_daemon(&format!("socket_mode = \"{mode}\""))).is_ok(),
+                "{mode}"
+            );
+        }
     }
 
     #[test]

@@ -220,7 +220,8 @@ impl PathDoc {
             .iter()
             .enumerate()
             .map(|(i, e)| element(i + 1, e))
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
+        last_ends_at_a_stop(&elements)?;
         Ok(Self {
             start,
             path_accel_mm_s2,
@@ -282,6 +283,22 @@ impl PathDoc {
             .as_ref()
             .map(|w| resolve_waypoint("start", w, a_rad, lookup))
             .transpose()
+    }
+}
+
+/// A blend rounds the corner into the element after it: the last element has none, so its
+/// `blend` is refused rather than dropped.
+fn last_ends_at_a_stop(elements: &[ElementDoc]) -> Result<(), PathFileError> {
+    let n = elements.len();
+    match elements.last().map(|e| e.corner) {
+        Some(Corner::Blend(r)) => Err(invalid(
+            &format!("element {n}: blend"),
+            format!(
+                "{r} mm rounds the corner into the next element, and element {n} is the last; \
+                 a path ends with a stop (leave out `blend`, or add an element after it)"
+            ),
+        )),
+        _ => Ok(()),
     }
 }
 
@@ -528,10 +545,32 @@ direction = "cw"
         );
         // The same document as JSON.
         let json = serde_json::json!({
-            "element": [{"arc": [0, 100, 0], "centre": [0, 0, 0], "direction": "ccw", "blend": 5}]
+            "element": [
+                {"arc": [0, 100, 0], "centre": [0, 0, 0], "direction": "ccw", "blend": 5},
+                {"line": [0, 200, 0]}
+            ]
         });
         let doc = PathDoc::from_json(json).unwrap();
         assert_eq!(doc.elements[0].corner, Corner::Blend(5.0));
+    }
+
+    #[test]
+    fn a_blend_on_the_last_element_is_refused_not_ignored() {
+        let err = |doc: Result<PathDoc, PathFileError>| doc.unwrap_err().to_string();
+        let toml = "[[element]]\nline = [1, 2, 3]\nblend = \"5mm\"\n\
+                    [[element]]\nline = [4, 5, 6]\nblend = \"5mm\"\n";
+        let e = err(PathDoc::from_toml(toml));
+        assert!(
+            e.starts_with("element 2: blend: 5 mm rounds the corner into the next element"),
+            "{e}"
+        );
+        assert!(e.contains("element 2 is the last"), "{e}");
+        // The API's JSON document is read by the same check.
+        let json = serde_json::json!({"element": [{"line": [1, 2, 3], "blend": "5mm"}]});
+        assert!(
+            err(PathDoc::from_json(json)).starts_with("element 1: blend: "),
+            "the last element's blend is refused in JSON too"
+        );
     }
 
     #[test]

@@ -65,19 +65,34 @@ impl Endpoint {
         body: Option<&str>,
         token: Option<&str>,
     ) -> Answer {
+        let authorization = token.map(|token| format!("Bearer {token}"));
+        let mut headers = Vec::new();
+        if let Some(value) = &authorization {
+            headers.push(("authorization", value.as_str()));
+        }
+        if body.is_some() {
+            headers.push(("content-type", "application/json"));
+        }
+        let body = body.unwrap_or("").as_bytes().to_vec();
+        self.request(method, path, &headers, body).await
+    }
+
+    /// `method path` with exactly these headers (and `host`) and body.
+    pub async fn request(
+        &self,
+        method: &str,
+        path: &str,
+        headers: &[(&str, &str)],
+        body: Vec<u8>,
+    ) -> Answer {
         let mut request = Request::builder()
             .method(method)
             .uri(path)
             .header("host", "localhost");
-        if let Some(token) = token {
-            request = request.header("authorization", format!("Bearer {token}"));
+        for (name, value) in headers {
+            request = request.header(*name, *value);
         }
-        if body.is_some() {
-            request = request.header("content-type", "application/json");
-        }
-        let request = request
-            .body(Full::new(Bytes::from(body.unwrap_or("").to_owned())))
-            .unwrap();
+        let request = request.body(Full::new(Bytes::from(body))).unwrap();
         match self {
             Self::Unix(path) => send(UnixStream::connect(path).await.unwrap(), request).await,
             Self::Tcp(address) => send(TcpStream::connect(address).await.unwrap(), request).await,
@@ -112,6 +127,81 @@ where
     Answer {
         status,
         content_type,
+        body,
+    }
+}
+
+/// A response read off a raw connection: its status code, headers (lower case names) and body.
+#[derive(Debug)]
+pub struct RawAnswer {
+    pub status: u16,
+    pub headers: Vec<(String, String)>,
+    pub body: Vec<u8>,
+}
+
+impl RawAnswer {
+    /// The body as JSON (panics, showing it, if it is not).
+    pub fn json(&self) -> Value {
+        serde_json::from_slice(&self.body).unwrap_or_else(|e| {
+            panic!(
+                "{} body is not JSON ({e}): {}",
+                self.status,
+                String::from_utf8_lossy(&self.body)
+            )
+        })
+    }
+
+    pub fn header(&self, name: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+/// Reads one response (head, then a `content-length` body) off `stream`, whatever the
+/// connection does after it.
+pub async fn read_response<S: AsyncRead + Unpin>(stream: &mut S) -> RawAnswer {
+    use tokio::io::AsyncReadExt;
+    let mut bytes = Vec::new();
+    let head_end = loop {
+        if let Some(at) = bytes.windows(4).position(|w| w == b"\r\n\r\n") {
+            break at + 4;
+        }
+        let mut chunk = [0; 1_024];
+        let n = stream.read(&mut chunk).await.expect("a response");
+        assert!(n > 0, "closed before a response head: {bytes:?}");
+        bytes.extend_from_slice(&chunk[..n]);
+    };
+    let head = String::from_utf8_lossy(&bytes[..head_end]).into_owned();
+    let mut lines = head.lines();
+    let status = lines
+        .next()
+        .unwrap()
+        .split(' ')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let headers: Vec<(String, String)> = lines
+        .filter_map(|l| l.split_once(':'))
+        .map(|(n, v)| (n.trim().to_ascii_lowercase(), v.trim().to_owned()))
+        .collect();
+    let length: usize = headers
+        .iter()
+        .find(|(n, _)| n == "content-length")
+        .map_or(0, |(_, v)| v.parse().unwrap());
+    let mut body = bytes[head_end..].to_vec();
+    while body.len() < length {
+        let mut chunk = [0; 1_024];
+        let n = stream.read(&mut chunk).await.expect("the body");
+        assert!(n > 0, "closed in the body");
+        body.extend_from_slice(&chunk[..n]);
+    }
+    body.truncate(length);
+    RawAnswer {
+        status,
+        headers,
         body,
     }
 }

@@ -13,6 +13,16 @@ const SHIPPED: &str = include_str!("../../config/linterpd.toml");
 
 /// The shipped config's robot, with a TCP link to `address` and the API socket at `socket`.
 pub fn config_for(address: &str, socket: &std::path::Path) -> String {
+    let dir = socket.parent().expect("the socket is in a directory");
+    config_with_state_dir(address, socket, dir)
+}
+
+/// As [`config_for`], the daemon's state in `state_dir`.
+pub fn config_with_state_dir(
+    address: &str,
+    socket: &std::path::Path,
+    state_dir: &std::path::Path,
+) -> String {
     let robot = SHIPPED
         .split("[robots.press-loader.plc]")
         .next()
@@ -21,10 +31,7 @@ pub fn config_for(address: &str, socket: &std::path::Path) -> String {
         "{robot}[robots.press-loader.plc]\nprotocol = \"mewtocol\"\ntcp = {{ address = \"{address}\" }}\n\
          [daemon]\nsocket = \"{}\"\nstate_dir = \"{}\"\n",
         socket.display(),
-        socket
-            .parent()
-            .expect("the socket is in a directory")
-            .display()
+        state_dir.display()
     )
 }
 
@@ -53,6 +60,16 @@ pub fn start_with(mock_args: &[&str]) -> Running {
 
 /// As [`start_with`], with `extra` TOML at the end of the daemon's config (a robot's gateway).
 pub fn start_with_config(mock_args: &[&str], extra: &str) -> Running {
+    start_in(mock_args, extra, None)
+}
+
+/// As [`start`], the daemon's state directory at `state_dir` under its temp dir (which need
+/// not exist).
+pub fn start_with_state_dir(state_dir: &str) -> Running {
+    start_in(&[], "", Some(state_dir))
+}
+
+fn start_in(mock_args: &[&str], extra: &str, state_dir: Option<&str>) -> Running {
     let bin = env!("CARGO_BIN_EXE_linterpd");
     let mut mock_command = Command::new(bin);
     mock_command.args([
@@ -68,7 +85,9 @@ pub fn start_with_config(mock_args: &[&str], extra: &str) -> Running {
     let dir = TempDir::new("serve");
     let socket = dir.path().join("api.sock");
     let config = dir.path().join("linterpd.toml");
-    std::fs::write(&config, config_for(&address, &socket) + extra).unwrap();
+    let state_dir = state_dir.map_or_else(|| dir.path().to_owned(), |s| dir.path().join(s));
+    let text = config_with_state_dir(&address, &socket, &state_dir) + extra;
+    std::fs::write(&config, text).unwrap();
     let mut serve_command = Command::new(bin);
     serve_command.arg("serve").arg("--config").arg(&config);
     let mut serve = Spawned::spawn("linterpd serve", serve_command);

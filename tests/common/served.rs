@@ -61,7 +61,11 @@ impl Served {
         let path = dir.join(socket);
         let listener = UnixListener::bind(&path).unwrap();
         let router = Api::new(daemon.robots().clone()).router(None);
-        tokio::spawn(async move { axum::serve(listener, router).await });
+        tokio::spawn(linterpd::daemon::api::serve(
+            listener,
+            router,
+            std::future::pending(),
+        ));
         wait_connected(&handle, shared).await;
         Self {
             daemon,

@@ -26,7 +26,7 @@ use crate::config::PathDoc;
 pub struct RunArgs {
     /// The path file (config/examples/pick-and-place.toml shows every key). Without a `start`
     /// it begins where the robot is (or where the move before it ends); with one, the robot
-    /// must be there.
+    /// must be there. A regular file of at most 1 MiB (anything else is refused unread).
     pub file: PathBuf,
     /// The robot (needed when the daemon runs several).
     #[arg(long)]
@@ -47,8 +47,7 @@ pub struct RunArgs {
 
 /// The API's path order: the file (checked here first, naming the key) and the flags.
 fn order(args: &RunArgs) -> anyhow::Result<Value> {
-    let text = std::fs::read_to_string(&args.file)
-        .with_context(|| format!("reading {}", args.file.display()))?;
+    let text = super::super::path_file::read(&args.file)?;
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
     let mut order = json!({ "path": path });
@@ -76,22 +75,20 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
                 &format!("path accepted: moves {}", list.join(", ")),
             );
         }
+        let reports = accepted["reports"]
+            .as_array()
+            .map_or(&[][..], Vec::as_slice);
+        let labels = start_labels(reports, ids.len());
         let mut finals = Vec::with_capacity(ids.len());
         let mut outcome = Ok(());
-        for (n, &id) in ids.iter().enumerate() {
+        for (&id, label) in ids.iter().zip(&labels) {
             let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
             if !args.daemon.json {
                 let elements = bars::elements(&last)
                     .map(|e| format!(" (element {e})"))
                     .unwrap_or_default();
-                writeln!(
-                    out,
-                    "section {}/{}{elements}: {}",
-                    n + 1,
-                    ids.len(),
-                    summary(&last)
-                )
-                .map_err(|e| Failure::Runtime(e.into()))?;
+                writeln!(out, "{label}{elements}: {}", summary(&last))
+                    .map_err(|e| Failure::Runtime(e.into()))?;
             }
             outcome = outcome.and(verdict(&last));
             finals.push(last);
@@ -101,4 +98,78 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
         }
         outcome
     })
+}
+
+/// What each of a path's `starts` moves runs, from the reports the daemon accepted it with:
+/// `section 1/2` for a section run in one start, `section 1/2, part 2/3` for one of the parts
+/// a section is cut into (chained at speed). Without a section in every report (a daemon that
+/// gives none), the starts are counted as sections.
+fn start_labels(reports: &[Value], starts: usize) -> Vec<String> {
+    let sections: Option<Vec<(u64, u64)>> = reports
+        .iter()
+        .map(|r| {
+            Some((
+                r["section"]["number"].as_u64()?,
+                r["section"]["of"].as_u64()?,
+            ))
+        })
+        .collect();
+    let Some(sections) = sections.filter(|s| s.len() == starts) else {
+        return (1..=starts)
+            .map(|n| format!("section {n}/{starts}"))
+            .collect();
+    };
+    sections
+        .iter()
+        .enumerate()
+        .map(|(i, &(number, of))| {
+            let parts = sections.iter().filter(|s| s.0 == number).count();
+            let part = sections[..=i].iter().filter(|s| s.0 == number).count();
+            if parts > 1 {
+                format!("section {number}/{of}, part {part}/{parts}")
+            } else {
+                format!("section {number}/{of}")
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(number: u64, of: u64) -> Value {
+        json!({"id": 1, "section": {"number": number, "of": of, "pieces": []}})
+    }
+
+    #[test]
+    fn a_section_cut_into_parts_is_counted_as_one_section_not_as_its_starts() {
+        // Two sections, the first cut into three parts: six starts before, two sections now.
+        let reports = [report(1, 2), report(1, 2), report(1, 2), report(2, 2)];
+        assert_eq!(
+            start_labels(&reports, 4),
+            [
+                "section 1/2, part 1/3",
+                "section 1/2, part 2/3",
+                "section 1/2, part 3/3",
+                "section 2/2",
+            ]
+        );
+    }
+
+    #[test]
+    fn sections_of_one_start_each_are_numbered_alone() {
+        assert_eq!(
+            start_labels(&[report(1, 2), report(2, 2)], 2),
+            ["section 1/2", "section 2/2"]
+        );
+    }
+
+    #[test]
+    fn reports_without_sections_count_the_starts() {
+        assert_eq!(
+            start_labels(&[json!({"id": 1})], 2),
+            ["section 1/2", "section 2/2"]
+        );
+    }
 }

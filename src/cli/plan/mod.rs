@@ -43,7 +43,7 @@ pub struct PlanArgs {
     #[arg(long, allow_hyphen_values = true, required_unless_present = "path")]
     pub to: Option<String>,
     /// Plan a path file (lines, arcs, blended corners; see config/examples/) instead of one
-    /// line.
+    /// line: a regular file of at most 1 MiB.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["to", "compare", "seed_exact"])]
     pub path: Option<PathBuf>,
     /// Speed along the line, e.g. `240mm/s` or `240` (mm/s; default: the robot's).

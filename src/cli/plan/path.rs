@@ -24,9 +24,7 @@ pub(super) fn run(
     out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let bad = Failure::BadInput;
-    let text = std::fs::read_to_string(file)
-        .with_context(|| format!("reading {}", file.display()))
-        .map_err(bad)?;
+    let text = crate::cli::path_file::read(file).map_err(bad)?;
     let doc = PathDoc::from_toml(&text)
         .with_context(|| format!("{}", file.display()))
         .map_err(bad)?;

@@ -81,17 +81,39 @@ pub(super) async fn require_token(
         .headers()
         .get(AUTHORIZATION)
         .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer "));
-    if given.is_some_and(|g| token.matches(g.trim())) {
+        .and_then(bearer_credentials);
+    if given.is_some_and(|g| token.matches(g)) {
         next.run(request).await
     } else {
         ApiError::Unauthorized.into_response()
     }
 }
 
+/// The token of an `Authorization` value whose scheme is `Bearer`, in any case (RFC 9110
+/// §11.1: the scheme is case-insensitive), with the blanks around it left out.
+fn bearer_credentials(value: &str) -> Option<&str> {
+    let (scheme, token) = value.trim_start().split_once(' ')?;
+    scheme.eq_ignore_ascii_case("bearer").then(|| token.trim())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_bearer_scheme_is_read_in_any_case() {
+        for value in [
+            "Bearer s3cret",
+            "bearer s3cret",
+            "BEARER s3cret",
+            "bEaReR   s3cret ",
+        ] {
+            assert_eq!(bearer_credentials(value), Some("s3cret"), "{value:?}");
+        }
+        assert_eq!(bearer_credentials("Basic s3cret"), None);
+        assert_eq!(bearer_credentials("Bearers3cret"), None);
+        assert_eq!(bearer_credentials("Bearer"), None);
+    }
 
     #[test]
     fn token_matches_only_itself() {

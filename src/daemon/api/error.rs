@@ -66,6 +66,25 @@ pub enum ApiError {
     /// A method the path does not take (405).
     #[error("method not allowed here")]
     MethodNotAllowed,
+    /// A body over the API's limit (413).
+    #[error(
+        "the body is {}; at most {limit} bytes",
+        bytes.map_or_else(|| format!("more than {limit} bytes"), |b| format!("{b} bytes"))
+    )]
+    TooLarge {
+        /// Its size, when the request declares it (`Content-Length`).
+        bytes: Option<u64>,
+        /// The most the API reads, bytes.
+        limit: usize,
+    },
+    /// An error the router's machinery answered (an extractor's rejection), in its words.
+    #[error("{message}")]
+    Other {
+        /// Its status.
+        status: StatusCode,
+        /// What it said.
+        message: String,
+    },
 }
 
 /// The JSON body of an error.
@@ -93,6 +112,8 @@ impl ApiError {
             Self::Unavailable { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             Self::Unauthorized => StatusCode::UNAUTHORIZED,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
+            Self::TooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
+            Self::Other { status, .. } => *status,
         }
     }
 
@@ -113,6 +134,7 @@ impl ApiError {
             Self::Plc(_) => Some("plc"),
             Self::Forbidden(_) => Some("not-allowed"),
             Self::Storage(_) => Some("storage"),
+            Self::TooLarge { .. } => Some("too-large"),
             _ => None,
         }
     }

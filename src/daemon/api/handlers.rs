@@ -14,6 +14,7 @@ use tokio::sync::watch;
 use tokio_util::sync::CancellationToken;
 
 use super::Api;
+use super::body::JsonBody;
 use super::error::ApiError;
 use super::metrics;
 use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHandle, RobotState};
@@ -49,7 +50,7 @@ pub(super) async fn robot(
 pub(super) async fn submit(
     State(api): State<Api>,
     Path(name): Path<String>,
-    body: Bytes,
+    JsonBody(body): JsonBody,
 ) -> Result<(StatusCode, Json<Accepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
@@ -66,7 +67,7 @@ pub(super) async fn submit(
 pub(super) async fn submit_path(
     State(api): State<Api>,
     Path(name): Path<String>,
-    body: Bytes,
+    JsonBody(body): JsonBody,
 ) -> Result<(StatusCode, Json<PathAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order: PathOrder = parse_body(&body)?;

@@ -19,13 +19,16 @@
 //! DELETE /v1/robots/{name}/positions/{pos} {"deleted": NamedPosition}    | 400 | 404 | 500
 //! GET  /metrics                            Prometheus text
 //! ```
-//! Every error is JSON with at least `error` (see [`ApiError`]), and `reason` (a word for
-//! programs) for 403 (`not-allowed`), 409, 502 and 503; `POST .../moves` answers 409 (`not-homed`, `homing`,
+//! Every error is JSON with at least `error` (see [`ApiError`]; a rejection axum makes itself
+//! is put in that shape too, `body.rs`), and `reason` (a word for programs) for 403
+//! (`not-allowed`), 409, 413 (`too-large`: a body over [`MAX_BODY_BYTES`]), 502 and 503; `POST .../moves` answers 409 (`not-homed`, `homing`,
 //! `faulted`, `not-ready`) or 503 (`link-down`, `stalled`) when the robot cannot take a move now.
 
 mod auth;
+mod body;
 mod error;
 mod handlers;
+mod listen;
 pub mod metrics;
 mod registers;
 
@@ -37,7 +40,9 @@ use axum::routing::{get, post};
 use tokio_util::sync::CancellationToken;
 
 pub use auth::{BearerToken, TokenError};
+pub use body::MAX_BODY_BYTES;
 pub use error::ApiError;
+pub use listen::{HEADER_READ_TIMEOUT, serve, serve_with};
 
 use super::RobotHandle;
 
@@ -96,13 +101,14 @@ impl Api {
             .fallback(handlers::no_route)
             .method_not_allowed_fallback(handlers::wrong_method)
             .with_state(self.clone());
-        match token {
+        let router = match token {
             Some(token) => router.layer(axum::middleware::from_fn_with_state(
                 token,
                 auth::require_token,
             )),
             None => router,
-        }
+        };
+        router.layer(axum::middleware::map_response(body::json_errors))
     }
 
     /// The robot called `name`, or a 404 naming the robots there are.

@@ -4,11 +4,11 @@
 use std::collections::HashMap;
 
 use axum::Json;
-use axum::body::Bytes;
 use axum::extract::{Path, Query, State};
 use serde::{Deserialize, Serialize};
 
 use super::Api;
+use super::body::JsonBody;
 use super::error::ApiError;
 use crate::daemon::{Values, values_from_json};
 use crate::gateway::Address;
@@ -50,7 +50,7 @@ pub(super) async fn read(
 pub(super) async fn write(
     State(api): State<Api>,
     Path((name, address)): Path<(String, String)>,
-    body: Bytes,
+    JsonBody(body): JsonBody,
 ) -> Result<Json<Registers>, ApiError> {
     let robot = api.robot(&name)?;
     let start = address_of(&address)?;

@@ -26,11 +26,11 @@ use crate::plc::RELAY_COIL_BASE;
 /// Registers one read (03, 04) may ask for (§6.3, §6.4).
 const MAX_READ_REGISTERS: u16 = 125;
 /// Registers one write (16) may carry (§6.12).
-const MAX_WRITE_REGISTERS: usize = 123;
+pub(super) const MAX_WRITE_REGISTERS: usize = 123;
 /// Coils or inputs one read (01, 02) may ask for (§6.1, §6.2).
 const MAX_READ_BITS: u16 = 2000;
 /// Coils one write (15) may carry (§6.11).
-const MAX_WRITE_COILS: usize = 1968;
+pub(super) const MAX_WRITE_COILS: usize = 1968;
 
 /// A request as the gateway carries it out.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -7,10 +7,13 @@
 //!  HMI / SCADA --Modbus TCP--> accept: peer in gateway.modbus.allow? (else closed, logged)
 //!     --request--> map::ask --Ask--> RobotHandle::{read,write}_registers --> worker --> PLC
 //!     <--reply or exception--  map::read_response / map::exception
+//!  (a 15 / 16 write tokio-modbus's codec cannot decode is made a write of nothing first,
+//!   screen.rs, so it is answered 03 and the connection kept)
 //! ```
 //! Any unit id is answered: the face stands for one PLC. It ends with the daemon.
 
 mod map;
+mod screen;
 
 use std::future::Future;
 use std::io;
@@ -24,6 +27,7 @@ use tokio_modbus::{ExceptionCode, Request, Response};
 use super::RobotHandle;
 use crate::gateway::ModbusFace;
 use map::Ask;
+use screen::Screened;
 
 /// A robot's Modbus face, bound and waiting to serve.
 #[derive(Debug)]
@@ -87,8 +91,14 @@ impl ModbusFaceServer {
     }
 }
 
-/// The stream, if `peer` may use the face; else none (the connection is closed at once), logged.
-fn admit(face: &ModbusFace, robot: &str, stream: TcpStream, peer: SocketAddr) -> Option<TcpStream> {
+/// The stream, screened (`screen.rs`), if `peer` may use the face; else none (the connection is
+/// closed at once), logged.
+fn admit(
+    face: &ModbusFace,
+    robot: &str,
+    stream: TcpStream,
+    peer: SocketAddr,
+) -> Option<Screened<TcpStream>> {
     if !face.admits(peer.ip()) {
         tracing::warn!(
             robot,
@@ -99,7 +109,7 @@ fn admit(face: &ModbusFace, robot: &str, stream: TcpStream, peer: SocketAddr) ->
     }
     tracing::info!(robot, %peer, "Modbus client connected");
     let _ = stream.set_nodelay(true);
-    Some(stream)
+    Some(Screened::new(stream))
 }
 
 /// The tokio-modbus service of one connection: the robot's gateway.

@@ -26,7 +26,7 @@ use thiserror::Error;
 use tokio::net::TcpListener;
 use tokio::task::JoinSet;
 
-use super::api::{Api, BearerToken, TokenError};
+use super::api::{self, Api, BearerToken, TokenError};
 use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
@@ -73,6 +73,18 @@ pub enum ServeError {
         socket: PathBuf,
         /// Its lock file.
         lock: PathBuf,
+    },
+    /// The state directory is missing and cannot be made (or is not a directory).
+    #[error(
+        "cannot create the state directory {} ([daemon] state_dir) with mode 0750",
+        path.display()
+    )]
+    StateDir {
+        /// The directory.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: io::Error,
     },
     /// A listener failed while serving.
     #[error("the API listener failed")]
@@ -149,6 +161,24 @@ pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
     }
 }
 
+/// The state directory's mode when the daemon creates it (systemd's `StateDirectory=` default).
+const STATE_DIR_MODE: u32 = 0o750;
+
+/// Makes the state directory (and its parents, mode 0750) when it is missing, as
+/// `StateDirectory=` does under systemd, so a daemon started by hand keeps its move ids and
+/// taught positions too; refuses at once when it cannot be made.
+pub fn ensure_state_dir(dir: &Path) -> Result<(), ServeError> {
+    use std::os::unix::fs::DirBuilderExt;
+    std::fs::DirBuilder::new()
+        .recursive(true)
+        .mode(STATE_DIR_MODE)
+        .create(dir)
+        .map_err(|source| ServeError::StateDir {
+            path: dir.to_owned(),
+            source,
+        })
+}
+
 /// Opens `link` anew on every call.
 #[must_use]
 pub fn connector(link: LinkSettings) -> Connector {
@@ -210,6 +240,7 @@ pub async fn serve(
         .as_deref()
         .map(BearerToken::read)
         .transpose()?;
+    ensure_state_dir(&settings.state_dir)?;
     let _lock = lock(&settings.socket)?;
     let unix = bind_unix(&settings.socket, settings.socket_mode)?;
     let tcp = match settings.listen {
@@ -224,17 +255,15 @@ pub async fn serve(
     let stop = closing.clone();
     let router = api.router(None);
     servers.spawn(async move {
-        axum::serve(unix, router)
-            .with_graceful_shutdown(stop.cancelled_owned())
-            .await
+        api::serve(unix, router, stop.cancelled_owned()).await;
+        Ok(())
     });
     if let Some(tcp) = tcp {
         let stop = closing.clone();
         let router = api.router(token);
         servers.spawn(async move {
-            axum::serve(tcp, router)
-                .with_graceful_shutdown(stop.cancelled_owned())
-                .await
+            api::serve(tcp, router, stop.cancelled_owned()).await;
+            Ok(())
         });
     }
     for (name, face) in faces {
@@ -379,6 +408,49 @@ mod tests {
     use super::*;
 
     const SHIPPED: &str = include_str!("../../../config/linterpd.toml");
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_missing_state_dir_is_created_0750_so_the_first_pos_save_can_write() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = temp("state-dir-made");
+        let state = dir.join("var/lib/linterpd");
+        ensure_state_dir(&state).unwrap();
+        let mode = std::fs::metadata(&state).unwrap().permissions().mode() & 0o777;
+        // The umask may take bits away, never add them.
+        assert_eq!(mode & !STATE_DIR_MODE, 0, "{mode:o}");
+        assert!(mode & 0o700 == 0o700, "{mode:o}");
+        // There already: nothing to do.
+        ensure_state_dir(&state).unwrap();
+        std::fs::write(state.join("positions.json"), "{}").unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_state_dir_that_cannot_be_made_is_refused_at_start_naming_the_key() {
+        let dir = temp("state-dir-file");
+        let file = dir.join("not-a-dir");
+        std::fs::write(&file, "").unwrap();
+        let e = ensure_state_dir(&file.join("state")).unwrap_err();
+        assert!(
+            e.to_string().starts_with(&format!(
+                "cannot create the state directory {}/state ([daemon] state_dir)",
+                file.display()
+            )),
+            "{e}"
+        );
+        assert!(
+            std::error::Error::source(&e).is_some(),
+            "the OS error is kept"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn a_reread_config_names_what_changed() {
