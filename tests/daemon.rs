@@ -655,3 +655,56 @@ async fn a_move_to_exactly_the_current_pose_ends_done_without_a_start() {
     assert_nothing_written(&shared);
     d.shut_down().await;
 }
+
+/// Issue 25: a move whose link died reported `deadline_s` 7.75 s but ended failed after
+/// 11.3 s (the worker looked only at its reconnection backoff), and the CLI, waiting the
+/// deadline and 2 s, gave up first. The link closes while the move runs and never opens
+/// again (each attempt hangs): the move ends failed within the deadline its running report
+/// gave, counted from that report.
+#[tokio::test(start_paused = true)]
+async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let shared = mock_at_seed_start("");
+    let opened = std::sync::Arc::new(AtomicUsize::new(0));
+    let first = duplex_connector(&shared, None);
+    let first = std::sync::Arc::new(tokio::sync::Mutex::new(first));
+    let connect: Connector = {
+        let opened = std::sync::Arc::clone(&opened);
+        Box::new(move || {
+            let (opened, first) = (
+                std::sync::Arc::clone(&opened),
+                std::sync::Arc::clone(&first),
+            );
+            Box::pin(async move {
+                if opened.fetch_add(1, Ordering::SeqCst) == 0 {
+                    let mut connect = first.lock().await;
+                    (*connect)().await
+                } else {
+                    std::future::pending().await
+                }
+            })
+        })
+    };
+    let (d, h) = daemon(connect, ContractSettings::default());
+    wait_connected(&h).await;
+    let id = h.submit(order(P2)).unwrap();
+    let mut feed = h.subscribe(id).unwrap();
+    let running = feed
+        .wait_for(|r| r.stage == Stage::Running)
+        .await
+        .unwrap()
+        .clone();
+    let seen = tokio::time::Instant::now();
+    let deadline = Duration::from_secs_f64(running.deadline_s.unwrap());
+    let next = shared.with(|m| m.commands()) + 1;
+    shared.with(|m| m.set_faults(format!("close@{next}").parse().unwrap()));
+    let ended = h.wait(id, Duration::from_secs(60)).await.unwrap();
+    let took = seen.elapsed();
+    assert_eq!(ended.stage, Stage::Failed, "{ended:?}");
+    assert!(
+        took <= deadline,
+        "ended after {took:?}, its report gave {deadline:?}"
+    );
+    assert!(opened.load(Ordering::SeqCst) >= 2, "it tried to reconnect");
+    d.kill().await;
+}

@@ -11,7 +11,15 @@
 //!   done only if the mock started that seq and the counts ended on its targets;
 //! - I3 every call returns within its bound (orders end within their deadline);
 //! - I4 once the fault clears (and after `home` where the PLC restarted), the next move ends done
-//!   with 0 pulses of final error.
+//!   with 0 pulses of final error;
+//! - I5 every `done` report's targets are the counts the mock stands on when the report says
+//!   done (or, when the PLC has already taken the start chained behind it, the counts it took
+//!   that start from): a report never says done with the robot elsewhere.
+//!
+//! Three flows are issue 25's: a move with no motion of its own queued behind a running move
+//! (it ends with that move), a path started from a pose off its stated start (within the
+//! slack), and an order refused while another runs (nothing of it queued, the running move
+//! unharmed).
 //!
 //! Everything runs in process on paused tokio time (MEWTOCOL over `duplex`), so the matrix is
 //! deterministic and fast. `cargo test --test fault_matrix -- --nocapture` prints the counts.
@@ -59,6 +67,21 @@ fn pick_and_place() -> linterpd::daemon::PathOrder {
             ]
         },
         "tolerance_mm": 0.05
+    }))
+    .unwrap()
+}
+
+/// A short path from 0.04 mm off A (a stated start the robot stands near, not on) up 40 mm
+/// and across to C.
+fn path_off_start() -> linterpd::daemon::PathOrder {
+    serde_json::from_value(serde_json::json!({
+        "path": {
+            "start": [A[0] + 0.03, A[1] - 0.02, A[2] + 0.0173],
+            "element": [
+                {"line": [A[0], A[1], A[2] + 40.0], "stop": true},
+                {"line": C},
+            ]
+        },
     }))
     .unwrap()
 }
@@ -119,6 +142,13 @@ enum Flow {
     StopChained,
     Home,
     Path,
+    /// A move, and a move to where it ends queued behind it (no motion of its own).
+    ZeroBehind,
+    /// A short path whose stated start is 0.04 mm from where the robot stands.
+    PathOffStart,
+    /// A move, and while it runs an order refused (a speed over the robot's limit) and a path
+    /// refused (too many elements): nothing of them is queued.
+    RefusedWhileRunning,
 }
 
 impl Flow {
@@ -372,6 +402,44 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 Err(e) => v.0.push(format!("the path was refused: {e}")),
             }
         }
+        Flow::ZeroBehind => {
+            ids.extend(h.submit(order(B)).ok());
+            ids.extend(h.submit(order(B)).ok());
+        }
+        Flow::PathOffStart => {
+            for _ in 0..500 {
+                if h.state().counts == Some(channel_counts_at_a()) {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(10)).await;
+            }
+            match h.submit_path(&path_off_start()) {
+                Ok(parts) => ids.extend(parts),
+                Err(e) => v.0.push(format!("the path off its start was refused: {e}")),
+            }
+        }
+        Flow::RefusedWhileRunning => {
+            ids.extend(h.submit(order(B)).ok());
+            tokio::time::sleep(Duration::from_millis(150)).await;
+            let before = h.state().queued;
+            let fast = MoveOrder {
+                speed_mm_s: Some(1e308),
+                ..order(C)
+            };
+            v.check(h.submit(fast).is_err(), || {
+                "a speed of 1e308 was accepted".into()
+            });
+            let element: Vec<_> = (0..600).map(|_| serde_json::json!({"line": C})).collect();
+            let long: linterpd::daemon::PathOrder =
+                serde_json::from_value(serde_json::json!({"path": {"element": element}})).unwrap();
+            v.check(h.submit_path(&long).is_err(), || {
+                "a path of 600 elements was accepted".into()
+            });
+            let after = h.state().queued;
+            v.check(after.iter().all(|q| before.contains(q)), || {
+                format!("a refused order queued something: {before:?} -> {after:?}")
+            });
+        }
         Flow::Home => {
             let home = tokio::time::timeout(BOUND, h.home()).await;
             v.check(home.is_ok(), || "I3: home did not answer".into());
@@ -381,6 +449,75 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
         }
     }
     ids
+}
+
+/// I5, watched as it happens: for each of `ids`, when its report turns done, its targets must
+/// be the counts the mock stands on at that instant (paused time does not move while the
+/// watcher runs), or, when the PLC already took a start after the move's own, the counts it
+/// took that one from. The violations found are pushed into the returned list.
+fn watch_done(
+    h: &RobotHandle,
+    shared: &SharedMock,
+    ids: &[MoveId],
+) -> Arc<std::sync::Mutex<Vec<String>>> {
+    let found = Arc::new(std::sync::Mutex::new(Vec::new()));
+    for &id in ids {
+        let Some(mut feed) = h.subscribe(id) else {
+            continue;
+        };
+        if feed.borrow().stage.is_final() {
+            continue;
+        }
+        let (shared, found) = (shared.clone(), Arc::clone(&found));
+        tokio::spawn(async move {
+            let Ok(report) = feed
+                .wait_for(|r| r.stage.is_final())
+                .await
+                .map(|r| r.clone())
+            else {
+                return;
+            };
+            if report.stage != Stage::Done || report.recovered {
+                return;
+            }
+            let Some(targets) = report.target_counts else {
+                found
+                    .lock()
+                    .unwrap()
+                    .push(format!("I5: move {id} done without targets"));
+                return;
+            };
+            let (now, taken_after) = shared.with(|m| {
+                let now: [i64; 4] = std::array::from_fn(|c| m.count(c));
+                let starts = m.starts();
+                let own = report.seq.and_then(|seq| {
+                    starts
+                        .iter()
+                        .rposition(|s| s.block.seq == seq && s.outcome == StartOutcome::Started)
+                });
+                let after = match own {
+                    Some(at) => starts[at + 1..]
+                        .iter()
+                        .find(|s| s.outcome == StartOutcome::Started)
+                        .map(|s| s.counts),
+                    // No start of its own: it ended with the last start acted on.
+                    None => starts
+                        .iter()
+                        .rev()
+                        .find(|s| s.outcome == StartOutcome::Started)
+                        .map(|s| s.counts),
+                };
+                (now, after)
+            });
+            if now != targets && taken_after != Some(targets) {
+                found.lock().unwrap().push(format!(
+                    "I5: move {id} done at targets {targets:?} with the mock at {now:?} \
+                     (the next start taken from {taken_after:?})"
+                ));
+            }
+        });
+    }
+    found
 }
 
 /// Waits for every id to end (I2, I3) and checks each against what the mock did (I2).
@@ -544,7 +681,10 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
         (d, h2)
     } else {
         let ids = run_flow(flow, &h, &mut v).await;
+        let i5 = watch_done(&h, &shared, &ids);
         settle(&h, &shared, &ids, &mut v).await;
+        tokio::time::sleep(Duration::from_millis(1)).await;
+        v.0.extend(i5.lock().unwrap().drain(..));
         (daemon, h)
     };
     check_starts(&shared, &mut v);
@@ -563,7 +703,10 @@ async fn positions(flow: Flow) -> u64 {
     let before = shared.with(|m| m.commands());
     let mut v = Violations::default();
     let ids = run_flow(flow, &h, &mut v).await;
+    let i5 = watch_done(&h, &shared, &ids);
     settle(&h, &shared, &ids, &mut v).await;
+    tokio::time::sleep(Duration::from_millis(1)).await;
+    v.0.extend(i5.lock().unwrap().drain(..));
     assert!(v.0.is_empty(), "{flow:?} without a fault: {:?}", v.0);
     if flow == Flow::Path {
         assert_eq!(ids.len(), 3, "the path is one section cut into three parts");
@@ -676,9 +819,25 @@ async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
     run_matrix_of(Flow::Path, &FAULTS[6..]).await;
 }
 
+#[tokio::test(start_paused = true)]
+async fn a_move_with_no_motion_behind_a_running_move_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::ZeroBehind).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_path_from_near_its_stated_start_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::PathOffStart).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn orders_refused_while_a_move_runs_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::RefusedWhileRunning).await;
+}
+
 /// One case with the daemon's and the mock's log, to see what happened in it:
 /// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test fault_matrix one_case -- --ignored
-/// --nocapture` (flows: single, chained, chained-slow, chained-unread, stop,
+/// --nocapture` (flows: single, chained, chained-slow, chained-unread, stop, zero-behind,
+/// path-off-start, refused,
 /// home, path).
 #[tokio::test(start_paused = true)]
 #[ignore = "a diagnostic for one case of the matrix: set MATRIX_CASE=flow:Fault:position"]
@@ -696,6 +855,9 @@ async fn one_case_with_its_log() {
         "chained-unread" => Flow::ChainedUnread,
         "stop" => Flow::StopChained,
         "path" => Flow::Path,
+        "zero-behind" => Flow::ZeroBehind,
+        "path-off-start" => Flow::PathOffStart,
+        "refused" => Flow::RefusedWhileRunning,
         _ => Flow::Home,
     };
     let fault = FAULTS

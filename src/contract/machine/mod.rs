@@ -676,6 +676,20 @@ impl Machine {
         events
     }
 
+    /// While the link is down: when [`Self::tick`] next ends something in flight (a start past
+    /// its run limit and the link's grace), if anything is.
+    #[must_use]
+    pub fn expires_while_down(&self) -> Option<Instant> {
+        let Phase::LinkDown {
+            was,
+            since: Some(since),
+        } = &self.phase
+        else {
+            return None;
+        };
+        phase::expiry_while_down(was, *since, &self.settings)
+    }
+
     /// Moves the machine along by a status block read at `now`.
     pub fn on_status(&mut self, status: &Status, now: Instant) -> Vec<Event> {
         let mut events = Vec::new();

@@ -691,6 +691,32 @@ fn stopping(
     }
 }
 
+/// While the link is down since `since`: the instant [`expire_while_down`] next ends something
+/// in `was` (a start past its run limit and the grace, a stop past the grace, a home routine past
+/// its limit), if anything is in flight. The worker wakes then, whatever its reconnection
+/// backoff, so a move ends by the deadline its report gave.
+pub(super) fn expiry_while_down(
+    was: &Phase,
+    since: Instant,
+    settings: &WatchSettings,
+) -> Option<Instant> {
+    let over =
+        |at: Instant, duration: Duration| at + settings.run_limit(duration) + settings.link_grace;
+    match was {
+        Phase::Running { current }
+        | Phase::Uploading {
+            current: Some(current),
+        } => Some(over(current.since, current.start.duration)),
+        Phase::Starting { start, written } => Some(over(written.at, start.duration)),
+        Phase::Chained { current, next, .. } => {
+            Some(over(current.since, current.start.duration + next.duration))
+        }
+        Phase::Stopping { .. } => Some(since + settings.link_grace),
+        Phase::Homing { written, .. } => Some(written.at + settings.home_timeout),
+        _ => None,
+    }
+}
+
 /// While the link is down: a start past its planned end (or a start never seen taken past its
 /// scans) ends as unknown, a home routine past its limit fails.
 pub(super) fn expire_while_down(
@@ -702,7 +728,7 @@ pub(super) fn expire_while_down(
 ) {
     let lost = Outcome::LinkLost { down };
     let over = |since: Instant, duration: Duration| {
-        now.saturating_duration_since(since) > settings.run_limit(duration) + settings.link_grace
+        now.saturating_duration_since(since) >= settings.run_limit(duration) + settings.link_grace
     };
     let phase = std::mem::replace(was, Phase::Idle);
     *was = match phase {
@@ -735,7 +761,7 @@ pub(super) fn expire_while_down(
             }
             Phase::Idle
         }
-        Phase::Stopping { current, next, .. } if down > settings.link_grace => {
+        Phase::Stopping { current, next, .. } if down >= settings.link_grace => {
             for start in current.map(|c| c.start).into_iter().chain(next) {
                 events.push(Event::Ended {
                     tag: start.tag,
@@ -745,7 +771,7 @@ pub(super) fn expire_while_down(
             Phase::Idle
         }
         Phase::Homing { written, .. }
-            if now.saturating_duration_since(written.at) > settings.home_timeout =>
+            if now.saturating_duration_since(written.at) >= settings.home_timeout =>
         {
             events.push(Event::HomeFailed { fault: 0 });
             Phase::Unhomed

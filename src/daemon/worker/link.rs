@@ -14,9 +14,26 @@ pub(super) const BACKOFF_MIN: Duration = Duration::from_millis(100);
 const BACKOFF_MAX: Duration = Duration::from_secs(5);
 
 impl Worker {
+    /// Opens the link again; while it is down, a move in flight is ended at the instant its
+    /// run limit and the link's grace run out ([`Machine::expires_while_down`]), whatever the
+    /// backoff or a connection attempt that hangs: by the deadline its report gave.
+    ///
+    /// [`Machine::expires_while_down`]: crate::contract::machine::Machine::expires_while_down
     pub(super) async fn reconnect(&mut self) {
         self.expire_offline();
-        match (self.connect)().await {
+        let expiry = self
+            .machine
+            .expires_while_down()
+            .map(tokio::time::Instant::from_std);
+        let attempt = (self.connect)();
+        let opened = match expiry {
+            Some(at) => tokio::select! {
+                opened = attempt => opened,
+                () = tokio::time::sleep_until(at) => return,
+            },
+            None => attempt.await,
+        };
+        match opened {
             Ok(mut plc) => {
                 plc.set_exchange_counts(self.shared.metrics.exchange_counts());
                 let mut contract = Contract::new(plc, self.settings);
@@ -50,7 +67,11 @@ impl Worker {
                     tracing::warn!(robot = %self.robot.name, error = %text, hint, "cannot open the PLC link");
                 }
                 self.publish_refusal();
-                let wait = self.backoff;
+                let until_expiry = self
+                    .machine
+                    .expires_while_down()
+                    .map(|at| at.saturating_duration_since(now()));
+                let wait = until_expiry.map_or(self.backoff, |d| self.backoff.min(d));
                 self.backoff = (self.backoff * 2).min(BACKOFF_MAX);
                 self.wait(wait).await;
                 self.offline_requests().await;
