@@ -18,11 +18,11 @@ const UNKNOWN_DURATION: std::time::Duration = std::time::Duration::from_secs(60)
 impl Worker {
     /// Reads the status block and applies what it means.
     pub(super) async fn poll(&mut self) -> Result<(), ContractError> {
-        let link = self.link.as_mut().expect("connected");
+        let session = self.session()?;
         let asked = tokio::time::Instant::now();
-        let status = match link.status().await {
+        let status = match session.contract.status().await {
             Ok(s) => {
-                self.exchange = asked.elapsed();
+                session.exchange = asked.elapsed();
                 s
             }
             Err(e) if link_broken(&e) => return Err(e),
@@ -64,7 +64,7 @@ impl Worker {
 
     /// Publishes why a new order would be refused now.
     pub(super) fn publish_refusal(&self) {
-        let blocker = if self.link.is_none() {
+        let blocker = if self.session.is_none() {
             Some(Blocker::LinkDown)
         } else {
             self.machine.blocker(now())
@@ -102,7 +102,7 @@ impl Worker {
 
     async fn apply_one(&mut self, event: Event) -> Result<(), ContractError> {
         tracing::debug!(robot = %self.robot.name, ?event, phase = self.machine.phase().name(), "machine event");
-        let Some(link) = self.link.as_mut() else {
+        let Some(link) = self.session.as_mut().map(|s| &mut s.contract) else {
             self.report_event(event);
             return Ok(());
         };
@@ -136,8 +136,9 @@ impl Worker {
     /// Writes a start's command word again after its reply was lost and the PLC did not show
     /// it taken (the PLC ignores a repeated `seq` anyway).
     async fn rewrite_start(&mut self, tag: MoveId) -> Result<(), ContractError> {
-        let link = self.link.as_mut().expect("connected");
-        let written = match &self.last_start {
+        let last_start = self.last_start.clone();
+        let link = self.link()?;
+        let written = match &last_start {
             Some((id, bank)) if *id == tag => link.start(bank).await,
             _ => Ok(CommandWrite::Unconfirmed(
                 crate::plc::PlcError::InvalidRequest {
@@ -159,8 +160,7 @@ impl Worker {
             return Ok(());
         };
         let id = self.shared.next_id();
-        let link = self.link.as_mut().expect("connected");
-        let planned = match link.describe_running(seq, id, &status).await {
+        let planned = match self.link()?.describe_running(seq, id, &status).await {
             Ok(p) => p,
             Err(e) if link_broken(&e) => return Err(e),
             Err(e) => {

@@ -15,11 +15,11 @@ impl Worker {
     /// Carries out the next piece of the oldest gateway request; answers it when it is done or
     /// failed. A link failure also fails the link (the caller reconnects).
     pub(super) async fn gateway_exchange(&mut self) -> Result<(), ContractError> {
-        let Some(link) = self.link.as_mut() else {
+        let Some(session) = self.session.as_mut() else {
             self.gateway_link_down();
             return Ok(());
         };
-        let plc = link.plc();
+        let plc = session.contract.plc();
         let sizes = plc.exchange_sizes();
         let Some(job) = self.gateway.front_mut() else {
             return Ok(());

@@ -2,12 +2,12 @@
 //! not as the contract says (wrong magic or version): then the link is kept, nothing moves, and
 //! the reason is what every order is refused with.
 
-use std::sync::Arc;
 use std::time::Duration;
 
+use super::session::Session;
 use super::{Worker, describe, now};
 use crate::contract::machine::Blocker;
-use crate::plc::contract::{Contract, ContractError};
+use crate::plc::contract::ContractError;
 
 /// Reconnection backoff bounds.
 pub(super) const BACKOFF_MIN: Duration = Duration::from_millis(100);
@@ -34,12 +34,8 @@ impl Worker {
             None => attempt.await,
         };
         match opened {
-            Ok(mut plc) => {
-                plc.set_exchange_counts(self.shared.metrics.exchange_counts());
-                let mut contract = Contract::new(plc, self.settings);
-                contract.set_abort(Arc::clone(&self.shared.stop_pending));
-                contract.set_beat(Arc::clone(&self.shared.beat));
-                self.link = Some(contract);
+            Ok(plc) => {
+                self.session = Some(Session::open(plc, self.settings, &self.shared));
                 self.backoff = BACKOFF_MIN;
                 // The first opening is a connection, not a reconnection.
                 let again = std::mem::replace(&mut self.opened_before, true);
@@ -48,7 +44,6 @@ impl Worker {
                     self.shared.metrics.reconnected();
                 }
                 tracing::info!(robot = %self.robot.name, "PLC link opened");
-                self.mode_read = None;
                 if let Err(e) = self.poll().await {
                     self.link_failed(&e);
                 }
@@ -111,7 +106,7 @@ impl Worker {
         } else {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
         }
-        self.link = None;
+        self.session = None;
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
         self.machine.link_lost(now());

@@ -21,6 +21,8 @@ mod link;
 mod moves;
 mod pace;
 mod placement;
+mod preload;
+mod session;
 
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;
@@ -109,7 +111,8 @@ pub(super) struct Worker {
     gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
     shutdown: watch::Receiver<bool>,
     shared: Arc<Shared>,
-    link: Option<Contract<AnyPlc>>,
+    /// The open link and what is known of it; `None` while the link is down.
+    session: Option<session::Session>,
     /// Register gateway requests, served one exchange at a time between the worker's own.
     gateway: VecDeque<super::gateway::Job>,
     /// When the status block is next to be read.
@@ -139,10 +142,6 @@ pub(super) struct Worker {
     started: HashMap<MoveId, std::time::Instant>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
     stop_asked: Option<std::time::Instant>,
-    /// How long the last poll's status read took.
-    exchange: Duration,
-    /// When the PLC's mode was last read.
-    mode_read: Option<std::time::Instant>,
     /// Whether the link was ever opened (a later opening is a reconnection).
     opened_before: bool,
     /// Moves with no motion of their own, each ending with the start ahead of it.
@@ -168,7 +167,7 @@ impl Worker {
             gateway_rx: channels.gateway,
             shutdown: channels.shutdown,
             shared,
-            link: None,
+            session: None,
             gateway: VecDeque::new(),
             next_poll: tokio::time::Instant::now(),
             gateway_turn: false,
@@ -185,8 +184,6 @@ impl Worker {
             preloaded: Vec::new(),
             started: HashMap::new(),
             stop_asked: None,
-            exchange: Duration::ZERO,
-            mode_read: None,
             opened_before: false,
             followers: Vec::new(),
         }
@@ -200,7 +197,7 @@ impl Worker {
                 self.shut_down().await;
                 return;
             }
-            if self.link.is_none() {
+            if self.session.is_none() {
                 self.reconnect().await;
                 continue;
             }
@@ -239,11 +236,8 @@ impl Worker {
             self.gateway_turn = true;
             self.expire_queue();
             let idle = matches!(self.machine.phase(), Phase::Idle | Phase::Unhomed);
-            if idle
-                && self
-                    .mode_read
-                    .is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL)
-            {
+            let mode_read = self.session()?.mode_read;
+            if idle && mode_read.is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL) {
                 self.read_mode().await?;
             }
             self.next_poll = tokio::time::Instant::now() + self.poll_pause();
@@ -257,6 +251,19 @@ impl Worker {
             self.wait_until(self.next_poll).await;
         }
         Ok(())
+    }
+
+    /// The open link's session. Every exchange is made from a step the loop runs only while
+    /// the link is up ([`Self::run`]); without one this is the link-down refusal, never a panic.
+    fn session(&mut self) -> Result<&mut session::Session, ContractError> {
+        self.session.as_mut().ok_or(ContractError::Blocked(
+            crate::contract::machine::Blocker::LinkDown,
+        ))
+    }
+
+    /// The contract over the open link ([`Self::session`]).
+    fn link(&mut self) -> Result<&mut Contract<AnyPlc>, ContractError> {
+        Ok(&mut self.session()?.contract)
     }
 
     /// Whether the head of the queue can begin now: the PLC takes a start, and the head does
@@ -290,9 +297,9 @@ impl Worker {
     /// Reads the PLC's mode (RUN / PROG) for the robot's state; a PLC that cannot say is not a
     /// failure (over Modbus the RUN relay is unverified).
     pub(super) async fn read_mode(&mut self) -> Result<(), ContractError> {
-        self.mode_read = Some(now());
-        let link = self.link.as_mut().expect("connected");
-        match link.plc().mode().await {
+        let session = self.session()?;
+        session.mode_read = Some(now());
+        match session.contract.plc().mode().await {
             Ok(mode) => {
                 let name = match mode {
                     crate::plc::PlcMode::Run => "run",
@@ -369,8 +376,8 @@ impl Worker {
             return Ok(());
         }
         self.next_poll = tokio::time::Instant::now();
-        let result = match self.link.as_mut() {
-            Some(link) => link.stop().await,
+        let result = match self.session.as_mut() {
+            Some(session) => session.contract.stop().await,
             None => Err(ContractError::Blocked(
                 crate::contract::machine::Blocker::LinkDown,
             )),
@@ -395,7 +402,7 @@ impl Worker {
         }
         let answer_for = match &result {
             Ok(()) => Ok(()),
-            Err(_) if self.link.is_none() => Err(CommandError::LinkDown {
+            Err(_) if self.session.is_none() => Err(CommandError::LinkDown {
                 detail: self.shared.state(|s| s.link.error.clone()),
             }),
             Err(e) if link_broken(e) => Err(CommandError::LinkDown {
@@ -419,21 +426,18 @@ impl Worker {
             let checked = self.command_allowed(&command);
             match (command, checked) {
                 (command, Err(e)) => answer(command, Err(e)),
-                (Request::ClearFault(reply), Ok(())) => {
-                    let link = self.link.as_mut().expect("checked: connected");
-                    match link.clear_fault().await {
-                        Ok(()) => {
-                            tracing::info!(robot = %self.robot.name, "fault cleared");
-                            let _ = reply.send(Ok(()));
-                        }
-                        Err(e) => {
-                            let _ = reply.send(Err(CommandError::Plc(describe(&e))));
-                            if link_broken(&e) {
-                                return Err(e);
-                            }
+                (Request::ClearFault(reply), Ok(())) => match self.link()?.clear_fault().await {
+                    Ok(()) => {
+                        tracing::info!(robot = %self.robot.name, "fault cleared");
+                        let _ = reply.send(Ok(()));
+                    }
+                    Err(e) => {
+                        let _ = reply.send(Err(CommandError::Plc(describe(&e))));
+                        if link_broken(&e) {
+                            return Err(e);
                         }
                     }
-                }
+                },
                 (Request::Home(reply), Ok(())) => self.home(reply).await?,
                 (Request::Move(..), Ok(())) => unreachable!("moves are queued, not commands"),
             }
@@ -443,7 +447,7 @@ impl Worker {
 
     /// Whether `command` may be written now: a link, and a PLC in a state that takes it.
     fn command_allowed(&self, command: &Request) -> Result<(), CommandError> {
-        let last = match (&self.link, self.machine.last()) {
+        let last = match (&self.session, self.machine.last()) {
             (Some(_), Some(last)) if !matches!(self.machine.phase(), Phase::LinkDown { .. }) => {
                 *last
             }
@@ -487,8 +491,7 @@ impl Worker {
             mask |= 1 << joint.channel;
             from[usize::from(joint.channel)] = count as i32;
         }
-        let link = self.link.as_mut().expect("checked: connected");
-        match link.home(mask, from).await {
+        match self.link()?.home(mask, from).await {
             Ok(write) => {
                 if let CommandWrite::Unconfirmed(e) = &write {
                     tracing::warn!(robot = %self.robot.name, error = %e, "home command unconfirmed");
@@ -509,9 +512,9 @@ impl Worker {
     /// start is left pending; a running move runs on to its end under the PLC program.
     async fn shut_down(&mut self) {
         if let Phase::Chained { next, .. } = self.machine.phase().clone()
-            && let Some(link) = self.link.as_mut()
+            && let Some(session) = self.session.as_mut()
         {
-            let result = link.withdraw().await;
+            let result = session.contract.withdraw().await;
             match &result {
                 Ok(()) => {
                     tracing::info!(robot = %self.robot.name, id = next.tag, "withdrew the waiting start");

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use super::pace::{Pace, Part};
 use super::placement::{Placement, directories_left};
+use super::preload::{self, Choice};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
@@ -24,68 +25,23 @@ const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 impl Worker {
     /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
-        // A fresh status block: the counts to plan from, and whether the PLC takes a start (the
-        // one just read, if read within a poll interval). Until the plan is made the order stays
-        // at the head of the queue.
-        let fresh = self
-            .machine
-            .read_at()
-            .is_some_and(|at| now().saturating_duration_since(at) < self.settings.poll_interval);
-        let polled = if fresh { Ok(()) } else { self.poll().await };
-        let exchange = self.exchange;
-        if polled.is_err() || self.machine.blocker(now()).is_some() {
-            self.queue.push_front(queued);
-            return polled;
-        }
-        let id = queued.id;
-        let chain = self.machine.chain_behind().cloned();
-        if self.waits_for_rest(&queued.order) {
-            // Its parts are preloaded and paced from rest ([`Worker::has_room`] waits for it).
-            self.queue.push_front(queued);
+        let Some(turn) = self.turn(queued).await? else {
             return Ok(());
-        }
-        let at_speed = queued.order.begins_at_speed();
-        if at_speed && chain.is_none() {
-            self.fail_at_speed(id);
-            return Ok(());
-        }
-        let from = match (&chain, self.machine.last()) {
-            (Some(running), _) => running.targets.expect("chained only behind known targets"),
-            (None, Some(last)) => last.block.elapsed,
-            (None, None) => unreachable!("no blocker without a status block"),
         };
-        let lead = chain.as_ref().map(|c| c.tag);
-        let plan = match plan_order(
-            &self.robot,
-            &queued.order,
-            self.by_joint(from.map(i64::from)),
-        ) {
-            Ok(plan) => plan,
-            Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
-                self.in_place(id, from, from, lead);
-                return Ok(());
-            }
-            Err(e) => {
-                self.finish(id, Stage::Failed, Some(describe(&e)), None);
-                self.cancel_queue("cancelled: the move before it could not be planned");
-                return Ok(());
-            }
-        };
-        let planned = self.planned(id, &plan, from, chain.as_ref().map(|c| c.bank));
-        let targets = planned.targets.expect("a plan knows its targets");
-        self.record_plan(id, &plan, &planned);
-        if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
-            self.in_place(id, from, targets, lead);
+        let Some((plan, planned)) = self.plan_turn(&turn) else {
             return Ok(());
-        }
+        };
+        let id = turn.id;
         let tables = plan
             .valid_tables(&self.robot)
             .expect("plan_move returns valid tables");
         self.machine.upload_begun();
         self.publish_phase();
         let began = tokio::time::Instant::now();
+        let exchange = self.session()?.exchange;
+        let from_rest = turn.chain.is_none();
         let bank = match self
-            .write_bank(id, &planned, &tables, chain.is_none(), exchange)
+            .write_bank(id, &planned, &tables, from_rest, exchange)
             .await
         {
             Ok(bank) => bank,
@@ -98,13 +54,91 @@ impl Worker {
         if let Err(e) = self.until_it_may_start(&planned).await {
             return self.not_started(id, e);
         }
-        if at_speed && self.lost_its_chain(id, chain.as_ref().map(|c| c.seq)) {
+        if turn.order.begins_at_speed()
+            && self.lost_its_chain(id, turn.chain.as_ref().map(|c| c.seq))
+        {
             return Ok(());
         }
-        let link = self.link.as_mut().expect("connected");
-        let written = link.start(&bank).await;
-        // Whatever became of the write, its sequence number is spent: a start whose fate is not
-        // known yet must never share it with the next.
+        self.write_start(&turn, planned, bank, upload_s).await
+    }
+
+    /// Whether `queued` may begin now, and from where: a fresh status block (the one just
+    /// read, if read within a poll interval) gives the counts to plan from and whether the PLC
+    /// takes a start. Until then the order stays at the head of the queue; a part of a path
+    /// that begins at speed with nothing running to chain behind fails.
+    async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
+        let fresh = self
+            .machine
+            .read_at()
+            .is_some_and(|at| now().saturating_duration_since(at) < self.settings.poll_interval);
+        let polled = if fresh { Ok(()) } else { self.poll().await };
+        if polled.is_err() || self.machine.blocker(now()).is_some() {
+            self.queue.push_front(queued);
+            return polled.map(|()| None);
+        }
+        if self.waits_for_rest(&queued.order) {
+            // Its parts are preloaded and paced from rest ([`Worker::has_room`] waits for it).
+            self.queue.push_front(queued);
+            return Ok(None);
+        }
+        let chain = self.machine.chain_behind().cloned();
+        if queued.order.begins_at_speed() && chain.is_none() {
+            self.fail_at_speed(queued.id);
+            return Ok(None);
+        }
+        let from = match (&chain, self.machine.last()) {
+            (Some(running), _) => running.targets.expect("chained only behind known targets"),
+            (None, Some(last)) => last.block.elapsed,
+            (None, None) => unreachable!("no blocker without a status block"),
+        };
+        Ok(Some(Turn {
+            id: queued.id,
+            order: queued.order,
+            chain,
+            from,
+        }))
+    }
+
+    /// The plan of `turn` and its description for the contract; `None` when it ends here: it
+    /// cannot be planned (failed, the queue behind it cancelled) or has nothing to start (within
+    /// a pulse of where it begins).
+    fn plan_turn(&mut self, turn: &Turn) -> Option<(Plan, Planned)> {
+        let (id, from) = (turn.id, turn.from);
+        let lead = turn.chain.as_ref().map(|c| c.tag);
+        let plan = match plan_order(&self.robot, &turn.order, self.by_joint(from.map(i64::from))) {
+            Ok(plan) => plan,
+            Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
+                self.in_place(id, from, from, lead);
+                return None;
+            }
+            Err(e) => {
+                self.finish(id, Stage::Failed, Some(describe(&e)), None);
+                self.cancel_queue("cancelled: the move before it could not be planned");
+                return None;
+            }
+        };
+        let planned = self.planned(id, &plan, from, turn.chain.as_ref().map(|c| c.bank));
+        let targets = planned.targets.expect("a plan knows its targets");
+        self.record_plan(id, &plan, &planned);
+        if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
+            self.in_place(id, from, targets, lead);
+            return None;
+        }
+        Some((plan, planned))
+    }
+
+    /// Writes the start of `turn` (its bank uploaded and verified, `planned`) once; whatever
+    /// became of the write, its sequence number is spent.
+    async fn write_start(
+        &mut self,
+        turn: &Turn,
+        planned: Planned,
+        bank: VerifiedBank,
+        upload_s: f64,
+    ) -> Result<(), ContractError> {
+        let id = turn.id;
+        let written = self.link()?.start(&bank).await;
+        // A start whose fate is not known yet must never share its seq with the next.
         self.next_seq = planned.seq.wrapping_add(1).max(1);
         self.next_bank = 1 - planned.bank;
         let written = match written {
@@ -115,6 +149,7 @@ impl Worker {
         let (seq, planned_bank) = (planned.seq, planned.bank);
         self.machine.start_written(planned, now(), confirmed);
         self.last_start = Some((id, bank));
+        let chain = turn.chain.as_ref();
         if chain.is_some() {
             self.shared
                 .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
@@ -123,10 +158,9 @@ impl Worker {
         // Chained: how long after the move before was seen running this start was written, of
         // the time that move runs (the chain's slack, as the pace check estimates it).
         let behind_s = chain
-            .as_ref()
             .and_then(|c| self.started.get(&c.tag))
             .map(|seen| now().saturating_duration_since(*seen).as_secs_f64());
-        let runs_s = chain.as_ref().map(|c| c.duration.as_secs_f64());
+        let runs_s = chain.map(|c| c.duration.as_secs_f64());
         tracing::info!(robot = %self.robot.name, id, seq, bank = planned_bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
         match written {
             CommandWrite::Unconfirmed(e) if e.is_link_failure() => {
@@ -171,13 +205,11 @@ impl Worker {
     async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
         if self.machine.proof_wants_two_reads(now()) {
             // The first of the two reads that must see the heartbeat move: its word alone.
-            let link = self.link.as_mut().expect("connected");
-            let beat = link.heartbeat().await?;
+            let beat = self.link()?.heartbeat().await?;
             self.machine.heartbeat_read(beat, now());
         }
         loop {
-            let link = self.link.as_mut().expect("connected");
-            let status = link.status().await?;
+            let status = self.link()?.status().await?;
             self.read(status).await?;
             match self.machine.may_start(planned, now()) {
                 Ok(()) => return Ok(()),
@@ -213,7 +245,7 @@ impl Worker {
                 .position(|(of, preload)| *of == id && preload.bank() == planned.bank)
                 .map(|at| self.preloaded.remove(at).1)
         };
-        let link = self.link.as_ref().expect("connected");
+        let link = self.link()?;
         let upload = if let Some(preload) = own {
             link.begin_upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
         } else {
@@ -256,8 +288,7 @@ impl Worker {
                     return Err(ContractError::Blocked(why));
                 }
             }
-            let link = self.link.as_mut().expect("connected");
-            if let Some(bank) = link.upload_step(upload).await? {
+            if let Some(bank) = self.link()?.upload_step(upload).await? {
                 return Ok(bank);
             }
         }
@@ -301,20 +332,13 @@ impl Worker {
             })
             .map(|q| (q.id, q.order.clone()))
             .collect();
-        let link = self.link.as_mut().expect("connected");
-        let area_words = usize::from(link.settings().layout.area_words);
+        let area_words = usize::from(self.link()?.settings().layout.area_words);
         let mut placement = Placement::new(first.bank, tables, area_words);
         let mut ends_on = first.targets.expect("a plan knows its targets");
         let mut bank = 1 - first.bank;
         let mut pace: Option<Pace> = None;
         let mut directories = Vec::new();
         for (id, order) in behind {
-            if let Some(pace) = &pace
-                && pace.check(&parts(&section, &directories)).is_ok()
-            {
-                // The rest can be written whole while the part before each runs.
-                break;
-            }
             let Ok(plan) = plan_order(&self.robot, &order, self.by_joint(ends_on.map(i64::from)))
             else {
                 break;
@@ -322,37 +346,21 @@ impl Worker {
             let Some(tables) = plan.valid_tables(&self.robot) else {
                 break;
             };
-            let base = match placement.place(bank, &tables) {
-                Ok(base) => base,
-                // Not even into an empty bank: it could never be written, and the part before
-                // it would end at speed.
-                Err((channel, words)) if directories.is_empty() => {
-                    return Err(ContractError::TooLarge {
-                        channel,
-                        words,
-                        area_words: area_words as u16,
-                    });
-                }
-                Err(_) => {
+            let so_far = parts(&section, &directories);
+            let base = match preload::choose(pace.as_ref(), &so_far, &mut placement, bank, &tables)?
+            {
+                Choice::Preload(base) => base,
+                Choice::Enough => break,
+                Choice::Full => {
                     tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
                     break;
                 }
             };
-            let link = self.link.as_mut().expect("connected");
-            let began = tokio::time::Instant::now();
-            let preloaded = link.preload(bank, base, &tables).await?;
-            let took = began.elapsed();
+            let (preloaded, took) = self.preload(bank, base, &tables).await?;
             tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
             let pace = match &mut pace {
                 Some(pace) => pace,
-                None => pace.insert(Pace {
-                    status: exchange,
-                    word: link.one_word_exchange().await?,
-                    preload: Duration::ZERO,
-                    preload_words: 0,
-                    read_back: self.settings.verify,
-                    watch_every: self.machine.settings().heartbeat_timeout,
-                }),
+                None => pace.insert(self.pace(exchange).await?),
             };
             pace.preload += took;
             pace.preload_words += preloaded.words();
@@ -366,6 +374,32 @@ impl Worker {
         };
         tracing::info!(robot = %self.robot.name, parts = directories.len(), words = pace.preload_words, preload_s = pace.preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
         pace.check(&parts(&section, &directories))
+    }
+
+    /// Writes and reads back `tables` into `bank` at `base` (per channel): what was written, and
+    /// how long it took.
+    async fn preload(
+        &mut self,
+        bank: u16,
+        base: [usize; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<(crate::plc::contract::Preload, Duration), ContractError> {
+        let began = tokio::time::Instant::now();
+        let preloaded = self.link()?.preload(bank, base, tables).await?;
+        Ok((preloaded, began.elapsed()))
+    }
+
+    /// The link's pace before any preload: the status read `exchange` just took and a one-word
+    /// read made now.
+    async fn pace(&mut self, exchange: Duration) -> Result<Pace, ContractError> {
+        Ok(Pace {
+            status: exchange,
+            word: self.link()?.one_word_exchange().await?,
+            preload: Duration::ZERO,
+            preload_words: 0,
+            read_back: self.settings.verify,
+            watch_every: self.machine.settings().heartbeat_timeout,
+        })
     }
 
     /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`
@@ -476,7 +510,7 @@ impl Worker {
     /// not count), and cancels the rest behind it.
     pub(super) fn expire_queue(&mut self) {
         let now = now();
-        let blocker = if self.link.is_none() {
+        let blocker = if self.session.is_none() {
             Some(Blocker::LinkDown)
         } else {
             self.machine.blocker(now)
@@ -604,6 +638,15 @@ pub(super) struct Follower {
     lead: MoveId,
     /// Its targets per channel: the lead's.
     targets: [i32; CHANNELS],
+}
+
+/// A queued move whose turn came: what it is, the running start it chains behind (none: it
+/// starts from rest) and the counts per channel it begins from.
+pub(super) struct Turn {
+    id: MoveId,
+    order: CheckedOrder,
+    chain: Option<Planned>,
+    from: [i32; CHANNELS],
 }
 
 /// The parts of `section` (planned) as the pace check sees them: the first

@@ -28,6 +28,11 @@ impl Placement {
         placement
     }
 
+    /// Words in each area.
+    pub(super) fn area_words(&self) -> usize {
+        self.area_words
+    }
+
     /// Where `tables` go in `bank` (per channel, the first word of their segments), taking
     /// those words; else, taking nothing, the first channel whose words would pass the end of
     /// its area, and where they would end.
