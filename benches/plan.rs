@@ -77,7 +77,7 @@ fn bench(c: &mut Criterion) {
     eprintln!("1 m move, 10 ms period: {}", rows(&robot, &metre));
     let (b05, b10) = (bounded(&seed, 0.05), bounded(&seed, 0.10));
     let mut seed_exact = seed;
-    seed_exact.seed_exact = true;
+    seed_exact.motion.method = linterpd::robot::Method::SeedExact;
     for (name, r) in [("0.05 mm", &b05), ("0.10 mm", &b10)] {
         eprintln!("seed move bounded-error {name}: {}", rows(&robot, r));
     }

@@ -98,7 +98,6 @@ fn seed_tables(method: Method) -> Vec<ValidTable> {
         from: Origin::Pose(from),
         to,
         motion: robot.motion,
-        seed_exact: false,
     };
     plan_move(&robot, &req)
         .unwrap()

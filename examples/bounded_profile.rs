@@ -19,7 +19,6 @@ fn main() {
         from: Origin::Pose(from),
         to,
         motion,
-        seed_exact: false,
     };
     let n: usize = std::env::args()
         .nth(1)

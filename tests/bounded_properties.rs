@@ -53,7 +53,6 @@ fn plan(
         from: Origin::Pose(from),
         to,
         motion,
-        seed_exact: false,
     };
     match plan_line(robot, &req) {
         Ok(planned) => Ok(Some(planned.starts().cloned().collect())),

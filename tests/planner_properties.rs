@@ -33,7 +33,6 @@ fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Option<Vec<Plan>>
         from: Origin::Pose(from),
         to,
         motion,
-        seed_exact: false,
     };
     match plan_line(robot, &req) {
         Ok(planned) => Some(planned.starts().cloned().collect()),

@@ -20,7 +20,6 @@ pub(crate) fn request(robot: &Robot, from: [f64; 3], to: [f64; 3], period_s: f64
         from: Origin::Pose(start),
         to: end,
         motion,
-        seed_exact: false,
     }
 }
 

@@ -279,7 +279,6 @@ impl RobotHandle {
             from: Origin::Counts(counts),
             to,
             motion: checked.motion,
-            seed_exact: false,
         });
         let planned = plan_path(&self.robot, &req)?;
         self.queue_sections(planned, req.path_accel_mm_s2, checked.motion, |end| {

@@ -699,7 +699,6 @@ pub(crate) fn plan_order(
             from: Origin::Counts(counts),
             to,
             motion: order.motion,
-            seed_exact: false,
         },
     )
 }

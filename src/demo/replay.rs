@@ -123,7 +123,6 @@ mod tests {
             from: Origin::Pose(Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0)),
             to: Pose::from_mm_deg(-936.57, 541.03, 56.0, 0.0),
             motion: robot.motion,
-            seed_exact: false,
         };
         plan_move(&robot, &request).unwrap()
     }

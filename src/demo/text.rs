@@ -15,6 +15,7 @@ fn point(p: [f64; 3]) -> String {
 fn motion(m: &Motion) -> String {
     let method = match m.method {
         Method::ConstantPeriod => format!("constant-period dT {:.0} ms", m.period_s * 1e3),
+        Method::SeedExact => format!("seed-exact dT {:.0} ms", m.period_s * 1e3),
         Method::BoundedError { tolerance_mm } => format!("bounded-error {tolerance_mm} mm"),
     };
     format!(
@@ -223,10 +224,7 @@ pub fn picture(robot: &Robot, moves: &[DemoMove]) -> Result<String, PlotError> {
             line: m.plan.line,
             start: std::array::from_fn(|j| m.plan.tables[j].start),
             events: &m.played.execution.events,
-            tolerance_mm: match m.plan.motion.method {
-                Method::BoundedError { tolerance_mm } => Some(tolerance_mm),
-                Method::ConstantPeriod => None,
-            },
+            tolerance_mm: m.plan.motion.method.tolerance_mm(),
         })
         .collect();
     let title = format!(

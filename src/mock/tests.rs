@@ -187,7 +187,6 @@ fn seed_plan() -> crate::plan::Plan {
             from: Origin::Pose(from),
             to,
             motion,
-            seed_exact: false,
         },
     )
     .unwrap()

@@ -106,7 +106,6 @@ mod tests {
                 method,
                 ..robot.motion
             },
-            seed_exact: false,
         }
     }
 

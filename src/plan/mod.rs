@@ -56,10 +56,9 @@ pub struct MoveRequest {
     pub from: Origin,
     /// The target pose.
     pub to: Pose,
-    /// The motion settings.
+    /// The motion settings (`Method::SeedExact` plans the paper as printed: comparison only,
+    /// never valid for a PLC).
     pub motion: Motion,
-    /// Plan the paper as printed (comparison only, never valid for a PLC).
-    pub seed_exact: bool,
 }
 
 /// One joint-space move to plan: every joint from where it starts to its target value, all on
@@ -124,20 +123,6 @@ pub enum PlanError {
         at_mm: f64,
         /// The line's length, mm.
         length_mm: f64,
-    },
-    /// A move too long for the samples it would be planned on.
-    #[error(
-        "the move would take {duration_s:.1} s, {:.0} sample points of {:.0} ms; at most {limit}: \
-         ask for a higher speed, a longer period or a shorter move",
-        duration_s / grid_s, grid_s * 1e3
-    )]
-    TooLong {
-        /// Its duration at the speed asked, s.
-        duration_s: f64,
-        /// The sample grid, s.
-        grid_s: f64,
-        /// The most sample points, [`MAX_SAMPLE_POINTS`].
-        limit: usize,
     },
     /// The robot is not where the path as written starts.
     #[error(
@@ -318,8 +303,6 @@ pub struct Plan {
     pub motion: Motion,
     /// Speed actually used over speed asked for (1 unless `slow-down` acted).
     pub speed_factor: f64,
-    /// Whether this is the paper as printed.
-    pub seed_exact: bool,
     /// Counts at every interpolation point.
     pub samples: Samples,
     /// One table per joint, in joint order (a joint that does not move has no segments).
@@ -499,10 +482,6 @@ impl Plan {
     }
 }
 
-/// The most sample points one move is planned on (the samples, and so its rows, are bounded
-/// before they are made): 600 s of motion on bounded-error's 1 ms grid.
-pub const MAX_SAMPLE_POINTS: usize = 600_000;
-
 /// The most times `slow-down` lowers the speed before giving up.
 const SLOW_DOWN_ATTEMPTS: usize = 24;
 
@@ -523,13 +502,7 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         values: start_values,
         counts: start_counts,
     };
-    plan_course(
-        robot,
-        &Course::Line(line),
-        &start,
-        req.motion,
-        req.seed_exact,
-    )
+    plan_course(robot, &Course::Line(line), &start, req.motion)
 }
 
 /// Plans one joint-space move for `robot`: the target is checked against every joint's limits
@@ -543,7 +516,7 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
             counts: start.counts,
         });
     }
-    plan_course(robot, &course, &start, req.motion, false)
+    plan_course(robot, &course, &start, req.motion)
 }
 
 /// Where a move starts: joint values and the counts that stand for them.
@@ -578,9 +551,8 @@ fn plan_course(
     course: &Course,
     start: &Start,
     asked: Motion,
-    seed_exact: bool,
 ) -> Result<Plan, PlanError> {
-    let sampled = Sampled::new(robot, course, start, asked, seed_exact)?;
+    let sampled = Sampled::new(robot, course, start, asked)?;
     let (first, last) = (0, sampled.last_point());
     let Course::Line(line) = course else {
         return sampled.plan(first, last, start.counts);
@@ -613,9 +585,6 @@ struct Sampled<'a> {
     /// The motion used (speed lowered by `slow-down` if it had to).
     motion: Motion,
     speed_factor: f64,
-    seed_exact: bool,
-    /// The bounded-error tolerance, mm (`None`: constant-period, or the paper as printed).
-    bounded: Option<f64>,
     profile: Profile,
     samples: Samples,
 }
@@ -626,13 +595,9 @@ impl<'a> Sampled<'a> {
         course: &'a Course,
         start: &Start,
         asked: Motion,
-        seed_exact: bool,
     ) -> Result<Self, PlanError> {
         let mut motion = asked;
-        let bounded = match motion.method {
-            Method::BoundedError { tolerance_mm } if !seed_exact => Some(tolerance_mm),
-            _ => None,
-        };
+        let bounded = motion.method.tolerance_mm();
         let grid_s = if bounded.is_some() {
             bounded::SAMPLE_S
         } else {
@@ -652,8 +617,6 @@ impl<'a> Sampled<'a> {
             course,
             speed_factor: motion.speed_mm_s / asked.speed_mm_s,
             motion,
-            seed_exact,
-            bounded,
             profile,
             samples,
         })
@@ -670,7 +633,12 @@ impl<'a> Sampled<'a> {
     /// channels run on, which the execution model does not play. Every plan meant for a PLC;
     /// not the paper as printed.
     fn cut_for_segments(&self) -> bool {
-        !self.seed_exact
+        !self.motion.method.is_seed_exact()
+    }
+
+    /// The bounded-error tolerance, mm (`None`: a constant-period method).
+    fn bounded(&self) -> Option<f64> {
+        self.motion.method.tolerance_mm()
     }
 
     fn time_s(&self, i: usize) -> f64 {
@@ -695,7 +663,7 @@ impl<'a> Sampled<'a> {
             values: self.samples.values[first..=last].to_vec(),
         };
         samples.counts[0] = counts;
-        let (tables, problems, figures) = if let Some(tolerance_mm) = self.bounded {
+        let (tables, problems, figures) = if let Some(tolerance_mm) = self.bounded() {
             let m = bounded::Move {
                 robot,
                 course: self.course,
@@ -707,14 +675,8 @@ impl<'a> Sampled<'a> {
             let v = m.plan(tolerance_mm)?;
             (v.tables, Vec::new(), v.figures)
         } else {
-            let tables = build_tables(
-                robot,
-                &samples,
-                &self.profile,
-                &self.motion,
-                self.seed_exact,
-            );
-            let problems = check_tables(robot, &tables, self.seed_exact)?;
+            let tables = build_tables(robot, &samples, &self.profile, &self.motion);
+            let problems = check_tables(robot, &tables, self.motion.method)?;
             let figures = simulate(
                 robot,
                 &tables,
@@ -733,7 +695,6 @@ impl<'a> Sampled<'a> {
             profile: self.profile,
             motion: self.motion,
             speed_factor: self.speed_factor,
-            seed_exact: self.seed_exact,
             samples,
             tables,
             problems,
@@ -981,14 +942,6 @@ impl Sampler<'_> {
             accel_s: motion.accel_s,
             period_s: self.grid_s,
         })?;
-        let points = profile.duration_s() / self.grid_s;
-        if !(points <= MAX_SAMPLE_POINTS as f64) {
-            return Err(PlanError::TooLong {
-                duration_s: profile.duration_s(),
-                grid_s: self.grid_s,
-                limit: MAX_SAMPLE_POINTS,
-            });
-        }
         let samples =
             self.course
                 .sample(self.robot, &profile, self.start_values, self.start_counts)?;
@@ -1050,7 +1003,6 @@ fn build_tables(
     samples: &Samples,
     profile: &Profile,
     motion: &Motion,
-    seed_exact: bool,
 ) -> Vec<ChannelTable> {
     robot
         .joints
@@ -1058,7 +1010,7 @@ fn build_tables(
         .enumerate()
         .map(|(j, joint)| {
             let counts = samples.joint(j);
-            if seed_exact {
+            if motion.method.is_seed_exact() {
                 return seed_exact::table(joint, &counts, profile.period_s);
             }
             let spans = constant_period::spans(&counts, profile.period_s);
@@ -1081,8 +1033,9 @@ fn build_tables(
 pub(super) fn check_tables(
     robot: &Robot,
     tables: &[ChannelTable],
-    seed_exact: bool,
+    method: Method,
 ) -> Result<Vec<String>, PlanError> {
+    let seed_exact = method.is_seed_exact();
     let mut out = if seed_exact {
         seed_exact::problems()
     } else {

@@ -345,7 +345,7 @@ fn parts(
     start: &Start,
     motion: Motion,
 ) -> Result<Vec<Plan>, PlanError> {
-    let sampled = Sampled::new(robot, course, start, motion, false)?;
+    let sampled = Sampled::new(robot, course, start, motion)?;
     let ahead = planned_ahead(&sampled, start.counts);
     parts_in_turn(robot, &sampled, start, ahead)
 }
@@ -426,7 +426,7 @@ struct Ahead {
 /// when there is nothing to plan side by side.
 fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS]) -> Vec<Ahead> {
     // A joint move's polyline remembers where its last search ended: not measured side by side.
-    if sampled.bounded.is_none() || sampled.course.path().is_none() {
+    if sampled.bounded().is_none() || sampled.course.path().is_none() {
         return Vec::new();
     }
     let mut cut = Vec::new();
@@ -1031,7 +1031,7 @@ mod tests {
             path: section,
             pace,
         };
-        let sampled = Sampled::new(&robot, &course, &start, asked, false).unwrap();
+        let sampled = Sampled::new(&robot, &course, &start, asked).unwrap();
         let ahead = planned_ahead(&sampled, start.counts);
         assert!(ahead.len() >= 3, "{} parts planned ahead", ahead.len());
 

@@ -16,9 +16,13 @@ fn seed_request(model: FrequencyModel, seed_exact: bool) -> MoveRequest {
         to,
         motion: Motion {
             frequency_model: model,
+            method: if seed_exact {
+                crate::robot::Method::SeedExact
+            } else {
+                robot.motion.method
+            },
             ..robot.motion
         },
-        seed_exact,
     }
 }
 
@@ -171,7 +175,6 @@ fn a_thread_that_planned_before_plans_as_a_fresh_one() {
             from: Origin::Pose(from),
             to,
             motion,
-            seed_exact: false,
         }
     };
     // Every start's tables (a line past the axis is cut at the radial joint's reversal).
@@ -418,7 +421,6 @@ fn accepted_try(from: [f64; 3], to: [f64; 3], model: FrequencyModel, tol_mm: f64
             over_speed: OverSpeed::SlowDown,
             ..robot.motion
         },
-        seed_exact: false,
     };
     let (line, values, counts) = resolve_line(&robot, &req).ok()?;
     let course = course::Course::Line(line);

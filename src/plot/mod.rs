@@ -61,9 +61,8 @@ struct Series {
 /// The name a plan goes by in the legend.
 fn label(plan: &Plan) -> String {
     let method = match plan.motion.method {
-        _ if plan.seed_exact => "seed-exact".to_owned(),
-        Method::ConstantPeriod => "constant-period".to_owned(),
         Method::BoundedError { tolerance_mm } => format!("bounded-error {tolerance_mm} mm"),
+        other => other.name().to_owned(),
     };
     format!("{method}, {}", plan.motion.frequency_model.name())
 }
@@ -71,13 +70,13 @@ fn label(plan: &Plan) -> String {
 /// A hue per method, a darker and a lighter one per frequency model.
 fn rgb(plan: &Plan) -> (u8, u8, u8) {
     let ideal = plan.motion.frequency_model == FrequencyModel::Ideal;
-    match (plan.motion.method, plan.seed_exact, ideal) {
-        (_, true, true) => (245, 140, 30),
-        (_, true, false) => (200, 30, 30),
-        (Method::ConstantPeriod, _, true) => (60, 160, 230),
-        (Method::ConstantPeriod, _, false) => (30, 50, 160),
-        (Method::BoundedError { .. }, _, true) => (120, 190, 40),
-        (Method::BoundedError { .. }, _, false) => (20, 110, 50),
+    match (plan.motion.method, ideal) {
+        (Method::SeedExact, true) => (245, 140, 30),
+        (Method::SeedExact, false) => (200, 30, 30),
+        (Method::ConstantPeriod, true) => (60, 160, 230),
+        (Method::ConstantPeriod, false) => (30, 50, 160),
+        (Method::BoundedError { .. }, true) => (120, 190, 40),
+        (Method::BoundedError { .. }, false) => (20, 110, 50),
     }
 }
 
@@ -85,11 +84,7 @@ fn rgb(plan: &Plan) -> (u8, u8, u8) {
 fn tolerances(plans: &[&Plan]) -> Vec<f64> {
     let mut out: Vec<f64> = plans
         .iter()
-        .filter(|p| !p.seed_exact)
-        .filter_map(|p| match p.motion.method {
-            Method::BoundedError { tolerance_mm } => Some(tolerance_mm),
-            Method::ConstantPeriod => None,
-        })
+        .filter_map(|p| p.motion.method.tolerance_mm())
         .collect();
     out.sort_by(f64::total_cmp);
     out.dedup();

@@ -12,10 +12,13 @@ fn plan(method: Method, seed_exact: bool) -> Plan {
         from: Origin::Pose(Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0)),
         to: Pose::from_mm_deg(-936.57, 541.03, 56.0, 0.0),
         motion: crate::robot::Motion {
-            method,
+            method: if seed_exact {
+                Method::SeedExact
+            } else {
+                method
+            },
             ..robot.motion
         },
-        seed_exact,
     };
     plan_move(&robot, &request).expect("a short move plans")
 }
@@ -93,7 +96,6 @@ fn executed_paths_back_and_forth_on_one_line_are_drawn_with_their_tolerance() {
             method: Method::BoundedError { tolerance_mm: 0.05 },
             ..seed_robot().motion
         },
-        seed_exact: false,
     };
     let back = plan_move(&seed_robot(), &back_request).unwrap();
     let (there_run, back_run) = (there.execution(), back.execution());

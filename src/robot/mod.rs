@@ -59,6 +59,9 @@ pub enum Method {
         /// The largest path deviation allowed, mm.
         tolerance_mm: f64,
     },
+    /// The seed's constant time period method exactly as the paper prints it (its "+1" rows
+    /// included): planned for comparison, never valid for a PLC. Not a config or order value.
+    SeedExact,
 }
 
 impl Method {
@@ -68,7 +71,23 @@ impl Method {
         match self {
             Self::ConstantPeriod => "constant-period",
             Self::BoundedError { .. } => "bounded-error",
+            Self::SeedExact => "seed-exact",
         }
+    }
+
+    /// The bounded-error tolerance, mm (`None` for the constant-period methods).
+    #[must_use]
+    pub fn tolerance_mm(self) -> Option<f64> {
+        match self {
+            Self::BoundedError { tolerance_mm } => Some(tolerance_mm),
+            Self::ConstantPeriod | Self::SeedExact => None,
+        }
+    }
+
+    /// Whether it is the paper as printed.
+    #[must_use]
+    pub fn is_seed_exact(self) -> bool {
+        self == Self::SeedExact
     }
 }
 

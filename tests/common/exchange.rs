@@ -47,7 +47,6 @@ pub fn plan_from(robot: &Robot, elapsed: [i32; 4]) -> Plan {
         from: Origin::Counts(counts),
         to,
         motion: robot.motion,
-        seed_exact: false,
     };
     plan_move(robot, &req).unwrap()
 }

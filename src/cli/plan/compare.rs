@@ -34,24 +34,23 @@ pub(super) const DEFAULT_TOLERANCE_MM: f64 = 0.05;
 #[derive(Debug, Clone, Copy)]
 struct Way {
     method: Method,
-    seed_exact: bool,
     model: FrequencyModel,
 }
 
 impl Way {
     fn name(self) -> String {
         match self.method {
-            _ if self.seed_exact => "seed-exact".to_owned(),
-            Method::ConstantPeriod => "constant-period".to_owned(),
             Method::BoundedError { tolerance_mm } => format!("bounded-error {tolerance_mm} mm"),
+            other => other.name().to_owned(),
         }
     }
 
     fn tolerance_mm(self) -> Option<f64> {
-        match self.method {
-            Method::BoundedError { tolerance_mm } if !self.seed_exact => Some(tolerance_mm),
-            _ => None,
-        }
+        self.method.tolerance_mm()
+    }
+
+    fn seed_exact(self) -> bool {
+        self.method.is_seed_exact()
     }
 }
 
@@ -104,16 +103,13 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
     let base = base_request(robot, args).map_err(Failure::BadInput)?;
     let tolerance_mm = tolerance(args)
         .map_err(Failure::BadInput)?
-        .or(match robot.motion.method {
-            Method::BoundedError { tolerance_mm } => Some(tolerance_mm),
-            Method::ConstantPeriod => None,
-        })
+        .or(robot.motion.method.tolerance_mm())
         .unwrap_or(DEFAULT_TOLERANCE_MM);
     let entries: Vec<Entry> = ways(tolerance_mm)
         .into_iter()
         .map(|way| {
-            let req = variant(&base, way.method, way.model, way.seed_exact);
-            let outcome = if way.seed_exact {
+            let req = variant(&base, way.method, way.model);
+            let outcome = if way.seed_exact() {
                 plan_move(robot, &req).map(|plan| vec![plan])
             } else {
                 plan_line(robot, &req).map(|planned| planned.starts().cloned().collect())
@@ -152,20 +148,14 @@ pub(super) fn run(robot: &Robot, args: &PlanArgs, out: &mut dyn Write) -> Result
 /// under `ideal` then `fpx-divider`.
 fn ways(tolerance_mm: f64) -> Vec<Way> {
     let methods = [
-        (Method::ConstantPeriod, true),
-        (Method::ConstantPeriod, false),
-        (Method::BoundedError { tolerance_mm }, false),
+        Method::SeedExact,
+        Method::ConstantPeriod,
+        Method::BoundedError { tolerance_mm },
     ];
     let models = [FrequencyModel::Ideal, FrequencyModel::FpxDivider];
     methods
         .into_iter()
-        .flat_map(|(method, seed_exact)| {
-            models.into_iter().map(move |model| Way {
-                method,
-                seed_exact,
-                model,
-            })
-        })
+        .flat_map(|method| models.into_iter().map(move |model| Way { method, model }))
         .collect()
 }
 
@@ -383,7 +373,7 @@ fn plan_doc(entry: &Entry) -> PlanDoc {
     let way = entry.way;
     let mut doc = PlanDoc {
         method: way.method.name(),
-        seed_exact: way.seed_exact,
+        seed_exact: way.seed_exact(),
         frequency_model: way.model.name(),
         tolerance_mm: way.tolerance_mm(),
         valid: false,
@@ -453,7 +443,7 @@ mod tests {
     fn six_ways_seed_exact_first_bounded_error_last() {
         let ways = ways(0.05);
         assert_eq!(ways.len(), 6);
-        assert!(ways[0].seed_exact && ways[1].seed_exact);
+        assert!(ways[0].seed_exact() && ways[1].seed_exact());
         assert_eq!(ways[5].tolerance_mm(), Some(0.05));
         assert_eq!(ways[0].tolerance_mm(), None);
         assert_eq!(ways[4].model, FrequencyModel::Ideal);

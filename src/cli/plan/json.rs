@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use crate::kinematics::{JointKind, Kinematics};
 use crate::plan::{MoveRequest, Plan};
-use crate::robot::Robot;
+use crate::robot::{Method, Robot};
 use crate::sim::Figures;
 use crate::table::{ChannelTable, Direction, Duty, Segment};
 
@@ -110,8 +110,12 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
         move_: MoveDoc {
             from: plan.line.from.to_mm_deg(),
             to: plan.line.to.to_mm_deg(),
-            method: plan.motion.method.name(),
-            seed_exact: plan.seed_exact,
+            // The paper as printed is the constant-period method, flagged.
+            method: match plan.motion.method {
+                Method::SeedExact => Method::ConstantPeriod.name(),
+                other => other.name(),
+            },
+            seed_exact: plan.motion.method.is_seed_exact(),
             frequency_model: plan.motion.frequency_model.name(),
             over_speed: plan.motion.over_speed.name(),
             requested_speed_mm_s: request.motion.speed_mm_s,

@@ -209,23 +209,22 @@ fn request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
     let model = args
         .frequency_model
         .map_or(base.motion.frequency_model, FrequencyModel::from);
-    Ok(variant(&base, method, model, args.seed_exact))
+    let method = if args.seed_exact {
+        Method::SeedExact
+    } else {
+        method
+    };
+    Ok(variant(&base, method, model))
 }
 
-/// `base` planned with `method` under `model`, seed-exact or not.
-fn variant(
-    base: &MoveRequest,
-    method: Method,
-    model: FrequencyModel,
-    seed_exact: bool,
-) -> MoveRequest {
+/// `base` planned with `method` under `model`.
+fn variant(base: &MoveRequest, method: Method, model: FrequencyModel) -> MoveRequest {
     MoveRequest {
         motion: Motion {
             method,
             frequency_model: model,
             ..base.motion
         },
-        seed_exact,
         ..*base
     }
 }
@@ -246,7 +245,6 @@ fn base_request(robot: &Robot, args: &PlanArgs) -> anyhow::Result<MoveRequest> {
         from: Origin::Pose(from),
         to,
         motion,
-        seed_exact: false,
     })
 }
 
@@ -302,9 +300,11 @@ fn method(
         | (Some(MethodArg::BoundedError), Method::BoundedError { tolerance_mm }, None) => {
             Method::BoundedError { tolerance_mm }
         }
-        (Some(MethodArg::BoundedError), Method::ConstantPeriod, None) => anyhow::bail!(
-            "--method bounded-error needs --tolerance (e.g. 0.05mm); the robot's config gives none"
-        ),
+        (Some(MethodArg::BoundedError), Method::ConstantPeriod | Method::SeedExact, None) => {
+            anyhow::bail!(
+                "--method bounded-error needs --tolerance (e.g. 0.05mm); the robot's config gives none"
+            )
+        }
         (Some(MethodArg::ConstantPeriod), _, Some(_)) => {
             anyhow::bail!("--tolerance only applies to --method bounded-error")
         }

@@ -101,7 +101,6 @@ pub(super) fn document(
                 from: Origin::Counts(s.plan.samples.counts[0]),
                 to: s.plan.line.to,
                 motion: req.motion,
-                seed_exact: false,
             };
             json::document(robot, &one, s.plan)
         })

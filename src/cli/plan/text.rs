@@ -40,7 +40,7 @@ pub(super) fn write(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> io::Resu
     )?;
     writeln!(out, "from     {}", pose_text(plan.line.from.to_mm_deg()))?;
     writeln!(out, "to       {}", pose_text(plan.line.to.to_mm_deg()))?;
-    let method = if plan.seed_exact {
+    let method = if plan.motion.method.is_seed_exact() {
         "seed-exact (the paper as printed)"
     } else {
         plan.motion.method.name()

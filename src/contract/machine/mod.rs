@@ -312,14 +312,28 @@ impl Blocker {
     }
 }
 
+/// What the host knows of the PLC's `host` word.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum HostWord {
+    /// Not seen holding ours since this host began or the PLC restarted. `written`: the PLC's
+    /// heartbeat when ours was last written (`None`: not written over this link yet), so it is
+    /// written again only once the PLC has had scans enough to take it.
+    Unconfirmed {
+        /// The heartbeat at the last write of ours.
+        written: Option<u16>,
+    },
+    /// Seen holding ours: another word there now means the PLC restarted.
+    Echoed,
+}
+
 /// The host's side of the contract for one PLC.
 #[derive(Debug, Clone)]
 pub struct Machine {
     settings: WatchSettings,
     phase: Phase,
     host: u16,
-    host_seen: bool,
-    host_written: Option<u16>,
+    /// What the PLC's `host` word is known to hold.
+    host_word: HostWord,
     /// The heartbeat last read and when it last changed.
     heartbeat: Option<(u16, Instant)>,
     last: Option<Status>,
@@ -345,8 +359,7 @@ impl Machine {
                 since: None,
             },
             host: host.max(1),
-            host_seen: false,
-            host_written: None,
+            host_word: HostWord::Unconfirmed { written: None },
             heartbeat: None,
             last: None,
             read_at: None,
@@ -489,7 +502,7 @@ impl Machine {
                 required,
             });
         }
-        if !self.host_seen {
+        if self.host_word != HostWord::Echoed {
             return Err(Blocker::HostUnconfirmed);
         }
         Ok(last)
@@ -661,7 +674,10 @@ impl Machine {
             since: Some(now),
         };
         self.heartbeat = None;
-        self.host_written = None;
+        // A write over the lost link may not have landed: write it again when it is due.
+        if let HostWord::Unconfirmed { written } = &mut self.host_word {
+            *written = None;
+        }
     }
 
     /// Time passing without a status block (the link is down): a start in flight past its
@@ -782,27 +798,31 @@ impl Machine {
     fn check_host(&mut self, status: &Status, events: &mut Vec<Event>) -> bool {
         let echoed = status.block.host;
         if echoed == self.host {
-            self.host_seen = true;
-            self.host_written = None;
+            self.host_word = HostWord::Echoed;
             return false;
         }
-        let restarted = self.host_seen;
+        let restarted = self.host_word == HostWord::Echoed;
         if restarted {
             self.end_all(Outcome::Restarted, events);
             if let Phase::Homing { .. } = self.phase {
                 events.push(Event::HomeFailed { fault: 0 });
             }
             events.push(Event::Restarted);
-            self.host_seen = false;
             self.phase = Phase::Unhomed;
         }
         let beat = status.block.heartbeat;
-        let due = self
-            .host_written
-            .is_none_or(|at| beat.wrapping_sub(at) >= self.settings.start_scans / 2);
+        let due = match self.host_word {
+            HostWord::Unconfirmed { written: Some(at) } => {
+                beat.wrapping_sub(at) >= self.settings.start_scans / 2
+            }
+            _ => true,
+        };
+        // (After a restart it is always due: the word was echoed until now.)
         if due {
             events.push(Event::WriteHost);
-            self.host_written = Some(beat);
+            self.host_word = HostWord::Unconfirmed {
+                written: Some(beat),
+            };
         }
         restarted
     }

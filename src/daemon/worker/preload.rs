@@ -115,8 +115,14 @@ mod tests {
         ];
         for (k, (pace, parts, bank, rows, want)) in cases.into_iter().enumerate() {
             let mut placement = Placement::new(0, &[table(0, 400)], 2_000);
-            let got =
-                choose(pace.as_ref(), parts, &mut placement, bank, &[table(0, rows)]).unwrap();
+            let got = choose(
+                pace.as_ref(),
+                parts,
+                &mut placement,
+                bank,
+                &[table(0, rows)],
+            )
+            .unwrap();
             let name = match got {
                 Choice::Preload(base) => {
                     let past_first = if bank == 0 { 1_600 + 4 } else { 0 };

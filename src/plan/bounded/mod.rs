@@ -368,7 +368,7 @@ impl Move<'_> {
         tolerance_mm: f64,
     ) -> Result<Option<Verified>, PlanError> {
         let tables = self.tables(tracks, deltas, off_window);
-        super::check_tables(self.robot, &tables, false)?;
+        super::check_tables(self.robot, &tables, self.motion.method)?;
         let run = simulate_within(
             self.robot,
             &tables,
