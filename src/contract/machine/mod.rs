@@ -31,7 +31,7 @@ use std::time::{Duration, Instant};
 
 use super::{CHANNELS, Fault, READY_HOMED, State, StatusBlock};
 
-pub use phase::{AHEAD, Phase, Running, Written};
+pub use phase::{AHEAD, Phase, Proof, Running, Written};
 pub use progress::{MIN_SCALE, ProgressCurve, THIN};
 
 /// The status block with its words decoded.
@@ -339,13 +339,6 @@ pub struct Machine {
     last: Option<Status>,
     /// When the last status block was read.
     read_at: Option<Instant>,
-    /// Since the upload began: status blocks read, and whether the heartbeat was seen changing
-    /// between two of them (behind a running start: between the read before the upload and
-    /// one after it).
-    since_upload: (u8, bool),
-    /// Whether a whole status block was read since the upload began (a start's checks read
-    /// it, not a heartbeat word alone).
-    status_since_upload: bool,
 }
 
 impl Machine {
@@ -363,8 +356,6 @@ impl Machine {
             heartbeat: None,
             last: None,
             read_at: None,
-            since_upload: (0, false),
-            status_since_upload: false,
         }
     }
 
@@ -451,10 +442,10 @@ impl Machine {
     /// channel is at `start.from`.
     pub fn may_start(&self, start: &Planned, now: Instant) -> Result<(), Blocker> {
         let last = self.plc_blocker(now)?;
-        let Phase::Uploading { current } = &self.phase else {
+        let Phase::Uploading { current, proof } = &self.phase else {
             return Err(Blocker::Full);
         };
-        if !(self.since_upload.1 && self.status_since_upload) {
+        if !proof.holds() {
             return Err(Blocker::Unproven);
         }
         match current {
@@ -525,6 +516,7 @@ impl Machine {
         match &self.phase {
             Phase::Uploading {
                 current: Some(current),
+                ..
             } => Some(&current.start),
             _ => None,
         }
@@ -532,8 +524,6 @@ impl Machine {
 
     /// The caller begins writing a bank (nothing is given to the PLC yet).
     pub fn upload_begun(&mut self) {
-        self.since_upload = (0, false);
-        self.status_since_upload = false;
         let current = match std::mem::replace(&mut self.phase, Phase::Idle) {
             Phase::Running { current } => Some(current),
             other => {
@@ -544,12 +534,15 @@ impl Machine {
                 None
             }
         };
-        self.phase = Phase::Uploading { current };
+        self.phase = Phase::Uploading {
+            current,
+            proof: Proof::default(),
+        };
     }
 
     /// The upload ended without a start (failed or abandoned).
     pub fn upload_ended(&mut self) {
-        if let Phase::Uploading { current } = &mut self.phase {
+        if let Phase::Uploading { current, .. } = &mut self.phase {
             self.phase = match current.take() {
                 Some(current) => Phase::Running { current },
                 None => Phase::Idle,
@@ -569,6 +562,7 @@ impl Machine {
         self.phase = match std::mem::replace(&mut self.phase, Phase::Idle) {
             Phase::Uploading {
                 current: Some(current),
+                ..
             } => Phase::Chained {
                 current,
                 next: start,
@@ -579,6 +573,7 @@ impl Machine {
                 was: Box::new(match *was {
                     Phase::Uploading {
                         current: Some(current),
+                        ..
                     } => Phase::Chained {
                         current,
                         next: start,
@@ -662,7 +657,7 @@ impl Machine {
         }
         let was = std::mem::replace(&mut self.phase, Phase::Idle);
         let was = match was {
-            Phase::Uploading { current } => match current {
+            Phase::Uploading { current, .. } => match current {
                 Some(current) => Phase::Running { current },
                 None => Phase::Idle,
             },
@@ -748,10 +743,10 @@ impl Machine {
     /// of the heartbeat word alone ([`Self::heartbeat_read`]).
     #[must_use]
     pub fn proof_wants_two_reads(&self, now: Instant) -> bool {
-        let Phase::Uploading { current } = &self.phase else {
+        let Phase::Uploading { current, proof } = &self.phase else {
             return false;
         };
-        self.since_upload.0 == 0 && !self.before_upload_counts(current.is_some(), now)
+        proof.reads == 0 && !self.before_upload_counts(current.is_some(), now)
     }
 
     /// Whether the status read before the upload counts as the first of the proof's two:
@@ -768,24 +763,31 @@ impl Machine {
     fn note_heartbeat(&mut self, value: u16, now: Instant) {
         self.heartbeat_read(value, now);
         self.read_at = Some(now);
-        self.status_since_upload = true;
+        if let Phase::Uploading { proof, .. } = &mut self.phase {
+            proof.status_read = true;
+        }
     }
 
     /// The heartbeat word read at `now`, alone or in a status block. Alone, while a bank is
     /// written or just after, it counts toward the proof a start needs ([`Self::may_start`]) as
     /// a status read does, and tells nothing else (the next status read checks the rest).
     pub fn heartbeat_read(&mut self, value: u16, now: Instant) {
-        if let Phase::Uploading { current } = &self.phase {
-            let (reads, moved) = self.since_upload;
-            let changed = self.heartbeat.is_some_and(|(last, _)| last != value);
+        let counts_first = match &self.phase {
+            Phase::Uploading { current, .. } => self.before_upload_counts(current.is_some(), now),
+            _ => false,
+        };
+        let heartbeat = self.heartbeat;
+        if let Phase::Uploading { proof, .. } = &mut self.phase {
+            let changed = heartbeat.is_some_and(|(last, _)| last != value);
             // Two reads after the upload began must show the heartbeat changing: the PLC scans
             // now, not only before the upload (a start written to a PLC that froze during it
             // would wait there, to be acted on whenever the PLC resumes). Behind a running
             // start, which is watched until it ends and stopped if the heartbeat stands still,
             // the read before the upload (the one that saw it running) counts as the first, if
             // no further back than the heartbeat timeout: a chained part's turn is short.
-            let first = reads >= 1 || self.before_upload_counts(current.is_some(), now);
-            self.since_upload = (reads.saturating_add(1), moved || (first && changed));
+            let first = proof.reads >= 1 || counts_first;
+            proof.moved |= first && changed;
+            proof.reads = proof.reads.saturating_add(1);
         }
         match self.heartbeat {
             Some((last, _)) if last == value => {}

@@ -100,6 +100,8 @@ pub enum Phase {
     Uploading {
         /// The running start.
         current: Option<Running>,
+        /// What was read since the upload began toward the proof that the PLC scans now.
+        proof: Proof,
     },
     /// A start was written while nothing ran; not yet seen taken.
     Starting {
@@ -168,6 +170,7 @@ impl Phase {
             Self::LinkDown { was, .. } => was.given(),
             Self::Uploading {
                 current: Some(current),
+                ..
             }
             | Self::Running { current } => vec![current.start.clone()],
             Self::Starting { start, .. } => vec![start.clone()],
@@ -185,7 +188,7 @@ impl Phase {
     pub(super) fn take_given(&mut self) -> (Option<Planned>, Option<Planned>) {
         match self {
             Self::LinkDown { was, .. } => return was.take_given(),
-            Self::Uploading { current } => return (current.take().map(|c| c.start), None),
+            Self::Uploading { current, .. } => return (current.take().map(|c| c.start), None),
             Self::Stopping { current, next, .. } => {
                 return (current.take().map(|c| c.start), next.take());
             }
@@ -207,7 +210,7 @@ impl Phase {
     pub(super) fn take_in_flight(&mut self) -> (Option<Running>, Option<Planned>) {
         match self {
             Self::LinkDown { was, .. } => return was.take_in_flight(),
-            Self::Uploading { current } => return (current.take(), None),
+            Self::Uploading { current, .. } => return (current.take(), None),
             Self::Stopping { current, next, .. } => return (current.take(), next.take()),
             _ => {}
         }
@@ -248,14 +251,25 @@ pub(super) fn step(
             seen,
             homed_before,
         } => homing(written, seen, homed_before, status, now, m, events),
-        Phase::Uploading { current: None } => Phase::Uploading { current: None },
+        Phase::Uploading {
+            current: None,
+            proof,
+        } => Phase::Uploading {
+            current: None,
+            proof,
+        },
         Phase::Uploading {
             current: Some(current),
+            proof,
         } => match running(current, status, now, m, events) {
             Phase::Running { current } => Phase::Uploading {
                 current: Some(current),
+                proof,
             },
-            _ => Phase::Uploading { current: None },
+            _ => Phase::Uploading {
+                current: None,
+                proof,
+            },
         },
         Phase::Starting { start, written } => starting(start, written, status, now, m, events),
         Phase::Running { current } => running(current, status, now, m, events),
@@ -691,6 +705,28 @@ fn stopping(
     }
 }
 
+/// What was read since an upload began toward the proof a start needs that the PLC scans now
+/// ([`super::Machine::may_start`]): two reads after the upload began (behind a running start,
+/// the read before it may be the first) must show the heartbeat changing, and a whole status
+/// block must be among them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Proof {
+    /// Reads of the heartbeat (alone or in a status block) since the upload began.
+    pub reads: u8,
+    /// Whether the heartbeat was seen changing between two reads that count.
+    pub moved: bool,
+    /// Whether a whole status block was read since the upload began.
+    pub status_read: bool,
+}
+
+impl Proof {
+    /// Whether a start may rest on it.
+    #[must_use]
+    pub fn holds(self) -> bool {
+        self.moved && self.status_read
+    }
+}
+
 /// While the link is down since `since`: the instant [`expire_while_down`] next ends something
 /// in `was` (a start past its run limit and the grace, a stop past the grace, a home routine past
 /// its limit), if anything is in flight. The worker wakes then, whatever its reconnection
@@ -706,6 +742,7 @@ pub(super) fn expiry_while_down(
         Phase::Running { current }
         | Phase::Uploading {
             current: Some(current),
+            ..
         } => Some(over(current.since, current.start.duration)),
         Phase::Starting { start, written } => Some(over(written.at, start.duration)),
         Phase::Chained { current, next, .. } => {
@@ -735,6 +772,7 @@ pub(super) fn expire_while_down(
         Phase::Running { current }
         | Phase::Uploading {
             current: Some(current),
+            ..
         } if over(current.since, current.start.duration) => {
             events.push(Event::Ended {
                 tag: current.start.tag,
