@@ -1,0 +1,218 @@
+//! PURE. Why a move or a path cannot be planned: one error enum for the planner, each variant
+//! with the values and limits its message names.
+
+use thiserror::Error;
+
+use crate::geometry::{PathError, ProfileError};
+use crate::kinematics::{JOINTS, KinematicsError};
+use crate::table::TableProblem;
+
+/// Why a move cannot be planned.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PlanError {
+    /// A pose or the path cannot be reached.
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// The speed, acceleration time or period is unusable.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+    /// A path cannot be built from its elements.
+    #[error(transparent)]
+    Path(#[from] PathError),
+    /// A path's acceleration limit is unusable.
+    #[error("the path acceleration {accel_mm_s2} mm/s^2 must be a number above 0")]
+    PathAccel {
+        /// The limit given, mm/s^2.
+        accel_mm_s2: f64,
+    },
+    /// A joint that first moves too late into a path section for one table to hold it back.
+    #[error(
+        "joint {joint} first moves {at_s:.2} s into the section, and an F174 table cannot hold \
+         a channel back that long within the tolerance (its first pulse lands after one period \
+         of a whole-hertz frequency: 1/1.5, 1/2, 1/3 s ...); stop at the waypoint before it \
+         moves, or blend a corner where every joint is already moving"
+    )]
+    LateStart {
+        /// The joint.
+        joint: String,
+        /// When it first moves, s into the section.
+        at_s: f64,
+    },
+    /// A line on which a joint's channel needs a second F174 segment (it reverses, or its run
+    /// changes frequency range) while another joint moves: one start would not play as
+    /// planned through it, so the line runs as a path cut there ([`plan_line`]).
+    #[error(
+        "joint {joint} {} {at_mm:.1} mm along the {length_mm:.1} mm line while other joints \
+         move: in one start its next F174 segment would begin up to a PLC scan late, off the \
+         line by as much as the joint moves in a scan; the line runs as a path cut there into \
+         starts chained at speed (`linterpd plan --path`, `linterpd run`)",
+        if *reverses { "reverses" } else { "changes frequency range" }
+    )]
+    LaterSegment {
+        /// The joint.
+        joint: String,
+        /// Whether it reverses there (else its run changes frequency range).
+        reverses: bool,
+        /// Where, mm along the line.
+        at_mm: f64,
+        /// The line's length, mm.
+        length_mm: f64,
+    },
+    /// The robot is not where the path as written starts.
+    #[error(
+        "the path starts at [{:.3}, {:.3}, {:.3}] mm and the robot is at [{:.3}, {:.3}, {:.3}] \
+         mm, {off_mm:.3} mm from it (at most {slack_mm} mm): move to the path's start first",
+        start[0], start[1], start[2], robot[0], robot[1], robot[2]
+    )]
+    NotAtPathStart {
+        /// The path's start: x, y, z mm, a deg.
+        start: [f64; 4],
+        /// The robot's pose: x, y, z mm, a deg.
+        robot: [f64; 4],
+        /// How far apart, mm.
+        off_mm: f64,
+        /// The most allowed, mm.
+        slack_mm: f64,
+    },
+    /// The robot is not where a path section starts.
+    #[error(
+        "the robot is {off_mm:.3} mm from where the path section starts (at most {slack_mm} mm): \
+         the move before it did not end where it was planned to"
+    )]
+    NotAtSectionStart {
+        /// How far, mm.
+        off_mm: f64,
+        /// The most allowed, mm.
+        slack_mm: f64,
+    },
+    /// A part of a path section chained at speed would begin from counts other than those it
+    /// was planned from.
+    #[error(
+        "part {part} of the path section would begin from counts {counts:?}, not {planned:?} \
+         where it was planned to begin; a part chained at speed starts only from the counts it \
+         was planned from"
+    )]
+    NotAtPartStart {
+        /// The part, from 1.
+        part: usize,
+        /// Where it would begin, per joint.
+        counts: [i64; JOINTS],
+        /// Where it was planned to begin, per joint.
+        planned: [i64; JOINTS],
+    },
+    /// A path section planned again where it begins needs another number of starts than when
+    /// the path was accepted.
+    #[error(
+        "the path section planned again where it begins needs {now} start(s), not the \
+         {accepted} it was accepted with"
+    )]
+    PartsChanged {
+        /// Starts when the path was accepted.
+        accepted: usize,
+        /// Starts now.
+        now: usize,
+    },
+    /// A section of a path (between two stops) cannot be planned.
+    #[error("path section {section} (element {elements}): {source}")]
+    Section {
+        /// Section number, from 1.
+        section: usize,
+        /// The elements it covers, "2" or "2-4".
+        elements: String,
+        /// Why.
+        source: Box<PlanError>,
+    },
+    /// The target is the start.
+    #[error(
+        "the move from ({x:.3}, {y:.3}, {z:.3}) mm has length 0; a line move needs a distance above 0"
+    )]
+    ZeroLength {
+        /// Start x, mm.
+        x: f64,
+        /// Start y, mm.
+        y: f64,
+        /// Start z, mm.
+        z: f64,
+    },
+    /// A joint would leave its position limits.
+    #[error(
+        "joint {joint} would reach {value:.4} {unit} at t = {t_s:.3} s; its limits are {min} to {max} {unit}"
+    )]
+    OutOfLimit {
+        /// Joint name.
+        joint: String,
+        /// The value, user units.
+        value: f64,
+        /// Lower limit, user units.
+        min: f64,
+        /// Upper limit, user units.
+        max: f64,
+        /// deg or mm.
+        unit: &'static str,
+        /// When, s.
+        t_s: f64,
+    },
+    /// A joint move's target is beyond a joint's position limits.
+    #[error("joint {joint} target {value:.4} {unit} is beyond its limits {min} to {max} {unit}")]
+    TargetOutOfLimit {
+        /// Joint name.
+        joint: String,
+        /// The target, user units.
+        value: f64,
+        /// Lower limit, user units.
+        min: f64,
+        /// Upper limit, user units.
+        max: f64,
+        /// deg or mm.
+        unit: &'static str,
+    },
+    /// A joint move whose every target count is its start count.
+    #[error(
+        "the joint move ends where it starts (counts {counts:?}); a joint move needs a joint to \
+         move at least one pulse"
+    )]
+    NoTravel {
+        /// The start (and target) counts, per joint.
+        counts: [i64; JOINTS],
+    },
+    /// A joint would need its channel faster than allowed.
+    #[error(
+        "joint {joint} would need {freq_hz:.0} Hz at t = {t_s:.3} s; channel {channel} allows {max_hz} Hz"
+    )]
+    OverSpeed {
+        /// Joint name.
+        joint: String,
+        /// Frequency needed, Hz.
+        freq_hz: f64,
+        /// When, s.
+        t_s: f64,
+        /// The channel.
+        channel: u8,
+        /// Its maximum, Hz.
+        max_hz: u32,
+    },
+    /// The tolerance asked of a bounded-error plan cannot be met.
+    #[error(
+        "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse on time the path \
+         still deviates {floor_mm:.4} mm{}",
+        works_mm.map_or(String::new(), |w| format!("; {w} mm works"))
+    )]
+    ToleranceTooSmall {
+        /// The tolerance asked for, mm.
+        tolerance_mm: f64,
+        /// The pulse grid's own path deviation on this move, mm.
+        floor_mm: f64,
+        /// The smallest tolerance found to work, mm.
+        works_mm: Option<f64>,
+    },
+    /// The tables break an F174 rule or do not fit their area.
+    #[error("joint {joint}: {first}{}", if *more > 0 { format!(" (and {more} more problems)") } else { String::new() })]
+    InvalidTable {
+        /// Joint name.
+        joint: String,
+        /// The first problem.
+        first: TableProblem,
+        /// How many more.
+        more: usize,
+    },
+}
