@@ -5,7 +5,7 @@
 //!
 //! ```text
 //!  stdout:  the report as text, check by check as they are made (or, with --json, one JSON
-//!           object at the end: README.md, "linterpd commission")
+//!           object at the end: docs/COMMISSION.md, "The report")
 //!  stderr:  the confirmation prompt; with --json the checks as they are made
 //!  exit:    0 every check passed; 1 a check failed or the link could not be opened;
 //!           2 bad arguments or config, or not confirmed (nothing was sent)

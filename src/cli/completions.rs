@@ -1,6 +1,6 @@
 //! `linterpd completions SHELL` and `linterpd man [--dir DIR]`: shell completion scripts and man
 //! pages generated from the CLI's own clap definitions (`clap_complete`, `clap_mangen`), so they never
-//! drift from the flags. A package installs their output (README, "Shell completions and man
+//! drift from the flags. A package installs their output (docs/CLI.md, "Shell completions and man
 //! pages").
 //!
 //! ```text

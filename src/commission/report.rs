@@ -1,6 +1,6 @@
 //! PURE. The commission's report: every check with what it checks, what it saw, its verdict and
 //! a hint; the figures measured; the config lines to paste; the counts found and left. Plain
-//! data, serialized as the `--json` report (`README.md`, "linterpd commission").
+//! data, serialized as the `--json` report (docs/COMMISSION.md, "The report").
 
 use serde::{Deserialize, Serialize};
 
