@@ -5,16 +5,12 @@ use std::fmt;
 use std::net::IpAddr;
 use std::str::FromStr;
 
+use ipnet::IpNet;
 use thiserror::Error;
 
-/// An IP address or network an allow-list admits.
+/// An IP address or network an allow-list admits (one address: its full prefix).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ClientNet {
-    /// The network's address (host bits as given).
-    pub ip: IpAddr,
-    /// Leading bits that must match: 32 (IPv4) or 128 (IPv6) for one address.
-    pub prefix: u8,
-}
+pub struct ClientNet(IpNet);
 
 /// An allow-list entry that is not an IP address or a CIDR network.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -31,25 +27,8 @@ impl ClientNet {
     /// socket (`::ffff:10.0.0.5`) is matched as the IPv4 address it is.
     #[must_use]
     pub fn contains(&self, peer: IpAddr) -> bool {
-        match (self.ip, peer.to_canonical()) {
-            (IpAddr::V4(net), IpAddr::V4(ip)) => same_prefix(
-                u128::from(net.to_bits()),
-                u128::from(ip.to_bits()),
-                32,
-                self.prefix,
-            ),
-            (IpAddr::V6(net), IpAddr::V6(ip)) => {
-                same_prefix(net.to_bits(), ip.to_bits(), 128, self.prefix)
-            }
-            _ => false,
-        }
+        self.0.contains(&peer.to_canonical())
     }
-}
-
-/// Whether the leading `prefix` of `width` bits of `a` and `b` are equal.
-fn same_prefix(a: u128, b: u128, width: u8, prefix: u8) -> bool {
-    let shift = u32::from(width - prefix);
-    shift >= 128 || (a >> shift) == (b >> shift)
 }
 
 impl FromStr for ClientNet {
@@ -60,33 +39,32 @@ impl FromStr for ClientNet {
             text: text.to_owned(),
             reason: reason.to_owned(),
         };
-        let (ip, prefix) = text
-            .trim()
-            .split_once('/')
-            .map_or((text.trim(), None), |(a, p)| (a, Some(p)));
+        let trimmed = text.trim();
+        let Some((ip, prefix)) = trimmed.split_once('/') else {
+            let ip: IpAddr = trimmed.parse().map_err(|_| {
+                bad("must be an IP address or a CIDR network, e.g. \"10.0.0.5\" or \"10.0.0.0/24\"")
+            })?;
+            return Ok(Self(IpNet::from(ip)));
+        };
         let ip: IpAddr = ip.parse().map_err(|_| {
             bad("must be an IP address or a CIDR network, e.g. \"10.0.0.5\" or \"10.0.0.0/24\"")
         })?;
         let width = if ip.is_ipv4() { 32 } else { 128 };
-        let prefix = match prefix {
-            None => width,
-            Some(p) => p
-                .parse::<u8>()
-                .ok()
-                .filter(|p| *p <= width)
-                .ok_or_else(|| bad(&format!("has a prefix length outside 0..={width}")))?,
-        };
-        Ok(Self { ip, prefix })
+        prefix
+            .parse::<u8>()
+            .ok()
+            .and_then(|p| IpNet::new(ip, p).ok())
+            .map(Self)
+            .ok_or_else(|| bad(&format!("has a prefix length outside 0..={width}")))
     }
 }
 
 impl fmt::Display for ClientNet {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let width = if self.ip.is_ipv4() { 32 } else { 128 };
-        if self.prefix == width {
-            write!(f, "{}", self.ip)
+        if self.0.prefix_len() == self.0.max_prefix_len() {
+            write!(f, "{}", self.0.addr())
         } else {
-            write!(f, "{}/{}", self.ip, self.prefix)
+            write!(f, "{}", self.0)
         }
     }
 }
