@@ -106,10 +106,18 @@ pub fn parse_number(text: &str) -> anyhow::Result<f64> {
     Ok(value)
 }
 
-/// A number followed by an optional `unit` (blanks allowed between): the number.
+/// A number followed by an optional `unit` (blanks allowed between): the number, finite.
 fn number_in(text: &str, unit: &str) -> anyhow::Result<f64> {
-    let trimmed = text.trim();
-    parse_number(trimmed.strip_suffix(unit).unwrap_or(trimmed))
+    let value =
+        crate::config::number_in(text, unit).map_err(|n| anyhow!("'{n}' is not a number"))?;
+    if !value.is_finite() {
+        let trimmed = text.trim();
+        bail!(
+            "'{}' is not a finite number",
+            trimmed.strip_suffix(unit).unwrap_or(trimmed).trim()
+        );
+    }
+    Ok(value)
 }
 
 /// A length in mm, written `0.05mm` or `0.05`; above 0.

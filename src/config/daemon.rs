@@ -19,8 +19,8 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::duration::parse_duration_s;
 use super::raw::RawDaemon;
+use super::units::parse_duration_s;
 
 /// The API socket when the config names none (deploy/linterpd.service's `RuntimeDirectory`).
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";

@@ -35,7 +35,6 @@
 
 mod check;
 mod daemon;
-mod duration;
 mod error;
 mod gateway;
 mod joints;
@@ -45,15 +44,16 @@ mod motion;
 mod path_file;
 mod plc;
 mod raw;
+mod units;
 mod validate;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
-pub use duration::{DurationError, DurationProblem, parse_duration_s};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
+pub use units::{DurationError, DurationProblem, number_in, parse_duration_s};
 
 use crate::plc::LinkSettings;
 use crate::robot::Robot;

@@ -4,8 +4,8 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::duration::parse_duration_s;
 use super::raw::{RawMethod, RawMotion};
+use super::units::parse_duration_s;
 use crate::robot::{DEFAULT_MAX_SPEED_MM_S, Method, Motion, OverSpeed};
 
 /// The motion defaults a motion table describes.

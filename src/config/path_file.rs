@@ -41,13 +41,8 @@ impl Quantity {
     fn value(&self, unit: &str) -> Result<f64, String> {
         match self {
             Self::Number(v) => Ok(*v),
-            Self::Text(text) => {
-                let t = text.trim();
-                let number = t.strip_suffix(unit).unwrap_or(t).trim();
-                number
-                    .parse::<f64>()
-                    .map_err(|_| format!("'{text}' is not a number of {unit}"))
-            }
+            Self::Text(text) => super::units::number_in(text, unit)
+                .map_err(|_| format!("'{text}' is not a number of {unit}")),
         }
     }
 }

@@ -28,8 +28,8 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::duration::parse_duration_s;
 use super::raw::{RawContract, RawParity, RawPlc, RawProtocol, RawSerial, RawTcp};
+use super::units::parse_duration_s;
 use crate::contract::{DT_LAST, Layout};
 use crate::kinematics::JOINTS;
 use crate::plc::{

@@ -1,5 +1,7 @@
-//! Durations as people write them (`50ms`, `0.2s`, `200 ms`, `250us`), for the config's motion
-//! section and the command line alike.
+//! Quantities as people write them, for the config, path files and the command line alike: one
+//! parser of a number and its unit. Durations take a unit (`50ms`, `0.2s`, `200 ms`, `250us`);
+//! lengths, speeds and accelerations may leave theirs out (`20mm` or `20`, `240mm/s`,
+//! `5000mm/s2`).
 
 use thiserror::Error;
 
@@ -40,6 +42,18 @@ pub enum DurationProblem {
     /// Below zero.
     #[error("must not be negative")]
     Negative,
+}
+
+/// A number, with `unit` written after it or not (blanks allowed between): the number, or the
+/// text of the number when it is none. Whether it is finite, and in range, is the caller's to
+/// say.
+///
+/// # Errors
+/// The number part as written, when it does not parse.
+pub fn number_in<'t>(text: &'t str, unit: &str) -> Result<f64, &'t str> {
+    let trimmed = text.trim();
+    let number = trimmed.strip_suffix(unit).unwrap_or(trimmed).trim();
+    number.parse::<f64>().map_err(|_| number)
 }
 
 /// Seconds in a duration written as a number and a unit (`s`, `ms`, `us` or `µs`), blanks
