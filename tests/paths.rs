@@ -504,8 +504,7 @@ fn plan_refusal(doc: &serde_json::Value) -> String {
         path_accel_mm_s2: motion.speed_mm_s / motion.accel_s,
     };
     linterpd::plan::plan_path(&robot, &req)
-        .err()
-        .expect("plan --path refuses it")
+        .expect_err("plan --path refuses it")
         .to_string()
 }
 
@@ -691,7 +690,7 @@ proptest::proptest! {
                 assert_eq!(report.stage, Stage::Done, "{report:?}");
             }
             s.daemon.shut_down().await;
-            let trace = shared.with(|m| m.take_pulses());
+            let trace = shared.with(linterpd::mock::MockPlc::take_pulses);
             Some(traced_poses(start, &trace))
         });
         proptest::prop_assume!(ran.is_some());

@@ -21,7 +21,7 @@ pub fn read(file: &Path) -> anyhow::Result<String> {
         bail!(
             "{shown} is not a regular file ({}); a path file must be a regular file of at most \
              {MAX_PATH_FILE_BYTES} bytes (1 MiB)",
-            kind(&meta.file_type())
+            kind(meta.file_type())
         );
     }
     too_long(file, meta.len())?;
@@ -45,7 +45,7 @@ fn too_long(file: &Path, bytes: u64) -> anyhow::Result<()> {
 }
 
 /// What a file that is not a regular file is, in words.
-fn kind(t: &std::fs::FileType) -> &'static str {
+fn kind(t: std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
     if t.is_dir() {
         "a directory"

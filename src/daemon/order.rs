@@ -89,7 +89,7 @@ pub struct PathOrder {
 impl PathOrder {
     /// The motion the order asks for, the robot's `defaults` filling the gaps, within `limits`.
     pub fn motion(&self, defaults: Motion, limits: &OrderLimits) -> Result<Motion, OrderError> {
-        self.as_move(None).motion(defaults, limits)
+        self.as_move(None).motion(defaults, *limits)
     }
 
     /// Checks the order's motion fields against `limits` and reads its document (at most
@@ -102,7 +102,7 @@ impl PathOrder {
         robot: &Robot,
         limits: &OrderLimits,
     ) -> Result<(Motion, PathDoc), OrderError> {
-        let motion = self.motion(robot.motion, limits)?;
+        let motion = self.as_move(None).motion(robot.motion, *limits)?;
         let doc = PathDoc::from_json(self.path.clone())
             .map_err(|e| path_refused("(the document)", e.to_string()))?;
         let max = super::MAX_PATH_ELEMENTS;
@@ -502,7 +502,7 @@ impl MoveOrder {
     ) -> Result<CheckedOrder, OrderError> {
         Ok(CheckedOrder {
             target: self.target(taught)?,
-            motion: self.motion(defaults, limits)?,
+            motion: self.motion(defaults, *limits)?,
         })
     }
 
@@ -591,7 +591,7 @@ impl MoveOrder {
         })
     }
 
-    fn motion(&self, defaults: Motion, limits: &OrderLimits) -> Result<Motion, OrderError> {
+    fn motion(&self, defaults: Motion, limits: OrderLimits) -> Result<Motion, OrderError> {
         let mut m = defaults;
         if let Some(v) = self.speed_mm_s {
             m.speed_mm_s = positive("speed_mm_s", v)?;

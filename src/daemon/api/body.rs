@@ -40,7 +40,9 @@ impl<S: Send + Sync> FromRequest<S> for JsonBody {
             .await
             .map(JsonBody)
             .map_err(|e| {
-                if std::error::Error::source(&e).is_some_and(|s| s.is::<LengthLimitError>()) {
+                if std::error::Error::source(&e)
+                    .is_some_and(<dyn std::error::Error>::is::<LengthLimitError>)
+                {
                     too_large(None)
                 } else {
                     ApiError::BadRequest {

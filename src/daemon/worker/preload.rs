@@ -86,6 +86,10 @@ mod tests {
         }
     }
 
+    /// A case: the pace so far, the parts as the check sees them, the next part's bank and
+    /// rows, and what to do.
+    type Case<'a> = (Option<Pace>, &'a [Part], u16, usize, &'a str);
+
     #[test]
     fn each_part_is_preloaded_while_the_pace_says_the_rest_would_be_late() {
         // (the pace so far, the parts as the check sees them, the next part's rows, what to do)
@@ -101,7 +105,7 @@ mod tests {
         ];
         // (the pace so far, the parts as the check sees them, the bank the next part goes into
         // and its rows (the first part's 400 rows fill most of bank 0), what to do)
-        let cases: [(Option<Pace>, &[Part], u16, usize, &str); 5] = [
+        let cases: [Case<'_>; 5] = [
             // No pace yet: the second part is always preloaded.
             (None, &slow_rest, 1, 10, "preload"),
             // A slow link: the third part (400 words) cannot be written whole in 0.3 s.
