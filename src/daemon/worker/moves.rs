@@ -169,15 +169,9 @@ impl Worker {
     /// (or it chains behind the start whose targets are its `from`). When two reads are needed
     /// for the heartbeat, the first is of its word alone.
     async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
-        if self.machine.proof_wants_two_reads(now()) {
-            // The first of the two reads that must see the heartbeat move: its word alone.
-            let link = self.link.as_mut().expect("connected");
-            let beat = link.heartbeat().await?;
-            self.machine.heartbeat_read(beat, now());
-        }
         loop {
             let link = self.link.as_mut().expect("connected");
-            let status = link.status().await?;
+            let status = link.proof_read(&mut self.machine).await?;
             self.read(status).await?;
             match self.machine.may_start(planned, now()) {
                 Ok(()) => return Ok(()),

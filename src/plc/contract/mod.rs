@@ -419,7 +419,7 @@ impl<P: Plc> Contract<P> {
 
     /// The status block's heartbeat word, read alone (nothing else of the block is checked:
     /// a status read after it does that).
-    pub async fn heartbeat(&mut self) -> Result<u16, ContractError> {
+    async fn heartbeat(&mut self) -> Result<u16, ContractError> {
         let at = self.settings.layout.status_base + STATUS_HEARTBEAT_OFFSET;
         let words = self.plc.read_words(at, 1).await?;
         words.first().copied().ok_or_else(|| {
@@ -747,6 +747,20 @@ impl<P: Plc> Contract<P> {
         let address = self.settings.layout.command_base + COMMAND_HOST_OFFSET;
         self.plc.write_words(address, &[host]).await?;
         Ok(())
+    }
+
+    /// The next read toward the proof a start needs after its upload, the one the daemon makes
+    /// and the tests' drivers make: while the machine wants two more reads to see the heartbeat
+    /// move ([`Machine::proof_wants_two_reads`]), the first is the heartbeat word alone, given to
+    /// the machine here; then the status block, which the caller gives the machine
+    /// ([`Machine::on_status`], carrying out what it asks for) before it asks
+    /// [`Machine::may_start`].
+    pub async fn proof_read(&mut self, machine: &mut Machine) -> Result<Status, ContractError> {
+        if machine.proof_wants_two_reads(tokio::time::Instant::now().into_std()) {
+            let beat = self.heartbeat().await?;
+            machine.heartbeat_read(beat, tokio::time::Instant::now().into_std());
+        }
+        self.status().await
     }
 
     /// Reads the status block into `machine` (carrying out the host word and stop it asks for)
