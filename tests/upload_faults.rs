@@ -8,7 +8,7 @@ mod common;
 use std::time::Duration;
 
 use common::exchange::{
-    exchange, home_where_it_stands, machine, mock_at_seed_start, settings, upload,
+    exchange, home_where_it_stands, machine, mock_at_seed_start, settings, start_and_follow, upload,
 };
 use linterpd::contract::MAGIC;
 use linterpd::mewtocol::Station;
@@ -65,8 +65,7 @@ async fn refused_then_recovers(script: &str, expect: impl Fn(&ContractError) -> 
     let mut m = machine();
     let err = match upload(&mut c, &mut m, 1).await {
         Err(e) => e,
-        Ok((_, bank, planned)) => c
-            .run(&mut m, &bank, planned, |_| {})
+        Ok((_, bank, planned)) => start_and_follow(&mut c, &mut m, &bank, planned)
             .await
             .expect_err("the start must be refused"),
     };

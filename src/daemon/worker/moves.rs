@@ -203,13 +203,11 @@ impl Worker {
     /// (or it chains behind the start whose targets are its `from`). When two reads are needed
     /// for the heartbeat, the first is of its word alone.
     async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
-        if self.machine.proof_wants_two_reads(now()) {
-            // The first of the two reads that must see the heartbeat move: its word alone.
-            let beat = self.link()?.heartbeat().await?;
-            self.machine.heartbeat_read(beat, now());
-        }
         loop {
-            let status = self.link()?.status().await?;
+            let Some(session) = self.session.as_mut() else {
+                return Err(ContractError::Blocked(Blocker::LinkDown));
+            };
+            let status = session.contract.proof_read(&mut self.machine).await?;
             self.read(status).await?;
             match self.machine.may_start(planned, now()) {
                 Ok(()) => return Ok(()),

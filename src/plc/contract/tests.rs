@@ -1,5 +1,5 @@
 use super::*;
-use crate::contract::machine::WatchSettings;
+use crate::contract::machine::{Event, Planned, WatchSettings};
 use crate::plc::PlcMode;
 use crate::table::{ChannelLimits, Segment, validate};
 
@@ -406,11 +406,126 @@ fn machine() -> Machine {
     Machine::new(WatchSettings::default(), 0xBEEF)
 }
 
+// The tests' driver of the machine up to a start, with the daemon's exchanges in its order
+// (before the upload, status reads until the PLC takes a start; after it, the daemon's own
+// [`Contract::proof_read`] until the start may be written). tests/common/exchange.rs has the
+// whole of it, to the start's end, for the integration tests.
+
+/// Reads the status block into `machine` (carrying out the host word and stop it asks for)
+/// until a start can be written, as long as the heartbeat stands still no longer than its
+/// limit: the heartbeat seen moving, the host word echoed, no fault, the ready bits set.
+async fn until_ready<P: Plc>(
+    c: &mut Contract<P>,
+    machine: &mut Machine,
+) -> Result<Status, ContractError> {
+    let limit = machine.settings().heartbeat_timeout;
+    let began = tokio::time::Instant::now();
+    let mut first = None;
+    loop {
+        let status = c.status().await?;
+        let now = tokio::time::Instant::now().into_std();
+        for event in machine.on_status(&status, now) {
+            carry_out(c, &event, machine).await?;
+        }
+        let moved = *first.get_or_insert(status.block.heartbeat) != status.block.heartbeat;
+        let still = machine.heartbeat_age(now).unwrap_or_default();
+        match machine.blocker(now) {
+            None if moved => return Ok(status),
+            Some(b @ (Blocker::Faulted { .. } | Blocker::NotReady { .. } | Blocker::NotHomed)) => {
+                return Err(ContractError::Blocked(b));
+            }
+            _ if still > limit => return Err(stalled(c, still, limit).await),
+            Some(b) if began.elapsed() > limit * 4 => return Err(ContractError::Blocked(b)),
+            _ => tokio::time::sleep(c.settings().scan_time.min(limit / 4)).await,
+        }
+    }
+}
+
+/// After the upload of `start` (begun with [`Machine::upload_begun`]): the daemon's reads
+/// toward the heartbeat proof until the start may be written. Counts other than `start.from`,
+/// a stalled PLC or anything else that blocks it end the upload with the reason.
+async fn until_it_may_start<P: Plc>(
+    c: &mut Contract<P>,
+    machine: &mut Machine,
+    start: &Planned,
+) -> Result<(), ContractError> {
+    loop {
+        let status = c.proof_read(machine).await?;
+        let now = tokio::time::Instant::now().into_std();
+        for event in machine.on_status(&status, now) {
+            carry_out(c, &event, machine).await?;
+        }
+        let blocker = match machine.may_start(start, now) {
+            Ok(()) => return Ok(()),
+            Err(Blocker::Unproven) => {
+                tokio::time::sleep(c.settings().scan_time / 2).await;
+                continue;
+            }
+            Err(blocker) => blocker,
+        };
+        machine.upload_ended();
+        return Err(match blocker {
+            Blocker::NotAtFrom {
+                channel,
+                count,
+                from,
+            } => ContractError::NotAtFrom {
+                channel,
+                count,
+                from,
+            },
+            Blocker::Stalled => {
+                let limit = machine.settings().heartbeat_timeout;
+                let still = machine.heartbeat_age(now).unwrap_or_default();
+                stalled(c, still, limit).await
+            }
+            other => ContractError::Blocked(other),
+        });
+    }
+}
+
+/// What the machine asks for that needs only the link: the host word, a stop.
+async fn carry_out<P: Plc>(
+    c: &mut Contract<P>,
+    event: &Event,
+    machine: &Machine,
+) -> Result<(), ContractError> {
+    match event {
+        Event::WriteHost => c.write_host(machine.host()).await,
+        Event::WriteStop => c.stop().await,
+        _ => Ok(()),
+    }
+}
+
+/// A stalled PLC, named with its mode when it says PROG.
+async fn stalled<P: Plc>(c: &mut Contract<P>, still: Duration, limit: Duration) -> ContractError {
+    let prog = matches!(c.plc().mode().await, Ok(PlcMode::Prog));
+    ContractError::Stalled {
+        still_ms: still.as_millis() as u64,
+        limit_ms: limit.as_millis() as u64,
+        mode: if prog { ", and in PROG mode" } else { "" },
+    }
+}
+
+/// The start of `table(0)` from [`FROM`] in bank 0 with sequence number 1.
+fn start_of_table_0() -> Planned {
+    Planned {
+        tag: 1,
+        seq: 1,
+        bank: 0,
+        from: FROM,
+        targets: Some([500, 0, 0, 0]),
+        envelope: [(0, 500), (0, 0), (0, 0), (0, 0)],
+        duration: Duration::from_millis(500),
+        curve: None,
+    }
+}
+
 #[tokio::test(start_paused = true)]
-async fn ready_writes_the_host_word_and_waits_for_its_echo() {
+async fn the_host_word_is_written_and_its_echo_waited_for_before_a_start() {
     let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
     let mut m = machine();
-    let status = c.ready(&mut m).await.unwrap();
+    let status = until_ready(&mut c, &mut m).await.unwrap();
     assert_eq!(c.plc().dt[&1_048], 0xBEEF);
     assert_eq!(status.block.host, 0xBEEF);
     assert_eq!(m.blocker(tokio::time::Instant::now().into_std()), None);
@@ -421,10 +536,8 @@ async fn frozen_heartbeat_in_prog_mode_is_refused_after_the_timeout() {
     let mut plc = FakePlc::running();
     plc.frozen = true;
     plc.prog = true;
-    let err = Contract::new(plc, ContractSettings::default())
-        .ready(&mut machine())
-        .await
-        .unwrap_err();
+    let mut c = Contract::new(plc, ContractSettings::default());
+    let err = until_ready(&mut c, &mut machine()).await.unwrap_err();
     let msg = err.to_string();
     assert!(
         msg.contains("limit 500 ms") && msg.ends_with("stalled, and in PROG mode"),
@@ -449,38 +562,53 @@ async fn latched_fault_missing_ready_bits_and_no_homing_are_refused() {
         plc.dt.insert(1_003, state);
         plc.dt.insert(1_005, fault);
         plc.dt.insert(1_007, ready);
-        let err = Contract::new(plc, ContractSettings::default())
-            .ready(&mut machine())
-            .await
-            .unwrap_err();
+        let mut c = Contract::new(plc, ContractSettings::default());
+        let err = until_ready(&mut c, &mut machine()).await.unwrap_err();
         assert!(err.to_string().contains(want), "{err}");
     }
 }
 
 #[tokio::test(start_paused = true)]
-async fn run_refuses_to_write_a_start_from_other_counts() {
+async fn a_start_from_other_counts_than_its_from_is_not_written() {
     let mut plc = FakePlc::running();
     plc.put(1_008, &[5, 0]);
     let mut c = Contract::new(plc, ContractSettings::default());
     let mut m = machine();
-    c.ready(&mut m).await.unwrap();
-    let bank = c.upload(0, 1, FROM, &[table(0)]).await.unwrap();
-    let start = Planned {
-        tag: 1,
-        seq: 1,
-        bank: 0,
-        from: FROM,
-        targets: Some([500, 0, 0, 0]),
-        envelope: [(0, 500), (0, 0), (0, 0), (0, 0)],
-        duration: Duration::from_millis(500),
-        curve: None,
-    };
-    let err = c.run(&mut m, &bank, start, |_| {}).await.unwrap_err();
+    until_ready(&mut c, &mut m).await.unwrap();
+    m.upload_begun();
+    let _bank = c.upload(0, 1, FROM, &[table(0)]).await.unwrap();
+    let err = until_it_may_start(&mut c, &mut m, &start_of_table_0())
+        .await
+        .unwrap_err();
     assert_eq!(
         err.to_string(),
         "channel 0 is at 5, the tables were planned from 0: the start is not written"
     );
     assert!(!c.plc().writes.iter().any(|(a, _)| *a == 1_032));
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_proof_after_an_upload_reads_the_heartbeat_word_alone_then_the_status_block() {
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let mut m = machine();
+    until_ready(&mut c, &mut m).await.unwrap();
+    m.upload_begun();
+    let _bank = c.upload(0, 1, FROM, &[table(0)]).await.unwrap();
+    let before = c.plc().reads.len();
+    // The fake ticks its heartbeat at each status read, not at a read of the word alone: the
+    // word, then the block, see it move.
+    let status = c.proof_read(&mut m).await.unwrap();
+    let now = tokio::time::Instant::now().into_std();
+    let _ = m.on_status(&status, now);
+    assert_eq!(m.may_start(&start_of_table_0(), now), Ok(()));
+    assert_eq!(
+        c.plc().reads[before..],
+        [(1_002, 1), (1_000, STATUS_WORDS)],
+        "the heartbeat word alone, then the status block"
+    );
+    // The proof made, a read more is the status block alone.
+    c.proof_read(&mut m).await.unwrap();
+    assert_eq!(c.plc().reads[before + 2..], [(1_000, STATUS_WORDS)]);
 }
 
 #[tokio::test(start_paused = true)]
