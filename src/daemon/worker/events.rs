@@ -6,7 +6,7 @@ use super::{Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault};
 use crate::daemon::order::MoveOrder;
-use crate::daemon::report::{MoveId, MoveReport, Stage};
+use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
 use crate::plc::contract::{CommandWrite, ContractError, describe_outcome, fault_meaning};
 
@@ -55,7 +55,7 @@ impl Worker {
             s.link.error = None;
             s.counts = Some(counts);
             s.pose = Some(pose);
-            s.state = Some(status.state.name());
+            s.state = Some(status.state);
             s.fault = (status.block.fault != 0).then_some(status.block.fault);
             s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
             s.homed = homed;
@@ -76,7 +76,7 @@ impl Worker {
     }
 
     pub(super) fn publish_phase(&self) {
-        let phase = self.machine.phase().name();
+        let phase = RobotPhase::from(self.machine.phase());
         self.shared.state(|s| s.phase = phase);
     }
 

@@ -294,11 +294,7 @@ impl Worker {
         let link = self.link.as_mut().expect("connected");
         match link.plc().mode().await {
             Ok(mode) => {
-                let name = match mode {
-                    crate::plc::PlcMode::Run => "run",
-                    crate::plc::PlcMode::Prog => "prog",
-                };
-                self.shared.state(|s| s.plc_mode = Some(name));
+                self.shared.state(|s| s.plc_mode = Some(mode));
                 Ok(())
             }
             Err(e) if e.is_link_failure() => Err(ContractError::Plc(e)),
