@@ -48,8 +48,8 @@ pub use order::{
 };
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, KEPT, LinkState, MoveId, MoveReport, Moves, PieceKind, PieceReport, Predicted,
-    RobotPhase, RobotState, SectionReport, Stage,
+    GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves, PathAccepted,
+    PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
 pub use request::CommandError;
 pub use worker::Connector;

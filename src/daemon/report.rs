@@ -132,6 +132,30 @@ pub struct MoveReport {
     pub section: Option<SectionReport>,
 }
 
+/// What `POST /v1/robots/{name}/moves` answers (202).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MoveAccepted {
+    /// The move's last start: the move has ended when it has.
+    pub id: MoveId,
+    /// Every start, in order: one, or a line cut where a joint reverses (an older daemon gave
+    /// only `id`: read back, then empty).
+    #[serde(default)]
+    pub ids: Vec<MoveId>,
+    /// The last start's report.
+    pub report: MoveReport,
+}
+
+/// What `POST /v1/robots/{name}/paths` answers (202): one move per section (or part of one), in
+/// order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PathAccepted {
+    /// The moves' ids.
+    pub ids: Vec<MoveId>,
+    /// Their reports (one that ended and was dropped since is left out).
+    #[serde(default)]
+    pub reports: Vec<MoveReport>,
+}
+
 /// Which section of a path a move runs, and when it runs each piece of it, so that a client can
 /// tell from a move's `progress` which element (or blend) the robot is on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

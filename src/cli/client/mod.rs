@@ -10,8 +10,11 @@ use http_body_util::{BodyExt, Full};
 use hyper::body::{Bytes, Incoming};
 use hyper::{Method, Request, StatusCode};
 use hyper_util::rt::TokioIo;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 use tokio::net::UnixStream;
+
+use crate::daemon::RobotState;
 
 /// Where the daemon listens unless told otherwise.
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
@@ -57,6 +60,25 @@ impl Answer {
     #[must_use]
     pub fn reason(&self) -> Option<&str> {
         self.body.get("reason").and_then(Value::as_str)
+    }
+}
+
+/// A body the daemon answered, read into the API's type `T`, with its JSON as the daemon wrote
+/// it (what `--json` prints, as is).
+#[derive(Debug, Clone)]
+pub struct Received<T> {
+    /// The body, typed.
+    pub value: T,
+    /// The body as written.
+    pub json: Value,
+}
+
+impl<T: DeserializeOwned> Received<T> {
+    /// Reads `json` as a `T`; `what` names it when it is not one.
+    pub fn read(json: Value, what: &str) -> anyhow::Result<Self> {
+        let value =
+            T::deserialize(&json).with_context(|| format!("the daemon's answer is not {what}"))?;
+        Ok(Self { value, json })
     }
 }
 
@@ -206,16 +228,11 @@ impl Client {
             return Ok(n.to_owned());
         }
         let answer = self.call(Method::GET, "/v1/robots", None).await?;
-        let names: Vec<String> = answer
-            .body
-            .as_array()
-            .map(|robots| {
-                robots
-                    .iter()
-                    .filter_map(|r| r["name"].as_str().map(str::to_owned))
-                    .collect()
-            })
-            .unwrap_or_default();
+        let robots: Vec<RobotState> = match answer.body {
+            list @ Value::Array(_) => Received::read(list, "a list of robots")?.value,
+            _ => Vec::new(),
+        };
+        let names: Vec<String> = robots.into_iter().map(|r| r.name).collect();
         match names.as_slice() {
             [one] => Ok(one.clone()),
             [] => Err(anyhow!("the daemon has no robots")),

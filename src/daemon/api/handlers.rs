@@ -17,24 +17,10 @@ use super::Api;
 use super::body::JsonBody;
 use super::error::ApiError;
 use super::metrics;
-use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHandle, RobotState};
-
-/// `POST .../moves` accepted.
-#[derive(Debug, Serialize)]
-pub(super) struct Accepted {
-    /// The move's last start: the move has ended when it has.
-    id: MoveId,
-    /// Every start, in order: one, or a line cut where a joint reverses.
-    ids: Vec<MoveId>,
-    report: MoveReport,
-}
-
-/// `POST .../paths` accepted: one move per section, in order.
-#[derive(Debug, Serialize)]
-pub(super) struct PathAccepted {
-    ids: Vec<MoveId>,
-    reports: Vec<MoveReport>,
-}
+use crate::daemon::{
+    MoveAccepted, MoveId, MoveOrder, MoveReport, PathAccepted, PathOrder, Position, RobotHandle,
+    RobotState,
+};
 
 pub(super) async fn robots(State(api): State<Api>) -> Json<Vec<RobotState>> {
     Json(api.robots.values().map(RobotHandle::state).collect())
@@ -51,7 +37,7 @@ pub(super) async fn submit(
     State(api): State<Api>,
     Path(name): Path<String>,
     JsonBody(body): JsonBody,
-) -> Result<(StatusCode, Json<Accepted>), ApiError> {
+) -> Result<(StatusCode, Json<MoveAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
     let ids = robot.submit_starts(order.clone())?;
@@ -61,7 +47,7 @@ pub(super) async fn submit(
     let report = robot
         .report(id)
         .unwrap_or_else(|| MoveReport::new(id, &name, order));
-    Ok((StatusCode::ACCEPTED, Json(Accepted { id, ids, report })))
+    Ok((StatusCode::ACCEPTED, Json(MoveAccepted { id, ids, report })))
 }
 
 pub(super) async fn submit_path(
