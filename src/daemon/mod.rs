@@ -51,5 +51,5 @@ pub use report::{
     GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves, PathAccepted,
     PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
-pub use request::CommandError;
+pub use request::{CommandError, ConflictReason};
 pub use worker::Connector;

@@ -8,7 +8,7 @@ use crate::contract::{CHANNELS, Fault};
 use crate::daemon::order::MoveOrder;
 use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
-use crate::plc::contract::{CommandWrite, ContractError, describe_outcome, fault_meaning};
+use crate::plc::contract::{CommandWrite, ContractError, describe_outcome};
 
 /// A stop asked for this recently stopped the moves that end stopped.
 const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);
@@ -243,17 +243,10 @@ impl Worker {
                 }
             }
             Event::HomeFailed { fault } => {
-                let why = if fault == 0 {
-                    "the home routine did not end with the homed bit set".to_owned()
-                } else {
-                    format!(
-                        "the home routine failed: fault {fault} ({})",
-                        fault_meaning(fault)
-                    )
-                };
+                let why = CommandError::HomeFailed { fault };
                 tracing::error!(robot = %self.robot.name, "{why}");
                 for reply in std::mem::take(&mut self.homing) {
-                    let _ = reply.send(Err(CommandError::Plc(why.clone())));
+                    let _ = reply.send(Err(why.clone()));
                 }
             }
             Event::WriteHost
