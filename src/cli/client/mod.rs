@@ -10,11 +10,13 @@ use http_body_util::{BodyExt, Full};
 use hyper::body::{Bytes, Incoming};
 use hyper::{Method, Request, StatusCode};
 use hyper_util::rt::TokioIo;
+use serde::Deserialize as _;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
 use tokio::net::UnixStream;
 
 use crate::daemon::RobotState;
+use crate::daemon::api::ErrorBody;
 
 /// Where the daemon listens unless told otherwise.
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
@@ -41,16 +43,15 @@ impl Answer {
     /// not name it, the `reason` word last when there is one.
     #[must_use]
     pub fn error(&self) -> String {
-        let msg = self
-            .body
-            .get("error")
-            .and_then(Value::as_str)
-            .unwrap_or("no error text");
-        let text = match self.body.get("field").and_then(Value::as_str) {
-            Some(field) if !msg.contains(field) => format!("{field}: {msg}"),
-            _ => msg.to_owned(),
+        let Some(body) = self.error_body() else {
+            return "no error text".to_owned();
         };
-        match self.reason() {
+        let msg = body.error;
+        let text = match body.field {
+            Some(field) if !msg.contains(&field) => format!("{field}: {msg}"),
+            _ => msg,
+        };
+        match body.reason {
             Some(reason) => format!("{text} (reason: {reason})"),
             None => text,
         }
@@ -58,8 +59,13 @@ impl Answer {
 
     /// The API's word for programs (`not-homed`, `link-down`, ...), when it gave one.
     #[must_use]
-    pub fn reason(&self) -> Option<&str> {
-        self.body.get("reason").and_then(Value::as_str)
+    pub fn reason(&self) -> Option<String> {
+        self.error_body()?.reason
+    }
+
+    /// The body of an error answer, when it is one.
+    fn error_body(&self) -> Option<ErrorBody> {
+        ErrorBody::deserialize(&self.body).ok()
     }
 }
 

@@ -24,6 +24,7 @@
 //! (`not-allowed`), 409, 413 (`too-large`: a body over [`MAX_BODY_BYTES`]), 502 and 503; `POST .../moves` answers 409 (`not-homed`, `homing`,
 //! `faulted`, `not-ready`) or 503 (`link-down`, `stalled`) when the robot cannot take a move now.
 
+mod answers;
 mod auth;
 mod body;
 mod error;
@@ -31,6 +32,7 @@ mod handlers;
 mod listen;
 pub mod metrics;
 mod registers;
+pub use registers::{RegisterWrite, Registers};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -39,9 +41,10 @@ use axum::Router;
 use axum::routing::{get, post};
 use tokio_util::sync::CancellationToken;
 
+pub use answers::{DeletedPosition, NamedPosition, PositionList, SavedPosition};
 pub use auth::{BearerToken, TokenError};
 pub use body::MAX_BODY_BYTES;
-pub use error::ApiError;
+pub use error::{ApiError, ErrorBody};
 pub use listen::{HEADER_READ_TIMEOUT, serve, serve_with};
 
 use super::RobotHandle;
