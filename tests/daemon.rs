@@ -355,7 +355,7 @@ async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
         // over (the phase still "link-down" while the host word is confirmed): wait for it.
         for _ in 0..500 {
             let s = h2.state();
-            if s.current_move.is_some() || s.phase != "link-down" {
+            if s.current_move.is_some() || s.phase != linterpd::daemon::RobotPhase::LinkDown {
                 break;
             }
             tokio::time::sleep(Duration::from_millis(2)).await;

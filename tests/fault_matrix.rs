@@ -339,7 +339,8 @@ const BOUND: Duration = Duration::from_secs(30);
 async fn until_ready(h: &RobotHandle) -> Result<(), String> {
     for _ in 0..3_000 {
         let s = h.state();
-        let takes = s.refuses.is_none() || (!s.homed && s.phase == "unhomed");
+        let takes =
+            s.refuses.is_none() || (!s.homed && s.phase == linterpd::daemon::RobotPhase::Unhomed);
         if s.link.connected && takes && s.counts.is_some() {
             return Ok(());
         }

@@ -14,12 +14,13 @@
 use anyhow::anyhow;
 use clap::{Args, Subcommand};
 use hyper::Method;
-use serde_json::{Value, json};
+use serde_json::Value;
 
-use super::client::Client;
+use super::client::{Client, Received};
 use super::positions::Robot;
 use super::{Failure, bad_input};
-use crate::daemon::values_from_json;
+use crate::daemon::api::{RegisterWrite, Registers};
+use crate::daemon::{Values, values_from_json};
 use crate::gateway::{Address, Area};
 
 /// Arguments of `linterpd io`.
@@ -76,11 +77,9 @@ pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         IoAction::Read(a) => (Method::GET, format!("?count={}", a.count), None),
         IoAction::Write(a) => {
             let values = parse_values(start.area, &a.values)?;
-            (
-                Method::PUT,
-                String::new(),
-                Some(json!({ "values": values })),
-            )
+            let body = serde_json::to_value(RegisterWrite { values })
+                .map_err(|e| Failure::Runtime(e.into()))?;
+            (Method::PUT, String::new(), Some(body))
         }
     };
     let daemon = &target.daemon;
@@ -92,8 +91,10 @@ pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
             .map_err(Failure::from_client)?;
         let path = format!("/v1/robots/{robot}/registers/{start}{query}");
         let answer = client.expect(method, &path, body.as_ref()).await?;
-        let text = lines(start, &answer)?;
-        super::print(out, daemon.json, &answer, &text)
+        let registers: Received<Registers> =
+            Received::read(answer, "registers").map_err(Failure::Runtime)?;
+        let text = lines(start, &registers.value);
+        super::print(out, daemon.json, &registers.json, &text)
     })
 }
 
@@ -139,32 +140,31 @@ fn parse_value(area: Area, text: &str) -> anyhow::Result<Value> {
 }
 
 /// `DT100 = 1234` (or `R10 = 1`) for each value of the answer, from `start` on.
-fn lines(start: Address, answer: &Value) -> Result<String, Failure> {
-    let values = answer["values"]
-        .as_array()
-        .ok_or_else(|| Failure::Runtime(anyhow!("the daemon's answer has no values: {answer}")))?;
-    let line = |(i, v): (usize, &Value)| {
-        let at = Address {
-            area: start.area,
-            index: start.index + i as u32,
-        };
-        match v {
-            Value::Bool(b) => format!("{at} = {}", u8::from(*b)),
-            v => format!("{at} = {v}"),
-        }
+fn lines(start: Address, answer: &Registers) -> String {
+    let at = |i: usize| Address {
+        area: start.area,
+        index: start.index + i as u32,
     };
-    Ok(values
-        .iter()
-        .enumerate()
-        .map(line)
-        .collect::<Vec<_>>()
-        .join("\n"))
+    let lines: Vec<String> = match &answer.values {
+        Values::Words(words) => words
+            .iter()
+            .enumerate()
+            .map(|(i, w)| format!("{} = {w}", at(i)))
+            .collect(),
+        Values::Bits(bits) => bits
+            .iter()
+            .enumerate()
+            .map(|(i, b)| format!("{} = {}", at(i), u8::from(*b)))
+            .collect(),
+    };
+    lines.join("\n")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use clap::Parser;
+    use serde_json::json;
 
     fn args(line: &[&str]) -> IoArgs {
         let cli = crate::cli::Cli::try_parse_from(line).unwrap();
@@ -176,16 +176,18 @@ mod tests {
 
     #[test]
     fn answers_print_a_line_per_address() {
-        let dt = json!({"address": "DT100", "count": 2, "values": [1234, 65535]});
+        let read = |json| {
+            Received::<Registers>::read(json, "registers")
+                .unwrap()
+                .value
+        };
+        let dt = read(json!({"address": "DT100", "count": 2, "values": [1234, 65535]}));
         assert_eq!(
-            lines("DT100".parse().unwrap(), &dt).unwrap(),
+            lines("DT100".parse().unwrap(), &dt),
             "DT100 = 1234\nDT101 = 65535"
         );
-        let r = json!({"address": "R1F", "count": 2, "values": [true, false]});
-        assert_eq!(
-            lines("R1F".parse().unwrap(), &r).unwrap(),
-            "R1F = 1\nR20 = 0"
-        );
+        let r = read(json!({"address": "R1F", "count": 2, "values": [true, false]}));
+        assert_eq!(lines("R1F".parse().unwrap(), &r), "R1F = 1\nR20 = 0");
     }
 
     #[test]

@@ -10,13 +10,13 @@
 //!           could not write its positions file (500)
 //! ```
 
-use anyhow::anyhow;
 use clap::{Args, Subcommand};
 use hyper::Method;
 use serde_json::Value;
 
-use super::client::Client;
+use super::client::{Client, Received};
 use super::{DaemonArgs, Failure};
+use crate::daemon::api::{DeletedPosition, NamedPosition, PositionList, SavedPosition};
 use crate::daemon::positions::check_name;
 
 /// Arguments of `linterpd pos`.
@@ -84,67 +84,82 @@ pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
             None => format!("/v1/robots/{robot}/positions"),
         };
         let answer = client.expect(method, &path, None).await?;
-        if let Some(warning) = answer["warning"].as_str() {
-            eprintln!("warning: {warning}");
-        }
-        let text = match &args.action {
-            PosAction::Save(_) => saved_text(&robot, &answer),
-            PosAction::List(_) => list_text(&robot, &answer)?,
-            PosAction::Show(_) => position_text(&answer),
-            PosAction::Delete(_) => format!(
-                "{robot}: deleted {}",
-                answer["deleted"]["name"].as_str().unwrap_or("?")
-            ),
-        };
+        let text = text(&args.action, &robot, &answer).map_err(Failure::Runtime)?;
         super::print(out, daemon.json, &answer, &text)
     })
 }
 
+/// What the answer to `action` says, in words; the daemon's warning about its positions file,
+/// if it gives one, on stderr.
+fn text(action: &PosAction, robot: &str, answer: &Value) -> anyhow::Result<String> {
+    let json = answer.clone();
+    Ok(match action {
+        PosAction::Save(_) => {
+            let saved: SavedPosition = Received::read(json, "a position saved")?.value;
+            warn(saved.warning.as_deref());
+            saved_text(robot, &saved)
+        }
+        PosAction::List(_) => {
+            let list: PositionList = Received::read(json, "a list of positions")?.value;
+            warn(list.warning.as_deref());
+            list_text(robot, &list)
+        }
+        PosAction::Show(_) => position_text(&Received::read(json, "a position")?.value),
+        PosAction::Delete(_) => {
+            let gone: DeletedPosition = Received::read(json, "a position deleted")?.value;
+            format!("{robot}: deleted {}", gone.deleted.name)
+        }
+    })
+}
+
+fn warn(warning: Option<&str>) {
+    if let Some(warning) = warning {
+        eprintln!("warning: {warning}");
+    }
+}
+
 /// `pick: x 0.000, y 520.000, z 20.000 mm, a 0.000 deg; joint counts [0, 800, 1538, 0]`.
-fn position_text(p: &Value) -> String {
+fn position_text(p: &NamedPosition) -> String {
     let v = |i: usize| {
-        p["pose"][i].as_f64().map_or("?".to_owned(), |v| {
-            let text = format!("{v:.3}");
-            // No "-0.000" for a value that rounds to zero.
-            if text == "-0.000" {
-                "0.000".to_owned()
-            } else {
-                text
-            }
-        })
+        let text = format!("{:.3}", p.position.pose[i]);
+        // No "-0.000" for a value that rounds to zero.
+        if text == "-0.000" {
+            "0.000".to_owned()
+        } else {
+            text
+        }
     };
+    let counts: Vec<String> = p.position.joint_counts.iter().map(i64::to_string).collect();
     format!(
-        "{}: x {}, y {}, z {} mm, a {} deg; joint counts {}",
-        p["name"].as_str().unwrap_or("?"),
+        "{}: x {}, y {}, z {} mm, a {} deg; joint counts [{}]",
+        p.name,
         v(0),
         v(1),
         v(2),
         v(3),
-        p["joint_counts"]
+        counts.join(",")
     )
 }
 
-fn saved_text(robot: &str, answer: &Value) -> String {
-    let replaced = if answer["replaced"] == true {
+fn saved_text(robot: &str, answer: &SavedPosition) -> String {
+    let replaced = if answer.replaced {
         " (replacing the one of that name)"
     } else {
         ""
     };
-    format!("{robot}: saved {}{replaced}", position_text(answer))
+    format!("{robot}: saved {}{replaced}", position_text(&answer.saved))
 }
 
-fn list_text(robot: &str, answer: &Value) -> Result<String, Failure> {
-    let list = answer["positions"]
-        .as_array()
-        .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no list of positions")))?;
-    if list.is_empty() {
-        return Ok(format!("{robot}: no taught positions"));
+fn list_text(robot: &str, answer: &PositionList) -> String {
+    if answer.positions.is_empty() {
+        return format!("{robot}: no taught positions");
     }
-    Ok(list
+    answer
+        .positions
         .iter()
         .map(position_text)
         .collect::<Vec<_>>()
-        .join("\n"))
+        .join("\n")
 }
 
 #[cfg(test)]
@@ -157,15 +172,37 @@ mod tests {
     fn positions_print_one_line_each() {
         let p = json!({"name": "pick", "pose": [-0.0, 520.0, 20.0, -0.0001],
             "joint_counts": [0, 800, 1538, 0], "saved_unix_s": 1});
+        let pick = Received::<NamedPosition>::read(p.clone(), "a position")
+            .unwrap()
+            .value;
         assert_eq!(
-            position_text(&p),
+            position_text(&pick),
             "pick: x 0.000, y 520.000, z 20.000 mm, a 0.000 deg; joint counts [0,800,1538,0]"
         );
-        let list = json!({"positions": [p.clone(), p]});
-        assert_eq!(list_text("r", &list).unwrap().lines().count(), 2);
+        let list = PositionList {
+            positions: vec![pick.clone(), pick],
+            warning: None,
+        };
+        assert_eq!(list_text("r", &list).lines().count(), 2);
+        let list = |json| {
+            let action = PosAction::List(Robot {
+                robot: None,
+                daemon: DaemonArgs {
+                    socket: "/nonexistent".into(),
+                    json: false,
+                },
+            });
+            text(&action, "r", &json)
+        };
         assert_eq!(
-            list_text("r", &json!({"positions": []})).unwrap(),
+            list(json!({"positions": []})).unwrap(),
             "r: no taught positions"
+        );
+        assert_eq!(list(json!({"positions": [p]})).unwrap().lines().count(), 1);
+        let e = format!("{:#}", list(json!({"list": []})).unwrap_err());
+        assert!(
+            e.starts_with("the daemon's answer is not a list of positions"),
+            "{e}"
         );
     }
 

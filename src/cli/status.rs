@@ -15,8 +15,11 @@ use clap::Args;
 use hyper::Method;
 use serde_json::Value;
 
-use super::client::Client;
+use super::client::{Client, Received};
 use super::{DaemonArgs, EXIT_FAILURE, EXIT_NOT_DONE, EXIT_OK, Failure};
+use crate::contract::State;
+use crate::daemon::{RobotPhase, RobotState};
+use crate::plc::PlcMode;
 
 /// Arguments of `linterpd status`.
 #[derive(Debug, Args)]
@@ -30,65 +33,63 @@ pub struct StatusArgs {
 }
 
 /// The link: up, or its last error; and how often it was opened, when more than once.
-fn link(r: &Value) -> String {
-    let opened = match r["link"]["reconnects"].as_u64().unwrap_or(0) {
+fn link(r: &RobotState) -> String {
+    let opened = match r.link.reconnects {
         0 | 1 => String::new(),
         n => format!(" (opened {n} times)"),
     };
-    if connected(r) {
+    if r.link.connected {
         format!("link up{opened}")
     } else {
-        match r["link"]["error"].as_str() {
+        match &r.link.error {
             Some(why) => format!("link error: {why}{opened}"),
             None => format!("not connected yet{opened}"),
         }
     }
 }
 
-fn connected(r: &Value) -> bool {
-    r["link"]["connected"].as_bool() == Some(true)
+/// The PLC's mode as the operator's panel writes it.
+fn mode_word(mode: PlcMode) -> &'static str {
+    match mode {
+        PlcMode::Run => "RUN",
+        PlcMode::Prog => "PROG",
+    }
 }
 
 /// The PLC as last read: mode, program state, homed, fault, heartbeat (its age only while the
 /// link is up: the daemon keeps the last values while it is down).
-fn plc(r: &Value) -> String {
-    let Some(mode) = r["plc_mode"].as_str() else {
+fn plc(r: &RobotState) -> String {
+    let Some(mode) = r.plc_mode else {
         return "PLC not read yet".to_owned();
     };
+    let connected = r.link.connected;
     let mut text = format!(
         "PLC {}in {}, program {}, {}",
-        if connected(r) { "" } else { "as last read: " },
-        mode.to_uppercase(),
-        r["state"].as_str().unwrap_or("state unknown"),
-        if r["homed"].as_bool() == Some(true) {
-            "homed"
-        } else {
-            "not homed"
-        }
+        if connected { "" } else { "as last read: " },
+        mode_word(mode),
+        r.state.map_or("state unknown", State::name),
+        if r.homed { "homed" } else { "not homed" }
     );
-    if let Some(fault) = r["fault"].as_u64() {
+    if let Some(fault) = r.fault {
         let _ = write!(text, ", fault {fault}");
     }
-    match r["heartbeat_age_ms"].as_u64() {
-        Some(ms) if connected(r) => {
+    match r.heartbeat_age_ms {
+        Some(ms) if connected => {
             let _ = write!(text, ", heartbeat {ms} ms ago");
         }
-        None if connected(r) => text.push_str(", no heartbeat seen"),
+        None if connected => text.push_str(", no heartbeat seen"),
         _ => {}
     }
     text
 }
 
 /// The pose, or that it is unknown.
-fn pose(r: &Value) -> String {
-    let Some(p) = r["pose"].as_array().filter(|p| p.len() == 4) else {
+fn pose(r: &RobotState) -> String {
+    let Some(p) = r.pose else {
         return "pose unknown".to_owned();
     };
     // (+ 0.0: no "-0.000")
-    let v: Vec<f64> = p
-        .iter()
-        .map(|x| x.as_f64().unwrap_or(f64::NAN) + 0.0)
-        .collect();
+    let v = p.map(|x| x + 0.0);
     format!(
         "pose ({:.3}, {:.3}, {:.3} mm, {:.3} deg)",
         v[0], v[1], v[2], v[3]
@@ -96,16 +97,11 @@ fn pose(r: &Value) -> String {
 }
 
 /// The move running and the moves queued.
-fn moves(r: &Value) -> String {
-    let running = r["current_move"]
-        .as_u64()
-        .map_or("no move running".to_owned(), |id| {
-            format!("move {id} running")
-        });
-    let queued: Vec<String> = r["queued"]
-        .as_array()
-        .map(|q| q.iter().map(Value::to_string).collect())
-        .unwrap_or_default();
+fn moves(r: &RobotState) -> String {
+    let running = r.current_move.map_or("no move running".to_owned(), |id| {
+        format!("move {id} running")
+    });
+    let queued: Vec<String> = r.queued.iter().map(u64::to_string).collect();
     if queued.is_empty() {
         format!("{running}, nothing queued")
     } else {
@@ -114,17 +110,17 @@ fn moves(r: &Value) -> String {
 }
 
 /// One robot in one line.
-fn line(r: &Value) -> String {
-    let phase = r["phase"].as_str().unwrap_or("unknown").replace('-', " ");
+fn line(r: &RobotState) -> String {
+    let phase = r.phase.name().replace('-', " ");
     let mut text = format!(
         "{}: {phase}; {}; {}; {}; {}",
-        r["name"].as_str().unwrap_or("?"),
+        r.name,
         link(r),
         plc(r),
         pose(r),
         moves(r)
     );
-    if let Some(why) = r["refuses"].as_str() {
+    if let Some(why) = &r.refuses {
         let _ = write!(text, "; new moves refused: {why}");
     }
     text
@@ -132,13 +128,13 @@ fn line(r: &Value) -> String {
 
 /// The exit code for these robots: 3 if a PLC link is down or stalled, else 1 if a robot reports
 /// a fault, else 0.
-fn exit_code(robots: &[Value]) -> u8 {
-    let down = robots
-        .iter()
-        .any(|r| !connected(r) || matches!(r["phase"].as_str(), Some("link-down" | "stalled")));
+fn exit_code(robots: &[RobotState]) -> u8 {
+    let down = robots.iter().any(|r| {
+        !r.link.connected || matches!(r.phase, RobotPhase::LinkDown | RobotPhase::Stalled)
+    });
     let faulted = robots
         .iter()
-        .any(|r| r["fault"].as_u64().is_some() || r["state"].as_str() == Some("fault"));
+        .any(|r| r.fault.is_some() || r.state == Some(State::Fault));
     if down {
         EXIT_NOT_DONE
     } else if faulted {
@@ -146,6 +142,14 @@ fn exit_code(robots: &[Value]) -> u8 {
     } else {
         EXIT_OK
     }
+}
+
+/// The robots of an answer: a list, or one robot.
+fn robots(answer: &Value) -> anyhow::Result<Vec<RobotState>> {
+    Ok(match answer {
+        Value::Array(_) => Received::read(answer.clone(), "a list of robots")?.value,
+        one => vec![Received::read(one.clone(), "a robot's state")?.value],
+    })
 }
 
 /// Runs `linterpd status`.
@@ -157,10 +161,7 @@ pub fn run(args: &StatusArgs, out: &mut dyn std::io::Write) -> Result<(), Failur
             .as_ref()
             .map_or("/v1/robots".to_owned(), |r| format!("/v1/robots/{r}"));
         let answer = client.expect(Method::GET, &path, None).await?;
-        let robots = match &answer {
-            Value::Array(list) => list.clone(),
-            one => vec![one.clone()],
-        };
+        let robots = robots(&answer).map_err(Failure::Runtime)?;
         let text: Vec<String> = robots.iter().map(line).collect();
         super::print(out, args.daemon.json, &answer, &text.join("\n"))?;
         match exit_code(&robots) {
@@ -175,12 +176,18 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    fn idle() -> Value {
-        json!({"name": "press-loader", "link": {"connected": true, "error": null,
+    fn state(json: Value) -> RobotState {
+        Received::read(json, "a robot's state").unwrap().value
+    }
+
+    fn idle() -> RobotState {
+        state(
+            json!({"name": "press-loader", "link": {"connected": true, "error": null,
             "reconnects": 1}, "phase": "idle", "homed": true, "refuses": null,
             "plc_mode": "run", "heartbeat_age_ms": 12, "state": "idle", "fault": null,
             "counts": [0, 0, 0, 0], "pose": [-0.0, 500.0, 0.0, 0.0], "current_move": null,
-            "queued": []})
+            "queued": []}),
+        )
     }
 
     #[test]
@@ -195,11 +202,11 @@ mod tests {
 
     #[test]
     fn a_robot_never_read_has_no_null_in_its_line() {
-        let r = json!({"name": "press-loader", "link": {"connected": false,
+        let r = state(json!({"name": "press-loader", "link": {"connected": false,
             "error": "connection refused", "reconnects": 0}, "phase": "link-down",
             "homed": false, "refuses": "the PLC link is down", "plc_mode": null,
             "heartbeat_age_ms": null, "state": null, "fault": null, "counts": null,
-            "pose": null, "current_move": null, "queued": []});
+            "pose": null, "current_move": null, "queued": []}));
         let text = line(&r);
         assert!(!text.contains("null"), "{text}");
         assert!(
@@ -213,9 +220,10 @@ mod tests {
     #[test]
     fn a_link_lost_shows_the_plc_as_last_read_without_a_heartbeat_age() {
         let mut r = idle();
-        r["link"] = json!({"connected": false, "error": "connection refused",
-            "reconnects": 3});
-        r["phase"] = json!("link-down");
+        r.link = state(json!({"name": "-", "link": {"connected": false,
+            "error": "connection refused", "reconnects": 3}}))
+        .link;
+        r.phase = RobotPhase::LinkDown;
         let text = line(&r);
         assert!(
             text.contains(
@@ -230,10 +238,10 @@ mod tests {
     #[test]
     fn a_fault_exits_1_and_is_named() {
         let mut r = idle();
-        r["state"] = json!("fault");
-        r["fault"] = json!(3);
-        r["current_move"] = json!(7);
-        r["queued"] = json!([8, 9]);
+        r.state = Some(State::Fault);
+        r.fault = Some(3);
+        r.current_move = Some(7);
+        r.queued = vec![8, 9];
         let text = line(&r);
         assert!(
             text.contains("program fault, homed, fault 3")
@@ -241,5 +249,17 @@ mod tests {
             "{text}"
         );
         assert_eq!(exit_code(&[r]), EXIT_FAILURE);
+    }
+
+    #[test]
+    fn one_robot_or_a_list_reads_as_robots() {
+        let one = json!({"name": "a", "phase": "idle"});
+        assert_eq!(robots(&one).unwrap().len(), 1);
+        assert_eq!(robots(&json!([one, {"name": "b"}])).unwrap().len(), 2);
+        let e = format!("{:#}", robots(&json!({"phase": "idle"})).unwrap_err());
+        assert!(
+            e.starts_with("the daemon's answer is not a robot's state"),
+            "{e}"
+        );
     }
 }

@@ -1,5 +1,6 @@
 //! The status and command blocks as typed values, and their word images.
 
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::CHANNELS;
@@ -31,7 +32,8 @@ pub struct UnknownValue {
 }
 
 /// The PLC program's state (status block +3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum State {
     /// Nothing started since power-up or clear fault.
     Idle,
@@ -79,7 +81,7 @@ impl State {
         })
     }
 
-    /// Lower-case name for messages.
+    /// Lower-case name for messages, as the API writes it.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {

@@ -3,7 +3,7 @@
 //! it owns, one exchange at a time between its own: a motion exchange never waits behind more
 //! than one gateway exchange.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 use tokio::sync::oneshot;
 
@@ -15,8 +15,8 @@ pub const MAX_WORDS: u32 = 1_000;
 /// Bits at most one gateway request may read or write.
 pub const MAX_BITS: u32 = 2_000;
 
-/// What a gateway request reads or writes.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+/// What a gateway request reads or writes (read back, an empty list is words).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Values {
     /// DT words.

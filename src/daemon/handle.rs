@@ -18,7 +18,7 @@ use super::order::{
     plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::report::{MoveId, MoveReport, RobotState, SectionReport, Stage};
+use super::report::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
 use super::request::{CommandError, Reply, Request};
 use super::shared::Shared;
 use super::worker::{Channels, Connector, Worker};
@@ -27,6 +27,7 @@ use crate::gateway::{Address, GatewaySettings, Range};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
 use crate::plan::{MoveRequest, Origin, PathPlan, PlanError, SectionPlan, line_as_path, plan_path};
+use crate::plc::PlcMode;
 use crate::plc::contract::ContractSettings;
 use crate::robot::{Motion, Robot};
 
@@ -293,7 +294,7 @@ impl RobotHandle {
         };
         let detail = match blocker {
             Blocker::LinkDown => self.shared.state(|s| s.link.error.clone()),
-            Blocker::Stalled if self.state().plc_mode == Some("prog") => {
+            Blocker::Stalled if self.state().plc_mode == Some(PlcMode::Prog) => {
                 Some("it reports PROG mode".to_owned())
             }
             _ => None,
@@ -424,7 +425,10 @@ impl RobotHandle {
             return Err(PositionError::NotNow { blocker });
         }
         let state = self.state();
-        if state.current_move.is_some() || !state.queued.is_empty() || state.phase != "idle" {
+        if state.current_move.is_some()
+            || !state.queued.is_empty()
+            || state.phase != RobotPhase::Idle
+        {
             return Err(PositionError::Busy {
                 current: state
                     .current_move

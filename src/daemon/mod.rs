@@ -9,10 +9,11 @@
 //! ```text
 //! handle.rs   RobotHandle, Daemon, RobotSetup, DaemonOptions
 //! shared.rs   what a handle and its worker share (neither owns the other)
-//! request.rs  requests to the worker and the typed CommandError
+//! request.rs  requests to the worker and the typed CommandError (ConflictReason)
 //! order.rs    a move order (to, by, joints or position), its check, and planning it
 //! positions.rs taught positions per robot, kept in the state directory
-//! report.rs   RobotState, MoveReport, Stage
+//! report.rs   RobotState (RobotPhase), MoveReport (Stage, SectionReport), MoveAccepted,
+//!             PathAccepted: what the API writes and the CLI reads back
 //! ids.rs      move ids unique across restarts
 //! gateway.rs  register gateway requests (the cell's other registers, through the same link)
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
@@ -48,8 +49,8 @@ pub use order::{
 };
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, KEPT, LinkState, MoveId, MoveReport, Moves, PieceReport, Predicted, RobotState,
-    SectionReport, Stage,
+    GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves, PathAccepted,
+    PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
-pub use request::CommandError;
+pub use request::{CommandError, ConflictReason};
 pub use worker::Connector;

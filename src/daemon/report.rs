@@ -3,17 +3,20 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tokio::sync::watch;
 
 use super::order::MoveOrder;
+use crate::contract::State;
+use crate::contract::machine::Phase;
 use crate::geometry::{Path, Primitive};
+use crate::plc::PlcMode;
 
 /// A move's identifier, unique across daemon runs (see [`super::MoveIds`]).
 pub type MoveId = u64;
 
 /// Where a move is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Stage {
     /// Accepted, waiting its turn.
@@ -65,7 +68,7 @@ impl Stage {
 }
 
 /// The planner's prediction for a move.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Predicted {
     /// Table rows over all channels.
     pub rows: usize,
@@ -79,8 +82,9 @@ pub struct Predicted {
     pub tracking_error_mm: f64,
 }
 
-/// Everything known about one move.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// Everything known about one move. Read back (by the CLI), a field an older daemon did not
+/// write is `None` (or empty, false, 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MoveReport {
     /// Its identifier.
     pub id: MoveId,
@@ -89,8 +93,10 @@ pub struct MoveReport {
     /// Where it is.
     pub stage: Stage,
     /// The order as accepted (empty for a move found running after a restart).
+    #[serde(default)]
     pub order: MoveOrder,
     /// Found running on the PLC when the daemon (re)connected, not started by this run.
+    #[serde(default)]
     pub recovered: bool,
     /// The longest the move may take from now on before it is given up, s (its planned
     /// duration and upload plus margins); what `linterpd move` waits for at most.
@@ -112,6 +118,7 @@ pub struct MoveReport {
     /// How far along its plan it is, as a share of its planned duration (0 to 1): the planned
     /// instant whose counts come nearest the counts last read from the PLC (it never goes
     /// back); by the clock only for a move the daemon found running without its plan.
+    #[serde(default)]
     pub progress: f64,
     /// The latest counts per channel read while it ran.
     pub counts: Option<[i64; 4]>,
@@ -121,13 +128,37 @@ pub struct MoveReport {
     /// Why it failed or stopped.
     pub error: Option<String>,
     /// A path section's move: which section, and when it runs each of the path's pieces.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub section: Option<SectionReport>,
+}
+
+/// What `POST /v1/robots/{name}/moves` answers (202).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MoveAccepted {
+    /// The move's last start: the move has ended when it has.
+    pub id: MoveId,
+    /// Every start, in order: one, or a line cut where a joint reverses (an older daemon gave
+    /// only `id`: read back, then empty).
+    #[serde(default)]
+    pub ids: Vec<MoveId>,
+    /// The last start's report.
+    pub report: MoveReport,
+}
+
+/// What `POST /v1/robots/{name}/paths` answers (202): one move per section (or part of one), in
+/// order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PathAccepted {
+    /// The moves' ids.
+    pub ids: Vec<MoveId>,
+    /// Their reports (one that ended and was dropped since is left out).
+    #[serde(default)]
+    pub reports: Vec<MoveReport>,
 }
 
 /// Which section of a path a move runs, and when it runs each piece of it, so that a client can
 /// tell from a move's `progress` which element (or blend) the robot is on.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SectionReport {
     /// The section, from 1.
     pub number: usize,
@@ -138,10 +169,10 @@ pub struct SectionReport {
 }
 
 /// One piece of a section, and when the move runs it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PieceReport {
-    /// `"line"` or `"arc"`.
-    pub kind: &'static str,
+    /// A line or an arc.
+    pub kind: PieceKind,
     /// The element it comes from (from 1); none for a blend.
     pub element: Option<usize>,
     /// A blend: the waypoint it rounds (the end of element n); none for an element's piece.
@@ -150,6 +181,25 @@ pub struct PieceReport {
     pub begins: f64,
     /// Share of the move's planned duration when it is left.
     pub ends: f64,
+}
+
+/// What a piece of a path is (`line` or `arc` in the API).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PieceKind {
+    /// A straight line.
+    Line,
+    /// A circular arc: an element's, or a blend rounding a waypoint.
+    Arc,
+}
+
+impl From<&Primitive> for PieceKind {
+    fn from(primitive: &Primitive) -> Self {
+        match primitive {
+            Primitive::Line(_) => Self::Line,
+            Primitive::Arc(_) => Self::Arc,
+        }
+    }
 }
 
 impl SectionReport {
@@ -170,10 +220,7 @@ impl SectionReport {
             .pieces()
             .iter()
             .map(|p| PieceReport {
-                kind: match p.primitive {
-                    Primitive::Line(_) => "line",
-                    Primitive::Arc(_) => "arc",
-                },
+                kind: PieceKind::from(&p.primitive),
                 element: p.element,
                 waypoint: p.waypoint,
                 begins: share(p.start_mm),
@@ -212,7 +259,8 @@ impl MoveReport {
 }
 
 /// The link to a robot's PLC.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct LinkState {
     /// Whether the link is up and the contract answered.
     pub connected: bool,
@@ -222,26 +270,29 @@ pub struct LinkState {
     pub reconnects: u64,
 }
 
-/// A robot's state as last read.
-#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+/// A robot's state as last read. Read back (by the CLI), a field an older daemon did not write
+/// is `None` (or empty, false, 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct RobotState {
     /// Robot name.
     pub name: String,
     /// The PLC link.
+    #[serde(default)]
     pub link: LinkState,
-    /// Where the daemon and the PLC stand: `link-down`, `stalled`, `unhomed`, `homing`, `idle`,
-    /// `uploading`, `starting`, `running`, `running-chained`, `stopping`.
-    pub phase: &'static str,
+    /// Where the daemon and the PLC stand.
+    #[serde(default)]
+    pub phase: RobotPhase,
     /// Whether the PLC's homed bit is set (`false` until known).
+    #[serde(default)]
     pub homed: bool,
     /// Why a new move would be refused now (`None`: it would be accepted).
     pub refuses: Option<String>,
     /// `run` or `prog`, when known.
-    pub plc_mode: Option<&'static str>,
+    pub plc_mode: Option<PlcMode>,
     /// Milliseconds since the heartbeat last changed.
     pub heartbeat_age_ms: Option<u64>,
-    /// The PLC program's state (`idle`, `running`, `done`, `stopped`, `fault`).
-    pub state: Option<&'static str>,
+    /// The PLC program's state (`idle`, `running`, `done`, `stopped`, `fault`, `homing`).
+    pub state: Option<State>,
     /// The fault word, when not 0.
     pub fault: Option<u16>,
     /// Counts per channel.
@@ -251,13 +302,100 @@ pub struct RobotState {
     /// The move running now.
     pub current_move: Option<MoveId>,
     /// Moves waiting, in order.
+    #[serde(default)]
     pub queued: Vec<MoveId>,
     /// The register gateway's work on this robot's link.
+    #[serde(default)]
     pub gateway: GatewayStats,
 }
 
+/// Where the daemon and the PLC stand, as [`RobotState::phase`] shows it: the contract machine's
+/// [`Phase`] without its data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum RobotPhase {
+    /// Not published yet: the worker's first connection attempt has not ended (the API writes
+    /// `""`).
+    #[default]
+    #[serde(rename = "")]
+    NotPublished,
+    /// No link to the PLC (or no status block yet).
+    LinkDown,
+    /// The PLC's heartbeat stands still (stalled, or in PROG mode).
+    Stalled,
+    /// The PLC's homed bit is clear.
+    Unhomed,
+    /// The home routine runs.
+    Homing,
+    /// Nothing in flight.
+    Idle,
+    /// A bank is being written (behind the running move, if there is one).
+    Uploading,
+    /// A start was written while nothing ran; not yet seen taken.
+    Starting,
+    /// A move runs.
+    Running,
+    /// A move runs and the next was written behind it.
+    RunningChained,
+    /// A stop was written: the moves in flight end as the PLC shows.
+    Stopping,
+}
+
+impl RobotPhase {
+    /// Every phase, in the order of its declaration.
+    pub const ALL: [Self; 11] = [
+        Self::NotPublished,
+        Self::LinkDown,
+        Self::Stalled,
+        Self::Unhomed,
+        Self::Homing,
+        Self::Idle,
+        Self::Uploading,
+        Self::Starting,
+        Self::Running,
+        Self::RunningChained,
+        Self::Stopping,
+    ];
+
+    /// Its name as the API writes it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::NotPublished => "",
+            Self::LinkDown => "link-down",
+            Self::Stalled => "stalled",
+            Self::Unhomed => "unhomed",
+            Self::Homing => "homing",
+            Self::Idle => "idle",
+            Self::Uploading => "uploading",
+            Self::Starting => "starting",
+            Self::Running => "running",
+            Self::RunningChained => "running-chained",
+            Self::Stopping => "stopping",
+        }
+    }
+}
+
+impl From<&Phase> for RobotPhase {
+    fn from(phase: &Phase) -> Self {
+        match phase {
+            Phase::LinkDown { .. } => Self::LinkDown,
+            Phase::Stalled => Self::Stalled,
+            Phase::Unhomed => Self::Unhomed,
+            Phase::Homing { .. } => Self::Homing,
+            Phase::Idle => Self::Idle,
+            Phase::Uploading { .. } => Self::Uploading,
+            Phase::Starting { .. } => Self::Starting,
+            Phase::Running { .. } => Self::Running,
+            Phase::Chained { .. } => Self::RunningChained,
+            Phase::Stopping { .. } => Self::Stopping,
+        }
+    }
+}
+
 /// What the register gateway did on a robot's link since the daemon started.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct GatewayStats {
     /// Requests answered (read or write).
     pub requests: u64,
@@ -399,9 +537,9 @@ mod tests {
         assert_eq!(
             names,
             [
-                ("line", Some(1), None),
-                ("arc", None, Some(1)),
-                ("line", Some(2), None)
+                (PieceKind::Line, Some(1), None),
+                (PieceKind::Arc, None, Some(1)),
+                (PieceKind::Line, Some(2), None)
             ]
         );
         // Back to back from 0 to 1; the blend's share is its time on the cruise.
@@ -416,5 +554,180 @@ mod tests {
             (blend_s - blend_mm / profile.speed_mm_s).abs() < 1e-6,
             "{blend_s}"
         );
+    }
+}
+
+/// The API's JSON of states and reports, byte for byte as the daemon wrote it before its types
+/// were read back (issue 26), and read back into the same values.
+#[cfg(test)]
+mod json_tests {
+    use super::*;
+
+    const STATE_NEW: &str = r#"{"name":"press-loader","link":{"connected":false,"error":null,"reconnects":0},"phase":"","homed":false,"refuses":null,"plc_mode":null,"heartbeat_age_ms":null,"state":null,"fault":null,"counts":null,"pose":null,"current_move":null,"queued":[],"gateway":{"requests":0,"failed":0,"exchanges":0,"longest_exchange_ms":0,"longest_poll_delay_ms":0}}"#;
+    const STATE_FULL: &str = r#"{"name":"press-loader","link":{"connected":true,"error":"timed out","reconnects":3},"phase":"running-chained","homed":true,"refuses":"a move runs","plc_mode":"prog","heartbeat_age_ms":12,"state":"fault","fault":3,"counts":[1,-2,3,40000],"pose":[-0.0,500.25,0.1,45.0],"current_move":7,"queued":[8,9],"gateway":{"requests":5,"failed":1,"exchanges":4,"longest_exchange_ms":30,"longest_poll_delay_ms":2}}"#;
+    const REPORT_NEW: &str = r#"{"id":42,"robot":"press-loader","stage":"queued","order":{},"recovered":false,"deadline_s":null,"seq":null,"bank":null,"start_counts":null,"target_counts":null,"predicted":null,"upload_s":null,"motion_s":null,"progress":0.0,"counts":null,"final_error_pulses":null,"error":null}"#;
+    const REPORT_FULL: &str = r#"{"id":43,"robot":"press-loader","stage":"running","order":{"to":[1.0,2.0,3.0],"speed_mm_s":120.0,"method":"bounded-error"},"recovered":true,"deadline_s":4.5,"seq":17,"bank":1,"start_counts":[0,0,0,0],"target_counts":[100,-200,300,0],"predicted":{"rows":12,"words":96,"duration_s":1.25,"path_deviation_mm":0.0125,"tracking_error_mm":0.3},"upload_s":0.08,"motion_s":1.3,"progress":0.42,"counts":[50,-100,150,0],"final_error_pulses":[0,1,-1,0],"error":"stopped by a stop request","section":{"number":2,"of":3,"pieces":[{"kind":"line","element":1,"waypoint":null,"begins":0.0,"ends":0.5},{"kind":"arc","element":null,"waypoint":1,"begins":0.5,"ends":0.6}]}}"#;
+
+    fn new_state() -> RobotState {
+        RobotState {
+            name: "press-loader".into(),
+            ..RobotState::default()
+        }
+    }
+
+    fn full_state() -> RobotState {
+        RobotState {
+            name: "press-loader".into(),
+            link: LinkState {
+                connected: true,
+                error: Some("timed out".into()),
+                reconnects: 3,
+            },
+            phase: RobotPhase::RunningChained,
+            homed: true,
+            refuses: Some("a move runs".into()),
+            plc_mode: Some(PlcMode::Prog),
+            heartbeat_age_ms: Some(12),
+            state: Some(State::Fault),
+            fault: Some(3),
+            counts: Some([1, -2, 3, 40000]),
+            pose: Some([-0.0, 500.25, 0.1, 45.0]),
+            current_move: Some(7),
+            queued: vec![8, 9],
+            gateway: GatewayStats {
+                requests: 5,
+                failed: 1,
+                exchanges: 4,
+                longest_exchange_ms: 30,
+                longest_poll_delay_ms: 2,
+            },
+        }
+    }
+
+    fn full_report() -> MoveReport {
+        let order = MoveOrder {
+            to: Some(vec![1.0, 2.0, 3.0]),
+            speed_mm_s: Some(120.0),
+            method: Some("bounded-error".into()),
+            ..MoveOrder::default()
+        };
+        let piece = |kind, element, waypoint, begins, ends| PieceReport {
+            kind,
+            element,
+            waypoint,
+            begins,
+            ends,
+        };
+        MoveReport {
+            stage: Stage::Running,
+            recovered: true,
+            deadline_s: Some(4.5),
+            seq: Some(17),
+            bank: Some(1),
+            start_counts: Some([0, 0, 0, 0]),
+            target_counts: Some([100, -200, 300, 0]),
+            predicted: Some(Predicted {
+                rows: 12,
+                words: 96,
+                duration_s: 1.25,
+                path_deviation_mm: 0.012_5,
+                tracking_error_mm: 0.3,
+            }),
+            upload_s: Some(0.08),
+            motion_s: Some(1.3),
+            progress: 0.42,
+            counts: Some([50, -100, 150, 0]),
+            final_error_pulses: Some([0, 1, -1, 0]),
+            error: Some("stopped by a stop request".into()),
+            section: Some(SectionReport {
+                number: 2,
+                of: 3,
+                pieces: vec![
+                    piece(PieceKind::Line, Some(1), None, 0.0, 0.5),
+                    piece(PieceKind::Arc, None, Some(1), 0.5, 0.6),
+                ],
+            }),
+            ..MoveReport::new(43, "press-loader", order)
+        }
+    }
+
+    /// `value` is written as `json`, and `json` reads back as `value`.
+    fn assert_json<T>(value: &T, json: &str)
+    where
+        T: Serialize + serde::de::DeserializeOwned + PartialEq + std::fmt::Debug,
+    {
+        assert_eq!(serde_json::to_string(value).unwrap(), json);
+        assert_eq!(&serde_json::from_str::<T>(json).unwrap(), value);
+    }
+
+    #[test]
+    fn a_robot_state_is_written_as_before_and_reads_back() {
+        assert_json(&new_state(), STATE_NEW);
+        assert_json(&full_state(), STATE_FULL);
+    }
+
+    #[test]
+    fn a_move_report_is_written_as_before_and_reads_back() {
+        assert_json(
+            &MoveReport::new(42, "press-loader", MoveOrder::default()),
+            REPORT_NEW,
+        );
+        assert_json(&full_report(), REPORT_FULL);
+    }
+
+    #[test]
+    fn every_phase_state_mode_stage_and_piece_kind_keeps_its_word() {
+        // The words `Phase::name()`, `State::name()` and the daemon wrote before.
+        let phases = [
+            "",
+            "link-down",
+            "stalled",
+            "unhomed",
+            "homing",
+            "idle",
+            "uploading",
+            "starting",
+            "running",
+            "running-chained",
+            "stopping",
+        ];
+        for (phase, word) in RobotPhase::ALL.into_iter().zip(phases) {
+            assert_json(&phase, &format!("\"{word}\""));
+            assert_eq!(phase.name(), word);
+        }
+        for word in ["idle", "running", "done", "stopped", "fault", "homing"] {
+            let state: State = serde_json::from_str(&format!("\"{word}\"")).unwrap();
+            assert_json(&state, &format!("\"{word}\""));
+            assert_eq!(state.name(), word);
+        }
+        assert_json(&PlcMode::Run, "\"run\"");
+        assert_json(&PlcMode::Prog, "\"prog\"");
+        assert_json(&PieceKind::Line, "\"line\"");
+        assert_json(&PieceKind::Arc, "\"arc\"");
+        for stage in Stage::FINAL.into_iter().chain([
+            Stage::Queued,
+            Stage::Uploading,
+            Stage::Waiting,
+            Stage::Running,
+        ]) {
+            assert_json(&stage, &format!("\"{}\"", stage.name()));
+        }
+    }
+
+    #[test]
+    fn a_report_or_state_without_the_optional_fields_still_reads() {
+        let report: MoveReport =
+            serde_json::from_str(r#"{"id":3,"robot":"r","stage":"done"}"#).unwrap();
+        assert_eq!(report, {
+            let mut r = MoveReport::new(3, "r", MoveOrder::default());
+            r.stage = Stage::Done;
+            r
+        });
+        let state: RobotState =
+            serde_json::from_str(r#"{"name":"r","link":{"connected":true},"phase":"idle"}"#)
+                .unwrap();
+        assert!(state.link.connected && state.phase == RobotPhase::Idle);
+        assert_eq!(state.gateway, GatewayStats::default());
+        assert!(state.queued.is_empty() && state.plc_mode.is_none());
     }
 }

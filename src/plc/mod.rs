@@ -22,6 +22,7 @@ use std::future::Future;
 
 pub mod contract;
 
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::gateway::Area;
@@ -51,8 +52,9 @@ pub struct ExchangeSizes {
     pub read_bits: u16,
 }
 
-/// RUN or PROG.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// RUN or PROG (`run`, `prog` in the daemon's API).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum PlcMode {
     /// The program runs.
     Run,

@@ -113,7 +113,10 @@ pub async fn wait_connected(h: &RobotHandle, shared: &SharedMock) {
     for _ in 0..500 {
         let s = h.state();
         let counts = shared.with(|m| m.status().elapsed.map(i64::from));
-        if s.link.connected && s.refuses.is_none() && s.counts == Some(counts) && s.phase == "idle"
+        if s.link.connected
+            && s.refuses.is_none()
+            && s.counts == Some(counts)
+            && s.phase == linterpd::daemon::RobotPhase::Idle
         {
             return;
         }

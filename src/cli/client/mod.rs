@@ -10,8 +10,13 @@ use http_body_util::{BodyExt, Full};
 use hyper::body::{Bytes, Incoming};
 use hyper::{Method, Request, StatusCode};
 use hyper_util::rt::TokioIo;
+use serde::Deserialize as _;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 use tokio::net::UnixStream;
+
+use crate::daemon::RobotState;
+use crate::daemon::api::ErrorBody;
 
 /// Where the daemon listens unless told otherwise.
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
@@ -38,16 +43,15 @@ impl Answer {
     /// not name it, the `reason` word last when there is one.
     #[must_use]
     pub fn error(&self) -> String {
-        let msg = self
-            .body
-            .get("error")
-            .and_then(Value::as_str)
-            .unwrap_or("no error text");
-        let text = match self.body.get("field").and_then(Value::as_str) {
-            Some(field) if !msg.contains(field) => format!("{field}: {msg}"),
-            _ => msg.to_owned(),
+        let Some(body) = self.error_body() else {
+            return "no error text".to_owned();
         };
-        match self.reason() {
+        let msg = body.error;
+        let text = match body.field {
+            Some(field) if !msg.contains(&field) => format!("{field}: {msg}"),
+            _ => msg,
+        };
+        match body.reason {
             Some(reason) => format!("{text} (reason: {reason})"),
             None => text,
         }
@@ -55,8 +59,32 @@ impl Answer {
 
     /// The API's word for programs (`not-homed`, `link-down`, ...), when it gave one.
     #[must_use]
-    pub fn reason(&self) -> Option<&str> {
-        self.body.get("reason").and_then(Value::as_str)
+    pub fn reason(&self) -> Option<String> {
+        self.error_body()?.reason
+    }
+
+    /// The body of an error answer, when it is one.
+    fn error_body(&self) -> Option<ErrorBody> {
+        ErrorBody::deserialize(&self.body).ok()
+    }
+}
+
+/// A body the daemon answered, read into the API's type `T`, with its JSON as the daemon wrote
+/// it (what `--json` prints, as is).
+#[derive(Debug, Clone)]
+pub struct Received<T> {
+    /// The body, typed.
+    pub value: T,
+    /// The body as written.
+    pub json: Value,
+}
+
+impl<T: DeserializeOwned> Received<T> {
+    /// Reads `json` as a `T`; `what` names it when it is not one.
+    pub fn read(json: Value, what: &str) -> anyhow::Result<Self> {
+        let value =
+            T::deserialize(&json).with_context(|| format!("the daemon's answer is not {what}"))?;
+        Ok(Self { value, json })
     }
 }
 
@@ -206,16 +234,11 @@ impl Client {
             return Ok(n.to_owned());
         }
         let answer = self.call(Method::GET, "/v1/robots", None).await?;
-        let names: Vec<String> = answer
-            .body
-            .as_array()
-            .map(|robots| {
-                robots
-                    .iter()
-                    .filter_map(|r| r["name"].as_str().map(str::to_owned))
-                    .collect()
-            })
-            .unwrap_or_default();
+        let robots: Vec<RobotState> = match answer.body {
+            list @ Value::Array(_) => Received::read(list, "a list of robots")?.value,
+            _ => Vec::new(),
+        };
+        let names: Vec<String> = robots.into_iter().map(|r| r.name).collect();
         match names.as_slice() {
             [one] => Ok(one.clone()),
             [] => Err(anyhow!("the daemon has no robots")),

@@ -12,7 +12,8 @@
 //! ```
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use serde_json::Value;
+
+use crate::daemon::{MoveReport, PieceReport, Stage};
 
 /// Positions a bar has.
 const STEPS: u64 = 1_000;
@@ -45,17 +46,17 @@ impl Bars {
     }
 
     /// Shows `report`, the move's latest.
-    pub(super) fn show(&mut self, report: &Value) {
-        let stage = report["stage"].as_str().unwrap_or("?");
-        let progress = match stage {
-            "uploading" | "queued" => 0.0,
-            _ => report["progress"].as_f64().unwrap_or(0.0),
+    pub(super) fn show(&mut self, report: &MoveReport) {
+        let progress = match report.stage {
+            Stage::Uploading | Stage::Queued => 0.0,
+            _ => report.progress,
         };
-        self.main.set_message(stage.to_owned());
+        self.main.set_message(report.stage.name());
         self.main.set_position(position(progress));
-        let Some(pieces) = report["section"]["pieces"].as_array() else {
+        let Some(section) = &report.section else {
             return;
         };
+        let pieces = section.pieces.as_slice();
         if self.pieces.is_empty() {
             for _ in pieces {
                 let bar = self.multi.add(ProgressBar::new(STEPS));
@@ -106,8 +107,8 @@ fn position(share: f64) -> u64 {
 
 /// A piece as the operator knows it: `element 2`, or `blend 2` for the corner arc rounding
 /// waypoint 2.
-pub(super) fn piece_name(piece: &Value) -> String {
-    match (piece["element"].as_u64(), piece["waypoint"].as_u64()) {
+pub(super) fn piece_name(piece: &PieceReport) -> String {
+    match (piece.element, piece.waypoint) {
         (Some(e), _) => format!("element {e}"),
         (None, Some(w)) => format!("blend {w}"),
         (None, None) => "blend".to_owned(),
@@ -115,9 +116,8 @@ pub(super) fn piece_name(piece: &Value) -> String {
 }
 
 /// How much of its planned time a piece has run when the move has run `progress` of its own.
-fn piece_share(piece: &Value, progress: f64) -> f64 {
-    let begins = piece["begins"].as_f64().unwrap_or(0.0);
-    let ends = piece["ends"].as_f64().unwrap_or(1.0);
+fn piece_share(piece: &PieceReport, progress: f64) -> f64 {
+    let (begins, ends) = (piece.begins, piece.ends);
     if ends <= begins {
         return if progress >= ends { 1.0 } else { 0.0 };
     }
@@ -125,18 +125,16 @@ fn piece_share(piece: &Value, progress: f64) -> f64 {
 }
 
 /// The piece the robot is on at `progress` (the last once the move is over).
-fn current(pieces: &[Value], progress: f64) -> Option<usize> {
-    let running = pieces
-        .iter()
-        .position(|p| progress < p["ends"].as_f64().unwrap_or(1.0));
+fn current(pieces: &[PieceReport], progress: f64) -> Option<usize> {
+    let running = pieces.iter().position(|p| progress < p.ends);
     running.or_else(|| pieces.len().checked_sub(1))
 }
 
 /// The elements a section's report covers, as "3" or "2-4" (`None` for a move that is no path
 /// section).
-pub(super) fn elements(report: &Value) -> Option<String> {
-    let pieces = report["section"]["pieces"].as_array()?;
-    let mut numbers = pieces.iter().filter_map(|p| p["element"].as_u64());
+pub(super) fn elements(report: &MoveReport) -> Option<String> {
+    let pieces = &report.section.as_ref()?.pieces;
+    let mut numbers = pieces.iter().filter_map(|p| p.element);
     let first = numbers.next()?;
     let last = numbers.next_back().unwrap_or(first);
     Some(if first == last {
@@ -149,7 +147,15 @@ pub(super) fn elements(report: &Value) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::cli::client::Received;
+    use serde_json::{Value, json};
+
+    /// A report of move 1 at `stage` and `progress`, of `section` if given.
+    fn report(stage: &str, progress: f64, section: Option<Value>) -> MoveReport {
+        let json = json!({"id": 1, "robot": "r", "stage": stage, "progress": progress,
+            "section": section});
+        Received::read(json, "a report").unwrap().value
+    }
 
     fn section() -> Value {
         json!({"number": 1, "of": 2, "pieces": [
@@ -162,11 +168,11 @@ mod tests {
     #[test]
     fn a_section_shows_a_bar_per_element_and_blend_marking_the_one_the_robot_is_on() {
         let mut bars = Bars::new(true);
-        bars.show(&json!({"stage": "uploading", "progress": 0.0, "section": section()}));
+        bars.show(&report("uploading", 0.0, Some(section())));
         let shown = bars.shown();
         assert_eq!(shown.len(), 4);
         assert_eq!(shown[1], ("> element 1".to_owned(), 0));
-        bars.show(&json!({"stage": "running", "progress": 0.55, "section": section()}));
+        bars.show(&report("running", 0.55, Some(section())));
         assert_eq!(
             bars.shown(),
             [
@@ -176,7 +182,7 @@ mod tests {
                 ("element 2".to_owned(), 0),
             ]
         );
-        bars.show(&json!({"stage": "done", "progress": 1.0, "section": section()}));
+        bars.show(&report("done", 1.0, Some(section())));
         let shown = bars.shown();
         assert!(shown[1..].iter().all(|(_, p)| *p == 1000), "{shown:?}");
         assert_eq!(shown[3].0, "> element 2");
@@ -185,20 +191,24 @@ mod tests {
     #[test]
     fn a_plain_move_has_one_bar_and_waits_at_zero_until_it_runs() {
         let mut bars = Bars::new(true);
-        bars.show(&json!({"stage": "queued", "progress": 0.3}));
+        bars.show(&report("queued", 0.3, None));
         assert_eq!(bars.shown(), [("queued".to_owned(), 0)]);
-        bars.show(&json!({"stage": "running", "progress": 0.3}));
+        bars.show(&report("running", 0.3, None));
         assert_eq!(bars.shown(), [("running".to_owned(), 300)]);
     }
 
     #[test]
     fn a_sections_elements_are_named_first_to_last() {
         assert_eq!(
-            elements(&json!({"section": section()})).as_deref(),
+            elements(&report("done", 1.0, Some(section()))).as_deref(),
             Some("1-2")
         );
-        let one = json!({"section": {"pieces": [{"element": 3, "begins": 0.0, "ends": 1.0}]}});
-        assert_eq!(elements(&one).as_deref(), Some("3"));
-        assert_eq!(elements(&json!({"stage": "done"})), None);
+        let one = json!({"number": 1, "of": 1, "pieces": [{"kind": "line", "element": 3,
+            "begins": 0.0, "ends": 1.0}]});
+        assert_eq!(
+            elements(&report("done", 1.0, Some(one))).as_deref(),
+            Some("3")
+        );
+        assert_eq!(elements(&report("done", 1.0, None)), None);
     }
 }

@@ -11,15 +11,11 @@ use serde_json::Value;
 use super::bars::Bars;
 use super::wait::{Deadline, link_down, waiting_for};
 use crate::cli::Failure;
-use crate::cli::client::{Client, Feed};
+use crate::cli::client::{Client, Feed, Received};
+use crate::daemon::{MoveReport, RobotState};
 
 /// How often the robot's state is read while a move is followed.
 const STATE_POLL: Duration = Duration::from_millis(500);
-
-/// Stages after which nothing more happens to a move.
-pub(super) fn is_final(stage: &str) -> bool {
-    matches!(stage, "done" | "stopped" | "failed" | "cancelled")
-}
 
 /// A move being followed.
 pub(super) struct Follow<'a> {
@@ -42,7 +38,7 @@ pub(super) async fn to_end(
     id: u64,
     timeout: Option<Duration>,
     quiet: bool,
-) -> Result<Value, Failure> {
+) -> Result<Received<MoveReport>, Failure> {
     let follow = Follow {
         client,
         robot,
@@ -56,34 +52,34 @@ pub(super) async fn to_end(
 impl Follow<'_> {
     /// Follows the move to a final report; a deadline that runs out, or a feed that ends first,
     /// is a failure saying what the move was waiting for.
-    pub(super) async fn run(&self) -> Result<Value, Failure> {
+    pub(super) async fn run(&self) -> Result<Received<MoveReport>, Failure> {
         let mut feed = self.open_feed().await?;
         let mut bars = Bars::new(self.quiet);
         let mut deadline = Deadline::new(Instant::now(), self.timeout);
-        let (mut last, mut state) = (Value::Null, Value::Null);
+        let (mut last, mut state) = (None::<MoveReport>, None::<RobotState>);
         let mut polls = tokio::time::interval(STATE_POLL);
         polls.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             let give_up = tokio::time::Instant::from_std(deadline.at());
             tokio::select! {
                 line = feed.next() => {
-                    let report = self.feed_line(line, &last)?;
-                    deadline.report(&report, Instant::now());
-                    bars.show(&report);
-                    last = report;
-                    if is_final(last["stage"].as_str().unwrap_or("")) {
+                    let report = self.feed_line(line, last.as_ref())?;
+                    deadline.report(&report.value, Instant::now());
+                    bars.show(&report.value);
+                    if report.value.stage.is_final() {
                         bars.clear();
-                        return Ok(last);
+                        return Ok(report);
                     }
+                    last = Some(report.value);
                 }
                 _ = polls.tick() => {
                     let Some(now_state) = self.read_state().await else { continue };
                     deadline.state(&now_state, self.id, Instant::now());
-                    if link_down(&now_state) && !link_down(&state) {
-                        let waiting = waiting_for(&last, &now_state);
+                    if link_down(Some(&now_state)) && !link_down(state.as_ref()) {
+                        let waiting = waiting_for(last.as_ref(), Some(&now_state));
                         bars.say(&format!("move {}: waiting for {waiting}", self.id));
                     }
-                    state = now_state;
+                    state = Some(now_state);
                 }
                 () = tokio::time::sleep_until(give_up) => {
                     bars.clear();
@@ -92,8 +88,8 @@ impl Follow<'_> {
                          stopped (`linterpd stop` stops it)",
                         self.id,
                         deadline.describe(),
-                        last["stage"].as_str().unwrap_or("not reported yet"),
-                        waiting_for(&last, &state)
+                        stage_seen(last.as_ref()),
+                        waiting_for(last.as_ref(), state.as_ref())
                     )));
                 }
             }
@@ -112,21 +108,24 @@ impl Follow<'_> {
         }
     }
 
-    /// The report a feed line holds; a feed that ended or broke before a final report means the
-    /// daemon went away.
+    /// The report a feed line holds; a feed that ended or broke (a line that is no move report
+    /// included) before a final report means the daemon went away.
     fn feed_line(
         &self,
         line: anyhow::Result<Option<Value>>,
-        last: &Value,
-    ) -> Result<Value, Failure> {
+        last: Option<&MoveReport>,
+    ) -> Result<Received<MoveReport>, Failure> {
         let lost = |why: String| {
             Failure::Unreachable(anyhow!(
                 "{why} before move {} ended (last seen {}): is the daemon shutting down?",
                 self.id,
-                last["stage"].as_str().unwrap_or("not reported yet")
+                stage_seen(last)
             ))
         };
-        match line {
+        match line.and_then(|l| {
+            l.map(|json| Received::read(json, "a move report"))
+                .transpose()
+        }) {
             Ok(Some(report)) => Ok(report),
             Ok(None) => Err(lost("the daemon ended the progress feed".to_owned())),
             Err(e) => Err(lost(format!("the progress feed broke ({e:#})"))),
@@ -135,9 +134,19 @@ impl Follow<'_> {
 
     /// The robot's state, or `None` when it cannot be read now (the feed tells when the daemon
     /// is gone).
-    async fn read_state(&self) -> Option<Value> {
+    async fn read_state(&self) -> Option<RobotState> {
         let path = format!("/v1/robots/{}", self.robot);
         let answer = self.client.call(Method::GET, &path, None).await.ok()?;
-        answer.status.is_success().then_some(answer.body)
+        if !answer.status.is_success() {
+            return None;
+        }
+        Received::read(answer.body, "a robot's state")
+            .ok()
+            .map(|r| r.value)
     }
+}
+
+/// The stage of the last report seen, in words.
+fn stage_seen(last: Option<&MoveReport>) -> &'static str {
+    last.map_or("not reported yet", |r| r.stage.name())
 }

@@ -24,14 +24,16 @@ use std::fmt::Write as _;
 use anyhow::{Context, anyhow};
 use clap::Args;
 use hyper::Method;
-use serde_json::{Value, json};
+use serde::Serialize;
+use serde_json::Value;
 
 use super::args::{
     MethodArg, parse_duration, parse_joints, parse_length_mm, parse_offset, parse_pose,
     parse_speed_mm_s,
 };
-use super::client::Client;
+use super::client::{Client, Received};
 use super::{DaemonArgs, Failure};
+use crate::daemon::{MoveAccepted, MoveOrder, MoveReport, Stage};
 
 /// Arguments of `linterpd move`.
 #[derive(Debug, Args)]
@@ -69,7 +71,7 @@ pub struct MoveArgs {
 }
 
 /// The API's move order for the arguments; every value is checked here first, naming its flag.
-fn order(args: &MoveArgs) -> anyhow::Result<Value> {
+fn order(args: &MoveArgs) -> anyhow::Result<MoveOrder> {
     let mut order = target(args)?;
     args.motion.add_to(&mut order)?;
     Ok(order)
@@ -98,47 +100,61 @@ pub struct MotionFlags {
 }
 
 impl MotionFlags {
-    /// Adds the flags given to an API order, each checked here first, naming its flag.
-    fn add_to(&self, order: &mut Value) -> anyhow::Result<()> {
+    /// Adds the flags given to a move order, each checked here first, naming its flag.
+    fn add_to(&self, order: &mut MoveOrder) -> anyhow::Result<()> {
         if let Some(text) = &self.speed {
-            order["speed_mm_s"] = parse_speed_mm_s(text).context("--speed")?.into();
+            order.speed_mm_s = Some(parse_speed_mm_s(text).context("--speed")?);
         }
-        for (key, flag, text) in [
-            ("accel_time", "--accel-time", &self.accel_time),
-            ("period", "--period", &self.period),
-        ] {
-            if let Some(text) = text {
-                parse_duration(text).context(flag)?;
-                order[key] = text.as_str().into();
-            }
-        }
-        if let Some(method) = self.method {
-            order["method"] = method.name().into();
-        }
+        order.accel_time = checked_duration(self.accel_time.as_ref(), "--accel-time")?;
+        order.period = checked_duration(self.period.as_ref(), "--period")?;
+        order.method = self.method.map(|m| m.name().to_owned());
         if let Some(text) = &self.tolerance {
-            order["tolerance_mm"] = parse_length_mm(text).context("--tolerance")?.into();
+            order.tolerance_mm = Some(parse_length_mm(text).context("--tolerance")?);
         }
         Ok(())
     }
 }
 
+/// A duration flag's text, once it reads as a duration (the daemon reads it again).
+fn checked_duration(text: Option<&String>, flag: &'static str) -> anyhow::Result<Option<String>> {
+    if let Some(text) = text {
+        parse_duration(text).context(flag)?;
+    }
+    Ok(text.cloned())
+}
+
 /// The order's target, from whichever of `--to`, `--by` and `--joints` was given (clap lets
 /// exactly one through).
-fn target(args: &MoveArgs) -> anyhow::Result<Value> {
+fn target(args: &MoveArgs) -> anyhow::Result<MoveOrder> {
+    let order = MoveOrder::default();
     if let Some(text) = &args.by {
-        return Ok(json!({ "by": parse_offset(text).context("--by")? }));
+        let by = parse_offset(text).context("--by")?;
+        return Ok(MoveOrder {
+            by: Some(by),
+            ..order
+        });
     }
     if let Some(text) = &args.joints {
-        return Ok(json!({ "joints": parse_joints(text).context("--joints")? }));
+        let joints = parse_joints(text).context("--joints")?;
+        return Ok(MoveOrder {
+            joints: Some(joints.to_vec()),
+            ..order
+        });
     }
     let text = args.to.as_deref().unwrap_or_default();
     if let Some(name) = text.strip_prefix('@') {
-        return Ok(json!({ "position": name }));
+        return Ok(MoveOrder {
+            position: Some(name.to_owned()),
+            ..order
+        });
     }
     let pose = parse_pose(text).context("--to")?;
     let mut to: Vec<f64> = pose.xyz_mm.to_vec();
     to.extend(pose.a_deg);
-    Ok(json!({ "to": to }))
+    Ok(MoveOrder {
+        to: Some(to),
+        ..order
+    })
 }
 
 /// Runs `linterpd move`.
@@ -148,15 +164,15 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     args.daemon.block_on(async {
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "moves", &order).await?;
-        let id = accepted["id"]
-            .as_u64()
-            .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move id")))?;
+        let accepted: Received<MoveAccepted> =
+            Received::read(accepted, "a move accepted").map_err(Failure::Runtime)?;
+        let id = accepted.value.id;
         // A line cut where a joint reverses runs as several starts (an older
         // daemon gives only `id`).
-        let ids: Vec<u64> = accepted["ids"].as_array().map_or_else(
-            || vec![id],
-            |a| a.iter().filter_map(Value::as_u64).collect(),
-        );
+        let ids = match accepted.value.ids.as_slice() {
+            [] => vec![id],
+            ids => ids.to_vec(),
+        };
         if args.no_wait {
             let accepted_line = if ids.len() > 1 {
                 let list: Vec<String> = ids.iter().map(u64::to_string).collect();
@@ -168,24 +184,24 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
             } else {
                 format!("move {id} accepted")
             };
-            return super::print(out, args.daemon.json, &accepted, &accepted_line);
+            return super::print(out, args.daemon.json, &accepted.json, &accepted_line);
         }
         let mut outcome = Ok(());
         for (n, &id) in ids.iter().enumerate() {
             let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
             let line = if ids.len() > 1 {
-                format!("start {}/{}: {}", n + 1, ids.len(), summary(&last))
+                format!("start {}/{}: {}", n + 1, ids.len(), summary(&last.value))
             } else {
-                summary(&last)
+                summary(&last.value)
             };
             // The JSON is the last start's report; a start before it is summed up in text only.
             let printed = if args.daemon.json && n + 1 < ids.len() {
                 Ok(())
             } else {
-                super::print(out, args.daemon.json, &last, &line)
+                super::print(out, args.daemon.json, &last.json, &line)
             };
             // The verdict counts even when the summary cannot be written (a closed pipe).
-            outcome = outcome.and(verdict(&last)).and(printed);
+            outcome = outcome.and(verdict(&last.value)).and(printed);
         }
         outcome
     })
@@ -203,55 +219,59 @@ async fn post(
     client: &Client,
     robot: Option<&str>,
     endpoint: &str,
-    order: &Value,
+    order: &impl Serialize,
 ) -> Result<(String, Value), Failure> {
+    let order = serde_json::to_value(order).map_err(|e| Failure::Runtime(e.into()))?;
     let robot = client.robot(robot).await.map_err(Failure::from_client)?;
     let accepted = client
         .expect(
             Method::POST,
             &format!("/v1/robots/{robot}/{endpoint}"),
-            Some(order),
+            Some(&order),
         )
         .await?;
     Ok((robot, accepted))
 }
 
 /// Done, or exit 3 with how the move ended.
-fn verdict(last: &Value) -> Result<(), Failure> {
-    let stage = last["stage"].as_str().unwrap_or("?");
-    if stage == "done" {
+fn verdict(last: &MoveReport) -> Result<(), Failure> {
+    if last.stage == Stage::Done {
         return Ok(());
     }
-    let why = last["error"]
-        .as_str()
+    let why = last
+        .error
+        .as_ref()
         .map(|e| format!(": {e}"))
         .unwrap_or_default();
     Err(Failure::NotDone(anyhow!(
-        "move {} ended {stage}{why}",
-        last["id"]
+        "move {} ended {}{why}",
+        last.id,
+        last.stage.name()
     )))
 }
 
 /// One line: what happened, how long it took, how far from the target it ended.
-fn summary(r: &Value) -> String {
-    let num = |k: &str| {
-        r[k].as_f64()
-            .map_or("-".to_owned(), |v| format!("{v:.3} s"))
-    };
+fn summary(r: &MoveReport) -> String {
+    let secs = |s: Option<f64>| s.map_or("-".to_owned(), |v| format!("{v:.3} s"));
     let mut line = format!(
         "move {} {}: upload {}, motion {}",
-        r["id"],
-        r["stage"].as_str().unwrap_or("?"),
-        num("upload_s"),
-        num("motion_s")
+        r.id,
+        r.stage.name(),
+        secs(r.upload_s),
+        secs(r.motion_s)
     );
-    if let Some(e) = r["final_error_pulses"].as_array() {
-        let _ = write!(line, ", final error {} pulses", Value::Array(e.clone()));
+    if let Some(e) = r.final_error_pulses {
+        let pulses: Vec<String> = e.iter().map(i64::to_string).collect();
+        let _ = write!(line, ", final error [{}] pulses", pulses.join(","));
     }
-    if let Some(d) = r["predicted"]["path_deviation_mm"].as_f64() {
-        let _ = write!(line, ", predicted path deviation {d:.4} mm");
+    if let Some(p) = &r.predicted {
+        let _ = write!(
+            line,
+            ", predicted path deviation {:.4} mm",
+            p.path_deviation_mm
+        );
     }
-    if let Some(e) = r["error"].as_str() {
+    if let Some(e) = &r.error {
         let _ = write!(line, ": {e}");
     }
     line
@@ -261,6 +281,12 @@ fn summary(r: &Value) -> String {
 mod tests {
     use super::*;
     use clap::Parser;
+    use serde_json::json;
+
+    /// The order as the body posted.
+    fn body(args: &MoveArgs) -> Value {
+        serde_json::to_value(order(args).unwrap()).unwrap()
+    }
 
     fn move_args(line: &[&str]) -> MoveArgs {
         let mut all = vec!["linterpd", "move"];
@@ -286,26 +312,26 @@ mod tests {
             "200ms",
         ]);
         assert_eq!(
-            order(&args).unwrap(),
+            body(&args),
             json!({"to": [1.0, 2.0, 3.0, 45.0], "speed_mm_s": 120.0,
                 "method": "bounded-error", "tolerance_mm": 0.05, "accel_time": "200ms"})
         );
         let old = move_args(&["--to", "1,2,3", "--tolerance-mm", "0.1"]);
-        assert_eq!(order(&old).unwrap()["tolerance_mm"], 0.1);
+        assert_eq!(order(&old).unwrap().tolerance_mm, Some(0.1));
     }
 
     #[test]
     fn a_jog_joints_or_a_taught_position_is_the_target() {
         assert_eq!(
-            order(&move_args(&["--by", "0,-5,2"])).unwrap(),
+            body(&move_args(&["--by", "0,-5,2"])),
             json!({"by": [0.0, -5.0, 2.0]})
         );
         assert_eq!(
-            order(&move_args(&["--joints", "10,20,30,-45", "--speed", "50"])).unwrap(),
+            body(&move_args(&["--joints", "10,20,30,-45", "--speed", "50"])),
             json!({"joints": [10.0, 20.0, 30.0, -45.0], "speed_mm_s": 50.0})
         );
         assert_eq!(
-            order(&move_args(&["--to", "@pick"])).unwrap(),
+            body(&move_args(&["--to", "@pick"])),
             json!({"position": "pick"})
         );
         let e = format!("{:#}", order(&move_args(&["--by", "1,2"])).unwrap_err());
@@ -346,10 +372,34 @@ mod tests {
 
     #[test]
     fn a_move_that_did_not_end_done_says_how_it_ended() {
-        assert!(verdict(&json!({"id": 3, "stage": "done"})).is_ok());
-        let e = verdict(&json!({"id": 3, "stage": "cancelled", "error": "cancelled by a stop"}))
-            .unwrap_err();
+        let report = |json| {
+            Received::<MoveReport>::read(json, "a report")
+                .unwrap()
+                .value
+        };
+        assert!(verdict(&report(json!({"id": 3, "robot": "r", "stage": "done"}))).is_ok());
+        let e = verdict(&report(json!({"id": 3, "robot": "r", "stage": "cancelled",
+            "error": "cancelled by a stop"})))
+        .unwrap_err();
         assert_eq!(e.exit_code(), crate::cli::EXIT_NOT_DONE);
         assert_eq!(e.to_string(), "move 3 ended cancelled: cancelled by a stop");
+    }
+
+    #[test]
+    fn a_summary_says_the_times_the_final_error_and_the_predicted_deviation() {
+        let report = Received::<MoveReport>::read(
+            json!({"id": 5, "robot": "r", "stage": "done", "upload_s": 0.0804,
+                "motion_s": null, "final_error_pulses": [0, 1, -1, 0],
+                "predicted": {"rows": 1, "words": 8, "duration_s": 1.0,
+                    "path_deviation_mm": 0.012_34, "tracking_error_mm": 0.0}}),
+            "a report",
+        )
+        .unwrap()
+        .value;
+        assert_eq!(
+            summary(&report),
+            "move 5 done: upload 0.080 s, motion -, final error [0,1,-1,0] pulses, predicted \
+             path deviation 0.0123 mm"
+        );
     }
 }

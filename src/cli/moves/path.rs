@@ -12,14 +12,15 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, anyhow};
+use anyhow::Context;
 use clap::Args;
-use serde_json::{Value, json};
+use serde_json::Value;
 
-use super::super::client::Client;
+use super::super::client::{Client, Received};
 use super::super::{DaemonArgs, Failure};
 use super::{MotionFlags, bars, follow, post, summary, timeout, verdict};
 use crate::config::PathDoc;
+use crate::daemon::{MoveOrder, MoveReport, PathAccepted, PathOrder};
 
 /// Arguments of `linterpd run`.
 #[derive(Debug, Args)]
@@ -46,13 +47,20 @@ pub struct RunArgs {
 }
 
 /// The API's path order: the file (checked here first, naming the key) and the flags.
-fn order(args: &RunArgs) -> anyhow::Result<Value> {
+fn order(args: &RunArgs) -> anyhow::Result<PathOrder> {
     let text = super::super::path_file::read(&args.file)?;
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
-    let mut order = json!({ "path": path });
-    args.motion.add_to(&mut order)?;
-    Ok(order)
+    let mut motion = MoveOrder::default();
+    args.motion.add_to(&mut motion)?;
+    Ok(PathOrder {
+        path,
+        speed_mm_s: motion.speed_mm_s,
+        accel_time: motion.accel_time,
+        method: motion.method,
+        period: motion.period,
+        tolerance_mm: motion.tolerance_mm,
+    })
 }
 
 /// Runs `linterpd run`.
@@ -62,36 +70,32 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
     args.daemon.block_on(async {
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "paths", &order).await?;
-        let ids: Vec<u64> = accepted["ids"]
-            .as_array()
-            .map(|a| a.iter().filter_map(Value::as_u64).collect())
-            .ok_or_else(|| Failure::Runtime(anyhow!("the daemon gave no move ids")))?;
+        let accepted: Received<PathAccepted> =
+            Received::read(accepted, "a path accepted").map_err(Failure::Runtime)?;
+        let ids = &accepted.value.ids;
         if args.no_wait {
             let list: Vec<String> = ids.iter().map(u64::to_string).collect();
             return super::super::print(
                 out,
                 args.daemon.json,
-                &accepted,
+                &accepted.json,
                 &format!("path accepted: moves {}", list.join(", ")),
             );
         }
-        let reports = accepted["reports"]
-            .as_array()
-            .map_or(&[][..], Vec::as_slice);
-        let labels = start_labels(reports, ids.len());
+        let labels = start_labels(&accepted.value.reports, ids.len());
         let mut finals = Vec::with_capacity(ids.len());
         let mut outcome = Ok(());
         for (&id, label) in ids.iter().zip(&labels) {
             let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
             if !args.daemon.json {
-                let elements = bars::elements(&last)
+                let elements = bars::elements(&last.value)
                     .map(|e| format!(" (element {e})"))
                     .unwrap_or_default();
-                writeln!(out, "{label}{elements}: {}", summary(&last))
+                writeln!(out, "{label}{elements}: {}", summary(&last.value))
                     .map_err(|e| Failure::Runtime(e.into()))?;
             }
-            outcome = outcome.and(verdict(&last));
-            finals.push(last);
+            outcome = outcome.and(verdict(&last.value));
+            finals.push(last.json);
         }
         if args.daemon.json {
             super::super::print(out, true, &Value::Array(finals), "")?;
@@ -104,15 +108,10 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
 /// `section 1/2` for a section run in one start, `section 1/2, part 2/3` for one of the parts
 /// a section is cut into (chained at speed). Without a section in every report (a daemon that
 /// gives none), the starts are counted as sections.
-fn start_labels(reports: &[Value], starts: usize) -> Vec<String> {
-    let sections: Option<Vec<(u64, u64)>> = reports
+fn start_labels(reports: &[MoveReport], starts: usize) -> Vec<String> {
+    let sections: Option<Vec<(usize, usize)>> = reports
         .iter()
-        .map(|r| {
-            Some((
-                r["section"]["number"].as_u64()?,
-                r["section"]["of"].as_u64()?,
-            ))
-        })
+        .map(|r| r.section.as_ref().map(|s| (s.number, s.of)))
         .collect();
     let Some(sections) = sections.filter(|s| s.len() == starts) else {
         return (1..=starts)
@@ -137,9 +136,21 @@ fn start_labels(reports: &[Value], starts: usize) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::daemon::SectionReport;
 
-    fn report(number: u64, of: u64) -> Value {
-        json!({"id": 1, "section": {"number": number, "of": of, "pieces": []}})
+    fn report(number: usize, of: usize) -> MoveReport {
+        MoveReport {
+            section: Some(SectionReport {
+                number,
+                of,
+                pieces: Vec::new(),
+            }),
+            ..plain()
+        }
+    }
+
+    fn plain() -> MoveReport {
+        MoveReport::new(1, "r", MoveOrder::default())
     }
 
     #[test]
@@ -167,9 +178,6 @@ mod tests {
 
     #[test]
     fn reports_without_sections_count_the_starts() {
-        assert_eq!(
-            start_labels(&[json!({"id": 1})], 2),
-            ["section 1/2", "section 2/2"]
-        );
+        assert_eq!(start_labels(&[plain()], 2), ["section 1/2", "section 2/2"]);
     }
 }

@@ -11,7 +11,7 @@
 
 use std::time::{Duration, Instant};
 
-use serde_json::Value;
+use crate::daemon::{MoveReport, RobotPhase, RobotState, Stage};
 
 /// Waited beyond the daemon's deadline for a move before giving up on it.
 pub(super) const MARGIN: Duration = Duration::from_secs(2);
@@ -41,9 +41,9 @@ impl Deadline {
     }
 
     /// A report of the move, received at `now`: a new `deadline_s` starts the clock again.
-    pub(super) fn report(&mut self, report: &Value, now: Instant) {
-        let deadline = report["deadline_s"]
-            .as_f64()
+    pub(super) fn report(&mut self, report: &MoveReport, now: Instant) {
+        let deadline = report
+            .deadline_s
             .and_then(|s| Duration::try_from_secs_f64(s).ok());
         if deadline.is_some() && deadline != self.given {
             self.given = deadline;
@@ -52,8 +52,8 @@ impl Deadline {
     }
 
     /// The robot's state, read at `now`: another move running ahead of move `id` holds the clock.
-    pub(super) fn state(&mut self, state: &Value, id: u64, now: Instant) {
-        if state["current_move"].as_u64().is_some_and(|c| c != id) {
+    pub(super) fn state(&mut self, state: &RobotState, id: u64, now: Instant) {
+        if state.current_move.is_some_and(|c| c != id) {
             self.turn = self.turn.max(now);
         }
     }
@@ -88,51 +88,73 @@ fn secs(d: Duration) -> String {
     format!("{:.1}", d.as_secs_f64())
 }
 
-/// Whether the robot's state says its PLC link is down.
-pub(super) fn link_down(state: &Value) -> bool {
-    state["link"]["connected"].as_bool() == Some(false) || state["phase"] == "link-down"
+/// Whether the robot's state (`None` if never read) says its PLC link is down.
+pub(super) fn link_down(state: Option<&RobotState>) -> bool {
+    state.is_some_and(|s| !s.link.connected || s.phase == RobotPhase::LinkDown)
 }
 
-/// What move `report` is waiting for, given its robot's `state` (`Null` if never read).
-pub(super) fn waiting_for(report: &Value, state: &Value) -> String {
-    let robot = report["robot"].as_str().unwrap_or("the robot");
+/// What move `report` (`None` before its first) is waiting for, given its robot's `state`
+/// (`None` if never read).
+pub(super) fn waiting_for(report: Option<&MoveReport>, state: Option<&RobotState>) -> String {
+    let robot = report.map_or("the robot", |r| r.robot.as_str());
     if link_down(state) {
-        let why = state["link"]["error"]
-            .as_str()
+        let why = state
+            .and_then(|s| s.link.error.as_ref())
             .map(|e| format!("; last error: {e}"))
             .unwrap_or_default();
         return format!(
             "the PLC link of {robot} to come back (the daemon reconnects by itself{why})"
         );
     }
-    if state["phase"] == "stalled" {
+    if state.is_some_and(|s| s.phase == RobotPhase::Stalled) {
         return format!(
             "the PLC of {robot} to scan again (its heartbeat stands still: stalled or in PROG mode)"
         );
     }
-    let ahead = state["current_move"]
-        .as_u64()
-        .filter(|c| Some(*c) != report["id"].as_u64());
-    match (report["stage"].as_str().unwrap_or("?"), ahead) {
-        ("queued" | "waiting", Some(c)) => format!("move {c} ahead of it to end"),
-        ("queued", None) => match state["refuses"].as_str() {
+    let Some(report) = report else {
+        return "its end (it is ?)".to_owned();
+    };
+    let ahead = state
+        .and_then(|s| s.current_move)
+        .filter(|c| *c != report.id);
+    match (report.stage, ahead) {
+        (Stage::Queued | Stage::Waiting, Some(c)) => format!("move {c} ahead of it to end"),
+        (Stage::Queued, None) => match state.and_then(|s| s.refuses.as_ref()) {
             Some(why) => format!("its turn ({why})"),
             None => "its turn".to_owned(),
         },
-        ("uploading", _) => "its upload to the PLC to finish".to_owned(),
-        ("waiting", None) => "the PLC to start it".to_owned(),
-        ("running", _) => format!(
+        (Stage::Uploading, _) => "its upload to the PLC to finish".to_owned(),
+        (Stage::Waiting, None) => "the PLC to start it".to_owned(),
+        (Stage::Running, _) => format!(
             "the PLC to report its end ({:.0}% of its planned time gone)",
-            report["progress"].as_f64().unwrap_or(0.0) * 100.0
+            report.progress * 100.0
         ),
-        (stage, _) => format!("its end (it is {stage})"),
+        (stage, _) => format!("its end (it is {})", stage.name()),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::cli::client::Received;
+    use serde_json::{Value, json};
+
+    /// A report of move 7 of press-loader, with `fields`.
+    fn report(fields: Value) -> MoveReport {
+        let mut json = json!({"id": 7, "robot": "press-loader", "stage": "queued"});
+        for (key, value) in fields.as_object().unwrap() {
+            json[key] = value.clone();
+        }
+        Received::read(json, "a report").unwrap().value
+    }
+
+    fn state(json: Value) -> RobotState {
+        let mut named = json!({"name": "press-loader"});
+        for (key, value) in json.as_object().unwrap() {
+            named[key] = value.clone();
+        }
+        Received::read(named, "a state").unwrap().value
+    }
 
     #[test]
     fn the_daemons_deadline_counts_from_the_report_that_gave_it() {
@@ -140,10 +162,16 @@ mod tests {
         let mut d = Deadline::new(t0, None);
         assert_eq!(d.at(), t0 + UNPLANNED + MARGIN);
         let t1 = t0 + Duration::from_secs(1);
-        d.report(&json!({"stage": "uploading", "deadline_s": 5.0}), t1);
+        d.report(
+            &report(json!({"stage": "uploading", "deadline_s": 5.0})),
+            t1,
+        );
         assert_eq!(d.at(), t1 + Duration::from_secs(5) + MARGIN);
         // The same deadline again later does not move the clock.
-        d.report(&json!({"stage": "running", "deadline_s": 5.0}), t1 + MARGIN);
+        d.report(
+            &report(json!({"stage": "running", "deadline_s": 5.0})),
+            t1 + MARGIN,
+        );
         assert_eq!(d.at(), t1 + Duration::from_secs(5) + MARGIN);
         assert!(d.describe().contains("the daemon's deadline for it, 5.0 s"));
     }
@@ -152,12 +180,12 @@ mod tests {
     fn a_move_running_ahead_holds_the_clock() {
         let t0 = Instant::now();
         let mut d = Deadline::new(t0, None);
-        d.report(&json!({"deadline_s": 3.0}), t0);
+        d.report(&report(json!({"deadline_s": 3.0})), t0);
         let later = t0 + Duration::from_secs(60);
-        d.state(&json!({"current_move": 6}), 7, later);
+        d.state(&state(json!({"current_move": 6})), 7, later);
         assert_eq!(d.at(), later + Duration::from_secs(3) + MARGIN);
         // Once it runs itself, the clock runs.
-        d.state(&json!({"current_move": 7}), 7, later + MARGIN);
+        d.state(&state(json!({"current_move": 7})), 7, later + MARGIN);
         assert_eq!(d.at(), later + Duration::from_secs(3) + MARGIN);
     }
 
@@ -165,41 +193,53 @@ mod tests {
     fn an_explicit_timeout_is_a_hard_bound_from_acceptance() {
         let t0 = Instant::now();
         let mut d = Deadline::new(t0, Some(Duration::from_millis(500)));
-        d.report(&json!({"deadline_s": 30.0}), t0 + MARGIN);
-        d.state(&json!({"current_move": 1}), 2, t0 + MARGIN);
+        d.report(&report(json!({"deadline_s": 30.0})), t0 + MARGIN);
+        d.state(&state(json!({"current_move": 1})), 2, t0 + MARGIN);
         assert_eq!(d.at(), t0 + Duration::from_millis(500));
         assert_eq!(d.describe(), "0.5 s (--timeout)");
     }
 
     #[test]
     fn waiting_for_names_the_link_first_then_the_stage() {
-        let running = json!({"id": 7, "robot": "press-loader", "stage": "running",
-            "progress": 0.42});
-        let up = json!({"link": {"connected": true}, "phase": "running", "current_move": 7});
+        let running = report(json!({"stage": "running", "progress": 0.42}));
+        let up = state(json!({"link": {"connected": true}, "phase": "running",
+            "current_move": 7}));
         assert_eq!(
-            waiting_for(&running, &up),
+            waiting_for(Some(&running), Some(&up)),
             "the PLC to report its end (42% of its planned time gone)"
         );
-        let down = json!({"link": {"connected": false, "error": "connection refused"},
-            "phase": "link-down"});
-        assert!(link_down(&down) && !link_down(&up) && !link_down(&Value::Null));
+        let down = state(
+            json!({"link": {"connected": false, "error": "connection refused"},
+            "phase": "link-down"}),
+        );
+        assert!(link_down(Some(&down)) && !link_down(Some(&up)) && !link_down(None));
         assert_eq!(
-            waiting_for(&running, &down),
+            waiting_for(Some(&running), Some(&down)),
             "the PLC link of press-loader to come back (the daemon reconnects by itself; \
              last error: connection refused)"
         );
-        let queued = json!({"id": 8, "robot": "press-loader", "stage": "queued"});
-        assert_eq!(waiting_for(&queued, &up), "move 7 ahead of it to end");
-        let refusing = json!({"link": {"connected": true}, "phase": "unhomed",
-            "refuses": "the robot is not homed"});
+        let queued = report(json!({"id": 8}));
         assert_eq!(
-            waiting_for(&queued, &refusing),
+            waiting_for(Some(&queued), Some(&up)),
+            "move 7 ahead of it to end"
+        );
+        let refusing = state(json!({"link": {"connected": true}, "phase": "unhomed",
+            "refuses": "the robot is not homed"}));
+        assert_eq!(
+            waiting_for(Some(&queued), Some(&refusing)),
             "its turn (the robot is not homed)"
         );
         assert_eq!(
-            waiting_for(&queued, &Value::Null),
+            waiting_for(Some(&queued), None),
             "its turn",
             "a state never read says nothing of the link"
         );
+        let stalled = state(json!({"link": {"connected": true}, "phase": "stalled"}));
+        assert_eq!(
+            waiting_for(None, Some(&stalled)),
+            "the PLC of the robot to scan again (its heartbeat stands still: stalled or in \
+             PROG mode)"
+        );
+        assert_eq!(waiting_for(None, Some(&up)), "its end (it is ?)");
     }
 }

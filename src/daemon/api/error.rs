@@ -4,7 +4,7 @@
 use axum::Json;
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::contract::machine::Blocker;
@@ -52,11 +52,17 @@ pub enum ApiError {
         reason: &'static str,
     },
     /// The PLC refused a command or failed to carry it out (502).
-    #[error("{0}")]
-    Plc(String),
+    #[error("{detail}")]
+    Plc {
+        /// What the PLC answered, or how the exchange failed.
+        detail: String,
+    },
     /// The daemon's own state could not be kept (a file in the state directory) (500).
-    #[error("{0}")]
-    Storage(String),
+    #[error(transparent)]
+    Storage {
+        /// The positions file that could not be written, or why none can be.
+        source: PositionError,
+    },
     /// The daemon is shutting down (503).
     #[error("the daemon is shutting down")]
     ShuttingDown,
@@ -87,14 +93,17 @@ pub enum ApiError {
     },
 }
 
-/// The JSON body of an error.
-#[derive(Debug, Serialize)]
-struct ErrorBody<'a> {
-    error: String,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    field: Option<&'a str>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    reason: Option<&'static str>,
+/// The JSON body of an error, as the API writes it and the CLI reads it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ErrorBody {
+    /// What went wrong.
+    pub error: String,
+    /// The field to blame, when one is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub field: Option<String>,
+    /// A word for programs (`not-homed`, `link-down`, `plc`...), when there is one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
 }
 
 impl ApiError {
@@ -107,8 +116,8 @@ impl ApiError {
             Self::Unplannable(_) => StatusCode::UNPROCESSABLE_ENTITY,
             Self::Forbidden(_) => StatusCode::FORBIDDEN,
             Self::Conflict { .. } => StatusCode::CONFLICT,
-            Self::Plc(_) => StatusCode::BAD_GATEWAY,
-            Self::Storage(_) => StatusCode::INTERNAL_SERVER_ERROR,
+            Self::Plc { .. } => StatusCode::BAD_GATEWAY,
+            Self::Storage { .. } => StatusCode::INTERNAL_SERVER_ERROR,
             Self::Unavailable { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             Self::Unauthorized => StatusCode::UNAUTHORIZED,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
@@ -131,9 +140,9 @@ impl ApiError {
         match self {
             Self::Conflict { reason, .. } | Self::Unavailable { reason, .. } => Some(reason),
             Self::ShuttingDown => Some("shutting-down"),
-            Self::Plc(_) => Some("plc"),
+            Self::Plc { .. } => Some("plc"),
             Self::Forbidden(_) => Some("not-allowed"),
-            Self::Storage(_) => Some("storage"),
+            Self::Storage { .. } => Some("storage"),
             Self::TooLarge { .. } => Some("too-large"),
             _ => None,
         }
@@ -166,11 +175,13 @@ impl From<CommandError> for ApiError {
                 message,
                 reason: "link-down",
             },
-            CommandError::Conflict(_) => Self::Conflict {
+            CommandError::Conflict { .. } => Self::Conflict {
                 message,
                 reason: "conflict",
             },
-            CommandError::Plc(_) => Self::Plc(message),
+            CommandError::Plc { .. } | CommandError::HomeFailed { .. } => {
+                Self::Plc { detail: message }
+            }
             CommandError::ShuttingDown => Self::ShuttingDown,
         }
     }
@@ -189,7 +200,7 @@ impl From<GatewayError> for ApiError {
                 message,
                 reason: "link-down",
             },
-            GatewayError::Plc(_) => Self::Plc(message),
+            GatewayError::Plc(_) => Self::Plc { detail: message },
             GatewayError::ShuttingDown => Self::ShuttingDown,
         }
     }
@@ -230,7 +241,9 @@ impl From<PositionError> for ApiError {
                 message,
                 reason: "busy",
             },
-            PositionError::Write { .. } | PositionError::ReadOnly { .. } => Self::Storage(message),
+            source @ (PositionError::Write { .. } | PositionError::ReadOnly { .. }) => {
+                Self::Storage { source }
+            }
         }
     }
 }
@@ -239,8 +252,8 @@ impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let body = ErrorBody {
             error: self.to_string(),
-            field: self.field(),
-            reason: self.reason(),
+            field: self.field().map(str::to_owned),
+            reason: self.reason().map(str::to_owned),
         };
         let mut response = (self.status(), Json(body)).into_response();
         if matches!(self, Self::Unauthorized) {
@@ -267,6 +280,85 @@ mod tests {
         }));
         assert_eq!(e.status(), StatusCode::BAD_REQUEST);
         assert_eq!(e.field(), Some("speed_mm_s"));
+    }
+
+    /// Each command error answers as before issue 26 typed them: the same status, `reason`
+    /// word and message.
+    #[test]
+    fn command_errors_keep_their_status_reason_and_message() {
+        use crate::contract::State;
+        use crate::daemon::ConflictReason;
+        let cases = [
+            (
+                CommandError::LinkDown {
+                    detail: Some("timed out".into()),
+                },
+                StatusCode::SERVICE_UNAVAILABLE,
+                "link-down",
+                "the PLC link is down: timed out",
+            ),
+            (
+                CommandError::Conflict {
+                    reason: ConflictReason::PlcBusy {
+                        state: State::Running,
+                    },
+                },
+                StatusCode::CONFLICT,
+                "conflict",
+                "the PLC is running: stop it first; a fault is cleared only when nothing runs",
+            ),
+            (
+                CommandError::Conflict {
+                    reason: ConflictReason::MoveRuns,
+                },
+                StatusCode::CONFLICT,
+                "conflict",
+                "a move runs: stop it before homing",
+            ),
+            (
+                CommandError::Plc {
+                    detail: "the PLC answered error 61".into(),
+                },
+                StatusCode::BAD_GATEWAY,
+                "plc",
+                "the PLC answered error 61",
+            ),
+            (
+                CommandError::HomeFailed { fault: 0 },
+                StatusCode::BAD_GATEWAY,
+                "plc",
+                "the home routine did not end with the homed bit set",
+            ),
+            (
+                CommandError::ShuttingDown,
+                StatusCode::SERVICE_UNAVAILABLE,
+                "shutting-down",
+                "the daemon is shutting down",
+            ),
+        ];
+        for (command, status, reason, message) in cases {
+            let e = ApiError::from(command);
+            assert_eq!(
+                (e.status(), e.reason(), e.to_string().as_str()),
+                (status, Some(reason), message)
+            );
+        }
+    }
+
+    #[test]
+    fn a_positions_file_that_cannot_be_written_is_a_storage_error_keeping_its_cause() {
+        let e = ApiError::from(PositionError::Write {
+            file: "/var/lib/linterpd/positions.json".into(),
+            source: std::io::Error::other("disk full"),
+        });
+        assert_eq!(e.status(), StatusCode::INTERNAL_SERVER_ERROR);
+        assert_eq!(e.reason(), Some("storage"));
+        assert!(
+            e.to_string().starts_with("cannot write the positions file"),
+            "{e}"
+        );
+        let cause = std::error::Error::source(&e).map(ToString::to_string);
+        assert_eq!(cause.as_deref(), Some("disk full"));
     }
 
     #[test]

@@ -8,33 +8,18 @@ use axum::body::{Body, Bytes};
 use axum::extract::{Path, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use serde::Serialize;
 use serde_json::error::Category;
 use tokio::sync::watch;
 use tokio_util::sync::CancellationToken;
 
 use super::Api;
+use super::answers::{self, DeletedPosition, NamedPosition, PositionList, SavedPosition};
 use super::body::JsonBody;
 use super::error::ApiError;
 use super::metrics;
-use crate::daemon::{MoveId, MoveOrder, MoveReport, PathOrder, Position, RobotHandle, RobotState};
-
-/// `POST .../moves` accepted.
-#[derive(Debug, Serialize)]
-pub(super) struct Accepted {
-    /// The move's last start: the move has ended when it has.
-    id: MoveId,
-    /// Every start, in order: one, or a line cut where a joint reverses.
-    ids: Vec<MoveId>,
-    report: MoveReport,
-}
-
-/// `POST .../paths` accepted: one move per section, in order.
-#[derive(Debug, Serialize)]
-pub(super) struct PathAccepted {
-    ids: Vec<MoveId>,
-    reports: Vec<MoveReport>,
-}
+use crate::daemon::{
+    MoveAccepted, MoveId, MoveOrder, MoveReport, PathAccepted, PathOrder, RobotHandle, RobotState,
+};
 
 pub(super) async fn robots(State(api): State<Api>) -> Json<Vec<RobotState>> {
     Json(api.robots.values().map(RobotHandle::state).collect())
@@ -51,7 +36,7 @@ pub(super) async fn submit(
     State(api): State<Api>,
     Path(name): Path<String>,
     JsonBody(body): JsonBody,
-) -> Result<(StatusCode, Json<Accepted>), ApiError> {
+) -> Result<(StatusCode, Json<MoveAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
     let ids = robot.submit_starts(order.clone())?;
@@ -61,7 +46,7 @@ pub(super) async fn submit(
     let report = robot
         .report(id)
         .unwrap_or_else(|| MoveReport::new(id, &name, order));
-    Ok((StatusCode::ACCEPTED, Json(Accepted { id, ids, report })))
+    Ok((StatusCode::ACCEPTED, Json(MoveAccepted { id, ids, report })))
 }
 
 pub(super) async fn submit_path(
@@ -139,29 +124,18 @@ pub(super) async fn home(
     Ok(Json(serde_json::json!({ "homed": true })))
 }
 
-/// A taught position with its name, as the API shows it.
-#[derive(Debug, Serialize)]
-pub(super) struct NamedPosition {
-    name: String,
-    #[serde(flatten)]
-    position: Position,
-}
-
 pub(super) async fn positions(
     State(api): State<Api>,
     Path(name): Path<String>,
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
-    let list: Vec<NamedPosition> = robot
+    let positions = robot
         .positions()
         .into_iter()
         .map(|(name, position)| NamedPosition { name, position })
         .collect();
-    let mut body = serde_json::json!({ "positions": list });
-    if let Some(warning) = robot.positions_warning() {
-        body["warning"] = warning.into();
-    }
-    Ok(Json(body))
+    let warning = robot.positions_warning().map(str::to_owned);
+    Ok(Json(answers::sorted(&PositionList { positions, warning })))
 }
 
 pub(super) async fn position(
@@ -181,16 +155,15 @@ pub(super) async fn save_position(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     let saved = robot.save_position(&pos)?;
-    let mut body = serde_json::to_value(NamedPosition {
-        name: pos,
-        position: saved.position,
-    })
-    .unwrap_or_default();
-    body["replaced"] = saved.replaced.into();
-    if let Some(warning) = robot.positions_warning() {
-        body["warning"] = warning.into();
-    }
-    Ok(Json(body))
+    let answer = SavedPosition {
+        saved: NamedPosition {
+            name: pos,
+            position: saved.position,
+        },
+        replaced: saved.replaced,
+        warning: robot.positions_warning().map(str::to_owned),
+    };
+    Ok(Json(answers::sorted(&answer)))
 }
 
 pub(super) async fn delete_position(
@@ -198,9 +171,11 @@ pub(super) async fn delete_position(
     Path((name, pos)): Path<(String, String)>,
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let position = api.robot(&name)?.delete_position(&pos)?;
-    Ok(Json(
-        serde_json::json!({ "deleted": NamedPosition { name: pos, position } }),
-    ))
+    let deleted = NamedPosition {
+        name: pos,
+        position,
+    };
+    Ok(Json(answers::sorted(&DeletedPosition { deleted })))
 }
 
 pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {

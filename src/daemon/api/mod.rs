@@ -4,7 +4,7 @@
 //! ```text
 //! GET  /v1/robots                          [RobotState]
 //! GET  /v1/robots/{name}                   RobotState                    | 404
-//! POST /v1/robots/{name}/moves             202 {"id", "report"}          | 400 | 404 | 422
+//! POST /v1/robots/{name}/moves             202 {"id", "ids", "report"}   | 400 | 404 | 422
 //! GET  /v1/robots/{name}/moves/{id}        MoveReport                    | 404
 //! GET  /v1/robots/{name}/moves/{id}/events application/x-ndjson reports  | 404
 //! POST /v1/robots/{name}/stop              {"stopped": true}             | 404 | 502 | 503
@@ -19,11 +19,15 @@
 //! DELETE /v1/robots/{name}/positions/{pos} {"deleted": NamedPosition}    | 400 | 404 | 500
 //! GET  /metrics                            Prometheus text
 //! ```
+//! The answers are typed ([`crate::daemon::RobotState`], [`crate::daemon::MoveReport`],
+//! [`crate::daemon::MoveAccepted`], [`NamedPosition`], [`Registers`], [`ErrorBody`]...) and
+//! derive `Deserialize` too: the CLI reads them into the same types.
 //! Every error is JSON with at least `error` (see [`ApiError`]; a rejection axum makes itself
 //! is put in that shape too, `body.rs`), and `reason` (a word for programs) for 403
 //! (`not-allowed`), 409, 413 (`too-large`: a body over [`MAX_BODY_BYTES`]), 502 and 503; `POST .../moves` answers 409 (`not-homed`, `homing`,
 //! `faulted`, `not-ready`) or 503 (`link-down`, `stalled`) when the robot cannot take a move now.
 
+mod answers;
 mod auth;
 mod body;
 mod error;
@@ -31,6 +35,7 @@ mod handlers;
 mod listen;
 pub mod metrics;
 mod registers;
+pub use registers::{RegisterWrite, Registers};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -39,9 +44,10 @@ use axum::Router;
 use axum::routing::{get, post};
 use tokio_util::sync::CancellationToken;
 
+pub use answers::{DeletedPosition, NamedPosition, PositionList, SavedPosition};
 pub use auth::{BearerToken, TokenError};
 pub use body::MAX_BODY_BYTES;
-pub use error::ApiError;
+pub use error::{ApiError, ErrorBody};
 pub use listen::{HEADER_READ_TIMEOUT, serve, serve_with};
 
 use super::RobotHandle;

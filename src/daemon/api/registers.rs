@@ -14,21 +14,22 @@ use crate::daemon::{Values, values_from_json};
 use crate::gateway::Address;
 
 /// What a read or a write answers.
-#[derive(Debug, Serialize)]
-pub(super) struct Registers {
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Registers {
     /// The first address, as Panasonic writes it.
-    address: String,
+    pub address: String,
     /// How many words or bits.
-    count: usize,
+    pub count: usize,
     /// What was read, or written.
-    values: Values,
+    pub values: Values,
 }
 
-/// A write's body.
-#[derive(Debug, Deserialize)]
+/// A write's body: words as numbers, bits as `true`/`false` or 1/0 (checked against the area).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct WriteBody {
-    values: Vec<serde_json::Value>,
+pub struct RegisterWrite {
+    /// The values, from the address on.
+    pub values: Vec<serde_json::Value>,
 }
 
 pub(super) async fn read(
@@ -54,7 +55,7 @@ pub(super) async fn write(
 ) -> Result<Json<Registers>, ApiError> {
     let robot = api.robot(&name)?;
     let start = address_of(&address)?;
-    let body: WriteBody = serde_json::from_slice(&body).map_err(|e| ApiError::BadRequest {
+    let body: RegisterWrite = serde_json::from_slice(&body).map_err(|e| ApiError::BadRequest {
         message: format!("the body must be {{\"values\": [...]}}: {e}"),
         field: Some("values".into()),
     })?;

@@ -6,9 +6,9 @@ use super::{Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault};
 use crate::daemon::order::MoveOrder;
-use crate::daemon::report::{MoveId, MoveReport, Stage};
+use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
-use crate::plc::contract::{CommandWrite, ContractError, describe_outcome, fault_meaning};
+use crate::plc::contract::{CommandWrite, ContractError, describe_outcome};
 
 /// A stop asked for this recently stopped the moves that end stopped.
 const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);
@@ -55,7 +55,7 @@ impl Worker {
             s.link.error = None;
             s.counts = Some(counts);
             s.pose = Some(pose);
-            s.state = Some(status.state.name());
+            s.state = Some(status.state);
             s.fault = (status.block.fault != 0).then_some(status.block.fault);
             s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
             s.homed = homed;
@@ -76,7 +76,7 @@ impl Worker {
     }
 
     pub(super) fn publish_phase(&self) {
-        let phase = self.machine.phase().name();
+        let phase = RobotPhase::from(self.machine.phase());
         self.shared.state(|s| s.phase = phase);
     }
 
@@ -243,17 +243,10 @@ impl Worker {
                 }
             }
             Event::HomeFailed { fault } => {
-                let why = if fault == 0 {
-                    "the home routine did not end with the homed bit set".to_owned()
-                } else {
-                    format!(
-                        "the home routine failed: fault {fault} ({})",
-                        fault_meaning(fault)
-                    )
-                };
+                let why = CommandError::HomeFailed { fault };
                 tracing::error!(robot = %self.robot.name, "{why}");
                 for reply in std::mem::take(&mut self.homing) {
-                    let _ = reply.send(Err(CommandError::Plc(why.clone())));
+                    let _ = reply.send(Err(why.clone()));
                 }
             }
             Event::WriteHost

@@ -36,7 +36,7 @@ use tokio::sync::{mpsc, watch};
 use super::handle::{DaemonOptions, RobotSetup};
 use super::order::CheckedOrder;
 use super::report::{MoveId, Stage};
-use super::request::{CommandError, Reply, Request};
+use super::request::{CommandError, ConflictReason, Reply, Request};
 use super::shared::Shared;
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
@@ -301,11 +301,7 @@ impl Worker {
         session.mode_read = Some(now());
         match session.contract.plc().mode().await {
             Ok(mode) => {
-                let name = match mode {
-                    crate::plc::PlcMode::Run => "run",
-                    crate::plc::PlcMode::Prog => "prog",
-                };
-                self.shared.state(|s| s.plc_mode = Some(name));
+                self.shared.state(|s| s.plc_mode = Some(mode));
                 Ok(())
             }
             Err(e) if e.is_link_failure() => Err(ContractError::Plc(e)),
@@ -391,9 +387,9 @@ impl Worker {
         for command in std::mem::take(&mut self.commands) {
             answer(
                 command,
-                Err(CommandError::Conflict(
-                    "a stop came first; ask again".into(),
-                )),
+                Err(CommandError::Conflict {
+                    reason: ConflictReason::StopCameFirst,
+                }),
             );
         }
         self.cancel_queue("cancelled by a stop request");
@@ -408,7 +404,9 @@ impl Worker {
             Err(e) if link_broken(e) => Err(CommandError::LinkDown {
                 detail: Some(describe(e)),
             }),
-            Err(e) => Err(CommandError::Plc(describe(e))),
+            Err(e) => Err(CommandError::Plc {
+                detail: describe(e),
+            }),
         };
         for reply in replies {
             let _ = reply.send(answer_for.clone());
@@ -432,7 +430,8 @@ impl Worker {
                         let _ = reply.send(Ok(()));
                     }
                     Err(e) => {
-                        let _ = reply.send(Err(CommandError::Plc(describe(&e))));
+                        let detail = describe(&e);
+                        let _ = reply.send(Err(CommandError::Plc { detail }));
                         if link_broken(&e) {
                             return Err(e);
                         }
@@ -460,26 +459,21 @@ impl Worker {
         let in_flight = !self.machine.given().is_empty();
         match command {
             Request::ClearFault(_) if matches!(last.state, State::Running | State::Homing) => {
-                Err(CommandError::Conflict(format!(
-                    "the PLC is {}: stop it first; a fault is cleared only when nothing runs",
-                    last.state.name()
-                )))
+                Err(ConflictReason::PlcBusy { state: last.state })
             }
             Request::ClearFault(_) if last.state != State::Fault && last.block.fault == 0 => {
-                Err(CommandError::Conflict("the PLC reports no fault".into()))
+                Err(ConflictReason::NoFault)
             }
-            Request::Home(_) if in_flight || last.state == State::Running => Err(
-                CommandError::Conflict("a move runs: stop it before homing".into()),
-            ),
-            Request::Home(_) if last.state == State::Homing => {
-                Err(CommandError::Conflict("the robot is already homing".into()))
+            Request::Home(_) if in_flight || last.state == State::Running => {
+                Err(ConflictReason::MoveRuns)
             }
-            Request::Home(_) if last.state == State::Fault => Err(CommandError::Conflict(format!(
-                "the PLC reports fault {}: clear it before homing",
-                last.block.fault
-            ))),
+            Request::Home(_) if last.state == State::Homing => Err(ConflictReason::AlreadyHoming),
+            Request::Home(_) if last.state == State::Fault => Err(ConflictReason::FaultLatched {
+                fault: last.block.fault,
+            }),
             _ => Ok(()),
         }
+        .map_err(|reason| CommandError::Conflict { reason })
     }
 
     /// Writes the home command for every joint's channel, each preset to its home count; the
@@ -502,7 +496,8 @@ impl Worker {
                 Ok(())
             }
             Err(e) => {
-                let _ = reply.send(Err(CommandError::Plc(describe(&e))));
+                let detail = describe(&e);
+                let _ = reply.send(Err(CommandError::Plc { detail }));
                 if link_broken(&e) { Err(e) } else { Ok(()) }
             }
         }
