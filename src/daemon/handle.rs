@@ -12,7 +12,6 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
-use super::ids::MoveIds;
 use super::order::{
     CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder, SectionPart, Target,
     plan_order,
@@ -20,15 +19,15 @@ use super::order::{
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::report::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
 use super::request::{CommandError, Reply, Request};
+use super::setup::{DaemonOptions, RobotSetup};
 use super::shared::Shared;
-use super::worker::{Channels, Connector, Worker};
+use super::worker::{Channels, Worker};
 use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
 use crate::plan::{MoveRequest, Origin, PathPlan, PlanError, SectionPlan, line_as_path, plan_path};
 use crate::plc::PlcMode;
-use crate::plc::contract::ContractSettings;
 use crate::robot::{Motion, Robot};
 
 /// Why a move was not accepted.
@@ -72,57 +71,6 @@ pub const MAX_QUEUED_STARTS: usize = 1_000;
 
 /// The most elements a path order may have (checked before anything is planned).
 pub const MAX_PATH_ELEMENTS: usize = 500;
-
-/// One robot as the daemon runs it.
-pub struct RobotSetup {
-    /// The robot.
-    pub robot: Robot,
-    /// How its contract is run.
-    pub settings: ContractSettings,
-    /// Opens its PLC link (again after every failure).
-    pub connect: Connector,
-    /// The count each joint is set to at its home position.
-    pub home_counts: [i64; JOINTS],
-    /// What the cell may reach of the PLC's registers through the daemon.
-    pub gateway: GatewaySettings,
-}
-
-/// What every robot of one daemon shares.
-#[derive(Debug, Clone)]
-pub struct DaemonOptions {
-    /// The word this daemon writes into every PLC's `host` word (nonzero).
-    pub host: u16,
-    /// Where move ids come from.
-    pub ids: Arc<MoveIds>,
-    /// A queued order that could not start for this long after its turn came ends failed.
-    pub start_within: Duration,
-    /// The robots' taught positions (by default in memory only).
-    pub positions: Arc<TaughtPositions>,
-}
-
-impl Default for DaemonOptions {
-    fn default() -> Self {
-        Self {
-            host: host_word(),
-            ids: Arc::new(MoveIds::counting_from(1)),
-            start_within: Duration::from_secs(10),
-            positions: Arc::new(TaughtPositions::in_memory()),
-        }
-    }
-}
-
-/// A nonzero word that differs from run to run (the clock and the process id, mixed).
-#[must_use]
-pub fn host_word() -> u16 {
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as u64);
-    let mut x = nanos ^ (u64::from(std::process::id()) << 32);
-    x ^= x >> 33;
-    x = x.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
-    x ^= x >> 33;
-    (x as u16).max(1)
-}
 
 /// One robot, as the API and the CLI see it.
 #[derive(Debug, Clone)]

@@ -33,14 +33,12 @@ pub mod positions;
 mod report;
 mod request;
 pub mod service;
+mod setup;
 mod shared;
 mod worker;
 
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{
-    Daemon, DaemonOptions, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, RobotSetup, Saved,
-    SubmitError, host_word,
-};
+pub use handle::{Daemon, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
 pub use ids::{MoveIds, write_atomically};
 pub(crate) use order::plan_order;
 pub use order::{
@@ -53,4 +51,5 @@ pub use report::{
     PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
 pub use request::{CommandError, ConflictReason};
+pub use setup::{DaemonOptions, RobotSetup, host_word};
 pub use worker::Connector;

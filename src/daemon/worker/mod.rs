@@ -33,10 +33,10 @@ use std::time::Duration;
 
 use tokio::sync::{mpsc, watch};
 
-use super::handle::{DaemonOptions, RobotSetup};
 use super::order::CheckedOrder;
 use super::report::{MoveId, Stage};
 use super::request::{CommandError, ConflictReason, Reply, Request};
+use super::setup::{DaemonOptions, RobotSetup};
 use super::shared::Shared;
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
