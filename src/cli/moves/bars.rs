@@ -152,8 +152,10 @@ mod tests {
 
     /// A report of move 1 at `stage` and `progress`, of `section` if given.
     fn report(stage: &str, progress: f64, section: Option<Value>) -> MoveReport {
-        let json = json!({"id": 1, "robot": "r", "stage": stage, "progress": progress,
-            "section": section});
+        let mut json = json!({"id": 1, "robot": "r", "stage": stage, "progress": progress});
+        if let Some(section) = section {
+            json["section"] = section;
+        }
         Received::read(json, "a report").unwrap().value
     }
 

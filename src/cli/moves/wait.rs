@@ -139,21 +139,28 @@ mod tests {
     use crate::cli::client::Received;
     use serde_json::{Value, json};
 
-    /// A report of move 7 of press-loader, with `fields`.
-    fn report(fields: Value) -> MoveReport {
-        let mut json = json!({"id": 7, "robot": "press-loader", "stage": "queued"});
-        for (key, value) in fields.as_object().unwrap() {
-            json[key] = value.clone();
+    /// `base` with `fields` set over it.
+    fn with(mut base: Value, fields: Value) -> Value {
+        if let Value::Object(fields) = fields {
+            for (key, value) in fields {
+                base[key] = value;
+            }
         }
-        Received::read(json, "a report").unwrap().value
+        base
     }
 
-    fn state(json: Value) -> RobotState {
-        let mut named = json!({"name": "press-loader"});
-        for (key, value) in json.as_object().unwrap() {
-            named[key] = value.clone();
-        }
-        Received::read(named, "a state").unwrap().value
+    /// A queued report of move 7 of press-loader, with `fields`.
+    fn report(fields: Value) -> MoveReport {
+        let base = json!({"id": 7, "robot": "press-loader", "stage": "queued"});
+        Received::read(with(base, fields), "a report")
+            .unwrap()
+            .value
+    }
+
+    /// press-loader's state, with `fields`.
+    fn state(fields: Value) -> RobotState {
+        let base = json!({"name": "press-loader"});
+        Received::read(with(base, fields), "a state").unwrap().value
     }
 
     #[test]
