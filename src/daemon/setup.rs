@@ -1,6 +1,6 @@
 //! What the daemon is started with: each robot's setup (the robot, its contract settings, its
 //! link, its home counts, its gateway) and what every robot of one daemon shares (the host word,
-//! move ids, start_within, taught positions).
+//! move ids, `start_within`, taught positions).
 
 use std::sync::Arc;
 use std::time::Duration;
