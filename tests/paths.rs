@@ -605,6 +605,8 @@ proptest::proptest! {
         cases: 6,
         failure_persistence: None,
         rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+        // The same cases every run: a case that fails fails again.
+        rng_seed: proptest::test_runner::RngSeed::Fixed(20_261_126),
         .. proptest::test_runner::Config::default()
     })]
 
@@ -690,10 +692,12 @@ proptest::proptest! {
                 // A part chained at speed whose turn came too late on a loaded machine ends
                 // failed with the robot stopped on the path (the parts after it cancelled):
                 // what ran is still judged below.
-                let late = report
-                    .error
-                    .as_deref()
-                    .is_some_and(|e| e.contains("begins at speed") || e.contains("could not be chained"));
+                // Or the pace check refused it before anything moved ("not started").
+                let late = report.error.as_deref().is_some_and(|e| {
+                    e.contains("begins at speed")
+                        || e.contains("could not be chained")
+                        || e.contains("not started")
+                });
                 assert!(report.stage == Stage::Done || late, "{report:?}");
             }
             s.daemon.shut_down().await;
