@@ -3,7 +3,7 @@
 
 use thiserror::Error;
 
-use super::{BANKS, CHANNELS, COMMAND_WORDS, DT_LAST, STATUS_WORDS};
+use super::{BANKS, CHANNELS, COMMAND_WORDS, DT_LAST, INPUT_WORDS, InputWord, STATUS_WORDS};
 
 /// Addresses of the status block, the command block and the table areas.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -20,6 +20,8 @@ pub struct Layout {
     pub channel_stride: u16,
     /// Words in each channel's area.
     pub area_words: u16,
+    /// The input words the program copies into the status block (version 3).
+    pub inputs: [InputWord; INPUT_WORDS],
 }
 
 impl Default for Layout {
@@ -31,6 +33,7 @@ impl Default for Layout {
             bank_stride: 8_000,
             channel_stride: 2_000,
             area_words: 2_000,
+            inputs: InputWord::DEFAULTS,
         }
     }
 }

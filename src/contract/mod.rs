@@ -15,6 +15,7 @@
 //! ```
 
 mod blocks;
+mod inputs;
 mod layout;
 pub mod machine;
 
@@ -23,6 +24,7 @@ pub use blocks::{
     READY_ESTOP_CLEAR, READY_HOMED, STATUS_HEARTBEAT_OFFSET, STATUS_WORDS, State, StatusBlock,
     UnknownValue,
 };
+pub use inputs::{INPUT_WORDS, InputArea, InputWord, InputWordError, Permit, PermitBit, bit_name};
 pub use layout::{Layout, LayoutError};
 
 /// `magic` once the PLC program runs ("LI").
