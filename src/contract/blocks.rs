@@ -3,14 +3,18 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::CHANNELS;
+use super::{CHANNELS, INPUT_WORDS, Permit};
 
 /// Words in the status block.
-pub const STATUS_WORDS: usize = 22;
+pub const STATUS_WORDS: usize = 26;
 /// Words in the command block.
-pub const COMMAND_WORDS: usize = 17;
+pub const COMMAND_WORDS: usize = 25;
 /// Offset of the command block's `host` word.
 pub const COMMAND_HOST_OFFSET: u16 = 16;
+/// Offset of the command block's `permit_mask[0]` (then `permit_value[0..3]` from +21).
+pub const COMMAND_PERMIT_OFFSET: u16 = 17;
+/// Offset of the status block's `inputs[0]`.
+pub const STATUS_INPUTS_OFFSET: u16 = 22;
 /// Offset of the status block's `heartbeat` word.
 pub const STATUS_HEARTBEAT_OFFSET: u16 = 2;
 
@@ -23,7 +27,7 @@ pub const READY_ESTOP_CLEAR: u16 = 0b100;
 
 /// A word that holds no value the contract defines.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
-#[error("{field} = {value} is not a value contract version 2 defines")]
+#[error("{field} = {value} is not a value contract version 3 defines")]
 pub struct UnknownValue {
     /// Which field.
     pub field: &'static str,
@@ -114,6 +118,10 @@ pub enum Fault {
     NotHomed,
     /// The home routine failed (timeout, limit switch, e-stop).
     HomingFailed,
+    /// The start's permit did not hold on the inputs of the scan that acted on it (version 3).
+    PermitNotMet,
+    /// The running move's permit stopped holding: every channel stopped (version 3).
+    PermitDropped,
 }
 
 impl Fault {
@@ -129,6 +137,8 @@ impl Fault {
             Self::NotAtStart => 5,
             Self::NotHomed => 6,
             Self::HomingFailed => 7,
+            Self::PermitNotMet => 8,
+            Self::PermitDropped => 9,
         }
     }
 
@@ -143,6 +153,8 @@ impl Fault {
             5 => Self::NotAtStart,
             6 => Self::NotHomed,
             7 => Self::HomingFailed,
+            8 => Self::PermitNotMet,
+            9 => Self::PermitDropped,
             _ => {
                 return Err(UnknownValue {
                     field: "fault",
@@ -164,6 +176,8 @@ impl Fault {
             Self::NotAtStart => "not at the table's start: a count differed from `from`",
             Self::NotHomed => "not homed",
             Self::HomingFailed => "homing failed",
+            Self::PermitNotMet => "permit not met at start",
+            Self::PermitDropped => "permit dropped while moving",
         }
     }
 }
@@ -241,6 +255,8 @@ pub struct StatusBlock {
     pub host: u16,
     /// Sequence number of a start waiting behind the running move, 0 when none.
     pub waiting: u16,
+    /// The cell's input words, copied every scan (version 3).
+    pub inputs: [u16; INPUT_WORDS],
 }
 
 fn dint(words: &[u16], at: usize) -> i32 {
@@ -273,6 +289,7 @@ impl StatusBlock {
         w.extend(self.segment);
         w.push(self.host);
         w.push(self.waiting);
+        w.extend(self.inputs);
         w
     }
 
@@ -295,6 +312,7 @@ impl StatusBlock {
             segment: std::array::from_fn(|c| words[16 + c]),
             host: words[20],
             waiting: words[21],
+            inputs: std::array::from_fn(|i| words[usize::from(STATUS_INPUTS_OFFSET) + i]),
         })
     }
 }
@@ -317,6 +335,8 @@ pub struct CommandBlock {
     pub from: [i32; CHANNELS],
     /// The host's word (see [`StatusBlock::host`]).
     pub host: u16,
+    /// The start's permit (all 0: none).
+    pub permit: Permit,
 }
 
 impl CommandBlock {
@@ -329,6 +349,8 @@ impl CommandBlock {
             push_dint(&mut w, f);
         }
         w.push(self.host);
+        w.extend(self.permit.mask);
+        w.extend(self.permit.value);
         w
     }
 
@@ -346,6 +368,10 @@ impl CommandBlock {
             segments: std::array::from_fn(|c| words[4 + c]),
             from: std::array::from_fn(|c| dint(words, 8 + 2 * c)),
             host: words[16],
+            permit: Permit {
+                mask: std::array::from_fn(|i| words[17 + i]),
+                value: std::array::from_fn(|i| words[21 + i]),
+            },
         })
     }
 }
@@ -369,13 +395,15 @@ mod tests {
             segment: [1, 0, 2, 0],
             host: 0xBEEF,
             waiting: 4,
+            inputs: [0x20, 0, 0xFFFF, 1],
         };
         let w = s.to_words();
         assert_eq!(w.len(), STATUS_WORDS);
         assert_eq!(&w[8..10], &[0xEC78, 0xFFFF]);
         assert_eq!(&w[20..22], &[0xBEEF, 4]);
+        assert_eq!(&w[22..26], &[0x20, 0, 0xFFFF, 1]);
         assert_eq!(StatusBlock::from_words(&w), Some(s));
-        assert_eq!(StatusBlock::from_words(&w[..21]), None);
+        assert_eq!(StatusBlock::from_words(&w[..25]), None);
     }
 
     #[test]
@@ -388,25 +416,33 @@ mod tests {
             segments: [1, 2, 0, 8],
             from: [-5_000, 70_000, 0, 1],
             host: 0x1234,
+            permit: Permit {
+                mask: [0x60, 0, 1, 0],
+                value: [0x20, 0, 1, 0],
+            },
         };
         let w = c.to_words();
         assert_eq!(w.len(), COMMAND_WORDS);
         assert_eq!(&w[8..10], &[0xEC78, 0xFFFF]);
         assert_eq!(w[usize::from(COMMAND_HOST_OFFSET)], 0x1234);
+        assert_eq!(&w[17..25], &[0x60, 0, 1, 0, 0x20, 0, 1, 0]);
         assert_eq!(CommandBlock::from_words(&w), Some(c));
+        assert_eq!(CommandBlock::from_words(&w[..24]), None);
     }
 
     #[test]
     fn unknown_state_is_named() {
         assert_eq!(
             State::from_word(9).unwrap_err().to_string(),
-            "state = 9 is not a value contract version 2 defines"
+            "state = 9 is not a value contract version 3 defines"
         );
         assert_eq!(State::from_word(5), Ok(State::Homing));
         assert_eq!(Fault::from_word(4), Ok(Fault::PulseInstruction));
         assert_eq!(Fault::from_word(5), Ok(Fault::NotAtStart));
         assert_eq!(Fault::from_word(7), Ok(Fault::HomingFailed));
-        assert!(Fault::from_word(8).is_err());
+        assert_eq!(Fault::from_word(8), Ok(Fault::PermitNotMet));
+        assert_eq!(Fault::from_word(9), Ok(Fault::PermitDropped));
+        assert!(Fault::from_word(10).is_err());
         assert_eq!(Command::from_word(2), Ok(Command::Stop));
         assert_eq!(Command::from_word(4), Ok(Command::Home));
     }

@@ -183,6 +183,27 @@ impl Permit {
     }
 }
 
+/// What `permit` lacks on `inputs`, named by `words`: "X5 is off (the permit needs it on)".
+#[must_use]
+pub fn describe_unmet(
+    permit: &Permit,
+    inputs: &[u16; INPUT_WORDS],
+    words: &[InputWord; INPUT_WORDS],
+) -> String {
+    let parts: Vec<String> = permit
+        .unmet(inputs)
+        .iter()
+        .map(|b| {
+            let (is, needs) = if b.on { ("off", "on") } else { ("on", "off") };
+            format!(
+                "{} is {is} (the permit needs it {needs})",
+                bit_name(words[b.word], b.bit)
+            )
+        })
+        .collect();
+    parts.join(", ")
+}
+
 /// The Panasonic name of bit `bit` of `word` (`X5`, `X1A`, `R10A`).
 #[must_use]
 pub fn bit_name(word: InputWord, bit: u8) -> String {

@@ -2,6 +2,7 @@
 //! clear a fault, read state and reports, follow a move's progress, teach positions) and the
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
+use crate::contract::Permit;
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, OnceLock};
@@ -314,6 +315,7 @@ impl RobotHandle {
                         parts,
                     }),
                     motion,
+                    permit: Permit::NONE,
                 };
                 let shown = SectionReport::new(
                     n + 1,

@@ -6,6 +6,7 @@
 //! values) or `position` (a straight line to a taught position's pose). [`plan_order`] is the one
 //! place an order becomes a plan.
 
+use crate::contract::Permit;
 use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 
@@ -406,6 +407,8 @@ pub struct CheckedOrder {
     pub target: Target,
     /// The motion.
     pub motion: Motion,
+    /// Its permit over the cell's inputs: written with its start, enforced by the PLC.
+    pub permit: Permit,
 }
 
 impl CheckedOrder {
@@ -503,6 +506,7 @@ impl MoveOrder {
         Ok(CheckedOrder {
             target: self.target(taught)?,
             motion: self.motion(defaults, *limits)?,
+            permit: Permit::NONE,
         })
     }
 

@@ -223,6 +223,7 @@ impl MockPlc {
     }
 
     fn scan(&mut self, at_s: f64) {
+        let cell = program::cell_inputs(&self.memory, &self.config.layout);
         let mut io = ScanIo {
             memory: &mut self.memory,
             engines: &mut self.engines,
@@ -234,6 +235,7 @@ impl MockPlc {
                 home_s: self.config.home_s,
                 variant: self.config.variant,
             },
+            cell,
         };
         self.program
             .scan(at_s, self.next_scan, &self.config.layout, &mut io);

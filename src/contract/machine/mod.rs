@@ -29,7 +29,7 @@ mod tests;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{CHANNELS, Fault, READY_HOMED, State, StatusBlock};
+use super::{CHANNELS, Fault, INPUT_WORDS, Permit, READY_HOMED, State, StatusBlock};
 
 pub use phase::{AHEAD, Phase, Proof, Running, Written};
 pub use progress::{MIN_SCALE, ProgressCurve, THIN};
@@ -67,6 +67,8 @@ pub struct Planned {
     /// ([`Running::progress`]); `None` for a start whose plan the host does not have (found
     /// running after a restart): its progress is then the clock's.
     pub curve: Option<Arc<ProgressCurve>>,
+    /// Its permit over the cell's inputs (written into the command block; none: all 0).
+    pub permit: Permit,
 }
 
 /// How closely a start is watched.
@@ -286,6 +288,13 @@ pub enum Blocker {
     /// The heartbeat has not been seen moving between two reads since the upload began (behind
     /// a running start: since the read just before it).
     Unproven,
+    /// The start's permit does not hold on the inputs of the last status read.
+    PermitNotMet {
+        /// The permit.
+        permit: Permit,
+        /// The inputs read.
+        inputs: [u16; INPUT_WORDS],
+    },
     /// A channel is not at the count the tables were planned from.
     NotAtFrom {
         /// Pulse channel.
@@ -447,6 +456,12 @@ impl Machine {
         };
         if !proof.holds() {
             return Err(Blocker::Unproven);
+        }
+        if !start.permit.holds(&last.block.inputs) {
+            return Err(Blocker::PermitNotMet {
+                permit: start.permit,
+                inputs: last.block.inputs,
+            });
         }
         match current {
             Some(current) => {

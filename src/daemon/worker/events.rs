@@ -3,8 +3,9 @@
 //! stop, a start written again, a withdrawal, a start found running) become exchanges.
 
 use super::{Worker, describe, link_broken, now};
+use crate::contract::Permit;
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
-use crate::contract::{CHANNELS, Fault};
+use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::order::MoveOrder;
 use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
@@ -305,6 +306,9 @@ impl Worker {
             Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
                 (Stage::Stopped, "stopped by the e-stop input".to_owned())
             }
+            Outcome::Stopped { fault } if fault == Fault::PermitDropped.word() => {
+                (Stage::Stopped, self.held_because(id))
+            }
             Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),
             Outcome::Stopped { .. } => (
                 Stage::Stopped,
@@ -326,6 +330,27 @@ impl Worker {
     }
 }
 
+impl Worker {
+    /// Why the PLC held move `id` (fault 9): the inputs of its permit that stopped holding, as
+    /// the last status block shows them.
+    fn held_because(&self, id: MoveId) -> String {
+        let inputs = self
+            .machine
+            .last()
+            .map(|s| s.block.inputs)
+            .unwrap_or_default();
+        let unmet = self
+            .permits
+            .get(&id)
+            .map(|p| describe_unmet(p, &inputs, &self.settings.layout.inputs))
+            .filter(|text| !text.is_empty());
+        match unmet {
+            Some(text) => format!("held by the PLC: its permit stopped holding ({text})"),
+            None => "held by the PLC: its permit stopped holding (fault 9)".to_owned(),
+        }
+    }
+}
+
 /// A start found running whose tables could not be read: bounded only in time.
 fn unknown_start(tag: MoveId, seq: u16, status: &Status) -> Planned {
     Planned {
@@ -337,6 +362,8 @@ fn unknown_start(tag: MoveId, seq: u16, status: &Status) -> Planned {
         envelope: [(i32::MIN, i32::MAX); CHANNELS],
         duration: UNKNOWN_DURATION,
         curve: None,
+        // Not known: a start found running is followed, never written again.
+        permit: Permit::NONE,
     }
 }
 

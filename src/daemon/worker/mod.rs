@@ -140,6 +140,9 @@ pub(super) struct Worker {
     preloaded: Vec<(MoveId, crate::plc::contract::Preload)>,
     /// When each running move was seen starting.
     started: HashMap<MoveId, std::time::Instant>,
+    /// The permit of each move written with one, until it ends (to name the input that held
+    /// it).
+    permits: HashMap<MoveId, crate::contract::Permit>,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
     stop_asked: Option<std::time::Instant>,
     /// Whether the link was ever opened (a later opening is a reconnection).
@@ -183,6 +186,7 @@ impl Worker {
             last_start: None,
             preloaded: Vec::new(),
             started: HashMap::new(),
+            permits: HashMap::new(),
             stop_asked: None,
             opened_before: false,
             followers: Vec::new(),

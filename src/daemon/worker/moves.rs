@@ -9,8 +9,8 @@ use super::pace::{Pace, Part};
 use super::placement::{Placement, directories_left};
 use super::preload::{self, Choice};
 use super::{Queued, Worker, describe, link_broken, now};
-use crate::contract::CHANNELS;
 use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
+use crate::contract::{CHANNELS, describe_unmet};
 use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
@@ -81,6 +81,21 @@ impl Worker {
             self.queue.push_front(queued);
             return Ok(None);
         }
+        let inputs = self
+            .machine
+            .last()
+            .map(|s| s.block.inputs)
+            .unwrap_or_default();
+        if !queued.order.permit.holds(&inputs) {
+            // Nothing planned or written: the host's own check, for a clear message (the PLC's
+            // check at the start is the one that counts).
+            let blocker = Blocker::PermitNotMet {
+                permit: queued.order.permit,
+                inputs,
+            };
+            self.not_started(queued.id, ContractError::Blocked(blocker))?;
+            return Ok(None);
+        }
         let chain = self.machine.chain_behind().cloned();
         if queued.order.begins_at_speed() && chain.is_none() {
             self.fail_at_speed(queued.id);
@@ -117,7 +132,7 @@ impl Worker {
                 return None;
             }
         };
-        let planned = self.planned(id, &plan, from, turn.chain.as_ref().map(|c| c.bank));
+        let planned = self.planned(id, &plan, turn, turn.chain.as_ref().map(|c| c.bank));
         let targets = planned.targets.expect("a plan knows its targets");
         self.record_plan(id, &plan, &planned);
         if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
@@ -145,6 +160,9 @@ impl Worker {
             Ok(written) => written,
             Err(e) => return self.not_started(id, e),
         };
+        if !planned.permit.is_none() {
+            self.permits.insert(id, planned.permit);
+        }
         let confirmed = matches!(written, CommandWrite::Confirmed);
         let (seq, planned_bank) = (planned.seq, planned.bank);
         self.machine.start_written(planned, now(), confirmed);
@@ -245,9 +263,9 @@ impl Worker {
         };
         let link = self.link()?;
         let upload = if let Some(preload) = own {
-            link.begin_upload_preloaded(planned.bank, planned.seq, planned.from, tables, &preload)
+            link.begin_upload_preloaded(&planned.into(), tables, &preload)
         } else {
-            link.begin_upload(planned.bank, planned.seq, planned.from, tables)
+            link.begin_upload(&planned.into(), tables)
         };
         let bank = match upload {
             Ok(mut upload) => self.upload_watching(&mut upload).await,
@@ -432,13 +450,8 @@ impl Worker {
     }
 
     /// The contract's description of a plan: its sequence number, bank, counts and envelope.
-    fn planned(
-        &self,
-        id: MoveId,
-        plan: &Plan,
-        from: [i32; CHANNELS],
-        running_bank: Option<u16>,
-    ) -> Planned {
+    fn planned(&self, id: MoveId, plan: &Plan, turn: &Turn, running_bank: Option<u16>) -> Planned {
+        let from = turn.from;
         let (envelope, targets) = planned_bounds(from, &channel_tables(plan));
         // Never the PLC's latched seq: it would take the start for one already acted on.
         let latched = self.machine.last().map(|s| s.block.seq);
@@ -457,6 +470,7 @@ impl Worker {
             envelope,
             duration: Duration::from_secs_f64(plan.duration_s()),
             curve: progress_curve(&self.robot, plan, from).map(Arc::new),
+            permit: turn.order.permit,
         }
     }
 
@@ -495,6 +509,10 @@ impl Worker {
         };
         let why = match &e {
             ContractError::Aborted => "cancelled by a stop request during its upload".to_owned(),
+            ContractError::Blocked(Blocker::PermitNotMet { permit, inputs }) => format!(
+                "not started: its permit does not hold: {}; nothing was written",
+                describe_unmet(permit, inputs, &self.settings.layout.inputs)
+            ),
             other => format!("not started: {}", describe(other)),
         };
         tracing::warn!(robot = %self.robot.name, id, "{why}");
@@ -556,6 +574,7 @@ impl Worker {
         final_error: Option<[i64; CHANNELS]>,
     ) {
         self.end_followers(id, stage, error.as_deref());
+        self.permits.remove(&id);
         let mut ended = false;
         self.shared.moves(|m| {
             m.update(id, |r| {

@@ -1,4 +1,4 @@
-//! The contract's PLC program (CONTRACT.md version 2, "What the PLC program does, every scan"),
+//! The contract's PLC program (CONTRACT.md version 3, "What the PLC program does, every scan"),
 //! one scan at a time, over the mock's memory and pulse engines.
 //!
 //! ```text
@@ -23,6 +23,12 @@
 //! - a start while homing is dropped (`command = 0`); a stop while homing abandons it (the homed
 //!   bit stays clear); the home routine takes [`super::MockConfig::home_s`] and then presets each
 //!   masked channel's count to `from[c]`;
+//! - a start refused for its permit (fault 8) latches the fault like every refused start; a
+//!   running move whose latched permit stops holding is stopped in that scan (state stopped,
+//!   fault 9, a waiting start dropped), after the scan's chaining and done checks, so a move
+//!   whose last segment ended in the same scan ends done;
+//! - the input words are read at the start of the scan: the status block, the start's check and
+//!   the running move's check all see the same words;
 //! - `segment[c]` holds the 1-based index of the segment channel c runs or last ran (0 before any
 //!   start).
 //!
@@ -40,9 +46,10 @@ use super::memory::Memory;
 use super::trace::Recorder;
 use super::variant::MockVariant;
 use crate::contract::{
-    CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, Layout, MAGIC,
-    READY_ESTOP_CLEAR, READY_HOMED, State, StatusBlock, VERSION,
+    CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, INPUT_WORDS,
+    InputArea, Layout, MAGIC, Permit, READY_ESTOP_CLEAR, READY_HOMED, State, StatusBlock, VERSION,
 };
+use crate::gateway::Area;
 use crate::table::Segment;
 
 /// What the program reads besides memory: inputs wired from outside.
@@ -71,6 +78,8 @@ pub(super) struct ScanIo<'a> {
     pub rec: &'a mut Recorder,
     /// Wired inputs.
     pub inputs: Inputs,
+    /// The cell's input words as this scan read them (the status block's `inputs`).
+    pub cell: [u16; INPUT_WORDS],
 }
 
 /// What one channel of the running start still has to play.
@@ -107,6 +116,8 @@ pub(super) struct Program {
     starts: Vec<StartRecord>,
     /// The seq of the start waiting behind the running move, and the scan it was first seen.
     waiting_since: Option<(u16, f64)>,
+    /// The running move's permit, latched when it started.
+    permit: Permit,
 }
 
 impl Program {
@@ -125,6 +136,7 @@ impl Program {
             last_fault: None,
             starts: Vec::new(),
             waiting_since: None,
+            permit: Permit::NONE,
         }
     }
 
@@ -180,6 +192,9 @@ impl Program {
         }
         if self.state == State::Homing {
             self.home_progress(at_s, io, layout);
+        }
+        if self.state == State::Running && !self.permit.holds(&io.cell) {
+            self.hold(at_s, io, layout);
         }
         let from_input = io.inputs.estop_open;
         if from_input || command == Command::Stop.word() {
@@ -282,6 +297,17 @@ impl Program {
         }
     }
 
+    /// The running move's permit stopped holding: every channel stops in this scan.
+    fn hold(&mut self, at_s: f64, io: &mut ScanIo<'_>, layout: &Layout) {
+        tracing::warn!(seq = self.seq, inputs = ?io.cell, "permit dropped: stopping");
+        self.stop(at_s, io, layout, false);
+        self.fault = Fault::PermitDropped;
+        self.last_fault = Some(format!(
+            "the permit of start {} stopped holding on inputs {:04X?}",
+            self.seq, io.cell
+        ));
+    }
+
     fn clear_fault(&mut self, memory: &mut Memory, layout: &Layout) {
         self.fault = Fault::None;
         self.last_fault = None;
@@ -377,6 +403,7 @@ impl Program {
             segment: self.segment,
             host: block.host,
             waiting,
+            inputs: io.cell,
         };
         let _ = io
             .memory
@@ -395,6 +422,21 @@ fn still_running(run: &ChannelRun, engine: &Engine, variant: MockVariant) -> boo
     current
         .and_then(|s| s.rows.last())
         .is_some_and(|row| engine.count() != row.target)
+}
+
+/// The cell's input words as they stand in memory, in the layout's order (a word the memory
+/// does not hold reads 0: the config checks the words against the FP-X's areas).
+pub(super) fn cell_inputs(memory: &Memory, layout: &Layout) -> [u16; INPUT_WORDS] {
+    std::array::from_fn(|i| {
+        let word = layout.inputs[i];
+        let area = match word.area {
+            InputArea::X => Area::X,
+            InputArea::R => Area::R,
+        };
+        memory
+            .read_bit_words(area, u32::from(word.word), 1)
+            .map_or(0, |w| w[0])
+    })
 }
 
 /// The command block as it stands in memory.

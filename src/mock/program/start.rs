@@ -70,6 +70,8 @@ pub struct StartRecord {
     pub block: CommandBlock,
     /// Every channel's count at that scan.
     pub counts: [i64; CHANNELS],
+    /// The cell's input words at that scan.
+    pub inputs: [u16; crate::contract::INPUT_WORDS],
     /// What the program did.
     pub outcome: StartOutcome,
 }
@@ -109,6 +111,7 @@ impl Program {
             seen_s: waited.map_or(at_s, |(_, seen_s)| seen_s),
             block,
             counts: std::array::from_fn(|c| io.engines[c].count()),
+            inputs: io.cell,
             outcome,
         });
         match outcome {
@@ -160,6 +163,7 @@ impl Program {
             });
         }
         self.seq = block.seq;
+        self.permit = block.permit;
         self.state = State::Running;
         tracing::info!(
             seq = block.seq,
@@ -173,8 +177,8 @@ impl Program {
 }
 
 /// Every check a start needs, in the contract's order: the e-stop input (the mock's choice),
-/// bounds (fault 1), homed (6), busy channels (2), every channel at `from` (5), then F174's own
-/// check of every segment 1 (4).
+/// bounds (fault 1), homed (6), busy channels (2), every channel at `from` (5), the permit on
+/// this scan's inputs (8), then F174's own check of every segment 1 (4).
 fn prepare(
     block: &CommandBlock,
     layout: &Layout,
@@ -201,6 +205,13 @@ fn prepare(
             block.from[c]
         );
         return Err((Fault::NotAtStart, why));
+    }
+    if !block.permit.holds(&io.cell) {
+        let why = format!(
+            "the permit (mask {:04X?}, value {:04X?}) does not hold on inputs {:04X?}",
+            block.permit.mask, block.permit.value, io.cell
+        );
+        return Err((Fault::PermitNotMet, why));
     }
     check_first_segments(&tables, io.engines)
         .map_err(|e| (Fault::PulseInstruction, e.to_string()))?;

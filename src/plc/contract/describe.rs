@@ -7,6 +7,7 @@
 //! come from each area's directory and its `from` is unknown: then only the channels whose tables
 //! hold their present count are bounded, and no final counts are compared.
 
+use crate::contract::Permit;
 use std::time::Duration;
 
 use super::{Contract, ContractError};
@@ -80,6 +81,7 @@ impl<P: Plc> Contract<P> {
             duration: Duration::ZERO,
             // Its plan is not known here: its progress is the clock's.
             curve: None,
+            permit: if known { block.permit } else { Permit::NONE },
         };
         let mut targets = planned.from;
         for c in 0..CHANNELS {

@@ -19,9 +19,48 @@ mod upload;
 pub use describe::planned_bounds;
 pub use upload::Upload;
 
-/// Words of a start's command block written before its start (all but `command` and `host`).
+/// What a start's command block says besides its tables: its bank, sequence number, the counts
+/// its tables were planned from, and its permit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StartBlock {
+    /// Table bank (0 or 1).
+    pub bank: u16,
+    /// Sequence number.
+    pub seq: u16,
+    /// The counts the tables were planned from.
+    pub from: [i32; CHANNELS],
+    /// The permit over the cell's inputs.
+    pub permit: Permit,
+}
+
+impl StartBlock {
+    /// A start with no permit.
+    #[must_use]
+    pub fn unpermitted(bank: u16, seq: u16, from: [i32; CHANNELS]) -> Self {
+        Self {
+            bank,
+            seq,
+            from,
+            permit: Permit::NONE,
+        }
+    }
+}
+
+impl From<&crate::contract::machine::Planned> for StartBlock {
+    fn from(p: &crate::contract::machine::Planned) -> Self {
+        Self {
+            bank: p.bank,
+            seq: p.seq,
+            from: p.from,
+            permit: p.permit,
+        }
+    }
+}
+
+/// Words of a start's command block written before its start (+1..+15: all before `host`).
 pub const BLOCK_WRITE_WORDS: usize = COMMAND_HOST_OFFSET as usize - 1;
 
+use crate::contract::Permit;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -31,8 +70,9 @@ use thiserror::Error;
 use super::{Plc, PlcError};
 use crate::contract::machine::{Blocker, Machine, Outcome, Status, WatchSettings};
 use crate::contract::{
-    CHANNELS, COMMAND_HOST_OFFSET, COMMAND_WORDS, Command, CommandBlock, Fault, Layout, MAGIC,
-    STATUS_HEARTBEAT_OFFSET, STATUS_WORDS, State, StatusBlock, UnknownValue, VERSION,
+    CHANNELS, COMMAND_HOST_OFFSET, COMMAND_PERMIT_OFFSET, COMMAND_WORDS, Command, CommandBlock,
+    Fault, Layout, MAGIC, STATUS_HEARTBEAT_OFFSET, STATUS_WORDS, State, StatusBlock, UnknownValue,
+    VERSION,
 };
 use crate::table::{DIRECTORY_WORDS, ValidTable, encode_at};
 
@@ -91,6 +131,15 @@ pub enum ContractError {
     /// The PLC cannot take a start now.
     #[error("{0}")]
     Blocked(Blocker),
+    /// A permit whose value words set bits its mask does not look at.
+    #[error(
+        "permit value {:04X?} sets bits outside its mask {:04X?}: no start is written with it",
+        permit.value, permit.mask
+    )]
+    BadPermit {
+        /// The permit.
+        permit: Permit,
+    },
     /// The heartbeat stood still while the host waited for the PLC.
     #[error(
         "the PLC heartbeat stood still for {still_ms} ms (limit {limit_ms} ms): the PLC is stalled{mode}"
@@ -215,6 +264,12 @@ impl std::fmt::Display for Blocker {
             Self::Unproven => write!(
                 f,
                 "the PLC heartbeat has not been seen moving since the upload"
+            ),
+            Self::PermitNotMet { permit, inputs } => write!(
+                f,
+                "the start's permit does not hold on the PLC's inputs {inputs:04X?} (it needs \
+                 the bits {:04X?} to be {:04X?}): the start is not written",
+                permit.mask, permit.value
             ),
             Self::NotAtFrom {
                 channel,
@@ -486,8 +541,8 @@ impl<P: Plc> Contract<P> {
     }
 
     /// Writes every table into `bank`, then the command block except its command and host words
-    /// (`from` = the counts the tables were planned from), then reads all of it back and
-    /// compares. Only a complete, verified upload yields the bank.
+    /// (`from` = the counts the tables were planned from, no permit), then reads all of it back
+    /// and compares. Only a complete, verified upload yields the bank.
     pub async fn upload(
         &mut self,
         bank: u16,
@@ -495,21 +550,20 @@ impl<P: Plc> Contract<P> {
         from: [i32; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<VerifiedBank, ContractError> {
-        let mut upload = self.begin_upload(bank, seq, from, tables)?;
+        let start = StartBlock::unpermitted(bank, seq, from);
+        let mut upload = self.begin_upload(&start, tables)?;
         self.finish_upload(&mut upload).await
     }
 
-    /// [`Self::upload`] cut into exchanges, none made yet: [`Self::upload_step`] makes them.
+    /// [`Self::upload`] for `start` (its permit too), cut into exchanges, none made yet:
+    /// [`Self::upload_step`] makes them.
     pub fn begin_upload(
         &self,
-        bank: u16,
-        seq: u16,
-        from: [i32; CHANNELS],
+        start: &StartBlock,
         tables: &[ValidTable],
     ) -> Result<Upload, ContractError> {
-        let (block, mut writes, _) =
-            self.placed(bank, seq, from, tables, [DIRECTORY_WORDS; CHANNELS])?;
-        writes.push(self.block_write(&block));
+        let (block, mut writes, _) = self.placed(start, tables, [DIRECTORY_WORDS; CHANNELS])?;
+        writes.extend(self.block_writes(&block));
         Ok(Upload::new(block, writes, false, self.settings.verify))
     }
 
@@ -558,7 +612,8 @@ impl<P: Plc> Contract<P> {
         base: [usize; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<Preload, ContractError> {
-        let (block, writes, _) = self.placed(bank, 0, [0; CHANNELS], tables, base)?;
+        let unstarted = StartBlock::unpermitted(bank, 0, [0; CHANNELS]);
+        let (block, writes, _) = self.placed(&unstarted, tables, base)?;
         // The tables alone: no command block is written (the start's upload writes it).
         let mut upload = Upload::new(block, writes.clone(), false, self.settings.verify);
         self.exchanges(&mut upload).await?;
@@ -579,30 +634,30 @@ impl<P: Plc> Contract<P> {
         tables: &[ValidTable],
         preload: &Preload,
     ) -> Result<VerifiedBank, ContractError> {
-        let mut upload = self.begin_upload_preloaded(bank, seq, from, tables, preload)?;
+        let start = StartBlock::unpermitted(bank, seq, from);
+        let mut upload = self.begin_upload_preloaded(&start, tables, preload)?;
         self.finish_upload(&mut upload).await
     }
 
-    /// [`Self::upload_preloaded`] cut into exchanges, none made yet.
+    /// [`Self::upload_preloaded`] for `start` (its permit too), cut into exchanges, none made
+    /// yet.
     pub fn begin_upload_preloaded(
         &self,
-        bank: u16,
-        seq: u16,
-        from: [i32; CHANNELS],
+        start: &StartBlock,
         tables: &[ValidTable],
         preload: &Preload,
     ) -> Result<Upload, ContractError> {
-        let (block, tables_writes, mut writes) =
-            self.placed(bank, seq, from, tables, preload.base)?;
+        let bank = start.bank;
+        let (block, tables_writes, mut writes) = self.placed(start, tables, preload.base)?;
         if preload.bank != bank || preload.writes != tables_writes {
             tracing::warn!(
                 bank,
                 preloaded_bank = preload.bank,
                 "tables differ from those preloaded: writing them whole"
             );
-            return self.begin_upload(bank, seq, from, tables);
+            return self.begin_upload(start, tables);
         }
-        writes.push(self.block_write(&block));
+        writes.extend(self.block_writes(&block));
         Ok(Upload::new(block, writes, true, self.settings.verify))
     }
 
@@ -611,20 +666,25 @@ impl<P: Plc> Contract<P> {
     /// (those of the channels placed past the directory's end).
     fn placed(
         &self,
-        bank: u16,
-        seq: u16,
-        from: [i32; CHANNELS],
+        start: &StartBlock,
         tables: &[ValidTable],
         base: [usize; CHANNELS],
     ) -> Result<(CommandBlock, Vec<Write>, Vec<Write>), ContractError> {
+        let bank = start.bank;
         if bank >= crate::contract::BANKS {
             return Err(ContractError::BadBank { bank });
         }
+        if !start.permit.is_well_formed() {
+            return Err(ContractError::BadPermit {
+                permit: start.permit,
+            });
+        }
         let mut block = CommandBlock {
             command: Command::None.word(),
-            seq,
+            seq: start.seq,
             bank,
-            from,
+            from: start.from,
+            permit: start.permit,
             ..CommandBlock::default()
         };
         let mut writes: Vec<Write> = Vec::with_capacity(tables.len() + 1);
@@ -659,10 +719,17 @@ impl<P: Plc> Contract<P> {
         Ok((block, writes, directories))
     }
 
-    /// The write of a command block's words 1..16 (everything but the command and host words).
-    fn block_write(&self, block: &CommandBlock) -> (u16, Vec<u16>) {
-        let words = block.to_words()[1..=BLOCK_WRITE_WORDS].to_vec();
-        (self.settings.layout.command_base + 1, words)
+    /// The writes of a command block's words but the command and host words: +1..+15 (seq,
+    /// mask, bank, segments, from), then the permit +17..+24. Two writes, so that the `host`
+    /// word is only ever written when the PLC's copy differs (CONTRACT.md).
+    fn block_writes(&self, block: &CommandBlock) -> [(u16, Vec<u16>); 2] {
+        let words = block.to_words();
+        let base = self.settings.layout.command_base;
+        let permit = usize::from(COMMAND_PERMIT_OFFSET);
+        [
+            (base + 1, words[1..=BLOCK_WRITE_WORDS].to_vec()),
+            (base + COMMAND_PERMIT_OFFSET, words[permit..].to_vec()),
+        ]
     }
 
     async fn compare(&mut self, address: u16, wrote: &[u16]) -> Result<(), ContractError> {
@@ -713,7 +780,7 @@ impl<P: Plc> Contract<P> {
             from,
             ..self.command_block().await?
         };
-        let (address, words) = self.block_write(&block);
+        let [(address, words), _permit] = self.block_writes(&block);
         self.plc.write_words(address, &words).await?;
         if self.settings.verify {
             self.compare(address, &words).await?;
