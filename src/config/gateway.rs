@@ -147,7 +147,7 @@ mod tests {
             "write = [\"DT100-DT199\", \"DT1030-DT1040\"]",
         ));
         assert!(
-            m.contains("robots.r.gateway.write[1] = \"DT1030-DT1040\": DT1030-DT1040 overlaps the contract's command block (DT1032-DT1048)"),
+            m.contains("robots.r.gateway.write[1] = \"DT1030-DT1040\": DT1030-DT1040 overlaps the contract's command block (DT1032-DT1056)"),
             "{m}"
         );
         let m = message(&with_gateway("write = [\"X0-X7\"]"));

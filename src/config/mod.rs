@@ -33,6 +33,7 @@
 //! ```
 //! `config/linterpd.toml` is the commented example.
 
+mod cell;
 mod check;
 mod daemon;
 mod error;
@@ -50,6 +51,7 @@ mod validate;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+pub use cell::CellSettings;
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
@@ -67,6 +69,8 @@ pub struct Config {
     pub links: BTreeMap<String, LinkSettings>,
     /// The register gateway of each robot with a `[robots.NAME.gateway]` table, by robot name.
     pub gateways: BTreeMap<String, crate::gateway::GatewaySettings>,
+    /// The cell of each robot with a `[robots.NAME.cell]` table, by robot name.
+    pub cells: BTreeMap<String, CellSettings>,
     /// How `linterpd serve` offers its API (`[daemon]`; every default without one).
     pub daemon: DaemonSettings,
 }
@@ -85,7 +89,14 @@ impl Config {
             path: path.to_owned(),
             source,
         })?;
-        Self::from_toml(&text)
+        let mut config = Self::from_toml(&text)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for cell in config.cells.values_mut() {
+            if let Some(programs) = &mut cell.programs {
+                *programs = dir.join(&*programs);
+            }
+        }
+        Ok(config)
     }
 
     /// The robot called `name`, or with `None` the only robot of the file.

@@ -19,6 +19,7 @@
 //! modbus_max_read = 125              # Modbus only: registers a read asks for, 1..=125 [unverified]
 //! [robots.press-loader.plc.contract] # optional; CONTRACT.md defaults
 //! status_base = 1000
+//! inputs = ["WX0", "WX1", "WR10", "WR11"]   # the words the program copies to status +22..+25
 //! ```
 
 use std::ops::Range;
@@ -30,7 +31,7 @@ use super::ConfigError;
 use super::check::At;
 use super::raw::{RawContract, RawParity, RawPlc, RawProtocol, RawSerial, RawTcp};
 use super::units::parse_duration_s;
-use crate::contract::{DT_LAST, Layout};
+use crate::contract::{DT_LAST, INPUT_WORDS, InputWord, Layout};
 use crate::kinematics::JOINTS;
 use crate::plc::{
     HeaderChoice, LinkSettings, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, Parity, Protocol,
@@ -344,10 +345,42 @@ fn layout(
             *slot = at.child(key).int_within(v, 0, i64::from(DT_LAST))? as u16;
         }
     }
+    if let Some(inputs) = &r.inputs {
+        layout.inputs = input_words(&at.child("inputs"), inputs)?;
+    }
     layout
         .check()
         .map_err(|e| table_invalid(at, &raw.span(), &shown(&layout), e))?;
     Ok(layout)
+}
+
+/// `inputs`: the four words the PLC program copies into the status block, in its order.
+fn input_words(
+    at: &At,
+    raw: &Spanned<Vec<Spanned<String>>>,
+) -> Result<[InputWord; INPUT_WORDS], ConfigError> {
+    let list = raw.get_ref();
+    if list.len() != INPUT_WORDS {
+        let shown: Vec<&str> = list.iter().map(|w| w.get_ref().as_str()).collect();
+        return Err(ConfigError::Invalid {
+            line: at.line(&raw.span()),
+            key: at.key().to_owned(),
+            value: format!("{shown:?}"),
+            reason: format!(
+                "names {} words; the status block holds {INPUT_WORDS} (repeat one the program \
+                 copies twice, or name an unused relay word)",
+                list.len()
+            ),
+        });
+    }
+    let mut words = InputWord::DEFAULTS;
+    for (i, text) in list.iter().enumerate() {
+        words[i] = text
+            .get_ref()
+            .parse()
+            .map_err(|e: crate::contract::InputWordError| at.index(i).invalid(text, e))?;
+    }
+    Ok(words)
 }
 
 fn shown(l: &Layout) -> String {

@@ -46,6 +46,16 @@ pub(super) struct RawRobot {
     pub joints: Spanned<Vec<Spanned<RawJoint>>>,
     pub plc: Option<Spanned<RawPlc>>,
     pub gateway: Option<Spanned<RawGateway>>,
+    pub cell: Option<Spanned<RawCell>>,
+}
+
+/// `[robots.NAME.cell]`: the cell's signals and cycle programs; checked by `cell`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCell {
+    pub signals: Option<BTreeMap<Spanned<String>, Spanned<String>>>,
+    pub programs: Option<Spanned<String>>,
+    pub require_wait_timeout: Option<Spanned<bool>>,
 }
 
 /// `[robots.NAME.gateway]`: the register gateway's access list; checked by `gateway`.
@@ -134,6 +144,7 @@ pub(super) struct RawContract {
     pub table_base: Option<Spanned<i64>>,
     pub bank_stride: Option<Spanned<i64>>,
     pub channel_stride: Option<Spanned<i64>>,
+    pub inputs: Option<Spanned<Vec<Spanned<String>>>>,
 }
 
 /// `[robots.NAME.kinematics]`: every model's keys, optional here; which ones a model takes is

@@ -8,7 +8,7 @@ use super::check::At;
 use super::raw::{RawConfig, RawRobot};
 use std::collections::BTreeMap;
 
-use super::{Config, ConfigError, daemon, gateway, joints, kinematics, motion, plc};
+use super::{Config, ConfigError, cell, daemon, gateway, joints, kinematics, motion, plc};
 use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
@@ -26,6 +26,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     let mut robots = Vec::with_capacity(entries.len());
     let mut links = BTreeMap::new();
     let mut gateways = BTreeMap::new();
+    let mut cells = BTreeMap::new();
     for (name, raw) in &entries {
         let robot = self::robot(text, name, raw)?;
         let link = self::link(text, &robot, raw)?;
@@ -34,6 +35,10 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         }
         if let Some(link) = link {
             links.insert(robot.name.clone(), link);
+        }
+        if let Some(table) = &raw.get_ref().cell {
+            let at = At::new(text, "robots").child(&robot.name).child("cell");
+            cells.insert(robot.name.clone(), cell::settings(&at, table)?);
         }
         robots.push(robot);
     }
@@ -45,6 +50,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         robots,
         links,
         gateways,
+        cells,
         daemon,
     })
 }

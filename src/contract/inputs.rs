@@ -263,7 +263,7 @@ mod tests {
         assert_eq!(p.value, [0x20, 0, 1, 0]);
         assert!(p.is_well_formed());
         assert!(p.holds(&[0x20, 0xFFFF, 1, 7]));
-        assert!(p.holds(&[0xFF9F, 0, 0xFFFF, 0]));
+        assert!(p.holds(&[0xFFBF, 0, 0xFFFF, 0]));
         assert!(!p.holds(&[0x60, 0, 1, 0]));
         assert_eq!(
             p.unmet(&[0x40, 0, 0, 0]),

@@ -498,7 +498,7 @@ mod tests {
         let e = AccessList::new(vec![], vec![range("DT900-DT1005")], &layout).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "DT900-DT1005 overlaps the contract's status block (DT1000-DT1021): the contract is never writable through the gateway"
+            "DT900-DT1005 overlaps the contract's status block (DT1000-DT1025): the contract is never writable through the gateway"
         );
         let e = AccessList::new(vec![], vec![range("DT9990-DT10000")], &layout).unwrap_err();
         assert!(e.to_string().contains("channel 3 table area"), "{e}");

@@ -122,7 +122,7 @@ fn heartbeat_counts_scans_and_freezes_on_request() {
     let s = m.status();
     assert_eq!(
         (s.magic, s.version, s.heartbeat),
-        (crate::contract::MAGIC, 2, 10)
+        (crate::contract::MAGIC, 3, 10)
     );
     assert_eq!(s.ready, 0b111);
     m.set_faults("freeze@t=0.05".parse().unwrap());
@@ -648,6 +648,7 @@ fn in_process_handle_runs_a_move_through_the_plc_trait() {
             segments: [1, 0, 0, 0],
             from: [0; 4],
             host: 0,
+            permit: crate::contract::Permit::NONE,
         };
         plc.write_words(1_033, &block.to_words()[1..])
             .await

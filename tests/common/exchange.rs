@@ -97,6 +97,7 @@ pub async fn upload<P: Plc>(
         envelope,
         duration: Duration::from_secs_f64(plan.duration_s()),
         curve: None,
+        permit: linterpd::contract::Permit::NONE,
     };
     Ok((plan, bank, planned))
 }

@@ -53,6 +53,7 @@ fn planned(tag: u64, seq: u16, from: [i32; CHANNELS], to: [i32; CHANNELS]) -> Pl
         envelope: std::array::from_fn(|c| (from[c].min(to[c]), from[c].max(to[c]))),
         duration: Duration::from_secs(1),
         curve: None,
+        permit: crate::contract::Permit::NONE,
     }
 }
 

@@ -178,7 +178,7 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
         .upload_preloaded(1, 7, FROM, &[table(0), table(2)], &preload)
         .await
         .unwrap();
-    assert_eq!(c.plc().writes[before..], [(1_033, 15)]);
+    assert_eq!(c.plc().writes[before..], [(1_033, 15), (1_049, 8)]);
     assert_eq!(bank.block.mask, 0b101);
     // Other tables: written whole, and the area holds them (the target word of row 1).
     let before = c.plc().writes.len();
@@ -186,10 +186,10 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
         .upload_preloaded(1, 8, FROM, &[table(0), table_to(2, 900)], &preload)
         .await
         .unwrap();
-    assert_eq!(whole.words, 47);
+    assert_eq!(whole.words, 55);
     assert_eq!(
         c.plc().writes[before..],
-        [(10_000, 16), (14_000, 16), (1_033, 15)]
+        [(10_000, 16), (14_000, 16), (1_033, 15), (1_049, 8)]
     );
     assert_eq!(c.plc().dt[&(14_000 + 8 + 4)], 900);
     // Another bank: written whole into it.
@@ -201,7 +201,7 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
     assert_eq!(other.block.bank, 0);
     assert_eq!(
         c.plc().writes[before..],
-        [(2_000, 16), (6_000, 16), (1_033, 15)]
+        [(2_000, 16), (6_000, 16), (1_033, 15), (1_049, 8)]
     );
 }
 
@@ -240,10 +240,10 @@ async fn a_table_preloaded_past_another_in_its_bank_is_started_on_its_directorie
         .await
         .unwrap();
     assert!(bank.on_preload);
-    assert_eq!(bank.words, 8 + 8 + 15);
+    assert_eq!(bank.words, 8 + 8 + 15 + 8);
     assert_eq!(
         c.plc().writes[before..],
-        [(10_000, 8), (14_000, 8), (1_033, 15)]
+        [(10_000, 8), (14_000, 8), (1_033, 15), (1_049, 8)]
     );
     assert_eq!(area_of(&mut c, 0), later_tables[0].table().segments);
     assert_eq!(area_of(&mut c, 2), later_tables[1].table().segments);
@@ -257,7 +257,7 @@ async fn a_table_preloaded_past_another_in_its_bank_is_started_on_its_directorie
         .await
         .unwrap();
     assert!(!whole.on_preload);
-    assert_eq!(whole.words, 16 + 16 + 15);
+    assert_eq!(whole.words, 16 + 16 + 15 + 8);
 }
 
 #[tokio::test(start_paused = true)]
@@ -298,7 +298,7 @@ async fn every_word_written_is_read_back_unless_read_back_is_off() {
         let mut c = Contract::new(FakePlc::running(), settings);
         let _bank = c.upload(1, 7, FROM, &[table(0), table(2)]).await.unwrap();
         let plc = c.plc();
-        assert_eq!(plc.writes.len(), 3, "two tables and the block");
+        assert_eq!(plc.writes.len(), 4, "two tables and the block's two writes");
         let read_back: Vec<_> = plc
             .writes
             .iter()
@@ -391,14 +391,14 @@ async fn wrong_magic_and_wrong_version_are_refused_naming_the_values() {
         "status block magic is 0x1234, expected 0x4c49: the linterpd PLC program is not running at DT1000"
     );
     let mut plc = FakePlc::running();
-    plc.dt.insert(1_001, 1);
+    plc.dt.insert(1_001, 2);
     let err = Contract::new(plc, ContractSettings::default())
         .status()
         .await
         .unwrap_err();
     assert_eq!(
         err.to_string(),
-        "the PLC program speaks contract version 1; this linterpd speaks 2"
+        "the PLC program speaks contract version 2; this linterpd speaks 3"
     );
 }
 
@@ -518,6 +518,7 @@ fn start_of_table_0() -> Planned {
         envelope: [(0, 500), (0, 0), (0, 0), (0, 0)],
         duration: Duration::from_millis(500),
         curve: None,
+        permit: crate::contract::Permit::NONE,
     }
 }
 

@@ -1,0 +1,120 @@
+//! `[robots.NAME.cell]` -> [`CellSettings`]: the robot's place in its cell: the names of the
+//! cell's signals and where its cycle programs are.
+//!
+//! ```toml
+//! [robots.press-loader.cell]
+//! signals = { press_open = "X5", press_moving = "X6", part_present = "X2", press_go = "Y0" }
+//! programs = "cycles"            # a directory of cycle programs (*.toml), relative to this file
+//! require_wait_timeout = true    # refuse a program whose `wait` has no `timeout` (default false)
+//! ```
+//! A signal is an X, Y or R bit (`X5`, `X1A`, `R10A`); an input the PLC program copies into the
+//! status block (`[robots.NAME.plc.contract] inputs`) is read at no cost with every status read.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use toml::Spanned;
+
+use super::ConfigError;
+use super::check::At;
+use super::raw::RawCell;
+use crate::gateway::Address;
+
+/// A robot's cell: its signals' names and its cycle programs' directory.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CellSettings {
+    /// Signal name -> its bit.
+    pub signals: BTreeMap<String, Address>,
+    /// The directory of the cycle programs, as the file gives it (relative to the config
+    /// file's directory once [`super::Config::load`] read it).
+    pub programs: Option<PathBuf>,
+    /// Whether every `wait` of a program must have a `timeout`.
+    pub require_wait_timeout: bool,
+}
+
+/// The cell a table describes.
+pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, ConfigError> {
+    let r = raw.get_ref();
+    let mut signals = BTreeMap::new();
+    for (name, bit) in r.signals.iter().flatten() {
+        let at = at.child("signals").child(name.get_ref());
+        check_name(&at, name)?;
+        let address: Address = bit
+            .get_ref()
+            .parse()
+            .map_err(|e: crate::gateway::AddressError| at.invalid(bit, e.reason))?;
+        if !address.area.is_bits() {
+            return Err(at.invalid(bit, "a signal is an X, Y or R bit, not a DT word"));
+        }
+        signals.insert(name.get_ref().clone(), address);
+    }
+    let programs = r.programs.as_ref().map(|p| PathBuf::from(p.get_ref()));
+    Ok(CellSettings {
+        signals,
+        programs,
+        require_wait_timeout: r.require_wait_timeout.as_ref().is_some_and(|b| *b.get_ref()),
+    })
+}
+
+/// A signal's name: a letter, then letters, digits, `_` or `-`; never one that reads as an
+/// address (a program could not tell them apart).
+fn check_name(at: &At, name: &Spanned<String>) -> Result<(), ConfigError> {
+    let text = name.get_ref();
+    let mut chars = text.chars();
+    let well_formed = chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if !well_formed {
+        return Err(at.invalid(
+            name,
+            "a signal's name starts with a letter, then letters, digits, `_` or `-`",
+        ));
+    }
+    if text.parse::<Address>().is_ok() {
+        return Err(at.invalid(name, "reads as a PLC address: name it otherwise"));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::Config;
+    use crate::config::fixture::MINIMAL;
+    use crate::gateway::Address;
+
+    fn with_cell(cell: &str) -> String {
+        format!("{MINIMAL}\n[robots.r.cell]\n{cell}\n")
+    }
+
+    #[test]
+    fn signals_name_bits_and_the_programs_directory_is_kept() {
+        let text = with_cell(
+            "signals = { press_open = \"X5\", press_go = \"Y0\", part = \"R10A\" }\n\
+             programs = \"cycles\"\nrequire_wait_timeout = true",
+        );
+        let config = Config::from_toml(&text).unwrap();
+        let cell = &config.cells["r"];
+        assert_eq!(cell.signals["press_open"], "X5".parse::<Address>().unwrap());
+        assert_eq!(cell.signals["part"], "R10A".parse::<Address>().unwrap());
+        assert_eq!(cell.programs.as_deref(), Some(std::path::Path::new("cycles")));
+        assert!(cell.require_wait_timeout);
+    }
+
+    #[test]
+    fn a_bad_signal_is_refused_naming_the_key_and_the_value() {
+        for (cell, key, words) in [
+            ("signals = { open = \"DT100\" }", "signals.open", "not a DT word"),
+            ("signals = { open = \"Q5\" }", "signals.open", "Q5"),
+            ("signals = { X5 = \"X5\" }", "signals.X5", "reads as a PLC address"),
+            ("signals = { \"5open\" = \"X5\" }", "signals.5open", "starts with a letter"),
+        ] {
+            let e = Config::from_toml(&with_cell(cell)).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(words), "{cell}: {e}");
+        }
+    }
+
+    #[test]
+    fn an_unknown_key_in_the_cell_table_is_refused() {
+        let e = Config::from_toml(&with_cell("signal = {}")).unwrap_err().to_string();
+        assert!(e.contains("signal"), "{e}");
+    }
+}
