@@ -52,7 +52,10 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, 
     Ok(CellSettings {
         signals,
         programs,
-        require_wait_timeout: r.require_wait_timeout.as_ref().is_some_and(|b| *b.get_ref()),
+        require_wait_timeout: r
+            .require_wait_timeout
+            .as_ref()
+            .is_some_and(|b| *b.get_ref()),
     })
 }
 
@@ -95,17 +98,32 @@ mod tests {
         let cell = &config.cells["r"];
         assert_eq!(cell.signals["press_open"], "X5".parse::<Address>().unwrap());
         assert_eq!(cell.signals["part"], "R10A".parse::<Address>().unwrap());
-        assert_eq!(cell.programs.as_deref(), Some(std::path::Path::new("cycles")));
+        assert_eq!(
+            cell.programs.as_deref(),
+            Some(std::path::Path::new("cycles"))
+        );
         assert!(cell.require_wait_timeout);
     }
 
     #[test]
     fn a_bad_signal_is_refused_naming_the_key_and_the_value() {
         for (cell, key, words) in [
-            ("signals = { open = \"DT100\" }", "signals.open", "not a DT word"),
+            (
+                "signals = { open = \"DT100\" }",
+                "signals.open",
+                "not a DT word",
+            ),
             ("signals = { open = \"Q5\" }", "signals.open", "Q5"),
-            ("signals = { X5 = \"X5\" }", "signals.X5", "reads as a PLC address"),
-            ("signals = { \"5open\" = \"X5\" }", "signals.5open", "starts with a letter"),
+            (
+                "signals = { X5 = \"X5\" }",
+                "signals.X5",
+                "reads as a PLC address",
+            ),
+            (
+                "signals = { \"5open\" = \"X5\" }",
+                "signals.5open",
+                "starts with a letter",
+            ),
         ] {
             let e = Config::from_toml(&with_cell(cell)).unwrap_err().to_string();
             assert!(e.contains(key) && e.contains(words), "{cell}: {e}");
@@ -114,7 +132,9 @@ mod tests {
 
     #[test]
     fn an_unknown_key_in_the_cell_table_is_refused() {
-        let e = Config::from_toml(&with_cell("signal = {}")).unwrap_err().to_string();
+        let e = Config::from_toml(&with_cell("signal = {}"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("signal"), "{e}");
     }
 }

@@ -945,3 +945,114 @@ fn stop_pauses_halts_the_table_and_the_next_start_resumes_it() {
     assert_eq!(m.count(0), 100);
     assert_eq!((m.state(), m.status().seq), (State::Done, 2));
 }
+
+/// Like [`start`], with a permit: the block's permit words written as a host writes them (after
+/// the `host` word), then the command.
+fn start_permitted(
+    m: &mut MockPlc,
+    seq: u16,
+    permit: crate::contract::Permit,
+    rows: &[(u32, i64)],
+) {
+    let base = u32::from(m.config().layout.command_base);
+    let words = CommandBlock {
+        permit,
+        ..CommandBlock::default()
+    }
+    .to_words();
+    let at = usize::from(crate::contract::COMMAND_PERMIT_OFFSET);
+    m.write_words(base + at as u32, &words[at..]).unwrap();
+    start(m, 0, seq, &[(0, vec![up(rows)])]);
+}
+
+/// X5 on and X6 off (press open, press not moving).
+fn press_open_permit() -> crate::contract::Permit {
+    use crate::contract::{Permit, PermitBit};
+    Permit::of(&[
+        PermitBit {
+            word: 0,
+            bit: 5,
+            on: true,
+        },
+        PermitBit {
+            word: 0,
+            bit: 6,
+            on: false,
+        },
+    ])
+    .unwrap()
+}
+
+#[test]
+fn the_status_block_copies_the_configured_input_words_every_scan() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_input(5, true).unwrap();
+    m.set_input(16 + 2, true).unwrap();
+    m.write_bit(crate::gateway::Area::R, 10 * 16 + 10, true)
+        .unwrap();
+    m.advance_to(SCAN);
+    assert_eq!(m.status().inputs, [1 << 5, 1 << 2, 1 << 10, 0]);
+    m.set_input(5, false).unwrap();
+    m.advance_to(2.0 * SCAN);
+    assert_eq!(m.status().inputs, [0, 1 << 2, 1 << 10, 0]);
+}
+
+#[test]
+fn a_start_whose_permit_does_not_hold_is_refused_with_fault_8_and_nothing_moves() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_input(5, true).unwrap();
+    m.set_input(6, true).unwrap(); // the press moves
+    start_permitted(&mut m, 1, press_open_permit(), &[(1_000, 20)]);
+    m.advance_to(0.1);
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault),
+        (State::Fault.word(), Fault::PermitNotMet.word())
+    );
+    assert_eq!((s.seq, m.count(0)), (0, 0));
+    assert!(m.take_pulses().is_empty());
+    let record = m.starts()[0];
+    assert_eq!(record.outcome, StartOutcome::Refused(Fault::PermitNotMet));
+    assert_eq!(record.inputs[0], 0x60);
+    // The press stops; the fault cleared, the same tables start.
+    m.set_input(6, false).unwrap();
+    write_command(&mut m, crate::contract::Command::ClearFault.word());
+    m.advance_to(0.2);
+    start_permitted(&mut m, 2, press_open_permit(), &[(1_000, 20)]);
+    m.advance_to(0.3);
+    assert_eq!(m.status().state, State::Done.word());
+    assert_eq!(m.count(0), 20);
+}
+
+#[test]
+fn a_permit_that_drops_stops_every_channel_within_one_scan_and_drops_the_waiting_start() {
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_input(5, true).unwrap();
+    // 1 kHz for 1000 pulses: 1 s.
+    start_permitted(&mut m, 1, press_open_permit(), &[(1_000, 1_000)]);
+    m.advance_to(0.3);
+    // A start waits behind it.
+    start_permitted(&mut m, 2, crate::contract::Permit::NONE, &[(1_000, 2_000)]);
+    m.advance_to(0.4);
+    assert_eq!(m.status().waiting, 2);
+    let dropped_at = 0.4 + SCAN / 3.0;
+    m.advance_to(dropped_at);
+    m.set_input(5, false).unwrap();
+    m.advance_to(0.6);
+    let s = m.status();
+    assert_eq!(
+        (s.state, s.fault),
+        (State::Stopped.word(), Fault::PermitDropped.word())
+    );
+    assert_eq!((s.seq, s.waiting, command_word(&m)), (1, 0, 0));
+    // The first scan at or after the drop stops the channel: no pulse after it.
+    let first_scan = (dropped_at / SCAN).ceil() * SCAN;
+    let last = times(&m.take_pulses(), 0).last().copied().unwrap();
+    assert!(
+        last <= first_scan + 1e-9,
+        "last pulse at {last} s, scan at {first_scan} s"
+    );
+    assert!(m.count(0) < 1_000 && m.count(0) > 300);
+    // The waiting start never ran.
+    assert!(m.starts().iter().all(|r| r.block.seq != 2));
+}

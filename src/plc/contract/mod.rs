@@ -58,7 +58,8 @@ impl From<&crate::contract::machine::Planned> for StartBlock {
 }
 
 /// Words of a start's permit (+17..+24), written after its block's first words.
-pub const PERMIT_WRITE_WORDS: usize = crate::contract::COMMAND_WORDS - COMMAND_PERMIT_OFFSET as usize;
+pub const PERMIT_WRITE_WORDS: usize =
+    crate::contract::COMMAND_WORDS - COMMAND_PERMIT_OFFSET as usize;
 
 /// Words of a start's command block written before its start (+1..+15: all before `host`).
 pub const BLOCK_WRITE_WORDS: usize = COMMAND_HOST_OFFSET as usize - 1;
