@@ -297,6 +297,10 @@ pub struct RobotState {
     pub fault: Option<u16>,
     /// Counts per channel.
     pub counts: Option<[i64; 4]>,
+    /// The cell's input words as the last status block showed them (contract v3, status
+    /// +22..+25); `None` while the link is down.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inputs: Option<[u16; 4]>,
     /// The pose those counts put the tool in: x, y, z mm, a deg.
     pub pose: Option<[f64; 4]>,
     /// The move running now.

@@ -28,6 +28,8 @@ pub(super) struct Shared {
     pub beat: Arc<Beat>,
     /// The robot's lifetime counters and histograms.
     pub metrics: RobotMetrics,
+    /// Counts the status blocks read (and the links lost): a cycle's `wait` wakes on each.
+    reads: tokio::sync::watch::Sender<u64>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -49,7 +51,18 @@ impl Shared {
             refusal: Mutex::new(Some(Blocker::LinkDown)),
             beat: Arc::new(Beat::default()),
             metrics,
+            reads: tokio::sync::watch::Sender::new(0),
         }
+    }
+
+    /// A status block was read, or the link lost: what [`Self::watch_reads`] wakes on.
+    pub(super) fn status_read(&self) {
+        self.reads.send_modify(|n| *n = n.wrapping_add(1));
+    }
+
+    /// Wakes on every status block read (and every link lost).
+    pub(super) fn watch_reads(&self) -> tokio::sync::watch::Receiver<u64> {
+        self.reads.subscribe()
     }
 
     pub(super) fn state<T>(&self, f: impl FnOnce(&mut RobotState) -> T) -> T {

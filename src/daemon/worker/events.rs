@@ -55,12 +55,14 @@ impl Worker {
             s.link.connected = true;
             s.link.error = None;
             s.counts = Some(counts);
+            s.inputs = Some(status.block.inputs);
             s.pose = Some(pose);
             s.state = Some(status.state);
             s.fault = (status.block.fault != 0).then_some(status.block.fault);
             s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
             s.homed = homed;
         });
+        self.shared.status_read();
     }
 
     /// Publishes why a new order would be refused now.
@@ -306,7 +308,11 @@ impl Worker {
             Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
                 (Stage::Stopped, "stopped by the e-stop input".to_owned())
             }
-            Outcome::Stopped { fault } if fault == Fault::PermitDropped.word() => {
+            // The fault word outlives a stop until a clear fault: only a move with a permit was
+            // held by it.
+            Outcome::Stopped { fault }
+                if fault == Fault::PermitDropped.word() && self.permits.contains_key(&id) =>
+            {
                 (Stage::Stopped, self.held_because(id))
             }
             Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),

@@ -115,7 +115,9 @@ impl Worker {
             s.link.error = Some(text);
             // Unknown until the link is back; the rest stays as last read.
             s.heartbeat_age_ms = None;
+            s.inputs = None;
         });
+        self.shared.status_read();
         self.publish_refusal();
         self.publish_phase();
     }
