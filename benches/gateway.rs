@@ -71,6 +71,7 @@ fn spawn(shared: &SharedMock) -> (Daemon, RobotHandle) {
         settings: ContractSettings::default(),
         connect: connector(shared),
         home_counts: [0; JOINTS],
+        cell: linterpd::config::CellSettings::default(),
         gateway: GatewaySettings {
             access,
             modbus: None,

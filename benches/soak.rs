@@ -153,6 +153,7 @@ pub async fn soak(link: SoakLink, moves: usize) -> Summary {
         connect: connector(link, &shared).await,
         home_counts: counts_at(A),
         gateway: linterpd::gateway::GatewaySettings::default(),
+        cell: linterpd::config::CellSettings::default(),
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
     let h = daemon.robot("press-loader").unwrap().clone();

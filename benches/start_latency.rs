@@ -65,6 +65,7 @@ async fn main() {
         connect,
         home_counts: [0; JOINTS],
         gateway: linterpd::gateway::GatewaySettings::default(),
+        cell: linterpd::config::CellSettings::default(),
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
     let h = daemon.robot("press-loader").unwrap().clone();

@@ -40,6 +40,7 @@ fn spawn(connect: Connector) -> (Daemon, RobotHandle) {
         settings: ContractSettings::default(),
         connect,
         home_counts: [0; JOINTS],
+        cell: linterpd::config::CellSettings::default(),
         gateway: GatewaySettings {
             access: access(),
             modbus: None,

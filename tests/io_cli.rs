@@ -48,6 +48,7 @@ fn serve(connect: Connector, socket: &Path) -> (Daemon, RobotHandle) {
         connect,
         home_counts: [0; JOINTS],
         gateway: gateway(),
+        cell: linterpd::config::CellSettings::default(),
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
     let handle = daemon.robot("press-loader").unwrap().clone();

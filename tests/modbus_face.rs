@@ -71,6 +71,7 @@ async fn start(connect: Connector, allow: &[&str]) -> Faced {
         settings: ContractSettings::default(),
         connect,
         home_counts: [0; JOINTS],
+        cell: linterpd::config::CellSettings::default(),
         gateway: GatewaySettings {
             access: access(),
             modbus: Some(face.clone()),

@@ -2,7 +2,9 @@
 //! clear a fault, read state and reports, follow a move's progress, teach positions) and the
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
+use crate::config::CellSettings;
 use crate::contract::Permit;
+use crate::contract::{INPUT_WORDS, InputWord};
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, OnceLock};
@@ -83,6 +85,15 @@ pub struct RobotHandle {
     gateway_settings: Arc<GatewaySettings>,
     shared: Arc<Shared>,
     positions: Arc<TaughtPositions>,
+    cell: Arc<Cell>,
+}
+
+/// What a robot's handle knows of its cell: the signals' names, the input words the PLC copies
+/// into the status block, the cycle programs' directory.
+#[derive(Debug)]
+pub(super) struct Cell {
+    pub settings: CellSettings,
+    pub inputs: [InputWord; INPUT_WORDS],
 }
 
 /// A position saved from the robot's pose.
@@ -554,6 +565,10 @@ impl Daemon {
                 gateway_settings: Arc::new(setup.gateway.clone()),
                 shared: Arc::clone(&shared),
                 positions: Arc::clone(&options.positions),
+                cell: Arc::new(Cell {
+                    settings: setup.cell.clone(),
+                    inputs: setup.settings.layout.inputs,
+                }),
             };
             let worker = Worker::new(
                 setup,

@@ -8,6 +8,7 @@ use std::time::Duration;
 use super::ids::MoveIds;
 use super::positions::TaughtPositions;
 use super::worker::Connector;
+use crate::config::CellSettings;
 use crate::gateway::GatewaySettings;
 use crate::kinematics::JOINTS;
 use crate::plc::contract::ContractSettings;
@@ -25,6 +26,8 @@ pub struct RobotSetup {
     pub home_counts: [i64; JOINTS],
     /// What the cell may reach of the PLC's registers through the daemon.
     pub gateway: GatewaySettings,
+    /// Its cell: signal names, cycle programs.
+    pub cell: CellSettings,
 }
 
 /// What every robot of one daemon shares.

@@ -256,6 +256,7 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
         connect: rig.connector(options.baud, options.link),
         home_counts: [0; crate::kinematics::JOINTS],
         gateway: crate::gateway::GatewaySettings::default(),
+        cell: crate::config::CellSettings::default(),
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
     let driven = match daemon.robot(&robot.name) {

@@ -64,6 +64,7 @@ pub fn spawn_with(
         connect,
         home_counts,
         gateway: linterpd::gateway::GatewaySettings::default(),
+        cell: linterpd::config::CellSettings::default(),
     };
     let d = Daemon::spawn(vec![setup], options);
     let h = d.robot("press-loader").unwrap().clone();

@@ -117,6 +117,7 @@ pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError
                 connect: connector(link.clone()),
                 home_counts: link.home_counts,
                 gateway: config.gateway(&robot.name).cloned().unwrap_or_default(),
+                cell: config.cells.get(&robot.name).cloned().unwrap_or_default(),
             })
         })
         .collect()
