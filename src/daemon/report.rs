@@ -130,6 +130,10 @@ pub struct MoveReport {
     /// A path section's move: which section, and when it runs each of the path's pieces.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub section: Option<SectionReport>,
+    /// Stopped by the PLC because its permit stopped holding (contract v3 fault 9): a hold, not
+    /// a fault; `error` names the input.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub held: bool,
 }
 
 /// What `POST /v1/robots/{name}/moves` answers (202).
@@ -252,6 +256,7 @@ impl MoveReport {
             progress: 0.0,
             counts: None,
             final_error_pulses: None,
+            held: false,
             error: None,
             section: None,
         }

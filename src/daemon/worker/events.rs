@@ -304,17 +304,15 @@ impl Worker {
         let asked = self
             .stop_asked
             .is_some_and(|t| now().saturating_duration_since(t) < STOP_ASKED_WINDOW);
+        let held = matches!(outcome, Outcome::Stopped { fault } if fault == Fault::PermitDropped.word())
+            && self.permits.contains_key(&id);
         let (stage, why) = match outcome {
             Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
                 (Stage::Stopped, "stopped by the e-stop input".to_owned())
             }
             // The fault word outlives a stop until a clear fault: only a move with a permit was
             // held by it.
-            Outcome::Stopped { fault }
-                if fault == Fault::PermitDropped.word() && self.permits.contains_key(&id) =>
-            {
-                (Stage::Stopped, self.held_because(id))
-            }
+            Outcome::Stopped { .. } if held => (Stage::Stopped, self.held_because(id)),
             Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),
             Outcome::Stopped { .. } => (
                 Stage::Stopped,
@@ -331,6 +329,9 @@ impl Worker {
             ),
         };
         tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
+        if held {
+            self.shared.moves(|m| m.update(id, |r| r.held = true));
+        }
         self.finish(id, stage, Some(why), None);
         self.cancel_queue("cancelled: the move before it did not end done");
     }
