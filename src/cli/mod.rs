@@ -23,6 +23,7 @@ pub mod clear_fault;
 pub mod client;
 pub mod commission;
 pub mod completions;
+pub mod cycle;
 pub mod demo;
 mod failure;
 pub mod home;
@@ -88,6 +89,9 @@ pub enum Command {
     Io(io::IoArgs),
     /// Stop every channel of a robot now (queued moves are cancelled).
     Stop(stop::StopArgs),
+    /// Run a cycle program (waits on the cell's inputs, interlocked moves), stop, pause,
+    /// resume or watch it.
+    Cycle(cycle::CycleArgs),
     /// Home a robot: the PLC's home routine sets every joint to its home count
     /// (`home_counts` in the config); returns when it has ended.
     Home(home::HomeArgs),
@@ -193,6 +197,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Status(args) => status::run(&args, out),
         Command::Io(args) => io::run(&args, out),
         Command::Stop(args) => stop::run(&args, out),
+        Command::Cycle(args) => cycle::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),

@@ -2,6 +2,8 @@
 //! clear a fault, read state and reports, follow a move's progress, teach positions) and the
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
+use super::cycle::{CycleError, CycleSlot, CycleStatus};
+use super::request::ConflictReason;
 use crate::config::CellSettings;
 use crate::contract::Permit;
 use crate::contract::{INPUT_WORDS, InputWord};
@@ -86,6 +88,7 @@ pub struct RobotHandle {
     shared: Arc<Shared>,
     positions: Arc<TaughtPositions>,
     cell: Arc<Cell>,
+    cycles: Arc<CycleSlot>,
 }
 
 /// What a robot's handle knows of its cell: the signals' names, the input words the PLC copies
@@ -421,6 +424,8 @@ impl RobotHandle {
 
     /// Stops every channel and cancels every queued move; returns once the stop is written.
     pub async fn stop(&self) -> Result<(), CommandError> {
+        // A stop always works, whoever runs the robot: a cycle ends with it.
+        self.cycles.robot_stopped();
         self.shared.stop_pending.store(true, Ordering::SeqCst);
         self.shared.forget_planned_end();
         let (tx, rx) = oneshot::channel();
@@ -436,9 +441,51 @@ impl RobotHandle {
         self.command(Request::Home).await
     }
 
-    /// Clears a latched fault on the PLC (refused while a move runs or when there is none).
+    /// Clears a latched fault on the PLC (refused while a move runs or when there is none,
+    /// unless a cycle is faulted: then its fault is cleared, and it may be resumed).
     pub async fn clear_fault(&self) -> Result<(), CommandError> {
-        self.command(Request::ClearFault).await
+        let cycle_faulted = self.cycles.fault_cleared();
+        match self.command(Request::ClearFault).await {
+            Err(CommandError::Conflict {
+                reason: ConflictReason::NoFault,
+            }) if cycle_faulted => Ok(()),
+            other => other,
+        }
+    }
+
+    /// The robot's cycle, if one ran since the daemon started.
+    #[must_use]
+    pub fn cycle(&self) -> Option<CycleStatus> {
+        self.cycles.status()
+    }
+
+    /// Stops the robot's cycle at the end of its current step, or `now`.
+    pub async fn stop_cycle(&self, now: bool) -> Result<CycleStatus, CycleError> {
+        let status = self.cycles.stop(now)?;
+        if now {
+            // The runner stops the robot too; this makes it sure even if it is between steps.
+            let _ = self.stop().await;
+        }
+        Ok(status)
+    }
+
+    /// Runs cycle program `program` (`count` cycles, or until stopped): loaded from the robot's
+    /// programs directory and checked whole before anything moves.
+    pub fn run_cycle(&self, program: &str, count: Option<u64>) -> Result<CycleStatus, CycleError> {
+        let _ = count;
+        Err(CycleError::Program(format!(
+            "cycle program {program:?}: cycle programs are not wired in yet"
+        )))
+    }
+
+    /// Pauses the robot's cycle at the end of its current step.
+    pub fn pause_cycle(&self) -> Result<CycleStatus, CycleError> {
+        self.cycles.pause()
+    }
+
+    /// Resumes a paused cycle, or a faulted one once its fault was cleared.
+    pub fn resume_cycle(&self) -> Result<CycleStatus, CycleError> {
+        self.cycles.resume()
     }
 
     async fn command(&self, request: fn(Reply) -> Request) -> Result<(), CommandError> {
@@ -490,7 +537,9 @@ impl RobotHandle {
     /// The robot's state as last read.
     #[must_use]
     pub fn state(&self) -> RobotState {
-        self.shared.state(|s| s.clone())
+        let mut state = self.shared.state(|s| s.clone());
+        state.cycle = self.cycles.status();
+        state
     }
 
     /// A move's report.
@@ -522,6 +571,13 @@ impl RobotHandle {
         let mut feed = self.subscribe(id)?;
         let _ = tokio::time::timeout(limit, feed.wait_for(|r| r.stage.is_final())).await;
         self.report(id)
+    }
+
+    /// Wakes on every status block the worker reads (and every link lost): what a cycle's wait
+    /// decides on.
+    #[must_use]
+    pub fn watch_reads(&self) -> watch::Receiver<u64> {
+        self.shared.watch_reads()
     }
 
     /// How long ago the robot's worker last went round its loop.
@@ -569,6 +625,7 @@ impl Daemon {
                     settings: setup.cell.clone(),
                     inputs: setup.settings.layout.inputs,
                 }),
+                cycles: Arc::new(CycleSlot::default()),
             };
             let worker = Worker::new(
                 setup,

@@ -22,6 +22,7 @@
 //! ```
 
 pub mod api;
+mod cycle;
 mod gateway;
 mod handle;
 mod ids;
@@ -37,6 +38,7 @@ mod setup;
 mod shared;
 mod worker;
 
+pub use cycle::{CycleError, CycleState, CycleStatus, StepAt};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
 pub use handle::{Daemon, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
 pub use ids::{MoveIds, write_atomically};

@@ -316,6 +316,9 @@ pub struct RobotState {
     /// The register gateway's work on this robot's link.
     #[serde(default)]
     pub gateway: GatewayStats,
+    /// The robot's cycle, if one ran since the daemon started.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cycle: Option<super::CycleStatus>,
 }
 
 /// Where the daemon and the PLC stand, as [`RobotState::phase`] shows it: the contract machine's

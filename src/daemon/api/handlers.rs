@@ -254,7 +254,7 @@ fn parse_order(body: &[u8]) -> Result<MoveOrder, ApiError> {
 }
 
 /// A JSON body, an error naming the field that is wrong.
-fn parse_body<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiError> {
+pub(super) fn parse_body<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiError> {
     let mut de = serde_json::Deserializer::from_slice(body);
     let order = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();

@@ -17,6 +17,8 @@
 //! PUT  /v1/robots/{name}/positions/{pos}   NamedPosition + "replaced"    | 400 | 404 | 409 | 500 | 503
 //!      (POST the same: the robot's pose now saved as {pos})
 //! DELETE /v1/robots/{name}/positions/{pos} {"deleted": NamedPosition}    | 400 | 404 | 500
+//! POST /v1/robots/{name}/cycles            202 CycleStatus  (cycles.rs: run, stop, pause,
+//! GET  /v1/robots/{name}/cycles            CycleStatus       resume a cycle program)
 //! GET  /metrics                            Prometheus text
 //! ```
 //! The answers are typed ([`crate::daemon::RobotState`], [`crate::daemon::MoveReport`],
@@ -30,11 +32,13 @@
 mod answers;
 mod auth;
 mod body;
+mod cycles;
 mod error;
 mod handlers;
 mod listen;
 pub mod metrics;
 mod registers;
+pub use cycles::{CycleOrder, CycleStop};
 pub use registers::{RegisterWrite, Registers};
 
 use std::collections::BTreeMap;
@@ -89,6 +93,13 @@ impl Api {
                 get(handlers::events),
             )
             .route(&format!("{robot}/stop"), post(handlers::stop))
+            .route(
+                &format!("{robot}/cycles"),
+                get(cycles::status).post(cycles::run),
+            )
+            .route(&format!("{robot}/cycles/stop"), post(cycles::stop))
+            .route(&format!("{robot}/cycles/pause"), post(cycles::pause))
+            .route(&format!("{robot}/cycles/resume"), post(cycles::resume))
             .route(&format!("{robot}/clear-fault"), post(handlers::clear_fault))
             .route(&format!("{robot}/home"), post(handlers::home))
             .route(

@@ -1,0 +1,184 @@
+//! `linterpd cycle`: run a cycle program on a robot, and stop, pause, resume or watch it.
+//!
+//! ```text
+//! linterpd cycle run press-load --count 10   -> press-load: running, 0 of 10 done
+//! linterpd cycle status                      -> press-load: waiting for press_open (X5) for 2.4 s
+//!                                               at step 3 (load) of press-load; 4 of 10 done
+//! linterpd cycle stop [--now]                -> press-load: stops at the end of step 3
+//! linterpd cycle pause | resume
+//! ```
+//! The programs are the robot's `[robots.NAME.cell] programs` directory's `*.toml` files; the
+//! daemon checks one whole (every step, every name, every position) before it runs anything.
+
+use clap::{Args, Subcommand};
+use hyper::Method;
+use serde_json::json;
+
+use super::client::Client;
+use super::{DaemonArgs, Failure};
+use crate::daemon::{CycleState, CycleStatus};
+
+/// Arguments of `linterpd cycle`.
+#[derive(Debug, Args)]
+pub struct CycleArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub action: CycleAction,
+    /// The robot (needed when the daemon runs several).
+    #[arg(long, global = true)]
+    pub robot: Option<String>,
+    /// The daemon and output options.
+    #[command(flatten)]
+    pub daemon: DaemonArgs,
+}
+
+/// What `linterpd cycle` does.
+#[derive(Debug, Subcommand)]
+pub enum CycleAction {
+    /// Run a program: `--count` cycles, or until stopped.
+    Run {
+        /// The program's name (its file's name without `.toml`).
+        program: String,
+        /// How many cycles (1 and up); without it the cycle repeats until stopped.
+        #[arg(long)]
+        count: Option<u64>,
+    },
+    /// Stop the cycle at the end of the current step (`--now`: stop the robot at once).
+    Stop {
+        /// Stop the robot now, mid-step.
+        #[arg(long)]
+        now: bool,
+    },
+    /// Pause at the end of the current step.
+    Pause,
+    /// Go on after a pause, a hold, or a fault once it was cleared (`linterpd clear-fault`).
+    Resume,
+    /// The cycle's state, step, count and what it waits for.
+    Status,
+}
+
+/// Runs `linterpd cycle`.
+pub fn run(args: &CycleArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let daemon = &args.daemon;
+    daemon.block_on(async {
+        let client = Client::new(&daemon.socket);
+        let robot = client
+            .robot(args.robot.as_deref())
+            .await
+            .map_err(Failure::from_client)?;
+        let base = format!("/v1/robots/{robot}/cycles");
+        let answer = match &args.action {
+            CycleAction::Run { program, count } => {
+                let body = json!({ "program": program, "count": count });
+                client.expect(Method::POST, &base, Some(&body)).await?
+            }
+            CycleAction::Stop { now } => {
+                let body = json!({ "now": now });
+                let path = format!("{base}/stop");
+                client.expect(Method::POST, &path, Some(&body)).await?
+            }
+            CycleAction::Pause => {
+                client
+                    .expect(Method::POST, &format!("{base}/pause"), None)
+                    .await?
+            }
+            CycleAction::Resume => {
+                client
+                    .expect(Method::POST, &format!("{base}/resume"), None)
+                    .await?
+            }
+            CycleAction::Status => client.expect(Method::GET, &base, None).await?,
+        };
+        let status: CycleStatus = serde_json::from_value(answer.clone())
+            .map_err(|e| Failure::Runtime(anyhow::anyhow!("the daemon's cycle status: {e}")))?;
+        super::print(out, daemon.json, &answer, &describe(&status))
+    })
+}
+
+/// A cycle's status in one line.
+#[must_use]
+pub fn describe(s: &CycleStatus) -> String {
+    let state = match s.state {
+        CycleState::Running => "running".to_owned(),
+        CycleState::Waiting => match (&s.waiting_for, s.waiting_s) {
+            (Some(what), Some(for_s)) => format!("waiting for {what} for {for_s:.1} s"),
+            (Some(what), None) => format!("waiting for {what}"),
+            _ => "waiting".to_owned(),
+        },
+        CycleState::Paused => "paused".to_owned(),
+        CycleState::Faulted => "FAULTED".to_owned(),
+        CycleState::Stopped => "stopped".to_owned(),
+        CycleState::Done => "done".to_owned(),
+    };
+    let mut text = format!("{}: {state}", s.program);
+    if let Some(step) = &s.step {
+        let label = step
+            .label
+            .as_ref()
+            .map(|l| format!(" ({l})"))
+            .unwrap_or_default();
+        text.push_str(&format!(
+            " at step {}{label} of {}",
+            step.step, step.program
+        ));
+        for from in &step.called_from {
+            text.push_str(&format!(", called from {from}"));
+        }
+        text.push_str(&format!(": {}", step.does));
+    }
+    if let Some(why) = &s.reason {
+        text.push_str(&format!("; {why}"));
+    }
+    match s.count {
+        Some(n) => text.push_str(&format!("; {} of {n} done", s.done)),
+        None => text.push_str(&format!("; {} done", s.done)),
+    }
+    if let Some(t) = s.last_cycle_s {
+        text.push_str(&format!(", last cycle {t:.2} s"));
+    }
+    if s.stopping {
+        text.push_str("; stops at the end of this step");
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::daemon::StepAt;
+
+    #[test]
+    fn a_waiting_cycle_says_what_it_waits_for_where_and_how_far_it_got() {
+        let mut s = CycleStatus::starting("press-load", Some(10));
+        s.state = CycleState::Waiting;
+        s.done = 4;
+        s.waiting_for = Some("press_open (X5)".into());
+        s.waiting_s = Some(2.44);
+        s.step = Some(StepAt {
+            program: "load".into(),
+            step: 3,
+            label: Some("in".into()),
+            does: "wait for press_open (X5)".into(),
+            called_from: vec!["press-load step 2".into()],
+        });
+        s.last_cycle_s = Some(7.123);
+        assert_eq!(
+            describe(&s),
+            "press-load: waiting for press_open (X5) for 2.4 s at step 3 (in) of load, called \
+             from press-load step 2: wait for press_open (X5); 4 of 10 done, last cycle 7.12 s"
+        );
+    }
+
+    #[test]
+    fn a_faulted_cycle_says_why_and_a_stopping_one_says_when() {
+        let mut s = CycleStatus::starting("press-load", None);
+        s.state = CycleState::Faulted;
+        s.reason = Some("wait for part_present (X2) timed out after 30 s".into());
+        s.stopping = true;
+        assert_eq!(
+            describe(&s),
+            "press-load: FAULTED; wait for part_present (X2) timed out after 30 s; 0 done; stops \
+             at the end of this step"
+        );
+    }
+}

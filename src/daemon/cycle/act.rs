@@ -1,0 +1,200 @@
+//! What a cycle's steps do to the robot, each through the robot's handle as any client would:
+//! a move or a path queued and followed to its end, a wait on the cell's inputs decided on every
+//! status block the worker reads, outputs written through the gateway, a dwell. Each gives way
+//! to a control request (stop now, or a stop / pause that waits for the step's end) as soon as
+//! one comes.
+
+use std::time::Duration;
+
+use tokio::sync::watch;
+
+use super::control::Control;
+use crate::contract::INPUT_WORDS;
+use crate::daemon::report::{MoveId, MoveReport, Stage};
+use crate::daemon::{MoveOrder, PathOrder, RobotHandle};
+use crate::gateway::Address;
+
+/// How a step's motion ended.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum MotionEnd {
+    /// Every start of it ended done.
+    Done,
+    /// The PLC held it (its permit dropped): the robot stands where it stopped.
+    Held {
+        /// The report's words (which input dropped).
+        why: String,
+    },
+    /// It was refused, failed, stopped or cancelled.
+    Failed {
+        /// Why.
+        why: String,
+    },
+    /// A stop asked for now: the robot was stopped.
+    StoppedNow,
+}
+
+/// Queues `order` and follows every start of it to its end.
+pub(super) async fn run_move(
+    handle: &RobotHandle,
+    order: MoveOrder,
+    control: &mut watch::Receiver<Control>,
+    started: &mut Vec<MoveId>,
+) -> MotionEnd {
+    match handle.submit_starts(order) {
+        Ok(ids) => follow(handle, &ids, control, started).await,
+        Err(e) => MotionEnd::Failed {
+            why: format!("refused: {e}"),
+        },
+    }
+}
+
+/// Queues `order` (a path) and follows every start of it to its end.
+pub(super) async fn run_path(
+    handle: &RobotHandle,
+    order: &PathOrder,
+    control: &mut watch::Receiver<Control>,
+    started: &mut Vec<MoveId>,
+) -> MotionEnd {
+    match handle.submit_path(order) {
+        Ok(ids) => follow(handle, &ids, control, started).await,
+        Err(e) => MotionEnd::Failed {
+            why: format!("refused: {e}"),
+        },
+    }
+}
+
+async fn follow(
+    handle: &RobotHandle,
+    ids: &[MoveId],
+    control: &mut watch::Receiver<Control>,
+    started: &mut Vec<MoveId>,
+) -> MotionEnd {
+    started.extend_from_slice(ids);
+    for &id in ids {
+        let Some(mut feed) = handle.subscribe(id) else {
+            return MotionEnd::Failed {
+                why: format!("move {id} has no report"),
+            };
+        };
+        let report = loop {
+            tokio::select! {
+                ended = feed.wait_for(|r| r.stage.is_final()) => {
+                    break ended.map(|r| r.clone()).ok();
+                }
+                changed = control.changed() => {
+                    if changed.is_err() || control.borrow().stop_now {
+                        let _ = handle.stop().await;
+                        return MotionEnd::StoppedNow;
+                    }
+                }
+            }
+        };
+        match report.or_else(|| handle.report(id)) {
+            Some(r) if r.stage == Stage::Done => {}
+            Some(r) => return ended_short(&r),
+            None => {
+                return MotionEnd::Failed {
+                    why: format!("move {id}'s report was dropped"),
+                };
+            }
+        }
+    }
+    MotionEnd::Done
+}
+
+fn ended_short(r: &MoveReport) -> MotionEnd {
+    let why = r.error.clone().unwrap_or_else(|| r.stage.name().to_owned());
+    if r.held {
+        MotionEnd::Held { why }
+    } else {
+        MotionEnd::Failed {
+            why: format!("move {} ended {}: {why}", r.id, r.stage.name()),
+        }
+    }
+}
+
+/// How a wait ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum WaitEnd {
+    /// The condition held.
+    Met,
+    /// The timeout passed first.
+    TimedOut,
+    /// A stop asked for now.
+    StoppedNow,
+}
+
+/// What a wait decides on: the cell's input words of a status block, and the words a condition
+/// reads beyond them (DT words, bits outside the input words), read through the gateway.
+pub(super) struct Inputs {
+    /// The status block's input words (`None` while the link is down: nothing is met).
+    pub words: Option<[u16; INPUT_WORDS]>,
+    /// The extra reads, in the order asked.
+    pub reads: Vec<(Address, Option<u16>)>,
+}
+
+/// Waits until `holds` says the inputs meet the condition, deciding on every status block the
+/// worker reads (and reading `extra` through the gateway each time, when the condition needs
+/// it), at most `timeout`.
+pub(super) async fn wait_until(
+    handle: &RobotHandle,
+    holds: impl Fn(&Inputs) -> bool,
+    extra: &[Address],
+    timeout: Option<Duration>,
+    control: &mut watch::Receiver<Control>,
+) -> WaitEnd {
+    let mut reads = handle.watch_reads();
+    let deadline = timeout.map(|t| tokio::time::Instant::now() + t);
+    loop {
+        let inputs = Inputs {
+            words: handle.state().inputs,
+            reads: read_extra(handle, extra).await,
+        };
+        if inputs.words.is_some() && holds(&inputs) {
+            return WaitEnd::Met;
+        }
+        let expired = async {
+            match deadline {
+                Some(at) => tokio::time::sleep_until(at).await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::select! {
+            _ = reads.changed() => {}
+            () = expired => return WaitEnd::TimedOut,
+            changed = control.changed() => {
+                if changed.is_err() || control.borrow().stop_now {
+                    return WaitEnd::StoppedNow;
+                }
+            }
+        }
+    }
+}
+
+async fn read_extra(handle: &RobotHandle, extra: &[Address]) -> Vec<(Address, Option<u16>)> {
+    let mut out = Vec::with_capacity(extra.len());
+    for &address in extra {
+        let value = match handle.read_registers(address, 1).await {
+            Ok(crate::daemon::Values::Words(w)) => w.first().copied(),
+            Ok(crate::daemon::Values::Bits(b)) => b.first().map(|&on| u16::from(on)),
+            Err(_) => None,
+        };
+        out.push((address, value));
+    }
+    out
+}
+
+/// Sleeps `for_`, or until a stop asked for now: whether it slept the whole time.
+pub(super) async fn dwell(for_: Duration, control: &mut watch::Receiver<Control>) -> bool {
+    let end = tokio::time::Instant::now() + for_;
+    loop {
+        tokio::select! {
+            () = tokio::time::sleep_until(end) => return true,
+            changed = control.changed() => {
+                if changed.is_err() || control.borrow().stop_now {
+                    return false;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! What the cycle's controller asks of a running cycle, as a value the runner watches: a stop
+//! (now, or at the end of the current step), a pause (at the end of the current step), a resume.
+
+/// The requests outstanding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct Control {
+    /// Stop the robot and end the cycle now.
+    pub stop_now: bool,
+    /// End the cycle at the end of the current step.
+    pub stop: bool,
+    /// Pause at the end of the current step.
+    pub pause: bool,
+    /// Counts the resumes asked for (a paused or faulted cycle goes on when it grows).
+    pub resumes: u64,
+}

@@ -1,0 +1,23 @@
+//! Cycle programs run by the daemon: one cycle at a time per robot, driven through the robot's
+//! handle like any client (its moves are queued and reported as every move is), watched by a
+//! status anyone can read, steered by a control value (stop, pause, resume).
+//!
+//! ```text
+//! status.rs   CycleStatus: the state, step, count, what it waits for and since when
+//! control.rs  Control: a stop (now, or at the step's end), a pause, the resumes asked for
+//! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
+//!             dwell
+//! slot.rs     the robot's cycle: at most one running, its status, its controller
+//! ```
+//! A cycle never resumes by itself: after a fault it needs `clear-fault` and `resume` (or a
+//! fresh `run`); a restarted daemon has no cycle.
+
+mod act;
+mod control;
+mod slot;
+mod status;
+
+pub(crate) use control::Control;
+pub use slot::CycleError;
+pub(crate) use slot::CycleSlot;
+pub use status::{CycleState, CycleStatus, StepAt};
