@@ -135,8 +135,9 @@ impl RobotHandle {
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
         let taught = self.positions.of(&self.robot.name);
-        let checked =
+        let mut checked =
             order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
+        checked.permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
         // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
@@ -245,9 +246,23 @@ impl RobotHandle {
             motion: checked.motion,
         });
         let planned = plan_path(&self.robot, &req)?;
-        self.queue_sections(planned, req.path_accel_mm_s2, checked.motion, |end| {
+        let (motion, permit) = (checked.motion, checked.permit);
+        self.queue_sections(planned, req.path_accel_mm_s2, motion, permit, |end| {
             order.ending_at(end)
         })
+    }
+
+    /// An order's `permit` resolved against the robot's signals and input words (none: no
+    /// permit).
+    fn permit(&self, text: Option<&str>) -> Result<Permit, SubmitError> {
+        let Some(text) = text else {
+            return Ok(Permit::NONE);
+        };
+        let names = super::permit::PermitNames {
+            signals: &self.cell.settings.signals,
+            inputs: &self.cell.inputs,
+        };
+        super::permit::resolve(text, names).map_err(|e| super::order::permit_refused(&e).into())
     }
 
     /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
@@ -274,6 +289,7 @@ impl RobotHandle {
         // Every field is checked before the robot's state: a bad order is a bad order.
         let limits = OrderLimits::of(&self.robot);
         order.check(&self.robot, &limits)?;
+        let permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
         let ahead = self
             .shared
@@ -297,7 +313,7 @@ impl RobotHandle {
         let req = order.request(&self.robot, &limits, counts, &lookup)?;
         let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
         let planned = plan_path(&self.robot, &req)?;
-        self.queue_sections(planned, path_accel_mm_s2, motion, |end| {
+        self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
             order.section_report(end)
         })
     }
@@ -309,6 +325,7 @@ impl RobotHandle {
         planned: PathPlan,
         path_accel_mm_s2: f64,
         motion: Motion,
+        permit: Permit,
         report: impl Fn(&Pose) -> MoveOrder,
     ) -> Result<Vec<MoveId>, SubmitError> {
         let of = planned.sections.len();
@@ -329,7 +346,7 @@ impl RobotHandle {
                         parts,
                     }),
                     motion,
-                    permit: Permit::NONE,
+                    permit,
                 };
                 let shown = SectionReport::new(
                     n + 1,

@@ -30,6 +30,7 @@ pub mod metrics;
 pub mod modbus_face;
 pub mod notify;
 mod order;
+pub mod permit;
 pub mod positions;
 mod report;
 mod request;

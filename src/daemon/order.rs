@@ -60,6 +60,11 @@ pub struct MoveOrder {
     /// Path tolerance of a bounded-error move, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_mm: Option<f64>,
+    /// An interlock the PLC enforces: input bits or signal names joined by `&`, each optionally
+    /// negated (`"press_open & !press_moving"`); the move starts only while it holds and is
+    /// held (stopped) in the first scan it stops holding.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub permit: Option<String>,
 }
 
 /// A path to run, as the API takes it (`POST /v1/robots/{name}/paths`): the path document
@@ -85,6 +90,9 @@ pub struct PathOrder {
     /// Path tolerance of a bounded-error path, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_mm: Option<f64>,
+    /// An interlock the PLC enforces on every start of the path (see [`MoveOrder::permit`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub permit: Option<String>,
 }
 
 impl PathOrder {
@@ -166,6 +174,7 @@ impl PathOrder {
             method: self.method.clone(),
             period: self.period.clone(),
             tolerance_mm: self.tolerance_mm,
+            permit: self.permit.clone(),
             ..MoveOrder::default()
         }
     }
@@ -206,6 +215,11 @@ pub const PERIOD_RANGE_S: std::ops::RangeInclusive<f64> = 0.001..=1.0;
 pub const TOLERANCE_RANGE_MM: std::ops::RangeInclusive<f64> = 0.001..=10.0;
 
 /// A path document that is wrong, as an order error on its `path` field.
+/// A `permit` refused: it is not one the PLC can check.
+pub(crate) fn permit_refused(e: &super::permit::PermitError) -> OrderError {
+    refuse("permit", &e.text, e.reason.clone())
+}
+
 pub(crate) fn path_refused(value: &str, reason: impl Into<String>) -> OrderError {
     refuse("path", &value, reason)
 }

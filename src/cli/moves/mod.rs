@@ -97,6 +97,11 @@ pub struct MotionFlags {
     /// the path as planned (a path's blends included).
     #[arg(long, alias = "tolerance-mm", allow_hyphen_values = true)]
     pub tolerance: Option<String>,
+    /// An interlock the PLC enforces, e.g. `"press_open & !press_moving"` or `"X5 & !X6"`:
+    /// signal names or X / R bits of the input words, `!` for off, joined by `&`. The move
+    /// starts only while it holds and is held (stopped) in the first scan it stops holding.
+    #[arg(long)]
+    pub permit: Option<String>,
 }
 
 impl MotionFlags {
@@ -111,6 +116,7 @@ impl MotionFlags {
         if let Some(text) = &self.tolerance {
             order.tolerance_mm = Some(parse_length_mm(text).context("--tolerance")?);
         }
+        order.permit.clone_from(&self.permit);
         Ok(())
     }
 }

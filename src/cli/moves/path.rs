@@ -60,6 +60,7 @@ fn order(args: &RunArgs) -> anyhow::Result<PathOrder> {
         method: motion.method,
         period: motion.period,
         tolerance_mm: motion.tolerance_mm,
+        permit: motion.permit,
     })
 }
 
