@@ -47,6 +47,7 @@ pub mod cli;
 pub mod commission;
 pub mod config;
 pub mod contract;
+pub mod cycle;
 pub mod daemon;
 pub mod demo;
 pub mod gateway;

@@ -49,6 +49,24 @@ fn motion_histogram() -> Histogram {
     Histogram::new([0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0])
 }
 
+/// How long a cycle took, s.
+fn cycle_histogram() -> Histogram {
+    Histogram::new([1.0, 2.5, 5.0, 10.0, 20.0, 30.0, 60.0, 120.0])
+}
+
+/// How long a cycle's wait step waited, s.
+fn cycle_wait_histogram() -> Histogram {
+    Histogram::new([0.01, 0.05, 0.1, 0.5, 1.0, 5.0, 30.0, 120.0])
+}
+
+/// A cycle's wait step: the robot, the program and the step.
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct WaitLabels {
+    robot: String,
+    program: String,
+    step: String,
+}
+
 /// How long a due status read waited behind one gateway exchange, s.
 fn wait_histogram() -> Histogram {
     Histogram::new([0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5])
@@ -70,6 +88,9 @@ struct Inner {
     upload: Histograms,
     motion: Histograms,
     gateway_wait: Histograms,
+    cycles: Family<RobotLabel, Counter>,
+    cycle_time: Histograms,
+    cycle_wait: Family<WaitLabels, Histogram, fn() -> Histogram>,
     /// Set from the robots' state at every read of `/metrics`.
     link_up: Family<RobotLabel, Gauge>,
     fault: Family<RobotLabel, Gauge>,
@@ -140,6 +161,9 @@ impl Metrics {
             upload: Family::new_with_constructor(upload_histogram),
             motion: Family::new_with_constructor(motion_histogram),
             gateway_wait: Family::new_with_constructor(wait_histogram),
+            cycles: Family::default(),
+            cycle_time: Family::new_with_constructor(cycle_histogram),
+            cycle_wait: Family::new_with_constructor(cycle_wait_histogram),
             link_up: Family::default(),
             fault: Family::default(),
             heartbeat_age: Family::default(),
@@ -165,10 +189,15 @@ impl Metrics {
                 outcome,
             }));
         }
-        for family in [&i.reconnects, &i.gateway_requests, &i.gateway_errors] {
+        for family in [
+            &i.reconnects,
+            &i.gateway_requests,
+            &i.gateway_errors,
+            &i.cycles,
+        ] {
             drop(family.get_or_create(&label));
         }
-        for family in [&i.upload, &i.motion, &i.gateway_wait] {
+        for family in [&i.upload, &i.motion, &i.gateway_wait, &i.cycle_time] {
             drop(family.get_or_create(&label));
         }
         let exchanges = Arc::new(ExchangeCounts::default());
@@ -255,6 +284,21 @@ impl Inner {
             self.gateway_wait.clone(),
         );
         r.register(
+            "linterpd_cycles",
+            "Cycle programs' cycles run to their end.",
+            self.cycles.clone(),
+        );
+        r.register(
+            "linterpd_cycle_seconds",
+            "Time a cycle took, from its first step to the end of its last.",
+            self.cycle_time.clone(),
+        );
+        r.register(
+            "linterpd_cycle_wait_seconds",
+            "Time a cycle's wait step waited, by program and step.",
+            self.cycle_wait.clone(),
+        );
+        r.register(
             "linterpd_link_up",
             "1 while the PLC link is up and the contract answers.",
             self.link_up.clone(),
@@ -325,6 +369,27 @@ impl RobotMetrics {
             .inner
             .motion
             .get_or_create(&self.label)
+            .observe(seconds);
+    }
+
+    /// A cycle ended, after `seconds`.
+    pub fn cycle_done(&self, seconds: f64) {
+        let i = &self.metrics.inner;
+        i.cycles.get_or_create(&self.label).inc();
+        i.cycle_time.get_or_create(&self.label).observe(seconds);
+    }
+
+    /// Wait step `step` of `program` waited `seconds`.
+    pub fn cycle_waited(&self, program: &str, step: usize, seconds: f64) {
+        let labels = WaitLabels {
+            robot: self.label.robot.clone(),
+            program: program.to_owned(),
+            step: step.to_string(),
+        };
+        self.metrics
+            .inner
+            .cycle_wait
+            .get_or_create(&labels)
             .observe(seconds);
     }
 

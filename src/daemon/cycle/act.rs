@@ -77,10 +77,12 @@ async fn follow(
             };
         };
         let report = loop {
+            let ended = async {
+                let r = feed.wait_for(|r| r.stage.is_final()).await;
+                r.map(|r| r.clone()).ok()
+            };
             tokio::select! {
-                ended = feed.wait_for(|r| r.stage.is_final()) => {
-                    break ended.map(|r| r.clone()).ok();
-                }
+                ended = ended => break ended,
                 changed = control.changed() => {
                     if changed.is_err() || control.borrow().stop_now {
                         let _ = handle.stop().await;
@@ -174,14 +176,18 @@ pub(super) async fn wait_until(
 async fn read_extra(handle: &RobotHandle, extra: &[Address]) -> Vec<(Address, Option<u16>)> {
     let mut out = Vec::with_capacity(extra.len());
     for &address in extra {
-        let value = match handle.read_registers(address, 1).await {
-            Ok(crate::daemon::Values::Words(w)) => w.first().copied(),
-            Ok(crate::daemon::Values::Bits(b)) => b.first().map(|&on| u16::from(on)),
-            Err(_) => None,
-        };
-        out.push((address, value));
+        out.push((address, read_one(handle, address).await));
     }
     out
+}
+
+/// One word or bit read through the gateway (`None`: it could not be read).
+pub(super) async fn read_one(handle: &RobotHandle, address: Address) -> Option<u16> {
+    match handle.read_registers(address, 1).await {
+        Ok(crate::daemon::Values::Words(w)) => w.first().copied(),
+        Ok(crate::daemon::Values::Bits(b)) => b.first().map(|&on| u16::from(on)),
+        Err(_) => None,
+    }
 }
 
 /// Sleeps `for_`, or until a stop asked for now: whether it slept the whole time.

@@ -7,6 +7,7 @@
 //! control.rs  Control: a stop (now, or at the step's end), a pause, the resumes asked for
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
 //!             dwell
+//! run.rs      the runner: a checked program's ops, one after another, in step with the control
 //! slot.rs     the robot's cycle: at most one running, its status, its controller
 //! ```
 //! A cycle never resumes by itself: after a fault it needs `clear-fault` and `resume` (or a
@@ -14,10 +15,11 @@
 
 mod act;
 mod control;
+mod run;
 mod slot;
 mod status;
 
-pub(crate) use control::Control;
+pub(crate) use run::run;
 pub use slot::CycleError;
 pub(crate) use slot::CycleSlot;
 pub use status::{CycleState, CycleStatus, StepAt};

@@ -1,0 +1,629 @@
+//! PURE. A program checked whole against its robot and cell before anything runs, and flattened
+//! into the ops the runner carries out: every name resolved (positions, signals, labels, called
+//! programs), every value inside its limit, every call inlined (a recursion refused, naming the
+//! chain), every jump an index. An error names the program, the step (its number from 1 and its
+//! label) and the value.
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use thiserror::Error;
+
+use super::condition::{self, Condition, Names};
+use super::program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
+use crate::config::parse_duration_s;
+use crate::daemon::{MoveOrder, OrderLimits, PathOrder, Position, StepAt, Values};
+use crate::gateway::{Address, Area, Range};
+use crate::robot::Robot;
+
+/// The longest a wait's timeout may be, s (a shift).
+pub const MAX_TIMEOUT_S: f64 = 12.0 * 3600.0;
+/// The longest a dwell may be, s.
+pub const MAX_DWELL_S: f64 = 3600.0;
+/// The most ops a program may flatten into (calls inlined).
+pub const MAX_OPS: usize = 10_000;
+
+/// Why a program cannot run.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("program {program:?}{}: {reason}", at_step(*step, label.as_deref()))]
+pub struct ProgramError {
+    /// The program.
+    pub program: String,
+    /// The step, from 1 (`None`: the program as a whole).
+    pub step: Option<usize>,
+    /// The step's label.
+    pub label: Option<String>,
+    /// What is wrong, naming the value.
+    pub reason: String,
+}
+
+fn at_step(step: Option<usize>, label: Option<&str>) -> String {
+    match (step, label) {
+        (Some(n), Some(l)) => format!(" step {n} ({l})"),
+        (Some(n), None) => format!(" step {n}"),
+        _ => String::new(),
+    }
+}
+
+/// What a program is checked against.
+#[derive(Debug, Clone, Copy)]
+pub struct Context<'a> {
+    /// The robot.
+    pub robot: &'a Robot,
+    /// Its taught positions now.
+    pub taught: &'a BTreeMap<String, Position>,
+    /// Its signals, input words and gateway access list.
+    pub names: Names<'a>,
+    /// Every program of the robot, by name (for `call`).
+    pub programs: &'a BTreeMap<String, ProgramDoc>,
+    /// Whether every wait needs a timeout.
+    pub require_wait_timeout: bool,
+}
+
+/// How a loop ends.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LoopExit {
+    /// After the steps from its label ran this many times.
+    Count(u64),
+    /// Once the condition holds at the loop step.
+    Until(Condition),
+    /// Never by itself: a stop request ends the cycle.
+    Stop,
+}
+
+/// What one op does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OpKind {
+    /// A move (its permit, if any, in the order).
+    Move(MoveOrder),
+    /// A path (its permit, if any, in the order).
+    Path(PathOrder),
+    /// A wait on the cell's inputs.
+    Wait {
+        /// The condition.
+        until: Condition,
+        /// The longest it may take.
+        timeout: Option<Duration>,
+        /// Where to go on when it times out (`None`: the cycle faults).
+        on_timeout: Option<usize>,
+    },
+    /// Outputs written, in order.
+    Set(Vec<(Address, Values)>),
+    /// A pause.
+    Dwell(Duration),
+    /// A jump back to op `to` until `exit`.
+    Loop {
+        /// The op jumped to.
+        to: usize,
+        /// When it stops jumping.
+        exit: LoopExit,
+    },
+}
+
+/// One op and the step it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Op {
+    /// The step, as the status names it.
+    pub at: StepAt,
+    /// What it does.
+    pub kind: OpKind,
+}
+
+/// A checked program: its ops, calls inlined.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked {
+    /// Its name.
+    pub name: String,
+    /// Its number, if it has one.
+    pub number: Option<u8>,
+    /// Its ops, in order.
+    pub ops: Vec<Op>,
+}
+
+/// Checks program `name` of `ctx.programs`, and every program it calls.
+///
+/// # Errors
+/// The first fault found, naming the program, the step and the value.
+pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
+    let Some(doc) = ctx.programs.get(name) else {
+        let known: Vec<&str> = ctx.programs.keys().map(String::as_str).collect();
+        return Err(ProgramError {
+            program: name.to_owned(),
+            step: None,
+            label: None,
+            reason: format!(
+                "no such program; there are: {}",
+                if known.is_empty() {
+                    "none".to_owned()
+                } else {
+                    known.join(", ")
+                }
+            ),
+        });
+    };
+    let number = number(name, doc)?;
+    let mut ops = Vec::new();
+    Flattener { ctx, ops: &mut ops }.program(name, &mut vec![name.to_owned()], &[])?;
+    Ok(Checked {
+        name: name.to_owned(),
+        number,
+        ops,
+    })
+}
+
+fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
+    doc.number
+        .map(|n| {
+            u8::try_from(n)
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| ProgramError {
+                    program: name.to_owned(),
+                    step: None,
+                    label: None,
+                    reason: format!("number = {n}: must be 1..=255"),
+                })
+        })
+        .transpose()
+}
+
+/// The programs by number; two with one number are refused, naming both.
+///
+/// # Errors
+/// A number outside 1..=255, or one used twice.
+pub fn numbers(
+    programs: &BTreeMap<String, ProgramDoc>,
+) -> Result<BTreeMap<u8, String>, ProgramError> {
+    let mut out: BTreeMap<u8, String> = BTreeMap::new();
+    for (name, doc) in programs {
+        if let Some(n) = number(name, doc)? {
+            if let Some(other) = out.insert(n, name.clone()) {
+                return Err(ProgramError {
+                    program: name.clone(),
+                    step: None,
+                    label: None,
+                    reason: format!("number = {n} is program {other:?}'s number too"),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+struct Flattener<'c, 'o> {
+    ctx: &'c Context<'c>,
+    ops: &'o mut Vec<Op>,
+}
+
+/// A jump to a label, resolved once the program's labels are known.
+struct Fixup {
+    op: usize,
+    label: String,
+    step: usize,
+    step_label: Option<String>,
+    backward_only: bool,
+}
+
+impl Flattener<'_, '_> {
+    fn program(
+        &mut self,
+        name: &str,
+        chain: &mut Vec<String>,
+        called_from: &[String],
+    ) -> Result<(), ProgramError> {
+        let doc = &self.ctx.programs[name];
+        let fail = |step: Option<usize>, label: Option<&String>, reason: String| ProgramError {
+            program: name.to_owned(),
+            step,
+            label: label.cloned(),
+            reason,
+        };
+        if doc.step.is_empty() {
+            return Err(fail(None, None, "has no step".to_owned()));
+        }
+        let mut labels: BTreeMap<String, usize> = BTreeMap::new();
+        let mut fixups = Vec::new();
+        for (i, step) in doc.step.iter().enumerate() {
+            let n = i + 1;
+            let here = |reason: String| fail(Some(n), step.label.as_ref(), reason);
+            if let Some(label) = &step.label {
+                if labels.insert(label.clone(), self.ops.len()).is_some() {
+                    return Err(here(format!(
+                        "label {label:?} is used by an earlier step too"
+                    )));
+                }
+            }
+            let at = |does: String| StepAt {
+                program: name.to_owned(),
+                step: n,
+                label: step.label.clone(),
+                does,
+                called_from: called_from.to_vec(),
+            };
+            let kind = self.step(step, &here)?;
+            match kind {
+                Action::Op(kind, does) => self.ops.push(Op { at: at(does), kind }),
+                Action::Wait(until, timeout, on_timeout) => {
+                    if let Some(label) = on_timeout {
+                        fixups.push(Fixup {
+                            op: self.ops.len(),
+                            label,
+                            step: n,
+                            step_label: step.label.clone(),
+                            backward_only: false,
+                        });
+                    }
+                    let does = format!("wait for {until}");
+                    let kind = OpKind::Wait {
+                        until,
+                        timeout,
+                        on_timeout: None,
+                    };
+                    self.ops.push(Op { at: at(does), kind });
+                }
+                Action::Loop(label, exit) => {
+                    fixups.push(Fixup {
+                        op: self.ops.len(),
+                        label: label.clone(),
+                        step: n,
+                        step_label: step.label.clone(),
+                        backward_only: true,
+                    });
+                    let does = match &exit {
+                        LoopExit::Count(c) => format!("loop to {label} ({c} times in all)"),
+                        LoopExit::Until(c) => format!("loop to {label} until {c}"),
+                        LoopExit::Stop => format!("loop to {label} until stopped"),
+                    };
+                    let kind = OpKind::Loop { to: 0, exit };
+                    self.ops.push(Op { at: at(does), kind });
+                }
+                Action::Call(callee) => {
+                    if chain.contains(&callee) {
+                        return Err(here(format!(
+                            "call = {callee:?} is a recursion: {} -> {callee}",
+                            chain.join(" -> ")
+                        )));
+                    }
+                    if !self.ctx.programs.contains_key(&callee) {
+                        let known: Vec<&str> =
+                            self.ctx.programs.keys().map(String::as_str).collect();
+                        return Err(here(format!(
+                            "call = {callee:?}: no such program; there are: {}",
+                            known.join(", ")
+                        )));
+                    }
+                    let mut from = called_from.to_vec();
+                    from.push(format!("{name} step {n}"));
+                    chain.push(callee.clone());
+                    self.program(&callee, chain, &from)?;
+                    chain.pop();
+                }
+            }
+            if self.ops.len() > MAX_OPS {
+                return Err(here(format!(
+                    "flattens into more than {MAX_OPS} steps (calls inlined)"
+                )));
+            }
+        }
+        for f in fixups {
+            let Some(&to) = labels.get(&f.label) else {
+                let known: Vec<&str> = labels.keys().map(String::as_str).collect();
+                return Err(fail(
+                    Some(f.step),
+                    f.step_label.as_ref(),
+                    format!(
+                        "no step is labelled {:?} in this program (labels: {})",
+                        f.label,
+                        if known.is_empty() {
+                            "none".to_owned()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                ));
+            };
+            match &mut self.ops[f.op].kind {
+                OpKind::Loop { to: target, .. } => {
+                    if f.backward_only && to > f.op {
+                        return Err(fail(
+                            Some(f.step),
+                            f.step_label.as_ref(),
+                            format!("loop to {:?} jumps forward: a loop jumps back", f.label),
+                        ));
+                    }
+                    *target = to;
+                }
+                OpKind::Wait { on_timeout, .. } => *on_timeout = Some(to),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn step(
+        &self,
+        step: &StepDoc,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        let actions: Vec<&str> = [
+            ("move", step.move_.is_some()),
+            ("path", step.path.is_some()),
+            ("wait", step.wait.is_some()),
+            ("set", step.set.is_some()),
+            ("dwell", step.dwell.is_some()),
+            ("call", step.call.is_some()),
+            ("loop", step.loop_.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(k, given)| given.then_some(k))
+        .collect();
+        match actions.as_slice() {
+            [_] => {}
+            [] => {
+                return Err(here(
+                    "has no action: one of move, path, wait, set, dwell, call, loop".to_owned(),
+                ));
+            }
+            many => {
+                return Err(here(format!(
+                    "has {} actions: one step does one",
+                    many.join(" and ")
+                )));
+            }
+        }
+        if step.permit.is_some() && step.move_.is_none() && step.path.is_none() {
+            return Err(here("permit goes with a move or a path".to_owned()));
+        }
+        if (step.timeout.is_some() || step.on_timeout.is_some()) && step.wait.is_none() {
+            return Err(here("timeout and on_timeout go with a wait".to_owned()));
+        }
+        if let Some(order) = &step.move_ {
+            return self.move_step(order, step.permit.as_deref(), here);
+        }
+        if let Some(path) = &step.path {
+            return self.path_step(path, step.permit.as_deref(), here);
+        }
+        if let Some(text) = &step.wait {
+            return self.wait_step(text, step, here);
+        }
+        if let Some(set) = &step.set {
+            return self.set_step(set, here);
+        }
+        if let Some(text) = &step.dwell {
+            let d = duration("dwell", text, MAX_DWELL_S).map_err(here)?;
+            return Ok(Action::Op(OpKind::Dwell(d), format!("dwell {text}")));
+        }
+        if let Some(callee) = &step.call {
+            return Ok(Action::Call(callee.clone()));
+        }
+        let l = step.loop_.as_ref().expect("one action, and it is loop");
+        self.loop_step(l, here)
+    }
+
+    fn permit_into(
+        &self,
+        permit: Option<&str>,
+        inner: &mut Option<String>,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<(), ProgramError> {
+        if let Some(p) = permit {
+            if inner.is_some() {
+                return Err(here(
+                    "permit is given twice (in the step and in its order)".to_owned(),
+                ));
+            }
+            *inner = Some(p.to_owned());
+        }
+        if let Some(p) = inner.as_deref() {
+            crate::daemon::permit::resolve(p, self.ctx.names.permit)
+                .map_err(|e| here(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    fn move_step(
+        &self,
+        order: &MoveOrder,
+        permit: Option<&str>,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        let mut order = order.clone();
+        self.permit_into(permit, &mut order.permit, here)?;
+        let robot = self.ctx.robot;
+        order
+            .check_with(robot.motion, &OrderLimits::of(robot), self.ctx.taught)
+            .map_err(|e| here(format!("move: {e}")))?;
+        let does = describe_move(&order);
+        Ok(Action::Op(OpKind::Move(order), does))
+    }
+
+    fn path_step(
+        &self,
+        step: &PathStep,
+        permit: Option<&str>,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        let document = match (&step.path, &step.file) {
+            (Some(doc), None) => doc.clone(),
+            (None, Some(file)) => {
+                return Err(here(format!(
+                    "path file {file:?} was not read (programs are loaded with their path files)"
+                )));
+            }
+            _ => {
+                return Err(here(
+                    "a path step has `file` or `path`, one of them".to_owned(),
+                ));
+            }
+        };
+        let mut order = PathOrder {
+            path: document,
+            speed_mm_s: step.speed_mm_s,
+            accel_time: step.accel_time.clone(),
+            method: step.method.clone(),
+            period: step.period.clone(),
+            tolerance_mm: step.tolerance_mm,
+            permit: None,
+        };
+        self.permit_into(permit, &mut order.permit, here)?;
+        let robot = self.ctx.robot;
+        order
+            .check(robot, &OrderLimits::of(robot))
+            .map_err(|e| here(format!("path: {e}")))?;
+        let does = match &order.permit {
+            Some(p) => format!("path (permit {p})"),
+            None => "path".to_owned(),
+        };
+        Ok(Action::Op(OpKind::Path(order), does))
+    }
+
+    fn wait_step(
+        &self,
+        text: &str,
+        step: &StepDoc,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        let until =
+            condition::parse(text, self.ctx.names).map_err(|e| here(format!("wait: {e}")))?;
+        let timeout = step
+            .timeout
+            .as_deref()
+            .map(|t| duration("timeout", t, MAX_TIMEOUT_S))
+            .transpose()
+            .map_err(here)?;
+        if timeout.is_none() && self.ctx.require_wait_timeout {
+            return Err(here(format!(
+                "wait = {text:?} has no timeout, and [robots.NAME.cell] require_wait_timeout = true"
+            )));
+        }
+        let on_timeout = match step.on_timeout.as_deref() {
+            None | Some("fault") => None,
+            Some(_) if timeout.is_none() => {
+                return Err(here(
+                    "on_timeout without a timeout never happens".to_owned(),
+                ));
+            }
+            Some(label) => Some(label.to_owned()),
+        };
+        Ok(Action::Wait(until, timeout, on_timeout))
+    }
+
+    fn set_step(
+        &self,
+        set: &BTreeMap<String, toml::Value>,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        if set.is_empty() {
+            return Err(here("set = {} writes nothing".to_owned()));
+        }
+        let mut writes = Vec::new();
+        let mut does = Vec::new();
+        for (key, value) in set {
+            let signals = self.ctx.names.permit.signals;
+            let address = match signals.get(key) {
+                Some(a) => *a,
+                None => key.parse::<Address>().map_err(|_| {
+                    here(format!(
+                        "set: {key:?} is neither a signal nor an address (Y0, R20, DT100)"
+                    ))
+                })?,
+            };
+            let range = Range::from_count(address, 1)
+                .ok_or_else(|| here(format!("set: {address} does not exist")))?;
+            self.ctx
+                .names
+                .access
+                .check_write(&range)
+                .map_err(|e| here(format!("set: {key} = {value}: {e}")))?;
+            let values = match (address.area, value) {
+                (Area::Dt, toml::Value::Integer(v)) if (-32_768..=65_535).contains(v) => {
+                    Values::Words(vec![*v as u16])
+                }
+                (Area::Dt, _) => {
+                    return Err(here(format!(
+                        "set: {key} = {value}: a DT word takes a whole number in -32768..=65535"
+                    )));
+                }
+                (_, toml::Value::Boolean(on)) => Values::Bits(vec![*on]),
+                (_, _) => {
+                    return Err(here(format!(
+                        "set: {key} = {value}: a bit takes true or false"
+                    )));
+                }
+            };
+            does.push(format!("{key} = {value}"));
+            writes.push((address, values));
+        }
+        Ok(Action::Op(
+            OpKind::Set(writes),
+            format!("set {}", does.join(", ")),
+        ))
+    }
+
+    fn loop_step(
+        &self,
+        l: &LoopDoc,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<Action, ProgramError> {
+        let exit = match (l.count, l.until.as_deref()) {
+            (Some(_), Some(_)) => {
+                return Err(here("loop has count and until: give one".to_owned()));
+            }
+            (Some(c), None) => {
+                let c = u64::try_from(c)
+                    .ok()
+                    .filter(|&c| c >= 1)
+                    .ok_or_else(|| here(format!("loop count = {c}: must be at least 1")))?;
+                LoopExit::Count(c)
+            }
+            (None, Some("stop")) => LoopExit::Stop,
+            (None, Some(text)) => LoopExit::Until(
+                condition::parse(text, self.ctx.names)
+                    .map_err(|e| here(format!("loop until: {e}")))?,
+            ),
+            (None, None) => {
+                return Err(here(format!(
+                    "loop to {:?} has no exit: give count, until = \"<condition>\" or until = \"stop\"",
+                    l.to
+                )));
+            }
+        };
+        Ok(Action::Loop(l.to.clone(), exit))
+    }
+}
+
+/// What a step turns into before its jumps are resolved.
+enum Action {
+    Op(OpKind, String),
+    Wait(Condition, Option<Duration>, Option<String>),
+    Loop(String, LoopExit),
+    Call(String),
+}
+
+fn duration(key: &str, text: &str, max_s: f64) -> Result<Duration, String> {
+    let s = parse_duration_s(text).map_err(|e| format!("{key} = {text:?}: {e}"))?;
+    if !(s > 0.0 && s <= max_s) {
+        return Err(format!(
+            "{key} = {text:?}: must be above 0 s and at most {max_s} s"
+        ));
+    }
+    Ok(Duration::from_secs_f64(s))
+}
+
+fn describe_move(order: &MoveOrder) -> String {
+    let target = if let Some(p) = &order.position {
+        format!("move to @{p}")
+    } else if let Some(to) = &order.to {
+        format!("move to {to:?}")
+    } else if let Some(by) = &order.by {
+        format!("move by {by:?}")
+    } else if let Some(j) = &order.joints {
+        format!("joint move to {j:?}")
+    } else {
+        "move".to_owned()
+    };
+    match &order.permit {
+        Some(p) => format!("{target} (permit {p})"),
+        None => target,
+    }
+}

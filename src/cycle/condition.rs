@@ -1,0 +1,546 @@
+//! PURE. A `wait`'s condition: input bits and signal names, DT words compared with a value,
+//! `!` (not), `&` (all of), `|` (any of), parentheses; `&` binds tighter than `|`.
+//!
+//! ```text
+//!  part_present & (press_open | X7) & !R10A
+//!  DT100 == 3 | DT101 >= -5
+//! ```
+//! Every term is resolved before anything runs: a bit in one of the four input words the PLC
+//! copies into the status block is read at no cost with every status read; any other bit or a
+//! DT word is read through the gateway (it must be in the robot's read list) each time the
+//! condition is decided.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use thiserror::Error;
+
+use crate::daemon::permit::PermitNames;
+use crate::gateway::{AccessList, Address, Area, Range};
+
+/// A condition that does not parse or resolve.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("condition {text:?}: {reason}")]
+pub struct ConditionError {
+    /// The condition as given.
+    pub text: String,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Where a term's value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// Bit `bit` of input word `word` of the status block.
+    Input {
+        /// Which of the four input words.
+        word: usize,
+        /// The bit.
+        bit: u8,
+    },
+    /// A bit or DT word read through the gateway.
+    Read(Address),
+}
+
+/// A comparison of a DT word with a value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Compare {
+    /// `==`
+    Eq,
+    /// `!=`
+    Ne,
+    /// `<`
+    Lt,
+    /// `<=`
+    Le,
+    /// `>`
+    Gt,
+    /// `>=`
+    Ge,
+}
+
+impl Compare {
+    fn symbol(self) -> &'static str {
+        match self {
+            Self::Eq => "==",
+            Self::Ne => "!=",
+            Self::Lt => "<",
+            Self::Le => "<=",
+            Self::Gt => ">",
+            Self::Ge => ">=",
+        }
+    }
+
+    fn holds(self, a: i16, b: i16) -> bool {
+        match self {
+            Self::Eq => a == b,
+            Self::Ne => a != b,
+            Self::Lt => a < b,
+            Self::Le => a <= b,
+            Self::Gt => a > b,
+            Self::Ge => a >= b,
+        }
+    }
+}
+
+/// A resolved condition.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Condition {
+    /// A bit is on; `name` is how the program wrote it.
+    Bit {
+        /// As written (a signal's name or an address).
+        name: String,
+        /// Its address.
+        address: Address,
+        /// Where its value comes from.
+        source: Source,
+    },
+    /// A DT word (signed) compared with a value.
+    Word {
+        /// The word.
+        address: Address,
+        /// The comparison.
+        compare: Compare,
+        /// The value.
+        value: i16,
+    },
+    /// Not.
+    Not(Box<Condition>),
+    /// All of.
+    All(Vec<Condition>),
+    /// Any of.
+    Any(Vec<Condition>),
+}
+
+impl Condition {
+    /// Whether it holds on the status block's input words, `read` giving every other word or
+    /// bit it needs (`None`: unknown, and a term that cannot be known does not hold).
+    #[must_use]
+    pub fn holds(&self, inputs: &[u16; 4], read: &dyn Fn(Address) -> Option<u16>) -> bool {
+        match self {
+            Self::Bit { source, .. } => match *source {
+                Source::Input { word, bit } => inputs[word] & (1 << bit) != 0,
+                Source::Read(a) => read(a).is_some_and(|v| v != 0),
+            },
+            Self::Word {
+                address,
+                compare,
+                value,
+            } => read(*address).is_some_and(|v| compare.holds(v as i16, *value)),
+            Self::Not(c) => !c.holds(inputs, read),
+            Self::All(cs) => cs.iter().all(|c| c.holds(inputs, read)),
+            Self::Any(cs) => cs.iter().any(|c| c.holds(inputs, read)),
+        }
+    }
+
+    /// The bits and words it reads through the gateway, each once.
+    #[must_use]
+    pub fn reads(&self) -> Vec<Address> {
+        let mut out = Vec::new();
+        self.collect_reads(&mut out);
+        out
+    }
+
+    fn collect_reads(&self, out: &mut Vec<Address>) {
+        let mut push = |a: Address| {
+            if !out.contains(&a) {
+                out.push(a);
+            }
+        };
+        match self {
+            Self::Bit {
+                source: Source::Read(a),
+                ..
+            } => push(*a),
+            Self::Bit { .. } => {}
+            Self::Word { address, .. } => push(*address),
+            Self::Not(c) => c.collect_reads(out),
+            Self::All(cs) | Self::Any(cs) => cs.iter().for_each(|c| c.collect_reads(out)),
+        }
+    }
+}
+
+impl fmt::Display for Condition {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let join = |f: &mut fmt::Formatter<'_>, cs: &[Condition], op: &str| {
+            for (i, c) in cs.iter().enumerate() {
+                if i > 0 {
+                    write!(f, " {op} ")?;
+                }
+                if matches!(c, Self::Any(_) | Self::All(_)) {
+                    write!(f, "({c})")?;
+                } else {
+                    write!(f, "{c}")?;
+                }
+            }
+            Ok(())
+        };
+        match self {
+            Self::Bit { name, address, .. } if name.parse::<Address>().is_ok() => {
+                write!(f, "{address}")
+            }
+            Self::Bit { name, address, .. } => write!(f, "{name} ({address})"),
+            Self::Word {
+                address,
+                compare,
+                value,
+            } => write!(f, "{address} {} {value}", compare.symbol()),
+            Self::Not(c) if matches!(**c, Self::Any(_) | Self::All(_)) => write!(f, "!({c})"),
+            Self::Not(c) => write!(f, "!{c}"),
+            Self::All(cs) => join(f, cs, "&"),
+            Self::Any(cs) => join(f, cs, "|"),
+        }
+    }
+}
+
+/// What a condition's names resolve against.
+#[derive(Debug, Clone, Copy)]
+pub struct Names<'a> {
+    /// Signal names and input words.
+    pub permit: PermitNames<'a>,
+    /// What may be read through the gateway.
+    pub access: &'a AccessList,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Token {
+    Word(String),
+    Number(i64),
+    Not,
+    And,
+    Or,
+    Open,
+    Close,
+    Compare(Compare),
+}
+
+fn tokens(text: &str) -> Result<Vec<Token>, String> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let next = chars.get(i + 1).copied();
+        let two = |t: Token| (t, 2);
+        let (token, len) = match (c, next) {
+            (c, _) if c.is_whitespace() => {
+                i += 1;
+                continue;
+            }
+            ('=', Some('=')) => two(Token::Compare(Compare::Eq)),
+            ('!', Some('=')) => two(Token::Compare(Compare::Ne)),
+            ('<', Some('=')) => two(Token::Compare(Compare::Le)),
+            ('>', Some('=')) => two(Token::Compare(Compare::Ge)),
+            ('<', _) => (Token::Compare(Compare::Lt), 1),
+            ('>', _) => (Token::Compare(Compare::Gt), 1),
+            ('!', _) => (Token::Not, 1),
+            ('&', _) => (Token::And, 1),
+            ('|', _) => (Token::Or, 1),
+            ('(', _) => (Token::Open, 1),
+            (')', _) => (Token::Close, 1),
+            (c, _) if c == '-' || c.is_ascii_digit() => {
+                let end = (i + 1..chars.len())
+                    .find(|&j| !chars[j].is_ascii_digit())
+                    .unwrap_or(chars.len());
+                let digits: String = chars[i..end].iter().collect();
+                let n = digits
+                    .parse()
+                    .map_err(|_| format!("{digits:?} is not a number"))?;
+                (Token::Number(n), end - i)
+            }
+            (c, _) if c.is_ascii_alphabetic() || c == '_' => {
+                let end = (i + 1..chars.len())
+                    .find(|&j| !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-')))
+                    .unwrap_or(chars.len());
+                (Token::Word(chars[i..end].iter().collect()), end - i)
+            }
+            (c, _) => return Err(format!("{c:?} at character {} is not understood", i + 1)),
+        };
+        out.push(token);
+        i += len;
+    }
+    Ok(out)
+}
+
+struct Parser<'a> {
+    tokens: Vec<Token>,
+    at: usize,
+    names: Names<'a>,
+}
+
+impl Parser<'_> {
+    fn peek(&self) -> Option<&Token> {
+        self.tokens.get(self.at)
+    }
+
+    fn any(&mut self) -> Result<Condition, String> {
+        let mut parts = vec![self.all()?];
+        while self.peek() == Some(&Token::Or) {
+            self.at += 1;
+            parts.push(self.all()?);
+        }
+        Ok(if parts.len() == 1 {
+            parts.remove(0)
+        } else {
+            Condition::Any(parts)
+        })
+    }
+
+    fn all(&mut self) -> Result<Condition, String> {
+        let mut parts = vec![self.unary()?];
+        while self.peek() == Some(&Token::And) {
+            self.at += 1;
+            parts.push(self.unary()?);
+        }
+        Ok(if parts.len() == 1 {
+            parts.remove(0)
+        } else {
+            Condition::All(parts)
+        })
+    }
+
+    fn unary(&mut self) -> Result<Condition, String> {
+        match self.tokens.get(self.at).cloned() {
+            Some(Token::Not) => {
+                self.at += 1;
+                Ok(Condition::Not(Box::new(self.unary()?)))
+            }
+            Some(Token::Open) => {
+                self.at += 1;
+                let inner = self.any()?;
+                if self.peek() != Some(&Token::Close) {
+                    return Err("a `(` is not closed".to_owned());
+                }
+                self.at += 1;
+                Ok(inner)
+            }
+            Some(Token::Word(name)) => {
+                self.at += 1;
+                self.term(&name)
+            }
+            Some(other) => Err(format!(
+                "expected an input, a signal or `(`, found {other:?}"
+            )),
+            None => Err("ends where an input, a signal or `(` was expected".to_owned()),
+        }
+    }
+
+    fn term(&mut self, name: &str) -> Result<Condition, String> {
+        let address = match self.names.permit.signals.get(name) {
+            Some(a) => *a,
+            None => name.parse::<Address>().map_err(|_| {
+                let known: Vec<&str> = self
+                    .names
+                    .permit
+                    .signals
+                    .keys()
+                    .map(String::as_str)
+                    .collect();
+                format!(
+                    "{name:?} is neither a signal ({}) nor an address (X5, R10A, DT100)",
+                    if known.is_empty() {
+                        "none named".to_owned()
+                    } else {
+                        known.join(", ")
+                    }
+                )
+            })?,
+        };
+        if let Some(Token::Compare(compare)) = self.peek().cloned() {
+            self.at += 1;
+            let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
+                return Err(format!(
+                    "{name} {} needs a number after it",
+                    compare.symbol()
+                ));
+            };
+            self.at += 1;
+            if address.area != Area::Dt {
+                return Err(format!(
+                    "{name} is a bit: only a DT word is compared with a value"
+                ));
+            }
+            let value = i16::try_from(value).map_err(|_| {
+                format!("{value} is outside a DT word's -32768..=32767 (compared as signed)")
+            })?;
+            self.readable(address)?;
+            return Ok(Condition::Word {
+                address,
+                compare,
+                value,
+            });
+        }
+        if address.area == Area::Dt {
+            return Err(format!("{name} is a DT word: compare it (`{name} == 1`)"));
+        }
+        let source = match self.names.permit.input_bit(address) {
+            Some((word, bit)) => Source::Input { word, bit },
+            None => {
+                self.readable(address)?;
+                Source::Read(address)
+            }
+        };
+        Ok(Condition::Bit {
+            name: name.to_owned(),
+            address,
+            source,
+        })
+    }
+
+    fn readable(&self, address: Address) -> Result<(), String> {
+        let range =
+            Range::from_count(address, 1).ok_or_else(|| format!("{address} does not exist"))?;
+        self.names.access.check_read(&range).map_err(|e| {
+            format!(
+                "{address} is not in the input words the PLC copies and cannot be read: {e} (add it \
+                 to [robots.NAME.gateway] read, or copy its word into the status block)"
+            )
+        })
+    }
+}
+
+/// Parses and resolves `text`.
+///
+/// # Errors
+/// The text and what in it is wrong.
+pub fn parse(text: &str, names: Names<'_>) -> Result<Condition, ConditionError> {
+    let fail = |reason: String| ConditionError {
+        text: text.to_owned(),
+        reason,
+    };
+    let tokens = tokens(text).map_err(fail)?;
+    if tokens.is_empty() {
+        return Err(fail("is empty".to_owned()));
+    }
+    let mut p = Parser {
+        tokens,
+        at: 0,
+        names,
+    };
+    let c = p.any().map_err(fail)?;
+    if p.at < p.tokens.len() {
+        return Err(fail(format!(
+            "{:?} is left over after a whole condition",
+            p.tokens[p.at]
+        )));
+    }
+    Ok(c)
+}
+
+/// Signal names of a cell, for tests and messages.
+pub type Signals = BTreeMap<String, Address>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contract::{InputWord, Layout};
+
+    fn signals() -> Signals {
+        [
+            ("press_open", "X5"),
+            ("press_moving", "X6"),
+            ("part", "X12"),
+            ("far", "X30"),
+        ]
+        .into_iter()
+        .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
+        .collect()
+    }
+
+    fn access() -> AccessList {
+        let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
+        AccessList::new(
+            ranges(&["DT100-DT199", "X30-X3F"]),
+            vec![],
+            &Layout::default(),
+        )
+        .unwrap()
+    }
+
+    fn parsed(text: &str) -> Result<Condition, String> {
+        let (signals, access) = (signals(), access());
+        let names = Names {
+            permit: PermitNames {
+                signals: &signals,
+                inputs: &InputWord::DEFAULTS,
+            },
+            access: &access,
+        };
+        parse(text, names).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn and_binds_tighter_than_or_and_parentheses_group() {
+        let c = parsed("press_open & !press_moving | part").unwrap();
+        assert_eq!(
+            c.to_string(),
+            "(press_open (X5) & !press_moving (X6)) | part (X12)"
+        );
+        let c = parsed("press_open & (!press_moving | part)").unwrap();
+        assert_eq!(
+            c.to_string(),
+            "press_open (X5) & (!press_moving (X6) | part (X12))"
+        );
+        let c = parsed("!(X5 | X6)").unwrap();
+        assert_eq!(c.to_string(), "!(X5 | X6)");
+    }
+
+    #[test]
+    fn a_condition_holds_as_its_truth_table_says() {
+        let c = parsed("press_open & !press_moving | part").unwrap();
+        let none = |_: Address| None;
+        for (x0, x1, expected) in [
+            (0x20, 0, true),
+            (0x60, 0, false),
+            (0x60, 1 << 2, true),
+            (0, 0, false),
+            (0x40, 1 << 2, true),
+        ] {
+            assert_eq!(c.holds(&[x0, x1, 0, 0], &none), expected, "{x0:#x} {x1:#x}");
+        }
+    }
+
+    #[test]
+    fn words_and_bits_outside_the_input_words_are_read_through_the_gateway() {
+        let c = parsed("DT100 >= -5 & far").unwrap();
+        let dt100: Address = "DT100".parse().unwrap();
+        let x30: Address = "X30".parse().unwrap();
+        assert_eq!(c.reads(), vec![dt100, x30]);
+        let read = |v: u16, bit: u16| move |a: Address| Some(if a == dt100 { v } else { bit });
+        assert!(c.holds(&[0; 4], &read((-5i16) as u16, 1)));
+        assert!(!c.holds(&[0; 4], &read((-6i16) as u16, 1)));
+        assert!(!c.holds(&[0; 4], &read(7, 0)));
+        // Unknown (the read failed): not met.
+        assert!(!c.holds(&[0; 4], &|_| None));
+        assert_eq!(c.to_string(), "DT100 >= -5 & far (X30)");
+    }
+
+    #[test]
+    fn a_bad_condition_is_refused_naming_the_text_and_the_fault() {
+        for (text, words) in [
+            ("", "is empty"),
+            ("press_open &", "ends where an input"),
+            ("(X5 | X6", "`(` is not closed"),
+            ("X5 X6", "left over"),
+            (
+                "door",
+                "\"door\" is neither a signal (far, part, press_moving, press_open)",
+            ),
+            ("DT100", "compare it"),
+            ("X5 == 1", "only a DT word is compared"),
+            ("DT100 == 40000", "outside a DT word"),
+            (
+                "DT300 == 1",
+                "DT300 is not in the input words the PLC copies and cannot be read",
+            ),
+            ("X40", "X40 is not in the input words"),
+            ("X5 ; X6", "';' at character 4"),
+        ] {
+            let e = parsed(text).unwrap_err();
+            assert!(
+                e.contains(words) && e.contains(&format!("{text:?}")),
+                "{text}: {e}"
+            );
+        }
+    }
+}

@@ -1,0 +1,140 @@
+//! The cycle program document, as a TOML file (and the same keys as JSON): an optional program
+//! number, a description, and its steps in order. Every key is known (unknown ones are refused,
+//! naming them); what each step means is checked by [`super::check`].
+//!
+//! ```toml
+//! number = 1                     # 1..=255: the number the press line selects it by
+//! description = "load one blank into the press"
+//! [[step]]
+//! label = "pick"
+//! move = { position = "above-stack", speed_mm_s = 300 }
+//! [[step]]
+//! wait = "part_present"
+//! timeout = "30s"
+//! on_timeout = "fault"           # or a label to go on from
+//! [[step]]
+//! move = { position = "in-press" }
+//! permit = "press_open & !press_moving"
+//! [[step]]
+//! path = { file = "load.toml", speed_mm_s = 200 }   # or path = { path = { ...document... } }
+//! [[step]]
+//! set = { press_go = true, DT100 = 7 }
+//! [[step]]
+//! dwell = "200ms"
+//! [[step]]
+//! call = "eject"
+//! [[step]]
+//! loop = { to = "pick", count = 3 }   # or until = "<condition>", or until = "stop"
+//! ```
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::daemon::MoveOrder;
+
+/// A cycle program as written.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ProgramDoc {
+    /// The number the cell selects it by (1..=255).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub number: Option<i64>,
+    /// What it does, for people.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Its steps, in order.
+    #[serde(default)]
+    pub step: Vec<StepDoc>,
+}
+
+/// One step as written: exactly one action key, and the keys that go with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct StepDoc {
+    /// A name other steps jump to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// A move (a move order's keys).
+    #[serde(default, rename = "move", skip_serializing_if = "Option::is_none")]
+    pub move_: Option<MoveOrder>,
+    /// A path: `file` (relative to the program's directory) or `path` (the document), and the
+    /// motion keys of a path order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathStep>,
+    /// A condition to wait for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wait: Option<String>,
+    /// How long a wait may take, e.g. `"30s"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timeout: Option<String>,
+    /// What a wait that times out does: `"fault"` (the default) or a label to go on from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub on_timeout: Option<String>,
+    /// Outputs to write: a Y or R bit (or its signal name) = true/false, a DT word = a number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub set: Option<BTreeMap<String, toml::Value>>,
+    /// A pause, e.g. `"200ms"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dwell: Option<String>,
+    /// Another program to run here, by name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub call: Option<String>,
+    /// A jump back to a label.
+    #[serde(default, rename = "loop", skip_serializing_if = "Option::is_none")]
+    pub loop_: Option<LoopDoc>,
+    /// A move's or path's interlock, enforced by the PLC.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub permit: Option<String>,
+}
+
+/// A `path` step's table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PathStep {
+    /// A path file, relative to the program's directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// The path document itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<serde_json::Value>,
+    /// Speed along the path, mm/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_mm_s: Option<f64>,
+    /// Acceleration time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accel_time: Option<String>,
+    /// `"constant-period"` or `"bounded-error"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Interpolation period.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period: Option<String>,
+    /// Path tolerance, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance_mm: Option<f64>,
+}
+
+/// A `loop` step's table.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LoopDoc {
+    /// The label to jump back to.
+    pub to: String,
+    /// How many times the steps from `to` to here run in all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<i64>,
+    /// Jump back until this condition holds (or `"stop"`: until a stop is asked for).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until: Option<String>,
+}
+
+impl ProgramDoc {
+    /// Reads a program file's text.
+    ///
+    /// # Errors
+    /// The TOML error, with its line.
+    pub fn from_toml(text: &str) -> Result<Self, String> {
+        toml::from_str(text).map_err(|e| e.to_string())
+    }
+}

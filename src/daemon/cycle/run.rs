@@ -1,0 +1,317 @@
+//! The cycle runner: one task per cycle, carrying out a checked program's ops through the
+//! robot's handle, writing its status as it goes, obeying its control between steps (a stop or
+//! a pause takes effect at the end of the current step; a stop `now` at once).
+//!
+//! What ends a step other than done:
+//! - a move held by the PLC (its permit dropped): the cycle pauses on that step; `resume` runs
+//!   the move again from where the robot stopped (a `by` move, whose target depended on where it
+//!   began, and a path, which would not be the path planned, fault instead);
+//! - anything else (a move refused or failed, a wait timed out with no `on_timeout`, an output
+//!   not written): the robot is stopped and the cycle faults on that step; it goes on only after
+//!   `clear-fault` and `resume` (or a fresh `run`), with that step again.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use tokio::sync::watch;
+
+use super::act::{self, Inputs, MotionEnd, WaitEnd};
+use super::control::Control;
+use super::slot::SharedStatus;
+use super::status::{CycleState, CycleStatus};
+use crate::cycle::{Checked, LoopExit, OpKind};
+use crate::daemon::RobotHandle;
+
+/// Moves kept in the status, the newest last.
+const MOVES_SHOWN: usize = 10;
+
+/// Runs `program` `count` times (or until stopped).
+pub(crate) async fn run(
+    handle: RobotHandle,
+    program: Checked,
+    count: Option<u64>,
+    control: watch::Receiver<Control>,
+    status: SharedStatus,
+) {
+    let mut runner = Runner {
+        handle,
+        program,
+        count,
+        control,
+        status,
+        resumes: 0,
+    };
+    let end = runner.cycles().await;
+    runner.set(|s| {
+        s.state = end.0;
+        s.reason = end.1;
+        s.waiting_for = None;
+        s.waiting_s = None;
+        s.stopping = false;
+    });
+    tracing::info!(robot = %runner.handle.robot().name, program = %runner.program.name, state = ?end.0, "cycle ended");
+}
+
+struct Runner {
+    handle: RobotHandle,
+    program: Checked,
+    count: Option<u64>,
+    control: watch::Receiver<Control>,
+    status: SharedStatus,
+    /// Resumes seen.
+    resumes: u64,
+}
+
+/// How a step ended.
+enum Next {
+    /// Go on at this op.
+    Go(usize),
+    /// The PLC held the robot: pause on this op.
+    Hold(String),
+    /// Stop the robot and fault on this op.
+    Fault(String),
+    /// A stop now: end.
+    Stopped,
+}
+
+impl Runner {
+    fn set(&self, f: impl FnOnce(&mut CycleStatus)) {
+        f(&mut self
+            .status
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner));
+    }
+
+    /// Every cycle: the final state and why.
+    async fn cycles(&mut self) -> (CycleState, Option<String>) {
+        let mut pc = 0;
+        let mut loops: HashMap<usize, u64> = HashMap::new();
+        let mut began = Instant::now();
+        let mut done = 0u64;
+        loop {
+            let c = *self.control.borrow();
+            if c.stop || c.stop_now {
+                return (CycleState::Stopped, Some("stopped by request".to_owned()));
+            }
+            if c.pause {
+                self.set(|s| {
+                    s.state = CycleState::Paused;
+                    s.reason = Some("paused by request".to_owned());
+                });
+                if !self.until_resumed().await {
+                    return (CycleState::Stopped, Some("stopped by request".to_owned()));
+                }
+            }
+            if pc == self.program.ops.len() {
+                done += 1;
+                let took = began.elapsed().as_secs_f64();
+                self.handle.cycle_done(took);
+                self.set(|s| {
+                    s.done = done;
+                    s.last_cycle_s = Some(took);
+                });
+                if self.count.is_some_and(|n| done >= n) {
+                    return (CycleState::Done, None);
+                }
+                pc = 0;
+                loops.clear();
+                began = Instant::now();
+                continue;
+            }
+            let at = self.program.ops[pc].at.clone();
+            self.set(|s| {
+                s.state = CycleState::Running;
+                s.step = Some(at);
+                s.reason = None;
+                s.stopping = c.stop;
+            });
+            match self.op(pc, &mut loops).await {
+                Next::Go(next) => pc = next,
+                Next::Stopped => {
+                    return (
+                        CycleState::Stopped,
+                        Some("stopped now by request".to_owned()),
+                    );
+                }
+                Next::Hold(why) => {
+                    tracing::warn!(robot = %self.handle.robot().name, "cycle held: {why}");
+                    self.set(|s| {
+                        s.state = CycleState::Paused;
+                        s.reason = Some(why);
+                    });
+                    if !self.until_resumed().await {
+                        return (CycleState::Stopped, Some("stopped by request".to_owned()));
+                    }
+                }
+                Next::Fault(why) => {
+                    tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
+                    let _ = self.handle.stop_robot().await;
+                    self.set(|s| {
+                        s.state = CycleState::Faulted;
+                        s.reason = Some(why);
+                        s.waiting_for = None;
+                        s.waiting_s = None;
+                    });
+                    if !self.until_resumed().await {
+                        return (CycleState::Stopped, Some("stopped by request".to_owned()));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Waits for a resume: `false` when a stop came instead.
+    async fn until_resumed(&mut self) -> bool {
+        loop {
+            {
+                let c = *self.control.borrow_and_update();
+                if c.stop || c.stop_now {
+                    return false;
+                }
+                if c.resumes > self.resumes {
+                    self.resumes = c.resumes;
+                    return true;
+                }
+            }
+            if self.control.changed().await.is_err() {
+                return false;
+            }
+        }
+    }
+
+    async fn op(&mut self, pc: usize, loops: &mut HashMap<usize, u64>) -> Next {
+        let kind = self.program.ops[pc].kind.clone();
+        match kind {
+            OpKind::Move(order) => {
+                let relative = order.by.is_some();
+                let mut started = Vec::new();
+                let end = act::run_move(&self.handle, order, &mut self.control, &mut started).await;
+                self.note_moves(&started);
+                match end {
+                    MotionEnd::Held { why } if relative => Next::Fault(format!(
+                        "{why}; a move `by` an offset is not resumed mid-way (its target depended \
+                         on where it began)"
+                    )),
+                    end => self.motion(pc, end),
+                }
+            }
+            OpKind::Path(order) => {
+                let mut started = Vec::new();
+                let end =
+                    act::run_path(&self.handle, &order, &mut self.control, &mut started).await;
+                self.note_moves(&started);
+                match end {
+                    MotionEnd::Held { why } => Next::Fault(format!(
+                        "{why}; a path is not resumed mid-way (it would not be the path planned)"
+                    )),
+                    end => self.motion(pc, end),
+                }
+            }
+            OpKind::Wait {
+                until,
+                timeout,
+                on_timeout,
+            } => {
+                let since = tokio::time::Instant::now();
+                self.set(|s| {
+                    s.state = CycleState::Waiting;
+                    s.waiting_for = Some(until.to_string());
+                    s.waiting_s = Some(0.0);
+                });
+                let status = std::sync::Arc::clone(&self.status);
+                let holds = |inputs: &Inputs| {
+                    let waited = since.elapsed().as_secs_f64();
+                    if let Ok(mut s) = status.lock() {
+                        s.waiting_s = Some(waited);
+                    }
+                    let words = inputs.words.unwrap_or_default();
+                    let read = |a| {
+                        inputs
+                            .reads
+                            .iter()
+                            .find(|(r, _)| *r == a)
+                            .and_then(|(_, v)| *v)
+                    };
+                    until.holds(&words, &read)
+                };
+                let end = act::wait_until(
+                    &self.handle,
+                    holds,
+                    &until.reads(),
+                    timeout,
+                    &mut self.control,
+                )
+                .await;
+                let waited = since.elapsed().as_secs_f64();
+                self.handle.waited(&self.program.ops[pc].at, waited);
+                self.set(|s| {
+                    s.waiting_for = None;
+                    s.waiting_s = None;
+                });
+                match (end, on_timeout) {
+                    (WaitEnd::Met, _) => Next::Go(pc + 1),
+                    (WaitEnd::TimedOut, Some(to)) => Next::Go(to),
+                    (WaitEnd::TimedOut, None) => {
+                        Next::Fault(format!("wait for {until} timed out after {waited:.1} s"))
+                    }
+                    (WaitEnd::StoppedNow, _) => Next::Stopped,
+                }
+            }
+            OpKind::Set(writes) => {
+                for (address, values) in writes {
+                    if let Err(e) = self.handle.write_registers(address, values).await {
+                        return Next::Fault(format!("set {address}: {e}"));
+                    }
+                }
+                Next::Go(pc + 1)
+            }
+            OpKind::Dwell(d) => {
+                if act::dwell(d, &mut self.control).await {
+                    Next::Go(pc + 1)
+                } else {
+                    Next::Stopped
+                }
+            }
+            OpKind::Loop { to, exit } => match exit {
+                LoopExit::Count(n) => {
+                    let ran = loops.entry(pc).or_insert(1);
+                    if *ran < n {
+                        *ran += 1;
+                        Next::Go(to)
+                    } else {
+                        loops.remove(&pc);
+                        Next::Go(pc + 1)
+                    }
+                }
+                LoopExit::Stop => Next::Go(to),
+                LoopExit::Until(until) => {
+                    let words = self.handle.state().inputs;
+                    let mut reads = Vec::new();
+                    for a in until.reads() {
+                        reads.push((a, act::read_one(&self.handle, a).await));
+                    }
+                    let read = |a| reads.iter().find(|(r, _)| *r == a).and_then(|(_, v)| *v);
+                    let met = words.is_some_and(|w| until.holds(&w, &read));
+                    Next::Go(if met { pc + 1 } else { to })
+                }
+            },
+        }
+    }
+
+    fn motion(&self, pc: usize, end: MotionEnd) -> Next {
+        match end {
+            MotionEnd::Done => Next::Go(pc + 1),
+            MotionEnd::Held { why } => Next::Hold(why),
+            MotionEnd::Failed { why } => Next::Fault(why),
+            MotionEnd::StoppedNow => Next::Stopped,
+        }
+    }
+
+    fn note_moves(&self, ids: &[u64]) {
+        self.set(|s| {
+            s.moves.extend_from_slice(ids);
+            let extra = s.moves.len().saturating_sub(MOVES_SHOWN);
+            s.moves.drain(..extra);
+        });
+    }
+}
