@@ -18,3 +18,6 @@ pub mod program;
 pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check, numbers};
 pub use condition::{Condition, ConditionError, Names, Source};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,276 @@
+//! The check against a robot and its cell: every malformed program refused before anything
+//! runs, naming the program, the step and the value; a press-loading program flattened.
+
+use std::collections::BTreeMap;
+
+use super::*;
+use crate::contract::{InputWord, Layout};
+use crate::daemon::Position;
+use crate::daemon::permit::PermitNames;
+use crate::gateway::{AccessList, Address};
+use crate::robot::seed_robot;
+
+const PRESS_LOAD: &str = r#"
+number = 1
+description = "load one blank into the press"
+[[step]]
+label = "pick"
+move = { position = "above-stack" }
+[[step]]
+wait = "part_present"
+timeout = "30s"
+[[step]]
+wait = "press_open & !press_moving"
+timeout = "60s"
+on_timeout = "pick"
+[[step]]
+move = { position = "in-press", speed_mm_s = 300 }
+permit = "press_open & !press_moving"
+[[step]]
+set = { press_go = true, DT100 = 7 }
+[[step]]
+dwell = "200ms"
+[[step]]
+call = "eject"
+[[step]]
+loop = { to = "pick", count = 3 }
+"#;
+
+const EJECT: &str = r#"
+[[step]]
+move = { by = [0, 0, 50] }
+[[step]]
+set = { press_go = false }
+"#;
+
+struct Cell {
+    signals: BTreeMap<String, Address>,
+    access: AccessList,
+    taught: BTreeMap<String, Position>,
+    robot: crate::robot::Robot,
+}
+
+fn cell() -> Cell {
+    let signals = [
+        ("press_open", "X5"),
+        ("press_moving", "X6"),
+        ("part_present", "X2"),
+        ("press_go", "Y0"),
+    ]
+    .into_iter()
+    .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
+    .collect();
+    let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
+    let access = AccessList::new(
+        ranges(&["DT0-DT199"]),
+        ranges(&["Y0-Y7", "DT100-DT199"]),
+        &Layout::default(),
+    )
+    .unwrap();
+    let at = |pose: [f64; 4]| Position {
+        pose,
+        joint_counts: [0; 4],
+        saved_unix_s: 0,
+    };
+    let taught = [
+        ("above-stack", at([-926.57, 535.03, 150.0, 0.0])),
+        ("in-press", at([-1144.43, 659.6, 186.6, 0.0])),
+    ]
+    .into_iter()
+    .map(|(n, p)| (n.to_owned(), p))
+    .collect();
+    Cell {
+        signals,
+        access,
+        taught,
+        robot: seed_robot(),
+    }
+}
+
+fn checked(programs: &[(&str, &str)], run: &str, require_timeout: bool) -> Result<Checked, String> {
+    let c = cell();
+    let docs: BTreeMap<String, ProgramDoc> = programs
+        .iter()
+        .map(|(n, t)| Ok(((*n).to_owned(), ProgramDoc::from_toml(t)?)))
+        .collect::<Result<_, String>>()?;
+    let ctx = Context {
+        robot: &c.robot,
+        taught: &c.taught,
+        names: Names {
+            permit: PermitNames {
+                signals: &c.signals,
+                inputs: &InputWord::DEFAULTS,
+            },
+            access: &c.access,
+        },
+        programs: &docs,
+        require_wait_timeout: require_timeout,
+    };
+    numbers(&docs).map_err(|e| e.to_string())?;
+    check(run, &ctx).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_press_loading_program_flattens_with_its_call_inlined_and_its_jumps_resolved() {
+    let c = checked(
+        &[("press-load", PRESS_LOAD), ("eject", EJECT)],
+        "press-load",
+        true,
+    )
+    .unwrap();
+    assert_eq!(c.number, Some(1));
+    let does: Vec<String> = c.ops.iter().map(|o| o.at.does.clone()).collect();
+    assert_eq!(
+        does,
+        [
+            "move to @above-stack",
+            "wait for part_present (X2)",
+            "wait for press_open (X5) & !press_moving (X6)",
+            "move to @in-press (permit press_open & !press_moving)",
+            "set DT100 = 7, press_go = true",
+            "dwell 200ms",
+            "move by [0.0, 0.0, 50.0]",
+            "set press_go = false",
+            "loop to pick (3 times in all)",
+        ]
+    );
+    // The called program's steps say where they were called from.
+    assert_eq!(c.ops[6].at.program, "eject");
+    assert_eq!(c.ops[6].at.step, 1);
+    assert_eq!(c.ops[6].at.called_from, ["press-load step 7"]);
+    assert!(matches!(
+        &c.ops[2].kind,
+        OpKind::Wait {
+            on_timeout: Some(0),
+            ..
+        }
+    ));
+    assert!(matches!(
+        &c.ops[8].kind,
+        OpKind::Loop {
+            to: 0,
+            exit: LoopExit::Count(3)
+        }
+    ));
+    let OpKind::Move(order) = &c.ops[3].kind else {
+        panic!()
+    };
+    assert_eq!(order.permit.as_deref(), Some("press_open & !press_moving"));
+}
+
+#[test]
+fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
+    let one = |steps: &str| format!("[[step]]\n{steps}\n");
+    let cases: Vec<(String, &str)> = vec![
+        (one("jump = \"pick\""), "unknown field `jump`"),
+        (
+            one("wait = \"door_shut\"\ntimeout = \"1s\""),
+            "step 1: wait: condition \"door_shut\": \"door_shut\" is neither a signal",
+        ),
+        (
+            one("set = { Y10 = true }"),
+            "step 1: set: Y10 = true: Y10 is not in this robot's gateway write list (Y0-Y7, DT100-DT199)",
+        ),
+        (one("set = { X5 = true }"), "step 1: set: X5 = true"),
+        (
+            one("set = { DT100 = true }"),
+            "a DT word takes a whole number",
+        ),
+        (one("set = { press_go = 1 }"), "a bit takes true or false"),
+        (
+            one("wait = \"press_open\""),
+            "step 1: wait = \"press_open\" has no timeout, and [robots.NAME.cell] require_wait_timeout = true",
+        ),
+        (
+            one("label = \"a\"\nloop = { to = \"a\" }"),
+            "step 1 (a): loop to \"a\" has no exit",
+        ),
+        (
+            one("loop = { to = \"nowhere\", count = 2 }"),
+            "step 1: no step is labelled \"nowhere\" in this program",
+        ),
+        (
+            one("move = { position = \"nowhere\" }"),
+            "step 1: move: position",
+        ),
+        (
+            one("move = { position = \"in-press\" }\npermit = \"press_open | X7\""),
+            "`|` cannot be a permit",
+        ),
+        (one("dwell = \"0s\""), "dwell = \"0s\": must be above 0 s"),
+        (
+            one("dwell = \"1s\"\nmove = { position = \"in-press\" }"),
+            "has move and dwell actions",
+        ),
+        (one("label = \"x\""), "has no action"),
+        (
+            one("wait = \"press_open\"\ntimeout = \"1s\"\npermit = \"X5\""),
+            "permit goes with a move or a path",
+        ),
+        (
+            "number = 300\n[[step]]\ndwell = \"1s\"".to_owned(),
+            "number = 300: must be 1..=255",
+        ),
+        (String::new(), "has no step"),
+        (
+            "[[step]]\nlabel = \"a\"\ndwell = \"1s\"\n[[step]]\nlabel = \"a\"\ndwell = \"1s\""
+                .to_owned(),
+            "step 2 (a): label \"a\" is used by an earlier step too",
+        ),
+    ];
+    for (program, words) in cases {
+        let e = checked(&[("p", &program)], "p", true).unwrap_err();
+        assert!(e.contains(words), "{program}\n=> {e}");
+        if !words.starts_with("unknown field") {
+            assert!(e.contains("program \"p\""), "{e}");
+        }
+    }
+}
+
+#[test]
+fn a_recursion_through_call_is_refused_naming_the_chain() {
+    let a = "[[step]]\ncall = \"b\"\n";
+    let b = "[[step]]\ndwell = \"1s\"\n[[step]]\ncall = \"a\"\n";
+    let e = checked(&[("a", a), ("b", b)], "a", false).unwrap_err();
+    assert!(
+        e.contains("program \"b\" step 2: call = \"a\" is a recursion: a -> b -> a"),
+        "{e}"
+    );
+    let e = checked(&[("a", "[[step]]\ncall = \"zz\"\n")], "a", false).unwrap_err();
+    assert!(
+        e.contains("call = \"zz\": no such program; there are: a"),
+        "{e}"
+    );
+    let e = checked(&[("a", a)], "main", false).unwrap_err();
+    assert!(
+        e.contains("program \"main\": no such program; there are: a"),
+        "{e}"
+    );
+}
+
+#[test]
+fn two_programs_with_one_number_are_refused_naming_both() {
+    let p = "number = 4\n[[step]]\ndwell = \"1s\"\n";
+    let e = checked(&[("a", p), ("b", p)], "a", false).unwrap_err();
+    assert!(
+        e.contains("program \"b\": number = 4 is program \"a\"'s number too"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_loop_jumps_back_only_and_on_timeout_may_jump_forward() {
+    let forward =
+        "[[step]]\nloop = { to = \"end\", count = 2 }\n[[step]]\nlabel = \"end\"\ndwell = \"1s\"\n";
+    let e = checked(&[("p", forward)], "p", false).unwrap_err();
+    assert!(e.contains("jumps forward"), "{e}");
+    let skip = "[[step]]\nwait = \"X5\"\ntimeout = \"1s\"\non_timeout = \"end\"\n[[step]]\ndwell = \"1s\"\n[[step]]\nlabel = \"end\"\ndwell = \"2s\"\n";
+    let c = checked(&[("p", skip)], "p", false).unwrap();
+    assert!(matches!(
+        &c.ops[0].kind,
+        OpKind::Wait {
+            on_timeout: Some(2),
+            ..
+        }
+    ));
+}
