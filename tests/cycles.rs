@@ -1,0 +1,263 @@
+//! Cycle programs run by the daemon against the mock PLC: waits decided on the status block's
+//! inputs, interlocked moves the PLC holds, outputs written, faults that need `clear-fault` and
+//! `resume`, stops that always work, and one controller at a time.
+
+mod common;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use common::daemon::duplex_connector;
+use common::exchange::{P1, P2, mock_at_seed_start};
+use linterpd::config::CellSettings;
+use linterpd::contract::{Layout, State};
+use linterpd::daemon::{
+    CycleError, CycleState, CycleStatus, Daemon, DaemonOptions, RobotHandle, RobotSetup,
+};
+use linterpd::gateway::{AccessList, GatewaySettings};
+use linterpd::kinematics::JOINTS;
+use linterpd::mock::SharedMock;
+use linterpd::plc::contract::ContractSettings;
+use linterpd::robot::seed_robot;
+
+const LIMIT: Duration = Duration::from_secs(20);
+
+/// A programs directory of its own for each test.
+fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("linterpd-cycles-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(format!("{name}.toml")), text).unwrap();
+    }
+    dir
+}
+
+fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
+    let signals = [
+        ("press_open", "X5"),
+        ("press_moving", "X6"),
+        ("part_present", "X2"),
+        ("press_go", "Y0"),
+    ]
+    .into_iter()
+    .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
+    .collect();
+    let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
+    let access = AccessList::new(
+        ranges(&["DT0-DT199"]),
+        ranges(&["Y0-Y7", "DT100-DT199"]),
+        &Layout::default(),
+    )
+    .unwrap();
+    let setup = RobotSetup {
+        robot: seed_robot(),
+        settings: ContractSettings::default(),
+        connect: duplex_connector(shared, None),
+        home_counts: [0; JOINTS],
+        gateway: GatewaySettings {
+            access,
+            modbus: None,
+        },
+        cell: CellSettings {
+            signals,
+            programs: Some(dir),
+            require_wait_timeout: false,
+        },
+    };
+    let d = Daemon::spawn(vec![setup], &DaemonOptions::default());
+    let h = d.robot("press-loader").unwrap().clone();
+    (d, h)
+}
+
+async fn connected(h: &RobotHandle) {
+    for _ in 0..500 {
+        let s = h.state();
+        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    panic!("never connected: {:?}", h.state());
+}
+
+/// Waits until the cycle's status satisfies `done`.
+async fn until(h: &RobotHandle, what: &str, done: impl Fn(&CycleStatus) -> bool) -> CycleStatus {
+    let began = std::time::Instant::now();
+    loop {
+        if let Some(s) = h.cycle() {
+            if done(&s) {
+                return s;
+            }
+        }
+        assert!(began.elapsed() < LIMIT, "never {what}: {:?}", h.cycle());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+}
+
+fn at(p: [f64; 3]) -> String {
+    format!("{{ to = [{}, {}, {}] }}", p[0], p[1], p[2])
+}
+
+/// Out to P2 once the press is open, interlocked, tell the press to go, back to P1.
+fn press_cycle() -> String {
+    format!(
+        r#"
+[[step]]
+label = "wait"
+wait = "press_open & !press_moving"
+timeout = "10s"
+[[step]]
+move = {p2}
+permit = "press_open & !press_moving"
+[[step]]
+set = {{ press_go = true, DT100 = 7 }}
+[[step]]
+move = {p1}
+[[step]]
+set = {{ press_go = false }}
+"#,
+        p1 = at(P1),
+        p2 = at(P2)
+    )
+}
+
+#[tokio::test]
+async fn a_press_cycle_waits_for_the_press_runs_interlocked_and_counts_its_cycles() {
+    let shared = mock_at_seed_start("");
+    let (_d, h) = spawn(&shared, programs("press", &[("press-load", press_cycle())]));
+    connected(&h).await;
+    let s = h.run_cycle("press-load", Some(2)).unwrap();
+    assert_eq!((s.state, s.count), (CycleState::Running, Some(2)));
+    // The press is closed: the cycle waits, and nothing moves.
+    let s = until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    assert_eq!(s.waiting_for.as_deref(), Some("press_open (X5) & !press_moving (X6)"));
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+    shared.with(|m| m.set_input(5, true).unwrap());
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 2);
+    assert!(s.last_cycle_s.is_some_and(|t| t > 0.0));
+    // Two cycles, two moves each, the outward one with its permit written; the outputs were set
+    // and reset.
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 4, "{starts:?}");
+    for (i, r) in starts.iter().enumerate() {
+        let permitted = i % 2 == 0;
+        assert_eq!(r.block.permit.mask[0] == 0x60, permitted, "start {i}");
+        assert!(r.block.permit.holds(&r.inputs));
+    }
+    let (go, dt100) = shared.with(|m| {
+        (
+            m.memory().bit(linterpd::gateway::Area::Y, 0).unwrap(),
+            m.read_words(100, 1).unwrap()[0],
+        )
+    });
+    assert_eq!((go, dt100), (false, 7));
+}
+
+#[tokio::test]
+async fn a_wait_that_times_out_faults_the_cycle_which_resumes_only_after_clear_fault() {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nwait = \"part_present\"\ntimeout = \"300ms\"\n[[step]]\nmove = {}\n",
+        at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("timeout", &[("p", program)]));
+    connected(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    let why = s.reason.unwrap();
+    assert!(why.contains("wait for part_present (X2) timed out after 0.3 s"), "{why}");
+    assert_eq!(s.step.unwrap().step, 1);
+    // Never by itself, not even once the part is there; not on resume alone.
+    shared.with(|m| m.set_input(2, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert_eq!(h.cycle().unwrap().state, CycleState::Faulted);
+    let e = h.resume_cycle().unwrap_err();
+    assert!(matches!(e, CycleError::FaultNotCleared { .. }), "{e}");
+    assert!(e.to_string().contains("clear the fault first"), "{e}");
+    // Cleared (the PLC has no fault: the cycle's is cleared), then resumed: the wait again,
+    // met now, and the move.
+    h.clear_fault().await.unwrap();
+    h.resume_cycle().unwrap();
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+    assert_eq!(shared.with(|m| m.starts().len()), 1);
+}
+
+#[tokio::test]
+async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resume_finishes_it() {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nmove = {}\npermit = \"press_open\"\n[[step]]\ndwell = \"10ms\"\n",
+        at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("hold", &[("p", program)]));
+    connected(&h).await;
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    // Once the robot moves, the press closes.
+    for _ in 0..2_000 {
+        if shared.with(|m| m.status().state) == State::Running.word() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    shared.with(|m| m.set_input(5, false).unwrap());
+    let s = until(&h, "paused", |s| s.state == CycleState::Paused).await;
+    let why = s.reason.unwrap();
+    assert!(why.contains("held by the PLC") && why.contains("X5 is off"), "{why}");
+    // Open again, resumed: the move again, from where the robot stopped, to its target.
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    h.resume_cycle().unwrap();
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+    let last = h.reports().into_iter().max_by_key(|r| r.id).unwrap();
+    assert_eq!(last.stage, linterpd::daemon::Stage::Done, "{last:?}");
+}
+
+#[tokio::test]
+async fn a_stop_during_a_wait_ends_the_cycle_and_nothing_moves() {
+    let shared = mock_at_seed_start("");
+    let (_d, h) = spawn(&shared, programs("stop", &[("press-load", press_cycle())]));
+    connected(&h).await;
+    h.run_cycle("press-load", None).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    // The CLI's stop (the robot's) always works, and ends the cycle.
+    h.stop().await.unwrap();
+    let s = until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
+    assert!(s.reason.unwrap().contains("stopped"));
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+    assert_eq!(h.cycle().unwrap().state, CycleState::Stopped);
+}
+
+#[tokio::test]
+async fn one_cycle_at_a_time_and_a_bad_program_is_refused_before_anything_moves() {
+    let shared = mock_at_seed_start("");
+    let bad = "[[step]]\nwait = \"door\"\ntimeout = \"1s\"\n".to_owned();
+    let (_d, h) = spawn(
+        &shared,
+        programs("one", &[("press-load", press_cycle()), ("bad", bad)]),
+    );
+    connected(&h).await;
+    let e = h.run_cycle("bad", Some(1)).unwrap_err();
+    assert!(e.to_string().contains("program \"bad\" step 1: wait: condition \"door\""), "{e}");
+    assert!(h.cycle().is_none());
+    let e = h.run_cycle("nope", Some(1)).unwrap_err();
+    assert!(e.to_string().contains("no such program; there are: bad, press-load"), "{e}");
+    h.run_cycle("press-load", None).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    let e = h.run_cycle("press-load", Some(1)).unwrap_err();
+    assert!(matches!(e, CycleError::Running { .. }), "{e}");
+    assert!(e.to_string().contains("is waiting: stop it first"), "{e}");
+    // A stop at the end of the step: the wait is the step; stop now ends it.
+    h.stop_cycle(true).await.unwrap();
+    until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+}
