@@ -123,6 +123,13 @@ fn line(r: &RobotState) -> String {
     if let Some(why) = &r.refuses {
         let _ = write!(text, "; new moves refused: {why}");
     }
+    if let Some(inputs) = r.inputs {
+        let words: Vec<String> = inputs.iter().map(|w| format!("{w:04X}")).collect();
+        let _ = write!(text, "; inputs {}", words.join(" "));
+    }
+    if let Some(cycle) = &r.cycle {
+        let _ = write!(text, "\n  cycle {}", super::cycle::describe(cycle));
+    }
     text
 }
 
@@ -198,6 +205,19 @@ mod tests {
              pose (0.000, 500.000, 0.000 mm, 0.000 deg); no move running, nothing queued"
         );
         assert_eq!(exit_code(&[idle()]), EXIT_OK);
+        let mut cycling = idle();
+        cycling.inputs = Some([0x20, 0, 0x400, 0]);
+        let mut cycle = crate::daemon::CycleStatus::starting("press-load", Some(10));
+        cycle.done = 3;
+        cycling.cycle = Some(cycle);
+        assert!(
+            line(&cycling).ends_with(
+                "nothing queued; inputs 0020 0000 0400 0000\n  cycle press-load: running; 3 of \
+                 10 done"
+            ),
+            "{}",
+            line(&cycling)
+        );
     }
 
     #[test]
