@@ -131,7 +131,10 @@ async fn a_press_cycle_waits_for_the_press_runs_interlocked_and_counts_its_cycle
     assert_eq!((s.state, s.count), (CycleState::Running, Some(2)));
     // The press is closed: the cycle waits, and nothing moves.
     let s = until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
-    assert_eq!(s.waiting_for.as_deref(), Some("press_open (X5) & !press_moving (X6)"));
+    assert_eq!(
+        s.waiting_for.as_deref(),
+        Some("press_open (X5) & !press_moving (X6)")
+    );
     tokio::time::sleep(Duration::from_millis(200)).await;
     assert!(shared.with(|m| m.starts().is_empty()));
     shared.with(|m| m.set_input(5, true).unwrap());
@@ -168,7 +171,10 @@ async fn a_wait_that_times_out_faults_the_cycle_which_resumes_only_after_clear_f
     h.run_cycle("p", Some(1)).unwrap();
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     let why = s.reason.unwrap();
-    assert!(why.contains("wait for part_present (X2) timed out after 0.3 s"), "{why}");
+    assert!(
+        why.contains("wait for part_present (X2) timed out after 0.3 s"),
+        "{why}"
+    );
     assert_eq!(s.step.unwrap().step, 1);
     // Never by itself, not even once the part is there; not on resume alone.
     shared.with(|m| m.set_input(2, true).unwrap());
@@ -209,7 +215,10 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
     shared.with(|m| m.set_input(5, false).unwrap());
     let s = until(&h, "paused", |s| s.state == CycleState::Paused).await;
     let why = s.reason.unwrap();
-    assert!(why.contains("held by the PLC") && why.contains("X5 is off"), "{why}");
+    assert!(
+        why.contains("held by the PLC") && why.contains("X5 is off"),
+        "{why}"
+    );
     // Open again, resumed: the move again, from where the robot stopped, to its target.
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
@@ -247,10 +256,18 @@ async fn one_cycle_at_a_time_and_a_bad_program_is_refused_before_anything_moves(
     );
     connected(&h).await;
     let e = h.run_cycle("bad", Some(1)).unwrap_err();
-    assert!(e.to_string().contains("program \"bad\" step 1: wait: condition \"door\""), "{e}");
+    assert!(
+        e.to_string()
+            .contains("program \"bad\" step 1: wait: condition \"door\""),
+        "{e}"
+    );
     assert!(h.cycle().is_none());
     let e = h.run_cycle("nope", Some(1)).unwrap_err();
-    assert!(e.to_string().contains("no such program; there are: bad, press-load"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("no such program; there are: bad, press-load"),
+        "{e}"
+    );
     h.run_cycle("press-load", None).unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     let e = h.run_cycle("press-load", Some(1)).unwrap_err();

@@ -41,6 +41,10 @@ pub struct DemoArgs {
     /// Do not read uploads back before their start (a config's `read_back = false`).
     #[arg(long)]
     pub no_read_back: bool,
+    /// Run the press-loading cycle program (config/examples/cycles/press-load.toml) 10 times
+    /// against a simulated press instead, with one hold of the press's guard mid-cycle.
+    #[arg(long)]
+    pub cycle: bool,
 }
 
 /// Runs `linterpd demo`.
@@ -63,6 +67,15 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
         .build()
         .context("cannot start the async runtime")
         .map_err(Failure::Runtime)?;
+    if args.cycle {
+        let demo = runtime
+            .block_on(crate::demo::press::run(options))
+            .context("demo --cycle")
+            .map_err(Failure::Runtime)?;
+        return crate::demo::press::write_press_report(&demo, out)
+            .context("cannot write to stdout")
+            .map_err(Failure::Runtime);
+    }
     let demo = runtime
         .block_on(run_demo(options))
         .context("demo")

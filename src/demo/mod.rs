@@ -18,6 +18,7 @@
 //! deviation along it).
 
 mod cycle;
+pub mod press;
 mod replay;
 mod rig;
 mod text;

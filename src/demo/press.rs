@@ -1,0 +1,311 @@
+//! `linterpd demo --cycle`: the shipped press-loading cycle (config/examples/cycles/
+//! press-load.toml) run by the daemon's cycle runner on the seed robot, against the mock PLC
+//! and a simulated press, 10 cycles.
+//!
+//! ```text
+//!  the press (a task on the mock's inputs): part present (X2) always; open (X5) and still
+//!      (X6 off) until the robot sets press_go (Y0); then closed and moving for 0.8 s, still
+//!      and closed 0.2 s more, open again
+//!  once, in cycle 4, while the robot moves into the press: the press opens its guard (X5
+//!      off) for 0.3 s -> the PLC holds the move within a scan, the cycle pauses naming X5;
+//!      the demo, as the operator, resumes it once X5 is back
+//!  measured: each cycle's time and its time waiting; the moves' motion time; the hold
+//! ```
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use super::rig::{self, Rig};
+use super::{DemoError, DemoOptions, P1};
+use crate::config::CellSettings;
+use crate::daemon::{CycleState, Daemon, DaemonOptions, RobotHandle, RobotSetup, Stage};
+use crate::gateway::{AccessList, Area, GatewaySettings};
+use crate::plc::contract::ContractSettings;
+use crate::robot::seed_robot;
+
+/// The shipped press-loading program.
+pub const PRESS_LOAD: &str = include_str!("../../config/examples/cycles/press-load.toml");
+/// Cycles the demo runs.
+pub const PRESS_CYCLES: u64 = 10;
+/// The press's stroke: closed and moving, s.
+const STROKE_S: f64 = 0.8;
+/// Closed and still after the stroke, before it opens, s.
+const SETTLE_S: f64 = 0.2;
+/// How long the guard opens in cycle 4, s.
+const GLITCH_S: f64 = 0.3;
+/// The step of the move into the press (press-load.toml).
+const INTO_PRESS_STEP: usize = 7;
+/// The longest the demo may take.
+const LIMIT: Duration = Duration::from_secs(300);
+
+/// One cycle as measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleTimes {
+    /// From its first step to the end of its last, s.
+    pub cycle_s: f64,
+    /// Time its waits waited, s.
+    pub waiting_s: f64,
+}
+
+/// The hold the glitch caused.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hold {
+    /// In which cycle (from 1).
+    pub cycle: u64,
+    /// What the cycle said.
+    pub why: String,
+    /// From the guard opening to the cycle paused, s.
+    pub seen_after_s: f64,
+    /// From the resume to the cycle running again, s.
+    pub resumed_after_s: f64,
+}
+
+/// The press demo's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressDemo {
+    /// Every cycle.
+    pub cycles: Vec<CycleTimes>,
+    /// The hold, if it was seen.
+    pub hold: Option<Hold>,
+    /// Motion time of every move that ended done, s.
+    pub motion_s: f64,
+    /// Moves that ended done, and moves that did not (the held one).
+    pub moves: (usize, usize),
+    /// The whole run, s.
+    pub total_s: f64,
+}
+
+/// The press's state as the simulator keeps it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Press {
+    Open,
+    Stroke { until: Instant },
+    Settle { until: Instant },
+}
+
+/// Runs the press demo.
+pub async fn run(options: DemoOptions) -> Result<PressDemo, DemoError> {
+    let robot = seed_robot();
+    let rig = Rig::start(&robot, P1, options.frequency_model)?;
+    let dir = programs_dir()?;
+    let signals = [
+        ("press_open", "X5"),
+        ("press_moving", "X6"),
+        ("part_present", "X2"),
+        ("gripper", "Y1"),
+        ("press_go", "Y0"),
+    ]
+    .into_iter()
+    .map(|(n, a)| (n.to_owned(), a.parse().expect("a signal of the demo")))
+    .collect();
+    let access = AccessList::new(
+        vec!["X0-X1F".parse().expect("a range")],
+        vec!["Y0-Y7".parse().expect("a range")],
+        &crate::contract::Layout::default(),
+    )
+    .map_err(|e| DemoError::Rig(e.to_string()))?;
+    let setup = RobotSetup {
+        robot: robot.clone(),
+        settings: ContractSettings {
+            verify: options.read_back,
+            ..ContractSettings::default()
+        },
+        connect: rig.connector(options.baud, options.link),
+        home_counts: [0; crate::kinematics::JOINTS],
+        gateway: GatewaySettings {
+            access,
+            modbus: None,
+        },
+        cell: CellSettings {
+            signals,
+            programs: Some(dir.clone()),
+            require_wait_timeout: true,
+        },
+    };
+    let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
+    let result = match daemon.robot(&robot.name) {
+        Some(handle) => drive(handle, &rig).await,
+        None => Err(DemoError::Rig("the daemon has no robot".into())),
+    };
+    daemon.shut_down().await;
+    rig.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+fn programs_dir() -> Result<PathBuf, DemoError> {
+    let dir = std::env::temp_dir().join(format!("linterpd-demo-cycles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(dir.join("press-load.toml"), PRESS_LOAD))
+        .map_err(|e| DemoError::Rig(format!("{}: {e}", dir.display())))?;
+    Ok(dir)
+}
+
+/// Runs the cycles, playing the press and the operator, measuring as it goes.
+async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> {
+    rig::connected(handle).await?;
+    let mock = &rig.mock;
+    mock.with(|m| {
+        let _ = m.set_input(2, true);
+        let _ = m.set_input(5, true);
+    });
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let began = Instant::now();
+    handle
+        .run_cycle("press-load", Some(PRESS_CYCLES))
+        .map_err(|e| DemoError::Rig(e.to_string()))?;
+    let mut press = Press::Open;
+    let mut cycles = Vec::new();
+    let mut cycle_began = Instant::now();
+    let mut waiting_s = 0.0;
+    let mut wait_seen = 0.0_f64;
+    let mut glitch: Option<Instant> = None;
+    let mut hold: Option<Hold> = None;
+    let mut resumed_at: Option<Instant> = None;
+    loop {
+        if began.elapsed() > LIMIT {
+            return Err(DemoError::Rig(format!("the cycles took over {LIMIT:?}")));
+        }
+        tokio::time::sleep(Duration::from_millis(2)).await;
+        press = step_press(mock, press);
+        let Some(s) = handle.cycle() else { continue };
+        if s.state == CycleState::Waiting {
+            wait_seen = wait_seen.max(s.waiting_s.unwrap_or(0.0));
+        } else if wait_seen > 0.0 {
+            waiting_s += wait_seen;
+            wait_seen = 0.0;
+        }
+        if s.done as usize > cycles.len() {
+            cycles.push(CycleTimes {
+                cycle_s: s
+                    .last_cycle_s
+                    .unwrap_or_else(|| cycle_began.elapsed().as_secs_f64()),
+                waiting_s,
+            });
+            cycle_began = Instant::now();
+            waiting_s = 0.0;
+        }
+        let step = s.step.as_ref().map_or(0, |st| st.step);
+        let moving = handle.state().current_move.is_some();
+        if s.done == 3 && step == INTO_PRESS_STEP && moving && glitch.is_none() && hold.is_none() {
+            tokio::time::sleep(Duration::from_millis(150)).await;
+            mock.with(|m| {
+                let _ = m.set_input(5, false);
+            });
+            glitch = Some(Instant::now());
+        }
+        if let Some(at) = glitch {
+            if s.state == CycleState::Paused && hold.is_none() {
+                hold = Some(Hold {
+                    cycle: s.done + 1,
+                    why: s.reason.clone().unwrap_or_default(),
+                    seen_after_s: at.elapsed().as_secs_f64(),
+                    resumed_after_s: 0.0,
+                });
+            }
+            if at.elapsed().as_secs_f64() >= GLITCH_S && hold.is_some() && resumed_at.is_none() {
+                mock.with(|m| {
+                    let _ = m.set_input(5, true);
+                });
+                tokio::time::sleep(Duration::from_millis(20)).await;
+                handle
+                    .resume_cycle()
+                    .map_err(|e| DemoError::Rig(e.to_string()))?;
+                resumed_at = Some(Instant::now());
+            }
+        }
+        if let (Some(at), Some(h)) = (resumed_at, hold.as_mut()) {
+            if h.resumed_after_s == 0.0 && s.state == CycleState::Running {
+                h.resumed_after_s = at.elapsed().as_secs_f64();
+            }
+        }
+        match s.state {
+            CycleState::Done => break,
+            CycleState::Faulted | CycleState::Stopped => {
+                return Err(DemoError::Rig(format!(
+                    "the cycle ended {:?}: {}",
+                    s.state,
+                    s.reason.unwrap_or_default()
+                )));
+            }
+            _ => {}
+        }
+    }
+    let reports = handle.reports();
+    let done: Vec<_> = reports.iter().filter(|r| r.stage == Stage::Done).collect();
+    Ok(PressDemo {
+        cycles,
+        hold,
+        motion_s: done.iter().filter_map(|r| r.motion_s).sum(),
+        moves: (done.len(), reports.len() - done.len()),
+        total_s: began.elapsed().as_secs_f64(),
+    })
+}
+
+/// One step of the simulated press on the mock's inputs and outputs.
+fn step_press(mock: &crate::mock::SharedMock, press: Press) -> Press {
+    let now = Instant::now();
+    mock.with(|m| {
+        let go = m.memory().bit(Area::Y, 0).unwrap_or(false);
+        let next = match press {
+            Press::Open if go => Press::Stroke {
+                until: now + Duration::from_secs_f64(STROKE_S),
+            },
+            Press::Stroke { until } if now >= until => Press::Settle {
+                until: now + Duration::from_secs_f64(SETTLE_S),
+            },
+            Press::Settle { until } if now >= until && !go => Press::Open,
+            other => other,
+        };
+        if next != press {
+            let (open, moving) = match next {
+                Press::Open => (true, false),
+                Press::Stroke { .. } => (false, true),
+                Press::Settle { .. } => (false, false),
+            };
+            let _ = m.set_input(5, open);
+            let _ = m.set_input(6, moving);
+        }
+        next
+    })
+}
+
+/// The report, in words.
+pub fn write_press_report(d: &PressDemo, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "Press-loading cycle (config/examples/cycles/press-load.toml) on the seed robot, mock PLC \
+         and a simulated press: {} cycles",
+        d.cycles.len()
+    )?;
+    writeln!(out, "  cycle   time s   waiting s")?;
+    for (i, c) in d.cycles.iter().enumerate() {
+        writeln!(
+            out,
+            "  {:>5}   {:>6.3}   {:>9.3}",
+            i + 1,
+            c.cycle_s,
+            c.waiting_s
+        )?;
+    }
+    let cycles_s: f64 = d.cycles.iter().map(|c| c.cycle_s).sum();
+    let waiting_s: f64 = d.cycles.iter().map(|c| c.waiting_s).sum();
+    writeln!(
+        out,
+        "  all: {cycles_s:.3} s in cycles, {waiting_s:.3} s waiting, {:.3} s of motion in {} moves \
+         done ({} not done); the rest (uploads, chaining, polls, outputs): {:.3} s",
+        d.motion_s,
+        d.moves.0,
+        d.moves.1,
+        cycles_s - waiting_s - d.motion_s
+    )?;
+    match &d.hold {
+        Some(h) => writeln!(
+            out,
+            "  hold in cycle {}: {}; seen {:.3} s after the guard opened, running again {:.3} s \
+             after the resume",
+            h.cycle, h.why, h.seen_after_s, h.resumed_after_s
+        ),
+        None => writeln!(out, "  the hold was not seen"),
+    }
+}
