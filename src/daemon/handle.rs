@@ -651,6 +651,12 @@ impl RobotHandle {
         self.shared.watch_reads()
     }
 
+    /// Whether a cycle waits on the inputs now: the worker then reads the status block at its
+    /// busy pace.
+    pub(crate) fn watch_inputs(&self, on: bool) {
+        self.shared.inputs_watched.store(on, Ordering::Relaxed);
+    }
+
     /// How long ago the robot's worker last went round its loop.
     #[must_use]
     pub fn since_worker_beat(&self) -> Option<Duration> {

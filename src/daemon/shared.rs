@@ -19,6 +19,9 @@ pub(super) struct Shared {
     moves: Mutex<Moves>,
     /// Set when a stop is asked for: an upload in progress gives up at its next write.
     pub stop_pending: Arc<AtomicBool>,
+    /// Set while a cycle waits on the inputs: the worker reads the status block at its busy
+    /// pace, so the wait reacts within one poll interval.
+    pub inputs_watched: AtomicBool,
     ids: Arc<MoveIds>,
     /// Where the last accepted order is planned to end, per joint (for checking the next).
     planned_end: Mutex<Option<[i64; JOINTS]>>,
@@ -46,6 +49,7 @@ impl Shared {
             }),
             moves: Mutex::new(Moves::default()),
             stop_pending: Arc::new(AtomicBool::new(false)),
+            inputs_watched: AtomicBool::new(false),
             ids,
             planned_end: Mutex::new(None),
             refusal: Mutex::new(Some(Blocker::LinkDown)),

@@ -147,6 +147,20 @@ pub(super) async fn wait_until(
 ) -> WaitEnd {
     let mut reads = handle.watch_reads();
     let deadline = timeout.map(|t| tokio::time::Instant::now() + t);
+    handle.watch_inputs(true);
+    let end = wait_loop(handle, holds, extra, deadline, control, &mut reads).await;
+    handle.watch_inputs(false);
+    end
+}
+
+async fn wait_loop(
+    handle: &RobotHandle,
+    holds: impl Fn(&Inputs) -> bool,
+    extra: &[Address],
+    deadline: Option<tokio::time::Instant>,
+    control: &mut watch::Receiver<Control>,
+    reads: &mut watch::Receiver<u64>,
+) -> WaitEnd {
     loop {
         let inputs = Inputs {
             words: handle.state().inputs,

@@ -290,7 +290,11 @@ impl Worker {
         let busy = !matches!(
             self.machine.phase(),
             Phase::Idle | Phase::Unhomed | Phase::Stalled
-        ) || !self.queue.is_empty();
+        ) || !self.queue.is_empty()
+            || self
+                .shared
+                .inputs_watched
+                .load(std::sync::atomic::Ordering::Relaxed);
         if busy {
             self.settings.poll_interval
         } else {
