@@ -278,3 +278,98 @@ async fn one_cycle_at_a_time_and_a_bad_program_is_refused_before_anything_moves(
     until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
     assert!(shared.with(|m| m.starts().is_empty()));
 }
+
+/// Waits until the robot's PLC is running a move.
+async fn until_moving(shared: &SharedMock) {
+    for _ in 0..5_000 {
+        if shared.with(|m| m.status().state) == State::Running.word() {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(1)).await;
+    }
+    panic!("the PLC never ran a move");
+}
+
+#[tokio::test]
+async fn a_plc_power_cycle_mid_move_faults_the_cycle_which_never_resumes_by_itself() {
+    let shared = mock_at_seed_start("");
+    let program = format!("[[step]]\nmove = {}\n[[step]]\nmove = {}\n", at(P2), at(P1));
+    let (_d, h) = spawn(&shared, programs("power", &[("p", program)]));
+    connected(&h).await;
+    h.run_cycle("p", None).unwrap();
+    until_moving(&shared).await;
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    shared.with(|m| m.power_cycle());
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    assert_eq!(s.step.unwrap().step, 1);
+    let why = s.reason.unwrap();
+    assert!(why.contains("restarted"), "{why}");
+    // I7: it stays faulted, and nothing starts, however long one waits.
+    let starts = shared.with(|m| m.starts().len());
+    tokio::time::sleep(Duration::from_millis(1_500)).await;
+    assert_eq!(h.cycle().unwrap().state, CycleState::Faulted);
+    assert_eq!(shared.with(|m| m.starts().len()), starts);
+    // The PLC came back unhomed: cleared and resumed, the move is refused (not homed) and the
+    // cycle faults again; nothing moves.
+    h.clear_fault().await.unwrap();
+    h.resume_cycle().unwrap();
+    let s = until(&h, "faulted again", |s| {
+        s.state == CycleState::Faulted && s.reason.as_deref().is_some_and(|r| r.contains("homed"))
+    })
+    .await;
+    assert!(s.reason.unwrap().contains("not homed"));
+    assert_eq!(shared.with(|m| m.starts().len()), starts);
+}
+
+#[tokio::test]
+async fn a_link_lost_during_a_wait_neither_faults_nor_meets_it_and_the_cycle_goes_on_once_back() {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nwait = \"press_open\"\ntimeout = \"20s\"\n[[step]]\nmove = {}\npermit = \"press_open\"\n",
+        at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("link", &[("p", program)]));
+    connected(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    // Every command's connection closed for a while: the link is down, the inputs unknown.
+    shared.with(|m| m.set_faults("close@100%".parse().unwrap()));
+    for _ in 0..500 {
+        if !h.state().link.connected {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    assert!(!h.state().link.connected);
+    assert_eq!(h.state().inputs, None);
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert_eq!(h.cycle().unwrap().state, CycleState::Waiting);
+    assert!(shared.with(|m| m.starts().is_empty()));
+    // Back: the wait is met on the first status read, and the move runs.
+    shared.with(|m| m.set_faults("".parse().unwrap()));
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 1);
+    assert!(starts[0].block.permit.holds(&starts[0].inputs));
+}
+
+#[tokio::test]
+async fn a_restarted_daemon_has_no_cycle_and_does_not_move_the_robot() {
+    let shared = mock_at_seed_start("");
+    let dir = programs("restart", &[("press-load", press_cycle())]);
+    let (d, h) = spawn(&shared, dir.clone());
+    connected(&h).await;
+    shared.with(|m| m.set_input(5, true).unwrap());
+    h.run_cycle("press-load", None).unwrap();
+    until(&h, "running a move", |s| !s.moves.is_empty()).await;
+    d.kill().await;
+    let starts = shared.with(|m| m.starts().len());
+    let (_d2, h2) = spawn(&shared, dir);
+    connected(&h2).await;
+    tokio::time::sleep(Duration::from_millis(1_500)).await;
+    assert!(h2.cycle().is_none());
+    // At most the start the old daemon left running; nothing after it.
+    assert_eq!(shared.with(|m| m.starts().len()), starts);
+}

@@ -1,0 +1,15 @@
+//! A short cycle soak in the test suite (the full one is `cargo bench --bench cycle_soak`, 1000
+//! cycles): the press program through a lossy link on paused time, every invariant checked.
+
+#[path = "../benches/cycle_soak.rs"]
+#[allow(dead_code, unreachable_pub)]
+mod cycle_soak;
+
+#[tokio::test(start_paused = true)]
+async fn fifty_press_cycles_through_a_lossy_link_keep_every_invariant() {
+    let summary = cycle_soak::cycle_soak(50).await;
+    let text = cycle_soak::report(&summary);
+    println!("{text}");
+    assert!(cycle_soak::clean(&summary), "{text}");
+    assert_eq!(summary.done, 50, "{text}");
+}
