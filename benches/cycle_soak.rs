@@ -132,16 +132,16 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
     let dir = std::env::temp_dir().join(format!("linterpd-cycle-soak-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("press.toml"), program()).unwrap();
-    let signals = [("press_open", "X5"), ("press_moving", "X6"), ("press_go", "Y0")]
-        .into_iter()
-        .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
-        .collect();
-    let access = AccessList::new(
-        vec![],
-        vec!["Y0-Y7".parse().unwrap()],
-        &Layout::default(),
-    )
-    .unwrap();
+    let signals = [
+        ("press_open", "X5"),
+        ("press_moving", "X6"),
+        ("press_go", "Y0"),
+    ]
+    .into_iter()
+    .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
+    .collect();
+    let access =
+        AccessList::new(vec![], vec!["Y0-Y7".parse().unwrap()], &Layout::default()).unwrap();
     let setup = RobotSetup {
         robot,
         settings: ContractSettings::default(),
@@ -189,7 +189,11 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
     summary.done = h.cycle().map_or(0, |s| s.done);
     shared.with(|m| {
         let mut seqs = BTreeMap::new();
-        for r in m.starts().iter().filter(|r| r.outcome == StartOutcome::Started) {
+        for r in m
+            .starts()
+            .iter()
+            .filter(|r| r.outcome == StartOutcome::Started)
+        {
             summary.starts += 1;
             if r.from_mismatch() {
                 summary.from_mismatches += 1;

@@ -571,13 +571,13 @@ fn special_addresses<'a>(lines: impl Iterator<Item = &'a str>) -> BTreeSet<Strin
 }
 
 #[test]
-fn plc_listing_speaks_contract_version_2_at_the_default_addresses() {
+fn plc_listing_speaks_contract_version_3_at_the_default_addresses() {
     let code = listing_code();
-    for line in ["F0 MV H4C49, DT1000", "F0 MV K2, DT1001"] {
+    for line in ["F0 MV H4C49, DT1000", "F0 MV K3, DT1001"] {
         assert!(code.contains(&line.to_owned()), "{LISTING} lacks `{line}`");
     }
     let written = written_words(&code);
-    let missing: Vec<u32> = (1000..=1021).filter(|w| !written.contains(w)).collect();
+    let missing: Vec<u32> = (1000..=1025).filter(|w| !written.contains(w)).collect();
     assert!(
         missing.is_empty(),
         "status words never written: {missing:?}"
@@ -585,12 +585,12 @@ fn plc_listing_speaks_contract_version_2_at_the_default_addresses() {
     // The command block is linterpd's: the program reads all of it and writes back only the
     // command word (0 once acted on) and the host word (0 in the first scan).
     let mentioned = mentioned_words(&code);
-    let unread: Vec<u32> = (1032..=1048).filter(|w| !mentioned.contains(w)).collect();
+    let unread: Vec<u32> = (1032..=1056).filter(|w| !mentioned.contains(w)).collect();
     assert!(
         unread.is_empty(),
         "command block words never used: {unread:?}"
     );
-    let overwritten: Vec<u32> = (1032..=1048).filter(|w| written.contains(w)).collect();
+    let overwritten: Vec<u32> = (1032..=1056).filter(|w| written.contains(w)).collect();
     assert_eq!(
         overwritten,
         [1032, 1048],
@@ -703,7 +703,7 @@ fn plc_listing_ignores_a_repeated_seq_and_checks_starts_in_contract_order() {
         );
         earlier.push(positive[0]["AN ".len()..].to_owned());
     }
-    assert_eq!(faults, ["1", "6", "2", "5", "4"]);
+    assert_eq!(faults, ["1", "6", "2", "5", "8", "4"]);
     let go = rung_with(&rungs, &format!("OT {START_GOES}"));
     assert_eq!(go.first_condition(), format!("ST {START_CHECKED}"));
     for e in &earlier {
@@ -805,13 +805,13 @@ fn plc_listing_chains_only_after_busy_was_seen_or_the_last_target_is_reached() {
         let set_seen = rung_with(&rungs, &format!("SET {seen}"));
         assert_eq!(
             set_seen.conditions,
-            [format!("ST {busy}"), format!("AN R10{c}")]
+            [format!("ST {busy}"), format!("AN R16{c}")]
         );
         let forget = rung_with(&rungs, &format!("RST {seen}"));
         assert_eq!(forget.first_condition(), format!("ST R7{c}"));
         // A segment has finished: busy OFF, and seen ON or the count at the last target;
         // never in the scan of a launch or the one after.
-        let finished = rung_with(&rungs, &format!("OT R11{c}"));
+        let finished = rung_with(&rungs, &format!("OT R17{c}"));
         for needed in [
             format!("AN/ {busy}"),
             format!("ST {seen}"),
@@ -829,7 +829,7 @@ fn plc_listing_chains_only_after_busy_was_seen_or_the_last_target_is_reached() {
             "channel {c}: no `{target}`"
         );
         let chain = rung_with(&rungs, &format!("OT R6{c}"));
-        assert_eq!(chain.first_condition(), format!("ST R11{c}"));
+        assert_eq!(chain.first_condition(), format!("ST R17{c}"));
         // The count compared is the same channel's elapsed value the status block reports.
         assert_eq!(
             dmv_source(&code, 1140 + 2 * c),
@@ -959,7 +959,9 @@ fn plc_listing_stops_every_channel_through_dt90052() {
         stop.conditions,
         [
             format!("ST {ESTOP_OPEN}"),
-            format!("OR= {COMMAND_OF_SCAN}, K2")
+            format!("OR= {COMMAND_OF_SCAN}, K2"),
+            // Version 3: the running move's latched permit stopped holding.
+            "OR R182".to_owned(),
         ]
     );
     let acts = rungs

@@ -376,7 +376,7 @@ impl Worker {
             tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
             let pace = match &mut pace {
                 Some(pace) => pace,
-                None => pace.insert(self.pace(exchange).await?),
+                None => pace.insert(self.pace(exchange, !first.permit.is_none()).await?),
             };
             pace.preload += took;
             pace.preload_words += preloaded.words();
@@ -407,8 +407,9 @@ impl Worker {
 
     /// The link's pace before any preload: the status read `exchange` just took and a one-word
     /// read made now.
-    async fn pace(&mut self, exchange: Duration) -> Result<Pace, ContractError> {
+    async fn pace(&mut self, exchange: Duration, permit: bool) -> Result<Pace, ContractError> {
         Ok(Pace {
+            permit_write: permit,
             status: exchange,
             word: self.link()?.one_word_exchange().await?,
             preload: Duration::ZERO,

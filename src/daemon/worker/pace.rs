@@ -38,6 +38,9 @@ pub(super) struct Pace {
     pub preload_words: usize,
     /// Whether every write is read back (the contract's `verify`).
     pub read_back: bool,
+    /// Whether each start writes its permit (a second write: a start with no permit writes it
+    /// only when the PLC's permit words are not known to be 0 already).
+    pub permit_write: bool,
     /// How often a running part is watched (a status read) while the next one is written: the
     /// heartbeat timeout.
     pub watch_every: Duration,
@@ -80,12 +83,17 @@ impl Pace {
     }
 
     /// About how long a part takes to start once the part before it is seen running, s: two
-    /// status reads, its block written (and read back) in its two writes (before and after the
-    /// `host` word), the start write.
+    /// status reads, its block written (and read back), with its permit when it has one (a
+    /// second write, after the `host` word), the start write.
     fn start_s(&self) -> f64 {
         2.0 * self.status.as_secs_f64()
             + self.exchanges_per_write()
-                * (self.exchange_s(BLOCK_WRITE_WORDS) + self.exchange_s(PERMIT_WRITE_WORDS))
+                * (self.exchange_s(BLOCK_WRITE_WORDS)
+                    + if self.permit_write {
+                        self.exchange_s(PERMIT_WRITE_WORDS)
+                    } else {
+                        0.0
+                    })
             + self.exchange_s(1)
     }
 
@@ -136,6 +144,7 @@ mod tests {
             preload: Duration::from_millis(preload_ms),
             preload_words,
             read_back: true,
+            permit_write: true,
             watch_every: Duration::from_secs(3_600),
         }
     }

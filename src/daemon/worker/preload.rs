@@ -74,6 +74,7 @@ mod tests {
             preload: Duration::from_millis(preload_ms),
             preload_words: 100,
             read_back: true,
+            permit_write: false,
             watch_every: Duration::from_secs(3_600),
         }
     }

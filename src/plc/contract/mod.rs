@@ -434,6 +434,11 @@ pub struct Contract<P> {
     settings: ContractSettings,
     abort: Option<Arc<AtomicBool>>,
     beat: Option<Arc<Beat>>,
+    /// Whether this connection wrote the PLC's permit words all 0 and saw the write through
+    /// (read back, or acknowledged with read-back off): a start with no permit then leaves them
+    /// alone. Only a start with no permit is ever spared the write: whatever the PLC's words
+    /// hold, a start with a permit writes its own.
+    no_permit_in_plc: bool,
 }
 
 impl<P: Plc> Contract<P> {
@@ -444,6 +449,7 @@ impl<P: Plc> Contract<P> {
             settings,
             abort: None,
             beat: None,
+            no_permit_in_plc: false,
         }
     }
 
@@ -580,6 +586,10 @@ impl<P: Plc> Contract<P> {
         self.aborted()?;
         match upload.next(self.plc.exchange_sizes()) {
             Some(upload::Exchange::Write { address, words }) => {
+                if address == self.permit_address() {
+                    // Unknown until the write is seen through.
+                    self.no_permit_in_plc = false;
+                }
                 self.plc.write_words(address, &words).await?;
             }
             Some(upload::Exchange::ReadBack { address, words }) => {
@@ -587,7 +597,13 @@ impl<P: Plc> Contract<P> {
             }
             None => {}
         }
-        Ok(upload.bank())
+        let bank = upload.bank();
+        if let Some(bank) = &bank {
+            if upload.writes_at(self.permit_address()) {
+                self.no_permit_in_plc = bank.block.permit.is_none();
+            }
+        }
+        Ok(bank)
     }
 
     /// Makes every exchange of `upload` left.
@@ -726,14 +742,20 @@ impl<P: Plc> Contract<P> {
     /// The writes of a command block's words but the command and host words: +1..+15 (seq,
     /// mask, bank, segments, from), then the permit +17..+24. Two writes, so that the `host`
     /// word is only ever written when the PLC's copy differs (CONTRACT.md).
-    fn block_writes(&self, block: &CommandBlock) -> [(u16, Vec<u16>); 2] {
+    fn block_writes(&self, block: &CommandBlock) -> Vec<(u16, Vec<u16>)> {
         let words = block.to_words();
         let base = self.settings.layout.command_base;
         let permit = usize::from(COMMAND_PERMIT_OFFSET);
-        [
-            (base + 1, words[1..=BLOCK_WRITE_WORDS].to_vec()),
-            (base + COMMAND_PERMIT_OFFSET, words[permit..].to_vec()),
-        ]
+        let mut writes = vec![(base + 1, words[1..=BLOCK_WRITE_WORDS].to_vec())];
+        if !(block.permit.is_none() && self.no_permit_in_plc) {
+            writes.push((base + COMMAND_PERMIT_OFFSET, words[permit..].to_vec()));
+        }
+        writes
+    }
+
+    /// The address of the command block's permit words.
+    fn permit_address(&self) -> u16 {
+        self.settings.layout.command_base + COMMAND_PERMIT_OFFSET
     }
 
     async fn compare(&mut self, address: u16, wrote: &[u16]) -> Result<(), ContractError> {
@@ -784,7 +806,7 @@ impl<P: Plc> Contract<P> {
             from,
             ..self.command_block().await?
         };
-        let [(address, words), _permit] = self.block_writes(&block);
+        let (address, words) = self.block_writes(&block).swap_remove(0);
         self.plc.write_words(address, &words).await?;
         if self.settings.verify {
             self.compare(address, &words).await?;

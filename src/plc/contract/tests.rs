@@ -172,7 +172,8 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
         .await
         .unwrap();
     assert_eq!(preload.words(), 32);
-    // The same tables: the command block alone.
+    // The same tables: the command block alone (the first start of a connection writes its
+    // permit words too, all 0 here).
     let before = c.plc().writes.len();
     let bank = c
         .upload_preloaded(1, 7, FROM, &[table(0), table(2)], &preload)
@@ -186,10 +187,11 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
         .upload_preloaded(1, 8, FROM, &[table(0), table_to(2, 900)], &preload)
         .await
         .unwrap();
-    assert_eq!(whole.words, 55);
+    // The PLC's permit words are known to be 0 now: a start with no permit leaves them.
+    assert_eq!(whole.words, 47);
     assert_eq!(
         c.plc().writes[before..],
-        [(10_000, 16), (14_000, 16), (1_033, 15), (1_049, 8)]
+        [(10_000, 16), (14_000, 16), (1_033, 15)]
     );
     assert_eq!(c.plc().dt[&(14_000 + 8 + 4)], 900);
     // Another bank: written whole into it.
@@ -201,7 +203,7 @@ async fn a_preloaded_bank_is_started_on_its_block_alone_only_when_its_tables_are
     assert_eq!(other.block.bank, 0);
     assert_eq!(
         c.plc().writes[before..],
-        [(2_000, 16), (6_000, 16), (1_033, 15), (1_049, 8)]
+        [(2_000, 16), (6_000, 16), (1_033, 15)]
     );
 }
 
@@ -240,10 +242,10 @@ async fn a_table_preloaded_past_another_in_its_bank_is_started_on_its_directorie
         .await
         .unwrap();
     assert!(bank.on_preload);
-    assert_eq!(bank.words, 8 + 8 + 15 + 8);
+    assert_eq!(bank.words, 8 + 8 + 15);
     assert_eq!(
         c.plc().writes[before..],
-        [(10_000, 8), (14_000, 8), (1_033, 15), (1_049, 8)]
+        [(10_000, 8), (14_000, 8), (1_033, 15)]
     );
     assert_eq!(area_of(&mut c, 0), later_tables[0].table().segments);
     assert_eq!(area_of(&mut c, 2), later_tables[1].table().segments);
@@ -257,7 +259,44 @@ async fn a_table_preloaded_past_another_in_its_bank_is_started_on_its_directorie
         .await
         .unwrap();
     assert!(!whole.on_preload);
-    assert_eq!(whole.words, 16 + 16 + 15 + 8);
+    assert_eq!(whole.words, 16 + 16 + 15);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_start_with_a_permit_always_writes_it_and_the_next_without_one_writes_zeros() {
+    use crate::contract::{Permit, PermitBit};
+    let mut c = Contract::new(FakePlc::running(), ContractSettings::default());
+    let permit = Permit::of(&[PermitBit {
+        word: 0,
+        bit: 5,
+        on: true,
+    }])
+    .unwrap();
+    let start = |seq: u16, permit: Permit| StartBlock {
+        bank: 1,
+        seq,
+        from: FROM,
+        permit,
+    };
+    let tables = [table(0), table(2)];
+    for (seq, wanted, writes_permit) in [
+        (1, Permit::NONE, true),  // the connection's first: not known yet
+        (2, Permit::NONE, false), // known all 0: left alone
+        (3, permit, true),        // a permit: always written
+        (4, permit, true),        // again: never trusted to be there
+        (5, Permit::NONE, true),  // back to none: the PLC holds a permit, zeros written
+        (6, Permit::NONE, false),
+    ] {
+        let before = c.plc().writes.len();
+        let mut upload = c.begin_upload(&start(seq, wanted), &tables).unwrap();
+        while c.upload_step(&mut upload).await.unwrap().is_none() {}
+        let wrote = c.plc().writes[before..].iter().any(|(a, _)| *a == 1_049);
+        assert_eq!(wrote, writes_permit, "start {seq}");
+        let held: Vec<u16> = (1_049..1_057)
+            .map(|a| c.plc().dt.get(&a).copied().unwrap_or(0))
+            .collect();
+        assert_eq!(held, [wanted.mask, wanted.value].concat(), "start {seq}");
+    }
 }
 
 #[tokio::test(start_paused = true)]

@@ -83,6 +83,11 @@ impl Upload {
         })
     }
 
+    /// Whether one of its writes begins at `address`.
+    pub(super) fn writes_at(&self, address: u16) -> bool {
+        self.writes.iter().any(|(a, _)| *a == address)
+    }
+
     /// Whether every exchange is done.
     #[must_use]
     pub fn is_done(&self) -> bool {
