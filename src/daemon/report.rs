@@ -595,6 +595,7 @@ mod json_tests {
             state: Some(State::Fault),
             fault: Some(3),
             counts: Some([1, -2, 3, 40000]),
+            inputs: Some([0x20, 0, 0, 1]),
             pose: Some([-0.0, 500.25, 0.1, 45.0]),
             current_move: Some(7),
             queued: vec![8, 9],
