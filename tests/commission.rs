@@ -141,7 +141,7 @@ async fn the_listing_passes_every_check_and_leaves_the_counts_as_found() {
     let target = target(serial_link(HeaderChoice::Auto), FrequencyModel::FpxDivider);
     let (report, shared) = commission_mewtocol(MockVariant::Listing, &target).await;
     all_pass(&report);
-    assert_eq!(report.checks.len(), 6 + 5 + 7 * 4);
+    assert_eq!(report.checks.len(), 6 + 5 + 1 + 9 * 4);
     assert_eq!(
         report.findings.multi_frame_reads, None,
         "< carries 509 words a frame"
@@ -654,7 +654,7 @@ mod cli {
         assert_eq!(done.status.code(), Some(0), "{}", done.describe());
         assert!(
             done.stdout
-                .contains("result: 18 checks: 17 pass, 0 FAIL, 1 skipped")
+                .contains("result: 21 checks: 20 pass, 0 FAIL, 1 skipped")
         );
         assert!(
             done.stdout

@@ -26,10 +26,12 @@
 //! timing.rs    the timing run and its three checks
 //! moves.rs     two-segment chain; stop mid-table and the following start
 //! refusals.rs  the `from` interlock; the repeated seq
-//! permit.rs    the permit refused at start (fault 8) and dropped while running (fault 9)
+//! permit.rs    the permit refused at start (fault 8), and let run when it holds
+//! hold.rs      the permit dropped while running: held within one scan (fault 9)
 //! ```
 
 mod bench;
+mod hold;
 mod moves;
 mod permit;
 mod refusals;
@@ -132,7 +134,7 @@ async fn channel<P: Plc>(
     refusals::interlock(s, bench, ch).await?;
     refusals::repeated_seq(s, bench, ch).await?;
     permit::refuses(s, bench, ch).await?;
-    permit::drop_holds(s, bench, ch).await
+    hold::drop_holds(s, bench, ch).await
 }
 
 /// The counts now, or a failed check.
