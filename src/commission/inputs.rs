@@ -57,7 +57,10 @@ pub(super) fn on_off(on: bool) -> &'static str {
 }
 
 /// `WX0 0x0000 (all off), WR10 0x8001 (R100, R10F on)`.
-pub(super) fn describe_inputs(values: &[u16; INPUT_WORDS], words: &[InputWord; INPUT_WORDS]) -> String {
+pub(super) fn describe_inputs(
+    values: [u16; INPUT_WORDS],
+    words: &[InputWord; INPUT_WORDS],
+) -> String {
     let parts: Vec<String> = (0..INPUT_WORDS)
         .map(|i| {
             let on: Vec<String> = (0..16u8)
@@ -133,8 +136,7 @@ pub(super) async fn switch<P: Plc>(
             out.late = true;
         }
         out.elsewhere = out.elsewhere.or_else(|| {
-            (0..INPUT_WORDS)
-                .find(|&j| j != w && is_on(block.inputs[j] ^ before.inputs[j], bit))
+            (0..INPUT_WORDS).find(|&j| j != w && is_on(block.inputs[j] ^ before.inputs[j], bit))
         });
     }
     Ok(out)
@@ -172,7 +174,7 @@ pub(super) async fn step<P: Plc>(
         Ok(st) => st.block,
         Err(e) => return s.record(k.fail(format!("{e:#}"), "the link failed")),
     };
-    let read = describe_inputs(&before.inputs, &words);
+    let read = describe_inputs(before.inputs, &words);
     s.findings.inputs = Some(InputsFound {
         words: named,
         values: before.inputs.to_vec(),
@@ -218,7 +220,11 @@ async fn copy_and_back<P: Plc>(
         }
     };
     let seen = |x: &Switched| match x.shown_after_s {
-        Some(t) => format!("showed in inputs[{w}] after {} read(s), the read sent {:.1} ms after the write's acknowledgement", x.reads, t * 1e3),
+        Some(t) => format!(
+            "showed in inputs[{w}] after {} read(s), the read sent {:.1} ms after the write's acknowledgement",
+            x.reads,
+            t * 1e3
+        ),
         None => format!(
             "inputs[{w}] read 0x{:04X} over {} reads, never {}",
             x.last.inputs[w],

@@ -110,6 +110,18 @@ impl Target {
     }
 }
 
+/// The relays the commission switches over the link and back (named `R10F`): two bits of the
+/// first R word among the input words, none when all four are X words.
+#[must_use]
+pub fn relays_switched(target: &Target) -> Vec<String> {
+    let words = target.link.layout.inputs;
+    inputs::relay_word(&words).map_or_else(Vec::new, |w| {
+        [inputs::COPY_BIT, inputs::DROP_BIT]
+            .map(|bit| crate::contract::bit_name(words[w], bit))
+            .to_vec()
+    })
+}
+
 /// The link in words: protocol, transport and station.
 #[must_use]
 pub fn describe_link(settings: &LinkSettings) -> String {

@@ -200,9 +200,10 @@ pub(super) async fn drop_holds<P: Plc>(
     let words = s.target.link.layout.inputs;
     let hz = ch.hz_for(DROP_PULSES, 20.0 * bench.pace.sample_s());
     let plan = drop_word(s);
-    let name = plan
-        .as_ref()
-        .map_or_else(|_| "an R input bit".to_owned(), |&w| bit_name(words[w], DROP_BIT));
+    let name = plan.as_ref().map_or_else(
+        |_| "an R input bit".to_owned(),
+        |&w| bit_name(words[w], DROP_BIT),
+    );
     let k = check(
         "permit drop holds within one scan",
         c,
@@ -238,7 +239,10 @@ pub(super) async fn drop_holds<P: Plc>(
         Ok(r) if r.shown_after_s.is_some() => format!("{name} back {}", on_off(on)),
         Ok(_) => {
             return s.record(k.fail(
-                format!("{saw}; {name} switched back {} but its copy did not follow", on_off(on)),
+                format!(
+                    "{saw}; {name} switched back {} but its copy did not follow",
+                    on_off(on)
+                ),
                 format!("{name} may be left {}: switch it back", on_off(!on)),
             ));
         }
@@ -264,10 +268,19 @@ pub(super) async fn drop_holds<P: Plc>(
     let (lo, hi) = (c0.min(at), c0.max(at));
     let deadline = bench.deadline_s((at - c0).abs(), hz);
     let back = bench
-        .play(ch, vec![ch.segment(at, c0, hz)], from, deadline, &within(i, lo, hi))
+        .play(
+            ch,
+            vec![ch.segment(at, c0, hz)],
+            from,
+            deadline,
+            &within(i, lo, hi),
+        )
         .await;
     let end = back.count(i).unwrap_or(at);
-    let saw = format!("{saw}; clear fault gave idle; back {at} -> {end}: {}", back.ending());
+    let saw = format!(
+        "{saw}; clear fault gave idle; back {at} -> {end}: {}",
+        back.ending()
+    );
     if back.ended(State::Done) && end == c0 {
         s.record(k.pass(saw))
     } else {
@@ -314,17 +327,20 @@ fn describe_drop(
         format!(
             "{}, busy {}, the count at {}",
             state(x),
-            if x.block.busy & (1 << i) == 0 { "OFF" } else { "ON" },
+            if x.block.busy & (1 << i) == 0 {
+                "OFF"
+            } else {
+                "ON"
+            },
             x.block.elapsed[i]
         )
     });
     let furthest = run
         .furthest(i, c0, sign)
         .map_or(String::new(), |m| format!(", furthest {}", c0 + sign * m));
-    let stop = run
-        .stopped_for
-        .as_ref()
-        .map_or(String::new(), |why| format!("; the check wrote a stop: {why}"));
+    let stop = run.stopped_for.as_ref().map_or(String::new(), |why| {
+        format!("; the check wrote a stop: {why}")
+    });
     format!(
         "count {c0}; {name} switched {} at count {} (read {:.1} ms before the write was \
          acknowledged): over {} reads then {last}{furthest}; one scan ({:.1} ms) at {hz} Hz \
@@ -338,7 +354,12 @@ fn describe_drop(
 }
 
 /// `None` when the run held as the contract says; else the hint.
-fn drop_verdict(run: &DropRun, (c0, sign, i): (i64, i64, usize), name: &str, hz: u32) -> Option<String> {
+fn drop_verdict(
+    run: &DropRun,
+    (c0, sign, i): (i64, i64, usize),
+    name: &str,
+    hz: u32,
+) -> Option<String> {
     if run.error.is_some() {
         return Some("the link failed during the run".to_owned());
     }
@@ -363,13 +384,14 @@ fn drop_verdict(run: &DropRun, (c0, sign, i): (i64, i64, usize), name: &str, hz:
         && last.block.busy & (1 << i) == 0
         && run.stopped_for.is_none();
     if !held {
-        return Some(format!(
+        return Some(
             "the contract says a move whose latched permit stops holding is stopped within one \
              scan: state stopped, fault 9, busy OFF (and a waiting start dropped); this program \
              did not hold it: it does not check the latched permit every scan of the move, as a \
              program still at contract version 2's logic would. Load the listing that comes with \
              this linterpd"
-        ));
+                .to_owned(),
+        );
     }
     let furthest = run.furthest(i, c0, sign).unwrap_or(0);
     if furthest > sw.limit {
@@ -488,6 +510,7 @@ mod tests {
     #[tokio::test(start_paused = true)]
     async fn a_program_that_never_holds_fails_the_drop_check_with_nothing_moving() {
         let (checks, shared) = drop_check_against(MockVariant::IgnoresPermit).await;
+        eprintln!("{:#?}", checks[1]);
         assert_eq!(checks[0].verdict, Verdict::Pass, "{:?}", checks[0]);
         let c = &checks[1];
         assert_eq!(c.verdict, Verdict::Fail, "{c:?}");

@@ -89,8 +89,7 @@ pub(super) async fn refuses<P: Plc>(
              (permit_mask/permit_value, command +17..+24) against inputs, as a program still at \
              contract version 2's logic would. Load the listing that comes with this linterpd"
                 .to_owned()
-        } else if run.link_error.is_none() && run.last().is_some_and(|x| x.state == State::Fault)
-        {
+        } else if run.link_error.is_none() && run.last().is_some_and(|x| x.state == State::Fault) {
             format!(
                 "the contract says fault 8 (permit not met at start); the program latched another \
                  fault: {}",
@@ -110,8 +109,8 @@ pub(super) async fn refuses<P: Plc>(
         ));
     }
     let saw = format!("{saw}; clear fault gave idle");
-    let report = permitted_out_and_back(bench, ch, (c0, target, hz), (permit(on), &name, on), saw, k)
-        .await;
+    let report =
+        permitted_out_and_back(bench, ch, (c0, target, hz), (permit(on), &name, on), saw, k).await;
     s.record(report)
 }
 
@@ -179,4 +178,3 @@ async fn permitted_out_and_back<P: Plc>(
         k.fail(saw, unfinished_hint(&back))
     }
 }
-
