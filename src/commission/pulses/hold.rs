@@ -29,6 +29,9 @@ const DROP_PULSES: i64 = 300;
 const DROP_AFTER: i64 = DROP_PULSES / 5;
 /// Pulses allowed past the bound for rounding (a pulse under way, the model's rounding).
 const DROP_SLACK: i64 = 2;
+/// The shortest the table whose permit is dropped lasts, s: a poll delayed on a loaded PC must
+/// still find it running.
+const DROP_MIN_S: f64 = 0.5;
 /// Reads in a row with the channel stopped that end the watch after the switch.
 const SETTLED_READS: usize = 3;
 
@@ -198,7 +201,7 @@ pub(super) async fn drop_holds<P: Plc>(
 ) -> Result<(), Halt> {
     let (c, i) = (ch.c, ch.index());
     let words = s.target.link.layout.inputs;
-    let hz = ch.hz_for(DROP_PULSES, 20.0 * bench.pace.sample_s());
+    let hz = ch.hz_for(DROP_PULSES, (20.0 * bench.pace.sample_s()).max(DROP_MIN_S));
     let plan = drop_word(s);
     let name = plan.as_ref().map_or_else(
         |_| "an R input bit".to_owned(),
