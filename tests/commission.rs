@@ -1,6 +1,6 @@
 //! `linterpd commission` against every mock variant: the listing passes every check; each
 //! other variant fails exactly the check built to find it, with its hint, and nothing is left
-//! running. MEWTOCOL runs in process over `tokio::io::duplex` on paused time (the serial line
+//! running; with four X input words the checks that switch a relay are skipped. MEWTOCOL runs in process over `tokio::io::duplex` on paused time (the serial line
 //! emulated at 115200 baud, replies at the end of a scan, as a real PLC answers); Modbus runs
 //! over loopback TCP in real time, on one channel.
 
@@ -25,11 +25,14 @@ use linterpd::table::FrequencyModel;
 const START: [i64; 4] = [1_000, 2_000, 30_000, -400];
 
 fn mock(variant: MockVariant) -> SharedMock {
-    let mut plc = MockPlc::new(MockConfig {
+    mock_with(MockConfig {
         variant,
         ..MockConfig::default()
     })
-    .unwrap();
+}
+
+fn mock_with(config: MockConfig) -> SharedMock {
+    let mut plc = MockPlc::new(config).unwrap();
     for (c, count) in START.into_iter().enumerate() {
         plc.set_count(c, count);
     }
@@ -63,7 +66,11 @@ fn target(link: LinkSettings, model: FrequencyModel) -> Target {
 
 /// Commission over MEWTOCOL in process; the report and the mock.
 async fn commission_mewtocol(variant: MockVariant, target: &Target) -> (Report, SharedMock) {
-    let shared = mock(variant);
+    commission_mewtocol_on(mock(variant), target).await
+}
+
+/// Commission over MEWTOCOL in process against `shared`; the report and the mock.
+async fn commission_mewtocol_on(shared: SharedMock, target: &Target) -> (Report, SharedMock) {
     let driver = tokio::spawn(shared.clone().run_scans());
     let (ours, theirs) = tokio::io::duplex(8_192);
     let options = MewtocolServerOptions {
@@ -141,7 +148,7 @@ async fn the_listing_passes_every_check_and_leaves_the_counts_as_found() {
     let target = target(serial_link(HeaderChoice::Auto), FrequencyModel::FpxDivider);
     let (report, shared) = commission_mewtocol(MockVariant::Listing, &target).await;
     all_pass(&report);
-    assert_eq!(report.checks.len(), 6 + 5 + 7 * 4);
+    assert_eq!(report.checks.len(), 6 + 5 + 1 + 9 * 4);
     assert_eq!(
         report.findings.multi_frame_reads, None,
         "< carries 509 words a frame"
@@ -273,6 +280,79 @@ async fn stop_pauses_fails_the_stop_check_because_the_next_start_resumed_the_old
         Some(counts.found),
         "the report says where it left channel 0"
     );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_program_that_ignores_the_permit_fails_permit_refuses_fault_8_and_stops() {
+    let target = target(serial_link(HeaderChoice::Auto), FrequencyModel::FpxDivider);
+    let (report, shared) = commission_mewtocol(MockVariant::IgnoresPermit, &target).await;
+    // Version 3's status block: the inputs are copied, so the inputs step passes.
+    assert_eq!(
+        find(&report, "copied every scan", None).verdict,
+        Verdict::Pass
+    );
+    let check = find(&report, "permit refuses fault 8", Some(0));
+    assert!(
+        check.saw.contains("the permit needs XD on") && check.saw.contains("the start ran"),
+        "{}",
+        line(check)
+    );
+    stops_at(
+        &report,
+        &shared,
+        ("permit refuses fault 8", Some(0)),
+        "the contract says a start whose permit does not hold is refused with fault 8",
+    );
+    assert!(
+        check.hint.as_deref().unwrap().contains("version 2's logic"),
+        "{}",
+        line(check)
+    );
+    // The program started it: the count moved, and the report says where it was left.
+    let counts = report.findings.counts[0];
+    assert_ne!(counts.left, Some(counts.found));
+}
+
+#[tokio::test(start_paused = true)]
+async fn with_four_x_input_words_the_relay_checks_are_skipped_as_needing_wiring() {
+    let words = ["WX0", "WX1", "WX2", "WX3"].map(|w| w.parse().unwrap());
+    let mut link = serial_link(HeaderChoice::Auto);
+    link.layout.inputs = words;
+    let target = target(link, FrequencyModel::FpxDivider);
+    let mut config = MockConfig::default();
+    config.layout.inputs = words;
+    let shared = mock_with(config);
+    // X1D on: channel 1's refused start asks it off, its running start on.
+    shared.with(|m| m.set_input(16 + 0xD, true).unwrap());
+    let (report, shared) = commission_mewtocol_on(shared, &target).await;
+    let needs_wiring = |c: &CheckReport| {
+        c.verdict == Verdict::Skip && c.saw.contains("X words") && c.saw.contains("needs wiring")
+    };
+    let copied = find(&report, "copied every scan", None);
+    assert!(needs_wiring(copied), "{}", line(copied));
+    assert!(
+        copied.saw.contains("WX1 0x2000 (X1D on)"),
+        "{}",
+        line(copied)
+    );
+    for c in 0..4 {
+        let held = find(&report, "permit drop holds within one scan", Some(c));
+        assert!(needs_wiring(held), "{}", line(held));
+    }
+    let refused = find(&report, "permit refuses fault 8", Some(1));
+    assert!(
+        refused.saw.contains("the permit needs X1D off"),
+        "{}",
+        line(refused)
+    );
+    for c in report.checks.iter().filter(|c| !needs_wiring(c)) {
+        passed(&report, c);
+    }
+    assert!(report.passed, "skips that need wiring are not failures");
+    nothing_left_running(&report, &shared);
+    for counts in &report.findings.counts {
+        assert_eq!(counts.left, Some(counts.found));
+    }
 }
 
 #[tokio::test(start_paused = true)]
@@ -654,7 +734,7 @@ mod cli {
         assert_eq!(done.status.code(), Some(0), "{}", done.describe());
         assert!(
             done.stdout
-                .contains("result: 18 checks: 17 pass, 0 FAIL, 1 skipped")
+                .contains("result: 21 checks: 20 pass, 0 FAIL, 1 skipped")
         );
         assert!(
             done.stdout

@@ -19,7 +19,9 @@ use anyhow::{Context, anyhow};
 use clap::Args;
 
 use super::{Failure, bad_input};
-use crate::commission::{self, CheckReport, Report, Target, Verdict, describe_link};
+use crate::commission::{
+    self, CheckReport, Report, Target, Verdict, describe_link, relays_switched,
+};
 use crate::config::Config;
 use crate::plc::{BoxedLink, LinkSettings, PlcError, Transport, open_serial, open_tcp};
 
@@ -79,10 +81,19 @@ fn target(args: &CommissionArgs) -> anyhow::Result<Target> {
 #[must_use]
 pub fn prompt(target: &Target) -> String {
     let channels: Vec<String> = target.channels.iter().map(u8::to_string).collect();
+    let relays = match relays_switched(target).as_slice() {
+        [] => String::new(),
+        names => format!(
+            "It switches relays {} (input bits the permit checks use) over the link for a moment\n\
+             each, and back.\n",
+            names.join(" and ")
+        ),
+    };
     format!(
         "linterpd commission: robot {}, {}\n\
          It plays tiny pulse tables on channel {}, one channel at a time: at most 600 pulses away\n\
          from where each channel stands, at 100..2000 Hz, and back again.\n\
+         {relays}\
          Before you go on:\n  \
          - switch the drives' power OFF: the tables must move nothing;\n  \
          - stop `linterpd serve` and anything else that talks to this PLC: the commission must\n    \

@@ -95,6 +95,8 @@ pub enum VariantArg {
     DividerClock,
     /// The channels output exactly the value written, whatever --frequency-model says.
     IdealClock,
+    /// Version 2's logic reporting version 3: the permit is never checked (no fault 8 or 9).
+    IgnoresPermit,
 }
 
 impl VariantArg {
@@ -110,6 +112,7 @@ impl VariantArg {
             Self::SmallRequests => MockVariant::SmallRequests,
             Self::DividerClock => MockVariant::DividerClock,
             Self::IdealClock => MockVariant::IdealClock,
+            Self::IgnoresPermit => MockVariant::IgnoresPermit,
         }
     }
 }

@@ -2,17 +2,19 @@
 //! unit, with the drives' power off, that measures what `docs/PLC.md` tags \[unverified\] and
 //! `deploy/plc/README.md` lists as probable or unknown, and says which config lines fit the unit.
 //!
-//! Three steps, each a list of checks named as `deploy/plc/README.md`'s "measured by" column
+//! Four steps, each a list of checks named as `deploy/plc/README.md`'s "measured by" column
 //! names them:
 //! ```text
 //! link      headers %, <  |  largest frame/read/write  |  multi-frame read  |  round trip  |
 //!           scan time from heartbeat rate  |  RUN/PROG read                    (link/)
 //! contract  magic  |  version  |  heartbeat  |  host echo  |  ready bits       (contract.rs)
-//! pulses    per channel, one at a time, tiny tables at a low frequency:      (pulses.rs)
+//! inputs    copied every scan                                                 (inputs.rs)
+//! pulses    per channel, one at a time, tiny tables at a low frequency:      (pulses/)
 //!           busy on then off  |  elapsed moves by exactly the table's pulses  |
 //!           time taken vs frequency  |  two-segment table chains  |
 //!           stop mid-table then a following start works  |
-//!           `from` interlock refuses fault 5  |  repeated seq ignored
+//!           `from` interlock refuses fault 5  |  repeated seq ignored  |
+//!           permit refuses fault 8  |  permit drop holds within one scan
 //! ```
 //! Every check reports what it checks, what it saw, pass or fail, and a hint. A failure that
 //! only asks for a config change (a header, a request size, a timeout, the frequency model) lets
@@ -30,11 +32,14 @@
 //! link/        the link step over the raw stream (MEWTOCOL headers, request sizes, round trip,
 //!              scan time, RUN/PROG); hands back the client it settled on
 //! contract.rs  the contract step over any Plc
+//! inputs.rs    the inputs step over any Plc: the status block's inputs, a relay of an R input
+//!              word switched and seen in its copy; which input bits the permit checks use
 //! pulses/      the pulses step over any Plc: the bench a run plays on, then per channel the
 //!              timing run, chain and stop, and the starts that must be refused or ignored
 //! ```
 
 mod contract;
+mod inputs;
 pub mod judge;
 mod lines;
 mod link;
@@ -45,8 +50,8 @@ use std::time::Duration;
 
 pub use lines::config_lines;
 pub use report::{
-    ChannelCounts, ChannelRate, CheckReport, Findings, HeaderProbe, Report, RequestSizes, Step,
-    Verdict,
+    ChannelCounts, ChannelRate, CheckReport, Findings, HeaderProbe, InputsFound, Report,
+    RequestSizes, Step, Verdict,
 };
 
 use crate::plc::contract::{Contract, ContractSettings};
@@ -64,8 +69,10 @@ pub const LINK_CHECKS: [&str; 6] = [
 ];
 /// The checks of the contract step, in order.
 pub const CONTRACT_CHECKS: [&str; 5] = ["magic", "version", "heartbeat", "host echo", "ready bits"];
+/// The checks of the inputs step, in order.
+pub const INPUT_CHECKS: [&str; 1] = ["copied every scan"];
 /// The checks of the pulses step, per channel, in order.
-pub const PULSE_CHECKS: [&str; 7] = [
+pub const PULSE_CHECKS: [&str; 9] = [
     "busy on then off",
     "elapsed moves by exactly the table's pulses",
     "time taken vs frequency",
@@ -73,6 +80,8 @@ pub const PULSE_CHECKS: [&str; 7] = [
     "stop mid-table then a following start works",
     "`from` interlock refuses fault 5",
     "repeated seq ignored",
+    "permit refuses fault 8",
+    "permit drop holds within one scan",
 ];
 
 /// What to commission.
@@ -99,6 +108,18 @@ impl Target {
             channels,
         }
     }
+}
+
+/// The relays the commission switches over the link and back (named `R10F`): two bits of the
+/// first R word among the input words, none when all four are X words.
+#[must_use]
+pub fn relays_switched(target: &Target) -> Vec<String> {
+    let words = target.link.layout.inputs;
+    inputs::relay_word(&words).map_or_else(Vec::new, |w| {
+        [inputs::COPY_BIT, inputs::DROP_BIT]
+            .map(|bit| crate::contract::bit_name(words[w], bit))
+            .to_vec()
+    })
 }
 
 /// The link in words: protocol, transport and station.
@@ -216,6 +237,7 @@ impl Session<'_> {
             .iter()
             .map(|&c| (Step::Link, c, None))
             .chain(CONTRACT_CHECKS.iter().map(|&c| (Step::Contract, c, None)))
+            .chain(INPUT_CHECKS.iter().map(|&c| (Step::Inputs, c, None)))
             .collect();
         for &channel in &self.target.channels {
             out.extend(
@@ -316,7 +338,8 @@ pub async fn run(
     }
 }
 
-/// The contract and pulses steps, then the final stop (only once the program was recognised).
+/// The contract, inputs and pulses steps, then the final stop (only once the program was
+/// recognised).
 /// Whether every channel was seen stopped at the end.
 async fn after_link<P: Plc>(
     session: &mut Session<'_>,
@@ -329,7 +352,9 @@ async fn after_link<P: Plc>(
             return recognised && stop_everything(contract, pace).await;
         }
     };
-    let _ = pulses::step(session, contract, pace, found).await;
+    if inputs::step(session, contract, pace).await.is_ok() {
+        let _ = pulses::step(session, contract, pace, found).await;
+    }
     let stopped = stop_everything(contract, pace).await;
     if let Ok(status) = contract.status().await {
         for counts in &mut session.findings.counts {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::judge::{RateFit, ScanRate, Spread};
 
-/// The three steps, as `deploy/plc/README.md` names them.
+/// The four steps, as `deploy/plc/README.md` names them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Step {
@@ -14,6 +14,8 @@ pub enum Step {
     Link,
     /// The contract's status block and host word.
     Contract,
+    /// The cell's input words copied into the status block (contract version 3).
+    Inputs,
     /// Tiny pulse tables, one channel at a time.
     Pulses,
 }
@@ -25,6 +27,7 @@ impl Step {
         match self {
             Self::Link => "link",
             Self::Contract => "contract",
+            Self::Inputs => "inputs",
             Self::Pulses => "pulses",
         }
     }
@@ -135,6 +138,20 @@ pub struct ChannelRate {
     pub rate: RateFit,
 }
 
+/// The status block's `inputs` as the inputs step found them.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputsFound {
+    /// The input words the config names, in the block's order (`WX0`, `WR10`).
+    pub words: Vec<String>,
+    /// `inputs[0..3]` as first read.
+    pub values: Vec<u16>,
+    /// The index of the first R word among them: the one whose relays the checks switch.
+    pub relay_word: Option<usize>,
+    /// Whether a relay of that word, switched over the link, showed in `inputs[relay_word]`
+    /// and went back (`None`: not tried, no R word).
+    pub copied: Option<bool>,
+}
+
 /// Every figure the commission measured.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Findings {
@@ -160,6 +177,9 @@ pub struct Findings {
     pub host: Option<u16>,
     /// The ready word read.
     pub ready: Option<u16>,
+    /// The status block's `inputs` (contract version 3).
+    #[serde(default)]
+    pub inputs: Option<InputsFound>,
     /// Timing runs, per channel.
     pub rates: Vec<ChannelRate>,
     /// Counts before and after, per channel tested.

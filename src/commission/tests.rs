@@ -38,7 +38,7 @@ fn a_stop_skips_every_later_check_and_names_the_failure() {
     let c = Check::new(Step::Link, "round trip", "x");
     assert_eq!(s.record(c.fail("dead", "fix it")), Err(Halt));
     s.skip_the_rest();
-    let planned = 6 + 5 + 7 * 4;
+    let planned = 6 + 5 + 1 + 9 * 4;
     assert_eq!(s.checks.len(), planned);
     assert!(s.checks[4..].iter().all(|c| c.verdict == Verdict::Skip));
     assert!(
@@ -50,7 +50,8 @@ fn a_stop_skips_every_later_check_and_names_the_failure() {
     assert!(!s.checks[1].stopped && s.checks[3].stopped);
     drop(s);
     assert_eq!(seen.len(), planned);
-    assert_eq!(seen[11], "pulses: busy on then off (channel 0)");
+    assert_eq!(seen[11], "inputs: copied every scan");
+    assert_eq!(seen[12], "pulses: busy on then off (channel 0)");
 }
 
 #[test]

@@ -17,6 +17,10 @@
 //!                   requests of more than 100 registers exception 03 answer.rs, modbus_server.rs
 //! divider-clock     the channels output per the fpx-divider model, whatever --frequency-model
 //! ideal-clock       the channels output exactly the value written, whatever --frequency-model
+//! ignores-permit    a program at version 2's logic that reports version 3: the status block
+//!                   (inputs too) is version 3's, but a start's permit is never checked (no
+//!                   fault 8) and a running move is never held by it (no fault 9)
+//!                                                                   program/mod.rs, start.rs
 //! ```
 
 use crate::table::FrequencyModel;
@@ -46,11 +50,13 @@ pub enum MockVariant {
     DividerClock,
     /// The channels output exactly the value written.
     IdealClock,
+    /// The permit is never checked: no fault 8 at a start, no fault 9 while running.
+    IgnoresPermit,
 }
 
 impl MockVariant {
     /// Every variant, the default first.
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 9] = [
         Self::Listing,
         Self::BusyNeverRises,
         Self::StopPauses,
@@ -59,6 +65,7 @@ impl MockVariant {
         Self::SmallRequests,
         Self::DividerClock,
         Self::IdealClock,
+        Self::IgnoresPermit,
     ];
 
     /// The name used on the command line.
@@ -73,6 +80,7 @@ impl MockVariant {
             Self::SmallRequests => "small-requests",
             Self::DividerClock => "divider-clock",
             Self::IdealClock => "ideal-clock",
+            Self::IgnoresPermit => "ignores-permit",
         }
     }
 
@@ -102,6 +110,12 @@ impl MockVariant {
     #[must_use]
     pub fn stop_aborts(self) -> bool {
         self != Self::StopPauses
+    }
+
+    /// Whether the program checks a start's permit (fault 8) and a running move's (fault 9).
+    #[must_use]
+    pub fn checks_permit(self) -> bool {
+        self != Self::IgnoresPermit
     }
 
     /// Whether `<` frames are answered.

@@ -7,9 +7,9 @@ use tokio::time::Instant;
 
 use super::{MAX_HZ, MIN_HZ, QUIET_POLLS, RANGE};
 use crate::commission::Pace;
-use crate::contract::{CHANNELS, Fault, State, StatusBlock};
+use crate::contract::{CHANNELS, Fault, Permit, State, StatusBlock};
 use crate::plc::Plc;
-use crate::plc::contract::{Contract, fault_meaning};
+use crate::plc::contract::{Contract, ContractError, StartBlock, fault_meaning};
 use crate::robot::Joint;
 use crate::table::{
     ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyModel, Row, Segment,
@@ -166,13 +166,13 @@ impl<P: Plc> Bench<'_, P> {
             .map_err(|e| format!("{e:#}"))
     }
 
-    /// Uploads `segments` for channel `ch` with `from` (and `seq`, or a new one) and writes the
-    /// start once.
+    /// Uploads `segments` for channel `ch` with `from` and `permit` (and `seq`, or a new one)
+    /// and writes the start once.
     pub(super) async fn launch(
         &mut self,
         ch: &Channel<'_>,
         segments: Vec<Segment>,
-        from: [i32; CHANNELS],
+        (from, permit): ([i32; CHANNELS], Permit),
         seq: Option<u16>,
     ) -> Result<u16, String> {
         let table = ChannelTable {
@@ -189,11 +189,19 @@ impl<P: Plc> Bench<'_, P> {
         })?;
         let seq = seq.unwrap_or_else(|| self.next_seq());
         self.bank ^= 1;
-        let bank = self
-            .contract
-            .upload(self.bank, seq, from, &[table])
-            .await
-            .map_err(|e| format!("{e:#}"))?;
+        let start = StartBlock {
+            bank: self.bank,
+            seq,
+            from,
+            permit,
+        };
+        let link = |e: ContractError| format!("{e:#}");
+        let mut upload = self.contract.begin_upload(&start, &[table]).map_err(link)?;
+        let bank = loop {
+            if let Some(bank) = self.contract.upload_step(&mut upload).await.map_err(link)? {
+                break bank;
+            }
+        };
         self.contract
             .start(&bank)
             .await
@@ -211,8 +219,21 @@ impl<P: Plc> Bench<'_, P> {
         deadline_s: f64,
         watch: Watch<'_>,
     ) -> Run {
+        self.play_permitted(ch, segments, (from, Permit::NONE), deadline_s, watch)
+            .await
+    }
+
+    /// [`Self::play`] for a start whose command block carries `permit`.
+    pub(super) async fn play_permitted(
+        &mut self,
+        ch: &Channel<'_>,
+        segments: Vec<Segment>,
+        start: ([i32; CHANNELS], Permit),
+        deadline_s: f64,
+        watch: Watch<'_>,
+    ) -> Run {
         let mut run = Run::default();
-        match self.launch(ch, segments, from, None).await {
+        match self.launch(ch, segments, start, None).await {
             Ok(seq) => run.seq = seq,
             Err(e) => {
                 run.link_error = Some(e);
@@ -297,6 +318,16 @@ pub(super) fn unfinished_hint(run: &Run) -> String {
         Some(Fault::NotAtStart) => {
             "the count moved between the read and the start (fault 5): is something else \
              driving this channel?"
+                .to_owned()
+        }
+        Some(Fault::PermitNotMet) => {
+            "the start was refused for its permit (fault 8): the program compares the permit with \
+             other words than the status block's inputs, or an input changed under it"
+                .to_owned()
+        }
+        Some(Fault::PermitDropped) => {
+            "the move was held by its permit (fault 9): an input its permit looks at changed while \
+             it ran"
                 .to_owned()
         }
         Some(Fault::BadTableHeader) => {

@@ -9,6 +9,9 @@
 //!                                      stop mid-table then a following start works
 //! interlock  from = c0 + 1 on this channel: must be refused with fault 5, nothing moves
 //! repeat     a start with the last accepted seq: must be ignored, nothing moves
+//! permit     a start whose permit does not hold: refused with fault 8; the same start with
+//!            a permit that holds: c0 -> c0 + 50 and back; a start of 300 whose permit's R bit
+//!            is switched once it runs: held with fault 9 within a scan, then back to c0
 //! ```
 //! The direction is the one towards the middle of the joint's range. The run lengths follow the
 //! link's pace: the timing run lasts about 60 polls (0.25..5 s), at the frequency near that where
@@ -23,10 +26,14 @@
 //! timing.rs    the timing run and its three checks
 //! moves.rs     two-segment chain; stop mid-table and the following start
 //! refusals.rs  the `from` interlock; the repeated seq
+//! permit.rs    the permit refused at start (fault 8), and let run when it holds
+//! hold.rs      the permit dropped while running: held within one scan (fault 9)
 //! ```
 
 mod bench;
+mod hold;
 mod moves;
+mod permit;
 mod refusals;
 mod timing;
 
@@ -125,7 +132,9 @@ async fn channel<P: Plc>(
     moves::chain(s, bench, ch).await?;
     moves::stop_then_start(s, bench, ch).await?;
     refusals::interlock(s, bench, ch).await?;
-    refusals::repeated_seq(s, bench, ch).await
+    refusals::repeated_seq(s, bench, ch).await?;
+    permit::refuses(s, bench, ch).await?;
+    hold::drop_holds(s, bench, ch).await
 }
 
 /// The counts now, or a failed check.

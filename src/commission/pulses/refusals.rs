@@ -4,7 +4,7 @@
 use super::bench::{Bench, Channel, Sample, jittered};
 use super::{PROBE_PULSES, QUIET_POLLS, check, counts};
 use crate::commission::{Halt, Session};
-use crate::contract::{Fault, State};
+use crate::contract::{Fault, Permit, State};
 use crate::plc::Plc;
 
 /// A start whose `from` is one pulse off on this channel: refused with fault 5, nothing moves;
@@ -75,7 +75,8 @@ pub(super) async fn interlock<P: Plc>(
     }
 }
 
-async fn clear_fault<P: Plc>(bench: &mut Bench<'_, P>) -> Result<(), String> {
+/// Writes clear fault and reads until fault 0 and state idle.
+pub(super) async fn clear_fault<P: Plc>(bench: &mut Bench<'_, P>) -> Result<(), String> {
     bench
         .contract
         .clear_fault()
@@ -117,7 +118,7 @@ pub(super) async fn repeated_seq<P: Plc>(
         .launch(
             ch,
             vec![ch.segment(c0, target, hz)],
-            before.elapsed,
+            (before.elapsed, Permit::NONE),
             Some(before.seq),
         )
         .await;

@@ -35,7 +35,8 @@
 //! Variants ([`super::MockVariant`]): with busy relays that never rise, the busy word stays 0,
 //! fault 2 never fires and a segment ends when the count shows its last target (the listing's
 //! fallback rule); with a stop that only pauses, a stop halts the engines instead of ending their
-//! segments ([`Engine::halt`]).
+//! segments ([`Engine::halt`]); with a program that ignores the permit, a start is never refused
+//! for it and a running move never held by it.
 
 mod start;
 
@@ -193,7 +194,8 @@ impl Program {
         if self.state == State::Homing {
             self.home_progress(at_s, io, layout);
         }
-        if self.state == State::Running && !self.permit.holds(&io.cell) {
+        let checks_permit = io.inputs.variant.checks_permit();
+        if self.state == State::Running && checks_permit && !self.permit.holds(&io.cell) {
             self.hold(at_s, io, layout);
         }
         let from_input = io.inputs.estop_open;
