@@ -373,3 +373,22 @@ async fn a_restarted_daemon_has_no_cycle_and_does_not_move_the_robot() {
     // At most the start the old daemon left running; nothing after it.
     assert_eq!(shared.with(|m| m.starts().len()), starts);
 }
+
+#[tokio::test]
+async fn a_loop_of_outputs_alone_goes_round_at_the_pace_of_the_status_reads_and_ends_on_its_condition()
+ {
+    let shared = mock_at_seed_start("");
+    let program = "[[step]]\nlabel = \"x\"\nset = { press_go = true }\n[[step]]\nloop = { to = \"x\", until = \"press_open\" }\n".to_owned();
+    let (_d, h) = spawn(&shared, programs("spin", &[("p", program)]));
+    connected(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let before = h.state().gateway.requests;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let writes = h.state().gateway.requests - before;
+    // One write a status read (every 20 ms while watched, or 250 ms idle): never a spin.
+    assert!((1..=40).contains(&writes), "{writes} writes in 0.5 s");
+    shared.with(|m| m.set_input(5, true).unwrap());
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+}

@@ -63,6 +63,7 @@ struct Runner {
 }
 
 /// How a step ended.
+#[derive(Debug, PartialEq)]
 enum Next {
     /// Go on at this op.
     Go(usize),
@@ -272,29 +273,60 @@ impl Runner {
                     Next::Stopped
                 }
             }
-            OpKind::Loop { to, exit } => match exit {
-                LoopExit::Count(n) => {
-                    let ran = loops.entry(pc).or_insert(1);
-                    if *ran < n {
-                        *ran += 1;
-                        Next::Go(to)
-                    } else {
-                        loops.remove(&pc);
-                        Next::Go(pc + 1)
-                    }
+            OpKind::Loop { to, exit } => {
+                let next = self.loop_next(pc, to, exit, loops).await;
+                if next == Next::Go(to) && !self.takes_time(to, pc) {
+                    // A loop whose steps take no time (outputs, conditions) goes round at the
+                    // pace of the status reads, not as fast as the runtime can spin.
+                    let mut reads = self.handle.watch_reads();
+                    let _ =
+                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.changed())
+                            .await;
                 }
-                LoopExit::Stop => Next::Go(to),
-                LoopExit::Until(until) => {
-                    let words = self.handle.state().inputs;
-                    let mut reads = Vec::new();
-                    for a in until.reads() {
-                        reads.push((a, act::read_one(&self.handle, a).await));
-                    }
-                    let read = |a| reads.iter().find(|(r, _)| *r == a).and_then(|(_, v)| *v);
-                    let met = words.is_some_and(|w| until.holds(&w, &read));
-                    Next::Go(if met { pc + 1 } else { to })
+                next
+            }
+        }
+    }
+
+    /// Whether ops `from..=to` include one that takes time (a motion, a wait, a dwell).
+    fn takes_time(&self, from: usize, to: usize) -> bool {
+        self.program.ops[from..=to].iter().any(|op| {
+            matches!(
+                op.kind,
+                OpKind::Move(_) | OpKind::Path(_) | OpKind::Wait { .. } | OpKind::Dwell(_)
+            )
+        })
+    }
+
+    async fn loop_next(
+        &mut self,
+        pc: usize,
+        to: usize,
+        exit: LoopExit,
+        loops: &mut HashMap<usize, u64>,
+    ) -> Next {
+        match exit {
+            LoopExit::Count(n) => {
+                let ran = loops.entry(pc).or_insert(1);
+                if *ran < n {
+                    *ran += 1;
+                    Next::Go(to)
+                } else {
+                    loops.remove(&pc);
+                    Next::Go(pc + 1)
                 }
-            },
+            }
+            LoopExit::Stop => Next::Go(to),
+            LoopExit::Until(until) => {
+                let words = self.handle.state().inputs;
+                let mut reads = Vec::new();
+                for a in until.reads() {
+                    reads.push((a, act::read_one(&self.handle, a).await));
+                }
+                let read = |a| reads.iter().find(|(r, _)| *r == a).and_then(|(_, v)| *v);
+                let met = words.is_some_and(|w| until.holds(&w, &read));
+                Next::Go(if met { pc + 1 } else { to })
+            }
         }
     }
 
