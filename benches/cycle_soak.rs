@@ -5,8 +5,8 @@
 //! is left alone for 5 s (it must not go on by itself), then cleared and resumed.
 //!
 //! Checked over every start the mock acted on: I1 never from counts other than its plan's
-//! (`from`), I2 no seq acted on twice, I5 every start's permit held on the inputs of its scan;
-//! I7 a faulted cycle started nothing while it waited for the operator; and every cycle ended
+//! (`from`), no seq acted on twice, I6 every start's permit held on the inputs of its scan;
+//! I8 a faulted cycle started nothing while it waited for the operator; and every cycle ended
 //! done, or faulted with a reason.
 //!
 //! Run: `cargo bench --bench cycle_soak` (1000 cycles; `CYCLES=N` for another count).
@@ -48,11 +48,11 @@ pub struct Summary {
     pub starts: usize,
     /// I1: starts acted on from counts other than their `from`.
     pub from_mismatches: usize,
-    /// I2: seqs acted on twice.
+    /// Seqs acted on twice.
     pub repeated_seqs: usize,
-    /// I5: starts acted on whose permit did not hold on that scan's inputs.
+    /// I6: starts acted on whose permit did not hold on that scan's inputs.
     pub permit_violations: usize,
-    /// I7: starts while a faulted cycle waited for the operator.
+    /// I8: starts while a faulted cycle waited for the operator.
     pub resumed_by_itself: usize,
     /// Whether it ended done.
     pub finished: bool,
@@ -247,7 +247,7 @@ async fn until_ready(h: &RobotHandle) {
 pub fn report(s: &Summary) -> String {
     let mut out = format!(
         "{SCRIPT}: {} cycles done (finished: {}), starts acted on {}; I1 from wrong counts {}, \
-         I2 seqs repeated {}, I5 permits not holding {}, I7 resumed by itself {}",
+         seqs acted on twice {}, I6 permits not holding {}, I8 resumed by itself {}",
         s.done,
         s.finished,
         s.starts,
