@@ -501,7 +501,9 @@ fn written_words(code: &[String]) -> BTreeSet<u32> {
     for (op, args) in code.iter().filter_map(|l| f_instruction(l)) {
         let dest = |i: usize| args.get(i).and_then(|a| dt(a));
         let (start, words) = match op {
-            "F0" | "F65" => (dest(1), 1),
+            "F0" => (dest(1), 1),
+            // F65 WAN S1, S2, D (16-bit AND).
+            "F65" => (dest(2).or_else(|| dest(1)), 1),
             "F1" => (dest(1), 2),
             "F22" | "F27" => (dest(2), 1),
             "F35" => (dest(0), 1),
@@ -972,7 +974,7 @@ fn plc_listing_stops_every_channel_through_dt90052() {
         let line = format!("F0 MV H{channel}108, DT90052");
         assert!(acts.has_output(&line), "the stop never runs `{line}`");
     }
-    for line in ["F0 MV K0, DT1032", "F0 MV K0, WR10"] {
+    for line in ["F0 MV K0, DT1032", "F0 MV K0, WR16"] {
         assert!(acts.has_output(line), "the stop lacks `{line}`");
     }
 }
@@ -1061,7 +1063,7 @@ fn plc_readme_and_header_list_every_special_address_with_its_status() {
 }
 
 /// The commission's steps and checks, named as the commission command names them.
-const COMMISSION: [(&str, &[&str]); 3] = [
+const COMMISSION: [(&str, &[&str]); 4] = [
     (
         "link",
         &[
@@ -1077,6 +1079,7 @@ const COMMISSION: [(&str, &[&str]); 3] = [
         "contract",
         &["magic", "version", "heartbeat", "host echo", "ready bits"],
     ),
+    ("inputs", &["copied every scan"]),
     (
         "pulses",
         &[
@@ -1087,6 +1090,8 @@ const COMMISSION: [(&str, &[&str]); 3] = [
             "stop mid-table then a following start works",
             "`from` interlock refuses fault 5",
             "repeated seq ignored",
+            "permit refuses fault 8",
+            "permit drop holds within one scan",
         ],
     ),
 ];
