@@ -26,8 +26,11 @@
 //! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
 //! gateway/     PURE  the register gateway's addresses (DT, X, Y, R), access lists, and who may use
 //!                    its Modbus face (IPs, CIDR networks)
-//! contract/    PURE  the register contract: DT layout, status and command blocks, and the host's
-//!                    side as one state machine over the status block (machine/)
+//! contract/    PURE  the register contract (version 3): DT layout, status and command blocks,
+//!                    the cell's input words and a start's permit, and the host's side as one
+//!                    state machine over the status block (machine/)
+//! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
+//!                    into ops (and the loading of a programs directory)
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
 //!                    fault injection, pulse trace (a synchronous core, time is an argument);
@@ -36,8 +39,8 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
-//!                    handles, taught positions, the HTTP/JSON API, the register gateway and its
-//!                    Modbus TCP face, systemd notification
+//!                    handles, taught positions, permits, the cycle runner (cycle/), the HTTP/JSON
+//!                    API, the register gateway and its Modbus TCP face, systemd notification
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
 //! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
 //!                    a pure part (rate fits, frequency models), reported with config lines
