@@ -32,7 +32,7 @@ use linterpd::robot::seed_robot;
 pub const SCRIPT: &str = "seed=5,corrupt@2%,drop@2%";
 const A: [f64; 3] = [-926.57, 535.03, 50.0];
 const B: [f64; 3] = [-950.0, 560.0, 80.0];
-/// How long the press strokes after press_go, s.
+/// How long the press strokes after `press_go`, s.
 const STROKE_S: f64 = 0.3;
 /// How long the operator leaves a faulted cycle alone, s.
 const OPERATOR_S: u64 = 5;
@@ -75,8 +75,8 @@ fn counts_at(p: [f64; 3]) -> [i64; JOINTS] {
     robot.counts_of(&q)
 }
 
-/// The simulated press: open and still until press_go; then closed and moving for
-/// [`STROKE_S`]; then open again once press_go is reset.
+/// The simulated press: open and still until `press_go`; then closed and moving for
+/// [`STROKE_S`]; then open again once `press_go` is reset.
 async fn press(shared: SharedMock) {
     let mut stroke_until: Option<f64> = None;
     loop {
@@ -187,6 +187,17 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
         }
     }
     summary.done = h.cycle().map_or(0, |s| s.done);
+    tally(&shared, &mut summary);
+    let _ = h.stop_cycle(true).await;
+    daemon.shut_down().await;
+    driver.abort();
+    pressing.abort();
+    let _ = std::fs::remove_dir_all(&dir);
+    summary
+}
+
+/// Every start the mock acted on, against I1, repeated seqs and I6.
+fn tally(shared: &SharedMock, summary: &mut Summary) {
     shared.with(|m| {
         let mut seqs = BTreeMap::new();
         for r in m
@@ -206,12 +217,6 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
         // Seqs wrap at 65535; a soak of this length never wraps.
         summary.repeated_seqs = seqs.values().filter(|&&n| n > 1).count();
     });
-    let _ = h.stop_cycle(true).await;
-    daemon.shut_down().await;
-    driver.abort();
-    pressing.abort();
-    let _ = std::fs::remove_dir_all(&dir);
-    summary
 }
 
 /// The operator at a faulted cycle: leaves it alone for [`OPERATOR_S`] (nothing may start),

@@ -85,10 +85,10 @@ async fn connected(h: &RobotHandle) {
 async fn until(h: &RobotHandle, what: &str, done: impl Fn(&CycleStatus) -> bool) -> CycleStatus {
     let began = std::time::Instant::now();
     loop {
-        if let Some(s) = h.cycle() {
-            if done(&s) {
-                return s;
-            }
+        if let Some(s) = h.cycle()
+            && done(&s)
+        {
+            return s;
         }
         assert!(began.elapsed() < LIMIT, "never {what}: {:?}", h.cycle());
         tokio::time::sleep(Duration::from_millis(5)).await;
@@ -299,7 +299,7 @@ async fn a_plc_power_cycle_mid_move_faults_the_cycle_which_never_resumes_by_itse
     h.run_cycle("p", None).unwrap();
     until_moving(&shared).await;
     tokio::time::sleep(Duration::from_millis(100)).await;
-    shared.with(|m| m.power_cycle());
+    shared.with(linterpd::mock::MockPlc::power_cycle);
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     assert_eq!(s.step.unwrap().step, 1);
     let why = s.reason.unwrap();

@@ -10,6 +10,8 @@
 //! The programs are the robot's `[robots.NAME.cell] programs` directory's `*.toml` files; the
 //! daemon checks one whole (every step, every name, every position) before it runs anything.
 
+use std::fmt::Write as _;
+
 use clap::{Args, Subcommand};
 use hyper::Method;
 use serde_json::json;
@@ -117,24 +119,21 @@ pub fn describe(s: &CycleStatus) -> String {
             .as_ref()
             .map(|l| format!(" ({l})"))
             .unwrap_or_default();
-        text.push_str(&format!(
-            " at step {}{label} of {}",
-            step.step, step.program
-        ));
+        let _ = write!(text, " at step {}{label} of {}", step.step, step.program);
         for from in &step.called_from {
-            text.push_str(&format!(", called from {from}"));
+            let _ = write!(text, ", called from {from}");
         }
-        text.push_str(&format!(": {}", step.does));
+        let _ = write!(text, ": {}", step.does);
     }
     if let Some(why) = &s.reason {
-        text.push_str(&format!("; {why}"));
+        let _ = write!(text, "; {why}");
     }
-    match s.count {
-        Some(n) => text.push_str(&format!("; {} of {n} done", s.done)),
-        None => text.push_str(&format!("; {} done", s.done)),
-    }
+    let _ = match s.count {
+        Some(n) => write!(text, "; {} of {n} done", s.done),
+        None => write!(text, "; {} done", s.done),
+    };
     if let Some(t) = s.last_cycle_s {
-        text.push_str(&format!(", last cycle {t:.2} s"));
+        let _ = write!(text, ", last cycle {t:.2} s");
     }
     if s.stopping {
         text.push_str("; stops at the end of this step");

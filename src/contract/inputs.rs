@@ -160,10 +160,10 @@ impl Permit {
     #[must_use]
     pub fn unmet(&self, inputs: &[u16; INPUT_WORDS]) -> Vec<PermitBit> {
         let mut out = Vec::new();
-        for word in 0..INPUT_WORDS {
+        for (word, input) in inputs.iter().enumerate() {
             for bit in 0..16u8 {
                 let m = 1u16 << bit;
-                if self.mask[word] & m != 0 && (inputs[word] ^ self.value[word]) & m != 0 {
+                if self.mask[word] & m != 0 && (input ^ self.value[word]) & m != 0 {
                     out.push(PermitBit {
                         word,
                         bit,

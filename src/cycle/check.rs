@@ -176,15 +176,15 @@ pub fn numbers(
 ) -> Result<BTreeMap<u8, String>, ProgramError> {
     let mut out: BTreeMap<u8, String> = BTreeMap::new();
     for (name, doc) in programs {
-        if let Some(n) = number(name, doc)? {
-            if let Some(other) = out.insert(n, name.clone()) {
-                return Err(ProgramError {
-                    program: name.clone(),
-                    step: None,
-                    label: None,
-                    reason: format!("number = {n} is program {other:?}'s number too"),
-                });
-            }
+        if let Some(n) = number(name, doc)?
+            && let Some(other) = out.insert(n, name.clone())
+        {
+            return Err(ProgramError {
+                program: name.clone(),
+                step: None,
+                label: None,
+                reason: format!("number = {n} is program {other:?}'s number too"),
+            });
         }
     }
     Ok(out)
@@ -226,12 +226,12 @@ impl Flattener<'_, '_> {
         for (i, step) in doc.step.iter().enumerate() {
             let n = i + 1;
             let here = |reason: String| fail(Some(n), step.label.as_ref(), reason);
-            if let Some(label) = &step.label {
-                if labels.insert(label.clone(), self.ops.len()).is_some() {
-                    return Err(here(format!(
-                        "label {label:?} is used by an earlier step too"
-                    )));
-                }
+            if let Some(label) = &step.label
+                && labels.insert(label.clone(), self.ops.len()).is_some()
+            {
+                return Err(here(format!(
+                    "label {label:?} is used by an earlier step too"
+                )));
             }
             let at = |does: String| StepAt {
                 program: name.to_owned(),
@@ -305,6 +305,22 @@ impl Flattener<'_, '_> {
                 )));
             }
         }
+        self.resolve(name, &labels, fixups)
+    }
+
+    /// Points every jump of program `name` at its label's op.
+    fn resolve(
+        &mut self,
+        name: &str,
+        labels: &BTreeMap<String, usize>,
+        fixups: Vec<Fixup>,
+    ) -> Result<(), ProgramError> {
+        let fail = |step: Option<usize>, label: Option<&String>, reason: String| ProgramError {
+            program: name.to_owned(),
+            step,
+            label: label.cloned(),
+            reason,
+        };
         for f in fixups {
             let Some(&to) = labels.get(&f.label) else {
                 let known: Vec<&str> = labels.keys().map(String::as_str).collect();

@@ -373,12 +373,11 @@ impl Parser<'_> {
         if address.area == Area::Dt {
             return Err(format!("{name} is a DT word: compare it (`{name} == 1`)"));
         }
-        let source = match self.names.permit.input_bit(address) {
-            Some((word, bit)) => Source::Input { word, bit },
-            None => {
-                self.readable(address)?;
-                Source::Read(address)
-            }
+        let source = if let Some((word, bit)) = self.names.permit.input_bit(address) {
+            Source::Input { word, bit }
+        } else {
+            self.readable(address)?;
+            Source::Read(address)
         };
         Ok(Condition::Bit {
             name: name.to_owned(),

@@ -36,12 +36,12 @@ call = "eject"
 loop = { to = "pick", count = 3 }
 "#;
 
-const EJECT: &str = r#"
+const EJECT: &str = r"
 [[step]]
 move = { by = [0, 0, 50] }
 [[step]]
 set = { press_go = false }
-"#;
+";
 
 struct Cell {
     signals: BTreeMap<String, Address>,

@@ -84,6 +84,9 @@ enum Press {
 }
 
 /// Runs the press demo.
+///
+/// # Panics
+/// Never: the demo's signals and ranges are written here and parse.
 pub async fn run(options: DemoOptions) -> Result<PressDemo, DemoError> {
     let robot = seed_robot();
     let rig = Rig::start(&robot, P1, options.frequency_model)?;
@@ -214,10 +217,11 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
                 resumed_at = Some(Instant::now());
             }
         }
-        if let (Some(at), Some(h)) = (resumed_at, hold.as_mut()) {
-            if h.resumed_after_s == 0.0 && s.state == CycleState::Running {
-                h.resumed_after_s = at.elapsed().as_secs_f64();
-            }
+        if let (Some(at), Some(h)) = (resumed_at, hold.as_mut())
+            && h.resumed_after_s == 0.0
+            && s.state == CycleState::Running
+        {
+            h.resumed_after_s = at.elapsed().as_secs_f64();
         }
         match s.state {
             CycleState::Done => break,

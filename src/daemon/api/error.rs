@@ -266,6 +266,35 @@ impl IntoResponse for ApiError {
     }
 }
 
+impl From<crate::daemon::CycleError> for ApiError {
+    fn from(e: crate::daemon::CycleError) -> Self {
+        use crate::daemon::CycleError;
+        let message = e.to_string();
+        match e {
+            CycleError::NoCycle => Self::NotFound {
+                message,
+                field: None,
+            },
+            CycleError::Program(_) => Self::BadRequest {
+                message,
+                field: Some("program".to_owned()),
+            },
+            CycleError::Running { .. } => Self::Conflict {
+                message,
+                reason: "cycle-running",
+            },
+            CycleError::Conflict { .. } => Self::Conflict {
+                message,
+                reason: "cycle-state",
+            },
+            CycleError::FaultNotCleared { .. } => Self::Conflict {
+                message,
+                reason: "faulted",
+            },
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -369,34 +398,5 @@ mod tests {
             reason: None,
         };
         assert_eq!(serde_json::to_string(&body).unwrap(), r#"{"error":"x"}"#);
-    }
-}
-
-impl From<crate::daemon::CycleError> for ApiError {
-    fn from(e: crate::daemon::CycleError) -> Self {
-        use crate::daemon::CycleError;
-        let message = e.to_string();
-        match e {
-            CycleError::NoCycle => Self::NotFound {
-                message,
-                field: None,
-            },
-            CycleError::Program(_) => Self::BadRequest {
-                message,
-                field: Some("program".to_owned()),
-            },
-            CycleError::Running { .. } => Self::Conflict {
-                message,
-                reason: "cycle-running",
-            },
-            CycleError::Conflict { .. } => Self::Conflict {
-                message,
-                reason: "cycle-state",
-            },
-            CycleError::FaultNotCleared { .. } => Self::Conflict {
-                message,
-                reason: "faulted",
-            },
-        }
     }
 }

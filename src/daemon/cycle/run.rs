@@ -193,7 +193,7 @@ impl Runner {
                         "{why}; a move `by` an offset is not resumed mid-way (its target depended \
                          on where it began)"
                     )),
-                    end => self.motion(pc, end),
+                    end => Self::motion(pc, end),
                 }
             }
             OpKind::Path(order) => {
@@ -205,59 +205,14 @@ impl Runner {
                     MotionEnd::Held { why } => Next::Fault(format!(
                         "{why}; a path is not resumed mid-way (it would not be the path planned)"
                     )),
-                    end => self.motion(pc, end),
+                    end => Self::motion(pc, end),
                 }
             }
             OpKind::Wait {
                 until,
                 timeout,
                 on_timeout,
-            } => {
-                let since = tokio::time::Instant::now();
-                self.set(|s| {
-                    s.state = CycleState::Waiting;
-                    s.waiting_for = Some(until.to_string());
-                    s.waiting_s = Some(0.0);
-                });
-                let status = std::sync::Arc::clone(&self.status);
-                let holds = |inputs: &Inputs| {
-                    let waited = since.elapsed().as_secs_f64();
-                    if let Ok(mut s) = status.lock() {
-                        s.waiting_s = Some(waited);
-                    }
-                    let words = inputs.words.unwrap_or_default();
-                    let read = |a| {
-                        inputs
-                            .reads
-                            .iter()
-                            .find(|(r, _)| *r == a)
-                            .and_then(|(_, v)| *v)
-                    };
-                    until.holds(&words, &read)
-                };
-                let end = act::wait_until(
-                    &self.handle,
-                    holds,
-                    &until.reads(),
-                    timeout,
-                    &mut self.control,
-                )
-                .await;
-                let waited = since.elapsed().as_secs_f64();
-                self.handle.waited(&self.program.ops[pc].at, waited);
-                self.set(|s| {
-                    s.waiting_for = None;
-                    s.waiting_s = None;
-                });
-                match (end, on_timeout) {
-                    (WaitEnd::Met, _) => Next::Go(pc + 1),
-                    (WaitEnd::TimedOut, Some(to)) => Next::Go(to),
-                    (WaitEnd::TimedOut, None) => {
-                        Next::Fault(format!("wait for {until} timed out after {waited:.1} s"))
-                    }
-                    (WaitEnd::StoppedNow, _) => Next::Stopped,
-                }
-            }
+            } => self.wait(pc, &until, timeout, on_timeout).await,
             OpKind::Set(writes) => {
                 for (address, values) in writes {
                     if let Err(e) = self.handle.write_registers(address, values).await {
@@ -285,6 +240,60 @@ impl Runner {
                 }
                 next
             }
+        }
+    }
+
+    /// A wait step: until its condition holds, at most `timeout`.
+    async fn wait(
+        &mut self,
+        pc: usize,
+        until: &crate::cycle::Condition,
+        timeout: Option<std::time::Duration>,
+        on_timeout: Option<usize>,
+    ) -> Next {
+        let since = tokio::time::Instant::now();
+        self.set(|s| {
+            s.state = CycleState::Waiting;
+            s.waiting_for = Some(until.to_string());
+            s.waiting_s = Some(0.0);
+        });
+        let status = std::sync::Arc::clone(&self.status);
+        let holds = |inputs: &Inputs| {
+            let waited = since.elapsed().as_secs_f64();
+            if let Ok(mut s) = status.lock() {
+                s.waiting_s = Some(waited);
+            }
+            let words = inputs.words.unwrap_or_default();
+            let read = |a| {
+                inputs
+                    .reads
+                    .iter()
+                    .find(|(r, _)| *r == a)
+                    .and_then(|(_, v)| *v)
+            };
+            until.holds(&words, &read)
+        };
+        let end = act::wait_until(
+            &self.handle,
+            holds,
+            &until.reads(),
+            timeout,
+            &mut self.control,
+        )
+        .await;
+        let waited = since.elapsed().as_secs_f64();
+        self.handle.waited(&self.program.ops[pc].at, waited);
+        self.set(|s| {
+            s.waiting_for = None;
+            s.waiting_s = None;
+        });
+        match (end, on_timeout) {
+            (WaitEnd::Met, _) => Next::Go(pc + 1),
+            (WaitEnd::TimedOut, Some(to)) => Next::Go(to),
+            (WaitEnd::TimedOut, None) => {
+                Next::Fault(format!("wait for {until} timed out after {waited:.1} s"))
+            }
+            (WaitEnd::StoppedNow, _) => Next::Stopped,
         }
     }
 
@@ -330,7 +339,7 @@ impl Runner {
         }
     }
 
-    fn motion(&self, pc: usize, end: MotionEnd) -> Next {
+    fn motion(pc: usize, end: MotionEnd) -> Next {
         match end {
             MotionEnd::Done => Next::Go(pc + 1),
             MotionEnd::Held { why } => Next::Hold(why),

@@ -598,10 +598,10 @@ impl<P: Plc> Contract<P> {
             None => {}
         }
         let bank = upload.bank();
-        if let Some(bank) = &bank {
-            if upload.writes_at(self.permit_address()) {
-                self.no_permit_in_plc = bank.block.permit.is_none();
-            }
+        if let Some(bank) = &bank
+            && upload.writes_at(self.permit_address())
+        {
+            self.no_permit_in_plc = bank.block.permit.is_none();
         }
         Ok(bank)
     }
