@@ -467,13 +467,18 @@ impl RobotHandle {
     /// Clears a latched fault on the PLC (refused while a move runs or when there is none,
     /// unless a cycle is faulted: then its fault is cleared, and it may be resumed).
     pub async fn clear_fault(&self) -> Result<(), CommandError> {
-        let cycle_faulted = self.cycles.fault_cleared();
-        match self.command(Request::ClearFault).await {
+        let cycle_faulted = self.cycle().is_some_and(|c| c.state == super::CycleState::Faulted);
+        let cleared = match self.command(Request::ClearFault).await {
             Err(CommandError::Conflict {
                 reason: ConflictReason::NoFault,
             }) if cycle_faulted => Ok(()),
             other => other,
+        };
+        // Only a clear that happened lets a faulted cycle be resumed.
+        if cleared.is_ok() {
+            self.cycles.fault_cleared();
         }
+        cleared
     }
 
     /// The robot's cycle, if one ran since the daemon started.
