@@ -392,3 +392,27 @@ async fn a_loop_of_outputs_alone_goes_round_at_the_pace_of_the_status_reads_and_
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
 }
+
+#[tokio::test]
+async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resumed_wait_waits_again()
+{
+    let shared = mock_at_seed_start("");
+    let (_d, h) = spawn(&shared, programs("pause", &[("press-load", press_cycle())]));
+    connected(&h).await;
+    h.run_cycle("press-load", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    h.pause_cycle().unwrap();
+    let s = until(&h, "paused", |s| s.state == CycleState::Paused).await;
+    assert_eq!(s.reason.as_deref(), Some("paused by request"));
+    // Paused, the press opening moves nothing.
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+    shared.with(|m| m.set_input(5, false).unwrap());
+    h.resume_cycle().unwrap();
+    until(&h, "waiting again", |s| s.state == CycleState::Waiting).await;
+    // A stop at the step's end: a wait is ended at once (it moves nothing).
+    h.stop_cycle(false).await.unwrap();
+    until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+}

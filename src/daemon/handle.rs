@@ -467,7 +467,9 @@ impl RobotHandle {
     /// Clears a latched fault on the PLC (refused while a move runs or when there is none,
     /// unless a cycle is faulted: then its fault is cleared, and it may be resumed).
     pub async fn clear_fault(&self) -> Result<(), CommandError> {
-        let cycle_faulted = self.cycle().is_some_and(|c| c.state == super::CycleState::Faulted);
+        let cycle_faulted = self
+            .cycle()
+            .is_some_and(|c| c.state == super::CycleState::Faulted);
         let cleared = match self.command(Request::ClearFault).await {
             Err(CommandError::Conflict {
                 reason: ConflictReason::NoFault,
@@ -654,6 +656,12 @@ impl RobotHandle {
     #[must_use]
     pub fn watch_reads(&self) -> watch::Receiver<u64> {
         self.shared.watch_reads()
+    }
+
+    /// How long ago the worker last read the status block (`None`: never since the link came).
+    #[must_use]
+    pub fn since_status_read(&self) -> Option<Duration> {
+        self.shared.since_read()
     }
 
     /// Whether a cycle waits on the inputs now: the worker then reads the status block at its

@@ -33,6 +33,8 @@ pub(super) struct Shared {
     pub metrics: RobotMetrics,
     /// Counts the status blocks read (and the links lost): a cycle's `wait` wakes on each.
     reads: tokio::sync::watch::Sender<u64>,
+    /// When the last status block was read (tokio's clock).
+    read_at: Mutex<Option<tokio::time::Instant>>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -56,12 +58,30 @@ impl Shared {
             beat: Arc::new(Beat::default()),
             metrics,
             reads: tokio::sync::watch::Sender::new(0),
+            read_at: Mutex::new(None),
         }
+    }
+
+    /// How long ago the last status block was read (`None`: never, or the link was lost since).
+    pub(super) fn since_read(&self) -> Option<std::time::Duration> {
+        lock(&self.read_at).map(|at| at.elapsed())
     }
 
     /// A status block was read, or the link lost: what [`Self::watch_reads`] wakes on.
     pub(super) fn status_read(&self) {
         self.reads.send_modify(|n| *n = n.wrapping_add(1));
+    }
+
+    /// A status block was read now.
+    pub(super) fn fresh_read(&self) {
+        *lock(&self.read_at) = Some(tokio::time::Instant::now());
+        self.status_read();
+    }
+
+    /// The link was lost: no read is fresh.
+    pub(super) fn no_read(&self) {
+        *lock(&self.read_at) = None;
+        self.status_read();
     }
 
     /// Wakes on every status block read (and every link lost).

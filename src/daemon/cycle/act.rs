@@ -115,6 +115,9 @@ fn ended_short(r: &MoveReport) -> MotionEnd {
     }
 }
 
+/// The oldest status block a wait is decided on (two busy polls).
+pub(super) const FRESH: Duration = Duration::from_millis(40);
+
 /// How a wait ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum WaitEnd {
@@ -122,8 +125,10 @@ pub(super) enum WaitEnd {
     Met,
     /// The timeout passed first.
     TimedOut,
-    /// A stop asked for now.
+    /// A stop asked for (now, or at the step's end: a wait moves nothing, so it ends at once).
     StoppedNow,
+    /// A pause asked for: the wait gives way, and is waited again on resume.
+    Paused,
 }
 
 /// What a wait decides on: the cell's input words of a status block, and the words a condition
@@ -166,7 +171,10 @@ async fn wait_loop(
             words: handle.state().inputs,
             reads: read_extra(handle, extra).await,
         };
-        if inputs.words.is_some() && holds(&inputs) {
+        // Decided only on a status block read within the last poll or two: one read while the
+        // robot stood (every 250 ms) may show an input that has changed since.
+        let fresh = handle.since_status_read().is_some_and(|age| age <= FRESH);
+        if fresh && inputs.words.is_some() && holds(&inputs) {
             return WaitEnd::Met;
         }
         let expired = async {
@@ -179,8 +187,12 @@ async fn wait_loop(
             _ = reads.changed() => {}
             () = expired => return WaitEnd::TimedOut,
             changed = control.changed() => {
-                if changed.is_err() || control.borrow().stop_now {
+                let c = *control.borrow();
+                if changed.is_err() || c.stop_now || c.stop {
                     return WaitEnd::StoppedNow;
+                }
+                if c.pause {
+                    return WaitEnd::Paused;
                 }
             }
         }
@@ -204,14 +216,16 @@ pub(super) async fn read_one(handle: &RobotHandle, address: Address) -> Option<u
     }
 }
 
-/// Sleeps `for_`, or until a stop asked for now: whether it slept the whole time.
+/// Sleeps `for_`, or until a stop (now or at the step's end: a dwell moves nothing): whether it
+/// slept the whole time.
 pub(super) async fn dwell(for_: Duration, control: &mut watch::Receiver<Control>) -> bool {
     let end = tokio::time::Instant::now() + for_;
     loop {
         tokio::select! {
             () = tokio::time::sleep_until(end) => return true,
             changed = control.changed() => {
-                if changed.is_err() || control.borrow().stop_now {
+                let c = *control.borrow();
+                if changed.is_err() || c.stop_now || c.stop {
                     return false;
                 }
             }

@@ -294,6 +294,8 @@ impl Runner {
                 Next::Fault(format!("wait for {until} timed out after {waited:.1} s"))
             }
             (WaitEnd::StoppedNow, _) => Next::Stopped,
+            // The pause at the top of the loop takes it; the wait runs again on resume.
+            (WaitEnd::Paused, _) => Next::Go(pc),
         }
     }
 
@@ -327,6 +329,17 @@ impl Runner {
             }
             LoopExit::Stop => Next::Go(to),
             LoopExit::Until(until) => {
+                if self
+                    .handle
+                    .since_status_read()
+                    .is_none_or(|age| age > act::FRESH)
+                {
+                    // Decided on a fresh status block, not one from before the steps ran.
+                    let mut reads = self.handle.watch_reads();
+                    let _ =
+                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.changed())
+                            .await;
+                }
                 let words = self.handle.state().inputs;
                 let mut reads = Vec::new();
                 for a in until.reads() {

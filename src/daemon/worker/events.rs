@@ -62,7 +62,7 @@ impl Worker {
             s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
             s.homed = homed;
         });
-        self.shared.status_read();
+        self.shared.fresh_read();
     }
 
     /// Publishes why a new order would be refused now.

@@ -117,7 +117,7 @@ impl Worker {
             s.heartbeat_age_ms = None;
             s.inputs = None;
         });
-        self.shared.status_read();
+        self.shared.no_read();
         self.publish_refusal();
         self.publish_phase();
     }
