@@ -416,3 +416,55 @@ async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resume
     until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
     assert!(shared.with(|m| m.starts().is_empty()));
 }
+
+#[tokio::test]
+async fn the_cycles_api_answers_every_request_with_its_status_and_a_json_error_naming_the_reason() {
+    use common::http::Endpoint;
+    use hyper::StatusCode;
+    let shared = mock_at_seed_start("");
+    let bad = "[[step]]\nwait = \"door\"\ntimeout = \"1s\"\n".to_owned();
+    let dir = programs("api", &[("press-load", press_cycle()), ("bad", bad)]);
+    let (d, h) = spawn(&shared, dir.clone());
+    connected(&h).await;
+    let socket = dir.join("api.sock");
+    let listener = tokio::net::UnixListener::bind(&socket).unwrap();
+    let router = linterpd::daemon::api::Api::new(d.robots().clone()).router(None);
+    tokio::spawn(linterpd::daemon::api::serve(
+        listener,
+        router,
+        std::future::pending(),
+    ));
+    let api = Endpoint::unix(&socket);
+    let base = "/v1/robots/press-loader/cycles";
+    let a = api.get(base).await;
+    assert_eq!(a.status, StatusCode::NOT_FOUND, "{}", a.text());
+    let a = api.post(base, r#"{"program": "bad", "count": 1}"#).await;
+    assert_eq!(a.status, StatusCode::BAD_REQUEST, "{}", a.text());
+    assert_eq!(a.json()["field"], "program");
+    assert!(
+        a.json()["error"].as_str().unwrap().contains("step 1"),
+        "{}",
+        a.text()
+    );
+    let a = api
+        .post(base, r#"{"program": "press-load", "cont": 1}"#)
+        .await;
+    assert_eq!(a.status, StatusCode::BAD_REQUEST, "{}", a.text());
+    let a = api.post(base, r#"{"program": "press-load"}"#).await;
+    assert_eq!(a.status, StatusCode::ACCEPTED, "{}", a.text());
+    assert_eq!(a.json()["state"], "running");
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    let a = api.post(base, r#"{"program": "press-load"}"#).await;
+    assert_eq!(a.status, StatusCode::CONFLICT, "{}", a.text());
+    assert_eq!(a.json()["reason"], "cycle-running");
+    let a = api.post(&format!("{base}/resume"), "").await;
+    assert_eq!(a.status, StatusCode::CONFLICT, "{}", a.text());
+    assert_eq!(a.json()["reason"], "cycle-state");
+    let a = api.get("/v1/robots/press-loader").await;
+    assert_eq!(a.json()["cycle"]["state"], "waiting", "{}", a.text());
+    let a = api.post(&format!("{base}/stop"), r#"{"now": true}"#).await;
+    assert_eq!(a.status, StatusCode::OK, "{}", a.text());
+    until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
+    let a = api.get(base).await;
+    assert_eq!(a.json()["state"], "stopped", "{}", a.text());
+}
