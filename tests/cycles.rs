@@ -7,18 +7,13 @@ mod common;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use common::daemon::duplex_connector;
+use common::daemon::{duplex_connector, signals, spawn_in_cell, taking_moves};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::config::CellSettings;
 use linterpd::contract::{Layout, State};
-use linterpd::daemon::{
-    CycleError, CycleState, CycleStatus, Daemon, DaemonOptions, RobotHandle, RobotSetup,
-};
+use linterpd::daemon::{CycleError, CycleState, CycleStatus, Daemon, RobotHandle};
 use linterpd::gateway::{AccessList, GatewaySettings};
-use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
-use linterpd::robot::seed_robot;
 
 const LIMIT: Duration = Duration::from_secs(20);
 
@@ -34,15 +29,12 @@ fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
 }
 
 fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
-    let signals = [
+    let signals = signals(&[
         ("press_open", "X5"),
         ("press_moving", "X6"),
         ("part_present", "X2"),
         ("press_go", "Y0"),
-    ]
-    .into_iter()
-    .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
-    .collect();
+    ]);
     let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
     let access = AccessList::new(
         ranges(&["DT0-DT199"]),
@@ -50,35 +42,16 @@ fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
         &Layout::default(),
     )
     .unwrap();
-    let setup = RobotSetup {
-        robot: seed_robot(),
-        settings: ContractSettings::default(),
-        connect: duplex_connector(shared, None),
-        home_counts: [0; JOINTS],
-        gateway: GatewaySettings {
-            access,
-            modbus: None,
-        },
-        cell: CellSettings {
-            signals,
-            programs: Some(dir),
-            require_wait_timeout: false,
-        },
+    let cell = CellSettings {
+        signals,
+        programs: Some(dir),
+        require_wait_timeout: false,
     };
-    let d = Daemon::spawn(vec![setup], &DaemonOptions::default());
-    let h = d.robot("press-loader").unwrap().clone();
-    (d, h)
-}
-
-async fn connected(h: &RobotHandle) {
-    for _ in 0..500 {
-        let s = h.state();
-        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("never connected: {:?}", h.state());
+    let gateway = GatewaySettings {
+        access,
+        modbus: None,
+    };
+    spawn_in_cell(duplex_connector(shared, None), cell, gateway)
 }
 
 /// Waits until the cycle's status satisfies `done`.
@@ -126,7 +99,7 @@ set = {{ press_go = false }}
 async fn a_press_cycle_waits_for_the_press_runs_interlocked_and_counts_its_cycles() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("press", &[("press-load", press_cycle())]));
-    connected(&h).await;
+    taking_moves(&h).await;
     let s = h.run_cycle("press-load", Some(2)).unwrap();
     assert_eq!((s.state, s.count), (CycleState::Running, Some(2)));
     // The press is closed: the cycle waits, and nothing moves.
@@ -167,7 +140,7 @@ async fn a_wait_that_times_out_faults_the_cycle_which_resumes_only_after_clear_f
         at(P2)
     );
     let (_d, h) = spawn(&shared, programs("timeout", &[("p", program)]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("p", Some(1)).unwrap();
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     let why = s.reason.unwrap();
@@ -200,7 +173,7 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
         at(P2)
     );
     let (_d, h) = spawn(&shared, programs("hold", &[("p", program)]));
-    connected(&h).await;
+    taking_moves(&h).await;
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
     h.run_cycle("p", Some(1)).unwrap();
@@ -233,7 +206,7 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
 async fn a_stop_during_a_wait_ends_the_cycle_and_nothing_moves() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("stop", &[("press-load", press_cycle())]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("press-load", None).unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     // The CLI's stop (the robot's) always works, and ends the cycle.
@@ -254,7 +227,7 @@ async fn one_cycle_at_a_time_and_a_bad_program_is_refused_before_anything_moves(
         &shared,
         programs("one", &[("press-load", press_cycle()), ("bad", bad)]),
     );
-    connected(&h).await;
+    taking_moves(&h).await;
     let e = h.run_cycle("bad", Some(1)).unwrap_err();
     assert!(
         e.to_string()
@@ -295,7 +268,7 @@ async fn a_plc_power_cycle_mid_move_faults_the_cycle_which_never_resumes_by_itse
     let shared = mock_at_seed_start("");
     let program = format!("[[step]]\nmove = {}\n[[step]]\nmove = {}\n", at(P2), at(P1));
     let (_d, h) = spawn(&shared, programs("power", &[("p", program)]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("p", None).unwrap();
     until_moving(&shared).await;
     tokio::time::sleep(Duration::from_millis(100)).await;
@@ -329,7 +302,7 @@ async fn a_link_lost_during_a_wait_neither_faults_nor_meets_it_and_the_cycle_goe
         at(P2)
     );
     let (_d, h) = spawn(&shared, programs("link", &[("p", program)]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("p", Some(1)).unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     // Every command's connection closed for a while: the link is down, the inputs unknown.
@@ -360,14 +333,14 @@ async fn a_restarted_daemon_has_no_cycle_and_does_not_move_the_robot() {
     let shared = mock_at_seed_start("");
     let dir = programs("restart", &[("press-load", press_cycle())]);
     let (d, h) = spawn(&shared, dir.clone());
-    connected(&h).await;
+    taking_moves(&h).await;
     shared.with(|m| m.set_input(5, true).unwrap());
     h.run_cycle("press-load", None).unwrap();
     until(&h, "running a move", |s| !s.moves.is_empty()).await;
     d.kill().await;
     let starts = shared.with(|m| m.starts().len());
     let (_d2, h2) = spawn(&shared, dir);
-    connected(&h2).await;
+    taking_moves(&h2).await;
     tokio::time::sleep(Duration::from_millis(1_500)).await;
     assert!(h2.cycle().is_none());
     // At most the start the old daemon left running; nothing after it.
@@ -380,7 +353,7 @@ async fn a_loop_of_outputs_alone_goes_round_at_the_pace_of_the_status_reads_and_
     let shared = mock_at_seed_start("");
     let program = "[[step]]\nlabel = \"x\"\nset = { press_go = true }\n[[step]]\nloop = { to = \"x\", until = \"press_open\" }\n".to_owned();
     let (_d, h) = spawn(&shared, programs("spin", &[("p", program)]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("p", Some(1)).unwrap();
     tokio::time::sleep(Duration::from_millis(100)).await;
     let before = h.state().gateway.requests;
@@ -398,7 +371,7 @@ async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resume
 {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("pause", &[("press-load", press_cycle())]));
-    connected(&h).await;
+    taking_moves(&h).await;
     h.run_cycle("press-load", Some(1)).unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     h.pause_cycle().unwrap();
@@ -425,7 +398,7 @@ async fn the_cycles_api_answers_every_request_with_its_status_and_a_json_error_n
     let bad = "[[step]]\nwait = \"door\"\ntimeout = \"1s\"\n".to_owned();
     let dir = programs("api", &[("press-load", press_cycle()), ("bad", bad)]);
     let (d, h) = spawn(&shared, dir.clone());
-    connected(&h).await;
+    taking_moves(&h).await;
     let socket = dir.join("api.sock");
     let listener = tokio::net::UnixListener::bind(&socket).unwrap();
     let router = linterpd::daemon::api::Api::new(d.robots().clone()).router(None);

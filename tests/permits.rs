@@ -7,50 +7,25 @@ mod common;
 
 use std::time::Duration;
 
-use common::daemon::duplex_connector;
+use common::daemon::{duplex_connector, signals, spawn_in_cell, taking_moves};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::config::CellSettings;
 use linterpd::contract::{Fault, State};
-use linterpd::daemon::{
-    Daemon, DaemonOptions, MoveOrder, RobotHandle, RobotSetup, Stage, SubmitError,
-};
-use linterpd::kinematics::JOINTS;
+use linterpd::daemon::{Daemon, MoveOrder, RobotHandle, Stage, SubmitError};
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
-use linterpd::robot::seed_robot;
 
 const LIMIT: Duration = Duration::from_secs(15);
 
 fn spawn(shared: &SharedMock) -> (Daemon, RobotHandle) {
-    let signals = [("press_open", "X5"), ("press_moving", "X6")]
-        .into_iter()
-        .map(|(n, a)| (n.to_owned(), a.parse().unwrap()))
-        .collect();
-    let setup = RobotSetup {
-        robot: seed_robot(),
-        settings: ContractSettings::default(),
-        connect: duplex_connector(shared, None),
-        home_counts: [0; JOINTS],
-        gateway: linterpd::gateway::GatewaySettings::default(),
-        cell: CellSettings {
-            signals,
-            ..CellSettings::default()
-        },
+    let cell = CellSettings {
+        signals: signals(&[("press_open", "X5"), ("press_moving", "X6")]),
+        ..CellSettings::default()
     };
-    let d = Daemon::spawn(vec![setup], &DaemonOptions::default());
-    let h = d.robot("press-loader").unwrap().clone();
-    (d, h)
-}
-
-async fn wait_connected(h: &RobotHandle) {
-    for _ in 0..500 {
-        let s = h.state();
-        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("never connected: {:?}", h.state());
+    spawn_in_cell(
+        duplex_connector(shared, None),
+        cell,
+        linterpd::gateway::GatewaySettings::default(),
+    )
 }
 
 fn to(p: [f64; 3], permit: &str) -> MoveOrder {
@@ -65,7 +40,7 @@ fn to(p: [f64; 3], permit: &str) -> MoveOrder {
 async fn a_move_whose_permit_does_not_hold_starts_nothing_and_says_which_input() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared);
-    wait_connected(&h).await;
+    taking_moves(&h).await;
     shared.with(|m| m.set_input(6, true).unwrap()); // the press moves
     let before = shared.with(|m| (0..4).map(|c| m.count(c)).collect::<Vec<_>>());
     let id = h.submit(to(P2, "press_open & !press_moving")).unwrap();
@@ -101,7 +76,7 @@ async fn a_move_whose_permit_does_not_hold_starts_nothing_and_says_which_input()
 async fn a_permit_that_drops_mid_move_holds_the_robot_and_the_report_names_the_input() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared);
-    wait_connected(&h).await;
+    taking_moves(&h).await;
     shared.with(|m| {
         m.set_input(5, true).unwrap();
         m.record_pulses(true);
@@ -149,7 +124,7 @@ async fn a_permit_that_drops_mid_move_holds_the_robot_and_the_report_names_the_i
 async fn a_permit_the_plc_cannot_check_is_refused_naming_it_and_nothing_is_queued() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared);
-    wait_connected(&h).await;
+    taking_moves(&h).await;
     for (permit, words) in [
         ("press_open | X7", "`|` cannot be a permit"),
         (

@@ -70,3 +70,48 @@ pub fn spawn_with(
     let h = d.robot("press-loader").unwrap().clone();
     (d, h)
 }
+
+/// Signal names for a cell, from (name, bit) pairs.
+#[allow(dead_code)] // not every test binary has a cell
+pub fn signals(
+    pairs: &[(&str, &str)],
+) -> std::collections::BTreeMap<String, linterpd::gateway::Address> {
+    pairs
+        .iter()
+        .map(|(n, a)| ((*n).to_owned(), a.parse().unwrap()))
+        .collect()
+}
+
+/// A daemon for the seed's robot on `connect` in a cell: its signals and programs, and its
+/// gateway.
+#[allow(dead_code)] // not every test binary has a cell
+pub fn spawn_in_cell(
+    connect: Connector,
+    cell: linterpd::config::CellSettings,
+    gateway: linterpd::gateway::GatewaySettings,
+) -> (Daemon, RobotHandle) {
+    let setup = RobotSetup {
+        robot: seed_robot(),
+        settings: ContractSettings::default(),
+        connect,
+        home_counts: [0; JOINTS],
+        gateway,
+        cell,
+    };
+    let d = Daemon::spawn(vec![setup], &DaemonOptions::default());
+    let h = d.robot("press-loader").unwrap().clone();
+    (d, h)
+}
+
+/// Waits until the daemon takes moves: connected, nothing refusing them, the counts read.
+#[allow(dead_code)] // not every test binary waits so
+pub async fn taking_moves(h: &RobotHandle) {
+    for _ in 0..500 {
+        let s = h.state();
+        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
+            return;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(10)).await;
+    }
+    panic!("never connected: {:?}", h.state());
+}

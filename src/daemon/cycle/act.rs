@@ -10,6 +10,7 @@ use tokio::sync::watch;
 
 use super::control::Control;
 use crate::contract::INPUT_WORDS;
+use crate::cycle::Condition;
 use crate::daemon::report::{MoveId, MoveReport, Stage};
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle};
 use crate::gateway::Address;
@@ -167,10 +168,7 @@ async fn wait_loop(
     reads: &mut watch::Receiver<u64>,
 ) -> WaitEnd {
     loop {
-        let inputs = Inputs {
-            words: handle.state().inputs,
-            reads: read_extra(handle, extra).await,
-        };
+        let inputs = Inputs::read(handle, extra).await;
         // Decided only on a status block read within the last poll or two: one read while the
         // robot stood (every 250 ms) may show an input that has changed since.
         let fresh = handle.since_status_read().is_some_and(|age| age <= FRESH);
@@ -199,16 +197,33 @@ async fn wait_loop(
     }
 }
 
-async fn read_extra(handle: &RobotHandle, extra: &[Address]) -> Vec<(Address, Option<u16>)> {
-    let mut out = Vec::with_capacity(extra.len());
-    for &address in extra {
-        out.push((address, read_one(handle, address).await));
+impl Inputs {
+    /// The input words of the last status block, and `extra` read through the gateway now.
+    pub(super) async fn read(handle: &RobotHandle, extra: &[Address]) -> Self {
+        let mut reads = Vec::with_capacity(extra.len());
+        for &address in extra {
+            reads.push((address, read_one(handle, address).await));
+        }
+        Self {
+            words: handle.state().inputs,
+            reads,
+        }
     }
-    out
+
+    /// Whether `until` holds on them (never while the input words are unknown).
+    pub(super) fn meet(&self, until: &Condition) -> bool {
+        let read = |a| {
+            self.reads
+                .iter()
+                .find(|(r, _)| *r == a)
+                .and_then(|(_, v)| *v)
+        };
+        self.words.is_some_and(|w| until.holds(&w, &read))
+    }
 }
 
 /// One word or bit read through the gateway (`None`: it could not be read).
-pub(super) async fn read_one(handle: &RobotHandle, address: Address) -> Option<u16> {
+async fn read_one(handle: &RobotHandle, address: Address) -> Option<u16> {
     match handle.read_registers(address, 1).await {
         Ok(crate::daemon::Values::Words(w)) => w.first().copied(),
         Ok(crate::daemon::Values::Bits(b)) => b.first().map(|&on| u16::from(on)),

@@ -263,15 +263,7 @@ impl Runner {
             if let Ok(mut s) = status.lock() {
                 s.waiting_s = Some(waited);
             }
-            let words = inputs.words.unwrap_or_default();
-            let read = |a| {
-                inputs
-                    .reads
-                    .iter()
-                    .find(|(r, _)| *r == a)
-                    .and_then(|(_, v)| *v)
-            };
-            until.holds(&words, &read)
+            inputs.meet(until)
         };
         let end = act::wait_until(
             &self.handle,
@@ -340,13 +332,9 @@ impl Runner {
                         tokio::time::timeout(std::time::Duration::from_secs(1), reads.changed())
                             .await;
                 }
-                let words = self.handle.state().inputs;
-                let mut reads = Vec::new();
-                for a in until.reads() {
-                    reads.push((a, act::read_one(&self.handle, a).await));
-                }
-                let read = |a| reads.iter().find(|(r, _)| *r == a).and_then(|(_, v)| *v);
-                let met = words.is_some_and(|w| until.holds(&w, &read));
+                let met = Inputs::read(&self.handle, &until.reads())
+                    .await
+                    .meet(&until);
                 Next::Go(if met { pc + 1 } else { to })
             }
         }
