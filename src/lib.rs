@@ -46,6 +46,7 @@
 //!                    a pure part (rate fits, frequency models), reported with config lines
 //! ```
 
+pub mod cell;
 pub mod cli;
 pub mod commission;
 pub mod config;

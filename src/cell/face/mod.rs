@@ -1,0 +1,155 @@
+//! The cell face: a block of 18 registers through which the line's PLC or HMI drives the robot
+//! with no PC code of its own, in the manner of KUKA's Automatic External interface and FANUC's
+//! UOP signals. The line writes the command words and reads the status words; the daemon serves
+//! the block on the gateway's Modbus TCP face (from register `registers`), or mirrors it in the
+//! robot PLC's own DT area (from `plc`), polled, for a press PLC wired to the robot's PLC.
+//!
+//! ```text
+//!  +0  program    the program's number, 1..=255 (a program's `number`)        written by the line
+//!  +1  check      the program number's complement: program XOR 0xFFFF
+//!  +2  commands   bit 0 strobe     select the program: on its rising edge, with the check
+//!                 bit 1 start      run the selected program (or resume a paused or faulted cycle)
+//!                 bit 2 stop       stop the cycle at the end of its current step
+//!                 bit 3 pause      pause the cycle at the end of its current step
+//!                 bit 4 reset      clear the robot's fault (a faulted cycle then resumes on start)
+//!                 bit 5 home       move to the `home` position (no cycle running)
+//!                 bit 6 enable     move-enable, a level: motion only while it is on; when it
+//!                                  drops, the robot stops at once and the cycle pauses
+//!                 bit 7 stop-now   stop the robot at once and end the cycle
+//!  +3  count      cycles a start runs (0: until stopped)
+//!  +4..+7         reserved: read 0, not writable
+//!  +8  status     bit 0 ready      remote, enabled, linked, homed, no fault, no cycle: a start runs
+//!                 bit 1 running    a cycle runs a step        bit 2 paused   bit 3 waiting
+//!                 bit 4 fault      (+11 says which)           bit 5 in-home (at `home`)
+//!                 bit 6 remote     bit 7 selected (+9 echoes the program acknowledged)
+//!                 bit 8 moving     bit 9 linked               bit 10 refused (+12 says why)
+//!                 bit 11 enabled   (move-enable as taken)
+//!  +9  program    the acknowledged program's number (0: none)                 read by the line
+//!  +10 step       the cycle's step number (from 1; 0: none)
+//!  +11 fault      0 none; 1..=99 the PLC's fault word; 100 the cycle faulted (+10: the step);
+//!                 101 no link to the PLC; 102 the PLC's heartbeat stands still (stalled, PROG)
+//!  +12 refused    why the last command was refused ([`Refusal`]; 0: taken)
+//!  +13 heartbeat  the daemon's status reads of the PLC, wrapping: stands still when it stalls
+//!  +14 done       cycles done, low word         +15  high word
+//!  +16 position   the taught position the robot stands at, its place in `positions` from 1 (0: none)
+//!  +17 commands   the command word as the face last took it
+//! ```
+//! Commands act on edges, so a line that writes its whole command block every scan starts one
+//! cycle per rising edge, not one per write. The first write after the daemon starts, or after
+//! the mode changes, only sets the baseline: a bit already on in it is not an edge (drop it and
+//! raise it again), so a restart never starts a cycle by itself.
+
+mod machine;
+mod status;
+
+pub use machine::{Action, Face, Refusal};
+pub use status::{CyclePhase, CycleView, View, status_words};
+
+/// Command words (+0..+3).
+pub const COMMAND_WORDS: usize = 4;
+/// The status words' offset in the block.
+pub const STATUS_AT: usize = 8;
+/// Status words (+8..+17).
+pub const STATUS_WORDS: usize = 10;
+/// The block's words.
+pub const BLOCK_WORDS: usize = STATUS_AT + STATUS_WORDS;
+
+/// Command word offsets.
+pub mod command {
+    /// The program number.
+    pub const PROGRAM: usize = 0;
+    /// Its complement.
+    pub const CHECK: usize = 1;
+    /// The command bits.
+    pub const BITS: usize = 2;
+    /// Cycles to run (0: until stopped).
+    pub const COUNT: usize = 3;
+}
+
+/// Command bits (+2).
+pub mod bit {
+    /// Select the program (rising edge).
+    pub const STROBE: u16 = 1 << 0;
+    /// Run the selected program, or resume (rising edge).
+    pub const START: u16 = 1 << 1;
+    /// Stop the cycle at the end of its step (rising edge).
+    pub const STOP: u16 = 1 << 2;
+    /// Pause the cycle at the end of its step (rising edge).
+    pub const PAUSE: u16 = 1 << 3;
+    /// Clear the robot's fault (rising edge).
+    pub const RESET: u16 = 1 << 4;
+    /// Move to the home position (rising edge).
+    pub const HOME: u16 = 1 << 5;
+    /// Move-enable (a level).
+    pub const ENABLE: u16 = 1 << 6;
+    /// Stop the robot now and end the cycle (rising edge).
+    pub const STOP_NOW: u16 = 1 << 7;
+}
+
+/// Status bits (+8).
+pub mod status_bit {
+    /// A start would run the selected program.
+    pub const READY: u16 = 1 << 0;
+    /// A cycle runs a step.
+    pub const RUNNING: u16 = 1 << 1;
+    /// The cycle is paused (by request, a hold, or move-enable dropping).
+    pub const PAUSED: u16 = 1 << 2;
+    /// The cycle waits on the cell's inputs.
+    pub const WAITING: u16 = 1 << 3;
+    /// A fault (the fault word says which).
+    pub const FAULT: u16 = 1 << 4;
+    /// The robot stands at the home position.
+    pub const IN_HOME: u16 = 1 << 5;
+    /// The mode is remote.
+    pub const REMOTE: u16 = 1 << 6;
+    /// A program is selected (its number is echoed).
+    pub const SELECTED: u16 = 1 << 7;
+    /// A move is queued or running.
+    pub const MOVING: u16 = 1 << 8;
+    /// The PLC link is up.
+    pub const LINKED: u16 = 1 << 9;
+    /// The last command was refused (the refusal word says why).
+    pub const REFUSED: u16 = 1 << 10;
+    /// Move-enable is on, as the face took it.
+    pub const ENABLED: u16 = 1 << 11;
+}
+
+/// Status word offsets within the status words (add [`STATUS_AT`] for the block).
+pub mod status_word {
+    /// The status bits.
+    pub const BITS: usize = 0;
+    /// The acknowledged program's number.
+    pub const PROGRAM: usize = 1;
+    /// The step number.
+    pub const STEP: usize = 2;
+    /// The fault code.
+    pub const FAULT: usize = 3;
+    /// The refusal code.
+    pub const REFUSED: usize = 4;
+    /// The heartbeat.
+    pub const HEARTBEAT: usize = 5;
+    /// Cycles done, low word.
+    pub const DONE_LOW: usize = 6;
+    /// Cycles done, high word.
+    pub const DONE_HIGH: usize = 7;
+    /// The taught position the robot stands at.
+    pub const POSITION: usize = 8;
+    /// The command word as taken.
+    pub const COMMANDS: usize = 9;
+}
+
+/// Fault codes (+11) beyond the PLC's own fault word (1..=99).
+pub mod fault {
+    /// The cycle faulted in the step +10 names.
+    pub const CYCLE: u16 = 100;
+    /// No link to the PLC.
+    pub const LINK_DOWN: u16 = 101;
+    /// The PLC's heartbeat stands still (stalled, or in PROG mode).
+    pub const STALLED: u16 = 102;
+}
+
+/// The check word a program number needs.
+#[must_use]
+pub fn check_of(program: u16) -> u16 {
+    program ^ 0xFFFF
+}

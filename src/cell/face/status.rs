@@ -1,0 +1,280 @@
+//! The face's status side: the status words (+8..+17) from the command side and what the robot
+//! does.
+
+use super::machine::Face;
+use super::{STATUS_WORDS, fault, status_bit, status_word};
+use crate::cell::Mode;
+
+/// Where the robot's cycle stands, as the face shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CyclePhase {
+    /// Running a step.
+    Running,
+    /// Waiting on the cell's inputs.
+    Waiting,
+    /// Paused (by request, a hold, move-enable).
+    Paused,
+    /// Faulted.
+    Faulted,
+    /// Ended (stopped or done): a start may run another.
+    Ended,
+}
+
+/// The robot's cycle, as the face shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CycleView {
+    /// Where it stands.
+    pub phase: CyclePhase,
+    /// The step's number, from 1 (0: none).
+    pub step: u16,
+    /// Cycles done.
+    pub done: u64,
+}
+
+/// What the robot does, as the status words need it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct View {
+    /// Who drives it.
+    pub mode: Mode,
+    /// Whether the PLC link is up.
+    pub linked: bool,
+    /// Whether the PLC's heartbeat stands still.
+    pub stalled: bool,
+    /// Whether a move would be taken now (homed, no fault, the PLC in RUN).
+    pub accepts_moves: bool,
+    /// The PLC's fault word, when not 0.
+    pub plc_fault: Option<u16>,
+    /// Whether a move is queued or running.
+    pub moving: bool,
+    /// The cycle, if one ran.
+    pub cycle: Option<CycleView>,
+    /// Status reads of the PLC so far.
+    pub heartbeat: u64,
+    /// The taught position the robot stands at: its place in the face's `positions`, from 1.
+    pub position: Option<u16>,
+    /// Whether it stands at the home position.
+    pub in_home: bool,
+}
+
+/// The status words.
+#[must_use]
+pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
+    let phase = view.cycle.map(|c| c.phase);
+    let cycle_live = phase.is_some_and(|p| p != CyclePhase::Ended);
+    let remote = view.mode == Mode::Remote;
+    let fault = match (view.plc_fault, view.linked, view.stalled, phase) {
+        (_, false, _, _) => fault::LINK_DOWN,
+        (_, _, true, _) => fault::STALLED,
+        (Some(code), ..) => code.min(99),
+        (None, .., Some(CyclePhase::Faulted)) => fault::CYCLE,
+        _ => 0,
+    };
+    let ready = remote
+        && face.enabled()
+        && view.linked
+        && view.accepts_moves
+        && fault == 0
+        && !cycle_live
+        && !view.moving;
+    let bits = [
+        (ready, status_bit::READY),
+        (phase == Some(CyclePhase::Running), status_bit::RUNNING),
+        (phase == Some(CyclePhase::Paused), status_bit::PAUSED),
+        (phase == Some(CyclePhase::Waiting), status_bit::WAITING),
+        (fault != 0, status_bit::FAULT),
+        (view.in_home, status_bit::IN_HOME),
+        (remote, status_bit::REMOTE),
+        (face.selected().is_some(), status_bit::SELECTED),
+        (view.moving, status_bit::MOVING),
+        (view.linked, status_bit::LINKED),
+        (face.refused().is_some(), status_bit::REFUSED),
+        (face.enabled(), status_bit::ENABLED),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .fold(0, |word, (_, bit)| word | bit);
+    let done = view.cycle.map_or(0, |c| c.done);
+    let mut words = [0; STATUS_WORDS];
+    words[status_word::BITS] = bits;
+    words[status_word::PROGRAM] = face.selected().map_or(0, |(n, _)| u16::from(n));
+    words[status_word::STEP] = view.cycle.filter(|_| cycle_live).map_or(0, |c| c.step);
+    words[status_word::FAULT] = fault;
+    words[status_word::REFUSED] = face.refused().map_or(0, super::Refusal::code);
+    words[status_word::HEARTBEAT] = (view.heartbeat & 0xFFFF) as u16;
+    words[status_word::DONE_LOW] = (done & 0xFFFF) as u16;
+    words[status_word::DONE_HIGH] = ((done >> 16) & 0xFFFF) as u16;
+    words[status_word::POSITION] = view.position.unwrap_or(0);
+    words[status_word::COMMANDS] = face.words()[super::command::BITS];
+    words
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cell::face::{bit, check_of};
+
+    fn remote_ready() -> (Face, View) {
+        let mut face = Face::new();
+        face.write(0, &[0, 0, bit::ENABLE, 0], Mode::Remote);
+        let view = View {
+            mode: Mode::Remote,
+            linked: true,
+            accepts_moves: true,
+            heartbeat: 0x1_0005,
+            ..View::default()
+        };
+        (face, view)
+    }
+
+    fn has(words: &[u16; STATUS_WORDS], b: u16) -> bool {
+        words[status_word::BITS] & b != 0
+    }
+
+    #[test]
+    fn ready_needs_remote_enable_link_no_fault_and_no_cycle() {
+        let (face, view) = remote_ready();
+        let w = status_words(&face, &view);
+        assert!(has(&w, status_bit::READY) && has(&w, status_bit::REMOTE));
+        assert_eq!(w[status_word::HEARTBEAT], 5, "wraps at 16 bits");
+        let not_ready = [
+            View {
+                mode: Mode::Local,
+                ..view
+            },
+            View {
+                linked: false,
+                ..view
+            },
+            View {
+                accepts_moves: false,
+                ..view
+            },
+            View {
+                moving: true,
+                ..view
+            },
+            View {
+                plc_fault: Some(4),
+                ..view
+            },
+            View {
+                cycle: Some(CycleView {
+                    phase: CyclePhase::Paused,
+                    step: 2,
+                    done: 0,
+                }),
+                ..view
+            },
+        ];
+        for v in not_ready {
+            assert!(!has(&status_words(&face, &v), status_bit::READY), "{v:?}");
+        }
+        let mut off = face.clone();
+        off.write(bit_word(), &[0], Mode::Remote);
+        assert!(!has(&status_words(&off, &view), status_bit::READY));
+    }
+
+    fn bit_word() -> usize {
+        crate::cell::face::command::BITS
+    }
+
+    #[test]
+    fn the_fault_word_names_the_worst_first() {
+        let (face, view) = remote_ready();
+        let faulted = Some(CycleView {
+            phase: CyclePhase::Faulted,
+            step: 3,
+            done: 70_000,
+        });
+        let cases = [
+            (
+                View {
+                    linked: false,
+                    plc_fault: Some(4),
+                    ..view
+                },
+                fault::LINK_DOWN,
+            ),
+            (
+                View {
+                    stalled: true,
+                    ..view
+                },
+                fault::STALLED,
+            ),
+            (
+                View {
+                    plc_fault: Some(4),
+                    cycle: faulted,
+                    ..view
+                },
+                4,
+            ),
+            (
+                View {
+                    cycle: faulted,
+                    ..view
+                },
+                fault::CYCLE,
+            ),
+            (view, 0),
+        ];
+        for (v, code) in cases {
+            let w = status_words(&face, &v);
+            assert_eq!(w[status_word::FAULT], code, "{v:?}");
+            assert_eq!(has(&w, status_bit::FAULT), code != 0);
+        }
+        let w = status_words(
+            &face,
+            &View {
+                cycle: faulted,
+                ..view
+            },
+        );
+        assert_eq!(w[status_word::STEP], 3);
+        assert_eq!(
+            (w[status_word::DONE_LOW], w[status_word::DONE_HIGH]),
+            (4_464, 1)
+        );
+    }
+
+    #[test]
+    fn the_selection_and_the_refusal_are_echoed() {
+        let (mut face, view) = remote_ready();
+        face.write(
+            0,
+            &[9, check_of(9), bit::ENABLE | bit::STROBE],
+            Mode::Remote,
+        );
+        face.select(9, "unload");
+        let w = status_words(&face, &view);
+        assert_eq!(w[status_word::PROGRAM], 9);
+        assert!(has(&w, status_bit::SELECTED) && !has(&w, status_bit::REFUSED));
+        assert_eq!(w[status_word::COMMANDS], bit::ENABLE | bit::STROBE);
+        face.write(0, &[10], Mode::Remote);
+        let w = status_words(&face, &view);
+        assert_eq!(w[status_word::PROGRAM], 0);
+        assert_eq!(w[status_word::REFUSED], 5);
+        assert!(has(&w, status_bit::REFUSED));
+    }
+
+    #[test]
+    fn an_ended_cycle_shows_no_step_but_its_count() {
+        let (face, view) = remote_ready();
+        let v = View {
+            cycle: Some(CycleView {
+                phase: CyclePhase::Ended,
+                step: 4,
+                done: 12,
+            }),
+            position: Some(2),
+            in_home: true,
+            ..view
+        };
+        let w = status_words(&face, &v);
+        assert_eq!(w[status_word::STEP], 0);
+        assert_eq!(w[status_word::DONE_LOW], 12);
+        assert_eq!(w[status_word::POSITION], 2);
+        assert!(has(&w, status_bit::IN_HOME) && has(&w, status_bit::READY));
+    }
+}
