@@ -7,6 +7,14 @@
 //! programs = "cycles"            # a directory of cycle programs (*.toml), relative to this file
 //! require_wait_timeout = true    # refuse a program whose `wait` has no `timeout` (default false)
 //! ```
+//!
+//! [robots.press-loader.cell.face]   # the register face the line's PLC or HMI drives
+//! registers = 50000              # its first register on the gateway's Modbus face (18 words)
+//! home = "home"                  # the taught position `home` moves to (default "home")
+//! positions = ["home", "pick", "press"]   # numbered from 1 in the status block's +16
+//! mode = "local"                 # the mode at start-up: local (default) or remote
+//! ```
+//! ```text
 //! A signal is an X, Y or R bit (`X5`, `X1A`, `R10A`); an input the PLC program copies into the
 //! status block (`[robots.NAME.plc.contract] inputs`) is read at no cost with every status read.
 
@@ -17,7 +25,10 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::raw::RawCell;
+use super::raw::{RawCell, RawCellFace};
+use crate::cell::Mode;
+use crate::cell::face::BLOCK_WORDS;
+use crate::contract::DT_LAST;
 use crate::gateway::Address;
 
 /// A robot's cell: its signals' names and its cycle programs' directory.
@@ -30,7 +41,25 @@ pub struct CellSettings {
     pub programs: Option<PathBuf>,
     /// Whether every `wait` of a program must have a `timeout`.
     pub require_wait_timeout: bool,
+    /// The register face the line drives, if it has one.
+    pub face: Option<FaceSettings>,
 }
+
+/// `[robots.NAME.cell.face]`: where the cell face is served and what it shows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FaceSettings {
+    /// Its first register on the gateway's Modbus face: above the DT words, so it hides none.
+    pub registers: u16,
+    /// The taught position the `home` command moves to and `in-home` compares with.
+    pub home: String,
+    /// The taught positions the status block numbers (from 1).
+    pub positions: Vec<String>,
+    /// The mode at start-up.
+    pub mode: Mode,
+}
+
+/// The face's default first register.
+pub(super) const FACE_REGISTERS: u16 = 50_000;
 
 /// The cell a table describes.
 pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, ConfigError> {
@@ -49,6 +78,11 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, 
         signals.insert(name.get_ref().clone(), address);
     }
     let programs = r.programs.as_ref().map(|p| PathBuf::from(p.get_ref()));
+    let face = r
+        .face
+        .as_ref()
+        .map(|f| face(&at.child("face"), f.get_ref()))
+        .transpose()?;
     Ok(CellSettings {
         signals,
         programs,
@@ -56,6 +90,52 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, 
             .require_wait_timeout
             .as_ref()
             .is_some_and(|b| *b.get_ref()),
+        face,
+    })
+}
+
+/// The face a table describes.
+fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
+    let first = i64::from(DT_LAST) + 1;
+    let last = i64::from(u16::MAX) + 1 - BLOCK_WORDS as i64;
+    let registers = match &raw.registers {
+        Some(r) => {
+            let v = at.child("registers").int_within(r, first, last)?;
+            u16::try_from(v).unwrap_or(FACE_REGISTERS)
+        }
+        None => FACE_REGISTERS,
+    };
+    let name = |key: &str, value: &Spanned<String>| {
+        if crate::robot::is_position_name(value.get_ref()) {
+            Ok(value.get_ref().clone())
+        } else {
+            Err(at.child(key).invalid(value, crate::robot::POSITION_NAME_RULE))
+        }
+    };
+    let home = raw
+        .home
+        .as_ref()
+        .map_or_else(|| Ok("home".to_owned()), |h| name("home", h))?;
+    let mut positions = Vec::new();
+    for p in raw.positions.iter().flatten() {
+        let n = name("positions", p)?;
+        if positions.contains(&n) {
+            return Err(at.child("positions").invalid(p, "is named twice"));
+        }
+        positions.push(n);
+    }
+    let mode = match &raw.mode {
+        Some(m) => m
+            .get_ref()
+            .parse()
+            .map_err(|e: String| at.child("mode").invalid(m, e))?,
+        None => Mode::Local,
+    };
+    Ok(FaceSettings {
+        registers,
+        home,
+        positions,
+        mode,
     })
 }
 
@@ -128,6 +208,52 @@ mod tests {
             let e = Config::from_toml(&with_cell(cell)).unwrap_err().to_string();
             assert!(e.contains(key) && e.contains(words), "{cell}: {e}");
         }
+    }
+
+    #[test]
+    fn the_face_takes_its_defaults_and_checks_every_key() {
+        let config = Config::from_toml(&with_face("")).unwrap();
+        let face = config.cells["r"].face.clone().unwrap();
+        assert_eq!(face.registers, super::FACE_REGISTERS);
+        assert_eq!(face.home, "home");
+        assert_eq!(face.mode, crate::cell::Mode::Local);
+        let config = Config::from_toml(&with_face(
+            "registers = 40000\nhome = \"rest\"\npositions = [\"rest\", \"pick\"]\nmode = \"remote\"",
+        ))
+        .unwrap();
+        let face = config.cells["r"].face.clone().unwrap();
+        assert_eq!(
+            (face.registers, face.home.as_str(), face.positions.len()),
+            (40_000, "rest", 2)
+        );
+        assert_eq!(face.mode, crate::cell::Mode::Remote);
+        for (table, key, words) in [
+            ("registers = 100", "face.registers", "32765..=65518"),
+            ("registers = 65530", "face.registers", "32765..=65518"),
+            ("mode = \"auto\"", "face.mode", "`local` or `remote`"),
+            ("positions = [\"a\", \"a\"]", "face.positions", "named twice"),
+            ("home = \"\"", "face.home", "\"\""),
+            ("strobe = 1", "strobe", "unknown field"),
+        ] {
+            let e = Config::from_toml(&with_face(table)).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(words), "{table}: {e}");
+        }
+    }
+
+    fn with_face(face: &str) -> String {
+        format!(
+            "{MINIMAL}\n[robots.r.plc]\nprotocol = \"mewtocol\"\nserial = {{ path = \"/dev/ttyS0\" }}\n\
+             [robots.r.gateway.modbus]\nlisten = \"127.0.0.1:1502\"\n\
+             [robots.r.cell.face]\n{face}\n"
+        )
+    }
+
+    #[test]
+    fn a_face_without_the_gateways_modbus_face_is_refused() {
+        let e = Config::from_toml(&with_cell("[robots.r.cell.face]"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("gateway.modbus"), "{e}");
     }
 
     #[test]

@@ -56,6 +56,17 @@ pub(super) struct RawCell {
     pub signals: Option<BTreeMap<Spanned<String>, Spanned<String>>>,
     pub programs: Option<Spanned<String>>,
     pub require_wait_timeout: Option<Spanned<bool>>,
+    pub face: Option<Spanned<RawCellFace>>,
+}
+
+/// `[robots.NAME.cell.face]`: the register face the line drives; checked by `cell`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCellFace {
+    pub registers: Option<Spanned<i64>>,
+    pub home: Option<Spanned<String>>,
+    pub positions: Option<Vec<Spanned<String>>>,
+    pub mode: Option<Spanned<String>>,
 }
 
 /// `[robots.NAME.gateway]`: the register gateway's access list; checked by `gateway`.

@@ -32,11 +32,7 @@ use crate::kinematics::JOINTS;
 pub const POSITIONS_FILE: &str = "positions.json";
 /// The format version this daemon reads and writes.
 const VERSION: u32 = 1;
-/// The longest name.
-const MAX_NAME: usize = 32;
-/// The rule a position name must follow, as every refusal says it.
-pub const NAME_RULE: &str =
-    "a position name is 1 to 32 letters, digits, '_' or '-', not starting with '-'";
+pub use crate::robot::POSITION_NAME_RULE as NAME_RULE;
 
 /// One taught position.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -125,12 +121,7 @@ fn known_text(known: &[String]) -> String {
 
 /// Checks `name` against [`NAME_RULE`].
 pub fn check_name(name: &str) -> Result<(), PositionError> {
-    let ok = (1..=MAX_NAME).contains(&name.len())
-        && !name.starts_with('-')
-        && name
-            .bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-');
-    if ok {
+    if crate::robot::is_position_name(name) {
         Ok(())
     } else {
         Err(PositionError::BadName {

@@ -123,6 +123,7 @@ pub async fn run(options: DemoOptions) -> Result<PressDemo, DemoError> {
             signals,
             programs: Some(dir.clone()),
             require_wait_timeout: true,
+            face: None,
         },
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());

@@ -250,3 +250,17 @@ pub fn seed_robot() -> Robot {
         max_speed_mm_s: DEFAULT_MAX_SPEED_MM_S,
     }
 }
+
+/// The rule a taught position's name follows, as every refusal says it.
+pub const POSITION_NAME_RULE: &str =
+    "a position name is 1 to 32 letters, digits, '_' or '-', not starting with '-'";
+
+/// Whether `name` follows [`POSITION_NAME_RULE`].
+#[must_use]
+pub fn is_position_name(name: &str) -> bool {
+    (1..=32).contains(&name.len())
+        && !name.starts_with('-')
+        && name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+}
