@@ -30,6 +30,7 @@ pub mod home;
 pub mod io;
 pub mod logging;
 pub mod mock_plc;
+pub mod mode;
 pub mod moves;
 pub mod path_file;
 pub mod plan;
@@ -92,6 +93,9 @@ pub enum Command {
     /// Run a cycle program (waits on the cell's inputs, interlocked moves), stop, pause,
     /// resume or watch it.
     Cycle(cycle::CycleArgs),
+    /// Show or set who drives a robot: local (the CLI and the API) or remote (the line's PLC or
+    /// HMI through the cell face); `stop` works in both.
+    Mode(mode::ModeArgs),
     /// Home a robot: the PLC's home routine sets every joint to its home count
     /// (`home_counts` in the config); returns when it has ended.
     Home(home::HomeArgs),
@@ -198,6 +202,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Io(args) => io::run(&args, out),
         Command::Stop(args) => stop::run(&args, out),
         Command::Cycle(args) => cycle::run(&args, out),
+        Command::Mode(args) => mode::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),

@@ -127,6 +127,9 @@ fn line(r: &RobotState) -> String {
         let words: Vec<String> = inputs.iter().map(|w| format!("{w:04X}")).collect();
         let _ = write!(text, "; inputs {}", words.join(" "));
     }
+    if r.mode == crate::cell::Mode::Remote {
+        text.push_str("; remote mode (the cell face drives it)");
+    }
     if let Some(cycle) = &r.cycle {
         let _ = write!(text, "\n  cycle {}", super::cycle::describe(cycle));
     }

@@ -51,7 +51,7 @@ mod validate;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use cell::CellSettings;
+pub use cell::{CellSettings, FaceSettings};
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};

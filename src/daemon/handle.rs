@@ -2,11 +2,10 @@
 //! clear a fault, read state and reports, follow a move's progress, teach positions) and the
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
+use super::cell::Cell;
 use super::cycle::{CycleError, CycleSlot, CycleStatus};
 use super::request::ConflictReason;
-use crate::config::CellSettings;
 use crate::contract::Permit;
-use crate::contract::{INPUT_WORDS, InputWord};
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, OnceLock};
@@ -65,6 +64,11 @@ pub enum SubmitError {
         /// The most, [`MAX_QUEUED_STARTS`].
         limit: usize,
     },
+    /// The robot is in remote mode and the cell face's move-enable is off.
+    #[error(
+        "the cell face's move-enable is off (remote mode): no motion until the line turns it on"
+    )]
+    MoveEnableOff,
     /// The daemon is shutting down.
     #[error("the daemon is shutting down")]
     ShuttingDown,
@@ -80,23 +84,15 @@ pub const MAX_PATH_ELEMENTS: usize = 500;
 /// One robot, as the API and the CLI see it.
 #[derive(Debug, Clone)]
 pub struct RobotHandle {
-    robot: Arc<Robot>,
+    pub(super) robot: Arc<Robot>,
     requests: mpsc::UnboundedSender<Request>,
     stops: mpsc::UnboundedSender<Reply>,
     gateway: mpsc::UnboundedSender<Job>,
     gateway_settings: Arc<GatewaySettings>,
     shared: Arc<Shared>,
     positions: Arc<TaughtPositions>,
-    cell: Arc<Cell>,
-    cycles: Arc<CycleSlot>,
-}
-
-/// What a robot's handle knows of its cell: the signals' names, the input words the PLC copies
-/// into the status block, the cycle programs' directory.
-#[derive(Debug)]
-pub(super) struct Cell {
-    pub settings: CellSettings,
-    pub inputs: [InputWord; INPUT_WORDS],
+    pub(super) cell: Arc<Cell>,
+    pub(super) cycles: Arc<CycleSlot>,
 }
 
 /// A position saved from the robot's pose.
@@ -267,6 +263,9 @@ impl RobotHandle {
 
     /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
     fn can_move_now(&self) -> Result<(), SubmitError> {
+        if self.face_holds_motion() {
+            return Err(SubmitError::MoveEnableOff);
+        }
         let Some(blocker) = self.shared.refusal() else {
             return Ok(());
         };
@@ -369,7 +368,7 @@ impl RobotHandle {
     }
 
     /// The counts the PLC last reported, per joint.
-    fn counts_by_joint(&self) -> Option<[i64; JOINTS]> {
+    pub(super) fn counts_by_joint(&self) -> Option<[i64; JOINTS]> {
         let counts = self.shared.state(|s| s.counts)?;
         Some(std::array::from_fn(|j| {
             counts[usize::from(self.robot.joints[j].channel)]
@@ -617,6 +616,7 @@ impl RobotHandle {
     pub fn state(&self) -> RobotState {
         let mut state = self.shared.state(|s| s.clone());
         state.cycle = self.cycles.status();
+        state.mode = self.mode();
         state
     }
 
@@ -711,10 +711,7 @@ impl Daemon {
                 gateway_settings: Arc::new(setup.gateway.clone()),
                 shared: Arc::clone(&shared),
                 positions: Arc::clone(&options.positions),
-                cell: Arc::new(Cell {
-                    settings: setup.cell.clone(),
-                    inputs: setup.settings.layout.inputs,
-                }),
+                cell: Arc::new(Cell::new(setup.cell.clone(), setup.settings.layout.inputs)),
                 cycles: Arc::new(CycleSlot::default()),
             };
             let worker = Worker::new(

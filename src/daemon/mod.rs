@@ -15,6 +15,7 @@
 //! report.rs   RobotState (RobotPhase), MoveReport (Stage, SectionReport), MoveAccepted,
 //!             PathAccepted: what the API writes and the CLI reads back
 //! ids.rs      move ids unique across restarts
+//! cell/       the robot in its cell: signals, the mode (local/remote), the cell face's daemon side
 //! gateway.rs  register gateway requests (the cell's other registers, through the same link)
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
@@ -22,6 +23,7 @@
 //! ```
 
 pub mod api;
+mod cell;
 mod cycle;
 mod gateway;
 mod handle;
@@ -39,6 +41,7 @@ mod setup;
 mod shared;
 mod worker;
 
+pub use cell::{ModeError, Owner};
 pub use cycle::{CycleError, CycleState, CycleStatus, StepAt};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
 pub use handle::{Daemon, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};

@@ -319,6 +319,9 @@ pub struct RobotState {
     /// The robot's cycle, if one ran since the daemon started.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cycle: Option<super::CycleStatus>,
+    /// Who drives the robot: `local` (the CLI and the API) or `remote` (the cell face).
+    #[serde(default)]
+    pub mode: crate::cell::Mode,
 }
 
 /// Where the daemon and the PLC stand, as [`RobotState::phase`] shows it: the contract machine's

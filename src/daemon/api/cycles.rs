@@ -7,6 +7,8 @@
 //! POST /v1/robots/{name}/cycles/pause                          CycleStatus   | 404 | 409
 //! POST /v1/robots/{name}/cycles/resume                         CycleStatus   | 404 | 409
 //! ```
+//! Running, pausing and resuming are the local controller's: refused (409 `mode-remote`) while
+//! the cell face drives the robot. A stop is taken in both modes.
 
 use axum::Json;
 use axum::body::Bytes;
@@ -16,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::ApiError;
 use super::{Api, handlers};
+use crate::cell::Mode;
 use crate::daemon::CycleStatus;
 
 /// What `POST .../cycles` takes.
@@ -46,7 +49,10 @@ pub(super) async fn run(
     let robot = api.robot(&name)?;
     let order: CycleOrder = handlers::parse_body(&body)?;
     tracing::info!(robot = %name, program = %order.program, count = order.count, "cycle run requested");
-    let status = robot.run_cycle(&order.program, order.count)?;
+    let status = {
+        let _owner = robot.owned_by(Mode::Local)?;
+        robot.run_cycle(&order.program, order.count)?
+    };
     Ok((StatusCode::ACCEPTED, Json(status)))
 }
 
@@ -82,6 +88,7 @@ pub(super) async fn pause(
 ) -> Result<Json<CycleStatus>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle pause requested");
+    let _owner = robot.owned_by(Mode::Local)?;
     Ok(Json(robot.pause_cycle()?))
 }
 
@@ -91,5 +98,6 @@ pub(super) async fn resume(
 ) -> Result<Json<CycleStatus>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle resume requested");
+    let _owner = robot.owned_by(Mode::Local)?;
     Ok(Json(robot.resume_cycle()?))
 }

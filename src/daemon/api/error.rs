@@ -219,6 +219,10 @@ impl From<SubmitError> for ApiError {
                 message: e.to_string(),
                 reason: "queue-full",
             },
+            e @ SubmitError::MoveEnableOff => Self::Conflict {
+                message: e.to_string(),
+                reason: "move-enable-off",
+            },
             SubmitError::ShuttingDown => Self::ShuttingDown,
         }
     }
@@ -398,5 +402,29 @@ mod tests {
             reason: None,
         };
         assert_eq!(serde_json::to_string(&body).unwrap(), r#"{"error":"x"}"#);
+    }
+}
+
+impl From<crate::daemon::ModeError> for ApiError {
+    fn from(e: crate::daemon::ModeError) -> Self {
+        use crate::cell::Mode;
+        use crate::daemon::ModeError;
+        match &e {
+            ModeError::NotYours { mode } => Self::Conflict {
+                message: e.to_string(),
+                reason: match mode {
+                    Mode::Remote => "mode-remote",
+                    Mode::Local => "mode-local",
+                },
+            },
+            ModeError::Busy { .. } => Self::Conflict {
+                message: e.to_string(),
+                reason: "busy",
+            },
+            ModeError::NoFace { .. } => Self::BadRequest {
+                message: e.to_string(),
+                field: Some("mode".to_owned()),
+            },
+        }
     }
 }

@@ -1,6 +1,7 @@
 //! The handlers: each takes its path parameters and body, asks a [`RobotHandle`] and answers JSON
 //! (or NDJSON, or the metrics text).
 
+use crate::cell::Mode;
 use std::convert::Infallible;
 
 use axum::Json;
@@ -39,7 +40,10 @@ pub(super) async fn submit(
 ) -> Result<(StatusCode, Json<MoveAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
-    let ids = robot.submit_starts(order.clone())?;
+    let ids = {
+        let _owner = robot.owned_by(Mode::Local)?;
+        robot.submit_starts(order.clone())?
+    };
     let id = ids[ids.len() - 1];
     tracing::info!(robot = %name, move_id = id, starts = ids.len(), "move accepted");
     // Queued: the answer is 202 whatever follows (a report of a queued move is never dropped).
@@ -56,7 +60,10 @@ pub(super) async fn submit_path(
 ) -> Result<(StatusCode, Json<PathAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order: PathOrder = parse_body(&body)?;
-    let ids = robot.submit_path(&order)?;
+    let ids = {
+        let _owner = robot.owned_by(Mode::Local)?;
+        robot.submit_path(&order)?
+    };
     tracing::info!(robot = %name, sections = ids.len(), first_move_id = ids.first().copied().unwrap_or(0), "path accepted");
     // Queued: the answer is 202 whatever follows; a report that ended and was dropped since
     // (only ended ones are) is left out.
@@ -110,6 +117,7 @@ pub(super) async fn clear_fault(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "fault clear requested");
+    drop(robot.owned_by(Mode::Local)?);
     robot.clear_fault().await?;
     Ok(Json(serde_json::json!({ "cleared": true })))
 }
@@ -120,6 +128,7 @@ pub(super) async fn home(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "home requested");
+    drop(robot.owned_by(Mode::Local)?);
     robot.home().await?;
     Ok(Json(serde_json::json!({ "homed": true })))
 }

@@ -37,6 +37,7 @@ mod error;
 mod handlers;
 mod listen;
 pub mod metrics;
+pub mod mode;
 mod registers;
 pub use cycles::{CycleOrder, CycleStop};
 pub use registers::{RegisterWrite, Registers};
@@ -102,6 +103,7 @@ impl Api {
             .route(&format!("{robot}/cycles/resume"), post(cycles::resume))
             .route(&format!("{robot}/clear-fault"), post(handlers::clear_fault))
             .route(&format!("{robot}/home"), post(handlers::home))
+            .route(&format!("{robot}/mode"), get(mode::get).put(mode::put))
             .route(
                 &format!("{robot}/registers/{{address}}"),
                 get(registers::read).put(registers::write),

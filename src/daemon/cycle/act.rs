@@ -41,6 +41,9 @@ pub(super) async fn run_move(
     control: &mut watch::Receiver<Control>,
     started: &mut Vec<MoveId>,
 ) -> MotionEnd {
+    if let Some(why) = control.borrow().hold {
+        return MotionEnd::Held { why: why.to_owned() };
+    }
     match handle.submit_starts(order) {
         Ok(ids) => follow(handle, &ids, control, started).await,
         Err(e) => MotionEnd::Failed {
@@ -56,6 +59,9 @@ pub(super) async fn run_path(
     control: &mut watch::Receiver<Control>,
     started: &mut Vec<MoveId>,
 ) -> MotionEnd {
+    if let Some(why) = control.borrow().hold {
+        return MotionEnd::Held { why: why.to_owned() };
+    }
     match handle.submit_path(order) {
         Ok(ids) => follow(handle, &ids, control, started).await,
         Err(e) => MotionEnd::Failed {
@@ -92,8 +98,16 @@ async fn follow(
                 }
             }
         };
+        // A hold from outside the PLC is set before the robot is stopped: the move that ends
+        // short under it was held.
+        let held = control.borrow().hold;
         match report.or_else(|| handle.report(id)) {
             Some(r) if r.stage == Stage::Done => {}
+            Some(_) if held.is_some() => {
+                return MotionEnd::Held {
+                    why: held.unwrap_or_default().to_owned(),
+                };
+            }
             Some(r) => return ended_short(&r),
             None => {
                 return MotionEnd::Failed {

@@ -10,6 +10,9 @@ pub(crate) struct Control {
     pub stop: bool,
     /// Pause at the end of the current step.
     pub pause: bool,
+    /// A hold from outside the PLC (the cell face's move-enable dropped): the robot is being
+    /// stopped, the move running ends held and the cycle pauses, with this reason.
+    pub hold: Option<&'static str>,
     /// Counts the resumes asked for (a paused or faulted cycle goes on when it grows).
     pub resumes: u64,
 }

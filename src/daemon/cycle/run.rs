@@ -97,7 +97,7 @@ impl Runner {
             if c.pause {
                 self.set(|s| {
                     s.state = CycleState::Paused;
-                    s.reason = Some("paused by request".to_owned());
+                    s.reason = Some(c.hold.unwrap_or("paused by request").to_owned());
                 });
                 if !self.until_resumed().await {
                     return (CycleState::Stopped, Some("stopped by request".to_owned()));

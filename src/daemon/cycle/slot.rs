@@ -157,12 +157,28 @@ impl CycleSlot {
         })
     }
 
+    /// Holds the cycle from outside the PLC (`why`): the move running ends held and the cycle
+    /// pauses (the caller stops the robot). Whether a cycle was under way.
+    pub(crate) fn hold(&self, why: &'static str) -> bool {
+        match self.current().as_ref() {
+            Some(c) if !lock(&c.status).state.is_final() => {
+                c.control.send_modify(|k| {
+                    k.pause = true;
+                    k.hold = Some(why);
+                });
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Resumes a paused cycle, or a faulted one whose fault was cleared.
     pub(crate) fn resume(&self) -> Result<CycleStatus, CycleError> {
         self.with_live(|c, s| match s.state {
             CycleState::Paused => {
                 c.control.send_modify(|k| {
                     k.pause = false;
+                    k.hold = None;
                     k.resumes += 1;
                 });
                 Ok(s.clone())
@@ -171,6 +187,7 @@ impl CycleSlot {
                 c.fault_cleared = false;
                 c.control.send_modify(|k| {
                     k.pause = false;
+                    k.hold = None;
                     k.resumes += 1;
                 });
                 Ok(s.clone())

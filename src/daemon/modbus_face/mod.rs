@@ -10,8 +10,11 @@
 //!  (a 15 / 16 write tokio-modbus's codec cannot decode is made a write of nothing first,
 //!   screen.rs, so it is answered 03 and the connection kept)
 //! ```
-//! Any unit id is answered: the face stands for one PLC. It ends with the daemon.
+//! Any unit id is answered: the face stands for one PLC. It ends with the daemon. A robot with a
+//! cell face (`[robots.NAME.cell.face]`) has its block here too, from register `registers`
+//! (`cell.rs`): those requests go to the face, not the PLC.
 
+mod cell;
 mod map;
 mod screen;
 
@@ -139,6 +142,10 @@ async fn answer(robot: &RobotHandle, request: &Request<'_>) -> Result<Response, 
         tracing::info!(robot = %robot.robot().name, ?request, exception = u8::from(code), error = %e, "Modbus request refused");
         code
     };
+    let base = robot.face_settings().map(|f| f.registers);
+    if let Some(asked) = base.and_then(|base| cell::ask(request, base)) {
+        return face(robot, asked?).await;
+    }
     match map::ask(request)? {
         Ask::Read { start, count, kind } => {
             let values = robot.read_registers(start, count).await.map_err(refused)?;
@@ -155,6 +162,36 @@ async fn answer(robot: &RobotHandle, request: &Request<'_>) -> Result<Response, 
                 .await
                 .map_err(refused)?;
             Ok(echo)
+        }
+    }
+}
+
+/// Carries out one request for the cell face's block.
+async fn face(robot: &RobotHandle, asked: cell::FaceAsk) -> Result<Response, ExceptionCode> {
+    match asked {
+        cell::FaceAsk::Read {
+            offset,
+            count,
+            kind,
+        } => {
+            let block = robot
+                .face_block()
+                .ok_or(ExceptionCode::IllegalDataAddress)?;
+            Ok(cell::read_response(
+                kind,
+                block[offset..offset + count].to_vec(),
+            ))
+        }
+        cell::FaceAsk::Write {
+            offset,
+            values,
+            echo,
+        } => {
+            if robot.face_write(offset, &values).await {
+                Ok(echo)
+            } else {
+                Err(ExceptionCode::IllegalDataAddress)
+            }
         }
     }
 }

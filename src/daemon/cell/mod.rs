@@ -1,0 +1,148 @@
+//! The robot in its cell, as the daemon keeps it: the signals' names and the input words the
+//! PLC copies, who drives the robot (the [`Mode`]), and the cell face the line drives it through
+//! (`face.rs`).
+//!
+//! ```text
+//!  local:  API / CLI --owned_by(Local)--> submit, paths, cycles, home, clear-fault
+//!  remote: cell face --owned_by(Remote)--> select, start (run / resume), pause, reset, home
+//!  both:   stop (CLI, API, the face's stop and stop-now)
+//!  set_mode: only while no cycle is under way and no move is queued or running
+//! ```
+//! The mode is held (a read lock) while an order is taken, and changed under the write lock, so
+//! an order is taken in the mode it was checked in: of two controllers racing, exactly one wins.
+
+mod face;
+
+use std::sync::{PoisonError, RwLock, RwLockReadGuard};
+
+use thiserror::Error;
+
+pub(crate) use face::FaceCell;
+
+use super::RobotHandle;
+use crate::cell::Mode;
+use crate::config::CellSettings;
+use crate::contract::{INPUT_WORDS, InputWord};
+
+/// What a robot's handle knows of its cell.
+#[derive(Debug)]
+pub(crate) struct Cell {
+    pub settings: CellSettings,
+    pub inputs: [InputWord; INPUT_WORDS],
+    mode: RwLock<Mode>,
+    pub face: Option<FaceCell>,
+}
+
+impl Cell {
+    pub(crate) fn new(settings: CellSettings, inputs: [InputWord; INPUT_WORDS]) -> Self {
+        let mode = settings.face.as_ref().map_or(Mode::Local, |f| f.mode);
+        let face = settings.face.clone().map(FaceCell::new);
+        Self {
+            settings,
+            inputs,
+            mode: RwLock::new(mode),
+            face,
+        }
+    }
+}
+
+/// Why a request was refused by the mode.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum ModeError {
+    /// The other controller drives the robot.
+    #[error("{}", not_yours(*mode))]
+    NotYours {
+        /// The robot's mode.
+        mode: Mode,
+    },
+    /// The mode changes only while the robot is idle.
+    #[error("the mode changes only while nothing runs: {what}")]
+    Busy {
+        /// What runs.
+        what: String,
+    },
+    /// Remote needs a cell face.
+    #[error(
+        "robot {robot} has no cell face ([robots.{robot}.cell.face]): it is driven locally only"
+    )]
+    NoFace {
+        /// The robot.
+        robot: String,
+    },
+}
+
+fn not_yours(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Remote => {
+            "the robot is in remote mode: the cell face drives it (`linterpd mode local` takes it \
+             back; `linterpd stop` works in both modes)"
+        }
+        Mode::Local => {
+            "the robot is in local mode: the CLI and the API drive it (`linterpd mode remote` \
+             gives it to the cell face)"
+        }
+    }
+}
+
+/// The mode held while an order is taken: it cannot change until this is dropped.
+#[derive(Debug)]
+pub struct Owner<'a>(#[allow(dead_code, reason = "held, not read")] RwLockReadGuard<'a, Mode>);
+
+impl RobotHandle {
+    /// Who drives the robot.
+    #[must_use]
+    pub fn mode(&self) -> Mode {
+        *self.cell.mode.read().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The mode, held, when `who` drives the robot; refused otherwise. Hold it while the order
+    /// is taken (it is a lock: never across an `.await`).
+    pub fn owned_by(&self, who: Mode) -> Result<Owner<'_>, ModeError> {
+        let mode = self.cell.mode.read().unwrap_or_else(PoisonError::into_inner);
+        if *mode == who {
+            Ok(Owner(mode))
+        } else {
+            Err(ModeError::NotYours { mode: *mode })
+        }
+    }
+
+    /// Sets who drives the robot: refused while a cycle is under way or a move is queued or
+    /// running, and `remote` without a cell face.
+    pub fn set_mode(&self, to: Mode) -> Result<Mode, ModeError> {
+        let mut mode = self
+            .cell
+            .mode
+            .write()
+            .unwrap_or_else(PoisonError::into_inner);
+        if *mode == to {
+            return Ok(to);
+        }
+        if to == Mode::Remote && self.cell.face.is_none() {
+            return Err(ModeError::NoFace {
+                robot: self.robot().name.clone(),
+            });
+        }
+        if let Some(c) = self.cycle().filter(|c| !c.state.is_final()) {
+            let state = serde_json::to_value(c.state).unwrap_or_default();
+            return Err(ModeError::Busy {
+                what: format!(
+                    "cycle {} is {}: stop it first (linterpd cycle stop)",
+                    c.program,
+                    state.as_str().unwrap_or_default()
+                ),
+            });
+        }
+        let state = self.state();
+        if let Some(id) = state.current_move.or_else(|| state.queued.first().copied()) {
+            return Err(ModeError::Busy {
+                what: format!("move {id} is queued or running: wait for it, or stop the robot"),
+            });
+        }
+        tracing::info!(robot = %self.robot().name, from = %*mode, to = %to, "mode changed");
+        *mode = to;
+        if let Some(face) = &self.cell.face {
+            face.mode_changed();
+        }
+        Ok(to)
+    }
+}
