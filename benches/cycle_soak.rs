@@ -155,6 +155,7 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
             signals,
             programs: Some(dir.clone()),
             require_wait_timeout: true,
+            face: None,
         },
     };
     let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());

@@ -46,6 +46,7 @@ fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
         signals,
         programs: Some(dir),
         require_wait_timeout: false,
+        face: None,
     };
     let gateway = GatewaySettings {
         access,

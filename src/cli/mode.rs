@@ -60,8 +60,8 @@ pub fn run(args: &ModeArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
 fn describe(robot: &str, mode: Mode) -> String {
     match mode {
         Mode::Local => format!("{robot}: local (the CLI and the API drive it)"),
-        Mode::Remote => format!(
-            "{robot}: remote (the cell face drives it; `linterpd stop` still works)"
-        ),
+        Mode::Remote => {
+            format!("{robot}: remote (the cell face drives it; `linterpd stop` still works)")
+        }
     }
 }

@@ -109,7 +109,9 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
         if crate::robot::is_position_name(value.get_ref()) {
             Ok(value.get_ref().clone())
         } else {
-            Err(at.child(key).invalid(value, crate::robot::POSITION_NAME_RULE))
+            Err(at
+                .child(key)
+                .invalid(value, crate::robot::POSITION_NAME_RULE))
         }
     };
     let home = raw
@@ -231,11 +233,17 @@ mod tests {
             ("registers = 100", "face.registers", "32765..=65518"),
             ("registers = 65530", "face.registers", "32765..=65518"),
             ("mode = \"auto\"", "face.mode", "`local` or `remote`"),
-            ("positions = [\"a\", \"a\"]", "face.positions", "named twice"),
+            (
+                "positions = [\"a\", \"a\"]",
+                "face.positions",
+                "named twice",
+            ),
             ("home = \"\"", "face.home", "\"\""),
             ("strobe = 1", "strobe", "unknown field"),
         ] {
-            let e = Config::from_toml(&with_face(table)).unwrap_err().to_string();
+            let e = Config::from_toml(&with_face(table))
+                .unwrap_err()
+                .to_string();
             assert!(e.contains(key) && e.contains(words), "{table}: {e}");
         }
     }

@@ -39,7 +39,9 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         if let Some(table) = &raw.get_ref().cell {
             let at = At::new(text, "robots").child(&robot.name).child("cell");
             let settings = cell::settings(&at, table)?;
-            let served = gateways.get(&robot.name).is_some_and(|g| g.modbus.is_some());
+            let served = gateways
+                .get(&robot.name)
+                .is_some_and(|g| g.modbus.is_some());
             if let (Some(face), false) = (&table.get_ref().face, served) {
                 let reason = format!(
                     "the cell face is served on the gateway's Modbus face: it needs \

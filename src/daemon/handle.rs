@@ -89,7 +89,7 @@ pub struct RobotHandle {
     stops: mpsc::UnboundedSender<Reply>,
     gateway: mpsc::UnboundedSender<Job>,
     gateway_settings: Arc<GatewaySettings>,
-    shared: Arc<Shared>,
+    pub(super) shared: Arc<Shared>,
     positions: Arc<TaughtPositions>,
     pub(super) cell: Arc<Cell>,
     pub(super) cycles: Arc<CycleSlot>,
@@ -668,6 +668,9 @@ impl RobotHandle {
     /// busy pace.
     pub(crate) fn watch_inputs(&self, on: bool) {
         self.shared.inputs_watched.store(on, Ordering::Relaxed);
+        if on {
+            self.shared.read_soon.notify_one();
+        }
     }
 
     /// How long ago the robot's worker last went round its loop.

@@ -22,6 +22,9 @@ pub(super) struct Shared {
     /// Set while a cycle waits on the inputs: the worker reads the status block at its busy
     /// pace, so the wait reacts within one poll interval.
     pub inputs_watched: AtomicBool,
+    /// Wakes the worker to read the status block at once (a wait began: it is decided on a
+    /// fresh block, not one an idle poll away).
+    pub read_soon: tokio::sync::Notify,
     ids: Arc<MoveIds>,
     /// Where the last accepted order is planned to end, per joint (for checking the next).
     planned_end: Mutex<Option<[i64; JOINTS]>>,
@@ -52,6 +55,7 @@ impl Shared {
             moves: Mutex::new(Moves::default()),
             stop_pending: Arc::new(AtomicBool::new(false)),
             inputs_watched: AtomicBool::new(false),
+            read_soon: tokio::sync::Notify::new(),
             ids,
             planned_end: Mutex::new(None),
             refusal: Mutex::new(Some(Blocker::LinkDown)),

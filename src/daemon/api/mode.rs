@@ -10,8 +10,8 @@ use axum::Json;
 use axum::extract::{Path, State};
 use serde::{Deserialize, Serialize};
 
-use super::error::ApiError;
 use super::body::JsonBody;
+use super::error::ApiError;
 use super::{Api, handlers};
 use crate::cell::Mode;
 

@@ -212,10 +212,7 @@ impl RobotHandle {
     /// What the status words need of the robot now.
     fn face_view(&self, settings: &FaceSettings) -> View {
         let state = self.state();
-        let linked = !matches!(
-            state.phase,
-            RobotPhase::LinkDown | RobotPhase::NotPublished
-        );
+        let linked = !matches!(state.phase, RobotPhase::LinkDown | RobotPhase::NotPublished);
         let moving = state.current_move.is_some() || !state.queued.is_empty();
         let counts = self.counts_by_joint().filter(|_| linked && !moving);
         let taught = self.positions();

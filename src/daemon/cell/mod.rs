@@ -13,6 +13,7 @@
 
 mod face;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{PoisonError, RwLock, RwLockReadGuard};
 
 use thiserror::Error;
@@ -29,7 +30,11 @@ use crate::contract::{INPUT_WORDS, InputWord};
 pub(crate) struct Cell {
     pub settings: CellSettings,
     pub inputs: [InputWord; INPUT_WORDS],
+    /// Taken to hold the mode while an order is taken, and to change it.
     mode: RwLock<Mode>,
+    /// The mode as last set, read without the lock (`RobotHandle::mode`), so code that holds
+    /// the mode may read it again.
+    remote: AtomicBool,
     pub face: Option<FaceCell>,
 }
 
@@ -41,6 +46,7 @@ impl Cell {
             settings,
             inputs,
             mode: RwLock::new(mode),
+            remote: AtomicBool::new(mode == Mode::Remote),
             face,
         }
     }
@@ -92,13 +98,21 @@ impl RobotHandle {
     /// Who drives the robot.
     #[must_use]
     pub fn mode(&self) -> Mode {
-        *self.cell.mode.read().unwrap_or_else(PoisonError::into_inner)
+        if self.cell.remote.load(Ordering::SeqCst) {
+            Mode::Remote
+        } else {
+            Mode::Local
+        }
     }
 
     /// The mode, held, when `who` drives the robot; refused otherwise. Hold it while the order
-    /// is taken (it is a lock: never across an `.await`).
+    /// is taken (it is a lock: never across an `.await`, and never taken twice by one caller).
     pub fn owned_by(&self, who: Mode) -> Result<Owner<'_>, ModeError> {
-        let mode = self.cell.mode.read().unwrap_or_else(PoisonError::into_inner);
+        let mode = self
+            .cell
+            .mode
+            .read()
+            .unwrap_or_else(PoisonError::into_inner);
         if *mode == who {
             Ok(Owner(mode))
         } else {
@@ -132,14 +146,17 @@ impl RobotHandle {
                 ),
             });
         }
-        let state = self.state();
-        if let Some(id) = state.current_move.or_else(|| state.queued.first().copied()) {
+        let running = self
+            .shared
+            .state(|s| s.current_move.or_else(|| s.queued.first().copied()));
+        if let Some(id) = running {
             return Err(ModeError::Busy {
                 what: format!("move {id} is queued or running: wait for it, or stop the robot"),
             });
         }
         tracing::info!(robot = %self.robot().name, from = %*mode, to = %to, "mode changed");
         *mode = to;
+        self.cell.remote.store(to == Mode::Remote, Ordering::SeqCst);
         if let Some(face) = &self.cell.face {
             face.mode_changed();
         }

@@ -42,7 +42,9 @@ pub(super) async fn run_move(
     started: &mut Vec<MoveId>,
 ) -> MotionEnd {
     if let Some(why) = control.borrow().hold {
-        return MotionEnd::Held { why: why.to_owned() };
+        return MotionEnd::Held {
+            why: why.to_owned(),
+        };
     }
     match handle.submit_starts(order) {
         Ok(ids) => follow(handle, &ids, control, started).await,
@@ -60,7 +62,9 @@ pub(super) async fn run_path(
     started: &mut Vec<MoveId>,
 ) -> MotionEnd {
     if let Some(why) = control.borrow().hold {
-        return MotionEnd::Held { why: why.to_owned() };
+        return MotionEnd::Held {
+            why: why.to_owned(),
+        };
     }
     match handle.submit_path(order) {
         Ok(ids) => follow(handle, &ids, control, started).await,

@@ -36,9 +36,12 @@ pub(super) fn ask(request: &Request<'_>, base: u16) -> Option<Result<FaceAsk, Ex
         Request::ReadHoldingRegisters(at, n) => (*at, Some(ReadKind::Holding), *n, None),
         Request::ReadInputRegisters(at, n) => (*at, Some(ReadKind::Input), *n, None),
         Request::WriteSingleRegister(at, w) => (*at, None, 1, Some(vec![*w])),
-        Request::WriteMultipleRegisters(at, w) => {
-            (*at, None, u16::try_from(w.len()).unwrap_or(u16::MAX), Some(w.to_vec()))
-        }
+        Request::WriteMultipleRegisters(at, w) => (
+            *at,
+            None,
+            u16::try_from(w.len()).unwrap_or(u16::MAX),
+            Some(w.to_vec()),
+        ),
         _ => return None,
     };
     let offset = usize::from(at.checked_sub(base)?);
@@ -123,9 +126,18 @@ mod tests {
             Some(Ok(FaceAsk::Write { offset: 0, .. }))
         ));
         let address = Some(Err(ExceptionCode::IllegalDataAddress));
-        assert_eq!(ask(&Request::ReadHoldingRegisters(BASE + 8, 11), BASE), address);
-        assert_eq!(ask(&Request::WriteSingleRegister(BASE + 4, 1), BASE), address);
-        assert_eq!(ask(&Request::WriteSingleRegister(BASE + 9, 1), BASE), address);
+        assert_eq!(
+            ask(&Request::ReadHoldingRegisters(BASE + 8, 11), BASE),
+            address
+        );
+        assert_eq!(
+            ask(&Request::WriteSingleRegister(BASE + 4, 1), BASE),
+            address
+        );
+        assert_eq!(
+            ask(&Request::WriteSingleRegister(BASE + 9, 1), BASE),
+            address
+        );
         let spans = Request::WriteMultipleRegisters(BASE + 2, vec![1, 2, 3].into());
         assert_eq!(ask(&spans, BASE), address);
         assert_eq!(

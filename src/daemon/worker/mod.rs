@@ -346,6 +346,9 @@ impl Worker {
                 }
             }
             () = tokio::time::sleep_until(until) => {}
+            () = self.shared.read_soon.notified() => {
+                self.next_poll = tokio::time::Instant::now();
+            }
         }
     }
 
