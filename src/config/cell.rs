@@ -6,7 +6,6 @@
 //! signals = { press_open = "X5", press_moving = "X6", part_present = "X2", press_go = "Y0" }
 //! programs = "cycles"            # a directory of cycle programs (*.toml), relative to this file
 //! require_wait_timeout = true    # refuse a program whose `wait` has no `timeout` (default false)
-//! ```
 //!
 //! [robots.press-loader.cell.face]   # the register face the line's PLC or HMI drives
 //! registers = 50000              # its first register on the gateway's Modbus face (18 words)
@@ -14,7 +13,6 @@
 //! positions = ["home", "pick", "press"]   # numbered from 1 in the status block's +16
 //! mode = "local"                 # the mode at start-up: local (default) or remote
 //! ```
-//! ```text
 //! A signal is an X, Y or R bit (`X5`, `X1A`, `R10A`); an input the PLC program copies into the
 //! status block (`[robots.NAME.plc.contract] inputs`) is read at no cost with every status read.
 

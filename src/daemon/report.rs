@@ -618,6 +618,7 @@ mod json_tests {
                 longest_poll_delay_ms: 2,
             },
             cycle: Some(super::super::CycleStatus::starting("press-load", Some(10))),
+            mode: crate::cell::Mode::Remote,
         }
     }
 

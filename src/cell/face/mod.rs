@@ -43,7 +43,7 @@ mod machine;
 mod status;
 
 pub use machine::{Action, Face, Refusal};
-pub use status::{CyclePhase, CycleView, View, status_words};
+pub use status::{CyclePhase, CycleView, Link, View, status_words};
 
 /// Command words (+0..+3).
 pub const COMMAND_WORDS: usize = 4;

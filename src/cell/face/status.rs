@@ -31,15 +31,25 @@ pub struct CycleView {
     pub done: u64,
 }
 
+/// The PLC link, as the face shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Link {
+    /// No link (or no status block yet).
+    #[default]
+    Down,
+    /// Linked, but the PLC's heartbeat stands still (stalled, or in PROG mode).
+    Stalled,
+    /// Linked and running.
+    Up,
+}
+
 /// What the robot does, as the status words need it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct View {
     /// Who drives it.
     pub mode: Mode,
-    /// Whether the PLC link is up.
-    pub linked: bool,
-    /// Whether the PLC's heartbeat stands still.
-    pub stalled: bool,
+    /// The PLC link.
+    pub link: Link,
     /// Whether a move would be taken now (homed, no fault, the PLC in RUN).
     pub accepts_moves: bool,
     /// The PLC's fault word, when not 0.
@@ -62,16 +72,17 @@ pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
     let phase = view.cycle.map(|c| c.phase);
     let cycle_live = phase.is_some_and(|p| p != CyclePhase::Ended);
     let remote = view.mode == Mode::Remote;
-    let fault = match (view.plc_fault, view.linked, view.stalled, phase) {
-        (_, false, _, _) => fault::LINK_DOWN,
-        (_, _, true, _) => fault::STALLED,
-        (Some(code), ..) => code.min(99),
-        (None, .., Some(CyclePhase::Faulted)) => fault::CYCLE,
-        _ => 0,
+    let linked = view.link != Link::Down;
+    let fault = match (view.link, view.plc_fault, phase) {
+        (Link::Down, ..) => fault::LINK_DOWN,
+        (Link::Stalled, ..) => fault::STALLED,
+        (Link::Up, Some(code), _) => code.min(99),
+        (Link::Up, None, Some(CyclePhase::Faulted)) => fault::CYCLE,
+        (Link::Up, ..) => 0,
     };
     let ready = remote
         && face.enabled()
-        && view.linked
+        && linked
         && view.accepts_moves
         && fault == 0
         && !cycle_live
@@ -86,7 +97,7 @@ pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
         (remote, status_bit::REMOTE),
         (face.selected().is_some(), status_bit::SELECTED),
         (view.moving, status_bit::MOVING),
-        (view.linked, status_bit::LINKED),
+        (linked, status_bit::LINKED),
         (face.refused().is_some(), status_bit::REFUSED),
         (face.enabled(), status_bit::ENABLED),
     ]
@@ -118,7 +129,7 @@ mod tests {
         face.write(0, &[0, 0, bit::ENABLE, 0], Mode::Remote);
         let view = View {
             mode: Mode::Remote,
-            linked: true,
+            link: Link::Up,
             accepts_moves: true,
             heartbeat: 0x1_0005,
             ..View::default()
@@ -142,7 +153,7 @@ mod tests {
                 ..view
             },
             View {
-                linked: false,
+                link: Link::Down,
                 ..view
             },
             View {
@@ -189,7 +200,7 @@ mod tests {
         let cases = [
             (
                 View {
-                    linked: false,
+                    link: Link::Down,
                     plc_fault: Some(4),
                     ..view
                 },
@@ -197,7 +208,7 @@ mod tests {
             ),
             (
                 View {
-                    stalled: true,
+                    link: Link::Stalled,
                     ..view
                 },
                 fault::STALLED,

@@ -299,6 +299,30 @@ impl From<crate::daemon::CycleError> for ApiError {
     }
 }
 
+impl From<crate::daemon::ModeError> for ApiError {
+    fn from(e: crate::daemon::ModeError) -> Self {
+        use crate::cell::Mode;
+        use crate::daemon::ModeError;
+        match &e {
+            ModeError::NotYours { mode } => Self::Conflict {
+                message: e.to_string(),
+                reason: match mode {
+                    Mode::Remote => "mode-remote",
+                    Mode::Local => "mode-local",
+                },
+            },
+            ModeError::Busy { .. } => Self::Conflict {
+                message: e.to_string(),
+                reason: "busy",
+            },
+            ModeError::NoFace { .. } => Self::BadRequest {
+                message: e.to_string(),
+                field: Some("mode".to_owned()),
+            },
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -402,29 +426,5 @@ mod tests {
             reason: None,
         };
         assert_eq!(serde_json::to_string(&body).unwrap(), r#"{"error":"x"}"#);
-    }
-}
-
-impl From<crate::daemon::ModeError> for ApiError {
-    fn from(e: crate::daemon::ModeError) -> Self {
-        use crate::cell::Mode;
-        use crate::daemon::ModeError;
-        match &e {
-            ModeError::NotYours { mode } => Self::Conflict {
-                message: e.to_string(),
-                reason: match mode {
-                    Mode::Remote => "mode-remote",
-                    Mode::Local => "mode-local",
-                },
-            },
-            ModeError::Busy { .. } => Self::Conflict {
-                message: e.to_string(),
-                reason: "busy",
-            },
-            ModeError::NoFace { .. } => Self::BadRequest {
-                message: e.to_string(),
-                field: Some("mode".to_owned()),
-            },
-        }
     }
 }

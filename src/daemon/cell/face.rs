@@ -20,8 +20,8 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::cell::Mode;
 use crate::cell::face::{
-    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Face, Refusal, STATUS_AT, View,
-    status_words,
+    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Face, Link, Refusal, STATUS_AT,
+    View, status_words,
 };
 use crate::config::FaceSettings;
 use crate::daemon::request::{CommandError, ConflictReason};
@@ -212,7 +212,12 @@ impl RobotHandle {
     /// What the status words need of the robot now.
     fn face_view(&self, settings: &FaceSettings) -> View {
         let state = self.state();
-        let linked = !matches!(state.phase, RobotPhase::LinkDown | RobotPhase::NotPublished);
+        let link = match state.phase {
+            RobotPhase::LinkDown | RobotPhase::NotPublished => Link::Down,
+            RobotPhase::Stalled => Link::Stalled,
+            _ => Link::Up,
+        };
+        let linked = link != Link::Down;
         let moving = state.current_move.is_some() || !state.queued.is_empty();
         let counts = self.counts_by_joint().filter(|_| linked && !moving);
         let taught = self.positions();
@@ -241,8 +246,7 @@ impl RobotHandle {
         });
         View {
             mode: self.mode(),
-            linked,
-            stalled: state.phase == RobotPhase::Stalled,
+            link,
             accepts_moves: state.refuses.is_none(),
             plc_fault: state.fault.filter(|f| *f != 0),
             moving,
