@@ -391,3 +391,72 @@ async fn a_fresh_face_takes_its_first_write_as_the_baseline_and_starts_nothing()
     assert!(c.h.cycle().is_none());
     assert!(c.shared.with(|m| m.starts().is_empty()));
 }
+
+#[tokio::test]
+async fn the_api_shows_and_sets_the_mode_and_refuses_local_orders_in_remote_mode() {
+    use common::http::Endpoint;
+    use hyper::StatusCode;
+    let mut c = cell("api", Mode::Local).await;
+    let dir = common::process::TempDir::new("face-api");
+    let path = dir.path().join("api.sock");
+    let listener = tokio::net::UnixListener::bind(&path).unwrap();
+    let router = linterpd::daemon::api::Api::new(c._daemon.robots().clone()).router(None);
+    tokio::spawn(linterpd::daemon::api::serve(
+        listener,
+        router,
+        std::future::pending(),
+    ));
+    let api = Endpoint::unix(&path);
+    let robot = "/v1/robots/press-loader";
+    let mode = api.get(&format!("{robot}/mode")).await;
+    assert_eq!(mode.json()["mode"], "local");
+    let set = |m: &str| format!(r#"{{"mode": "{m}"}}"#);
+    let put = api
+        .call("PUT", &format!("{robot}/mode"), Some(&set("remote")), None)
+        .await;
+    assert_eq!(put.status, StatusCode::OK, "{}", put.text());
+    assert_eq!(api.get(robot).await.json()["mode"], "remote");
+    // Remote: the local controller's orders are 409 mode-remote; a stop is taken.
+    c.write(0, &[0, 0, ON, 0]).await;
+    let to = format!(r#"{{"to": [{}, {}, {}]}}"#, P2[0], P2[1], P2[2]);
+    for (path, body) in [
+        ("moves", to.as_str()),
+        ("cycles", r#"{"program": "load"}"#),
+        ("home", ""),
+    ] {
+        let a = api.post(&format!("{robot}/{path}"), body).await;
+        assert_eq!(a.status, StatusCode::CONFLICT, "{path}: {}", a.text());
+        assert_eq!(a.json()["reason"], "mode-remote", "{path}");
+        assert!(a.json()["error"].as_str().unwrap().contains("remote mode"));
+    }
+    assert_eq!(
+        api.post(&format!("{robot}/stop"), "").await.status,
+        StatusCode::OK
+    );
+    // The face's cycle runs: the mode does not change under it.
+    c.strobe(3, check_of(3)).await;
+    c.edge(bit::START).await;
+    c.until("waiting", |s| on(s, status_bit::WAITING)).await;
+    let put = api
+        .call("PUT", &format!("{robot}/mode"), Some(&set("local")), None)
+        .await;
+    assert_eq!(put.status, StatusCode::CONFLICT, "{}", put.text());
+    assert_eq!(put.json()["reason"], "busy");
+    assert!(
+        put.text().contains("cycle load is waiting"),
+        "{}",
+        put.text()
+    );
+    // A cycle stop from the API is taken in remote mode; then the mode changes.
+    let stop = api.post(&format!("{robot}/cycles/stop"), "{}").await;
+    assert_eq!(stop.status, StatusCode::OK, "{}", stop.text());
+    c.until("stopped", |s| !on(s, status_bit::WAITING)).await;
+    let put = api
+        .call("PUT", &format!("{robot}/mode"), Some(&set("local")), None)
+        .await;
+    assert_eq!(put.status, StatusCode::OK, "{}", put.text());
+    let bad = api
+        .call("PUT", &format!("{robot}/mode"), Some(&set("auto")), None)
+        .await;
+    assert_eq!(bad.status, StatusCode::BAD_REQUEST, "{}", bad.text());
+}
