@@ -383,6 +383,14 @@ async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resume
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert!(shared.with(|m| m.starts().is_empty()));
     shared.with(|m| m.set_input(5, false).unwrap());
+    // Resumed once the daemon has read the press closed (a block read before would show it
+    // open, and the wait would be met on it).
+    for _ in 0..500 {
+        if h.state().inputs.is_some_and(|w| w[0] & 0x20 == 0) {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     h.resume_cycle().unwrap();
     until(&h, "waiting again", |s| s.state == CycleState::Waiting).await;
     // A stop at the step's end: a wait is ended at once (it moves nothing).

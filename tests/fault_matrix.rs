@@ -23,6 +23,14 @@
 //! slack), and an order refused while another runs (nothing of it queued, the running move
 //! unharmed).
 //!
+//! Two flows are issue 27's cycles: a cycle program (a wait met 200 ms after it begins, a move
+//! interlocked on the press being open, an output written, a move back), and the same with the
+//! permit dropped mid-move (the PLC holds the robot, the cycle pauses, the permit comes back and
+//! the cycle is resumed). Beyond I1-I5 they check I6 (no start acted on while its permit did not
+//! hold: the mock records each start's inputs), I7 (a held cycle pauses, naming the input, and
+//! never ends `done` with its move undone) and I8 (a cycle that faulted stays faulted once the
+//! PLC is well again, and a restarted daemon has no cycle).
+//!
 //! Everything runs in process on paused tokio time (MEWTOCOL over `duplex`), so the matrix is
 //! deterministic and fast. `cargo test --test fault_matrix -- --nocapture` prints the counts.
 
@@ -151,6 +159,10 @@ enum Flow {
     /// A move, and while it runs an order refused (a speed over the robot's limit) and a path
     /// refused (too many elements): nothing of them is queued.
     RefusedWhileRunning,
+    /// A cycle: a wait met 200 ms in, an interlocked move, an output, a move back.
+    Cycle,
+    /// A cycle whose interlocked move's permit drops mid-move: held, paused, resumed.
+    CycleHold,
 }
 
 impl Flow {
@@ -298,14 +310,62 @@ fn channel_counts_at_a() -> [i64; 4] {
     counts
 }
 
-/// The daemon on `connect`, homing the robot to A.
+/// The cycle programs of the cycle flows, written once per test process.
+fn programs() -> std::path::PathBuf {
+    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("linterpd-matrix-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let to = |p: [f64; 3]| format!("[{}, {}, {}]", p[0], p[1], p[2]);
+        let cycle = format!(
+            "[[step]]\nwait = \"press_open\"\ntimeout = \"10s\"\n\
+             [[step]]\nmove = {{ to = {b} }}\npermit = \"press_open\"\n\
+             [[step]]\nset = {{ DT100 = 1 }}\n[[step]]\nmove = {{ to = {c} }}\n",
+            b = to(B),
+            c = to(C)
+        );
+        let hold = format!(
+            "[[step]]\nmove = {{ to = {b}, speed_mm_s = 40.0 }}\npermit = \"press_open\"\n\
+             [[step]]\nmove = {{ to = {c} }}\n",
+            b = to(B),
+            c = to(C)
+        );
+        std::fs::write(dir.join("cycle.toml"), cycle).unwrap();
+        std::fs::write(dir.join("hold.toml"), hold).unwrap();
+        dir
+    })
+    .clone()
+}
+
+/// The daemon on `connect`, homing the robot to A, in a cell: X5 is the press open, the cycle
+/// programs are [`programs`], DT100..DT199 may be written.
 fn spawn(connect: Connector, flow: Flow) -> (linterpd::daemon::Daemon, RobotHandle) {
-    common::daemon::spawn_with(
-        connect,
-        flow.settings(),
-        &DaemonOptions::default(),
-        counts_at_a(),
+    let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
+    let access = linterpd::gateway::AccessList::new(
+        ranges(&["DT100-DT199"]),
+        ranges(&["DT100-DT199"]),
+        &linterpd::contract::Layout::default(),
     )
+    .unwrap();
+    let setup = linterpd::daemon::RobotSetup {
+        robot: seed_robot(),
+        settings: flow.settings(),
+        connect,
+        home_counts: counts_at_a(),
+        gateway: linterpd::gateway::GatewaySettings {
+            access,
+            modbus: None,
+        },
+        cell: linterpd::config::CellSettings {
+            signals: common::daemon::signals(&[("press_open", "X5")]),
+            programs: Some(programs()),
+            require_wait_timeout: true,
+            face: None,
+        },
+    };
+    let d = linterpd::daemon::Daemon::spawn(vec![setup], &DaemonOptions::default());
+    let h = d.robot("press-loader").unwrap().clone();
+    (d, h)
 }
 
 /// A mock at A (homed unless `homed` is false), its scans driven on tokio's (paused) clock by
@@ -443,6 +503,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 format!("a refused order queued something: {before:?} -> {after:?}")
             });
         }
+        Flow::Cycle | Flow::CycleHold => return run_cycle(flow, h, v).await,
         Flow::Home => {
             let home = tokio::time::timeout(BOUND, h.home()).await;
             v.check(home.is_ok(), || "I3: home did not answer".into());
@@ -452,6 +513,107 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
         }
     }
     ids
+}
+
+/// The cycle flows: the cycle run to its end (done, stopped or faulted), the permit dropped
+/// mid-move and restored for [`Flow::CycleHold`]; returns the moves it started. I7 and I8 are
+/// checked on the way.
+async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId> {
+    use linterpd::daemon::CycleState;
+    let shared = SHARED
+        .with(|s| s.borrow().clone())
+        .expect("the case's mock");
+    let program = if flow == Flow::Cycle { "cycle" } else { "hold" };
+    shared.with(|m| m.set_input(5, flow == Flow::CycleHold).unwrap());
+    if let Err(e) = h.run_cycle(program, Some(1)) {
+        v.0.push(format!("the cycle was refused: {e}"));
+        return Vec::new();
+    }
+    let ended = |s: CycleState| {
+        matches!(
+            s,
+            CycleState::Done | CycleState::Stopped | CycleState::Faulted
+        )
+    };
+    if flow == Flow::Cycle {
+        // The press opens 200 ms into the wait.
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        shared.with(|m| m.set_input(5, true).unwrap());
+    } else {
+        // The press closes once the robot has moved 300 ms.
+        for _ in 0..3_000 {
+            let running =
+                shared.with(|m| m.status().state) == linterpd::contract::State::Running.word();
+            if running || h.cycle().is_some_and(|c| ended(c.state)) {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        shared.with(|m| m.set_input(5, false).unwrap());
+        let paused_or_ended = cycle_until(h, |s| s == CycleState::Paused || ended(s)).await;
+        v.check(paused_or_ended, || {
+            format!("I3: the held cycle never paused: {:?}", h.cycle())
+        });
+        let status = h.cycle().unwrap();
+        if status.state == CycleState::Paused {
+            let why = status.reason.clone().unwrap_or_default();
+            v.check(why.contains("X5 is off"), || {
+                format!("I7: the hold does not name the input: {why}")
+            });
+        }
+        v.check(status.state != CycleState::Done, || {
+            "I7: the cycle ended done with its permit dropped mid-move".into()
+        });
+        shared.with(|m| m.set_input(5, true).unwrap());
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        if status.state == CycleState::Paused {
+            let _ = h.resume_cycle();
+        }
+    }
+    let done = cycle_until(h, ended).await;
+    let status = h.cycle().unwrap();
+    v.check(done, || format!("I3: the cycle never ended: {status:?}"));
+    v.check(
+        status.state == CycleState::Done || status.reason.is_some(),
+        || format!("the cycle ended {:?} with no reason", status.state),
+    );
+    if status.state == CycleState::Faulted {
+        // I8: the PLC made well again, the cycle stays faulted and nothing more starts.
+        let starts = shared.with(|m| m.starts().len());
+        shared.with(|m| {
+            m.set_faults(linterpd::mock::FaultScript::default());
+            m.freeze_heartbeat(false);
+            if m.mode() == PlcMode::Prog {
+                m.set_mode(PlcMode::Run);
+            }
+        });
+        tokio::time::sleep(Duration::from_secs(2)).await;
+        v.check(h.cycle().unwrap().state == CycleState::Faulted, || {
+            format!("I8: a faulted cycle went on by itself: {:?}", h.cycle())
+        });
+        v.check(shared.with(|m| m.starts().len()) == starts, || {
+            "I8: a start after the cycle faulted, with no one asking".into()
+        });
+        let _ = h.stop_cycle(false).await;
+    }
+    status.moves.clone()
+}
+
+/// Whether the cycle's state came to one `done` accepts within 30 s.
+async fn cycle_until(h: &RobotHandle, done: impl Fn(linterpd::daemon::CycleState) -> bool) -> bool {
+    for _ in 0..3_000 {
+        if h.cycle().is_some_and(|c| done(c.state)) {
+            return true;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    false
+}
+
+thread_local! {
+    /// The mock of the case running on this thread (the cycle flows set its inputs).
+    static SHARED: std::cell::RefCell<Option<SharedMock>> = const { std::cell::RefCell::new(None) };
 }
 
 /// I5, watched as it happens: for each of `ids`, when its report turns done, its targets must
@@ -586,6 +748,17 @@ fn check_starts(shared: &SharedMock, v: &mut Violations) {
                 )
             });
         }
+        for s in m.starts() {
+            v.check(
+                s.outcome != StartOutcome::Started || s.block.permit.holds(&s.inputs),
+                || {
+                    format!(
+                        "I6: start {} acted on with inputs {:?} its permit {:?} does not hold on",
+                        s.block.seq, s.inputs, s.block.permit
+                    )
+                },
+            );
+        }
         for a in m.anomalies() {
             v.check(!matches!(a, Anomaly::RunOn { .. }), || {
                 format!("I1: a channel ran on: {a:?}")
@@ -641,6 +814,7 @@ async fn recover(fault: Fault, h: &RobotHandle, shared: &SharedMock, v: &mut Vio
 async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
     let mut v = Violations::default();
     let (shared, driver) = mock_at_a(flow != Flow::Home);
+    SHARED.with(|s| *s.borrow_mut() = Some(shared.clone()));
     let switch = Switch::new();
     let connect = if fault == Fault::DaemonRestart {
         killing_connector(&shared, &switch, flow.baud())
@@ -681,6 +855,10 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
         if let Err(e) = until_ready(&h2).await {
             v.0.push(format!("after the restart: {e}"));
         }
+        // I8: a restarted daemon has no cycle.
+        v.check(h2.cycle().is_none(), || {
+            format!("I8: a restarted daemon has a cycle: {:?}", h2.cycle())
+        });
         // Whatever the new daemon found running it follows to its end.
         let found: Vec<MoveId> = h2.reports().iter().map(|r| r.id).collect();
         settle(&h2, &shared, &found, &mut v).await;
@@ -704,6 +882,7 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
 /// How many exchanges a flow takes without a fault (after the daemon is ready).
 async fn positions(flow: Flow) -> u64 {
     let (shared, driver) = mock_at_a(flow != Flow::Home);
+    SHARED.with(|s| *s.borrow_mut() = Some(shared.clone()));
     let (daemon, h) = spawn(duplex_connector(&shared, flow.baud()), flow);
     until_ready(&h).await.unwrap();
     let before = shared.with(|m| m.commands());
@@ -716,6 +895,14 @@ async fn positions(flow: Flow) -> u64 {
     assert!(v.0.is_empty(), "{flow:?} without a fault: {:?}", v.0);
     if flow == Flow::Path {
         assert_eq!(ids.len(), 3, "the path is one section cut into three parts");
+    }
+    if matches!(flow, Flow::Cycle | Flow::CycleHold) {
+        let c = h.cycle().unwrap();
+        assert_eq!(
+            c.state,
+            linterpd::daemon::CycleState::Done,
+            "{flow:?}: {c:?}"
+        );
     }
     if flow != Flow::StopChained {
         for id in ids {
@@ -864,6 +1051,8 @@ async fn one_case_with_its_log() {
         "zero-behind" => Flow::ZeroBehind,
         "path-off-start" => Flow::PathOffStart,
         "refused" => Flow::RefusedWhileRunning,
+        "cycle" => Flow::Cycle,
+        "cycle-hold" => Flow::CycleHold,
         _ => Flow::Home,
     };
     let fault = FAULTS
@@ -874,4 +1063,14 @@ async fn one_case_with_its_log() {
     let k: u64 = parts[2].parse().expect("a position");
     let v = case(flow, fault, k).await;
     assert!(v.0.is_empty(), "{:?}", v.0);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_cycle_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::Cycle).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_cycle_held_by_its_permit_under_every_fault_at_every_exchange() {
+    run_matrix(Flow::CycleHold).await;
 }
