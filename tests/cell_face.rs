@@ -26,6 +26,8 @@ use tokio_modbus::client::{Context, Reader, Writer};
 const LIMIT: Duration = Duration::from_secs(20);
 const BASE: u16 = 50_000;
 const ON: u16 = bit::ENABLE;
+/// Where the face is mirrored in the PLC.
+const MIRROR: u32 = 3_000;
 
 fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("linterpd-face-{}-{test}", std::process::id()));
@@ -60,6 +62,11 @@ struct Cell {
 }
 
 async fn cell(test: &str, mode: Mode) -> Cell {
+    cell_with(test, mode, None).await
+}
+
+/// A cell whose face is mirrored in the PLC from DT`mirror` (not served on Modbus).
+async fn cell_with(test: &str, mode: Mode, mirror: Option<u32>) -> Cell {
     let shared = mock_at_seed_start("");
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
     let address = listener.local_addr().unwrap();
@@ -73,6 +80,7 @@ async fn cell(test: &str, mode: Mode) -> Cell {
         require_wait_timeout: false,
         face: Some(FaceSettings {
             registers: BASE,
+            plc: mirror,
             home: "home".to_owned(),
             positions: vec!["home".to_owned(), "out".to_owned()],
             mode,
@@ -84,6 +92,10 @@ async fn cell(test: &str, mode: Mode) -> Cell {
         modbus: Some(modbus.clone()),
     };
     let (daemon, h) = spawn_in_cell(duplex_connector(&shared, None), cell, gateway);
+    tokio::spawn(linterpd::daemon::mirror_face(
+        h.clone(),
+        std::future::pending(),
+    ));
     let server = ModbusFaceServer::on(listener, &modbus);
     tokio::spawn(server.serve(h.clone(), std::future::pending()));
     taking_moves(&h).await;
@@ -459,4 +471,56 @@ async fn the_api_shows_and_sets_the_mode_and_refuses_local_orders_in_remote_mode
         .call("PUT", &format!("{robot}/mode"), Some(&set("auto")), None)
         .await;
     assert_eq!(bad.status, StatusCode::BAD_REQUEST, "{}", bad.text());
+}
+
+#[tokio::test]
+async fn a_press_plc_wired_to_the_robots_plc_drives_the_face_mirrored_in_its_dt_words() {
+    let c = cell_with("mirror", Mode::Remote, Some(MIRROR)).await;
+    c.shared.with(|m| m.set_input(5, true).unwrap());
+    let plc = |words: &[u16]| c.shared.with(|m| m.write_words(MIRROR, words).unwrap());
+    // The mirror writes the status words, the heartbeat counting.
+    let s = mirrored_until(&c.shared, "the status words", |s| on(s, status_bit::REMOTE)).await;
+    let beat = s[status_word::HEARTBEAT];
+    mirrored_until(&c.shared, "a heartbeat", |s| {
+        s[status_word::HEARTBEAT] != beat
+    })
+    .await;
+    // The press PLC's program: the baseline, the strobe, the start.
+    plc(&[0, 0, ON, 1]);
+    mirrored_until(&c.shared, "ready", |s| on(s, status_bit::READY)).await;
+    plc(&[3, check_of(3), ON | bit::STROBE]);
+    mirrored_until(&c.shared, "selected", |s| s[status_word::PROGRAM] == 3).await;
+    plc(&[3, check_of(3), ON]);
+    mirrored_until(&c.shared, "strobe taken off", |s| {
+        s[status_word::COMMANDS] == ON
+    })
+    .await;
+    plc(&[3, check_of(3), ON | bit::START]);
+    let s = mirrored_until(&c.shared, "one cycle done", |s| {
+        s[status_word::DONE_LOW] == 1
+    })
+    .await;
+    assert_eq!(s[status_word::REFUSED], 0, "{s:?}");
+    assert_eq!(c.shared.with(|m| m.starts().len()), 2);
+    assert_eq!(c.h.cycle().unwrap().state, CycleState::Done);
+    // The command words are the line's: the daemon never wrote them.
+    let commands = c.shared.with(|m| m.read_words(MIRROR, 4).unwrap());
+    assert_eq!(commands, [3, check_of(3), ON | bit::START, 1]);
+}
+
+/// The status words mirrored in the PLC, once `done` says so.
+async fn mirrored_until(
+    shared: &SharedMock,
+    what: &str,
+    done: impl Fn(&[u16]) -> bool,
+) -> Vec<u16> {
+    let began = Instant::now();
+    loop {
+        let s = shared.with(|m| m.read_words(MIRROR + STATUS_AT as u32, 10).unwrap());
+        if done(&s) {
+            return s;
+        }
+        assert!(began.elapsed() < LIMIT, "never {what}: {s:?}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
 }

@@ -9,6 +9,7 @@
 //!
 //! [robots.press-loader.cell.face]   # the register face the line's PLC or HMI drives
 //! registers = 50000              # its first register on the gateway's Modbus face (18 words)
+//! # plc = "DT3000"               # or: mirrored in the robot PLC's DT3000..DT3017, polled
 //! home = "home"                  # the taught position `home` moves to (default "home")
 //! positions = ["home", "pick", "press"]   # numbered from 1 in the status block's +16
 //! mode = "local"                 # the mode at start-up: local (default) or remote
@@ -48,6 +49,10 @@ pub struct CellSettings {
 pub struct FaceSettings {
     /// Its first register on the gateway's Modbus face: above the DT words, so it hides none.
     pub registers: u16,
+    /// Its first DT word in the robot's PLC, when it is mirrored there (for a press PLC wired
+    /// to the robot's PLC): the daemon reads the command words and writes the status words.
+    /// A mirrored face is not served on the Modbus face (one writer of its command words).
+    pub plc: Option<u32>,
     /// The taught position the `home` command moves to and `in-home` compares with.
     pub home: String,
     /// The taught positions the status block numbers (from 1).
@@ -103,6 +108,32 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
         }
         None => FACE_REGISTERS,
     };
+    let plc = raw
+        .plc
+        .as_ref()
+        .map(|p| {
+            let at = at.child("plc");
+            let address: Address = p
+                .get_ref()
+                .parse()
+                .map_err(|e: crate::gateway::AddressError| at.invalid(p, e.reason))?;
+            let last = address.index + BLOCK_WORDS as u32 - 1;
+            if address.area != crate::gateway::Area::Dt || last > u32::from(DT_LAST) {
+                return Err(at.invalid(
+                    p,
+                    format!("the face's {BLOCK_WORDS} words are DT words, within DT0-DT{DT_LAST}"),
+                ));
+            }
+            Ok(address.index)
+        })
+        .transpose()?;
+    if let (Some(_), Some(r)) = (&plc, &raw.registers) {
+        return Err(at.child("registers").invalid(
+            r,
+            "the face is either served on the Modbus face (`registers`) or mirrored in the PLC \
+             (`plc`), not both: its command words have one writer",
+        ));
+    }
     let name = |key: &str, value: &Spanned<String>| {
         if crate::robot::is_position_name(value.get_ref()) {
             Ok(value.get_ref().clone())
@@ -133,10 +164,47 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
     };
     Ok(FaceSettings {
         registers,
+        plc,
         home,
         positions,
         mode,
     })
+}
+
+/// The mirrored face's words must not touch the contract's (the PLC program owns those), and
+/// the robot needs a link to mirror it over.
+pub(super) fn face_clear_of_contract(
+    at: &At,
+    raw: &Spanned<RawCell>,
+    first: u32,
+    link: Option<&crate::plc::LinkSettings>,
+) -> Result<(), ConfigError> {
+    let Some(plc) = raw
+        .get_ref()
+        .face
+        .as_ref()
+        .and_then(|f| f.get_ref().plc.as_ref())
+    else {
+        return Ok(());
+    };
+    let at = at.child("plc");
+    let Some(link) = link else {
+        return Err(at.invalid(
+            plc,
+            "a face mirrored in the PLC needs the robot's [plc] link",
+        ));
+    };
+    let block = crate::gateway::Range {
+        area: crate::gateway::Area::Dt,
+        first,
+        last: first + BLOCK_WORDS as u32 - 1,
+    };
+    for (what, words) in crate::gateway::contract_regions(&link.layout) {
+        if block.overlaps(&words) {
+            return Err(at.invalid(plc, format!("{block} overlaps {what} ({words})")));
+        }
+    }
+    Ok(())
 }
 
 /// A signal's name: a letter, then letters, digits, `_` or `-`; never one that reads as an
@@ -238,6 +306,18 @@ mod tests {
             ),
             ("home = \"\"", "face.home", "\"\""),
             ("strobe = 1", "strobe", "unknown field"),
+            ("plc = \"X10\"", "face.plc", "DT words"),
+            ("plc = \"DT32760\"", "face.plc", "DT words"),
+            (
+                "plc = \"DT1010\"",
+                "face.plc",
+                "overlaps the contract's status block",
+            ),
+            (
+                "plc = \"DT3000\"\nregisters = 40000",
+                "face.registers",
+                "not both",
+            ),
         ] {
             let e = Config::from_toml(&with_face(table))
                 .unwrap_err()

@@ -64,6 +64,7 @@ pub(super) struct RawCell {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawCellFace {
     pub registers: Option<Spanned<i64>>,
+    pub plc: Option<Spanned<String>>,
     pub home: Option<Spanned<String>>,
     pub positions: Option<Vec<Spanned<String>>>,
     pub mode: Option<Spanned<String>>,

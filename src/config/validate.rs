@@ -42,13 +42,18 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
             let served = gateways
                 .get(&robot.name)
                 .is_some_and(|g| g.modbus.is_some());
-            if let (Some(face), false) = (&table.get_ref().face, served) {
+            let mirrored = settings.face.as_ref().and_then(|f| f.plc);
+            if let (Some(face), false, None) = (&table.get_ref().face, served, mirrored) {
                 let reason = format!(
-                    "the cell face is served on the gateway's Modbus face: it needs \
-                     [robots.{}.gateway.modbus]",
+                    "the cell face is served on the gateway's Modbus face or mirrored in the \
+                     PLC: it needs [robots.{}.gateway.modbus], or `plc = \"DT...\"`",
                     robot.name
                 );
                 return Err(at.child("face").missing(&face.span(), reason));
+            }
+            if let Some(first) = mirrored {
+                let link = links.get(&robot.name);
+                cell::face_clear_of_contract(&at.child("face"), table, first, link)?;
             }
             cells.insert(robot.name.clone(), settings);
         }

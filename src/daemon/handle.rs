@@ -599,7 +599,7 @@ impl RobotHandle {
         self.gateway_job(range, Some(values)).await.map(|_| ())
     }
 
-    async fn gateway_job(
+    pub(super) async fn gateway_job(
         &self,
         range: Range,
         write: Option<Values>,

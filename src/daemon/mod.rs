@@ -41,7 +41,7 @@ mod setup;
 mod shared;
 mod worker;
 
-pub use cell::{ModeError, Owner};
+pub use cell::{MIRROR_EVERY, ModeError, Owner, mirror_face};
 pub use cycle::{CycleError, CycleState, CycleStatus, StepAt};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
 pub use handle::{Daemon, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};

@@ -12,6 +12,7 @@
 //! an order is taken in the mode it was checked in: of two controllers racing, exactly one wins.
 
 mod face;
+mod mirror;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{PoisonError, RwLock, RwLockReadGuard};
@@ -19,6 +20,7 @@ use std::sync::{PoisonError, RwLock, RwLockReadGuard};
 use thiserror::Error;
 
 pub(crate) use face::FaceCell;
+pub use mirror::{MIRROR_EVERY, mirror_face};
 
 use super::RobotHandle;
 use crate::cell::Mode;

@@ -142,7 +142,11 @@ async fn answer(robot: &RobotHandle, request: &Request<'_>) -> Result<Response, 
         tracing::info!(robot = %robot.robot().name, ?request, exception = u8::from(code), error = %e, "Modbus request refused");
         code
     };
-    let base = robot.face_settings().map(|f| f.registers);
+    // A face mirrored in the PLC is the PLC's words' only: not served here too.
+    let base = robot
+        .face_settings()
+        .filter(|f| f.plc.is_none())
+        .map(|f| f.registers);
     if let Some(asked) = base.and_then(|base| cell::ask(request, base)) {
         return face(robot, asked?).await;
     }

@@ -274,6 +274,15 @@ pub async fn serve(
         let stop = closing.clone();
         servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
     }
+    for robot in daemon.robots().values() {
+        if robot.face_settings().is_some_and(|f| f.plc.is_some()) {
+            let (robot, stop) = (robot.clone(), closing.clone());
+            servers.spawn(async move {
+                super::mirror_face(robot, stop.cancelled_owned()).await;
+                Ok(())
+            });
+        }
+    }
     let listen = settings.listen.map(tracing::field::display);
     tracing::info!(socket = %settings.socket.display(), listen, "API listening");
     log_notify(notifier.ready(), "READY=1");
