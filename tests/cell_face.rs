@@ -55,7 +55,7 @@ fn load() -> String {
 
 struct Cell {
     shared: SharedMock,
-    _daemon: Daemon,
+    daemon: Daemon,
     h: RobotHandle,
     line: Context,
     address: SocketAddr,
@@ -102,7 +102,7 @@ async fn cell_with(test: &str, mode: Mode, mirror: Option<u32>) -> Cell {
     let line = tokio_modbus::client::tcp::connect(address).await.unwrap();
     Cell {
         shared,
-        _daemon: daemon,
+        daemon,
         h,
         line,
         address,
@@ -412,7 +412,7 @@ async fn the_api_shows_and_sets_the_mode_and_refuses_local_orders_in_remote_mode
     let dir = common::process::TempDir::new("face-api");
     let path = dir.path().join("api.sock");
     let listener = tokio::net::UnixListener::bind(&path).unwrap();
-    let router = linterpd::daemon::api::Api::new(c._daemon.robots().clone()).router(None);
+    let router = linterpd::daemon::api::Api::new(c.daemon.robots().clone()).router(None);
     tokio::spawn(linterpd::daemon::api::serve(
         listener,
         router,

@@ -66,10 +66,16 @@ pub(super) async fn run_path(
             why: why.to_owned(),
         };
     }
-    match handle.submit_path(order) {
-        Ok(ids) => follow(handle, &ids, control, started).await,
-        Err(e) => MotionEnd::Failed {
+    // Planned off the runtime (a path takes milliseconds), as the API plans one.
+    let (planner, order) = (handle.clone(), order.clone());
+    let submitted = tokio::task::spawn_blocking(move || planner.submit_path(&order)).await;
+    match submitted {
+        Ok(Ok(ids)) => follow(handle, &ids, control, started).await,
+        Ok(Err(e)) => MotionEnd::Failed {
             why: format!("refused: {e}"),
+        },
+        Err(e) => MotionEnd::Failed {
+            why: format!("the path's planning task failed: {e}"),
         },
     }
 }
