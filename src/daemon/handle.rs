@@ -3,7 +3,7 @@
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
 use super::cell::Cell;
-use super::cycle::{CycleError, CycleSlot, CycleStatus};
+use super::cycle::CycleSlot;
 use super::request::ConflictReason;
 use crate::contract::Permit;
 use std::collections::BTreeMap;
@@ -88,9 +88,9 @@ pub struct RobotHandle {
     requests: mpsc::UnboundedSender<Request>,
     stops: mpsc::UnboundedSender<Reply>,
     gateway: mpsc::UnboundedSender<Job>,
-    gateway_settings: Arc<GatewaySettings>,
+    pub(super) gateway_settings: Arc<GatewaySettings>,
     pub(super) shared: Arc<Shared>,
-    positions: Arc<TaughtPositions>,
+    pub(super) positions: Arc<TaughtPositions>,
     pub(super) cell: Arc<Cell>,
     pub(super) cycles: Arc<CycleSlot>,
 }
@@ -480,89 +480,6 @@ impl RobotHandle {
             self.cycles.fault_cleared();
         }
         cleared
-    }
-
-    /// The robot's cycle, if one ran since the daemon started.
-    #[must_use]
-    pub fn cycle(&self) -> Option<CycleStatus> {
-        self.cycles.status()
-    }
-
-    /// Stops the robot's cycle at the end of its current step, or `now`.
-    pub async fn stop_cycle(&self, now: bool) -> Result<CycleStatus, CycleError> {
-        let status = self.cycles.stop(now)?;
-        if now {
-            // The runner stops the robot too; this makes it sure even if it is between steps.
-            let _ = self.stop().await;
-        }
-        Ok(status)
-    }
-
-    /// Runs cycle program `program` (`count` cycles, or until stopped): loaded from the robot's
-    /// programs directory and checked whole before anything moves.
-    pub fn run_cycle(&self, program: &str, count: Option<u64>) -> Result<CycleStatus, CycleError> {
-        if count == Some(0) {
-            return Err(CycleError::Program(
-                "count = 0: run at least 1 cycle".to_owned(),
-            ));
-        }
-        let checked = self.check_program(program)?;
-        let handle = self.clone();
-        tracing::info!(robot = %self.robot.name, program, count, ops = checked.ops.len(), "cycle starts");
-        self.cycles.start(
-            CycleStatus::starting(program, count),
-            move |control, status| super::cycle::run(handle, checked, count, control, status),
-        )
-    }
-
-    /// Program `name` of the robot's programs directory, read and checked whole against the
-    /// robot, its cell and its taught positions now.
-    pub fn check_program(&self, name: &str) -> Result<crate::cycle::Checked, CycleError> {
-        let Some(dir) = &self.cell.settings.programs else {
-            return Err(CycleError::Program(format!(
-                "robot {} has no cycle programs: set [robots.{}.cell] programs",
-                self.robot.name, self.robot.name
-            )));
-        };
-        let programs = crate::cycle::load::programs(dir).map_err(CycleError::Program)?;
-        crate::cycle::numbers(&programs).map_err(|e| CycleError::Program(e.to_string()))?;
-        let taught = self.positions.of(&self.robot.name);
-        let ctx = crate::cycle::Context {
-            robot: &self.robot,
-            taught: &taught,
-            names: crate::cycle::Names {
-                permit: super::permit::PermitNames {
-                    signals: &self.cell.settings.signals,
-                    inputs: &self.cell.inputs,
-                },
-                access: &self.gateway_settings.access,
-            },
-            programs: &programs,
-            require_wait_timeout: self.cell.settings.require_wait_timeout,
-        };
-        crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
-    }
-
-    /// A cycle ended after `seconds` (metrics).
-    pub(crate) fn cycle_done(&self, seconds: f64) {
-        self.shared.metrics.cycle_done(seconds);
-    }
-
-    /// A cycle's wait step at `at` waited `seconds` (metrics).
-    pub(crate) fn waited(&self, at: &super::StepAt, seconds: f64) {
-        self.shared
-            .metrics
-            .cycle_waited(&at.program, at.step, seconds);
-    }
-
-    /// Pauses the robot's cycle at the end of its current step.
-    pub fn pause_cycle(&self) -> Result<CycleStatus, CycleError> {
-        self.cycles.pause()
-    }
-
-    /// Resumes a paused cycle, or a faulted one once its fault was cleared.
-    pub fn resume_cycle(&self) -> Result<CycleStatus, CycleError> {
-        self.cycles.resume()
     }
 
     async fn command(&self, request: fn(Reply) -> Request) -> Result<(), CommandError> {

@@ -9,12 +9,14 @@
 //!             dwell
 //! run.rs      the runner: a checked program's ops, one after another, in step with the control
 //! slot.rs     the robot's cycle: at most one running, its status, its controller
+//! handle.rs   RobotHandle's cycle methods: run (checked first), watch, stop, pause, resume
 //! ```
 //! A cycle never resumes by itself: after a fault it needs `clear-fault` and `resume` (or a
 //! fresh `run`); a restarted daemon has no cycle.
 
 mod act;
 mod control;
+mod handle;
 mod run;
 mod slot;
 mod status;
