@@ -30,13 +30,7 @@ const ON: u16 = bit::ENABLE;
 const MIRROR: u32 = 3_000;
 
 fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("linterpd-face-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, text) in files {
-        std::fs::write(dir.join(format!("{name}.toml")), text).unwrap();
-    }
-    dir
+    common::daemon::programs_dir("face", test, files)
 }
 
 fn to(p: [f64; 3]) -> String {

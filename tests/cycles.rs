@@ -19,13 +19,7 @@ const LIMIT: Duration = Duration::from_secs(20);
 
 /// A programs directory of its own for each test.
 fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("linterpd-cycles-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, text) in files {
-        std::fs::write(dir.join(format!("{name}.toml")), text).unwrap();
-    }
-    dir
+    common::daemon::programs_dir("cycles", test, files)
 }
 
 fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {

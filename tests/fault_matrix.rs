@@ -591,13 +591,7 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
     if status.state == CycleState::Faulted {
         // I8: the PLC made well again, the cycle stays faulted and nothing more starts.
         let starts = shared.with(|m| m.starts().len());
-        shared.with(|m| {
-            m.set_faults(linterpd::mock::FaultScript::default());
-            m.freeze_heartbeat(false);
-            if m.mode() == PlcMode::Prog {
-                m.set_mode(PlcMode::Run);
-            }
-        });
+        heal(&shared);
         tokio::time::sleep(Duration::from_secs(2)).await;
         v.check(h.cycle().unwrap().state == CycleState::Faulted, || {
             format!("I8: a faulted cycle went on by itself: {:?}", h.cycle())
@@ -777,8 +771,8 @@ fn check_starts(shared: &SharedMock, v: &mut Violations) {
     });
 }
 
-/// Clears the fault, homes where needed, and runs one more move (I4).
-async fn recover(fault: Fault, h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
+/// The PLC made well: no more faults scripted, its heartbeat going, in RUN.
+fn heal(shared: &SharedMock) {
     shared.with(|m| {
         m.set_faults(linterpd::mock::FaultScript::default());
         m.freeze_heartbeat(false);
@@ -786,6 +780,11 @@ async fn recover(fault: Fault, h: &RobotHandle, shared: &SharedMock, v: &mut Vio
             m.set_mode(PlcMode::Run);
         }
     });
+}
+
+/// Clears the fault, homes where needed, and runs one more move (I4).
+async fn recover(fault: Fault, h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
+    heal(shared);
     // Let the daemon see the PLC as it is now (a stall or a restart takes the heartbeat
     // timeout to be sure of).
     tokio::time::sleep(Duration::from_secs(1)).await;

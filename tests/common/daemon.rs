@@ -115,3 +115,16 @@ pub async fn taking_moves(h: &RobotHandle) {
     }
     panic!("never connected: {:?}", h.state());
 }
+
+/// A directory of cycle programs of its own for one test: `files` are (name, text) pairs,
+/// written as `name.toml`.
+#[allow(dead_code)] // not every test binary has a cell
+pub fn programs_dir(prefix: &str, test: &str, files: &[(&str, String)]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("linterpd-{prefix}-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(format!("{name}.toml")), text).unwrap();
+    }
+    dir
+}
