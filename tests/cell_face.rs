@@ -211,6 +211,14 @@ async fn bad_strobes_and_starts_are_refused_with_their_reason_and_nothing_runs()
         c.edge(bit::START).await;
         let s = c.status().await;
         assert_eq!(s[status_word::REFUSED], Refusal::NotSelected.code());
+        // The robot's state says it too, in words.
+        let face = c.h.state().face.unwrap();
+        assert_eq!((face.program, face.enabled), (0, true));
+        let refused = face.refused.unwrap();
+        assert_eq!(
+            (refused.code, refused.meaning.as_str()),
+            (7, "no program is selected")
+        );
     }
     // The number toggled while the strobe is on: the selection goes, and a start is refused.
     c.write(0, &[3, check_of(3), ON | bit::STROBE]).await;

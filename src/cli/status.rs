@@ -130,8 +130,25 @@ fn line(r: &RobotState) -> String {
     if r.mode == crate::cell::Mode::Remote {
         text.push_str("; remote mode (the cell face drives it)");
     }
+    if let Some(face) = &r.face {
+        let _ = write!(text, "\n  {}", describe_face(face));
+    }
     if let Some(cycle) = &r.cycle {
         let _ = write!(text, "\n  cycle {}", super::cycle::describe(cycle));
+    }
+    text
+}
+
+/// The cell face in one line.
+fn describe_face(face: &crate::daemon::FaceState) -> String {
+    let program = match &face.program_name {
+        Some(name) => format!("program {} ({name}) selected", face.program),
+        None => "no program selected".to_owned(),
+    };
+    let enable = if face.enabled { "on" } else { "off" };
+    let mut text = format!("cell face: {program}, move-enable {enable}");
+    if let Some(r) = &face.refused {
+        let _ = write!(text, "; last command refused: {} ({})", r.code, r.meaning);
     }
     text
 }
@@ -283,6 +300,25 @@ mod tests {
         assert!(
             e.starts_with("the daemon's answer is not a robot's state"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn the_cell_face_is_one_line_with_the_selection_enable_and_refusal() {
+        let face = crate::daemon::FaceState {
+            program: 3,
+            program_name: Some("press-load".into()),
+            enabled: false,
+            commands: 0,
+            refused: Some(crate::daemon::FaceRefusal {
+                code: 2,
+                meaning: "move-enable is off".into(),
+            }),
+        };
+        assert_eq!(
+            super::describe_face(&face),
+            "cell face: program 3 (press-load) selected, move-enable off; last command refused: \
+             2 (move-enable is off)"
         );
     }
 }

@@ -534,6 +534,7 @@ impl RobotHandle {
         let mut state = self.shared.state(|s| s.clone());
         state.cycle = self.cycles.status();
         state.mode = self.mode();
+        state.face = self.face_state();
         state
     }
 

@@ -53,8 +53,8 @@ pub use order::{
 };
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{
-    GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves, PathAccepted,
-    PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
+    FaceRefusal, FaceState, GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves,
+    PathAccepted, PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
 pub use request::{CommandError, ConflictReason};
 pub use setup::{DaemonOptions, RobotSetup, host_word};

@@ -322,6 +322,35 @@ pub struct RobotState {
     /// Who drives the robot: `local` (the CLI and the API) or `remote` (the cell face).
     #[serde(default)]
     pub mode: crate::cell::Mode,
+    /// The cell face's command side, when the robot has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face: Option<FaceState>,
+}
+
+/// The cell face as the robot's state shows it: what the line selected and last asked.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FaceState {
+    /// The selected program: its number (0: none).
+    pub program: u16,
+    /// Its name, when one is selected.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub program_name: Option<String>,
+    /// Whether move-enable is on.
+    pub enabled: bool,
+    /// The command word as last taken.
+    pub commands: u16,
+    /// Why the last command was refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused: Option<FaceRefusal>,
+}
+
+/// A refused cell face command: the status block's refusal word and what it means.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FaceRefusal {
+    /// The refusal word's code.
+    pub code: u16,
+    /// What it means.
+    pub meaning: String,
 }
 
 /// Where the daemon and the PLC stand, as [`RobotState::phase`] shows it: the contract machine's
@@ -579,7 +608,7 @@ mod json_tests {
     use super::*;
 
     const STATE_NEW: &str = r#"{"name":"press-loader","link":{"connected":false,"error":null,"reconnects":0},"phase":"","homed":false,"refuses":null,"plc_mode":null,"heartbeat_age_ms":null,"state":null,"fault":null,"counts":null,"pose":null,"current_move":null,"queued":[],"gateway":{"requests":0,"failed":0,"exchanges":0,"longest_exchange_ms":0,"longest_poll_delay_ms":0},"mode":"local"}"#;
-    const STATE_FULL: &str = r#"{"name":"press-loader","link":{"connected":true,"error":"timed out","reconnects":3},"phase":"running-chained","homed":true,"refuses":"a move runs","plc_mode":"prog","heartbeat_age_ms":12,"state":"fault","fault":3,"counts":[1,-2,3,40000],"inputs":[32,0,0,1],"pose":[-0.0,500.25,0.1,45.0],"current_move":7,"queued":[8,9],"gateway":{"requests":5,"failed":1,"exchanges":4,"longest_exchange_ms":30,"longest_poll_delay_ms":2},"cycle":{"program":"press-load","state":"running","done":0,"count":10},"mode":"remote"}"#;
+    const STATE_FULL: &str = r#"{"name":"press-loader","link":{"connected":true,"error":"timed out","reconnects":3},"phase":"running-chained","homed":true,"refuses":"a move runs","plc_mode":"prog","heartbeat_age_ms":12,"state":"fault","fault":3,"counts":[1,-2,3,40000],"inputs":[32,0,0,1],"pose":[-0.0,500.25,0.1,45.0],"current_move":7,"queued":[8,9],"gateway":{"requests":5,"failed":1,"exchanges":4,"longest_exchange_ms":30,"longest_poll_delay_ms":2},"cycle":{"program":"press-load","state":"running","done":0,"count":10},"mode":"remote","face":{"program":3,"program_name":"press-load","enabled":true,"commands":66,"refused":{"code":8,"meaning":"a cycle is under way or the robot is moving"}}}"#;
     const REPORT_NEW: &str = r#"{"id":42,"robot":"press-loader","stage":"queued","order":{},"recovered":false,"deadline_s":null,"seq":null,"bank":null,"start_counts":null,"target_counts":null,"predicted":null,"upload_s":null,"motion_s":null,"progress":0.0,"counts":null,"final_error_pulses":null,"error":null}"#;
     const REPORT_FULL: &str = r#"{"id":43,"robot":"press-loader","stage":"running","order":{"to":[1.0,2.0,3.0],"speed_mm_s":120.0,"method":"bounded-error"},"recovered":true,"deadline_s":4.5,"seq":17,"bank":1,"start_counts":[0,0,0,0],"target_counts":[100,-200,300,0],"predicted":{"rows":12,"words":96,"duration_s":1.25,"path_deviation_mm":0.0125,"tracking_error_mm":0.3},"upload_s":0.08,"motion_s":1.3,"progress":0.42,"counts":[50,-100,150,0],"final_error_pulses":[0,1,-1,0],"error":"stopped by a stop request","section":{"number":2,"of":3,"pieces":[{"kind":"line","element":1,"waypoint":null,"begins":0.0,"ends":0.5},{"kind":"arc","element":null,"waypoint":1,"begins":0.5,"ends":0.6}]}}"#;
 
@@ -619,6 +648,16 @@ mod json_tests {
             },
             cycle: Some(super::super::CycleStatus::starting("press-load", Some(10))),
             mode: crate::cell::Mode::Remote,
+            face: Some(FaceState {
+                program: 3,
+                program_name: Some("press-load".into()),
+                enabled: true,
+                commands: 0x42,
+                refused: Some(FaceRefusal {
+                    code: 8,
+                    meaning: "a cycle is under way or the robot is moving".into(),
+                }),
+            }),
         }
     }
 

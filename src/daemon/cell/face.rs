@@ -65,6 +65,22 @@ impl RobotHandle {
         self.cell.face.as_ref().map(|f| &f.settings)
     }
 
+    /// The face's command side, for the robot's state.
+    pub(crate) fn face_state(&self) -> Option<crate::daemon::report::FaceState> {
+        let cell = self.cell.face.as_ref()?;
+        let face = cell.face();
+        Some(crate::daemon::report::FaceState {
+            program: face.selected().map_or(0, |(n, _)| u16::from(n)),
+            program_name: face.selected().map(|(_, name)| name.to_owned()),
+            enabled: face.enabled(),
+            commands: face.words()[crate::cell::face::command::BITS],
+            refused: face.refused().map(|r| crate::daemon::FaceRefusal {
+                code: r.code(),
+                meaning: r.meaning().to_owned(),
+            }),
+        })
+    }
+
     /// Whether the face holds every motion: remote mode with move-enable off.
     pub(crate) fn face_holds_motion(&self) -> bool {
         self.cell
