@@ -31,6 +31,8 @@
 //!                    state machine over the status block (machine/)
 //! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
 //!                    into ops (and the loading of a programs directory)
+//! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
+//!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
 //!                    fault injection, pulse trace (a synchronous core, time is an argument);
@@ -39,8 +41,10 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
-//!                    handles, taught positions, permits, the cycle runner (cycle/), the HTTP/JSON
-//!                    API, the register gateway and its Modbus TCP face, systemd notification
+//!                    handles, taught positions, permits, the cycle runner (cycle/), the mode and
+//!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
+//!                    PLC), the HTTP/JSON API, the register gateway and its Modbus TCP face,
+//!                    systemd notification
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
 //! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
 //!                    a pure part (rate fits, frequency models), reported with config lines
