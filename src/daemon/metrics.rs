@@ -67,6 +67,14 @@ struct WaitLabels {
     step: String,
 }
 
+/// A cell face command: the robot, and the command (`start`, `strobe`, ...) or the refusal's
+/// code.
+#[derive(Debug, Clone, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct FaceLabels {
+    robot: String,
+    what: String,
+}
+
 /// How long a due status read waited behind one gateway exchange, s.
 fn wait_histogram() -> Histogram {
     Histogram::new([0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5])
@@ -91,6 +99,8 @@ struct Inner {
     cycles: Family<RobotLabel, Counter>,
     cycle_time: Histograms,
     cycle_wait: Family<WaitLabels, Histogram, fn() -> Histogram>,
+    face_commands: Family<FaceLabels, Counter>,
+    face_refusals: Family<FaceLabels, Counter>,
     /// Set from the robots' state at every read of `/metrics`.
     link_up: Family<RobotLabel, Gauge>,
     fault: Family<RobotLabel, Gauge>,
@@ -164,6 +174,8 @@ impl Metrics {
             cycles: Family::default(),
             cycle_time: Family::new_with_constructor(cycle_histogram),
             cycle_wait: Family::new_with_constructor(cycle_wait_histogram),
+            face_commands: Family::default(),
+            face_refusals: Family::default(),
             link_up: Family::default(),
             fault: Family::default(),
             heartbeat_age: Family::default(),
@@ -299,6 +311,16 @@ impl Inner {
             self.cycle_wait.clone(),
         );
         r.register(
+            "linterpd_face_commands",
+            "Cell face commands taken from the line (an edge of a command bit), by command.",
+            self.face_commands.clone(),
+        );
+        r.register(
+            "linterpd_face_refusals",
+            "Cell face commands refused, by the refusal word's code.",
+            self.face_refusals.clone(),
+        );
+        r.register(
             "linterpd_link_up",
             "1 while the PLC link is up and the contract answers.",
             self.link_up.clone(),
@@ -393,6 +415,32 @@ impl RobotMetrics {
             .observe(seconds);
     }
 
+    /// The cell face took command `what` (`start`, `strobe`, `hold`...).
+    pub fn face_command(&self, what: &str) {
+        let labels = FaceLabels {
+            robot: self.label.robot.clone(),
+            what: what.to_owned(),
+        };
+        self.metrics
+            .inner
+            .face_commands
+            .get_or_create(&labels)
+            .inc();
+    }
+
+    /// The cell face refused a command with refusal `code`.
+    pub fn face_refused(&self, code: u16) {
+        let labels = FaceLabels {
+            robot: self.label.robot.clone(),
+            what: code.to_string(),
+        };
+        self.metrics
+            .inner
+            .face_refusals
+            .get_or_create(&labels)
+            .inc();
+    }
+
     /// A due status read waited `seconds` behind a gateway exchange.
     pub fn waited_behind_gateway(&self, seconds: f64) {
         let i = &self.metrics.inner;
@@ -446,6 +494,8 @@ mod tests {
         a.gateway_request(true);
         a.uploaded(0.3);
         a.exchange_counts().retried();
+        a.face_command("start");
+        a.face_refused(7);
         let text = metrics.encode();
         for want in [
             "linterpd_moves_total{robot=\"a\",outcome=\"done\"} 1",
@@ -456,6 +506,8 @@ mod tests {
             "linterpd_upload_seconds_count{robot=\"a\"} 1",
             "linterpd_link_exchange_retries_total{robot=\"a\"} 1",
             "linterpd_link_exchange_timeouts_total{robot=\"a\"} 0",
+            "linterpd_face_commands_total{robot=\"a\",what=\"start\"} 1",
+            "linterpd_face_refusals_total{robot=\"a\",what=\"7\"} 1",
         ] {
             assert!(text.lines().any(|l| l == want), "no {want:?} in\n{text}");
         }

@@ -35,6 +35,23 @@ pub enum Action {
     Home,
 }
 
+impl Action {
+    /// Its name, in a word (metrics, logs).
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Hold => "hold",
+            Self::StopNow => "stop-now",
+            Self::Stop => "stop",
+            Self::Reset => "reset",
+            Self::Pause => "pause",
+            Self::Select { .. } => "strobe",
+            Self::Start { .. } => "start",
+            Self::Home => "home",
+        }
+    }
+}
+
 /// Why a command was refused: the status block's refusal word (+12).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u16)]
@@ -125,6 +142,8 @@ pub struct Face {
     primed: bool,
     selected: Option<(u8, String)>,
     refused: Option<Refusal>,
+    /// Commands refused so far.
+    refusals: u64,
 }
 
 impl Face {
@@ -152,6 +171,12 @@ impl Face {
         self.refused
     }
 
+    /// Commands refused so far (each refusal counts, the same one again too).
+    #[must_use]
+    pub fn refusals(&self) -> u64 {
+        self.refusals
+    }
+
     /// Whether move-enable is on.
     #[must_use]
     pub fn enabled(&self) -> bool {
@@ -173,6 +198,7 @@ impl Face {
     /// The daemon refused the last command.
     pub fn refuse(&mut self, why: Refusal) {
         self.refused = Some(why);
+        self.refusals += 1;
     }
 
     /// The line wrote `values` from command word `at` (the caller keeps them within the
@@ -210,7 +236,7 @@ impl Face {
         if renumbered {
             self.selected = None;
             if was & now & bit::STROBE != 0 {
-                self.refused = Some(Refusal::ChangedDuringStrobe);
+                self.refuse(Refusal::ChangedDuringStrobe);
             }
         }
         for edge in [bit::RESET, bit::PAUSE, bit::STROBE, bit::START, bit::HOME] {
@@ -219,7 +245,7 @@ impl Face {
             }
             match self.command(edge, remote) {
                 Ok(action) => actions.push(action),
-                Err(why) => self.refused = Some(why),
+                Err(why) => self.refuse(why),
             }
         }
         actions
@@ -359,6 +385,11 @@ mod tests {
             assert!(acts.is_empty(), "{edge:#x}: {acts:?}");
             assert_eq!(f.refused(), Some(Refusal::Local), "{edge:#x}");
         }
+        assert_eq!(
+            f.refusals(),
+            5,
+            "each refusal counts, the same one again too"
+        );
         f.write(command::BITS, &[ON], Local);
         assert_eq!(
             f.write(command::BITS, &[ON | bit::STOP | bit::STOP_NOW], Local),

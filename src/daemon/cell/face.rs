@@ -108,13 +108,19 @@ impl RobotHandle {
             return false;
         };
         let _turn = cell.turn.lock().await;
+        let refusals = cell.face().refusals();
         let actions = cell.face().write(at, values, self.mode());
         for action in actions {
             tracing::info!(robot = %self.robot().name, ?action, "cell face command");
+            self.shared.metrics.face_command(action.name());
             if let Err(why) = self.face_act(cell, &action).await {
                 tracing::warn!(robot = %self.robot().name, ?action, refused = why.code(), "cell face command refused: {}", why.meaning());
                 cell.refuse(why);
             }
+        }
+        let face = cell.face();
+        if let Some(why) = face.refused().filter(|_| face.refusals() > refusals) {
+            self.shared.metrics.face_refused(why.code());
         }
         true
     }
