@@ -23,6 +23,11 @@ fn programs(test: &str, files: &[(&str, String)]) -> PathBuf {
 }
 
 fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
+    spawn_on(duplex_connector(shared, None), dir)
+}
+
+/// The daemon in the press cell, on `connect`.
+fn spawn_on(connect: linterpd::daemon::Connector, dir: PathBuf) -> (Daemon, RobotHandle) {
     let signals = signals(&[
         ("press_open", "X5"),
         ("press_moving", "X6"),
@@ -46,7 +51,31 @@ fn spawn(shared: &SharedMock, dir: PathBuf) -> (Daemon, RobotHandle) {
         access,
         modbus: None,
     };
-    spawn_in_cell(duplex_connector(shared, None), cell, gateway)
+    spawn_in_cell(connect, cell, gateway)
+}
+
+/// A connector to the mock over Modbus TCP (its Modbus server on a local port).
+async fn modbus_connector(shared: &SharedMock) -> linterpd::daemon::Connector {
+    use linterpd::mock::{ModbusServer, ModbusServerOptions};
+    use linterpd::plc::{AnyPlc, BoxedLink, ModbusClient, ModbusFraming, ModbusOptions};
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let address = listener.local_addr().unwrap();
+    let server = ModbusServer::new(shared.clone(), ModbusServerOptions::default());
+    tokio::spawn(server.serve_tcp(listener));
+    Box::new(move || {
+        Box::pin(async move {
+            let stream = tokio::net::TcpStream::connect(address)
+                .await
+                .map_err(|source| linterpd::plc::PlcError::Link {
+                    operation: "connect".into(),
+                    source,
+                })?;
+            Ok(AnyPlc::Modbus(ModbusClient::new(
+                Box::new(stream) as BoxedLink,
+                ModbusOptions::new(ModbusFraming::Tcp, 1),
+            )))
+        })
+    })
 }
 
 /// Waits until the cycle's status satisfies `done`.
@@ -125,6 +154,34 @@ async fn a_press_cycle_waits_for_the_press_runs_interlocked_and_counts_its_cycle
         )
     });
     assert_eq!((go, dt100), (false, 7));
+}
+
+#[tokio::test]
+async fn the_press_cycle_runs_the_same_over_modbus_tcp() {
+    let shared = mock_at_seed_start("");
+    let dir = programs("modbus", &[("press-load", press_cycle())]);
+    let (_d, h) = spawn_on(modbus_connector(&shared).await, dir);
+    taking_moves(&h).await;
+    h.run_cycle("press-load", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+    shared.with(|m| m.set_input(5, true).unwrap());
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 2, "{starts:?}");
+    assert_eq!(
+        starts[0].block.permit.mask[0], 0x60,
+        "the permit went over Modbus"
+    );
+    assert!(starts.iter().all(|r| r.block.permit.holds(&r.inputs)));
+    let (go, dt100) = shared.with(|m| {
+        (
+            m.memory().bit(linterpd::gateway::Area::Y, 0).unwrap(),
+            m.read_words(100, 1).unwrap()[0],
+        )
+    });
+    assert_eq!((go, dt100), (false, 7), "the outputs went over Modbus");
 }
 
 #[tokio::test]
