@@ -17,7 +17,7 @@ use linterpd::cell::face::{Refusal, STATUS_AT, bit, check_of, status_bit, status
 use linterpd::config::{CellSettings, FaceSettings};
 use linterpd::contract::{Layout, State};
 use linterpd::daemon::modbus_face::ModbusFaceServer;
-use linterpd::daemon::{CycleState, Daemon, ModeError, RobotHandle};
+use linterpd::daemon::{CycleState, Daemon, MIRROR_EVERY, ModeError, RobotHandle};
 use linterpd::gateway::{AccessList, GatewaySettings, ModbusFace};
 use linterpd::mock::SharedMock;
 use tokio::net::TcpListener;
@@ -525,4 +525,44 @@ async fn mirrored_until(
         assert!(began.elapsed() < LIMIT, "never {what}: {s:?}");
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
+}
+
+#[tokio::test]
+async fn the_mirror_goes_quiet_while_the_link_is_down_and_rewrites_the_status_once_back() {
+    let c = cell_with("mirror-link", Mode::Remote, Some(MIRROR)).await;
+    mirrored_until(&c.shared, "linked", |s| on(s, status_bit::LINKED)).await;
+    // The press PLC selects program 3 while the link is down: nothing is read, nothing written.
+    c.shared
+        .with(|m| m.set_faults("close@100%".parse().unwrap()));
+    let began = Instant::now();
+    while c.h.state().link.connected {
+        assert!(began.elapsed() < LIMIT, "the link never went down");
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let frozen = c
+        .shared
+        .with(|m| m.read_words(MIRROR + STATUS_AT as u32, 10).unwrap());
+    c.shared.with(|m| {
+        m.write_words(MIRROR, &[3, check_of(3), ON | bit::STROBE, 0])
+            .unwrap()
+    });
+    tokio::time::sleep(MIRROR_EVERY * 3).await;
+    let still = c
+        .shared
+        .with(|m| m.read_words(MIRROR + STATUS_AT as u32, 10).unwrap());
+    assert_eq!(still, frozen, "written while the link was down");
+    assert_eq!(
+        c.h.state().face.unwrap().commands,
+        0,
+        "read while the link was down"
+    );
+    // Back: the command words are read (the strobe's edge selects program 3) and the status
+    // words written again.
+    c.shared.with(|m| m.set_faults("".parse().unwrap()));
+    let s = mirrored_until(&c.shared, "program 3 selected", |s| {
+        s[status_word::PROGRAM] == 3 && on(s, status_bit::LINKED)
+    })
+    .await;
+    assert_eq!(s[status_word::COMMANDS], ON | bit::STROBE);
+    assert_eq!(s[status_word::REFUSED], 0);
 }
