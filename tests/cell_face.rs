@@ -544,7 +544,7 @@ async fn the_mirror_goes_quiet_while_the_link_is_down_and_rewrites_the_status_on
         .with(|m| m.read_words(MIRROR + STATUS_AT as u32, 10).unwrap());
     c.shared.with(|m| {
         m.write_words(MIRROR, &[3, check_of(3), ON | bit::STROBE, 0])
-            .unwrap()
+            .unwrap();
     });
     tokio::time::sleep(MIRROR_EVERY * 3).await;
     let still = c
