@@ -255,6 +255,66 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
 }
 
 #[tokio::test]
+async fn the_move_after_a_wait_is_uploaded_during_it_and_started_only_once_it_is_met() {
+    let shared = mock_at_seed_start("");
+    let (_d, h) = spawn(
+        &shared,
+        programs("prepared", &[("press-load", press_cycle())]),
+    );
+    taking_moves(&h).await;
+    h.run_cycle("press-load", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    // The move is uploaded and held while the press stays closed: nothing starts.
+    let began = std::time::Instant::now();
+    let prepared = loop {
+        let r = h.reports().into_iter().next();
+        if let Some(r) = r.filter(|r| r.upload_s.is_some()) {
+            break r;
+        }
+        assert!(began.elapsed() < LIMIT, "never uploaded: {:?}", h.reports());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    };
+    assert!(!prepared.stage.is_final(), "{prepared:?}");
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+    assert_eq!(h.cycle().unwrap().state, CycleState::Waiting);
+    // Open: that very move starts, with its permit, and the cycle goes on.
+    shared.with(|m| m.set_input(5, true).unwrap());
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.moves.first(), Some(&prepared.id));
+    assert_eq!(
+        h.report(prepared.id).unwrap().stage,
+        linterpd::daemon::Stage::Done
+    );
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 2);
+    assert!(starts[0].block.permit.holds(&starts[0].inputs));
+}
+
+#[tokio::test]
+async fn a_wait_that_times_out_cancels_its_prepared_move_before_any_start() {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nwait = \"part_present\"\ntimeout = \"600ms\"\n[[step]]\nmove = {}\n",
+        at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("prepared-timeout", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    assert!(s.reason.unwrap().contains("timed out"));
+    let reports = h.reports();
+    assert_eq!(reports.len(), 1, "{reports:?}");
+    assert_eq!(reports[0].stage, linterpd::daemon::Stage::Cancelled);
+    let why = reports[0].error.clone().unwrap();
+    assert!(
+        why.contains("before its start: its wait ended otherwise"),
+        "{why}"
+    );
+    assert!(shared.with(|m| m.starts().is_empty()));
+}
+
+#[tokio::test]
 async fn a_stop_during_a_wait_ends_the_cycle_and_nothing_moves() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("stop", &[("press-load", press_cycle())]));

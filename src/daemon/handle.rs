@@ -130,10 +130,31 @@ impl RobotHandle {
     /// of a path of that one line, cut at the reversal and chained at speed
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_behind(order, None)
+    }
+
+    /// [`RobotHandle::submit`] of a move that is uploaded now and started only once `gate`
+    /// opens (a cycle's move prepared during the wait before it). One start only: an order
+    /// that would run as several is refused (the cycle then runs it after its wait).
+    pub(crate) fn submit_gated(
+        &self,
+        order: MoveOrder,
+        gate: &super::gate::Gate,
+    ) -> Result<MoveId, SubmitError> {
+        let ids = self.submit_behind(order, Some(gate))?;
+        Ok(ids[0])
+    }
+
+    fn submit_behind(
+        &self,
+        order: MoveOrder,
+        gate: Option<&super::gate::Gate>,
+    ) -> Result<Vec<MoveId>, SubmitError> {
         let taught = self.positions.of(&self.robot.name);
         let mut checked =
             order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
         checked.permit = self.permit(order.permit.as_deref())?;
+        checked.gate = gate.cloned();
         self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
         // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
@@ -156,6 +177,9 @@ impl RobotHandle {
                 // with that move).
                 Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
                     end = Some(counts);
+                }
+                Err(e @ PlanError::LaterSegment { .. }) if gate.is_some() => {
+                    return Err(e.into());
                 }
                 Err(e @ PlanError::LaterSegment { .. }) => {
                     return match checked.pose_target(&self.robot.pose_of(&counts)) {
@@ -346,6 +370,7 @@ impl RobotHandle {
                     }),
                     motion,
                     permit,
+                    gate: None,
                 };
                 let shown = SectionReport::new(
                     n + 1,

@@ -25,6 +25,7 @@
 pub mod api;
 mod cell;
 mod cycle;
+pub mod gate;
 mod gateway;
 mod handle;
 mod ids;

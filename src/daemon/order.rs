@@ -423,6 +423,8 @@ pub struct CheckedOrder {
     pub motion: Motion,
     /// Its permit over the cell's inputs: written with its start, enforced by the PLC.
     pub permit: Permit,
+    /// A gate its start waits for once it is uploaded (a cycle's move prepared during its wait).
+    pub gate: Option<super::gate::Gate>,
 }
 
 impl CheckedOrder {
@@ -521,6 +523,7 @@ impl MoveOrder {
             target: self.target(taught)?,
             motion: self.motion(defaults, *limits)?,
             permit: Permit::NONE,
+            gate: None,
         })
     }
 

@@ -80,7 +80,8 @@ pub(super) async fn run_path(
     }
 }
 
-async fn follow(
+/// Follows every start of `ids` to its end.
+pub(super) async fn follow(
     handle: &RobotHandle,
     ids: &[MoveId],
     control: &mut watch::Receiver<Control>,

@@ -243,7 +243,9 @@ impl Runner {
         }
     }
 
-    /// A wait step: until its condition holds, at most `timeout`.
+    /// A wait step: until its condition holds, at most `timeout`. A move right after it (to a
+    /// pose, a position or joints) is prepared meanwhile: uploaded now and started as soon as
+    /// the wait is met, so the robot moves one status read and a start after the input.
     async fn wait(
         &mut self,
         pc: usize,
@@ -251,6 +253,59 @@ impl Runner {
         timeout: Option<std::time::Duration>,
         on_timeout: Option<usize>,
     ) -> Next {
+        let gate = crate::daemon::gate::Gate::new();
+        let prepared = match self.program.ops.get(pc + 1).map(|op| &op.kind) {
+            Some(OpKind::Move(order)) if order.by.is_none() => {
+                self.handle.submit_gated(order.clone(), &gate).ok()
+            }
+            _ => None,
+        };
+        let (next, met) = self.wait_only(pc, until, timeout, on_timeout).await;
+        let Some(id) = prepared else {
+            return next;
+        };
+        if met {
+            gate.open();
+            return self.prepared(pc + 1, id).await;
+        }
+        gate.shut();
+        let _ = self
+            .handle
+            .wait(id, std::time::Duration::from_secs(30))
+            .await;
+        next
+    }
+
+    /// The move of op `at`, prepared during the wait before it and released: followed to its
+    /// end; run afresh when it was cancelled before its start.
+    async fn prepared(&mut self, at: usize, id: u64) -> Next {
+        let step = self.program.ops[at].at.clone();
+        self.set(|s| {
+            s.state = CycleState::Running;
+            s.step = Some(step);
+        });
+        let mut started = Vec::new();
+        let end = act::follow(&self.handle, &[id], &mut self.control, &mut started).await;
+        let cancelled_before_start = self.handle.report(id).is_some_and(|r| {
+            r.error
+                .as_deref()
+                .is_some_and(|e| e.starts_with(crate::daemon::worker::PREPARED_CANCELLED))
+        });
+        if cancelled_before_start {
+            return Next::Go(at);
+        }
+        self.note_moves(&started);
+        Self::motion(at, end)
+    }
+
+    /// A wait step alone: what comes next, and whether its condition was met.
+    async fn wait_only(
+        &mut self,
+        pc: usize,
+        until: &crate::cycle::Condition,
+        timeout: Option<std::time::Duration>,
+        on_timeout: Option<usize>,
+    ) -> (Next, bool) {
         let since = tokio::time::Instant::now();
         self.set(|s| {
             s.state = CycleState::Waiting;
@@ -279,7 +334,7 @@ impl Runner {
             s.waiting_for = None;
             s.waiting_s = None;
         });
-        match (end, on_timeout) {
+        let next = match (end, on_timeout) {
             (WaitEnd::Met, _) => Next::Go(pc + 1),
             (WaitEnd::TimedOut, Some(to)) => Next::Go(to),
             (WaitEnd::TimedOut, None) => {
@@ -288,7 +343,8 @@ impl Runner {
             (WaitEnd::StoppedNow, _) => Next::Stopped,
             // The pause at the top of the loop takes it; the wait runs again on resume.
             (WaitEnd::Paused, _) => Next::Go(pc),
-        }
+        };
+        (next, end == WaitEnd::Met)
     }
 
     /// Whether ops `from..=to` include one that takes time (a motion, a wait, a dwell).

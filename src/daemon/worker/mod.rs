@@ -19,6 +19,7 @@ mod events;
 mod gateway;
 mod link;
 mod moves;
+pub(crate) use moves::PREPARED_CANCELLED;
 mod pace;
 mod placement;
 mod preload;

@@ -11,6 +11,7 @@ use super::preload::{self, Choice};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
 use crate::contract::{CHANNELS, describe_unmet};
+use crate::daemon::gate::{Gate, GateState};
 use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
@@ -18,6 +19,18 @@ use crate::plan::{Plan, PlanError};
 use crate::plc::contract::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
+
+/// How a prepared move cancelled before its start begins its report's error: the cycle then runs
+/// it as any move, after its wait.
+pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
+
+/// Why a held bank was not started.
+enum Held {
+    /// Cancelled before its start, for this reason.
+    Cancelled(&'static str),
+    /// The link failed.
+    Link(ContractError),
+}
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -45,12 +58,26 @@ impl Worker {
             .await
         {
             Ok(bank) => bank,
+            Err(e) if turn.order.gate.is_some() => {
+                let why = describe(&e);
+                return self.unprepared(id, &why, link_broken(&e).then_some(e));
+            }
             Err(e) => return self.not_started(id, e),
         };
         let upload_s = began.elapsed().as_secs_f64();
         self.shared.metrics.uploaded(upload_s);
         self.shared
             .moves(|m| m.update(id, |r| r.upload_s = Some(upload_s)));
+        if let Some(gate) = &turn.order.gate {
+            match self.hold_for(gate).await {
+                Ok(()) => {}
+                Err(Held::Cancelled(why)) => return self.unprepared(id, why, None),
+                Err(Held::Link(e)) => {
+                    let why = describe(&e);
+                    return self.unprepared(id, &why, Some(e));
+                }
+            }
+        }
         if let Err(e) = self.until_it_may_start(&planned).await {
             return self.not_started(id, e);
         }
@@ -86,7 +113,9 @@ impl Worker {
             .last()
             .map(|s| s.block.inputs)
             .unwrap_or_default();
-        if !queued.order.permit.holds(&inputs) {
+        // A gated move's permit is for when its gate opens: the PLC and `may_start` check it
+        // then.
+        if queued.order.gate.is_none() && !queued.order.permit.holds(&inputs) {
             // Nothing planned or written: the host's own check, for a clear message (the PLC's
             // check at the start is the one that counts).
             let blocker = Blocker::PermitNotMet {
@@ -214,6 +243,65 @@ impl Worker {
         let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
         self.finish(id, Stage::Done, None, Some(error));
         tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
+    }
+
+    /// Holds an uploaded, verified bank until `gate` opens: the status block read at the busy
+    /// pace (the cycle's wait is decided on it) and the gateway served meanwhile. Anything
+    /// else cancels it: the gate shut, a stop or a command asked for, the PLC no longer where
+    /// the upload left it (a restart, a fault), the link failing.
+    async fn hold_for(&mut self, gate: &Gate) -> Result<(), Held> {
+        loop {
+            match gate.state() {
+                GateState::Open => return Ok(()),
+                GateState::Shut => return Err(Held::Cancelled("its wait ended otherwise")),
+                GateState::Closed => {}
+            }
+            self.take_pending_requests();
+            if self
+                .shared
+                .stop_pending
+                .load(std::sync::atomic::Ordering::SeqCst)
+            {
+                return Err(Held::Cancelled("a stop was asked for"));
+            }
+            if !self.commands.is_empty() {
+                return Err(Held::Cancelled("a command came (home, clear-fault)"));
+            }
+            while let Ok(job) = self.gateway_rx.try_recv() {
+                self.gateway.push_back(job);
+            }
+            if !self.gateway.is_empty() {
+                self.gateway_exchange().await.map_err(Held::Link)?;
+                continue;
+            }
+            if tokio::time::Instant::now() >= self.next_poll {
+                self.poll().await.map_err(Held::Link)?;
+                self.next_poll = tokio::time::Instant::now() + self.settings.poll_interval;
+                let uploading =
+                    matches!(self.machine.phase(), Phase::Uploading { current: None, .. });
+                if !uploading
+                    || self
+                        .machine
+                        .blocker(now())
+                        .is_some_and(|b| b != Blocker::Full)
+                {
+                    return Err(Held::Cancelled("the PLC changed under it"));
+                }
+                continue;
+            }
+            tokio::select! {
+                () = gate.decided() => {}
+                () = tokio::time::sleep_until(self.next_poll) => {}
+                job = self.gateway_rx.recv() => {
+                    if let Some(job) = job {
+                        self.gateway.push_back(job);
+                    }
+                }
+                () = self.shared.read_soon.notified() => {
+                    self.next_poll = tokio::time::Instant::now();
+                }
+            }
+        }
     }
 
     /// The contract's first step once more, after the upload: the bank is started only once
@@ -497,6 +585,27 @@ impl Worker {
                 r.deadline_s = Some((limit + self.start_within + DEADLINE_MARGIN).as_secs_f64());
             });
         });
+    }
+
+    /// Ends prepared move `id` before its start (cancelled, `why`; the cycle runs it afresh
+    /// after its wait); a link failure (`link`) goes on up.
+    fn unprepared(
+        &mut self,
+        id: MoveId,
+        why: &str,
+        link: Option<ContractError>,
+    ) -> Result<(), ContractError> {
+        self.machine.upload_ended();
+        self.publish_phase();
+        tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
+        self.finish(
+            id,
+            Stage::Cancelled,
+            Some(format!("{PREPARED_CANCELLED}: {why}")),
+            None,
+        );
+        self.cancel_queue("cancelled: the move before it did not start");
+        link.map_or(Ok(()), Err)
     }
 
     /// Ends move `id`, whose start was not written, by `e`; a link failure goes on up.
