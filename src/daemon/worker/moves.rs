@@ -78,7 +78,14 @@ impl Worker {
                 }
             }
         }
-        if let Err(e) = self.until_it_may_start(&planned).await {
+        // A prepared move released on a status block read within a poll (the one that met
+        // its wait) starts on it, as a move's turn is planned on one; else on a fresh read.
+        let fresh = turn.order.gate.is_some()
+            && self.machine.read_at().is_some_and(|at| {
+                now().saturating_duration_since(at) < self.settings.poll_interval
+            })
+            && self.machine.may_start(&planned, now()).is_ok();
+        if !fresh && let Err(e) = self.until_it_may_start(&planned).await {
             return self.not_started(id, e);
         }
         if turn.order.begins_at_speed()
