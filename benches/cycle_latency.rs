@@ -2,8 +2,9 @@
 //! start of the move the cycle waited to make, over MEWTOCOL-COM on an emulated serial line at
 //! 19200 and 115200 baud (real time, 2 ms scans). The cycle alternates: wait for X5 on, a move
 //! of 20 mm, wait for X5 off, the move back. What it costs: the status read that sees the input
-//! (at most one poll interval, 20 ms, plus the read), then the move's plan, upload with
-//! read-back and start (a move after a wait is not prepared ahead yet: docs/CYCLES.md).
+//! (at most one poll interval, 20 ms, plus the read), then the start write: the move after a
+//! wait is prepared during it (planned, uploaded, read back and held; docs/CYCLES.md). An input
+//! that changes while that upload is still being written is seen once it is done.
 //!
 //! Run: `cargo bench --bench cycle_latency`
 
