@@ -292,6 +292,31 @@ async fn the_move_after_a_wait_is_uploaded_during_it_and_started_only_once_it_is
 }
 
 #[tokio::test]
+async fn the_daemon_shuts_down_while_a_prepared_move_is_held_and_nothing_starts() {
+    let shared = mock_at_seed_start("");
+    let (d, h) = spawn(
+        &shared,
+        programs("prepared-shutdown", &[("press-load", press_cycle())]),
+    );
+    taking_moves(&h).await;
+    h.run_cycle("press-load", Some(1)).unwrap();
+    let began = std::time::Instant::now();
+    while !h.reports().iter().any(|r| r.upload_s.is_some()) {
+        assert!(began.elapsed() < LIMIT, "never uploaded: {:?}", h.reports());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    // Well inside the wait's 10 s timeout: the hold itself gives way to the shutdown.
+    let down = tokio::time::timeout(Duration::from_secs(5), d.shut_down()).await;
+    assert!(
+        down.is_ok(),
+        "the daemon did not shut down while the bank was held"
+    );
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    assert!(shared.with(|m| m.starts().is_empty()));
+}
+
+#[tokio::test]
 async fn a_wait_that_times_out_cancels_its_prepared_move_before_any_start() {
     let shared = mock_at_seed_start("");
     let program = format!(

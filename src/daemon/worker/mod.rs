@@ -34,6 +34,7 @@ use std::time::Duration;
 
 use tokio::sync::{mpsc, watch};
 
+use super::gate::Gate;
 use super::order::CheckedOrder;
 use super::report::{MoveId, Stage};
 use super::request::{CommandError, ConflictReason, Reply, Request};
@@ -253,7 +254,7 @@ impl Worker {
             }
         }
         if self.gateway.is_empty() {
-            self.wait_until(self.next_poll).await;
+            self.wait_until(self.next_poll, None).await;
         }
         Ok(())
     }
@@ -323,11 +324,19 @@ impl Worker {
 
     /// Waits up to `pause`; a request, a stop or shutdown ends the wait at once.
     async fn wait(&mut self, pause: Duration) {
-        self.wait_until(tokio::time::Instant::now() + pause).await;
+        self.wait_until(tokio::time::Instant::now() + pause, None)
+            .await;
     }
 
-    /// Waits until `until`; a request, a stop, a gateway request or shutdown ends the wait.
-    async fn wait_until(&mut self, until: tokio::time::Instant) {
+    /// Waits until `until`; a request, a stop, a gateway request, shutdown, a read asked for
+    /// soon or `gate` deciding (a held bank's) ends the wait.
+    async fn wait_until(&mut self, until: tokio::time::Instant, gate: Option<&Gate>) {
+        let decided = async {
+            match gate {
+                Some(gate) => gate.decided().await,
+                None => std::future::pending().await,
+            }
+        };
         tokio::select! {
             biased;
             _ = self.shutdown.changed() => {}
@@ -350,6 +359,7 @@ impl Worker {
             () = self.shared.read_soon.notified() => {
                 self.next_poll = tokio::time::Instant::now();
             }
+            () = decided => {}
         }
     }
 

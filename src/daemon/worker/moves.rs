@@ -264,11 +264,15 @@ impl Worker {
                 GateState::Closed => {}
             }
             self.take_pending_requests();
-            if self
-                .shared
-                .stop_pending
-                .load(std::sync::atomic::Ordering::SeqCst)
-            {
+            if *self.shutdown.borrow() {
+                return Err(Held::Cancelled("the daemon is shutting down"));
+            }
+            let stopping = !self.pending_stops.is_empty()
+                || self
+                    .shared
+                    .stop_pending
+                    .load(std::sync::atomic::Ordering::SeqCst);
+            if stopping {
                 return Err(Held::Cancelled("a stop was asked for"));
             }
             if !self.commands.is_empty() {
@@ -296,18 +300,7 @@ impl Worker {
                 }
                 continue;
             }
-            tokio::select! {
-                () = gate.decided() => {}
-                () = tokio::time::sleep_until(self.next_poll) => {}
-                job = self.gateway_rx.recv() => {
-                    if let Some(job) = job {
-                        self.gateway.push_back(job);
-                    }
-                }
-                () = self.shared.read_soon.notified() => {
-                    self.next_poll = tokio::time::Instant::now();
-                }
-            }
+            self.wait_until(self.next_poll, Some(gate)).await;
         }
     }
 
