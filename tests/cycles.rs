@@ -33,11 +33,13 @@ fn spawn_on(connect: linterpd::daemon::Connector, dir: PathBuf) -> (Daemon, Robo
         ("press_moving", "X6"),
         ("part_present", "X2"),
         ("press_go", "Y0"),
+        // In the status block's third input word (WR10): a start's record shows it.
+        ("gripper", "R100"),
     ]);
     let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
     let access = AccessList::new(
         ranges(&["DT0-DT199"]),
-        ranges(&["Y0-Y7", "DT100-DT199"]),
+        ranges(&["Y0-Y7", "DT100-DT199", "R100-R10F"]),
         &Layout::default(),
     )
     .unwrap();
@@ -291,6 +293,129 @@ async fn the_move_after_a_wait_is_uploaded_during_it_and_started_only_once_it_is
     assert!(starts[0].block.permit.holds(&starts[0].inputs));
 }
 
+/// Until the daemon has uploaded move `n` (0-based, in report order): the reports then.
+async fn until_uploaded(h: &RobotHandle, n: usize) -> Vec<linterpd::daemon::MoveReport> {
+    let began = std::time::Instant::now();
+    loop {
+        let reports = h.reports();
+        if reports.get(n).is_some_and(|r| r.upload_s.is_some()) {
+            return reports;
+        }
+        assert!(began.elapsed() < LIMIT, "never uploaded: {reports:?}");
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+}
+
+#[tokio::test]
+async fn the_move_after_a_move_and_its_outputs_is_uploaded_while_that_one_runs_and_starts_from_rest_after_them()
+ {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nmove = {p2}\n[[step]]\nset = {{ gripper = true }}\n[[step]]\nmove = {p1}\n\
+         [[step]]\nset = {{ gripper = false }}\n",
+        p1 = at(P1),
+        p2 = at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("ahead", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    // The second move is uploaded while the first still runs.
+    let reports = until_uploaded(&h, 1).await;
+    assert!(!reports[0].stage.is_final(), "{reports:?}");
+    assert!(!reports[1].stage.is_final(), "{reports:?}");
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.moves, vec![reports[0].id, reports[1].id]);
+    let [first, second] = [reports[0].id, reports[1].id].map(|id| h.report(id).unwrap());
+    assert_eq!(first.stage, linterpd::daemon::Stage::Done, "{first:?}");
+    assert_eq!(second.stage, linterpd::daemon::Stage::Done, "{second:?}");
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 2, "{starts:?}");
+    // Planned from where the first ends, started there from rest, after the output: the
+    // gripper (R100) was on in the scan that started it, and off in the first's.
+    let ends = first.target_counts.unwrap();
+    assert!((0..4).all(|c| i64::from(starts[1].block.from[c]) == ends[c]));
+    assert!(!starts[1].from_mismatch(), "{:?}", starts[1]);
+    assert!(starts[1].seen_s >= starts[0].at_s);
+    assert_eq!(starts[0].inputs[2] & 1, 0);
+    assert_eq!(starts[1].inputs[2] & 1, 1);
+}
+
+#[tokio::test]
+async fn past_a_move_to_where_the_robot_will_be_the_next_move_is_prepared_too_and_waits_for_its_wait()
+ {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nmove = {p2}\n[[step]]\nset = {{ gripper = true }}\n[[step]]\nmove = {p2}\n\
+         [[step]]\nwait = \"part_present\"\ntimeout = \"10s\"\n[[step]]\nmove = {p1}\n",
+        p1 = at(P1),
+        p2 = at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("ahead-past", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    // Both queued behind the first move while it runs; the last uploaded, held.
+    let reports = until_uploaded(&h, 2).await;
+    assert!(!reports[0].stage.is_final(), "{reports:?}");
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    assert_eq!(shared.with(|m| m.starts().len()), 1);
+    let r = h.report(reports[1].id).unwrap();
+    assert_eq!(r.stage, linterpd::daemon::Stage::Done, "{r:?}");
+    assert!(r.motion_s.is_none(), "no start of its own: {r:?}");
+    assert!(!h.report(reports[2].id).unwrap().stage.is_final());
+    // The part arrives: the held move starts from where the first ended.
+    shared.with(|m| m.set_input(2, true).unwrap());
+    until(&h, "done", |s| s.state == CycleState::Done).await;
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 2, "{starts:?}");
+    assert!(!starts[1].from_mismatch(), "{:?}", starts[1]);
+    assert_eq!(starts[1].inputs[0] & 0b100, 0b100);
+    let last = h.report(reports[2].id).unwrap();
+    assert_eq!(last.stage, linterpd::daemon::Stage::Done, "{last:?}");
+}
+
+#[tokio::test]
+async fn a_move_prepared_behind_one_the_plc_holds_is_cancelled_before_its_start_and_runs_after_the_resume()
+ {
+    let shared = mock_at_seed_start("");
+    let program = format!(
+        "[[step]]\nmove = {p2}\npermit = \"press_open\"\n[[step]]\nset = {{ gripper = true }}\n\
+         [[step]]\nmove = {p1}\n",
+        p1 = at(P1),
+        p2 = at(P2)
+    );
+    let (_d, h) = spawn(&shared, programs("ahead-held", &[("p", program)]));
+    taking_moves(&h).await;
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    let reports = until_uploaded(&h, 1).await;
+    let prepared = reports[1].id;
+    // The press closes while the first move runs: it is held, the one behind it never starts.
+    shared.with(|m| m.set_input(5, false).unwrap());
+    until(&h, "paused", |s| s.state == CycleState::Paused).await;
+    let r = h.report(prepared).unwrap();
+    assert_eq!(r.stage, linterpd::daemon::Stage::Cancelled, "{r:?}");
+    assert!(
+        r.error.as_deref().unwrap().contains("before its start"),
+        "{r:?}"
+    );
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    assert_eq!(shared.with(|m| m.starts().len()), 1);
+    assert!(!shared.with(|m| m.memory().bit(linterpd::gateway::Area::R, 100).unwrap()));
+    // Resumed: the first move again from where it stopped, then the second afresh.
+    shared.with(|m| m.set_input(5, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    h.resume_cycle().unwrap();
+    until(&h, "done", |s| s.state == CycleState::Done).await;
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), 3, "{starts:?}");
+    assert!(starts.iter().all(|s| !s.from_mismatch()), "{starts:?}");
+    let last = h.reports().into_iter().max_by_key(|r| r.id).unwrap();
+    assert_eq!(last.stage, linterpd::daemon::Stage::Done, "{last:?}");
+    assert_eq!(starts[2].inputs[2] & 1, 1);
+}
+
 #[tokio::test]
 async fn the_daemon_shuts_down_while_a_prepared_move_is_held_and_nothing_starts() {
     let shared = mock_at_seed_start("");
@@ -332,8 +457,11 @@ async fn a_wait_that_times_out_cancels_its_prepared_move_before_any_start() {
     assert_eq!(reports.len(), 1, "{reports:?}");
     assert_eq!(reports[0].stage, linterpd::daemon::Stage::Cancelled);
     let why = reports[0].error.clone().unwrap();
+    // The cycle faulted: the robot was stopped and the prepared move's gate shut, whichever
+    // the worker saw first.
     assert!(
-        why.contains("before its start: its wait ended otherwise"),
+        why.contains("before its start: its cycle went another way")
+            || why.contains("before its start: a stop was asked for"),
         "{why}"
     );
     assert!(shared.with(|m| m.starts().is_empty()));
@@ -475,6 +603,8 @@ async fn a_restarted_daemon_has_no_cycle_and_does_not_move_the_robot() {
     h.run_cycle("press-load", None).unwrap();
     until(&h, "running a move", |s| !s.moves.is_empty()).await;
     d.kill().await;
+    // A start the old daemon wrote just before it died is acted on in the PLC's next scans.
+    tokio::time::sleep(Duration::from_millis(200)).await;
     let starts = shared.with(|m| m.starts().len());
     let (_d2, h2) = spawn(&shared, dir);
     taking_moves(&h2).await;

@@ -134,6 +134,9 @@ pub fn describe(s: &CycleStatus) -> String {
     };
     if let Some(t) = s.last_cycle_s {
         let _ = write!(text, ", last cycle {t:.2} s");
+        if let Some(w) = s.last_cycle_waiting_s {
+            let _ = write!(text, " ({w:.2} s of it waiting)");
+        }
     }
     if s.stopping {
         text.push_str("; stops at the end of this step");
@@ -161,10 +164,12 @@ mod tests {
             called_from: vec!["press-load step 2".into()],
         });
         s.last_cycle_s = Some(7.123);
+        s.last_cycle_waiting_s = Some(1.5);
         assert_eq!(
             describe(&s),
             "press-load: waiting for press_open (X5) for 2.4 s at step 3 (in) of load, called \
-             from press-load step 2: wait for press_open (X5); 4 of 10 done, last cycle 7.12 s"
+             from press-load step 2: wait for press_open (X5); 4 of 10 done, last cycle 7.12 s \
+             (1.50 s of it waiting)"
         );
     }
 

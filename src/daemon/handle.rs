@@ -130,26 +130,30 @@ impl RobotHandle {
     /// of a path of that one line, cut at the reversal and chained at speed
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_behind(order, None)
+        self.submit_behind(order, None).map(|(ids, _)| ids)
     }
 
     /// [`RobotHandle::submit`] of a move that is uploaded now and started only once `gate`
     /// opens (a cycle's move prepared during the wait before it). One start only: an order
-    /// that would run as several is refused (the cycle then runs it after its wait).
+    /// that would run as several is refused (the cycle then runs it after its wait). With its
+    /// id, whether it moves: `false` when it is planned to end within a pulse of where it
+    /// begins (it then ends with the move ahead of it, with no start of its own).
     pub(crate) fn submit_gated(
         &self,
         order: MoveOrder,
         gate: &super::gate::Gate,
-    ) -> Result<MoveId, SubmitError> {
-        let ids = self.submit_behind(order, Some(gate))?;
-        Ok(ids[0])
+    ) -> Result<(MoveId, bool), SubmitError> {
+        let (ids, moves) = self.submit_behind(order, Some(gate))?;
+        Ok((ids[0], moves))
     }
 
+    /// The ids of `order`'s starts, and whether it moves the robot (as far as it can be told
+    /// before its turn: no counts read yet, it is taken to).
     fn submit_behind(
         &self,
         order: MoveOrder,
         gate: Option<&super::gate::Gate>,
-    ) -> Result<Vec<MoveId>, SubmitError> {
+    ) -> Result<(Vec<MoveId>, bool), SubmitError> {
         let taught = self.positions.of(&self.robot.name);
         let mut checked =
             order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
@@ -183,16 +187,22 @@ impl RobotHandle {
                 }
                 Err(e @ PlanError::LaterSegment { .. }) => {
                     return match checked.pose_target(&self.robot.pose_of(&counts)) {
-                        Some(to) => self.submit_line_in_parts(&order, &checked, counts, to),
+                        Some(to) => self
+                            .submit_line_in_parts(&order, &checked, counts, to)
+                            .map(|ids| (ids, true)),
                         None => Err(e.into()),
                     };
                 }
                 Err(e) => return Err(e.into()),
             }
         }
+        let moves = from
+            .zip(end)
+            .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1));
         let id = self.shared.next_id();
         let report = MoveReport::new(id, &self.robot.name, order);
         self.enqueue(vec![(report, checked)], end)
+            .map(|ids| (ids, moves))
     }
 
     /// Queues every start of one order, whole or not at all: refused with nothing queued when
@@ -614,6 +624,13 @@ impl RobotHandle {
         if on {
             self.shared.read_soon.notify_one();
         }
+    }
+
+    /// Shuts `gate`, a prepared move's, and wakes the worker to end that move at once wherever
+    /// it is (queued, uploading or held).
+    pub(crate) fn shut_gate(&self, gate: &super::gate::Gate) {
+        gate.shut();
+        self.shared.read_soon.notify_one();
     }
 
     /// How long ago the robot's worker last went round its loop.

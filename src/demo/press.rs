@@ -45,6 +45,21 @@ pub struct CycleTimes {
     pub cycle_s: f64,
     /// Time its waits waited, s.
     pub waiting_s: f64,
+    /// The planned time of its moves that ended done (the time the PLC runs their tables), s.
+    pub motion_s: f64,
+}
+
+impl CycleTimes {
+    /// What the cycle took beyond its motion and its waits, as a share of them.
+    #[must_use]
+    pub fn overhead(&self) -> f64 {
+        overhead(self.cycle_s, self.motion_s, self.waiting_s)
+    }
+}
+
+/// The time beyond `motion_s` and `waiting_s` in `cycle_s`, as a share of them.
+fn overhead(cycle_s: f64, motion_s: f64, waiting_s: f64) -> f64 {
+    (cycle_s - motion_s - waiting_s) / (motion_s + waiting_s)
 }
 
 /// The hold the glitch caused.
@@ -161,11 +176,10 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
     let mut press = Press::Open;
     let mut cycles = Vec::new();
     let mut cycle_began = Instant::now();
-    let mut waiting_s = 0.0;
-    let mut wait_seen = 0.0_f64;
     let mut glitch: Option<Instant> = None;
     let mut hold: Option<Hold> = None;
     let mut resumed_at: Option<Instant> = None;
+    let mut counted = std::collections::HashSet::new();
     loop {
         if began.elapsed() > LIMIT {
             return Err(DemoError::Rig(format!("the cycles took over {LIMIT:?}")));
@@ -173,21 +187,23 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
         tokio::time::sleep(Duration::from_millis(2)).await;
         press = step_press(mock, press);
         let Some(s) = handle.cycle() else { continue };
-        if s.state == CycleState::Waiting {
-            wait_seen = wait_seen.max(s.waiting_s.unwrap_or(0.0));
-        } else if wait_seen > 0.0 {
-            waiting_s += wait_seen;
-            wait_seen = 0.0;
-        }
         if s.done as usize > cycles.len() {
+            let motion_s = handle
+                .reports()
+                .iter()
+                .filter(|r| r.stage == Stage::Done && counted.insert(r.id))
+                // Seen running: a move to where the robot stood has no start of its own.
+                .filter(|r| r.motion_s.is_some())
+                .filter_map(|r| r.predicted.map(|p| p.duration_s))
+                .sum();
             cycles.push(CycleTimes {
                 cycle_s: s
                     .last_cycle_s
                     .unwrap_or_else(|| cycle_began.elapsed().as_secs_f64()),
-                waiting_s,
+                waiting_s: s.last_cycle_waiting_s.unwrap_or_default(),
+                motion_s,
             });
             cycle_began = Instant::now();
-            waiting_s = 0.0;
         }
         let step = s.step.as_ref().map_or(0, |st| st.step);
         let moving = handle.state().current_move.is_some();
@@ -283,27 +299,65 @@ pub fn write_press_report(d: &PressDemo, out: &mut dyn std::io::Write) -> std::i
          and a simulated press: {} cycles",
         d.cycles.len()
     )?;
-    writeln!(out, "  cycle   time s   waiting s")?;
+    writeln!(
+        out,
+        "  cycle   time s   motion s   waiting s   beyond motion and waits"
+    )?;
+    let held = d.hold.as_ref().map(|h| h.cycle);
     for (i, c) in d.cycles.iter().enumerate() {
         writeln!(
             out,
-            "  {:>5}   {:>6.3}   {:>9.3}",
+            "  {:>5}   {:>6.3}   {:>8.3}   {:>9.3}   {:>5.1} %{}",
             i + 1,
             c.cycle_s,
-            c.waiting_s
+            c.motion_s,
+            c.waiting_s,
+            100.0 * c.overhead(),
+            if held == Some(i as u64 + 1) {
+                " (held)"
+            } else {
+                ""
+            }
         )?;
     }
     let cycles_s: f64 = d.cycles.iter().map(|c| c.cycle_s).sum();
     let waiting_s: f64 = d.cycles.iter().map(|c| c.waiting_s).sum();
+    let motion_s: f64 = d.cycles.iter().map(|c| c.motion_s).sum();
     writeln!(
         out,
-        "  all: {cycles_s:.3} s in cycles, {waiting_s:.3} s waiting, {:.3} s of motion in {} moves \
-         done ({} not done); the rest (uploads, chaining, polls, outputs): {:.3} s",
+        "  all: {cycles_s:.3} s in cycles, {waiting_s:.3} s waiting, {motion_s:.3} s of motion \
+         (planned; {:.3} s as the daemon saw it) in {} moves done ({} not done); the rest \
+         (uploads, chaining, polls, outputs, the hold): {:.3} s",
         d.motion_s,
         d.moves.0,
         d.moves.1,
-        cycles_s - waiting_s - d.motion_s
+        cycles_s - waiting_s - motion_s
     )?;
+    // The goal's measure: the cycles as the program runs them, without the one paused by the
+    // hold (its time paused is neither motion nor a wait) nor the first (its first move comes
+    // from the demo's start pose, not from the cycle before).
+    let steady: Vec<&CycleTimes> = d
+        .cycles
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i > 0 && held != Some(*i as u64 + 1))
+        .map(|(_, c)| c)
+        .collect();
+    if !steady.is_empty() {
+        let sum = |f: fn(&CycleTimes) -> f64| steady.iter().map(|c| f(c)).sum::<f64>();
+        let (cycle_s, motion_s, waiting_s) = (
+            sum(|c| c.cycle_s),
+            sum(|c| c.motion_s),
+            sum(|c| c.waiting_s),
+        );
+        writeln!(
+            out,
+            "  the {} cycles after the first without the hold: {cycle_s:.3} s, {motion_s:.3} s \
+             of motion (planned) and {waiting_s:.3} s waiting: {:.1} % beyond motion and waits",
+            steady.len(),
+            100.0 * overhead(cycle_s, motion_s, waiting_s)
+        )?;
+    }
     match &d.hold {
         Some(h) => writeln!(
             out,

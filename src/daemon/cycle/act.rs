@@ -34,24 +34,21 @@ pub(super) enum MotionEnd {
     StoppedNow,
 }
 
-/// Queues `order` and follows every start of it to its end.
-pub(super) async fn run_move(
+/// Queues `order`: the ids of its starts, or how the step ends when it cannot be queued (held
+/// from outside the PLC, or refused).
+pub(super) fn submit_move(
     handle: &RobotHandle,
     order: MoveOrder,
-    control: &mut watch::Receiver<Control>,
-    started: &mut Vec<MoveId>,
-) -> MotionEnd {
+    control: &watch::Receiver<Control>,
+) -> Result<Vec<MoveId>, MotionEnd> {
     if let Some(why) = control.borrow().hold {
-        return MotionEnd::Held {
+        return Err(MotionEnd::Held {
             why: why.to_owned(),
-        };
+        });
     }
-    match handle.submit_starts(order) {
-        Ok(ids) => follow(handle, &ids, control, started).await,
-        Err(e) => MotionEnd::Failed {
-            why: format!("refused: {e}"),
-        },
-    }
+    handle.submit_starts(order).map_err(|e| MotionEnd::Failed {
+        why: format!("refused: {e}"),
+    })
 }
 
 /// Queues `order` (a path) and follows every start of it to its end.

@@ -9,8 +9,16 @@
 //! - anything else (a move refused or failed, a wait timed out with no `on_timeout`, an output
 //!   not written): the robot is stopped and the cycle faults on that step; it goes on only after
 //!   `clear-fault` and `resume` (or a fresh `run`), with that step again.
+//!
+//! The next move is prepared ahead: while a move runs, or a wait waits, the next move step the
+//! cycle comes to through outputs, waits and dwells only (wrapping round to the next cycle) is
+//! uploaded behind it and held; it starts, from rest, when the runner reaches its step. (A move
+//! to where the robot will already be has no motion of its own: the one after it is prepared
+//! too.) Anything else the cycle does first (another motion, a fault, a hold, a pause, a stop,
+//! its end) shuts its gate and it is cancelled before its start; a move cancelled so is run
+//! afresh at its step.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::time::Instant;
 
 use tokio::sync::watch;
@@ -21,6 +29,8 @@ use super::slot::SharedStatus;
 use super::status::{CycleState, CycleStatus};
 use crate::cycle::{Checked, LoopExit, OpKind};
 use crate::daemon::RobotHandle;
+use crate::daemon::gate::Gate;
+use crate::daemon::report::MoveId;
 
 /// Moves kept in the status, the newest last.
 const MOVES_SHOWN: usize = 10;
@@ -40,8 +50,12 @@ pub(crate) async fn run(
         control,
         status,
         resumes: 0,
+        done: 0,
+        waited_s: 0.0,
+        ahead: VecDeque::new(),
     };
     let end = runner.cycles().await;
+    runner.drop_ahead().await;
     runner.set(|s| {
         s.state = end.0;
         s.reason = end.1;
@@ -60,6 +74,25 @@ struct Runner {
     status: SharedStatus,
     /// Resumes seen.
     resumes: u64,
+    /// Cycles done.
+    done: u64,
+    /// Time this cycle's waits waited so far, s.
+    waited_s: f64,
+    /// The next move steps' moves, prepared ahead, in the order the cycle comes to them: one
+    /// that moves, and before it any that do not.
+    ahead: VecDeque<Ahead>,
+}
+
+/// A move uploaded ahead of its step and held until the runner reaches it.
+struct Ahead {
+    /// Its op.
+    at: usize,
+    /// Its move.
+    id: MoveId,
+    /// Opened at its step; shut when the cycle goes another way.
+    gate: Gate,
+    /// Whether it moves the robot (planned to end more than a pulse from where it begins).
+    moves: bool,
 }
 
 /// How a step ended.
@@ -88,13 +121,13 @@ impl Runner {
         let mut pc = 0;
         let mut loops: HashMap<usize, u64> = HashMap::new();
         let mut began = Instant::now();
-        let mut done = 0u64;
         loop {
             let c = *self.control.borrow();
             if c.stop || c.stop_now {
                 return (CycleState::Stopped, Some("stopped by request".to_owned()));
             }
             if c.pause {
+                self.drop_ahead().await;
                 self.set(|s| {
                     s.state = CycleState::Paused;
                     s.reason = Some(c.hold.unwrap_or("paused by request").to_owned());
@@ -104,12 +137,14 @@ impl Runner {
                 }
             }
             if pc == self.program.ops.len() {
-                done += 1;
-                let took = began.elapsed().as_secs_f64();
+                self.done += 1;
+                let (took, done) = (began.elapsed().as_secs_f64(), self.done);
+                let waited = std::mem::take(&mut self.waited_s);
                 self.handle.cycle_done(took);
                 self.set(|s| {
                     s.done = done;
                     s.last_cycle_s = Some(took);
+                    s.last_cycle_waiting_s = Some(waited);
                 });
                 if self.count.is_some_and(|n| done >= n) {
                     return (CycleState::Done, None);
@@ -119,7 +154,14 @@ impl Runner {
                 began = Instant::now();
                 continue;
             }
+            let moves_elsewhere =
+                matches!(self.program.ops[pc].kind, OpKind::Move(_) | OpKind::Path(_))
+                    && self.ahead.front().is_some_and(|a| a.at != pc);
+            if moves_elsewhere {
+                self.drop_ahead().await;
+            }
             let at = self.program.ops[pc].at.clone();
+            tracing::debug!(robot = %self.handle.robot().name, step = at.step, ahead = ?self.ahead.iter().map(|a| a.at).collect::<Vec<_>>(), "cycle step");
             self.set(|s| {
                 s.state = CycleState::Running;
                 s.step = Some(at);
@@ -136,6 +178,7 @@ impl Runner {
                 }
                 Next::Hold(why) => {
                     tracing::warn!(robot = %self.handle.robot().name, "cycle held: {why}");
+                    self.drop_ahead().await;
                     self.set(|s| {
                         s.state = CycleState::Paused;
                         s.reason = Some(why);
@@ -147,6 +190,7 @@ impl Runner {
                 Next::Fault(why) => {
                     tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
                     let _ = self.handle.stop_robot().await;
+                    self.drop_ahead().await;
                     self.set(|s| {
                         s.state = CycleState::Faulted;
                         s.reason = Some(why);
@@ -184,9 +228,20 @@ impl Runner {
         let kind = self.program.ops[pc].kind.clone();
         match kind {
             OpKind::Move(order) => {
+                if self.ahead.front().is_some_and(|a| a.at == pc) {
+                    let ahead = self.ahead.pop_front().expect("just seen");
+                    ahead.gate.open();
+                    return self.prepared(pc, ahead.id).await;
+                }
                 let relative = order.by.is_some();
                 let mut started = Vec::new();
-                let end = act::run_move(&self.handle, order, &mut self.control, &mut started).await;
+                let end = match act::submit_move(&self.handle, order, &self.control) {
+                    Ok(ids) => {
+                        self.prepare(pc);
+                        act::follow(&self.handle, &ids, &mut self.control, &mut started).await
+                    }
+                    Err(end) => end,
+                };
                 self.note_moves(&started);
                 match end {
                     MotionEnd::Held { why } if relative => Next::Fault(format!(
@@ -212,7 +267,10 @@ impl Runner {
                 until,
                 timeout,
                 on_timeout,
-            } => self.wait(pc, &until, timeout, on_timeout).await,
+            } => {
+                self.prepare(pc);
+                self.wait(pc, &until, timeout, on_timeout).await.0
+            }
             OpKind::Set(writes) => {
                 for (address, values) in writes {
                     if let Err(e) = self.handle.write_registers(address, values).await {
@@ -243,47 +301,88 @@ impl Runner {
         }
     }
 
-    /// A wait step: until its condition holds, at most `timeout`. A move right after it (to a
-    /// pose, a position or joints) is prepared meanwhile: uploaded now and started as soon as
-    /// the wait is met, so the robot moves one status read and a start after the input.
-    async fn wait(
-        &mut self,
-        pc: usize,
-        until: &crate::cycle::Condition,
-        timeout: Option<std::time::Duration>,
-        on_timeout: Option<usize>,
-    ) -> Next {
-        let gate = crate::daemon::gate::Gate::new();
-        let prepared = match self.program.ops.get(pc + 1).map(|op| &op.kind) {
-            Some(OpKind::Move(order)) if order.by.is_none() => {
-                self.handle.submit_gated(order.clone(), &gate).ok()
+    /// The next move step the cycle comes to after op `pc` through outputs, waits and dwells
+    /// only (round to the first op when another cycle follows, on through a loop that always
+    /// goes back): that step's op, if its move can be prepared (to a pose, a position or
+    /// joints; not `by` an offset, not a path).
+    fn next_move(&self, pc: usize) -> Option<usize> {
+        let ops = &self.program.ops;
+        let wraps = self.count.is_none_or(|n| self.done + 1 < n);
+        let mut at = pc + 1;
+        for _ in 0..=ops.len() {
+            if at == ops.len() {
+                if !wraps {
+                    return None;
+                }
+                at = 0;
             }
-            _ => None,
-        };
-        let (next, met) = self.wait_only(pc, until, timeout, on_timeout).await;
-        let Some(id) = prepared else {
-            return next;
-        };
-        if met {
-            gate.open();
-            return self.prepared(pc + 1, id).await;
+            match &ops[at].kind {
+                OpKind::Set(_) | OpKind::Wait { .. } | OpKind::Dwell(_) => at += 1,
+                OpKind::Loop {
+                    to,
+                    exit: LoopExit::Stop,
+                } => at = *to,
+                OpKind::Move(order) if order.by.is_none() && at != pc => return Some(at),
+                _ => return None,
+            }
         }
-        gate.shut();
-        let _ = self
-            .handle
-            .wait(id, std::time::Duration::from_secs(30))
-            .await;
-        next
+        None
     }
 
-    /// The move of op `at`, prepared during the wait before it and released: followed to its
-    /// end; run afresh when it was cancelled before its start.
-    async fn prepared(&mut self, at: usize, id: u64) -> Next {
-        let step = self.program.ops[at].at.clone();
-        self.set(|s| {
-            s.state = CycleState::Running;
-            s.step = Some(step);
-        });
+    /// Prepares the next moves after op `pc` ([`Self::next_move`]) up to one that moves,
+    /// unless a stop, a pause or a hold is asked for; one the robot refuses now is left to run
+    /// at its step.
+    fn prepare(&mut self, pc: usize) {
+        let c = *self.control.borrow();
+        if c.stop || c.stop_now || c.pause || c.hold.is_some() {
+            return;
+        }
+        // Never round the program more than once: a move's step is prepared once.
+        while self.ahead.len() < self.program.ops.len()
+            && self.ahead.back().is_none_or(|a| !a.moves)
+        {
+            let after = self.ahead.back().map_or(pc, |a| a.at);
+            let Some(at) = self.next_move(after) else {
+                return;
+            };
+            if at == pc || self.ahead.iter().any(|a| a.at == at) {
+                return;
+            }
+            let OpKind::Move(order) = &self.program.ops[at].kind else {
+                return;
+            };
+            let gate = Gate::new();
+            let Ok((id, moves)) = self.handle.submit_gated(order.clone(), &gate) else {
+                return;
+            };
+            self.ahead.push_back(Ahead {
+                at,
+                id,
+                gate,
+                moves,
+            });
+        }
+    }
+
+    /// Shuts the prepared moves' gates and waits for them to end (cancelled before their
+    /// start), so nothing is queued behind them.
+    async fn drop_ahead(&mut self) {
+        let dropped: Vec<Ahead> = self.ahead.drain(..).collect();
+        for ahead in &dropped {
+            self.handle.shut_gate(&ahead.gate);
+        }
+        for ahead in dropped {
+            let _ = self
+                .handle
+                .wait(ahead.id, std::time::Duration::from_secs(30))
+                .await;
+        }
+    }
+
+    /// The move of op `at`, prepared ahead and released now: followed to its end (the move
+    /// after it prepared meanwhile); run afresh when it was cancelled before its start.
+    async fn prepared(&mut self, at: usize, id: MoveId) -> Next {
+        self.prepare(at);
         let mut started = Vec::new();
         let end = act::follow(&self.handle, &[id], &mut self.control, &mut started).await;
         let cancelled_before_start = self.handle.report(id).is_some_and(|r| {
@@ -292,14 +391,16 @@ impl Runner {
                 .is_some_and(|e| e.starts_with(crate::daemon::worker::PREPARED_CANCELLED))
         });
         if cancelled_before_start {
+            self.drop_ahead().await;
             return Next::Go(at);
         }
         self.note_moves(&started);
         Self::motion(at, end)
     }
 
-    /// A wait step alone: what comes next, and whether its condition was met.
-    async fn wait_only(
+    /// A wait step: until its condition holds, at most `timeout`: what comes next, and whether
+    /// its condition was met.
+    async fn wait(
         &mut self,
         pc: usize,
         until: &crate::cycle::Condition,
@@ -329,6 +430,7 @@ impl Runner {
         )
         .await;
         let waited = since.elapsed().as_secs_f64();
+        self.waited_s += waited;
         self.handle.waited(&self.program.ops[pc].at, waited);
         self.set(|s| {
             s.waiting_for = None;

@@ -73,6 +73,9 @@ pub struct CycleStatus {
     /// The last cycle's time, s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub last_cycle_s: Option<f64>,
+    /// Of it, the time its waits waited, s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub last_cycle_waiting_s: Option<f64>,
     /// The moves this cycle started, the last few (the newest last).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub moves: Vec<u64>,
@@ -95,6 +98,7 @@ impl CycleStatus {
             waiting_s: None,
             reason: None,
             last_cycle_s: None,
+            last_cycle_waiting_s: None,
             moves: Vec::new(),
             stopping: false,
         }

@@ -224,6 +224,7 @@ impl Worker {
         self.take_pending_requests();
         self.take_stops().await?;
         self.run_commands().await?;
+        self.drop_shut();
         self.expire_queue();
         if self.has_room() {
             let queued = self.queue.pop_front().expect("not empty");

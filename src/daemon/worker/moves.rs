@@ -24,6 +24,9 @@ use crate::table::ValidTable;
 /// it as any move, after its wait.
 pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
 
+/// Why a prepared move whose gate shut before its start was not started.
+const CYCLE_WENT_ON: &str = "its cycle went another way (a fault, a stop, a pause, a timeout)";
+
 /// Why a held bank was not started.
 enum Held {
     /// Cancelled before its start, for this reason.
@@ -48,18 +51,27 @@ impl Worker {
         let tables = plan
             .valid_tables(&self.robot)
             .expect("plan_move returns valid tables");
+        let gate = turn.order.gate.as_ref();
+        if gate.is_some_and(|g| g.state() == GateState::Shut) {
+            // Its cycle went another way while it was queued: nothing written.
+            return self.unprepared(id, CYCLE_WENT_ON, None);
+        }
         self.machine.upload_begun();
         self.publish_phase();
         let began = tokio::time::Instant::now();
         let exchange = self.session()?.exchange;
         let from_rest = turn.chain.is_none();
         let bank = match self
-            .write_bank(id, &planned, &tables, from_rest, exchange)
+            .write_bank(id, &planned, &tables, from_rest, exchange, gate)
             .await
         {
             Ok(bank) => bank,
-            Err(e) if turn.order.gate.is_some() => {
-                let why = describe(&e);
+            Err(e) if gate.is_some() => {
+                let why = if gate.is_some_and(|g| g.state() == GateState::Shut) {
+                    CYCLE_WENT_ON.to_owned()
+                } else {
+                    describe(&e)
+                };
                 return self.unprepared(id, &why, link_broken(&e).then_some(e));
             }
             Err(e) => return self.not_started(id, e),
@@ -201,9 +213,14 @@ impl Worker {
         }
         let confirmed = matches!(written, CommandWrite::Confirmed);
         let (seq, planned_bank) = (planned.seq, planned.bank);
+        // Chained when the move it was planned behind still runs (a prepared move, held past
+        // that one's end, starts from rest).
+        let chain = turn
+            .chain
+            .as_ref()
+            .filter(|_| self.machine.uploading_behind().is_some());
         self.machine.start_written(planned, now(), confirmed);
         self.last_start = Some((id, bank));
-        let chain = turn.chain.as_ref();
         if chain.is_some() {
             self.shared
                 .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
@@ -259,9 +276,11 @@ impl Worker {
     async fn hold_for(&mut self, gate: &Gate) -> Result<(), Held> {
         loop {
             match gate.state() {
-                GateState::Open => return Ok(()),
-                GateState::Shut => return Err(Held::Cancelled("its wait ended otherwise")),
-                GateState::Closed => {}
+                // Started from rest only: never chained behind the move still running ahead
+                // of it (the steps between, outputs and waits, come after that one's end).
+                GateState::Open if self.machine.uploading_behind().is_none() => return Ok(()),
+                GateState::Shut => return Err(Held::Cancelled(CYCLE_WENT_ON)),
+                GateState::Open | GateState::Closed => {}
             }
             self.take_pending_requests();
             if *self.shutdown.borrow() {
@@ -288,8 +307,8 @@ impl Worker {
             if tokio::time::Instant::now() >= self.next_poll {
                 self.poll().await.map_err(Held::Link)?;
                 self.next_poll = tokio::time::Instant::now() + self.settings.poll_interval;
-                let uploading =
-                    matches!(self.machine.phase(), Phase::Uploading { current: None, .. });
+                // Behind a running move, which may end meanwhile (followed as ever), or alone.
+                let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
                 if !uploading
                     || self
                         .machine
@@ -300,7 +319,8 @@ impl Worker {
                 }
                 continue;
             }
-            self.wait_until(self.next_poll, Some(gate)).await;
+            let closed = (gate.state() == GateState::Closed).then_some(gate);
+            self.wait_until(self.next_poll, closed).await;
         }
     }
 
@@ -336,6 +356,7 @@ impl Worker {
         tables: &[ValidTable],
         from_rest: bool,
         exchange: Duration,
+        gate: Option<&Gate>,
     ) -> Result<VerifiedBank, ContractError> {
         let own = if from_rest {
             // Nothing preloaded before outlives a start from rest: its section's parts are
@@ -356,7 +377,7 @@ impl Worker {
             link.begin_upload(&planned.into(), tables)
         };
         let bank = match upload {
-            Ok(mut upload) => self.upload_watching(&mut upload).await,
+            Ok(mut upload) => self.upload_watching(&mut upload, gate).await,
             Err(e) => Err(e),
         };
         // Written whole from the directory's end (or partly, when it failed), a bank may lie
@@ -371,14 +392,27 @@ impl Worker {
     /// Makes `upload`'s exchanges. Between two, while a start the PLC was given may run, the
     /// status block is read whenever the last read is a heartbeat timeout old: the running move
     /// stays watched (its heartbeat, counts, state, progress) through an upload that lasts
-    /// seconds on a slow line, and is stopped as it would be between uploads. An upload the
-    /// machine gave up on meanwhile (the PLC stalled or restarted) ends there.
+    /// seconds on a slow line, and is stopped as it would be between uploads. A prepared move
+    /// (`gate`) is uploaded behind a cycle's move, whose end (done, or held by its permit) the
+    /// cycle goes on from: its status block is read more often, at most a sixth of the link's
+    /// time ([`prepared_watch`]). An upload the machine gave up on meanwhile (the PLC stalled or
+    /// restarted) ends there, as does the upload of a prepared move whose gate shut.
     async fn upload_watching(
         &mut self,
         upload: &mut Upload,
+        gate: Option<&Gate>,
     ) -> Result<VerifiedBank, ContractError> {
-        let every = self.machine.settings().heartbeat_timeout;
+        let timeout = self.machine.settings().heartbeat_timeout;
+        let every = match gate {
+            Some(_) => {
+                prepared_watch(self.session()?.exchange, self.settings.poll_interval).min(timeout)
+            }
+            None => timeout,
+        };
         loop {
+            if gate.is_some_and(|g| g.state() == GateState::Shut) {
+                return Err(ContractError::Aborted);
+            }
             let due = self
                 .machine
                 .read_at()
@@ -669,6 +703,28 @@ impl Worker {
         self.cancel_queue("cancelled: the move before it did not start");
     }
 
+    /// Ends the queued prepared moves whose gate shut before their turn (their cycle went
+    /// another way), and every move queued behind one (planned from where it would have ended).
+    pub(super) fn drop_shut(&mut self) {
+        let shut = |q: &Queued| {
+            q.order
+                .gate
+                .as_ref()
+                .is_some_and(|g| g.state() == GateState::Shut)
+        };
+        let Some(at) = self.queue.iter().position(shut) else {
+            return;
+        };
+        for (k, queued) in self.queue.split_off(at).into_iter().enumerate() {
+            let why = if k == 0 {
+                format!("{PREPARED_CANCELLED}: {CYCLE_WENT_ON}")
+            } else {
+                "cancelled: the move before it did not start".to_owned()
+            };
+            self.finish(queued.id, Stage::Cancelled, Some(why), None);
+        }
+    }
+
     /// Cancels every queued move (never given to the PLC).
     pub(super) fn cancel_queue(&mut self, why: &str) {
         for queued in std::mem::take(&mut self.queue) {
@@ -796,6 +852,13 @@ fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
                 .collect()
         })
         .unwrap_or_default()
+}
+
+/// How often the status block is read during a prepared move's upload behind a running move,
+/// when a status read takes `exchange`: five exchanges of the upload to one read (at least
+/// `poll`, the busy pace, apart).
+fn prepared_watch(exchange: Duration, poll: Duration) -> Duration {
+    (exchange * 6).max(poll)
 }
 
 /// The counts per channel where `plan`, started from `from`, ends.
