@@ -3,8 +3,9 @@
 //! 19200 and 115200 baud (real time, 2 ms scans). The cycle alternates: wait for X5 on, a move
 //! of 20 mm, wait for X5 off, the move back. What it costs: the status read that sees the input
 //! (at most one poll interval, 20 ms, plus the read), then the start write: the move after a
-//! wait is prepared during it (planned, uploaded, read back and held; docs/CYCLES.md). An input
-//! that changes while that upload is still being written is seen once it is done.
+//! wait is prepared ahead (planned, uploaded, read back and held; docs/CYCLES.md) while the move
+//! before it runs, or during the wait for the first. An input that changes while an upload is
+//! still being written during its wait is seen once it is done.
 //!
 //! Run: `cargo bench --bench cycle_latency`
 
@@ -39,12 +40,14 @@ fn program() -> String {
 async fn main() {
     for baud in [19_200, 115_200] {
         let (mut latency, mut seen) = run(baud).await;
+        // The first wait's move is prepared during that wait, not during a move before it.
+        let later_max = latency[1..].iter().copied().fold(0.0, f64::max);
         latency.sort_by(f64::total_cmp);
         seen.sort_by(f64::total_cmp);
         println!(
             "{baud} baud, MEWTOCOL %, {TOGGLES} input changes: input -> start acted on by the PLC: \
-             median {:.1} ms, max {:.1} ms; of it, input -> the wait met (status read): median \
-             {:.1} ms, max {:.1} ms",
+             median {:.1} ms, max {:.1} ms (after the first change: max {later_max:.1} ms); of it, \
+             input -> the wait met (status read): median {:.1} ms, max {:.1} ms",
             percentile(&latency, 0.5),
             latency[latency.len() - 1],
             percentile(&seen, 0.5),

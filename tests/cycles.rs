@@ -319,10 +319,14 @@ async fn the_move_after_a_move_and_its_outputs_is_uploaded_while_that_one_runs_a
     let (_d, h) = spawn(&shared, programs("ahead", &[("p", program)]));
     taking_moves(&h).await;
     h.run_cycle("p", Some(1)).unwrap();
-    // The second move is uploaded while the first still runs.
+    // The second move is uploaded while the first still runs, and held.
     let reports = until_uploaded(&h, 1).await;
     assert!(!reports[0].stage.is_final(), "{reports:?}");
-    assert!(!reports[1].stage.is_final(), "{reports:?}");
+    assert_eq!(
+        reports[1].stage,
+        linterpd::daemon::Stage::Prepared,
+        "{reports:?}"
+    );
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.moves, vec![reports[0].id, reports[1].id]);
     let [first, second] = [reports[0].id, reports[1].id].map(|id| h.report(id).unwrap());

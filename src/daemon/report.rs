@@ -23,6 +23,9 @@ pub enum Stage {
     Queued,
     /// Planned; its bank is being written and verified.
     Uploading,
+    /// A cycle's move prepared ahead: its bank written and verified, held until the cycle
+    /// reaches its step (nothing given to the PLC yet).
+    Prepared,
     /// Uploaded and started while the previous move runs: the PLC starts it when that one ends.
     Waiting,
     /// Running on the PLC.
@@ -57,6 +60,7 @@ impl Stage {
         match self {
             Self::Queued => "queued",
             Self::Uploading => "uploading",
+            Self::Prepared => "prepared",
             Self::Waiting => "waiting",
             Self::Running => "running",
             Self::Done => "done",
@@ -764,6 +768,7 @@ mod json_tests {
         for stage in Stage::FINAL.into_iter().chain([
             Stage::Queued,
             Stage::Uploading,
+            Stage::Prepared,
             Stage::Waiting,
             Stage::Running,
         ]) {

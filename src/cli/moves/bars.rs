@@ -48,7 +48,7 @@ impl Bars {
     /// Shows `report`, the move's latest.
     pub(super) fn show(&mut self, report: &MoveReport) {
         let progress = match report.stage {
-            Stage::Uploading | Stage::Queued => 0.0,
+            Stage::Uploading | Stage::Prepared | Stage::Queued => 0.0,
             _ => report.progress,
         };
         self.main.set_message(report.stage.name());

@@ -124,6 +124,7 @@ pub(super) fn waiting_for(report: Option<&MoveReport>, state: Option<&RobotState
             None => "its turn".to_owned(),
         },
         (Stage::Uploading, _) => "its upload to the PLC to finish".to_owned(),
+        (Stage::Prepared, _) => "its cycle to reach its step (it is uploaded, held)".to_owned(),
         (Stage::Waiting, None) => "the PLC to start it".to_owned(),
         (Stage::Running, _) => format!(
             "the PLC to report its end ({:.0}% of its planned time gone)",

@@ -524,6 +524,28 @@ impl Machine {
         }
     }
 
+    /// Whether the start running alone (none chained behind it) is due to end within `within`
+    /// of `now`, or was due to within `within` before it: where its counts were last found along
+    /// its plan, the rest of its plan's time after that read (at most its planned time after it
+    /// was seen running). Its end is then worth reading for at once.
+    #[must_use]
+    pub fn near_planned_end(&self, now: Instant, within: Duration) -> bool {
+        let (Phase::Running { current }
+        | Phase::Uploading {
+            current: Some(current),
+            ..
+        }) = &self.phase
+        else {
+            return false;
+        };
+        let duration = current.start.duration;
+        let by_time = current.since + duration;
+        let end = self.read_at.map_or(by_time, |at| {
+            by_time.min(at + duration.saturating_sub(current.reached))
+        });
+        now + within >= end && now <= end + within
+    }
+
     /// While a bank is written: the start still running that the new one chains behind, if
     /// the status block still shows it running.
     #[must_use]

@@ -298,10 +298,16 @@ impl Worker {
                 .shared
                 .inputs_watched
                 .load(std::sync::atomic::Ordering::Relaxed);
-        if busy {
-            self.settings.poll_interval
+        if !busy {
+            return IDLE_POLL;
+        }
+        // Near a move's planned end reads come a scan apart: the next step (a start from rest,
+        // a cycle's output) waits on seeing it end.
+        let pace = self.settings.poll_interval;
+        if self.machine.near_planned_end(now(), 2 * pace) {
+            self.settings.scan_time.min(pace)
         } else {
-            IDLE_POLL
+            pace
         }
     }
 

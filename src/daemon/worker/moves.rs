@@ -78,8 +78,15 @@ impl Worker {
         };
         let upload_s = began.elapsed().as_secs_f64();
         self.shared.metrics.uploaded(upload_s);
-        self.shared
-            .moves(|m| m.update(id, |r| r.upload_s = Some(upload_s)));
+        let prepared = turn.order.gate.is_some();
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                r.upload_s = Some(upload_s);
+                if prepared {
+                    r.stage = Stage::Prepared;
+                }
+            });
+        });
         if let Some(gate) = &turn.order.gate {
             match self.hold_for(gate).await {
                 Ok(()) => {}
@@ -306,7 +313,7 @@ impl Worker {
             }
             if tokio::time::Instant::now() >= self.next_poll {
                 self.poll().await.map_err(Held::Link)?;
-                self.next_poll = tokio::time::Instant::now() + self.settings.poll_interval;
+                self.next_poll = tokio::time::Instant::now() + self.poll_pause();
                 // Behind a running move, which may end meanwhile (followed as ever), or alone.
                 let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
                 if !uploading
