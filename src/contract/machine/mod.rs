@@ -23,6 +23,7 @@
 
 mod phase;
 mod progress;
+mod step;
 #[cfg(test)]
 mod tests;
 
@@ -770,7 +771,7 @@ impl Machine {
             return events;
         }
         let phase = std::mem::replace(&mut self.phase, Phase::Idle);
-        self.phase = phase::step(phase, status, now, self, &mut events);
+        self.phase = step::step(phase, status, now, self, &mut events);
         self.last = Some(*status);
         events
     }

@@ -16,13 +16,15 @@
 //! wakes the worker at once: nothing waits for the next poll.
 
 mod events;
+mod followers;
 mod gateway;
 mod link;
 mod moves;
-pub(crate) use moves::PREPARED_CANCELLED;
 mod pace;
 mod placement;
 mod preload;
+mod prepared;
+pub(crate) use prepared::PREPARED_CANCELLED;
 mod session;
 
 use std::collections::{HashMap, VecDeque};
@@ -150,7 +152,7 @@ pub(super) struct Worker {
     /// Whether the link was ever opened (a later opening is a reconnection).
     opened_before: bool,
     /// Moves with no motion of their own, each ending with the start ahead of it.
-    followers: Vec<moves::Follower>,
+    followers: Vec<followers::Follower>,
 }
 
 impl Worker {

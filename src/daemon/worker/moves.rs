@@ -8,6 +8,7 @@ use std::time::Duration;
 use super::pace::{Pace, Part};
 use super::placement::{Placement, directories_left};
 use super::preload::{self, Choice};
+use super::prepared::{CYCLE_WENT_ON, Held, prepared_watch};
 use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
 use crate::contract::{CHANNELS, describe_unmet};
@@ -19,21 +20,6 @@ use crate::plan::{Plan, PlanError};
 use crate::plc::contract::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
-
-/// How a prepared move cancelled before its start begins its report's error: the cycle then runs
-/// it as any move, after its wait.
-pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
-
-/// Why a prepared move whose gate shut before its start was not started.
-const CYCLE_WENT_ON: &str = "its cycle went another way (a fault, a stop, a pause, a timeout)";
-
-/// Why a held bank was not started.
-enum Held {
-    /// Cancelled before its start, for this reason.
-    Cancelled(&'static str),
-    /// The link failed.
-    Link(ContractError),
-}
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -246,88 +232,6 @@ impl Worker {
                 Err(ContractError::Plc(e))
             }
             _ => Ok(()),
-        }
-    }
-
-    /// Move `id`, whose `targets` are within a pulse of `from`, where it begins: nothing to
-    /// start. With nothing running (`lead` none) the robot is at `from` now and it ends done;
-    /// behind the running start `lead` it is not there yet, and it ends with that start (done
-    /// only if that one ends done, [`Worker::finish`]).
-    fn in_place(
-        &mut self,
-        id: MoveId,
-        from: [i32; CHANNELS],
-        targets: [i32; CHANNELS],
-        lead: Option<MoveId>,
-    ) {
-        self.shared.moves(|m| {
-            m.update(id, |r| {
-                r.start_counts = Some(from.map(i64::from));
-                r.target_counts = Some(targets.map(i64::from));
-            });
-        });
-        if let Some(lead) = lead {
-            tracing::info!(robot = %self.robot.name, id, lead, "no motion of its own: ends with the move ahead");
-            self.followers.push(Follower { id, lead, targets });
-            return;
-        }
-        let error = std::array::from_fn(|c| i64::from(from[c]) - i64::from(targets[c]));
-        self.finish(id, Stage::Done, None, Some(error));
-        tracing::info!(robot = %self.robot.name, id, "move within one pulse of the pose: done without a start");
-    }
-
-    /// Holds an uploaded, verified bank until `gate` opens: the status block read at the busy
-    /// pace (the cycle's wait is decided on it) and the gateway served meanwhile. Anything
-    /// else cancels it: the gate shut, a stop or a command asked for, the PLC no longer where
-    /// the upload left it (a restart, a fault), the link failing.
-    async fn hold_for(&mut self, gate: &Gate) -> Result<(), Held> {
-        loop {
-            match gate.state() {
-                // Started from rest only: never chained behind the move still running ahead
-                // of it (the steps between, outputs and waits, come after that one's end).
-                GateState::Open if self.machine.uploading_behind().is_none() => return Ok(()),
-                GateState::Shut => return Err(Held::Cancelled(CYCLE_WENT_ON)),
-                GateState::Open | GateState::Closed => {}
-            }
-            self.take_pending_requests();
-            if *self.shutdown.borrow() {
-                return Err(Held::Cancelled("the daemon is shutting down"));
-            }
-            let stopping = !self.pending_stops.is_empty()
-                || self
-                    .shared
-                    .stop_pending
-                    .load(std::sync::atomic::Ordering::SeqCst);
-            if stopping {
-                return Err(Held::Cancelled("a stop was asked for"));
-            }
-            if !self.commands.is_empty() {
-                return Err(Held::Cancelled("a command came (home, clear-fault)"));
-            }
-            while let Ok(job) = self.gateway_rx.try_recv() {
-                self.gateway.push_back(job);
-            }
-            if !self.gateway.is_empty() {
-                self.gateway_exchange().await.map_err(Held::Link)?;
-                continue;
-            }
-            if tokio::time::Instant::now() >= self.next_poll {
-                self.poll().await.map_err(Held::Link)?;
-                self.next_poll = tokio::time::Instant::now() + self.poll_pause();
-                // Behind a running move, which may end meanwhile (followed as ever), or alone.
-                let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
-                if !uploading
-                    || self
-                        .machine
-                        .blocker(now())
-                        .is_some_and(|b| b != Blocker::Full)
-                {
-                    return Err(Held::Cancelled("the PLC changed under it"));
-                }
-                continue;
-            }
-            let closed = (gate.state() == GateState::Closed).then_some(gate);
-            self.wait_until(self.next_poll, closed).await;
         }
     }
 
@@ -628,27 +532,6 @@ impl Worker {
         });
     }
 
-    /// Ends prepared move `id` before its start (cancelled, `why`; the cycle runs it afresh
-    /// after its wait); a link failure (`link`) goes on up.
-    fn unprepared(
-        &mut self,
-        id: MoveId,
-        why: &str,
-        link: Option<ContractError>,
-    ) -> Result<(), ContractError> {
-        self.machine.upload_ended();
-        self.publish_phase();
-        tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
-        self.finish(
-            id,
-            Stage::Cancelled,
-            Some(format!("{PREPARED_CANCELLED}: {why}")),
-            None,
-        );
-        self.cancel_queue("cancelled: the move before it did not start");
-        link.map_or(Ok(()), Err)
-    }
-
     /// Ends move `id`, whose start was not written, by `e`; a link failure goes on up.
     fn not_started(&mut self, id: MoveId, e: ContractError) -> Result<(), ContractError> {
         self.machine.upload_ended();
@@ -710,28 +593,6 @@ impl Worker {
         self.cancel_queue("cancelled: the move before it did not start");
     }
 
-    /// Ends the queued prepared moves whose gate shut before their turn (their cycle went
-    /// another way), and every move queued behind one (planned from where it would have ended).
-    pub(super) fn drop_shut(&mut self) {
-        let shut = |q: &Queued| {
-            q.order
-                .gate
-                .as_ref()
-                .is_some_and(|g| g.state() == GateState::Shut)
-        };
-        let Some(at) = self.queue.iter().position(shut) else {
-            return;
-        };
-        for (k, queued) in self.queue.split_off(at).into_iter().enumerate() {
-            let why = if k == 0 {
-                format!("{PREPARED_CANCELLED}: {CYCLE_WENT_ON}")
-            } else {
-                "cancelled: the move before it did not start".to_owned()
-            };
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
-        }
-    }
-
     /// Cancels every queued move (never given to the PLC).
     pub(super) fn cancel_queue(&mut self, why: &str) {
         for queued in std::mem::take(&mut self.queue) {
@@ -776,60 +637,6 @@ impl Worker {
     }
 }
 
-impl Worker {
-    /// Ends the moves with no motion of their own that end with move `lead`, which ended
-    /// `stage` (`why`): done at their targets only when it ended done at the same counts, else
-    /// cancelled with the reason.
-    fn end_followers(&mut self, lead: MoveId, stage: Stage, why: Option<&str>) {
-        let (ending, rest) = std::mem::take(&mut self.followers)
-            .into_iter()
-            .partition(|f: &Follower| f.lead == lead);
-        self.followers = rest;
-        let counts = self.shared.moves(|m| m.get(lead)).and_then(|r| {
-            r.counts
-                .zip(r.target_counts)
-                .filter(|_| stage == Stage::Done)
-        });
-        for f in ending {
-            let targets = f.targets.map(i64::from);
-            match counts {
-                Some((counts, lead_targets)) if lead_targets == targets => {
-                    let error = std::array::from_fn(|c| counts[c] - targets[c]);
-                    self.finish(f.id, Stage::Done, None, Some(error));
-                }
-                _ => {
-                    let why = format!(
-                        "cancelled: it had no motion of its own and was to end with move {lead}, \
-                         which ended {}{}",
-                        stage.name(),
-                        why.map(|w| format!(" ({w})")).unwrap_or_default()
-                    );
-                    self.finish(f.id, Stage::Cancelled, Some(why), None);
-                }
-            }
-        }
-    }
-
-    /// Cancels every move waiting to end with a start (the daemon shuts down).
-    pub(super) fn cancel_followers(&mut self, why: &str) {
-        for f in std::mem::take(&mut self.followers) {
-            self.finish(f.id, Stage::Cancelled, Some(why.to_owned()), None);
-        }
-    }
-}
-
-/// A move with no motion of its own queued behind a running start (its lead): it ends with
-/// that start.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Follower {
-    /// The move.
-    id: MoveId,
-    /// The start it ends with.
-    lead: MoveId,
-    /// Its targets per channel: the lead's.
-    targets: [i32; CHANNELS],
-}
-
 /// A queued move whose turn came: what it is, the running start it chains behind (none: it
 /// starts from rest) and the counts per channel it begins from.
 pub(super) struct Turn {
@@ -859,13 +666,6 @@ fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
                 .collect()
         })
         .unwrap_or_default()
-}
-
-/// How often the status block is read during a prepared move's upload behind a running move,
-/// when a status read takes `exchange`: five exchanges of the upload to one read (at least
-/// `poll`, the busy pace, apart).
-fn prepared_watch(exchange: Duration, poll: Duration) -> Duration {
-    (exchange * 6).max(poll)
 }
 
 /// The counts per channel where `plan`, started from `from`, ends.
