@@ -4,7 +4,7 @@
 //! emulated at 115200 baud, replies at the end of a scan, as a real PLC answers); Modbus runs
 //! over loopback TCP in real time, on one channel.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

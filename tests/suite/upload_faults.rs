@@ -3,7 +3,7 @@
 //! client's usual timeout and retries; a single glitch is retried through, a persistent one is
 //! not. Then the Modbus faults over Modbus TCP.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

@@ -1,7 +1,7 @@
 //! Jogs, joint moves and taught positions, end to end in process: the daemon on the mock PLC, its
 //! API on a Unix socket in a temp dir, its positions in a temp state directory.
 
-mod common;
+use crate::common;
 
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;

@@ -10,7 +10,7 @@
 //! rmodbus 0.13 maps exception codes 0x0A and 0x0B to `UnknownError` (it matches 0x09 and 0x10),
 //! so the tests read the exception code from the reply's PDU: the byte after the function code.
 
-mod common;
+use crate::common;
 
 use std::io;
 use std::time::Duration;

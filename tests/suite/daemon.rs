@@ -1,6 +1,6 @@
 //! The daemon's move path end to end against the mock PLC: the same code a real PLC gets.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 
@@ -429,7 +429,7 @@ async fn while_the_link_is_down_orders_are_refused_and_a_stop_answers_at_once() 
 /// `<` read is not cut off and no late reply is taken for the next request.
 #[tokio::test]
 async fn the_shipped_config_moves_over_a_19200_baud_line() {
-    let shipped = include_str!("../config/linterpd.toml");
+    let shipped = include_str!("../../config/linterpd.toml");
     let (mut master, slave) = tokio_serial::SerialStream::pair().unwrap();
     let path = tokio_serial::SerialPort::name(&slave).expect("the pty's path");
     // The daemon opens the path itself (exclusively), so this end is closed first.

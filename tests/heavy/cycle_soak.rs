@@ -1,7 +1,7 @@
 //! A short cycle soak in the test suite (the full one is `cargo bench --bench cycle_soak`, 1000
 //! cycles): the press program through a lossy link on paused time, every invariant checked.
 
-#[path = "../benches/cycle_soak.rs"]
+#[path = "../../benches/cycle_soak.rs"]
 #[allow(dead_code, unreachable_pub)]
 mod cycle_soak;
 

@@ -2,7 +2,7 @@
 //! on the mock PLC, and a real HTTP client; then the `linterpd serve` binary against
 //! `linterpd mock-plc`.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 
@@ -21,7 +21,7 @@ use tokio::net::{TcpListener, UnixListener, UnixStream};
 
 const ROBOT: &str = "/v1/robots/press-loader";
 use common::serve::READY;
-const SHIPPED: &str = include_str!("../config/linterpd.toml");
+const SHIPPED: &str = include_str!("../../config/linterpd.toml");
 
 /// The daemon on a mock at the seed's start, its API on a Unix socket in `dir`.
 struct Served {

@@ -2,7 +2,7 @@
 //! every report of a running part pairs its `progress` with the counts it was computed from, and
 //! the part's plan, at that share of its duration, has the robot at those counts.
 
-mod common;
+use crate::common;
 
 use common::exchange::{P1, P2, mock_at_seed_start};
 use common::process::TempDir;

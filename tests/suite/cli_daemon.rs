@@ -1,7 +1,7 @@
 //! The CLI against a running daemon: `linterpd serve` on `linterpd mock-plc`, both real
 //! processes, and `linterpd move / status / stop / home / clear-fault` as an operator types them.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -3,7 +3,7 @@
 //! one period from the grid, and every start plays as planned whatever the PLC's scan between a
 //! channel's segments (a line is cut into starts where a joint would need a later segment).
 
-mod common;
+use crate::common;
 
 use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;

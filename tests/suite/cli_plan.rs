@@ -1,6 +1,6 @@
 //! `linterpd plan` as a user runs it: the seed's move, its formats, and bad input.
 
-mod common;
+use crate::common;
 
 use common::cli::SEED;
 use std::process::{Command, Output};

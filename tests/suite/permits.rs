@@ -3,7 +3,7 @@
 //! nothing; one that drops mid-move holds the robot within a scan, and the report says which
 //! input dropped.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

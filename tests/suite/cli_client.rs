@@ -1,7 +1,7 @@
 //! The daemon's CLI when there is no daemon, and what needs none: `check-config`, `--version`,
 //! output into a closed pipe.
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Stdio};
 

@@ -4,7 +4,7 @@
 //! reverses chains from exactly the counts each start was planned from, and the move ends on
 //! target. A tolerance below what the pulse grid reaches is refused with one that works.
 
-mod common;
+use crate::common;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, scara_move};
 use linterpd::geometry::Line;

@@ -4,7 +4,7 @@
 //! the address and the list, never reaching the PLC; a link that is down exits 4, a PLC that
 //! refuses exits 1.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::time::Duration;

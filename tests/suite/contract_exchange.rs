@@ -4,7 +4,7 @@
 //! Modbus TCP. (Modbus over `duplex` is not here: tokio-modbus serves only a TCP listener or a
 //! serial port, and Modbus is never written by hand.)
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

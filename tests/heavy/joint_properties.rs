@@ -3,7 +3,7 @@
 //! the execution gets there, and a bounded-error plan keeps the tool within its tolerance of the
 //! tool's path. A target beyond a joint's limits is refused naming the joint and the limit.
 
-mod common;
+use crate::common;
 
 use linterpd::kinematics::{JOINTS, Joints, Kinematics};
 use linterpd::plan::{JointMoveRequest, Origin, Plan, PlanError, plan_joint_move};

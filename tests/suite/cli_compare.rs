@@ -1,6 +1,6 @@
 //! `linterpd plan --compare` and `--svg` as a user runs them on the seed's move.
 
-mod common;
+use crate::common;
 
 use common::cli::SEED;
 use std::process::{Command, Output};

@@ -1,7 +1,7 @@
 //! Paths through the daemon, end to end in process: `POST .../paths` on the mock PLC, every
 //! section planned before anything moves, one move per section chained by the PLC.
 
-mod common;
+use crate::common;
 
 use common::daemon::{duplex_connector_with, mewtocol_options};
 use common::exchange::{P1, P2, mock_at_seed_start};

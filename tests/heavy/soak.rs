@@ -1,7 +1,7 @@
 //! A short soak in the test suite (the full one is `cargo bench --bench soak`): 100 moves over
 //! MEWTOCOL-COM on paused time through replies corrupted, dropped and delayed at random.
 
-#[path = "../benches/soak.rs"]
+#[path = "../../benches/soak.rs"]
 #[allow(dead_code, unreachable_pub)]
 mod soak;
 

@@ -3,7 +3,7 @@
 //! move runs to its target while a client keeps the gateway busy, its status reads waiting behind
 //! one gateway exchange at most.
 
-mod common;
+use crate::common;
 
 use std::time::Duration;
 

@@ -32,9 +32,9 @@
 //! PLC is well again, and a restarted daemon has no cycle).
 //!
 //! Everything runs in process on paused tokio time (MEWTOCOL over `duplex`), so the matrix is
-//! deterministic and fast. `cargo test --test fault_matrix -- --nocapture` prints the counts.
+//! deterministic and fast. `cargo test --test heavy fault_matrix:: -- --nocapture` prints the counts.
 
-mod common;
+use crate::common;
 
 use std::pin::Pin;
 use std::sync::Arc;
@@ -1038,7 +1038,7 @@ async fn orders_refused_while_a_move_runs_under_every_fault_at_every_exchange() 
 }
 
 /// One case with the daemon's and the mock's log, to see what happened in it:
-/// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test fault_matrix one_case -- --ignored
+/// `MATRIX_CASE=chained:ErrorReply:55 cargo test --test heavy fault_matrix::one_case -- --ignored
 /// --nocapture` (flows: single, chained, chained-slow, chained-unread, stop, zero-behind,
 /// path-off-start, refused,
 /// home, path).

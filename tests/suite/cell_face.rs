@@ -4,7 +4,7 @@
 //! holds the robot and the cycle, which goes on only on a fresh start; a stop works in both
 //! modes; a restarted face starts nothing by itself.
 
-mod common;
+use crate::common;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;

@@ -2,7 +2,7 @@
 //! inputs, interlocked moves the PLC holds, outputs written, faults that need `clear-fault` and
 //! `resume`, stops that always work, and one controller at a time.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::time::Duration;

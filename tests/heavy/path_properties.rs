@@ -19,7 +19,7 @@
 //! what the pulse grid reaches, a joint that starts too late into a blended section) are
 //! counted by reason and printed; each test requires most of its cases to be planned.
 
-mod common;
+use crate::common;
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;

@@ -1,0 +1,31 @@
+//! The integration tests that run on real time (the daemon, its API and CLI, the mock's
+//! servers, cycles, the gateway), in one binary: one compile and one link for them all. The
+//! CPU-bound ones on paused time (the fault matrix, the property tests, the soaks) are in
+//! tests/heavy, run after, so they never share the cores with a test that keeps time; the second
+//! suite's peers (`interop_modbus`, `deploy`) stay apart. A file here is a module: run one with
+//! `cargo test --test suite <module>::`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod api;
+mod cell_face;
+mod cli_client;
+mod cli_compare;
+mod cli_daemon;
+mod cli_plan;
+mod commission;
+mod contract_exchange;
+mod cycles;
+mod daemon;
+mod demo;
+mod gateway;
+mod interop_rmodbus;
+mod io_cli;
+mod jog_teach;
+mod mock_servers;
+mod modbus_face;
+mod path_progress;
+mod paths;
+mod permits;
+mod upload_faults;
