@@ -16,7 +16,7 @@ use linterpd::daemon::{CycleState, Daemon, DaemonOptions, RobotSetup};
 use linterpd::kinematics::JOINTS;
 use linterpd::mewtocol::Station;
 use linterpd::mock::{MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock};
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
 use linterpd::robot::seed_robot;
 

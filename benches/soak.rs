@@ -18,7 +18,7 @@ use linterpd::mock::{
     Anomaly, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, ModbusServer,
     ModbusServerOptions, SharedMock, StartOutcome,
 };
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{
     AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming,
     ModbusOptions, PlcError,

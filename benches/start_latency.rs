@@ -14,7 +14,7 @@ use linterpd::mewtocol::Station;
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock, StartOutcome,
 };
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
 use linterpd::robot::seed_robot;
 use tokio::net::{TcpListener, TcpStream};

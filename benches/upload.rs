@@ -18,7 +18,7 @@ use linterpd::mock::{
     SharedMock,
 };
 use linterpd::plan::{MoveRequest, Origin, plan_move};
-use linterpd::plc::contract::{BLOCK_WRITE_WORDS, Contract, ContractSettings};
+use linterpd::plc::exchange::{BLOCK_WRITE_WORDS, Contract, ContractSettings};
 use linterpd::plc::{
     HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming, ModbusOptions, Plc,
 };

@@ -37,7 +37,8 @@
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
 //!                    fault injection, pulse trace (a synchronous core, time is an argument);
 //!                    around it the MEWTOCOL and Modbus servers and the serial-line emulation
-//! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract flow
+//! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract's exchanges
+//!                    (`plc::exchange`: status reads, verified banks, a start written once)
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,

@@ -7,12 +7,12 @@ use std::time::Duration;
 use tokio::time::Instant;
 
 use super::judge::scan_rate;
-use super::{CONTRACT_CHECKS, Check, Halt, Pace, Session, Step};
+use super::{CONTRACT_CHECKS, Check, Halt, LinkTiming, Session, Step};
 use crate::contract::{
     MAGIC, READY_DRIVES, READY_ESTOP_CLEAR, READY_HOMED, STATUS_WORDS, State, StatusBlock, VERSION,
 };
 use crate::plc::Plc;
-use crate::plc::contract::{Contract, ContractError, fault_meaning};
+use crate::plc::exchange::{Contract, ContractError, fault_meaning};
 
 /// How long the host word is watched after its echo: more than twice the 250 ms at which an
 /// idle `linterpd serve` reads the status block (and writes its own host word back).
@@ -48,7 +48,7 @@ fn halted(recognised: bool) -> impl Fn(Halt) -> Halted {
 pub(super) async fn step<P: Plc>(
     s: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
 ) -> Result<Found, Halted> {
     let base = s.target.link.layout.status_base;
     let first = match read_raw(contract, base).await {
@@ -126,7 +126,7 @@ async fn status<P: Plc>(
 async fn heartbeat<P: Plc>(
     s: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
 ) -> Result<(), Halt> {
     let limit = s.target.link.heartbeat_timeout;
     let c = check(
@@ -183,7 +183,7 @@ fn host_word(current: u16, heartbeat: u16) -> u16 {
 async fn host_echo<P: Plc>(
     s: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
     first: &StatusBlock,
 ) -> Result<(), Halt> {
     let layout = s.target.link.layout;

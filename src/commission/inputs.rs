@@ -15,10 +15,10 @@
 use tokio::time::Instant;
 
 use super::report::InputsFound;
-use super::{Check, Halt, INPUT_CHECKS, Pace, Session, Step};
+use super::{Check, Halt, INPUT_CHECKS, LinkTiming, Session, Step};
 use crate::contract::{INPUT_WORDS, InputArea, InputWord, StatusBlock, bit_name};
 use crate::plc::Plc;
-use crate::plc::contract::Contract;
+use crate::plc::exchange::Contract;
 
 /// The bit of the first R input word the copy check switches and switches back.
 pub(super) const COPY_BIT: u8 = 15;
@@ -98,7 +98,7 @@ pub(super) struct Switched {
 /// shows it ([`COPY_READS`] reads at most). `Err` when the write or a read failed.
 pub(super) async fn switch<P: Plc>(
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
     (w, bit): (usize, u8),
     on: bool,
     before: &StatusBlock,
@@ -146,7 +146,7 @@ pub(super) async fn switch<P: Plc>(
 pub(super) async fn step<P: Plc>(
     s: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
 ) -> Result<(), Halt> {
     let layout = s.target.link.layout;
     let words = layout.inputs;
@@ -198,7 +198,7 @@ pub(super) async fn step<P: Plc>(
 /// Switches the copy bit of R word `w`, then back; the check's report.
 async fn copy_and_back<P: Plc>(
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
     k: Check,
     (w, before): (usize, &StatusBlock),
     read: &str,

@@ -54,7 +54,7 @@ pub use report::{
     RequestSizes, Step, Verdict,
 };
 
-use crate::plc::contract::{Contract, ContractSettings};
+use crate::plc::exchange::{Contract, ContractSettings};
 use crate::plc::{BoxedLink, LinkSettings, Plc, Protocol, Transport};
 use crate::robot::Robot;
 
@@ -273,14 +273,14 @@ impl Session<'_> {
 
 /// Timing the pulses step plans with: the link's pace and the PLC's scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Pace {
+struct LinkTiming {
     /// Median round trip of a status-block read, s.
     status_s: f64,
     /// Mean scan time, s.
     scan_s: f64,
 }
 
-impl Pace {
+impl LinkTiming {
     /// How long the procedure sleeps between two polls (at least 1 ms).
     fn poll(self) -> Duration {
         Duration::from_secs_f64(self.scan_s.max(0.001))
@@ -344,7 +344,7 @@ pub async fn run(
 async fn after_link<P: Plc>(
     session: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
 ) -> bool {
     let found = match contract::step(session, contract, pace).await {
         Ok(found) => found,
@@ -365,7 +365,7 @@ async fn after_link<P: Plc>(
 }
 
 /// Writes `command = 2` and reads the status block until no channel is busy (a few scans).
-async fn stop_everything<P: Plc>(contract: &mut Contract<P>, pace: Pace) -> bool {
+async fn stop_everything<P: Plc>(contract: &mut Contract<P>, pace: LinkTiming) -> bool {
     if let Err(e) = contract.stop().await {
         tracing::error!(error = %e, "commission: the final stop could not be written");
         return false;

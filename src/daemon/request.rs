@@ -8,7 +8,7 @@ use tokio::sync::oneshot;
 use super::order::CheckedOrder;
 use super::report::MoveId;
 use crate::contract::State;
-use crate::plc::contract::fault_meaning;
+use crate::plc::exchange::fault_meaning;
 
 /// Why a stop, home or clear-fault did not happen.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

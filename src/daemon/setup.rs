@@ -11,7 +11,7 @@ use super::worker::Connector;
 use crate::config::CellSettings;
 use crate::gateway::GatewaySettings;
 use crate::kinematics::JOINTS;
-use crate::plc::contract::ContractSettings;
+use crate::plc::exchange::ContractSettings;
 use crate::robot::Robot;
 
 /// One robot as the daemon runs it.

@@ -10,7 +10,7 @@ use super::metrics::RobotMetrics;
 use super::report::{MoveId, Moves, RobotState};
 use crate::contract::machine::Blocker;
 use crate::kinematics::JOINTS;
-use crate::plc::contract::Beat;
+use crate::plc::exchange::Beat;
 
 /// State shared by a robot's worker and its handle.
 #[derive(Debug)]

@@ -38,7 +38,7 @@ use crate::daemon::{
 use crate::kinematics::JOINTS;
 use crate::mock::{StartOutcome, StartRecord};
 use crate::plan::Plan;
-use crate::plc::contract::ContractSettings;
+use crate::plc::exchange::ContractSettings;
 use crate::robot::{Robot, seed_robot};
 use crate::table::FrequencyModel;
 use rig::Rig;

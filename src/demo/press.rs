@@ -20,7 +20,7 @@ use super::{DemoError, DemoOptions, P1};
 use crate::config::CellSettings;
 use crate::daemon::{CycleState, Daemon, DaemonOptions, RobotHandle, RobotSetup, Stage};
 use crate::gateway::{AccessList, Area, GatewaySettings};
-use crate::plc::contract::ContractSettings;
+use crate::plc::exchange::ContractSettings;
 use crate::robot::seed_robot;
 
 /// The shipped press-loading program.

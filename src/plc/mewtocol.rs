@@ -156,7 +156,7 @@ impl MewtocolOptions {
 
 /// Why one attempt failed.
 #[derive(Debug)]
-enum Failure {
+enum AttemptFailure {
     /// A `!` reply.
     Refused(PlcErrorCode),
     /// A reply that does not decode or does not answer the command.
@@ -167,7 +167,7 @@ enum Failure {
     Link(io::Error),
 }
 
-impl Failure {
+impl AttemptFailure {
     fn is_retryable(&self) -> bool {
         match self {
             Self::Refused(code) => {
@@ -198,7 +198,7 @@ impl Failure {
     }
 }
 
-impl fmt::Display for Failure {
+impl fmt::Display for AttemptFailure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Refused(code) => write!(f, "refused with {code}"),
@@ -306,7 +306,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         let command = Command::ReadDt(dt_range(0, 1, "probe the < header")?);
         match self.attempt(Header::Angle, &command).await {
             Ok(_) => Ok(Header::Angle),
-            Err(Failure::Link(source)) => Err(PlcError::Link {
+            Err(AttemptFailure::Link(source)) => Err(PlcError::Link {
                 operation: "probe the < header".to_owned(),
                 source,
             }),
@@ -423,23 +423,30 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
     }
 
     /// One try: settle the link, then one timeout around the whole round trip.
-    async fn attempt(&mut self, header: Header, command: &Command) -> Result<Reply, Failure> {
+    async fn attempt(
+        &mut self,
+        header: Header,
+        command: &Command,
+    ) -> Result<Reply, AttemptFailure> {
         self.settle().await?;
         let timeout = self.exchange_timeout(header, command);
         let result = tokio::time::timeout(timeout, self.round_trip(header, command))
             .await
-            .unwrap_or(Err(Failure::Timeout));
-        if matches!(result, Err(Failure::Timeout)) {
+            .unwrap_or(Err(AttemptFailure::Timeout));
+        if matches!(result, Err(AttemptFailure::Timeout)) {
             self.counts.timed_out();
         }
-        if matches!(result, Err(Failure::Timeout | Failure::Garbled(_))) {
+        if matches!(
+            result,
+            Err(AttemptFailure::Timeout | AttemptFailure::Garbled(_))
+        ) {
             self.stale = true;
         }
         result
     }
 
     /// After a failed attempt: forget half-read replies and drain late bytes.
-    async fn settle(&mut self) -> Result<(), Failure> {
+    async fn settle(&mut self) -> Result<(), AttemptFailure> {
         if !std::mem::take(&mut self.stale) {
             return Ok(());
         }
@@ -448,7 +455,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         drain(self.framed.get_mut(), self.options.timing().quiet())
             .await
             .map(|_| ())
-            .map_err(Failure::Link)
+            .map_err(AttemptFailure::Link)
     }
 
     async fn send(
@@ -456,29 +463,33 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         header: Header,
         station: Station,
         message: Request,
-    ) -> Result<(), Failure> {
+    ) -> Result<(), AttemptFailure> {
         let addressed = Addressed {
             header,
             station,
             message,
         };
         self.framed.send(addressed).await.map_err(|e| match e {
-            CodecError::Io(e) => Failure::Link(e),
-            other => Failure::Garbled(other.to_string()),
+            CodecError::Io(e) => AttemptFailure::Link(e),
+            other => AttemptFailure::Garbled(other.to_string()),
         })
     }
 
-    async fn round_trip(&mut self, header: Header, command: &Command) -> Result<Reply, Failure> {
+    async fn round_trip(
+        &mut self,
+        header: Header,
+        command: &Command,
+    ) -> Result<Reply, AttemptFailure> {
         let request = Request::Command(command.clone());
         self.send(header, self.options.station, request).await?;
         loop {
             match self.framed.next().await {
-                None => return Err(Failure::Link(io::ErrorKind::UnexpectedEof.into())),
-                Some(Err(CodecError::Io(e))) => return Err(Failure::Link(e)),
+                None => return Err(AttemptFailure::Link(io::ErrorKind::UnexpectedEof.into())),
+                Some(Err(CodecError::Io(e))) => return Err(AttemptFailure::Link(e)),
                 Some(Err(e)) => {
                     // Framed yields `None` once after a decoder error: take it now.
                     let _ = self.framed.next().await;
-                    return Err(Failure::Garbled(e.to_string()));
+                    return Err(AttemptFailure::Garbled(e.to_string()));
                 }
                 Some(Ok(ClientEvent::Skipped(bytes))) => {
                     tracing::warn!(
@@ -502,18 +513,18 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         reply: Addressed<Response>,
         header: Header,
         command: &Command,
-    ) -> Result<Reply, Failure> {
+    ) -> Result<Reply, AttemptFailure> {
         let station = self.options.station;
         if reply.header != header || (station != Station::ANY && reply.station != station) {
-            return Err(Failure::Garbled(format!(
+            return Err(AttemptFailure::Garbled(format!(
                 "reply from {:?} station {:?}, expected {header:?} station {station:?}",
                 reply.header, reply.station
             )));
         }
         match reply.message {
-            Err(refusal) => Err(Failure::Refused(refusal.code)),
+            Err(refusal) => Err(AttemptFailure::Refused(refusal.code)),
             Ok(data) if data.answers(command) => Ok(data),
-            Ok(data) => Err(Failure::Garbled(format!(
+            Ok(data) => Err(AttemptFailure::Garbled(format!(
                 "{data:?} does not answer {command:?}"
             ))),
         }

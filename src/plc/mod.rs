@@ -20,7 +20,7 @@ mod settings;
 
 use std::future::Future;
 
-pub mod contract;
+pub mod exchange;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;

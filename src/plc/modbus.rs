@@ -159,14 +159,14 @@ pub fn exception_meaning(code: u8) -> &'static str {
 
 /// Why one call failed.
 #[derive(Debug)]
-enum Failure {
+enum CallFailure {
     Exception(ExceptionCode),
     Garbled(String),
     Timeout,
     Link(io::Error),
 }
 
-impl Failure {
+impl CallFailure {
     fn is_retryable(&self) -> bool {
         matches!(self, Self::Garbled(_) | Self::Timeout)
     }
@@ -194,7 +194,7 @@ impl Failure {
     }
 }
 
-impl fmt::Display for Failure {
+impl fmt::Display for CallFailure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Exception(code) => write!(f, "exception {:#04x}", u8::from(*code)),
@@ -261,39 +261,39 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> ModbusClie
     }
 
     /// The attached context; after a failure, drain the stream and attach a fresh one first.
-    async fn context(&mut self) -> Result<&mut Context, Failure> {
+    async fn context(&mut self) -> Result<&mut Context, CallFailure> {
         if self.context.is_none() {
             let mut handle = self.stream.clone();
             drain(&mut handle, self.options.timing().quiet())
                 .await
-                .map_err(Failure::Link)?;
+                .map_err(CallFailure::Link)?;
             self.reattached += 1;
         }
         let (stream, options) = (&self.stream, &self.options);
         Ok(self.context.get_or_insert_with(|| attach(stream, options)))
     }
 
-    async fn attempt(&mut self, request: Request<'_>) -> Result<Response, Failure> {
+    async fn attempt(&mut self, request: Request<'_>) -> Result<Response, CallFailure> {
         let timeout = self.call_timeout(&request);
         let context = self.context().await?;
         let outcome = match tokio::time::timeout(timeout, context.call(request)).await {
             Err(_) => {
                 self.counts.timed_out();
-                Err(Failure::Timeout)
+                Err(CallFailure::Timeout)
             }
             Ok(Err(tokio_modbus::Error::Transport(e)))
                 if e.kind() == io::ErrorKind::InvalidData =>
             {
-                Err(Failure::Garbled(e.to_string()))
+                Err(CallFailure::Garbled(e.to_string()))
             }
-            Ok(Err(tokio_modbus::Error::Transport(e))) => Err(Failure::Link(e)),
-            Ok(Err(tokio_modbus::Error::Protocol(e))) => Err(Failure::Garbled(e.to_string())),
-            Ok(Ok(Err(code))) => Err(Failure::Exception(code)),
+            Ok(Err(tokio_modbus::Error::Transport(e))) => Err(CallFailure::Link(e)),
+            Ok(Err(tokio_modbus::Error::Protocol(e))) => Err(CallFailure::Garbled(e.to_string())),
+            Ok(Ok(Err(code))) => Err(CallFailure::Exception(code)),
             Ok(Ok(Ok(response))) => Ok(response),
         };
         if matches!(
             outcome,
-            Err(Failure::Timeout | Failure::Garbled(_) | Failure::Link(_))
+            Err(CallFailure::Timeout | CallFailure::Garbled(_) | CallFailure::Link(_))
         ) {
             self.context = None;
         }

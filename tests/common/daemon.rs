@@ -5,7 +5,7 @@ use linterpd::daemon::{Connector, Daemon, DaemonOptions, RobotHandle, RobotSetup
 use linterpd::kinematics::JOINTS;
 use linterpd::mewtocol::Station;
 use linterpd::mock::{MewtocolServer, MewtocolServerOptions, SharedMock};
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
 use linterpd::robot::seed_robot;
 

@@ -16,7 +16,7 @@ use linterpd::plc::{Plc, PlcMode};
 use std::time::Duration;
 
 use linterpd::contract::machine::{Blocker, Event, Machine, Planned, Status};
-use linterpd::plc::contract::{
+use linterpd::plc::exchange::{
     CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank, planned_bounds,
 };
 use linterpd::robot::{Robot, seed_robot};

@@ -12,7 +12,7 @@ use linterpd::daemon::{
 };
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use serde_json::Value;
 use tokio::net::UnixListener;
 

@@ -3,13 +3,13 @@
 
 #[path = "../../benches/cycle_soak.rs"]
 #[allow(dead_code, unreachable_pub)]
-mod cycle_soak;
+mod bench;
 
 #[tokio::test(start_paused = true)]
 async fn fifty_press_cycles_through_a_lossy_link_keep_every_invariant() {
-    let summary = cycle_soak::cycle_soak(50).await;
-    let text = cycle_soak::report(&summary);
+    let summary = bench::cycle_soak(50).await;
+    let text = bench::report(&summary);
     println!("{text}");
-    assert!(cycle_soak::clean(&summary), "{text}");
+    assert!(bench::clean(&summary), "{text}");
     assert_eq!(summary.done, 50, "{text}");
 }

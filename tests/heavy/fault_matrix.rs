@@ -48,7 +48,7 @@ use linterpd::kinematics::JOINTS;
 use linterpd::mock::{
     Anomaly, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock, StartOutcome,
 };
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, MewtocolClient, PlcMode};
 use linterpd::robot::seed_robot;
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};

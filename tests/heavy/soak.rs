@@ -3,13 +3,13 @@
 
 #[path = "../../benches/soak.rs"]
 #[allow(dead_code, unreachable_pub)]
-mod soak;
+mod bench;
 
 #[tokio::test(start_paused = true)]
 async fn a_hundred_moves_through_a_lossy_link_keep_every_invariant() {
-    let summary = soak::soak(soak::SoakLink::Mewtocol, 100).await;
-    let text = soak::report(soak::SoakLink::Mewtocol, &summary);
+    let summary = bench::soak(bench::SoakLink::Mewtocol, 100).await;
+    let text = bench::report(bench::SoakLink::Mewtocol, &summary);
     println!("{text}");
-    assert!(soak::clean(&summary), "{text}");
+    assert!(bench::clean(&summary), "{text}");
     assert!(summary.starts > 50, "most moves ran: {text}");
 }

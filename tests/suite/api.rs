@@ -14,7 +14,7 @@ use hyper::StatusCode;
 use linterpd::config::Config;
 use linterpd::daemon::api::{self, Api, BearerToken};
 use linterpd::daemon::{Daemon, RobotHandle};
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use serde_json::{Value, json};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, UnixListener, UnixStream};

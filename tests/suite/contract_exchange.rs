@@ -11,7 +11,7 @@ use std::time::Duration;
 use common::exchange::{exchange, mock_at_seed_start, settings};
 use linterpd::mewtocol::Station;
 use linterpd::mock::{MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions};
-use linterpd::plc::contract::Contract;
+use linterpd::plc::exchange::Contract;
 use linterpd::plc::{
     HeaderChoice, MewtocolClient, MewtocolOptions, ModbusClient, ModbusFraming, ModbusOptions,
 };

@@ -11,7 +11,7 @@ use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, St
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
 };
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{
     AnyPlc, BoxedLink, MewtocolClient, ModbusClient, ModbusFraming, ModbusOptions, PlcMode,
 };

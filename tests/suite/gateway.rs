@@ -17,7 +17,7 @@ use linterpd::daemon::{
 use linterpd::gateway::{AccessList, Address, Area, GatewaySettings, Range};
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::robot::seed_robot;
 
 fn ranges(texts: &[&str]) -> Vec<Range> {

@@ -18,7 +18,7 @@ use linterpd::daemon::{Connector, Daemon, DaemonOptions, RobotHandle, RobotSetup
 use linterpd::gateway::{AccessList, Area, GatewaySettings, Range};
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::robot::seed_robot;
 use serde_json::Value;
 use tokio::net::UnixListener;

@@ -23,7 +23,7 @@ use linterpd::daemon::{Connector, Daemon, DaemonOptions, RobotHandle, RobotSetup
 use linterpd::gateway::{AccessList, Area, GatewaySettings, ModbusFace, Range};
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
-use linterpd::plc::contract::ContractSettings;
+use linterpd::plc::exchange::ContractSettings;
 use linterpd::robot::seed_robot;
 use rmodbus::client::ModbusRequest;
 use rmodbus::{ErrorKind, ModbusProto, guess_response_frame_len};

@@ -367,7 +367,7 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
     };
     let (daemon, h) = common::daemon::spawn_with(
         common::daemon::duplex_connector(&shared, None),
-        linterpd::plc::contract::ContractSettings::default(),
+        linterpd::plc::exchange::ContractSettings::default(),
         &options,
         [0; JOINTS],
     );

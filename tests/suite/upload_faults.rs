@@ -16,7 +16,7 @@ use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
 };
 use linterpd::plc::MewtocolOptions;
-use linterpd::plc::contract::{Contract, ContractError};
+use linterpd::plc::exchange::{Contract, ContractError};
 use linterpd::plc::{
     HeaderChoice, MewtocolClient, ModbusClient, ModbusFraming, ModbusOptions, PlcError, PlcMode,
 };

@@ -20,7 +20,7 @@ use std::time::Duration;
 use tokio::time::Instant;
 
 use super::judge::{scan_rate, spread};
-use super::{Check, Halt, LINK_CHECKS, Pace, Session, Step};
+use super::{Check, Halt, LINK_CHECKS, LinkTiming, Session, Step};
 use crate::plc::{AnyPlc, BoxedLink, LinkSettings, Plc, PlcError, PlcMode, Protocol, relay_name};
 
 /// Exchanges timed per kind for the round trip.
@@ -36,7 +36,7 @@ pub(super) struct Linked {
     /// The client to go on with.
     pub plc: AnyPlc,
     /// The link's pace.
-    pub pace: Pace,
+    pub pace: LinkTiming,
 }
 
 /// What the multi-frame read check looks at (MEWTOCOL `%`; skipped otherwise).
@@ -61,7 +61,7 @@ pub(super) async fn step(s: &mut Session<'_>, link: BoxedLink) -> Result<Linked,
     run_prog(s, &mut plc, &settings).await?;
     Ok(Linked {
         plc,
-        pace: Pace {
+        pace: LinkTiming {
             status_s: pace_status_s,
             scan_s,
         },

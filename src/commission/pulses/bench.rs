@@ -6,10 +6,10 @@ use std::time::Duration;
 use tokio::time::Instant;
 
 use super::{MAX_HZ, MIN_HZ, QUIET_POLLS, RANGE};
-use crate::commission::Pace;
+use crate::commission::LinkTiming;
 use crate::contract::{CHANNELS, Fault, Permit, State, StatusBlock};
 use crate::plc::Plc;
-use crate::plc::contract::{Contract, ContractError, StartBlock, fault_meaning};
+use crate::plc::exchange::{Contract, ContractError, StartBlock, fault_meaning};
 use crate::robot::Joint;
 use crate::table::{
     ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyModel, Row, Segment,
@@ -144,7 +144,7 @@ pub(super) fn jittered(poll: Duration, k: u32) -> Duration {
 /// The contract, the pace and the next sequence number and bank.
 pub(super) struct Bench<'c, P> {
     pub contract: &'c mut Contract<P>,
-    pub pace: Pace,
+    pub pace: LinkTiming,
     pub seq: u16,
     pub bank: u16,
 }

@@ -21,7 +21,7 @@ use crate::commission::inputs::{DROP_BIT, is_on, on_off, relay, switch};
 use crate::commission::{Halt, Session};
 use crate::contract::{CHANNELS, Fault, Permit, PermitBit, State, bit_name};
 use crate::plc::Plc;
-use crate::plc::contract::fault_meaning;
+use crate::plc::exchange::fault_meaning;
 
 /// Pulses of the table whose permit is dropped.
 const DROP_PULSES: i64 = 300;
@@ -425,11 +425,11 @@ fn drop_verdict(
 mod tests {
     use super::*;
     use crate::commission::report::{CheckReport, Findings};
-    use crate::commission::{Pace, Target, Verdict, inputs};
+    use crate::commission::{LinkTiming, Target, Verdict, inputs};
     use crate::mock::{
         MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, MockVariant, SharedMock,
     };
-    use crate::plc::contract::{Contract, ContractSettings};
+    use crate::plc::exchange::{Contract, ContractSettings};
     use crate::plc::{
         LinkSettings, MewtocolClient, MewtocolOptions, Parity, Protocol, SerialSettings, Transport,
     };
@@ -473,7 +473,7 @@ mod tests {
             stopped: None,
             observe: &mut observe,
         };
-        let pace = Pace {
+        let pace = LinkTiming {
             status_s: 0.012,
             scan_s: 0.002,
         };

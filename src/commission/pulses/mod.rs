@@ -41,10 +41,10 @@ use bench::{Bench, Channel, Sample};
 
 use super::contract::Found;
 use super::report::ChannelCounts;
-use super::{Check, Halt, PULSE_CHECKS, Pace, Session, Step};
+use super::{Check, Halt, LinkTiming, PULSE_CHECKS, Session, Step};
 use crate::contract::CHANNELS;
 use crate::plc::Plc;
-use crate::plc::contract::Contract;
+use crate::plc::exchange::Contract;
 use crate::robot::Joint;
 use crate::table::FrequencyRange;
 
@@ -77,7 +77,7 @@ fn check(name: &'static str, channel: u8, checks: impl Into<String>) -> Check {
 pub(super) async fn step<P: Plc>(
     s: &mut Session<'_>,
     contract: &mut Contract<P>,
-    pace: Pace,
+    pace: LinkTiming,
     found: Found,
 ) -> Result<(), Halt> {
     let mut bench = Bench {

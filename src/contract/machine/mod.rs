@@ -1,7 +1,7 @@
 //! PURE. The host's side of the contract as one state machine: what the host has given the PLC,
 //! moved along by every status block it reads. No IO and no clock: `now` is an argument, and what
 //! the host must do (write its host word, write a stop, write a start again) comes back as
-//! [`Event`]s for the caller to carry out. The daemon's worker and [`crate::plc::contract`]'s
+//! [`Event`]s for the caller to carry out. The daemon's worker and [`crate::plc::exchange`]'s
 //! `follow` both drive this one machine, so "what became of start `seq`" is worked out once.
 //!
 //! ```text

@@ -32,7 +32,7 @@ use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
 use crate::config::{Config, DaemonSettings};
 use crate::contract::machine::WatchSettings;
-use crate::plc::contract::ContractSettings;
+use crate::plc::exchange::ContractSettings;
 use crate::plc::{self, LinkSettings};
 
 /// Longest wait for open connections after the daemon has shut down.

@@ -9,7 +9,7 @@ use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::order::MoveOrder;
 use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
-use crate::plc::contract::{CommandWrite, ContractError, describe_outcome};
+use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
 
 /// A stop asked for this recently stopped the moves that end stopped.
 const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);

@@ -8,7 +8,7 @@ use tokio::time::Instant;
 
 use super::Worker;
 use crate::daemon::gateway::{GatewayError, Piece, Values};
-use crate::plc::contract::ContractError;
+use crate::plc::exchange::ContractError;
 use crate::plc::{AnyPlc, Plc, PlcError};
 
 impl Worker {

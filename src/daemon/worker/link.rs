@@ -7,7 +7,7 @@ use std::time::Duration;
 use super::session::Session;
 use super::{Worker, describe, now};
 use crate::contract::machine::Blocker;
-use crate::plc::contract::ContractError;
+use crate::plc::exchange::ContractError;
 
 /// Reconnection backoff bounds.
 pub(super) const BACKOFF_MIN: Duration = Duration::from_millis(100);

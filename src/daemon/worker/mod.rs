@@ -45,7 +45,7 @@ use super::shared::Shared;
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
-use crate::plc::contract::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
+use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
 use crate::plc::{AnyPlc, Plc, PlcError};
 use crate::robot::Robot;
 
@@ -141,7 +141,7 @@ pub(super) struct Worker {
     /// The queued parts of a path whose tables were written and read back ahead of their
     /// turns, and what was written (the bank, where, the words, which each start must match).
     /// Emptied by every bank written whole, which may overwrite them.
-    preloaded: Vec<(MoveId, crate::plc::contract::Preload)>,
+    preloaded: Vec<(MoveId, crate::plc::exchange::Preload)>,
     /// When each running move was seen starting.
     started: HashMap<MoveId, std::time::Instant>,
     /// The permit of each move written with one, until it ends (to name the input that held

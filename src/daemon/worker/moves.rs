@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use super::pace::{Pace, Part};
+use super::pace::{LinkPace, Part};
 use super::placement::{Placement, directories_left};
 use super::preload::{self, Choice};
 use super::prepared::{CYCLE_WENT_ON, Held, prepared_watch};
@@ -17,7 +17,7 @@ use crate::daemon::order::plan_order;
 use crate::daemon::order::{CheckedOrder, SectionOrder};
 use crate::daemon::report::{MoveId, Predicted, Stage};
 use crate::plan::{Plan, PlanError};
-use crate::plc::contract::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
+use crate::plc::exchange::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
 
@@ -355,7 +355,7 @@ impl Worker {
     /// Nothing runs from either bank: `first` is written while nothing runs, and every
     /// preloaded word lies outside its tables. A part that cannot be planned is left to fail
     /// at its own turn. Then every part of the section must be ready to start before the part
-    /// ahead of it ends: if not, this start is refused before anything moves ([`Pace::check`]).
+    /// ahead of it ends: if not, this start is refused before anything moves ([`LinkPace::check`]).
     async fn preload_section(
         &mut self,
         first: &Planned,
@@ -385,7 +385,7 @@ impl Worker {
         let mut placement = Placement::new(first.bank, tables, area_words);
         let mut ends_on = first.targets.expect("a plan knows its targets");
         let mut bank = 1 - first.bank;
-        let mut pace: Option<Pace> = None;
+        let mut pace: Option<LinkPace> = None;
         let mut directories = Vec::new();
         for (id, order) in behind {
             let Ok(plan) = plan_order(&self.robot, &order, self.by_joint(ends_on.map(i64::from)))
@@ -432,7 +432,7 @@ impl Worker {
         bank: u16,
         base: [usize; CHANNELS],
         tables: &[ValidTable],
-    ) -> Result<(crate::plc::contract::Preload, Duration), ContractError> {
+    ) -> Result<(crate::plc::exchange::Preload, Duration), ContractError> {
         let began = tokio::time::Instant::now();
         let preloaded = self.link()?.preload(bank, base, tables).await?;
         Ok((preloaded, began.elapsed()))
@@ -440,8 +440,8 @@ impl Worker {
 
     /// The link's pace before any preload: the status read `exchange` just took and a one-word
     /// read made now.
-    async fn pace(&mut self, exchange: Duration, permit: bool) -> Result<Pace, ContractError> {
-        Ok(Pace {
+    async fn pace(&mut self, exchange: Duration, permit: bool) -> Result<LinkPace, ContractError> {
+        Ok(LinkPace {
             permit_write: permit,
             status: exchange,
             word: self.link()?.one_word_exchange().await?,

@@ -19,7 +19,7 @@ use std::time::Duration;
 
 use crate::contract::STATUS_WORDS;
 use crate::plan::Plan;
-use crate::plc::contract::{BLOCK_WRITE_WORDS, ContractError, PERMIT_WRITE_WORDS};
+use crate::plc::exchange::{BLOCK_WRITE_WORDS, ContractError, PERMIT_WRITE_WORDS};
 use crate::table::DIRECTORY_WORDS;
 
 /// The estimate must fit the part before it this many times over (a link's pace varies).
@@ -27,7 +27,7 @@ const MARGIN: f64 = 1.25;
 
 /// What the link showed just before the section's first start.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Pace {
+pub(super) struct LinkPace {
     /// One status read ([`STATUS_WORDS`] words).
     pub status: Duration,
     /// One one-word read.
@@ -68,7 +68,7 @@ impl Part {
     }
 }
 
-impl Pace {
+impl LinkPace {
     /// About how long one exchange of `words` words takes, s: on the line through the two
     /// reads measured (never less than the one-word read).
     fn exchange_s(&self, words: usize) -> f64 {
@@ -137,8 +137,8 @@ mod tests {
     use super::*;
 
     /// A status read of 22 words in `status_ms`, a one-word read in `word_ms`.
-    fn pace(status_ms: u64, word_ms: u64, preload_ms: u64, preload_words: usize) -> Pace {
-        Pace {
+    fn pace(status_ms: u64, word_ms: u64, preload_ms: u64, preload_words: usize) -> LinkPace {
+        LinkPace {
             status: Duration::from_millis(status_ms),
             word: Duration::from_millis(word_ms),
             preload: Duration::from_millis(preload_ms),
@@ -254,7 +254,7 @@ mod tests {
     fn a_part_written_whole_pays_for_the_reads_that_watch_the_part_before_it() {
         // 1 ms a word: 1 200 words take 1.2 s, watched every 0.5 s: two status reads of 72 ms.
         let unwatched = pace(72, 20, 1_000, 1_000);
-        let watched = Pace {
+        let watched = LinkPace {
             watch_every: Duration::from_millis(500),
             ..unwatched
         };
@@ -270,7 +270,7 @@ mod tests {
     fn without_read_back_a_start_writes_its_blocks_once() {
         // 19200 baud as above, read_back = false: the block and directories written, not read.
         let on = pace(72, 20, 6_000, 1_000);
-        let off = Pace {
+        let off = LinkPace {
             read_back: false,
             ..on
         };

@@ -1,6 +1,6 @@
 //! PURE. Which parts of a path section chained at speed are preloaded before its first part
 //! starts from rest (see `Worker::preload_section`, which makes the writes): the choice for each
-//! part behind the first, in order, from what the link has shown so far ([`Pace`]) and where
+//! part behind the first, in order, from what the link has shown so far ([`LinkPace`]) and where
 //! the parts before it went ([`Placement`]).
 //!
 //! The second part always is (there is no pace yet to judge by); each later one only while, at
@@ -9,10 +9,10 @@
 //! would not fit even the empty areas of its bank (the first preloaded) can never be written:
 //! the start is refused before anything moves.
 
-use super::pace::{Pace, Part};
+use super::pace::{LinkPace, Part};
 use super::placement::Placement;
 use crate::contract::CHANNELS;
-use crate::plc::contract::ContractError;
+use crate::plc::exchange::ContractError;
 use crate::table::ValidTable;
 
 /// What to do with the next part.
@@ -33,7 +33,7 @@ pub(super) enum Choice {
 /// # Errors
 /// [`ContractError::TooLarge`] when the first part preloaded would not fit even its empty bank.
 pub(super) fn choose(
-    pace: Option<&Pace>,
+    pace: Option<&LinkPace>,
     parts: &[Part],
     placement: &mut Placement,
     bank: u16,
@@ -67,8 +67,8 @@ mod tests {
     }
 
     /// A link that took `status_ms` for a status read and preloaded 100 words in `preload_ms`.
-    fn pace(status_ms: u64, preload_ms: u64) -> Pace {
-        Pace {
+    fn pace(status_ms: u64, preload_ms: u64) -> LinkPace {
+        LinkPace {
             status: Duration::from_millis(status_ms),
             word: Duration::from_millis(status_ms / 3),
             preload: Duration::from_millis(preload_ms),
@@ -89,7 +89,7 @@ mod tests {
 
     /// A case: the pace so far, the parts as the check sees them, the next part's bank and
     /// rows, and what to do.
-    type Case<'a> = (Option<Pace>, &'a [Part], u16, usize, &'a str);
+    type Case<'a> = (Option<LinkPace>, &'a [Part], u16, usize, &'a str);
 
     #[test]
     fn each_part_is_preloaded_while_the_pace_says_the_rest_would_be_late() {

@@ -9,7 +9,7 @@ use super::{Queued, Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::daemon::report::{MoveId, Stage};
-use crate::plc::contract::ContractError;
+use crate::plc::exchange::ContractError;
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
 /// it as any move, after its wait.

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use super::Shared;
 use crate::plc::AnyPlc;
-use crate::plc::contract::{Contract, ContractSettings};
+use crate::plc::exchange::{Contract, ContractSettings};
 
 /// One opened link: the contract over it and what was learnt of it.
 pub(super) struct Session {
