@@ -362,10 +362,10 @@ pub struct FaceRefusal {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum RobotPhase {
-    /// Not published yet: the worker's first connection attempt has not ended (the API writes
-    /// `""`).
+    /// Not published yet: the worker's first connection attempt has not ended (the API wrote
+    /// `""` for it before; that still reads).
     #[default]
-    #[serde(rename = "")]
+    #[serde(rename = "connecting", alias = "")]
     NotPublished,
     /// No link to the PLC (or no status block yet).
     LinkDown,
@@ -409,7 +409,7 @@ impl RobotPhase {
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
-            Self::NotPublished => "",
+            Self::NotPublished => "connecting",
             Self::LinkDown => "link-down",
             Self::Stalled => "stalled",
             Self::Unhomed => "unhomed",
@@ -611,7 +611,7 @@ mod tests {
 mod json_tests {
     use super::*;
 
-    const STATE_NEW: &str = r#"{"name":"press-loader","link":{"connected":false,"error":null,"reconnects":0},"phase":"","homed":false,"refuses":null,"plc_mode":null,"heartbeat_age_ms":null,"state":null,"fault":null,"counts":null,"pose":null,"current_move":null,"queued":[],"gateway":{"requests":0,"failed":0,"exchanges":0,"longest_exchange_ms":0,"longest_poll_delay_ms":0},"mode":"local"}"#;
+    const STATE_NEW: &str = r#"{"name":"press-loader","link":{"connected":false,"error":null,"reconnects":0},"phase":"connecting","homed":false,"refuses":null,"plc_mode":null,"heartbeat_age_ms":null,"state":null,"fault":null,"counts":null,"pose":null,"current_move":null,"queued":[],"gateway":{"requests":0,"failed":0,"exchanges":0,"longest_exchange_ms":0,"longest_poll_delay_ms":0},"mode":"local"}"#;
     const STATE_FULL: &str = r#"{"name":"press-loader","link":{"connected":true,"error":"timed out","reconnects":3},"phase":"running-chained","homed":true,"refuses":"a move runs","plc_mode":"prog","heartbeat_age_ms":12,"state":"fault","fault":3,"counts":[1,-2,3,40000],"inputs":[32,0,0,1],"pose":[-0.0,500.25,0.1,45.0],"current_move":7,"queued":[8,9],"gateway":{"requests":5,"failed":1,"exchanges":4,"longest_exchange_ms":30,"longest_poll_delay_ms":2},"cycle":{"program":"press-load","state":"running","done":0,"count":10},"mode":"remote","face":{"program":3,"program_name":"press-load","enabled":true,"commands":66,"refused":{"code":8,"meaning":"a cycle is under way or the robot is moving"}}}"#;
     const REPORT_NEW: &str = r#"{"id":42,"robot":"press-loader","stage":"queued","order":{},"recovered":false,"deadline_s":null,"seq":null,"bank":null,"start_counts":null,"target_counts":null,"predicted":null,"upload_s":null,"motion_s":null,"progress":0.0,"counts":null,"final_error_pulses":null,"error":null}"#;
     const REPORT_FULL: &str = r#"{"id":43,"robot":"press-loader","stage":"running","order":{"to":[1.0,2.0,3.0],"speed_mm_s":120.0,"method":"bounded-error"},"recovered":true,"deadline_s":4.5,"seq":17,"bank":1,"start_counts":[0,0,0,0],"target_counts":[100,-200,300,0],"predicted":{"rows":12,"words":96,"duration_s":1.25,"path_deviation_mm":0.0125,"tracking_error_mm":0.3},"upload_s":0.08,"motion_s":1.3,"progress":0.42,"counts":[50,-100,150,0],"final_error_pulses":[0,1,-1,0],"error":"stopped by a stop request","section":{"number":2,"of":3,"pieces":[{"kind":"line","element":1,"waypoint":null,"begins":0.0,"ends":0.5},{"kind":"arc","element":null,"waypoint":1,"begins":0.5,"ends":0.6}]}}"#;
@@ -740,7 +740,7 @@ mod json_tests {
     fn every_phase_state_mode_stage_and_piece_kind_keeps_its_word() {
         // The words `Phase::name()`, `State::name()` and the daemon wrote before.
         let phases = [
-            "",
+            "connecting",
             "link-down",
             "stalled",
             "unhomed",
@@ -756,6 +756,9 @@ mod json_tests {
             assert_json(&phase, &format!("\"{word}\""));
             assert_eq!(phase.name(), word);
         }
+        // What a daemon before "connecting" wrote still reads.
+        let old: RobotPhase = serde_json::from_str("\"\"").unwrap();
+        assert_eq!(old, RobotPhase::NotPublished);
         for word in ["idle", "running", "done", "stopped", "fault", "homing"] {
             let state: State = serde_json::from_str(&format!("\"{word}\"")).unwrap();
             assert_json(&state, &format!("\"{word}\""));
