@@ -229,6 +229,13 @@ impl Runner {
         match kind {
             OpKind::Move(order) => {
                 if self.ahead.front().is_some_and(|a| a.at == pc) {
+                    // Held from outside the PLC (move-enable dropped): its gate shuts, as a
+                    // move not prepared is not queued.
+                    let hold = self.control.borrow().hold;
+                    if let Some(why) = hold {
+                        self.drop_ahead().await;
+                        return Next::Hold(why.to_owned());
+                    }
                     let ahead = self.ahead.pop_front().expect("just seen");
                     ahead.gate.open();
                     return self.prepared(pc, ahead.id).await;
