@@ -18,6 +18,7 @@ mod bounded;
 mod constant_period;
 mod course;
 mod error;
+mod joint_path;
 mod judge;
 mod limits;
 mod line_parts;
@@ -33,8 +34,8 @@ use crate::sim::{self, Execution, Figures, Settings};
 use crate::table::{ChannelTable, ValidTable};
 
 use course::Course;
-pub use course::JointPath;
 pub use error::PlanError;
+pub use joint_path::JointPath;
 use judge::{max_hz, settings, simulate, simulate_within};
 pub use line_parts::{MovePlan, line_as_path, plan_line};
 pub use path::{

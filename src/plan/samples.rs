@@ -8,7 +8,7 @@ use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
 use super::PlanError;
-use super::course::JointPath;
+use super::joint_path::JointPath;
 
 /// Counts of every joint at every interpolation point 0..=N.
 #[derive(Debug, Clone, PartialEq)]

@@ -31,13 +31,10 @@ pub use any::{AnyPlc, connect};
 pub use counts::ExchangeCounts;
 pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_hint, open_serial, open_tcp};
 pub use mewtocol::{EXCHANGE_BUDGET, MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
-pub use modbus::{
-    MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, ModbusClient, ModbusFraming, ModbusOptions,
-    RELAY_COIL_BASE, exception_meaning,
-};
+pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
 pub use settings::{
-    HeaderChoice, LinkSettings, Parity, Protocol, R9020, SerialSettings, TcpSettings, Timing,
-    Transport,
+    HeaderChoice, LinkSettings, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, Parity, Protocol, R9020,
+    SerialSettings, TcpSettings, Timing, Transport,
 };
 
 /// How much one exchange carries: the most DT words one read and one write, and the most bits

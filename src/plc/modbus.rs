@@ -27,19 +27,13 @@ use tokio_modbus::client::{Client, Context, rtu, tcp};
 use tokio_modbus::{ExceptionCode, Request, Response, Slave};
 
 use super::link::{SharedStream, drain};
-use super::settings::{LinkSettings, Protocol, Timing};
+use super::settings::{LinkSettings, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, Protocol, Timing};
 use super::{ExchangeCounts, ExchangeSizes, Plc, PlcError, PlcMode, Refusal};
 use crate::contract::DT_LAST;
 use crate::gateway::{Address, Area};
 
 /// Coil of relay R0 (PLC.md §2: coil 2048 + 16 w + b = R w.b).
 pub const RELAY_COIL_BASE: u16 = 2048;
-/// Registers one read (function 03) may ask for (Modbus Application Protocol v1.1b3, §6.3; the
-/// FP-X's own maximum is \[unverified\]).
-pub const MAX_READ_REGISTERS: u16 = 125;
-/// Registers one write (function 16) may carry (Modbus Application Protocol v1.1b3, §6.12; the
-/// FP-X's own maximum is \[unverified\]).
-pub const MAX_WRITE_REGISTERS: u16 = 123;
 /// Highest relay number: R999F.
 const RELAY_MAX: u16 = 999 * 16 + 15;
 /// Coils or inputs one read (01, 02) asks for at most (Modbus spec).

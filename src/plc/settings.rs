@@ -3,8 +3,14 @@
 
 use std::time::Duration;
 
-use super::modbus::{MAX_READ_REGISTERS, MAX_WRITE_REGISTERS};
 use crate::contract::Layout;
+
+/// Registers one read (function 03) may ask for (Modbus Application Protocol v1.1b3, §6.3; the
+/// FP-X's own maximum is \[unverified\]).
+pub const MAX_READ_REGISTERS: u16 = 125;
+/// Registers one write (function 16) may carry (Modbus Application Protocol v1.1b3, §6.12; the
+/// FP-X's own maximum is \[unverified\]).
+pub const MAX_WRITE_REGISTERS: u16 = 123;
 
 /// Relay R9020 as a relay number (word 902, bit 0): the RUN-mode special relay of the FP series.
 /// Its Modbus coil on an FP-X is \[unverified\] (PLC.md §2); [`LinkSettings::mode_relay`] makes it
