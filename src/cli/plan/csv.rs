@@ -3,7 +3,7 @@
 
 use std::io::Write;
 
-use super::path::Start;
+use super::starts::Start;
 use crate::plan::Plan;
 use crate::robot::Robot;
 

@@ -7,6 +7,7 @@ mod csv;
 mod json;
 mod path;
 mod path_json;
+mod starts;
 mod text;
 
 use std::path::{Path, PathBuf};

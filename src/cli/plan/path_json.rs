@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::json;
-use super::path::{Start, elements_between, holding, time_at_mm};
+use super::starts::{Start, elements_between, holding, time_at_mm};
 use crate::geometry::{Path, Piece, Primitive};
 use crate::plan::{MoveRequest, Origin, PathPlan, PathRequest};
 use crate::robot::Robot;
