@@ -42,6 +42,7 @@ pub(crate) fn gantry() -> Robot {
             max: kind.from_user(limit),
             max_freq_hz,
             output: OutputMethod::PulseSign,
+            dynamics: linterpd::robot::Dynamics::default(),
         };
     let mut robot = seed_robot();
     robot.name = "gantry".into();

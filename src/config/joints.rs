@@ -8,7 +8,7 @@ use super::check::At;
 use super::kinematics::joint_order;
 use super::raw::{Quantity, RawJoint};
 use crate::kinematics::{JOINTS, JointKind, Kinematics, Model};
-use crate::robot::Joint;
+use crate::robot::{Dynamics, Joint};
 
 /// Highest pulse frequency of each channel of an FP-X C60T (transistor output), Hz: channels 0
 /// and 1 are the 100 kHz ones, 2 and 3 the 20 kHz ones (FP-X User's Manual, positioning
@@ -71,9 +71,51 @@ fn joint(at: &At, table: &Spanned<RawJoint>, kind: JointKind) -> Result<Joint, C
         max: required(Quantity::Max, max)?,
         max_freq_hz: max_freq_hz(at, raw, channel)?,
         output: raw.output,
+        dynamics: Dynamics::default(),
     };
     check_step_and_limits(at, raw, &joint)?;
-    Ok(joint)
+    let dynamics = dynamics(at, raw, &joint, value(Quantity::MaxAccel)?)?;
+    Ok(Joint { dynamics, ..joint })
+}
+
+/// The drive's limits: `max_accel_deg_s2` (or `_mm_s2`) above 0, `start_hz` above 0 and at most
+/// the channel's `max_freq_hz`.
+fn dynamics(
+    at: &At,
+    raw: &RawJoint,
+    joint: &Joint,
+    max_accel: Option<f64>,
+) -> Result<Dynamics, ConfigError> {
+    let unit = joint.kind.user_unit();
+    if let Some(a) = max_accel
+        && a <= 0.0
+    {
+        let spanned = raw.get(Quantity::MaxAccel, unit).expect("given");
+        let key = at.child(&Quantity::MaxAccel.key(unit));
+        return Err(key.invalid(spanned, "must be above 0"));
+    }
+    let start_hz = raw
+        .start_hz
+        .as_ref()
+        .map(|v| {
+            let hz = at.child("start_hz").finite(v)?;
+            if hz <= 0.0 {
+                return Err(at.child("start_hz").invalid(v, "must be above 0 Hz"));
+            }
+            if hz > f64::from(joint.max_freq_hz) {
+                let reason = format!(
+                    "must be at most the joint's max_freq_hz = {} Hz",
+                    joint.max_freq_hz
+                );
+                return Err(at.child("start_hz").invalid(v, reason));
+            }
+            Ok(hz)
+        })
+        .transpose()?;
+    Ok(Dynamics {
+        max_accel: max_accel.map(f64::abs),
+        start_hz,
+    })
 }
 
 /// The quantity in internal units, when given in the unit `kind` takes; an error naming the
@@ -90,17 +132,15 @@ fn unit_value(
     };
     if let Some(wrong) = raw.get(quantity, other) {
         let reason = format!(
-            "joint {} is {}, so it takes {}_{unit}",
+            "joint {} is {}, so it takes {}",
             raw.name.get_ref(),
             kind_name(kind),
-            quantity.stem()
+            quantity.key(unit)
         );
-        return Err(at
-            .child(&format!("{}_{other}", quantity.stem()))
-            .invalid(wrong, reason));
+        return Err(at.child(&quantity.key(other)).invalid(wrong, reason));
     }
     raw.get(quantity, unit)
-        .map(|v| at.child(&format!("{}_{unit}", quantity.stem())).finite(v))
+        .map(|v| at.child(&quantity.key(unit)).finite(v))
         .transpose()
         .map(|v| v.map(|v| kind.from_user(v)))
 }
@@ -114,7 +154,7 @@ fn required(
     value: Option<f64>,
 ) -> Result<f64, ConfigError> {
     value.ok_or_else(|| {
-        let key = format!("{}_{}", quantity.stem(), kind.user_unit());
+        let key = quantity.key(kind.user_unit());
         let name = table.get_ref().name.get_ref();
         let reason = format!("joint {name} is {}", kind_name(kind));
         at.child(&key).missing(&table.span(), reason)
@@ -147,7 +187,7 @@ fn max_freq_hz(at: &At, raw: &RawJoint, channel: u8) -> Result<u32, ConfigError>
 fn check_step_and_limits(at: &At, raw: &RawJoint, joint: &Joint) -> Result<(), ConfigError> {
     let unit = joint.kind.user_unit();
     let spanned = |q| raw.get(q, unit).expect("required quantities are present");
-    let key = |q: Quantity| at.child(&format!("{}_{unit}", q.stem()));
+    let key = |q: Quantity| at.child(&q.key(unit));
     if joint.step == 0.0 {
         return Err(key(Quantity::Step).invalid(spanned(Quantity::Step), "must not be 0"));
     }
@@ -307,6 +347,52 @@ mod tests {
         let text = edited(&[(34, "name = \"d2\"")]);
         assert!(
             message(&text).ends_with("joints[3].name = \"d2\": joints[1] already has this name")
+        );
+    }
+
+    #[test]
+    fn drive_limits_are_read_in_the_joint_s_units() {
+        let text = edited(&[
+            (16, "output = \"pulse-sign\"\nmax_accel_deg_s2 = 90.0"),
+            (
+                32,
+                "output = \"pulse-sign\"\nmax_accel_mm_s2 = 2000.0\nstart_hz = 800.0",
+            ),
+        ]);
+        let config = super::super::Config::from_toml(&text).unwrap();
+        let joints = &config.robot(Some("r")).unwrap().joints;
+        let a = joints[0].dynamics.max_accel.unwrap();
+        assert!((a - 90f64.to_radians()).abs() < 1e-12, "{a}");
+        assert_eq!(joints[0].dynamics.start_hz, None);
+        assert_eq!(joints[2].dynamics.max_accel, Some(2000.0));
+        assert_eq!(joints[2].dynamics.start_hz, Some(800.0));
+        assert!(!joints[1].dynamics.is_set());
+    }
+
+    #[test]
+    fn drive_limits_name_the_joint_the_key_the_value_and_the_limit() {
+        let after_d3 = |extra: &str| edited(&[(32, &format!("output = \"pulse-sign\"\n{extra}"))]);
+        assert_eq!(
+            message(&after_d3("max_accel_mm_s2 = 0.0")),
+            "config line 33: robots.r.joints[2].max_accel_mm_s2 = 0: must be above 0"
+        );
+        assert_eq!(
+            message(&after_d3("max_accel_deg_s2 = 50.0")),
+            "config line 33: robots.r.joints[2].max_accel_deg_s2 = 50: joint d3 is prismatic, so \
+             it takes max_accel_mm_s2"
+        );
+        assert_eq!(
+            message(&after_d3("start_hz = 25000.0")),
+            "config line 33: robots.r.joints[2].start_hz = 25000: must be at most the joint's \
+             max_freq_hz = 20000 Hz"
+        );
+        assert_eq!(
+            message(&after_d3("start_hz = -1.0")),
+            "config line 33: robots.r.joints[2].start_hz = -1: must be above 0 Hz"
+        );
+        assert!(
+            message(&after_d3("start_hz = nan"))
+                .contains("start_hz = nan: must be a finite number")
         );
     }
 

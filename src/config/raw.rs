@@ -247,6 +247,9 @@ pub(super) struct RawJoint {
     pub max_mm: Option<Spanned<f64>>,
     pub max_freq_hz: Spanned<i64>,
     pub output: OutputMethod,
+    pub max_accel_deg_s2: Option<Spanned<f64>>,
+    pub max_accel_mm_s2: Option<Spanned<f64>>,
+    pub start_hz: Option<Spanned<f64>>,
 }
 
 /// A joint quantity written in degrees or millimetres.
@@ -256,6 +259,7 @@ pub(super) enum Quantity {
     Offset,
     Min,
     Max,
+    MaxAccel,
 }
 
 impl Quantity {
@@ -266,6 +270,15 @@ impl Quantity {
             Self::Offset => "offset",
             Self::Min => "min",
             Self::Max => "max",
+            Self::MaxAccel => "max_accel",
+        }
+    }
+
+    /// The key in `unit` ("deg" or "mm"): `step_deg`, `max_accel_mm_s2`.
+    pub(super) fn key(self, unit: &str) -> String {
+        match self {
+            Self::MaxAccel => format!("{}_{unit}_s2", self.stem()),
+            _ => format!("{}_{unit}", self.stem()),
         }
     }
 }
@@ -283,6 +296,8 @@ impl RawJoint {
             Quantity::Min => &self.min_mm,
             Quantity::Max if deg => &self.max_deg,
             Quantity::Max => &self.max_mm,
+            Quantity::MaxAccel if deg => &self.max_accel_deg_s2,
+            Quantity::MaxAccel => &self.max_accel_mm_s2,
         };
         field.as_ref()
     }

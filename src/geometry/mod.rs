@@ -6,6 +6,7 @@ mod pace;
 mod path;
 mod polyline;
 mod profile;
+pub mod topp;
 
 pub use pace::{Pace, SpeedCap};
 pub use path::{

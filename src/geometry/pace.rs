@@ -208,6 +208,50 @@ impl Pace {
         Self { knots: kept }
     }
 
+    /// The pace of a motion that runs at `speeds_mm_s[i]` at `s_mm[i]` along the path, its `v²`
+    /// linear in `s` between two points (a constant acceleration), under a profile cruising at
+    /// `speed_mm_s` (no speed above it): the time-optimal motion of [`super::topp`], from rest
+    /// to rest when its ends are 0. `None` when the points do not rise from 0, or two points
+    /// in a row stand still (no time along them).
+    #[must_use]
+    #[allow(clippy::float_cmp)] // the path's start is exactly 0
+    pub fn from_speeds(s_mm: &[f64], speeds_mm_s: &[f64], speed_mm_s: f64) -> Option<Self> {
+        if s_mm.len() < 2 || s_mm.len() != speeds_mm_s.len() || s_mm[0] != 0.0 {
+            return None;
+        }
+        let mut knots = Vec::with_capacity(s_mm.len());
+        let mut last: Option<Knot> = None;
+        for (&s, &v) in s_mm.iter().zip(speeds_mm_s) {
+            let w = (v / speed_mm_s).clamp(0.0, 1.0);
+            let knot = match last {
+                None => Knot {
+                    s_mm: s,
+                    sigma_mm: 0.0,
+                    w,
+                },
+                Some(k) if s > k.s_mm && k.w + w > 0.0 => Knot {
+                    s_mm: s,
+                    sigma_mm: k.sigma_mm + 2.0 * (s - k.s_mm) / (k.w + w),
+                    w,
+                },
+                Some(_) => return None,
+            };
+            knots.push(knot);
+            last = Some(knot);
+        }
+        Some(Self {
+            knots: without_flat_knots(&knots),
+        })
+    }
+
+    /// Whether the pace itself starts and ends at rest (a time-optimal motion's): its profile
+    /// then runs at one speed, with no ramp of its own.
+    #[must_use]
+    #[allow(clippy::float_cmp)] // at rest is exactly 0
+    pub fn from_rest(&self) -> bool {
+        self.knots[0].w == 0.0
+    }
+
     /// The profile's length: the distance it runs to reach the path's end, mm.
     #[must_use]
     pub fn profile_length_mm(&self) -> f64 {

@@ -126,6 +126,22 @@ impl Course {
         }
     }
 
+    /// The straight line it follows: a line, or a path of one line piece (a line timed along
+    /// its path, [`super::dynamics`]).
+    pub(super) fn line(&self) -> Option<Line> {
+        match self {
+            Self::Line(line) => Some(*line),
+            Self::Path { path, .. } => match path.pieces() {
+                [piece] => match piece.primitive {
+                    crate::geometry::Primitive::Line(line) => Some(line),
+                    crate::geometry::Primitive::Arc(_) => None,
+                },
+                _ => None,
+            },
+            Self::Joints { .. } => None,
+        }
+    }
+
     /// The path, for a path section.
     pub(super) fn path(&self) -> Option<&Path> {
         match self {

@@ -205,6 +205,73 @@ pub enum PlanError {
         /// The smallest tolerance found to work, mm.
         works_mm: Option<f64>,
     },
+    /// A joint's `start_hz` is below what a row from rest of the plan's length carries in its
+    /// pulse of rounding alone.
+    #[error(
+        "joint {joint}: start_hz = {start_hz} Hz cannot be kept by rows of {row_s} s from rest: \
+         one pulse of rounding is {min_hz:.1} Hz on its own; raise start_hz to at least \
+         {min_hz:.1} Hz or plan with a longer period"
+    )]
+    StartHzTooLow {
+        /// Joint name.
+        joint: String,
+        /// Its start frequency, Hz.
+        start_hz: f64,
+        /// The lowest start frequency rows of `row_s` keep, Hz.
+        min_hz: f64,
+        /// How long a row from rest lasts, s.
+        row_s: f64,
+    },
+    /// No motion along the course keeps every limit at some point of it.
+    #[error("no motion {at_mm:.1} mm along the course keeps every limit: {reason}")]
+    Untimed {
+        /// Where, mm along the course.
+        at_mm: f64,
+        /// Why.
+        reason: &'static str,
+    },
+    /// Two consecutive rows of a joint's table step by more than its drive follows.
+    #[error(
+        "joint {joint}: its rows step from {from_hz:.1} Hz to {to_hz:.1} Hz at t = {t_s:.3} s; \
+         max_accel = {max_accel} {unit}/s^2 allows {allowed_hz:.1} Hz between them"
+    )]
+    RowStep {
+        /// Joint name.
+        joint: String,
+        /// When the second row begins, s.
+        t_s: f64,
+        /// The first row's frequency, Hz.
+        from_hz: f64,
+        /// The second's, Hz.
+        to_hz: f64,
+        /// The largest step allowed between them (rounding and the frequency model's step
+        /// included), Hz.
+        allowed_hz: f64,
+        /// The joint's limit, user units/s^2.
+        max_accel: f64,
+        /// deg or mm.
+        unit: &'static str,
+    },
+    /// A row that leaves or reaches standstill runs faster than the joint's drive follows.
+    #[error(
+        "joint {joint}: its row {} standstill at t = {t_s:.3} s runs at {freq_hz:.1} Hz; {limit} \
+         allows {limit_hz:.1} Hz",
+        if *from_rest { "from" } else { "into" }
+    )]
+    RestRow {
+        /// Joint name.
+        joint: String,
+        /// When the row begins, s.
+        t_s: f64,
+        /// Whether it leaves standstill (else it reaches it).
+        from_rest: bool,
+        /// Its frequency, Hz.
+        freq_hz: f64,
+        /// The most allowed, Hz.
+        limit_hz: f64,
+        /// Which limit: `start_hz`, or `max_accel` over half the row.
+        limit: &'static str,
+    },
     /// The tables break an F174 rule or do not fit their area.
     #[error("joint {joint}: {first}{}", if *more > 0 { format!(" (and {more} more problems)") } else { String::new() })]
     InvalidTable {

@@ -17,6 +17,7 @@
 mod bounded;
 mod constant_period;
 mod course;
+mod dynamics;
 mod error;
 mod joint_path;
 mod judge;
@@ -34,6 +35,7 @@ use crate::sim::{self, Execution, Figures, Settings};
 use crate::table::{ChannelTable, ValidTable};
 
 use course::Course;
+pub use dynamics::DriveFigures;
 pub use error::PlanError;
 pub use joint_path::JointPath;
 use judge::{max_hz, settings, simulate, simulate_within};
@@ -109,6 +111,9 @@ pub struct Plan {
     /// The stretch of the profile this start plays: the whole of it, or one part of a path
     /// section cut into several chained starts.
     pub window: Window,
+    /// How hard every joint's drive is asked to follow its table, in joint order
+    /// ([`DriveFigures`]; every row of a joint with drive limits is within them).
+    pub drive: [DriveFigures; JOINTS],
 }
 
 /// The stretch of a profile one start plays, s: `samples` point 0 is at `from_s`, and the
@@ -295,7 +300,43 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         values: start_values,
         counts: start_counts,
     };
+    if robot.has_dynamics() {
+        let course = timed_line(robot, &line, &start, &req.motion)?;
+        return plan_course(robot, &course, &start, req.motion);
+    }
     plan_course(robot, &Course::Line(line), &start, req.motion)
+}
+
+/// A line for a robot with drive limits: a path of that one line, run at its time-optimal
+/// pace ([`dynamics::pace`]).
+fn timed_line(
+    robot: &Robot,
+    line: &Line,
+    start: &Start,
+    motion: &Motion,
+) -> Result<Course, PlanError> {
+    let path = Path::build(&crate::geometry::PathSpec {
+        start: line.from,
+        elements: vec![(
+            crate::geometry::Element::Line { to: line.to },
+            crate::geometry::Corner::Stop,
+        )],
+    })?;
+    let pace = dynamics::pace(
+        robot,
+        &dynamics::Shape {
+            length_mm: path.length_mm(),
+            pose_at: &|s| path.at(s),
+            curvature_at: &|_| 0.0,
+        },
+        &start.values,
+        motion,
+        &dynamics::PathLimits {
+            centripetal_mm_s2: f64::INFINITY,
+            rest_row_s: motion.period_s,
+        },
+    )?;
+    Ok(Course::Path { path, pace })
 }
 
 /// Plans one joint-space move for `robot`: the target is checked against every joint's limits
@@ -309,7 +350,63 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
             counts: start.counts,
         });
     }
-    plan_course(robot, &course, &start, req.motion)
+    let motion = joint_move_motion(
+        robot,
+        &start.values,
+        &req.to,
+        course.length_mm(),
+        req.motion,
+    )?;
+    plan_course(robot, &course, &start, motion)
+}
+
+/// A joint move's motion under its joints' drive limits: every joint moves in proportion, so
+/// the time-optimal motion is one trapezoid, its acceleration the lowest any joint allows
+/// (`max_accel`, and `start_hz` over the first and last periods) over its share of the
+/// course's length. Without drive limits, `motion` as it is.
+fn joint_move_motion(
+    robot: &Robot,
+    from: &Joints,
+    to: &Joints,
+    length_mm: f64,
+    motion: Motion,
+) -> Result<Motion, PlanError> {
+    use dynamics::{ACCEL_MARGIN, START_MARGIN};
+    let mut accel = if motion.accel_s > 0.0 {
+        motion.speed_mm_s / motion.accel_s
+    } else {
+        f64::INFINITY
+    };
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let share = (to[j] - from[j]).abs() / length_mm;
+        if share == 0.0 {
+            continue;
+        }
+        if let Some(a) = joint.dynamics.max_accel {
+            accel = accel.min(a * ACCEL_MARGIN / share);
+        }
+        if let Some(start_hz) = joint.dynamics.start_hz {
+            let room_hz = START_MARGIN * start_hz - 1.0 / motion.period_s;
+            if room_hz <= 0.0 {
+                return Err(PlanError::StartHzTooLow {
+                    joint: joint.name.clone(),
+                    start_hz,
+                    min_hz: 1.0 / motion.period_s / START_MARGIN,
+                    row_s: motion.period_s,
+                });
+            }
+            let rest = 2.0 * room_hz / motion.period_s * joint.step.abs();
+            accel = accel.min(rest / share);
+        }
+    }
+    Ok(if accel.is_finite() {
+        Motion {
+            accel_s: motion.speed_mm_s / accel,
+            ..motion
+        }
+    } else {
+        motion
+    })
 }
 
 /// Where a move starts: joint values and the counts that stand for them.
@@ -347,13 +444,17 @@ fn plan_course(
 ) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked)?;
     let (first, last) = (0, sampled.last_point());
-    let Course::Line(line) = course else {
+    let Some(line) = course.line() else {
         return sampled.plan(first, last, start.counts);
     };
     let later = |joint: usize, reverses: bool, at_s: f64| PlanError::LaterSegment {
         joint: robot.joints[joint].name.clone(),
         reverses,
-        at_mm: sampled.profile.distance_mm(at_s),
+        at_mm: course
+            .pace()
+            .map_or(sampled.profile.distance_mm(at_s), |pace| {
+                pace.path_mm(sampled.profile.distance_mm(at_s))
+            }),
         length_mm: line.length_mm(),
     };
     if sampled.cut_for_segments()
@@ -480,6 +581,18 @@ impl<'a> Sampled<'a> {
             );
             (tables, problems, figures)
         };
+        let drive = if self.motion.method.is_seed_exact() {
+            [DriveFigures::default(); JOINTS]
+        } else {
+            dynamics::judge(
+                robot,
+                &tables,
+                &samples,
+                self.profile.period_s,
+                &window,
+                settings(&self.motion),
+            )?
+        };
         Ok(Plan {
             line: self.course.chord(),
             joint_path: self.course.joint_path().cloned(),
@@ -494,6 +607,7 @@ impl<'a> Sampled<'a> {
             max_hz: max_hz(robot),
             figures,
             window,
+            drive,
         })
     }
 }
@@ -533,10 +647,12 @@ struct Sampler<'a> {
 
 impl Sampler<'_> {
     fn at(&self, motion: &Motion) -> Result<(Profile, Samples, limits::Peak), PlanError> {
+        // A time-optimal pace starts and ends at rest itself: its profile has no ramp.
+        let ramp = !self.course.pace().is_some_and(Pace::from_rest);
         let profile = Profile::new(ProfileRequest {
             length_mm: self.course.length_mm(),
             speed_mm_s: motion.speed_mm_s,
-            accel_s: motion.accel_s,
+            accel_s: if ramp { motion.accel_s } else { 0.0 },
             period_s: self.grid_s,
         })?;
         let samples =

@@ -260,6 +260,28 @@ fn section_plan(
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
+    if robot.has_dynamics() {
+        let pace = super::dynamics::pace(
+            robot,
+            &super::dynamics::Shape {
+                length_mm: section.length_mm(),
+                pose_at: &|s| section.at(s),
+                curvature_at: &|s| section.curvature_per_mm(s),
+            },
+            &start.values,
+            &asked,
+            &super::dynamics::PathLimits {
+                centripetal_mm_s2: path_accel_mm_s2,
+                rest_row_s: asked.period_s,
+            },
+        )
+        .map_err(|source| (elements.clone(), source))?;
+        let course = Course::Path {
+            path: section.clone(),
+            pace,
+        };
+        return parts(robot, &course, start, asked).map_err(|source| (elements, source));
+    }
     let caps = match asked.over_speed {
         OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),
         OverSpeed::Reject => Vec::new(),

@@ -69,6 +69,7 @@ mod tests {
             max: 1.0,
             max_freq_hz: 100_000,
             output: OutputMethod::CwCcw,
+            dynamics: crate::robot::Dynamics::default(),
         }
     }
 

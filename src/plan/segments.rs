@@ -309,6 +309,7 @@ mod tests {
             max: 1e6,
             max_freq_hz,
             output: OutputMethod::PulseSign,
+            dynamics: crate::robot::Dynamics::default(),
         }
     }
 

@@ -26,6 +26,29 @@ pub struct Joint {
     pub max_freq_hz: u32,
     /// How the channel is wired to its drive.
     pub output: OutputMethod,
+    /// What the drive behind the channel can follow (nothing beyond `max_freq_hz` when unset).
+    pub dynamics: Dynamics,
+}
+
+/// What a joint's drive can follow, beyond its channel's top frequency: every key absent plans
+/// as if the drive followed any step (the seed's tables).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Dynamics {
+    /// The highest acceleration of the joint, rad/s^2 or mm/s^2: the time-optimal speed along
+    /// every line and path keeps the joint within it, and every pair of consecutive rows of its
+    /// table steps by no more than it allows over them.
+    pub max_accel: Option<f64>,
+    /// The highest frequency the drive follows from and to standstill, Hz: the first row of
+    /// every run from rest and the last row into rest stay at or under it.
+    pub start_hz: Option<f64>,
+}
+
+impl Dynamics {
+    /// Whether any limit is set.
+    #[must_use]
+    pub fn is_set(&self) -> bool {
+        self.max_accel.is_some() || self.start_hz.is_some()
+    }
 }
 
 impl Joint {
@@ -186,6 +209,13 @@ impl Robot {
             area_words: self.area_words,
         }
     }
+
+    /// Whether any joint has a drive limit beyond its channel's top frequency
+    /// ([`Dynamics`]): its moves are then timed along their path under every limit at once.
+    #[must_use]
+    pub fn has_dynamics(&self) -> bool {
+        self.joints.iter().any(|j| j.dynamics.is_set())
+    }
 }
 
 /// The seed's robot as `ACCURACY.md` gives it, built in code (the same values as the shipped
@@ -209,6 +239,7 @@ pub fn seed_robot() -> Robot {
         max: kind.from_user(max),
         max_freq_hz,
         output: OutputMethod::PulseSign,
+        dynamics: Dynamics::default(),
     };
     Robot {
         name: "press-loader".into(),

@@ -32,6 +32,7 @@ fn joint(
         max: kind.from_user(limit_user),
         max_freq_hz,
         output: OutputMethod::CwCcw,
+        dynamics: linterpd::robot::Dynamics::default(),
     }
 }
 

@@ -305,24 +305,42 @@ impl Move<'_> {
     /// first two ([`Sizing::first_two`]), then, past the pulse grid's floor (a tolerance at or
     /// below it is refused without them), the narrowing search ([`Sizing::narrowing`]). The
     /// first accepted (`None` if none).
+    ///
+    /// A try whose rows a joint's drive could not follow ([`super::dynamics::judge`]) is
+    /// refused like one off the tolerance. When the tries end and one was refused so, the rows
+    /// are made once more with every pulse on time (windows of half a pulse: the rows follow
+    /// the motion within a pulse of rounding); if the drive cannot follow those either, its
+    /// refusal is the error.
     fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
+        let mut drive = None;
         for off_window in OFF_WINDOW_TRIES {
             for deltas in sizing.first_two(tolerance_mm).flatten() {
-                if let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)? {
+                if let Some(v) =
+                    self.verify(sizing.tracks, &deltas, off_window, tolerance_mm, &mut drive)?
+                {
                     return Ok(Some(v));
                 }
             }
             let floor_mm = self.floor_mm(sizing);
             if floor_mm >= tolerance_mm {
-                return Ok(None);
+                break;
             }
             for deltas in sizing.narrowing(tolerance_mm, floor_mm) {
-                if let Some(v) = self.verify(sizing.tracks, &deltas, off_window, tolerance_mm)? {
+                if let Some(v) =
+                    self.verify(sizing.tracks, &deltas, off_window, tolerance_mm, &mut drive)?
+                {
                     return Ok(Some(v));
                 }
             }
         }
-        Ok(None)
+        let Some(refusal) = drive else {
+            return Ok(None);
+        };
+        let mut again = None;
+        match self.verify(sizing.tracks, &[0.0; JOINTS], 0, tolerance_mm, &mut again)? {
+            Some(v) => Ok(Some(v)),
+            None => Err(again.unwrap_or(refusal)),
+        }
     }
 
     /// Which of the tries ([`Self::try_plan`]) the execution model accepts first, from 1
@@ -335,7 +353,7 @@ impl Move<'_> {
         for (k, deltas) in sizing.first_two(tolerance_mm).enumerate() {
             if let Some(deltas) = deltas
                 && self
-                    .verify(&tracks, &deltas, off_window, tolerance_mm)?
+                    .verify(&tracks, &deltas, off_window, tolerance_mm, &mut None)?
                     .is_some()
             {
                 return Ok(Some(k + 1));
@@ -349,7 +367,7 @@ impl Move<'_> {
         for deltas in sizing.narrowing(tolerance_mm, floor_mm) {
             tried += 1;
             if self
-                .verify(&tracks, &deltas, off_window, tolerance_mm)?
+                .verify(&tracks, &deltas, off_window, tolerance_mm, &mut None)?
                 .is_some()
             {
                 return Ok(Some(tried));
@@ -359,13 +377,15 @@ impl Move<'_> {
     }
 
     /// Rows for windows `deltas` pulses wide, if the execution model finds them within the
-    /// tolerance (and the tracking error within twice it).
+    /// tolerance (and the tracking error within twice it) and every joint's drive can follow
+    /// them (else `drive` takes the drive's refusal).
     fn verify(
         &self,
         tracks: &[Counts],
         deltas: &[f64; JOINTS],
         off_window: usize,
         tolerance_mm: f64,
+        drive: &mut Option<PlanError>,
     ) -> Result<Option<Verified>, PlanError> {
         let tables = self.tables(tracks, deltas, off_window);
         super::check_tables(self.robot, &tables, self.motion.method)?;
@@ -378,12 +398,23 @@ impl Move<'_> {
             self.motion,
             tolerance_mm,
         );
-        Ok(match run {
-            Some(figures) if figures.tracking_error_mm <= 2.0 * tolerance_mm => {
-                Some(Verified { tables, figures })
-            }
-            _ => None,
-        })
+        let Some(figures) = run.filter(|f| f.tracking_error_mm <= 2.0 * tolerance_mm) else {
+            return Ok(None);
+        };
+        if self.robot.has_dynamics()
+            && let Err(refusal) = super::dynamics::judge(
+                self.robot,
+                &tables,
+                self.samples,
+                self.profile.period_s,
+                self.window,
+                super::settings(self.motion),
+            )
+        {
+            *drive = Some(refusal);
+            return Ok(None);
+        }
+        Ok(Some(Verified { tables, figures }))
     }
 
     /// The refusal of a tolerance, naming the smallest one that does work on this move.

@@ -1,0 +1,202 @@
+//! PURE. Whether a drive can follow a table row by row: F174 has no ramps, so every row boundary
+//! is an instant step of the channel's frequency, the first row of a run from rest starts at
+//! its frequency and the last row into rest stops from it.
+//!
+//! For a joint with `max_accel` (`a` pulses/s^2 here), two consecutive rows in one direction, of
+//! real frequencies `f1`, `f2` and lengths `T1`, `T2` (the execution model's), may step by
+//! `a (T1 + T2) / 2`: what a motion within `a` changes its average speed by between the two
+//! rows. To that come a pulse of rounding per row (`1/T1 + 1/T2`: a row carries whole pulses,
+//! its ends rounded from the planned motion) and the frequency model's step at each row's
+//! value (the nearest frequency the channel can put out). A row from or into standstill (the
+//! start, the end, either side of a reversal) steps from or to 0 over its half: within
+//! `a T / 2` and its pulse of rounding, and within `start_hz` when the joint has one.
+//!
+//! A table that breaks any of these for a joint with the limit is never emitted; the figures
+//! ([`DriveFigures`]) are reported for every joint.
+
+use crate::kinematics::JOINTS;
+use crate::robot::{Joint, Robot};
+use crate::sim::{self, RowTiming, Settings};
+use crate::table::{ChannelTable, Direction, FrequencyModel};
+
+use super::super::{PlanError, Samples, Window};
+
+/// How one joint's drive is asked to follow its table in one start.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DriveFigures {
+    /// The fastest row's real frequency, Hz.
+    pub peak_hz: f64,
+    /// The joint's fastest planned speed, deg/s or mm/s.
+    pub peak_speed: f64,
+    /// The joint's largest planned acceleration, deg/s^2 or mm/s^2 (from the samples: over
+    /// a period for constant-period, over a millisecond for bounded-error).
+    pub peak_accel: f64,
+    /// The largest step between two consecutive rows as a share of what `max_accel` allows
+    /// (`None` without `max_accel`, or with fewer than two rows).
+    pub step_load: Option<f64>,
+    /// The fastest row from or into standstill, Hz.
+    pub rest_hz: f64,
+}
+
+/// One row as the drive sees it.
+#[derive(Debug, Clone, Copy)]
+struct Played {
+    hz: f64,
+    len_s: f64,
+    start_s: f64,
+    way: Direction,
+    /// The frequency model's step at its value, Hz.
+    grain_hz: f64,
+}
+
+/// The rows of table `index` as played.
+fn played(table: &ChannelTable, timings: &[RowTiming], model: FrequencyModel) -> Vec<Played> {
+    timings
+        .iter()
+        .map(|r| {
+            let seg = &table.segments[r.segment];
+            let set = seg.rows[r.row].freq_hz;
+            let range = seg.control.range;
+            let here = model.actual_hz(set, range);
+            let up = (model.actual_hz(set.saturating_add(1), range) - here).abs();
+            let down = (here - model.actual_hz(set.saturating_sub(1).max(1), range)).abs();
+            Played {
+                hz: r.actual_hz,
+                len_s: (r.end_s - r.start_s).max(1e-9),
+                start_s: r.start_s,
+                way: seg.control.direction,
+                grain_hz: up.max(down),
+            }
+        })
+        .collect()
+}
+
+/// Checks every table of a start against its joint's drive limits and measures how hard each
+/// drive is asked: the first row that breaks a limit of a joint that has it is the error.
+pub(in crate::plan) fn judge(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    samples: &Samples,
+    sample_s: f64,
+    window: &Window,
+    settings: Settings,
+) -> Result<[DriveFigures; JOINTS], PlanError> {
+    let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
+    let timings = sim::row_timings(tables, &max_hz, settings);
+    let mut out = [DriveFigures::default(); JOINTS];
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let mine: Vec<RowTiming> = timings.iter().filter(|r| r.table == j).copied().collect();
+        let rows = played(&tables[j], &mine, settings.model);
+        let (peak_speed, peak_accel) = planned_peaks(joint, samples, j, sample_s);
+        let rests = Rests {
+            begins: !window.begins_at_speed(),
+            ends: !window.ends_at_speed,
+        };
+        out[j] = follow(joint, &rows, rests)?;
+        out[j].peak_speed = peak_speed;
+        out[j].peak_accel = peak_accel;
+    }
+    Ok(out)
+}
+
+/// Whether the start begins and ends at standstill.
+#[derive(Debug, Clone, Copy)]
+struct Rests {
+    begins: bool,
+    ends: bool,
+}
+
+/// The joint's fastest speed and acceleration over the samples, user units.
+fn planned_peaks(joint: &Joint, samples: &Samples, j: usize, sample_s: f64) -> (f64, f64) {
+    let v: Vec<f64> = samples
+        .values
+        .windows(2)
+        .map(|w| (w[1][j] - w[0][j]) / sample_s)
+        .collect();
+    let speed = v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let accel = v
+        .windows(2)
+        .fold(0.0_f64, |m, w| m.max(((w[1] - w[0]) / sample_s).abs()));
+    (joint.user(speed).abs(), joint.user(accel).abs())
+}
+
+/// One joint's rows against its limits.
+fn follow(joint: &Joint, rows: &[Played], rests: Rests) -> Result<DriveFigures, PlanError> {
+    let accel_pulses = joint.dynamics.max_accel.map(|a| a / joint.step.abs());
+    let mut figures = DriveFigures {
+        peak_hz: rows.iter().fold(0.0, |m, r| m.max(r.hz)),
+        ..DriveFigures::default()
+    };
+    let n = rows.len();
+    for (k, row) in rows.iter().enumerate() {
+        let turns_before = k > 0 && rows[k - 1].way != row.way;
+        let turns_after = k + 1 < n && rows[k + 1].way != row.way;
+        if (k == 0 && rests.begins) || turns_before {
+            rest_row(joint, row, true, accel_pulses, &mut figures)?;
+        }
+        if (k + 1 == n && rests.ends) || turns_after {
+            rest_row(joint, row, false, accel_pulses, &mut figures)?;
+        }
+        if k == 0 || turns_before {
+            continue;
+        }
+        let Some(a) = accel_pulses else { continue };
+        let before = rows[k - 1];
+        let allowed_hz = a * (before.len_s + row.len_s) / 2.0
+            + 1.0 / before.len_s
+            + 1.0 / row.len_s
+            + before.grain_hz
+            + row.grain_hz;
+        let step = (row.hz - before.hz).abs();
+        let load = step / allowed_hz;
+        figures.step_load = Some(figures.step_load.map_or(load, |m: f64| m.max(load)));
+        if load > 1.0 {
+            return Err(PlanError::RowStep {
+                joint: joint.name.clone(),
+                t_s: row.start_s,
+                from_hz: before.hz,
+                to_hz: row.hz,
+                allowed_hz,
+                max_accel: joint
+                    .user(joint.dynamics.max_accel.unwrap_or_default())
+                    .abs(),
+                unit: joint.kind.user_unit(),
+            });
+        }
+    }
+    Ok(figures)
+}
+
+/// A row from (`from_rest`) or into standstill: within `start_hz`, and within `max_accel`
+/// over its half.
+fn rest_row(
+    joint: &Joint,
+    row: &Played,
+    from_rest: bool,
+    accel_pulses: Option<f64>,
+    figures: &mut DriveFigures,
+) -> Result<(), PlanError> {
+    figures.rest_hz = figures.rest_hz.max(row.hz);
+    let limits = [
+        joint.dynamics.start_hz.map(|hz| (hz, "start_hz")),
+        accel_pulses.map(|a| {
+            (
+                a * row.len_s / 2.0 + 1.0 / row.len_s + row.grain_hz,
+                "max_accel over half the row",
+            )
+        }),
+    ];
+    for (limit_hz, limit) in limits.into_iter().flatten() {
+        if row.hz > limit_hz {
+            return Err(PlanError::RestRow {
+                joint: joint.name.clone(),
+                t_s: row.start_s,
+                from_rest,
+                freq_hz: row.hz,
+                limit_hz,
+                limit,
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,362 @@
+//! The drive limits on the seed's robot and a cylindrical robot with a short arm: the seed's
+//! move, a line past the base axis, a joint move, a path with arcs.
+
+use std::fmt::Write as _;
+
+use crate::geometry::{Corner, Element, Pose};
+use crate::kinematics::{Cylindrical, JointKind, Kinematics, Model};
+use crate::plan::{
+    JointMoveRequest, MovePlan, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
+    plan_line, plan_move, plan_path,
+};
+use crate::robot::{Dynamics, Method, Motion, OverSpeed, Robot, seed_robot};
+use crate::table::FrequencyModel;
+
+const BOUNDED: Method = Method::BoundedError { tolerance_mm: 0.05 };
+
+/// `robot` with every joint's `max_accel` (user units/s^2) and `start_hz`.
+fn limited(mut robot: Robot, accel_user: [f64; 4], start_hz: [Option<f64>; 4]) -> Robot {
+    for (j, joint) in robot.joints.iter_mut().enumerate() {
+        joint.dynamics = Dynamics {
+            max_accel: Some(joint.kind.from_user(accel_user[j])),
+            start_hz: start_hz[j],
+        };
+    }
+    robot
+}
+
+/// The seed's robot with a radial drive that follows 1000 mm/s^2 and starts at 1 kHz.
+fn seed_limited() -> Robot {
+    limited(
+        seed_robot(),
+        [200.0, 1_000.0, 1_000.0, 200.0],
+        [None, None, Some(1_000.0), None],
+    )
+}
+
+fn seed_move(robot: &Robot, method: Method, model: FrequencyModel) -> MoveRequest {
+    let from = robot
+        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+        .unwrap();
+    let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
+    to.a_rad = from.a_rad;
+    MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion: Motion {
+            method,
+            frequency_model: model,
+            ..robot.motion
+        },
+    }
+}
+
+/// The step between neighbouring frequencies at `hz` in a range with divider clock `clock_hz`:
+/// 1 Hz of the written value under the ideal model, `c/d - c/(d+1)`, about `hz^2 / c`, under
+/// the divider.
+fn grain_hz(model: FrequencyModel, clock_hz: f64, hz: f64) -> f64 {
+    match model {
+        FrequencyModel::Ideal => 1.0,
+        FrequencyModel::FpxDivider => 1.0 + 1.1 * hz * hz / clock_hz,
+    }
+}
+
+/// Every row of every table of `plan` within its joint's limits, checked from the execution
+/// model's rows (the rule of `rows.rs`, written again from its documentation).
+fn assert_rows_within(robot: &Robot, plan: &Plan) {
+    let run = plan.execution();
+    let model = plan.motion.frequency_model;
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let rows: Vec<_> = run.rows.iter().filter(|r| r.table == j).collect();
+        let a = joint.dynamics.max_accel.map(|a| a / joint.step.abs());
+        let grain = |r: &crate::sim::RowTiming| {
+            let clock = plan.tables[j].segments[r.segment]
+                .control
+                .range
+                .divider_clock_hz();
+            grain_hz(model, clock, r.actual_hz)
+        };
+        for (k, r) in rows.iter().enumerate() {
+            assert!(r.actual_hz <= f64::from(joint.max_freq_hz) + 1e-9);
+            let len = r.end_s - r.start_s;
+            let first = k == 0 && !plan.window.begins_at_speed();
+            let last = k + 1 == rows.len() && !plan.window.ends_at_speed;
+            if first || last {
+                if let Some(hz) = joint.dynamics.start_hz {
+                    assert!(
+                        r.actual_hz <= hz,
+                        "{}: row {k} at {} Hz",
+                        joint.name,
+                        r.actual_hz
+                    );
+                }
+                if let Some(a) = a {
+                    let hz = a * len / 2.0 + 1.0 / len + grain(r);
+                    assert!(r.actual_hz <= hz, "{}: row {k}", joint.name);
+                }
+            }
+            if k > 0
+                && let Some(a) = a
+            {
+                let b = rows[k - 1];
+                let (lb, lr) = (b.end_s - b.start_s, len);
+                let allowed = a * (lb + lr) / 2.0 + 1.0 / lb + 1.0 / lr + grain(b) + grain(r);
+                let step = (r.actual_hz - b.actual_hz).abs();
+                assert!(
+                    step <= allowed,
+                    "{}: rows {} and {k} step {step} Hz, {allowed} allowed",
+                    joint.name,
+                    k - 1
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_seed_move_under_drive_limits_keeps_every_row_within_them_at_little_cost() {
+    // Without limits the radial joint starts at about 2 kHz from rest: a drive that starts at
+    // 1 kHz would lose steps there.
+    let free = seed_robot();
+    let unlimited = plan_move(
+        &free,
+        &seed_move(&free, free.motion.method, FrequencyModel::FpxDivider),
+    )
+    .unwrap();
+    assert!(
+        unlimited.drive[2].rest_hz > 1_900.0,
+        "{:?}",
+        unlimited.drive[2]
+    );
+    let robot = seed_limited();
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let plan = plan_move(&robot, &seed_move(&robot, method, model)).unwrap();
+            assert!(plan.valid(), "{method:?} {model:?}: {:?}", plan.problems);
+            assert_rows_within(&robot, &plan);
+            let d3 = plan.drive[2];
+            assert!(d3.rest_hz <= 1_000.0, "{method:?} {model:?}: {d3:?}");
+            assert!(d3.step_load.unwrap() <= 1.0, "{method:?} {model:?}: {d3:?}");
+            assert!(
+                d3.peak_accel <= 1_000.0 * 1.05,
+                "{method:?} {model:?}: {d3:?}"
+            );
+            // The speed drops only where the limits need it: the ramps.
+            let cost = plan.duration_s() / unlimited.duration_s();
+            assert!((1.0..1.2).contains(&cost), "{method:?} {model:?}: {cost}");
+            if let Some(tolerance_mm) = method.tolerance_mm() {
+                assert!(
+                    plan.figures.path_deviation_mm <= tolerance_mm,
+                    "{:?}",
+                    plan.figures
+                );
+            }
+            assert_eq!(
+                plan.end_counts(),
+                robot.counts_of(
+                    &robot
+                        .kinematics
+                        .ik(&seed_move(&robot, method, model).to, None)
+                        .unwrap()
+                )
+            );
+        }
+    }
+}
+
+#[test]
+fn without_drive_limits_the_seed_move_plans_the_tables_it_always_did() {
+    // The tables of the seed's move at the commit before drive limits, both methods and both
+    // frequency models: a robot with no `max_accel` and no `start_hz` takes the same road.
+    let robot = seed_robot();
+    let mut text = String::new();
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let plan = plan_move(&robot, &seed_move(&robot, method, model)).unwrap();
+            writeln!(text, "{method:?} {model:?}\n{:?}", plan.tables).unwrap();
+        }
+    }
+    let golden = include_str!("seed_tables.golden");
+    if std::env::var_os("LINTERPD_WRITE_GOLDEN").is_some() {
+        std::fs::write("src/plan/dynamics/seed_tables.golden", &text).unwrap();
+    }
+    assert!(text == golden, "the seed's tables changed");
+}
+
+/// A cylindrical robot whose arm reaches in to 50 mm from its axis, its base channel at
+/// 20 kHz: a line 100 mm from the axis swings the base at 1.4 rad/s at 240 mm/s, and 20 kHz
+/// allows 0.87 rad/s.
+fn short_arm(over_speed: OverSpeed) -> Robot {
+    let mut robot = seed_robot();
+    robot.kinematics = Model::Cylindrical(Cylindrical {
+        l0_mm: 50.0,
+        min_axis_distance_mm: 20.0,
+    });
+    robot.joints[0].max_freq_hz = 20_000;
+    robot.joints[0].min = JointKind::Revolute.from_user(-360.0);
+    robot.joints[0].max = JointKind::Revolute.from_user(360.0);
+    robot.motion.over_speed = over_speed;
+    robot
+}
+
+/// A line 100 mm from the axis, 400 mm long, ending where it comes nearest the axis (no joint
+/// reverses: one start).
+fn to_the_axis(robot: &Robot, method: Method) -> MoveRequest {
+    let from = robot.pose_with_wrist_at_zero(-400.0, 100.0, 100.0).unwrap();
+    let mut to = Pose::from_mm_deg(0.0, 100.0, 100.0, 0.0);
+    to.a_rad = from.a_rad;
+    MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion: Motion {
+            method,
+            ..robot.motion
+        },
+    }
+}
+
+fn total_s(plan: &MovePlan) -> f64 {
+    plan.starts().map(Plan::duration_s).sum()
+}
+
+#[test]
+fn a_line_to_the_axis_slows_near_the_axis_alone_where_slow_down_slows_it_all() {
+    // Whole-move slow-down: today's answer for a line of one start without drive limits.
+    let whole = short_arm(OverSpeed::SlowDown);
+    let slowed = plan_line(&whole, &to_the_axis(&whole, Method::ConstantPeriod)).unwrap();
+    assert!(matches!(slowed, MovePlan::One(ref p) if p.speed_factor < 0.5));
+    // Drive limits (generous accelerations) time the line along it instead.
+    let robot = limited(
+        short_arm(OverSpeed::SlowDown),
+        [2_000.0, 5_000.0, 5_000.0, 2_000.0],
+        [None; 4],
+    );
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        let timed = plan_line(&robot, &to_the_axis(&robot, method)).unwrap();
+        for plan in timed.starts() {
+            assert!(plan.valid(), "{method:?}");
+            assert_rows_within(&robot, plan);
+            assert!(plan.drive[0].peak_hz <= 20_000.0);
+        }
+        let gain = total_s(&slowed) / total_s(&timed);
+        assert!(
+            gain > 1.5,
+            "{method:?}: {} s timed, {} s slowed",
+            total_s(&timed),
+            total_s(&slowed)
+        );
+        // Away from the axis the tool runs at the speed asked.
+        let first = timed.starts().next().unwrap();
+        let at = first.time_at_course_mm(100.0);
+        let speed = (first.course_mm(at + 0.01) - first.course_mm(at - 0.01)) / 0.02;
+        assert!(
+            speed > 0.98 * 240.0 * first.speed_factor,
+            "{method:?}: {speed}"
+        );
+    }
+}
+
+#[test]
+fn a_start_frequency_below_a_pulse_per_period_is_refused_naming_the_joint_and_the_figure() {
+    // 50 ms rows carry 20 Hz of rounding on their own.
+    let robot = limited(
+        seed_robot(),
+        [200.0, 1_000.0, 1_000.0, 200.0],
+        [None, None, Some(15.0), None],
+    );
+    let err = plan_move(
+        &robot,
+        &seed_move(&robot, Method::ConstantPeriod, FrequencyModel::Ideal),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, PlanError::StartHzTooLow { ref joint, .. } if joint == "d3"),
+        "{err}"
+    );
+    assert!(err.to_string().contains("start_hz = 15 Hz"), "{err}");
+    assert!(err.to_string().contains("20.6 Hz"), "{err}");
+}
+
+#[test]
+fn a_joint_move_under_drive_limits_keeps_one_trapezoid_within_them() {
+    let robot = seed_limited();
+    let start = robot
+        .kinematics
+        .ik(
+            &robot
+                .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+                .unwrap(),
+            None,
+        )
+        .unwrap();
+    let mut to = start;
+    to[1] += 100.0;
+    to[2] += 200.0;
+    let req = JointMoveRequest {
+        from: Origin::Pose(robot.kinematics.fk(&start)),
+        to,
+        motion: robot.motion,
+    };
+    let plan = plan_joint_move(&robot, &req).unwrap();
+    let free = plan_joint_move(&seed_robot(), &req).unwrap();
+    assert!(plan.valid());
+    assert_rows_within(&robot, &plan);
+    assert!(plan.drive[2].rest_hz <= 1_000.0, "{:?}", plan.drive[2]);
+    assert!(free.drive[2].rest_hz > 1_000.0, "{:?}", free.drive[2]);
+    assert!(plan.motion.accel_s > free.motion.accel_s);
+}
+
+#[test]
+fn a_path_with_arcs_under_drive_limits_keeps_every_row_within_them() {
+    let robot = seed_limited();
+    let at = |x, y, z| {
+        let mut p = Pose::from_mm_deg(x, y, z, 0.0);
+        p.a_rad = robot
+            .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+            .unwrap()
+            .a_rad;
+        p
+    };
+    let start = robot
+        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+        .unwrap();
+    let req = PathRequest {
+        from: Origin::Pose(start),
+        start: None,
+        elements: vec![
+            (
+                Element::Line {
+                    to: at(-926.57, 535.03, 150.0),
+                },
+                Corner::Blend(20.0),
+            ),
+            (
+                Element::Line {
+                    to: at(-1100.0, 640.0, 150.0),
+                },
+                Corner::Blend(20.0),
+            ),
+            (
+                Element::Line {
+                    to: at(-1100.0, 640.0, 60.0),
+                },
+                Corner::Stop,
+            ),
+        ],
+        motion: Motion {
+            method: BOUNDED,
+            ..robot.motion
+        },
+        path_accel_mm_s2: 2_000.0,
+    };
+    let plan = plan_path(&robot, &req).unwrap();
+    assert!(plan.valid());
+    for start in plan.starts() {
+        assert_rows_within(&robot, start);
+        assert!(
+            start.figures.path_deviation_mm <= 0.05,
+            "{:?}",
+            start.figures
+        );
+    }
+}

@@ -1,0 +1,264 @@
+//! PURE. The time-optimal motion along a line or a path section under every limit at once
+//! ([`crate::geometry::topp`]), as the pace its profile runs at:
+//! - the path's speed (the move's) and tangential acceleration (speed over acceleration time);
+//! - on an arc, the path's centripetal acceleration (`v² <= a r`);
+//! - under `slow-down`, every joint's speed within its channel's top frequency;
+//! - every joint's `max_accel` through the path's derivatives (`q' s̈ + q'' ṡ²`, by inverse
+//!   kinematics on a grid);
+//! - around every standstill of a joint with `start_hz` (the move's ends, where it reverses),
+//!   a lower acceleration, so the row that leaves or reaches it stays within `start_hz`.
+//!
+//! The speed drops only where a limit needs it (near the base axis, on a tight arc, where a
+//! joint reverses), never over the whole move.
+
+use crate::geometry::topp::{self, AccelLimit, GridPoint};
+use crate::geometry::{Pace, Pose};
+use crate::kinematics::{JOINTS, Joints, Kinematics};
+use crate::robot::{Motion, OverSpeed, Robot};
+
+use super::super::PlanError;
+
+/// The grid's spacing along the path, mm.
+const GRID_MM: f64 = 0.5;
+/// The fewest and the most grid points.
+const GRID_POINTS: (usize, usize) = (64, 4_000);
+/// The share of a joint's `max_accel` planned to: the limits hold at the grid's points, and
+/// the joints' derivatives change a little between them.
+pub(in crate::plan) const ACCEL_MARGIN: f64 = 0.98;
+/// The share of a channel's top frequency planned to (the rows' rounding takes a pulse per
+/// row more).
+const SPEED_MARGIN: f64 = 0.99;
+/// The share of `start_hz` a row from or to rest is planned to, before its pulse of rounding.
+pub(in crate::plan) const START_MARGIN: f64 = 0.97;
+
+/// A line or a path section, as the timing reads it.
+pub(in crate::plan) struct Shape<'a> {
+    /// Its length, mm.
+    pub length_mm: f64,
+    /// The pose at a distance along it.
+    pub pose_at: &'a dyn Fn(f64) -> Pose,
+    /// Its curvature at a distance along it, 1/mm (0 on a line).
+    pub curvature_at: &'a dyn Fn(f64) -> f64,
+}
+
+/// The limits along the path beyond the joints'.
+pub(in crate::plan) struct PathLimits {
+    /// The path's centripetal acceleration limit, mm/s^2 (infinite on a line).
+    pub centripetal_mm_s2: f64,
+    /// How long a row from or to rest lasts, s: a standstill's zone of lower acceleration
+    /// lasts that long either side.
+    pub rest_row_s: f64,
+}
+
+/// The joints along the grid: values, first and second derivatives by distance.
+struct JointsAlong {
+    s_mm: Vec<f64>,
+    q: Vec<Joints>,
+    dq: Vec<Joints>,
+    ddq: Vec<Joints>,
+}
+
+impl JointsAlong {
+    fn new(robot: &Robot, shape: &Shape, start: &Joints) -> Result<Self, PlanError> {
+        let n = ((shape.length_mm / GRID_MM).ceil() as usize).clamp(GRID_POINTS.0, GRID_POINTS.1);
+        let h = shape.length_mm / n as f64;
+        let s_mm: Vec<f64> = (0..=n).map(|i| h * i as f64).collect();
+        let mut q = Vec::with_capacity(n + 1);
+        let mut near = *start;
+        for &s in &s_mm {
+            near = robot.kinematics.ik(&(shape.pose_at)(s), Some(&near))?;
+            q.push(near);
+        }
+        let at = |i: usize, j: usize| q[i][j];
+        let dq = (0..=n)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(1), (i + 1).min(n));
+                std::array::from_fn(|j| (at(b, j) - at(a, j)) / (s_mm[b] - s_mm[a]))
+            })
+            .collect();
+        let ddq = (0..=n)
+            .map(|i| {
+                let m = i.clamp(1, n - 1);
+                std::array::from_fn(|j| (at(m + 1, j) - 2.0 * at(m, j) + at(m - 1, j)) / (h * h))
+            })
+            .collect();
+        Ok(Self { s_mm, q, dq, ddq })
+    }
+
+    /// Every grid point where joint `j` stands still: the ends, and where it reverses.
+    fn rests(&self, j: usize) -> Vec<usize> {
+        let mut out = vec![0];
+        let mut way = 0.0;
+        for i in 1..self.q.len() {
+            let d = self.q[i][j] - self.q[i - 1][j];
+            if d != 0.0 {
+                if way * d < 0.0 {
+                    out.push(i - 1);
+                }
+                way = d;
+            }
+        }
+        out.push(self.q.len() - 1);
+        out
+    }
+}
+
+/// The time-optimal pace of `shape` for `robot` from `start` (the joints where it begins),
+/// under `motion`'s speed and acceleration and every joint's limits.
+pub(in crate::plan) fn pace(
+    robot: &Robot,
+    shape: &Shape,
+    start: &Joints,
+    motion: &Motion,
+    limits: &PathLimits,
+) -> Result<Pace, PlanError> {
+    let along = JointsAlong::new(robot, shape, start)?;
+    let rest_accel = rest_accels(robot, &along, limits.rest_row_s)?;
+    let free = grid(robot, shape, &along, motion, limits, &[]);
+    let first = solve(&free)?;
+    let zones = rest_zones(&along, &free, &first, &rest_accel, limits.rest_row_s);
+    let x = if zones.is_empty() {
+        first
+    } else {
+        solve(&grid(robot, shape, &along, motion, limits, &zones))?
+    };
+    let speeds: Vec<f64> = x.iter().map(|x| x.max(0.0).sqrt()).collect();
+    Pace::from_speeds(&along.s_mm, &speeds, motion.speed_mm_s).ok_or(PlanError::Untimed {
+        at_mm: 0.0,
+        reason: "the time-optimal motion stands still between two points",
+    })
+}
+
+/// Every joint's acceleration limit around a standstill (`start_hz`), joint units/s^2: its
+/// row of `rest_row_s` from rest reaches `START_MARGIN * start_hz` less a pulse of rounding.
+fn rest_accels(
+    robot: &Robot,
+    along: &JointsAlong,
+    rest_row_s: f64,
+) -> Result<[Option<f64>; JOINTS], PlanError> {
+    let mut out = [None; JOINTS];
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let Some(start_hz) = joint.dynamics.start_hz else {
+            continue;
+        };
+        let moves = along.dq.iter().any(|d| d[j] != 0.0);
+        let room_hz = START_MARGIN * start_hz - 1.0 / rest_row_s;
+        if moves && room_hz <= 0.0 {
+            return Err(PlanError::StartHzTooLow {
+                joint: joint.name.clone(),
+                start_hz,
+                min_hz: 1.0 / rest_row_s / START_MARGIN,
+                row_s: rest_row_s,
+            });
+        }
+        out[j] = Some(2.0 * room_hz / rest_row_s * joint.step.abs());
+    }
+    Ok(out)
+}
+
+/// A zone of lower acceleration: joint `joint` within `accel` at grid points `from..=to`.
+#[derive(Debug, Clone, Copy)]
+struct Zone {
+    joint: usize,
+    from: usize,
+    to: usize,
+    accel: f64,
+}
+
+/// Every standstill's zone: the grid points the fastest motion (`x`) passes within
+/// `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows either side of
+/// the standstill of the motion planned with it too.
+fn rest_zones(
+    along: &JointsAlong,
+    grid: &[GridPoint],
+    x: &[f64],
+    rest_accel: &[Option<f64>; JOINTS],
+    rest_row_s: f64,
+) -> Vec<Zone> {
+    let mut t = vec![0.0; x.len()];
+    for i in 1..x.len() {
+        let v = x[i - 1].max(0.0).sqrt() + x[i].max(0.0).sqrt();
+        t[i] = t[i - 1] + 2.0 * (grid[i].s - grid[i - 1].s) / v.max(1e-12);
+    }
+    let mut zones = Vec::new();
+    for (joint, accel) in rest_accel.iter().enumerate() {
+        let Some(accel) = *accel else { continue };
+        for r in along.rests(joint) {
+            let from = t.partition_point(|&ti| ti < t[r] - rest_row_s);
+            let to = t.partition_point(|&ti| ti <= t[r] + rest_row_s).max(1) - 1;
+            zones.push(Zone {
+                joint,
+                from: from.min(r),
+                to: to.max(r),
+                accel,
+            });
+        }
+    }
+    zones
+}
+
+/// The grid's limits at every point.
+fn grid(
+    robot: &Robot,
+    shape: &Shape,
+    along: &JointsAlong,
+    motion: &Motion,
+    limits: &PathLimits,
+    zones: &[Zone],
+) -> Vec<GridPoint> {
+    let tangential = if motion.accel_s > 0.0 {
+        motion.speed_mm_s / motion.accel_s
+    } else {
+        f64::INFINITY
+    };
+    let speeds = motion.over_speed == OverSpeed::SlowDown;
+    along
+        .s_mm
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            let mut x_max = motion.speed_mm_s * motion.speed_mm_s;
+            let k = (shape.curvature_at)(s);
+            if k > 0.0 {
+                x_max = x_max.min(limits.centripetal_mm_s2 / k);
+            }
+            let mut accels = Vec::with_capacity(JOINTS + 1);
+            if tangential.is_finite() {
+                accels.push(AccelLimit::symmetric(1.0, 0.0, tangential));
+            }
+            for (j, joint) in robot.joints.iter().enumerate() {
+                let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
+                if speeds && d != 0.0 {
+                    let v = SPEED_MARGIN * f64::from(joint.max_freq_hz) * joint.step.abs();
+                    x_max = x_max.min((v / d).powi(2));
+                }
+                let zone = zones
+                    .iter()
+                    .filter(|z| z.joint == j && (z.from..=z.to).contains(&i))
+                    .map(|z| z.accel)
+                    .fold(f64::INFINITY, f64::min);
+                let accel = joint
+                    .dynamics
+                    .max_accel
+                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN)
+                    .min(zone);
+                if accel.is_finite() {
+                    accels.push(AccelLimit::symmetric(d, dd, accel));
+                }
+            }
+            GridPoint { s, x_max, accels }
+        })
+        .collect()
+}
+
+fn solve(grid: &[GridPoint]) -> Result<Vec<f64>, PlanError> {
+    topp::time_optimal(grid).map_err(|e| {
+        let index = match e {
+            topp::ToppError::BadGrid { index } | topp::ToppError::Stuck { index } => index,
+        };
+        PlanError::Untimed {
+            at_mm: grid.get(index).map_or(0.0, |p| p.s),
+            reason: "no acceleration there keeps every joint within its limits",
+        }
+    })
+}
