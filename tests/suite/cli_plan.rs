@@ -445,3 +445,76 @@ fn plan_path_refuses_a_blend_on_the_last_element_instead_of_ignoring_it() {
         "{err}"
     );
 }
+
+/// The shipped config with d3's drive limited to `accel` mm/s^2 and `start` Hz from rest, in a
+/// file of its own.
+fn limited_config(name: &str, accel: &str, start: &str) -> String {
+    let shipped = include_str!("../../config/linterpd.toml");
+    let d3 = "max_freq_hz = 20000\n# Wiring.";
+    assert!(shipped.contains(d3));
+    let text = shipped.replacen(
+        d3,
+        &format!("max_freq_hz = 20000\nmax_accel_mm_s2 = {accel}\nstart_hz = {start}\n# Wiring."),
+        1,
+    );
+    let path = std::env::temp_dir().join(format!("linterpd-{}-{name}.toml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+/// The seed's move's arguments on the config at `config`.
+fn seed_on(config: &str) -> Vec<&str> {
+    let mut args: Vec<&str> = vec!["plan"];
+    args.extend(SEED);
+    let at = args.iter().position(|a| *a == "--config").unwrap() + 1;
+    args[at] = config;
+    args
+}
+
+#[test]
+fn plan_reports_every_drive_against_its_limits_and_times_the_line_under_them() {
+    let config = limited_config("drives", "1000.0", "1000.0");
+    let free = plan_json(&[]);
+    let mut args = seed_on(&config);
+    args.extend(["--format", "json"]);
+    let out = linterpd(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(free["profile"]["timing"], "trapezoid");
+    assert_eq!(doc["profile"]["timing"], "time-optimal");
+    let d3 = &doc["drives"][2];
+    assert_eq!(d3["joint"], "d3");
+    assert_eq!(d3["max_accel"], 1000.0);
+    assert_eq!(d3["start_hz"], 1000.0);
+    assert!(d3["step_load"].as_f64().unwrap() <= 1.0, "{d3}");
+    assert!(d3["rest_hz"].as_f64().unwrap() <= 1000.0, "{d3}");
+    // Without the limits the radial joint starts at about 2 kHz.
+    assert!(free["drives"][2]["rest_hz"].as_f64().unwrap() > 1_900.0);
+    assert!(free["drives"][2]["max_accel"].is_null());
+    // The text names the limits beside the peaks.
+    let out = linterpd(&seed_on(&config));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("profile  time-optimal under the drive limits"),
+        "{text}"
+    );
+    assert!(
+        text.contains("(max_accel 1000), largest row step"),
+        "{text}"
+    );
+    assert!(text.contains("(start_hz 1000)"), "{text}");
+    std::fs::remove_file(&config).unwrap();
+}
+
+#[test]
+fn a_drive_limit_no_row_can_keep_is_refused_naming_the_joint_and_the_figure() {
+    let config = limited_config("refused", "1000.0", "10.0");
+    let e = refused(&[("--config", &config)], &[]);
+    assert!(e.contains("joint d3: start_hz = 10 Hz"), "{e}");
+    assert!(e.contains("raise start_hz to at least 20.6 Hz"), "{e}");
+    std::fs::remove_file(&config).unwrap();
+}

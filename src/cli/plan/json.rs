@@ -21,6 +21,43 @@ pub(super) struct Document {
     valid: bool,
     problems: Vec<String>,
     figures: FiguresDoc,
+    /// How hard each joint's drive is asked, against its limits (added with drive limits).
+    drives: Vec<DriveDoc>,
+}
+
+/// One joint's drive in one start: its peaks and its limits (`null` where the config sets none).
+#[derive(Debug, Serialize)]
+pub(super) struct DriveDoc {
+    joint: String,
+    unit: &'static str,
+    peak_hz: f64,
+    peak_speed: f64,
+    peak_accel: f64,
+    max_accel: Option<f64>,
+    /// The largest step between two rows over what `max_accel` allows there.
+    step_load: Option<f64>,
+    rest_hz: f64,
+    start_hz: Option<f64>,
+}
+
+/// Every joint's drive figures of `plan`.
+pub(super) fn drives(robot: &Robot, plan: &Plan) -> Vec<DriveDoc> {
+    robot
+        .joints
+        .iter()
+        .zip(&plan.drive)
+        .map(|(j, d)| DriveDoc {
+            joint: j.name.clone(),
+            unit: j.kind.user_unit(),
+            peak_hz: d.peak_hz,
+            peak_speed: d.peak_speed,
+            peak_accel: d.peak_accel,
+            max_accel: j.dynamics.max_accel.map(|a| j.user(a).abs()),
+            step_load: d.step_load,
+            rest_hz: d.rest_hz,
+            start_hz: j.dynamics.start_hz,
+        })
+        .collect()
 }
 
 #[derive(Debug, Serialize)]
@@ -63,6 +100,9 @@ struct ProfileDoc {
     /// The course's length: the line's, or the section path's, mm.
     course_length_mm: f64,
     speed_mm_s: f64,
+    /// "trapezoid" (the seed's profile) or "time-optimal" (under drive limits: the ramps are
+    /// the pace's, `accel_s` 0 and `accel_mm_s2` null).
+    timing: &'static str,
     accel_s: f64,
     accel_mm_s2: f64,
     period_s: f64,
@@ -128,6 +168,15 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
                 crate::geometry::Pace::path_length_mm,
             ),
             speed_mm_s: plan.profile.speed_mm_s,
+            timing: if plan
+                .pace
+                .as_ref()
+                .is_some_and(crate::geometry::Pace::from_rest)
+            {
+                "time-optimal"
+            } else {
+                "trapezoid"
+            },
             accel_s: plan.profile.accel_s,
             accel_mm_s2: plan.profile.accel_mm_s2,
             period_s: plan.profile.period_s,
@@ -143,6 +192,7 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
         valid: plan.valid(),
         problems: plan.problems.clone(),
         figures: FiguresDoc::from(figures),
+        drives: drives(robot, plan),
     }
 }
 

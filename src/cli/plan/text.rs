@@ -58,11 +58,65 @@ pub(super) fn write(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> io::Resu
             writeln!(out, "  (does not move: no table)")?;
         }
     }
-    write_figures(plan, out)
+    write_figures(plan, out)?;
+    write_drives(robot, plan, out)
+}
+
+/// Every moving joint's drive: its peaks against its limits.
+pub(super) fn write_drives(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
+    writeln!(
+        out,
+        "drives   (peaks of the planned motion and the rows; limits from the config)"
+    )?;
+    for ((joint, d), table) in robot.joints.iter().zip(&plan.drive).zip(&plan.tables) {
+        if table.segments.is_empty() {
+            continue;
+        }
+        let unit = joint.kind.user_unit();
+        let accel = joint.dynamics.max_accel.map_or(String::new(), |a| {
+            format!(" (max_accel {})", joint.user(a).abs())
+        });
+        let step = d.step_load.map_or(String::new(), |l| {
+            format!(
+                ", largest row step {:.0} % of what max_accel allows",
+                l * 100.0
+            )
+        });
+        let start = joint
+            .dynamics
+            .start_hz
+            .map_or(String::new(), |hz| format!(" (start_hz {hz})"));
+        writeln!(
+            out,
+            "  {:<8} {:.0} Hz, {:.2} {unit}/s, {:.1} {unit}/s^2{accel}{step}; from and to \
+             standstill {:.0} Hz{start}",
+            joint.name, d.peak_hz, d.peak_speed, d.peak_accel, d.rest_hz
+        )?;
+    }
+    Ok(())
 }
 
 fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
     let p = &plan.profile;
+    if plan
+        .pace
+        .as_ref()
+        .is_some_and(crate::geometry::Pace::from_rest)
+    {
+        writeln!(
+            out,
+            "profile  time-optimal under the drive limits: {:.3} mm at up to {:.3} mm/s, period \
+             {:.3} s: {} periods, {:.3} s",
+            plan.pace
+                .as_ref()
+                .map_or(p.length_mm, crate::geometry::Pace::path_length_mm),
+            p.speed_mm_s,
+            p.period_s,
+            p.periods(),
+            p.duration_s()
+        )?;
+        return write_slowed(plan, out);
+    }
     writeln!(
         out,
         "profile  {:.3} mm at {:.3} mm/s, ramps {:.3} s ({:.1} mm/s^2), period {:.3} s: {} periods, {:.3} s",
@@ -74,6 +128,10 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         p.periods(),
         p.duration_s()
     )?;
+    write_slowed(plan, out)
+}
+
+fn write_slowed(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
     if plan.speed_factor < 1.0 {
         writeln!(
             out,
