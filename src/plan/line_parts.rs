@@ -50,8 +50,12 @@ pub fn line_as_path(req: &MoveRequest) -> PathRequest {
         start: None,
         elements: vec![(Element::Line { to: req.to }, Corner::Stop)],
         motion: req.motion,
-        // A line has no arc to turn on: the profile's own acceleration.
-        path_accel_mm_s2: req.motion.speed_mm_s / req.motion.accel_s,
+        // A line has no arc to turn on: the profile's own acceleration (any, without a ramp).
+        path_accel_mm_s2: if req.motion.accel_s > 0.0 {
+            req.motion.speed_mm_s / req.motion.accel_s
+        } else {
+            f64::MAX
+        },
     }
 }
 

@@ -164,7 +164,13 @@ impl Frequencies<'_> {
     /// `SKIP_REPEATS`.
     fn choose_searching<const SKIP_REPEATS: bool>(&self) -> Vec<u32> {
         let n = self.spans.len();
-        let tail = n.min(TAIL_ROWS);
+        // The tail's search moves a boundary by up to half its row, which a drive with limits
+        // would take as a step: its rows each aim at their planned end.
+        let tail = if self.joint.dynamics.is_set() {
+            0
+        } else {
+            n.min(TAIL_ROWS)
+        };
         let mut freqs = Vec::with_capacity(n);
         let mut t_s = 0.0;
         for i in 0..n - tail {

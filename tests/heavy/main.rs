@@ -8,6 +8,7 @@ mod common;
 
 mod bounded_properties;
 mod cycle_soak;
+mod drive_properties;
 mod fault_matrix;
 mod joint_properties;
 mod path_properties;

@@ -17,7 +17,7 @@
 use crate::kinematics::JOINTS;
 use crate::robot::{Joint, Robot};
 use crate::sim::{self, RowTiming, Settings};
-use crate::table::{ChannelTable, Direction, FrequencyModel};
+use crate::table::{ChannelTable, Direction, FrequencyModel, FrequencyRange};
 
 use super::super::{PlanError, Samples, Window};
 
@@ -49,23 +49,33 @@ struct Played {
     grain_hz: f64,
 }
 
+/// The step from `hz` to the nearest other frequency the channel can put out in `range`: 1 Hz of
+/// the written value under the ideal model; under the divider, `c/(d-1) - c/d` at the divisor
+/// `d` that gives `hz` from the range's clock `c` (about `hz^2 / c`: 312 Hz at 31 kHz in range
+/// 1).
+fn grain_hz(model: FrequencyModel, range: FrequencyRange, hz: f64) -> f64 {
+    match model {
+        FrequencyModel::Ideal => 1.0,
+        FrequencyModel::FpxDivider => {
+            let clock = range.divider_clock_hz();
+            let d = (clock / hz).round().max(2.0);
+            clock / (d - 1.0) - clock / d
+        }
+    }
+}
+
 /// The rows of table `index` as played.
 fn played(table: &ChannelTable, timings: &[RowTiming], model: FrequencyModel) -> Vec<Played> {
     timings
         .iter()
         .map(|r| {
             let seg = &table.segments[r.segment];
-            let set = seg.rows[r.row].freq_hz;
-            let range = seg.control.range;
-            let here = model.actual_hz(set, range);
-            let up = (model.actual_hz(set.saturating_add(1), range) - here).abs();
-            let down = (here - model.actual_hz(set.saturating_sub(1).max(1), range)).abs();
             Played {
                 hz: r.actual_hz,
                 len_s: (r.end_s - r.start_s).max(1e-9),
                 start_s: r.start_s,
                 way: seg.control.direction,
-                grain_hz: up.max(down),
+                grain_hz: grain_hz(model, seg.control.range, r.actual_hz),
             }
         })
         .collect()

@@ -165,8 +165,8 @@ struct Zone {
     accel: f64,
 }
 
-/// Every standstill's zone: the grid points the fastest motion (`x`) passes within
-/// `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows either side of
+/// Every standstill's zone: the grid points whose step to the next the fastest motion (`x`)
+/// runs within `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows either side of
 /// the standstill of the motion planned with it too.
 fn rest_zones(
     along: &JointsAlong,
@@ -184,11 +184,17 @@ fn rest_zones(
     for (joint, accel) in rest_accel.iter().enumerate() {
         let Some(accel) = *accel else { continue };
         for r in along.rests(joint) {
-            let from = t.partition_point(|&ti| ti < t[r] - rest_row_s);
-            let to = t.partition_point(|&ti| ti <= t[r] + rest_row_s).max(1) - 1;
+            // Point i's limit holds over the step from it to the next: every step that
+            // overlaps the time either side of the standstill.
+            let from = t
+                .partition_point(|&ti| ti <= t[r] - rest_row_s)
+                .saturating_sub(1);
+            let to = t
+                .partition_point(|&ti| ti < t[r] + rest_row_s)
+                .saturating_sub(1);
             zones.push(Zone {
                 joint,
-                from: from.min(r),
+                from: from.min(r.saturating_sub(1)),
                 to: to.max(r),
                 accel,
             });

@@ -1,0 +1,200 @@
+//! Property tests of the drive limits over random lines, random limits and both methods, for
+//! every kinematics: every emitted table keeps every limit (top frequency, standstill rows within
+//! `start_hz`, row steps within `max_accel`, travel within the joint's limits), checked from the
+//! execution model's rows by a check written here from the rule `docs/ACCURACY.md` states, and a
+//! bounded-error plan keeps its tolerance under both frequency models. A move is refused only
+//! for a limit it cannot meet, named.
+
+use crate::common;
+
+use linterpd::geometry::Pose;
+use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
+use linterpd::robot::{Dynamics, Method, Robot};
+use linterpd::table::{FrequencyModel, TableProblem};
+use proptest::prelude::*;
+
+use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
+
+/// Every joint's drive: `max_accel` as a share of a typical one (5000 mm/s^2, 2000 deg/s^2),
+/// `start_hz` as a share of the channel's top frequency (or none).
+#[derive(Debug, Clone, Copy)]
+struct Limits {
+    accel_share: [f64; 4],
+    start_share: [Option<f64>; 4],
+    bounded_mm: Option<f64>,
+}
+
+fn limits() -> impl Strategy<Value = Limits> {
+    (
+        prop::array::uniform4(0.02..1.0f64),
+        prop::array::uniform4(prop::option::of(0.01..0.2f64)),
+        prop::option::of(0.1..0.3f64),
+    )
+        .prop_map(|(accel_share, start_share, bounded_mm)| Limits {
+            accel_share,
+            start_share,
+            bounded_mm,
+        })
+}
+
+fn limited(mut robot: Robot, l: &Limits) -> Robot {
+    for (j, joint) in robot.joints.iter_mut().enumerate() {
+        let typical = joint.kind.from_user(match joint.kind {
+            linterpd::kinematics::JointKind::Prismatic => 5_000.0,
+            linterpd::kinematics::JointKind::Revolute => 2_000.0,
+        });
+        joint.dynamics = Dynamics {
+            max_accel: Some(typical * l.accel_share[j]),
+            start_hz: l.start_share[j].map(|s| (s * f64::from(joint.max_freq_hz)).max(100.0)),
+        };
+    }
+    robot
+}
+
+/// Plans the line; `None` when it is refused for a reason with its own tests (rows that do
+/// not fit one table area: a slow move may need more).
+fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion, l: &Limits) -> Option<Vec<Plan>> {
+    let mut motion = robot.motion;
+    let length_mm = (to.position_mm - from.position_mm).norm();
+    motion.speed_mm_s = m.speed_mm_s.max(length_mm / (300.0 * m.period_s));
+    motion.accel_s = m.accel_s;
+    motion.period_s = m.period_s;
+    motion.frequency_model = if m.ideal {
+        FrequencyModel::Ideal
+    } else {
+        FrequencyModel::FpxDivider
+    };
+    if let Some(tolerance_mm) = l.bounded_mm {
+        motion.method = Method::BoundedError { tolerance_mm };
+    }
+    let req = MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion,
+    };
+    match plan_line(robot, &req) {
+        Ok(planned) => Some(planned.starts().cloned().collect()),
+        Err(PlanError::InvalidTable {
+            first: TableProblem::AreaOverflow { .. },
+            ..
+        }) => None,
+        Err(e) => panic!("{from:?} -> {to:?} {motion:?} {l:?}: {e}"),
+    }
+}
+
+/// The step between neighbouring real frequencies at `hz` in a range of divider clock
+/// `clock_hz`: 1 Hz of the value under the ideal model, about `hz^2 / clock` under the divider.
+fn grain_hz(model: FrequencyModel, clock_hz: f64, hz: f64) -> f64 {
+    match model {
+        FrequencyModel::Ideal => 1.0,
+        FrequencyModel::FpxDivider => 1.0 + 1.1 * hz * hz / clock_hz,
+    }
+}
+
+/// Every row of `plan` within its joint's limits (`docs/ACCURACY.md`, "What a drive follows").
+fn check_rows(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
+    let run = plan.execution();
+    let model = plan.motion.frequency_model;
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let table = &plan.tables[j];
+        let rows: Vec<_> = run.rows.iter().filter(|r| r.table == j).collect();
+        let a = joint.dynamics.max_accel.map(|a| a / joint.step.abs());
+        let grain = |r: &linterpd::sim::RowTiming| {
+            let clock = table.segments[r.segment].control.range.divider_clock_hz();
+            grain_hz(model, clock, r.actual_hz)
+        };
+        let way = |r: &linterpd::sim::RowTiming| table.segments[r.segment].control.direction;
+        let (lo, hi) = (joint.min.min(joint.max), joint.min.max(joint.max));
+        let slack = joint.step.abs() / 2.0;
+        for (k, r) in rows.iter().enumerate() {
+            let target = table.segments[r.segment].rows[r.row].target;
+            let value = joint.value_of(target);
+            prop_assert!(
+                value >= lo - slack && value <= hi + slack,
+                "{} travel",
+                joint.name
+            );
+            prop_assert!(r.actual_hz <= f64::from(joint.max_freq_hz) + 1e-9);
+            let len = r.end_s - r.start_s;
+            let turn_before = k > 0 && way(rows[k - 1]) != way(r);
+            let turn_after = k + 1 < rows.len() && way(rows[k + 1]) != way(r);
+            let rest = (k == 0 && !plan.window.begins_at_speed())
+                || (k + 1 == rows.len() && !plan.window.ends_at_speed)
+                || turn_before
+                || turn_after;
+            if rest {
+                if let Some(hz) = joint.dynamics.start_hz {
+                    prop_assert!(
+                        r.actual_hz <= hz,
+                        "{}: row {k} at standstill {} Hz, start_hz {hz}",
+                        joint.name,
+                        r.actual_hz
+                    );
+                }
+                if let Some(a) = a {
+                    let hz = a * len / 2.0 + 1.0 / len + grain(r);
+                    prop_assert!(r.actual_hz <= hz, "{}: row {k} from rest", joint.name);
+                }
+            }
+            if k > 0
+                && !turn_before
+                && let Some(a) = a
+            {
+                let b = rows[k - 1];
+                let lb = b.end_s - b.start_s;
+                let allowed = a * (lb + len) / 2.0 + 1.0 / lb + 1.0 / len + grain(b) + grain(r);
+                let step = (r.actual_hz - b.actual_hz).abs();
+                prop_assert!(
+                    step <= allowed,
+                    "{}: rows {} and {k} step {step} Hz, {allowed} allowed",
+                    joint.name,
+                    k - 1
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check(robot: &Robot, starts: &[Plan], l: &Limits) -> Result<(), TestCaseError> {
+    for plan in starts {
+        prop_assert!(plan.valid(), "{:?}", plan.problems);
+        common::moves::check_tables_and_ends(robot, plan)?;
+        check_rows(robot, plan)?;
+        if let Some(tolerance_mm) = l.bounded_mm {
+            prop_assert!(plan.figures.path_deviation_mm <= tolerance_mm);
+        }
+    }
+    for pair in starts.windows(2) {
+        prop_assert_eq!(pair[1].start_counts(), pair[0].end_counts());
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn cylindrical_lines_keep_every_drive_limit(mv in cylindrical_move(), m in motion(), l in limits()) {
+        let robot = limited(common::cylindrical(), &l);
+        let starts = plan(&robot, mv, m, &l);
+        prop_assume!(starts.is_some());
+        check(&robot, &starts.unwrap(), &l)?;
+    }
+
+    #[test]
+    fn gantry_lines_keep_every_drive_limit(mv in gantry_move(), m in motion(), l in limits()) {
+        let robot = limited(common::gantry(), &l);
+        let starts = plan(&robot, mv, m, &l);
+        prop_assume!(starts.is_some());
+        check(&robot, &starts.unwrap(), &l)?;
+    }
+
+    #[test]
+    fn scara_lines_keep_every_drive_limit(mv in scara_move(), m in motion(), l in limits()) {
+        let robot = limited(common::scara(), &l);
+        let starts = plan(&robot, mv, m, &l);
+        prop_assume!(starts.is_some());
+        check(&robot, &starts.unwrap(), &l)?;
+    }
+}
