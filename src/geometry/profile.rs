@@ -73,6 +73,10 @@ pub struct Profile {
     pub ramp_periods: u32,
     /// Periods from the start to the start of the deceleration (N0).
     pub cruise_end_periods: u32,
+    /// The last period's length, s: `period_s`, but for a profile at one speed along a pace
+    /// that starts and ends at rest ([`Profile::paced`]), between half a period and a period
+    /// and a half, so the profile keeps its speed.
+    pub last_period_s: f64,
 }
 
 /// The most periods one move may have (far beyond any table area).
@@ -123,6 +127,7 @@ impl Profile {
                 period_s,
                 ramp_periods: 0,
                 cruise_end_periods: n0,
+                last_period_s: period_s,
             });
         }
         let accel = speed / req.accel_s;
@@ -144,6 +149,36 @@ impl Profile {
             period_s,
             ramp_periods: na,
             cruise_end_periods: n0,
+            last_period_s: period_s,
+        })
+    }
+
+    /// A profile at `speed_mm_s` for the whole of `length_mm`, with no ramp of its own (the
+    /// pace it runs along starts and ends at rest: a time-optimal motion), its periods whole
+    /// but the last, which is between half a period and a period and a half long: the speed is
+    /// kept, where [`Profile::new`] lowers it to end on a whole period (up to a period longer).
+    pub fn paced(length_mm: f64, speed_mm_s: f64, period_s: f64) -> Result<Self, ProfileError> {
+        let length_mm = positive("length_mm", length_mm)?;
+        let speed_mm_s = positive("speed_mm_s", speed_mm_s)?;
+        let period_s = positive("period_s", period_s)?;
+        let total_s = length_mm / speed_mm_s;
+        let periods = (total_s / period_s).round().max(1.0);
+        if periods > f64::from(MAX_PERIODS) {
+            return Err(ProfileError::TooManyPeriods {
+                periods,
+                period_s,
+                max: MAX_PERIODS,
+            });
+        }
+        Ok(Self {
+            length_mm,
+            speed_mm_s,
+            accel_mm_s2: f64::INFINITY,
+            accel_s: 0.0,
+            period_s,
+            ramp_periods: 0,
+            cruise_end_periods: periods as u32,
+            last_period_s: total_s - (periods - 1.0) * period_s,
         })
     }
 
@@ -155,8 +190,13 @@ impl Profile {
 
     /// Duration of the move, s.
     #[must_use]
+    #[allow(clippy::float_cmp)] // a whole last period, bit for bit as ever
     pub fn duration_s(&self) -> f64 {
-        f64::from(self.periods()) * self.period_s
+        if self.last_period_s == self.period_s {
+            f64::from(self.periods()) * self.period_s
+        } else {
+            f64::from(self.periods() - 1) * self.period_s + self.last_period_s
+        }
     }
 
     /// Distance from P1 at time `t_s` (eq. 6, in continuous time), mm.

@@ -8,23 +8,32 @@
 
 use super::segments::Span;
 
-/// The spans of one joint: `counts[i]` is its count at point i, points `period_s` apart.
+/// The spans of one joint: `counts[i]` is its count at point i, points `period_s` apart but the
+/// last, at `end_s` (a whole number of periods, or a time-optimal profile's own last period).
 #[must_use]
-pub(super) fn spans(counts: &[i64], period_s: f64) -> Vec<Span> {
+pub(super) fn spans(counts: &[i64], period_s: f64, end_s: f64) -> Vec<Span> {
+    let last = counts.len().saturating_sub(1);
+    let at = |i: usize| {
+        if i == last {
+            end_s
+        } else {
+            i as f64 * period_s
+        }
+    };
     let mut out: Vec<Span> = Vec::new();
     let mut row_start = 0usize;
     for i in 1..counts.len() {
         if counts[i] != counts[i - 1] {
             out.push(Span {
                 target: counts[i],
-                start_s: row_start as f64 * period_s,
-                end_s: i as f64 * period_s,
+                start_s: at(row_start),
+                end_s: at(i),
             });
             row_start = i;
         }
     }
-    if let Some(last) = out.last_mut() {
-        last.end_s = (counts.len() - 1) as f64 * period_s;
+    if let Some(row) = out.last_mut() {
+        row.end_s = at(last);
     }
     out
 }
@@ -35,7 +44,7 @@ mod tests {
 
     #[test]
     fn zero_periods_fold_into_the_next_row_and_trailing_ones_into_the_last() {
-        let s = spans(&[0, 0, 0, 2, 2, 5, 5], 0.05);
+        let s = spans(&[0, 0, 0, 2, 2, 5, 5], 0.05, 0.30);
         assert_eq!(s.len(), 2);
         assert_eq!(s[0].target, 2);
         assert!((s[0].start_s - 0.0).abs() < 1e-12 && (s[0].end_s - 0.15).abs() < 1e-12);
@@ -45,6 +54,6 @@ mod tests {
 
     #[test]
     fn joint_that_never_moves_has_no_rows() {
-        assert!(spans(&[7, 7, 7], 0.05).is_empty());
+        assert!(spans(&[7, 7, 7], 0.05, 0.1).is_empty());
     }
 }

@@ -5,6 +5,7 @@
 //! passes through are bounded by the sampled counts: checking every sample checks every position
 //! the PLC will command.
 
+use crate::geometry::Profile;
 use crate::kinematics::{JOINTS, Joints};
 use crate::robot::Robot;
 
@@ -77,7 +78,9 @@ pub(super) struct Peak {
 /// the rounded counts (a constant-period row plays exactly those), or from the exact joint values
 /// (`continuous`, for a fine sampling where rounding would dominate).
 #[must_use]
-pub(super) fn peak(robot: &Robot, samples: &Samples, period_s: f64, continuous: bool) -> Peak {
+pub(super) fn peak(robot: &Robot, samples: &Samples, profile: &Profile, continuous: bool) -> Peak {
+    let period_s = profile.period_s;
+    let last = samples.counts.len().saturating_sub(2);
     let mut best = Peak {
         joint: 0,
         freq_hz: 0.0,
@@ -91,7 +94,12 @@ pub(super) fn peak(robot: &Robot, samples: &Samples, period_s: f64, continuous: 
             } else {
                 (samples.counts[i + 1][j] - samples.counts[i][j]).abs() as f64
             };
-            let freq_hz = pulses / period_s;
+            let freq_hz = pulses
+                / if i == last {
+                    profile.last_period_s
+                } else {
+                    period_s
+                };
             let load = freq_hz / f64::from(joint.max_freq_hz);
             if load > best.load {
                 best = Peak {

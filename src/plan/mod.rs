@@ -569,7 +569,13 @@ impl<'a> Sampled<'a> {
             let v = m.plan(tolerance_mm)?;
             (v.tables, Vec::new(), v.figures)
         } else {
-            let tables = build_tables(robot, &samples, &self.profile, &self.motion);
+            let tables = build_tables(
+                robot,
+                &samples,
+                &self.profile,
+                window.duration_s(),
+                &self.motion,
+            );
             let problems = check_tables(robot, &tables, self.motion.method)?;
             let figures = simulate(
                 robot,
@@ -647,19 +653,24 @@ struct Sampler<'a> {
 
 impl Sampler<'_> {
     fn at(&self, motion: &Motion) -> Result<(Profile, Samples, limits::Peak), PlanError> {
-        // A time-optimal pace starts and ends at rest itself: its profile has no ramp.
+        // A time-optimal pace starts and ends at rest itself: its profile has no ramp, and
+        // under constant-period keeps its speed with a last period of its own length.
         let ramp = !self.course.pace().is_some_and(Pace::from_rest);
-        let profile = Profile::new(ProfileRequest {
-            length_mm: self.course.length_mm(),
-            speed_mm_s: motion.speed_mm_s,
-            accel_s: if ramp { motion.accel_s } else { 0.0 },
-            period_s: self.grid_s,
-        })?;
+        let profile = if ramp || self.continuous {
+            Profile::new(ProfileRequest {
+                length_mm: self.course.length_mm(),
+                speed_mm_s: motion.speed_mm_s,
+                accel_s: if ramp { motion.accel_s } else { 0.0 },
+                period_s: self.grid_s,
+            })?
+        } else {
+            Profile::paced(self.course.length_mm(), motion.speed_mm_s, self.grid_s)?
+        };
         let samples =
             self.course
                 .sample(self.robot, &profile, self.start_values, self.start_counts)?;
         limits::check_positions(self.robot, &samples.counts, profile.period_s)?;
-        let peak = limits::peak(self.robot, &samples, profile.period_s, self.continuous);
+        let peak = limits::peak(self.robot, &samples, &profile, self.continuous);
         Ok((profile, samples, peak))
     }
 
@@ -711,10 +722,12 @@ impl Sampler<'_> {
     }
 }
 
+/// Every joint's table from `samples`, a period apart but the last point, `end_s` from the first.
 fn build_tables(
     robot: &Robot,
     samples: &Samples,
     profile: &Profile,
+    end_s: f64,
     motion: &Motion,
 ) -> Vec<ChannelTable> {
     robot
@@ -726,7 +739,7 @@ fn build_tables(
             if motion.method.is_seed_exact() {
                 return seed_exact::table(joint, &counts, profile.period_s);
             }
-            let spans = constant_period::spans(&counts, profile.period_s);
+            let spans = constant_period::spans(&counts, profile.period_s, end_s);
             let segments = segments::build(
                 joint,
                 motion.frequency_model,

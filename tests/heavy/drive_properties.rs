@@ -122,7 +122,8 @@ fn check_rows(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
                 || (k + 1 == rows.len() && !plan.window.ends_at_speed)
                 || turn_before
                 || turn_after;
-            if rest {
+            let pulses = ((r.end_s - r.start_s) * r.actual_hz).round();
+            if rest && pulses >= 2.0 {
                 if let Some(hz) = joint.dynamics.start_hz {
                     prop_assert!(
                         r.actual_hz <= hz,

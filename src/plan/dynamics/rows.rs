@@ -9,7 +9,9 @@
 //! its ends rounded from the planned motion) and the frequency model's step at each row's
 //! value (the nearest frequency the channel can put out). A row from or into standstill (the
 //! start, the end, either side of a reversal) steps from or to 0 over its half: within
-//! `a T / 2` and its pulse of rounding, and within `start_hz` when the joint has one.
+//! `a T / 2` and its pulse of rounding, and within `start_hz` when the joint has one. A row of
+//! one pulse is a single step (its frequency only times that step): the standstill checks
+//! apply to rows of two pulses or more.
 //!
 //! A table that breaks any of these for a joint with the limit is never emitted; the figures
 //! ([`DriveFigures`]) are reported for every joint.
@@ -47,6 +49,8 @@ struct Played {
     way: Direction,
     /// The frequency model's step at its value, Hz.
     grain_hz: f64,
+    /// Its pulses.
+    pulses: u64,
 }
 
 /// The step from `hz` to the nearest other frequency the channel can put out in `range`: 1 Hz of
@@ -76,6 +80,7 @@ fn played(table: &ChannelTable, timings: &[RowTiming], model: FrequencyModel) ->
                 start_s: r.start_s,
                 way: seg.control.direction,
                 grain_hz: grain_hz(model, seg.control.range, r.actual_hz),
+                pulses: ((r.end_s - r.start_s) * r.actual_hz).round() as u64,
             }
         })
         .collect()
@@ -141,10 +146,12 @@ fn follow(joint: &Joint, rows: &[Played], rests: Rests) -> Result<DriveFigures, 
     for (k, row) in rows.iter().enumerate() {
         let turns_before = k > 0 && rows[k - 1].way != row.way;
         let turns_after = k + 1 < n && rows[k + 1].way != row.way;
-        if (k == 0 && rests.begins) || turns_before {
+        // A row of one pulse is a single step, not a rate the drive is asked to run at.
+        let steps = row.pulses >= 2;
+        if steps && ((k == 0 && rests.begins) || turns_before) {
             rest_row(joint, row, true, accel_pulses, &mut figures)?;
         }
-        if (k + 1 == n && rests.ends) || turns_after {
+        if steps && ((k + 1 == n && rests.ends) || turns_after) {
             rest_row(joint, row, false, accel_pulses, &mut figures)?;
         }
         if k == 0 || turns_before {

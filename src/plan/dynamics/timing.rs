@@ -30,6 +30,9 @@ pub(in crate::plan) const ACCEL_MARGIN: f64 = 0.98;
 const SPEED_MARGIN: f64 = 0.99;
 /// The share of `start_hz` a row from or to rest is planned to, before its pulse of rounding.
 pub(in crate::plan) const START_MARGIN: f64 = 0.97;
+/// The longest row from or to rest, in periods: a time-optimal profile's last period is up to
+/// a period and a half ([`crate::geometry::Profile::paced`]).
+const REST_ROW_PERIODS: f64 = 1.5;
 
 /// A line or a path section, as the timing reads it.
 pub(in crate::plan) struct Shape<'a> {
@@ -45,8 +48,8 @@ pub(in crate::plan) struct Shape<'a> {
 pub(in crate::plan) struct PathLimits {
     /// The path's centripetal acceleration limit, mm/s^2 (infinite on a line).
     pub centripetal_mm_s2: f64,
-    /// How long a row from or to rest lasts, s: a standstill's zone of lower acceleration
-    /// lasts that long either side.
+    /// The period, s: a row from or to rest lasts between half a period and a period and a
+    /// half, and a standstill's zone of lower acceleration lasts the longest either side.
     pub rest_row_s: f64,
 }
 
@@ -116,7 +119,13 @@ pub(in crate::plan) fn pace(
     let rest_accel = rest_accels(robot, &along, limits.rest_row_s)?;
     let free = grid(robot, shape, &along, motion, limits, &[]);
     let first = solve(&free)?;
-    let zones = rest_zones(&along, &free, &first, &rest_accel, limits.rest_row_s);
+    let zones = rest_zones(
+        &along,
+        &free,
+        &first,
+        &rest_accel,
+        REST_ROW_PERIODS * limits.rest_row_s,
+    );
     let x = if zones.is_empty() {
         first
     } else {
@@ -130,7 +139,8 @@ pub(in crate::plan) fn pace(
 }
 
 /// Every joint's acceleration limit around a standstill (`start_hz`), joint units/s^2: its
-/// row of `rest_row_s` from rest reaches `START_MARGIN * start_hz` less a pulse of rounding.
+/// longest row from rest ([`REST_ROW_PERIODS`] of `rest_row_s`) reaches `START_MARGIN *
+/// start_hz` less a pulse of rounding over a period.
 fn rest_accels(
     robot: &Robot,
     along: &JointsAlong,
@@ -151,7 +161,7 @@ fn rest_accels(
                 row_s: rest_row_s,
             });
         }
-        out[j] = Some(2.0 * room_hz / rest_row_s * joint.step.abs());
+        out[j] = Some(2.0 * room_hz / (REST_ROW_PERIODS * rest_row_s) * joint.step.abs());
     }
     Ok(out)
 }
