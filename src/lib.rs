@@ -14,12 +14,14 @@
 //! Rings pointing inward: the pure core does no IO and reads no clock.
 //! ```text
 //! geometry/    PURE  poses, the line P1P2, the polyline of a curved tool path, the trapezoidal
-//!                    profile s(t)
+//!                    profile s(t), the pace along a path, the time-optimal speed (TOPP-RA)
 //! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
-//! robot/       PURE  a robot as planned for: model, joints and channels, motion defaults
+//! robot/       PURE  a robot as planned for: model, joints and channels, drive limits, motion
+//!                    defaults
 //! plan/        PURE  move request (a line, or a line in joint space) -> joint samples -> pulse
 //!                    tables (constant-period, seed-exact, bounded-error), limits and over-speed
-//!                    policy
+//!                    policy; under drive limits the time-optimal timing and every row checked
+//!                    against the drive (plan/dynamics)
 //! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
