@@ -96,16 +96,23 @@ fn bench(c: &mut Criterion) {
     // The same move on a robot whose radial drive follows 1000 mm/s^2 and starts at 1 kHz
     // (every joint with a max_accel): timed time-optimally under the limits.
     let mut limited = robot.clone();
-    for (joint, a) in limited.joints.iter_mut().zip([200.0, 1_000.0, 1_000.0, 200.0]) {
+    for (joint, a) in limited
+        .joints
+        .iter_mut()
+        .zip([200.0, 1_000.0, 1_000.0, 200.0])
+    {
         joint.dynamics.max_accel = Some(joint.kind.from_user(a));
     }
     limited.joints[2].dynamics.start_hz = Some(1_000.0);
     c.bench_function("plan seed move under drive limits (50 ms period)", |b| {
         b.iter(|| plan_move(&limited, black_box(&seed)).unwrap());
     });
-    c.bench_function("plan seed move under drive limits bounded-error 0.05 mm", |b| {
-        b.iter(|| plan_move(&limited, black_box(&b05)).unwrap());
-    });
+    c.bench_function(
+        "plan seed move under drive limits bounded-error 0.05 mm",
+        |b| {
+            b.iter(|| plan_move(&limited, black_box(&b05)).unwrap());
+        },
+    );
     c.bench_function("plan 1 m move (10 ms period)", |b| {
         b.iter(|| plan_line(&robot, black_box(&metre)).unwrap());
     });

@@ -58,8 +58,19 @@ pub fn spawn_with(
     options: &DaemonOptions,
     home_counts: [i64; JOINTS],
 ) -> (Daemon, RobotHandle) {
+    spawn_robot(connect, settings, options, home_counts, seed_robot())
+}
+
+/// As [`spawn_with`], for `robot` (the seed's, named `press-loader`, with changes).
+pub fn spawn_robot(
+    connect: Connector,
+    settings: ContractSettings,
+    options: &DaemonOptions,
+    home_counts: [i64; JOINTS],
+    robot: linterpd::robot::Robot,
+) -> (Daemon, RobotHandle) {
     let setup = RobotSetup {
-        robot: seed_robot(),
+        robot,
         settings,
         connect,
         home_counts,

@@ -708,3 +708,53 @@ async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
     assert!(opened.load(Ordering::SeqCst) >= 2, "it tried to reconnect");
     d.kill().await;
 }
+
+#[tokio::test]
+async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
+    // d3's drive follows 1000 mm/s^2 and starts at 1 kHz: without the limits its first 50 ms
+    // row runs at about 2 kHz from rest.
+    let mut robot = linterpd::robot::seed_robot();
+    robot.joints[2].dynamics = linterpd::robot::Dynamics {
+        max_accel: Some(1_000.0),
+        start_hz: Some(1_000.0),
+    };
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.record_pulses(true));
+    let (d, h) = common::daemon::spawn_robot(
+        duplex_connector(&shared, None),
+        ContractSettings::default(),
+        &linterpd::daemon::DaemonOptions::default(),
+        [0; linterpd::kinematics::JOINTS],
+        robot,
+    );
+    wait_connected(&h).await;
+    let there = run(&h, P2).await;
+    assert_on_target(&there);
+    // The PLC's pulses: d3 (channel 2) leaves standstill and comes to it at no more than
+    // 1 kHz over its first and last 50 ms (a pulse of rounding aside), and its speed changes
+    // by no more than 1000 mm/s^2 allows between two 50 ms windows (two pulses of rounding).
+    let times: Vec<f64> = shared
+        .with(linterpd::mock::MockPlc::take_pulses)
+        .into_iter()
+        .filter(|p| p.channel == 2)
+        .map(|p| p.time_s)
+        .collect();
+    let (first, last) = (times[0], times[times.len() - 1]);
+    let within = |from: f64, to: f64| times.iter().filter(|&&t| t >= from && t < to).count();
+    assert!(
+        within(first, first + 0.05) <= 51,
+        "{} pulses",
+        within(first, first + 0.05)
+    );
+    assert!(within(last - 0.05, last + 1e-9) <= 51);
+    let windows = ((last - first) / 0.05).ceil() as u32;
+    let per_window: Vec<usize> = (0..windows)
+        .map(|k| first + 0.05 * f64::from(k))
+        .map(|t| within(t, t + 0.05))
+        .collect();
+    // 1000 mm/s^2 over 50 ms at 0.013 mm a pulse: 3846 Hz, 192 pulses a window.
+    for w in per_window.windows(2) {
+        assert!(w[0].abs_diff(w[1]) <= 192 + 4, "{per_window:?}");
+    }
+    d.shut_down().await;
+}

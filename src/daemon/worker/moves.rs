@@ -687,13 +687,19 @@ fn channel_tables(plan: &Plan) -> Vec<(usize, &[crate::table::Segment])> {
 fn progress_curve(robot: &Robot, plan: &Plan, from: [i32; CHANNELS]) -> Option<ProgressCurve> {
     let period_s = plan.profile.period_s;
     let duration_s = plan.duration_s();
+    let last = plan.samples.counts.len().saturating_sub(1);
     let points: Vec<(Duration, [i32; CHANNELS])> = plan
         .samples
         .counts
         .iter()
         .enumerate()
         .map(|(k, joints)| {
-            let at_s = (k as f64 * period_s).min(duration_s);
+            // The last point is the end: a time-optimal profile's last period has its own length.
+            let at_s = if k == last {
+                duration_s
+            } else {
+                (k as f64 * period_s).min(duration_s)
+            };
             let mut counts = from;
             for (joint, &count) in robot.joints.iter().zip(joints) {
                 counts[usize::from(joint.channel)] =
