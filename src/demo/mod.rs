@@ -15,9 +15,11 @@
 //! to P2 again at dT 50 ms: a bounded-error and a constant-period upload behind a bounded-error
 //! move, each measured on the trace for idle time). All run on the
 //! line P1P2, so one picture shows them all (the seed's Figs. 6 and 7: the path, and the
-//! deviation along it).
+//! deviation along it). Last, planned only ([`drives`]): a line near a short arm's axis under
+//! whole-move slow-down beside its time-optimal timing under drive limits.
 
 mod cycle;
+pub mod drives;
 pub mod press;
 mod replay;
 mod rig;
@@ -238,6 +240,8 @@ pub struct Demo {
     pub moves: Vec<DemoMove>,
     /// The pick-and-place cycle, blended and stopped.
     pub cycles: Vec<Cycle>,
+    /// A line near a short arm's axis planned with and without drive limits.
+    pub drives: drives::DriveComparison,
     /// The picture, when asked for.
     pub svg: Option<String>,
 }
@@ -267,6 +271,8 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     daemon.shut_down().await;
     rig.stop();
     let (moves, cycles) = driven?;
+    let drives =
+        drives::compare().map_err(|e| DemoError::Rig(format!("the drive comparison: {e}")))?;
     let svg = if options.svg {
         Some(picture(&robot, &moves)?)
     } else {
@@ -278,6 +284,7 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
         scan_s,
         moves,
         cycles,
+        drives,
         svg,
     })
 }

@@ -156,7 +156,8 @@ pub fn write_report(demo: &Demo, out: &mut dyn Write) -> io::Result<()> {
         "(they can differ only where a channel has several segments: the mock starts the next\n\
          one at its next scan, the planner at once)."
     )?;
-    cycles(demo, out)
+    cycles(demo, out)?;
+    super::drives::write(&demo.drives, out)
 }
 
 /// The pick-and-place cycle, blended and stopped, and how much shorter blending makes it.
