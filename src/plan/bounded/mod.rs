@@ -100,6 +100,16 @@ fn deltas(reach: &[f64; JOINTS], scale: f64, budget_mm: f64) -> [f64; JOINTS] {
     })
 }
 
+/// How many times the windows of a joint whose drive refused a try's rows are halved before
+/// every pulse is made on time.
+const DRIVE_NARROWINGS: usize = 4;
+
+/// A try a joint's drive could not follow: why, and its windows.
+struct DriveRefusal {
+    error: PlanError,
+    deltas: [f64; JOINTS],
+}
+
 /// A verified bounded-error plan's tables and how they ran.
 pub(super) struct Verified {
     pub tables: Vec<ChannelTable>,
@@ -307,10 +317,11 @@ impl Move<'_> {
     /// first accepted (`None` if none).
     ///
     /// A try whose rows a joint's drive could not follow ([`super::dynamics::judge`]) is
-    /// refused like one off the tolerance. When the tries end and one was refused so, the rows
-    /// are made once more with every pulse on time (windows of half a pulse: the rows follow
-    /// the motion within a pulse of rounding); if the drive cannot follow those either, its
-    /// refusal is the error.
+    /// refused like one off the tolerance. When the tries end and one was refused so, the
+    /// windows of the joint the drive refused are halved, a few times, from that try's (the
+    /// rows then follow the motion more closely); then every pulse is made on time (windows
+    /// of half a pulse: the rows follow the motion within a pulse of rounding). If the drive
+    /// cannot follow those either, its refusal is the error.
     fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
         let mut drive = None;
         for off_window in OFF_WINDOW_TRIES {
@@ -333,14 +344,37 @@ impl Move<'_> {
                 }
             }
         }
-        let Some(refusal) = drive else {
+        let Some(mut refused) = drive else {
             return Ok(None);
         };
+        let mut deltas = refused.deltas;
+        for _ in 0..DRIVE_NARROWINGS {
+            let Some(j) = self.joint_named(&refused.error) else {
+                break;
+            };
+            deltas[j] *= 0.5;
+            let mut again = None;
+            if let Some(v) = self.verify(sizing.tracks, &deltas, 0, tolerance_mm, &mut again)? {
+                return Ok(Some(v));
+            }
+            match again {
+                Some(r) => refused.error = r.error,
+                None => break,
+            }
+        }
         let mut again = None;
         match self.verify(sizing.tracks, &[0.0; JOINTS], 0, tolerance_mm, &mut again)? {
             Some(v) => Ok(Some(v)),
-            None => Err(again.unwrap_or(refusal)),
+            None => Err(again.map_or(refused.error, |r| r.error)),
         }
+    }
+
+    /// The joint a drive refusal names.
+    fn joint_named(&self, refusal: &PlanError) -> Option<usize> {
+        let (PlanError::RowStep { joint, .. } | PlanError::RestRow { joint, .. }) = refusal else {
+            return None;
+        };
+        self.robot.joints.iter().position(|j| j.name == *joint)
     }
 
     /// Which of the tries ([`Self::try_plan`]) the execution model accepts first, from 1
@@ -378,14 +412,14 @@ impl Move<'_> {
 
     /// Rows for windows `deltas` pulses wide, if the execution model finds them within the
     /// tolerance (and the tracking error within twice it) and every joint's drive can follow
-    /// them (else `drive` takes the drive's refusal).
+    /// them (else `drive` takes the drive's refusal and the windows).
     fn verify(
         &self,
         tracks: &[Counts],
         deltas: &[f64; JOINTS],
         off_window: usize,
         tolerance_mm: f64,
-        drive: &mut Option<PlanError>,
+        drive: &mut Option<DriveRefusal>,
     ) -> Result<Option<Verified>, PlanError> {
         let tables = self.tables(tracks, deltas, off_window);
         super::check_tables(self.robot, &tables, self.motion.method)?;
@@ -411,7 +445,10 @@ impl Move<'_> {
                 super::settings(self.motion),
             )
         {
-            *drive = Some(refusal);
+            *drive = Some(DriveRefusal {
+                error: refusal,
+                deltas: *deltas,
+            });
             return Ok(None);
         }
         Ok(Some(Verified { tables, figures }))
