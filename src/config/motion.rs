@@ -4,9 +4,9 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::raw::{RawMethod, RawMotion};
+use super::raw::{RawMethod, RawMotion, RawRamp};
 use super::units::parse_duration_s;
-use crate::robot::{DEFAULT_MAX_SPEED_MM_S, Method, Motion, OverSpeed};
+use crate::robot::{DEFAULT_MAX_SPEED_MM_S, Method, Motion, OverSpeed, Ramp};
 
 /// The motion defaults a motion table describes.
 pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
@@ -23,7 +23,25 @@ pub(super) fn motion(at: &At, raw: &RawMotion) -> Result<Motion, ConfigError> {
         accel_s: duration_s(&at.child("accel_time"), &raw.accel_time)?,
         frequency_model: raw.frequency_model.unwrap_or_default(),
         over_speed: raw.over_speed.map_or(OverSpeed::default(), OverSpeed::from),
+        ramp: ramp(at, raw)?,
     })
+}
+
+/// The ramps' shape; `s-curve` needs `jerk_mm_s3`, which the trapezoid does not take.
+fn ramp(at: &At, raw: &RawMotion) -> Result<Ramp, ConfigError> {
+    let jerk = at.child("jerk_mm_s3");
+    let profile = raw.profile.as_ref().map(|p| (*p.get_ref(), p.span()));
+    match (profile, &raw.jerk_mm_s3) {
+        (Some((RawRamp::SCurve, _)), Some(j)) => Ok(Ramp::SCurve {
+            jerk_mm_s3: jerk.positive(j)?,
+        }),
+        (Some((RawRamp::SCurve, span)), None) => Err(jerk.missing(
+            &span,
+            "profile \"s-curve\" needs the path's jerk, e.g. jerk_mm_s3 = 20000",
+        )),
+        (_, Some(j)) => Err(jerk.invalid(j, "only profile \"s-curve\" takes a jerk")),
+        (_, None) => Ok(Ramp::Trapezoid),
+    }
 }
 
 /// The fastest an order may ask for (default [`DEFAULT_MAX_SPEED_MM_S`]): above 0 and at least
@@ -70,6 +88,42 @@ fn duration_s(at: &At, text: &Spanned<String>) -> Result<f64, ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::super::fixture::{edited, message};
+
+    #[test]
+    fn an_s_curve_takes_its_jerk_and_the_trapezoid_none() {
+        let text = edited(&[(
+            8,
+            "accel_time = \"200ms\"\nprofile = \"s-curve\"\njerk_mm_s3 = 20000.0",
+        )]);
+        let config = super::super::Config::from_toml(&text).unwrap();
+        assert_eq!(
+            config.robot(Some("r")).unwrap().motion.ramp,
+            crate::robot::Ramp::SCurve {
+                jerk_mm_s3: 20_000.0
+            }
+        );
+        let without = edited(&[(8, "accel_time = \"200ms\"\nprofile = \"s-curve\"")]);
+        assert_eq!(
+            message(&without),
+            "config line 9: robots.r.motion.jerk_mm_s3 is missing: profile \"s-curve\" needs the \
+             path's jerk, e.g. jerk_mm_s3 = 20000"
+        );
+        let stray = edited(&[(8, "accel_time = \"200ms\"\njerk_mm_s3 = 20000.0")]);
+        assert_eq!(
+            message(&stray),
+            "config line 9: robots.r.motion.jerk_mm_s3 = 20000: only profile \"s-curve\" takes a \
+             jerk"
+        );
+        let zero = edited(&[(
+            8,
+            "accel_time = \"200ms\"\nprofile = \"s-curve\"\njerk_mm_s3 = 0.0",
+        )]);
+        assert!(
+            message(&zero).contains("jerk_mm_s3 = 0"),
+            "{}",
+            message(&zero)
+        );
+    }
 
     #[test]
     fn period_without_unit_names_value_and_line() {

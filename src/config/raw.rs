@@ -203,6 +203,16 @@ pub(super) struct RawMotion {
     pub over_speed: Option<RawOverSpeed>,
     pub tolerance_mm: Option<Spanned<f64>>,
     pub max_speed_mm_s: Option<Spanned<f64>>,
+    pub profile: Option<Spanned<RawRamp>>,
+    pub jerk_mm_s3: Option<Spanned<f64>>,
+}
+
+/// `motion.profile`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub(super) enum RawRamp {
+    Trapezoid,
+    SCurve,
 }
 
 /// `motion.method`.

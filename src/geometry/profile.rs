@@ -63,7 +63,7 @@ pub struct Profile {
     pub length_mm: f64,
     /// Cruise (or peak) speed actually used, mm/s.
     pub speed_mm_s: f64,
-    /// Acceleration actually used, mm/s^2.
+    /// Acceleration actually used, mm/s^2 (an S-curve's: its peak).
     pub accel_mm_s2: f64,
     /// Ramp time, s (`ramp_periods * period_s`).
     pub accel_s: f64,
@@ -77,6 +77,9 @@ pub struct Profile {
     /// that starts and ends at rest ([`Profile::paced`]), between half a period and a period
     /// and a half, so the profile keeps its speed.
     pub last_period_s: f64,
+    /// An S-curve's jerk phase at each end of a ramp, s (0: the trapezoid's ramps, the
+    /// acceleration a step); see [`Profile::s_curve`].
+    pub jerk_s: f64,
 }
 
 /// The most periods one move may have (far beyond any table area).
@@ -128,6 +131,7 @@ impl Profile {
                 ramp_periods: 0,
                 cruise_end_periods: n0,
                 last_period_s: period_s,
+                jerk_s: 0.0,
             });
         }
         let accel = speed / req.accel_s;
@@ -150,7 +154,39 @@ impl Profile {
             ramp_periods: na,
             cruise_end_periods: n0,
             last_period_s: period_s,
+            jerk_s: 0.0,
         })
+    }
+
+    /// The jerk-limited (S-curve) profile of `req` under `jerk_mm_s3`: every ramp's acceleration
+    /// rises at that jerk to at most the trapezoid's (`speed / accel_s`), holds, and falls at
+    /// that jerk (seven phases over the move). The ramps are whole periods as the trapezoid's,
+    /// each lengthened by the jerk's time `a / j` (and by whole periods more where the peak
+    /// acceleration or the jerk would still pass its limit), so the S-curve never accelerates
+    /// harder than the trapezoid and takes longer by about `a / j` per move.
+    pub fn s_curve(req: ProfileRequest, jerk_mm_s3: f64) -> Result<Self, ProfileError> {
+        let jerk = positive("jerk_mm_s3", jerk_mm_s3)?;
+        let accel = positive("accel_s", req.accel_s).map(|ta| req.speed_mm_s / ta)?;
+        let mut ramp_s = req.accel_s + accel / jerk;
+        loop {
+            let base = Self::new(ProfileRequest {
+                accel_s: ramp_s,
+                ..req
+            })?;
+            let tr = base.accel_s;
+            let jerk_s = (accel / jerk).min(tr / 2.0);
+            let peak = base.speed_mm_s / (tr - jerk_s);
+            if (peak <= accel * (1.0 + 1e-9) && peak / jerk_s <= jerk * (1.0 + 1e-9))
+                || base.ramp_periods >= MAX_PERIODS
+            {
+                return Ok(Self {
+                    accel_mm_s2: peak,
+                    jerk_s,
+                    ..base
+                });
+            }
+            ramp_s = tr + req.period_s;
+        }
     }
 
     /// A profile at `speed_mm_s` for the whole of `length_mm`, with no ramp of its own (the
@@ -179,6 +215,7 @@ impl Profile {
             ramp_periods: 0,
             cruise_end_periods: periods as u32,
             last_period_s: total_s - (periods - 1.0) * period_s,
+            jerk_s: 0.0,
         })
     }
 
@@ -208,14 +245,49 @@ impl Profile {
         if ta == 0.0 {
             return self.speed_mm_s * t;
         }
-        let a = self.accel_mm_s2;
         if t <= ta {
-            0.5 * a * t * t
+            self.ramp_mm(t)
         } else if t <= total - ta {
-            0.5 * a * ta * ta + self.speed_mm_s * (t - ta)
+            self.ramp_mm(ta) + self.speed_mm_s * (t - ta)
         } else {
-            let r = total - t;
-            self.length_mm - 0.5 * a * r * r
+            self.length_mm - self.ramp_mm(total - t)
+        }
+    }
+
+    /// The distance a ramp covers from rest in `t_s` (at most its length), mm: `a t^2 / 2` for
+    /// the trapezoid; for an S-curve its jerk phase, constant acceleration and jerk phase again.
+    fn ramp_mm(&self, t_s: f64) -> f64 {
+        let a = self.accel_mm_s2;
+        let tj = self.jerk_s;
+        if tj == 0.0 {
+            return 0.5 * a * t_s * t_s;
+        }
+        let tr = self.accel_s;
+        if t_s <= tj {
+            a * t_s.powi(3) / (6.0 * tj)
+        } else if t_s <= tr - tj {
+            a * tj * tj / 6.0 + a * ((t_s - tj / 2.0).powi(2) - tj * tj / 4.0) / 2.0
+        } else {
+            let r = tr - t_s;
+            self.speed_mm_s * tr / 2.0 - (self.speed_mm_s * r - a * r.powi(3) / (6.0 * tj))
+        }
+    }
+
+    /// The speed a ramp reaches from rest in `t_s`, mm/s.
+    fn ramp_speed_mm_s(&self, t_s: f64) -> f64 {
+        let a = self.accel_mm_s2;
+        let tj = self.jerk_s;
+        if tj == 0.0 {
+            return a * t_s;
+        }
+        let tr = self.accel_s;
+        if t_s <= tj {
+            a * t_s * t_s / (2.0 * tj)
+        } else if t_s <= tr - tj {
+            a * (t_s - tj / 2.0)
+        } else {
+            let r = tr - t_s;
+            self.speed_mm_s - a * r * r / (2.0 * tj)
         }
     }
 
@@ -262,11 +334,11 @@ impl Profile {
         if ta == 0.0 {
             self.speed_mm_s
         } else if t_s <= ta {
-            self.accel_mm_s2 * t_s
+            self.ramp_speed_mm_s(t_s)
         } else if t_s <= total - ta {
             self.speed_mm_s
         } else {
-            self.accel_mm_s2 * (total - t_s)
+            self.ramp_speed_mm_s(total - t_s)
         }
     }
 }
@@ -284,6 +356,46 @@ mod tests {
             period_s: 0.05,
         })
         .unwrap()
+    }
+
+    #[test]
+    fn an_s_curve_keeps_its_acceleration_and_jerk_and_ends_where_the_trapezoid_does() {
+        let req = ProfileRequest {
+            length_mm: 285.73,
+            speed_mm_s: 240.0,
+            accel_s: 0.2,
+            period_s: 0.05,
+        };
+        for jerk in [5_000.0, 20_000.0, 1e6] {
+            let p = Profile::s_curve(req, jerk).unwrap();
+            let accel = 240.0 / 0.2;
+            assert!(p.accel_mm_s2 <= accel * (1.0 + 1e-9), "{p:?}");
+            assert!(p.accel_mm_s2 / p.jerk_s <= jerk * (1.0 + 1e-9), "{p:?}");
+            assert!(p.duration_s() >= seed().duration_s());
+            assert!((p.distance_mm(p.duration_s()) - 285.73).abs() < 1e-9);
+            // Speed from the distance, numerically, and its steps: no jump in the speed, no
+            // acceleration beyond the limit, jerk within it (sampled every 0.1 ms).
+            let h = 1e-4;
+            let n = (p.duration_s() / h) as usize;
+            let v: Vec<f64> = (0..n).map(|i| p.speed_at_mm_s(i as f64 * h)).collect();
+            for i in 1..n {
+                let d = (p.distance_mm(i as f64 * h) - p.distance_mm((i - 1) as f64 * h)) / h;
+                let mid = f64::midpoint(v[i], v[i - 1]);
+                assert!(
+                    (d - mid).abs() < 1e-3,
+                    "jerk {jerk}, t {}: {d} {mid}",
+                    i as f64 * h
+                );
+                assert!((v[i] - v[i - 1]).abs() / h <= accel * (1.0 + 1e-6) + 1e-6);
+            }
+            for i in 2..n {
+                let jerk_here = (v[i] - 2.0 * v[i - 1] + v[i - 2]).abs() / (h * h);
+                assert!(jerk_here <= jerk * 1.01 + 1.0, "jerk {jerk}: {jerk_here}");
+            }
+        }
+        // A very high jerk is the trapezoid's shape plus a period at most.
+        let p = Profile::s_curve(req, 1e9).unwrap();
+        assert!(p.duration_s() <= seed().duration_s() + 0.05 + 1e-12);
     }
 
     #[test]

@@ -222,6 +222,13 @@ pub enum PlanError {
         /// How long a row from rest lasts, s.
         row_s: f64,
     },
+    /// An S-curve asked of a robot with drive limits, whose moves are timed time-optimally.
+    #[error(
+        "profile \"s-curve\" is not planned for a robot with drive limits (max_accel, \
+         start_hz): its moves are timed time-optimally under them, with trapezoidal \
+         accelerations; use profile \"trapezoid\" for this robot"
+    )]
+    SCurveUnderDriveLimits,
     /// No motion along the course keeps every limit at some point of it.
     #[error("no motion {at_mm:.1} mm along the course keeps every limit: {reason}")]
     Untimed {

@@ -30,7 +30,7 @@ pub mod segments;
 
 use crate::geometry::{Line, Pace, Path, Pose, Profile, ProfileRequest};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
-use crate::robot::{Method, Motion, OverSpeed, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Ramp, Robot};
 use crate::sim::{self, Execution, Figures, Settings};
 use crate::table::{ChannelTable, ValidTable};
 
@@ -656,15 +656,20 @@ impl Sampler<'_> {
         // A time-optimal pace starts and ends at rest itself: its profile has no ramp, and
         // under constant-period keeps its speed with a last period of its own length.
         let ramp = !self.course.pace().is_some_and(Pace::from_rest);
-        let profile = if ramp || self.continuous {
-            Profile::new(ProfileRequest {
-                length_mm: self.course.length_mm(),
-                speed_mm_s: motion.speed_mm_s,
-                accel_s: if ramp { motion.accel_s } else { 0.0 },
-                period_s: self.grid_s,
-            })?
-        } else {
-            Profile::paced(self.course.length_mm(), motion.speed_mm_s, self.grid_s)?
+        let request = ProfileRequest {
+            length_mm: self.course.length_mm(),
+            speed_mm_s: motion.speed_mm_s,
+            accel_s: if ramp { motion.accel_s } else { 0.0 },
+            period_s: self.grid_s,
+        };
+        let profile = match (ramp, motion.ramp) {
+            (true, Ramp::SCurve { jerk_mm_s3 }) => Profile::s_curve(request, jerk_mm_s3)?,
+            (false, Ramp::SCurve { .. }) => return Err(PlanError::SCurveUnderDriveLimits),
+            (true, Ramp::Trapezoid) => Profile::new(request)?,
+            (false, Ramp::Trapezoid) if self.continuous => Profile::new(request)?,
+            (false, Ramp::Trapezoid) => {
+                Profile::paced(self.course.length_mm(), motion.speed_mm_s, self.grid_s)?
+            }
         };
         let samples =
             self.course

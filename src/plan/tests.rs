@@ -498,3 +498,35 @@ fn bounded_error_never_narrows_on_random_seed_robot_lines() {
     assert!(tries.len() >= 60 && skipped <= 20, "{skipped} skipped");
     assert!(tries.iter().all(|&k| k <= 2), "{tries:?}");
 }
+
+#[test]
+fn an_s_curve_seed_move_is_valid_a_little_slower_and_gentler_from_rest() {
+    use crate::robot::Ramp;
+    let robot = seed_robot();
+    for method in [
+        Method::ConstantPeriod,
+        Method::BoundedError { tolerance_mm: 0.05 },
+    ] {
+        let mut req = seed_request(FrequencyModel::FpxDivider, false);
+        req.motion.method = method;
+        let trapezoid = plan_move(&robot, &req).unwrap();
+        req.motion.ramp = Ramp::SCurve {
+            jerk_mm_s3: 20_000.0,
+        };
+        let s_curve = plan_move(&robot, &req).unwrap();
+        assert!(s_curve.valid(), "{method:?}: {:?}", s_curve.problems);
+        // The jerk's time a / j = 1200 / 20000 = 0.06 s per ramp, rounded to whole periods.
+        let cost = s_curve.duration_s() - trapezoid.duration_s();
+        assert!((0.0..=0.12 + 0.1).contains(&cost), "{method:?}: {cost} s");
+        assert!(s_curve.profile.accel_mm_s2 <= 1_200.0 * (1.0 + 1e-9));
+        // The radial joint leaves rest far below the trapezoid's 2 kHz.
+        assert!(
+            s_curve.drive[2].rest_hz < 0.5 * trapezoid.drive[2].rest_hz,
+            "{method:?}"
+        );
+        assert_eq!(s_curve.end_counts(), trapezoid.end_counts());
+        if let Some(t) = method.tolerance_mm() {
+            assert!(s_curve.figures.path_deviation_mm <= t);
+        }
+    }
+}

@@ -135,6 +135,31 @@ impl OverSpeed {
     }
 }
 
+/// The shape of a move's start and stop ramps.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Ramp {
+    /// The seed's trapezoid: the acceleration steps on and off.
+    #[default]
+    Trapezoid,
+    /// Jerk-limited: the acceleration rises and falls at `jerk_mm_s3` (seven phases over a
+    /// move), for loads that must not be shaken; a little slower than the trapezoid.
+    SCurve {
+        /// The path's jerk, mm/s^3.
+        jerk_mm_s3: f64,
+    },
+}
+
+impl Ramp {
+    /// The name used in config and reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Trapezoid => "trapezoid",
+            Self::SCurve { .. } => "s-curve",
+        }
+    }
+}
+
 /// The motion settings of a move (a robot's defaults, overridden per move).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Motion {
@@ -150,6 +175,8 @@ pub struct Motion {
     pub frequency_model: FrequencyModel,
     /// What to do when a channel would be too fast.
     pub over_speed: OverSpeed,
+    /// The ramps' shape.
+    pub ramp: Ramp,
 }
 
 /// A robot: kinematics, joints in the model's order, motion defaults and table area size.
@@ -276,6 +303,7 @@ pub fn seed_robot() -> Robot {
             accel_s: 0.2,
             frequency_model: FrequencyModel::FpxDivider,
             over_speed: OverSpeed::Reject,
+            ramp: Ramp::Trapezoid,
         },
         area_words: 2_000,
         max_speed_mm_s: DEFAULT_MAX_SPEED_MM_S,

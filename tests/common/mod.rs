@@ -44,6 +44,7 @@ fn motion() -> Motion {
         accel_s: 0.2,
         frequency_model: FrequencyModel::FpxDivider,
         over_speed: OverSpeed::SlowDown,
+        ramp: linterpd::robot::Ramp::Trapezoid,
     }
 }
 

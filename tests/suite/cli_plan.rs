@@ -518,3 +518,18 @@ fn a_drive_limit_no_row_can_keep_is_refused_naming_the_joint_and_the_figure() {
     assert!(e.contains("raise start_hz to at least 20.6 Hz"), "{e}");
     std::fs::remove_file(&config).unwrap();
 }
+
+#[test]
+fn an_s_curve_is_planned_on_request_and_a_bad_one_named() {
+    let trapezoid = plan_json(&[]);
+    let s_curve = plan_json(&["--profile", "s-curve:20000"]);
+    assert_eq!(s_curve["profile"]["timing"], "s-curve");
+    assert_eq!(s_curve["valid"], true);
+    let duration = |doc: &Value| doc["profile"]["duration_s"].as_f64().unwrap();
+    assert!(duration(&s_curve) > duration(&trapezoid));
+    assert!(s_curve["profile"]["accel_mm_s2"].as_f64().unwrap() <= 1_200.0 + 1e-6);
+    let e = refused(&[], &["--profile", "s-curve:-5"]);
+    assert!(e.contains("--profile") && e.contains("above 0"), "{e}");
+    let e = refused(&[], &["--profile", "sine"]);
+    assert!(e.contains("\"sine\"") && e.contains("s-curve:JERK"), "{e}");
+}

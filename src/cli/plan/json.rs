@@ -100,8 +100,9 @@ struct ProfileDoc {
     /// The course's length: the line's, or the section path's, mm.
     course_length_mm: f64,
     speed_mm_s: f64,
-    /// "trapezoid" (the seed's profile) or "time-optimal" (under drive limits: the ramps are
-    /// the pace's, `accel_s` 0 and `accel_mm_s2` null).
+    /// "trapezoid" (the seed's profile), "s-curve" (jerk-limited ramps: `accel_mm_s2` is their
+    /// peak) or "time-optimal" (under drive limits: the ramps are the pace's, `accel_s` 0 and
+    /// `accel_mm_s2` null).
     timing: &'static str,
     accel_s: f64,
     accel_mm_s2: f64,
@@ -175,7 +176,7 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             {
                 "time-optimal"
             } else {
-                "trapezoid"
+                plan.motion.ramp.name()
             },
             accel_s: plan.profile.accel_s,
             accel_mm_s2: plan.profile.accel_mm_s2,

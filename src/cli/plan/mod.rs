@@ -20,7 +20,7 @@ use super::{Failure, bad_input};
 use crate::config::{Config, parse_duration_s};
 use crate::geometry::Pose;
 use crate::plan::{MovePlan, MoveRequest, Origin, Plan, line_as_path, plan_line};
-use crate::robot::{Method, Motion, OverSpeed, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Ramp, Robot};
 use crate::table::FrequencyModel;
 
 /// Arguments of `linterpd plan`.
@@ -72,6 +72,10 @@ pub struct PlanArgs {
     /// What to do when a channel would be too fast (default: the robot's).
     #[arg(long, value_enum)]
     pub over_speed: Option<OverSpeedArg>,
+    /// The ramps' shape: `trapezoid`, or `s-curve` with the path's jerk, e.g. `s-curve:20000`
+    /// (mm/s^3; default: the robot's).
+    #[arg(long)]
+    pub profile: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
@@ -286,7 +290,27 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
             OverSpeedArg::SlowDown => OverSpeed::SlowDown,
         };
     }
+    if let Some(text) = &args.profile {
+        m.ramp = ramp(text).context("--profile")?;
+    }
     Ok(m)
+}
+
+/// `--profile`: `trapezoid`, or `s-curve:JERK` in mm/s^3.
+fn ramp(text: &str) -> anyhow::Result<Ramp> {
+    if text == "trapezoid" {
+        return Ok(Ramp::Trapezoid);
+    }
+    let Some(jerk) = text.strip_prefix("s-curve:") else {
+        anyhow::bail!(
+            "{text:?}: must be \"trapezoid\" or \"s-curve:JERK\" with the path's jerk in mm/s^3, \
+             e.g. s-curve:20000"
+        );
+    };
+    match jerk.trim().parse::<f64>() {
+        Ok(j) if j.is_finite() && j > 0.0 => Ok(Ramp::SCurve { jerk_mm_s3: j }),
+        _ => anyhow::bail!("{text:?}: the jerk {jerk:?} must be a number of mm/s^3 above 0"),
+    }
 }
 
 /// The method `--method` and `--tolerance` ask for, the robot's `default` filling the gaps.

@@ -117,6 +117,22 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         )?;
         return write_slowed(plan, out);
     }
+    if p.jerk_s > 0.0 {
+        writeln!(
+            out,
+            "profile  s-curve: {:.3} mm at {:.3} mm/s, ramps {:.3} s (at most {:.1} mm/s^2, jerk \
+             phases {:.3} s), period {:.3} s: {} periods, {:.3} s",
+            p.length_mm,
+            p.speed_mm_s,
+            p.accel_s,
+            p.accel_mm_s2,
+            p.jerk_s,
+            p.period_s,
+            p.periods(),
+            p.duration_s()
+        )?;
+        return write_slowed(plan, out);
+    }
     writeln!(
         out,
         "profile  {:.3} mm at {:.3} mm/s, ramps {:.3} s ({:.1} mm/s^2), period {:.3} s: {} periods, {:.3} s",
