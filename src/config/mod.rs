@@ -279,7 +279,8 @@ mod tests {
         assert_eq!(
             message(&text),
             "config line 8: robots.r.motion.colour: unknown field `colour`, expected one of \
-             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`, `tolerance_mm`, `max_speed_mm_s`"
+             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`, `tolerance_mm`, `max_speed_mm_s`, \
+             `profile`, `jerk_mm_s3`"
         );
     }
 
