@@ -301,42 +301,10 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         counts: start_counts,
     };
     if robot.has_dynamics() {
-        let course = timed_line(robot, &line, &start, &req.motion)?;
+        let course = dynamics::timed_line(robot, &line, &start, &req.motion)?;
         return plan_course(robot, &course, &start, req.motion);
     }
     plan_course(robot, &Course::Line(line), &start, req.motion)
-}
-
-/// A line for a robot with drive limits: a path of that one line, run at its time-optimal
-/// pace ([`dynamics::pace`]).
-fn timed_line(
-    robot: &Robot,
-    line: &Line,
-    start: &Start,
-    motion: &Motion,
-) -> Result<Course, PlanError> {
-    let path = Path::build(&crate::geometry::PathSpec {
-        start: line.from,
-        elements: vec![(
-            crate::geometry::Element::Line { to: line.to },
-            crate::geometry::Corner::Stop,
-        )],
-    })?;
-    let pace = dynamics::pace(
-        robot,
-        &dynamics::Shape {
-            length_mm: path.length_mm(),
-            pose_at: &|s| path.at(s),
-            curvature_at: &|_| 0.0,
-        },
-        &start.values,
-        motion,
-        &dynamics::PathLimits {
-            centripetal_mm_s2: f64::INFINITY,
-            rest_row_s: motion.period_s,
-        },
-    )?;
-    Ok(Course::Path { path, pace })
 }
 
 /// Plans one joint-space move for `robot`: the target is checked against every joint's limits
@@ -350,7 +318,7 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
             counts: start.counts,
         });
     }
-    let motion = joint_move_motion(
+    let motion = dynamics::joint_move_motion(
         robot,
         &start.values,
         &req.to,
@@ -358,55 +326,6 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
         req.motion,
     )?;
     plan_course(robot, &course, &start, motion)
-}
-
-/// A joint move's motion under its joints' drive limits: every joint moves in proportion, so
-/// the time-optimal motion is one trapezoid, its acceleration the lowest any joint allows
-/// (`max_accel`, and `start_hz` over the first and last periods) over its share of the
-/// course's length. Without drive limits, `motion` as it is.
-fn joint_move_motion(
-    robot: &Robot,
-    from: &Joints,
-    to: &Joints,
-    length_mm: f64,
-    motion: Motion,
-) -> Result<Motion, PlanError> {
-    use dynamics::{ACCEL_MARGIN, START_MARGIN};
-    let mut accel = if motion.accel_s > 0.0 {
-        motion.speed_mm_s / motion.accel_s
-    } else {
-        f64::INFINITY
-    };
-    for (j, joint) in robot.joints.iter().enumerate() {
-        let share = (to[j] - from[j]).abs() / length_mm;
-        if share == 0.0 {
-            continue;
-        }
-        if let Some(a) = joint.dynamics.max_accel {
-            accel = accel.min(a * ACCEL_MARGIN / share);
-        }
-        if let Some(start_hz) = joint.dynamics.start_hz {
-            let room_hz = START_MARGIN * start_hz - 1.0 / motion.period_s;
-            if room_hz <= 0.0 {
-                return Err(PlanError::StartHzTooLow {
-                    joint: joint.name.clone(),
-                    start_hz,
-                    min_hz: 1.0 / motion.period_s / START_MARGIN,
-                    row_s: motion.period_s,
-                });
-            }
-            let rest = 2.0 * room_hz / motion.period_s * joint.step.abs();
-            accel = accel.min(rest / share);
-        }
-    }
-    Ok(if accel.is_finite() {
-        Motion {
-            accel_s: motion.speed_mm_s / accel,
-            ..motion
-        }
-    } else {
-        motion
-    })
 }
 
 /// Where a move starts: joint values and the counts that stand for them.

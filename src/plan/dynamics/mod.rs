@@ -1,13 +1,16 @@
 //! PURE. What the drives behind the pulse outputs can follow ([`crate::robot::Dynamics`]): the
 //! time-optimal motion along a line or path section under every joint's limits ([`timing`]),
-//! and every table's rows checked against them ([`rows`]).
+//! and every table's rows checked against them ([`rows`]); a line and a joint move under them
+//! ([`moves`]).
 
+mod moves;
 mod rows;
 mod timing;
 
+pub(super) use moves::{joint_move_motion, timed_line};
 pub use rows::DriveFigures;
 pub(super) use rows::judge;
-pub(super) use timing::{ACCEL_MARGIN, PathLimits, START_MARGIN, Shape, pace};
+pub(super) use timing::{PathLimits, Shape, pace};
 
 #[cfg(test)]
 mod tests;
