@@ -161,9 +161,10 @@ impl Profile {
     /// The jerk-limited (S-curve) profile of `req` under `jerk_mm_s3`: every ramp's acceleration
     /// rises at that jerk to at most the trapezoid's (`speed / accel_s`), holds, and falls at
     /// that jerk (seven phases over the move). The ramps are whole periods as the trapezoid's,
-    /// each lengthened by the jerk's time `a / j` (and by whole periods more where the peak
-    /// acceleration or the jerk would still pass its limit), so the S-curve never accelerates
-    /// harder than the trapezoid and takes longer by about `a / j` per move.
+    /// each lengthened by the jerk's time `a / j` (and, where the peak acceleration or the jerk
+    /// would still pass its limit, by 5 % and a period more until neither does: a short move's
+    /// triangle), so the S-curve never accelerates harder than the trapezoid and takes longer
+    /// by about `a / j` per move.
     pub fn s_curve(req: ProfileRequest, jerk_mm_s3: f64) -> Result<Self, ProfileError> {
         let jerk = positive("jerk_mm_s3", jerk_mm_s3)?;
         let accel = positive("accel_s", req.accel_s).map(|ta| req.speed_mm_s / ta)?;
@@ -185,7 +186,9 @@ impl Profile {
                     ..base
                 });
             }
-            ramp_s = tr + req.period_s;
+            // Longer ramps, growing: a short move's triangle takes a ramp of about the square
+            // root of the time asked, so a step of one period alone need not end.
+            ramp_s = ramp_s.max(tr) * 1.05 + req.period_s;
         }
     }
 
@@ -396,6 +399,24 @@ mod tests {
         // A very high jerk is the trapezoid's shape plus a period at most.
         let p = Profile::s_curve(req, 1e9).unwrap();
         assert!(p.duration_s() <= seed().duration_s() + 0.05 + 1e-12);
+    }
+
+    #[test]
+    fn a_short_s_curve_move_ends_its_search_within_its_limits() {
+        // A 2 mm move on a 1 ms grid: its ramps are triangles, and a search lengthening them by
+        // a period went round for ever.
+        for (length_mm, jerk) in [(2.0, 2_000.0), (0.5, 150_000.0), (40.0, 3_000.0)] {
+            let req = ProfileRequest {
+                length_mm,
+                speed_mm_s: 500.0,
+                accel_s: 0.05,
+                period_s: 0.001,
+            };
+            let p = Profile::s_curve(req, jerk).unwrap();
+            assert!(p.accel_mm_s2 <= 10_000.0 * (1.0 + 1e-9), "{p:?}");
+            assert!(p.accel_mm_s2 / p.jerk_s <= jerk * (1.0 + 1e-9), "{p:?}");
+            assert!((p.distance_mm(p.duration_s()) - length_mm).abs() < 1e-9);
+        }
     }
 
     #[test]

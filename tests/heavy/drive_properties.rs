@@ -3,7 +3,9 @@
 //! `start_hz`, row steps within `max_accel`, travel within the joint's limits), checked from the
 //! execution model's rows by a check written here from the rule `docs/ACCURACY.md` states, and a
 //! bounded-error plan keeps its tolerance under both frequency models. A move is refused only
-//! for a limit it cannot meet, named.
+//! for a limit it cannot meet, named. And S-curve ramps (no drive limits): every plan valid, on
+//! its target, within its tolerance, its profile never above the trapezoid's acceleration nor
+//! the jerk asked.
 
 use crate::common;
 
@@ -172,8 +174,58 @@ fn check(robot: &Robot, starts: &[Plan], l: &Limits) -> Result<(), TestCaseError
     Ok(())
 }
 
+/// Plans the line with S-curve ramps of `jerk_mm_s3`, checked as every plan is and against
+/// the trapezoid's acceleration.
+fn check_s_curve(
+    robot: &Robot,
+    mv: (Pose, Pose),
+    m: Motion,
+    tolerance_mm: Option<f64>,
+    jerk_mm_s3: f64,
+) -> Result<(), TestCaseError> {
+    let mut robot = robot.clone();
+    robot.motion.ramp = linterpd::robot::Ramp::SCurve { jerk_mm_s3 };
+    let m = Motion {
+        accel_s: m.accel_s.max(0.01),
+        ..m
+    };
+    let l = Limits {
+        accel_share: [1.0; 4],
+        start_share: [None; 4],
+        bounded_mm: tolerance_mm,
+    };
+    let Some(starts) = plan(&robot, mv, m, &l) else {
+        return Ok(());
+    };
+    for start in &starts {
+        let p = &start.profile;
+        let trapezoid_accel = start.motion.speed_mm_s / start.motion.accel_s;
+        prop_assert!(p.accel_mm_s2 <= trapezoid_accel * (1.0 + 1e-9), "{p:?}");
+        prop_assert!(p.jerk_s > 0.0 && p.accel_mm_s2 / p.jerk_s <= jerk_mm_s3 * (1.0 + 1e-9));
+    }
+    check(&robot, &starts, &l)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn s_curve_lines_keep_every_rule_on_every_kinematics(
+        which in 0..3usize,
+        cyl in cylindrical_move(),
+        gan in gantry_move(),
+        sca in scara_move(),
+        m in motion(),
+        tolerance_mm in prop::option::of(0.1..0.3f64),
+        jerk_mm_s3 in 2_000.0..200_000.0f64,
+    ) {
+        let (robot, mv) = match which {
+            0 => (common::cylindrical(), cyl),
+            1 => (common::gantry(), gan),
+            _ => (common::scara(), sca),
+        };
+        check_s_curve(&robot, mv, m, tolerance_mm, jerk_mm_s3)?;
+    }
 
     #[test]
     fn cylindrical_lines_keep_every_drive_limit(mv in cylindrical_move(), m in motion(), l in limits()) {
