@@ -278,6 +278,35 @@ fn a_start_frequency_below_a_pulse_per_period_is_refused_naming_the_joint_and_th
 }
 
 #[test]
+fn a_start_frequency_on_a_joint_that_does_not_move_refuses_nothing() {
+    // A vertical line moves d2 alone: theta1's start_hz of 1 Hz (below a pulse per period) has
+    // no standstill to leave, while the same on d2 is refused.
+    let lift = |robot: &Robot| {
+        let from = robot
+            .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+            .unwrap();
+        let mut to = from;
+        to.position_mm.z += 100.0;
+        MoveRequest {
+            from: Origin::Pose(from),
+            to,
+            motion: robot.motion,
+        }
+    };
+    let mut robot = seed_limited();
+    robot.joints[0].dynamics.start_hz = Some(1.0);
+    let plan = plan_move(&robot, &lift(&robot)).unwrap();
+    assert!(plan.tables[0].segments.is_empty());
+    assert!(plan.valid());
+    robot.joints[1].dynamics.start_hz = Some(1.0);
+    let err = plan_move(&robot, &lift(&robot)).unwrap_err();
+    assert!(
+        matches!(err, PlanError::StartHzTooLow { ref joint, .. } if joint == "d2"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_joint_move_under_drive_limits_keeps_one_trapezoid_within_them() {
     let robot = seed_limited();
     let start = robot

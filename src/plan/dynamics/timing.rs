@@ -151,9 +151,12 @@ fn rest_accels(
         let Some(start_hz) = joint.dynamics.start_hz else {
             continue;
         };
-        let moves = along.dq.iter().any(|d| d[j] != 0.0);
+        // A joint that does not move has no standstill to leave.
+        if along.dq.iter().all(|d| d[j] == 0.0) {
+            continue;
+        }
         let room_hz = START_MARGIN * start_hz - 1.0 / rest_row_s;
-        if moves && room_hz <= 0.0 {
+        if room_hz <= 0.0 {
             return Err(PlanError::StartHzTooLow {
                 joint: joint.name.clone(),
                 start_hz,
@@ -176,8 +179,8 @@ struct Zone {
 }
 
 /// Every standstill's zone: the grid points whose step to the next the fastest motion (`x`)
-/// runs within `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows either side of
-/// the standstill of the motion planned with it too.
+/// runs within `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows
+/// either side of the standstill of the motion planned with it too.
 fn rest_zones(
     along: &JointsAlong,
     grid: &[GridPoint],
