@@ -109,3 +109,47 @@ pub fn check_tables_and_ends(robot: &Robot, plan: &Plan) -> Result<(), TestCaseE
     }
     Ok(())
 }
+
+/// `robot`'s motion with `m`'s speed, acceleration time, period and frequency model, the speed
+/// raised where the line from `from` to `to` would need more than `max_periods` periods (more
+/// rows than a table area holds: that refusal has tests of its own).
+#[allow(dead_code)] // not every test binary plans random lines
+pub fn motion_on(
+    robot: &Robot,
+    (from, to): (Pose, Pose),
+    m: Motion,
+    max_periods: f64,
+) -> linterpd::robot::Motion {
+    let length_mm = (to.position_mm - from.position_mm).norm();
+    linterpd::robot::Motion {
+        speed_mm_s: m.speed_mm_s.max(length_mm / (max_periods * m.period_s)),
+        accel_s: m.accel_s,
+        period_s: m.period_s,
+        frequency_model: if m.ideal {
+            linterpd::table::FrequencyModel::Ideal
+        } else {
+            linterpd::table::FrequencyModel::FpxDivider
+        },
+        ..robot.motion
+    }
+}
+
+/// Every start of the line `req` asks for; `None` when it is refused only because its rows do
+/// not fit one table area. Any other refusal fails the test, naming the move and `context`.
+#[allow(dead_code)] // not every test binary plans random lines
+pub fn starts_or_area(
+    robot: &Robot,
+    req: &linterpd::plan::MoveRequest,
+    context: &str,
+) -> Option<Vec<Plan>> {
+    use linterpd::plan::PlanError;
+    use linterpd::table::TableProblem;
+    match linterpd::plan::plan_line(robot, req) {
+        Ok(planned) => Some(planned.starts().cloned().collect()),
+        Err(PlanError::InvalidTable {
+            first: TableProblem::AreaOverflow { .. },
+            ..
+        }) => None,
+        Err(e) => panic!("{:?} -> {:?} {context}: {e}", req.from, req.to),
+    }
+}

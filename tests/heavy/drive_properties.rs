@@ -10,9 +10,9 @@
 use crate::common;
 
 use linterpd::geometry::Pose;
-use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
+use linterpd::plan::{MoveRequest, Origin, Plan};
 use linterpd::robot::{Dynamics, Method, Robot};
-use linterpd::table::{FrequencyModel, TableProblem};
+use linterpd::table::FrequencyModel;
 use proptest::prelude::*;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
@@ -56,16 +56,7 @@ fn limited(mut robot: Robot, l: &Limits) -> Robot {
 /// Plans the line; `None` when it is refused for a reason with its own tests (rows that do
 /// not fit one table area: a slow move may need more).
 fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion, l: &Limits) -> Option<Vec<Plan>> {
-    let mut motion = robot.motion;
-    let length_mm = (to.position_mm - from.position_mm).norm();
-    motion.speed_mm_s = m.speed_mm_s.max(length_mm / (300.0 * m.period_s));
-    motion.accel_s = m.accel_s;
-    motion.period_s = m.period_s;
-    motion.frequency_model = if m.ideal {
-        FrequencyModel::Ideal
-    } else {
-        FrequencyModel::FpxDivider
-    };
+    let mut motion = common::moves::motion_on(robot, (from, to), m, 300.0);
     if let Some(tolerance_mm) = l.bounded_mm {
         motion.method = Method::BoundedError { tolerance_mm };
     }
@@ -74,14 +65,7 @@ fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion, l: &Limits) -> Optio
         to,
         motion,
     };
-    match plan_line(robot, &req) {
-        Ok(planned) => Some(planned.starts().cloned().collect()),
-        Err(PlanError::InvalidTable {
-            first: TableProblem::AreaOverflow { .. },
-            ..
-        }) => None,
-        Err(e) => panic!("{from:?} -> {to:?} {motion:?} {l:?}: {e}"),
-    }
+    common::moves::starts_or_area(robot, &req, &format!("{motion:?} {l:?}"))
 }
 
 /// The step between neighbouring real frequencies at `hz` in a range of divider clock

@@ -7,9 +7,9 @@ use crate::common;
 
 use linterpd::geometry::Pose;
 use linterpd::kinematics::Kinematics;
-use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
+use linterpd::plan::{MoveRequest, Origin, Plan};
 use linterpd::robot::Robot;
-use linterpd::table::{FrequencyModel, FrequencyRange, TableProblem};
+use linterpd::table::FrequencyRange;
 use proptest::prelude::*;
 
 use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
@@ -17,31 +17,14 @@ use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
 /// Plans the move, every start of it; `None` when it is refused only because its rows do not
 /// fit one table area (slow-down can stretch a move that far; that refusal has its own test).
 fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion) -> Option<Vec<Plan>> {
-    let mut motion = robot.motion;
     // At most ~400 periods, so every channel's rows fit its 2000-word area (a longer move is
     // refused with an area error, tested elsewhere).
-    let length_mm = (to.position_mm - from.position_mm).norm();
-    motion.speed_mm_s = m.speed_mm_s.max(length_mm / (400.0 * m.period_s));
-    motion.accel_s = m.accel_s;
-    motion.period_s = m.period_s;
-    motion.frequency_model = if m.ideal {
-        FrequencyModel::Ideal
-    } else {
-        FrequencyModel::FpxDivider
-    };
     let req = MoveRequest {
         from: Origin::Pose(from),
         to,
-        motion,
+        motion: common::moves::motion_on(robot, (from, to), m, 400.0),
     };
-    match plan_line(robot, &req) {
-        Ok(planned) => Some(planned.starts().cloned().collect()),
-        Err(PlanError::InvalidTable {
-            first: TableProblem::AreaOverflow { .. },
-            ..
-        }) => None,
-        Err(e) => panic!("{from:?} -> {to:?}: {e}"),
-    }
+    common::moves::starts_or_area(robot, &req, "")
 }
 
 fn check_fk_ik(robot: &Robot, pose: Pose) -> Result<(), TestCaseError> {
