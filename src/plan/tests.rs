@@ -4,7 +4,9 @@ use super::*;
 use crate::robot::seed_robot;
 use crate::table::FrequencyModel;
 
-fn seed_request(model: FrequencyModel, seed_exact: bool) -> MoveRequest {
+/// The seed's move on the seed's robot (also for the drive-limits tests, whose robots move the
+/// same way).
+pub(super) fn seed_request(model: FrequencyModel, seed_exact: bool) -> MoveRequest {
     let robot = seed_robot();
     let from = robot
         .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)

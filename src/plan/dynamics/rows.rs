@@ -102,7 +102,8 @@ pub(in crate::plan) fn judge(
     for (j, joint) in robot.joints.iter().enumerate() {
         let mine: Vec<RowTiming> = timings.iter().filter(|r| r.table == j).copied().collect();
         let rows = played(&tables[j], &mine, settings.model);
-        let (peak_speed, peak_accel) = planned_peaks(joint, samples, j, sample_s);
+        let (peak_speed, peak_accel) =
+            planned_peaks(joint, samples, j, sample_s, window.duration_s());
         let rests = Rests {
             begins: !window.begins_at_speed(),
             ends: !window.ends_at_speed,
@@ -121,17 +122,38 @@ struct Rests {
     ends: bool,
 }
 
-/// The joint's fastest speed and acceleration over the samples, user units.
-fn planned_peaks(joint: &Joint, samples: &Samples, j: usize, sample_s: f64) -> (f64, f64) {
-    let v: Vec<f64> = samples
+/// The joint's fastest speed and acceleration over the samples, user units: the points
+/// `sample_s` apart but the last, at `end_s` (a time-optimal profile's last period has its
+/// own length); each speed at the middle of its interval.
+fn planned_peaks(
+    joint: &Joint,
+    samples: &Samples,
+    j: usize,
+    sample_s: f64,
+    end_s: f64,
+) -> (f64, f64) {
+    let last = samples.values.len().saturating_sub(1);
+    let at = |k: usize| {
+        if k == last {
+            end_s
+        } else {
+            k as f64 * sample_s
+        }
+    };
+    // (the interval's middle, the speed over it)
+    let v: Vec<(f64, f64)> = samples
         .values
         .windows(2)
-        .map(|w| (w[1][j] - w[0][j]) / sample_s)
+        .enumerate()
+        .map(|(k, w)| {
+            let (t0, t1) = (at(k), at(k + 1));
+            (f64::midpoint(t0, t1), (w[1][j] - w[0][j]) / (t1 - t0))
+        })
         .collect();
-    let speed = v.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let accel = v
-        .windows(2)
-        .fold(0.0_f64, |m, w| m.max(((w[1] - w[0]) / sample_s).abs()));
+    let speed = v.iter().fold(0.0_f64, |m, v| m.max(v.1.abs()));
+    let accel = v.windows(2).fold(0.0_f64, |m, w| {
+        m.max(((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs())
+    });
     (joint.user(speed).abs(), joint.user(accel).abs())
 }
 

@@ -35,20 +35,13 @@ fn seed_limited() -> Robot {
 }
 
 fn seed_move(robot: &Robot, method: Method, model: FrequencyModel) -> MoveRequest {
-    let from = robot
-        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
-        .unwrap();
-    let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
-    to.a_rad = from.a_rad;
-    MoveRequest {
-        from: Origin::Pose(from),
-        to,
-        motion: Motion {
-            method,
-            frequency_model: model,
-            ..robot.motion
-        },
-    }
+    let mut req = crate::plan::tests::seed_request(model, false);
+    req.motion = Motion {
+        method,
+        frequency_model: model,
+        ..robot.motion
+    };
+    req
 }
 
 /// The step between neighbouring frequencies at `hz` in a range with divider clock `clock_hz`:
