@@ -75,8 +75,8 @@ impl Kin {
 }
 
 /// One waypoint as generated: where the element ends, whether it is an arc (its via point
-/// `bulge` chords off the chord's middle, at angle `phi` about the chord) and, when both
-/// neighbours are lines, the corner's blend radius (`None`: a stop).
+/// `bulge` chords off the chord's middle, at angle `phi` about the chord) and, after a line, the
+/// corner's blend radius (`None`: a stop).
 #[derive(Debug, Clone, Copy)]
 struct Waypoint {
     to: Pose,
@@ -273,12 +273,16 @@ fn settings() -> impl Strategy<Value = Settings> {
 }
 
 impl Route {
-    /// The path's elements: arcs through a via point off the chord's middle; a waypoint
-    /// between two lines blended or stopped at as generated, one next to an arc a stop.
+    /// The path's elements: arcs through a via point off the chord's middle; a waypoint after
+    /// a line blended or stopped at as generated, one after an arc a stop. An arc after a
+    /// blended corner lies in the plane of the line before it (a blend next to an arc needs
+    /// one plane); others in any plane.
     fn elements(&self) -> Vec<(Element, Corner)> {
         let n = self.waypoints.len();
         let mut from = self.start.position_mm;
         let mut out = Vec::with_capacity(n);
+        // The line before, when the corner into this element is blended.
+        let mut blended_from: Option<Vector3<f64>> = None;
         for (i, w) in self.waypoints.iter().enumerate() {
             let to = w.to.position_mm;
             let element = match w.arc {
@@ -291,18 +295,24 @@ impl Route {
                         .try_normalize(1e-9)
                         .unwrap_or_else(Vector3::x);
                     let up = chord.cross(&side).normalize();
-                    let off = (side * phi.cos() + up * phi.sin()) * bulge * chord.norm();
+                    let in_plane = blended_from
+                        .and_then(|d| d.cross(&chord).try_normalize(1e-6))
+                        .map(|n| n.cross(&chord).normalize());
+                    let off = match in_plane {
+                        Some(across) => across * phi.signum() * bulge * chord.norm(),
+                        None => (side * phi.cos() + up * phi.sin()) * bulge * chord.norm(),
+                    };
                     Element::Arc {
                         to: w.to,
                         by: ArcBy::Via((from + to) / 2.0 + off),
                     }
                 }
             };
-            let next_is_arc = self.waypoints.get(i + 1).is_some_and(|w| w.arc.is_some());
             let corner = match w.blend_mm {
-                Some(r) if i + 1 < n && w.arc.is_none() && !next_is_arc => Corner::Blend(r),
+                Some(r) if i + 1 < n && w.arc.is_none() => Corner::Blend(r),
                 _ => Corner::Stop,
             };
+            blended_from = matches!(corner, Corner::Blend(_)).then(|| to - from);
             out.push((element, corner));
             from = to;
         }
@@ -386,6 +396,8 @@ struct Tally {
     /// Planned paths with a blended corner / an arc element.
     with_blend: usize,
     with_arc: usize,
+    /// Planned paths with a blend into an arc.
+    blend_into_arc: usize,
     /// Refusals by reason.
     skipped: BTreeMap<String, usize>,
     /// The largest re-measured deviation over the tolerance, of every bounded-error plan.
@@ -646,6 +658,9 @@ fn run(kin: Kin) {
                         .iter()
                         .any(|(e, _)| matches!(e, Element::Arc { .. })),
                 );
+                t.blend_into_arc += usize::from(req.elements.windows(2).any(|w| {
+                    matches!(w[0].1, Corner::Blend(_)) && matches!(w[1].0, Element::Arc { .. })
+                }));
                 Ok(())
             }
             Err(e) => match refusal(&e, &s) {
@@ -675,7 +690,10 @@ fn run(kin: Kin) {
         t.planned_bounded > 0 && t.planned_constant > 0,
         "{kin:?}: {t:?}"
     );
-    assert!(t.with_blend > 0 && t.with_arc > 0, "{kin:?}: {t:?}");
+    assert!(
+        t.with_blend > 0 && t.with_arc > 0 && t.blend_into_arc > 0,
+        "{kin:?}: {t:?}"
+    );
     assert!(
         t.arc_speeds > 0,
         "{kin:?}: no planned speed on an arc checked"

@@ -533,3 +533,62 @@ fn an_s_curve_is_planned_on_request_and_a_bad_one_named() {
     let e = refused(&[], &["--profile", "sine"]);
     assert!(e.contains("\"sine\"") && e.contains("s-curve:JERK"), "{e}");
 }
+
+/// A path in the horizontal plane z = 150 mm: a line, an arc, a line, both corners blended at
+/// 15 mm; `lift_mm` raises everything after the start (the first line then climbs out of the
+/// arc's plane).
+fn line_arc_line(lift_mm: f64) -> String {
+    let z = 150.0 + lift_mm;
+    format!(
+        "linterpd_path = 1\nstart = [-926.57, 535.03, 150.0]\npath_accel = \"5000mm/s2\"\n\
+         [[element]]\nline = [-1050.0, 600.0, {z}]\nblend = \"15mm\"\n\
+         [[element]]\narc = [-1100.0, 700.0, {z}]\nvia = [-1061.6, 643.3, {z}]\nblend = \"15mm\"\n\
+         [[element]]\nline = [-1000.0, 760.0, {z}]\n"
+    )
+}
+
+#[test]
+fn corners_next_to_an_arc_are_blended_in_its_plane_and_refused_out_of_it() {
+    let dir = std::env::temp_dir().join(format!("linterpd-arc-blend-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let flat = dir.join("flat.toml");
+    std::fs::write(&flat, line_arc_line(0.0)).unwrap();
+    let out = plan_path(flat.to_str().unwrap(), &["--json"]);
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let pieces = doc["path"].as_array().unwrap();
+    let kinds: Vec<&str> = pieces.iter().map(|p| p["kind"].as_str().unwrap()).collect();
+    assert_eq!(kinds, ["line", "arc", "arc", "arc", "line"]);
+    // A blend's arc, what is left of element 2's arc, a blend's arc.
+    let elements: Vec<Option<u64>> = pieces.iter().map(|p| p["element"].as_u64()).collect();
+    assert_eq!(elements, [Some(1), None, Some(2), None, Some(3)]);
+    assert_eq!(pieces[1]["waypoint"], 1);
+    assert_eq!(pieces[3]["waypoint"], 2);
+    // The first line is 139.48 mm; its blend reaches 15 mm back along it.
+    let first = num(&pieces[0]["length_mm"]);
+    assert!((first - (139.484 - 15.0)).abs() < 0.01, "{first}");
+    // One section (no stop at either corner), within the tolerance of the blended path.
+    assert!(pieces.iter().all(|p| p["section"] == 1), "{doc}");
+    assert!(doc["valid"].as_bool().unwrap());
+    let deviation = num(&doc["path_deviation_mm"]);
+    assert!(deviation <= 0.05, "{deviation} mm");
+
+    let tilted = dir.join("tilted.toml");
+    std::fs::write(&tilted, line_arc_line(30.0)).unwrap();
+    let out = linterpd(&[
+        "plan",
+        "--config",
+        CONFIG,
+        "--path",
+        tilted.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "waypoint 1: a blend next to an arc needs both neighbours in one plane, and element \
+             1 leaves the arc's plane by 12.138 deg"
+        ),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -632,11 +632,17 @@ proptest::proptest! {
         let w2 = [w1[0] + d2.0, w1[1] + d2.1, w1[2] + d2.2];
         let chord = nalgebra::Vector3::from(w2) - nalgebra::Vector3::from(w1);
         proptest::prop_assume!(chord.norm() > 20.0);
-        let side = chord.cross(&nalgebra::Vector3::z());
+        // A blend into an arc needs the arc in the line's plane; else it bulges sideways.
+        let line = nalgebra::Vector3::new(d1.0, d1.1, d1.2);
+        let side = if blend {
+            line.cross(&chord).cross(&chord)
+        } else {
+            chord.cross(&nalgebra::Vector3::z())
+        };
         proptest::prop_assume!(side.norm() > 1.0);
         let via = nalgebra::Vector3::from(w1) + chord / 2.0 + side.normalize() * bulge;
         let mut first = json!({"line": w1});
-        if blend && !arc {
+        if blend {
             first["blend"] = json!("5mm");
         }
         let second = if arc {

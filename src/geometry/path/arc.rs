@@ -208,7 +208,9 @@ impl Arc {
             to,
             centre_mm: centre,
             radius_mm,
-            sweep_rad: t_in.dot(&t_out).clamp(-1.0, 1.0).acos(),
+            // Not the arccosine of the dot product: nearly parallel directions (a corner arc
+            // of a large radius) would lose half their digits.
+            sweep_rad: t_in.cross(&t_out).norm().atan2(t_in.dot(&t_out)),
             u: -inward,
             v: t_in,
         }
@@ -218,6 +220,37 @@ impl Arc {
     #[must_use]
     pub fn length_mm(&self) -> f64 {
         self.radius_mm * self.sweep_rad
+    }
+
+    /// The part of it from `start_mm` after its start to `end_mm` before its end (a blend's
+    /// corner takes the rest): the same circle, its ends where [`Self::at`] puts them.
+    pub(super) fn cut(&self, start_mm: f64, end_mm: f64) -> Self {
+        if start_mm <= 0.0 && end_mm <= 0.0 {
+            return *self;
+        }
+        let len = self.length_mm();
+        let theta = self.sweep_rad * (start_mm.max(0.0) / len);
+        let (sin, cos) = theta.sin_cos();
+        Self {
+            from: self.at(start_mm.max(0.0)),
+            to: if end_mm > 0.0 {
+                self.at(len - end_mm)
+            } else {
+                self.to
+            },
+            sweep_rad: self.sweep_rad * ((len - start_mm.max(0.0) - end_mm.max(0.0)) / len),
+            u: self.u * cos + self.v * sin,
+            v: self.v * cos - self.u * sin,
+            ..*self
+        }
+    }
+
+    /// How far the end its circle and sweep make lies from its `to`, mm (0 but for rounding in
+    /// an arc made whole).
+    pub(super) fn end_gap_mm(&self) -> f64 {
+        let (sin, cos) = self.sweep_rad.sin_cos();
+        (self.centre_mm + (self.u * cos + self.v * sin) * self.radius_mm - self.to.position_mm)
+            .norm()
     }
 
     /// The unit normal of its plane, about which it turns counter-clockwise.

@@ -4,11 +4,13 @@
 //! A blend of radius `r` at a waypoint replaces the corner by an arc tangent to both neighbours,
 //! starting and ending no further than `r` from the waypoint along them (less where a
 //! neighbour is shorter than `2 r`: a blend takes at most half of each neighbour, so two blends
-//! never overlap). Blends join two lines; a corner next to an arc is a stop or a tangent join
-//! (where the arc leaves in the direction the line came in, no blend is needed).
+//! never overlap). Next to an arc the corner arc is the circle tangent to both neighbours in
+//! the plane they share ([`fillet`]); it reaches at most `r` along each, and at most half of
+//! either. A tangent join (an arc leaving in the direction the line came in) needs no blend.
 
 mod arc;
 mod bounds;
+mod fillet;
 
 pub use arc::{ARC_MIN_BULGE, ARC_MIN_GAP_MM, Arc, ArcFault, RADIUS_SLACK_MM};
 
@@ -17,6 +19,7 @@ use thiserror::Error;
 
 use super::{Line, LineDistance, Pose, ToolPath};
 use bounds::Bounds;
+use fillet::{Fillet, NoFillet, fillet};
 
 /// The turn (radians) below which a corner is no corner: the path goes straight on.
 const STRAIGHT_RAD: f64 = 1e-6;
@@ -119,16 +122,34 @@ pub enum PathError {
         /// The radius given, mm.
         radius_mm: f64,
     },
-    /// A blend next to an arc that the arc does not meet tangentially.
+    /// A blend next to an arc whose other neighbour leaves the arc's plane: no circle is
+    /// tangent to both.
     #[error(
-        "waypoint {waypoint}: a blend joins two lines, and element {element} is an arc; make the \
-         corner a stop, or end the line where the arc leaves along it"
+        "waypoint {waypoint}: a blend next to an arc needs both neighbours in one plane, and \
+         element {element} leaves the arc's plane by {off_deg:.3} deg (at most {max_deg:.1e} \
+         deg); make the corner a stop"
     )]
-    BlendNextToArc {
+    BlendOffPlane {
         /// Waypoint number, from 1.
         waypoint: usize,
-        /// The arc's element number, from 1.
+        /// The element that leaves the plane (the line, or the second arc), from 1.
         element: usize,
+        /// By how much, degrees.
+        off_deg: f64,
+        /// The most taken as in the plane, degrees.
+        max_deg: f64,
+    },
+    /// No circle tangent to both neighbours touches them within the blend's reach.
+    #[error(
+        "waypoint {waypoint}: no arc tangent to both neighbours touches them within \
+         {radius_mm} mm of the waypoint (and within half of each); make the corner a stop or \
+         give another blend"
+    )]
+    BlendNoArc {
+        /// Waypoint number, from 1.
+        waypoint: usize,
+        /// The blend asked, mm.
+        radius_mm: f64,
     },
     /// A corner that turns the path back on itself cannot be blended.
     #[error("waypoint {waypoint}: the path turns back by {turn_deg:.1} deg there; it must stop")]
@@ -211,6 +232,27 @@ impl Primitive {
                 }
             }
             Self::Arc(a) => a.nearest_mm(p),
+        }
+    }
+
+    /// The part of it from `start_mm` after its start to `end_mm` before its end (what blends
+    /// at its ends leave of it).
+    #[must_use]
+    fn cut(&self, start_mm: f64, end_mm: f64) -> Self {
+        match self {
+            Self::Line(line) => Self::Line(Line {
+                from: if start_mm > 0.0 {
+                    line.at(start_mm)
+                } else {
+                    line.from
+                },
+                to: if end_mm > 0.0 {
+                    line.at(line.length_mm() - end_mm)
+                } else {
+                    line.to
+                },
+            }),
+            Self::Arc(arc) => Self::Arc(arc.cut(start_mm, end_mm)),
         }
     }
 
@@ -330,28 +372,15 @@ impl Path {
         let mut stops_mm = Vec::new();
         let mut s = 0.0;
         for (i, prim) in raw.iter().enumerate() {
-            let reach = |w: Option<&Pass>| match w {
-                Some(Pass::Blend { reach_mm, .. }) => *reach_mm,
+            let cut_start = match i.checked_sub(1).and_then(|w| passes.get(w)) {
+                Some(Pass::Blend(f)) => f.reach_out_mm,
                 _ => 0.0,
             };
-            let cut_start = if i > 0 { reach(passes.get(i - 1)) } else { 0.0 };
-            let cut_end = reach(passes.get(i));
-            let own = match *prim {
-                Primitive::Line(line) => Primitive::Line(Line {
-                    from: if cut_start > 0.0 {
-                        line.at(cut_start)
-                    } else {
-                        line.from
-                    },
-                    to: if cut_end > 0.0 {
-                        line.at(line.length_mm() - cut_end)
-                    } else {
-                        line.to
-                    },
-                }),
-                // Blends never cut an arc.
-                arc @ Primitive::Arc(_) => arc,
+            let cut_end = match passes.get(i) {
+                Some(Pass::Blend(f)) => f.reach_in_mm,
+                _ => 0.0,
             };
+            let own = prim.cut(cut_start, cut_end);
             // A line two blends took whole leaves nothing between their arcs.
             if own.length_mm() > 1e-9 {
                 pieces.push(Piece {
@@ -363,19 +392,7 @@ impl Path {
                 s += own.length_mm();
             }
             match passes.get(i) {
-                Some(&Pass::Blend {
-                    reach_mm,
-                    turn_rad,
-                    t_in,
-                    t_out,
-                }) => {
-                    let corner = Arc::tangent(
-                        own.to(),
-                        raw[i + 1].at(reach_mm),
-                        t_in,
-                        t_out,
-                        reach_mm / (turn_rad / 2.0).tan(),
-                    );
+                Some(&Pass::Blend(Fillet { corner, .. })) => {
                     pieces.push(Piece {
                         primitive: Primitive::Arc(corner),
                         start_mm: s,
@@ -582,13 +599,8 @@ enum Pass {
     Stop,
     /// Its neighbours meet in line (a blend asked there has nothing to round).
     Straight,
-    /// A corner arc reaching `reach_mm` along both neighbours.
-    Blend {
-        reach_mm: f64,
-        turn_rad: f64,
-        t_in: Vector3<f64>,
-        t_out: Vector3<f64>,
-    },
+    /// A corner arc and how far it reaches along its neighbours.
+    Blend(Fillet),
 }
 
 /// How the path passes `waypoint`, between primitives `a` and `b`, asked for `corner`.
@@ -608,23 +620,31 @@ fn pass(waypoint: usize, corner: Corner, a: &Primitive, b: &Primitive) -> Result
     if turn_rad <= STRAIGHT_RAD {
         return Ok(Pass::Straight);
     }
-    for (p, element) in [(a, waypoint), (b, waypoint + 1)] {
-        if matches!(p, Primitive::Arc(_)) {
-            return Err(PathError::BlendNextToArc { waypoint, element });
-        }
-    }
     if turn_rad >= REVERSAL_RAD {
         return Err(PathError::Reversal {
             waypoint,
             turn_deg: turn_rad.to_degrees(),
         });
     }
-    Ok(Pass::Blend {
-        reach_mm: r.min(a.length_mm() / 2.0).min(b.length_mm() / 2.0),
-        turn_rad,
-        t_in,
-        t_out,
-    })
+    let reach = |p: &Primitive| r.min(p.length_mm() / 2.0);
+    match fillet(a, b, turn_rad, reach(a), reach(b)) {
+        Ok(f) => Ok(Pass::Blend(f)),
+        Err(NoFillet::OffPlane { off_rad }) => Err(PathError::BlendOffPlane {
+            waypoint,
+            // The line leaves the arc's plane; of two arcs, the second leaves the first's.
+            element: if matches!(a, Primitive::Line(_)) {
+                waypoint
+            } else {
+                waypoint + 1
+            },
+            off_deg: off_rad.to_degrees(),
+            max_deg: fillet::COPLANAR_RAD.to_degrees(),
+        }),
+        Err(NoFillet::NoCircle) => Err(PathError::BlendNoArc {
+            waypoint,
+            radius_mm: r,
+        }),
+    }
 }
 
 /// Element `n`'s primitive from `from`.

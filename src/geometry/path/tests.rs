@@ -174,18 +174,22 @@ fn refusals_name_the_element_or_waypoint() {
         ]),
         "waypoint 1: the path turns back by 180.0 deg there; it must stop"
     );
+    // The line climbs out of the arc's plane (z = 0) by 45 degrees.
     let msg = at(vec![
-        line(pose(10.0, 0.0, 0.0), Corner::Blend(2.0)),
+        line(pose(10.0, 0.0, 10.0), Corner::Blend(2.0)),
         (
             Element::Arc {
-                to: pose(20.0, 10.0, 0.0),
-                by: ArcBy::Via(Vector3::new(15.0, 8.0, 0.0)),
+                to: pose(20.0, 10.0, 10.0),
+                by: ArcBy::Via(Vector3::new(15.0, 8.0, 10.0)),
             },
             Corner::Stop,
         ),
     ]);
     assert!(
-        msg.starts_with("waypoint 1: a blend joins two lines, and element 2 is an arc"),
+        msg.starts_with(
+            "waypoint 1: a blend next to an arc needs both neighbours in one plane, and element \
+             1 leaves the arc's plane by 45.000 deg"
+        ),
         "{msg}"
     );
     let msg = at(vec![(
@@ -411,4 +415,266 @@ fn a_near_position_is_within_its_bound_on_lines_and_none_on_arcs_and_at_the_ends
         on_lines > 30_000 && elsewhere > 1_000,
         "{on_lines} {elsewhere}"
     );
+}
+
+/// A path's pieces with no corner blended: its elements' own primitives.
+fn unblended(spec: &PathSpec) -> Vec<Primitive> {
+    let stops = PathSpec {
+        start: spec.start,
+        elements: spec
+            .elements
+            .iter()
+            .map(|(e, _)| (*e, Corner::Stop))
+            .collect(),
+    };
+    Path::build(&stops)
+        .unwrap()
+        .pieces()
+        .iter()
+        .map(|p| p.primitive)
+        .collect()
+}
+
+/// Every blend of `path` (built from `spec`) touches both neighbours where it leaves and joins
+/// them, along their direction there, no further than its radius and half of either from the
+/// waypoint, and (`full`) as far as that allows on one side at least. Returns how many blends
+/// it found.
+fn assert_blends_touch_their_neighbours(spec: &PathSpec, path: &Path, full: bool) -> usize {
+    let raw = unblended(spec);
+    let pieces = path.pieces();
+    let mut blends = 0;
+    for (i, piece) in pieces.iter().enumerate() {
+        let Some(w) = piece.waypoint else { continue };
+        blends += 1;
+        let Corner::Blend(r) = spec.elements[w - 1].1 else {
+            panic!("a corner arc at a stop")
+        };
+        let Primitive::Arc(corner) = piece.primitive else {
+            panic!("a corner that is no arc")
+        };
+        let (a, b) = (raw[w - 1], raw[w]);
+        let (p, q) = (corner.from.position_mm, corner.to.position_mm);
+        assert!(
+            a.distance_mm(&p) < 1e-9 && b.distance_mm(&q) < 1e-9,
+            "{w}: off"
+        );
+        let reach_in = a.length_mm() - a.nearest_mm(&p);
+        let reach_out = b.nearest_mm(&q);
+        let (lim_in, lim_out) = (r.min(a.length_mm() / 2.0), r.min(b.length_mm() / 2.0));
+        assert!(
+            reach_in <= lim_in + 1e-9 && reach_out <= lim_out + 1e-9,
+            "{w}: reaches {reach_in} {reach_out} over {lim_in} {lim_out}"
+        );
+        let most = (reach_in / lim_in).max(reach_out / lim_out);
+        assert!(
+            !full || most > 1.0 - 1e-6,
+            "{w}: reaches only {most} of what it may"
+        );
+        let tangent = |u: Vector3<f64>, v: Vector3<f64>| u.dot(&v) > 1.0 - 1e-12;
+        assert!(
+            tangent(a.direction(a.length_mm() - reach_in), corner.direction(0.0)),
+            "{w}: a kink into the blend"
+        );
+        assert!(
+            tangent(b.direction(reach_out), corner.direction(corner.length_mm())),
+            "{w}: a kink out of the blend"
+        );
+        // The pieces either side are what is left of the neighbours (or a blend that took
+        // the rest of one), joined.
+        let gap = |p: Pose, q: Pose| (p.position_mm - q.position_mm).norm();
+        assert!(gap(pieces[i - 1].primitive.to(), corner.from) < 1e-9, "{w}");
+        assert!(gap(pieces[i + 1].primitive.from(), corner.to) < 1e-9, "{w}");
+    }
+    blends
+}
+
+fn arc_centred(to: Pose, centre: (f64, f64, f64), clockwise: bool) -> Element {
+    Element::Arc {
+        to,
+        by: ArcBy::Centre {
+            centre_mm: Vector3::new(centre.0, centre.1, centre.2),
+            axis: Vector3::z(),
+            clockwise,
+        },
+    }
+}
+
+#[test]
+fn a_line_into_an_arc_is_blended_by_a_circle_tangent_to_both() {
+    // Along +x to (100, 0), then a quarter circle about (150, 0) leaving along -y: a right turn
+    // of 90 degrees into an arc curving left, away from the corner.
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(10.0)),
+            (
+                arc_centred(pose(150.0, -50.0, 0.0), (150.0, 0.0, 0.0), false),
+                Corner::Stop,
+            ),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    assert_eq!(assert_blends_touch_their_neighbours(&spec, &path, true), 1);
+    let pieces = path.pieces();
+    assert_eq!(pieces.len(), 3);
+    assert_eq!(pieces[2].element, Some(2));
+    let Primitive::Arc(corner) = pieces[1].primitive else {
+        panic!()
+    };
+    // With the arc curving away, the corner circle reaches the full 10 mm along the line and a
+    // little less along the arc; its centre lies one radius from the line and 50 mm + one radius
+    // from the arc's centre.
+    let Primitive::Arc(rest) = pieces[2].primitive else {
+        panic!()
+    };
+    assert!(((corner.centre_mm - rest.centre_mm).norm() - (50.0 + corner.radius_mm)).abs() < 1e-9);
+    assert!((corner.centre_mm.y + corner.radius_mm).abs() < 1e-9);
+    assert!((pieces[0].primitive.length_mm() - 90.0).abs() < 1e-9);
+    let along_arc = 25.0 * PI - rest.length_mm();
+    assert!(along_arc > 9.0 && along_arc < 10.0, "{along_arc}");
+    // 10 mm along the line: sqrt(50^2 + 100 r) = 60 mm from the arc's centre, so r = 11 mm.
+    assert!((corner.radius_mm - 11.0).abs() < 1e-9, "{corner:?}");
+    assert_eq!(path.stops_mm(), [path.length_mm()]);
+    assert_smooth(&path, 0.05, 0.05 / corner.radius_mm + 1e-9);
+    // The arc's own end is where it was.
+    assert!(
+        (path.at(path.length_mm()).position_mm - Vector3::new(150.0, -50.0, 0.0)).norm() < 1e-9
+    );
+}
+
+#[test]
+fn arcs_curving_into_the_corner_or_away_and_either_order_are_blended() {
+    let quarter = |to, centre, cw| (arc_centred(to, centre, cw), Corner::Blend(8.0));
+    let cases: Vec<Vec<(Element, Corner)>> = vec![
+        // A line into an arc curving into the corner (the corner circle inside the arc's).
+        vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(8.0)),
+            (
+                arc_centred(pose(50.0, -50.0, 0.0), (50.0, 0.0, 0.0), true),
+                Corner::Stop,
+            ),
+        ],
+        // An arc (ending along -x at (100, 100)) into a line turning away from its centre and
+        // into a line towards it.
+        vec![
+            quarter(pose(100.0, 100.0, 0.0), (100.0, 0.0, 0.0), false),
+            line(pose(100.0, 200.0, 0.0), Corner::Stop),
+        ],
+        vec![
+            quarter(pose(100.0, 100.0, 0.0), (100.0, 0.0, 0.0), false),
+            line(pose(100.0, 20.0, 0.0), Corner::Stop),
+        ],
+        // Arc into arc: the second turning the other way, and the same way.
+        vec![
+            quarter(pose(100.0, 100.0, 0.0), (100.0, 0.0, 0.0), false),
+            (
+                arc_centred(pose(150.0, 150.0, 0.0), (150.0, 100.0, 0.0), true),
+                Corner::Stop,
+            ),
+        ],
+        vec![
+            quarter(pose(100.0, 100.0, 0.0), (100.0, 0.0, 0.0), false),
+            (
+                arc_centred(pose(30.0, 110.0, 0.0), (60.0, 70.0, 0.0), false),
+                Corner::Stop,
+            ),
+        ],
+        vec![
+            quarter(pose(100.0, 100.0, 0.0), (100.0, 0.0, 0.0), false),
+            (
+                arc_centred(pose(90.0, 30.0, 0.0), (60.0, 70.0, 0.0), true),
+                Corner::Stop,
+            ),
+        ],
+        // In a vertical plane: a line down into an arc in the x-z plane.
+        vec![
+            line(pose(0.0, 0.0, -100.0), Corner::Blend(8.0)),
+            (
+                Element::Arc {
+                    to: pose(60.0, 0.0, -100.0),
+                    by: ArcBy::Via(Vector3::new(30.0, 0.0, -110.0)),
+                },
+                Corner::Stop,
+            ),
+        ],
+    ];
+    for elements in cases {
+        let start = if matches!(elements[0].0, Element::Arc { .. }) {
+            pose(200.0, 0.0, 0.0)
+        } else {
+            pose(0.0, 0.0, 0.0)
+        };
+        let spec = PathSpec { start, elements };
+        let path = Path::build(&spec).unwrap_or_else(|e| panic!("{spec:?}: {e}"));
+        assert_eq!(
+            assert_blends_touch_their_neighbours(&spec, &path, true),
+            1,
+            "{spec:?}"
+        );
+        let tightest = 1.0 / path.max_curvature_per_mm();
+        assert_smooth(&path, 0.05, 0.05 / tightest + 1e-9);
+    }
+}
+
+proptest::proptest! {
+    /// Random corners in one plane between lines and arcs of every sense and radius, with
+    /// random blends: every corner that builds is tangent to both neighbours within its reach,
+    /// and the path has no jump or kink; nearly all build.
+    #[test]
+    fn blends_next_to_arcs_touch_both_neighbours_within_their_reach(
+        steps in proptest::collection::vec(
+            (
+                -200.0..200.0_f64,
+                -200.0..200.0_f64,
+                proptest::option::of((0.05..0.6_f64, proptest::bool::ANY)),
+                0.5..60.0_f64,
+            ),
+            2..6,
+        ),
+        tilt in 0.0..1.5_f64,
+    ) {
+        // A plane through the origin tilted about x: every element in it.
+        let (sin, cos) = tilt.sin_cos();
+        let at = |x: f64, y: f64| Vector3::new(x, y * cos, y * sin);
+        let mut elements = Vec::new();
+        let mut from = Vector3::zeros();
+        for &(x, y, bulge, r) in &steps {
+            let to = at(x, y);
+            if (to - from).norm() < 5.0 {
+                continue;
+            }
+            let element = match bulge {
+                Some((bulge, left)) => {
+                    let b = if left { bulge } else { -bulge };
+                    let chord = to - from;
+                    let normal = at(0.0, 1.0).cross(&at(1.0, 0.0)).normalize();
+                    let side = normal.cross(&chord);
+                    Element::Arc {
+                        to: Pose::from_mm_deg(to.x, to.y, to.z, 0.0),
+                        by: ArcBy::Via(from + chord / 2.0 + side * b),
+                    }
+                }
+                None => Element::Line { to: Pose::from_mm_deg(to.x, to.y, to.z, 0.0) },
+            };
+            elements.push((element, Corner::Blend(r)));
+            from = to;
+        }
+        proptest::prop_assume!(elements.len() >= 2);
+        let spec = PathSpec { start: pose(0.0, 0.0, 0.0), elements };
+        match Path::build(&spec) {
+            Ok(path) => {
+                // A corner nearly turning back on an arc curving into it may hold no circle
+                // as large as the reach allows: the largest that fits is taken.
+                assert_blends_touch_their_neighbours(&spec, &path, false);
+                let tightest = 1.0 / path.max_curvature_per_mm();
+                let step = (tightest / 4.0).min(0.5);
+                assert_smooth(&path, step, step / tightest + 1e-6);
+            }
+            // A corner that turns back on itself must stop; nothing else may be refused.
+            Err(e) => proptest::prop_assert!(
+                matches!(e, PathError::Reversal { .. }),
+                "{e}"
+            ),
+        }
+    }
 }
