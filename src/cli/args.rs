@@ -134,6 +134,27 @@ pub fn parse_speed_mm_s(text: &str) -> anyhow::Result<f64> {
     number_in(text, "mm/s")
 }
 
+/// `--profile` (`plan`, `move`, `run`): `trapezoid`, or `s-curve:JERK` in mm/s^3.
+///
+/// # Errors
+/// Anything else, naming what is taken.
+pub fn parse_ramp(text: &str) -> anyhow::Result<crate::robot::Ramp> {
+    use crate::robot::Ramp;
+    if text == "trapezoid" {
+        return Ok(Ramp::Trapezoid);
+    }
+    let Some(jerk) = text.strip_prefix("s-curve:") else {
+        anyhow::bail!(
+            "{text:?}: must be \"trapezoid\" or \"s-curve:JERK\" with the path's jerk in mm/s^3, \
+             e.g. s-curve:20000"
+        );
+    };
+    match jerk.trim().parse::<f64>() {
+        Ok(j) if j.is_finite() && j > 0.0 => Ok(Ramp::SCurve { jerk_mm_s3: j }),
+        _ => anyhow::bail!("{text:?}: the jerk {jerk:?} must be a number of mm/s^3 above 0"),
+    }
+}
+
 /// A duration, written `50ms`, `0.2s` or `250us` (a unit is required, as in the config).
 pub fn parse_duration(text: &str) -> anyhow::Result<std::time::Duration> {
     let seconds = crate::config::parse_duration_s(text)?;

@@ -23,7 +23,7 @@ use crate::plan::{
     JointMoveRequest, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
     plan_move, plan_section,
 };
-use crate::robot::{Method, Motion, Robot};
+use crate::robot::{Method, Motion, Ramp, Robot};
 
 /// A move order: one target (`to`, `by`, `joints` or `position`) and optional motion overrides
 /// (the robot's defaults otherwise).
@@ -60,6 +60,13 @@ pub struct MoveOrder {
     /// Path tolerance of a bounded-error move, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_mm: Option<f64>,
+    /// The ramps' shape: `"trapezoid"` or `"s-curve"` (jerk-limited; its jerk from
+    /// `jerk_mm_s3` or the robot's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<String>,
+    /// The path's jerk of an S-curve, mm/s^3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk_mm_s3: Option<f64>,
     /// An interlock the PLC enforces: input bits or signal names joined by `&`, each optionally
     /// negated (`"press_open & !press_moving"`); the move starts only while it holds and is
     /// held (stopped) in the first scan it stops holding.
@@ -90,6 +97,12 @@ pub struct PathOrder {
     /// Path tolerance of a bounded-error path, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_mm: Option<f64>,
+    /// The ramps' shape (see [`MoveOrder::profile`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<String>,
+    /// The path's jerk of an S-curve, mm/s^3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk_mm_s3: Option<f64>,
     /// An interlock the PLC enforces on every start of the path (see [`MoveOrder::permit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
@@ -174,6 +187,8 @@ impl PathOrder {
             method: self.method.clone(),
             period: self.period.clone(),
             tolerance_mm: self.tolerance_mm,
+            profile: self.profile.clone(),
+            jerk_mm_s3: self.jerk_mm_s3,
             permit: self.permit.clone(),
             ..MoveOrder::default()
         }
@@ -687,7 +702,45 @@ impl MoveOrder {
             }
             (None, None, method) => method,
         };
+        m.ramp = self.ramp(defaults.ramp)?;
         Ok(m)
+    }
+
+    /// The ramps' shape asked (`profile`, `jerk_mm_s3`), the robot's filling the gaps.
+    fn ramp(&self, default: Ramp) -> Result<Ramp, OrderError> {
+        let jerk = self
+            .jerk_mm_s3
+            .map(|j| positive("jerk_mm_s3", j))
+            .transpose()?;
+        Ok(match (self.profile.as_deref(), jerk, default) {
+            (None, None, ramp) => ramp,
+            (Some("trapezoid"), None, _) => Ramp::Trapezoid,
+            (Some("s-curve") | None, Some(jerk_mm_s3), Ramp::SCurve { .. })
+            | (Some("s-curve"), Some(jerk_mm_s3), Ramp::Trapezoid)
+            | (Some("s-curve"), None, Ramp::SCurve { jerk_mm_s3 }) => Ramp::SCurve { jerk_mm_s3 },
+            (Some("s-curve"), None, Ramp::Trapezoid) => {
+                return Err(refuse(
+                    "jerk_mm_s3",
+                    &"null",
+                    "profile \"s-curve\" needs the path's jerk (the robot's profile is the \
+                     trapezoid), e.g. 20000 mm/s^3",
+                ));
+            }
+            (Some("trapezoid") | None, Some(j), _) => {
+                return Err(refuse(
+                    "jerk_mm_s3",
+                    &number(j),
+                    "only profile \"s-curve\" takes a jerk",
+                ));
+            }
+            (Some(other), _, _) => {
+                return Err(refuse(
+                    "profile",
+                    &format!("{other:?}"),
+                    "must be \"trapezoid\" or \"s-curve\"",
+                ));
+            }
+        })
     }
 }
 
@@ -779,6 +832,64 @@ mod tests {
                 .unwrap_err()
                 .reason
                 .contains("constant-period")
+        );
+    }
+
+    #[test]
+    fn an_order_chooses_its_ramps_and_a_jerk_needs_an_s_curve() {
+        let trapezoid = seed_robot().motion;
+        let s_curve = Motion {
+            ramp: Ramp::SCurve { jerk_mm_s3: 5000.0 },
+            ..trapezoid
+        };
+        let base = order(vec![1.0, 2.0, 3.0]);
+        let with = |profile: Option<&str>, jerk: Option<f64>| MoveOrder {
+            profile: profile.map(str::to_owned),
+            jerk_mm_s3: jerk,
+            ..base.clone()
+        };
+        let ramp = |o: MoveOrder, m: Motion| o.check(m).map(|c| c.motion.ramp);
+        let err = |o: MoveOrder, m: Motion| o.check(m).unwrap_err().to_string();
+        // Nothing asked: the robot's.
+        assert_eq!(ramp(with(None, None), trapezoid), Ok(Ramp::Trapezoid));
+        assert_eq!(ramp(with(None, None), s_curve), Ok(s_curve.ramp));
+        // Asked, with its jerk or the robot's.
+        assert_eq!(
+            ramp(with(Some("s-curve"), Some(20000.0)), trapezoid),
+            Ok(Ramp::SCurve {
+                jerk_mm_s3: 20000.0
+            })
+        );
+        assert_eq!(ramp(with(Some("s-curve"), None), s_curve), Ok(s_curve.ramp));
+        assert_eq!(
+            ramp(with(None, Some(9000.0)), s_curve),
+            Ok(Ramp::SCurve { jerk_mm_s3: 9000.0 })
+        );
+        assert_eq!(
+            ramp(with(Some("trapezoid"), None), s_curve),
+            Ok(Ramp::Trapezoid)
+        );
+        // Refused, naming the field, the value and why.
+        assert_eq!(
+            err(with(Some("s-curve"), None), trapezoid),
+            "jerk_mm_s3 = null: profile \"s-curve\" needs the path's jerk (the robot's profile \
+             is the trapezoid), e.g. 20000 mm/s^3"
+        );
+        assert_eq!(
+            err(with(None, Some(20000.0)), trapezoid),
+            "jerk_mm_s3 = 20000: only profile \"s-curve\" takes a jerk"
+        );
+        assert_eq!(
+            err(with(Some("trapezoid"), Some(20000.0)), s_curve),
+            "jerk_mm_s3 = 20000: only profile \"s-curve\" takes a jerk"
+        );
+        assert_eq!(
+            err(with(Some("s-curve"), Some(-1.0)), trapezoid),
+            "jerk_mm_s3 = -1: must be a number above 0"
+        );
+        assert_eq!(
+            err(with(Some("spline"), None), trapezoid),
+            "profile = \"spline\": must be \"trapezoid\" or \"s-curve\""
         );
     }
 

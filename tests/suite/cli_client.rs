@@ -62,6 +62,10 @@ fn bad_move_arguments_are_refused_before_any_connection() {
         ),
         (["--timeout", "5"], "--timeout: duration \"5\": no unit"),
         (["--accel-time", "x"], "--accel-time: duration \"x\""),
+        (
+            ["--profile", "s-curve:0"],
+            "--profile: \"s-curve:0\": the jerk \"0\" must be a number of mm/s^3 above 0",
+        ),
     ] {
         let line = [&["move", "--to", "1,2,3"][..], &args, &no_daemon].concat();
         let (code, out, err) = linterpd(&line);

@@ -758,3 +758,48 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
     }
     d.shut_down().await;
 }
+
+#[tokio::test]
+async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
+    // The seed's move asked with S-curve ramps of 5000 mm/s^3 (the robot's own are the
+    // trapezoid): PLANNING.md gives 1.650 s against 1.400 s, d3 leaving rest at 141 Hz
+    // against 2024 Hz.
+    let mut firsts = Vec::new();
+    for profile in [None, Some("s-curve")] {
+        let shared = mock_at_seed_start("");
+        shared.with(|m| m.record_pulses(true));
+        let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+        wait_connected(&h).await;
+        // Until the daemon has read the counts the mock's engines hold (a status block read
+        // before the mock's first scan holds zeros): the line may be planned in parts, from
+        // the counts at the order.
+        let start = shared.with(|m| std::array::from_fn(|c| m.count(c)));
+        while h.state().counts != Some(start) {
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        }
+        let mut asked = order(P2);
+        asked.profile = profile.map(str::to_owned);
+        asked.jerk_mm_s3 = profile.map(|_| 5000.0);
+        let id = h.submit(asked).unwrap();
+        let there = h.wait(id, LIMIT).await.unwrap();
+        assert_on_target(&there);
+        let times: Vec<f64> = shared
+            .with(linterpd::mock::MockPlc::take_pulses)
+            .into_iter()
+            .filter(|p| p.channel == 2)
+            .map(|p| p.time_s)
+            .collect();
+        let (first, last) = (times[0], times[times.len() - 1]);
+        let first_50ms = times.iter().filter(|&&t| t < first + 0.05).count();
+        firsts.push((last - first, first_50ms));
+        d.shut_down().await;
+    }
+    let ((trapezoid_s, trapezoid_pulses), (s_curve_s, s_curve_pulses)) = (firsts[0], firsts[1]);
+    // d3's pulses span the move, less a row's rise at either end.
+    assert!((trapezoid_s - 1.40).abs() < 0.06, "{trapezoid_s}");
+    assert!((s_curve_s - 1.65).abs() < 0.06, "{s_curve_s}");
+    // 2024 Hz over the first 50 ms against 141 Hz (the 50 ms from the first pulse reach into
+    // the faster second row).
+    assert!(trapezoid_pulses >= 95, "{trapezoid_pulses}");
+    assert!(s_curve_pulses <= 20, "{s_curve_pulses}");
+}

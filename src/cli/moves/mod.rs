@@ -28,12 +28,13 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::args::{
-    MethodArg, parse_duration, parse_joints, parse_length_mm, parse_offset, parse_pose,
+    MethodArg, parse_duration, parse_joints, parse_length_mm, parse_offset, parse_pose, parse_ramp,
     parse_speed_mm_s,
 };
 use super::client::{Client, Received};
 use super::{DaemonArgs, Failure};
 use crate::daemon::{MoveAccepted, MoveOrder, MoveReport, Stage};
+use crate::robot::Ramp;
 
 /// Arguments of `linterpd move`.
 #[derive(Debug, Args)]
@@ -97,6 +98,10 @@ pub struct MotionFlags {
     /// the path as planned (a path's blends included).
     #[arg(long, alias = "tolerance-mm", allow_hyphen_values = true)]
     pub tolerance: Option<String>,
+    /// The ramps' shape: `trapezoid`, or `s-curve:JERK` with the path's jerk in mm/s^3, e.g.
+    /// `s-curve:20000` (default: the robot's).
+    #[arg(long, allow_hyphen_values = true)]
+    pub profile: Option<String>,
     /// An interlock the PLC enforces, e.g. `"press_open & !press_moving"` or `"X5 & !X6"`:
     /// signal names or X / R bits of the input words, `!` for off, joined by `&`. The move
     /// starts only while it holds and is held (stopped) in the first scan it stops holding.
@@ -115,6 +120,15 @@ impl MotionFlags {
         order.method = self.method.map(|m| m.name().to_owned());
         if let Some(text) = &self.tolerance {
             order.tolerance_mm = Some(parse_length_mm(text).context("--tolerance")?);
+        }
+        if let Some(text) = &self.profile {
+            match parse_ramp(text).context("--profile")? {
+                Ramp::Trapezoid => order.profile = Some("trapezoid".to_owned()),
+                Ramp::SCurve { jerk_mm_s3 } => {
+                    order.profile = Some("s-curve".to_owned());
+                    order.jerk_mm_s3 = Some(jerk_mm_s3);
+                }
+            }
         }
         order.permit.clone_from(&self.permit);
         Ok(())

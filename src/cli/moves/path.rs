@@ -60,6 +60,8 @@ fn order(args: &RunArgs) -> anyhow::Result<PathOrder> {
         method: motion.method,
         period: motion.period,
         tolerance_mm: motion.tolerance_mm,
+        profile: motion.profile,
+        jerk_mm_s3: motion.jerk_mm_s3,
         permit: motion.permit,
     })
 }

@@ -15,12 +15,12 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
-use super::args::{MethodArg, PoseArg, parse_length_mm, parse_pose, parse_speed_mm_s};
+use super::args::{MethodArg, PoseArg, parse_length_mm, parse_pose, parse_ramp, parse_speed_mm_s};
 use super::{Failure, bad_input};
 use crate::config::{Config, parse_duration_s};
 use crate::geometry::Pose;
 use crate::plan::{MovePlan, MoveRequest, Origin, Plan, line_as_path, plan_line};
-use crate::robot::{Method, Motion, OverSpeed, Ramp, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::table::FrequencyModel;
 
 /// Arguments of `linterpd plan`.
@@ -291,26 +291,9 @@ fn motion(defaults: Motion, args: &PlanArgs) -> anyhow::Result<Motion> {
         };
     }
     if let Some(text) = &args.profile {
-        m.ramp = ramp(text).context("--profile")?;
+        m.ramp = parse_ramp(text).context("--profile")?;
     }
     Ok(m)
-}
-
-/// `--profile`: `trapezoid`, or `s-curve:JERK` in mm/s^3.
-fn ramp(text: &str) -> anyhow::Result<Ramp> {
-    if text == "trapezoid" {
-        return Ok(Ramp::Trapezoid);
-    }
-    let Some(jerk) = text.strip_prefix("s-curve:") else {
-        anyhow::bail!(
-            "{text:?}: must be \"trapezoid\" or \"s-curve:JERK\" with the path's jerk in mm/s^3, \
-             e.g. s-curve:20000"
-        );
-    };
-    match jerk.trim().parse::<f64>() {
-        Ok(j) if j.is_finite() && j > 0.0 => Ok(Ramp::SCurve { jerk_mm_s3: j }),
-        _ => anyhow::bail!("{text:?}: the jerk {jerk:?} must be a number of mm/s^3 above 0"),
-    }
 }
 
 /// The method `--method` and `--tolerance` ask for, the robot's `default` filling the gaps.
