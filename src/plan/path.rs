@@ -261,12 +261,19 @@ fn section_plan(
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
     if robot.has_dynamics() {
+        let breaks_mm: Vec<f64> = section
+            .pieces()
+            .iter()
+            .skip(1)
+            .map(|p| p.start_mm)
+            .collect();
         let pace = super::dynamics::pace(
             robot,
             &super::dynamics::Shape {
                 length_mm: section.length_mm(),
                 pose_at: &|s| section.at(s),
                 curvature_at: &|s| section.curvature_per_mm(s),
+                breaks_mm: &breaks_mm,
             },
             &start.values,
             &asked,

@@ -20,13 +20,13 @@ use common::moves::{Motion, cylindrical_move, gantry_move, motion, scara_move};
 /// Every joint's drive: `max_accel` as a share of a typical one (5000 mm/s^2, 2000 deg/s^2),
 /// `start_hz` as a share of the channel's top frequency (or none).
 #[derive(Debug, Clone, Copy)]
-struct Limits {
+pub(crate) struct Limits {
     accel_share: [f64; 4],
     start_share: [Option<f64>; 4],
     bounded_mm: Option<f64>,
 }
 
-fn limits() -> impl Strategy<Value = Limits> {
+pub(crate) fn limits() -> impl Strategy<Value = Limits> {
     (
         prop::array::uniform4(0.02..1.0f64),
         prop::array::uniform4(prop::option::of(0.01..0.2f64)),
@@ -39,7 +39,7 @@ fn limits() -> impl Strategy<Value = Limits> {
         })
 }
 
-fn limited(mut robot: Robot, l: &Limits) -> Robot {
+pub(crate) fn limited(mut robot: Robot, l: &Limits) -> Robot {
     for (j, joint) in robot.joints.iter_mut().enumerate() {
         let typical = joint.kind.from_user(match joint.kind {
             linterpd::kinematics::JointKind::Prismatic => 5_000.0,
@@ -78,7 +78,7 @@ fn grain_hz(model: FrequencyModel, clock_hz: f64, hz: f64) -> f64 {
 }
 
 /// Every row of `plan` within its joint's limits (`docs/ACCURACY.md`, "What a drive follows").
-fn check_rows(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
+pub(crate) fn check_rows(robot: &Robot, plan: &Plan) -> Result<(), TestCaseError> {
     let run = plan.execution();
     let model = plan.motion.frequency_model;
     for (j, joint) in robot.joints.iter().enumerate() {

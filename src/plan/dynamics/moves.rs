@@ -27,6 +27,7 @@ pub(in crate::plan) fn timed_line(
             length_mm: path.length_mm(),
             pose_at: &|s| path.at(s),
             curvature_at: &|_| 0.0,
+            breaks_mm: &[],
         },
         &start.values,
         motion,

@@ -22,6 +22,16 @@ use super::super::PlanError;
 const GRID_MM: f64 = 0.5;
 /// The fewest and the most grid points.
 const GRID_POINTS: (usize, usize) = (64, 4_000);
+/// The fewest grid steps on one piece of a path.
+const PIECE_STEPS: usize = 4;
+/// How far either side of where two pieces meet a joint's rate is measured, mm.
+const KINK_PROBE_MM: f64 = 1e-5;
+/// The share of a joint's `max_accel` over a period that its speed may jump by at a kink; the
+/// rest of the acceleration is what its zone leaves ([`kink_zones`]).
+const KINK_SHARE: f64 = 0.45;
+/// A jump in a joint's rate by distance below this, per mm, is the probe's rounding (and a
+/// smooth joint's curvature over it), not a kink.
+const KINK_MIN_PER_MM: f64 = 1e-6;
 /// The share of a joint's `max_accel` planned to: the limits hold at the grid's points, and
 /// the joints' derivatives change a little between them.
 pub(in crate::plan) const ACCEL_MARGIN: f64 = 0.98;
@@ -42,6 +52,9 @@ pub(in crate::plan) struct Shape<'a> {
     pub pose_at: &'a dyn Fn(f64) -> Pose,
     /// Its curvature at a distance along it, 1/mm (0 on a line).
     pub curvature_at: &'a dyn Fn(f64) -> f64,
+    /// Where its pieces meet, mm from its start, ascending (none on a line): grid points, so
+    /// that every step of the grid lies on one piece.
+    pub breaks_mm: &'a [f64],
 }
 
 /// The limits along the path beyond the joints'.
@@ -59,13 +72,15 @@ struct JointsAlong {
     q: Vec<Joints>,
     dq: Vec<Joints>,
     ddq: Vec<Joints>,
+    /// Where two pieces meet with a joint's rate by distance changing at once (a kink: the
+    /// tool angle goes at each piece's own rate): the grid point and every joint's jump, per mm.
+    kinks: Vec<(usize, Joints)>,
 }
 
 impl JointsAlong {
     fn new(robot: &Robot, shape: &Shape, start: &Joints) -> Result<Self, PlanError> {
-        let n = ((shape.length_mm / GRID_MM).ceil() as usize).clamp(GRID_POINTS.0, GRID_POINTS.1);
-        let h = shape.length_mm / n as f64;
-        let s_mm: Vec<f64> = (0..=n).map(|i| h * i as f64).collect();
+        let (s_mm, breaks) = grid_points(shape);
+        let n = s_mm.len() - 1;
         let mut q = Vec::with_capacity(n + 1);
         let mut near = *start;
         for &s in &s_mm {
@@ -82,10 +97,37 @@ impl JointsAlong {
         let ddq = (0..=n)
             .map(|i| {
                 let m = i.clamp(1, n - 1);
-                std::array::from_fn(|j| (at(m + 1, j) - 2.0 * at(m, j) + at(m - 1, j)) / (h * h))
+                let (h1, h2) = (s_mm[m] - s_mm[m - 1], s_mm[m + 1] - s_mm[m]);
+                std::array::from_fn(|j| {
+                    let (back, on) = (
+                        (at(m, j) - at(m - 1, j)) / h1,
+                        (at(m + 1, j) - at(m, j)) / h2,
+                    );
+                    2.0 * (on - back) / (h1 + h2)
+                })
             })
             .collect();
-        Ok(Self { s_mm, q, dq, ddq })
+        let mut kinks = Vec::new();
+        for i in breaks {
+            let s = s_mm[i];
+            let back = robot
+                .kinematics
+                .ik(&(shape.pose_at)(s - KINK_PROBE_MM), Some(&q[i]))?;
+            let on = robot
+                .kinematics
+                .ik(&(shape.pose_at)(s + KINK_PROBE_MM), Some(&q[i]))?;
+            let jump: Joints = std::array::from_fn(|j| {
+                ((on[j] - q[i][j]) - (q[i][j] - back[j])).abs() / KINK_PROBE_MM
+            });
+            kinks.push((i, jump));
+        }
+        Ok(Self {
+            s_mm,
+            q,
+            dq,
+            ddq,
+            kinks,
+        })
     }
 
     /// Every grid point where joint `j` stands still: the ends, and where it reverses.
@@ -106,6 +148,36 @@ impl JointsAlong {
     }
 }
 
+/// The grid's distances: about [`GRID_MM`] apart ([`GRID_POINTS`] in all, at least), every
+/// place where two pieces meet among them, and every piece at least [`PIECE_STEPS`] steps (a
+/// blend of a fraction of a millimetre is seen from the inside).
+fn grid_points(shape: &Shape) -> (Vec<f64>, Vec<usize>) {
+    let n = ((shape.length_mm / GRID_MM).ceil() as usize).clamp(GRID_POINTS.0, GRID_POINTS.1);
+    let h = shape.length_mm / n as f64;
+    let ends: Vec<f64> = shape
+        .breaks_mm
+        .iter()
+        .copied()
+        .filter(|&b| b > 0.0 && b < shape.length_mm)
+        .chain(std::iter::once(shape.length_mm))
+        .collect();
+    let mut s_mm = vec![0.0];
+    let mut breaks = Vec::new();
+    let mut from = 0.0;
+    for to in ends {
+        if to <= from {
+            continue;
+        }
+        if from > 0.0 {
+            breaks.push(s_mm.len() - 1);
+        }
+        let steps = (((to - from) / h).ceil() as usize).max(PIECE_STEPS);
+        s_mm.extend((1..=steps).map(|k| from + (to - from) * k as f64 / steps as f64));
+        from = to;
+    }
+    (s_mm, breaks)
+}
+
 /// The time-optimal pace of `shape` for `robot` from `start` (the joints where it begins),
 /// under `motion`'s speed and acceleration and every joint's limits.
 pub(in crate::plan) fn pace(
@@ -119,13 +191,19 @@ pub(in crate::plan) fn pace(
     let rest_accel = rest_accels(robot, &along, limits.rest_row_s)?;
     let free = grid(robot, shape, &along, motion, limits, &[]);
     let first = solve(&free)?;
-    let zones = rest_zones(
+    let times = times(&free, &first);
+    let mut zones = rest_zones(
         &along,
-        &free,
-        &first,
+        &times,
         &rest_accel,
         REST_ROW_PERIODS * limits.rest_row_s,
     );
+    zones.extend(kink_zones(
+        robot,
+        &along,
+        &times,
+        REST_ROW_PERIODS * limits.rest_row_s,
+    ));
     let x = if zones.is_empty() {
         first
     } else {
@@ -183,34 +261,60 @@ struct Zone {
 /// either side of the standstill of the motion planned with it too.
 fn rest_zones(
     along: &JointsAlong,
-    grid: &[GridPoint],
-    x: &[f64],
+    t: &[f64],
     rest_accel: &[Option<f64>; JOINTS],
     rest_row_s: f64,
 ) -> Vec<Zone> {
+    let mut zones = Vec::new();
+    for (joint, accel) in rest_accel.iter().enumerate() {
+        let Some(accel) = *accel else { continue };
+        for r in along.rests(joint) {
+            zones.push(zone(t, joint, r, rest_row_s, accel));
+        }
+    }
+    zones
+}
+
+/// When the motion `x` reaches every grid point, s from its start.
+fn times(grid: &[GridPoint], x: &[f64]) -> Vec<f64> {
     let mut t = vec![0.0; x.len()];
     for i in 1..x.len() {
         let v = x[i - 1].max(0.0).sqrt() + x[i].max(0.0).sqrt();
         t[i] = t[i - 1] + 2.0 * (grid[i].s - grid[i - 1].s) / v.max(1e-12);
     }
+    t
+}
+
+/// Joint `joint` within `accel` over the steps within `span_s` either side of point `r`.
+fn zone(t: &[f64], joint: usize, r: usize, span_s: f64, accel: f64) -> Zone {
+    // Point i's limit holds over the step from it to the next: every step that overlaps the
+    // time either side of point r.
+    let from = t
+        .partition_point(|&ti| ti <= t[r] - span_s)
+        .saturating_sub(1);
+    let to = t
+        .partition_point(|&ti| ti < t[r] + span_s)
+        .saturating_sub(1);
+    Zone {
+        joint,
+        from: from.min(r.saturating_sub(1)),
+        to: to.max(r),
+        accel,
+    }
+}
+
+/// Around every kink of a joint with `max_accel`, that joint's acceleration held to what its
+/// jump there leaves ([`KINK_SHARE`]): the rows either side then step by the jump and at most
+/// the rest.
+fn kink_zones(robot: &Robot, along: &JointsAlong, t: &[f64], span_s: f64) -> Vec<Zone> {
     let mut zones = Vec::new();
-    for (joint, accel) in rest_accel.iter().enumerate() {
-        let Some(accel) = *accel else { continue };
-        for r in along.rests(joint) {
-            // Point i's limit holds over the step from it to the next: every step that
-            // overlaps the time either side of the standstill.
-            let from = t
-                .partition_point(|&ti| ti <= t[r] - rest_row_s)
-                .saturating_sub(1);
-            let to = t
-                .partition_point(|&ti| ti < t[r] + rest_row_s)
-                .saturating_sub(1);
-            zones.push(Zone {
-                joint,
-                from: from.min(r.saturating_sub(1)),
-                to: to.max(r),
-                accel,
-            });
+    for &(i, jump) in &along.kinks {
+        for (j, joint) in robot.joints.iter().enumerate() {
+            if let Some(a) = joint.dynamics.max_accel
+                && jump[j] > KINK_MIN_PER_MM
+            {
+                zones.push(zone(t, j, i, span_s, (1.0 - KINK_SHARE) * a * ACCEL_MARGIN));
+            }
         }
     }
     zones
@@ -237,7 +341,12 @@ fn grid(
         .enumerate()
         .map(|(i, &s)| {
             let mut x_max = motion.speed_mm_s * motion.speed_mm_s;
-            let k = (shape.curvature_at)(s);
+            // The tightest curvature of the steps either side (each on one piece): the speed
+            // between two points goes no higher than at either.
+            let mid =
+                |a: usize, b: usize| (shape.curvature_at)(0.5 * (along.s_mm[a] + along.s_mm[b]));
+            let last = along.s_mm.len() - 1;
+            let k = mid(i.saturating_sub(1), i.max(1)).max(mid(i.min(last - 1), (i + 1).min(last)));
             if k > 0.0 {
                 x_max = x_max.min(limits.centripetal_mm_s2 / k);
             }
@@ -247,6 +356,14 @@ fn grid(
             }
             for (j, joint) in robot.joints.iter().enumerate() {
                 let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
+                if let (Some(a), Some((_, jump))) = (
+                    joint.dynamics.max_accel,
+                    along.kinks.iter().find(|(k, _)| *k == i),
+                ) && jump[j] > KINK_MIN_PER_MM
+                {
+                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.rest_row_s / jump[j];
+                    x_max = x_max.min(v * v);
+                }
                 if speeds && d != 0.0 {
                     let v = SPEED_MARGIN * f64::from(joint.max_freq_hz) * joint.step.abs();
                     x_max = x_max.min((v / d).powi(2));
