@@ -479,8 +479,8 @@ impl Flattener<'_, '_> {
             method: step.method.clone(),
             period: step.period.clone(),
             tolerance_mm: step.tolerance_mm,
-            profile: None,
-            jerk_mm_s3: None,
+            profile: step.profile.clone(),
+            jerk_mm_s3: step.jerk_mm_s3,
             permit: None,
         };
         self.permit_into(permit, &mut order.permit, here)?;

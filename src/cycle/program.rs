@@ -113,6 +113,12 @@ pub struct PathStep {
     /// Path tolerance, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_mm: Option<f64>,
+    /// The ramps' shape: `"trapezoid"` or `"s-curve"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<String>,
+    /// The path's jerk of an S-curve, mm/s^3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk_mm_s3: Option<f64>,
 }
 
 /// A `loop` step's table.

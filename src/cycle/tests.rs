@@ -204,6 +204,17 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
         ),
         (one("label = \"x\""), "has no action"),
         (
+            one("move = { position = \"in-press\", profile = \"s-curve\" }"),
+            "step 1: move: jerk_mm_s3 = null: profile \"s-curve\" needs the path's jerk",
+        ),
+        (
+            one(
+                "path = { path = { element = [{ line = [1, 2, 3] }] }, profile = \"trapezoid\", \
+                 jerk_mm_s3 = 5000 }",
+            ),
+            "step 1: path: jerk_mm_s3 = 5000: only profile \"s-curve\" takes a jerk",
+        ),
+        (
             one("wait = \"press_open\"\ntimeout = \"1s\"\npermit = \"X5\""),
             "permit goes with a move or a path",
         ),
