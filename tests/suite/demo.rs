@@ -47,8 +47,11 @@ async fn every_move_ends_on_target_and_the_trace_agrees_with_the_plan() {
         (measured - predicted).abs() <= AGREEMENT_MM,
         "measured {measured} mm, predicted {predicted} mm"
     );
-    assert!(d.moves[4].chained && d.moves[4].report.final_error_pulses.is_none());
-    assert!(d.moves[5].chained && d.moves[5].report.final_error_pulses.is_none());
+    // A chained move's end is read by the daemon only if a status read falls between its last
+    // pulse and the PLC taking the waiting start (within two scans); on a loaded machine one
+    // sometimes does (seen once in a full `cargo test`, move 5), and then its counts were
+    // checked on target above. The last move's end is always read.
+    assert!(d.moves[4].chained && d.moves[5].chained);
     assert!(d.moves[6].chained && d.moves[6].report.final_error_pulses.is_some());
     // At 115200 baud every queued move is uploaded long before the one before it ends: its
     // start waits in the PLC, which takes it within two scans of that move's last pulse.
