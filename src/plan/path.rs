@@ -267,27 +267,38 @@ fn section_plan(
             .skip(1)
             .map(|p| p.start_mm)
             .collect();
-        let pace = super::dynamics::pace(
-            robot,
-            &super::dynamics::Shape {
-                length_mm: section.length_mm(),
-                pose_at: &|s| section.at(s),
-                curvature_at: &|s| section.curvature_per_mm(s),
-                breaks_mm: &breaks_mm,
-            },
-            &start.values,
-            &asked,
-            &super::dynamics::PathLimits {
+        let shape = super::dynamics::Shape {
+            length_mm: section.length_mm(),
+            pose_at: &|s| section.at(s),
+            curvature_at: &|s| section.curvature_per_mm(s),
+            breaks_mm: &breaks_mm,
+        };
+        // A timing whose rows a drive refuses (by a little, where the grid between its points
+        // or a kink's rounding missed it) is made again to smaller shares of the limits.
+        let timed = |accel_share: f64| {
+            let limits = super::dynamics::PathLimits {
                 centripetal_mm_s2: path_accel_mm_s2,
                 rest_row_s: asked.period_s,
-            },
-        )
-        .map_err(|source| (elements.clone(), source))?;
-        let course = Course::Path {
-            path: section.clone(),
-            pace,
+                accel_share,
+            };
+            let pace = super::dynamics::pace(robot, &shape, &start.values, &asked, &limits)?;
+            let course = Course::Path {
+                path: section.clone(),
+                pace,
+            };
+            parts(robot, &course, start, asked)
         };
-        return parts(robot, &course, start, asked).map_err(|source| (elements, source));
+        let mut outcome = timed(1.0);
+        for accel_share in super::dynamics::RETIMING {
+            if !matches!(
+                outcome,
+                Err(PlanError::RowStep { .. } | PlanError::RestRow { .. })
+            ) {
+                break;
+            }
+            outcome = timed(accel_share);
+        }
+        return outcome.map_err(|source| (elements, source));
     }
     let caps = match asked.over_speed {
         OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),

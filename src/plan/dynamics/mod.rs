@@ -10,7 +10,7 @@ mod timing;
 pub(super) use moves::{joint_move_motion, timed_line};
 pub use rows::DriveFigures;
 pub(super) use rows::judge;
-pub(super) use timing::{PathLimits, Shape, pace};
+pub(super) use timing::{PathLimits, RETIMING, Shape, pace};
 
 #[cfg(test)]
 mod tests;

@@ -34,6 +34,7 @@ pub(in crate::plan) fn timed_line(
         &PathLimits {
             centripetal_mm_s2: f64::INFINITY,
             rest_row_s: motion.period_s,
+            accel_share: 1.0,
         },
     )?;
     Ok(Course::Path { path, pace })

@@ -22,6 +22,9 @@ use super::super::PlanError;
 const GRID_MM: f64 = 0.5;
 /// The fewest and the most grid points.
 const GRID_POINTS: (usize, usize) = (64, 4_000);
+/// The shares of every joint's acceleration limit a path section is timed to again, in turn,
+/// when the rows of the timing before were refused for a drive ([`PathLimits::accel_share`]).
+pub(in crate::plan) const RETIMING: [f64; 2] = [0.85, 0.7];
 /// The fewest grid steps on one piece of a path.
 const PIECE_STEPS: usize = 4;
 /// How far either side of where two pieces meet a joint's rate is measured, mm.
@@ -64,6 +67,10 @@ pub(in crate::plan) struct PathLimits {
     /// The period, s: a row from or to rest lasts between half a period and a period and a
     /// half, and a standstill's zone of lower acceleration lasts the longest either side.
     pub rest_row_s: f64,
+    /// The share of every joint's acceleration limit (`max_accel`, and what `start_hz` and a
+    /// kink leave) the timing plans to: 1, or less when a first timing's rows were refused
+    /// ([`RETIMING`]).
+    pub accel_share: f64,
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
@@ -188,7 +195,8 @@ pub(in crate::plan) fn pace(
     limits: &PathLimits,
 ) -> Result<Pace, PlanError> {
     let along = JointsAlong::new(robot, shape, start)?;
-    let rest_accel = rest_accels(robot, &along, limits.rest_row_s)?;
+    let rest_accel =
+        rest_accels(robot, &along, limits.rest_row_s)?.map(|a| a.map(|a| a * limits.accel_share));
     let free = grid(robot, shape, &along, motion, limits, &[]);
     let first = solve(&free)?;
     let times = times(&free, &first);
@@ -203,6 +211,7 @@ pub(in crate::plan) fn pace(
         &along,
         &times,
         REST_ROW_PERIODS * limits.rest_row_s,
+        limits.accel_share,
     ));
     let x = if zones.is_empty() {
         first
@@ -306,14 +315,15 @@ fn zone(t: &[f64], joint: usize, r: usize, span_s: f64, accel: f64) -> Zone {
 /// Around every kink of a joint with `max_accel`, that joint's acceleration held to what its
 /// jump there leaves ([`KINK_SHARE`]): the rows either side then step by the jump and at most
 /// the rest.
-fn kink_zones(robot: &Robot, along: &JointsAlong, t: &[f64], span_s: f64) -> Vec<Zone> {
+fn kink_zones(robot: &Robot, along: &JointsAlong, t: &[f64], span_s: f64, share: f64) -> Vec<Zone> {
     let mut zones = Vec::new();
     for &(i, jump) in &along.kinks {
         for (j, joint) in robot.joints.iter().enumerate() {
             if let Some(a) = joint.dynamics.max_accel
                 && jump[j] > KINK_MIN_PER_MM
             {
-                zones.push(zone(t, j, i, span_s, (1.0 - KINK_SHARE) * a * ACCEL_MARGIN));
+                let accel = (1.0 - KINK_SHARE) * a * ACCEL_MARGIN * share;
+                zones.push(zone(t, j, i, span_s, accel));
             }
         }
     }
@@ -361,7 +371,8 @@ fn grid(
                     along.kinks.iter().find(|(k, _)| *k == i),
                 ) && jump[j] > KINK_MIN_PER_MM
                 {
-                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.rest_row_s / jump[j];
+                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.accel_share * limits.rest_row_s
+                        / jump[j];
                     x_max = x_max.min(v * v);
                 }
                 if speeds && d != 0.0 {
@@ -376,7 +387,7 @@ fn grid(
                 let accel = joint
                     .dynamics
                     .max_accel
-                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN)
+                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.accel_share)
                     .min(zone);
                 if accel.is_finite() {
                     accels.push(AccelLimit::symmetric(d, dd, accel));
