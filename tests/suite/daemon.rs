@@ -709,6 +709,16 @@ async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
     d.kill().await;
 }
 
+/// When the mock played each pulse of `channel` since the last take, s on its clock.
+fn pulse_times(shared: &SharedMock, channel: u8) -> Vec<f64> {
+    shared
+        .with(linterpd::mock::MockPlc::take_pulses)
+        .into_iter()
+        .filter(|p| p.channel == channel)
+        .map(|p| p.time_s)
+        .collect()
+}
+
 #[tokio::test]
 async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
     // d3's drive follows 1000 mm/s^2 and starts at 1 kHz: without the limits its first 50 ms
@@ -733,12 +743,7 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
     // The PLC's pulses: d3 (channel 2) leaves standstill and comes to it at no more than
     // 1 kHz over its first and last 50 ms (a pulse of rounding aside), and its speed changes
     // by no more than 1000 mm/s^2 allows between two 50 ms windows (two pulses of rounding).
-    let times: Vec<f64> = shared
-        .with(linterpd::mock::MockPlc::take_pulses)
-        .into_iter()
-        .filter(|p| p.channel == 2)
-        .map(|p| p.time_s)
-        .collect();
+    let times = pulse_times(&shared, 2);
     let (first, last) = (times[0], times[times.len() - 1]);
     let within = |from: f64, to: f64| times.iter().filter(|&&t| t >= from && t < to).count();
     assert!(
@@ -783,12 +788,7 @@ async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
         let id = h.submit(asked).unwrap();
         let there = h.wait(id, LIMIT).await.unwrap();
         assert_on_target(&there);
-        let times: Vec<f64> = shared
-            .with(linterpd::mock::MockPlc::take_pulses)
-            .into_iter()
-            .filter(|p| p.channel == 2)
-            .map(|p| p.time_s)
-            .collect();
+        let times = pulse_times(&shared, 2);
         let (first, last) = (times[0], times[times.len() - 1]);
         let first_50ms = times.iter().filter(|&&t| t < first + 0.05).count();
         firsts.push((last - first, first_50ms));
