@@ -345,6 +345,18 @@ fn grid(
         f64::INFINITY
     };
     let speeds = motion.over_speed == OverSpeed::SlowDown;
+    // Every point's lowest zone limit and kink, made once (a path of many blends has as many
+    // kinks and zones).
+    let mut zone_at = vec![[f64::INFINITY; JOINTS]; along.s_mm.len()];
+    for z in zones {
+        for at in &mut zone_at[z.from..=z.to.min(along.s_mm.len() - 1)] {
+            at[z.joint] = at[z.joint].min(z.accel);
+        }
+    }
+    let mut kink_at = vec![None; along.s_mm.len()];
+    for (i, jump) in &along.kinks {
+        kink_at[*i] = Some(jump);
+    }
     along
         .s_mm
         .iter()
@@ -366,10 +378,8 @@ fn grid(
             }
             for (j, joint) in robot.joints.iter().enumerate() {
                 let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
-                if let (Some(a), Some((_, jump))) = (
-                    joint.dynamics.max_accel,
-                    along.kinks.iter().find(|(k, _)| *k == i),
-                ) && jump[j] > KINK_MIN_PER_MM
+                if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, kink_at[i])
+                    && jump[j] > KINK_MIN_PER_MM
                 {
                     let v = KINK_SHARE * a * ACCEL_MARGIN * limits.accel_share * limits.rest_row_s
                         / jump[j];
@@ -379,11 +389,7 @@ fn grid(
                     let v = SPEED_MARGIN * f64::from(joint.max_freq_hz) * joint.step.abs();
                     x_max = x_max.min((v / d).powi(2));
                 }
-                let zone = zones
-                    .iter()
-                    .filter(|z| z.joint == j && (z.from..=z.to).contains(&i))
-                    .map(|z| z.accel)
-                    .fold(f64::INFINITY, f64::min);
+                let zone = zone_at[i][j];
                 let accel = joint
                     .dynamics
                     .max_accel
