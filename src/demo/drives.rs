@@ -24,8 +24,10 @@ pub struct DriveComparison {
     pub peak_hz: [f64; 2],
 }
 
-/// The short-armed robot, with drive limits or without.
-fn robot(limited: bool) -> Robot {
+/// A cylindrical robot whose arm reaches in to 50 mm from its axis, its base channel at
+/// 20 kHz: a line 100 mm from the axis swings the base at 1.4 rad/s at 240 mm/s, and 20 kHz
+/// allows 0.87 rad/s.
+pub(crate) fn short_arm(over_speed: OverSpeed) -> Robot {
     let mut robot = seed_robot();
     robot.kinematics = Model::Cylindrical(Cylindrical {
         l0_mm: 50.0,
@@ -34,7 +36,13 @@ fn robot(limited: bool) -> Robot {
     robot.joints[0].max_freq_hz = 20_000;
     robot.joints[0].min = JointKind::Revolute.from_user(-360.0);
     robot.joints[0].max = JointKind::Revolute.from_user(360.0);
-    robot.motion.over_speed = OverSpeed::SlowDown;
+    robot.motion.over_speed = over_speed;
+    robot
+}
+
+/// The short-armed robot under `slow-down`, with drive limits or without.
+fn robot(limited: bool) -> Robot {
+    let mut robot = short_arm(OverSpeed::SlowDown);
     if limited {
         for (joint, a) in robot
             .joints

@@ -3,8 +3,9 @@
 
 use std::fmt::Write as _;
 
+use crate::demo::drives::short_arm;
 use crate::geometry::{Corner, Element, Pose};
-use crate::kinematics::{Cylindrical, JointKind, Kinematics, Model};
+use crate::kinematics::Kinematics;
 use crate::plan::{
     JointMoveRequest, MovePlan, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
     plan_line, plan_move, plan_path,
@@ -174,22 +175,6 @@ fn without_drive_limits_the_seed_move_plans_the_tables_it_always_did() {
         std::fs::write("src/plan/dynamics/seed_tables.golden", &text).unwrap();
     }
     assert!(text == golden, "the seed's tables changed");
-}
-
-/// A cylindrical robot whose arm reaches in to 50 mm from its axis, its base channel at
-/// 20 kHz: a line 100 mm from the axis swings the base at 1.4 rad/s at 240 mm/s, and 20 kHz
-/// allows 0.87 rad/s.
-fn short_arm(over_speed: OverSpeed) -> Robot {
-    let mut robot = seed_robot();
-    robot.kinematics = Model::Cylindrical(Cylindrical {
-        l0_mm: 50.0,
-        min_axis_distance_mm: 20.0,
-    });
-    robot.joints[0].max_freq_hz = 20_000;
-    robot.joints[0].min = JointKind::Revolute.from_user(-360.0);
-    robot.joints[0].max = JointKind::Revolute.from_user(360.0);
-    robot.motion.over_speed = over_speed;
-    robot
 }
 
 /// A line 100 mm from the axis, 400 mm long, ending where it comes nearest the axis (no joint
