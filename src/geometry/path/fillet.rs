@@ -94,28 +94,38 @@ pub(super) fn fillet(
     corner.branch = corner
         .branch_near(tiny, &centre)
         .ok_or(NoFillet::NoCircle)?;
-    let radius = corner.largest(guess)?;
-    let (centre, reach_in, reach_out) = corner.at(radius).ok_or(NoFillet::NoCircle)?;
-    let arc = Arc::tangent(
-        a.at(len_a - reach_in),
-        b.at(reach_out),
-        a.direction(len_a - reach_in),
-        b.direction(reach_out),
-        radius,
-    );
-    // The centre's own rounding grows with the radius.
-    let fits = (arc.centre_mm - plane.point(&centre)).norm() <= FIT_MM * (1.0 + radius * 1e-3)
-        && arc.end_gap_mm() <= FIT_MM
-        && arc.sweep_rad <= MAX_TURN_RAD + 1e-9;
-    if !fits {
-        return Err(NoFillet::NoCircle);
+    // Where circles of every size up to the largest touch both (a line nearly tangent to an arc
+    // curving back across it), the largest is found far off, where the offsets' crossing has
+    // lost the digits the arc as built needs: it is halved until the arc fits.
+    let mut radius = corner.largest(guess)?;
+    for _ in 0..=HALVINGS {
+        let (centre, reach_in, reach_out) = corner.at(radius).ok_or(NoFillet::NoCircle)?;
+        let arc = Arc::tangent(
+            a.at(len_a - reach_in),
+            b.at(reach_out),
+            a.direction(len_a - reach_in),
+            b.direction(reach_out),
+            radius,
+        );
+        // The centre's own rounding grows with the radius.
+        let fits = (arc.centre_mm - plane.point(&centre)).norm() <= FIT_MM * (1.0 + radius * 1e-3)
+            && arc.end_gap_mm() <= FIT_MM
+            && arc.sweep_rad <= MAX_TURN_RAD + 1e-9;
+        if fits {
+            return Ok(Fillet {
+                reach_in_mm: reach_in,
+                reach_out_mm: reach_out,
+                corner: arc,
+            });
+        }
+        radius /= 2.0;
     }
-    Ok(Fillet {
-        reach_in_mm: reach_in,
-        reach_out_mm: reach_out,
-        corner: arc,
-    })
+    Err(NoFillet::NoCircle)
 }
+
+/// How many times the radius found is halved for an arc that fits ([`fillet`]): from the
+/// largest corner circle to about 1 m.
+const HALVINGS: usize = 7;
 
 /// The plane both neighbours lie in, as coordinates about the waypoint.
 struct Plane {
