@@ -363,8 +363,13 @@ fn plan_course(
 ) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked)?;
     let (first, last) = (0, sampled.last_point());
+    let plan = |first, last| {
+        sampled
+            .plan(first, last, start.counts)
+            .map_err(|e| sampled.named(e, first, last, start.counts))
+    };
     let Some(line) = course.line() else {
-        return sampled.plan(first, last, start.counts);
+        return plan(first, last);
     };
     let later = |joint: usize, reverses: bool, at_s: f64| PlanError::LaterSegment {
         joint: robot.joints[joint].name.clone(),
@@ -381,7 +386,7 @@ fn plan_course(
     {
         return Err(later(joint, true, sampled.time_s(cut)));
     }
-    let plan = sampled.plan(first, last, start.counts)?;
+    let plan = plan(first, last)?;
     if sampled.cut_for_segments()
         && let Some((joint, at_s)) = plan.later_segment()
     {
@@ -462,10 +467,9 @@ impl<'a> Sampled<'a> {
         }
     }
 
-    /// Plans the start from sample point `first` to `last`, from `counts` (where the start
-    /// before it ends, or where the move begins).
-    fn plan(&self, first: usize, last: usize, counts: [i64; JOINTS]) -> Result<Plan, PlanError> {
-        let robot = self.robot;
+    /// The window and samples of the start from sample point `first` to `last`, from
+    /// `counts`.
+    fn part(&self, first: usize, last: usize, counts: [i64; JOINTS]) -> (Window, Samples) {
         let window = Window {
             from_s: self.time_s(first),
             to_s: self.time_s(last),
@@ -476,16 +480,55 @@ impl<'a> Sampled<'a> {
             values: self.samples.values[first..=last].to_vec(),
         };
         samples.counts[0] = counts;
+        (window, samples)
+    }
+
+    /// The bounded-error planner of a part ([`Self::part`]).
+    fn bounded_move<'m>(&'m self, window: &'m Window, samples: &'m Samples) -> bounded::Move<'m> {
+        bounded::Move {
+            robot: self.robot,
+            course: self.course,
+            profile: &self.profile,
+            window,
+            samples,
+            motion: &self.motion,
+        }
+    }
+
+    /// `refusal` of the start from `first` to `last` from `counts` as it reaches the user: a
+    /// tolerance too small names the smallest found to work ([`Self::plan`] leaves it out).
+    fn named(
+        &self,
+        refusal: PlanError,
+        first: usize,
+        last: usize,
+        counts: [i64; JOINTS],
+    ) -> PlanError {
+        match refusal {
+            PlanError::ToleranceTooSmall {
+                tolerance_mm,
+                floor_mm,
+                works_mm: None,
+            } => {
+                let (window, samples) = self.part(first, last, counts);
+                PlanError::ToleranceTooSmall {
+                    tolerance_mm,
+                    floor_mm,
+                    works_mm: self.bounded_move(&window, &samples).works_mm(tolerance_mm),
+                }
+            }
+            other => other,
+        }
+    }
+
+    /// Plans the start from sample point `first` to `last`, from `counts` (where the start
+    /// before it ends, or where the move begins). A tolerance too small is refused without the
+    /// one that works ([`Self::named`] adds it).
+    fn plan(&self, first: usize, last: usize, counts: [i64; JOINTS]) -> Result<Plan, PlanError> {
+        let robot = self.robot;
+        let (window, samples) = self.part(first, last, counts);
         let (tables, problems, figures) = if let Some(tolerance_mm) = self.bounded() {
-            let m = bounded::Move {
-                robot,
-                course: self.course,
-                profile: &self.profile,
-                window: &window,
-                samples: &samples,
-                motion: &self.motion,
-            };
-            let v = m.plan(tolerance_mm)?;
+            let v = self.bounded_move(&window, &samples).plan(tolerance_mm)?;
             (v.tables, Vec::new(), v.figures)
         } else {
             let tables = build_tables(

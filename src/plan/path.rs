@@ -439,7 +439,10 @@ fn parts_in_turn(
             Err(e @ PlanError::ToleranceTooSmall { .. }) => {
                 match late_cut(sampled, first, end, min_points) {
                     Some(cut) => cut,
-                    None => return Err(late_start(robot, sampled, first, end).unwrap_or(e)),
+                    None => {
+                        return Err(late_start(robot, sampled, first, end)
+                            .unwrap_or_else(|| sampled.named(e, first, end, counts)));
+                    }
                 }
             }
             Err(e) => return Err(e),
@@ -1010,6 +1013,38 @@ mod tests {
             "{} s",
             plan.duration_s()
         );
+    }
+
+    /// A part refused for its tolerance is cut again, without the planner searching for a
+    /// tolerance that works; one that reaches the user names it, and it does plan the path.
+    #[test]
+    fn a_path_tolerance_below_the_pulse_grid_is_refused_naming_one_that_plans_it() {
+        let above = [pose(P2, 100.0)];
+        let asked = Method::BoundedError { tolerance_mm: 0.01 };
+        let model = FrequencyModel::FpxDivider;
+        let refused = cycle(&above, Corner::Blend(20.0), asked, model).unwrap_err();
+        let PlanError::Section { source, .. } = &refused else {
+            panic!("{refused}")
+        };
+        let PlanError::ToleranceTooSmall {
+            floor_mm,
+            works_mm: Some(works_mm),
+            ..
+        } = **source
+        else {
+            panic!("{refused}")
+        };
+        assert!(floor_mm > 0.01 && works_mm > floor_mm, "{refused}");
+        assert!(
+            refused
+                .to_string()
+                .contains(&format!("{works_mm} mm works"))
+        );
+        let works = Method::BoundedError {
+            tolerance_mm: works_mm,
+        };
+        let plan = cycle(&above, Corner::Blend(20.0), works, model).unwrap();
+        assert!(plan.valid() && plan.max_deviation_mm() <= works_mm);
     }
 
     #[test]

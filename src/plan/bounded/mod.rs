@@ -301,13 +301,20 @@ impl Move<'_> {
             .get_or_init(|| self.play_floor_mm(sizing.tracks))
     }
 
-    /// Plans at `tolerance_mm`, narrowing the windows until the execution model agrees.
+    /// Plans at `tolerance_mm`, narrowing the windows until the execution model agrees. A
+    /// tolerance no try meets is refused with the pulse grid's floor and no suggestion: a path's
+    /// part cut again at a later point never shows it, and finding one plans the move again up
+    /// to six times ([`Self::works_mm`] finds it for a refusal that reaches the user).
     pub(super) fn plan(&self, tolerance_mm: f64) -> Result<Verified, PlanError> {
         let tracks = self.tracks();
         let sizing = self.sizing(&tracks);
         match self.try_plan(&sizing, tolerance_mm)? {
             Some(v) => Ok(v),
-            None => Err(self.too_tight(&sizing, tolerance_mm)),
+            None => Err(PlanError::ToleranceTooSmall {
+                tolerance_mm,
+                floor_mm: self.floor_mm(&sizing),
+                works_mm: None,
+            }),
         }
     }
 
@@ -454,17 +461,15 @@ impl Move<'_> {
         Ok(Some(Verified { tables, figures }))
     }
 
-    /// The refusal of a tolerance, naming the smallest one that does work on this move.
-    fn too_tight(&self, sizing: &Sizing, tolerance_mm: f64) -> PlanError {
-        let floor_mm = self.floor_mm(sizing);
-        let works = [1.05, 1.1, 1.25, 1.5, 2.0, 3.0]
+    /// The smallest tolerance above `tolerance_mm` found to work on this move, from a few
+    /// multiples of the pulse grid's floor (`None` if none of them does).
+    pub(super) fn works_mm(&self, tolerance_mm: f64) -> Option<f64> {
+        let tracks = self.tracks();
+        let sizing = self.sizing(&tracks);
+        let floor_mm = self.floor_mm(&sizing);
+        [1.05, 1.1, 1.25, 1.5, 2.0, 3.0]
             .iter()
             .map(|k| (floor_mm * k * 1e4).ceil() / 1e4)
-            .find(|&t| t > tolerance_mm && matches!(self.try_plan(sizing, t), Ok(Some(_))));
-        PlanError::ToleranceTooSmall {
-            tolerance_mm,
-            floor_mm,
-            works_mm: works,
-        }
+            .find(|&t| t > tolerance_mm && matches!(self.try_plan(&sizing, t), Ok(Some(_))))
     }
 }
