@@ -172,17 +172,15 @@ impl Channel<'_> {
         best
     }
 
-    /// Rows for `pulses` in `range` from `t_s`; a pulse no frequency can place is played at the
-    /// nearest the range allows and counted as broken.
-    /// Rows for `pulses` in `range` from `t_s`. With `stop_at_break` it ends at the first pulse
-    /// no frequency can place; otherwise such a pulse is played at the nearest value the range
-    /// allows and counted as broken.
+    /// Rows for `pulses` in `range` from `t_s`. A pulse no frequency can place is played at the
+    /// nearest value the range allows and counted as broken; once more than `give_up_after` are
+    /// broken the attempt ends there (its caller does not take it).
     fn attempt(
         &self,
         range: FrequencyRange,
         pulses: &[Pulse],
         mut t_s: f64,
-        stop_at_break: bool,
+        give_up_after: usize,
     ) -> Attempt {
         let mut a = Attempt {
             rows: Vec::new(),
@@ -201,7 +199,7 @@ impl Channel<'_> {
                     a.clean_pulses = k;
                 }
                 a.broken += 1;
-                if stop_at_break {
+                if a.broken > give_up_after {
                     break;
                 }
                 self.nearest(range, (pulses[k].ideal_s - t_s).max(1e-6))
@@ -242,7 +240,7 @@ impl Channel<'_> {
     ) -> (FrequencyRange, Attempt) {
         let mut prefixes = Vec::with_capacity(3);
         for range in FrequencyRange::FINEST_FIRST {
-            let a = self.attempt(range, pulses, t_s, true);
+            let a = self.attempt(range, pulses, t_s, 0);
             if a.broken == 0 {
                 return (range, a);
             }
@@ -254,7 +252,7 @@ impl Channel<'_> {
         // (With none allowed off, the loop above already found that no range plays them all.)
         if self.off_window > 0 {
             for range in FrequencyRange::FINEST_FIRST {
-                let a = self.attempt(range, pulses, t_s, false);
+                let a = self.attempt(range, pulses, t_s, self.off_window);
                 if a.broken <= self.off_window {
                     return (range, a);
                 }
@@ -267,11 +265,20 @@ impl Channel<'_> {
         if !last_chance && best.clean_pulses > 0 {
             return (range, best);
         }
-        FrequencyRange::FINEST_FIRST
-            .map(|r| (r, self.attempt(r, pulses, t_s, false)))
-            .into_iter()
-            .min_by_key(|(_, a)| a.broken)
-            .expect("three ranges")
+        // The range that breaks fewest (the finest of those that tie): a later range is given up
+        // once it breaks as many as the best so far.
+        let [finest, rest @ ..] = FrequencyRange::FINEST_FIRST;
+        let mut best = (finest, self.attempt(finest, pulses, t_s, usize::MAX));
+        for range in rest {
+            let Some(fewer) = best.1.broken.checked_sub(1) else {
+                break;
+            };
+            let a = self.attempt(range, pulses, t_s, fewer);
+            if a.broken <= fewer {
+                best = (range, a);
+            }
+        }
+        best
     }
 
     /// Segments for one run of pulses starting at `t_s` from `count`; returns them and the
@@ -325,6 +332,83 @@ mod tests {
         let starts = Counts::new(u).track(1e-3).pulses_into(0, 2.0, &mut pulses);
         assert_eq!(starts.len(), 1, "one run");
         pulses
+    }
+
+    /// [`Channel::next_segment`] as it was before attempts were given up early: every range
+    /// played to the end of the pulses wherever pulses broke.
+    fn next_segment_in_full(
+        channel: &Channel<'_>,
+        pulses: &[Pulse],
+        t_s: f64,
+        last_chance: bool,
+    ) -> (FrequencyRange, Vec<Row>, usize) {
+        let full = |r| channel.attempt(r, pulses, t_s, usize::MAX);
+        let played = |r, a: Attempt| (r, a.rows, a.broken);
+        let mut prefixes = Vec::new();
+        for range in FrequencyRange::FINEST_FIRST {
+            let a = channel.attempt(range, pulses, t_s, 0);
+            if a.broken == 0 {
+                return played(range, a);
+            }
+            prefixes.push((range, a));
+        }
+        if channel.off_window > 0 {
+            for range in FrequencyRange::FINEST_FIRST {
+                let a = full(range);
+                if a.broken <= channel.off_window {
+                    return played(range, a);
+                }
+            }
+        }
+        let (range, best) = prefixes
+            .into_iter()
+            .max_by_key(|(_, a)| a.clean_pulses)
+            .unwrap();
+        if !last_chance && best.clean_pulses > 0 {
+            return played(range, best);
+        }
+        let (range, a) = FrequencyRange::FINEST_FIRST
+            .map(|r| (r, full(r)))
+            .into_iter()
+            .min_by_key(|(_, a)| a.broken)
+            .unwrap();
+        played(range, a)
+    }
+
+    /// A cruise whose pulses waver by more than any one frequency plays, from many starts:
+    /// the segment chosen with attempts given up once they cannot be taken is the segment
+    /// chosen with every attempt played in full.
+    #[test]
+    fn attempts_given_up_early_choose_the_segment_attempts_played_in_full_choose() {
+        let joint = seed_robot().joints[1].clone();
+        let mut pulses = cruise(4_000.0, 0.5);
+        // Every seventh pulse's window pulled early: no frequency lands in all of them.
+        for p in pulses.iter_mut().skip(40).step_by(7) {
+            p.lo_s -= 2e-3;
+            p.hi_s = p.lo_s + 2e-5;
+        }
+        let mut broke = 0;
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            for off_window in [0, 2, 30] {
+                let spare = RefCell::new(Vec::new());
+                let channel = Channel {
+                    joint: &joint,
+                    model,
+                    off_window,
+                    bounds: &spare,
+                };
+                for k in (0..pulses.len()).step_by(211) {
+                    let t_s = pulses[k].ideal_s - 1e-4;
+                    for last_chance in [false, true] {
+                        let (range, a) = channel.next_segment(&pulses[k..], t_s, last_chance);
+                        let full = next_segment_in_full(&channel, &pulses[k..], t_s, last_chance);
+                        assert_eq!((range, a.rows, a.broken), full, "{model:?} {k}");
+                        broke += usize::from(full.2 > 0);
+                    }
+                }
+            }
+        }
+        assert!(broke > 20, "{broke} choices with pulses off their windows");
     }
 
     #[test]
