@@ -1,5 +1,6 @@
-//! Plans the seed's move a few hundred times (for profilers): bounded-error 0.05 mm, or
-//! constant-period at the robot's period with `cp` as the second argument.
+//! Plans the seed's move a few hundred times (for profilers): bounded-error 0.05 mm (or the
+//! tolerance in mm given as the second argument), or constant-period at the robot's period with
+//! `cp` as the second argument.
 use linterpd::geometry::Pose;
 use linterpd::plan::{MoveRequest, Origin, plan_move};
 use linterpd::robot::{Method, seed_robot};
@@ -12,8 +13,10 @@ fn main() {
     let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
     to.a_rad = from.a_rad;
     let mut motion = robot.motion;
-    if std::env::args().nth(2).as_deref() != Some("cp") {
-        motion.method = Method::BoundedError { tolerance_mm: 0.05 };
+    let second = std::env::args().nth(2);
+    if second.as_deref() != Some("cp") {
+        let tolerance_mm = second.and_then(|a| a.parse().ok()).unwrap_or(0.05);
+        motion.method = Method::BoundedError { tolerance_mm };
     }
     let req = MoveRequest {
         from: Origin::Pose(from),
