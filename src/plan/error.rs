@@ -222,11 +222,12 @@ pub enum PlanError {
         /// How long a row from rest lasts, s.
         row_s: f64,
     },
-    /// An S-curve asked of a robot with drive limits, whose moves are timed time-optimally.
+    /// An S-curve asked to follow a time-optimal pace, whose accelerations step on and off (a
+    /// guard: under drive limits an S-curve is slowed as a whole instead, see
+    /// `dynamics::followed`).
     #[error(
-        "profile \"s-curve\" is not planned for a robot with drive limits (max_accel, \
-         start_hz): its moves are timed time-optimally under them, with trapezoidal \
-         accelerations; use profile \"trapezoid\" for this robot"
+        "profile \"s-curve\" cannot follow a time-optimal pace, whose accelerations step on \
+         and off; an S-curve under drive limits is slowed as a whole instead"
     )]
     SCurveUnderDriveLimits,
     /// No motion along the course keeps every limit at some point of it.
@@ -236,6 +237,24 @@ pub enum PlanError {
         at_mm: f64,
         /// Why.
         reason: &'static str,
+    },
+    /// An S-curve slowed as far as it is slowed still asks a joint for more acceleration than
+    /// its `max_accel`.
+    #[error(
+        "joint {joint}: profile \"s-curve\" asks it for {accel:.1} {unit}/s^2 even slowed to \
+         {speed_pct:.1} % of the speed asked for; max_accel = {max_accel} {unit}/s^2"
+    )]
+    SCurveOverMaxAccel {
+        /// Joint name.
+        joint: String,
+        /// Its largest planned acceleration at the slowest tried, user units/s^2.
+        accel: f64,
+        /// The joint's limit, user units/s^2.
+        max_accel: f64,
+        /// deg or mm.
+        unit: &'static str,
+        /// The slowest speed tried, % of the speed asked for.
+        speed_pct: f64,
     },
     /// Two consecutive rows of a joint's table step by more than its drive follows.
     #[error(

@@ -96,7 +96,8 @@ pub struct Plan {
     pub profile: Profile,
     /// The motion settings actually used (speed lowered by `slow-down` if it had to).
     pub motion: Motion,
-    /// Speed actually used over speed asked for (1 unless `slow-down` acted).
+    /// Speed actually used over speed asked for (1 unless `slow-down` acted, or an S-curve was
+    /// slowed for its drives' limits).
     pub speed_factor: f64,
     /// Counts at every interpolation point.
     pub samples: Samples,
@@ -301,6 +302,16 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         counts: start_counts,
     };
     if robot.has_dynamics() {
+        if let Ramp::SCurve { .. } = req.motion.ramp {
+            let course = Course::Line(line);
+            return dynamics::followed(|k| {
+                let mut plan =
+                    plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
+                plan.speed_factor *= k.sqrt();
+                dynamics::within_max_accel(robot, &plan.drive, plan.speed_factor)?;
+                Ok(plan)
+            });
+        }
         let course = dynamics::timed_line(robot, &line, &start, &req.motion)?;
         return plan_course(robot, &course, &start, req.motion);
     }

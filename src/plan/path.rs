@@ -22,7 +22,7 @@
 
 use crate::geometry::{Corner, Element, Pace, Path, PathSpec, Pose, SpeedCap};
 use crate::kinematics::{JOINTS, Kinematics};
-use crate::robot::{Method, Motion, OverSpeed, Robot};
+use crate::robot::{Method, Motion, OverSpeed, Ramp, Robot};
 
 use crate::table::TableProblem;
 
@@ -260,6 +260,24 @@ fn section_plan(
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
+    if robot.has_dynamics() && matches!(asked.ramp, Ramp::SCurve { .. }) {
+        // Slowed as a whole (its path acceleration with the rest) until the drives follow it.
+        return super::dynamics::followed(|k| {
+            let mut starts = planned_as_asked(
+                robot,
+                section,
+                start,
+                super::dynamics::slowed(&asked, k),
+                path_accel_mm_s2 * k,
+            )?;
+            for s in &mut starts {
+                s.speed_factor *= k.sqrt();
+                super::dynamics::within_max_accel(robot, &s.drive, s.speed_factor)?;
+            }
+            Ok(starts)
+        })
+        .map_err(|source| (elements, source));
+    }
     if robot.has_dynamics() {
         let breaks_mm: Vec<f64> = section
             .pieces()
@@ -300,6 +318,19 @@ fn section_plan(
         }
         return outcome.map_err(|source| (elements, source));
     }
+    planned_as_asked(robot, section, start, asked, path_accel_mm_s2)
+        .map_err(|source| (elements, source))
+}
+
+/// [`section_plan`] for a robot without drive limits: the profile along a pace that slows only
+/// for tight arcs and, under `slow-down`, where a channel would be too fast.
+fn planned_as_asked(
+    robot: &Robot,
+    section: &Path,
+    start: &Start,
+    asked: Motion,
+    path_accel_mm_s2: f64,
+) -> Result<Vec<Plan>, PlanError> {
     let caps = match asked.over_speed {
         OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),
         OverSpeed::Reject => Vec::new(),
@@ -315,7 +346,7 @@ fn section_plan(
         path: section.clone(),
         pace,
     };
-    parts(robot, &course, start, asked).map_err(|source| (elements, source))
+    parts(robot, &course, start, asked)
 }
 
 /// The stretches a section is cut into to find where a joint would be too fast, mm.

@@ -151,7 +151,8 @@ fn write_slowed(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
     if plan.speed_factor < 1.0 {
         writeln!(
             out,
-            "         slowed down to {:.1} % of the speed asked for (over-speed policy slow-down)",
+            "         slowed down to {:.1} % of the speed asked for (over-speed policy slow-down, \
+             or an S-curve slowed until its drives follow it)",
             plan.speed_factor * 100.0
         )?;
     }

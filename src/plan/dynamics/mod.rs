@@ -1,15 +1,17 @@
 //! PURE. What the drives behind the pulse outputs can follow ([`crate::robot::Dynamics`]): the
 //! time-optimal motion along a line or path section under every joint's limits ([`timing`]),
 //! and every table's rows checked against them ([`rows`]); a line and a joint move under them
-//! ([`moves`]).
+//! ([`moves`]); an S-curve slowed as a whole until the drives follow it ([`slowed`]).
 
 mod moves;
 mod rows;
+mod slowed;
 mod timing;
 
 pub(super) use moves::{joint_move_motion, timed_line};
 pub use rows::DriveFigures;
 pub(super) use rows::judge;
+pub(super) use slowed::{followed, slowed, within_max_accel};
 pub(super) use timing::{PathLimits, RETIMING, Shape, pace};
 
 #[cfg(test)]

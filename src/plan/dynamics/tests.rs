@@ -10,7 +10,7 @@ use crate::plan::{
     JointMoveRequest, MovePlan, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
     plan_line, plan_move, plan_path,
 };
-use crate::robot::{Dynamics, Method, Motion, OverSpeed, Robot, seed_robot};
+use crate::robot::{Dynamics, Method, Motion, OverSpeed, Ramp, Robot, seed_robot};
 use crate::table::FrequencyModel;
 
 const BOUNDED: Method = Method::BoundedError { tolerance_mm: 0.05 };
@@ -364,6 +364,134 @@ fn a_path_with_arcs_under_drive_limits_keeps_every_row_within_them() {
             start.figures.path_deviation_mm <= 0.05,
             "{:?}",
             start.figures
+        );
+    }
+}
+
+/// The seed's robot with a radial drive that follows only 300 mm/s^2: the seed's move's
+/// S-curve asks it for about 1050.
+fn seed_slow_radial() -> Robot {
+    limited(
+        seed_robot(),
+        [200.0, 1_000.0, 300.0, 200.0],
+        [None, None, Some(1_000.0), None],
+    )
+}
+
+fn s_curve(robot: &Robot, method: Method, jerk_mm_s3: f64) -> MoveRequest {
+    let mut req = seed_move(robot, method, FrequencyModel::FpxDivider);
+    req.motion.ramp = Ramp::SCurve { jerk_mm_s3 };
+    req
+}
+
+/// An S-curve under drive limits is planned (it was refused), slowed as a whole until every
+/// row and the planned motion keep every limit, and no slower than it needs: 12 % faster is
+/// over a limit.
+#[test]
+fn an_s_curve_under_drive_limits_is_slowed_as_a_whole_until_the_drives_follow_it() {
+    let robot = seed_slow_radial();
+    let free = seed_robot();
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        let asked = plan_move(&free, &s_curve(&free, method, 20_000.0)).unwrap();
+        assert!(asked.drive[2].peak_accel > 800.0, "{:?}", asked.drive[2]);
+        let plan = plan_move(&robot, &s_curve(&robot, method, 20_000.0)).unwrap();
+        assert!(plan.valid(), "{method:?}: {:?}", plan.problems);
+        assert!(matches!(plan.motion.ramp, Ramp::SCurve { .. }));
+        assert_rows_within(&robot, &plan);
+        let d3 = plan.drive[2];
+        assert!(d3.peak_accel <= 300.0 * 1.02, "{method:?}: {d3:?}");
+        assert!(d3.rest_hz <= 1_000.0, "{method:?}: {d3:?}");
+        // Slowed in time as a whole: every speed by the same factor.
+        let f = plan.speed_factor;
+        assert!((0.4..0.75).contains(&f), "{method:?}: {f}");
+        assert!(
+            (plan.motion.speed_mm_s - free.motion.speed_mm_s * f).abs() < 1e-6,
+            "{method:?}: {} mm/s at {f}",
+            plan.motion.speed_mm_s
+        );
+        // Near the fastest followed: the same S-curve slowed to 12 % more of its
+        // accelerations is over d3's limit.
+        let k = (f * 1.06).powi(2);
+        let faster = plan_move(
+            &free,
+            &MoveRequest {
+                motion: super::slowed(&s_curve(&free, method, 20_000.0).motion, k),
+                ..s_curve(&free, method, 20_000.0)
+            },
+        )
+        .unwrap();
+        assert!(
+            faster.drive[2].peak_accel > 300.0 * 1.02
+                || faster.drive[2].step_load.is_some_and(|l| l > 1.0),
+            "{method:?}: {:?}",
+            faster.drive[2]
+        );
+    }
+}
+
+/// A limit no slowing meets is refused naming the joint: d3 at 0.001 mm/s^2.
+#[test]
+fn an_s_curve_no_slowing_lets_a_drive_follow_is_refused_naming_the_joint() {
+    let robot = limited(seed_robot(), [200.0, 1_000.0, 0.001, 200.0], [None; 4]);
+    let e = plan_move(&robot, &s_curve(&robot, Method::ConstantPeriod, 20_000.0)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            PlanError::RowStep { ref joint, .. } | PlanError::SCurveOverMaxAccel { ref joint, .. }
+                if joint == "d3"
+        ),
+        "{e}"
+    );
+}
+
+/// A path section's S-curve under drive limits is slowed the same way, its path acceleration
+/// with the rest.
+#[test]
+fn a_path_s_curve_under_drive_limits_keeps_every_limit() {
+    let robot = seed_slow_radial();
+    let start = robot
+        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+        .unwrap();
+    let at = |x, y, z| {
+        let mut p = Pose::from_mm_deg(x, y, z, 0.0);
+        p.a_rad = start.a_rad;
+        p
+    };
+    let req = PathRequest {
+        from: Origin::Pose(start),
+        start: None,
+        elements: vec![
+            (
+                Element::Line {
+                    to: at(-926.57, 535.03, 150.0),
+                },
+                Corner::Blend(20.0),
+            ),
+            (
+                Element::Line {
+                    to: at(-1100.0, 640.0, 150.0),
+                },
+                Corner::Stop,
+            ),
+        ],
+        motion: Motion {
+            ramp: Ramp::SCurve {
+                jerk_mm_s3: 20_000.0,
+            },
+            ..robot.motion
+        },
+        path_accel_mm_s2: 2_000.0,
+    };
+    let plan = plan_path(&robot, &req).unwrap();
+    assert!(plan.valid());
+    for start in plan.starts() {
+        assert!(matches!(start.motion.ramp, Ramp::SCurve { .. }));
+        assert!(start.speed_factor < 1.0, "{}", start.speed_factor);
+        assert_rows_within(&robot, start);
+        assert!(
+            start.drive[2].peak_accel <= 300.0 * 1.02,
+            "{:?}",
+            start.drive[2]
         );
     }
 }

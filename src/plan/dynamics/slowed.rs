@@ -1,0 +1,121 @@
+//! PURE. An S-curve under drive limits: the move or path section is planned as it would be
+//! without them (the S-curve's seven phases at the asked speed, acceleration and jerk), and
+//! where a joint's drive could not follow its rows the whole motion is slowed in time until it
+//! can. Slowing time by `1 / sqrt(k)` takes every speed (the tool's and each joint's) to
+//! `sqrt(k)` of itself, every acceleration to `k` (a joint's `q' s'' + q'' s'^2` alike) and
+//! every jerk to `k^1.5`: the shape of the motion stays, and what each drive is asked for
+//! shrinks with `k`. The largest `k` found (to within 5 %) whose tables the drives follow is
+//! taken. It is not time-optimal: the time-optimal timing steps its acceleration on and off,
+//! which a jerk limit forbids.
+
+use super::DriveFigures;
+use crate::kinematics::JOINTS;
+use crate::plan::PlanError;
+use crate::robot::{Motion, Ramp, Robot};
+
+/// How many times the share is halved looking for one the drives follow: down to 1/64 (the
+/// tool at 12.5 % of the speed asked; slower, a move's rows would outgrow its table area
+/// before the drive's refusal could be named).
+const HALVINGS: usize = 6;
+
+/// How close the share found is to the largest the drives follow (a ratio).
+const CLOSE: f64 = 1.05;
+
+/// How far a joint's planned acceleration (measured on the samples) may pass its `max_accel`.
+const ACCEL_SLACK: f64 = 0.02;
+
+/// Whether every joint's planned acceleration in `drive` keeps within its `max_accel` (and
+/// [`ACCEL_SLACK`]); if not, the refusal naming the first joint over it, for a plan at
+/// `speed_factor` of the speed asked for. The rows alone do not show it: a row's frequency is
+/// known only to a pulse over its length, so short rows (bounded-error's, a few ms) leave room
+/// for steps well over the limit. A time-optimal timing keeps the planned motion within it by
+/// construction; a slowed S-curve is checked.
+pub(in crate::plan) fn within_max_accel(
+    robot: &Robot,
+    drive: &[DriveFigures; JOINTS],
+    speed_factor: f64,
+) -> Result<(), PlanError> {
+    for (joint, d) in robot.joints.iter().zip(drive) {
+        if let Some(a) = joint.dynamics.max_accel {
+            let max_accel = joint.user(a).abs();
+            if d.peak_accel > max_accel * (1.0 + ACCEL_SLACK) {
+                return Err(PlanError::SCurveOverMaxAccel {
+                    joint: joint.name.clone(),
+                    accel: d.peak_accel,
+                    max_accel,
+                    unit: joint.kind.user_unit(),
+                    speed_pct: speed_factor * 100.0,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `asked` slowed in time to share `k` of its accelerations ([`followed`]).
+#[must_use]
+pub(in crate::plan) fn slowed(asked: &Motion, k: f64) -> Motion {
+    let ramp = match asked.ramp {
+        Ramp::SCurve { jerk_mm_s3 } => Ramp::SCurve {
+            jerk_mm_s3: jerk_mm_s3 * k.powf(1.5),
+        },
+        Ramp::Trapezoid => Ramp::Trapezoid,
+    };
+    Motion {
+        speed_mm_s: asked.speed_mm_s * k.sqrt(),
+        accel_s: asked.accel_s / k.sqrt(),
+        ramp,
+        ..*asked
+    }
+}
+
+/// Whether `outcome` is a drive's refusal: a row step over its `max_accel`, a row from or into
+/// rest over its `start_hz`, a motion over its `max_accel`. A slower motion may be followed.
+fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
+    matches!(
+        outcome,
+        Err(PlanError::RowStep { .. }
+            | PlanError::RestRow { .. }
+            | PlanError::SCurveOverMaxAccel { .. })
+    )
+}
+
+/// `plan` at share 1 of the accelerations, or, when a drive would not follow it, at the
+/// largest share found that every drive follows; `plan(k)` plans the motion slowed to share
+/// `k` ([`slowed`]) and refuses one over a joint's `max_accel` ([`within_max_accel`]). The
+/// refusal of the slowest tried when none is followed; any other refusal at the largest share
+/// followed.
+pub(in crate::plan) fn followed<T>(
+    plan: impl Fn(f64) -> Result<T, PlanError>,
+) -> Result<T, PlanError> {
+    let first = plan(1.0);
+    if !refused_by_a_drive(&first) {
+        return first;
+    }
+    let (mut bad, mut last) = (1.0, first);
+    let mut found = None;
+    for _ in 0..HALVINGS {
+        let k = bad * 0.5;
+        let outcome = plan(k);
+        if !refused_by_a_drive(&outcome) {
+            found = Some((k, outcome));
+            break;
+        }
+        (bad, last) = (k, outcome);
+    }
+    let Some((mut good, mut best)) = found else {
+        return last;
+    };
+    // The outcome at the largest share followed: a plan, or why it is refused otherwise (a
+    // slower motion has more rows: the fastest followed is the likeliest to fit its tables).
+    while bad / good > CLOSE {
+        let k = (good * bad).sqrt();
+        let outcome = plan(k);
+        if refused_by_a_drive(&outcome) {
+            bad = k;
+        } else {
+            (good, best) = (k, outcome);
+        }
+    }
+    best
+}
