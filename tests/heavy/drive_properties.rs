@@ -5,7 +5,8 @@
 //! bounded-error plan keeps its tolerance under both frequency models. A move is refused only
 //! for a limit it cannot meet, named. And S-curve ramps (no drive limits): every plan valid, on
 //! its target, within its tolerance, its profile never above the trapezoid's acceleration nor
-//! the jerk asked.
+//! the jerk asked; under drive limits, slowed until every limit holds, the planned motion's
+//! accelerations included.
 
 use crate::common;
 
@@ -190,6 +191,59 @@ fn check_s_curve(
     check(&robot, &starts, &l)
 }
 
+/// Plans the line with S-curve ramps of `jerk_mm_s3` under drive limits `l`: slowed as a whole
+/// until every drive follows it, it keeps every limit, and its planned motion every joint's
+/// `max_accel` (2 % allowed for sampling). Refused only for a drive it cannot slow enough for
+/// (the joint named) or rows that outgrow a table area.
+fn check_s_curve_under_limits(
+    robot: &Robot,
+    (from, to): (Pose, Pose),
+    m: Motion,
+    l: &Limits,
+    jerk_mm_s3: f64,
+) -> Result<(), TestCaseError> {
+    use linterpd::plan::PlanError;
+    let mut robot = limited(robot.clone(), l);
+    robot.motion.ramp = linterpd::robot::Ramp::SCurve { jerk_mm_s3 };
+    let m = Motion {
+        accel_s: m.accel_s.max(0.01),
+        ..m
+    };
+    let mut motion = common::moves::motion_on(&robot, (from, to), m, 300.0);
+    if let Some(tolerance_mm) = l.bounded_mm {
+        motion.method = Method::BoundedError { tolerance_mm };
+    }
+    let req = MoveRequest {
+        from: Origin::Pose(from),
+        to,
+        motion,
+    };
+    let starts: Vec<Plan> = match linterpd::plan::plan_line(&robot, &req) {
+        Ok(planned) => planned.starts().cloned().collect(),
+        Err(
+            PlanError::RowStep { .. }
+            | PlanError::RestRow { .. }
+            | PlanError::SCurveOverMaxAccel { .. }
+            | PlanError::InvalidTable { .. },
+        ) => return Ok(()),
+        Err(e) => panic!("{from:?} -> {to:?} {motion:?} {l:?}: {e}"),
+    };
+    for start in &starts {
+        let s_curve = matches!(start.motion.ramp, linterpd::robot::Ramp::SCurve { .. });
+        prop_assert!(s_curve, "{:?}", start.motion.ramp);
+        for (joint, d) in robot.joints.iter().zip(&start.drive) {
+            let max_accel = joint.user(joint.dynamics.max_accel.unwrap()).abs();
+            prop_assert!(
+                d.peak_accel <= max_accel * 1.02,
+                "{}: {} over {max_accel}",
+                joint.name,
+                d.peak_accel
+            );
+        }
+    }
+    check(&robot, &starts, l)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
@@ -209,6 +263,24 @@ proptest! {
             _ => (common::scara(), sca),
         };
         check_s_curve(&robot, mv, m, tolerance_mm, jerk_mm_s3)?;
+    }
+
+    #[test]
+    fn s_curve_lines_under_drive_limits_keep_every_limit_on_every_kinematics(
+        which in 0..3usize,
+        cyl in cylindrical_move(),
+        gan in gantry_move(),
+        sca in scara_move(),
+        m in motion(),
+        l in limits(),
+        jerk_mm_s3 in 2_000.0..200_000.0f64,
+    ) {
+        let (robot, mv) = match which {
+            0 => (common::cylindrical(), cyl),
+            1 => (common::gantry(), gan),
+            _ => (common::scara(), sca),
+        };
+        check_s_curve_under_limits(&robot, mv, m, &l, jerk_mm_s3)?;
     }
 
     #[test]
