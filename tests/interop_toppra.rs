@@ -348,7 +348,7 @@ fn linterpd_runs_within_three_percent_of_toppra_and_no_row_breaks_a_limit() {
 /// S-curve ramps (jerk 20000 mm/s^3) on the same cases: slowed as a whole until the drives
 /// follow them, so slower than toppra's time-optimal timing by what the jerk limit and the
 /// whole-move slowing cost (reported, not bounded), never faster than it by more than the 3 %
-/// the trapezoid is held to, and toppra_duration.py's own check of the tables finds no row over
+/// the trapezoid is held to, and `toppra_duration.py`'s own check of the tables finds no row over
 /// a limit.
 #[test]
 #[cfg_attr(
