@@ -765,6 +765,54 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
 }
 
 #[tokio::test]
+async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_slowed_within_them_on_the_plc() {
+    // d3's drive follows 300 mm/s^2 and starts at 1 kHz; the seed's move asked with S-curve
+    // ramps of 20000 mm/s^3 (it was refused) is slowed to 56.9 %: 2.600 s (PLANNING.md,
+    // "S-curve ramps").
+    let mut robot = linterpd::robot::seed_robot();
+    robot.joints[2].dynamics = linterpd::robot::Dynamics {
+        max_accel: Some(300.0),
+        start_hz: Some(1_000.0),
+    };
+    let shared = mock_at_seed_start("");
+    shared.with(|m| m.record_pulses(true));
+    let (d, h) = common::daemon::spawn_robot(
+        duplex_connector(&shared, None),
+        ContractSettings::default(),
+        &linterpd::daemon::DaemonOptions::default(),
+        [0; linterpd::kinematics::JOINTS],
+        robot,
+    );
+    wait_connected(&h).await;
+    let start = shared.with(|m| std::array::from_fn(|c| m.count(c)));
+    while h.state().counts != Some(start) {
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let mut asked = order(P2);
+    asked.profile = Some("s-curve".to_owned());
+    asked.jerk_mm_s3 = Some(20_000.0);
+    let id = h.submit(asked).unwrap();
+    let there = h.wait(id, LIMIT).await.unwrap();
+    assert_on_target(&there);
+    let times = pulse_times(&shared, 2);
+    let (first, last) = (times[0], times[times.len() - 1]);
+    assert!((last - first - 2.60).abs() < 0.06, "{}", last - first);
+    let within = |from: f64, to: f64| times.iter().filter(|&&t| t >= from && t < to).count();
+    assert!(within(first, first + 0.05) <= 51);
+    assert!(within(last - 0.05, last + 1e-9) <= 51);
+    // 300 mm/s^2 over 50 ms at 0.013 mm a pulse: 1154 Hz, 58 pulses a window.
+    let windows = ((last - first) / 0.05).ceil() as u32;
+    let per_window: Vec<usize> = (0..windows)
+        .map(|k| first + 0.05 * f64::from(k))
+        .map(|t| within(t, t + 0.05))
+        .collect();
+    for w in per_window.windows(2) {
+        assert!(w[0].abs_diff(w[1]) <= 58 + 4, "{per_window:?}");
+    }
+    d.shut_down().await;
+}
+
+#[tokio::test]
 async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
     // The seed's move asked with S-curve ramps of 5000 mm/s^3 (the robot's own are the
     // trapezoid): PLANNING.md gives 1.650 s against 1.400 s, d3 leaving rest at 141 Hz
