@@ -301,7 +301,23 @@ fn pick_and_place(robot: &Robot, method: Method) -> PathRequest {
 }
 
 /// A case: its name, its robot, its request by method.
-type Case<'a> = (&'a str, &'a Robot, fn(&Robot, Method) -> PathRequest);
+type Case = (&'static str, Robot, fn(&Robot, Method) -> PathRequest);
+
+/// The cases compared with toppra: the seed's move, a line near a short arm's axis, a SCARA
+/// line near full stretch and the example pick and place.
+fn cases() -> [Case; 4] {
+    let seed = limited(seed_robot(), [200.0, 1_000.0, 1_000.0, 200.0]);
+    [
+        ("the seed's move", seed.clone(), seed_move),
+        (
+            "a line 100 mm from the axis, l0 50 mm",
+            short_arm(),
+            near_the_axis,
+        ),
+        ("a SCARA line near full stretch", scara(), scara_stretched),
+        ("pick-and-place.toml", seed, pick_and_place),
+    ]
+}
 
 #[test]
 #[cfg_attr(
@@ -309,23 +325,14 @@ type Case<'a> = (&'a str, &'a Robot, fn(&Robot, Method) -> PathRequest);
     ignore = "needs toppra (the second suite: cargo test --features third-party-peers)"
 )]
 fn linterpd_runs_within_three_percent_of_toppra_and_no_row_breaks_a_limit() {
-    let seed = limited(seed_robot(), [200.0, 1_000.0, 1_000.0, 200.0]);
-    let arm = short_arm();
-    let scara = scara();
     let bounded = Method::BoundedError { tolerance_mm: 0.05 };
-    let cases: [Case; 4] = [
-        ("the seed's move", &seed, seed_move),
-        ("a line 100 mm from the axis, l0 50 mm", &arm, near_the_axis),
-        ("a SCARA line near full stretch", &scara, scara_stretched),
-        ("pick-and-place.toml", &seed, pick_and_place),
-    ];
     println!("| case | method | linterpd s | toppra s | difference |");
     println!("|---|---|---|---|---|");
     let mut worst = 0.0_f64;
     let mut beyond = Vec::new();
-    for (name, robot, request) in cases {
+    for (name, robot, request) in cases() {
         for method in [Method::ConstantPeriod, bounded] {
-            let (ours, theirs) = compare(name, robot, &request(robot, method));
+            let (ours, theirs) = compare(name, &robot, &request(&robot, method));
             let difference = ours / theirs - 1.0;
             println!(
                 "| {name} | {} | {ours:.3} | {theirs:.3} | {:+.1} % |",
@@ -356,25 +363,16 @@ fn linterpd_runs_within_three_percent_of_toppra_and_no_row_breaks_a_limit() {
     ignore = "needs toppra (the second suite: cargo test --features third-party-peers)"
 )]
 fn s_curves_under_drive_limits_keep_every_limit_and_report_their_cost_against_toppra() {
-    let seed = limited(seed_robot(), [200.0, 1_000.0, 1_000.0, 200.0]);
-    let arm = short_arm();
-    let scara = scara();
     let bounded = Method::BoundedError { tolerance_mm: 0.05 };
-    let cases: [Case; 4] = [
-        ("the seed's move", &seed, seed_move),
-        ("a line 100 mm from the axis, l0 50 mm", &arm, near_the_axis),
-        ("a SCARA line near full stretch", &scara, scara_stretched),
-        ("pick-and-place.toml", &seed, pick_and_place),
-    ];
     println!("| case | method | linterpd S-curve s | toppra s | difference |");
     println!("|---|---|---|---|---|");
-    for (name, robot, request) in cases {
+    for (name, robot, request) in cases() {
         for method in [Method::ConstantPeriod, bounded] {
-            let mut req = request(robot, method);
+            let mut req = request(&robot, method);
             req.motion.ramp = linterpd::robot::Ramp::SCurve {
                 jerk_mm_s3: 20_000.0,
             };
-            let (ours, theirs) = compare(name, robot, &req);
+            let (ours, theirs) = compare(name, &robot, &req);
             let difference = ours / theirs - 1.0;
             println!(
                 "| {name} | {} | {ours:.3} | {theirs:.3} | {:+.1} % |",

@@ -56,17 +56,22 @@ pub(crate) fn limited(mut robot: Robot, l: &Limits) -> Robot {
 
 /// Plans the line; `None` when it is refused for a reason with its own tests (rows that do
 /// not fit one table area: a slow move may need more).
-fn plan(robot: &Robot, (from, to): (Pose, Pose), m: Motion, l: &Limits) -> Option<Vec<Plan>> {
+fn plan(robot: &Robot, mv: (Pose, Pose), m: Motion, l: &Limits) -> Option<Vec<Plan>> {
+    let req = request(robot, mv, m, l);
+    common::moves::starts_or_area(robot, &req, &format!("{:?} {l:?}", req.motion))
+}
+
+/// The line from `from` to `to` at motion `m` (bounded-error when `l` says so).
+fn request(robot: &Robot, (from, to): (Pose, Pose), m: Motion, l: &Limits) -> MoveRequest {
     let mut motion = common::moves::motion_on(robot, (from, to), m, 300.0);
     if let Some(tolerance_mm) = l.bounded_mm {
         motion.method = Method::BoundedError { tolerance_mm };
     }
-    let req = MoveRequest {
+    MoveRequest {
         from: Origin::Pose(from),
         to,
         motion,
-    };
-    common::moves::starts_or_area(robot, &req, &format!("{motion:?} {l:?}"))
+    }
 }
 
 /// The step between neighbouring real frequencies at `hz` in a range of divider clock
@@ -209,15 +214,7 @@ fn check_s_curve_under_limits(
         accel_s: m.accel_s.max(0.01),
         ..m
     };
-    let mut motion = common::moves::motion_on(&robot, (from, to), m, 300.0);
-    if let Some(tolerance_mm) = l.bounded_mm {
-        motion.method = Method::BoundedError { tolerance_mm };
-    }
-    let req = MoveRequest {
-        from: Origin::Pose(from),
-        to,
-        motion,
-    };
+    let req = request(&robot, (from, to), m, l);
     let starts: Vec<Plan> = match linterpd::plan::plan_line(&robot, &req) {
         Ok(planned) => planned.starts().cloned().collect(),
         Err(
@@ -226,7 +223,7 @@ fn check_s_curve_under_limits(
             | PlanError::SCurveOverMaxAccel { .. }
             | PlanError::InvalidTable { .. },
         ) => return Ok(()),
-        Err(e) => panic!("{from:?} -> {to:?} {motion:?} {l:?}: {e}"),
+        Err(e) => panic!("{from:?} -> {to:?} {:?} {l:?}: {e}", req.motion),
     };
     for start in &starts {
         let s_curve = matches!(start.motion.ramp, linterpd::robot::Ramp::SCurve { .. });

@@ -719,13 +719,12 @@ fn pulse_times(shared: &SharedMock, channel: u8) -> Vec<f64> {
         .collect()
 }
 
-#[tokio::test]
-async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
-    // d3's drive follows 1000 mm/s^2 and starts at 1 kHz: without the limits its first 50 ms
-    // row runs at about 2 kHz from rest.
+/// A daemon on the seed's robot whose d3 drive follows `max_accel_mm_s2` and starts at 1 kHz,
+/// against a mock at the seed's start recording its pulses.
+async fn d3_limited(max_accel_mm_s2: f64) -> (SharedMock, Daemon, RobotHandle) {
     let mut robot = linterpd::robot::seed_robot();
     robot.joints[2].dynamics = linterpd::robot::Dynamics {
-        max_accel: Some(1_000.0),
+        max_accel: Some(max_accel_mm_s2),
         start_hz: Some(1_000.0),
     };
     let shared = mock_at_seed_start("");
@@ -738,12 +737,15 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
         robot,
     );
     wait_connected(&h).await;
-    let there = run(&h, P2).await;
-    assert_on_target(&there);
-    // The PLC's pulses: d3 (channel 2) leaves standstill and comes to it at no more than
-    // 1 kHz over its first and last 50 ms (a pulse of rounding aside), and its speed changes
-    // by no more than 1000 mm/s^2 allows between two 50 ms windows (two pulses of rounding).
-    let times = pulse_times(&shared, 2);
+    (shared, d, h)
+}
+
+/// d3's pulses on the PLC keep its drive's limits: it leaves standstill and comes to it at no
+/// more than 1 kHz over its first and last 50 ms (a pulse of rounding aside), and its speed
+/// changes by no more than `max_accel_mm_s2` allows between two 50 ms windows (two pulses of
+/// rounding). Returns the time from its first pulse to its last, s.
+fn assert_d3_within(shared: &SharedMock, max_accel_mm_s2: f64) -> f64 {
+    let times = pulse_times(shared, 2);
     let (first, last) = (times[0], times[times.len() - 1]);
     let within = |from: f64, to: f64| times.iter().filter(|&&t| t >= from && t < to).count();
     assert!(
@@ -757,10 +759,22 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
         .map(|k| first + 0.05 * f64::from(k))
         .map(|t| within(t, t + 0.05))
         .collect();
-    // 1000 mm/s^2 over 50 ms at 0.013 mm a pulse: 3846 Hz, 192 pulses a window.
+    // At 0.013 mm a pulse, over 50 ms: 1000 mm/s^2 is 3846 Hz, 192 pulses a window.
+    let allowed = (max_accel_mm_s2 / 0.013 * 0.05 * 0.05).round() as usize + 4;
     for w in per_window.windows(2) {
-        assert!(w[0].abs_diff(w[1]) <= 192 + 4, "{per_window:?}");
+        assert!(w[0].abs_diff(w[1]) <= allowed, "{per_window:?}");
     }
+    last - first
+}
+
+#[tokio::test]
+async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
+    // d3's drive follows 1000 mm/s^2 and starts at 1 kHz: without the limits its first 50 ms
+    // row runs at about 2 kHz from rest.
+    let (shared, d, h) = d3_limited(1_000.0).await;
+    let there = run(&h, P2).await;
+    assert_on_target(&there);
+    assert_d3_within(&shared, 1_000.0);
     d.shut_down().await;
 }
 
@@ -769,21 +783,7 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_slowed_within_them_o
     // d3's drive follows 300 mm/s^2 and starts at 1 kHz; the seed's move asked with S-curve
     // ramps of 20000 mm/s^3 (it was refused) is slowed to 56.9 %: 2.600 s (PLANNING.md,
     // "S-curve ramps").
-    let mut robot = linterpd::robot::seed_robot();
-    robot.joints[2].dynamics = linterpd::robot::Dynamics {
-        max_accel: Some(300.0),
-        start_hz: Some(1_000.0),
-    };
-    let shared = mock_at_seed_start("");
-    shared.with(|m| m.record_pulses(true));
-    let (d, h) = common::daemon::spawn_robot(
-        duplex_connector(&shared, None),
-        ContractSettings::default(),
-        &linterpd::daemon::DaemonOptions::default(),
-        [0; linterpd::kinematics::JOINTS],
-        robot,
-    );
-    wait_connected(&h).await;
+    let (shared, d, h) = d3_limited(300.0).await;
     let start = shared.with(|m| std::array::from_fn(|c| m.count(c)));
     while h.state().counts != Some(start) {
         tokio::time::sleep(Duration::from_millis(5)).await;
@@ -794,21 +794,8 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_slowed_within_them_o
     let id = h.submit(asked).unwrap();
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
-    let times = pulse_times(&shared, 2);
-    let (first, last) = (times[0], times[times.len() - 1]);
-    assert!((last - first - 2.60).abs() < 0.06, "{}", last - first);
-    let within = |from: f64, to: f64| times.iter().filter(|&&t| t >= from && t < to).count();
-    assert!(within(first, first + 0.05) <= 51);
-    assert!(within(last - 0.05, last + 1e-9) <= 51);
-    // 300 mm/s^2 over 50 ms at 0.013 mm a pulse: 1154 Hz, 58 pulses a window.
-    let windows = ((last - first) / 0.05).ceil() as u32;
-    let per_window: Vec<usize> = (0..windows)
-        .map(|k| first + 0.05 * f64::from(k))
-        .map(|t| within(t, t + 0.05))
-        .collect();
-    for w in per_window.windows(2) {
-        assert!(w[0].abs_diff(w[1]) <= 58 + 4, "{per_window:?}");
-    }
+    let span_s = assert_d3_within(&shared, 300.0);
+    assert!((span_s - 2.60).abs() < 0.06, "{span_s}");
     d.shut_down().await;
 }
 

@@ -313,49 +313,48 @@ fn a_joint_move_under_drive_limits_keeps_one_trapezoid_within_them() {
     assert!(plan.motion.accel_s > free.motion.accel_s);
 }
 
-#[test]
-fn a_path_with_arcs_under_drive_limits_keeps_every_row_within_them() {
-    let robot = seed_limited();
-    let at = |x, y, z| {
-        let mut p = Pose::from_mm_deg(x, y, z, 0.0);
-        p.a_rad = robot
-            .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
-            .unwrap()
-            .a_rad;
-        p
-    };
+/// A path of lines from the seed's start through `corners` (the wrist held), at `motion`, with
+/// a path acceleration of 2000 mm/s^2.
+fn from_the_seed_start(
+    robot: &Robot,
+    corners: &[([f64; 3], Corner)],
+    motion: Motion,
+) -> PathRequest {
     let start = robot
         .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
         .unwrap();
-    let req = PathRequest {
+    let elements = corners
+        .iter()
+        .map(|&([x, y, z], corner)| {
+            let mut to = Pose::from_mm_deg(x, y, z, 0.0);
+            to.a_rad = start.a_rad;
+            (Element::Line { to }, corner)
+        })
+        .collect();
+    PathRequest {
         from: Origin::Pose(start),
         start: None,
-        elements: vec![
-            (
-                Element::Line {
-                    to: at(-926.57, 535.03, 150.0),
-                },
-                Corner::Blend(20.0),
-            ),
-            (
-                Element::Line {
-                    to: at(-1100.0, 640.0, 150.0),
-                },
-                Corner::Blend(20.0),
-            ),
-            (
-                Element::Line {
-                    to: at(-1100.0, 640.0, 60.0),
-                },
-                Corner::Stop,
-            ),
+        elements,
+        motion,
+        path_accel_mm_s2: 2_000.0,
+    }
+}
+
+#[test]
+fn a_path_with_arcs_under_drive_limits_keeps_every_row_within_them() {
+    let robot = seed_limited();
+    let req = from_the_seed_start(
+        &robot,
+        &[
+            ([-926.57, 535.03, 150.0], Corner::Blend(20.0)),
+            ([-1100.0, 640.0, 150.0], Corner::Blend(20.0)),
+            ([-1100.0, 640.0, 60.0], Corner::Stop),
         ],
-        motion: Motion {
+        Motion {
             method: BOUNDED,
             ..robot.motion
         },
-        path_accel_mm_s2: 2_000.0,
-    };
+    );
     let plan = plan_path(&robot, &req).unwrap();
     assert!(plan.valid());
     for start in plan.starts() {
@@ -449,39 +448,19 @@ fn an_s_curve_no_slowing_lets_a_drive_follow_is_refused_naming_the_joint() {
 #[test]
 fn a_path_s_curve_under_drive_limits_keeps_every_limit() {
     let robot = seed_slow_radial();
-    let start = robot
-        .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
-        .unwrap();
-    let at = |x, y, z| {
-        let mut p = Pose::from_mm_deg(x, y, z, 0.0);
-        p.a_rad = start.a_rad;
-        p
-    };
-    let req = PathRequest {
-        from: Origin::Pose(start),
-        start: None,
-        elements: vec![
-            (
-                Element::Line {
-                    to: at(-926.57, 535.03, 150.0),
-                },
-                Corner::Blend(20.0),
-            ),
-            (
-                Element::Line {
-                    to: at(-1100.0, 640.0, 150.0),
-                },
-                Corner::Stop,
-            ),
+    let req = from_the_seed_start(
+        &robot,
+        &[
+            ([-926.57, 535.03, 150.0], Corner::Blend(20.0)),
+            ([-1100.0, 640.0, 150.0], Corner::Stop),
         ],
-        motion: Motion {
+        Motion {
             ramp: Ramp::SCurve {
                 jerk_mm_s3: 20_000.0,
             },
             ..robot.motion
         },
-        path_accel_mm_s2: 2_000.0,
-    };
+    );
     let plan = plan_path(&robot, &req).unwrap();
     assert!(plan.valid());
     for start in plan.starts() {
