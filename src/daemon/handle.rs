@@ -368,10 +368,11 @@ impl RobotHandle {
             let shared = Arc::new(SectionOrder {
                 path: section.path,
                 path_accel_mm_s2,
+                accepted: section.starts,
                 planned: OnceLock::new(),
             });
-            let parts = section.starts.len();
-            for (part, plan) in section.starts.iter().enumerate() {
+            let parts = shared.accepted.len();
+            for (part, plan) in shared.accepted.iter().enumerate() {
                 let checked = CheckedOrder {
                     target: Target::Section(SectionPart {
                         section: Arc::clone(&shared),

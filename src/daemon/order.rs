@@ -363,8 +363,13 @@ pub struct SectionOrder {
     pub path: Path,
     /// The path's acceleration limit across it, mm/s^2.
     pub path_accel_mm_s2: f64,
+    /// Its starts as planned when the path was accepted, from the counts it was expected to
+    /// begin on.
+    pub accepted: Vec<Plan>,
     /// Its starts, planned once, when the first of them begins, from the counts where it
-    /// really begins; every later part takes its plan from here.
+    /// really begins (the accepted ones when it begins on the counts they were planned from:
+    /// planning is a function of the robot, the section, the motion and the counts); every
+    /// later part takes its plan from here.
     pub planned: OnceLock<Vec<Plan>>,
 }
 
@@ -396,8 +401,13 @@ impl SectionPart {
         motion: Motion,
         counts: [i64; JOINTS],
     ) -> Result<Plan, PlanError> {
+        let accepted = self.section.accepted.first();
         let starts = if let Some(starts) = self.section.planned.get() {
             starts
+        } else if self.part == 0 && accepted.is_some_and(|a| a.start_counts() == counts) {
+            self.section
+                .planned
+                .get_or_init(|| self.section.accepted.clone())
         } else {
             let starts = plan_section(
                 robot,
@@ -787,6 +797,117 @@ mod tests {
             to: Some(to),
             ..MoveOrder::default()
         }
+    }
+
+    /// A pick and place accepted from the seed's start on the seed robot: its one section,
+    /// cut into parts chained at speed, with the starts planned at acceptance.
+    fn accepted_section() -> (crate::robot::Robot, SectionOrder, Motion) {
+        use crate::geometry::{Corner, Element, Pose};
+        use crate::kinematics::Kinematics;
+        use crate::plan::{Origin, PathRequest, plan_path};
+        let robot = seed_robot();
+        let start = robot
+            .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+            .unwrap();
+        let at = |x, y, z| {
+            let mut p = Pose::from_mm_deg(x, y, z, 0.0);
+            p.a_rad = start.a_rad;
+            p
+        };
+        let motion = Motion {
+            method: crate::robot::Method::BoundedError { tolerance_mm: 0.05 },
+            ..robot.motion
+        };
+        // From counts, as the daemon plans an order.
+        let counts = robot.counts_of(&robot.kinematics.ik(&start, None).unwrap());
+        let req = PathRequest {
+            from: Origin::Counts(counts),
+            start: None,
+            elements: vec![
+                (
+                    Element::Line {
+                        to: at(-926.57, 535.03, 150.0),
+                    },
+                    Corner::Blend(20.0),
+                ),
+                (
+                    Element::Line {
+                        to: at(-1144.43, 659.60, 236.60),
+                    },
+                    Corner::Blend(20.0),
+                ),
+                (
+                    Element::Line {
+                        to: at(-1144.43, 659.60, 186.60),
+                    },
+                    Corner::Stop,
+                ),
+            ],
+            motion,
+            path_accel_mm_s2: 5_000.0,
+        };
+        let mut planned = plan_path(&robot, &req).unwrap();
+        assert_eq!(planned.sections.len(), 1);
+        let section = planned.sections.remove(0);
+        let order = SectionOrder {
+            path: section.path,
+            path_accel_mm_s2: 5_000.0,
+            accepted: section.starts,
+            planned: OnceLock::new(),
+        };
+        (robot, order, motion)
+    }
+
+    /// A section begun on the counts it was accepted from takes the starts planned then (they
+    /// are the starts planning there again gives); begun anywhere else, it is planned again
+    /// from where it begins.
+    #[test]
+    #[allow(clippy::float_cmp)] // a marker value, copied exactly
+    fn a_section_begun_where_it_was_accepted_from_takes_the_accepted_starts() {
+        let (robot, section, motion) = accepted_section();
+        let counts = section.accepted[0].start_counts();
+        let again =
+            crate::plan::plan_section(&robot, &section.path, motion, 5_000.0, counts).unwrap();
+        assert!(
+            again == section.accepted,
+            "planned again, not the accepted starts"
+        );
+        // Marked, to tell the accepted starts from starts planned again.
+        let mut marked = section.clone();
+        for plan in &mut marked.accepted {
+            plan.speed_factor = 0.5;
+        }
+        let parts = marked.accepted.len();
+        assert!(parts >= 2, "{parts} parts");
+        let arc = Arc::new(marked);
+        let part = |part| SectionPart {
+            section: Arc::clone(&arc),
+            part,
+            parts,
+        };
+        let first = part(0).plan(&robot, motion, counts).unwrap();
+        assert_eq!(first.speed_factor, 0.5);
+        let second_from = first.end_counts();
+        assert_eq!(
+            part(1)
+                .plan(&robot, motion, second_from)
+                .unwrap()
+                .speed_factor,
+            0.5
+        );
+        // A pulse off on d3: planned again, from there.
+        let mut off = counts;
+        off[2] += 1;
+        let fresh = Arc::new(section);
+        let replanned = SectionPart {
+            section: Arc::clone(&fresh),
+            part: 0,
+            parts,
+        }
+        .plan(&robot, motion, off)
+        .unwrap();
+        assert_eq!(replanned.start_counts(), off);
+        assert_eq!(replanned.speed_factor, 1.0);
     }
 
     #[test]
