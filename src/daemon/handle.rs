@@ -17,8 +17,8 @@ use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
 use super::order::{
-    CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder, SectionPart, Target,
-    plan_order,
+    Accepted, CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder,
+    SectionPart, Target, plan_order,
 };
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::report::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
@@ -169,14 +169,18 @@ impl RobotHandle {
             .state(|s| s.current_move.is_some() || !s.queued.is_empty());
         let planned_end = self.shared.planned_end().filter(|_| ahead);
         let from = planned_end.or_else(|| self.counts_by_joint());
-        let checked = match planned_end {
+        let mut checked = match planned_end {
             Some(end) => checked.anchored_at(&self.robot, end),
             None => checked,
         };
         let mut end = None;
         if let Some(counts) = from {
             match plan_order(&self.robot, &checked, counts) {
-                Ok(plan) => end = Some(plan.end_counts()),
+                // Kept: begun from these counts, the order takes this plan.
+                Ok(plan) => {
+                    end = Some(plan.end_counts());
+                    checked.accepted = Some(Arc::new(Accepted { counts, plan }));
+                }
                 // Where it starts already: it ends done there without a start (behind a move,
                 // with that move).
                 Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
@@ -382,6 +386,7 @@ impl RobotHandle {
                     motion,
                     permit,
                     gate: None,
+                    accepted: None,
                 };
                 let shown = SectionReport::new(
                     n + 1,

@@ -450,6 +450,27 @@ pub struct CheckedOrder {
     pub permit: Permit,
     /// A gate its start waits for once it is uploaded (a cycle's move prepared during its wait).
     pub gate: Option<super::gate::Gate>,
+    /// Its plan when it was accepted ([`plan_order`] takes it when asked from those counts).
+    pub accepted: Option<Arc<Accepted>>,
+}
+
+/// An order's plan when it was accepted, and the counts it was planned from: planning is a
+/// function of the robot, the order and the counts, so from those counts it is the plan.
+#[derive(Clone, PartialEq)]
+pub struct Accepted {
+    /// The counts it was planned from, per joint.
+    pub counts: [i64; JOINTS],
+    /// The plan.
+    pub plan: Plan,
+}
+
+impl std::fmt::Debug for Accepted {
+    // The plan's samples and tables would fill a log line many times over.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Accepted")
+            .field("counts", &self.counts)
+            .finish_non_exhaustive()
+    }
 }
 
 impl CheckedOrder {
@@ -491,6 +512,7 @@ impl CheckedOrder {
         match self.pose_target(&from) {
             Some(to) if self.is_relative() => Self {
                 target: Target::Pose { to, a_given: true },
+                accepted: None,
                 ..self
             },
             _ => self,
@@ -549,6 +571,7 @@ impl MoveOrder {
             motion: self.motion(defaults, *limits)?,
             permit: Permit::NONE,
             gate: None,
+            accepted: None,
         })
     }
 
@@ -762,6 +785,11 @@ pub(crate) fn plan_order(
     order: &CheckedOrder,
     counts: [i64; JOINTS],
 ) -> Result<Plan, PlanError> {
+    if let Some(accepted) = order.accepted.as_deref()
+        && accepted.counts == counts
+    {
+        return Ok(accepted.plan.clone());
+    }
     if let Target::Section(part) = &order.target {
         return part.plan(robot, order.motion, counts);
     }
@@ -856,6 +884,48 @@ mod tests {
             planned: OnceLock::new(),
         };
         (robot, order, motion)
+    }
+
+    /// An order begun on the counts it was accepted from takes the plan made then (planning
+    /// there again gives the same plan); begun anywhere else, it is planned from there.
+    #[test]
+    #[allow(clippy::float_cmp)] // a marker value, copied exactly
+    fn an_order_begun_where_it_was_accepted_from_takes_the_accepted_plan() {
+        use crate::kinematics::Kinematics;
+        let robot = seed_robot();
+        let p1 = robot
+            .pose_with_wrist_at_zero(-926.57, 535.03, 50.0)
+            .unwrap();
+        let counts = robot.counts_of(&robot.kinematics.ik(&p1, None).unwrap());
+        let mut checked = order(vec![-1144.43, 659.60, 186.60])
+            .check(robot.motion)
+            .unwrap();
+        let plan = plan_order(&robot, &checked, counts).unwrap();
+        assert!(plan_order(&robot, &checked, counts).unwrap() == plan);
+        let mut marked = plan;
+        marked.speed_factor = 0.5;
+        checked.accepted = Some(Arc::new(Accepted {
+            counts,
+            plan: marked,
+        }));
+        assert_eq!(
+            plan_order(&robot, &checked, counts).unwrap().speed_factor,
+            0.5
+        );
+        let mut off = counts;
+        off[2] += 1;
+        let fresh = plan_order(&robot, &checked, off).unwrap();
+        assert_eq!((fresh.start_counts(), fresh.speed_factor), (off, 1.0));
+        // A relative order anchored elsewhere forgets it.
+        let jog = MoveOrder {
+            by: Some(vec![0.0, 0.0, 10.0]),
+            ..MoveOrder::default()
+        }
+        .check(robot.motion)
+        .unwrap();
+        let mut jog_accepted = jog.clone();
+        jog_accepted.accepted = checked.accepted.clone();
+        assert!(jog_accepted.anchored_at(&robot, off).accepted.is_none());
     }
 
     /// A section begun on the counts it was accepted from takes the starts planned then (they
