@@ -55,6 +55,7 @@ fn limited(mut robot: Robot, accel_user: [f64; JOINTS]) -> Robot {
         joint.dynamics = Dynamics {
             max_accel: Some(joint.kind.from_user(a)),
             start_hz: None,
+            max_jerk: None,
         };
     }
     robot

@@ -8,7 +8,7 @@ use super::check::At;
 use super::kinematics::joint_order;
 use super::raw::{Quantity, RawJoint};
 use crate::kinematics::{JOINTS, JointKind, Kinematics, Model};
-use crate::robot::{Dynamics, Joint};
+use crate::robot::{Dynamics, Joint, Ramp};
 
 /// Highest pulse frequency of each channel of an FP-X C60T (transistor output), Hz: channels 0
 /// and 1 are the 100 kHz ones, 2 and 3 the 20 kHz ones (FP-X User's Manual, positioning
@@ -74,25 +74,60 @@ fn joint(at: &At, table: &Spanned<RawJoint>, kind: JointKind) -> Result<Joint, C
         dynamics: Dynamics::default(),
     };
     check_step_and_limits(at, raw, &joint)?;
-    let dynamics = dynamics(at, raw, &joint, value(Quantity::MaxAccel)?)?;
+    let dynamics = dynamics(
+        at,
+        raw,
+        &joint,
+        value(Quantity::MaxAccel)?,
+        value(Quantity::MaxJerk)?,
+    )?;
     Ok(Joint { dynamics, ..joint })
 }
 
-/// The drive's limits: `max_accel_deg_s2` (or `_mm_s2`) above 0, `start_hz` above 0 and at most
-/// the channel's `max_freq_hz`.
+/// A joint's `max_jerk` is kept by an S-curve alone (a trapezoid steps its acceleration at
+/// once): a robot whose motion is a trapezoid may not give one.
+pub(super) fn jerk_needs_s_curve(
+    at: &At,
+    raw: &Spanned<Vec<Spanned<RawJoint>>>,
+    joints: &[Joint; JOINTS],
+    ramp: Ramp,
+) -> Result<(), ConfigError> {
+    if matches!(ramp, Ramp::SCurve { .. }) {
+        return Ok(());
+    }
+    for (i, (joint, table)) in joints.iter().zip(raw.get_ref()).enumerate() {
+        let unit = joint.kind.user_unit();
+        if let Some(spanned) = table.get_ref().get(Quantity::MaxJerk, unit) {
+            let key = at.index(i).child(&Quantity::MaxJerk.key(unit));
+            return Err(key.invalid(
+                spanned,
+                "needs the robot's motion.profile = \"s-curve\" (a trapezoid steps its \
+                 acceleration at once)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The drive's limits: `max_accel_deg_s2` (or `_mm_s2`) and `max_jerk_deg_s3` (or `_mm_s3`)
+/// above 0, `start_hz` above 0 and at most the channel's `max_freq_hz`.
 fn dynamics(
     at: &At,
     raw: &RawJoint,
     joint: &Joint,
     max_accel: Option<f64>,
+    max_jerk: Option<f64>,
 ) -> Result<Dynamics, ConfigError> {
     let unit = joint.kind.user_unit();
-    if let Some(a) = max_accel
-        && a <= 0.0
-    {
-        let spanned = raw.get(Quantity::MaxAccel, unit).expect("given");
-        let key = at.child(&Quantity::MaxAccel.key(unit));
-        return Err(key.invalid(spanned, "must be above 0"));
+    for (quantity, value) in [
+        (Quantity::MaxAccel, max_accel),
+        (Quantity::MaxJerk, max_jerk),
+    ] {
+        if value.is_some_and(|v| v <= 0.0) {
+            let spanned = raw.get(quantity, unit).expect("given");
+            let key = at.child(&quantity.key(unit));
+            return Err(key.invalid(spanned, "must be above 0"));
+        }
     }
     let start_hz = raw
         .start_hz
@@ -113,8 +148,9 @@ fn dynamics(
         })
         .transpose()?;
     Ok(Dynamics {
-        max_accel: max_accel.map(f64::abs),
+        max_accel,
         start_hz,
+        max_jerk,
     })
 }
 
@@ -393,6 +429,46 @@ mod tests {
         assert!(
             message(&after_d3("start_hz = nan"))
                 .contains("start_hz = nan: must be a finite number")
+        );
+    }
+
+    #[test]
+    fn a_joint_s_jerk_is_read_in_its_units_and_needs_an_s_curve() {
+        let s_curve = "accel_time = \"200ms\"\nprofile = \"s-curve\"\njerk_mm_s3 = 20000.0";
+        let text = edited(&[
+            (8, s_curve),
+            (16, "output = \"pulse-sign\"\nmax_jerk_deg_s3 = 900.0"),
+            (32, "output = \"pulse-sign\"\nmax_jerk_mm_s3 = 5000.0"),
+        ]);
+        let config = super::super::Config::from_toml(&text).unwrap();
+        let joints = &config.robot(Some("r")).unwrap().joints;
+        let j = joints[0].dynamics.max_jerk.unwrap();
+        assert!((j - 900f64.to_radians()).abs() < 1e-12, "{j}");
+        assert_eq!(joints[2].dynamics.max_jerk, Some(5000.0));
+        assert!(joints[2].dynamics.is_set() && !joints[1].dynamics.is_set());
+
+        let after_d3 = |motion: &str, extra: &str| {
+            edited(&[
+                (8, motion),
+                (32, &format!("output = \"pulse-sign\"\n{extra}")),
+            ])
+        };
+        assert_eq!(
+            message(&after_d3(s_curve, "max_jerk_mm_s3 = 0.0")),
+            "config line 35: robots.r.joints[2].max_jerk_mm_s3 = 0: must be above 0"
+        );
+        assert_eq!(
+            message(&after_d3(s_curve, "max_jerk_deg_s3 = 50.0")),
+            "config line 35: robots.r.joints[2].max_jerk_deg_s3 = 50: joint d3 is prismatic, \
+             so it takes max_jerk_mm_s3"
+        );
+        assert_eq!(
+            message(&after_d3(
+                "accel_time = \"200ms\"",
+                "max_jerk_mm_s3 = 5000.0"
+            )),
+            "config line 33: robots.r.joints[2].max_jerk_mm_s3 = 5000: needs the robot's \
+             motion.profile = \"s-curve\" (a trapezoid steps its acceleration at once)"
         );
     }
 

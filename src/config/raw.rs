@@ -260,6 +260,8 @@ pub(super) struct RawJoint {
     pub max_accel_deg_s2: Option<Spanned<f64>>,
     pub max_accel_mm_s2: Option<Spanned<f64>>,
     pub start_hz: Option<Spanned<f64>>,
+    pub max_jerk_deg_s3: Option<Spanned<f64>>,
+    pub max_jerk_mm_s3: Option<Spanned<f64>>,
 }
 
 /// A joint quantity written in degrees or millimetres.
@@ -270,6 +272,7 @@ pub(super) enum Quantity {
     Min,
     Max,
     MaxAccel,
+    MaxJerk,
 }
 
 impl Quantity {
@@ -281,6 +284,7 @@ impl Quantity {
             Self::Min => "min",
             Self::Max => "max",
             Self::MaxAccel => "max_accel",
+            Self::MaxJerk => "max_jerk",
         }
     }
 
@@ -288,6 +292,7 @@ impl Quantity {
     pub(super) fn key(self, unit: &str) -> String {
         match self {
             Self::MaxAccel => format!("{}_{unit}_s2", self.stem()),
+            Self::MaxJerk => format!("{}_{unit}_s3", self.stem()),
             _ => format!("{}_{unit}", self.stem()),
         }
     }
@@ -308,6 +313,8 @@ impl RawJoint {
             Quantity::Max => &self.max_mm,
             Quantity::MaxAccel if deg => &self.max_accel_deg_s2,
             Quantity::MaxAccel => &self.max_accel_mm_s2,
+            Quantity::MaxJerk if deg => &self.max_jerk_deg_s3,
+            Quantity::MaxJerk => &self.max_jerk_mm_s3,
         };
         field.as_ref()
     }

@@ -109,6 +109,7 @@ fn robot(
     let motion = motion::motion(&at.child("motion"), r.motion.get_ref())?;
     let max_speed_mm_s = motion::max_speed(&at.child("motion"), r.motion.get_ref(), &motion)?;
     let joints = joints::joints(&at.child("joints"), &r.joints, &kinematics)?;
+    joints::jerk_needs_s_curve(&at.child("joints"), &r.joints, &joints, motion.ramp)?;
     Ok(Robot {
         name: name.get_ref().clone(),
         kinematics,

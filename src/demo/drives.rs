@@ -52,6 +52,7 @@ fn robot(limited: bool) -> Robot {
             joint.dynamics = Dynamics {
                 max_accel: Some(joint.kind.from_user(a)),
                 start_hz: None,
+                max_jerk: None,
             };
         }
     }

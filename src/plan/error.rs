@@ -193,8 +193,19 @@ pub enum PlanError {
     },
     /// The tolerance asked of a bounded-error plan cannot be met.
     #[error(
-        "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse on time the path \
-         still deviates {floor_mm:.4} mm{}",
+        "{}{}",
+        if floor_mm >= tolerance_mm {
+            format!(
+                "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse \
+                 on time the path still deviates {floor_mm:.4} mm"
+            )
+        } else {
+            format!(
+                "no rows found that keep this move within tolerance {tolerance_mm} mm: with every \
+                 pulse on time the path deviates {floor_mm:.4} mm, but every set of rows tried \
+                 ran further off it; a larger tolerance may plan it"
+            )
+        },
         works_mm.map_or(String::new(), |w| format!("; {w} mm works"))
     )]
     ToleranceTooSmall {
@@ -255,6 +266,38 @@ pub enum PlanError {
         unit: &'static str,
         /// The slowest speed tried, % of the speed asked for.
         speed_pct: f64,
+    },
+    /// An S-curve slowed as far as it is slowed still asks a joint for more jerk than its
+    /// `max_jerk` (the change of its planned acceleration over 10 ms).
+    #[error(
+        "joint {joint}: the motion asks it for a jerk of {jerk:.1} {unit}/s^3 (its acceleration's \
+         change over 10 ms) even slowed to {speed_pct:.1} % of the speed asked for; max_jerk = \
+         {max_jerk} {unit}/s^3"
+    )]
+    OverMaxJerk {
+        /// Joint name.
+        joint: String,
+        /// Its largest planned jerk at the slowest tried, user units/s^3.
+        jerk: f64,
+        /// The joint's limit, user units/s^3.
+        max_jerk: f64,
+        /// deg or mm.
+        unit: &'static str,
+        /// The slowest speed tried, % of the speed asked for.
+        speed_pct: f64,
+    },
+    /// A trapezoid asked of a robot with a joint's `max_jerk`: its acceleration steps at once.
+    #[error(
+        "joint {joint} has max_jerk = {max_jerk} {unit}/s^3, which only profile \"s-curve\" \
+         keeps (a trapezoid steps its acceleration at once); ask for profile \"s-curve\""
+    )]
+    JerkNeedsSCurve {
+        /// Joint name.
+        joint: String,
+        /// The joint's limit, user units/s^3.
+        max_jerk: f64,
+        /// deg or mm.
+        unit: &'static str,
     },
     /// Two consecutive rows of a joint's table step by more than its drive follows.
     #[error(

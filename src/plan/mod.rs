@@ -302,13 +302,14 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         counts: start_counts,
     };
     if robot.has_dynamics() {
+        dynamics::jerk_needs_s_curve(robot, req.motion.ramp)?;
         if let Ramp::SCurve { .. } = req.motion.ramp {
             let course = Course::Line(line);
             return dynamics::followed(|k| {
                 let mut plan =
                     plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
                 plan.speed_factor *= k.sqrt();
-                dynamics::within_max_accel(robot, &plan.drive, plan.speed_factor)?;
+                dynamics::within_limits(robot, &mut plan)?;
                 Ok(plan)
             });
         }
@@ -329,6 +330,7 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
             counts: start.counts,
         });
     }
+    dynamics::jerk_needs_s_curve(robot, req.motion.ramp)?;
     let motion = dynamics::joint_move_motion(
         robot,
         &start.values,
@@ -336,7 +338,9 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
         course.length_mm(),
         req.motion,
     )?;
-    plan_course(robot, &course, &start, motion)
+    let mut plan = plan_course(robot, &course, &start, motion)?;
+    dynamics::within_limits(robot, &mut plan)?;
+    Ok(plan)
 }
 
 /// Where a move starts: joint values and the counts that stand for them.

@@ -260,6 +260,7 @@ fn section_plan(
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
+    super::dynamics::jerk_needs_s_curve(robot, asked.ramp).map_err(|e| (elements.clone(), e))?;
     if robot.has_dynamics() && matches!(asked.ramp, Ramp::SCurve { .. }) {
         // Slowed as a whole (its path acceleration with the rest) until the drives follow it.
         return super::dynamics::followed(|k| {
@@ -272,7 +273,7 @@ fn section_plan(
             )?;
             for s in &mut starts {
                 s.speed_factor *= k.sqrt();
-                super::dynamics::within_max_accel(robot, &s.drive, s.speed_factor)?;
+                super::dynamics::within_limits(robot, s)?;
             }
             Ok(starts)
         })

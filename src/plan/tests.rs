@@ -226,6 +226,24 @@ fn tolerance_below_the_pulse_grid_is_refused_naming_one_that_works() {
     );
 }
 
+/// A tolerance above the pulse grid's floor that no rows met is not said to be below what the
+/// move can reach (the refusal found by the drive properties: a slow gantry line at 0.1 mm
+/// with a floor of 0.010 mm).
+#[test]
+fn a_tolerance_above_the_floor_no_rows_met_is_refused_as_such() {
+    let err = PlanError::ToleranceTooSmall {
+        tolerance_mm: 0.1,
+        floor_mm: 0.010_002_6,
+        works_mm: None,
+    };
+    assert_eq!(
+        err.to_string(),
+        "no rows found that keep this move within tolerance 0.1 mm: with every pulse on time \
+         the path deviates 0.0100 mm, but every set of rows tried ran further off it; a larger \
+         tolerance may plan it"
+    );
+}
+
 /// A joint move of the seed's robot from the counts of its P1 to `to` (deg, mm, mm, deg).
 fn joint_request(to_user: [f64; 4], method: crate::robot::Method) -> JointMoveRequest {
     let robot = seed_robot();

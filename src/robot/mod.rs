@@ -41,13 +41,23 @@ pub struct Dynamics {
     /// The highest frequency the drive follows from and to standstill, Hz: the first row of
     /// every run from rest and the last row into rest stay at or under it.
     pub start_hz: Option<f64>,
+    /// The highest jerk of the joint, rad/s^3 or mm/s^3, as its planned motion is judged: its
+    /// position's third difference at steps of [`JERK_SPAN_S`]. Only an S-curve is planned for it (a
+    /// trapezoid steps its acceleration at once); the S-curve is slowed until it keeps it.
+    pub max_jerk: Option<f64>,
 }
+
+/// The step at which a joint's jerk is judged, s: its speed over it, that speed's change over
+/// it, and that change's over it (a third difference). A drive's position loop (a servo's, some
+/// 100 Hz) smooths what changes faster; a corner of a path (a line into an arc) steps the
+/// acceleration at once, and that step over this span is the jerk it asks for.
+pub const JERK_SPAN_S: f64 = 0.010;
 
 impl Dynamics {
     /// Whether any limit is set.
     #[must_use]
     pub fn is_set(&self) -> bool {
-        self.max_accel.is_some() || self.start_hz.is_some()
+        self.max_accel.is_some() || self.start_hz.is_some() || self.max_jerk.is_some()
     }
 }
 

@@ -49,6 +49,7 @@ pub(crate) fn limited(mut robot: Robot, l: &Limits) -> Robot {
         joint.dynamics = Dynamics {
             max_accel: Some(typical * l.accel_share[j]),
             start_hz: l.start_share[j].map(|s| (s * f64::from(joint.max_freq_hz)).max(100.0)),
+            max_jerk: None,
         };
     }
     robot
@@ -196,19 +197,65 @@ fn check_s_curve(
     check(&robot, &starts, &l)
 }
 
-/// Plans the line with S-curve ramps of `jerk_mm_s3` under drive limits `l`: slowed as a whole
-/// until every drive follows it, it keeps every limit, and its planned motion every joint's
-/// `max_accel` (2 % allowed for sampling). Refused only for a drive it cannot slow enough for
-/// (the joint named) or rows that outgrow a table area.
+/// A typical drive's jerk: 100 000 mm/s^3, 50 000 deg/s^3, in internal units.
+fn typical_jerk(joint: &linterpd::robot::Joint) -> f64 {
+    joint.kind.from_user(match joint.kind {
+        linterpd::kinematics::JointKind::Prismatic => 100_000.0,
+        linterpd::kinematics::JointKind::Revolute => 50_000.0,
+    })
+}
+
+/// A joint's largest jerk in `plan`, user units/s^3, measured here on its own: the joints by
+/// inverse kinematics every half millisecond along its course, the jerk the change over 10 ms of
+/// the change over 10 ms of the speed over 10 ms (what `max_jerk` is judged by, ACCURACY.md).
+fn jerks_measured_here(robot: &Robot, plan: &Plan) -> [f64; 4] {
+    use linterpd::kinematics::Kinematics;
+    let h = 0.0005;
+    let n = (plan.duration_s() / h).floor() as usize;
+    let mut near = plan.samples.values[0];
+    let q: Vec<[f64; 4]> = (0..=n)
+        .map(|i| {
+            let t = plan.window.from_s + i as f64 * h;
+            // A line a joint reverses on is planned as a path of that one line (its parts).
+            let pose = match &plan.path {
+                Some(path) => path.at(plan.course_mm(t)),
+                None => plan.line.at(plan.profile.distance_mm(t)),
+            };
+            near = robot.kinematics.ik(&pose, Some(&near)).unwrap();
+            near
+        })
+        .collect();
+    let tau = 0.010;
+    let span = 20;
+    let speed = |i: usize, j: usize| (q[i + span][j] - q[i][j]) / tau;
+    let accel = |i: usize, j: usize| (speed(i + span, j) - speed(i, j)) / tau;
+    std::array::from_fn(|j| {
+        let peak = (0..q.len().saturating_sub(3 * span))
+            .map(|i| ((accel(i + span, j) - accel(i, j)) / tau).abs())
+            .fold(0.0_f64, f64::max);
+        robot.joints[j].user(peak).abs()
+    })
+}
+
+/// Plans the line with S-curve ramps of `jerk_mm_s3` under drive limits `l` and joints' jerk
+/// limits `jerk_share` (of [`typical_jerk`]): slowed as a whole until every drive follows it,
+/// it keeps every limit, and its planned motion every joint's `max_accel` (2 % allowed for
+/// sampling) and `max_jerk` (measured again here, 3 % allowed for the finer sampling). Refused
+/// only for a drive it cannot slow enough for (the joint named) or rows that outgrow a table
+/// area.
 fn check_s_curve_under_limits(
     robot: &Robot,
     (from, to): (Pose, Pose),
     m: Motion,
     l: &Limits,
     jerk_mm_s3: f64,
+    jerk_share: [Option<f64>; 4],
 ) -> Result<(), TestCaseError> {
     use linterpd::plan::PlanError;
     let mut robot = limited(robot.clone(), l);
+    for (joint, share) in robot.joints.iter_mut().zip(jerk_share) {
+        joint.dynamics.max_jerk = share.map(|s| typical_jerk(joint) * s);
+    }
     robot.motion.ramp = linterpd::robot::Ramp::SCurve { jerk_mm_s3 };
     let m = Motion {
         accel_s: m.accel_s.max(0.01),
@@ -221,6 +268,7 @@ fn check_s_curve_under_limits(
             PlanError::RowStep { .. }
             | PlanError::RestRow { .. }
             | PlanError::SCurveOverMaxAccel { .. }
+            | PlanError::OverMaxJerk { .. }
             | PlanError::InvalidTable { .. },
         ) => return Ok(()),
         Err(e) => panic!("{from:?} -> {to:?} {:?} {l:?}: {e}", req.motion),
@@ -236,6 +284,25 @@ fn check_s_curve_under_limits(
                 joint.name,
                 d.peak_accel
             );
+        }
+        if jerk_share.iter().any(Option::is_some) {
+            let here = jerks_measured_here(&robot, start);
+            for ((joint, d), here) in robot.joints.iter().zip(&start.drive).zip(here) {
+                let Some(max_jerk) = joint.dynamics.max_jerk.map(|v| joint.user(v).abs()) else {
+                    continue;
+                };
+                let planned = d.peak_jerk.expect("measured");
+                prop_assert!(
+                    planned <= max_jerk,
+                    "{}: {planned} over {max_jerk}",
+                    joint.name
+                );
+                prop_assert!(
+                    here <= max_jerk * 1.03,
+                    "{}: measured here {here} over {max_jerk} (the planner's {planned})",
+                    joint.name
+                );
+            }
         }
     }
     check(&robot, &starts, l)
@@ -271,13 +338,14 @@ proptest! {
         m in motion(),
         l in limits(),
         jerk_mm_s3 in 2_000.0..200_000.0f64,
+        jerk_share in prop::array::uniform4(prop::option::of(0.02..1.0f64)),
     ) {
         let (robot, mv) = match which {
             0 => (common::cylindrical(), cyl),
             1 => (common::gantry(), gan),
             _ => (common::scara(), sca),
         };
-        check_s_curve_under_limits(&robot, mv, m, &l, jerk_mm_s3)?;
+        check_s_curve_under_limits(&robot, mv, m, &l, jerk_mm_s3, jerk_share)?;
     }
 
     #[test]

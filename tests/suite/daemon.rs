@@ -726,6 +726,7 @@ async fn d3_limited(max_accel_mm_s2: f64) -> (SharedMock, Daemon, RobotHandle) {
     robot.joints[2].dynamics = linterpd::robot::Dynamics {
         max_accel: Some(max_accel_mm_s2),
         start_hz: Some(1_000.0),
+        max_jerk: None,
     };
     let shared = mock_at_seed_start("");
     shared.with(|m| m.record_pulses(true));

@@ -38,6 +38,9 @@ pub(super) struct DriveDoc {
     step_load: Option<f64>,
     rest_hz: f64,
     start_hz: Option<f64>,
+    /// The largest change of acceleration over 10 ms, measured when a joint has `max_jerk`.
+    peak_jerk: Option<f64>,
+    max_jerk: Option<f64>,
 }
 
 /// Every joint's drive figures of `plan`.
@@ -56,6 +59,8 @@ pub(super) fn drives(robot: &Robot, plan: &Plan) -> Vec<DriveDoc> {
             step_load: d.step_load,
             rest_hz: d.rest_hz,
             start_hz: j.dynamics.start_hz,
+            peak_jerk: d.peak_jerk,
+            max_jerk: j.dynamics.max_jerk.map(|v| j.user(v).abs()),
         })
         .collect()
 }

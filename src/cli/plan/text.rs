@@ -86,10 +86,16 @@ pub(super) fn write_drives(robot: &Robot, plan: &Plan, out: &mut dyn Write) -> i
             .dynamics
             .start_hz
             .map_or(String::new(), |hz| format!(" (start_hz {hz})"));
+        let jerk = d.peak_jerk.map_or(String::new(), |v| {
+            let max = joint.dynamics.max_jerk.map_or(String::new(), |m| {
+                format!(" (max_jerk {})", joint.user(m).abs())
+            });
+            format!(", jerk {v:.0} {unit}/s^3{max}")
+        });
         writeln!(
             out,
-            "  {:<8} {:.0} Hz, {:.2} {unit}/s, {:.1} {unit}/s^2{accel}{step}; from and to \
-             standstill {:.0} Hz{start}",
+            "  {:<8} {:.0} Hz, {:.2} {unit}/s, {:.1} {unit}/s^2{accel}{step}{jerk}; from and \
+             to standstill {:.0} Hz{start}",
             joint.name, d.peak_hz, d.peak_speed, d.peak_accel, d.rest_hz
         )?;
     }

@@ -1,8 +1,10 @@
 //! PURE. What the drives behind the pulse outputs can follow ([`crate::robot::Dynamics`]): the
 //! time-optimal motion along a line or path section under every joint's limits ([`timing`]),
 //! and every table's rows checked against them ([`rows`]); a line and a joint move under them
-//! ([`moves`]); an S-curve slowed as a whole until the drives follow it ([`slowed`]).
+//! ([`moves`]); an S-curve slowed as a whole until the drives follow it ([`slowed`]), its
+//! joints' jerk measured on the planned motion ([`jerk`]).
 
+mod jerk;
 mod moves;
 mod rows;
 mod slowed;
@@ -11,7 +13,7 @@ mod timing;
 pub(super) use moves::{joint_move_motion, timed_line};
 pub use rows::DriveFigures;
 pub(super) use rows::judge;
-pub(super) use slowed::{followed, slowed, within_max_accel};
+pub(super) use slowed::{followed, jerk_needs_s_curve, slowed, within_limits};
 pub(super) use timing::{PathLimits, RETIMING, Shape, pace};
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 
 use crate::geometry::{Corner, Element, Line, Path, PathSpec};
 use crate::kinematics::Joints;
-use crate::robot::{Motion, Robot};
+use crate::robot::{Motion, Ramp, Robot};
 
 use super::super::course::Course;
 use super::super::{PlanError, Start};
@@ -43,7 +43,8 @@ pub(in crate::plan) fn timed_line(
 /// A joint move's motion under its joints' drive limits: every joint moves in proportion, so
 /// the time-optimal motion is one trapezoid, its acceleration the lowest any joint allows
 /// (`max_accel`, and `start_hz` over the first and last periods) over its share of the
-/// course's length. Without drive limits, `motion` as it is.
+/// course's length; an S-curve's jerk the lowest any joint's `max_jerk` allows over its share
+/// likewise. Without drive limits, `motion` as it is.
 pub(in crate::plan) fn joint_move_motion(
     robot: &Robot,
     from: &Joints,
@@ -51,6 +52,20 @@ pub(in crate::plan) fn joint_move_motion(
     length_mm: f64,
     motion: Motion,
 ) -> Result<Motion, PlanError> {
+    let mut motion = motion;
+    if let Ramp::SCurve { jerk_mm_s3 } = motion.ramp {
+        let jerk = robot
+            .joints
+            .iter()
+            .enumerate()
+            .filter_map(|(j, joint)| {
+                let share = (to[j] - from[j]).abs() / length_mm;
+                let max_jerk = joint.dynamics.max_jerk?;
+                (share > 0.0).then(|| max_jerk * ACCEL_MARGIN / share)
+            })
+            .fold(jerk_mm_s3, f64::min);
+        motion.ramp = Ramp::SCurve { jerk_mm_s3: jerk };
+    }
     let mut accel = if motion.accel_s > 0.0 {
         motion.speed_mm_s / motion.accel_s
     } else {

@@ -33,6 +33,9 @@ pub struct DriveFigures {
     /// The joint's largest planned acceleration, deg/s^2 or mm/s^2 (from the samples: over
     /// a period for constant-period, over a millisecond for bounded-error).
     pub peak_accel: f64,
+    /// The joint's largest planned jerk, deg/s^3 or mm/s^3: the change of its acceleration over
+    /// 10 ms (measured for an S-curve on a robot with a joint's `max_jerk`, else `None`).
+    pub peak_jerk: Option<f64>,
     /// The largest step between two consecutive rows as a share of what `max_accel` allows
     /// (`None` without `max_accel`, or with fewer than two rows).
     pub step_load: Option<f64>,

@@ -8,9 +8,8 @@
 //! taken. It is not time-optimal: the time-optimal timing steps its acceleration on and off,
 //! which a jerk limit forbids.
 
-use super::DriveFigures;
-use crate::kinematics::JOINTS;
-use crate::plan::PlanError;
+use super::jerk::peak_jerks;
+use crate::plan::{Plan, PlanError};
 use crate::robot::{Motion, Ramp, Robot};
 
 /// How many times the share is halved looking for one the drives follow: down to 1/64 (the
@@ -24,18 +23,18 @@ const CLOSE: f64 = 1.05;
 /// How far a joint's planned acceleration (measured on the samples) may pass its `max_accel`.
 const ACCEL_SLACK: f64 = 0.02;
 
-/// Whether every joint's planned acceleration in `drive` keeps within its `max_accel` (and
-/// [`ACCEL_SLACK`]); if not, the refusal naming the first joint over it, for a plan at
-/// `speed_factor` of the speed asked for. The rows alone do not show it: a row's frequency is
-/// known only to a pulse over its length, so short rows (bounded-error's, a few ms) leave room
-/// for steps well over the limit. A time-optimal timing keeps the planned motion within it by
-/// construction; a slowed S-curve is checked.
-pub(in crate::plan) fn within_max_accel(
-    robot: &Robot,
-    drive: &[DriveFigures; JOINTS],
-    speed_factor: f64,
-) -> Result<(), PlanError> {
-    for (joint, d) in robot.joints.iter().zip(drive) {
+/// Whether every joint's planned motion in `plan` (at `speed_factor` of the speed asked for)
+/// keeps within its `max_accel` (and [`ACCEL_SLACK`]) and its `max_jerk`; if not, the refusal
+/// naming the first joint over one. The jerks are measured ([`peak_jerks`]) when a joint has a
+/// `max_jerk`, and kept in the plan's figures.
+///
+/// The rows alone do not show an acceleration: a row's frequency is known only to a pulse over
+/// its length, so short rows (bounded-error's, a few ms) leave room for steps well over the
+/// limit. A time-optimal timing keeps the planned motion within it by construction; a slowed
+/// S-curve is checked.
+pub(in crate::plan) fn within_limits(robot: &Robot, plan: &mut Plan) -> Result<(), PlanError> {
+    let speed_pct = plan.speed_factor * 100.0;
+    for (joint, d) in robot.joints.iter().zip(&plan.drive) {
         if let Some(a) = joint.dynamics.max_accel {
             let max_accel = joint.user(a).abs();
             if d.peak_accel > max_accel * (1.0 + ACCEL_SLACK) {
@@ -44,12 +43,48 @@ pub(in crate::plan) fn within_max_accel(
                     accel: d.peak_accel,
                     max_accel,
                     unit: joint.kind.user_unit(),
-                    speed_pct: speed_factor * 100.0,
+                    speed_pct,
+                });
+            }
+        }
+    }
+    if robot.joints.iter().all(|j| j.dynamics.max_jerk.is_none()) {
+        return Ok(());
+    }
+    let jerks = peak_jerks(robot, plan)?;
+    for ((joint, d), jerk) in robot.joints.iter().zip(&mut plan.drive).zip(jerks) {
+        d.peak_jerk = Some(jerk);
+        if let Some(j) = joint.dynamics.max_jerk {
+            let max_jerk = joint.user(j).abs();
+            if jerk > max_jerk {
+                return Err(PlanError::OverMaxJerk {
+                    joint: joint.name.clone(),
+                    jerk,
+                    max_jerk,
+                    unit: joint.kind.user_unit(),
+                    speed_pct,
                 });
             }
         }
     }
     Ok(())
+}
+
+/// Refuses a trapezoid for a robot with a joint's `max_jerk`: only an S-curve keeps it.
+pub(in crate::plan) fn jerk_needs_s_curve(robot: &Robot, ramp: Ramp) -> Result<(), PlanError> {
+    if matches!(ramp, Ramp::SCurve { .. }) {
+        return Ok(());
+    }
+    match robot.joints.iter().find(|j| j.dynamics.max_jerk.is_some()) {
+        Some(joint) => Err(PlanError::JerkNeedsSCurve {
+            joint: joint.name.clone(),
+            max_jerk: joint
+                .user(joint.dynamics.max_jerk.unwrap_or_default())
+                .abs(),
+            unit: joint.kind.user_unit(),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// `asked` slowed in time to share `k` of its accelerations ([`followed`]).
@@ -70,19 +105,21 @@ pub(in crate::plan) fn slowed(asked: &Motion, k: f64) -> Motion {
 }
 
 /// Whether `outcome` is a drive's refusal: a row step over its `max_accel`, a row from or into
-/// rest over its `start_hz`, a motion over its `max_accel`. A slower motion may be followed.
+/// rest over its `start_hz`, a motion over its `max_accel` or its `max_jerk`. A slower motion may be followed.
 fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
     matches!(
         outcome,
         Err(PlanError::RowStep { .. }
             | PlanError::RestRow { .. }
-            | PlanError::SCurveOverMaxAccel { .. })
+            | PlanError::SCurveOverMaxAccel { .. }
+            | PlanError::OverMaxJerk { .. })
     )
 }
 
 /// `plan` at share 1 of the accelerations, or, when a drive would not follow it, at the
 /// largest share found that every drive follows; `plan(k)` plans the motion slowed to share
-/// `k` ([`slowed`]) and refuses one over a joint's `max_accel` ([`within_max_accel`]). The
+/// `k` ([`slowed`]) and refuses one over a joint's `max_accel` or `max_jerk`
+/// ([`within_limits`]). The
 /// refusal of the slowest tried when none is followed; any other refusal at the largest share
 /// followed.
 pub(in crate::plan) fn followed<T>(

@@ -21,6 +21,7 @@ fn limited(mut robot: Robot, accel_user: [f64; 4], start_hz: [Option<f64>; 4]) -
         joint.dynamics = Dynamics {
             max_accel: Some(joint.kind.from_user(accel_user[j])),
             start_hz: start_hz[j],
+            max_jerk: None,
         };
     }
     robot
@@ -472,5 +473,195 @@ fn a_path_s_curve_under_drive_limits_keeps_every_limit() {
             "{:?}",
             start.drive[2]
         );
+    }
+}
+
+/// `robot` with joint `j`'s `max_jerk` (user units/s^3) added.
+fn with_max_jerk(mut robot: Robot, j: usize, max_jerk_user: f64) -> Robot {
+    let joint = &mut robot.joints[j];
+    joint.dynamics.max_jerk = Some(joint.kind.from_user(max_jerk_user));
+    robot
+}
+
+/// The measurement itself, against a motion whose jerk is known: on a joint move every joint
+/// runs the profile's S-curve scaled by its share of the course, so its jerk is that share of
+/// the profile's (its jerk phases, 60 ms here, longer than the 10 ms it is judged over).
+#[test]
+fn a_joint_s_jerk_reads_as_its_share_of_a_joint_move_s_s_curve() {
+    let robot = seed_robot();
+    let from = crate::plan::tests::seed_request(FrequencyModel::FpxDivider, false).from;
+    let Origin::Pose(from_pose) = from else {
+        unreachable!()
+    };
+    let start = robot.kinematics.ik(&from_pose, None).unwrap();
+    let to = [start[0] + 0.3, start[1] + 40.0, start[2] - 90.0, start[3]];
+    let motion = Motion {
+        ramp: Ramp::SCurve {
+            jerk_mm_s3: 20_000.0,
+        },
+        ..robot.motion
+    };
+    let plan = plan_joint_move(&robot, &JointMoveRequest { from, to, motion }).unwrap();
+    let jerks = super::jerk::peak_jerks(&robot, &plan).unwrap();
+    let path_jerk = plan.profile.accel_mm_s2 / plan.profile.jerk_s;
+    assert!(plan.profile.jerk_s > 0.05, "{:?}", plan.profile);
+    let length = plan.profile.length_mm;
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let share = (to[j] - start[j]).abs() / length;
+        let expected = joint.user(path_jerk * share).abs();
+        assert!(
+            (jerks[j] - expected).abs() <= 0.01 * expected + 1e-6,
+            "{}: {} against {expected}",
+            joint.name,
+            jerks[j]
+        );
+    }
+}
+
+/// A radial drive that takes 5000 mm/s^3: the seed's move's S-curve (20000 mm/s^3 along the
+/// line) asks more of it, so the move is slowed as a whole until d3's jerk keeps it, and not
+/// much further: the same S-curve 10 % faster is over it.
+#[test]
+fn an_s_curve_is_slowed_until_every_joint_keeps_its_max_jerk() {
+    let free = seed_robot();
+    let robot = with_max_jerk(
+        limited(seed_robot(), [200.0, 1_000.0, 1_000.0, 200.0], [None; 4]),
+        2,
+        5_000.0,
+    );
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        let asked = plan_move(&free, &s_curve(&free, method, 20_000.0)).unwrap();
+        let asked_jerk = super::jerk::peak_jerks(&free, &asked).unwrap()[2];
+        assert!(asked_jerk > 8_000.0, "{method:?}: {asked_jerk}");
+        let plan = plan_move(&robot, &s_curve(&robot, method, 20_000.0)).unwrap();
+        assert!(plan.valid(), "{method:?}: {:?}", plan.problems);
+        assert_rows_within(&robot, &plan);
+        let d3 = plan.drive[2].peak_jerk.expect("measured");
+        assert!(d3 <= 5_000.0, "{method:?}: {d3}");
+        assert!(plan.speed_factor < 0.9, "{method:?}: {}", plan.speed_factor);
+        // Every joint's figure is the measurement's.
+        let again = super::jerk::peak_jerks(&robot, &plan).unwrap();
+        for (d, again) in plan.drive.iter().zip(again) {
+            assert_eq!(d.peak_jerk, Some(again));
+        }
+        // A tenth faster is over it.
+        let k = (plan.speed_factor * 1.1).powi(2);
+        let faster = plan_move(
+            &free,
+            &MoveRequest {
+                motion: super::slowed(&s_curve(&free, method, 20_000.0).motion, k),
+                ..s_curve(&free, method, 20_000.0)
+            },
+        )
+        .unwrap();
+        let faster_jerk = super::jerk::peak_jerks(&free, &faster).unwrap()[2];
+        assert!(faster_jerk > 5_000.0, "{method:?}: {faster_jerk}");
+    }
+}
+
+/// A jerk no slowing meets is refused naming the joint, the figures and the speed tried.
+#[test]
+fn a_max_jerk_no_slowing_meets_is_refused_naming_the_joint() {
+    let robot = with_max_jerk(seed_robot(), 2, 1.0);
+    let e = plan_move(&robot, &s_curve(&robot, Method::ConstantPeriod, 20_000.0)).unwrap_err();
+    let PlanError::OverMaxJerk {
+        ref joint,
+        max_jerk,
+        speed_pct,
+        ..
+    } = e
+    else {
+        panic!("{e}")
+    };
+    assert_eq!((joint.as_str(), max_jerk), ("d3", 1.0));
+    assert!((speed_pct - 12.5).abs() < 1e-9, "{speed_pct}");
+    assert!(e.to_string().contains("max_jerk = 1 mm/s^3"), "{e}");
+}
+
+/// A trapezoid steps its acceleration at once: a robot with a joint's `max_jerk` refuses it for
+/// a line, a joint move and a path alike, before anything is planned.
+#[test]
+fn a_trapezoid_is_refused_for_a_robot_with_a_max_jerk() {
+    let robot = with_max_jerk(seed_robot(), 0, 900.0);
+    let trapezoid = seed_move(&robot, Method::ConstantPeriod, FrequencyModel::FpxDivider);
+    let refused = |e: PlanError| {
+        assert!(
+            matches!(e, PlanError::JerkNeedsSCurve { ref joint, max_jerk, unit }
+                if joint == "theta1" && (max_jerk - 900.0).abs() < 1e-9 && unit == "deg"),
+            "{e}"
+        );
+    };
+    refused(plan_move(&robot, &trapezoid).unwrap_err());
+    let to = [0.9, 60.0, 600.0, 0.0];
+    let joint = JointMoveRequest {
+        from: trapezoid.from,
+        to,
+        motion: trapezoid.motion,
+    };
+    refused(plan_joint_move(&robot, &joint).unwrap_err());
+    let path = from_the_seed_start(
+        &robot,
+        &[([-1100.0, 640.0, 150.0], Corner::Stop)],
+        robot.motion,
+    );
+    let e = plan_path(&robot, &path).unwrap_err();
+    let PlanError::Section { source, .. } = e else {
+        panic!("{e}")
+    };
+    refused(*source);
+}
+
+/// A joint move's S-curve takes the jerk its joints allow over their shares, as its
+/// acceleration does: planned at the asked speed, not slowed.
+#[test]
+fn a_joint_move_s_s_curve_keeps_every_joint_s_max_jerk_at_its_speed() {
+    let robot = with_max_jerk(seed_robot(), 2, 3_000.0);
+    let from = crate::plan::tests::seed_request(FrequencyModel::FpxDivider, false).from;
+    let motion = Motion {
+        ramp: Ramp::SCurve {
+            jerk_mm_s3: 20_000.0,
+        },
+        ..robot.motion
+    };
+    let to = [1.1, 100.0, 700.0, 0.0];
+    let plan = plan_joint_move(&robot, &JointMoveRequest { from, to, motion }).unwrap();
+    assert!(plan.valid());
+    let d3 = plan.drive[2].peak_jerk.expect("measured");
+    assert!((2_500.0..=3_000.0).contains(&d3), "{d3}");
+    assert!((plan.speed_factor - 1.0).abs() < 1e-12);
+    let Ramp::SCurve { jerk_mm_s3 } = plan.motion.ramp else {
+        panic!()
+    };
+    assert!(jerk_mm_s3 < 20_000.0, "{jerk_mm_s3}");
+}
+
+/// A path's corner steps its acceleration where its arc begins: that step over 10 ms is a jerk
+/// too, and the path's S-curve is slowed until it keeps d3's.
+#[test]
+fn a_path_s_curve_keeps_every_joint_s_max_jerk_through_its_blends() {
+    let robot = with_max_jerk(seed_robot(), 2, 20_000.0);
+    let corners = [
+        ([-926.57, 535.03, 150.0], Corner::Blend(20.0)),
+        ([-1100.0, 640.0, 150.0], Corner::Stop),
+    ];
+    let motion = Motion {
+        ramp: Ramp::SCurve {
+            jerk_mm_s3: 20_000.0,
+        },
+        ..robot.motion
+    };
+    let free = seed_robot();
+    let asked = plan_path(&free, &from_the_seed_start(&free, &corners, motion)).unwrap();
+    let asked_jerk = asked
+        .starts()
+        .map(|s| super::jerk::peak_jerks(&free, s).unwrap()[2])
+        .fold(0.0, f64::max);
+    assert!(asked_jerk > 20_000.0, "{asked_jerk}");
+    let plan = plan_path(&robot, &from_the_seed_start(&robot, &corners, motion)).unwrap();
+    assert!(plan.valid());
+    for start in plan.starts() {
+        assert!(start.speed_factor < 1.0, "{}", start.speed_factor);
+        let d3 = start.drive[2].peak_jerk.expect("measured");
+        assert!(d3 <= 20_000.0, "{d3}");
     }
 }
