@@ -728,6 +728,11 @@ async fn d3_limited(max_accel_mm_s2: f64) -> (SharedMock, Daemon, RobotHandle) {
         start_hz: Some(1_000.0),
         max_jerk: None,
     };
+    daemon_for(robot).await
+}
+
+/// A daemon on `robot` against a mock at the seed's start recording its pulses.
+async fn daemon_for(robot: linterpd::robot::Robot) -> (SharedMock, Daemon, RobotHandle) {
     let shared = mock_at_seed_start("");
     shared.with(|m| m.record_pulses(true));
     let (d, h) = common::daemon::spawn_robot(
@@ -797,6 +802,44 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_slowed_within_them_o
     assert_on_target(&there);
     let span_s = assert_d3_within(&shared, 300.0);
     assert!((span_s - 2.60).abs() < 0.06, "{span_s}");
+    d.shut_down().await;
+}
+
+#[tokio::test]
+async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_slowed_and_refuses_a_trapezoid() {
+    // d3 takes 5000 mm/s^3; the robot's own ramps are S-curves of 20000 mm/s^3 along the path,
+    // which ask d3 for 14523: `plan` slows the seed's move to 66.3 %, 2.200 s (PLANNING.md, "A
+    // joint's jerk").
+    let mut robot = linterpd::robot::seed_robot();
+    robot.motion.ramp = linterpd::robot::Ramp::SCurve {
+        jerk_mm_s3: 20_000.0,
+    };
+    robot.joints[2].dynamics.max_jerk = Some(5_000.0);
+    let (shared, d, h) = daemon_for(robot).await;
+    let start = shared.with(|m| std::array::from_fn(|c| m.count(c)));
+    while h.state().counts != Some(start) {
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    // A trapezoid asked for: refused naming d3, and nothing moves.
+    let mut trapezoid = order(P2);
+    trapezoid.profile = Some("trapezoid".to_owned());
+    let refused = h.submit(trapezoid).unwrap_err();
+    assert!(
+        refused
+            .to_string()
+            .starts_with("joint d3 has max_jerk = 5000 mm/s^3"),
+        "{refused}"
+    );
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(pulse_times(&shared, 2).is_empty());
+    assert_eq!(shared.with(|m| std::array::from_fn(|c| m.count(c))), start);
+    // The robot's own S-curve runs slowed, as `plan` shows.
+    let id = h.submit(order(P2)).unwrap();
+    let there = h.wait(id, LIMIT).await.unwrap();
+    assert_on_target(&there);
+    let times = pulse_times(&shared, 2);
+    let span_s = times[times.len() - 1] - times[0];
+    assert!((span_s - 2.20).abs() < 0.06, "{span_s}");
     d.shut_down().await;
 }
 
