@@ -384,6 +384,17 @@ fn s_curve(robot: &Robot, method: Method, jerk_mm_s3: f64) -> MoveRequest {
     req
 }
 
+/// The seed's move's `s-curve:20000` slowed to share `k` of its accelerations, planned for
+/// `robot` as it is (no slowing of the planner's own).
+fn seed_s_curve_slowed(robot: &Robot, method: Method, k: f64) -> Plan {
+    let asked = s_curve(robot, method, 20_000.0);
+    let req = MoveRequest {
+        motion: super::slowed(&asked.motion, k),
+        ..asked
+    };
+    plan_move(robot, &req).unwrap()
+}
+
 /// An S-curve under drive limits is planned (it was refused), slowed as a whole until every
 /// row and the planned motion keep every limit, and no slower than it needs: 12 % faster is
 /// over a limit.
@@ -412,14 +423,7 @@ fn an_s_curve_under_drive_limits_is_slowed_as_a_whole_until_the_drives_follow_it
         // Near the fastest followed: the same S-curve slowed to 12 % more of its
         // accelerations is over d3's limit.
         let k = (f * 1.06).powi(2);
-        let faster = plan_move(
-            &free,
-            &MoveRequest {
-                motion: super::slowed(&s_curve(&free, method, 20_000.0).motion, k),
-                ..s_curve(&free, method, 20_000.0)
-            },
-        )
-        .unwrap();
+        let faster = seed_s_curve_slowed(&free, method, k);
         assert!(
             faster.drive[2].peak_accel > 300.0 * 1.02
                 || faster.drive[2].step_load.is_some_and(|l| l > 1.0),
@@ -546,14 +550,7 @@ fn an_s_curve_is_slowed_until_every_joint_keeps_its_max_jerk() {
         }
         // A tenth faster is over it.
         let k = (plan.speed_factor * 1.1).powi(2);
-        let faster = plan_move(
-            &free,
-            &MoveRequest {
-                motion: super::slowed(&s_curve(&free, method, 20_000.0).motion, k),
-                ..s_curve(&free, method, 20_000.0)
-            },
-        )
-        .unwrap();
+        let faster = seed_s_curve_slowed(&free, method, k);
         let faster_jerk = super::jerk::peak_jerks(&free, &faster).unwrap()[2];
         assert!(faster_jerk > 5_000.0, "{method:?}: {faster_jerk}");
     }
