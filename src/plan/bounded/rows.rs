@@ -68,6 +68,8 @@ struct Attempt {
     /// Pulses before the first one that could not land in its window.
     clean_pulses: usize,
     broken: usize,
+    /// How far outside its window the worst broken pulse lands, s (0 with none broken).
+    worst_miss_s: f64,
 }
 
 impl Channel<'_> {
@@ -187,6 +189,7 @@ impl Channel<'_> {
             end_s: t_s,
             clean_pulses: pulses.len(),
             broken: 0,
+            worst_miss_s: 0.0,
         };
         let mut k = 0;
         let mut bounds = self.bounds.borrow_mut();
@@ -202,7 +205,11 @@ impl Channel<'_> {
                 if a.broken > give_up_after {
                     break;
                 }
-                self.nearest(range, (pulses[k].ideal_s - t_s).max(1e-6))
+                let nearest = self.nearest(range, (pulses[k].ideal_s - t_s).max(1e-6));
+                let lands_s = t_s + 1.0 / nearest.2;
+                let miss_s = (pulses[k].lo_s - lands_s).max(lands_s - pulses[k].hi_s);
+                a.worst_miss_s = a.worst_miss_s.max(miss_s);
+                nearest
             };
             t_s += m as f64 / f;
             k += m;
@@ -231,7 +238,8 @@ impl Channel<'_> {
 
     /// The segment for the next stretch of `pulses`: the finest range that plays them all
     /// within their windows; else, with segments to spare, the range that plays the longest
-    /// clean stretch (the rest goes to the next segment); else the range that breaks fewest.
+    /// clean stretch (the rest goes to the next segment); else the range that breaks fewest
+    /// (of those that tie, the one whose worst pulse lands nearest its window).
     fn next_segment(
         &self,
         pulses: &[Pulse],
@@ -265,16 +273,20 @@ impl Channel<'_> {
         if !last_chance && best.clean_pulses > 0 {
             return (range, best);
         }
-        // The range that breaks fewest (the finest of those that tie): a later range is given up
-        // once it breaks as many as the best so far.
+        // The range that breaks fewest; of those that tie, the one whose worst pulse lands
+        // nearest its window (a joint slower than a range's lowest frequency runs ahead in
+        // every range, least in the slowest), then the finest. A later range is given up once
+        // it breaks more than the best so far.
         let [finest, rest @ ..] = FrequencyRange::FINEST_FIRST;
         let mut best = (finest, self.attempt(finest, pulses, t_s, usize::MAX));
         for range in rest {
-            let Some(fewer) = best.1.broken.checked_sub(1) else {
+            if best.1.broken == 0 {
                 break;
-            };
-            let a = self.attempt(range, pulses, t_s, fewer);
-            if a.broken <= fewer {
+            }
+            let a = self.attempt(range, pulses, t_s, best.1.broken);
+            if a.broken < best.1.broken
+                || (a.broken == best.1.broken && a.worst_miss_s < best.1.worst_miss_s)
+            {
                 best = (range, a);
             }
         }
@@ -334,8 +346,9 @@ mod tests {
         pulses
     }
 
-    /// [`Channel::next_segment`] as it was before attempts were given up early: every range
-    /// played to the end of the pulses wherever pulses broke.
+    /// [`Channel::next_segment`] with every attempt played to the end of the pulses wherever
+    /// pulses broke (as it was before attempts were given up early), the fewest broken chosen,
+    /// ties to the one that misses least.
     fn next_segment_in_full(
         channel: &Channel<'_>,
         pulses: &[Pulse],
@@ -370,7 +383,11 @@ mod tests {
         let (range, a) = FrequencyRange::FINEST_FIRST
             .map(|r| (r, full(r)))
             .into_iter()
-            .min_by_key(|(_, a)| a.broken)
+            .min_by(|(_, a), (_, b)| {
+                a.broken
+                    .cmp(&b.broken)
+                    .then(a.worst_miss_s.total_cmp(&b.worst_miss_s))
+            })
             .unwrap();
         played(range, a)
     }
@@ -409,6 +426,45 @@ mod tests {
             }
         }
         assert!(broke > 20, "{broke} choices with pulses off their windows");
+    }
+
+    /// A joint creeping slower than any range plays (a pulse every 0.8 s, its window 0.2 s
+    /// either side; range 0 goes no slower than 1.5 Hz): every range breaks every pulse, each
+    /// landing early, and the range chosen is the one that runs ahead least, the slowest. (The
+    /// finest was chosen before: range 2 played the pulses at 191 Hz, all within 0.1 s.)
+    #[test]
+    fn a_run_no_range_plays_goes_to_the_range_that_runs_ahead_least() {
+        let joint = seed_robot().joints[1].clone();
+        let pulses: Vec<Pulse> = (1..=20_i32)
+            .map(|i| {
+                let ideal_s = 3.0 + 0.8 * f64::from(i);
+                Pulse {
+                    count: i64::from(i),
+                    ideal_s,
+                    lo_s: ideal_s - 0.2,
+                    hi_s: ideal_s + 0.2,
+                }
+            })
+            .collect();
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let spare = RefCell::new(Vec::new());
+            let channel = Channel {
+                joint: &joint,
+                model,
+                off_window: 0,
+                bounds: &spare,
+            };
+            for last_chance in [false, true] {
+                let (range, a) = channel.next_segment(&pulses, 0.0, last_chance);
+                assert_eq!(range, FrequencyRange::Low, "{model:?}");
+                assert_eq!((a.rows.len(), a.broken), (20, 20), "{model:?}");
+                // A pulse every 1/1.5 s at the slowest (1.49 Hz under the divider): the last lands at
+                // about 13.4 s, 2.6 s early.
+                assert!((a.end_s - 20.0 / 1.5).abs() < 0.1, "{model:?} {}", a.end_s);
+                let full = next_segment_in_full(&channel, &pulses, 0.0, last_chance);
+                assert_eq!((range, a.rows, a.broken), full, "{model:?}");
+            }
+        }
     }
 
     #[test]
