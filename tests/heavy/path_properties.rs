@@ -790,3 +790,63 @@ fn gantry_paths_under_drive_limits_keep_every_row_within_them() {
 fn scara_paths_under_drive_limits_keep_every_row_within_them() {
     run(Kin::Scara, true);
 }
+
+/// A gantry's tool angle turning up a line and back down the next, a blend between them: the
+/// wrist reverses where the blend ends, a kink the path nearly stops at. The timing took the
+/// joints' rates at a point where two pieces meet as the mean of both sides (for the wrist
+/// there, about 0), so the step leaving the kink accelerated the joints far past their
+/// `max_accel` (the wrist at about seven times its own in the case found by
+/// `gantry_paths_under_drive_limits_...` at 160 cases) and the rows were refused after both
+/// retimings. Now it plans, every row within every limit, and every joint's planned
+/// acceleration within its `max_accel`.
+#[test]
+fn a_wrist_reversing_at_a_blend_leaves_it_within_its_max_accel() {
+    let mut robot = common::gantry();
+    // Every joint's max_accel in user units/s^2 (the wrist's in deg/s^2).
+    let accel_user = [2_900.0, 1_550.0, 3_800.0, 66.0];
+    for (joint, a) in robot.joints.iter_mut().zip(accel_user) {
+        joint.dynamics.max_accel = Some(joint.kind.from_user(a));
+    }
+    let p = |x: f64, y: f64, z: f64, a: f64| Pose {
+        position_mm: Vector3::new(x, y, z),
+        a_rad: a,
+    };
+    let route = Route {
+        start: p(615.7, 171.4, -82.7, -0.56),
+        waypoints: vec![
+            Waypoint {
+                to: p(615.7, 171.4, 11.5, 0.717),
+                arc: None,
+                blend_mm: Some(11.8),
+            },
+            Waypoint {
+                to: p(564.4, 308.0, -62.1, -0.206),
+                arc: None,
+                blend_mm: None,
+            },
+        ],
+    };
+    let s = Settings {
+        tolerance_mm: None,
+        period_s: 0.026,
+        ideal: true,
+        speed_mm_s: 370.0,
+        accel_s: 0.16,
+        path_accel_mm_s2: 8_500.0,
+        slow_down: true,
+        area_words: 2_000,
+        drives: true,
+    };
+    let planned = plan_path(&robot, &request(&robot, &route, &s)).unwrap();
+    for plan in planned.starts() {
+        super::drive_properties::check_rows(&robot, plan).unwrap();
+        for ((joint, max_accel), drive) in robot.joints.iter().zip(accel_user).zip(&plan.drive) {
+            let peak = drive.peak_accel;
+            assert!(
+                peak <= max_accel * 1.02,
+                "{}: planned at {peak}, max_accel {max_accel}",
+                joint.name
+            );
+        }
+    }
+}

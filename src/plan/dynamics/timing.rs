@@ -74,11 +74,18 @@ pub(in crate::plan) struct PathLimits {
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
+///
+/// A point's derivatives are those of the step from it to the next, which its limits hold
+/// over ([`zone`]): central differences on a piece, and where two pieces meet, the next
+/// piece's own (a joint's rate there may step, even reverse: the two sides' mean is neither).
 struct JointsAlong {
     s_mm: Vec<f64>,
     q: Vec<Joints>,
     dq: Vec<Joints>,
     ddq: Vec<Joints>,
+    /// Where two pieces meet, the grid point and every joint's rate by distance on the piece
+    /// that ends there (the speed at the point holds on both sides).
+    rate_before: Vec<(usize, Joints)>,
     /// Where two pieces meet with a joint's rate by distance changing at once (a kink: the
     /// tool angle goes at each piece's own rate): the grid point and every joint's jump, per mm.
     kinks: Vec<(usize, Joints)>,
@@ -95,13 +102,13 @@ impl JointsAlong {
             q.push(near);
         }
         let at = |i: usize, j: usize| q[i][j];
-        let dq = (0..=n)
-            .map(|i| {
-                let (a, b) = (i.saturating_sub(1), (i + 1).min(n));
-                std::array::from_fn(|j| (at(b, j) - at(a, j)) / (s_mm[b] - s_mm[a]))
-            })
+        let rate = |a: usize, b: usize| -> Joints {
+            std::array::from_fn(|j| (at(b, j) - at(a, j)) / (s_mm[b] - s_mm[a]))
+        };
+        let mut dq: Vec<Joints> = (0..=n)
+            .map(|i| rate(i.saturating_sub(1), (i + 1).min(n)))
             .collect();
-        let ddq = (0..=n)
+        let mut ddq: Vec<Joints> = (0..=n)
             .map(|i| {
                 let m = i.clamp(1, n - 1);
                 let (h1, h2) = (s_mm[m] - s_mm[m - 1], s_mm[m + 1] - s_mm[m]);
@@ -114,6 +121,15 @@ impl JointsAlong {
                 })
             })
             .collect();
+        // Where two pieces meet, the next piece's derivatives: its rate over the step from
+        // the point, and its second derivative at the step's end (every piece is at least
+        // PIECE_STEPS steps, so both are on it).
+        let mut rate_before = Vec::with_capacity(breaks.len());
+        for &i in &breaks {
+            rate_before.push((i, rate(i - 1, i)));
+            dq[i] = rate(i, i + 1);
+            ddq[i] = ddq[i + 1];
+        }
         let mut kinks = Vec::new();
         for i in breaks {
             let s = s_mm[i];
@@ -133,6 +149,7 @@ impl JointsAlong {
             q,
             dq,
             ddq,
+            rate_before,
             kinks,
         })
     }
@@ -357,6 +374,10 @@ fn grid(
     for (i, jump) in &along.kinks {
         kink_at[*i] = Some(jump);
     }
+    let mut before_at = vec![None; along.s_mm.len()];
+    for (i, rate) in &along.rate_before {
+        before_at[*i] = Some(rate);
+    }
     along
         .s_mm
         .iter()
@@ -385,9 +406,12 @@ fn grid(
                         / jump[j];
                     x_max = x_max.min(v * v);
                 }
-                if speeds && d != 0.0 {
+                // Where pieces meet, the speed at the point is the piece before's as well.
+                let fastest_rate =
+                    before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
+                if speeds && fastest_rate != 0.0 {
                     let v = SPEED_MARGIN * f64::from(joint.max_freq_hz) * joint.step.abs();
-                    x_max = x_max.min((v / d).powi(2));
+                    x_max = x_max.min((v / fastest_rate).powi(2));
                 }
                 let zone = zone_at[i][j];
                 let accel = joint
