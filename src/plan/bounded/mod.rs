@@ -324,19 +324,32 @@ impl Move<'_> {
     /// first accepted (`None` if none).
     ///
     /// A try whose rows a joint's drive could not follow ([`super::dynamics::judge`]) is
-    /// refused like one off the tolerance. When the tries end and one was refused so, the
-    /// windows of the joint the drive refused are halved, a few times, from that try's (the
-    /// rows then follow the motion more closely); then every pulse is made on time (windows
-    /// of half a pulse: the rows follow the motion within a pulse of rounding). If the drive
+    /// refused like one off the tolerance, and the windows of the joint the drive refused are
+    /// halved, a few times, from that try's (the rows then follow the motion more closely):
+    /// at once for the first of the first two the drive refuses, and when the tries end for
+    /// the last the drive refused, if another. Then every pulse is made on time (windows of
+    /// half a pulse: the rows follow the motion within a pulse of rounding). If the drive
     /// cannot follow those either, its refusal is the error.
     fn try_plan(&self, sizing: &Sizing, tolerance_mm: f64) -> Result<Option<Verified>, PlanError> {
-        let mut drive = None;
+        let mut drive: Option<DriveRefusal> = None;
+        // The first try the execution model accepted and a drive refused: the refused joint's
+        // windows are narrowed from it at once, before the wider tries of the narrowing search
+        // (which the drive would refuse as well, most often). Its windows, once narrowed.
+        let mut narrowed_from: Option<[f64; JOINTS]> = None;
         for off_window in OFF_WINDOW_TRIES {
             for deltas in sizing.first_two(tolerance_mm).flatten() {
                 if let Some(v) =
                     self.verify(sizing.tracks, &deltas, off_window, tolerance_mm, &mut drive)?
                 {
                     return Ok(Some(v));
+                }
+                if narrowed_from.is_none()
+                    && let Some(refused) = drive.as_mut()
+                {
+                    narrowed_from = Some(refused.deltas);
+                    if let Some(v) = self.drive_narrowed(sizing, tolerance_mm, refused)? {
+                        return Ok(Some(v));
+                    }
                 }
             }
             let floor_mm = self.floor_mm(sizing);
@@ -354,6 +367,27 @@ impl Move<'_> {
         let Some(mut refused) = drive else {
             return Ok(None);
         };
+        if narrowed_from != Some(refused.deltas)
+            && let Some(v) = self.drive_narrowed(sizing, tolerance_mm, &mut refused)?
+        {
+            return Ok(Some(v));
+        }
+        let mut again = None;
+        match self.verify(sizing.tracks, &[0.0; JOINTS], 0, tolerance_mm, &mut again)? {
+            Some(v) => Ok(Some(v)),
+            None => Err(again.map_or(refused.error, |r| r.error)),
+        }
+    }
+
+    /// The windows of the joint `refused` names halved from its try's, up to
+    /// [`DRIVE_NARROWINGS`] times, each try's refusal naming the next joint; `refused` takes
+    /// the last refusal.
+    fn drive_narrowed(
+        &self,
+        sizing: &Sizing,
+        tolerance_mm: f64,
+        refused: &mut DriveRefusal,
+    ) -> Result<Option<Verified>, PlanError> {
         let mut deltas = refused.deltas;
         for _ in 0..DRIVE_NARROWINGS {
             let Some(j) = self.joint_named(&refused.error) else {
@@ -369,11 +403,7 @@ impl Move<'_> {
                 None => break,
             }
         }
-        let mut again = None;
-        match self.verify(sizing.tracks, &[0.0; JOINTS], 0, tolerance_mm, &mut again)? {
-            Some(v) => Ok(Some(v)),
-            None => Err(again.map_or(refused.error, |r| r.error)),
-        }
+        Ok(None)
     }
 
     /// The joint a drive refusal names.
