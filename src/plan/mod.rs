@@ -313,8 +313,10 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
                 Ok(plan)
             });
         }
-        let course = dynamics::timed_line(robot, &line, &start, &req.motion)?;
-        return plan_course(robot, &course, &start, req.motion);
+        return dynamics::rest_rows_first(&req.motion, |rows_any_length| {
+            let course = dynamics::timed_line(robot, &line, &start, &req.motion, rows_any_length)?;
+            plan_course(robot, &course, &start, req.motion)
+        });
     }
     plan_course(robot, &Course::Line(line), &start, req.motion)
 }
@@ -331,16 +333,19 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
         });
     }
     dynamics::jerk_needs_s_curve(robot, req.motion.ramp)?;
-    let motion = dynamics::joint_move_motion(
-        robot,
-        &start.values,
-        &req.to,
-        course.length_mm(),
-        req.motion,
-    )?;
-    let mut plan = plan_course(robot, &course, &start, motion)?;
-    dynamics::within_limits(robot, &mut plan)?;
-    Ok(plan)
+    dynamics::rest_rows_first(&req.motion, |rows_any_length| {
+        let motion = dynamics::joint_move_motion(
+            robot,
+            &start.values,
+            &req.to,
+            course.length_mm(),
+            req.motion,
+            rows_any_length,
+        )?;
+        let mut plan = plan_course(robot, &course, &start, motion)?;
+        dynamics::within_limits(robot, &mut plan)?;
+        Ok(plan)
+    })
 }
 
 /// Where a move starts: joint values and the counts that stand for them.

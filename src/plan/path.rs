@@ -294,10 +294,11 @@ fn section_plan(
         };
         // A timing whose rows a drive refuses (by a little, where the grid between its points
         // or a kink's rounding missed it) is made again to smaller shares of the limits.
-        let timed = |accel_share: f64| {
+        let timed = |accel_share: f64, rows_any_length: bool| {
             let limits = super::dynamics::PathLimits {
                 centripetal_mm_s2: path_accel_mm_s2,
                 rest_row_s: asked.period_s,
+                rows_any_length,
                 accel_share,
             };
             let pace = super::dynamics::pace(robot, &shape, &start.values, &asked, &limits)?;
@@ -307,17 +308,20 @@ fn section_plan(
             };
             parts(robot, &course, start, asked)
         };
-        let mut outcome = timed(1.0);
-        for accel_share in super::dynamics::RETIMING {
-            if !matches!(
-                outcome,
-                Err(PlanError::RowStep { .. } | PlanError::RestRow { .. })
-            ) {
-                break;
+        return super::dynamics::rest_rows_first(&asked, |rows_any_length| {
+            let mut outcome = timed(1.0, rows_any_length);
+            for accel_share in super::dynamics::RETIMING {
+                if !matches!(
+                    outcome,
+                    Err(PlanError::RowStep { .. } | PlanError::RestRow { .. })
+                ) {
+                    break;
+                }
+                outcome = timed(accel_share, rows_any_length);
             }
-            outcome = timed(accel_share);
-        }
-        return outcome.map_err(|source| (elements, source));
+            outcome
+        })
+        .map_err(|source| (elements, source));
     }
     planned_as_asked(robot, section, start, asked, path_accel_mm_s2)
         .map_err(|source| (elements, source))

@@ -10,7 +10,7 @@ mod rows;
 mod slowed;
 mod timing;
 
-pub(super) use moves::{joint_move_motion, timed_line};
+pub(super) use moves::{joint_move_motion, rest_rows_first, timed_line};
 pub use rows::DriveFigures;
 pub(super) use rows::judge;
 pub(super) use slowed::{followed, jerk_needs_s_curve, slowed, within_limits};

@@ -235,6 +235,50 @@ fn a_line_to_the_axis_slows_near_the_axis_alone_where_slow_down_slows_it_all() {
     }
 }
 
+/// Under bounded-error rows are of any length: a standstill's zone is planned for the row from
+/// rest that leaves the joint the most acceleration, not for a period. The seed's move with
+/// d3's `start_hz` at 1000, 200 and 100 Hz: every row within every limit, the rows from and to
+/// rest within `start_hz`. At 1000 Hz it is as fast as with no `start_hz` at all, and faster
+/// than constant-period, whose zone lasts one and a half 50 ms periods. At 200 and 100 Hz it
+/// plans; the zone of a period made d2's rows outgrow its table area and refused it.
+#[test]
+fn bounded_error_leaves_a_standstill_as_its_rows_allow_not_as_a_period_would() {
+    let without = limited(seed_robot(), [200.0, 1_000.0, 1_000.0, 200.0], [None; 4]);
+    let free_s = plan_move(
+        &without,
+        &seed_move(&without, BOUNDED, FrequencyModel::FpxDivider),
+    )
+    .unwrap()
+    .duration_s();
+    for (start_hz, at_most) in [(1_000.0, 1.0), (200.0, 1.1), (100.0, 1.3)] {
+        let robot = limited(
+            seed_robot(),
+            [200.0, 1_000.0, 1_000.0, 200.0],
+            [None, None, Some(start_hz), None],
+        );
+        for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+            let plan = plan_move(&robot, &seed_move(&robot, BOUNDED, model)).unwrap();
+            assert!(plan.valid(), "{start_hz} {model:?}: {:?}", plan.problems);
+            assert_rows_within(&robot, &plan);
+            let d3 = plan.drive[2];
+            assert!(d3.rest_hz <= start_hz, "{start_hz} {model:?}: {d3:?}");
+            assert!(plan.figures.path_deviation_mm <= 0.05, "{:?}", plan.figures);
+            let cost = plan.duration_s() / free_s;
+            assert!(cost <= at_most + 1e-9, "{start_hz} {model:?}: x{cost}");
+            if start_hz >= 1_000.0 {
+                let constant =
+                    plan_move(&robot, &seed_move(&robot, Method::ConstantPeriod, model)).unwrap();
+                assert!(
+                    plan.duration_s() < 0.95 * constant.duration_s(),
+                    "{} s against constant-period's {} s",
+                    plan.duration_s(),
+                    constant.duration_s()
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn a_start_frequency_below_a_pulse_per_period_is_refused_naming_the_joint_and_the_figure() {
     // 50 ms rows carry 20 Hz of rounding on their own.
@@ -300,18 +344,37 @@ fn a_joint_move_under_drive_limits_keeps_one_trapezoid_within_them() {
     let mut to = start;
     to[1] += 100.0;
     to[2] += 200.0;
-    let req = JointMoveRequest {
+    let req = |method| JointMoveRequest {
         from: Origin::Pose(robot.kinematics.fk(&start)),
         to,
-        motion: robot.motion,
+        motion: Motion {
+            method,
+            ..robot.motion
+        },
     };
-    let plan = plan_joint_move(&robot, &req).unwrap();
-    let free = plan_joint_move(&seed_robot(), &req).unwrap();
+    let plan = plan_joint_move(&robot, &req(Method::ConstantPeriod)).unwrap();
+    let free = plan_joint_move(&seed_robot(), &req(Method::ConstantPeriod)).unwrap();
     assert!(plan.valid());
     assert_rows_within(&robot, &plan);
     assert!(plan.drive[2].rest_hz <= 1_000.0, "{:?}", plan.drive[2]);
     assert!(free.drive[2].rest_hz > 1_000.0, "{:?}", free.drive[2]);
     assert!(plan.motion.accel_s > free.motion.accel_s);
+    // Bounded-error's rows from rest are as short as its windows make them: its trapezoid
+    // leaves rest at d3's max_accel, not held for 50 ms rows within start_hz.
+    let bounded = plan_joint_move(&robot, &req(BOUNDED)).unwrap();
+    assert!(bounded.valid());
+    assert_rows_within(&robot, &bounded);
+    assert!(
+        bounded.drive[2].rest_hz <= 1_000.0,
+        "{:?}",
+        bounded.drive[2]
+    );
+    assert!(
+        bounded.motion.accel_s < plan.motion.accel_s,
+        "{} s against {} s",
+        bounded.motion.accel_s,
+        plan.motion.accel_s
+    );
 }
 
 /// A path of lines from the seed's start through `corners` (the wrist held), at `motion`, with

@@ -45,7 +45,7 @@ const SPEED_MARGIN: f64 = 0.99;
 pub(in crate::plan) const START_MARGIN: f64 = 0.97;
 /// The longest row from or to rest, in periods: a time-optimal profile's last period is up to
 /// a period and a half ([`crate::geometry::Profile::paced`]).
-const REST_ROW_PERIODS: f64 = 1.5;
+pub(in crate::plan) const REST_ROW_PERIODS: f64 = 1.5;
 
 /// A line or a path section, as the timing reads it.
 pub(in crate::plan) struct Shape<'a> {
@@ -67,6 +67,10 @@ pub(in crate::plan) struct PathLimits {
     /// The period, s: a row from or to rest lasts between half a period and a period and a
     /// half, and a standstill's zone of lower acceleration lasts the longest either side.
     pub rest_row_s: f64,
+    /// Whether rows are of any length (`bounded-error`): a standstill's zone is then planned
+    /// for the row from rest that leaves the joint the most acceleration ([`rest_accels`]),
+    /// not for a period.
+    pub rows_any_length: bool,
     /// The share of every joint's acceleration limit (`max_accel`, and what `start_hz` and a
     /// kink leave) the timing plans to: 1, or less when a first timing's rows were refused
     /// ([`RETIMING`]).
@@ -212,17 +216,11 @@ pub(in crate::plan) fn pace(
     limits: &PathLimits,
 ) -> Result<Pace, PlanError> {
     let along = JointsAlong::new(robot, shape, start)?;
-    let rest_accel =
-        rest_accels(robot, &along, limits.rest_row_s)?.map(|a| a.map(|a| a * limits.accel_share));
+    let rest = rest_accels(robot, &along, limits)?;
     let free = grid(robot, shape, &along, motion, limits, &[]);
     let first = solve(&free)?;
     let times = times(&free, &first);
-    let mut zones = rest_zones(
-        &along,
-        &times,
-        &rest_accel,
-        REST_ROW_PERIODS * limits.rest_row_s,
-    );
+    let mut zones = rest_zones(&along, &times, &rest);
     zones.extend(kink_zones(
         robot,
         &along,
@@ -242,14 +240,31 @@ pub(in crate::plan) fn pace(
     })
 }
 
-/// Every joint's acceleration limit around a standstill (`start_hz`), joint units/s^2: its
-/// longest row from rest ([`REST_ROW_PERIODS`] of `rest_row_s`) reaches `START_MARGIN *
-/// start_hz` less a pulse of rounding over a period.
+/// A joint's limit around a standstill ([`rest_accels`]).
+#[derive(Debug, Clone, Copy)]
+struct RestLimit {
+    /// Its acceleration there, joint units/s^2.
+    accel: f64,
+    /// The row from or to rest it is planned for, s.
+    row_s: f64,
+}
+
+/// Every joint's acceleration limit around a standstill (`start_hz`), joint units/s^2
+/// (and the share of the limits planned to): its longest row from rest ([`REST_ROW_PERIODS`] of
+/// the row `row_s` it is planned for) reaches `START_MARGIN * start_hz` less a pulse of
+/// rounding over that row.
+///
+/// Under constant-period `row_s` is the period. Rows of any length (bounded-error) take the
+/// row that leaves the most acceleration, `2 / (START_MARGIN * start_hz)`: a row from rest of
+/// `r` lets the joint accelerate at `(4/3) (c / r - 1 / r^2)` pulses/s^2 (`c` the start
+/// frequency planned to), at most `c^2 / 3` at `r = 2 / c`. The rows of the plan are judged as
+/// ever: where the windows make the row from rest longer and too fast for `start_hz`, the
+/// joint's windows are narrowed ([`crate::plan::bounded`]).
 fn rest_accels(
     robot: &Robot,
     along: &JointsAlong,
-    rest_row_s: f64,
-) -> Result<[Option<f64>; JOINTS], PlanError> {
+    limits: &PathLimits,
+) -> Result<[Option<RestLimit>; JOINTS], PlanError> {
     let mut out = [None; JOINTS];
     for (j, joint) in robot.joints.iter().enumerate() {
         let Some(start_hz) = joint.dynamics.start_hz else {
@@ -259,18 +274,34 @@ fn rest_accels(
         if along.dq.iter().all(|d| d[j] == 0.0) {
             continue;
         }
-        let room_hz = START_MARGIN * start_hz - 1.0 / rest_row_s;
+        let row_s = if limits.rows_any_length {
+            any_length_rest_row_s(start_hz)
+        } else {
+            limits.rest_row_s
+        };
+        let room_hz = START_MARGIN * start_hz - 1.0 / row_s;
         if room_hz <= 0.0 {
             return Err(PlanError::StartHzTooLow {
                 joint: joint.name.clone(),
                 start_hz,
-                min_hz: 1.0 / rest_row_s / START_MARGIN,
-                row_s: rest_row_s,
+                min_hz: 1.0 / row_s / START_MARGIN,
+                row_s,
             });
         }
-        out[j] = Some(2.0 * room_hz / (REST_ROW_PERIODS * rest_row_s) * joint.step.abs());
+        out[j] = Some(RestLimit {
+            accel: 2.0 * room_hz / (REST_ROW_PERIODS * row_s)
+                * joint.step.abs()
+                * limits.accel_share,
+            row_s,
+        });
     }
     Ok(out)
+}
+
+/// The row from or to rest of any length that leaves a joint with `start_hz` the most
+/// acceleration ([`rest_accels`]), s.
+pub(in crate::plan) fn any_length_rest_row_s(start_hz: f64) -> f64 {
+    2.0 / (START_MARGIN * start_hz)
 }
 
 /// A zone of lower acceleration: joint `joint` within `accel` at grid points `from..=to`.
@@ -282,20 +313,18 @@ struct Zone {
     accel: f64,
 }
 
-/// Every standstill's zone: the grid points whose step to the next the fastest motion (`x`)
-/// runs within `rest_row_s` of it. A slower motion passes fewer, so the zone holds the rows
-/// either side of the standstill of the motion planned with it too.
-fn rest_zones(
-    along: &JointsAlong,
-    t: &[f64],
-    rest_accel: &[Option<f64>; JOINTS],
-    rest_row_s: f64,
-) -> Vec<Zone> {
+/// Every standstill's zone: the grid points whose step to the next the fastest motion (`t`,
+/// when it passes each point) runs within [`REST_ROW_PERIODS`] of the joint's row from rest.
+/// A slower motion passes fewer, so the zone holds the rows either side of the standstill of
+/// the motion planned with it too.
+fn rest_zones(along: &JointsAlong, t: &[f64], rest: &[Option<RestLimit>; JOINTS]) -> Vec<Zone> {
     let mut zones = Vec::new();
-    for (joint, accel) in rest_accel.iter().enumerate() {
-        let Some(accel) = *accel else { continue };
+    for (joint, limit) in rest.iter().enumerate() {
+        let Some(RestLimit { accel, row_s }) = *limit else {
+            continue;
+        };
         for r in along.rests(joint) {
-            zones.push(zone(t, joint, r, rest_row_s, accel));
+            zones.push(zone(t, joint, r, REST_ROW_PERIODS * row_s, accel));
         }
     }
     zones
