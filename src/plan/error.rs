@@ -7,6 +7,30 @@ use crate::geometry::{PathError, ProfileError};
 use crate::kinematics::{JOINTS, KinematicsError};
 use crate::table::TableProblem;
 
+/// A joint moving slower than the lowest frequency its channel plays: an F174 row cannot wait,
+/// so its pulses land early however its rows are chosen (at best each a lowest-frequency
+/// period after the one before).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error(
+    "joint {joint} moves at {rate_hz:.2} pulses/s for {over_s:.2} s, slower than {lowest_hz:.2} \
+     Hz, the lowest frequency its channel plays: even at that frequency its pulse due {at_s:.2} \
+     s in lands {early_s:.2} s early, ahead of the path (a faster move keeps it in range)"
+)]
+pub struct Creep {
+    /// The joint's name.
+    pub joint: String,
+    /// Its mean pulse rate over the stretch it runs ahead on, pulses/s.
+    pub rate_hz: f64,
+    /// How long that stretch lasts, up to the pulse that lands earliest, s.
+    pub over_s: f64,
+    /// The lowest frequency its channel plays under the plan's frequency model, Hz.
+    pub lowest_hz: f64,
+    /// When the pulse that lands earliest is due, s from the start.
+    pub at_s: f64,
+    /// How early it lands at best, s.
+    pub early_s: f64,
+}
+
 /// Why a move cannot be planned.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum PlanError {
@@ -192,27 +216,15 @@ pub enum PlanError {
         max_hz: u32,
     },
     /// The tolerance asked of a bounded-error plan cannot be met.
-    #[error(
-        "{}{}",
-        if floor_mm >= tolerance_mm {
-            format!(
-                "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse \
-                 on time the path still deviates {floor_mm:.4} mm"
-            )
-        } else {
-            format!(
-                "no rows found that keep this move within tolerance {tolerance_mm} mm: with every \
-                 pulse on time the path deviates {floor_mm:.4} mm, but every set of rows tried \
-                 ran further off it; a larger tolerance may plan it"
-            )
-        },
-        works_mm.map_or(String::new(), |w| format!("; {w} mm works"))
-    )]
+    #[error("{}", tolerance_refusal(*tolerance_mm, *floor_mm, creep.as_ref(), *works_mm))]
     ToleranceTooSmall {
         /// The tolerance asked for, mm.
         tolerance_mm: f64,
         /// The pulse grid's own path deviation on this move, mm.
         floor_mm: f64,
+        /// A joint slower than its channel plays, which runs ahead of the path whatever the
+        /// rows (named in a refusal that reaches the user).
+        creep: Option<Creep>,
         /// The smallest tolerance found to work, mm.
         works_mm: Option<f64>,
     },
@@ -351,4 +363,27 @@ pub enum PlanError {
         /// How many more.
         more: usize,
     },
+}
+
+/// [`PlanError::ToleranceTooSmall`]'s message.
+fn tolerance_refusal(
+    tolerance_mm: f64,
+    floor_mm: f64,
+    creep: Option<&Creep>,
+    works_mm: Option<f64>,
+) -> String {
+    let creep = creep.map_or(String::new(), |c| format!(": {c}"));
+    let works = works_mm.map_or(String::new(), |w| format!("; {w} mm works"));
+    if floor_mm >= tolerance_mm {
+        format!(
+            "tolerance {tolerance_mm} mm is below what this move can reach: with every pulse on \
+             time the path still deviates {floor_mm:.4} mm{works}"
+        )
+    } else {
+        format!(
+            "no rows found that keep this move within tolerance {tolerance_mm} mm: with every \
+             pulse on time the path deviates {floor_mm:.4} mm, but every set of rows tried ran \
+             further off it{creep}; a larger tolerance may plan it{works}"
+        )
+    }
 }

@@ -36,7 +36,7 @@ use crate::table::{ChannelTable, ValidTable};
 
 use course::Course;
 pub use dynamics::DriveFigures;
-pub use error::PlanError;
+pub use error::{Creep, PlanError};
 pub use joint_path::JointPath;
 use judge::{max_hz, settings, simulate, simulate_within};
 pub use line_parts::{MovePlan, line_as_path, plan_line};
@@ -516,7 +516,8 @@ impl<'a> Sampled<'a> {
     }
 
     /// `refusal` of the start from `first` to `last` from `counts` as it reaches the user: a
-    /// tolerance too small names the smallest found to work ([`Self::plan`] leaves it out).
+    /// tolerance too small names the smallest found to work, and a joint slower than its
+    /// channel plays ([`Self::plan`] leaves both out).
     fn named(
         &self,
         refusal: PlanError,
@@ -529,12 +530,15 @@ impl<'a> Sampled<'a> {
                 tolerance_mm,
                 floor_mm,
                 works_mm: None,
+                ..
             } => {
                 let (window, samples) = self.part(first, last, counts);
+                let start = self.bounded_move(&window, &samples);
                 PlanError::ToleranceTooSmall {
                     tolerance_mm,
                     floor_mm,
-                    works_mm: self.bounded_move(&window, &samples).works_mm(tolerance_mm),
+                    creep: start.creep(),
+                    works_mm: start.works_mm(tolerance_mm),
                 }
             }
             other => other,

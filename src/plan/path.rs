@@ -120,6 +120,7 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
     let PlanError::ToleranceTooSmall {
         tolerance_mm,
         floor_mm,
+        ref creep,
         works_mm: Some(mut works_mm),
     } = **source
     else {
@@ -133,6 +134,7 @@ pub fn plan_path(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanError
         source: Box::new(PlanError::ToleranceTooSmall {
             tolerance_mm,
             floor_mm,
+            creep: creep.clone(),
             works_mm,
         }),
     };

@@ -226,6 +226,59 @@ fn tolerance_below_the_pulse_grid_is_refused_naming_one_that_works() {
     );
 }
 
+/// The seed's move kept level (z 50 -> 50.2 mm) at 20 mm/s: the vertical joint d2 makes 8
+/// pulses in 12.75 s, slower than the 1.49 Hz its channel plays at the least. No rows keep it
+/// on the path, and the refusal names it: its rate, the lowest frequency and how early its
+/// pulses land at best, which is when constant-period's rows at that lowest frequency land them.
+#[test]
+fn a_joint_slower_than_its_channel_plays_is_named_in_the_refusal() {
+    let robot = seed_robot();
+    let mut req = seed_request(FrequencyModel::FpxDivider, false);
+    req.to.position_mm.z = 50.2;
+    req.motion.speed_mm_s = 20.0;
+    let mut bounded = req;
+    bounded.motion.method = crate::robot::Method::BoundedError { tolerance_mm: 0.05 };
+    let err = plan_move(&robot, &bounded).unwrap_err();
+    let PlanError::ToleranceTooSmall {
+        creep: Some(creep), ..
+    } = &err
+    else {
+        panic!("{err}")
+    };
+    assert_eq!(creep.joint, "d2", "{err}");
+    assert!((1.4..1.5).contains(&creep.lowest_hz), "{err}");
+    assert!(creep.rate_hz < creep.lowest_hz / 2.0, "{err}");
+    assert!(
+        err.to_string().contains(&format!(
+            "joint d2 moves at {:.2} pulses/s for {:.2} s, slower than 1.49 Hz",
+            creep.rate_hz, creep.over_s
+        )),
+        "{err}"
+    );
+    // Constant-period plays d2 at its lowest frequency throughout: its last pulse lands when
+    // the refusal says the earliest-landing pulse lands at best.
+    let plan = plan_move(&robot, &req).unwrap();
+    let d2_rows: Vec<_> = plan
+        .row_timings()
+        .into_iter()
+        .filter(|r| r.table == 1)
+        .collect();
+    assert!(d2_rows.iter().all(|r| r.actual_hz < 1.5), "{d2_rows:?}");
+    let last_s = d2_rows.iter().map(|r| r.end_s).fold(0.0, f64::max);
+    assert!(
+        (creep.at_s - creep.early_s - last_s).abs() < 1e-3,
+        "{err}; constant-period's last d2 pulse at {last_s} s"
+    );
+    // A move whose joints all keep up names none.
+    let Err(PlanError::ToleranceTooSmall { creep: None, .. }) = plan_move(&robot, &{
+        let mut r = seed_request(FrequencyModel::FpxDivider, false);
+        r.motion.method = crate::robot::Method::BoundedError { tolerance_mm: 0.01 };
+        r
+    }) else {
+        panic!("the seed's move at 0.01 mm is refused below its floor, naming no joint")
+    };
+}
+
 /// A tolerance above the pulse grid's floor that no rows met is not said to be below what the
 /// move can reach (the refusal found by the drive properties: a slow gantry line at 0.1 mm
 /// with a floor of 0.010 mm).
@@ -234,6 +287,7 @@ fn a_tolerance_above_the_floor_no_rows_met_is_refused_as_such() {
     let err = PlanError::ToleranceTooSmall {
         tolerance_mm: 0.1,
         floor_mm: 0.010_002_6,
+        creep: None,
         works_mm: None,
     };
     assert_eq!(

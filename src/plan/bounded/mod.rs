@@ -28,10 +28,10 @@ use crate::geometry::Profile;
 use crate::kinematics::JOINTS;
 use crate::robot::{Motion, Robot};
 use crate::sim::{Figures, PulseEvent};
-use crate::table::ChannelTable;
+use crate::table::{ChannelTable, FrequencyRange};
 
 use super::course::Course;
-use super::{PlanError, Samples, Window, simulate_within};
+use super::{Creep, PlanError, Samples, Window, simulate_within};
 use budget::Budget;
 use pulses::{Counts, Pulse, Run, Track, runs};
 use rows::Channel;
@@ -313,6 +313,7 @@ impl Move<'_> {
             None => Err(PlanError::ToleranceTooSmall {
                 tolerance_mm,
                 floor_mm: self.floor_mm(&sizing),
+                creep: None,
                 works_mm: None,
             }),
         }
@@ -489,6 +490,48 @@ impl Move<'_> {
             return Ok(None);
         }
         Ok(Some(Verified { tables, figures }))
+    }
+
+    /// The joint that runs furthest ahead of the path because it moves slower than the lowest
+    /// frequency its channel plays, if one runs a pulse ahead or more (`None` otherwise).
+    ///
+    /// An F174 row cannot wait: a channel's next pulse lands at most a lowest-frequency period
+    /// after the one before. Played so, a pulse due `gap` after the one before lands
+    /// `early + gap - period` early, `early` the earliness before it (0 once the joint is fast
+    /// enough to be on time again): the least any rows can do. It is a pulse ahead when it
+    /// lands before the pulse before it was due.
+    pub(super) fn creep(&self) -> Option<Creep> {
+        let tracks = self.tracks();
+        let start = self.start_counts();
+        let low = FrequencyRange::Low;
+        let lowest_hz = self.motion.frequency_model.actual_hz(low.min_set_hz(), low);
+        let period_s = 1.0 / lowest_hz;
+        (0..JOINTS)
+            .filter_map(|j| {
+                let (mut early_s, mut due_s, mut since) = (0.0_f64, 0.0, (0.0, 0_usize));
+                let mut worst: Option<Creep> = None;
+                for (k, (t_s, _)) in self.track(&tracks, j).on_time(start[j]).enumerate() {
+                    let gap_s = t_s - due_s;
+                    early_s = (early_s + gap_s - period_s).max(0.0);
+                    if early_s <= 0.0 {
+                        since = (t_s, k + 1);
+                    } else if early_s > gap_s && worst.as_ref().is_none_or(|w| early_s > w.early_s)
+                    {
+                        let over_s = t_s - since.0;
+                        worst = Some(Creep {
+                            joint: self.robot.joints[j].name.clone(),
+                            rate_hz: (k + 1 - since.1) as f64 / over_s,
+                            over_s,
+                            lowest_hz,
+                            at_s: t_s,
+                            early_s,
+                        });
+                    }
+                    due_s = t_s;
+                }
+                worst
+            })
+            .max_by(|a, b| a.early_s.total_cmp(&b.early_s))
     }
 
     /// The smallest tolerance above `tolerance_mm` found to work on this move, from a few
