@@ -147,6 +147,26 @@ impl Budget {
         self.reach_mm
     }
 
+    /// The worst path deviation, mm, of windows `deltas` counting only the joints that make
+    /// more than `busy` pulses along the path (linearised, every product at its largest: see
+    /// [`above_every_corner`]). A joint that makes only a few pulses in the whole move (the
+    /// seed's base: 18) counts in the worst case with its whole window, which its rows, a
+    /// pulse or two each, seldom take up.
+    pub(super) fn busy_worst_mm(&self, deltas: &[f64; JOINTS], busy: f64) -> f64 {
+        let half: [f64; JOINTS] = std::array::from_fn(|j| {
+            if self.pulses[j] > busy {
+                0.5 + deltas[j]
+            } else {
+                0.0
+            }
+        });
+        self.points
+            .iter()
+            .map(|p| above_every_corner(&p.across, &half))
+            .fold(0.0, f64::max)
+            .sqrt()
+    }
+
     /// Every joint's largest whole move per pulse, mm.
     pub(super) fn whole_mm(&self) -> [f64; JOINTS] {
         self.whole_mm
