@@ -549,8 +549,8 @@ fn bounded_error_first_try_is_accepted_on_the_seed_move_under_both_models() {
 /// The fitted first try is made where it is likely accepted (`bounded::FITTED_BUSY`): on the
 /// seed's move, which its tables were fitted on, and not on lines where the execution model
 /// would refuse it (a refused try costs a move's tables and most of a simulation), here the
-/// 1 and 2 m lines 800 mm from the seed robot's axis (the planning bench's) and most random
-/// lines of the seed robot.
+/// 1 and 2 m lines 800 mm from the seed robot's axis (the planning bench's) and most of the
+/// random lines of the seed robot ([`random_seed_robot_lines`]).
 #[test]
 fn bounded_error_makes_the_fitted_try_where_it_is_likely_accepted() {
     let judged = |from, to, model, tol_mm| {
@@ -578,24 +578,8 @@ fn bounded_error_makes_the_fitted_try_where_it_is_likely_accepted() {
             half_mm / 500.0
         );
     }
-    // The lines of the test below: (made, accepted) counted.
-    let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1du64);
-    let mut point = || {
-        let (r, a, z) = (
-            600.0 + 800.0 * next(),
-            120f64.to_radians() * next(),
-            300.0 * next(),
-        );
-        [-r * a.sin(), r * a.cos(), z]
-    };
     let mut counts = std::collections::BTreeMap::new();
-    for i in 0..40 {
-        let (from, to) = (point(), point());
-        let model = if i % 2 == 0 {
-            FrequencyModel::Ideal
-        } else {
-            FrequencyModel::FpxDivider
-        };
+    for (from, to, model) in random_seed_robot_lines() {
         for tol_mm in [0.05, 0.10] {
             if let Some(k) = judged(from, to, model, tol_mm) {
                 *counts.entry(k).or_insert(0) += 1;
@@ -609,11 +593,9 @@ fn bounded_error_makes_the_fitted_try_where_it_is_likely_accepted() {
     assert!(count((false, false)) >= 70, "{counts:?}");
 }
 
-#[test]
-fn bounded_error_never_narrows_on_random_seed_robot_lines() {
-    // A fixed pseudo-random set of lines (radius 600..1400 mm, theta1 0..120 deg, z 0..300 mm),
-    // 0.05 and 0.10 mm, both frequency models: the worst-case windows (the second try) are
-    // accepted wherever the fitted first is not, so the narrowing search never runs.
+/// A fixed pseudo-random set of 40 lines of the seed robot (radius 600..1400 mm, theta1
+/// 0..120 deg, z 0..300 mm), every other one under each frequency model.
+fn random_seed_robot_lines() -> Vec<([f64; 3], [f64; 3], FrequencyModel)> {
     let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1du64);
     let mut point = || {
         let (r, a, z) = (
@@ -623,14 +605,26 @@ fn bounded_error_never_narrows_on_random_seed_robot_lines() {
         );
         [-r * a.sin(), r * a.cos(), z]
     };
+    (0..40)
+        .map(|i| {
+            let (from, to) = (point(), point());
+            let model = if i % 2 == 0 {
+                FrequencyModel::Ideal
+            } else {
+                FrequencyModel::FpxDivider
+            };
+            (from, to, model)
+        })
+        .collect()
+}
+
+#[test]
+fn bounded_error_never_narrows_on_random_seed_robot_lines() {
+    // The random lines at 0.05 and 0.10 mm: the worst-case windows (the second try) are
+    // accepted wherever the fitted first is not made or not accepted, so the narrowing search
+    // never runs.
     let (mut tries, mut skipped) = (Vec::new(), 0);
-    for i in 0..40 {
-        let (from, to) = (point(), point());
-        let model = if i % 2 == 0 {
-            FrequencyModel::Ideal
-        } else {
-            FrequencyModel::FpxDivider
-        };
+    for (from, to, model) in random_seed_robot_lines() {
         for tol_mm in [0.05, 0.10] {
             match accepted_try(from, to, model, tol_mm) {
                 None => skipped += 1,
