@@ -49,11 +49,12 @@ pub(super) const SAMPLE_S: f64 = 0.001;
 const FIRST_BUDGET: f64 = 0.62;
 /// When the fitted first try is made: where its windows' worst case, counting only the joints
 /// that make more than the first figure's pulses ([`Budget::busy_worst_mm`]), is at most the
-/// second figure times the tolerance. Measured on 134 tries (60 random lines of the seed robot
-/// and a few more, at 0.05 and 0.10 mm, both frequency models: `docs/PLANNING.md`): every
-/// fitted try the execution model accepted but three came at or under 1.16, every one it
-/// refused but one (1.12) above 1.19. Past it the fitted try is not made: it would be refused,
-/// and a refused try costs the move's tables and most of a simulation.
+/// second figure times the tolerance. Measured on 132 tries (60 random lines of the seed robot,
+/// every other one under each frequency model, and six more lines, among them the seed's move,
+/// each at 0.05 and 0.10 mm: `docs/BENCHMARKS.md`, stop 39): every fitted try the execution
+/// model accepted but three came at or under 1.16, every one it refused but one (1.12) above
+/// 1.19. Past it the fitted try is not made: it would be refused, and a refused try costs the
+/// move's tables and most of a simulation.
 const FITTED_BUSY: (f64, f64) = (100.0, 1.175);
 /// The narrowing search's first windows, relative to the budget left above the floor: the
 /// budget adds every joint's error at its worst as if they all pointed the same way, which they
