@@ -92,6 +92,104 @@ fn without_flat_knots(knots: &[Knot]) -> Vec<Knot> {
     kept
 }
 
+/// A pace's knots in time (its profile cruising at one speed): the time-optimal motion as
+/// stretches of constant acceleration, with its position's integral at every knot.
+struct TimedKnots {
+    /// Every knot's time, s.
+    t_s: Vec<f64>,
+    /// Every knot's distance along the path, mm.
+    s_mm: Vec<f64>,
+    /// Every knot's speed, mm/s.
+    v_mm_s: Vec<f64>,
+    /// The acceleration from every knot to the next, mm/s^2.
+    a_mm_s2: Vec<f64>,
+    /// The position's integral from 0 to every knot, mm s.
+    integral: Vec<f64>,
+}
+
+impl TimedKnots {
+    fn new(knots: &[Knot], speed_mm_s: f64) -> Self {
+        let t_s: Vec<f64> = knots.iter().map(|k| k.sigma_mm / speed_mm_s).collect();
+        let s_mm: Vec<f64> = knots.iter().map(|k| k.s_mm).collect();
+        let v_mm_s: Vec<f64> = knots.iter().map(|k| k.w * speed_mm_s).collect();
+        let a_mm_s2: Vec<f64> = (0..knots.len() - 1)
+            .map(|k| {
+                let dt = t_s[k + 1] - t_s[k];
+                if dt > 0.0 {
+                    (v_mm_s[k + 1] - v_mm_s[k]) / dt
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut integral = Vec::with_capacity(knots.len());
+        integral.push(0.0);
+        for k in 0..knots.len() - 1 {
+            let tau = t_s[k + 1] - t_s[k];
+            integral.push(integral[k] + Self::cubic(s_mm[k], v_mm_s[k], a_mm_s2[k], tau));
+        }
+        Self {
+            t_s,
+            s_mm,
+            v_mm_s,
+            a_mm_s2,
+            integral,
+        }
+    }
+
+    /// `∫ (s + v τ + a τ²/2) dτ` from 0 to `tau`.
+    fn cubic(s: f64, v: f64, a: f64, tau: f64) -> f64 {
+        tau * (s + tau * (v / 2.0 + tau * a / 6.0))
+    }
+
+    fn duration_s(&self) -> f64 {
+        self.t_s[self.t_s.len() - 1]
+    }
+
+    /// The stretch holding time `t_s` (its first knot), and the time into it.
+    fn stretch(&self, t_s: f64) -> (usize, f64) {
+        let k = self
+            .t_s
+            .partition_point(|&t| t <= t_s)
+            .clamp(1, self.t_s.len() - 1)
+            - 1;
+        (k, t_s - self.t_s[k])
+    }
+
+    /// Where the motion is at `t_s` (at its start before 0, at its end after its end), mm.
+    fn position_mm(&self, t_s: f64) -> f64 {
+        if t_s <= 0.0 {
+            return 0.0;
+        }
+        if t_s >= self.duration_s() {
+            return self.s_mm[self.s_mm.len() - 1];
+        }
+        let (k, tau) = self.stretch(t_s);
+        self.s_mm[k] + tau * (self.v_mm_s[k] + tau * self.a_mm_s2[k] / 2.0)
+    }
+
+    /// The position's integral from 0 to `t_s` (0 before 0; at the end's position after its
+    /// end), mm s.
+    fn integral(&self, t_s: f64) -> f64 {
+        if t_s <= 0.0 {
+            return 0.0;
+        }
+        let end = self.t_s.len() - 1;
+        if t_s >= self.duration_s() {
+            return self.integral[end] + self.s_mm[end] * (t_s - self.t_s[end]);
+        }
+        let (k, tau) = self.stretch(t_s);
+        self.integral[k] + Self::cubic(self.s_mm[k], self.v_mm_s[k], self.a_mm_s2[k], tau)
+    }
+
+    /// The lowest and the highest acceleration, mm/s^2.
+    fn accel_range(&self) -> (f64, f64) {
+        self.a_mm_s2
+            .iter()
+            .fold((0.0_f64, 0.0_f64), |(lo, hi), &a| (lo.min(a), hi.max(a)))
+    }
+}
+
 /// One corner of the piecewise-linear `w²(s)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Knot {
@@ -242,6 +340,64 @@ impl Pace {
         Some(Self {
             knots: without_flat_knots(&knots),
         })
+    }
+
+    /// A time-optimal pace's motion (its profile cruising at `speed_mm_s`, from rest to rest)
+    /// averaged over a moving window of `window_s`: the tool is where the time-optimal motion
+    /// was on average over the last `window_s`, at its average speed. Its speed and its
+    /// acceleration stay within the range the motion's took, and its jerk is at most the
+    /// acceleration's range over `window_s` (the average's acceleration is the change of the
+    /// speed over the window); it ends `window_s` later. A trapezoid so averaged is the seven
+    /// phases of an S-curve whose jerk phases last `window_s` (Biagiotti and Melchiorri's
+    /// moving-average filter). `None` when the pace does not start at rest or the figures are
+    /// not positive.
+    ///
+    /// The averaged motion is tabulated every `step_s` (its knots; the pace's constant
+    /// acceleration between two of them stands in for the average's, which changes by at most
+    /// the jerk times `step_s`), from the time-optimal motion's exact integral: its position is
+    /// quadratic in time between two knots, so its integral is a cubic.
+    #[must_use]
+    pub fn smoothed(&self, speed_mm_s: f64, window_s: f64, step_s: f64) -> Option<Self> {
+        if !(self.from_rest() && speed_mm_s > 0.0 && window_s > 0.0 && step_s > 0.0) {
+            return None;
+        }
+        let motion = TimedKnots::new(&self.knots, speed_mm_s);
+        let end_s = motion.duration_s() + window_s;
+        let steps = (end_s / step_s).ceil().max(1.0) as usize;
+        let mut s_mm: Vec<f64> = Vec::with_capacity(steps + 1);
+        let mut speeds: Vec<f64> = Vec::with_capacity(steps + 1);
+        for i in 0..=steps {
+            let (s, v) = if i == steps {
+                (self.path_length_mm(), 0.0)
+            } else {
+                let t_s = i as f64 * step_s;
+                (
+                    (motion.integral(t_s) - motion.integral(t_s - window_s)) / window_s,
+                    ((motion.position_mm(t_s) - motion.position_mm(t_s - window_s)) / window_s)
+                        .max(0.0),
+                )
+            };
+            // A knot that does not rise is left out (the rounding of the first steps' tiny
+            // distances), but the end's own knot takes the place of one that reached it.
+            if let (Some(last_s), Some(last_v)) = (s_mm.last_mut(), speeds.last_mut())
+                && s <= *last_s
+            {
+                if i == steps {
+                    (*last_s, *last_v) = (s, v);
+                }
+                continue;
+            }
+            s_mm.push(s);
+            speeds.push(v);
+        }
+        Self::from_speeds(&s_mm, &speeds, speed_mm_s)
+    }
+
+    /// The range of a time-optimal pace's acceleration (its profile cruising at
+    /// `speed_mm_s`): the lowest and the highest, mm/s^2.
+    #[must_use]
+    pub fn accel_range_mm_s2(&self, speed_mm_s: f64) -> (f64, f64) {
+        TimedKnots::new(&self.knots, speed_mm_s).accel_range()
     }
 
     /// Whether the pace itself starts and ends at rest (a time-optimal motion's): its profile
@@ -505,5 +661,64 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A trapezoid (1000 mm/s^2 up to 200 mm/s over 20 mm, cruise, down over 20 mm of 200 mm)
+    /// as a time-optimal pace, averaged over 50 ms: the seven phases of an S-curve. It ends
+    /// 50 ms later, at the path's end; its speed and acceleration stay within the trapezoid's;
+    /// its jerk, read by third differences, is the acceleration over the window; and where the
+    /// trapezoid cruises long enough it is at the trapezoid's position 25 ms earlier's speed.
+    #[test]
+    fn a_trapezoid_averaged_over_a_window_is_an_s_curve() {
+        let (a, v, l) = (1_000.0_f64, 200.0_f64, 200.0_f64);
+        let ramp_mm = v * v / (2.0 * a);
+        let s: Vec<f64> = (0..=40).map(|i| l * f64::from(i) / 40.0).collect();
+        let speeds: Vec<f64> = s
+            .iter()
+            .map(|&x| (2.0 * a * x.min(l - x)).sqrt().min(v))
+            .collect();
+        assert!(ramp_mm < l / 2.0);
+        let pace = Pace::from_speeds(&s, &speeds, v).unwrap();
+        let trapezoid = TimedKnots::new(&pace.knots, v);
+        let window_s = 0.05;
+        let smooth = pace.smoothed(v, window_s, 0.001).unwrap();
+        let averaged = TimedKnots::new(&smooth.knots, v);
+        assert!(
+            (averaged.duration_s() - trapezoid.duration_s() - window_s).abs() < 2e-3,
+            "{} against {}",
+            averaged.duration_s(),
+            trapezoid.duration_s()
+        );
+        assert_eq!(smooth.path_length_mm(), l);
+        assert!(smooth.from_rest());
+        let (lo, hi) = averaged.accel_range();
+        assert!(
+            lo >= -a * (1.0 + 1e-6) && hi <= a * (1.0 + 1e-6),
+            "{lo} {hi}"
+        );
+        assert!(averaged.v_mm_s.iter().all(|&x| x <= v * (1.0 + 1e-9)));
+        // The jerk over 10 ms, by third differences of the position: a / window at most, and
+        // reached in the jerk phases.
+        let tau = 0.01;
+        let mut peak = 0.0_f64;
+        let mut t = 0.0;
+        while t + 3.0 * tau <= averaged.duration_s() {
+            let p = |k: f64| averaged.position_mm(t + k * tau);
+            let third = p(3.0) - 3.0 * p(2.0) + 3.0 * p(1.0) - p(0.0);
+            peak = peak.max(third.abs() / tau.powi(3));
+            t += 0.001;
+        }
+        let jerk = a / window_s;
+        assert!(
+            peak <= jerk * 1.05 && peak >= jerk * 0.9,
+            "{peak} against {jerk}"
+        );
+        // Mid-cruise the average is the cruise itself, half a window behind, to within a
+        // step's time: the knots' constant acceleration stands in for the average's from rest
+        // (the first step, a cubic, is read as a parabola: two thirds of its time).
+        let mid_s = trapezoid.duration_s() / 2.0;
+        let behind = trapezoid.position_mm(mid_s - window_s / 2.0);
+        let off_mm = averaged.position_mm(mid_s) - behind;
+        assert!(off_mm.abs() < v * 0.001, "{off_mm} mm");
     }
 }

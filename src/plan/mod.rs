@@ -303,14 +303,20 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
     };
     if robot.has_dynamics() {
         dynamics::jerk_needs_s_curve(robot, req.motion.ramp)?;
-        if let Ramp::SCurve { .. } = req.motion.ramp {
+        if let Ramp::SCurve { jerk_mm_s3 } = req.motion.ramp {
+            let averaged = dynamics::rest_rows_first(&req.motion, |rows_any_length| {
+                dynamics::averaged_line(robot, &line, &start, &req.motion, rows_any_length)
+            });
             let course = Course::Line(line);
-            return dynamics::followed(|k| {
-                let mut plan =
-                    plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
-                plan.speed_factor *= k.sqrt();
-                dynamics::within_limits(robot, &mut plan)?;
-                Ok(plan)
+            let unslowed_s = unslowed_s_curve_s(&course, &req.motion, jerk_mm_s3);
+            return dynamics::faster_s_curve(averaged, unslowed_s, || {
+                dynamics::followed(|k| {
+                    let mut plan =
+                        plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
+                    plan.speed_factor *= k.sqrt();
+                    dynamics::within_limits(robot, &mut plan)?;
+                    Ok(plan)
+                })
             });
         }
         return dynamics::rest_rows_first(&req.motion, |rows_any_length| {
@@ -319,6 +325,25 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
         });
     }
     plan_course(robot, &Course::Line(line), &start, req.motion)
+}
+
+/// How long the S-curve `motion` (its jerk `jerk_mm_s3`) takes along `course` unslowed, on the
+/// grid its method samples it on (`None` if it cannot be profiled).
+fn unslowed_s_curve_s(course: &Course, motion: &Motion, jerk_mm_s3: f64) -> Option<f64> {
+    let grid_s = if motion.method.tolerance_mm().is_some() {
+        bounded::SAMPLE_S
+    } else {
+        motion.period_s
+    };
+    let request = ProfileRequest {
+        length_mm: course.length_mm(),
+        speed_mm_s: motion.speed_mm_s,
+        accel_s: motion.accel_s,
+        period_s: grid_s,
+    };
+    Profile::s_curve(request, jerk_mm_s3)
+        .ok()
+        .map(|p| p.duration_s())
 }
 
 /// Plans one joint-space move for `robot`: the target is checked against every joint's limits

@@ -21,6 +21,19 @@ pub(in crate::plan) fn timed_line(
     motion: &Motion,
     rows_any_length: bool,
 ) -> Result<Course, PlanError> {
+    timed_line_at(robot, line, start, motion, rows_any_length, 1.0)
+}
+
+/// [`timed_line`] timed to `accel_share` of every joint's acceleration limit
+/// ([`PathLimits::accel_share`]).
+pub(in crate::plan) fn timed_line_at(
+    robot: &Robot,
+    line: &Line,
+    start: &Start,
+    motion: &Motion,
+    rows_any_length: bool,
+    accel_share: f64,
+) -> Result<Course, PlanError> {
     let path = Path::build(&PathSpec {
         start: line.from,
         elements: vec![(Element::Line { to: line.to }, Corner::Stop)],
@@ -39,7 +52,7 @@ pub(in crate::plan) fn timed_line(
             centripetal_mm_s2: f64::INFINITY,
             rest_row_s: motion.period_s,
             rows_any_length,
-            accel_share: 1.0,
+            accel_share,
         },
     )?;
     Ok(Course::Path { path, pace })

@@ -106,7 +106,7 @@ pub(in crate::plan) fn slowed(asked: &Motion, k: f64) -> Motion {
 
 /// Whether `outcome` is a drive's refusal: a row step over its `max_accel`, a row from or into
 /// rest over its `start_hz`, a motion over its `max_accel` or its `max_jerk`. A slower motion may be followed.
-fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
+pub(super) fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
     matches!(
         outcome,
         Err(PlanError::RowStep { .. }
