@@ -182,6 +182,24 @@ impl TimedKnots {
         self.integral[k] + Self::cubic(self.s_mm[k], self.v_mm_s[k], self.a_mm_s2[k], tau)
     }
 
+    /// The acceleration at `t_s` (0 before the start and after the end), mm/s^2.
+    fn accel(&self, t_s: f64) -> f64 {
+        if t_s < 0.0 || t_s >= self.duration_s() {
+            return 0.0;
+        }
+        self.a_mm_s2[self.stretch(t_s).0]
+    }
+
+    /// The largest change of the acceleration over `window_s`: `|a(t) - a(t - window_s)|` at
+    /// its largest, read where either side steps (at every knot, and a window after it).
+    fn largest_change_over(&self, window_s: f64) -> f64 {
+        self.t_s
+            .iter()
+            .flat_map(|&t| [t, t + window_s])
+            .map(|t| (self.accel(t) - self.accel(t - window_s)).abs())
+            .fold(0.0, f64::max)
+    }
+
     /// The lowest and the highest acceleration, mm/s^2.
     fn accel_range(&self) -> (f64, f64) {
         self.a_mm_s2
@@ -393,11 +411,27 @@ impl Pace {
         Self::from_speeds(&s_mm, &speeds, speed_mm_s)
     }
 
-    /// The range of a time-optimal pace's acceleration (its profile cruising at
-    /// `speed_mm_s`): the lowest and the highest, mm/s^2.
+    /// The shortest window over which a time-optimal pace (its profile cruising at
+    /// `speed_mm_s`) averaged ([`Self::smoothed`]) keeps its jerk within `jerk_mm_s3`, s: the
+    /// average's jerk at `t` is `(a(t) - a(t - T)) / T`, so the window `T` must hold every
+    /// change of the acceleration over `T` within `jerk_mm_s3 * T`. From the least any window
+    /// needs (the acceleration's largest size over the jerk: from rest it rises from 0),
+    /// lengthened to the largest change over it until that fits; at most the acceleration's
+    /// range over the jerk, which always fits.
     #[must_use]
-    pub fn accel_range_mm_s2(&self, speed_mm_s: f64) -> (f64, f64) {
-        TimedKnots::new(&self.knots, speed_mm_s).accel_range()
+    pub fn jerk_window_s(&self, speed_mm_s: f64, jerk_mm_s3: f64) -> f64 {
+        let motion = TimedKnots::new(&self.knots, speed_mm_s);
+        let (lo, hi) = motion.accel_range();
+        let widest = (hi - lo) / jerk_mm_s3;
+        let mut window = hi.max(-lo) / jerk_mm_s3;
+        for _ in 0..16 {
+            let change = motion.largest_change_over(window);
+            if change <= jerk_mm_s3 * window * (1.0 + 1e-9) {
+                return window;
+            }
+            window = (change / jerk_mm_s3).min(widest);
+        }
+        widest
     }
 
     /// Whether the pace itself starts and ends at rest (a time-optimal motion's): its profile

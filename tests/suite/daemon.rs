@@ -749,7 +749,9 @@ async fn daemon_for(robot: linterpd::robot::Robot) -> (SharedMock, Daemon, Robot
 /// d3's pulses on the PLC keep its drive's limits: it leaves standstill and comes to it at no
 /// more than 1 kHz over its first and last 50 ms (a pulse of rounding aside), and its speed
 /// changes by no more than `max_accel_mm_s2` allows between two 50 ms windows (two pulses of
-/// rounding). Returns the time from its first pulse to its last, s.
+/// rounding). A time-optimal motion's last row lasts up to a period and a half (PLANNING.md),
+/// and a row step is judged over the two rows' mean length: into the last row, up to 1.25
+/// periods' worth. Returns the time from its first pulse to its last, s.
 fn assert_d3_within(shared: &SharedMock, max_accel_mm_s2: f64) -> f64 {
     let times = pulse_times(shared, 2);
     let (first, last) = (times[0], times[times.len() - 1]);
@@ -767,7 +769,13 @@ fn assert_d3_within(shared: &SharedMock, max_accel_mm_s2: f64) -> f64 {
         .collect();
     // At 0.013 mm a pulse, over 50 ms: 1000 mm/s^2 is 3846 Hz, 192 pulses a window.
     let allowed = (max_accel_mm_s2 / 0.013 * 0.05 * 0.05).round() as usize + 4;
-    for w in per_window.windows(2) {
+    let into_last_row = |k: usize| first + 0.05 * k as f64 >= last - 0.075;
+    for (k, w) in per_window.windows(2).enumerate() {
+        let allowed = if into_last_row(k + 1) {
+            allowed + allowed / 4
+        } else {
+            allowed
+        };
         assert!(w[0].abs_diff(w[1]) <= allowed, "{per_window:?}");
     }
     last - first
@@ -787,7 +795,7 @@ async fn a_robot_with_drive_limits_runs_its_moves_within_them_on_the_plc() {
 #[tokio::test]
 async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_within_them_on_the_plc() {
     // d3's drive follows 300 mm/s^2 and starts at 1 kHz; the seed's move asked with S-curve
-    // ramps of 20000 mm/s^3 is its time-optimal motion averaged to that jerk: 1.940 s, where
+    // ramps of 20000 mm/s^3 is its time-optimal motion averaged to that jerk: 1.923 s, where
     // slowing the S-curve as a whole took 2.600 s (PLANNING.md, "S-curve ramps").
     let (shared, d, h) = d3_limited(300.0).await;
     let start = shared.with(|m| std::array::from_fn(|c| m.count(c)));
@@ -801,15 +809,16 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_within_them_on_the_p
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
     let span_s = assert_d3_within(&shared, 300.0);
-    assert!((span_s - 1.94).abs() < 0.06, "{span_s}");
+    assert!((span_s - 1.92).abs() < 0.06, "{span_s}");
     d.shut_down().await;
 }
 
 #[tokio::test]
-async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_slowed_and_refuses_a_trapezoid() {
+async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_within_it_and_refuses_a_trapezoid() {
     // d3 takes 5000 mm/s^3; the robot's own ramps are S-curves of 20000 mm/s^3 along the path,
-    // which ask d3 for 14523: `plan` slows the seed's move to 66.3 %, 2.200 s (PLANNING.md, "A
-    // joint's jerk").
+    // which ask d3 for 14523: the seed's move runs as its time-optimal motion averaged over a
+    // window lengthened until d3 keeps its jerk, d3's pulses over 1.60 s, where slowing the
+    // S-curve as a whole (to 66.3 %) took 2.200 s (PLANNING.md, "A joint's jerk").
     let mut robot = linterpd::robot::seed_robot();
     robot.motion.ramp = linterpd::robot::Ramp::SCurve {
         jerk_mm_s3: 20_000.0,
@@ -833,13 +842,13 @@ async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_slowed_and_refuses_a_t
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert!(pulse_times(&shared, 2).is_empty());
     assert_eq!(shared.with(|m| std::array::from_fn(|c| m.count(c))), start);
-    // The robot's own S-curve runs slowed, as `plan` shows.
+    // The robot's own S-curve runs within d3's jerk, as `plan` shows.
     let id = h.submit(order(P2)).unwrap();
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
     let times = pulse_times(&shared, 2);
     let span_s = times[times.len() - 1] - times[0];
-    assert!((span_s - 2.20).abs() < 0.06, "{span_s}");
+    assert!((span_s - 1.60).abs() < 0.06, "{span_s}");
     d.shut_down().await;
 }
 

@@ -1,6 +1,7 @@
 //! PURE. An S-curve under drive limits as the time-optimal motion averaged: the line's
-//! time-optimal motion under every limit ([`super::timing`]), averaged over a moving window as
-//! long as its acceleration's range over the jerk asked ([`Pace::smoothed`]). The average keeps
+//! time-optimal motion under every limit ([`super::timing`]), averaged over a moving window
+//! ([`crate::geometry::Pace::smoothed`]) just long enough to hold its jerk within the one asked
+//! ([`crate::geometry::Pace::jerk_window_s`]). The average keeps
 //! the path, its speed and acceleration within the time-optimal motion's, and its jerk within
 //! the one asked; it ends one window later. Where only a stretch of the line needs the speed to
 //! drop (near the base axis, at a joint's reversal) only that stretch is slowed, where slowing
@@ -11,7 +12,7 @@
 //! is checked ([`super::within_limits`]) and, where a drive would not follow it, timed again to
 //! a lower share of every joint's acceleration ([`RETIMING`]).
 
-use crate::geometry::{Line, Pace};
+use crate::geometry::Line;
 use crate::robot::{Motion, Ramp, Robot};
 
 use super::super::course::Course;
@@ -21,9 +22,16 @@ use super::{RETIMING, refused_by_a_drive, timed_line_at, within_limits};
 /// The averaged motion is tabulated every this many seconds ([`Pace::smoothed`]).
 const KNOT_S: f64 = 0.001;
 
-/// The line's time-optimal motion averaged to the S-curve's jerk, planned; timed again to a
-/// lower share of the joints' accelerations ([`RETIMING`]) while a drive would not follow it
-/// (the last refusal when none is followed). `motion` is the S-curve asked for.
+/// How many times the window is lengthened for a joint's `max_jerk`, each time by the share its
+/// jerk was over ([`JERK_WIDENING_MARGIN`] more).
+const JERK_WIDENINGS: usize = 3;
+/// The lengthening's margin over the share a joint's jerk was over.
+const JERK_WIDENING_MARGIN: f64 = 1.05;
+
+/// The line's time-optimal motion averaged to the S-curve's jerk, planned; the window
+/// lengthened while a joint's jerk is over its `max_jerk` ([`JERK_WIDENINGS`]), and the motion
+/// timed again to a lower share of the joints' accelerations ([`RETIMING`]) while a drive would
+/// not follow it (the last refusal when none is followed). `motion` is the S-curve asked for.
 pub(in crate::plan) fn averaged_line(
     robot: &Robot,
     line: &Line,
@@ -41,32 +49,43 @@ pub(in crate::plan) fn averaged_line(
     };
     let mut last = Err(PlanError::SCurveUnderDriveLimits);
     for share in std::iter::once(1.0).chain(RETIMING) {
-        let outcome = (|| {
-            let Course::Path { path, pace } =
-                timed_line_at(robot, line, start, &timed, rows_any_length, share)?
-            else {
-                unreachable!("a timed line is a path of one line")
+        let Course::Path { path, pace } =
+            timed_line_at(robot, line, start, &timed, rows_any_length, share)?
+        else {
+            unreachable!("a timed line is a path of one line")
+        };
+        // The window the path's jerk needs, lengthened while a joint's jerk is over its
+        // `max_jerk`: the part of a joint's jerk the path's makes shrinks with the window.
+        let mut window_s = pace.jerk_window_s(timed.speed_mm_s, jerk_mm_s3);
+        for _ in 0..=JERK_WIDENINGS {
+            let outcome = pace
+                .smoothed(timed.speed_mm_s, window_s, KNOT_S)
+                .ok_or(PlanError::SCurveUnderDriveLimits)
+                .and_then(|pace| {
+                    let course = Course::Path {
+                        path: path.clone(),
+                        pace,
+                    };
+                    let mut plan = plan_course(robot, &course, start, timed)?;
+                    plan.motion.ramp = motion.ramp;
+                    within_limits(robot, &mut plan)?;
+                    Ok(plan)
+                });
+            let widen = match &outcome {
+                Err(PlanError::OverMaxJerk { jerk, max_jerk, .. }) => jerk / max_jerk,
+                _ => 0.0,
             };
-            let pace = averaged(&pace, timed.speed_mm_s, jerk_mm_s3)
-                .ok_or(PlanError::SCurveUnderDriveLimits)?;
-            let mut plan = plan_course(robot, &Course::Path { path, pace }, start, timed)?;
-            plan.motion.ramp = motion.ramp;
-            within_limits(robot, &mut plan)?;
-            Ok(plan)
-        })();
-        if !refused_by_a_drive(&outcome) {
-            return outcome;
+            if !refused_by_a_drive(&outcome) {
+                return outcome;
+            }
+            last = outcome;
+            if widen <= 1.0 {
+                break;
+            }
+            window_s *= widen * JERK_WIDENING_MARGIN;
         }
-        last = outcome;
     }
     last
-}
-
-/// `pace` (time-optimal, its profile cruising at `speed_mm_s`) averaged over the window whose
-/// jerk is `jerk_mm_s3`: its acceleration's range over the jerk.
-fn averaged(pace: &Pace, speed_mm_s: f64, jerk_mm_s3: f64) -> Option<Pace> {
-    let (lo, hi) = pace.accel_range_mm_s2(speed_mm_s);
-    pace.smoothed(speed_mm_s, (hi - lo) / jerk_mm_s3, KNOT_S)
 }
 
 /// The faster of an S-curve averaged from the time-optimal motion (`averaged`) and the same
