@@ -263,24 +263,6 @@ fn section_plan(
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
     super::dynamics::jerk_needs_s_curve(robot, asked.ramp).map_err(|e| (elements.clone(), e))?;
-    if robot.has_dynamics() && matches!(asked.ramp, Ramp::SCurve { .. }) {
-        // Slowed as a whole (its path acceleration with the rest) until the drives follow it.
-        return super::dynamics::followed(|k| {
-            let mut starts = planned_as_asked(
-                robot,
-                section,
-                start,
-                super::dynamics::slowed(&asked, k),
-                path_accel_mm_s2 * k,
-            )?;
-            for s in &mut starts {
-                s.speed_factor *= k.sqrt();
-                super::dynamics::within_limits(robot, s)?;
-            }
-            Ok(starts)
-        })
-        .map_err(|source| (elements, source));
-    }
     if robot.has_dynamics() {
         let breaks_mm: Vec<f64> = section
             .pieces()
@@ -294,16 +276,55 @@ fn section_plan(
             curvature_at: &|s| section.curvature_per_mm(s),
             breaks_mm: &breaks_mm,
         };
-        // A timing whose rows a drive refuses (by a little, where the grid between its points
-        // or a kink's rounding missed it) is made again to smaller shares of the limits.
-        let timed = |accel_share: f64, rows_any_length: bool| {
+        let pace = |motion: &Motion, accel_share: f64, rows_any_length: bool| {
             let limits = super::dynamics::PathLimits {
                 centripetal_mm_s2: path_accel_mm_s2,
                 rest_row_s: asked.period_s,
                 rows_any_length,
                 accel_share,
             };
-            let pace = super::dynamics::pace(robot, &shape, &start.values, &asked, &limits)?;
+            super::dynamics::pace(robot, &shape, &start.values, motion, &limits)
+        };
+        if matches!(asked.ramp, Ramp::SCurve { .. }) {
+            // The time-optimal motion averaged to the jerk, or the S-curve slowed as a whole
+            // (its path acceleration with the rest) until the drives follow it: the faster.
+            let averaged = super::dynamics::rest_rows_first(&asked, |rows_any_length| {
+                super::dynamics::averaged(
+                    &asked,
+                    |motion, share| Ok((section.clone(), pace(motion, share, rows_any_length)?)),
+                    |course, motion| {
+                        let mut starts = parts(robot, course, start, motion)?;
+                        for s in &mut starts {
+                            s.motion.ramp = asked.ramp;
+                            super::dynamics::within_limits(robot, s)?;
+                        }
+                        Ok(starts)
+                    },
+                )
+            });
+            let duration_s = |starts: &Vec<Plan>| starts.iter().map(Plan::duration_s).sum();
+            return super::dynamics::faster_s_curve(averaged, None, duration_s, || {
+                super::dynamics::followed(|k| {
+                    let mut starts = planned_as_asked(
+                        robot,
+                        section,
+                        start,
+                        super::dynamics::slowed(&asked, k),
+                        path_accel_mm_s2 * k,
+                    )?;
+                    for s in &mut starts {
+                        s.speed_factor *= k.sqrt();
+                        super::dynamics::within_limits(robot, s)?;
+                    }
+                    Ok(starts)
+                })
+            })
+            .map_err(|source| (elements, source));
+        }
+        // A timing whose rows a drive refuses (by a little, where the grid between its points
+        // or a kink's rounding missed it) is made again to smaller shares of the limits.
+        let timed = |accel_share: f64, rows_any_length: bool| {
+            let pace = pace(&asked, accel_share, rows_any_length)?;
             let course = Course::Path {
                 path: section.clone(),
                 pace,

@@ -12,7 +12,7 @@
 //! is checked ([`super::within_limits`]) and, where a drive would not follow it, timed again to
 //! a lower share of every joint's acceleration ([`RETIMING`]).
 
-use crate::geometry::Line;
+use crate::geometry::{Line, Pace, Path};
 use crate::robot::{Motion, Ramp, Robot};
 
 use super::super::course::Course;
@@ -28,10 +28,8 @@ const JERK_WIDENINGS: usize = 3;
 /// The lengthening's margin over the share a joint's jerk was over.
 const JERK_WIDENING_MARGIN: f64 = 1.05;
 
-/// The line's time-optimal motion averaged to the S-curve's jerk, planned; the window
-/// lengthened while a joint's jerk is over its `max_jerk` ([`JERK_WIDENINGS`]), and the motion
-/// timed again to a lower share of the joints' accelerations ([`RETIMING`]) while a drive would
-/// not follow it (the last refusal when none is followed). `motion` is the S-curve asked for.
+/// The line's time-optimal motion averaged to the S-curve's jerk, planned ([`averaged`]).
+/// `motion` is the S-curve asked for.
 pub(in crate::plan) fn averaged_line(
     robot: &Robot,
     line: &Line,
@@ -39,37 +37,60 @@ pub(in crate::plan) fn averaged_line(
     motion: &Motion,
     rows_any_length: bool,
 ) -> Result<Plan, PlanError> {
+    averaged(
+        motion,
+        |timed, share| {
+            let Course::Path { path, pace } =
+                timed_line_at(robot, line, start, timed, rows_any_length, share)?
+            else {
+                unreachable!("a timed line is a path of one line")
+            };
+            Ok((path, pace))
+        },
+        |course, timed| {
+            let mut plan = plan_course(robot, course, start, timed)?;
+            plan.motion.ramp = motion.ramp;
+            within_limits(robot, &mut plan)?;
+            Ok(plan)
+        },
+    )
+}
+
+/// A line's or a path section's time-optimal motion averaged to the S-curve `motion`'s jerk,
+/// planned: `timed(motion, share)` times the path to `share` of the joints' accelerations (the
+/// motion a trapezoid: the pace carries it), and `plan(course, motion)` plans the course at the
+/// averaged pace and checks the planned motion ([`within_limits`]). The window is lengthened
+/// while a joint's jerk is over its `max_jerk` ([`JERK_WIDENINGS`]), and the path timed again
+/// to a lower share ([`RETIMING`]) while a drive would not follow it; the last refusal when
+/// none is followed.
+pub(in crate::plan) fn averaged<T>(
+    motion: &Motion,
+    timed: impl Fn(&Motion, f64) -> Result<(Path, Pace), PlanError>,
+    plan: impl Fn(&Course, Motion) -> Result<T, PlanError>,
+) -> Result<T, PlanError> {
     let Ramp::SCurve { jerk_mm_s3 } = motion.ramp else {
         return Err(PlanError::SCurveUnderDriveLimits);
     };
-    // The time-optimal motion is timed and planned as a trapezoid is: the pace carries it.
-    let timed = Motion {
+    let trapezoid = Motion {
         ramp: Ramp::Trapezoid,
         ..*motion
     };
     let mut last = Err(PlanError::SCurveUnderDriveLimits);
     for share in std::iter::once(1.0).chain(RETIMING) {
-        let Course::Path { path, pace } =
-            timed_line_at(robot, line, start, &timed, rows_any_length, share)?
-        else {
-            unreachable!("a timed line is a path of one line")
-        };
+        let (path, pace) = timed(&trapezoid, share)?;
         // The window the path's jerk needs, lengthened while a joint's jerk is over its
         // `max_jerk`: the part of a joint's jerk the path's makes shrinks with the window.
-        let mut window_s = pace.jerk_window_s(timed.speed_mm_s, jerk_mm_s3);
+        let mut window_s = pace.jerk_window_s(trapezoid.speed_mm_s, jerk_mm_s3);
         for _ in 0..=JERK_WIDENINGS {
             let outcome = pace
-                .smoothed(timed.speed_mm_s, window_s, KNOT_S)
+                .smoothed(trapezoid.speed_mm_s, window_s, KNOT_S)
                 .ok_or(PlanError::SCurveUnderDriveLimits)
                 .and_then(|pace| {
                     let course = Course::Path {
                         path: path.clone(),
                         pace,
                     };
-                    let mut plan = plan_course(robot, &course, start, timed)?;
-                    plan.motion.ramp = motion.ramp;
-                    within_limits(robot, &mut plan)?;
-                    Ok(plan)
+                    plan(&course, trapezoid)
                 });
             let widen = match &outcome {
                 Err(PlanError::OverMaxJerk { jerk, max_jerk, .. }) => jerk / max_jerk,
@@ -90,20 +111,21 @@ pub(in crate::plan) fn averaged_line(
 
 /// The faster of an S-curve averaged from the time-optimal motion (`averaged`) and the same
 /// S-curve slowed as a whole (`slowed`, planned only when the averaged one is refused or slower
-/// than the S-curve unslowed, `unslowed_s`: slowing only lengthens it). The refusal of the
-/// slowed one when both are refused.
-pub(in crate::plan) fn faster_s_curve(
-    averaged: Result<Plan, PlanError>,
+/// than the S-curve unslowed, `unslowed_s`: slowing only lengthens it), by `duration_s`. The
+/// refusal of the slowed one when both are refused.
+pub(in crate::plan) fn faster_s_curve<T>(
+    averaged: Result<T, PlanError>,
     unslowed_s: Option<f64>,
-    slowed: impl FnOnce() -> Result<Plan, PlanError>,
-) -> Result<Plan, PlanError> {
+    duration_s: impl Fn(&T) -> f64,
+    slowed: impl FnOnce() -> Result<T, PlanError>,
+) -> Result<T, PlanError> {
     if let Ok(plan) = &averaged
-        && unslowed_s.is_some_and(|s| plan.duration_s() <= s)
+        && unslowed_s.is_some_and(|s| duration_s(plan) <= s)
     {
         return averaged;
     }
     match (averaged, slowed()) {
-        (Ok(a), Ok(s)) => Ok(if a.duration_s() < s.duration_s() {
+        (Ok(a), Ok(s)) => Ok(if duration_s(&a) < duration_s(&s) {
             a
         } else {
             s
