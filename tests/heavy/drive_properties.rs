@@ -243,6 +243,20 @@ fn jerks_measured_here(robot: &Robot, plan: &Plan) -> [f64; 4] {
 /// sampling) and `max_jerk` (measured again here, 3 % allowed for the finer sampling). Refused
 /// only for a drive it cannot slow enough for (the joint named) or rows that outgrow a table
 /// area.
+/// The tool's largest jerk along its course in `start`, mm/s^3: the third difference of its
+/// distance along the course over 10 ms, at every millisecond.
+fn tool_jerk(start: &Plan) -> f64 {
+    let tau = 0.01;
+    let (mut peak, mut t) = (0.0_f64, 0.0);
+    while t + 3.0 * tau <= start.duration_s() {
+        let at = |k: f64| start.course_mm(start.window.from_s + t + k * tau);
+        let third = at(3.0) - 3.0 * at(2.0) + 3.0 * at(1.0) - at(0.0);
+        peak = peak.max(third.abs() / tau.powi(3));
+        t += 0.001;
+    }
+    peak
+}
+
 fn check_s_curve_under_limits(
     robot: &Robot,
     (from, to): (Pose, Pose),
@@ -276,6 +290,21 @@ fn check_s_curve_under_limits(
     for start in &starts {
         let s_curve = matches!(start.motion.ramp, linterpd::robot::Ramp::SCurve { .. });
         prop_assert!(s_curve, "{:?}", start.motion.ramp);
+        // The tool's jerk along the line, by third differences over 10 ms, where the S-curve is
+        // the time-optimal motion averaged (its pace from rest to rest): within the one asked.
+        // (An S-curve planned as asked keeps the constant-acceleration transitions of
+        // `slow-down`'s speed caps, PLANNING.md.)
+        if start
+            .pace
+            .as_ref()
+            .is_some_and(linterpd::geometry::Pace::from_rest)
+        {
+            let path_jerk = tool_jerk(start);
+            prop_assert!(
+                path_jerk <= jerk_mm_s3 * 1.05,
+                "the tool's jerk {path_jerk} over {jerk_mm_s3}"
+            );
+        }
         for (joint, d) in robot.joints.iter().zip(&start.drive) {
             let max_accel = joint.user(joint.dynamics.max_accel.unwrap()).abs();
             prop_assert!(
