@@ -511,6 +511,36 @@ fn plan_reports_every_drive_against_its_limits_and_times_the_line_under_them() {
 }
 
 #[test]
+fn plan_shows_an_s_curve_under_drive_limits_as_the_time_optimal_motion_averaged() {
+    // d3 at 300 mm/s^2: the S-curve is the time-optimal motion averaged (1.923 s, where slowing
+    // it as a whole took 2.600 s: PLANNING.md, "S-curve ramps").
+    let config = limited_config("averaged", "300.0", "1000.0");
+    let mut args = seed_on(&config);
+    args.extend(["--profile", "s-curve:20000"]);
+    let out = linterpd(&args);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains(
+            "profile  s-curve (jerk 20000 mm/s^3), the time-optimal motion under the drive \
+             limits averaged"
+        ),
+        "{text}"
+    );
+    assert!(text.contains("1.923 s"), "{text}");
+    assert!(!text.contains("slowed down"), "{text}");
+    args.extend(["--format", "json"]);
+    let doc: Value = serde_json::from_slice(&linterpd(&args).stdout).unwrap();
+    assert_eq!(doc["profile"]["timing"], "time-optimal s-curve");
+    assert!(doc["drives"][2]["peak_accel"].as_f64().unwrap() <= 300.0 * 1.02);
+    std::fs::remove_file(&config).unwrap();
+}
+
+#[test]
 fn a_drive_limit_no_row_can_keep_is_refused_naming_the_joint_and_the_figure() {
     let config = limited_config("refused", "1000.0", "10.0");
     let e = refused(&[("--config", &config)], &[]);

@@ -106,8 +106,9 @@ struct ProfileDoc {
     course_length_mm: f64,
     speed_mm_s: f64,
     /// "trapezoid" (the seed's profile), "s-curve" (jerk-limited ramps: `accel_mm_s2` is their
-    /// peak) or "time-optimal" (under drive limits: the ramps are the pace's, `accel_s` 0 and
-    /// `accel_mm_s2` null).
+    /// peak), "time-optimal" (under drive limits: the ramps are the pace's, `accel_s` 0 and
+    /// `accel_mm_s2` null) or "time-optimal s-curve" (under drive limits, the time-optimal
+    /// motion averaged to the S-curve's jerk: the ramps are the pace's, as "time-optimal").
     timing: &'static str,
     accel_s: f64,
     accel_mm_s2: f64,
@@ -179,7 +180,10 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
                 .as_ref()
                 .is_some_and(crate::geometry::Pace::from_rest)
             {
-                "time-optimal"
+                match plan.motion.ramp {
+                    crate::robot::Ramp::SCurve { .. } => "time-optimal s-curve",
+                    crate::robot::Ramp::Trapezoid => "time-optimal",
+                }
             } else {
                 plan.motion.ramp.name()
             },

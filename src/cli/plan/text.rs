@@ -109,10 +109,17 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         .as_ref()
         .is_some_and(crate::geometry::Pace::from_rest)
     {
+        // An S-curve under drive limits is the time-optimal motion averaged to its jerk.
+        let shape = match plan.motion.ramp {
+            crate::robot::Ramp::SCurve { jerk_mm_s3 } => format!(
+                "s-curve (jerk {jerk_mm_s3:.0} mm/s^3), the time-optimal motion under the drive \
+                 limits averaged"
+            ),
+            crate::robot::Ramp::Trapezoid => "time-optimal under the drive limits".to_owned(),
+        };
         writeln!(
             out,
-            "profile  time-optimal under the drive limits: {:.3} mm at up to {:.3} mm/s, period \
-             {:.3} s: {} periods, {:.3} s",
+            "profile  {shape}: {:.3} mm at up to {:.3} mm/s, period {:.3} s: {} periods, {:.3} s",
             plan.pace
                 .as_ref()
                 .map_or(p.length_mm, crate::geometry::Pace::path_length_mm),
