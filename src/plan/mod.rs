@@ -309,8 +309,8 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
             });
             let course = Course::Line(line);
             let unslowed_s = unslowed_s_curve_s(&course, &req.motion, jerk_mm_s3);
-            return dynamics::faster_s_curve(averaged, unslowed_s, Plan::duration_s, || {
-                dynamics::followed(|k| {
+            return dynamics::faster_s_curve(averaged, unslowed_s, Plan::duration_s, |floor| {
+                dynamics::followed(floor, |k| {
                     let mut plan =
                         plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
                     plan.speed_factor *= k.sqrt();

@@ -303,8 +303,8 @@ fn section_plan(
                 )
             });
             let duration_s = |starts: &Vec<Plan>| starts.iter().map(Plan::duration_s).sum();
-            return super::dynamics::faster_s_curve(averaged, None, duration_s, || {
-                super::dynamics::followed(|k| {
+            return super::dynamics::faster_s_curve(averaged, None, duration_s, |floor| {
+                super::dynamics::followed(floor, |k| {
                     let mut starts = planned_as_asked(
                         robot,
                         section,

@@ -110,21 +110,28 @@ pub(in crate::plan) fn averaged<T>(
 }
 
 /// The faster of an S-curve averaged from the time-optimal motion (`averaged`) and the same
-/// S-curve slowed as a whole (`slowed`, planned only when the averaged one is refused or slower
-/// than the S-curve unslowed, `unslowed_s`: slowing only lengthens it), by `duration_s`. The
-/// refusal of the slowed one when both are refused.
+/// S-curve slowed as a whole (`slowed(floor)`, by `duration_s`): the slowed one is planned only
+/// when the averaged one is refused or slower than the S-curve unslowed (`unslowed_s`), and
+/// then no slower than the averaged one (`floor`, the least share of its accelerations
+/// `slowed` tries: slowed to share `k`, a motion takes `1 / sqrt(k)` of its time). The refusal
+/// of the slowed one when both are refused.
 pub(in crate::plan) fn faster_s_curve<T>(
     averaged: Result<T, PlanError>,
     unslowed_s: Option<f64>,
     duration_s: impl Fn(&T) -> f64,
-    slowed: impl FnOnce() -> Result<T, PlanError>,
+    slowed: impl FnOnce(f64) -> Result<T, PlanError>,
 ) -> Result<T, PlanError> {
-    if let Ok(plan) = &averaged
-        && unslowed_s.is_some_and(|s| duration_s(plan) <= s)
-    {
-        return averaged;
-    }
-    match (averaged, slowed()) {
+    let floor = match (&averaged, unslowed_s) {
+        (Ok(plan), Some(unslowed_s)) => {
+            let averaged_s = duration_s(plan);
+            if averaged_s <= unslowed_s {
+                return averaged;
+            }
+            (unslowed_s / averaged_s).powi(2)
+        }
+        _ => 0.0,
+    };
+    match (averaged, slowed(floor)) {
         (Ok(a), Ok(s)) => Ok(if duration_s(&a) < duration_s(&s) {
             a
         } else {
@@ -132,5 +139,54 @@ pub(in crate::plan) fn faster_s_curve<T>(
         }),
         (Ok(a), Err(_)) => Ok(a),
         (Err(_), slowed) => slowed,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Plans stood in for by their durations.
+    fn faster(
+        averaged: Result<f64, PlanError>,
+        unslowed_s: Option<f64>,
+        slowed: Result<f64, PlanError>,
+    ) -> (Result<f64, PlanError>, Option<f64>) {
+        let mut floor = None;
+        let chosen = faster_s_curve(
+            averaged,
+            unslowed_s,
+            |d| *d,
+            |f| {
+                floor = Some(f);
+                slowed
+            },
+        );
+        (chosen, floor)
+    }
+
+    #[test]
+    fn the_averaged_s_curve_is_taken_alone_when_no_slowing_could_beat_it() {
+        // No slower than the S-curve unslowed: slowing only lengthens that.
+        assert_eq!(faster(Ok(1.5), Some(1.5), Ok(1.4)), (Ok(1.5), None));
+        // Slower than it: the slowed one is tried down to the share whose time is the
+        // averaged one's, (1.5 / 2.0)^2, and the faster taken.
+        assert_eq!(faster(Ok(2.0), Some(1.5), Ok(1.8)), (Ok(1.8), Some(0.5625)));
+        assert_eq!(faster(Ok(2.0), Some(1.5), Ok(2.1)), (Ok(2.0), Some(0.5625)));
+        // The slowed one refused (not even at that share): the averaged one.
+        let refused = Err(PlanError::SCurveUnderDriveLimits);
+        assert_eq!(
+            faster(Ok(2.0), Some(1.5), refused.clone()),
+            (Ok(2.0), Some(0.5625))
+        );
+        // The averaged one refused: the slowed one, searched all the way, or its refusal.
+        assert_eq!(
+            faster(refused.clone(), Some(1.5), Ok(2.6)),
+            (Ok(2.6), Some(0.0))
+        );
+        assert_eq!(
+            faster(refused.clone(), None, refused.clone()),
+            (refused, Some(0.0))
+        );
     }
 }

@@ -119,10 +119,11 @@ pub(super) fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
 /// `plan` at share 1 of the accelerations, or, when a drive would not follow it, at the
 /// largest share found that every drive follows; `plan(k)` plans the motion slowed to share
 /// `k` ([`slowed`]) and refuses one over a joint's `max_accel` or `max_jerk`
-/// ([`within_limits`]). The
-/// refusal of the slowest tried when none is followed; any other refusal at the largest share
-/// followed.
+/// ([`within_limits`]). No share below `floor` is tried (a faster plan is at hand: a motion
+/// slowed to share `k` takes `1 / sqrt(k)` of its time). The refusal of the slowest tried when
+/// none is followed; any other refusal at the largest share followed.
 pub(in crate::plan) fn followed<T>(
+    floor: f64,
     plan: impl Fn(f64) -> Result<T, PlanError>,
 ) -> Result<T, PlanError> {
     let first = plan(1.0);
@@ -133,6 +134,9 @@ pub(in crate::plan) fn followed<T>(
     let mut found = None;
     for _ in 0..HALVINGS {
         let k = bad * 0.5;
+        if k < floor {
+            return last;
+        }
         let outcome = plan(k);
         if !refused_by_a_drive(&outcome) {
             found = Some((k, outcome));

@@ -465,7 +465,7 @@ fn seed_s_curve_slowed_as_a_whole(robot: &Robot, method: Method) -> Plan {
     let (line, values, counts) = crate::plan::resolve_line(robot, &asked).unwrap();
     let start = crate::plan::Start { values, counts };
     let course = crate::plan::course::Course::Line(line);
-    super::followed(|k| {
+    super::followed(0.0, |k| {
         let mut plan =
             crate::plan::plan_course(robot, &course, &start, super::slowed(&asked.motion, k))?;
         plan.speed_factor *= k.sqrt();
@@ -785,4 +785,29 @@ fn a_path_s_curve_keeps_every_joint_s_max_jerk_through_its_blends() {
         let d3 = start.drive[2].peak_jerk.expect("measured");
         assert!(d3 <= 20_000.0, "{d3}");
     }
+}
+
+/// The search for the largest share every drive follows tries no share below its floor: a
+/// motion followed only at 0.45 of its accelerations is found from a floor of 0, and from a
+/// floor of 0.6 only share 1 is tried, its refusal the answer.
+#[test]
+fn slowing_as_a_whole_tries_no_share_below_its_floor() {
+    let refusal = |k: f64| PlanError::SCurveOverMaxAccel {
+        joint: "d3".into(),
+        accel: 300.0 * 0.45 / k,
+        max_accel: 300.0,
+        unit: "mm",
+        speed_pct: k.sqrt() * 100.0,
+    };
+    let tried = std::cell::RefCell::new(Vec::new());
+    let plan = |k: f64| {
+        tried.borrow_mut().push(k);
+        if k <= 0.45 { Ok(k) } else { Err(refusal(k)) }
+    };
+    let found = super::followed(0.0, plan).unwrap();
+    assert!((0.45 / 1.05..=0.45).contains(&found), "{found}");
+    tried.borrow_mut().clear();
+    let e = super::followed(0.6, plan).unwrap_err();
+    assert_eq!(*tried.borrow(), vec![1.0]);
+    assert!(matches!(e, PlanError::SCurveOverMaxAccel { .. }), "{e}");
 }
