@@ -311,8 +311,12 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
             let unslowed_s = unslowed_s_curve_s(&course, &req.motion, jerk_mm_s3);
             return dynamics::faster_s_curve(averaged, unslowed_s, Plan::duration_s, |floor| {
                 dynamics::followed(floor, |k| {
+                    let slowed = dynamics::slowed(&req.motion, k);
+                    let check = |accels: &[f64; JOINTS], factor: f64| {
+                        dynamics::clearly_over_max_accel(robot, accels, factor * k.sqrt() * 100.0)
+                    };
                     let mut plan =
-                        plan_course(robot, &course, &start, dynamics::slowed(&req.motion, k))?;
+                        plan_course_checked(robot, &course, &start, slowed, Some(&check))?;
                     plan.speed_factor *= k.sqrt();
                     dynamics::within_limits(robot, &mut plan)?;
                     Ok(plan)
@@ -406,7 +410,38 @@ fn plan_course(
     start: &Start,
     asked: Motion,
 ) -> Result<Plan, PlanError> {
+    plan_course_checked(robot, course, start, asked, None)
+}
+
+/// A check of a sampled motion before its rows are made: every joint's planned acceleration
+/// (user units) and the speed factor `slow-down` left ([`plan_course_checked`]).
+type MotionCheck<'a> = &'a dyn Fn(&[f64; JOINTS], f64) -> Result<(), PlanError>;
+
+/// [`plan_course`], the sampled motion first checked by `check` (its every joint's planned
+/// acceleration, user units, and the speed factor `slow-down` left): a motion refused on its
+/// samples is refused before any rows are made.
+fn plan_course_checked(
+    robot: &Robot,
+    course: &Course,
+    start: &Start,
+    asked: Motion,
+    check: Option<MotionCheck>,
+) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked)?;
+    if let Some(check) = check {
+        let grid_s = if sampled.motion.method.tolerance_mm().is_some() {
+            bounded::SAMPLE_S
+        } else {
+            sampled.profile.period_s
+        };
+        let accels = dynamics::planned_accels(
+            robot,
+            &sampled.samples,
+            grid_s,
+            sampled.profile.duration_s(),
+        );
+        check(&accels, sampled.speed_factor)?;
+    }
     let (first, last) = (0, sampled.last_point());
     let plan = |first, last| {
         sampled

@@ -16,9 +16,11 @@ pub(super) use averaged::{averaged, averaged_line, faster_s_curve};
 use moves::timed_line_at;
 pub(super) use moves::{joint_move_motion, rest_rows_first, timed_line};
 pub use rows::DriveFigures;
-pub(super) use rows::judge;
+pub(super) use rows::{judge, planned_accels};
 use slowed::refused_by_a_drive;
-pub(super) use slowed::{followed, jerk_needs_s_curve, slowed, within_limits};
+pub(super) use slowed::{
+    clearly_over_max_accel, followed, jerk_needs_s_curve, slowed, within_limits,
+};
 pub(super) use timing::{PathLimits, RETIMING, Shape, pace};
 
 #[cfg(test)]

@@ -125,6 +125,16 @@ struct Rests {
     ends: bool,
 }
 
+/// Every joint's fastest acceleration over the samples, user units ([`planned_peaks`]).
+pub(in crate::plan) fn planned_accels(
+    robot: &Robot,
+    samples: &Samples,
+    sample_s: f64,
+    end_s: f64,
+) -> [f64; JOINTS] {
+    std::array::from_fn(|j| planned_peaks(&robot.joints[j], samples, j, sample_s, end_s).1)
+}
+
 /// The joint's fastest speed and acceleration over the samples, user units: the points
 /// `sample_s` apart but the last, at `end_s` (a time-optimal profile's last period has its
 /// own length); each speed at the middle of its interval.

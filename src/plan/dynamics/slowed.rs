@@ -70,6 +70,37 @@ pub(in crate::plan) fn within_limits(robot: &Robot, plan: &mut Plan) -> Result<(
     Ok(())
 }
 
+/// How far over its `max_accel` a joint's planned acceleration must be for
+/// [`clearly_over_max_accel`] to refuse the motion before its rows are made.
+const CLEARLY_OVER: f64 = 1.1;
+
+/// The refusal [`within_limits`] would give, found on the samples before any rows are made,
+/// where a joint's planned acceleration is clearly over its `max_accel` ([`CLEARLY_OVER`], well
+/// past [`ACCEL_SLACK`]: the samples are the whole course's, a start's may differ at its ends).
+/// A bounded-error plan whose rows a drive refuses runs its narrowed tries first: a motion
+/// refused anyway is spared them. `speed_pct` is the speed the motion is at.
+pub(in crate::plan) fn clearly_over_max_accel(
+    robot: &Robot,
+    accels: &[f64; crate::kinematics::JOINTS],
+    speed_pct: f64,
+) -> Result<(), PlanError> {
+    for (joint, &accel) in robot.joints.iter().zip(accels) {
+        if let Some(a) = joint.dynamics.max_accel {
+            let max_accel = joint.user(a).abs();
+            if accel > max_accel * CLEARLY_OVER {
+                return Err(PlanError::SCurveOverMaxAccel {
+                    joint: joint.name.clone(),
+                    accel,
+                    max_accel,
+                    unit: joint.kind.user_unit(),
+                    speed_pct,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a trapezoid for a robot with a joint's `max_jerk`: only an S-curve keeps it.
 pub(in crate::plan) fn jerk_needs_s_curve(robot: &Robot, ramp: Ramp) -> Result<(), PlanError> {
     if matches!(ramp, Ramp::SCurve { .. }) {

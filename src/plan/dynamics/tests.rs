@@ -461,13 +461,30 @@ fn seed_s_curve_slowed(robot: &Robot, method: Method, k: f64) -> Plan {
 /// The seed's move's `s-curve:20000` under `robot`'s limits slowed as a whole until the drives
 /// follow it ([`super::followed`]), as it was planned before the averaged motion.
 fn seed_s_curve_slowed_as_a_whole(robot: &Robot, method: Method) -> Plan {
+    seed_s_curve_slowed_checked(robot, method, None)
+}
+
+/// A check of a motion slowed to share `k` on its samples: `k`, every joint's planned
+/// acceleration, and the speed factor `slow-down` left.
+type SlowedCheck<'a> = dyn Fn(f64, &[f64; 4], f64) -> Result<(), PlanError> + 'a;
+
+/// [`seed_s_curve_slowed_as_a_whole`], every slowed motion first checked by `check` on its
+/// samples (`crate::plan::plan_course_checked`).
+fn seed_s_curve_slowed_checked(robot: &Robot, method: Method, check: Option<&SlowedCheck>) -> Plan {
     let asked = s_curve(robot, method, 20_000.0);
     let (line, values, counts) = crate::plan::resolve_line(robot, &asked).unwrap();
     let start = crate::plan::Start { values, counts };
     let course = crate::plan::course::Course::Line(line);
     super::followed(0.0, |k| {
-        let mut plan =
-            crate::plan::plan_course(robot, &course, &start, super::slowed(&asked.motion, k))?;
+        let checked = check.map(|c| move |a: &[f64; 4], f: f64| c(k, a, f));
+        let motion = super::slowed(&asked.motion, k);
+        let mut plan = crate::plan::plan_course_checked(
+            robot,
+            &course,
+            &start,
+            motion,
+            checked.as_ref().map(|c| c as _),
+        )?;
         plan.speed_factor *= k.sqrt();
         super::within_limits(robot, &mut plan)?;
         Ok(plan)
@@ -810,4 +827,36 @@ fn slowing_as_a_whole_tries_no_share_below_its_floor() {
     let e = super::followed(0.6, plan).unwrap_err();
     assert_eq!(*tried.borrow(), vec![1.0]);
     assert!(matches!(e, PlanError::SCurveOverMaxAccel { .. }), "{e}");
+}
+
+/// The check on the samples refuses only what the planned motion's check would: the seed's
+/// S-curve slowed as a whole under d3's 300 mm/s^2 finds the same share with it as without it,
+/// and the motion asked for (871 mm/s^2 of d3) is refused by it naming d3.
+#[test]
+fn a_motion_clearly_over_max_accel_is_refused_on_its_samples_as_after_its_rows() {
+    let robot = seed_slow_radial();
+    let check = |k: f64, accels: &[f64; 4], factor: f64| {
+        super::clearly_over_max_accel(&robot, accels, factor * k.sqrt() * 100.0)
+    };
+    for method in [Method::ConstantPeriod, BOUNDED] {
+        let plain = seed_s_curve_slowed_as_a_whole(&robot, method);
+        let checked = seed_s_curve_slowed_checked(&robot, method, Some(&check));
+        assert_eq!(
+            plain.speed_factor.to_bits(),
+            checked.speed_factor.to_bits(),
+            "{method:?}"
+        );
+        assert_eq!(plain.tables, checked.tables, "{method:?}");
+    }
+    let free = plan_move(
+        &seed_robot(),
+        &s_curve(&seed_robot(), Method::ConstantPeriod, 20_000.0),
+    )
+    .unwrap();
+    let accels: [f64; 4] = std::array::from_fn(|j| free.drive[j].peak_accel);
+    let e = super::clearly_over_max_accel(&robot, &accels, 100.0).unwrap_err();
+    assert!(
+        matches!(e, PlanError::SCurveOverMaxAccel { ref joint, .. } if joint == "d3"),
+        "{e}"
+    );
 }
