@@ -4,9 +4,9 @@
 //! one asked ([`crate::geometry::Pace::jerk_window_s`]). The average keeps the path, its speed
 //! and acceleration within the time-optimal motion's, and its jerk within the one asked; it
 //! ends one window later. Where only a stretch of the path needs the speed to drop (near the
-//! base axis, at a joint's reversal, on a tight arc) only that stretch is slowed, where slowing
-//! the S-curve as a whole ([`super::slowed`]) slows all of it; the faster of the two is
-//! planned ([`faster_s_curve`]).
+//! base axis, at a joint's reversal, on a tight arc) only that stretch is slowed, where
+//! slowing the S-curve as a whole ([`super::slowed`](mod@super::slowed)) slows all of it; the
+//! faster of the two is planned ([`faster_s_curve`]).
 //!
 //! The joints' accelerations are the average's through the path's derivatives, which change
 //! along the window: near the axis a joint's can pass its limit by a little. The planned motion

@@ -1,9 +1,10 @@
 //! PURE. What the drives behind the pulse outputs can follow ([`crate::robot::Dynamics`]): the
 //! time-optimal motion along a line or path section under every joint's limits ([`timing`]),
 //! and every table's rows checked against them ([`rows`]); a line and a joint move under them
-//! ([`moves`]); an S-curve as the time-optimal motion averaged to its jerk ([`averaged`]) or
-//! slowed as a whole until the drives follow it ([`slowed`]), whichever is faster, its joints'
-//! jerk measured on the planned motion ([`jerk`]).
+//! ([`moves`]); an S-curve as the time-optimal motion averaged to its jerk
+//! ([`averaged`](mod@averaged)) or slowed as a whole until the drives follow it
+//! ([`slowed`](mod@slowed)), whichever is faster, its joints' jerk measured on the planned
+//! motion ([`jerk`]).
 
 mod averaged;
 mod jerk;
