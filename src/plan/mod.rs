@@ -331,19 +331,24 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
     plan_course(robot, &Course::Line(line), &start, req.motion)
 }
 
-/// How long the S-curve `motion` (its jerk `jerk_mm_s3`) takes along `course` unslowed, on the
-/// grid its method samples it on (`None` if it cannot be profiled).
-fn unslowed_s_curve_s(course: &Course, motion: &Motion, jerk_mm_s3: f64) -> Option<f64> {
-    let grid_s = if motion.method.tolerance_mm().is_some() {
+/// The grid `motion`'s method samples a course on: bounded-error's fine samples
+/// ([`bounded::SAMPLE_S`]), or the period.
+fn grid_s(motion: &Motion) -> f64 {
+    if motion.method.tolerance_mm().is_some() {
         bounded::SAMPLE_S
     } else {
         motion.period_s
-    };
+    }
+}
+
+/// How long the S-curve `motion` (its jerk `jerk_mm_s3`) takes along `course` unslowed, on the
+/// grid its method samples it on (`None` if it cannot be profiled).
+fn unslowed_s_curve_s(course: &Course, motion: &Motion, jerk_mm_s3: f64) -> Option<f64> {
     let request = ProfileRequest {
         length_mm: course.length_mm(),
         speed_mm_s: motion.speed_mm_s,
         accel_s: motion.accel_s,
-        period_s: grid_s,
+        period_s: grid_s(motion),
     };
     Profile::s_curve(request, jerk_mm_s3)
         .ok()
@@ -429,15 +434,11 @@ fn plan_course_checked(
 ) -> Result<Plan, PlanError> {
     let sampled = Sampled::new(robot, course, start, asked)?;
     if let Some(check) = check {
-        let grid_s = if sampled.motion.method.tolerance_mm().is_some() {
-            bounded::SAMPLE_S
-        } else {
-            sampled.profile.period_s
-        };
+        // The profile's period is the samples' grid.
         let accels = dynamics::planned_accels(
             robot,
             &sampled.samples,
-            grid_s,
+            sampled.profile.period_s,
             sampled.profile.duration_s(),
         );
         check(&accels, sampled.speed_factor)?;
@@ -496,11 +497,7 @@ impl<'a> Sampled<'a> {
     ) -> Result<Self, PlanError> {
         let mut motion = asked;
         let bounded = motion.method.tolerance_mm();
-        let grid_s = if bounded.is_some() {
-            bounded::SAMPLE_S
-        } else {
-            motion.period_s
-        };
+        let grid_s = grid_s(&motion);
         let sampler = Sampler {
             robot,
             course,
