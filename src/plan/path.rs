@@ -8,7 +8,9 @@
 //! profile's own acceleration (speed / acceleration time). Under `slow-down`, the stretches
 //! where a joint's channel would pass its top frequency are slowed for in the same way
 //! ([`frequency_caps`]); what that misses, the sampled check lowers the whole section's speed
-//! for, as for a line. Under `reject` such a section is refused.
+//! for, as for a line. Under `reject` such a section is refused. An S-curve on a section whose
+//! pace would change speed so (an acceleration stepping on and off, past its jerk) is timed as
+//! under drive limits: the time-optimal motion averaged to its jerk.
 //!
 //! A section may need more than one start ("parts", chained at speed through the PLC's waiting
 //! start): where its tables would not fit a channel's area or 8 segments (cut in halves until
@@ -263,7 +265,13 @@ fn section_plan(
 ) -> Result<Vec<Plan>, (String, PlanError)> {
     let elements = covered(section);
     super::dynamics::jerk_needs_s_curve(robot, asked.ramp).map_err(|e| (elements.clone(), e))?;
-    if robot.has_dynamics() {
+    let s_curve = matches!(asked.ramp, Ramp::SCurve { .. });
+    // An S-curve whose pace would change speed along the section (a tight arc; under
+    // `slow-down`, where a channel would be too fast) is timed as a robot with drive limits
+    // is: the pace's changes of speed step the acceleration on and off.
+    if robot.has_dynamics()
+        || (s_curve && !as_asked_pace(robot, section, start, &asked, path_accel_mm_s2).is_uniform())
+    {
         let breaks_mm: Vec<f64> = section
             .pieces()
             .iter()
@@ -285,7 +293,7 @@ fn section_plan(
             };
             super::dynamics::pace(robot, &shape, &start.values, motion, &limits)
         };
-        if matches!(asked.ramp, Ramp::SCurve { .. }) {
+        if s_curve {
             // The time-optimal motion averaged to the jerk, or the S-curve slowed as a whole
             // (its path acceleration with the rest) until the drives follow it: the faster.
             let averaged = super::dynamics::rest_rows_first(&asked, |rows_any_length| {
@@ -351,7 +359,11 @@ fn section_plan(
 }
 
 /// [`section_plan`] for a robot without drive limits: the profile along a pace that slows only
-/// for tight arcs and, under `slow-down`, where a channel would be too fast.
+/// for tight arcs and, under `slow-down` with a trapezoid, where a channel would be too fast.
+///
+/// An S-curve is not slowed there: the pace's change of speed into and out of a cap is a
+/// constant acceleration that steps on and off, past the jerk asked. The sampled check slows
+/// the whole section instead, as it does a line, and the S-curve keeps its jerk.
 fn planned_as_asked(
     robot: &Robot,
     section: &Path,
@@ -359,9 +371,11 @@ fn planned_as_asked(
     asked: Motion,
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, PlanError> {
-    let caps = match asked.over_speed {
-        OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),
-        OverSpeed::Reject => Vec::new(),
+    let caps = match (asked.over_speed, asked.ramp) {
+        (OverSpeed::SlowDown, Ramp::Trapezoid) => {
+            frequency_caps(robot, section, start, asked.speed_mm_s)
+        }
+        (OverSpeed::SlowDown, Ramp::SCurve { .. }) | (OverSpeed::Reject, _) => Vec::new(),
     };
     let pace = Pace::new(
         section,
@@ -375,6 +389,28 @@ fn planned_as_asked(
         pace,
     };
     parts(robot, &course, start, asked)
+}
+
+/// The pace a trapezoid of `asked` would run `section` at: slowed for tight arcs and, under
+/// `slow-down`, where a channel would be too fast ([`frequency_caps`]).
+fn as_asked_pace(
+    robot: &Robot,
+    section: &Path,
+    start: &Start,
+    asked: &Motion,
+    path_accel_mm_s2: f64,
+) -> Pace {
+    let caps = match asked.over_speed {
+        OverSpeed::SlowDown => frequency_caps(robot, section, start, asked.speed_mm_s),
+        OverSpeed::Reject => Vec::new(),
+    };
+    Pace::new(
+        section,
+        asked.speed_mm_s,
+        path_accel_mm_s2,
+        asked.speed_mm_s / asked.accel_s,
+        &caps,
+    )
 }
 
 /// The stretches a section is cut into to find where a joint would be too fast, mm.
@@ -1072,6 +1108,98 @@ mod tests {
             "{} s",
             plan.duration_s()
         );
+    }
+
+    /// The tool's largest jerk along `start`'s course, mm/s^3: the third difference of its
+    /// distance along the course over 10 ms, at every millisecond.
+    fn course_jerk(start: &Plan) -> f64 {
+        let tau = 0.01;
+        let (mut peak, mut t) = (0.0_f64, 0.0);
+        while t + 3.0 * tau <= start.duration_s() {
+            let at = |k: f64| start.course_mm(start.window.from_s + t + k * tau);
+            let third = at(3.0) - 3.0 * at(2.0) + 3.0 * at(1.0) - at(0.0);
+            peak = peak.max(third.abs() / tau.powi(3));
+            t += 0.001;
+        }
+        peak
+    }
+
+    /// An S-curve that must slow on a stretch (under `slow-down`, where a channel would be too
+    /// fast) is the time-optimal motion averaged to its jerk: a trapezoid's pace steps its
+    /// acceleration on and off into the slow stretch, past any jerk (an S-curve run on that
+    /// pace read 7.4 times its jerk on a line in the heavy properties, before). Slowed as a
+    /// whole, it would keep its jerk too, but take longer.
+    #[test]
+    fn under_slow_down_an_s_curve_slows_on_the_stretch_alone_and_keeps_its_jerk() {
+        // d2 (the lift, 40 pulses/mm) limited to 6 kHz: 150 mm/s straight up. A lift of 100 mm
+        // blended into a level traverse of about 250 mm, at 240 mm/s asked.
+        let mut robot = seed_robot();
+        robot.joints[1].max_freq_hz = 6_000;
+        let jerk_mm_s3 = 5_000.0;
+        let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
+        for method in [
+            Method::ConstantPeriod,
+            Method::BoundedError { tolerance_mm: 0.05 },
+        ] {
+            let req = |ramp| PathRequest {
+                from: Origin::Pose(pose(P1, 0.0)),
+                start: None,
+                elements: vec![
+                    (
+                        Element::Line {
+                            to: pose(P1, 100.0),
+                        },
+                        Corner::Blend(20.0),
+                    ),
+                    (Element::Line { to: level }, Corner::Stop),
+                ],
+                motion: Motion {
+                    over_speed: OverSpeed::SlowDown,
+                    ramp,
+                    ..motion(&robot, method, FrequencyModel::FpxDivider)
+                },
+                path_accel_mm_s2: 5_000.0,
+            };
+            let trapezoid = plan_path(&robot, &req(Ramp::Trapezoid)).unwrap();
+            let s_curve_req = req(Ramp::SCurve { jerk_mm_s3 });
+            let s_curve = plan_path(&robot, &s_curve_req).unwrap();
+            assert!(trapezoid.valid() && s_curve.valid(), "{method:?}");
+            for start in s_curve.starts() {
+                let jerk = course_jerk(start);
+                assert!(jerk <= jerk_mm_s3 * 1.05, "{method:?}: {jerk} mm/s^3");
+                for row in start.row_timings() {
+                    let limit = f64::from(robot.joints[row.table].max_freq_hz);
+                    assert!(row.actual_hz <= limit, "{method:?} {row:?}");
+                }
+            }
+            // The trapezoid's change into its slow stretch is far past that jerk.
+            let stepped = trapezoid.starts().map(course_jerk).fold(0.0, f64::max);
+            assert!(stepped > 10.0 * jerk_mm_s3, "{method:?}: {stepped} mm/s^3");
+            // Slowed as a whole (what the sampled check does to an S-curve run as asked, no
+            // longer slowed on the stretch), it keeps its jerk, and takes longer.
+            let section = &s_curve.sections[0];
+            let start = Start::at(&robot, s_curve_req.from).unwrap();
+            let whole = planned_as_asked(
+                &robot,
+                &section.path,
+                &start,
+                s_curve_req.motion,
+                s_curve_req.path_accel_mm_s2,
+            )
+            .unwrap();
+            let whole_s: f64 = whole.iter().map(Plan::duration_s).sum();
+            assert!(whole[0].speed_factor < 0.7, "{}", whole[0].speed_factor);
+            for start in &whole {
+                let jerk = course_jerk(start);
+                assert!(jerk <= jerk_mm_s3 * 1.05, "{method:?}: {jerk} mm/s^3");
+            }
+            assert!(
+                s_curve.duration_s() < 0.9 * whole_s,
+                "{method:?}: {} s against {whole_s} s",
+                s_curve.duration_s()
+            );
+            assert!(s_curve.duration_s() > trapezoid.duration_s(), "{method:?}");
+        }
     }
 
     /// A part refused for its tolerance is cut again, without the planner searching for a

@@ -191,8 +191,29 @@ fn check_s_curve(
     for start in &starts {
         let p = &start.profile;
         let trapezoid_accel = start.motion.speed_mm_s / start.motion.accel_s;
-        prop_assert!(p.accel_mm_s2 <= trapezoid_accel * (1.0 + 1e-9), "{p:?}");
-        prop_assert!(p.jerk_s > 0.0 && p.accel_mm_s2 / p.jerk_s <= jerk_mm_s3 * (1.0 + 1e-9));
+        if start
+            .pace
+            .as_ref()
+            .is_some_and(linterpd::geometry::Pace::from_rest)
+        {
+            // The time-optimal motion averaged (a line a joint reverses on is a path of its
+            // parts, and one a channel would be too fast on, under `slow-down`, is slowed
+            // there): its acceleration within the path's, its speed's change over 10 ms.
+            let accel = tool_accel(start);
+            prop_assert!(
+                accel <= trapezoid_accel * 1.02,
+                "{accel} over {trapezoid_accel}"
+            );
+        } else {
+            prop_assert!(p.accel_mm_s2 <= trapezoid_accel * (1.0 + 1e-9), "{p:?}");
+            prop_assert!(p.jerk_s > 0.0 && p.accel_mm_s2 / p.jerk_s <= jerk_mm_s3 * (1.0 + 1e-9));
+        }
+        // The tool's jerk along the line.
+        let path_jerk = tool_jerk(start);
+        prop_assert!(
+            path_jerk <= jerk_mm_s3 * 1.05,
+            "the tool's jerk {path_jerk} over {jerk_mm_s3}"
+        );
     }
     check(&robot, &starts, &l)
 }
@@ -257,6 +278,20 @@ fn tool_jerk(start: &Plan) -> f64 {
     peak
 }
 
+/// The tool's largest acceleration along its course in `start`, mm/s^2: the second difference
+/// of its distance along the course over 10 ms, at every millisecond.
+fn tool_accel(start: &Plan) -> f64 {
+    let tau = 0.01;
+    let (mut peak, mut t) = (0.0_f64, 0.0);
+    while t + 2.0 * tau <= start.duration_s() {
+        let at = |k: f64| start.course_mm(start.window.from_s + t + k * tau);
+        let second = at(2.0) - 2.0 * at(1.0) + at(0.0);
+        peak = peak.max(second.abs() / tau.powi(2));
+        t += 0.001;
+    }
+    peak
+}
+
 fn check_s_curve_under_limits(
     robot: &Robot,
     (from, to): (Pose, Pose),
@@ -290,21 +325,14 @@ fn check_s_curve_under_limits(
     for start in &starts {
         let s_curve = matches!(start.motion.ramp, linterpd::robot::Ramp::SCurve { .. });
         prop_assert!(s_curve, "{:?}", start.motion.ramp);
-        // The tool's jerk along the line, by third differences over 10 ms, where the S-curve is
-        // the time-optimal motion averaged (its pace from rest to rest): within the one asked.
-        // (An S-curve planned as asked keeps the constant-acceleration transitions of
-        // `slow-down`'s speed caps, PLANNING.md.)
-        if start
-            .pace
-            .as_ref()
-            .is_some_and(linterpd::geometry::Pace::from_rest)
-        {
-            let path_jerk = tool_jerk(start);
-            prop_assert!(
-                path_jerk <= jerk_mm_s3 * 1.05,
-                "the tool's jerk {path_jerk} over {jerk_mm_s3}"
-            );
-        }
+        // The tool's jerk along the line, by third differences over 10 ms: within the one
+        // asked, whether the S-curve is the time-optimal motion averaged or the S-curve slowed
+        // as a whole (`slow-down` slows it as a whole, not where a channel would be too fast).
+        let path_jerk = tool_jerk(start);
+        prop_assert!(
+            path_jerk <= jerk_mm_s3 * 1.05,
+            "the tool's jerk {path_jerk} over {jerk_mm_s3}"
+        );
         for (joint, d) in robot.joints.iter().zip(&start.drive) {
             let max_accel = joint.user(joint.dynamics.max_accel.unwrap()).abs();
             prop_assert!(

@@ -526,8 +526,8 @@ fn plan_shows_an_s_curve_under_drive_limits_as_the_time_optimal_motion_averaged(
     );
     assert!(
         text.contains(
-            "profile  s-curve (jerk 20000 mm/s^3), the time-optimal motion under the drive \
-             limits averaged"
+            "profile  s-curve (jerk 20000 mm/s^3), the time-optimal motion averaged to that \
+             jerk"
         ),
         "{text}"
     );

@@ -107,8 +107,9 @@ struct ProfileDoc {
     speed_mm_s: f64,
     /// "trapezoid" (the seed's profile), "s-curve" (jerk-limited ramps: `accel_mm_s2` is their
     /// peak), "time-optimal" (under drive limits: the ramps are the pace's, `accel_s` 0 and
-    /// `accel_mm_s2` null) or "time-optimal s-curve" (under drive limits, the time-optimal
-    /// motion averaged to the S-curve's jerk: the ramps are the pace's, as "time-optimal").
+    /// `accel_mm_s2` null) or "time-optimal s-curve" (under drive limits, or on a path section
+    /// whose speed changes along it, the time-optimal motion averaged to the S-curve's jerk: the
+    /// ramps are the pace's, as "time-optimal").
     timing: &'static str,
     accel_s: f64,
     accel_mm_s2: f64,

@@ -109,11 +109,12 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         .as_ref()
         .is_some_and(crate::geometry::Pace::from_rest)
     {
-        // An S-curve under drive limits is the time-optimal motion averaged to its jerk.
+        // An S-curve under drive limits, or on a path section whose speed changes along it, is
+        // the time-optimal motion averaged to its jerk.
         let shape = match plan.motion.ramp {
             crate::robot::Ramp::SCurve { jerk_mm_s3 } => format!(
-                "s-curve (jerk {jerk_mm_s3:.0} mm/s^3), the time-optimal motion under the drive \
-                 limits averaged"
+                "s-curve (jerk {jerk_mm_s3:.0} mm/s^3), the time-optimal motion averaged to that \
+                 jerk"
             ),
             crate::robot::Ramp::Trapezoid => "time-optimal under the drive limits".to_owned(),
         };
