@@ -310,6 +310,14 @@ fn section_plan(
                     },
                 )
             });
+            if !robot.has_dynamics() {
+                // Without drive limits nothing slows the S-curve as a whole but a channel too
+                // fast (the sampled check), and on that pace its jerk breaks at the arcs: the
+                // averaged one, where it can be planned.
+                return averaged
+                    .or_else(|_| planned_as_asked(robot, section, start, asked, path_accel_mm_s2))
+                    .map_err(|source| (elements, source));
+            }
             let duration_s = |starts: &Vec<Plan>| starts.iter().map(Plan::duration_s).sum();
             return super::dynamics::faster_s_curve(averaged, None, duration_s, |floor| {
                 super::dynamics::followed(floor, |k| {
