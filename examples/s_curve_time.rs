@@ -96,17 +96,10 @@ fn main() {
                 to,
                 motion,
             };
-            let mut times = Vec::new();
-            let mut d = 0.0;
-            for _ in 0..30 {
-                let t = Instant::now();
-                d = plan_move(&robot, &req).unwrap().duration_s();
-                times.push(t.elapsed().as_secs_f64() * 1e3);
-            }
-            times.sort_by(f64::total_cmp);
+            let (ms, plan) = median_of_30(|| plan_move(&robot, &req).unwrap());
             println!(
-                "{method:?} {ramp:?}: {d:.3} s planned in {:.2} ms (median of 30)",
-                times[15]
+                "{method:?} {ramp:?}: {:.3} s planned in {ms:.2} ms (median of 30)",
+                plan.duration_s()
             );
         }
     }

@@ -11,3 +11,17 @@ pub(crate) fn uniform(seed: u64) -> impl FnMut() -> f64 {
         (state >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// The tool's largest jerk along `plan`'s course, mm/s^3: the third difference of its distance
+/// along the course over 10 ms, at every millisecond.
+pub(crate) fn course_jerk(plan: &crate::plan::Plan) -> f64 {
+    let tau = 0.01;
+    let (mut peak, mut t) = (0.0_f64, 0.0);
+    while t + 3.0 * tau <= plan.duration_s() {
+        let at = |k: f64| plan.course_mm(plan.window.from_s + t + k * tau);
+        let third = at(3.0) - 3.0 * at(2.0) + 3.0 * at(1.0) - at(0.0);
+        peak = peak.max(third.abs() / tau.powi(3));
+        t += 0.001;
+    }
+    peak
+}

@@ -1056,15 +1056,15 @@ mod tests {
         }
     }
 
-    #[test]
-    fn under_slow_down_a_joint_too_fast_on_one_stretch_slows_the_tool_there_alone() {
-        // d2 (the lift, 40 pulses/mm) limited to 6 kHz: 150 mm/s straight up. A lift of 100 mm
-        // blended into a level traverse of about 250 mm, at 240 mm/s asked.
+    /// The seed robot with d2 (the lift, 40 pulses/mm) limited to 6 kHz, 150 mm/s straight up,
+    /// and a lift of 100 mm blended into a level traverse of about 250 mm at 240 mm/s asked:
+    /// the request for `motion` (its method, `over_speed` and ramp taken).
+    fn lift_and_traverse() -> (Robot, impl Fn(Method, OverSpeed, Ramp) -> PathRequest) {
         let mut robot = seed_robot();
         robot.joints[1].max_freq_hz = 6_000;
-        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let asked = robot.motion;
         let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
-        let req = |over_speed| PathRequest {
+        let req = move |method, over_speed, ramp| PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
             start: None,
             elements: vec![
@@ -1077,11 +1077,22 @@ mod tests {
                 (Element::Line { to: level }, Corner::Stop),
             ],
             motion: Motion {
+                method,
+                frequency_model: FrequencyModel::FpxDivider,
                 over_speed,
-                ..motion(&robot, bounded, FrequencyModel::FpxDivider)
+                ramp,
+                ..asked
             },
             path_accel_mm_s2: 5_000.0,
         };
+        (robot, req)
+    }
+
+    #[test]
+    fn under_slow_down_a_joint_too_fast_on_one_stretch_slows_the_tool_there_alone() {
+        let (robot, lift) = lift_and_traverse();
+        let bounded = Method::BoundedError { tolerance_mm: 0.05 };
+        let req = |over_speed| lift(bounded, over_speed, Ramp::Trapezoid);
         let err = plan_path(&robot, &req(OverSpeed::Reject)).unwrap_err();
         assert!(err.to_string().contains("d2"), "{err}");
         let plan = plan_path(&robot, &req(OverSpeed::SlowDown)).unwrap();
@@ -1118,20 +1129,6 @@ mod tests {
         );
     }
 
-    /// The tool's largest jerk along `start`'s course, mm/s^3: the third difference of its
-    /// distance along the course over 10 ms, at every millisecond.
-    fn course_jerk(start: &Plan) -> f64 {
-        let tau = 0.01;
-        let (mut peak, mut t) = (0.0_f64, 0.0);
-        while t + 3.0 * tau <= start.duration_s() {
-            let at = |k: f64| start.course_mm(start.window.from_s + t + k * tau);
-            let third = at(3.0) - 3.0 * at(2.0) + 3.0 * at(1.0) - at(0.0);
-            peak = peak.max(third.abs() / tau.powi(3));
-            t += 0.001;
-        }
-        peak
-    }
-
     /// An S-curve that must slow on a stretch (under `slow-down`, where a channel would be too
     /// fast) is the time-optimal motion averaged to its jerk: a trapezoid's pace steps its
     /// acceleration on and off into the slow stretch, past any jerk (an S-curve run on that
@@ -1139,41 +1136,19 @@ mod tests {
     /// whole, it would keep its jerk too, but take longer.
     #[test]
     fn under_slow_down_an_s_curve_slows_on_the_stretch_alone_and_keeps_its_jerk() {
-        // d2 (the lift, 40 pulses/mm) limited to 6 kHz: 150 mm/s straight up. A lift of 100 mm
-        // blended into a level traverse of about 250 mm, at 240 mm/s asked.
-        let mut robot = seed_robot();
-        robot.joints[1].max_freq_hz = 6_000;
+        let (robot, lift) = lift_and_traverse();
         let jerk_mm_s3 = 5_000.0;
-        let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
         for method in [
             Method::ConstantPeriod,
             Method::BoundedError { tolerance_mm: 0.05 },
         ] {
-            let req = |ramp| PathRequest {
-                from: Origin::Pose(pose(P1, 0.0)),
-                start: None,
-                elements: vec![
-                    (
-                        Element::Line {
-                            to: pose(P1, 100.0),
-                        },
-                        Corner::Blend(20.0),
-                    ),
-                    (Element::Line { to: level }, Corner::Stop),
-                ],
-                motion: Motion {
-                    over_speed: OverSpeed::SlowDown,
-                    ramp,
-                    ..motion(&robot, method, FrequencyModel::FpxDivider)
-                },
-                path_accel_mm_s2: 5_000.0,
-            };
+            let req = |ramp| lift(method, OverSpeed::SlowDown, ramp);
             let trapezoid = plan_path(&robot, &req(Ramp::Trapezoid)).unwrap();
             let s_curve_req = req(Ramp::SCurve { jerk_mm_s3 });
             let s_curve = plan_path(&robot, &s_curve_req).unwrap();
             assert!(trapezoid.valid() && s_curve.valid(), "{method:?}");
             for start in s_curve.starts() {
-                let jerk = course_jerk(start);
+                let jerk = crate::testing::course_jerk(start);
                 assert!(jerk <= jerk_mm_s3 * 1.05, "{method:?}: {jerk} mm/s^3");
                 for row in start.row_timings() {
                     let limit = f64::from(robot.joints[row.table].max_freq_hz);
@@ -1181,7 +1156,10 @@ mod tests {
                 }
             }
             // The trapezoid's change into its slow stretch is far past that jerk.
-            let stepped = trapezoid.starts().map(course_jerk).fold(0.0, f64::max);
+            let stepped = trapezoid
+                .starts()
+                .map(crate::testing::course_jerk)
+                .fold(0.0, f64::max);
             assert!(stepped > 10.0 * jerk_mm_s3, "{method:?}: {stepped} mm/s^3");
             // Slowed as a whole (what the sampled check does to an S-curve run as asked, no
             // longer slowed on the stretch), it keeps its jerk, and takes longer.
@@ -1198,7 +1176,7 @@ mod tests {
             let whole_s: f64 = whole.iter().map(Plan::duration_s).sum();
             assert!(whole[0].speed_factor < 0.7, "{}", whole[0].speed_factor);
             for start in &whole {
-                let jerk = course_jerk(start);
+                let jerk = crate::testing::course_jerk(start);
                 assert!(jerk <= jerk_mm_s3 * 1.05, "{method:?}: {jerk} mm/s^3");
             }
             assert!(

@@ -492,20 +492,6 @@ fn seed_s_curve_slowed_checked(robot: &Robot, method: Method, check: Option<&Slo
     .unwrap()
 }
 
-/// The tool's largest jerk along the path in `plan`, mm/s^3: the third difference of its
-/// distance along the course over 10 ms, at every millisecond.
-fn path_jerk(plan: &Plan) -> f64 {
-    let tau = 0.01;
-    let (mut peak, mut t) = (0.0_f64, 0.0);
-    while t + 3.0 * tau <= plan.duration_s() {
-        let at = |k: f64| plan.course_mm(plan.window.from_s + t + k * tau);
-        let third = at(3.0) - 3.0 * at(2.0) + 3.0 * at(1.0) - at(0.0);
-        peak = peak.max(third.abs() / tau.powi(3));
-        t += 0.001;
-    }
-    peak
-}
-
 /// An S-curve under drive limits is planned (it was refused) as the time-optimal motion
 /// averaged to its jerk: every row and the planned motion keep every limit, the tool's jerk
 /// stays within the one asked, and it takes the time-optimal trapezoid's time and one window
@@ -524,7 +510,7 @@ fn an_s_curve_under_drive_limits_is_the_time_optimal_motion_averaged_to_its_jerk
         let d3 = plan.drive[2];
         assert!(d3.peak_accel <= 300.0 * 1.02, "{method:?}: {d3:?}");
         assert!(d3.rest_hz <= 1_000.0, "{method:?}: {d3:?}");
-        let jerk = path_jerk(&plan);
+        let jerk = crate::testing::course_jerk(&plan);
         assert!(jerk <= 20_000.0 * 1.05, "{method:?}: {jerk} mm/s^3");
         let mut trapezoid_req = seed_move(&robot, method, FrequencyModel::FpxDivider);
         trapezoid_req.motion.ramp = Ramp::Trapezoid;
@@ -592,7 +578,7 @@ fn a_path_s_curve_under_drive_limits_keeps_every_limit() {
     assert!(plan.valid());
     for start in plan.starts() {
         assert!(matches!(start.motion.ramp, Ramp::SCurve { .. }));
-        let jerk = path_jerk(start);
+        let jerk = crate::testing::course_jerk(start);
         assert!(jerk <= 20_000.0 * 1.05, "{jerk} mm/s^3");
         assert_rows_within(&robot, start);
         assert!(
