@@ -11,7 +11,7 @@
 //! `cargo run --release --example s_curve_time`
 use linterpd::geometry::{Corner, Element, Pose};
 use linterpd::plan::{MoveRequest, Origin, PathRequest, plan_move, plan_path};
-use linterpd::robot::{Dynamics, Method, OverSpeed, Ramp, seed_robot};
+use linterpd::robot::{Dynamics, Method, Motion, OverSpeed, Ramp, seed_robot};
 use std::time::Instant;
 
 /// The median of 30 timings of `plan` (ms) and its last result.
@@ -32,37 +32,46 @@ fn lift_and_traverse() {
     robot.joints[1].max_freq_hz = 6_000;
     let at = |dz: f64| Pose::from_mm_deg(-926.57, 535.03, 50.0 + dz, 0.0);
     let level = Pose::from_mm_deg(-1144.43, 659.60, 150.0, 0.0);
-    for method in [
+    for mut motion in motions(&robot.motion, 5_000.0) {
+        motion.over_speed = OverSpeed::SlowDown;
+        let req = PathRequest {
+            from: Origin::Pose(at(0.0)),
+            start: None,
+            elements: vec![
+                (Element::Line { to: at(100.0) }, Corner::Blend(20.0)),
+                (Element::Line { to: level }, Corner::Stop),
+            ],
+            motion,
+            path_accel_mm_s2: 5_000.0,
+        };
+        let (ms, plan) = median_of_30(|| plan_path(&robot, &req).unwrap());
+        println!(
+            "lift and traverse {:?} {:?}: {:.3} s planned in {ms:.2} ms (median of 30)",
+            motion.method,
+            motion.ramp,
+            plan.duration_s()
+        );
+    }
+}
+
+/// `motion` under constant-period and bounded-error 0.05 mm, each as a trapezoid and as an
+/// S-curve of `jerk_mm_s3`.
+fn motions(motion: &Motion, jerk_mm_s3: f64) -> Vec<Motion> {
+    let methods = [
         Method::ConstantPeriod,
         Method::BoundedError { tolerance_mm: 0.05 },
-    ] {
-        for ramp in [
-            Ramp::Trapezoid,
-            Ramp::SCurve {
-                jerk_mm_s3: 5_000.0,
-            },
-        ] {
-            let mut motion = robot.motion;
-            motion.method = method;
-            motion.ramp = ramp;
-            motion.over_speed = OverSpeed::SlowDown;
-            let req = PathRequest {
-                from: Origin::Pose(at(0.0)),
-                start: None,
-                elements: vec![
-                    (Element::Line { to: at(100.0) }, Corner::Blend(20.0)),
-                    (Element::Line { to: level }, Corner::Stop),
-                ],
-                motion,
-                path_accel_mm_s2: 5_000.0,
-            };
-            let (ms, plan) = median_of_30(|| plan_path(&robot, &req).unwrap());
-            println!(
-                "lift and traverse {method:?} {ramp:?}: {:.3} s planned in {ms:.2} ms (median of 30)",
-                plan.duration_s()
-            );
-        }
-    }
+    ];
+    let ramps = [Ramp::Trapezoid, Ramp::SCurve { jerk_mm_s3 }];
+    methods
+        .into_iter()
+        .flat_map(|method| {
+            ramps.map(|ramp| Motion {
+                method,
+                ramp,
+                ..*motion
+            })
+        })
+        .collect()
 }
 
 fn main() {
@@ -78,29 +87,18 @@ fn main() {
         .unwrap();
     let mut to = Pose::from_mm_deg(-1144.43, 659.60, 186.60, 0.0);
     to.a_rad = from.a_rad;
-    for method in [
-        Method::ConstantPeriod,
-        Method::BoundedError { tolerance_mm: 0.05 },
-    ] {
-        for ramp in [
-            Ramp::Trapezoid,
-            Ramp::SCurve {
-                jerk_mm_s3: 20_000.0,
-            },
-        ] {
-            let mut motion = robot.motion;
-            motion.method = method;
-            motion.ramp = ramp;
-            let req = MoveRequest {
-                from: Origin::Pose(from),
-                to,
-                motion,
-            };
-            let (ms, plan) = median_of_30(|| plan_move(&robot, &req).unwrap());
-            println!(
-                "{method:?} {ramp:?}: {:.3} s planned in {ms:.2} ms (median of 30)",
-                plan.duration_s()
-            );
-        }
+    for motion in motions(&robot.motion, 20_000.0) {
+        let req = MoveRequest {
+            from: Origin::Pose(from),
+            to,
+            motion,
+        };
+        let (ms, plan) = median_of_30(|| plan_move(&robot, &req).unwrap());
+        println!(
+            "{:?} {:?}: {:.3} s planned in {ms:.2} ms (median of 30)",
+            motion.method,
+            motion.ramp,
+            plan.duration_s()
+        );
     }
 }
