@@ -284,12 +284,13 @@ fn section_plan(
             curvature_at: &|s| section.curvature_per_mm(s),
             breaks_mm: &breaks_mm,
         };
-        let pace = |motion: &Motion, accel_share: f64, rows_any_length: bool| {
+        let pace = |motion: &Motion, shares: super::dynamics::Shares, rows_any_length: bool| {
             let limits = super::dynamics::PathLimits {
                 centripetal_mm_s2: path_accel_mm_s2,
                 rest_row_s: asked.period_s,
                 rows_any_length,
-                accel_share,
+                accel_share: shares.accel,
+                speed_share: shares.speed,
             };
             super::dynamics::pace(robot, &shape, &start.values, motion, &limits)
         };
@@ -308,6 +309,7 @@ fn section_plan(
                         }
                         Ok(starts)
                     },
+                    |course, motion| super::dynamics::probe(robot, course, start, motion),
                 )
             });
             if !robot.has_dynamics() {
@@ -340,7 +342,11 @@ fn section_plan(
         // A timing whose rows a drive refuses (by a little, where the grid between its points
         // or a kink's rounding missed it) is made again to smaller shares of the limits.
         let timed = |accel_share: f64, rows_any_length: bool| {
-            let pace = pace(&asked, accel_share, rows_any_length)?;
+            let shares = super::dynamics::Shares {
+                accel: accel_share,
+                speed: 1.0,
+            };
+            let pace = pace(&asked, shares, rows_any_length)?;
             let course = Course::Path {
                 path: section.clone(),
                 pace,
@@ -1133,7 +1139,8 @@ mod tests {
     /// fast) is the time-optimal motion averaged to its jerk: a trapezoid's pace steps its
     /// acceleration on and off into the slow stretch, past any jerk (an S-curve run on that
     /// pace read 7.4 times its jerk on a line in the heavy properties, before). Slowed as a
-    /// whole, it would keep its jerk too, but take longer.
+    /// whole, it would keep its jerk too, but take longer; run on that pace, it takes about as
+    /// long.
     #[test]
     fn under_slow_down_an_s_curve_slows_on_the_stretch_alone_and_keeps_its_jerk() {
         let (robot, lift) = lift_and_traverse();
@@ -1185,6 +1192,34 @@ mod tests {
                 s_curve.duration_s()
             );
             assert!(s_curve.duration_s() > trapezoid.duration_s(), "{method:?}");
+            // Run on the trapezoid's pace (as it was), the S-curve passed its jerk many times
+            // over, and took hardly less time: the average passes d2's top frequency after
+            // the lift, and is timed again to the share of it the sampled check leaves.
+            let stepped_pace = Course::Path {
+                path: section.path.clone(),
+                pace: as_asked_pace(
+                    &robot,
+                    &section.path,
+                    &start,
+                    &s_curve_req.motion,
+                    s_curve_req.path_accel_mm_s2,
+                ),
+            };
+            let stepped = parts(&robot, &stepped_pace, &start, s_curve_req.motion).unwrap();
+            let stepped_s: f64 = stepped.iter().map(Plan::duration_s).sum();
+            let stepped_jerk = stepped
+                .iter()
+                .map(crate::testing::course_jerk)
+                .fold(0.0, f64::max);
+            assert!(
+                stepped_jerk > 10.0 * jerk_mm_s3,
+                "{method:?}: {stepped_jerk}"
+            );
+            assert!(
+                s_curve.duration_s() < 1.04 * stepped_s,
+                "{method:?}: {} s against {stepped_s} s",
+                s_curve.duration_s()
+            );
         }
     }
 

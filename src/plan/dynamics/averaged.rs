@@ -17,7 +17,7 @@ use crate::geometry::{Line, Pace, Path};
 use crate::robot::{Motion, Ramp, Robot};
 
 use super::super::course::Course;
-use super::super::{Plan, PlanError, Start, plan_course};
+use super::super::{Plan, PlanError, Sampled, Start, plan_course};
 use super::{RETIMING, refused_by_a_drive, timed_line_at, within_limits};
 
 /// The averaged motion is tabulated every this many seconds ([`Pace::smoothed`]).
@@ -40,9 +40,16 @@ pub(in crate::plan) fn averaged_line(
 ) -> Result<Plan, PlanError> {
     averaged(
         motion,
-        |timed, share| {
-            let Course::Path { path, pace } =
-                timed_line_at(robot, line, start, timed, rows_any_length, share)?
+        |timed, shares| {
+            let Course::Path { path, pace } = timed_line_at(
+                robot,
+                line,
+                start,
+                timed,
+                rows_any_length,
+                shares.accel,
+                shares.speed,
+            )?
             else {
                 unreachable!("a timed line is a path of one line")
             };
@@ -54,20 +61,48 @@ pub(in crate::plan) fn averaged_line(
             within_limits(robot, &mut plan)?;
             Ok(plan)
         },
+        |course, timed| probe(robot, course, start, timed),
     )
 }
 
+/// A course sampled for `motion` as it would be planned: its duration and the speed factor the
+/// sampled check leaves it (`None` if it cannot be sampled) ([`averaged`]).
+pub(in crate::plan) fn probe(
+    robot: &Robot,
+    course: &Course,
+    start: &Start,
+    motion: Motion,
+) -> Option<(f64, f64)> {
+    let sampled = Sampled::new(robot, course, start, motion).ok()?;
+    Some((sampled.profile.duration_s(), sampled.speed_factor))
+}
+
+/// The shares of the limits a path is timed to ([`super::PathLimits`]): of every joint's
+/// acceleration limit, and of every channel's top frequency.
+#[derive(Debug, Clone, Copy)]
+pub(in crate::plan) struct Shares {
+    pub accel: f64,
+    pub speed: f64,
+}
+
 /// A line's or a path section's time-optimal motion averaged to the S-curve `motion`'s jerk,
-/// planned: `timed(motion, share)` times the path to `share` of the joints' accelerations (the
-/// motion a trapezoid: the pace carries it), and `plan(course, motion)` plans the course at the
-/// averaged pace and checks the planned motion ([`within_limits`]). The window is lengthened
-/// while a joint's jerk is over its `max_jerk` ([`JERK_WIDENINGS`]), and the path timed again
-/// to a lower share ([`RETIMING`]) while a drive would not follow it; the last refusal when
-/// none is followed.
+/// planned: `timed(motion, shares)` times the path to those shares of the joints' accelerations
+/// and the channels' top frequencies (the motion a trapezoid: the pace carries it), and
+/// `plan(course, motion)` plans the course at the averaged pace and checks the planned motion
+/// ([`within_limits`]); `probe(course, motion)` samples a course as `plan` would and gives its
+/// duration and the speed factor the sampled check leaves it (`None` if it cannot be sampled). The window is lengthened while a joint's jerk is over its `max_jerk`
+/// ([`JERK_WIDENINGS`]), and the path timed again to a lower share ([`RETIMING`]) while a drive
+/// would not follow it; the last refusal when none is followed.
+///
+/// Where the average passes a channel's top frequency, the sampled check slows the whole
+/// motion; the path is then timed again to that share of every top frequency, which slows
+/// only where a channel's frequency holds the motion back, and the faster of the two on their
+/// samples is planned.
 pub(in crate::plan) fn averaged<T>(
     motion: &Motion,
-    timed: impl Fn(&Motion, f64) -> Result<(Path, Pace), PlanError>,
+    timed: impl Fn(&Motion, Shares) -> Result<(Path, Pace), PlanError>,
     plan: impl Fn(&Course, Motion) -> Result<T, PlanError>,
+    probe: impl Fn(&Course, Motion) -> Option<(f64, f64)>,
 ) -> Result<T, PlanError> {
     let Ramp::SCurve { jerk_mm_s3 } = motion.ramp else {
         return Err(PlanError::SCurveUnderDriveLimits);
@@ -76,23 +111,42 @@ pub(in crate::plan) fn averaged<T>(
         ramp: Ramp::Trapezoid,
         ..*motion
     };
+    let smoothed = |path: &Path, pace: &Pace, window_s: f64| {
+        let pace = pace.smoothed(trapezoid.speed_mm_s, window_s, KNOT_S)?;
+        Some(Course::Path {
+            path: path.clone(),
+            pace,
+        })
+    };
+    // The path timed to `shares`, its window the one its jerk needs or `window_s`, the longer.
+    let timed_at = |shares: Shares, window_s: f64| {
+        timed(&trapezoid, shares).map(|(path, pace)| {
+            let w = pace.jerk_window_s(trapezoid.speed_mm_s, jerk_mm_s3);
+            (path, pace, w.max(window_s))
+        })
+    };
     let mut last = Err(PlanError::SCurveUnderDriveLimits);
-    for share in std::iter::once(1.0).chain(RETIMING) {
-        let (path, pace) = timed(&trapezoid, share)?;
+    for accel in std::iter::once(1.0).chain(RETIMING) {
         // The window the path's jerk needs, lengthened while a joint's jerk is over its
         // `max_jerk`: the part of a joint's jerk the path's makes shrinks with the window.
-        let mut window_s = pace.jerk_window_s(trapezoid.speed_mm_s, jerk_mm_s3);
+        let (mut path, mut pace, mut window_s) = timed_at(Shares { accel, speed: 1.0 }, 0.0)?;
+        // Where the average passes a channel's top frequency the sampled check slows all of
+        // it: timed again to that share of the channels' top frequencies, and the faster
+        // (judged on the samples, before any rows) kept.
+        if let Some((duration_s, speed)) =
+            smoothed(&path, &pace, window_s).and_then(|c| probe(&c, trapezoid))
+            && speed < 1.0
+            && let Ok(again) = timed_at(Shares { accel, speed }, window_s)
+            && smoothed(&again.0, &again.1, again.2)
+                .and_then(|c| probe(&c, trapezoid))
+                .is_some_and(|(d, _)| d < duration_s)
+        {
+            (path, pace, window_s) = again;
+        }
         for _ in 0..=JERK_WIDENINGS {
-            let outcome = pace
-                .smoothed(trapezoid.speed_mm_s, window_s, KNOT_S)
+            let outcome = smoothed(&path, &pace, window_s)
                 .ok_or(PlanError::SCurveUnderDriveLimits)
-                .and_then(|pace| {
-                    let course = Course::Path {
-                        path: path.clone(),
-                        pace,
-                    };
-                    plan(&course, trapezoid)
-                });
+                .and_then(|course| plan(&course, trapezoid));
             let widen = match &outcome {
                 Err(PlanError::OverMaxJerk { jerk, max_jerk, .. }) => jerk / max_jerk,
                 _ => 0.0,

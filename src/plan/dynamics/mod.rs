@@ -13,7 +13,7 @@ mod rows;
 mod slowed;
 mod timing;
 
-pub(super) use averaged::{averaged, averaged_line, faster_s_curve};
+pub(super) use averaged::{Shares, averaged, averaged_line, faster_s_curve, probe};
 use moves::timed_line_at;
 pub(super) use moves::{joint_move_motion, rest_rows_first, timed_line};
 pub use rows::DriveFigures;

@@ -21,11 +21,12 @@ pub(in crate::plan) fn timed_line(
     motion: &Motion,
     rows_any_length: bool,
 ) -> Result<Course, PlanError> {
-    timed_line_at(robot, line, start, motion, rows_any_length, 1.0)
+    timed_line_at(robot, line, start, motion, rows_any_length, 1.0, 1.0)
 }
 
-/// [`timed_line`] timed to `accel_share` of every joint's acceleration limit
-/// ([`PathLimits::accel_share`]).
+/// [`timed_line`] timed to `accel_share` of every joint's acceleration limit and
+/// `speed_share` of every channel's top frequency ([`PathLimits::accel_share`],
+/// [`PathLimits::speed_share`]).
 pub(in crate::plan) fn timed_line_at(
     robot: &Robot,
     line: &Line,
@@ -33,6 +34,7 @@ pub(in crate::plan) fn timed_line_at(
     motion: &Motion,
     rows_any_length: bool,
     accel_share: f64,
+    speed_share: f64,
 ) -> Result<Course, PlanError> {
     let path = Path::build(&PathSpec {
         start: line.from,
@@ -53,6 +55,7 @@ pub(in crate::plan) fn timed_line_at(
             rest_row_s: motion.period_s,
             rows_any_length,
             accel_share,
+            speed_share,
         },
     )?;
     Ok(Course::Path { path, pace })

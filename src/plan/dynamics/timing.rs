@@ -75,6 +75,10 @@ pub(in crate::plan) struct PathLimits {
     /// kink leave) the timing plans to: 1, or less when a first timing's rows were refused
     /// ([`RETIMING`]).
     pub accel_share: f64,
+    /// The share of every channel's top frequency the timing plans to: 1, or less where an
+    /// averaged S-curve's speeds passed it (the average of a motion speeding up after a stretch
+    /// slowed for a channel reaches that stretch faster than the motion did).
+    pub speed_share: f64,
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
@@ -439,7 +443,10 @@ fn grid(
                 let fastest_rate =
                     before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
                 if speeds && fastest_rate != 0.0 {
-                    let v = SPEED_MARGIN * f64::from(joint.max_freq_hz) * joint.step.abs();
+                    let v = SPEED_MARGIN
+                        * limits.speed_share
+                        * f64::from(joint.max_freq_hz)
+                        * joint.step.abs();
                     x_max = x_max.min((v / fastest_rate).powi(2));
                 }
                 let zone = zone_at[i][j];
