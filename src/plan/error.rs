@@ -64,7 +64,7 @@ pub enum PlanError {
     },
     /// A line on which a joint's channel needs a second F174 segment (it reverses, or its run
     /// changes frequency range) while another joint moves: one start would not play as
-    /// planned through it, so the line runs as a path cut there ([`plan_line`]).
+    /// planned through it, so the line runs as a path cut there ([`plan_line`](super::plan_line)).
     #[error(
         "joint {joint} {} {at_mm:.1} mm along the {length_mm:.1} mm line while other joints \
          move: in one start its next F174 segment would begin up to a PLC scan late, off the \

@@ -11,7 +11,12 @@
 //! The joints' accelerations are the average's through the path's derivatives, which change
 //! along the window: near the axis a joint's can pass its limit by a little. The planned motion
 //! is checked ([`super::within_limits`]) and, where a drive would not follow it, timed again to
-//! a lower share of every joint's acceleration ([`RETIMING`]).
+//! a lower share of every joint's acceleration ([`RETIMING`]); where the average passes a
+//! channel's top frequency, to a lower share of every top frequency ([`Shares`]).
+//!
+//! A path section whose speed must change along it is timed so without drive limits too: an
+//! S-curve run on the pace of a trapezoid (whose changes of speed step the acceleration on and
+//! off) would not keep its jerk.
 
 use crate::geometry::{Line, Pace, Path};
 use crate::robot::{Motion, Ramp, Robot};
@@ -90,9 +95,10 @@ pub(in crate::plan) struct Shares {
 /// and the channels' top frequencies (the motion a trapezoid: the pace carries it), and
 /// `plan(course, motion)` plans the course at the averaged pace and checks the planned motion
 /// ([`within_limits`]); `probe(course, motion)` samples a course as `plan` would and gives its
-/// duration and the speed factor the sampled check leaves it (`None` if it cannot be sampled). The window is lengthened while a joint's jerk is over its `max_jerk`
-/// ([`JERK_WIDENINGS`]), and the path timed again to a lower share ([`RETIMING`]) while a drive
-/// would not follow it; the last refusal when none is followed.
+/// duration and the speed factor the sampled check leaves it (`None` if it cannot be sampled).
+/// The window is lengthened while a joint's jerk is over its `max_jerk` ([`JERK_WIDENINGS`]),
+/// and the path timed again to a lower share ([`RETIMING`]) while a drive would not follow it;
+/// the last refusal when none is followed.
 ///
 /// Where the average passes a channel's top frequency, the sampled check slows the whole
 /// motion; the path is then timed again to that share of every top frequency, which slows
