@@ -291,6 +291,7 @@ fn section_plan(
                 rows_any_length,
                 accel_share: shares.accel,
                 speed_share: shares.speed,
+                centripetal_share: shares.centripetal,
             };
             super::dynamics::pace(robot, &shape, &start.values, motion, &limits)
         };
@@ -300,6 +301,7 @@ fn section_plan(
             let averaged = super::dynamics::rest_rows_first(&asked, |rows_any_length| {
                 super::dynamics::averaged(
                     &asked,
+                    path_accel_mm_s2,
                     |motion, share| Ok((section.clone(), pace(motion, share, rows_any_length)?)),
                     |course, motion| {
                         let mut starts = parts(robot, course, start, motion)?;
@@ -344,7 +346,7 @@ fn section_plan(
         let timed = |accel_share: f64, rows_any_length: bool| {
             let shares = super::dynamics::Shares {
                 accel: accel_share,
-                speed: 1.0,
+                ..super::dynamics::Shares::WHOLE
             };
             let pace = pace(&asked, shares, rows_any_length)?;
             let course = Course::Path {
@@ -1058,6 +1060,90 @@ mod tests {
                 plan.duration_s() < length / allowed,
                 "{} s for {length} mm",
                 plan.duration_s()
+            );
+        }
+    }
+
+    /// An S-curve through a blend too tight for its speed is the time-optimal motion averaged
+    /// to its jerk: slowed for the blend alone, within its jerk, where on the trapezoid's pace
+    /// (as it was) its change of speed into the blend passed the jerk many times over.
+    #[test]
+    fn an_s_curve_through_a_tight_blend_slows_for_it_alone_and_keeps_its_jerk() {
+        // The blend of the test above: 207.7 mm/s allowed on it, 240 mm/s on the lines.
+        let robot = seed_robot();
+        let jerk_mm_s3 = 20_000.0;
+        for method in [
+            Method::ConstantPeriod,
+            Method::BoundedError { tolerance_mm: 0.05 },
+        ] {
+            let req = PathRequest {
+                from: Origin::Pose(pose(P1, 0.0)),
+                start: None,
+                elements: vec![
+                    (
+                        Element::Line {
+                            to: pose(P2, 100.0),
+                        },
+                        Corner::Blend(20.0),
+                    ),
+                    (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
+                ],
+                motion: Motion {
+                    ramp: Ramp::SCurve { jerk_mm_s3 },
+                    ..motion(&robot, method, FrequencyModel::FpxDivider)
+                },
+                path_accel_mm_s2: 5_000.0,
+            };
+            let plan = plan_path(&robot, &req).unwrap();
+            assert!(plan.valid(), "{method:?}");
+            for start in plan.starts() {
+                let jerk = crate::testing::course_jerk(start);
+                assert!(jerk <= jerk_mm_s3 * 1.05, "{method:?}: {jerk} mm/s^3");
+                assert!(
+                    start.pace.as_ref().is_some_and(Pace::from_rest),
+                    "{method:?}"
+                );
+            }
+            // Along the course: within the blend's speed on it, at the speed asked on a line.
+            let blend = plan.path.pieces()[1];
+            let allowed = (req.path_accel_mm_s2 / blend.primitive.curvature_per_mm()).sqrt();
+            let (b0, b1) = (blend.start_mm, blend.start_mm + blend.primitive.length_mm());
+            let (mut on_blend, mut fastest) = (0.0_f64, 0.0_f64);
+            for start in plan.starts() {
+                let at = |t: f64| start.course_mm(start.window.from_s + t);
+                let dt = 1e-4;
+                for i in 0..(start.duration_s() / dt) as usize {
+                    let t = i as f64 * dt;
+                    let speed = (at(t + dt) - at(t)) / dt;
+                    if (b0..b1).contains(&at(t)) {
+                        on_blend = on_blend.max(speed);
+                    }
+                    fastest = fastest.max(speed);
+                }
+            }
+            assert!(on_blend <= allowed * (1.0 + 1e-6), "{method:?}: {on_blend}");
+            assert!(fastest > 239.0, "{method:?}: the lines at {fastest} mm/s");
+            // On the trapezoid's pace.
+            let section = &plan.sections[0];
+            let start = Start::at(&robot, req.from).unwrap();
+            let stepped_pace = Course::Path {
+                path: section.path.clone(),
+                pace: as_asked_pace(
+                    &robot,
+                    &section.path,
+                    &start,
+                    &req.motion,
+                    req.path_accel_mm_s2,
+                ),
+            };
+            let stepped = parts(&robot, &stepped_pace, &start, req.motion).unwrap();
+            let stepped_jerk = stepped
+                .iter()
+                .map(crate::testing::course_jerk)
+                .fold(0.0, f64::max);
+            assert!(
+                stepped_jerk > 3.0 * jerk_mm_s3,
+                "{method:?}: {stepped_jerk}"
             );
         }
     }

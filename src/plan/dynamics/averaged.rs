@@ -45,6 +45,7 @@ pub(in crate::plan) fn averaged_line(
 ) -> Result<Plan, PlanError> {
     averaged(
         motion,
+        f64::INFINITY,
         |timed, shares| {
             let Course::Path { path, pace } = timed_line_at(
                 robot,
@@ -83,11 +84,49 @@ pub(in crate::plan) fn probe(
 }
 
 /// The shares of the limits a path is timed to ([`super::PathLimits`]): of every joint's
-/// acceleration limit, and of every channel's top frequency.
+/// acceleration limit, of every channel's top frequency, and of the centripetal limit.
 #[derive(Debug, Clone, Copy)]
 pub(in crate::plan) struct Shares {
     pub accel: f64,
     pub speed: f64,
+    pub centripetal: f64,
+}
+
+impl Shares {
+    /// Every limit whole.
+    pub(in crate::plan) const WHOLE: Self = Self {
+        accel: 1.0,
+        speed: 1.0,
+        centripetal: 1.0,
+    };
+}
+
+/// How many times a path is timed again to a lower share of its centripetal limit while its
+/// average passes it ([`averaged`]).
+const CENTRIPETAL_RETIMINGS: usize = 4;
+/// The margin under the share the average passed the centripetal limit by.
+const CENTRIPETAL_MARGIN: f64 = 1.01;
+/// The spacing the centripetal acceleration is read at along a path, mm.
+const CENTRIPETAL_STEP_MM: f64 = 0.25;
+
+/// How far `course` (a path at a pace from rest, its profile cruising at `speed_mm_s`) passes
+/// the centripetal limit `centripetal_mm_s2`: the largest `v^2 k / a` along it, read every
+/// [`CENTRIPETAL_STEP_MM`] (0 on a line).
+fn centripetal_load(course: &Course, speed_mm_s: f64, centripetal_mm_s2: f64) -> f64 {
+    let Course::Path { path, pace } = course else {
+        return 0.0;
+    };
+    if !centripetal_mm_s2.is_finite() {
+        return 0.0;
+    }
+    let steps = (path.length_mm() / CENTRIPETAL_STEP_MM).ceil() as usize;
+    (0..=steps)
+        .map(|i| {
+            let s = (i as f64 * CENTRIPETAL_STEP_MM).min(path.length_mm());
+            let v = speed_mm_s * pace.ratio_at(s);
+            v * v * path.curvature_per_mm(s) / centripetal_mm_s2
+        })
+        .fold(0.0, f64::max)
 }
 
 /// A line's or a path section's time-optimal motion averaged to the S-curve `motion`'s jerk,
@@ -106,6 +145,7 @@ pub(in crate::plan) struct Shares {
 /// samples is planned.
 pub(in crate::plan) fn averaged<T>(
     motion: &Motion,
+    centripetal_mm_s2: f64,
     timed: impl Fn(&Motion, Shares) -> Result<(Path, Pace), PlanError>,
     plan: impl Fn(&Course, Motion) -> Result<T, PlanError>,
     probe: impl Fn(&Course, Motion) -> Option<(f64, f64)>,
@@ -131,25 +171,49 @@ pub(in crate::plan) fn averaged<T>(
             (path, pace, w.max(window_s))
         })
     };
+    // The path timed to `shares` and its window at least `window_s`, timed again to lower
+    // shares of the centripetal limit while its average passes it (entering an arc the motion
+    // slowed for, the average is still nearly as fast as before it); refused if it still does.
+    let fitted = |mut shares: Shares, window_s: f64| {
+        let (mut path, mut pace, mut window_s) = timed_at(shares, window_s)?;
+        for retiming in 0..=CENTRIPETAL_RETIMINGS {
+            let load = smoothed(&path, &pace, window_s).map_or(0.0, |c| {
+                centripetal_load(&c, trapezoid.speed_mm_s, centripetal_mm_s2)
+            });
+            if load <= 1.0 {
+                return Ok((path, pace, window_s, shares));
+            }
+            if retiming == CENTRIPETAL_RETIMINGS {
+                break;
+            }
+            shares.centripetal /= load * CENTRIPETAL_MARGIN;
+            (path, pace, window_s) = timed_at(shares, window_s)?;
+        }
+        Err(PlanError::SCurveUnderDriveLimits)
+    };
     let mut last = Err(PlanError::SCurveUnderDriveLimits);
     for accel in std::iter::once(1.0).chain(RETIMING) {
         // The window the path's jerk needs, lengthened while a joint's jerk is over its
         // `max_jerk`: the part of a joint's jerk the path's makes shrinks with the window.
-        let (mut path, mut pace, mut window_s) = timed_at(Shares { accel, speed: 1.0 }, 0.0)?;
+        let whole = Shares {
+            accel,
+            ..Shares::WHOLE
+        };
+        let (mut path, mut pace, mut window_s, mut shares) = fitted(whole, 0.0)?;
         // Where the average passes a channel's top frequency the sampled check slows all of
         // it: timed again to that share of the channels' top frequencies, and the faster
         // (judged on the samples, before any rows) kept.
         if let Some((duration_s, speed)) =
             smoothed(&path, &pace, window_s).and_then(|c| probe(&c, trapezoid))
             && speed < 1.0
-            && let Ok(again) = timed_at(Shares { accel, speed }, window_s)
+            && let Ok(again) = fitted(Shares { speed, ..shares }, window_s)
             && smoothed(&again.0, &again.1, again.2)
                 .and_then(|c| probe(&c, trapezoid))
                 .is_some_and(|(d, _)| d < duration_s)
         {
-            (path, pace, window_s) = again;
+            (path, pace, window_s, shares) = again;
         }
-        for _ in 0..=JERK_WIDENINGS {
+        for widening in 0..=JERK_WIDENINGS {
             let outcome = smoothed(&path, &pace, window_s)
                 .ok_or(PlanError::SCurveUnderDriveLimits)
                 .and_then(|course| plan(&course, trapezoid));
@@ -161,10 +225,12 @@ pub(in crate::plan) fn averaged<T>(
                 return outcome;
             }
             last = outcome;
-            if widen <= 1.0 {
+            if widen <= 1.0 || widening == JERK_WIDENINGS {
                 break;
             }
-            window_s *= widen * JERK_WIDENING_MARGIN;
+            // A longer window lags more: the centripetal limit fitted again.
+            (path, pace, window_s, shares) =
+                fitted(shares, window_s * widen * JERK_WIDENING_MARGIN)?;
         }
     }
     last

@@ -56,6 +56,7 @@ pub(in crate::plan) fn timed_line_at(
             rows_any_length,
             accel_share,
             speed_share,
+            centripetal_share: 1.0,
         },
     )?;
     Ok(Course::Path { path, pace })

@@ -79,6 +79,10 @@ pub(in crate::plan) struct PathLimits {
     /// averaged S-curve's speeds passed it (the average of a motion speeding up after a stretch
     /// slowed for a channel reaches that stretch faster than the motion did).
     pub speed_share: f64,
+    /// The share of the centripetal limit the timing plans to: 1, or less where an averaged
+    /// S-curve passed it (the average of a motion that slowed for an arc enters the arc faster
+    /// than the motion did).
+    pub centripetal_share: f64,
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
@@ -424,7 +428,7 @@ fn grid(
             let last = along.s_mm.len() - 1;
             let k = mid(i.saturating_sub(1), i.max(1)).max(mid(i.min(last - 1), (i + 1).min(last)));
             if k > 0.0 {
-                x_max = x_max.min(limits.centripetal_mm_s2 / k);
+                x_max = x_max.min(limits.centripetal_mm_s2 * limits.centripetal_share / k);
             }
             let mut accels = Vec::with_capacity(JOINTS + 1);
             if tangential.is_finite() {
