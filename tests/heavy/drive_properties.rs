@@ -266,7 +266,7 @@ fn jerks_measured_here(robot: &Robot, plan: &Plan) -> [f64; 4] {
 /// area.
 /// The tool's largest jerk along its course in `start`, mm/s^3: the third difference of its
 /// distance along the course over 10 ms, at every millisecond.
-fn tool_jerk(start: &Plan) -> f64 {
+pub(crate) fn tool_jerk(start: &Plan) -> f64 {
     let tau = 0.01;
     let (mut peak, mut t) = (0.0_f64, 0.0);
     while t + 3.0 * tau <= start.duration_s() {

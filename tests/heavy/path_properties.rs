@@ -31,7 +31,7 @@ use std::time::Instant;
 use linterpd::geometry::{ArcBy, Corner, Element, Path, PathSpec, Pose, ToolPath};
 use linterpd::kinematics::{JOINTS, Kinematics};
 use linterpd::plan::{Origin, PathPlan, PathRequest, Plan, PlanError, plan_path};
-use linterpd::robot::{Method, OverSpeed, Robot};
+use linterpd::robot::{Method, OverSpeed, Ramp, Robot};
 use linterpd::table::{FrequencyModel, TableProblem, problems};
 use nalgebra::Vector3;
 use proptest::prelude::*;
@@ -41,6 +41,8 @@ use proptest::test_runner::{Config, RngSeed, TestRunner};
 const CASES: u32 = 48;
 /// Cases per kinematics under random drive limits.
 const DRIVE_CASES: u32 = 16;
+/// Cases per kinematics with S-curve ramps.
+const S_CURVE_CASES: u32 = 24;
 /// The seed of the cases drawn.
 const SEED: u64 = 20_261_125;
 
@@ -417,6 +419,10 @@ struct Tally {
     events: usize,
     /// Planned speeds checked on arcs.
     arc_speeds: usize,
+    /// S-curve starts whose tool's jerk was checked.
+    jerk_checked: usize,
+    /// S-curve starts run on a pace that changes speed (the averaged one refused): not checked.
+    jerk_stepped: usize,
 }
 
 /// The refusals that mean "this random path cannot be planned": the reason's name, or `None`
@@ -643,11 +649,22 @@ fn check_arc_speeds(
 }
 
 fn run(kin: Kin, drives: bool) {
+    run_with(kin, drives, None);
+}
+
+/// [`run`], every path with S-curve ramps of `s_curve` mm/s^3 if given: every start then keeps
+/// that jerk along its course too ([`super::drive_properties::tool_jerk`], 5 % allowed for its
+/// third differences), as well as the centripetal limit on every arc.
+fn run_with(kin: Kin, drives: bool, s_curve: Option<f64>) {
     let began = Instant::now();
     let robot = kin.robot();
     let tally = RefCell::new(Tally::default());
     let mut runner = TestRunner::new(Config {
-        cases: if drives { DRIVE_CASES } else { CASES },
+        cases: match (drives, s_curve) {
+            (true, _) => DRIVE_CASES,
+            (false, Some(_)) => S_CURVE_CASES,
+            (false, None) => CASES,
+        },
         source_file: Some(file!()),
         // The same cases on every run, so that the coverage asserted below is the same too
         // (`PROPTEST_RNG_SEED=N` explores others).
@@ -673,13 +690,19 @@ fn run(kin: Kin, drives: bool) {
             s.drives = l.is_some();
             robot.area_words = s.area_words;
             let robot = &robot;
-            let req = request(robot, &route, &s);
+            let mut req = request(robot, &route, &s);
+            if let Some(jerk_mm_s3) = s_curve {
+                req.motion.ramp = Ramp::SCurve { jerk_mm_s3 };
+            }
             let outcome = plan_path(robot, &req);
             let mut t = tally.borrow_mut();
             t.cases += 1;
             match outcome {
                 Ok(planned) => {
                     check(robot, &route, &s, &req, &planned, &mut t)?;
+                    if let Some(jerk_mm_s3) = s_curve {
+                        check_jerk(&planned, jerk_mm_s3, &mut t)?;
+                    }
                     if s.drives {
                         for plan in planned.starts() {
                             super::drive_properties::check_rows(robot, plan)?;
@@ -724,7 +747,46 @@ fn run(kin: Kin, drives: bool) {
     if let Err(e) = result {
         panic!("{kin:?}: {e}");
     }
-    assert_coverage(kin, drives, &t);
+    if s_curve.is_some() {
+        assert_s_curve_coverage(kin, &t);
+    } else {
+        assert_coverage(kin, drives, &t);
+    }
+}
+
+/// Every S-curve start of `planned` keeps `jerk_mm_s3` along its course
+/// ([`super::drive_properties::tool_jerk`], 5 % allowed for its third differences), but those
+/// run on a pace that changes speed (where the averaged S-curve could not be planned), which
+/// keep that pace's steps: counted.
+fn check_jerk(planned: &PathPlan, jerk_mm_s3: f64, t: &mut Tally) -> Result<(), TestCaseError> {
+    for (k, plan) in planned.starts().enumerate() {
+        let stepped = plan
+            .pace
+            .as_ref()
+            .is_some_and(|p| !p.from_rest() && !p.is_uniform());
+        if stepped {
+            t.jerk_stepped += 1;
+            continue;
+        }
+        let jerk = super::drive_properties::tool_jerk(plan);
+        prop_assert!(
+            jerk <= jerk_mm_s3 * 1.05,
+            "start {}: the tool's jerk {jerk} over {jerk_mm_s3}",
+            k + 1
+        );
+        t.jerk_checked += 1;
+    }
+    Ok(())
+}
+
+/// With S-curves: most plan, arcs and S-curve starts among them were checked, and at most one
+/// start in ten checked ran on a stepping pace.
+fn assert_s_curve_coverage(kin: Kin, t: &Tally) {
+    let planned = t.planned_bounded + t.planned_constant;
+    let over_speed = t.skipped.get("OverSpeed").copied().unwrap_or(0);
+    assert!(2 * planned >= t.cases - over_speed, "{kin:?}: {t:?}");
+    assert!(t.arc_speeds > 0 && t.jerk_checked > 0, "{kin:?}: {t:?}");
+    assert!(t.jerk_stepped * 10 <= t.jerk_checked, "{kin:?}: {t:?}");
 }
 
 /// Most cases plan, with every feature among them (under drive limits: every start checked).
@@ -774,6 +836,19 @@ fn gantry_paths_chain_keep_the_rules_and_stay_within_tolerance() {
 #[test]
 fn scara_paths_chain_keep_the_rules_and_stay_within_tolerance() {
     run(Kin::Scara, false);
+}
+
+/// S-curve paths keep their jerk along the path and the centripetal limit on every arc: an
+/// S-curve whose pace changes speed (a tight arc, a channel too fast under `slow-down`) is the
+/// time-optimal motion averaged, and timed again where its average enters an arc too fast.
+/// Where that one is refused (a bounded-error part a joint starts late into, say), the S-curve
+/// runs on the trapezoid's pace and keeps its steps at arcs: those starts are counted, at most
+/// one in ten of those checked.
+#[test]
+fn paths_with_s_curves_keep_their_jerk_and_the_centripetal_limit() {
+    for kin in [Kin::Cylindrical, Kin::Gantry, Kin::Scara] {
+        run_with(kin, false, Some(20_000.0));
+    }
 }
 
 #[test]

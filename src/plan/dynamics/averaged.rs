@@ -103,15 +103,17 @@ impl Shares {
 
 /// How many times a path is timed again to a lower share of its centripetal limit while its
 /// average passes it ([`averaged`]).
-const CENTRIPETAL_RETIMINGS: usize = 4;
+const CENTRIPETAL_RETIMINGS: usize = 6;
 /// The margin under the share the average passed the centripetal limit by.
 const CENTRIPETAL_MARGIN: f64 = 1.01;
-/// The spacing the centripetal acceleration is read at along a path, mm.
+/// The spacing the centripetal acceleration is read at along an arc, mm.
 const CENTRIPETAL_STEP_MM: f64 = 0.25;
+/// The fewest reads of the centripetal acceleration along one arc.
+const CENTRIPETAL_READS: usize = 8;
 
 /// How far `course` (a path at a pace from rest, its profile cruising at `speed_mm_s`) passes
-/// the centripetal limit `centripetal_mm_s2`: the largest `v^2 k / a` along it, read every
-/// [`CENTRIPETAL_STEP_MM`] (0 on a line).
+/// the centripetal limit `centripetal_mm_s2`: the largest `v^2 k / a` on its arcs, read every
+/// [`CENTRIPETAL_STEP_MM`] and at least [`CENTRIPETAL_READS`] times along each (0 on a line).
 fn centripetal_load(course: &Course, speed_mm_s: f64, centripetal_mm_s2: f64) -> f64 {
     let Course::Path { path, pace } = course else {
         return 0.0;
@@ -119,14 +121,21 @@ fn centripetal_load(course: &Course, speed_mm_s: f64, centripetal_mm_s2: f64) ->
     if !centripetal_mm_s2.is_finite() {
         return 0.0;
     }
-    let steps = (path.length_mm() / CENTRIPETAL_STEP_MM).ceil() as usize;
-    (0..=steps)
-        .map(|i| {
-            let s = (i as f64 * CENTRIPETAL_STEP_MM).min(path.length_mm());
-            let v = speed_mm_s * pace.ratio_at(s);
-            v * v * path.curvature_per_mm(s) / centripetal_mm_s2
-        })
-        .fold(0.0, f64::max)
+    let mut load: f64 = 0.0;
+    for piece in path.pieces() {
+        let k = piece.primitive.curvature_per_mm();
+        let length_mm = piece.primitive.length_mm();
+        if k <= 0.0 {
+            continue;
+        }
+        let reads = ((length_mm / CENTRIPETAL_STEP_MM).ceil() as usize).max(CENTRIPETAL_READS);
+        for i in 0..=reads {
+            let s = piece.start_mm + length_mm * i as f64 / reads as f64;
+            let v = speed_mm_s * pace.ratio_at(s.min(path.length_mm()));
+            load = load.max(v * v * k / centripetal_mm_s2);
+        }
+    }
+    load
 }
 
 /// A line's or a path section's time-optimal motion averaged to the S-curve `motion`'s jerk,
@@ -176,6 +185,10 @@ pub(in crate::plan) fn averaged<T>(
     // slowed for, the average is still nearly as fast as before it); refused if it still does.
     let fitted = |mut shares: Shares, window_s: f64| {
         let (mut path, mut pace, mut window_s) = timed_at(shares, window_s)?;
+        // The load goes down with the share as a power of it (the average's speed on an arc
+        // is partly the approach's, which the share does not lower): that power is measured
+        // between the last two timings, from the square root (the arc's own speed) at first.
+        let mut before: Option<(f64, f64)> = None;
         for retiming in 0..=CENTRIPETAL_RETIMINGS {
             let load = smoothed(&path, &pace, window_s).map_or(0.0, |c| {
                 centripetal_load(&c, trapezoid.speed_mm_s, centripetal_mm_s2)
@@ -186,7 +199,13 @@ pub(in crate::plan) fn averaged<T>(
             if retiming == CENTRIPETAL_RETIMINGS {
                 break;
             }
-            shares.centripetal /= load * CENTRIPETAL_MARGIN;
+            let power = before
+                .map(|(share, was)| (was / load).ln() / (share / shares.centripetal).ln())
+                .filter(|p| p.is_finite())
+                .map_or(0.5, |p| p.clamp(0.1, 1.0));
+            before = Some((shares.centripetal, load));
+            // At most halved at a time: where the load does not fall with the share, slowly.
+            shares.centripetal *= (load.powf(-1.0 / power) / CENTRIPETAL_MARGIN).max(0.5);
             (path, pace, window_s) = timed_at(shares, window_s)?;
         }
         Err(PlanError::SCurveUnderDriveLimits)
