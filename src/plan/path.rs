@@ -786,6 +786,25 @@ mod tests {
         plan_path(&robot, &req)
     }
 
+    /// From P1 up and across to 100 mm above P2, a 20 mm blend there, down to P2, at `motion`.
+    fn over_p2(motion: Motion) -> PathRequest {
+        PathRequest {
+            from: Origin::Pose(pose(P1, 0.0)),
+            start: None,
+            elements: vec![
+                (
+                    Element::Line {
+                        to: pose(P2, 100.0),
+                    },
+                    Corner::Blend(20.0),
+                ),
+                (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
+            ],
+            motion,
+            path_accel_mm_s2: 5_000.0,
+        }
+    }
+
     #[test]
     fn a_blended_cycle_is_one_section_within_tolerance_ends_on_p2_and_beats_stops() {
         let robot = seed_robot();
@@ -911,21 +930,7 @@ mod tests {
         // Areas a little over half of what the largest table needs.
         let area = words / 2 + 10;
         robot.area_words = area;
-        let req = PathRequest {
-            from: Origin::Pose(pose(P1, 0.0)),
-            start: None,
-            elements: vec![
-                (
-                    Element::Line {
-                        to: pose(P2, 100.0),
-                    },
-                    Corner::Blend(20.0),
-                ),
-                (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
-            ],
-            motion: motion(&robot, bounded, FrequencyModel::Ideal),
-            path_accel_mm_s2: 5_000.0,
-        };
+        let req = over_p2(motion(&robot, bounded, FrequencyModel::Ideal));
         let split = plan_path(&robot, &req).unwrap_or_else(|e| panic!("area {area}: {e}"));
         let starts = &split.sections[0].starts;
         assert!(starts.len() > whole_starts + 1, "{} starts", starts.len());
@@ -1076,24 +1081,10 @@ mod tests {
             Method::ConstantPeriod,
             Method::BoundedError { tolerance_mm: 0.05 },
         ] {
-            let req = PathRequest {
-                from: Origin::Pose(pose(P1, 0.0)),
-                start: None,
-                elements: vec![
-                    (
-                        Element::Line {
-                            to: pose(P2, 100.0),
-                        },
-                        Corner::Blend(20.0),
-                    ),
-                    (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
-                ],
-                motion: Motion {
-                    ramp: Ramp::SCurve { jerk_mm_s3 },
-                    ..motion(&robot, method, FrequencyModel::FpxDivider)
-                },
-                path_accel_mm_s2: 5_000.0,
-            };
+            let req = over_p2(Motion {
+                ramp: Ramp::SCurve { jerk_mm_s3 },
+                ..motion(&robot, method, FrequencyModel::FpxDivider)
+            });
             let plan = plan_path(&robot, &req).unwrap();
             assert!(plan.valid(), "{method:?}");
             for start in plan.starts() {
