@@ -786,23 +786,41 @@ mod tests {
         plan_path(&robot, &req)
     }
 
-    /// From P1 up and across to 100 mm above P2, a 20 mm blend there, down to P2, at `motion`.
-    fn over_p2(motion: Motion) -> PathRequest {
+    /// From P1 to `via`, a 20 mm blend there, on to `to`, at `motion` (5000 mm/s^2 on arcs).
+    fn blended_via(via: Pose, to: Pose, motion: Motion) -> PathRequest {
         PathRequest {
             from: Origin::Pose(pose(P1, 0.0)),
             start: None,
             elements: vec![
-                (
-                    Element::Line {
-                        to: pose(P2, 100.0),
-                    },
-                    Corner::Blend(20.0),
-                ),
-                (Element::Line { to: pose(P2, 0.0) }, Corner::Stop),
+                (Element::Line { to: via }, Corner::Blend(20.0)),
+                (Element::Line { to }, Corner::Stop),
             ],
             motion,
             path_accel_mm_s2: 5_000.0,
         }
+    }
+
+    /// From P1 up and across to 100 mm above P2, a 20 mm blend there, down to P2, at `motion`.
+    fn over_p2(motion: Motion) -> PathRequest {
+        blended_via(pose(P2, 100.0), pose(P2, 0.0), motion)
+    }
+
+    /// `req`'s one section (planned as `plan`) run on the pace a trapezoid would have (as an
+    /// S-curve was before stop 40): its duration and the tool's largest jerk along it.
+    fn on_trapezoid_pace(robot: &Robot, req: &PathRequest, plan: &PathPlan) -> (f64, f64) {
+        let section = &plan.sections[0].path;
+        let start = Start::at(robot, req.from).unwrap();
+        let pace = as_asked_pace(robot, section, &start, &req.motion, req.path_accel_mm_s2);
+        let course = Course::Path {
+            path: section.clone(),
+            pace,
+        };
+        let starts = parts(robot, &course, &start, req.motion).unwrap();
+        let jerk = starts
+            .iter()
+            .map(crate::testing::course_jerk)
+            .fold(0.0, f64::max);
+        (starts.iter().map(Plan::duration_s).sum(), jerk)
     }
 
     #[test]
@@ -1115,23 +1133,7 @@ mod tests {
             assert!(on_blend <= allowed * (1.0 + 1e-6), "{method:?}: {on_blend}");
             assert!(fastest > 239.0, "{method:?}: the lines at {fastest} mm/s");
             // On the trapezoid's pace.
-            let section = &plan.sections[0];
-            let start = Start::at(&robot, req.from).unwrap();
-            let stepped_pace = Course::Path {
-                path: section.path.clone(),
-                pace: as_asked_pace(
-                    &robot,
-                    &section.path,
-                    &start,
-                    &req.motion,
-                    req.path_accel_mm_s2,
-                ),
-            };
-            let stepped = parts(&robot, &stepped_pace, &start, req.motion).unwrap();
-            let stepped_jerk = stepped
-                .iter()
-                .map(crate::testing::course_jerk)
-                .fold(0.0, f64::max);
+            let (_, stepped_jerk) = on_trapezoid_pace(&robot, &req, &plan);
             assert!(
                 stepped_jerk > 3.0 * jerk_mm_s3,
                 "{method:?}: {stepped_jerk}"
@@ -1147,26 +1149,15 @@ mod tests {
         robot.joints[1].max_freq_hz = 6_000;
         let asked = robot.motion;
         let level = Pose::from_mm_deg(P2[0], P2[1], P1[2] + 100.0, 0.0);
-        let req = move |method, over_speed, ramp| PathRequest {
-            from: Origin::Pose(pose(P1, 0.0)),
-            start: None,
-            elements: vec![
-                (
-                    Element::Line {
-                        to: pose(P1, 100.0),
-                    },
-                    Corner::Blend(20.0),
-                ),
-                (Element::Line { to: level }, Corner::Stop),
-            ],
-            motion: Motion {
+        let req = move |method, over_speed, ramp| {
+            let motion = Motion {
                 method,
                 frequency_model: FrequencyModel::FpxDivider,
                 over_speed,
                 ramp,
                 ..asked
-            },
-            path_accel_mm_s2: 5_000.0,
+            };
+            blended_via(pose(P1, 100.0), level, motion)
         };
         (robot, req)
     }
@@ -1272,22 +1263,7 @@ mod tests {
             // Run on the trapezoid's pace (as it was), the S-curve passed its jerk many times
             // over, and took hardly less time: the average passes d2's top frequency after
             // the lift, and is timed again to the share of it the sampled check leaves.
-            let stepped_pace = Course::Path {
-                path: section.path.clone(),
-                pace: as_asked_pace(
-                    &robot,
-                    &section.path,
-                    &start,
-                    &s_curve_req.motion,
-                    s_curve_req.path_accel_mm_s2,
-                ),
-            };
-            let stepped = parts(&robot, &stepped_pace, &start, s_curve_req.motion).unwrap();
-            let stepped_s: f64 = stepped.iter().map(Plan::duration_s).sum();
-            let stepped_jerk = stepped
-                .iter()
-                .map(crate::testing::course_jerk)
-                .fold(0.0, f64::max);
+            let (stepped_s, stepped_jerk) = on_trapezoid_pace(&robot, &s_curve_req, &s_curve);
             assert!(
                 stepped_jerk > 10.0 * jerk_mm_s3,
                 "{method:?}: {stepped_jerk}"
