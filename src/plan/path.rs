@@ -387,22 +387,17 @@ fn planned_as_asked(
     asked: Motion,
     path_accel_mm_s2: f64,
 ) -> Result<Vec<Plan>, PlanError> {
-    let caps = match (asked.over_speed, asked.ramp) {
-        (OverSpeed::SlowDown, Ramp::Trapezoid) => {
-            frequency_caps(robot, section, start, asked.speed_mm_s)
-        }
-        (OverSpeed::SlowDown, Ramp::SCurve { .. }) | (OverSpeed::Reject, _) => Vec::new(),
+    // The pace an S-curve runs at has no caps: its arcs' alone, as under `reject`.
+    let paced = match asked.ramp {
+        Ramp::Trapezoid => asked,
+        Ramp::SCurve { .. } => Motion {
+            over_speed: OverSpeed::Reject,
+            ..asked
+        },
     };
-    let pace = Pace::new(
-        section,
-        asked.speed_mm_s,
-        path_accel_mm_s2,
-        asked.speed_mm_s / asked.accel_s,
-        &caps,
-    );
     let course = Course::Path {
         path: section.clone(),
-        pace,
+        pace: as_asked_pace(robot, section, start, &paced, path_accel_mm_s2),
     };
     parts(robot, &course, start, asked)
 }
