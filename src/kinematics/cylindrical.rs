@@ -53,7 +53,9 @@ impl Kinematics for Cylindrical {
     fn ik(&self, pose: &Pose, near: Option<&Joints>) -> Result<Joints, KinematicsError> {
         check_finite(pose)?;
         let p = pose.position_mm;
-        let r = p.x.hypot(p.y);
+        // Not `hypot`: coordinates in millimetres neither overflow nor underflow, and the
+        // library call costs more than the rest of the solution.
+        let r = (p.x * p.x + p.y * p.y).sqrt();
         if r < self.min_axis_distance_mm {
             return Err(KinematicsError::NearAxis {
                 distance_mm: r,

@@ -194,5 +194,7 @@ pub fn check_finite(pose: &Pose) -> Result<(), KinematicsError> {
 #[must_use]
 pub fn unwrap_near(angle: f64, near: f64) -> f64 {
     let turn = std::f64::consts::TAU;
-    angle + ((near - angle) / turn).round() * turn
+    // Whole turns, rounded as `round` does without its library call (planning unwraps every
+    // millisecond sample).
+    angle + crate::robot::nearest_count((near - angle) / turn) as f64 * turn
 }

@@ -23,6 +23,7 @@ use std::cell::RefCell;
 mod budget;
 mod pulses;
 mod rows;
+mod windows;
 
 use crate::geometry::Profile;
 use crate::kinematics::JOINTS;
@@ -33,8 +34,9 @@ use crate::table::{ChannelTable, FrequencyRange};
 use super::course::Course;
 use super::{Creep, PlanError, Samples, Window, simulate_within};
 use budget::Budget;
-use pulses::{Counts, Pulse, Run, Track, runs};
-use rows::Channel;
+use pulses::{Counts, Run, Track};
+use rows::{Bounds, Channel};
+use windows::{Pulses, Stretch};
 
 /// Sample spacing of the trajectory, s.
 pub(super) const SAMPLE_S: f64 = 0.001;
@@ -75,28 +77,12 @@ const NARROWING: f64 = 0.8;
 /// The widest window, pulses each side (also for joints that do not move the tool point).
 const MAX_DELTA_PULSES: f64 = 8.0;
 
-/// Buffers kept on a thread between tries and plans: one channel's pulses run to a megabyte
-/// on the seed's move, and buffers that large, handed back to the system at the end of every
-/// plan, came back as page faults on the next (a fifth of its planning time in the bench).
-struct Scratch {
-    /// One channel's pulses ([`Track::pulses_into`]).
-    pulses: RefCell<Vec<Pulse>>,
-    /// A row's period bounds ([`rows::Channel`]).
-    bounds: RefCell<Vec<(f64, f64)>>,
-}
-
 thread_local! {
-    static SCRATCH: Scratch = const {
-        Scratch {
-            pulses: RefCell::new(Vec::new()),
-            bounds: RefCell::new(Vec::new()),
-        }
-    };
+    /// A row's scan's buffers ([`rows::Channel`]), kept on a thread between tries and plans.
+    static BOUNDS: RefCell<Bounds> = RefCell::new(Bounds::default());
 }
-/// The most pulses [`SCRATCH`] keeps after a plan, 32 bytes each (and as many bounds, 16 bytes):
-/// 12 MB at most on a thread that planned. A channel of more pulses (2.6 m of a 0.01 mm axis)
-/// hands its buffers back, and its plan pays the page faults, a small part of its time.
-const SCRATCH_KEPT: usize = 1 << 18;
+/// The most pieces [`BOUNDS`] keeps after a plan, 24 bytes each per side: 12 MB at most.
+const BOUNDS_KEPT: usize = 1 << 18;
 
 /// Every joint's window, pulses each side: `budget_mm * scale` over its reach, at most
 /// [`MAX_DELTA_PULSES`] (a joint that cannot move the tool gets that much times the scale).
@@ -247,8 +233,7 @@ impl Move<'_> {
         )
     }
 
-    /// Every channel's table for windows `deltas` pulses wide, one channel's pulses at a
-    /// time in the thread's [`SCRATCH`].
+    /// Every channel's table for windows `deltas` pulses wide.
     fn tables(
         &self,
         tracks: &[Counts],
@@ -256,22 +241,15 @@ impl Move<'_> {
         off_window: usize,
     ) -> Vec<ChannelTable> {
         let start = self.start_counts();
-        SCRATCH.with(|scratch| {
-            let mut pulses = scratch.pulses.borrow_mut();
+        BOUNDS.with(|bounds| {
             let tables = (0..JOINTS)
                 .map(|j| {
-                    let starts =
-                        self.track(tracks, j)
-                            .pulses_into(start[j], deltas[j], &mut pulses);
-                    self.table(j, &runs(&pulses, &starts), off_window, &scratch.bounds)
+                    let windows = self.track(tracks, j).windows(start[j], deltas[j]);
+                    self.table(j, &windows.runs(), off_window, bounds)
                 })
                 .collect();
-            if pulses.capacity() > SCRATCH_KEPT {
-                *pulses = Vec::new();
-            }
-            let mut bounds = scratch.bounds.borrow_mut();
-            if bounds.capacity() > SCRATCH_KEPT {
-                *bounds = Vec::new();
+            if bounds.borrow().capacity() > BOUNDS_KEPT {
+                *bounds.borrow_mut() = Bounds::default();
             }
             tables
         })
@@ -281,9 +259,9 @@ impl Move<'_> {
     fn table(
         &self,
         j: usize,
-        runs: &[Run],
+        runs: &[Run<Stretch>],
         off_window: usize,
-        bounds: &RefCell<Vec<(f64, f64)>>,
+        bounds: &RefCell<Bounds>,
     ) -> ChannelTable {
         let start = self.start_counts()[j];
         let joint = &self.robot.joints[j];
@@ -299,7 +277,10 @@ impl Move<'_> {
                 .saturating_sub(segments.len() + runs.len() - i - 1)
                 .max(1);
             let (segs, end) = channel.run(run, t_s, count, left);
-            count = run.pulses.last().map_or(count, |p| p.count);
+            let n = run.pulses.len();
+            if n > 0 {
+                count = run.pulses.pulse(n - 1).count;
+            }
             t_s = end;
             segments.extend(segs);
         }

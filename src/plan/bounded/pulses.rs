@@ -21,17 +21,21 @@ pub(super) struct Pulse {
     pub hi_s: f64,
 }
 
-/// Pulses in one direction, back to back.
+/// Pulses in one direction, back to back ([`super::windows::Windows::runs`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Run<'a> {
+pub(super) struct Run<P> {
     /// Their direction.
     pub direction: Direction,
     /// The pulses, in order.
-    pub pulses: &'a [Pulse],
+    pub pulses: P,
 }
 
-/// A joint's pulses ([`Track::pulses_into`]) cut where the direction changes.
-pub(super) fn runs<'a>(pulses: &'a [Pulse], starts: &[(usize, Direction)]) -> Vec<Run<'a>> {
+/// A joint's pulses made one by one ([`Track::pulses_into`]) cut where the direction changes.
+#[cfg(test)]
+pub(super) fn runs<'a>(
+    pulses: &'a [Pulse],
+    starts: &[(usize, Direction)],
+) -> Vec<Run<&'a [Pulse]>> {
     starts
         .iter()
         .enumerate()
@@ -89,22 +93,29 @@ pub(super) struct Track<'a> {
 }
 
 impl<'a> Track<'a> {
-    fn t(&self, i: usize) -> f64 {
+    /// The counts, one per sample.
+    pub(super) fn counts(&self) -> &'a [f64] {
+        self.u
+    }
+
+    /// The time of sample `i`.
+    pub(super) fn t(&self, i: usize) -> f64 {
         i as f64 * self.dt_s
     }
 
     /// Time in sample interval `i` at which `u` passes `level` (linear between samples).
-    fn at(&self, i: usize, level: f64) -> f64 {
+    pub(super) fn at(&self, i: usize, level: f64) -> f64 {
         let f = ((level - self.u[i]) * self.per_count[i]).clamp(0.0, 1.0);
         self.t(i) + f * self.dt_s
     }
 
     /// Moving in direction `d` (+1/-1) between samples `i` and `i + 1`.
-    fn moves(&self, i: usize, d: f64) -> bool {
+    pub(super) fn moves(&self, i: usize, d: f64) -> bool {
         (self.u[i + 1] - self.u[i]) * d > 0.0
     }
 
     /// Earliest time, searching back from interval `i`, since which `u` is past `level`.
+    #[cfg(test)]
     fn since(&self, mut i: usize, level: f64, d: f64) -> f64 {
         loop {
             if (self.u[i] - level) * d <= 0.0 {
@@ -118,6 +129,7 @@ impl<'a> Track<'a> {
     }
 
     /// Latest time, searching on from interval `i`, before which `u` has not reached `level`.
+    #[cfg(test)]
     fn until(&self, mut i: usize, level: f64, d: f64) -> f64 {
         loop {
             if (self.u[i + 1] - level) * d >= 0.0 {
@@ -132,7 +144,7 @@ impl<'a> Track<'a> {
 
     /// Every half count the trajectory crosses from count `start`, in time order, made as they
     /// are read.
-    fn crossings(&self, start: i64) -> Crossings<'a> {
+    pub(super) fn crossings(&self, start: i64) -> Crossings<'a> {
         Crossings {
             u: self.u,
             i: 0,
@@ -148,8 +160,9 @@ impl<'a> Track<'a> {
     }
 
     /// The joint's pulses from count `start`, with windows `delta` pulses wide each side,
-    /// written over `pulses` (a buffer kept between plans: see `super::SCRATCH`); returns where
-    /// each run of one direction starts ([`runs`] cuts them).
+    /// made one by one and written over `pulses`; returns where each run of one direction
+    /// starts ([`runs`] cuts them). What [`Track::windows`] reads is checked against it.
+    #[cfg(test)]
     pub(super) fn pulses_into(
         &self,
         start: i64,
@@ -181,20 +194,21 @@ impl<'a> Track<'a> {
 }
 
 /// A half count the trajectory crosses ([`Track::crossings`]).
-struct Crossing {
+pub(super) struct Crossing {
     /// The sample interval it is crossed in.
-    interval: usize,
+    pub interval: usize,
     /// The half count.
-    half: f64,
+    pub half: f64,
     /// +1 counting up, -1 down.
-    direction: f64,
+    #[cfg(test)]
+    pub direction: f64,
     /// The count after the pulse.
-    count: i64,
+    pub count: i64,
 }
 
 /// The half counts a track crosses, from a start count: the count follows the trajectory,
 /// a pulse each time it passes the half count above or below.
-struct Crossings<'a> {
+pub(super) struct Crossings<'a> {
     u: &'a [f64],
     /// The interval being crossed: `u[i]` to `u[i + 1]`.
     i: usize,
@@ -220,6 +234,7 @@ impl Iterator for Crossings<'_> {
             return Some(Crossing {
                 interval: self.i,
                 half,
+                #[cfg(test)]
                 direction: f64::from(d),
                 count: self.count,
             });

@@ -6,7 +6,8 @@
 
 use std::cell::RefCell;
 
-use super::pulses::{Pulse, Run};
+use super::pulses::Run;
+use super::windows::{NO_CURSOR, Pulses, Side};
 use crate::plan::segments::segment;
 use crate::robot::Joint;
 use crate::table::{FrequencyModel, FrequencyRange, MAX_SEGMENTS, Row, Segment};
@@ -20,44 +21,195 @@ pub(super) struct Channel<'a> {
     /// Pulses a run may leave off their windows (played as near as its range allows) to stay
     /// one segment where no range plays it all; the execution model judges the result.
     pub off_window: usize,
-    /// A buffer for a row's period bounds ([`Channel::longest`]), kept between rows.
-    pub bounds: &'a RefCell<Vec<(f64, f64)>>,
+    /// Buffers for a row's scan ([`Channel::longest`]), kept between rows.
+    pub bounds: &'a RefCell<Bounds>,
 }
 
 /// Pulses a row's windows are first scanned over ([`Channel::longest`]).
 const SCAN_FIRST: usize = 4096;
 
-/// A row's period bounds from its start, pulse by pulse: pulse `i` (from 0) lands at
-/// `t_s + (i + 1) * period`, so the period lies within every earlier pulse's window over its
-/// number.
-struct Scan<'a> {
-    pulses: &'a [Pulse],
+/// The pieces a row's scan has read on each side ([`Bound`]), kept between rows and plans.
+#[derive(Default)]
+pub(super) struct Bounds {
+    early: Vec<Scanned>,
+    late: Vec<Scanned>,
+}
+
+impl Bounds {
+    /// The most pieces held.
+    pub(super) fn capacity(&self) -> usize {
+        self.early.capacity().max(self.late.capacity())
+    }
+}
+
+/// A piece a scan has read: its first pulse, the bound over the pulses before it, and the first
+/// pulse's own bound.
+#[derive(Clone, Copy)]
+struct Scanned {
+    first: usize,
+    before: f64,
+    own: f64,
+}
+
+/// One side of a row's period bounds from its start, read piece by piece: pulse `i` (from 0)
+/// lands at `t_s + (i + 1) * period`, so the period is at least every earlier pulse's earliest
+/// landing over its number (the [`Side::Early`] bound, the largest of them) and at most every
+/// latest over its number (the smallest). Along a piece a pulse's own bound is monotone
+/// ([`super::windows`]), so the bound through a pulse of it is read from the piece's first
+/// pulse and that one.
+struct Bound<'b> {
+    side: Side,
+    cursor: usize,
+    pieces: &'b mut Vec<Scanned>,
+    /// The bound before any pulse (the range's period limit).
+    outer: f64,
+    /// The current piece's last pulse (`None` before the first), and the bound through it.
+    last: Option<usize>,
+    through_last: f64,
+}
+
+impl Bound<'_> {
+    fn combine(&self, a: f64, b: f64) -> f64 {
+        match self.side {
+            Side::Early => a.max(b),
+            Side::Late => a.min(b),
+        }
+    }
+
+    fn own(t_s: f64, k: usize, edge_s: f64) -> f64 {
+        (edge_s - t_s) / (k + 1) as f64
+    }
+
+    /// The bound through pulse `k` of the current piece.
+    fn through<P: Pulses>(&mut self, pulses: P, t_s: f64, k: usize) -> f64 {
+        if self.last == Some(k) {
+            return self.through_last;
+        }
+        let piece = *self.pieces.last().expect("a piece entered");
+        let own = if k == piece.first {
+            piece.own
+        } else {
+            Self::own(t_s, k, pulses.edge(self.side, k, &mut self.cursor))
+        };
+        self.combine(self.combine(piece.before, piece.own), own)
+    }
+
+    /// Enters the piece pulse `k` is in, the pulses before it scanned.
+    fn enter<P: Pulses>(&mut self, pulses: P, t_s: f64, k: usize) {
+        let before = match self.last {
+            Some(_) => self.through_last,
+            None => self.outer,
+        };
+        let (last, at_k, at_last) = pulses.piece(self.side, k, &mut self.cursor);
+        let own = Self::own(t_s, k, at_k);
+        self.pieces.push(Scanned {
+            first: k,
+            before,
+            own,
+        });
+        let own_last = Self::own(t_s, last, at_last);
+        self.through_last = self.combine(self.combine(before, own), own_last);
+        self.last = Some(last);
+    }
+
+    /// The bound through pulse `k` of any piece scanned.
+    fn through_scanned<P: Pulses>(&self, pulses: P, t_s: f64, k: usize) -> f64 {
+        let piece = self.pieces[self.pieces.partition_point(|p| p.first <= k) - 1];
+        let own = if k == piece.first {
+            piece.own
+        } else {
+            Self::own(t_s, k, pulses.edge(self.side, k, &mut { NO_CURSOR }))
+        };
+        self.combine(self.combine(piece.before, piece.own), own)
+    }
+}
+
+/// A row's period bounds from its start, as far as they have been scanned.
+struct Scan<'b, P> {
+    pulses: P,
     t_s: f64,
-    lo: f64,
-    hi: f64,
+    early: Bound<'b>,
+    late: Bound<'b>,
+    /// Pulses that keep the bounds open.
+    open_to: usize,
     /// False once the bounds cross or the pulses run out.
     open: bool,
 }
 
-impl Scan<'_> {
-    /// Extends `bounds` to `reach` pulses, or as far as they stay open; returns their length.
-    fn extend(&mut self, bounds: &mut Vec<(f64, f64)>, reach: usize) -> usize {
-        while self.open && bounds.len() < reach {
-            let i = bounds.len();
-            let Some(p) = self.pulses.get(i) else {
-                self.open = false;
-                break;
-            };
-            let n = (i + 1) as f64;
-            self.lo = self.lo.max((p.lo_s - self.t_s) / n);
-            self.hi = self.hi.min((p.hi_s - self.t_s) / n);
-            if self.lo > self.hi {
+impl<'b, P: Pulses> Scan<'b, P> {
+    fn new(pulses: P, t_s: f64, (lo, hi): (f64, f64), bounds: &'b mut Bounds) -> Self {
+        bounds.early.clear();
+        bounds.late.clear();
+        let bound = |side, pieces, outer| Bound {
+            side,
+            cursor: NO_CURSOR,
+            pieces,
+            outer,
+            last: None,
+            through_last: outer,
+        };
+        Self {
+            pulses,
+            t_s,
+            early: bound(Side::Early, &mut bounds.early, lo),
+            late: bound(Side::Late, &mut bounds.late, hi),
+            open_to: 0,
+            open: true,
+        }
+    }
+
+    /// Whether the bounds through pulse `k` (in both current pieces) cross.
+    fn crosses(&mut self, k: usize) -> bool {
+        let (pulses, t_s) = (self.pulses, self.t_s);
+        self.early.through(pulses, t_s, k) > self.late.through(pulses, t_s, k)
+    }
+
+    /// Scans to `reach` pulses, or as far as they stay open; returns how many are open.
+    fn extend(&mut self, reach: usize) -> usize {
+        let (pulses, t_s) = (self.pulses, self.t_s);
+        while self.open && self.open_to < reach {
+            let k = self.open_to;
+            if k == pulses.len() {
                 self.open = false;
                 break;
             }
-            bounds.push((self.lo, self.hi));
+            for bound in [&mut self.early, &mut self.late] {
+                if bound.last.is_none_or(|last| last < k) {
+                    bound.enter(pulses, t_s, k);
+                }
+            }
+            let last = |b: &Bound| b.last.expect("a piece entered");
+            let x = last(&self.early).min(last(&self.late)).min(reach - 1);
+            // Each side's bound through its piece's last pulse is known, and bounds only close
+            // as pulses are added: where those are open, so is every pulse before.
+            let clear = self.early.through_last <= self.late.through_last;
+            if !clear && self.crosses(x) {
+                // The first pulse they cross at: the bounds only close as pulses are added.
+                let (mut open, mut closed) = (k, x);
+                while open < closed {
+                    let mid = usize::midpoint(open, closed);
+                    if self.crosses(mid) {
+                        closed = mid;
+                    } else {
+                        open = mid + 1;
+                    }
+                }
+                self.open_to = closed;
+                self.open = false;
+                break;
+            }
+            self.open_to = x + 1;
         }
-        bounds.len()
+        self.open_to
+    }
+
+    /// The bounds over the first `m` pulses (scanned and open).
+    fn over(&self, m: usize) -> (f64, f64) {
+        debug_assert!(m >= 1 && m <= self.open_to);
+        (
+            self.early.through_scanned(self.pulses, self.t_s, m - 1),
+            self.late.through_scanned(self.pulses, self.t_s, m - 1),
+        )
     }
 }
 
@@ -108,52 +260,48 @@ impl Channel<'_> {
     /// row ends at the frequency step nearest its speed, not where its windows close), only as
     /// far as a doubling search needs: scanning every row to the cruise's end made the rows'
     /// time grow with the square of its length.
-    fn longest(
+    fn longest<P: Pulses>(
         &self,
         range: FrequencyRange,
-        pulses: &[Pulse],
+        pulses: P,
         t_s: f64,
-        bounds: &mut Vec<(f64, f64)>,
+        bounds: &mut Bounds,
     ) -> Option<(usize, u32, f64)> {
         self.longest_scanning(range, pulses, t_s, bounds, SCAN_FIRST)
+            .0
     }
 
-    /// [`Self::longest`], the windows first scanned over `first_reach` pulses.
-    fn longest_scanning(
+    /// [`Self::longest`], the windows first scanned over `first_reach` pulses; also how many
+    /// pulses were scanned.
+    fn longest_scanning<P: Pulses>(
         &self,
         range: FrequencyRange,
-        pulses: &[Pulse],
+        pulses: P,
         t_s: f64,
-        bounds: &mut Vec<(f64, f64)>,
+        bounds: &mut Bounds,
         first_reach: usize,
-    ) -> Option<(usize, u32, f64)> {
+    ) -> (Option<(usize, u32, f64)>, usize) {
         let fastest = self
             .model
             .actual_hz(self.fastest_set(range), range)
             .min(f64::from(self.joint.max_freq_hz));
-        let mut scan = Scan {
-            pulses,
-            t_s,
-            lo: 1.0 / fastest,
-            hi: 1.0 / range.min_actual_hz(),
-            open: true,
-        };
-        bounds.clear();
-        let fit = |bounds: &[(f64, f64)], m: usize| {
-            let (lo, hi) = bounds[m - 1];
-            let want = (pulses[m - 1].ideal_s - t_s) / m as f64;
+        let outer = (1.0 / fastest, 1.0 / range.min_actual_hz());
+        let mut scan = Scan::new(pulses, t_s, outer, bounds);
+        let fit = |scan: &Scan<P>, m: usize| {
+            let (lo, hi) = scan.over(m);
+            let want = (pulses.pulse(m - 1).ideal_s - t_s) / m as f64;
             self.realise(range, lo, hi, want)
                 .map(|(set, f)| (m, set, f))
         };
         let (mut good, mut best, mut reach) = (0usize, None, first_reach.max(1));
         let mut bad = loop {
-            let n = scan.extend(bounds, reach);
+            let n = scan.extend(reach);
             if n <= good {
                 // The windows closed right after the longest that fits.
-                return best;
+                return (best, scan.open_to);
             }
-            match fit(bounds, n) {
-                Some(found) if !scan.open => return Some(found),
+            match fit(&scan, n) {
+                Some(found) if !scan.open => return (Some(found), scan.open_to),
                 Some(found) => {
                     (good, best) = (n, Some(found));
                     reach *= 2;
@@ -163,7 +311,7 @@ impl Channel<'_> {
         };
         while bad - good > 1 {
             let mid = usize::midpoint(good, bad);
-            match fit(bounds, mid) {
+            match fit(&scan, mid) {
                 Some(found) => {
                     good = mid;
                     best = Some(found);
@@ -171,16 +319,16 @@ impl Channel<'_> {
                 None => bad = mid,
             }
         }
-        best
+        (best, scan.open_to)
     }
 
     /// Rows for `pulses` in `range` from `t_s`. A pulse no frequency can place is played at the
     /// nearest value the range allows and counted as broken; once more than `give_up_after` are
     /// broken the attempt ends there (its caller does not take it).
-    fn attempt(
+    fn attempt<P: Pulses>(
         &self,
         range: FrequencyRange,
-        pulses: &[Pulse],
+        pulses: P,
         mut t_s: f64,
         give_up_after: usize,
     ) -> Attempt {
@@ -194,28 +342,29 @@ impl Channel<'_> {
         let mut k = 0;
         let mut bounds = self.bounds.borrow_mut();
         while k < pulses.len() {
-            let (m, set, f) = if let Some(row) = self.longest(range, &pulses[k..], t_s, &mut bounds)
-            {
-                row
-            } else {
-                if a.broken == 0 {
-                    a.clean_pulses = k;
-                }
-                a.broken += 1;
-                if a.broken > give_up_after {
-                    break;
-                }
-                let nearest = self.nearest(range, (pulses[k].ideal_s - t_s).max(1e-6));
-                let lands_s = t_s + 1.0 / nearest.2;
-                let miss_s = (pulses[k].lo_s - lands_s).max(lands_s - pulses[k].hi_s);
-                a.worst_miss_s = a.worst_miss_s.max(miss_s);
-                nearest
-            };
+            let (m, set, f) =
+                if let Some(row) = self.longest(range, pulses.after(k), t_s, &mut bounds) {
+                    row
+                } else {
+                    if a.broken == 0 {
+                        a.clean_pulses = k;
+                    }
+                    a.broken += 1;
+                    if a.broken > give_up_after {
+                        break;
+                    }
+                    let pulse = pulses.pulse(k);
+                    let nearest = self.nearest(range, (pulse.ideal_s - t_s).max(1e-6));
+                    let lands_s = t_s + 1.0 / nearest.2;
+                    let miss_s = (pulse.lo_s - lands_s).max(lands_s - pulse.hi_s);
+                    a.worst_miss_s = a.worst_miss_s.max(miss_s);
+                    nearest
+                };
             t_s += m as f64 / f;
             k += m;
             a.rows.push(Row {
                 freq_hz: set,
-                target: pulses[k - 1].count,
+                target: pulses.pulse(k - 1).count,
             });
         }
         a.end_s = t_s;
@@ -240,9 +389,9 @@ impl Channel<'_> {
     /// within their windows; else, with segments to spare, the range that plays the longest
     /// clean stretch (the rest goes to the next segment); else the range that breaks fewest
     /// (of those that tie, the one whose worst pulse lands nearest its window).
-    fn next_segment(
+    fn next_segment<P: Pulses>(
         &self,
-        pulses: &[Pulse],
+        pulses: P,
         t_s: f64,
         last_chance: bool,
     ) -> (FrequencyRange, Attempt) {
@@ -295,16 +444,16 @@ impl Channel<'_> {
 
     /// Segments for one run of pulses starting at `t_s` from `count`; returns them and the
     /// time the last pulse lands. `segments_left` bounds the splitting.
-    pub(super) fn run(
+    pub(super) fn run<P: Pulses>(
         &self,
-        run: &Run<'_>,
+        run: &Run<P>,
         mut t_s: f64,
         mut count: i64,
         segments_left: usize,
     ) -> (Vec<Segment>, f64) {
         let mut out = Vec::new();
         let mut pulses = run.pulses;
-        while !pulses.is_empty() {
+        while pulses.len() > 0 {
             let last_chance = out.len() + 1 >= segments_left.min(MAX_SEGMENTS);
             let (range, a) = self.next_segment(pulses, t_s, last_chance);
             let played = a
@@ -314,7 +463,7 @@ impl Channel<'_> {
             t_s = a.end_s;
             count = a.rows.last().map_or(count, |r| r.target);
             out.push(segment(self.joint, run.direction, range, a.rows));
-            pulses = &pulses[played.max(1).min(pulses.len())..];
+            pulses = pulses.after(played.max(1).min(pulses.len()));
         }
         (out, t_s)
     }
@@ -322,7 +471,7 @@ impl Channel<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::pulses::Counts;
+    use super::super::pulses::{Counts, Pulse, runs};
     use super::*;
     use crate::robot::seed_robot;
 
@@ -407,7 +556,7 @@ mod tests {
         let mut broke = 0;
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
             for off_window in [0, 2, 30] {
-                let spare = RefCell::new(Vec::new());
+                let spare = RefCell::new(Bounds::default());
                 let channel = Channel {
                     joint: &joint,
                     model,
@@ -447,7 +596,7 @@ mod tests {
             })
             .collect();
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
-            let spare = RefCell::new(Vec::new());
+            let spare = RefCell::new(Bounds::default());
             let channel = Channel {
                 joint: &joint,
                 model,
@@ -455,13 +604,13 @@ mod tests {
                 bounds: &spare,
             };
             for last_chance in [false, true] {
-                let (range, a) = channel.next_segment(&pulses, 0.0, last_chance);
+                let (range, a) = channel.next_segment(pulses.as_slice(), 0.0, last_chance);
                 assert_eq!(range, FrequencyRange::Low, "{model:?}");
                 assert_eq!((a.rows.len(), a.broken), (20, 20), "{model:?}");
                 // A pulse every 1/1.5 s at the slowest (1.49 Hz under the divider): the last lands at
                 // about 13.4 s, 2.6 s early.
                 assert!((a.end_s - 20.0 / 1.5).abs() < 0.1, "{model:?} {}", a.end_s);
-                let full = next_segment_in_full(&channel, &pulses, 0.0, last_chance);
+                let full = next_segment_in_full(&channel, pulses.as_slice(), 0.0, last_chance);
                 assert_eq!((range, a.rows, a.broken), full, "{model:?}");
             }
         }
@@ -471,9 +620,9 @@ mod tests {
     fn a_row_scanned_as_far_as_the_search_needs_is_the_row_scanned_to_its_windows_end() {
         let joint = seed_robot().joints[1].clone();
         let pulses = cruise(9_000.0, 3.0);
-        let mut bounds = Vec::new();
+        let mut bounds = Bounds::default();
         for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
-            let spare = RefCell::new(Vec::new());
+            let spare = RefCell::new(Bounds::default());
             let channel = Channel {
                 joint: &joint,
                 model,
@@ -486,10 +635,10 @@ mod tests {
                 let (mut rows, mut longer_than_first) = (0, 0);
                 for k in (0..pulses.len()).step_by(97) {
                     let t_s = pulses[k].ideal_s - 1e-4;
-                    let whole =
+                    let (whole, _) =
                         channel.longest_scanning(range, &pulses[k..], t_s, &mut bounds, usize::MAX);
                     for first in [1, 7, 64, SCAN_FIRST] {
-                        let row =
+                        let (row, scanned) =
                             channel.longest_scanning(range, &pulses[k..], t_s, &mut bounds, first);
                         assert_eq!(
                             row, whole,
@@ -497,11 +646,7 @@ mod tests {
                         );
                         // Scanned no further than a doubling past the row.
                         let m = row.map_or(0, |r| r.0);
-                        assert!(
-                            bounds.len() <= (2 * m + 1).max(first),
-                            "{m} {}",
-                            bounds.len()
-                        );
+                        assert!(scanned <= (2 * m + 1).max(first), "{m} {scanned}");
                     }
                     rows += 1;
                     longer_than_first += usize::from(whole.is_some_and(|r| r.0 > 64));
@@ -512,6 +657,37 @@ mod tests {
                         longer_than_first > 10,
                         "{model:?} {range:?} {longer_than_first}"
                     );
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// A run's segments read piece by piece from its windows are the segments read pulse
+        /// by pulse from its pulses made one by one.
+        #[test]
+        fn rows_read_by_pieces_are_the_rows_read_pulse_by_pulse(
+            u in super::super::windows::tests::track(),
+            delta in 0.0..6.0_f64,
+            off_window in 0..3_usize,
+        ) {
+            let joint = seed_robot().joints[1].clone();
+            let counts = Counts::new(u);
+            let track = counts.track(1e-3);
+            let mut made = Vec::new();
+            let starts = track.pulses_into(0, delta, &mut made);
+            let windows = track.windows(0, delta);
+            let read = windows.runs();
+            for model in [FrequencyModel::Ideal, FrequencyModel::FpxDivider] {
+                let spare = RefCell::new(Bounds::default());
+                let channel = Channel { joint: &joint, model, off_window, bounds: &spare };
+                let (mut t_s, mut count) = (0.0, 0);
+                for (r, o) in read.iter().zip(runs(&made, &starts)) {
+                    let by_pieces = channel.run(r, t_s, count, 4);
+                    let by_pulses = channel.run(&o, t_s, count, 4);
+                    proptest::prop_assert_eq!(&by_pieces, &by_pulses, "{:?}", model);
+                    t_s = by_pulses.1;
+                    count = o.pulses.last().map_or(count, |p| p.count);
                 }
             }
         }

@@ -153,20 +153,18 @@ fn planned_peaks(
             k as f64 * sample_s
         }
     };
-    // (the interval's middle, the speed over it)
-    let v: Vec<(f64, f64)> = samples
-        .values
-        .windows(2)
-        .enumerate()
-        .map(|(k, w)| {
-            let (t0, t1) = (at(k), at(k + 1));
-            (f64::midpoint(t0, t1), (w[1][j] - w[0][j]) / (t1 - t0))
-        })
-        .collect();
-    let speed = v.iter().fold(0.0_f64, |m, v| m.max(v.1.abs()));
-    let accel = v.windows(2).fold(0.0_f64, |m, w| {
-        m.max(((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs())
-    });
+    // (the interval's middle, the speed over it), and the one before
+    let (mut speed, mut accel) = (0.0_f64, 0.0_f64);
+    let mut before: Option<(f64, f64)> = None;
+    for (k, w) in samples.values.windows(2).enumerate() {
+        let (t0, t1) = (at(k), at(k + 1));
+        let v = (f64::midpoint(t0, t1), (w[1][j] - w[0][j]) / (t1 - t0));
+        speed = speed.max(v.1.abs());
+        if let Some(b) = before {
+            accel = accel.max(((v.1 - b.1) / (v.0 - b.0)).abs());
+        }
+        before = Some(v);
+    }
     (joint.user(speed).abs(), joint.user(accel).abs())
 }
 

@@ -1,0 +1,436 @@
+//! Cutting a joint's pulses into runs and pieces ([`Windows`]) from its track.
+//!
+//! 1. One sweep over the sample intervals counts each interval's crossings (the rule of
+//!    `Track::crossings`, worked per interval, not per pulse) and cuts the runs one way.
+//! 2. A run whose intervals all move its way (one stretch: the searches for its windows' edges
+//!    stop at the same two samples for every pulse) gets its pieces per sample interval: the
+//!    pulse where an edge's level reaches the interval's next sample is worked out from the
+//!    level's arithmetic and checked on the two pulses either side.
+//! 3. Any other run (a joint that wavers, or windows too narrow for step 2's argument) follows
+//!    each edge from pulse to pulse, skipping the pulses where nothing changes.
+
+use super::{Edge, Piece, RunStart, Windows};
+use crate::plan::bounded::pulses::Track;
+use crate::table::Direction;
+
+/// Windows narrower than this, pulses each side, take step 3: step 2 needs a pulse's latest
+/// level strictly past its half count in floating point.
+const STRETCH_MIN_DELTA: f64 = 1e-3;
+/// Counts beyond this take step 3, for the same reason.
+const STRETCH_MAX_COUNT: i64 = 1 << 40;
+
+/// A run as the sweep finds it.
+struct Span {
+    start: RunStart,
+    /// Its pulses.
+    n: usize,
+    /// The sample intervals its first and last pulses cross in.
+    first_interval: usize,
+    last_interval: usize,
+    /// Every interval from the first to the last moves its way.
+    one_stretch: bool,
+}
+
+impl Span {
+    fn d(&self) -> i64 {
+        match self.start.direction {
+            Direction::Up => 1,
+            Direction::Down => -1,
+        }
+    }
+}
+
+/// The count after an interval ending at `b` crossed from `count` going `d`: the count
+/// follows while `b` is past the next half count, so it ends within a half of `b`, and on an
+/// exact half it stops short.
+fn count_after(b: f64, count: i64, d: i64) -> i64 {
+    let past = |c: i64| {
+        if d > 0 {
+            b > c as f64 + 0.5
+        } else {
+            b < c as f64 - 0.5
+        }
+    };
+    let mut after = crate::robot::nearest_count(b);
+    if (after - count) * d < 1 || past(after) {
+        // Off by more than a tie (a count beyond any a track reaches): the rule itself.
+        after = count;
+        while past(after) {
+            after += d;
+        }
+    } else if !past(after - d) {
+        after -= d;
+    }
+    after
+}
+
+/// The first of `lo..hi` where `short` is false (it is true up to some point and false from
+/// there); `hi` if none.
+fn first_not(mut lo: i64, mut hi: i64, short: impl Fn(i64) -> bool) -> i64 {
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if short(mid) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// A run's edge levels: pulse `m` (from 0) crosses the half count after `c0 + d m`, and an
+/// edge's level is that half count plus `offset` (`-d delta` earliest, `+d delta` latest),
+/// worked as the one-by-one pulses work them.
+struct Levels {
+    c0: i64,
+    d: i64,
+    df: f64,
+    offset: f64,
+}
+
+impl Levels {
+    fn level(&self, m: i64) -> f64 {
+        let half = (self.c0 + self.d * m) as f64 + 0.5 * self.df;
+        half + self.offset
+    }
+
+    /// The first pulse from `from` (of `n`) whose level has reached `target` (passed it, if
+    /// `strictly`); `n` if none.
+    fn first_reaching(&self, from: i64, n: i64, target: f64, strictly: bool) -> i64 {
+        let short = |m: i64| {
+            let gap = (target - self.level(m)) * self.df;
+            if strictly { gap >= 0.0 } else { gap > 0.0 }
+        };
+        // Most often the pulse or the one after (a cast, not a ceiling, and the rounding of
+        // the levels): checked there, and searched for only if not.
+        let guess = self.df * (target - self.c0 as f64) - 0.5 - self.df * self.offset;
+        let m = if guess >= n as f64 {
+            n
+        } else if guess > from as f64 {
+            guess as i64
+        } else {
+            from
+        };
+        if m > from && !short(m - 1) {
+            first_not(from, m - 1, short)
+        } else if m == n || !short(m) {
+            m
+        } else if m + 1 == n || !short(m + 1) {
+            m + 1
+        } else {
+            first_not(m + 2, n, short)
+        }
+    }
+}
+
+impl<'a> Track<'a> {
+    /// The joint's pulses from count `start`, with windows `delta` pulses wide each side.
+    pub(in crate::plan::bounded) fn windows(self, start: i64, delta: f64) -> Windows<'a> {
+        let mut w = Windows {
+            track: self,
+            delta,
+            runs: Vec::new(),
+            crossed: Vec::with_capacity(self.counts().len()),
+            early: Vec::with_capacity(self.counts().len() + 2),
+            late: Vec::with_capacity(self.counts().len() + 2),
+            len: 0,
+        };
+        for span in self.sweep(start, &mut w) {
+            w.runs.push(span.start);
+            let kept = (w.early.len(), w.late.len());
+            let narrow = delta.is_nan()
+                || delta < STRETCH_MIN_DELTA
+                || span.start.count.abs() > STRETCH_MAX_COUNT - span.n as i64;
+            if narrow || !span.one_stretch || !self.stretch_pieces(&span, delta, &mut w) {
+                w.early.truncate(kept.0);
+                w.late.truncate(kept.1);
+                self.pieces_one_by_one(&span, delta, &mut w);
+            }
+        }
+        w.ends();
+        w
+    }
+
+    /// Step 1: the runs, and where each pulse is crossed (into `w.crossed`); sets `w.len`.
+    fn sweep(&self, start: i64, w: &mut Windows) -> Vec<Span> {
+        let u = self.counts();
+        let mut spans: Vec<Span> = Vec::new();
+        let (mut count, mut k) = (start, 0_usize);
+        // An interval since the run's last crossing that does not move its way.
+        let mut bent = false;
+        for i in 0..u.len().saturating_sub(1) {
+            let (b, c) = (u[i + 1], count as f64);
+            let d: i64 = if b > c + 0.5 {
+                1
+            } else if b < c - 0.5 {
+                -1
+            } else {
+                if let Some(span) = spans.last() {
+                    bent |= !self.moves(i, span.d() as f64);
+                }
+                continue;
+            };
+            let direction = if d > 0 {
+                Direction::Up
+            } else {
+                Direction::Down
+            };
+            match spans.last_mut() {
+                Some(span) if span.start.direction == direction => {
+                    span.one_stretch &= !bent;
+                    span.last_interval = i;
+                }
+                _ => spans.push(Span {
+                    start: RunStart {
+                        first: k,
+                        direction,
+                        count,
+                    },
+                    n: 0,
+                    first_interval: i,
+                    last_interval: i,
+                    one_stretch: true,
+                }),
+            }
+            // A count that starts off its track crosses where the track holds still.
+            let span = spans.last_mut().expect("a run");
+            span.one_stretch &= self.moves(i, d as f64);
+            bent = false;
+            w.crossed.push((k, i));
+            let after = count_after(b, count, d);
+            k += (after - count).unsigned_abs() as usize;
+            count = after;
+            span.n = k - span.start.first;
+        }
+        w.len = k;
+        spans
+    }
+
+    /// Step 2 for a run of one stretch; false if its pieces do not close (they always should:
+    /// the caller then takes step 3).
+    fn stretch_pieces(&self, span: &Span, delta: f64, w: &mut Windows) -> bool {
+        let u = self.counts();
+        let (d, k0, n) = (span.d(), span.start.first, span.n as i64);
+        let df = d as f64;
+        // The searches' ends: back to the stretch's first sample, on to its last.
+        let mut from = span.first_interval;
+        while from > 0 && self.moves(from - 1, df) {
+            from -= 1;
+        }
+        let mut to = span.last_interval;
+        while to + 2 < u.len() && self.moves(to + 1, df) {
+            to += 1;
+        }
+        let early = Levels {
+            c0: span.start.count,
+            d,
+            df,
+            offset: -df * delta,
+        };
+        let late = Levels {
+            c0: span.start.count,
+            d,
+            df,
+            offset: df * delta,
+        };
+        // Earliest: before the stretch's first sample, the stretch's start; then the interval
+        // whose first sample the level has reached and whose next it has not.
+        let mut m = early.first_reaching(0, n, u[from], false);
+        if m > 0 {
+            w.early.push(Piece::at(k0, self.t(from)));
+        }
+        let mut j = from;
+        while m < n {
+            // The interval pulse `m`'s level is in (most often the next).
+            let level = early.level(m);
+            let past = |x: f64| (x - level) * df <= 0.0;
+            if j < to && past(u[j + 1]) {
+                j += 1;
+                if j < to && past(u[j + 1]) {
+                    j += u[j + 1..=to].partition_point(|&x| past(x));
+                }
+            }
+            if j > to {
+                return false;
+            }
+            let next = early.first_reaching(m, n, u[j + 1], false);
+            if next == m {
+                return false;
+            }
+            w.early.push(self.piece(k0, j, &early, m, next));
+            m = next;
+        }
+        // Latest: the interval whose next sample the level has not passed, from the one the
+        // pulse crosses in (no earlier one: the level is past the half count); past the
+        // stretch's last sample, its end.
+        let (mut m, mut j) = (0, span.first_interval);
+        while m < n {
+            let level = late.level(m);
+            let passed = |x: f64| (x - level) * df < 0.0;
+            if passed(u[j + 1]) {
+                j += 1;
+                if j <= to && passed(u[j + 1]) {
+                    j += u[j + 1..=to + 1].partition_point(|&x| passed(x));
+                }
+            }
+            if j > to {
+                w.late.push(Piece::at(k0 + m as usize, self.t(to + 1)));
+                break;
+            }
+            let next = late.first_reaching(m, n, u[j + 1], true);
+            if next == m {
+                return false;
+            }
+            w.late.push(self.piece(k0, j, &late, m, next));
+            m = next;
+        }
+        true
+    }
+
+    /// The piece of a run from pulse `k0` whose pulses `m` to before `next` have their edge
+    /// (`levels`) in sample interval `j`.
+    fn piece(&self, k0: usize, j: usize, levels: &Levels, m: i64, next: i64) -> Piece {
+        Piece {
+            first: k0 + m as usize,
+            edge: Edge::Passes(j),
+            at_first: self.at(j, levels.level(m)),
+            at_last: self.at(j, levels.level(next - 1)),
+        }
+    }
+
+    /// Step 3: follows each edge's sample interval from pulse to pulse as the one-by-one
+    /// searches would find it, working out only the pulses where the crossing interval or an
+    /// edge's changes.
+    fn pieces_one_by_one(&self, span: &Span, delta: f64, w: &mut Windows) {
+        let u = self.counts();
+        let (d, mut k) = (span.d(), span.start.first);
+        let df = d as f64;
+        let mut count = span.start.count;
+        let mut early = EarlyEdge::new(self, span.first_interval, df);
+        let mut late = LateEdge(None);
+        let (first_early, first_late) = (w.early.len(), w.late.len());
+        for i in span.first_interval..=span.last_interval {
+            let b = u[i + 1];
+            while if d > 0 {
+                b > count as f64 + 0.5
+            } else {
+                b < count as f64 - 0.5
+            } {
+                let h = count as f64 + 0.5 * df;
+                let lo = early.edge(self, i, h - df * delta, df);
+                if w.early.len() == first_early || w.early.last().is_some_and(|p| p.edge != lo) {
+                    w.early.push(Piece::new(k, lo));
+                }
+                let hi = late.edge(self, i, h + df * delta, df);
+                if w.late.len() == first_late || w.late.last().is_some_and(|p| p.edge != hi) {
+                    w.late.push(Piece::new(k, hi));
+                }
+                count += d;
+                k += 1;
+                let skip = same_after(u, b, count, d, delta, (lo, early.from), hi, i);
+                count += d * skip;
+                k += skip as usize;
+            }
+        }
+        debug_assert_eq!(k, span.start.first + span.n);
+    }
+}
+
+/// How many pulses after one just worked out (the count now `count`, crossing in interval `i`
+/// that ends at `b`) cross in the same interval with both edges where its are (`lo`, with the
+/// stretch's first sample `from`, and `hi`).
+#[allow(clippy::too_many_arguments)]
+fn same_after(
+    u: &[f64],
+    b: f64,
+    count: i64,
+    d: i64,
+    delta: f64,
+    (lo, from): (Edge, usize),
+    hi: Edge,
+    i: usize,
+) -> i64 {
+    let df = d as f64;
+    let levels = |offset| Levels {
+        c0: count,
+        d,
+        df,
+        offset,
+    };
+    // In the interval: the half counts `b` is past.
+    let mut same = levels(0.0).first_reaching(0, i64::MAX / 4, b, false);
+    let early = levels(-df * delta);
+    match lo {
+        Edge::At(_) => same = early.first_reaching(0, same, u[from], false),
+        Edge::Passes(j) if j < i => same = early.first_reaching(0, same, u[j + 1], false),
+        Edge::Passes(_) => {}
+    }
+    if let Edge::Passes(j) = hi {
+        same = levels(df * delta).first_reaching(0, same, u[j + 1], true);
+    }
+    same
+}
+
+/// Follows the sample interval in which a run's earliest landings fall (`Track::since`'s
+/// search, carried from pulse to pulse).
+struct EarlyEdge {
+    /// The crossing interval of the pulse before.
+    crossed: usize,
+    /// The first interval of the stretch moving this way that holds it.
+    from: usize,
+    /// The last interval found to start at or before the level.
+    at: usize,
+}
+
+impl EarlyEdge {
+    fn new(track: &Track, crossed: usize, d: f64) -> Self {
+        let mut from = crossed;
+        while from > 0 && track.moves(from - 1, d) {
+            from -= 1;
+        }
+        Self {
+            crossed,
+            from,
+            at: from,
+        }
+    }
+
+    fn edge(&mut self, track: &Track, crossed: usize, level: f64, d: f64) -> Edge {
+        for i in self.crossed + 1..=crossed {
+            if !track.moves(i - 1, d) {
+                (self.from, self.at) = (i, i);
+            }
+        }
+        self.crossed = crossed;
+        let u = track.counts();
+        if (u[self.from] - level) * d > 0.0 {
+            return Edge::At(track.t(self.from));
+        }
+        while self.at < crossed && (u[self.at + 1] - level) * d <= 0.0 {
+            self.at += 1;
+        }
+        Edge::Passes(self.at)
+    }
+}
+
+/// Follows the sample interval in which a run's latest landings fall (`Track::until`'s
+/// search, carried from pulse to pulse): where the last search stopped.
+struct LateEdge(Option<usize>);
+
+impl LateEdge {
+    fn edge(&mut self, track: &Track, crossed: usize, level: f64, d: f64) -> Edge {
+        let u = track.counts();
+        let mut i = self.0.filter(|&i| i >= crossed).unwrap_or(crossed);
+        loop {
+            if (u[i + 1] - level) * d >= 0.0 {
+                self.0 = Some(i);
+                return Edge::Passes(i);
+            }
+            if i + 2 >= u.len() || !track.moves(i + 1, d) {
+                self.0 = Some(i);
+                return Edge::At(track.t(i + 1));
+            }
+            i += 1;
+        }
+    }
+}
