@@ -87,26 +87,31 @@ pub(super) fn peak(robot: &Robot, samples: &Samples, profile: &Profile, continuo
         t_s: 0.0,
         load: 0.0,
     };
+    // The joints side by side: the bounded-error method checks every millisecond sample.
+    let step: Joints = std::array::from_fn(|j| robot.joints[j].step);
+    let max_hz: Joints = std::array::from_fn(|j| f64::from(robot.joints[j].max_freq_hz));
     for i in 0..samples.counts.len().saturating_sub(1) {
-        for (j, joint) in robot.joints.iter().enumerate() {
-            let pulses = if continuous {
-                ((samples.values[i + 1][j] - samples.values[i][j]) / joint.step).abs()
-            } else {
-                (samples.counts[i + 1][j] - samples.counts[i][j]).abs() as f64
-            };
-            let freq_hz = pulses
-                / if i == last {
-                    profile.last_period_s
-                } else {
-                    period_s
-                };
-            let load = freq_hz / f64::from(joint.max_freq_hz);
-            if load > best.load {
+        let pulses: Joints = if continuous {
+            let (a, b) = (&samples.values[i], &samples.values[i + 1]);
+            std::array::from_fn(|j| ((b[j] - a[j]) / step[j]).abs())
+        } else {
+            let (a, b) = (&samples.counts[i], &samples.counts[i + 1]);
+            std::array::from_fn(|j| (b[j] - a[j]).abs() as f64)
+        };
+        let period = if i == last {
+            profile.last_period_s
+        } else {
+            period_s
+        };
+        let freq_hz: Joints = std::array::from_fn(|j| pulses[j] / period);
+        let load: Joints = std::array::from_fn(|j| freq_hz[j] / max_hz[j]);
+        for j in 0..JOINTS {
+            if load[j] > best.load {
                 best = Peak {
                     joint: j,
-                    freq_hz,
+                    freq_hz: freq_hz[j],
                     t_s: (i + 1) as f64 * period_s,
-                    load,
+                    load: load[j],
                 };
             }
         }

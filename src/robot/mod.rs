@@ -232,7 +232,12 @@ impl Robot {
     /// Counts nearest joint values.
     #[must_use]
     pub fn counts_of(&self, q: &Joints) -> [i64; JOINTS] {
-        std::array::from_fn(|j| self.joints[j].count_of(q[j]))
+        // `Joint::count_of` for every joint, the joints side by side (planning counts every
+        // joint at every millisecond sample).
+        let offset: Joints = std::array::from_fn(|j| self.joints[j].offset);
+        let step: Joints = std::array::from_fn(|j| self.joints[j].step);
+        let scaled: Joints = std::array::from_fn(|j| (q[j] - offset[j]) / step[j]);
+        scaled.map(nearest_count)
     }
 
     /// The pose that counts put the tool in.

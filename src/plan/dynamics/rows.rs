@@ -102,11 +102,11 @@ pub(in crate::plan) fn judge(
     let max_hz: Vec<u32> = robot.joints.iter().map(|j| j.max_freq_hz).collect();
     let timings = sim::row_timings(tables, &max_hz, settings);
     let mut out = [DriveFigures::default(); JOINTS];
+    let peaks = planned_peaks(robot, samples, sample_s, window.duration_s());
     for (j, joint) in robot.joints.iter().enumerate() {
         let mine: Vec<RowTiming> = timings.iter().filter(|r| r.table == j).copied().collect();
         let rows = played(&tables[j], &mine, settings.model);
-        let (peak_speed, peak_accel) =
-            planned_peaks(joint, samples, j, sample_s, window.duration_s());
+        let (peak_speed, peak_accel) = peaks[j];
         let rests = Rests {
             begins: !window.begins_at_speed(),
             ends: !window.ends_at_speed,
@@ -132,19 +132,18 @@ pub(in crate::plan) fn planned_accels(
     sample_s: f64,
     end_s: f64,
 ) -> [f64; JOINTS] {
-    std::array::from_fn(|j| planned_peaks(&robot.joints[j], samples, j, sample_s, end_s).1)
+    planned_peaks(robot, samples, sample_s, end_s).map(|p| p.1)
 }
 
-/// The joint's fastest speed and acceleration over the samples, user units: the points
+/// Every joint's fastest speed and acceleration over the samples, user units: the points
 /// `sample_s` apart but the last, at `end_s` (a time-optimal profile's last period has its
-/// own length); each speed at the middle of its interval.
+/// own length); each speed at the middle of its interval. The joints side by side, one pass.
 fn planned_peaks(
-    joint: &Joint,
+    robot: &Robot,
     samples: &Samples,
-    j: usize,
     sample_s: f64,
     end_s: f64,
-) -> (f64, f64) {
+) -> [(f64, f64); JOINTS] {
     let last = samples.values.len().saturating_sub(1);
     let at = |k: usize| {
         if k == last {
@@ -153,19 +152,28 @@ fn planned_peaks(
             k as f64 * sample_s
         }
     };
-    // (the interval's middle, the speed over it), and the one before
-    let (mut speed, mut accel) = (0.0_f64, 0.0_f64);
-    let mut before: Option<(f64, f64)> = None;
+    let (mut speed, mut accel) = ([0.0_f64; JOINTS], [0.0_f64; JOINTS]);
+    // The interval before: its middle and every joint's speed over it.
+    let mut before: Option<(f64, [f64; JOINTS])> = None;
     for (k, w) in samples.values.windows(2).enumerate() {
         let (t0, t1) = (at(k), at(k + 1));
-        let v = (f64::midpoint(t0, t1), (w[1][j] - w[0][j]) / (t1 - t0));
-        speed = speed.max(v.1.abs());
-        if let Some(b) = before {
-            accel = accel.max(((v.1 - b.1) / (v.0 - b.0)).abs());
+        let (mid, dt) = (f64::midpoint(t0, t1), t1 - t0);
+        let v: [f64; JOINTS] = std::array::from_fn(|j| (w[1][j] - w[0][j]) / dt);
+        for j in 0..JOINTS {
+            speed[j] = speed[j].max(v[j].abs());
         }
-        before = Some(v);
+        if let Some((mid_before, v_before)) = before {
+            let gap = mid - mid_before;
+            for j in 0..JOINTS {
+                accel[j] = accel[j].max(((v[j] - v_before[j]) / gap).abs());
+            }
+        }
+        before = Some((mid, v));
     }
-    (joint.user(speed).abs(), joint.user(accel).abs())
+    std::array::from_fn(|j| {
+        let joint = &robot.joints[j];
+        (joint.user(speed[j]).abs(), joint.user(accel[j]).abs())
+    })
 }
 
 /// One joint's rows against its limits.
