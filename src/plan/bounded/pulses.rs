@@ -98,6 +98,11 @@ impl<'a> Track<'a> {
         self.u
     }
 
+    /// Every interval's reciprocal change of count (0 where it holds).
+    pub(super) fn rates(&self) -> &'a [f64] {
+        self.per_count
+    }
+
     /// The time of sample `i`.
     pub(super) fn t(&self, i: usize) -> f64 {
         i as f64 * self.dt_s

@@ -7,7 +7,7 @@
 use std::cell::RefCell;
 
 use super::pulses::Run;
-use super::windows::{NO_CURSOR, Pulses, Side};
+use super::windows::{Cursor, Pulses, Side};
 use crate::plan::segments::segment;
 use crate::robot::Joint;
 use crate::table::{FrequencyModel, FrequencyRange, MAX_SEGMENTS, Row, Segment};
@@ -59,7 +59,7 @@ struct Scanned {
 /// pulse and that one.
 struct Bound<'b> {
     side: Side,
-    cursor: usize,
+    cursor: Cursor,
     pieces: &'b mut Vec<Scanned>,
     /// The bound before any pulse (the range's period limit).
     outer: f64,
@@ -118,7 +118,7 @@ impl Bound<'_> {
         let own = if k == piece.first {
             piece.own
         } else {
-            Self::own(t_s, k, pulses.edge(self.side, k, &mut { NO_CURSOR }))
+            Self::own(t_s, k, pulses.edge(self.side, k, &mut { Cursor::NEW }))
         };
         self.combine(self.combine(piece.before, piece.own), own)
     }
@@ -142,7 +142,7 @@ impl<'b, P: Pulses> Scan<'b, P> {
         bounds.late.clear();
         let bound = |side, pieces, outer| Bound {
             side,
-            cursor: NO_CURSOR,
+            cursor: Cursor::NEW,
             pieces,
             outer,
             last: None,

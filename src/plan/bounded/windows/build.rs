@@ -9,7 +9,7 @@
 //! 3. Any other run (a joint that wavers, or windows too narrow for step 2's argument) follows
 //!    each edge from pulse to pulse, skipping the pulses where nothing changes.
 
-use super::{Edge, Piece, RunStart, Windows};
+use super::{Edge, Piece, RunStart, Side, Windows};
 use crate::plan::bounded::pulses::Track;
 use crate::table::Direction;
 
@@ -33,10 +33,7 @@ struct Span {
 
 impl Span {
     fn d(&self) -> i64 {
-        match self.start.direction {
-            Direction::Up => 1,
-            Direction::Down => -1,
-        }
+        self.start.d()
     }
 }
 
@@ -253,12 +250,17 @@ impl<'a> Track<'a> {
             if j > to {
                 return false;
             }
-            let next = early.first_reaching(m, n, u[j + 1], false);
+            // On along the intervals where the edge bends up (convex: the earliest bound,
+            // a largest, is at a piece's ends).
+            let last = self.bending(j, to, d, Side::Early);
+            let next = early.first_reaching(m, n, u[last + 1], false);
             if next == m {
                 return false;
             }
-            w.early.push(self.piece(k0, j, &early, m, next));
+            w.early
+                .push(self.piece(k0, (j, last), Side::Early, &early, m, next));
             m = next;
+            j = last;
         }
         // Latest: the interval whose next sample the level has not passed, from the one the
         // pulse crosses in (no earlier one: the level is past the half count); past the
@@ -277,25 +279,114 @@ impl<'a> Track<'a> {
                 w.late.push(Piece::at(k0 + m as usize, self.t(to + 1)));
                 break;
             }
-            let next = late.first_reaching(m, n, u[j + 1], true);
+            // On along the intervals where the edge bends down (concave: the latest bound,
+            // a smallest, is at a piece's ends).
+            let last = self.bending(j, to, d, Side::Late);
+            let next = late.first_reaching(m, n, u[last + 1], true);
             if next == m {
                 return false;
             }
-            w.late.push(self.piece(k0, j, &late, m, next));
+            w.late
+                .push(self.piece(k0, (j, last), Side::Late, &late, m, next));
             m = next;
+            j = last;
         }
         true
     }
 
+    /// The last sample interval from `j` (up to `to`) along which an edge's time, as a
+    /// function of the pulse, bends only the way `side` needs: its slope over an interval is
+    /// the interval's time per count (its reciprocal change, counted the run's way `d`), never
+    /// falling for the earliest (convex) and never rising for the latest (concave).
+    fn bending(&self, j: usize, to: usize, d: i64, side: Side) -> usize {
+        let rate = self.rates();
+        let slope = |i: usize| rate[i] * d as f64;
+        let mut last = j;
+        match side {
+            Side::Early => {
+                while last < to && slope(last + 1) >= slope(last) {
+                    last += 1;
+                }
+            }
+            Side::Late => {
+                while last < to && slope(last + 1) <= slope(last) {
+                    last += 1;
+                }
+            }
+        }
+        last
+    }
+
     /// The piece of a run from pulse `k0` whose pulses `m` to before `next` have their edge
-    /// (`levels`) in sample interval `j`.
-    fn piece(&self, k0: usize, j: usize, levels: &Levels, m: i64, next: i64) -> Piece {
+    /// (`levels`) in sample intervals `from` to `to`.
+    fn piece(
+        &self,
+        k0: usize,
+        (from, to): (usize, usize),
+        side: Side,
+        levels: &Levels,
+        m: i64,
+        next: i64,
+    ) -> Piece {
+        let edge = if from == to {
+            Edge::Passes(from)
+        } else {
+            Edge::Spans(from, to)
+        };
         Piece {
             first: k0 + m as usize,
-            edge: Edge::Passes(j),
-            at_first: self.at(j, levels.level(m)),
-            at_last: self.at(j, levels.level(next - 1)),
+            edge,
+            at_first: self.edge_at(side, edge, levels.level(m), levels.df, &mut { from }),
+            at_last: self.edge_at(side, edge, levels.level(next - 1), levels.df, &mut { to }),
         }
+    }
+
+    /// When the track passes `level` (going `d`), for an edge on `side` in `edge`'s sample
+    /// intervals: the earliest in the last interval that starts at or before the level, the
+    /// latest in the first that ends at or past it (as `Track::since` and `Track::until`
+    /// find them).
+    pub(super) fn edge_at(
+        &self,
+        side: Side,
+        edge: Edge,
+        level: f64,
+        d: f64,
+        interval: &mut usize,
+    ) -> f64 {
+        let (from, to) = match edge {
+            Edge::At(t_s) => return t_s,
+            Edge::Passes(i) => return self.at(i, level),
+            Edge::Spans(from, to) => (from, to),
+        };
+        let u = self.counts();
+        // The samples after the first the level is past (has reached, for the earliest) are a
+        // run from the first: the interval is the first plus how many. Read on from where the
+        // last reading found it, or (a level before that) a piece's first and last pulses are
+        // most often in its first and last intervals.
+        let past = |x: f64| match side {
+            Side::Early => (x - level) * d <= 0.0,
+            Side::Late => (x - level) * d < 0.0,
+        };
+        let hint = *interval;
+        let i = if (from..=to).contains(&hint) && (hint == from || past(u[hint])) {
+            let mut i = hint;
+            while i < to && past(u[i + 1]) {
+                i += 1;
+                if i - hint > 3 {
+                    i += u[i + 1..=to].partition_point(|&x| past(x));
+                    break;
+                }
+            }
+            i
+        } else if !past(u[from + 1]) {
+            from
+        } else if past(u[to]) {
+            to
+        } else {
+            from + 1 + u[from + 2..to].partition_point(|&x| past(x))
+        };
+        *interval = i;
+        self.at(i, level)
     }
 
     /// Step 3: follows each edge's sample interval from pulse to pulse as the one-by-one
@@ -363,7 +454,8 @@ fn same_after(
     match lo {
         Edge::At(_) => same = early.first_reaching(0, same, u[from], false),
         Edge::Passes(j) if j < i => same = early.first_reaching(0, same, u[j + 1], false),
-        Edge::Passes(_) => {}
+        // (A one-by-one piece is one interval: never `Spans`.)
+        Edge::Passes(_) | Edge::Spans(..) => {}
     }
     if let Edge::Passes(j) = hi {
         same = levels(df * delta).first_reaching(0, same, u[j + 1], true);

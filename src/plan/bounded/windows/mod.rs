@@ -32,14 +32,27 @@ pub(super) trait Pulses: Copy {
     fn after(self, k: usize) -> Self;
     /// The last pulse of the piece pulse `k` is in on `side` (from `k`, that side's edge is
     /// monotone in the pulse), and the edge at `k` and at that last pulse. `cursor` is a place
-    /// to start looking, kept between calls ([`NO_CURSOR`] at first).
-    fn piece(self, side: Side, k: usize, cursor: &mut usize) -> (usize, f64, f64);
+    /// to start looking, kept between calls ([`Cursor::NEW`] at first).
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64);
     /// Pulse `k`'s edge on `side` (`cursor` as for [`Self::piece`]).
-    fn edge(self, side: Side, k: usize, cursor: &mut usize) -> f64;
+    fn edge(self, side: Side, k: usize, cursor: &mut Cursor) -> f64;
 }
 
-/// A cursor that knows nothing yet.
-pub(super) const NO_CURSOR: usize = usize::MAX;
+/// Where a reading of pieces left off: the piece, and the sample interval in it. Kept between
+/// calls it makes reading on cheap.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Cursor {
+    piece: usize,
+    interval: usize,
+}
+
+impl Cursor {
+    /// A cursor that knows nothing yet.
+    pub(super) const NEW: Self = Self {
+        piece: usize::MAX,
+        interval: usize::MAX,
+    };
+}
 
 /// Pulses made one by one: every pulse is a piece of its own.
 impl Pulses for &[Pulse] {
@@ -55,12 +68,12 @@ impl Pulses for &[Pulse] {
         &self[k..]
     }
 
-    fn piece(self, side: Side, k: usize, cursor: &mut usize) -> (usize, f64, f64) {
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64) {
         let at_k = self.edge(side, k, cursor);
         (k, at_k, at_k)
     }
 
-    fn edge(self, side: Side, k: usize, _: &mut usize) -> f64 {
+    fn edge(self, side: Side, k: usize, _: &mut Cursor) -> f64 {
         match side {
             Side::Early => self[k].lo_s,
             Side::Late => self[k].hi_s,
@@ -73,6 +86,10 @@ impl Pulses for &[Pulse] {
 enum Edge {
     /// When the track passes the edge's level, in this sample interval.
     Passes(usize),
+    /// When the track passes the edge's level, in one of the sample intervals from the first
+    /// to the second, along which the edge bends one way only ([`build`]): the pulse's own
+    /// interval is searched for, as the one-by-one searches find it.
+    Spans(usize, usize),
     /// At this time: where the joint's motion that way starts (earliest) or ends (latest).
     At(f64),
 }
@@ -116,6 +133,27 @@ struct RunStart {
     count: i64,
 }
 
+impl RunStart {
+    /// Its direction, +1 or -1.
+    fn d(&self) -> i64 {
+        match self.direction {
+            Direction::Up => 1,
+            Direction::Down => -1,
+        }
+    }
+
+    /// The count before its pulse `k` (counted in the joint's pulses).
+    fn before(&self, k: usize) -> i64 {
+        self.count + self.d() * (k - self.first) as i64
+    }
+
+    /// The half count its pulse `k` crosses, and its direction.
+    fn half(&self, k: usize) -> (f64, f64) {
+        let df = self.d() as f64;
+        (self.before(k) as f64 + 0.5 * df, df)
+    }
+}
+
 /// One joint's pulses and windows `delta` pulses wide each side ([`Track::windows`]).
 pub(super) struct Windows<'a> {
     track: Track<'a>,
@@ -153,21 +191,9 @@ fn locate<T>(entries: &[T], first: impl Fn(&T) -> usize, k: usize, cursor: &mut 
 }
 
 impl Windows<'_> {
-    /// Pulse `k`'s run, the count before it and its direction (+1 or -1).
-    fn before(&self, k: usize) -> (i64, f64) {
-        let mut cursor = NO_CURSOR;
-        let run = self.runs[locate(&self.runs, |r| r.first, k, &mut cursor)];
-        let d = match run.direction {
-            Direction::Up => 1,
-            Direction::Down => -1,
-        };
-        (run.count + d * (k - run.first) as i64, d as f64)
-    }
-
-    /// The half count pulse `k` crosses and its direction.
-    fn half(&self, k: usize) -> (f64, f64) {
-        let (count, df) = self.before(k);
-        (count as f64 + 0.5 * df, df)
+    /// The run pulse `k` is in.
+    fn run_of(&self, k: usize) -> RunStart {
+        self.runs[locate(&self.runs, |r| r.first, k, &mut { usize::MAX })]
     }
 
     fn pieces(&self, side: Side) -> &[Piece] {
@@ -177,42 +203,54 @@ impl Windows<'_> {
         }
     }
 
-    /// Pulse `k`'s edge on `side`, in `piece`.
-    fn edge_in(&self, side: Side, piece: &Piece, k: usize) -> f64 {
-        match piece.edge {
-            Edge::At(t_s) => t_s,
-            Edge::Passes(i) => {
-                let (h, df) = self.half(k);
-                let level = match side {
-                    Side::Early => h - df * self.delta,
-                    Side::Late => h + df * self.delta,
-                };
-                self.track.at(i, level)
-            }
+    /// Pulse `k`'s edge on `side`, in `piece`, of `run`; `interval` is where the last reading
+    /// found its interval.
+    fn edge_in(
+        &self,
+        side: Side,
+        piece: &Piece,
+        k: usize,
+        run: &RunStart,
+        interval: &mut usize,
+    ) -> f64 {
+        if let Edge::At(t_s) = piece.edge {
+            return t_s;
         }
+        let (h, df) = run.half(k);
+        let level = match side {
+            Side::Early => h - df * self.delta,
+            Side::Late => h + df * self.delta,
+        };
+        self.track.edge_at(side, piece.edge, level, df, interval)
     }
 
-    /// Pulse `k`'s edge on `side`, its piece found from `cursor`.
-    fn edge(&self, side: Side, k: usize, cursor: &mut usize) -> f64 {
+    /// Pulse `k`'s edge on `side` (of `run`), its piece found from `cursor`.
+    fn edge(&self, side: Side, k: usize, cursor: &mut Cursor, run: &RunStart) -> f64 {
         let pieces = self.pieces(side);
-        let piece = &pieces[locate(pieces, |p| p.first, k, cursor)];
+        let piece = &pieces[locate(pieces, |p| p.first, k, &mut cursor.piece)];
         if k == piece.first {
             piece.at_first
         } else {
-            self.edge_in(side, piece, k)
+            self.edge_in(side, piece, k, run, &mut cursor.interval)
         }
     }
 
-    /// The last pulse of `k`'s piece on `side`, the edge at `k` and there.
-    fn piece(&self, side: Side, k: usize, cursor: &mut usize) -> (usize, f64, f64) {
+    /// The last pulse of `k`'s piece on `side` (of `run`), the edge at `k` and there.
+    fn piece(
+        &self,
+        side: Side,
+        k: usize,
+        cursor: &mut Cursor,
+        run: &RunStart,
+    ) -> (usize, f64, f64) {
         let pieces = self.pieces(side);
-        let p = locate(pieces, |p| p.first, k, cursor);
+        let p = locate(pieces, |p| p.first, k, &mut cursor.piece);
         let piece = &pieces[p];
         let last = pieces.get(p + 1).map_or(self.len, |next| next.first) - 1;
         let at_k = if k == piece.first {
             piece.at_first
         } else {
-            self.edge_in(side, piece, k)
+            self.edge_in(side, piece, k, run, &mut cursor.interval)
         };
         (last, at_k, piece.at_last)
     }
@@ -230,8 +268,10 @@ impl Windows<'_> {
                     continue;
                 }
                 let last = pieces.get(p + 1).map_or(self.len, |next| next.first) - 1;
-                pieces[p].at_first = self.edge_in(side, &piece, piece.first);
-                pieces[p].at_last = self.edge_in(side, &piece, last);
+                let run = self.run_of(piece.first);
+                let mut interval = usize::MAX;
+                pieces[p].at_first = self.edge_in(side, &piece, piece.first, &run, &mut interval);
+                pieces[p].at_last = self.edge_in(side, &piece, last, &run, &mut interval);
             }
             match side {
                 Side::Early => self.early = pieces,
@@ -241,16 +281,14 @@ impl Windows<'_> {
     }
 
     /// Pulse `k`.
-    fn pulse(&self, k: usize) -> Pulse {
-        let (before, df) = self.before(k);
-        let h = before as f64 + 0.5 * df;
-        let mut cursor = NO_CURSOR;
-        let crossed = self.crossed[locate(&self.crossed, |c| c.0, k, &mut cursor)].1;
+    fn pulse(&self, k: usize, run: &RunStart) -> Pulse {
+        let (h, df) = run.half(k);
+        let crossed = self.crossed[locate(&self.crossed, |c| c.0, k, &mut { usize::MAX })].1;
         Pulse {
-            count: before + df as i64,
+            count: run.before(k) + df as i64,
             ideal_s: self.track.at(crossed, h),
-            lo_s: self.edge(Side::Early, k, &mut { NO_CURSOR }),
-            hi_s: self.edge(Side::Late, k, &mut { NO_CURSOR }),
+            lo_s: self.edge(Side::Early, k, &mut { Cursor::NEW }, run),
+            hi_s: self.edge(Side::Late, k, &mut { Cursor::NEW }, run),
         }
     }
 
@@ -263,6 +301,7 @@ impl Windows<'_> {
                 direction: run.direction,
                 pulses: Stretch {
                     windows: self,
+                    run: *run,
                     from: run.first,
                     to: self.runs.get(r + 1).map_or(self.len, |next| next.first),
                 },
@@ -281,6 +320,8 @@ impl Windows<'_> {
 #[derive(Clone, Copy)]
 pub(super) struct Stretch<'w> {
     windows: &'w Windows<'w>,
+    /// The run they are in.
+    run: RunStart,
     from: usize,
     to: usize,
 }
@@ -292,7 +333,7 @@ impl Pulses for Stretch<'_> {
 
     fn pulse(self, k: usize) -> Pulse {
         debug_assert!(self.from + k < self.to);
-        self.windows.pulse(self.from + k)
+        self.windows.pulse(self.from + k, &self.run)
     }
 
     fn after(self, k: usize) -> Self {
@@ -303,16 +344,16 @@ impl Pulses for Stretch<'_> {
         }
     }
 
-    fn piece(self, side: Side, k: usize, cursor: &mut usize) -> (usize, f64, f64) {
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64) {
         let g = self.from + k;
-        let (last, at_k, at_last) = self.windows.piece(side, g, cursor);
+        let (last, at_k, at_last) = self.windows.piece(side, g, cursor, &self.run);
         // Pieces end where runs do.
         debug_assert!(last < self.to);
         (last - self.from, at_k, at_last)
     }
 
-    fn edge(self, side: Side, k: usize, cursor: &mut usize) -> f64 {
-        self.windows.edge(side, self.from + k, cursor)
+    fn edge(self, side: Side, k: usize, cursor: &mut Cursor) -> f64 {
+        self.windows.edge(side, self.from + k, cursor, &self.run)
     }
 }
 
@@ -322,13 +363,14 @@ pub(super) mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// A track of `n` samples: stretches of steady speed (counts a sample, either way, some
-    /// holding still), with a wiggle of `wiggle` counts now and then and values that now and
-    /// then land on half counts exactly.
+    /// A track: legs of steady speed (counts a sample, either way, some holding still), of
+    /// speed changing steadily (speeding up or slowing down, the edges bending one way), with
+    /// a wiggle of `wiggle` counts now and then, and values that now and then land on half
+    /// counts exactly.
     pub(in crate::plan::bounded) fn track() -> impl Strategy<Value = Vec<f64>> {
         (
             -3.0..3.0_f64,
-            prop::collection::vec((-20.0..20.0_f64, 1..60_usize, 0..4_u8), 1..12),
+            prop::collection::vec((-20.0..20.0_f64, 1..60_usize, 0..6_u8), 1..12),
             0.0..0.9_f64,
         )
             .prop_map(|(u0, legs, wiggle)| {
@@ -346,7 +388,13 @@ pub(super) mod tests {
                         } else {
                             0.0
                         };
-                        u.push(last + speed + jiggle);
+                        let ramp = (s + 1) as f64 / samples as f64;
+                        let step = match kind {
+                            4 => speed * ramp,
+                            5 => speed * (1.0 - ramp + 0.01),
+                            _ => speed,
+                        };
+                        u.push(last + step + jiggle);
                     }
                 }
                 u
@@ -374,7 +422,7 @@ pub(super) mod tests {
             for (r, o) in read.iter().zip(&one_by_one) {
                 prop_assert_eq!(r.direction, o.direction);
                 prop_assert_eq!(r.pulses.len(), o.pulses.len());
-                let mut cursors = [NO_CURSOR; 2];
+                let mut cursors = [Cursor::NEW; 2];
                 for (k, p) in o.pulses.iter().enumerate() {
                     prop_assert_eq!(r.pulses.pulse(k), *p);
                     // Read along the pieces as the scan reads them.
@@ -383,8 +431,8 @@ pub(super) mod tests {
                         prop_assert!(last >= k && last < o.pulses.len());
                         // Bit for bit.
                         let bits = |at: f64| at.to_bits();
-                        prop_assert_eq!(bits(at_k), bits(o.pulses.edge(side, k, &mut 0)));
-                        prop_assert_eq!(bits(at_last), bits(o.pulses.edge(side, last, &mut 0)));
+                        prop_assert_eq!(bits(at_k), bits(o.pulses.edge(side, k, &mut { Cursor::NEW })));
+                        prop_assert_eq!(bits(at_last), bits(o.pulses.edge(side, last, &mut { Cursor::NEW })));
                     }
                 }
             }
