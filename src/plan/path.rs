@@ -634,27 +634,29 @@ pub(super) fn reversal_cut(sampled: &Sampled, from: usize, to: usize) -> Option<
 
 /// [`reversal_cut`] with the joint that reverses there.
 pub(super) fn reversal(sampled: &Sampled, from: usize, to: usize) -> Option<(usize, usize)> {
+    use crate::kinematics::JOINTS;
     let counts = &sampled.samples.counts;
     let others_move = |j: usize, i: usize| {
-        (0..crate::kinematics::JOINTS)
-            .any(|k| k != j && counts[i.saturating_sub(1)][k] != counts[(i + 1).min(to)][k])
+        (0..JOINTS).any(|k| k != j && counts[i.saturating_sub(1)][k] != counts[(i + 1).min(to)][k])
     };
-    (0..crate::kinematics::JOINTS)
-        .filter_map(|j| {
-            let mut direction = 0_i64;
-            (from + 1..=to).find_map(|i| {
-                let step = (counts[i][j] - counts[i - 1][j]).signum();
-                if step == 0 {
-                    return None;
-                }
-                let reverses = direction != 0 && step != direction;
-                direction = step;
-                // Point i - 1 is the last at the extreme count.
-                (reverses && others_move(j, i - 1)).then_some((i - 1, j))
-            })
-        })
-        .filter(|&(cut, _)| cut > from && cut < to)
-        .min()
+    // Every joint's way so far (0 before it moves), the joints read side by side: the first
+    // reversal met, the earliest joint's at a point, is every joint's first one's least.
+    let mut direction = [0_i64; JOINTS];
+    for i in from + 1..=to {
+        for j in 0..JOINTS {
+            let step = (counts[i][j] - counts[i - 1][j]).signum();
+            if step == 0 {
+                continue;
+            }
+            let reverses = direction[j] != 0 && step != direction[j];
+            direction[j] = step;
+            // Point i - 1 is the last at the extreme count.
+            if reverses && others_move(j, i - 1) {
+                return Some((i - 1, j));
+            }
+        }
+    }
+    None
 }
 
 /// Where to cut a part from sample point `first` to `end` whose `plan` gives a
