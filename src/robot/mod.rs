@@ -237,7 +237,7 @@ impl Robot {
         let offset: Joints = std::array::from_fn(|j| self.joints[j].offset);
         let step: Joints = std::array::from_fn(|j| self.joints[j].step);
         let scaled: Joints = std::array::from_fn(|j| (q[j] - offset[j]) / step[j]);
-        scaled.map(nearest_count)
+        std::array::from_fn(|j| nearest_count(scaled[j]))
     }
 
     /// The pose that counts put the tool in.
