@@ -1,13 +1,15 @@
 //! A joint's pulses and their windows ([`super::pulses`]), read where needed rather than made
 //! one by one: between two samples the track is a line, so along the pulses whose window edge
-//! falls in one sample interval the edge follows one formula. The pulses are cut into such
-//! pieces, a few per sample interval, and a row's period bounds are read at each piece's ends
-//! only ([`super::rows`]): a pulse's bound `(edge - start) / n` is monotone along a piece.
+//! falls in one sample interval the edge follows one formula, and a pulse's bound in a row,
+//! `(edge - start) / n`, is monotone along them. The pulses are cut into such pieces (run on
+//! over further intervals while the edge bends the way its bound allows: [`Edge::Spans`]), and
+//! a row's period bounds are read at each piece's ends only ([`super::rows`]).
 //!
 //! The pieces are found per sample interval ([`build`]); a pulse read from them is the pulse
 //! `Track::pulses_into` makes, bit for bit (the tests check it).
 
 mod build;
+mod one_by_one;
 
 use super::pulses::{Pulse, Track};
 use crate::table::Direction;
