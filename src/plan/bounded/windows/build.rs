@@ -251,17 +251,12 @@ impl<'a> Track<'a> {
             if j > to {
                 return false;
             }
-            // On along the intervals where the edge bends up (convex: the earliest bound,
-            // a largest, is at a piece's ends).
-            let last = self.bending(j, to, d, Side::Early);
-            let next = early.first_reaching(m, n, u[last + 1], false);
-            if next == m {
+            let Some((next, last)) =
+                self.run_on(&mut w.early, k0, (j, to), &early, Side::Early, (m, n))
+            else {
                 return false;
-            }
-            w.early
-                .push(self.piece(k0, (j, last), Side::Early, &early, m, next));
-            m = next;
-            j = last;
+            };
+            (m, j) = (next, last);
         }
         // Latest: the interval whose next sample the level has not passed, from the one the
         // pulse crosses in (no earlier one: the level is past the half count); past the
@@ -280,19 +275,38 @@ impl<'a> Track<'a> {
                 w.late.push(Piece::at(k0 + m as usize, self.t(to + 1)));
                 break;
             }
-            // On along the intervals where the edge bends down (concave: the latest bound,
-            // a smallest, is at a piece's ends).
-            let last = self.bending(j, to, d, Side::Late);
-            let next = late.first_reaching(m, n, u[last + 1], true);
-            if next == m {
+            let Some((next, last)) =
+                self.run_on(&mut w.late, k0, (j, to), &late, Side::Late, (m, n))
+            else {
                 return false;
-            }
-            w.late
-                .push(self.piece(k0, (j, last), Side::Late, &late, m, next));
-            m = next;
-            j = last;
+            };
+            (m, j) = (next, last);
         }
         true
+    }
+
+    /// The piece from pulse `m` (of `n`, from the run's pulse `k0`), whose edge on `side` is in
+    /// interval `j`, run on as far as the edge bends the way the side's bound needs (convex for
+    /// the earliest, a largest; concave for the latest, a smallest: either is then at the
+    /// piece's ends), pushed onto `pieces`; the pulse after it and its last interval. `None` if
+    /// it would hold no pulse (it always does: the caller then takes step 3).
+    fn run_on(
+        &self,
+        pieces: &mut Vec<Piece>,
+        k0: usize,
+        (j, to): (usize, usize),
+        levels: &Levels,
+        side: Side,
+        (m, n): (i64, i64),
+    ) -> Option<(i64, usize)> {
+        let last = self.bending(j, to, levels.d, side);
+        let strictly = side == Side::Late;
+        let next = levels.first_reaching(m, n, self.counts()[last + 1], strictly);
+        if next == m {
+            return None;
+        }
+        pieces.push(self.piece(k0, (j, last), side, levels, m, next));
+        Some((next, last))
     }
 
     /// The last sample interval from `j` (up to `to`) along which an edge's time, as a
