@@ -6,9 +6,9 @@
 //!    every joint may be `1/2 + delta_j` pulses off, the widest windows whose worst case, the
 //!    joints' errors combined as the vectors their pulses move the tool by, stays within the
 //!    tolerance.
-//! 3. Every pulse gets a window of landing times ([`pulses`]); rows are the longest runs of
-//!    pulses one realisable frequency lands inside their windows (Klipper's step compression,
-//!    [`rows`]).
+//! 3. Every pulse gets a window of landing times ([`pulses`]), read by pieces along which
+//!    a row's bound is monotone ([`windows`]); rows are the longest runs of pulses one
+//!    realisable frequency lands inside their windows (Klipper's step compression, [`rows`]).
 //! 4. The execution model plays the tables; a plan whose path deviation exceeds the tolerance
 //!    (or whose tracking error exceeds twice it) is not returned. The windows of step 2 make
 //!    that rare (the linearisation is the only gap); when it happens the windows narrow and it
