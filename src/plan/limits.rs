@@ -41,6 +41,24 @@ pub(super) fn check_positions(
     counts: &[[i64; JOINTS]],
     period_s: f64,
 ) -> Result<(), PlanError> {
+    // A joint's value grows (or falls) with its count: its fewest and most counts are its
+    // extremes. Only if one is beyond a limit is the first sample beyond it looked for.
+    let (mut fewest, mut most) = ([i64::MAX; JOINTS], [i64::MIN; JOINTS]);
+    for c in counts {
+        for j in 0..JOINTS {
+            fewest[j] = fewest[j].min(c[j]);
+            most[j] = most[j].max(c[j]);
+        }
+    }
+    let within = |j: usize, count: i64| {
+        let joint = &robot.joints[j];
+        let value = joint.value_of(count);
+        let slack = joint.step.abs() / 2.0;
+        !(value < joint.min - slack || value > joint.max + slack)
+    };
+    if counts.is_empty() || (0..JOINTS).all(|j| within(j, fewest[j]) && within(j, most[j])) {
+        return Ok(());
+    }
     for (i, c) in counts.iter().enumerate() {
         for (j, joint) in robot.joints.iter().enumerate() {
             let value = joint.value_of(c[j]);
@@ -300,6 +318,60 @@ mod tests {
                 peak(&robot, &samples, &profile, continuous),
                 peak_at_every_period(&robot, &samples, &profile, continuous)
             );
+        }
+    }
+
+    /// Every joint's counts stepping by `steps` a sample from its limit's middle.
+    fn counts_from_the_middle(steps: [i64; JOINTS], n: i64) -> Vec<[i64; JOINTS]> {
+        let robot = seed_robot();
+        let middle: [i64; JOINTS] = std::array::from_fn(|j| {
+            robot.joints[j].count_of((robot.joints[j].min + robot.joints[j].max) / 2.0)
+        });
+        (0..n)
+            .map(|i| std::array::from_fn(|j| middle[j] + i * steps[j]))
+            .collect()
+    }
+
+    #[test]
+    fn the_first_sample_beyond_a_limit_is_named_and_none_within_them() {
+        let robot = seed_robot();
+        let period_s = 0.01;
+        assert!(
+            check_positions(
+                &robot,
+                &counts_from_the_middle([1, -1, 1, -1], 50),
+                period_s
+            )
+            .is_ok()
+        );
+        for j in 0..JOINTS {
+            let joint = &robot.joints[j];
+            // Towards either limit, fast enough to pass it within the samples.
+            for way in [1_i64, -1] {
+                let mut steps = [0; JOINTS];
+                steps[j] = way * 1_000_000;
+                let counts = counts_from_the_middle(steps, 2_000);
+                let first = counts
+                    .iter()
+                    .position(|c| {
+                        let v = joint.value_of(c[j]);
+                        let slack = joint.step.abs() / 2.0;
+                        v < joint.min - slack || v > joint.max + slack
+                    })
+                    .expect("a sample beyond the limit");
+                match check_positions(&robot, &counts, period_s) {
+                    Err(PlanError::OutOfLimit {
+                        joint: name, t_s, ..
+                    }) => {
+                        assert_eq!(name, joint.name);
+                        assert!(
+                            (t_s - first as f64 * period_s).abs() < 1e-12,
+                            "{t_s} {first}"
+                        );
+                    }
+                    other => panic!("{j} {way}: {other:?}"),
+                }
+            }
         }
     }
 
