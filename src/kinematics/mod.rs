@@ -194,7 +194,37 @@ pub fn check_finite(pose: &Pose) -> Result<(), KinematicsError> {
 #[must_use]
 pub fn unwrap_near(angle: f64, near: f64) -> f64 {
     let turn = std::f64::consts::TAU;
-    // Whole turns, rounded as `round` does without its library call (planning unwraps every
-    // millisecond sample).
+    // Planning unwraps every millisecond sample, most often less than a half turn from the
+    // last: no turn, without the division (`+ 0.0` as the sum with no turns makes it).
+    if (near - angle).abs() < 3.0 {
+        return angle + 0.0;
+    }
+    // Whole turns, rounded as `round` does without its library call.
     angle + crate::robot::nearest_count((near - angle) / turn) as f64 * turn
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// `unwrap_near` worked with the division at every call.
+    fn unwrap_dividing(angle: f64, near: f64) -> f64 {
+        let turn = std::f64::consts::TAU;
+        angle + crate::robot::nearest_count((near - angle) / turn) as f64 * turn
+    }
+
+    proptest! {
+        #[test]
+        fn an_angle_unwrapped_without_the_division_is_the_angle_unwrapped_with_it(
+            angle in prop_oneof![-20.0..20.0_f64, Just(-0.0), Just(0.0), Just(3.0), Just(-3.0)],
+            gap in prop_oneof![-3.5..3.5_f64, -40.0..40.0_f64, Just(3.0), Just(-3.0), Just(0.0)],
+        ) {
+            let near = angle + gap;
+            prop_assert_eq!(
+                unwrap_near(angle, near).to_bits(),
+                unwrap_dividing(angle, near).to_bits()
+            );
+        }
+    }
 }
