@@ -42,10 +42,11 @@ pub(super) fn sample(
     counts.push(start_counts);
     values.push(*start_values);
     let mut near = *start_values;
+    let counter = robot.counter();
     for i in 1..=n {
         let pose = pose_at(profile.distance_at_point_mm(i as u32));
         let q = robot.kinematics.ik(&pose, Some(&near))?;
-        counts.push(robot.counts_of(&q));
+        counts.push(counter.counts_of(&q));
         values.push(q);
         near = q;
     }
@@ -95,6 +96,7 @@ pub(super) fn sample_joints(
     let mut values = Vec::with_capacity(n as usize + 1);
     counts.push(start_counts);
     values.push(path.from);
+    let counter = robot.counter();
     for i in 1..=n {
         let u = if i == n {
             1.0
@@ -102,7 +104,7 @@ pub(super) fn sample_joints(
             profile.distance_at_point_mm(i) / profile.length_mm
         };
         let q = path.joints_at(u);
-        counts.push(robot.counts_of(&q));
+        counts.push(counter.counts_of(&q));
         values.push(q);
     }
     Samples { counts, values }

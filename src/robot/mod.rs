@@ -73,6 +73,35 @@ pub(crate) fn nearest_count(x: f64) -> i64 {
     whole + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
 }
 
+/// [`Robot::counts_of`] at every sample of a move: each joint's value times its step's
+/// reciprocal, a product where the quotient is a division. The product is within two roundings
+/// of the quotient, so it rounds to the same count but within a few roundings of a half count,
+/// where the quotient is worked.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Counter {
+    offset: Joints,
+    step: Joints,
+    per_step: Joints,
+}
+
+impl Counter {
+    /// The counts nearest `q`, as [`Robot::counts_of`] rounds them.
+    pub(crate) fn counts_of(&self, q: &Joints) -> [i64; JOINTS] {
+        std::array::from_fn(|j| {
+            let from = q[j] - self.offset[j];
+            let x = from * self.per_step[j];
+            if x.abs() < 4.0e15 {
+                let whole = x as i64;
+                let fraction = x - whole as f64;
+                if (fraction.abs() - 0.5).abs() > x.abs() * 1e-15 {
+                    return whole + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5);
+                }
+            }
+            nearest_count(from / self.step[j])
+        })
+    }
+}
+
 impl Joint {
     /// The count nearest a joint value.
     #[must_use]
@@ -240,6 +269,17 @@ impl Robot {
         std::array::from_fn(|j| nearest_count(scaled[j]))
     }
 
+    /// [`Self::counts_of`] for many samples ([`Counter`]).
+    #[must_use]
+    pub(crate) fn counter(&self) -> Counter {
+        let step: Joints = std::array::from_fn(|j| self.joints[j].step);
+        Counter {
+            offset: std::array::from_fn(|j| self.joints[j].offset),
+            step,
+            per_step: step.map(|s| 1.0 / s),
+        }
+    }
+
     /// The pose that counts put the tool in.
     #[must_use]
     pub fn pose_of(&self, counts: &[i64; JOINTS]) -> Pose {
@@ -386,6 +426,33 @@ mod tests {
     }
 
     proptest! {
+        #[test]
+        fn counts_worked_by_products_are_the_counts_worked_by_quotients(
+            seed_joints in prop::array::uniform4(-1e5..1e5_f64),
+            halves in prop::array::uniform4(-2_000_000_i64..2_000_000),
+            nudge in prop::array::uniform4(-4_i64..=4),
+            scale in prop_oneof![Just(1.0), 1e-3..1e3_f64],
+        ) {
+            let mut robot = super::seed_robot();
+            for joint in &mut robot.joints {
+                joint.step *= scale;
+            }
+            let counter = robot.counter();
+            // Anywhere, and on a half count give or take a few roundings.
+            let on_halves: crate::kinematics::Joints = std::array::from_fn(|j| {
+                let joint = &robot.joints[j];
+                let v = joint.offset + (halves[j] as f64 + 0.5) * joint.step;
+                let mut bits = v.to_bits() as i64 + nudge[j];
+                if v == 0.0 {
+                    bits = 0;
+                }
+                f64::from_bits(bits as u64)
+            });
+            for q in [seed_joints, on_halves] {
+                prop_assert_eq!(counter.counts_of(&q), robot.counts_of(&q), "{:?}", q);
+            }
+        }
+
         #[test]
         fn nearest_count_is_round(x in prop_oneof![-1e7..1e7_f64, -1e16..1e16_f64, any::<f64>()]) {
             prop_assert_eq!(nearest_count(x), x.round() as i64);
