@@ -325,7 +325,7 @@ mod tests {
     fn counts_from_the_middle(steps: [i64; JOINTS], n: i64) -> Vec<[i64; JOINTS]> {
         let robot = seed_robot();
         let middle: [i64; JOINTS] = std::array::from_fn(|j| {
-            robot.joints[j].count_of((robot.joints[j].min + robot.joints[j].max) / 2.0)
+            robot.joints[j].count_of(f64::midpoint(robot.joints[j].min, robot.joints[j].max))
         });
         (0..n)
             .map(|i| std::array::from_fn(|j| middle[j] + i * steps[j]))
