@@ -50,6 +50,26 @@ impl Kinematics for Cylindrical {
         }
     }
 
+    fn fk_moved(&self, q: &Joints, steps: &Joints) -> (Vector3<f64>, [Vector3<f64>; JOINTS]) {
+        // `fk`'s formula, the angle's sine and cosine worked once for every joint but the base.
+        let [theta1, d2, d3, _] = *q;
+        let (sin, cos) = theta1.sin_cos();
+        let at_radius = |d3: f64, d2: f64| {
+            let r = d3 + self.l0_mm;
+            Vector3::new(-r * sin, r * cos, d2)
+        };
+        let at = at_radius(d3, d2);
+        let mut base = *q;
+        base[0] += steps[0];
+        let moved = [
+            self.fk(&base).position_mm,
+            at_radius(d3, d2 + steps[1]),
+            at_radius(d3 + steps[2], d2),
+            at,
+        ];
+        (at, moved)
+    }
+
     fn ik(&self, pose: &Pose, near: Option<&Joints>) -> Result<Joints, KinematicsError> {
         check_finite(pose)?;
         let p = pose.position_mm;
@@ -106,6 +126,23 @@ mod tests {
         );
         assert!((q[1] - 50.0).abs() < 1e-12);
         assert!((q[2] - (926.57f64.hypot(535.03) - 500.0)).abs() < 1e-9);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn the_moved_poses_shared_are_the_poses_worked_one_by_one(
+            q in proptest::array::uniform4(-1e3..1e3_f64),
+            steps in proptest::array::uniform4(-1.0..1.0_f64),
+        ) {
+            let k = robot();
+            let (at, moved) = k.fk_moved(&q, &steps);
+            proptest::prop_assert_eq!(at, k.fk(&q).position_mm);
+            for j in 0..JOINTS {
+                let mut m = q;
+                m[j] += steps[j];
+                proptest::prop_assert_eq!(moved[j], k.fk(&m).position_mm, "joint {}", j);
+            }
+        }
     }
 
     #[test]

@@ -18,6 +18,7 @@ pub use cylindrical::Cylindrical;
 pub use positions::Positions;
 pub use scara::{Elbow, Scara};
 
+use nalgebra::Vector3;
 use thiserror::Error;
 
 use crate::geometry::{Line, Pose};
@@ -128,6 +129,20 @@ pub trait Kinematics {
     /// The pose the joints put the tool in.
     fn fk(&self, q: &Joints) -> Pose;
 
+    /// Where the joints put the tool, and where each joint moved by `steps[j]` alone puts it:
+    /// [`Self::fk`] at `q` and at each moved `q`, bit for bit. A model may share the work
+    /// between them (the bounded-error method's budget reads a pulse of every joint at a
+    /// hundred points of every move).
+    fn fk_moved(&self, q: &Joints, steps: &Joints) -> (Vector3<f64>, [Vector3<f64>; JOINTS]) {
+        let at = self.fk(q).position_mm;
+        let moved = std::array::from_fn(|j| {
+            let mut m = *q;
+            m[j] += steps[j];
+            self.fk(&m).position_mm
+        });
+        (at, moved)
+    }
+
     /// Joint values for a pose. Revolute joints are taken on the turn nearest `near` (the
     /// previous point of a path), so a path never jumps by a full turn; with no `near`, angles
     /// fall in (-pi, pi].
@@ -170,6 +185,9 @@ impl Kinematics for Model {
     }
     fn fk(&self, q: &Joints) -> Pose {
         self.inner().fk(q)
+    }
+    fn fk_moved(&self, q: &Joints, steps: &Joints) -> (Vector3<f64>, [Vector3<f64>; JOINTS]) {
+        self.inner().fk_moved(q, steps)
     }
     fn ik(&self, pose: &Pose, near: Option<&Joints>) -> Result<Joints, KinematicsError> {
         self.inner().ik(pose, near)

@@ -102,18 +102,16 @@ impl Budget {
     pub(super) fn new(robot: &Robot, values: &[Joints]) -> Self {
         let n = values.len();
         let fk = |q: &Joints| robot.kinematics.fk(q).position_mm;
+        let steps: Joints = std::array::from_fn(|j| robot.joints[j].step);
         let mut points = Vec::with_capacity(POINTS + 2);
         let (mut reach_mm, mut whole_mm) = ([0.0f64; JOINTS], [0.0f64; JOINTS]);
         for i in (0..n).step_by((n / POINTS).max(1)).chain([n - 1]) {
-            let q = values[i];
-            let p = fk(&q);
+            let (p, moved) = robot.kinematics.fk_moved(&values[i], &steps);
             let (before, after) = (i.saturating_sub(1), (i + 1).min(n - 1));
             let tangent = (fk(&values[after]) - fk(&values[before])).try_normalize(1e-12);
             let (mut across, mut whole) = ([Vector3::zeros(); JOINTS], [Vector3::zeros(); JOINTS]);
             for j in 0..JOINTS {
-                let mut moved = q;
-                moved[j] += robot.joints[j].step;
-                let d = fk(&moved) - p;
+                let d = moved[j] - p;
                 across[j] = tangent.map_or(d, |t| d - t * d.dot(&t));
                 whole[j] = d;
                 reach_mm[j] = reach_mm[j].max(across[j].norm().max(d.norm() / 2.0));
