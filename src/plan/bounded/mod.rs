@@ -279,7 +279,7 @@ impl Move<'_> {
             let (segs, end) = channel.run(run, t_s, count, left);
             let n = run.pulses.len();
             if n > 0 {
-                count = run.pulses.pulse(n - 1).count;
+                count = run.pulses.count(n - 1);
             }
             t_s = end;
             segments.extend(segs);

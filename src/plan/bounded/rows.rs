@@ -289,7 +289,7 @@ impl Channel<'_> {
         let mut scan = Scan::new(pulses, t_s, outer, bounds);
         let fit = |scan: &Scan<P>, m: usize| {
             let (lo, hi) = scan.over(m);
-            let want = (pulses.pulse(m - 1).ideal_s - t_s) / m as f64;
+            let want = (pulses.ideal_s(m - 1) - t_s) / m as f64;
             self.realise(range, lo, hi, want)
                 .map(|(set, f)| (m, set, f))
         };
@@ -364,7 +364,7 @@ impl Channel<'_> {
             k += m;
             a.rows.push(Row {
                 freq_hz: set,
-                target: pulses.pulse(k - 1).count,
+                target: pulses.count(k - 1),
             });
         }
         a.end_s = t_s;

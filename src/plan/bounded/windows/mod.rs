@@ -30,6 +30,14 @@ pub(super) trait Pulses: Copy {
     fn len(self) -> usize;
     /// Pulse `k`.
     fn pulse(self, k: usize) -> Pulse;
+    /// Pulse `k`'s count after it ([`Pulse::count`]), without its windows.
+    fn count(self, k: usize) -> i64 {
+        self.pulse(k).count
+    }
+    /// When pulse `k` lands on time ([`Pulse::ideal_s`]), without its windows.
+    fn ideal_s(self, k: usize) -> f64 {
+        self.pulse(k).ideal_s
+    }
     /// The pulses from `k` on.
     fn after(self, k: usize) -> Self;
     /// The last pulse of the piece pulse `k` is in on `side` (from `k`, that side's edge is
@@ -284,14 +292,23 @@ impl Windows<'_> {
 
     /// Pulse `k`.
     fn pulse(&self, k: usize, run: &RunStart) -> Pulse {
-        let (h, df) = run.half(k);
-        let crossed = self.crossed[locate(&self.crossed, |c| c.0, k, &mut { usize::MAX })].1;
         Pulse {
-            count: run.before(k) + df as i64,
-            ideal_s: self.track.at(crossed, h),
+            count: Self::count(k, run),
+            ideal_s: self.ideal_s(k, run),
             lo_s: self.edge(Side::Early, k, &mut { Cursor::NEW }, run),
             hi_s: self.edge(Side::Late, k, &mut { Cursor::NEW }, run),
         }
+    }
+
+    /// Pulse `k`'s count after it.
+    fn count(k: usize, run: &RunStart) -> i64 {
+        run.before(k) + run.half(k).1 as i64
+    }
+
+    /// When pulse `k` lands on time.
+    fn ideal_s(&self, k: usize, run: &RunStart) -> f64 {
+        let crossed = self.crossed[locate(&self.crossed, |c| c.0, k, &mut { usize::MAX })].1;
+        self.track.at(crossed, run.half(k).0)
     }
 
     /// The runs of one direction, in order.
@@ -336,6 +353,16 @@ impl Pulses for Stretch<'_> {
     fn pulse(self, k: usize) -> Pulse {
         debug_assert!(self.from + k < self.to);
         self.windows.pulse(self.from + k, &self.run)
+    }
+
+    fn count(self, k: usize) -> i64 {
+        debug_assert!(self.from + k < self.to);
+        Windows::count(self.from + k, &self.run)
+    }
+
+    fn ideal_s(self, k: usize) -> f64 {
+        debug_assert!(self.from + k < self.to);
+        self.windows.ideal_s(self.from + k, &self.run)
     }
 
     fn after(self, k: usize) -> Self {
@@ -427,6 +454,8 @@ pub(super) mod tests {
                 let mut cursors = [Cursor::NEW; 2];
                 for (k, p) in o.pulses.iter().enumerate() {
                     prop_assert_eq!(r.pulses.pulse(k), *p);
+                    prop_assert_eq!(r.pulses.count(k), p.count);
+                    prop_assert_eq!(r.pulses.ideal_s(k).to_bits(), p.ideal_s.to_bits());
                     // Read along the pieces as the scan reads them.
                     for (side, c) in [Side::Early, Side::Late].into_iter().zip(&mut cursors) {
                         let (last, at_k, at_last) = r.pulses.piece(side, k, c);
