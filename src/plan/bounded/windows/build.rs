@@ -343,16 +343,23 @@ impl<'a> Track<'a> {
         m: i64,
         next: i64,
     ) -> Piece {
-        let edge = if from == to {
-            Edge::Passes(from)
-        } else {
-            Edge::Spans(from, to)
-        };
+        let first = k0 + m as usize;
+        let (level_first, level_last) = (levels.level(m), levels.level(next - 1));
+        if from == to {
+            // Most pieces (wherever the edge bends the other way): read in place.
+            return Piece {
+                first,
+                edge: Edge::Passes(from),
+                at_first: self.at(from, level_first),
+                at_last: self.at(from, level_last),
+            };
+        }
+        let edge = Edge::Spans(from, to);
         Piece {
-            first: k0 + m as usize,
+            first,
             edge,
-            at_first: self.edge_at(side, edge, levels.level(m), levels.df, &mut { from }),
-            at_last: self.edge_at(side, edge, levels.level(next - 1), levels.df, &mut { to }),
+            at_first: self.edge_at(side, edge, level_first, levels.df, &mut { from }),
+            at_last: self.edge_at(side, edge, level_last, levels.df, &mut { to }),
         }
     }
 
