@@ -19,6 +19,14 @@ use crate::table::Direction;
 const STRETCH_MIN_DELTA: f64 = 1e-3;
 /// Counts beyond this take step 3, for the same reason.
 const STRETCH_MAX_COUNT: i64 = 1 << 40;
+/// How far, as a share, an edge's slope may bend the other way along a piece that runs on
+/// ([`Track::bending`]): no more than the samples' rounding. A joint at a steady speed has
+/// intervals equal but for the last bits of its counts (on the seed's move, slopes a few
+/// 1e-13 apart), which would otherwise cut a piece every few intervals. Along such a piece
+/// a pulse inside can bound a row past its ends by at most this share of the piece's time
+/// (about 1e-10 s on a 0.1 s piece): far below any realisable step of a row's period, and
+/// the execution model judges every plan.
+const BEND_ROUNDING: f64 = 1e-9;
 
 /// A run as the sweep finds it.
 pub(super) struct Span {
@@ -312,20 +320,25 @@ impl<'a> Track<'a> {
     /// The last sample interval from `j` (up to `to`) along which an edge's time, as a
     /// function of the pulse, bends only the way `side` needs: its slope over an interval is
     /// the interval's time per count (its reciprocal change, counted the run's way `d`), never
-    /// falling for the earliest (convex) and never rising for the latest (concave).
+    /// falling for the earliest (convex) and never rising for the latest (concave), by more
+    /// than [`BEND_ROUNDING`] of the steepest (shallowest) before it.
     fn bending(&self, j: usize, to: usize, d: i64, side: Side) -> usize {
         let rate = self.rates();
         let slope = |i: usize| rate[i] * d as f64;
         let mut last = j;
         match side {
             Side::Early => {
-                while last < to && slope(last + 1) >= slope(last) {
+                let mut most = slope(j);
+                while last < to && slope(last + 1) >= most - BEND_ROUNDING * most.abs() {
                     last += 1;
+                    most = most.max(slope(last));
                 }
             }
             Side::Late => {
-                while last < to && slope(last + 1) <= slope(last) {
+                let mut least = slope(j);
+                while last < to && slope(last + 1) <= least + BEND_ROUNDING * least.abs() {
                     last += 1;
+                    least = least.min(slope(last));
                 }
             }
         }

@@ -2,8 +2,9 @@
 //! one by one: between two samples the track is a line, so along the pulses whose window edge
 //! falls in one sample interval the edge follows one formula, and a pulse's bound in a row,
 //! `(edge - start) / n`, is monotone along them. The pulses are cut into such pieces (run on
-//! over further intervals while the edge bends the way its bound allows: [`Edge::Spans`]), and
-//! a row's period bounds are read at each piece's ends only ([`super::rows`]).
+//! over further intervals while the edge bends the way its bound allows, to within the
+//! samples' rounding: [`Edge::Spans`]), and a row's period bounds are read at each piece's ends
+//! only ([`super::rows`]).
 //!
 //! The pieces are found per sample interval ([`build`]); a pulse read from them is the pulse
 //! `Track::pulses_into` makes, bit for bit (the tests check it).
