@@ -42,13 +42,15 @@ impl Bounds {
     }
 }
 
-/// A piece a scan has read: its first pulse, the bound over the pulses before it, and the first
-/// pulse's own bound.
+/// A piece a scan has read: its first pulse, the bound over the pulses before it, the first
+/// pulse's own bound, and, along a piece whose edge bends against the bound, the pulse where
+/// its own bound peaks and that bound.
 #[derive(Clone, Copy)]
 struct Scanned {
     first: usize,
     before: f64,
     own: f64,
+    peak: Option<(usize, f64)>,
 }
 
 /// One side of a row's period bounds from its start, read piece by piece: pulse `i` (from 0)
@@ -56,7 +58,8 @@ struct Scanned {
 /// landing over its number (the [`Side::Early`] bound, the largest of them) and at most every
 /// latest over its number (the smallest). Along a piece a pulse's own bound is monotone
 /// ([`super::windows`]), so the bound through a pulse of it is read from the piece's first
-/// pulse and that one.
+/// pulse and that one; along a piece whose edge bends against the bound it rises to one peak
+/// and falls, so past the peak it is the peak's.
 struct Bound<'b> {
     side: Side,
     cursor: Cursor,
@@ -66,6 +69,14 @@ struct Bound<'b> {
     /// The current piece's last pulse (`None` before the first), and the bound through it.
     last: Option<usize>,
     through_last: f64,
+}
+
+/// Whether bound `a` is tighter than `b` on `side`.
+fn tighter(side: Side, a: f64, b: f64) -> bool {
+    match side {
+        Side::Early => a > b,
+        Side::Late => a < b,
+    }
 }
 
 impl Bound<'_> {
@@ -86,12 +97,59 @@ impl Bound<'_> {
             return self.through_last;
         }
         let piece = *self.pieces.last().expect("a piece entered");
-        let own = if k == piece.first {
-            piece.own
-        } else {
-            Self::own(t_s, k, pulses.edge(self.side, k, &mut self.cursor))
+        let own = match piece.peak {
+            Some((p, at_peak)) if k >= p => at_peak,
+            _ if k == piece.first => piece.own,
+            _ => Self::own(t_s, k, pulses.edge(self.side, k, &mut self.cursor)),
         };
         self.combine(self.combine(piece.before, piece.own), own)
+    }
+
+    /// Where the own bound peaks along pulses `k` (bound `at_k`) to `last` (`at_last`) of a
+    /// piece whose edge bends against it, and the bound there: it rises to the peak and falls
+    /// after, so the peak is searched for; the rounding of the pulses' edges may leave a
+    /// neighbour of the one found a last bit tighter, so a few either side are read too.
+    fn peak<P: Pulses>(
+        &mut self,
+        pulses: P,
+        t_s: f64,
+        (k, at_k): (usize, f64),
+        (last, at_last): (usize, f64),
+    ) -> (usize, f64) {
+        let side = self.side;
+        let mut own = |i: usize| Self::own(t_s, i, pulses.edge(side, i, &mut self.cursor));
+        // Falling from the first, or rising to the last, it peaks there.
+        let found = if last <= k + 1 || !tighter(side, own(k + 1), at_k) {
+            k
+        } else if tighter(side, at_last, own(last - 1)) {
+            last
+        } else {
+            // It rises into `lo` and does not rise past `hi`.
+            let (mut lo, mut hi) = (k + 1, last - 1);
+            while lo < hi {
+                let mid = usize::midpoint(lo, hi);
+                if tighter(side, own(mid + 1), own(mid)) {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        let mut best = (k, at_k);
+        for i in found.saturating_sub(2).max(k)..=(found + 2).min(last) {
+            let at = if i == k {
+                at_k
+            } else if i == last {
+                at_last
+            } else {
+                own(i)
+            };
+            if tighter(side, at, best.1) {
+                best = (i, at);
+            }
+        }
+        best
     }
 
     /// Enters the piece pulse `k` is in, the pulses before it scanned.
@@ -100,25 +158,28 @@ impl Bound<'_> {
             Some(_) => self.through_last,
             None => self.outer,
         };
-        let (last, at_k, at_last) = pulses.piece(self.side, k, &mut self.cursor);
+        let (last, at_k, at_last, against) = pulses.piece(self.side, k, &mut self.cursor);
         let own = Self::own(t_s, k, at_k);
+        let own_last = Self::own(t_s, last, at_last);
+        let peak = against.then(|| self.peak(pulses, t_s, (k, own), (last, own_last)));
         self.pieces.push(Scanned {
             first: k,
             before,
             own,
+            peak,
         });
-        let own_last = Self::own(t_s, last, at_last);
-        self.through_last = self.combine(self.combine(before, own), own_last);
+        let through = peak.map_or(own_last, |(_, at_peak)| self.combine(at_peak, own_last));
+        self.through_last = self.combine(self.combine(before, own), through);
         self.last = Some(last);
     }
 
     /// The bound through pulse `k` of any piece scanned.
     fn through_scanned<P: Pulses>(&self, pulses: P, t_s: f64, k: usize) -> f64 {
         let piece = self.pieces[self.pieces.partition_point(|p| p.first <= k) - 1];
-        let own = if k == piece.first {
-            piece.own
-        } else {
-            Self::own(t_s, k, pulses.edge(self.side, k, &mut { Cursor::NEW }))
+        let own = match piece.peak {
+            Some((p, at_peak)) if k >= p => at_peak,
+            _ if k == piece.first => piece.own,
+            _ => Self::own(t_s, k, pulses.edge(self.side, k, &mut { Cursor::NEW })),
         };
         self.combine(self.combine(piece.before, piece.own), own)
     }

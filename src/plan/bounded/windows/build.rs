@@ -5,7 +5,8 @@
 //! 2. A run whose intervals all move its way (one stretch: the searches for its windows' edges
 //!    stop at the same two samples for every pulse) gets its pieces per sample interval: the
 //!    pulse where an edge's level reaches the interval's next sample is worked out from the
-//!    level's arithmetic and checked on the two pulses either side.
+//!    level's arithmetic and checked on the two pulses either side; a piece runs on over the
+//!    intervals along which its edge bends one way ([`Track::bending`]).
 //! 3. Any other run (a joint that wavers, or windows too narrow for step 2's argument) follows
 //!    each edge from pulse to pulse, skipping the pulses where nothing changes
 //!    ([`super::one_by_one`]).
@@ -27,6 +28,11 @@ const STRETCH_MAX_COUNT: i64 = 1 << 40;
 /// (about 1e-10 s on a 0.1 s piece): far below any realisable step of a row's period, and
 /// the execution model judges every plan.
 const BEND_ROUNDING: f64 = 1e-9;
+/// The most sample intervals a piece runs on over: a pulse inside a piece is read by searching
+/// for its interval, which a longer piece makes longer. On the seed's move 8, 16, 32 and 48
+/// plan about as fast; unbounded, pieces as long as a ramp made the rows' searches cost more
+/// than the pieces saved.
+const PIECE_INTERVALS: usize = 16;
 
 /// A run as the sweep finds it.
 pub(super) struct Span {
@@ -296,8 +302,10 @@ impl<'a> Track<'a> {
     /// The piece from pulse `m` (of `n`, from the run's pulse `k0`), whose edge on `side` is in
     /// interval `j`, run on as far as the edge bends the way the side's bound needs (convex for
     /// the earliest, a largest; concave for the latest, a smallest: either is then at the
-    /// piece's ends), pushed onto `pieces`; the pulse after it and its last interval. `None` if
-    /// it would hold no pulse (it always does: the caller then takes step 3).
+    /// piece's ends), or, if not past `j`, as far as it bends against it (the bound then has
+    /// one peak, [`Piece::against`]), pushed onto `pieces`; the pulse after it and its last
+    /// interval. `None` if it would hold no pulse (it always does: the caller then takes step
+    /// 3).
     fn run_on(
         &self,
         pieces: &mut Vec<Piece>,
@@ -307,13 +315,20 @@ impl<'a> Track<'a> {
         side: Side,
         (m, n): (i64, i64),
     ) -> Option<(i64, usize)> {
-        let last = self.bending(j, to, levels.d, side);
+        let mut last = self.bending(j, to, levels.d, side);
+        let mut against = false;
+        if last == j {
+            last = self.bending(j, to, levels.d, side.other());
+            against = last > j;
+        }
         let strictly = side == Side::Late;
         let next = levels.first_reaching(m, n, self.counts()[last + 1], strictly);
         if next == m {
             return None;
         }
-        pieces.push(self.piece(k0, (j, last), side, levels, m, next));
+        let mut piece = self.piece(k0, (j, last), side, levels, m, next);
+        piece.against = against;
+        pieces.push(piece);
         Some((next, last))
     }
 
@@ -323,6 +338,7 @@ impl<'a> Track<'a> {
     /// falling for the earliest (convex) and never rising for the latest (concave), by more
     /// than [`BEND_ROUNDING`] of the steepest (shallowest) before it.
     fn bending(&self, j: usize, to: usize, d: i64, side: Side) -> usize {
+        let to = to.min(j + PIECE_INTERVALS - 1);
         let rate = self.rates();
         let slope = |i: usize| rate[i] * d as f64;
         let mut last = j;
@@ -359,12 +375,13 @@ impl<'a> Track<'a> {
         let first = k0 + m as usize;
         let (level_first, level_last) = (levels.level(m), levels.level(next - 1));
         if from == to {
-            // Most pieces (wherever the edge bends the other way): read in place.
+            // A piece of one interval: read in place.
             return Piece {
                 first,
                 edge: Edge::Passes(from),
                 at_first: self.at(from, level_first),
                 at_last: self.at(from, level_last),
+                against: false,
             };
         }
         let edge = Edge::Spans(from, to);
@@ -373,6 +390,7 @@ impl<'a> Track<'a> {
             edge,
             at_first: self.edge_at(side, edge, level_first, levels.df, &mut { from }),
             at_last: self.edge_at(side, edge, level_last, levels.df, &mut { to }),
+            against: false,
         }
     }
 

@@ -1,10 +1,12 @@
 //! A joint's pulses and their windows ([`super::pulses`]), read where needed rather than made
 //! one by one: between two samples the track is a line, so along the pulses whose window edge
 //! falls in one sample interval the edge follows one formula, and a pulse's bound in a row,
-//! `(edge - start) / n`, is monotone along them. The pulses are cut into such pieces (run on
-//! over further intervals while the edge bends the way its bound allows, to within the
-//! samples' rounding: [`Edge::Spans`]), and a row's period bounds are read at each piece's ends
-//! only ([`super::rows`]).
+//! `(edge - start) / n`, is monotone along them. The pulses are cut into such pieces, run on
+//! over further intervals ([`Edge::Spans`], up to sixteen) while the edge bends one way (to
+//! within the samples' rounding): the way its bound allows, and a row's period bounds are read
+//! at the piece's ends only ([`super::rows`]); or against it, where a joint speeds up (its
+//! earliest landings) or slows down (its latest), and the bound rises to one peak inside the
+//! piece and falls, which the rows search for ([`Piece::against`]).
 //!
 //! The pieces are found per sample interval ([`build`]); a pulse read from them is the pulse
 //! `Track::pulses_into` makes, bit for bit (the tests check it).
@@ -22,6 +24,16 @@ pub(super) enum Side {
     Early,
     /// The latest landing.
     Late,
+}
+
+impl Side {
+    /// The other edge.
+    fn other(self) -> Self {
+        match self {
+            Self::Early => Self::Late,
+            Self::Late => Self::Early,
+        }
+    }
 }
 
 /// Pulses with windows, read by index from 0 in time order, in pieces along which one edge
@@ -42,9 +54,10 @@ pub(super) trait Pulses: Copy {
     /// The pulses from `k` on.
     fn after(self, k: usize) -> Self;
     /// The last pulse of the piece pulse `k` is in on `side` (from `k`, that side's edge is
-    /// monotone in the pulse), and the edge at `k` and at that last pulse. `cursor` is a place
-    /// to start looking, kept between calls ([`Cursor::NEW`] at first).
-    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64);
+    /// monotone in the pulse), the edge at `k` and at that last pulse, and whether the edge
+    /// bends against the side's bound along it ([`Piece::against`]). `cursor` is a place to
+    /// start looking, kept between calls ([`Cursor::NEW`] at first).
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64, bool);
     /// Pulse `k`'s edge on `side` (`cursor` as for [`Self::piece`]).
     fn edge(self, side: Side, k: usize, cursor: &mut Cursor) -> f64;
 }
@@ -79,9 +92,9 @@ impl Pulses for &[Pulse] {
         &self[k..]
     }
 
-    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64) {
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64, bool) {
         let at_k = self.edge(side, k, cursor);
-        (k, at_k, at_k)
+        (k, at_k, at_k, false)
     }
 
     fn edge(self, side: Side, k: usize, _: &mut Cursor) -> f64 {
@@ -113,6 +126,10 @@ struct Piece {
     edge: Edge,
     at_first: f64,
     at_last: f64,
+    /// The edge bends against its side's bound along the piece (concave for the earliest,
+    /// convex for the latest, where a joint speeds up or slows down): a pulse's bound in a
+    /// row then rises to one peak and falls ([`super::rows`] finds it), not only at the ends.
+    against: bool,
 }
 
 impl Piece {
@@ -123,6 +140,7 @@ impl Piece {
             edge: Edge::At(t_s),
             at_first: t_s,
             at_last: t_s,
+            against: false,
         }
     }
 
@@ -132,6 +150,7 @@ impl Piece {
             edge,
             at_first: f64::NAN,
             at_last: f64::NAN,
+            against: false,
         }
     }
 }
@@ -253,7 +272,7 @@ impl Windows<'_> {
         k: usize,
         cursor: &mut Cursor,
         run: &RunStart,
-    ) -> (usize, f64, f64) {
+    ) -> (usize, f64, f64, bool) {
         let pieces = self.pieces(side);
         let p = locate(pieces, |p| p.first, k, &mut cursor.piece);
         let piece = &pieces[p];
@@ -263,7 +282,7 @@ impl Windows<'_> {
         } else {
             self.edge_in(side, piece, k, run, &mut cursor.interval)
         };
-        (last, at_k, piece.at_last)
+        (last, at_k, piece.at_last, piece.against)
     }
 
     /// Works out the edge at their first and last pulses for the pieces that do not have them.
@@ -374,12 +393,12 @@ impl Pulses for Stretch<'_> {
         }
     }
 
-    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64) {
+    fn piece(self, side: Side, k: usize, cursor: &mut Cursor) -> (usize, f64, f64, bool) {
         let g = self.from + k;
-        let (last, at_k, at_last) = self.windows.piece(side, g, cursor, &self.run);
+        let (last, at_k, at_last, against) = self.windows.piece(side, g, cursor, &self.run);
         // Pieces end where runs do.
         debug_assert!(last < self.to);
-        (last - self.from, at_k, at_last)
+        (last - self.from, at_k, at_last, against)
     }
 
     fn edge(self, side: Side, k: usize, cursor: &mut Cursor) -> f64 {
@@ -459,7 +478,7 @@ pub(super) mod tests {
                     prop_assert_eq!(r.pulses.ideal_s(k).to_bits(), p.ideal_s.to_bits());
                     // Read along the pieces as the scan reads them.
                     for (side, c) in [Side::Early, Side::Late].into_iter().zip(&mut cursors) {
-                        let (last, at_k, at_last) = r.pulses.piece(side, k, c);
+                        let (last, at_k, at_last, _) = r.pulses.piece(side, k, c);
                         prop_assert!(last >= k && last < o.pulses.len());
                         // Bit for bit.
                         let bits = |at: f64| at.to_bits();
