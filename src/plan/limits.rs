@@ -53,6 +53,7 @@ pub(super) fn check_positions(
     let within = |j: usize, count: i64| {
         let joint = &robot.joints[j];
         let value = joint.value_of(count);
+        // Half a pulse of slack: a limit set exactly on a taught point must not trip on rounding.
         let slack = joint.step.abs() / 2.0;
         !(value < joint.min - slack || value > joint.max + slack)
     };
@@ -61,10 +62,8 @@ pub(super) fn check_positions(
     }
     for (i, c) in counts.iter().enumerate() {
         for (j, joint) in robot.joints.iter().enumerate() {
-            let value = joint.value_of(c[j]);
-            // Half a pulse of slack: a limit set exactly on a taught point must not trip on rounding.
-            let slack = joint.step.abs() / 2.0;
-            if value < joint.min - slack || value > joint.max + slack {
+            if !within(j, c[j]) {
+                let value = joint.value_of(c[j]);
                 return Err(PlanError::OutOfLimit {
                     joint: joint.name.clone(),
                     value: joint.user(value),
