@@ -71,6 +71,27 @@ struct Bound<'b> {
     through_last: f64,
 }
 
+/// Bounds `a` and `b` on `side` together: the tighter.
+fn combine(side: Side, a: f64, b: f64) -> f64 {
+    match side {
+        Side::Early => a.max(b),
+        Side::Late => a.min(b),
+    }
+}
+
+impl Scanned {
+    /// The bound through pulse `k` of this piece, `read` working out `k`'s own bound where
+    /// the piece's first pulse and peak do not give it.
+    fn through(&self, side: Side, k: usize, read: impl FnOnce() -> f64) -> f64 {
+        let own = match self.peak {
+            Some((p, at_peak)) if k >= p => at_peak,
+            _ if k == self.first => self.own,
+            _ => read(),
+        };
+        combine(side, combine(side, self.before, self.own), own)
+    }
+}
+
 /// Whether bound `a` is tighter than `b` on `side`.
 fn tighter(side: Side, a: f64, b: f64) -> bool {
     match side {
@@ -81,10 +102,7 @@ fn tighter(side: Side, a: f64, b: f64) -> bool {
 
 impl Bound<'_> {
     fn combine(&self, a: f64, b: f64) -> f64 {
-        match self.side {
-            Side::Early => a.max(b),
-            Side::Late => a.min(b),
-        }
+        combine(self.side, a, b)
     }
 
     fn own(t_s: f64, k: usize, edge_s: f64) -> f64 {
@@ -97,12 +115,10 @@ impl Bound<'_> {
             return self.through_last;
         }
         let piece = *self.pieces.last().expect("a piece entered");
-        let own = match piece.peak {
-            Some((p, at_peak)) if k >= p => at_peak,
-            _ if k == piece.first => piece.own,
-            _ => Self::own(t_s, k, pulses.edge(self.side, k, &mut self.cursor)),
-        };
-        self.combine(self.combine(piece.before, piece.own), own)
+        let side = self.side;
+        piece.through(side, k, || {
+            Self::own(t_s, k, pulses.edge(side, k, &mut self.cursor))
+        })
     }
 
     /// Where the own bound peaks along pulses `k` (bound `at_k`) to `last` (`at_last`) of a
@@ -176,12 +192,9 @@ impl Bound<'_> {
     /// The bound through pulse `k` of any piece scanned.
     fn through_scanned<P: Pulses>(&self, pulses: P, t_s: f64, k: usize) -> f64 {
         let piece = self.pieces[self.pieces.partition_point(|p| p.first <= k) - 1];
-        let own = match piece.peak {
-            Some((p, at_peak)) if k >= p => at_peak,
-            _ if k == piece.first => piece.own,
-            _ => Self::own(t_s, k, pulses.edge(self.side, k, &mut { Cursor::NEW })),
-        };
-        self.combine(self.combine(piece.before, piece.own), own)
+        piece.through(self.side, k, || {
+            Self::own(t_s, k, pulses.edge(self.side, k, &mut { Cursor::NEW }))
+        })
     }
 }
 
