@@ -74,6 +74,14 @@ impl Layout {
         self.table_base + bank * self.bank_stride + channel as u16 * self.channel_stride
     }
 
+    /// Whether DT word `word` belongs to the contract (its blocks or a table area).
+    #[must_use]
+    pub fn holds(&self, word: u32) -> bool {
+        self.regions()
+            .iter()
+            .any(|(_, start, end)| (*start..=*end).contains(&word))
+    }
+
     fn regions(&self) -> Vec<(String, u32, u32)> {
         let span =
             |start: u16, words: usize| (u32::from(start), u32::from(start) + words as u32 - 1);

@@ -63,6 +63,12 @@ pub enum GatewayError {
     /// The daemon is shutting down.
     #[error("the daemon is shutting down")]
     ShuttingDown,
+    /// Asked for before the PLC restarted, stalled or was lost (a cycle's output): not written.
+    #[error("not written: {why} since it was asked for")]
+    Untrusted {
+        /// What happened.
+        why: String,
+    },
 }
 
 /// The range `count` addresses from `start` cover, checked against the gateway's bounds.
@@ -149,6 +155,9 @@ pub(super) struct Job {
     pub done: u32,
     /// The answer.
     pub reply: oneshot::Sender<Result<Values, GatewayError>>,
+    /// The PLC's incident count it was asked under (a cycle's outputs): refused once another
+    /// incident came ([`GatewayError::Untrusted`]); `None`: whenever.
+    pub epoch: Option<u64>,
 }
 
 /// One exchange of a job: the next piece.
@@ -178,6 +187,7 @@ impl Job {
             read,
             done: 0,
             reply,
+            epoch: None,
         }
     }
 

@@ -72,6 +72,12 @@ pub enum SubmitError {
     /// The daemon is shutting down.
     #[error("the daemon is shutting down")]
     ShuttingDown,
+    /// Asked for by a cycle before the PLC restarted, stalled or was lost: refused.
+    #[error("{why} since the cycle asked for it")]
+    Untrusted {
+        /// What happened.
+        why: String,
+    },
 }
 
 /// The most starts a robot's queue holds, the running one included: an order that would pass
@@ -93,6 +99,9 @@ pub struct RobotHandle {
     pub(super) positions: Arc<TaughtPositions>,
     pub(super) cell: Arc<Cell>,
     pub(super) cycles: Arc<CycleSlot>,
+    /// The PLC's incident count this handle acts under (a cycle's): its moves and writes are
+    /// refused once another incident came ([`Shared::incident`]); `None`: whenever.
+    epoch: Option<u64>,
 }
 
 /// A position saved from the robot's pose.
@@ -235,7 +244,8 @@ impl RobotHandle {
             }
         });
         self.shared.state(|s| s.queued.extend(&ids));
-        for (report, checked) in starts {
+        for (report, mut checked) in starts {
+            checked.epoch = self.epoch;
             if self
                 .requests
                 .send(Request::Move(report.id, checked))
@@ -301,6 +311,9 @@ impl RobotHandle {
 
     /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
     fn can_move_now(&self) -> Result<(), SubmitError> {
+        if let Some(why) = self.untrusted() {
+            return Err(SubmitError::Untrusted { why });
+        }
         if self.face_holds_motion() {
             return Err(SubmitError::MoveEnableOff);
         }
@@ -387,6 +400,7 @@ impl RobotHandle {
                     permit,
                     gate: None,
                     accepted: None,
+                    epoch: None,
                 };
                 let shown = SectionReport::new(
                     n + 1,
@@ -518,7 +532,7 @@ impl RobotHandle {
         };
         // Only a clear that happened lets a faulted cycle be resumed.
         if cleared.is_ok() {
-            self.cycles.fault_cleared();
+            self.cycles.fault_cleared(self.shared.incidents().count);
         }
         cleared
     }
@@ -562,9 +576,14 @@ impl RobotHandle {
         range: Range,
         write: Option<Values>,
     ) -> Result<Values, GatewayError> {
+        if let Some(why) = self.untrusted() {
+            return Err(GatewayError::Untrusted { why });
+        }
         let (tx, rx) = oneshot::channel();
+        let mut job = Job::new(range, write, tx);
+        job.epoch = self.epoch;
         self.gateway
-            .send(Job::new(range, write, tx))
+            .send(job)
             .map_err(|_| GatewayError::ShuttingDown)?;
         rx.await.map_err(|_| GatewayError::ShuttingDown)?
     }
@@ -639,6 +658,36 @@ impl RobotHandle {
         self.shared.read_soon.notify_one();
     }
 
+    /// This handle acting under the PLC's incident count `epoch` (a cycle's, from its start or
+    /// its last resume): what it asks for is refused, or not carried out, once another incident
+    /// came.
+    pub(crate) fn under(&self, epoch: u64) -> Self {
+        Self {
+            epoch: Some(epoch),
+            ..self.clone()
+        }
+    }
+
+    /// What happened since this handle's epoch, if anything did.
+    fn untrusted(&self) -> Option<String> {
+        let epoch = self.epoch?;
+        let incidents = self.shared.incidents();
+        (incidents.count != epoch).then(|| incidents.last.unwrap_or_default())
+    }
+
+    /// The PLC's incidents so far (a restart, a stall or PROG mode, a link lost past a move's
+    /// end): a cycle faults on every one, whatever its step.
+    #[must_use]
+    pub fn incidents(&self) -> super::shared::Incidents {
+        self.shared.incidents()
+    }
+
+    /// Wakes on every incident ([`Self::incidents`]).
+    #[must_use]
+    pub fn watch_incidents(&self) -> watch::Receiver<super::shared::Incidents> {
+        self.shared.watch_incidents()
+    }
+
     /// How long ago the robot's worker last went round its loop.
     #[must_use]
     pub fn since_worker_beat(&self) -> Option<Duration> {
@@ -682,6 +731,7 @@ impl Daemon {
                 positions: Arc::clone(&options.positions),
                 cell: Arc::new(Cell::new(setup.cell.clone(), setup.settings.layout.inputs)),
                 cycles: Arc::new(CycleSlot::default()),
+                epoch: None,
             };
             let worker = Worker::new(
                 setup,

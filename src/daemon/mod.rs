@@ -59,4 +59,5 @@ pub use report::{
 };
 pub use request::{CommandError, ConflictReason};
 pub use setup::{DaemonOptions, RobotSetup, host_word};
+pub use shared::Incidents;
 pub use worker::Connector;

@@ -452,6 +452,9 @@ pub struct CheckedOrder {
     pub gate: Option<super::gate::Gate>,
     /// Its plan when it was accepted ([`plan_order`] takes it when asked from those counts).
     pub accepted: Option<Arc<Accepted>>,
+    /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
+    /// another incident came (the PLC restarted, stalled or was lost since); `None`: whenever.
+    pub epoch: Option<u64>,
 }
 
 /// An order's plan when it was accepted, and the counts it was planned from: planning is a
@@ -572,6 +575,7 @@ impl MoveOrder {
             permit: Permit::NONE,
             gate: None,
             accepted: None,
+            epoch: None,
         })
     }
 

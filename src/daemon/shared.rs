@@ -38,6 +38,19 @@ pub(super) struct Shared {
     reads: tokio::sync::watch::Sender<u64>,
     /// When the last status block was read (tokio's clock).
     read_at: Mutex<Option<tokio::time::Instant>>,
+    /// Counts what made the PLC untrustworthy under the host (it restarted, stalled, went to
+    /// PROG mode, or the link was lost past a move's end): a cycle faults on each, whatever its
+    /// step, and what it asked for before one is refused after it.
+    incidents: tokio::sync::watch::Sender<Incidents>,
+}
+
+/// What made the PLC untrustworthy under the host, counted ([`Shared::incident`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Incidents {
+    /// How many so far.
+    pub count: u64,
+    /// The last one, in words.
+    pub last: Option<String>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -63,6 +76,7 @@ impl Shared {
             metrics,
             reads: tokio::sync::watch::Sender::new(0),
             read_at: Mutex::new(None),
+            incidents: tokio::sync::watch::Sender::new(Incidents::default()),
         }
     }
 
@@ -86,6 +100,25 @@ impl Shared {
     pub(super) fn no_read(&self) {
         *lock(&self.read_at) = None;
         self.status_read();
+    }
+
+    /// The PLC restarted, stalled or went to PROG mode, or the link was lost past a move's end
+    /// (`why`): counted, and every watcher woken.
+    pub(super) fn incident(&self, why: String) {
+        self.incidents.send_modify(|i| {
+            i.count += 1;
+            i.last = Some(why);
+        });
+    }
+
+    /// The incidents so far.
+    pub(super) fn incidents(&self) -> Incidents {
+        self.incidents.borrow().clone()
+    }
+
+    /// Wakes on every incident.
+    pub(super) fn watch_incidents(&self) -> tokio::sync::watch::Receiver<Incidents> {
+        self.incidents.subscribe()
     }
 
     /// Wakes on every status block read (and every link lost).

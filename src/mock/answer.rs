@@ -134,11 +134,11 @@ pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
     }
     match command {
         Command::ReadDt(range) => mock
-            .read_words(range.start(), range.len())
+            .host_read_words(range.start(), range.len())
             .map(Reply::ReadDt)
             .map_err(memory_refusal),
         Command::WriteDt { start, words } => mock
-            .write_words(*start, words)
+            .host_write_words(*start, words)
             .map(|()| Reply::WriteDt)
             .map_err(memory_refusal),
         Command::ReadContact(c) => match bit_area(c.area()) {
@@ -150,7 +150,7 @@ pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
         },
         Command::WriteContact { contact: c, on } => match bit_area(c.area()) {
             Some(area) => mock
-                .write_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()), *on)
+                .host_write_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()), *on)
                 .map(|()| Reply::WriteContact)
                 .map_err(memory_refusal),
             None => address_error(),

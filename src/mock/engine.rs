@@ -323,7 +323,7 @@ mod tests {
     fn recorder() -> Recorder {
         Recorder {
             pulses: Some(Vec::new()),
-            anomalies: Vec::new(),
+            ..Recorder::default()
         }
     }
 

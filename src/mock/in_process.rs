@@ -98,7 +98,7 @@ impl Plc for InProcess {
         start: u16,
         count: u16,
     ) -> impl Future<Output = Result<Vec<u16>, PlcError>> + Send {
-        let result = self.exchange(|m| m.read_words(u32::from(start), usize::from(count)));
+        let result = self.exchange(|m| m.host_read_words(u32::from(start), usize::from(count)));
         ready(result.map_err(|e| refused(dt_operation("read", start, usize::from(count)), e)))
     }
 
@@ -107,7 +107,7 @@ impl Plc for InProcess {
         start: u16,
         words: &[u16],
     ) -> impl Future<Output = Result<(), PlcError>> + Send {
-        let result = self.exchange(|m| m.write_words(u32::from(start), words));
+        let result = self.exchange(|m| m.host_write_words(u32::from(start), words));
         ready(result.map_err(|e| refused(dt_operation("write", start, words.len()), e)))
     }
 
@@ -157,7 +157,7 @@ impl Plc for InProcess {
         bit: u32,
         on: bool,
     ) -> impl Future<Output = Result<(), PlcError>> + Send {
-        let result = self.exchange(|m| m.write_bit(area, bit, on));
+        let result = self.exchange(|m| m.host_write_bit(area, bit, on));
         ready(result.map_err(|e| refused(format!("write bit {bit} of {}", area.name()), e)))
     }
 

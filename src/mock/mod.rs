@@ -52,7 +52,7 @@ pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
 pub use modbus_server::{ModbusServer, ModbusServerOptions};
 pub use program::{HeaderError, StartOutcome, StartRecord};
 pub use shared::SharedMock;
-pub use trace::{Anomaly, PulsePoint, Recorder, write_csv};
+pub use trace::{Anomaly, HostWrite, PulsePoint, Recorder, write_csv};
 pub use variant::{MockVariant, SMALL_MEWTOCOL_WORDS, SMALL_MODBUS_REGISTERS};
 pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
@@ -120,6 +120,9 @@ pub enum MockError {
         scan_s: f64,
     },
 }
+
+/// The most host writes a mock keeps ([`MockPlc::host_writes`]); older ones go, half at a time.
+pub const HOST_WRITES_KEPT: usize = 10_000;
 
 /// An FP-X running the contract's PLC program.
 #[derive(Debug, Clone)]
@@ -318,6 +321,63 @@ impl MockPlc {
         self.memory.write_dt(start, words)
     }
 
+    /// A client's read of DT words: [`Self::read_words`], noting a read of the status block's
+    /// `host` word (the host learns of a power cycle from it).
+    pub fn host_read_words(&mut self, start: u32, count: usize) -> Result<Vec<u16>, MemoryError> {
+        let words = self.read_words(start, count)?;
+        let host = u32::from(self.config.layout.status_base) + 20;
+        if (start..start + count as u32).contains(&host) {
+            self.recorder.restart_unseen = false;
+        }
+        Ok(words)
+    }
+
+    /// A client's write of DT words: [`Self::write_words`], recorded ([`Self::host_writes`]).
+    pub fn host_write_words(&mut self, start: u32, words: &[u16]) -> Result<(), MemoryError> {
+        self.write_words(start, words)?;
+        self.note_host_write(crate::gateway::Area::Dt, start, words.to_vec());
+        Ok(())
+    }
+
+    /// A client's write of a Y or R bit: [`Self::write_bit`], recorded ([`Self::host_writes`]).
+    pub fn host_write_bit(
+        &mut self,
+        area: crate::gateway::Area,
+        bit: u32,
+        on: bool,
+    ) -> Result<(), MemoryError> {
+        self.write_bit(area, bit, on)?;
+        self.note_host_write(area, bit, vec![u16::from(on)]);
+        Ok(())
+    }
+
+    fn note_host_write(&mut self, area: crate::gateway::Area, start: u32, values: Vec<u16>) {
+        if area == crate::gateway::Area::Dt && self.config.layout.holds(start) {
+            // The contract's own words: its starts are recorded as such.
+            return;
+        }
+        let kept = &mut self.recorder.host_writes;
+        if kept.len() == HOST_WRITES_KEPT {
+            kept.drain(..HOST_WRITES_KEPT / 2);
+        }
+        let write = HostWrite {
+            command: self.commands,
+            area,
+            start,
+            values,
+            after_restart_seen: self.recorder.power_cycled && !self.recorder.restart_unseen,
+        };
+        self.recorder.host_writes.push(write);
+    }
+
+    /// The writes a client made (over MEWTOCOL, Modbus or in process) outside the contract's
+    /// blocks and table areas (the cell's outputs), in order, each with whether the host could
+    /// have known of the last power cycle before it; the last [`HOST_WRITES_KEPT`] at most.
+    #[must_use]
+    pub fn host_writes(&self) -> &[HostWrite] {
+        &self.recorder.host_writes
+    }
+
     /// Reads relay R`relay` (word * 16 + bit).
     pub fn read_relay(&self, relay: u32) -> Result<bool, MemoryError> {
         self.memory.relay(relay)
@@ -386,6 +446,8 @@ impl MockPlc {
             e.set_count(0);
         }
         self.program.power_cycle();
+        self.recorder.power_cycled = true;
+        self.recorder.restart_unseen = true;
         tracing::warn!(at_s = self.now_s, "mock PLC power-cycled");
     }
 

@@ -237,7 +237,7 @@ fn write_coils(mock: &mut MockPlc, first: u16, coils: &[bool]) -> Result<(), Exc
         return Err(ExceptionCode::IllegalDataAddress);
     }
     for (bit, on) in (start..).zip(coils) {
-        mock.write_bit(area, bit, *on).map_err(address_error)?;
+        mock.host_write_bit(area, bit, *on).map_err(address_error)?;
     }
     Ok(())
 }
@@ -256,17 +256,17 @@ fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, Except
         Request::ReadHoldingRegisters(start, n) => {
             let most = registers_limit(mock, usize::from(MAX_READ_REGISTERS));
             quantity(usize::from(*n), most)?;
-            mock.read_words(u32::from(*start), usize::from(*n))
+            mock.host_read_words(u32::from(*start), usize::from(*n))
                 .map(Response::ReadHoldingRegisters)
                 .map_err(address_error)
         }
         Request::WriteSingleRegister(at, word) => mock
-            .write_words(u32::from(*at), &[*word])
+            .host_write_words(u32::from(*at), &[*word])
             .map(|()| Response::WriteSingleRegister(*at, *word))
             .map_err(address_error),
         Request::WriteMultipleRegisters(start, words) => {
             quantity(words.len(), registers_limit(mock, MAX_WRITE_REGISTERS))?;
-            mock.write_words(u32::from(*start), words)
+            mock.host_write_words(u32::from(*start), words)
                 .map(|()| Response::WriteMultipleRegisters(*start, words.len() as u16))
                 .map_err(address_error)
         }

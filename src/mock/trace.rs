@@ -56,6 +56,23 @@ pub enum Anomaly {
     },
 }
 
+/// A write a client (the host) made to the PLC's memory, and whether the host could have known
+/// of the last power cycle before it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HostWrite {
+    /// The mock's command count at it ([`super::MockPlc::commands`]).
+    pub command: u64,
+    /// The area: DT words, or Y / R bits.
+    pub area: crate::gateway::Area,
+    /// The first word or bit written.
+    pub start: u32,
+    /// The words, or the bits as 0 and 1.
+    pub values: Vec<u16>,
+    /// Whether the mock had power-cycled and a client had read the status block's `host` word
+    /// since (the host then knew of the restart before it wrote this).
+    pub after_restart_seen: bool,
+}
+
 /// Where the engines put what they did.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Recorder {
@@ -63,6 +80,13 @@ pub struct Recorder {
     pub pulses: Option<Vec<PulsePoint>>,
     /// Every anomaly since the mock started.
     pub anomalies: Vec<Anomaly>,
+    /// Every write a client made, in order.
+    pub host_writes: Vec<HostWrite>,
+    /// Whether the mock power-cycled and no client has read the status block's `host` word
+    /// since.
+    pub restart_unseen: bool,
+    /// Whether the mock has power-cycled at all.
+    pub power_cycled: bool,
 }
 
 impl Recorder {

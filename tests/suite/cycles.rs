@@ -720,3 +720,113 @@ async fn the_cycles_api_answers_every_request_with_its_status_and_a_json_error_n
     let a = api.get(base).await;
     assert_eq!(a.json()["state"], "stopped", "{}", a.text());
 }
+
+/// The writes the daemon made to Y0 (`press_go`) on the mock.
+fn press_go_writes(shared: &SharedMock) -> Vec<linterpd::mock::HostWrite> {
+    shared.with(|m| {
+        m.host_writes()
+            .iter()
+            .filter(|w| w.area == linterpd::gateway::Area::Y && w.start == 0)
+            .cloned()
+            .collect()
+    })
+}
+
+/// Issue 44: a PLC restarted during a wait let the cycle go on and write `press_go` to it.
+#[tokio::test]
+async fn a_plc_restart_during_a_wait_faults_the_cycle_and_writes_no_output_until_resumed() {
+    let shared = mock_at_seed_start("");
+    let program = "[[step]]\nwait = \"part_present\"\ntimeout = \"20s\"\n\
+                   [[step]]\nset = { press_go = true }\n[[step]]\ndwell = \"200ms\"\n\
+                   [[step]]\nset = { press_go = false }\n"
+        .to_owned();
+    let (_d, h) = spawn(&shared, programs("restart-wait", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    shared.with(linterpd::mock::MockPlc::power_cycle);
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    assert_eq!(s.step.as_ref().unwrap().step, 1);
+    assert!(s.reason.as_deref().unwrap().contains("restarted"), "{s:?}");
+    // The input comes on: nothing is written, the cycle stays faulted.
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    shared.with(|m| m.set_input(2, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(700)).await;
+    assert_eq!(h.cycle().unwrap().state, CycleState::Faulted);
+    assert!(
+        press_go_writes(&shared).is_empty(),
+        "{:?}",
+        press_go_writes(&shared)
+    );
+    // A resume without a clear is refused; after one, the cycle goes on: the wait again, then
+    // the outputs.
+    assert!(matches!(
+        h.resume_cycle(),
+        Err(CycleError::FaultNotCleared { .. })
+    ));
+    h.clear_fault().await.unwrap();
+    let resumed = h.resume_cycle().unwrap();
+    assert_eq!(resumed.state, CycleState::Running, "{resumed:?}");
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+    let writes = press_go_writes(&shared);
+    assert_eq!(writes.len(), 2, "{writes:?}");
+    assert!(writes.iter().all(|w| w.after_restart_seen));
+}
+
+/// Issue 44: a cycle paused when the PLC restarted stayed paused.
+#[tokio::test]
+async fn a_paused_cycle_faults_when_the_plc_restarts_and_needs_a_clear_to_resume() {
+    let shared = mock_at_seed_start("");
+    let program =
+        "[[step]]\nwait = \"part_present\"\ntimeout = \"20s\"\n[[step]]\nset = { press_go = true }\n"
+            .to_owned();
+    let (_d, h) = spawn(&shared, programs("restart-paused", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    h.pause_cycle().unwrap();
+    until(&h, "paused", |s| s.state == CycleState::Paused).await;
+    shared.with(linterpd::mock::MockPlc::power_cycle);
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    assert!(s.reason.as_deref().unwrap().contains("restarted"), "{s:?}");
+    assert!(matches!(
+        h.resume_cycle(),
+        Err(CycleError::FaultNotCleared { .. })
+    ));
+    shared.with(|m| m.set_input(2, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(press_go_writes(&shared).is_empty());
+}
+
+/// A clear made before another incident does not let the cycle resume after it.
+#[tokio::test]
+async fn a_clear_before_a_second_restart_does_not_resume_the_cycle() {
+    let shared = mock_at_seed_start("");
+    let program =
+        "[[step]]\nwait = \"part_present\"\ntimeout = \"20s\"\n[[step]]\nset = { press_go = true }\n"
+            .to_owned();
+    let (_d, h) = spawn(&shared, programs("restart-twice", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).unwrap();
+    until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
+    shared.with(linterpd::mock::MockPlc::power_cycle);
+    until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    h.clear_fault().await.unwrap();
+    let seen = h.incidents().count;
+    shared.with(linterpd::mock::MockPlc::power_cycle);
+    for _ in 0..400 {
+        if h.incidents().count > seen {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    assert!(
+        h.incidents().count > seen,
+        "the second restart was never seen"
+    );
+    assert!(matches!(
+        h.resume_cycle(),
+        Err(CycleError::FaultNotCleared { .. })
+    ));
+}

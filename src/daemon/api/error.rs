@@ -200,7 +200,7 @@ impl From<GatewayError> for ApiError {
                 message,
                 reason: "link-down",
             },
-            GatewayError::Plc(_) => Self::Plc { detail: message },
+            GatewayError::Plc(_) | GatewayError::Untrusted { .. } => Self::Plc { detail: message },
             GatewayError::ShuttingDown => Self::ShuttingDown,
         }
     }
@@ -222,6 +222,10 @@ impl From<SubmitError> for ApiError {
             e @ SubmitError::MoveEnableOff => Self::Conflict {
                 message: e.to_string(),
                 reason: "move-enable-off",
+            },
+            e @ SubmitError::Untrusted { .. } => Self::Conflict {
+                message: e.to_string(),
+                reason: "untrusted",
             },
             SubmitError::ShuttingDown => Self::ShuttingDown,
         }

@@ -175,10 +175,25 @@ pub(super) async fn wait_until(
 ) -> WaitEnd {
     let mut reads = handle.watch_reads();
     let deadline = timeout.map(|t| tokio::time::Instant::now() + t);
-    handle.watch_inputs(true);
-    let end = wait_loop(handle, holds, extra, deadline, control, &mut reads).await;
-    handle.watch_inputs(false);
-    end
+    let _watching = Watching::inputs(handle);
+    wait_loop(handle, holds, extra, deadline, control, &mut reads).await
+}
+
+/// The worker reads the status block at its busy pace while this lives: dropped when the wait
+/// ends, or is given up (the cycle faulted on an incident meanwhile).
+struct Watching<'h>(&'h RobotHandle);
+
+impl<'h> Watching<'h> {
+    fn inputs(handle: &'h RobotHandle) -> Self {
+        handle.watch_inputs(true);
+        Self(handle)
+    }
+}
+
+impl Drop for Watching<'_> {
+    fn drop(&mut self) {
+        self.0.watch_inputs(false);
+    }
 }
 
 async fn wait_loop(

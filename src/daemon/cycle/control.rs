@@ -15,4 +15,8 @@ pub(crate) struct Control {
     pub hold: Option<&'static str>,
     /// Counts the resumes asked for (a paused or faulted cycle goes on when it grows).
     pub resumes: u64,
+    /// With a resume from a fault, the PLC's incident count its fault was cleared at: the cycle
+    /// acts under it from then on (an incident since faults it again). A resume from a pause
+    /// keeps the count the cycle had.
+    pub epoch: Option<u64>,
 }

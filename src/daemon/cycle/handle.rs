@@ -85,6 +85,6 @@ impl RobotHandle {
 
     /// Resumes a paused cycle, or a faulted one once its fault was cleared.
     pub fn resume_cycle(&self) -> Result<CycleStatus, CycleError> {
-        self.cycles.resume()
+        self.cycles.resume(self.incidents().count)
     }
 }

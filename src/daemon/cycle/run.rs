@@ -31,6 +31,7 @@ use crate::cycle::{Checked, LoopExit, OpKind};
 use crate::daemon::RobotHandle;
 use crate::daemon::gate::Gate;
 use crate::daemon::report::MoveId;
+use crate::daemon::shared::Incidents;
 
 /// Moves kept in the status, the newest last.
 const MOVES_SHOWN: usize = 10;
@@ -43,8 +44,14 @@ pub(crate) async fn run(
     control: watch::Receiver<Control>,
     status: SharedStatus,
 ) {
+    let incidents = handle.watch_incidents();
+    let epoch = incidents.borrow().count;
     let mut runner = Runner {
-        handle,
+        handle: handle.under(epoch),
+        base: handle,
+        incidents,
+        epoch,
+        reported: epoch,
         program,
         count,
         control,
@@ -67,7 +74,18 @@ pub(crate) async fn run(
 }
 
 struct Runner {
+    /// The robot, acting under [`Self::epoch`]: what the cycle asks for is refused once
+    /// another incident came.
     handle: RobotHandle,
+    /// The robot, as any client.
+    base: RobotHandle,
+    /// The PLC's incidents (restarts, stalls and PROG mode, links lost past a move's end).
+    incidents: watch::Receiver<Incidents>,
+    /// The incident count the cycle acts under: from its start, or the fault clear it was
+    /// resumed after. Any incident since faults it, whatever it is doing.
+    epoch: u64,
+    /// The incident count the status last reported.
+    reported: u64,
     program: Checked,
     count: Option<u64>,
     control: watch::Receiver<Control>,
@@ -126,6 +144,12 @@ impl Runner {
             if c.stop || c.stop_now {
                 return (CycleState::Stopped, Some("stopped by request".to_owned()));
             }
+            if let Some(why) = self.incident() {
+                if !self.faulted(why).await {
+                    return (CycleState::Stopped, Some("stopped by request".to_owned()));
+                }
+                continue;
+            }
             if c.pause {
                 self.drop_ahead().await;
                 self.set(|s| {
@@ -168,7 +192,16 @@ impl Runner {
                 s.reason = None;
                 s.stopping = c.stop;
             });
-            match self.op(pc, &mut loops).await {
+            let next = {
+                let mut incidents = self.incidents.clone();
+                let epoch = self.epoch;
+                tokio::select! {
+                    biased;
+                    why = until_incident(&mut incidents, epoch) => Next::Fault(why),
+                    next = self.op(pc, &mut loops) => next,
+                }
+            };
+            match next {
                 Next::Go(next) => pc = next,
                 Next::Stopped => {
                     return (
@@ -188,16 +221,7 @@ impl Runner {
                     }
                 }
                 Next::Fault(why) => {
-                    tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
-                    let _ = self.handle.stop_robot().await;
-                    self.drop_ahead().await;
-                    self.set(|s| {
-                        s.state = CycleState::Faulted;
-                        s.reason = Some(why);
-                        s.waiting_for = None;
-                        s.waiting_s = None;
-                    });
-                    if !self.until_resumed().await {
+                    if !self.faulted(why).await {
                         return (CycleState::Stopped, Some("stopped by request".to_owned()));
                     }
                 }
@@ -205,7 +229,30 @@ impl Runner {
         }
     }
 
-    /// Waits for a resume: `false` when a stop came instead.
+    /// What an incident since the cycle's epoch was, if one came.
+    fn incident(&self) -> Option<String> {
+        let now = self.incidents.borrow();
+        (now.count != self.epoch).then(|| now.last.clone().unwrap_or_default())
+    }
+
+    /// Faults the cycle on its step (`why`): the robot stopped, the prepared moves dropped; then
+    /// waits for a resume after `clear-fault` (`false`: a stop came instead).
+    async fn faulted(&mut self, why: String) -> bool {
+        tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
+        self.reported = self.incidents.borrow().count;
+        let _ = self.base.stop_robot().await;
+        self.drop_ahead().await;
+        self.set(|s| {
+            s.state = CycleState::Faulted;
+            s.reason = Some(why);
+            s.waiting_for = None;
+            s.waiting_s = None;
+        });
+        self.until_resumed().await
+    }
+
+    /// Waits for a resume: `false` when a stop came instead. An incident meanwhile faults a
+    /// paused cycle (and a faulted one names it): only a resume after `clear-fault` goes on.
     async fn until_resumed(&mut self) -> bool {
         loop {
             {
@@ -215,11 +262,31 @@ impl Runner {
                 }
                 if c.resumes > self.resumes {
                     self.resumes = c.resumes;
+                    if let Some(epoch) = c.epoch {
+                        // Resumed after a clear with no incident since: it acts under it now.
+                        self.epoch = epoch;
+                        self.reported = epoch;
+                        self.handle = self.base.under(epoch);
+                    }
                     return true;
                 }
             }
-            if self.control.changed().await.is_err() {
-                return false;
+            let mut incidents = self.incidents.clone();
+            let reported = self.reported;
+            tokio::select! {
+                changed = self.control.changed() => {
+                    if changed.is_err() {
+                        return false;
+                    }
+                }
+                why = until_incident(&mut incidents, reported) => {
+                    tracing::warn!(robot = %self.handle.robot().name, "cycle faulted while it stood: {why}");
+                    self.reported = incidents.borrow().count;
+                    self.set(|s| {
+                        s.state = CycleState::Faulted;
+                        s.reason = Some(why);
+                    });
+                }
             }
         }
     }
@@ -520,5 +587,21 @@ impl Runner {
             let extra = s.moves.len().saturating_sub(MOVES_SHOWN);
             s.moves.drain(..extra);
         });
+    }
+}
+
+/// Waits until the incident count is other than `epoch`: the last incident, in words.
+async fn until_incident(incidents: &mut watch::Receiver<Incidents>, epoch: u64) -> String {
+    loop {
+        {
+            let now = incidents.borrow_and_update();
+            if now.count != epoch {
+                return now.last.clone().unwrap_or_default();
+            }
+        }
+        if incidents.changed().await.is_err() {
+            // The robot's worker is gone: nothing more comes.
+            std::future::pending::<()>().await;
+        }
     }
 }

@@ -67,8 +67,10 @@ pub(crate) struct CycleSlot {
 struct Current {
     status: SharedStatus,
     control: watch::Sender<Control>,
-    /// Whether the fault the cycle is in was cleared since it faulted.
-    fault_cleared: bool,
+    /// The PLC's incident count when the fault the cycle is in was cleared (`None`: not cleared
+    /// since it faulted). A resume needs it to be the count now: an incident after the clear
+    /// needs another.
+    cleared_at: Option<u64>,
 }
 
 fn state_name(state: CycleState) -> String {
@@ -115,7 +117,7 @@ impl CycleSlot {
         *current = Some(Current {
             status: shared,
             control,
-            fault_cleared: false,
+            cleared_at: None,
         });
         Ok(status)
     }
@@ -172,40 +174,45 @@ impl CycleSlot {
         }
     }
 
-    /// Resumes a paused cycle, or a faulted one whose fault was cleared.
-    pub(crate) fn resume(&self) -> Result<CycleStatus, CycleError> {
-        self.with_live(|c, s| match s.state {
-            CycleState::Paused => {
-                c.control.send_modify(|k| {
-                    k.pause = false;
-                    k.hold = None;
-                    k.resumes += 1;
+    /// Resumes a paused cycle, or a faulted one whose fault was cleared with no incident since
+    /// (`incidents`: the PLC's incident count now). The status returned is the cycle's as it
+    /// goes on: running, at the step it was at.
+    pub(crate) fn resume(&self, incidents: u64) -> Result<CycleStatus, CycleError> {
+        let mut current = self.current();
+        let Some(c) = current.as_mut() else {
+            return Err(CycleError::NoCycle);
+        };
+        let mut status = lock(&c.status);
+        let epoch = match status.state {
+            CycleState::Paused => None,
+            CycleState::Faulted if c.cleared_at == Some(incidents) => c.cleared_at.take(),
+            CycleState::Faulted => {
+                return Err(CycleError::FaultNotCleared {
+                    program: status.program.clone(),
+                    why: status.reason.clone().unwrap_or_default(),
                 });
-                Ok(s.clone())
             }
-            CycleState::Faulted if c.fault_cleared => {
-                c.fault_cleared = false;
-                c.control.send_modify(|k| {
-                    k.pause = false;
-                    k.hold = None;
-                    k.resumes += 1;
-                });
-                Ok(s.clone())
-            }
-            CycleState::Faulted => Err(CycleError::FaultNotCleared {
-                program: s.program.clone(),
-                why: s.reason.clone().unwrap_or_default(),
-            }),
-            _ => Err(conflict(s, "only a paused or faulted cycle resumes")),
-        })
+            _ => return Err(conflict(&status, "only a paused or faulted cycle resumes")),
+        };
+        c.control.send_modify(|k| {
+            k.pause = false;
+            k.hold = None;
+            k.resumes += 1;
+            k.epoch = epoch;
+        });
+        // What the runner writes as it takes the resume; said here so the answer is true.
+        status.state = CycleState::Running;
+        status.reason = None;
+        Ok(status.clone())
     }
 
-    /// The robot's fault was cleared: a faulted cycle may resume. Whether one was faulted.
-    pub(crate) fn fault_cleared(&self) -> bool {
+    /// The robot's fault was cleared (at the PLC's incident count `incidents`): a faulted
+    /// cycle may resume. Whether one was faulted.
+    pub(crate) fn fault_cleared(&self, incidents: u64) -> bool {
         let mut current = self.current();
         match current.as_mut() {
             Some(c) if lock(&c.status).state == CycleState::Faulted => {
-                c.fault_cleared = true;
+                c.cleared_at = Some(incidents);
                 true
             }
             _ => false,

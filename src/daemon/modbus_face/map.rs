@@ -171,7 +171,7 @@ pub(super) fn exception(e: &GatewayError) -> ExceptionCode {
         GatewayError::BadRequest(_) => ExceptionCode::IllegalDataValue,
         // The gateway stands, the device behind it does not answer.
         GatewayError::LinkDown { .. } => ExceptionCode::GatewayTargetDevice,
-        GatewayError::Plc(_) => ExceptionCode::ServerDeviceFailure,
+        GatewayError::Plc(_) | GatewayError::Untrusted { .. } => ExceptionCode::ServerDeviceFailure,
         // The path through the gateway is going away.
         GatewayError::ShuttingDown => ExceptionCode::GatewayPathUnavailable,
     }

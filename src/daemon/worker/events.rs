@@ -38,6 +38,9 @@ impl Worker {
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
         let events = self.machine.on_status(&status, now());
+        // Counted before anything reads this block: a cycle must not take a wait met on the
+        // block that shows its PLC restarted.
+        self.note_incidents(&events);
         self.publish_refusal();
         self.note_status(&status);
         let result = self.apply(events).await;
@@ -96,8 +99,19 @@ impl Worker {
         Ok(())
     }
 
+    /// Counts the incidents among `events` ([`incident`]).
+    fn note_incidents(&self, events: &[Event]) {
+        for event in events {
+            if let Some(why) = incident(event) {
+                tracing::warn!(robot = %self.robot.name, "incident: {why}");
+                self.shared.incident(why);
+            }
+        }
+    }
+
     /// Applies events when no exchange is possible (the link is down).
     pub(super) fn apply_offline(&mut self, events: Vec<Event>) {
+        self.note_incidents(&events);
         for event in events {
             self.report_event(event);
         }
@@ -355,6 +369,28 @@ impl Worker {
             Some(text) => format!("held by the PLC: its permit stopped holding ({text})"),
             None => "held by the PLC: its permit stopped holding (fault 9)".to_owned(),
         }
+    }
+}
+
+/// What an event makes untrustworthy, in words (a cycle faults on it, whatever its step).
+fn incident(event: &Event) -> Option<String> {
+    match event {
+        Event::Restarted => Some(
+            "the PLC restarted (its host word was cleared): nothing moves until it is homed"
+                .to_owned(),
+        ),
+        Event::Stalled { still } => Some(format!(
+            "the PLC's heartbeat stood still for {:.1} s (stalled, or in PROG mode)",
+            still.as_secs_f64()
+        )),
+        Event::Ended {
+            tag,
+            outcome: Outcome::LinkLost { down },
+        } => Some(format!(
+            "the PLC link was down {:.1} s, past move {tag}'s end: what became of it is unknown",
+            down.as_secs_f64()
+        )),
+        _ => None,
     }
 }
 

@@ -24,6 +24,16 @@ impl Worker {
         let Some(job) = self.gateway.front_mut() else {
             return Ok(());
         };
+        let incidents = self.shared.incidents();
+        if job.epoch.is_some_and(|e| e != incidents.count) {
+            // Asked for before the PLC restarted, stalled or was lost: a cycle's output is
+            // never written to a PLC it no longer knows.
+            let job = self.gateway.pop_front().expect("front");
+            let why = incidents.last.unwrap_or_default();
+            tracing::warn!(robot = %self.robot.name, range = %job.range, "a cycle's output not written: {why} since it was asked for");
+            let _ = job.reply.send(Err(GatewayError::Untrusted { why }));
+            return Ok(());
+        }
         let Some(piece) = job.next_piece(sizes) else {
             let job = self.gateway.pop_front().expect("front");
             job.finish();

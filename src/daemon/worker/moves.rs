@@ -27,6 +27,18 @@ const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 impl Worker {
     /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
+        let incidents = self.shared.incidents();
+        if queued.order.epoch.is_some_and(|e| e != incidents.count) {
+            // A cycle's move asked for before the PLC restarted, stalled or was lost.
+            let why = format!(
+                "cancelled: {} since its cycle asked for it",
+                incidents.last.unwrap_or_default()
+            );
+            tracing::warn!(robot = %self.robot.name, id = queued.id, "{why}");
+            self.finish(queued.id, Stage::Cancelled, Some(why), None);
+            self.cancel_queue("cancelled: the move before it did not start");
+            return Ok(());
+        }
         let Some(turn) = self.turn(queued).await? else {
             return Ok(());
         };
