@@ -140,3 +140,49 @@ async fn a_permit_the_plc_cannot_check_is_refused_naming_it_and_nothing_is_queue
     }
     assert!(h.reports().is_empty());
 }
+
+/// The mock's counts, per channel.
+fn mock_counts(shared: &SharedMock) -> [i64; 4] {
+    shared.with(|m| std::array::from_fn(|c| m.count(c)))
+}
+
+/// Issue 44: a move stopped by `linterpd stop` or held by its permit ended `stopped` with the
+/// counts of a status read from before the stop (274 pulses off, seconds later) and no error.
+#[tokio::test]
+async fn a_stopped_or_held_moves_report_says_where_the_plc_stopped_it() {
+    for held in [false, true] {
+        let shared = mock_at_seed_start("");
+        let (_d, h) = spawn(&shared);
+        taking_moves(&h).await;
+        shared.with(|m| m.set_input(5, true).unwrap());
+        let order = MoveOrder {
+            speed_mm_s: Some(60.0),
+            ..to(P2, "press_open")
+        };
+        let id = h.submit(order).unwrap();
+        for _ in 0..2_000 {
+            if shared.with(|m| m.status().state) == State::Running.word() {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(1)).await;
+        }
+        tokio::time::sleep(Duration::from_millis(400)).await;
+        if held {
+            shared.with(|m| m.set_input(5, false).unwrap());
+        } else {
+            h.stop().await.unwrap();
+        }
+        let r = h.wait(id, LIMIT).await.unwrap();
+        assert_eq!(r.stage, Stage::Stopped, "{r:?}");
+        assert_eq!(r.held, held, "{r:?}");
+        let counts = r.counts.expect("counts");
+        assert_eq!(counts, mock_counts(&shared), "held {held}: {r:?}");
+        let targets = r.target_counts.expect("targets");
+        let error = r.final_error_pulses.expect("the error to the target");
+        assert_eq!(error, std::array::from_fn(|c| counts[c] - targets[c]));
+        assert!(error.iter().any(|e| e.abs() > 100), "{error:?}");
+        // Seconds later it is still the truth.
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        assert_eq!(h.report(id).unwrap().counts, Some(mock_counts(&shared)));
+    }
+}

@@ -11,6 +11,21 @@ use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
 use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
 
+/// A move that stopped short, waiting for the status block that shows where the PLC stopped it.
+#[derive(Debug)]
+pub(super) struct Settling {
+    id: MoveId,
+    stage: Stage,
+    why: String,
+    /// The heartbeat of the block that showed its end.
+    beat: u16,
+    /// When that block was read.
+    since: std::time::Instant,
+}
+
+/// The longest a stopped move's report waits for a block that shows the channels still.
+const SETTLE_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A stop asked for this recently stopped the moves that end stopped.
 const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);
 /// Planned duration given to a start found running whose tables could not be read.
@@ -38,12 +53,15 @@ impl Worker {
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
         let events = self.machine.on_status(&status, now());
+        let incidents_before = self.shared.incidents().count;
         // Counted before anything reads this block: a cycle must not take a wait met on the
         // block that shows its PLC restarted.
         self.note_incidents(&events);
         self.publish_refusal();
         self.note_status(&status);
         let result = self.apply(events).await;
+        let trusted = self.shared.incidents().count == incidents_before;
+        self.settle(trusted.then_some(&status));
         self.publish_refusal();
         self.publish_phase();
         result
@@ -346,8 +364,72 @@ impl Worker {
         if held {
             self.shared.moves(|m| m.update(id, |r| r.held = true));
         }
-        self.finish(id, stage, Some(why), None);
+        let moved = matches!(
+            outcome,
+            Outcome::Stopped { .. }
+                | Outcome::Faulted { .. }
+                | Outcome::OutsideEnvelope { .. }
+                | Outcome::Overrun { .. }
+                | Outcome::WentIdle
+        );
+        match self.machine.last() {
+            // Its counts are read once the channels have stopped: a scan after the block
+            // that showed the end, with no channel of the robot busy.
+            Some(last) if moved => {
+                self.settling.push(Settling {
+                    id,
+                    stage,
+                    why,
+                    beat: last.block.heartbeat,
+                    since: now(),
+                });
+                // The PLC runs it no more; its report ends with the counts it stopped at.
+                self.shared.state(|s| {
+                    if s.current_move == Some(id) {
+                        s.current_move = None;
+                    }
+                });
+            }
+            _ => self.finish(id, stage, Some(why), None),
+        }
         self.cancel_queue("cancelled: the move before it did not end done");
+    }
+
+    /// Ends the moves that stopped short once a status block read a scan after their end
+    /// shows the robot's channels still: their report's counts are that block's, with the
+    /// error to their targets. `None`: the PLC can no longer tell (the link, a restart, a
+    /// stall); they end with the counts last read.
+    pub(super) fn settle(&mut self, status: Option<&Status>) {
+        let mask = self
+            .robot
+            .joints
+            .iter()
+            .fold(0_u16, |m, j| m | 1 << j.channel);
+        let late = |s: &Settling| now().saturating_duration_since(s.since) > SETTLE_LIMIT;
+        let (done, waiting): (Vec<Settling>, Vec<Settling>) = std::mem::take(&mut self.settling)
+            .into_iter()
+            .partition(|s| match status {
+                Some(b) => (b.block.heartbeat != s.beat && b.block.busy & mask == 0) || late(s),
+                None => true,
+            });
+        self.settling = waiting;
+        for s in done {
+            let counts = status
+                .filter(|b| b.block.busy & mask == 0)
+                .map(|b| b.block.elapsed.map(i64::from));
+            let target = self
+                .shared
+                .moves(|m| m.get(s.id))
+                .and_then(|r| r.target_counts);
+            let error = counts
+                .zip(target)
+                .map(|(c, t)| std::array::from_fn(|ch| c[ch] - t[ch]));
+            if let Some(c) = counts {
+                self.shared
+                    .moves(|m| m.update(s.id, |r| r.counts = Some(c)));
+            }
+            self.finish(s.id, s.stage, Some(s.why), error);
+        }
     }
 }
 

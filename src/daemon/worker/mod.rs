@@ -153,6 +153,8 @@ pub(super) struct Worker {
     opened_before: bool,
     /// Moves with no motion of their own, each ending with the start ahead of it.
     followers: Vec<followers::Follower>,
+    /// Moves that stopped short, their reports waiting for the counts the PLC stopped at.
+    settling: Vec<events::Settling>,
 }
 
 impl Worker {
@@ -194,6 +196,7 @@ impl Worker {
             stop_asked: None,
             opened_before: false,
             followers: Vec::new(),
+            settling: Vec::new(),
         }
     }
 
@@ -296,6 +299,7 @@ impl Worker {
             self.machine.phase(),
             Phase::Idle | Phase::Unhomed | Phase::Stalled
         ) || !self.queue.is_empty()
+            || !self.settling.is_empty()
             || self
                 .shared
                 .inputs_watched
@@ -556,6 +560,7 @@ impl Worker {
                 None,
             );
         }
+        self.settle(None);
         self.cancel_queue("cancelled: the daemon shut down");
         self.cancel_followers("cancelled: the daemon shut down");
         for command in std::mem::take(&mut self.commands) {
