@@ -52,7 +52,7 @@ pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
 pub use modbus_server::{ModbusServer, ModbusServerOptions};
 pub use program::{HeaderError, StartOutcome, StartRecord};
 pub use shared::SharedMock;
-pub use trace::{Anomaly, HostWrite, PulsePoint, Recorder, write_csv};
+pub use trace::{Anomaly, HostWrite, PulsePoint, Recorder, RestartSeen, write_csv};
 pub use variant::{MockVariant, SMALL_MEWTOCOL_WORDS, SMALL_MODBUS_REGISTERS};
 pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
@@ -242,6 +242,9 @@ impl MockPlc {
         };
         self.program
             .scan(at_s, self.next_scan, &self.config.layout, &mut io);
+        if self.recorder.restart == RestartSeen::NotScanned {
+            self.recorder.restart = RestartSeen::Unseen;
+        }
         for (c, e) in self.engines.iter().enumerate() {
             if e.running_on() && self.next_scan.is_multiple_of(self.scans_per_second()) {
                 tracing::error!(
@@ -326,8 +329,10 @@ impl MockPlc {
     pub fn host_read_words(&mut self, start: u32, count: usize) -> Result<Vec<u16>, MemoryError> {
         let words = self.read_words(start, count)?;
         let host = u32::from(self.config.layout.status_base) + 20;
-        if (start..start + count as u32).contains(&host) {
-            self.recorder.restart_unseen = false;
+        if (start..start + count as u32).contains(&host)
+            && self.recorder.restart == RestartSeen::Unseen
+        {
+            self.recorder.restart = RestartSeen::Seen;
         }
         Ok(words)
     }
@@ -365,7 +370,7 @@ impl MockPlc {
             area,
             start,
             values,
-            after_restart_seen: self.recorder.power_cycled && !self.recorder.restart_unseen,
+            after_restart_seen: self.recorder.restart == RestartSeen::Seen,
         };
         self.recorder.host_writes.push(write);
     }
@@ -446,8 +451,7 @@ impl MockPlc {
             e.set_count(0);
         }
         self.program.power_cycle();
-        self.recorder.power_cycled = true;
-        self.recorder.restart_unseen = true;
+        self.recorder.restart = RestartSeen::NotScanned;
         tracing::warn!(at_s = self.now_s, "mock PLC power-cycled");
     }
 

@@ -82,11 +82,23 @@ pub struct Recorder {
     pub anomalies: Vec<Anomaly>,
     /// Every write a client made, in order.
     pub host_writes: Vec<HostWrite>,
-    /// Whether the mock power-cycled and no client has read the status block's `host` word
-    /// since.
-    pub restart_unseen: bool,
-    /// Whether the mock has power-cycled at all.
-    pub power_cycled: bool,
+    /// What a client can know of the last power cycle.
+    pub restart: RestartSeen,
+}
+
+/// What a client can know of the mock's last power cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RestartSeen {
+    /// It never power-cycled.
+    #[default]
+    Never,
+    /// It power-cycled and has not scanned since: its status block still shows the old `host`
+    /// word.
+    NotScanned,
+    /// Its first scan since cleared the `host` word; no client has read it since.
+    Unseen,
+    /// A client has read the cleared `host` word.
+    Seen,
 }
 
 impl Recorder {

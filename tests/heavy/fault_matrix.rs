@@ -163,6 +163,10 @@ enum Flow {
     Cycle,
     /// A cycle whose interlocked move's permit drops mid-move: held, paused, resumed.
     CycleHold,
+    /// A cycle with a step of every kind (issue 44): a move, a wait, an output, a dwell, a
+    /// move prepared during the wait, a call of a program with an output and a path, a loop
+    /// round an output, a move back.
+    CycleKinds,
 }
 
 impl Flow {
@@ -330,8 +334,29 @@ fn programs() -> std::path::PathBuf {
             b = to(B),
             c = to(C)
         );
+        let kinds = format!(
+            "[[step]]\nlabel = \"top\"\nmove = {{ to = {b} }}\n\
+             [[step]]\nwait = \"press_open\"\ntimeout = \"10s\"\n\
+             [[step]]\nset = {{ DT100 = 1 }}\n[[step]]\ndwell = \"100ms\"\n\
+             [[step]]\nmove = {{ to = {c} }}\n[[step]]\ncall = \"kinds-sub\"\n\
+             [[step]]\nlabel = \"again\"\nset = {{ DT102 = 3 }}\n\
+             [[step]]\nloop = {{ to = \"again\", count = 2 }}\n\
+             [[step]]\nmove = {{ to = {a} }}\n",
+            a = to(A),
+            b = to(B),
+            c = to(C)
+        );
+        let above_c = [C[0], C[1], C[2] + 20.0];
+        let sub = format!(
+            "[[step]]\nset = {{ DT101 = 2 }}\n\
+             [[step]]\npath = {{ path = {{ element = [{{ line = {up}, stop = true }}, {{ line = {c} }}] }} }}\n",
+            up = to(above_c),
+            c = to(C)
+        );
         std::fs::write(dir.join("cycle.toml"), cycle).unwrap();
         std::fs::write(dir.join("hold.toml"), hold).unwrap();
+        std::fs::write(dir.join("kinds.toml"), kinds).unwrap();
+        std::fs::write(dir.join("kinds-sub.toml"), sub).unwrap();
         dir
     })
     .clone()
@@ -503,7 +528,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 format!("a refused order queued something: {before:?} -> {after:?}")
             });
         }
-        Flow::Cycle | Flow::CycleHold => return run_cycle(flow, h, v).await,
+        Flow::Cycle | Flow::CycleHold | Flow::CycleKinds => return run_cycle(flow, h, v).await,
         Flow::Home => {
             let home = tokio::time::timeout(BOUND, h.home()).await;
             v.check(home.is_ok(), || "I3: home did not answer".into());
@@ -523,8 +548,13 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
     let shared = SHARED
         .with(|s| s.borrow().clone())
         .expect("the case's mock");
-    let program = if flow == Flow::Cycle { "cycle" } else { "hold" };
+    let program = match flow {
+        Flow::Cycle => "cycle",
+        Flow::CycleKinds => "kinds",
+        _ => "hold",
+    };
     shared.with(|m| m.set_input(5, flow == Flow::CycleHold).unwrap());
+    let at_incidents = watch_incidents(h);
     if flow == Flow::CycleHold {
         // The press is open as the daemon reads it before the cycle runs (a move whose permit
         // does not hold on the last block read is refused, not waited for).
@@ -547,6 +577,14 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
     };
     if flow == Flow::Cycle {
         // The press opens 200 ms into the wait.
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        shared.with(|m| m.set_input(5, true).unwrap());
+    } else if flow == Flow::CycleKinds {
+        // The press opens 200 ms into the wait, which begins once the move out has ended.
+        let waiting = cycle_until(h, |s| s == CycleState::Waiting || ended(s)).await;
+        v.check(waiting, || {
+            format!("I3: the cycle never waited: {:?}", h.cycle())
+        });
         tokio::time::sleep(Duration::from_millis(200)).await;
         shared.with(|m| m.set_input(5, true).unwrap());
     } else {
@@ -588,9 +626,25 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
         status.state == CycleState::Done || status.reason.is_some(),
         || format!("the cycle ended {:?} with no reason", status.state),
     );
+    // I8: an incident (a restart, a stall, a link lost past a move's end) that came while the
+    // cycle was under way faults it, whatever its step.
+    let seen = at_incidents.lock().unwrap().clone();
+    if let Some(at) = seen
+        .iter()
+        .find(|s| !matches!(s, CycleState::Done | CycleState::Stopped))
+    {
+        v.check(status.state == CycleState::Faulted, || {
+            format!(
+                "I8: an incident while the cycle was {at:?} left it {:?}: {status:?}",
+                status.state
+            )
+        });
+    }
     if status.state == CycleState::Faulted {
-        // I8: the PLC made well again, the cycle stays faulted and nothing more starts.
+        // I8: the PLC made well again, the cycle stays faulted and nothing more starts or is
+        // written.
         let starts = shared.with(|m| m.starts().len());
+        let writes = output_writes(&shared).len();
         heal(&shared);
         tokio::time::sleep(Duration::from_secs(2)).await;
         v.check(h.cycle().unwrap().state == CycleState::Faulted, || {
@@ -599,9 +653,49 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
         v.check(shared.with(|m| m.starts().len()) == starts, || {
             "I8: a start after the cycle faulted, with no one asking".into()
         });
+        v.check(output_writes(&shared).len() == writes, || {
+            format!(
+                "I8: an output written after the cycle faulted: {:?}",
+                &output_writes(&shared)[writes..]
+            )
+        });
         let _ = h.stop_cycle(false).await;
     }
+    // I8: nothing is written to the cell's outputs once the host has seen the PLC restart.
+    for w in output_writes(&shared) {
+        v.check(!w.after_restart_seen, || {
+            format!("I8: an output written after the host saw the PLC restart: {w:?}")
+        });
+    }
     status.moves.clone()
+}
+
+/// The writes to the cell's outputs (DT100..DT199) the mock saw.
+fn output_writes(shared: &SharedMock) -> Vec<linterpd::mock::HostWrite> {
+    shared.with(|m| {
+        m.host_writes()
+            .iter()
+            .filter(|w| w.area == linterpd::gateway::Area::Dt && (100..200).contains(&w.start))
+            .cloned()
+            .collect()
+    })
+}
+
+/// The cycle's state at each incident the daemon counts from now on, as it was when the
+/// incident came (the watcher runs before the cycle's runner has taken it, or just after).
+fn watch_incidents(h: &RobotHandle) -> Arc<std::sync::Mutex<Vec<linterpd::daemon::CycleState>>> {
+    let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
+    let mut incidents = h.watch_incidents();
+    incidents.borrow_and_update();
+    let (h, found) = (h.clone(), Arc::clone(&seen));
+    tokio::spawn(async move {
+        while incidents.changed().await.is_ok() {
+            if let Some(c) = h.cycle() {
+                found.lock().unwrap().push(c.state);
+            }
+        }
+    });
+    seen
 }
 
 /// Whether the cycle's state came to one `done` accepts within 30 s.
@@ -646,6 +740,23 @@ fn watch_done(
             else {
                 return;
             };
+            if report.stage == Stage::Stopped {
+                // I9: a stopped report's counts are the mock's when it says so, with the
+                // error to its targets; unknown (no error) only when the PLC could no longer
+                // tell (the link lost, a restart, a stall). (A power cycle in the very exchange
+                // that read the counts clears them after the reply was made.)
+                let (now, restarted) = shared.with(|m| {
+                    let now: [i64; 4] = std::array::from_fn(|c| m.count(c));
+                    (now, now == [0; 4] && !m.homed())
+                });
+                if report.final_error_pulses.is_some() && report.counts != Some(now) && !restarted {
+                    found.lock().unwrap().push(format!(
+                        "I9: move {id} stopped at {:?} with the mock at {now:?}",
+                        report.counts
+                    ));
+                }
+                return;
+            }
             if report.stage != Stage::Done || report.recovered {
                 return;
             }
@@ -905,13 +1016,19 @@ async fn positions(flow: Flow) -> u64 {
     if flow == Flow::Path {
         assert_eq!(ids.len(), 3, "the path is one section cut into three parts");
     }
-    if matches!(flow, Flow::Cycle | Flow::CycleHold) {
+    if matches!(flow, Flow::Cycle | Flow::CycleHold | Flow::CycleKinds) {
         let c = h.cycle().unwrap();
         assert_eq!(
             c.state,
             linterpd::daemon::CycleState::Done,
             "{flow:?}: {c:?}"
         );
+    }
+    if flow == Flow::StopChained {
+        // I9 is not idle: the stopped move says where it stopped, and its error.
+        let r = h.report(ids[0]).unwrap();
+        assert_eq!(r.stage, Stage::Stopped, "{r:?}");
+        assert!(r.final_error_pulses.is_some(), "{r:?}");
     }
     // A stopped pair ends stopped, and a held move stopped (the cycle runs it again).
     if !matches!(flow, Flow::StopChained | Flow::CycleHold) {
@@ -1063,6 +1180,7 @@ async fn one_case_with_its_log() {
         "refused" => Flow::RefusedWhileRunning,
         "cycle" => Flow::Cycle,
         "cycle-hold" => Flow::CycleHold,
+        "cycle-kinds" => Flow::CycleKinds,
         _ => Flow::Home,
     };
     let fault = FAULTS
@@ -1083,4 +1201,22 @@ async fn a_cycle_under_every_fault_at_every_exchange() {
 #[tokio::test(start_paused = true)]
 async fn a_cycle_held_by_its_permit_under_every_fault_at_every_exchange() {
     run_matrix(Flow::CycleHold).await;
+}
+
+// A cycle of every step kind runs seconds of motion and many exchanges: its faults are split
+// in three tests.
+
+#[tokio::test(start_paused = true)]
+async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_1_of_3() {
+    run_matrix_of(Flow::CycleKinds, &FAULTS[..3]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_2_of_3() {
+    run_matrix_of(Flow::CycleKinds, &FAULTS[3..6]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_3_of_3() {
+    run_matrix_of(Flow::CycleKinds, &FAULTS[6..]).await;
 }

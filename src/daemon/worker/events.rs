@@ -395,6 +395,17 @@ impl Worker {
         self.cancel_queue("cancelled: the move before it did not end done");
     }
 
+    /// Ends the moves that stopped short and have waited too long for a block that shows their
+    /// channels still (the link is down): with the counts last read.
+    pub(super) fn settle_late(&mut self) {
+        let (late, waiting): (Vec<Settling>, Vec<Settling>) = std::mem::take(&mut self.settling)
+            .into_iter()
+            .partition(|s| now().saturating_duration_since(s.since) > SETTLE_LIMIT);
+        self.settling = late;
+        self.settle(None);
+        self.settling = waiting;
+    }
+
     /// Ends the moves that stopped short once a status block read a scan after their end
     /// shows the robot's channels still: their report's counts are that block's, with the
     /// error to their targets. `None`: the PLC can no longer tell (the link, a restart, a

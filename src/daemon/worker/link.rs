@@ -92,6 +92,7 @@ impl Worker {
     fn expire_offline(&mut self) {
         let events = self.machine.tick(now());
         self.apply_offline(events);
+        self.settle_late();
         self.publish_phase();
     }
 
@@ -107,7 +108,6 @@ impl Worker {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
         }
         self.session = None;
-        self.settle(None);
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
         self.machine.link_lost(now());
