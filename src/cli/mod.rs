@@ -32,7 +32,6 @@ pub mod logging;
 pub mod mock_plc;
 pub mod mode;
 pub mod moves;
-pub mod path_file;
 pub mod plan;
 pub mod positions;
 pub mod serve;

@@ -37,6 +37,7 @@ mod cell;
 mod check;
 mod daemon;
 mod error;
+pub mod files;
 mod gateway;
 mod joints;
 mod kinematics;

@@ -5,6 +5,7 @@
 //! label) and the value.
 
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 use std::time::Duration;
 
 use thiserror::Error;
@@ -56,6 +57,8 @@ pub struct Context<'a> {
     pub names: Names<'a>,
     /// Every program of the robot, by name (for `call`).
     pub programs: &'a BTreeMap<String, ProgramDoc>,
+    /// The robot's programs that could not be read, by name, with why.
+    pub broken: &'a BTreeMap<String, String>,
     /// Whether every wait needs a timeout.
     pub require_wait_timeout: bool,
 }
@@ -125,23 +128,31 @@ pub struct Checked {
 /// # Errors
 /// The first fault found, naming the program, the step and the value.
 pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
+    let whole = |reason: String| ProgramError {
+        program: name.to_owned(),
+        step: None,
+        label: None,
+        reason,
+    };
+    if let Some(why) = ctx.broken.get(name) {
+        return Err(whole(format!("cannot be read: {why}")));
+    }
     let Some(doc) = ctx.programs.get(name) else {
-        let known: Vec<&str> = ctx.programs.keys().map(String::as_str).collect();
-        return Err(ProgramError {
-            program: name.to_owned(),
-            step: None,
-            label: None,
-            reason: format!(
-                "no such program; there are: {}",
-                if known.is_empty() {
-                    "none".to_owned()
-                } else {
-                    known.join(", ")
-                }
-            ),
-        });
+        return Err(whole(format!("no such program; {}", known(ctx))));
     };
     let number = number(name, doc)?;
+    if let Some(n) = number
+        && let Some(other) = ctx
+            .programs
+            .iter()
+            .find(|(other, d)| *other != name && d.number == Some(i64::from(n)))
+            .map(|(other, _)| other)
+    {
+        return Err(whole(format!(
+            "number = {n} is program {other:?}'s number too: neither runs until one is \
+             renumbered"
+        )));
+    }
     let mut ops = Vec::new();
     Flattener { ctx, ops: &mut ops }.program(name, &mut vec![name.to_owned()], &[])?;
     Ok(Checked {
@@ -149,6 +160,21 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
         number,
         ops,
     })
+}
+
+/// The programs there are, in words.
+fn known(ctx: &Context<'_>) -> String {
+    let names: Vec<&str> = ctx.programs.keys().map(String::as_str).collect();
+    let mut text = if names.is_empty() {
+        "there are none".to_owned()
+    } else {
+        format!("there are: {}", names.join(", "))
+    };
+    if !ctx.broken.is_empty() {
+        let broken: Vec<&str> = ctx.broken.keys().map(String::as_str).collect();
+        let _ = write!(text, " (and, unreadable: {})", broken.join(", "));
+    }
+    text
 }
 
 fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
@@ -165,29 +191,6 @@ fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
                 })
         })
         .transpose()
-}
-
-/// The programs by number; two with one number are refused, naming both.
-///
-/// # Errors
-/// A number outside 1..=255, or one used twice.
-pub fn numbers(
-    programs: &BTreeMap<String, ProgramDoc>,
-) -> Result<BTreeMap<u8, String>, ProgramError> {
-    let mut out: BTreeMap<u8, String> = BTreeMap::new();
-    for (name, doc) in programs {
-        if let Some(n) = number(name, doc)?
-            && let Some(other) = out.insert(n, name.clone())
-        {
-            return Err(ProgramError {
-                program: name.clone(),
-                step: None,
-                label: None,
-                reason: format!("number = {n} is program {other:?}'s number too"),
-            });
-        }
-    }
-    Ok(out)
 }
 
 struct Flattener<'c, 'o> {
@@ -284,12 +287,13 @@ impl Flattener<'_, '_> {
                             chain.join(" -> ")
                         )));
                     }
+                    if let Some(why) = self.ctx.broken.get(&callee) {
+                        return Err(here(format!("call = {callee:?}: cannot be read: {why}")));
+                    }
                     if !self.ctx.programs.contains_key(&callee) {
-                        let known: Vec<&str> =
-                            self.ctx.programs.keys().map(String::as_str).collect();
                         return Err(here(format!(
-                            "call = {callee:?}: no such program; there are: {}",
-                            known.join(", ")
+                            "call = {callee:?}: no such program; {}",
+                            known(self.ctx)
                         )));
                     }
                     let mut from = called_from.to_vec();

@@ -15,8 +15,9 @@ pub mod condition;
 pub mod load;
 pub mod program;
 
-pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check, numbers};
+pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check};
 pub use condition::{Condition, ConditionError, Names, Source};
+pub use load::Programs;
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
 
 #[cfg(test)]

@@ -104,9 +104,9 @@ fn checked(programs: &[(&str, &str)], run: &str, require_timeout: bool) -> Resul
             access: &c.access,
         },
         programs: &docs,
+        broken: &BTreeMap::new(),
         require_wait_timeout: require_timeout,
     };
-    numbers(&docs).map_err(|e| e.to_string())?;
     check(run, &ctx).map_err(|e| e.to_string())
 }
 
@@ -259,14 +259,23 @@ fn a_recursion_through_call_is_refused_naming_the_chain() {
     );
 }
 
+/// Issue 44: a copied program that kept `number = 1` made every program refuse.
 #[test]
-fn two_programs_with_one_number_are_refused_naming_both() {
+fn two_programs_with_one_number_are_refused_naming_each_other_and_the_rest_run() {
     let p = "number = 4\n[[step]]\ndwell = \"1s\"\n";
-    let e = checked(&[("a", p), ("b", p)], "a", false).unwrap_err();
+    let other = "number = 5\n[[step]]\ndwell = \"1s\"\n";
+    let programs = [("a", p), ("b", p), ("c", other)];
+    let e = checked(&programs, "a", false).unwrap_err();
+    assert!(
+        e.contains("program \"a\": number = 4 is program \"b\"'s number too"),
+        "{e}"
+    );
+    let e = checked(&programs, "b", false).unwrap_err();
     assert!(
         e.contains("program \"b\": number = 4 is program \"a\"'s number too"),
         "{e}"
     );
+    assert!(checked(&programs, "c", false).is_ok());
 }
 
 #[test]

@@ -622,13 +622,28 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
     let done = cycle_until(h, ended).await;
     let status = h.cycle().unwrap();
     v.check(done, || format!("I3: the cycle never ended: {status:?}"));
+    let seen = at_incidents.lock().unwrap().clone();
+    check_ended_cycle(h, &shared, &seen, v).await;
+    status.moves.clone()
+}
+
+/// I8 once the cycle has ended: faulted after an incident that came while it was under way
+/// (`seen`: its state at each), staying so with nothing started or written once the PLC is
+/// well, and no output written once the host saw the PLC restart.
+async fn check_ended_cycle(
+    h: &RobotHandle,
+    shared: &SharedMock,
+    seen: &[linterpd::daemon::CycleState],
+    v: &mut Violations,
+) {
+    use linterpd::daemon::CycleState;
+    let status = h.cycle().unwrap();
     v.check(
         status.state == CycleState::Done || status.reason.is_some(),
         || format!("the cycle ended {:?} with no reason", status.state),
     );
     // I8: an incident (a restart, a stall, a link lost past a move's end) that came while the
     // cycle was under way faults it, whatever its step.
-    let seen = at_incidents.lock().unwrap().clone();
     if let Some(at) = seen
         .iter()
         .find(|s| !matches!(s, CycleState::Done | CycleState::Stopped))
@@ -644,8 +659,8 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
         // I8: the PLC made well again, the cycle stays faulted and nothing more starts or is
         // written.
         let starts = shared.with(|m| m.starts().len());
-        let writes = output_writes(&shared).len();
-        heal(&shared);
+        let writes = output_writes(shared).len();
+        heal(shared);
         tokio::time::sleep(Duration::from_secs(2)).await;
         v.check(h.cycle().unwrap().state == CycleState::Faulted, || {
             format!("I8: a faulted cycle went on by itself: {:?}", h.cycle())
@@ -653,21 +668,20 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
         v.check(shared.with(|m| m.starts().len()) == starts, || {
             "I8: a start after the cycle faulted, with no one asking".into()
         });
-        v.check(output_writes(&shared).len() == writes, || {
+        v.check(output_writes(shared).len() == writes, || {
             format!(
                 "I8: an output written after the cycle faulted: {:?}",
-                &output_writes(&shared)[writes..]
+                &output_writes(shared)[writes..]
             )
         });
         let _ = h.stop_cycle(false).await;
     }
     // I8: nothing is written to the cell's outputs once the host has seen the PLC restart.
-    for w in output_writes(&shared) {
+    for w in output_writes(shared) {
         v.check(!w.after_restart_seen, || {
             format!("I8: an output written after the host saw the PLC restart: {w:?}")
         });
     }
-    status.moves.clone()
 }
 
 /// The writes to the cell's outputs (DT100..DT199) the mock saw.

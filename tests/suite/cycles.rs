@@ -830,3 +830,54 @@ async fn a_clear_before_a_second_restart_does_not_resume_the_cycle() {
         Err(CycleError::FaultNotCleared { .. })
     ));
 }
+
+/// Issue 44: one bad file in the programs directory made every good program refuse, naming the
+/// other file; a path file outside the directory was read.
+#[tokio::test]
+async fn a_bad_neighbour_never_keeps_a_good_program_from_running() {
+    let shared = mock_at_seed_start("");
+    let dwell = "[[step]]\ndwell = \"50ms\"\n".to_owned();
+    let one = format!("number = 1\n{dwell}");
+    let dir = programs(
+        "neighbours",
+        &[
+            ("good", dwell.clone()),
+            ("garbled", "[[step]\n".to_owned()),
+            ("first", one.clone()),
+            ("copy", one),
+            (
+                "escape",
+                "[[step]]\npath = { file = \"../../x.toml\" }\n".to_owned(),
+            ),
+            (
+                "passwd",
+                "[[step]]\npath = { file = \"/etc/passwd\" }\n".to_owned(),
+            ),
+        ],
+    );
+    let (_d, h) = spawn(&shared, dir);
+    taking_moves(&h).await;
+    let refused = |name: &str| match h.run_cycle(name, Some(1)) {
+        Err(CycleError::Program(e)) => e,
+        other => panic!("{name}: {other:?}"),
+    };
+    let e = refused("first");
+    assert!(
+        e.contains("number = 1 is program \"copy\"'s number too"),
+        "{e}"
+    );
+    let e = refused("escape");
+    assert!(e.contains("\"../../x.toml\" goes up with .."), "{e}");
+    let e = refused("passwd");
+    assert!(e.contains("\"/etc/passwd\" is an absolute name"), "{e}");
+    let e = refused("garbled");
+    assert!(e.contains("cannot be read: garbled.toml: "), "{e}");
+    let e = refused("nosuch");
+    assert!(
+        e.contains("no such program; there are: copy, first, good (and, unreadable: escape, garbled, passwd)"),
+        "{e}"
+    );
+    h.run_cycle("good", Some(1)).unwrap();
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    assert_eq!(s.done, 1);
+}

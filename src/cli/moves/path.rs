@@ -48,7 +48,7 @@ pub struct RunArgs {
 
 /// The API's path order: the file (checked here first, naming the key) and the flags.
 fn order(args: &RunArgs) -> anyhow::Result<PathOrder> {
-    let text = super::super::path_file::read(&args.file)?;
+    let text = crate::config::files::read_regular(&args.file)?;
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
     let mut motion = MoveOrder::default();

@@ -25,7 +25,7 @@ pub(super) fn run(
     out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let bad = Failure::BadInput;
-    let text = crate::cli::path_file::read(file).map_err(bad)?;
+    let text = crate::config::files::read_regular(file).map_err(|e| bad(e.into()))?;
     let doc = PathDoc::from_toml(&text)
         .with_context(|| format!("{}", file.display()))
         .map_err(bad)?;

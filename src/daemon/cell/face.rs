@@ -177,11 +177,14 @@ impl RobotHandle {
             tracing::warn!(robot = %self.robot().name, "cell face: the programs cannot be read: {e}");
             Refusal::UnknownProgram
         })?;
-        programs
-            .iter()
-            .find(|(_, p)| p.number == Some(i64::from(number)))
-            .map(|(name, _)| name.clone())
-            .ok_or(Refusal::UnknownProgram)
+        match programs.numbered(number) {
+            Ok(name) => Ok(name.to_owned()),
+            Err(none) if none.is_empty() => Err(Refusal::UnknownProgram),
+            Err(shared) => {
+                tracing::warn!(robot = %self.robot().name, number, programs = %shared.join(", "), "cell face: program number {number} is shared by programs {}: neither runs until one is renumbered", shared.join(" and "));
+                Err(Refusal::ProgramRefused)
+            }
+        }
     }
 
     fn face_start(&self, cell: &FaceCell, count: Option<u64>) -> Result<(), Refusal> {

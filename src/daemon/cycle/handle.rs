@@ -47,8 +47,12 @@ impl RobotHandle {
                 self.robot.name, self.robot.name
             )));
         };
-        let programs = crate::cycle::load::programs(dir).map_err(CycleError::Program)?;
-        crate::cycle::numbers(&programs).map_err(|e| CycleError::Program(e.to_string()))?;
+        let programs =
+            crate::cycle::load::programs(dir).map_err(|e| CycleError::Program(e.to_string()))?;
+        for (program, why) in &programs.broken {
+            // Said once each time a program is run; it keeps no other from running.
+            tracing::warn!(robot = %self.robot.name, program, "a cycle program cannot be read: {why}");
+        }
         let taught = self.positions.of(&self.robot.name);
         let ctx = crate::cycle::Context {
             robot: &self.robot,
@@ -60,7 +64,8 @@ impl RobotHandle {
                 },
                 access: &self.gateway_settings.access,
             },
-            programs: &programs,
+            programs: &programs.docs,
+            broken: &programs.broken,
             require_wait_timeout: self.cell.settings.require_wait_timeout,
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
