@@ -61,6 +61,9 @@ pub struct Context<'a> {
     pub broken: &'a BTreeMap<String, String>,
     /// Whether every wait needs a timeout.
     pub require_wait_timeout: bool,
+    /// The robot's counts where the program will begin (the run's), when known: the first
+    /// motion is checked from there ([`super::reach`]).
+    pub start: Option<[i64; crate::kinematics::JOINTS]>,
 }
 
 /// How a loop ends.
@@ -121,6 +124,9 @@ pub struct Checked {
     pub number: Option<u8>,
     /// Its ops, in order.
     pub ops: Vec<Op>,
+    /// The motions whose start depends on the run, checked when they run (one line each,
+    /// naming the step).
+    pub unchecked: Vec<String>,
 }
 
 /// Checks program `name` of `ctx.programs`, and every program it calls.
@@ -155,10 +161,12 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
     }
     let mut ops = Vec::new();
     Flattener { ctx, ops: &mut ops }.program(name, &mut vec![name.to_owned()], &[])?;
+    let unchecked = super::reach::check(&ops, ctx)?;
     Ok(Checked {
         name: name.to_owned(),
         number,
         ops,
+        unchecked,
     })
 }
 

@@ -7,6 +7,8 @@
 //! program.rs    the document: ProgramDoc, StepDoc (every key known)
 //! condition.rs  a wait's condition: bits, signals, DT compares, ! & | ( ); resolved and decided
 //! check.rs      ProgramDoc -> Checked { ops }: names, limits, labels, calls inlined
+//! reach.rs      where the ops take the robot: targets in reach and limits, motions planned
+//!               from every start known before the run
 //! load.rs       a robot's programs directory, path files read in
 //! ```
 
@@ -14,6 +16,7 @@ pub mod check;
 pub mod condition;
 pub mod load;
 pub mod program;
+mod reach;
 
 pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check};
 pub use condition::{Condition, ConditionError, Names, Source};

@@ -24,7 +24,7 @@ wait = "press_open & !press_moving"
 timeout = "60s"
 on_timeout = "pick"
 [[step]]
-move = { position = "in-press", speed_mm_s = 300 }
+move = { position = "in-press", speed_mm_s = 150 }
 permit = "press_open & !press_moving"
 [[step]]
 set = { press_go = true, DT100 = 7 }
@@ -88,6 +88,15 @@ fn cell() -> Cell {
 }
 
 fn checked(programs: &[(&str, &str)], run: &str, require_timeout: bool) -> Result<Checked, String> {
+    checked_from(programs, run, require_timeout, None)
+}
+
+fn checked_from(
+    programs: &[(&str, &str)],
+    run: &str,
+    require_timeout: bool,
+    start: Option<[i64; 4]>,
+) -> Result<Checked, String> {
     let c = cell();
     let docs: BTreeMap<String, ProgramDoc> = programs
         .iter()
@@ -106,6 +115,7 @@ fn checked(programs: &[(&str, &str)], run: &str, require_timeout: bool) -> Resul
         programs: &docs,
         broken: &BTreeMap::new(),
         require_wait_timeout: require_timeout,
+        start,
     };
     check(run, &ctx).map_err(|e| e.to_string())
 }
@@ -293,4 +303,84 @@ fn a_loop_jumps_back_only_and_on_timeout_may_jump_forward() {
             ..
         }
     ));
+}
+
+/// The seed robot's counts at the seed's P1, the tool at 0 degrees (as the taught positions).
+fn counts_at_p1() -> [i64; 4] {
+    let robot = seed_robot();
+    let pose = crate::geometry::Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0);
+    robot.counts_of(&crate::kinematics::Kinematics::ik(&robot.kinematics, &pose, None).unwrap())
+}
+
+/// Issue 44: a program whose third step went past a joint's limit (z = 900) or onto the base
+/// axis was accepted, and faulted at that step with the press half loaded.
+#[test]
+fn a_target_out_of_reach_or_past_a_limit_is_refused_when_checked_naming_the_step() {
+    let beyond = "[[step]]\nmove = { position = \"above-stack\" }\n[[step]]\ndwell = \"1s\"\n\
+                  [[step]]\nlabel = \"up\"\nmove = { to = [-926.57, 535.03, 900.0, 0.0] }\n";
+    let e = checked(&[("p", beyond)], "p", false).unwrap_err();
+    assert!(e.starts_with("program \"p\" step 3 (up): move: "), "{e}");
+    assert!(
+        e.contains("joint d2 target 900.0000 mm is beyond its limits"),
+        "{e}"
+    );
+    let axis = "[[step]]\nmove = { to = [0.0, 0.0, 100.0] }\n";
+    let e = checked(&[("p", axis)], "p", false).unwrap_err();
+    assert!(e.starts_with("program \"p\" step 1: move: "), "{e}");
+    // In a called program too, named there.
+    let calls = "[[step]]\ncall = \"far\"\n";
+    let far = "[[step]]\ndwell = \"1s\"\n[[step]]\nmove = { joints = [0, 900, 600, 0] }\n";
+    let e = checked(&[("p", calls), ("far", far)], "p", false).unwrap_err();
+    assert!(e.starts_with("program \"far\" step 2: move: "), "{e}");
+}
+
+#[test]
+fn a_move_by_an_offset_is_checked_from_where_the_moves_before_it_end() {
+    let up = "[[step]]\nmove = { position = \"in-press\" }\n[[step]]\nwait = \"X5\"\n\
+              [[step]]\nmove = { by = [0, 0, 800] }\n";
+    let e = checked(&[("p", up)], "p", false).unwrap_err();
+    assert!(
+        e.starts_with("program \"p\" step 3: move from where the steps before it end (-1144.4, 659.6, 186.6, 0.0): "),
+        "{e}"
+    );
+    // A small one is fine, and nothing is left to check when the run begins.
+    let fine = up.replace("800", "20");
+    let c = checked(&[("p", &fine)], "p", false).unwrap();
+    assert!(c.unchecked.is_empty(), "{:?}", c.unchecked);
+}
+
+#[test]
+fn a_motion_whose_start_depends_on_the_run_is_named_as_checked_when_it_runs() {
+    // The first step's start is where the robot stands: unknown before the run, known at it.
+    let by =
+        "[[step]]\nmove = { by = [0, 0, 20] }\n[[step]]\nmove = { position = \"above-stack\" }\n";
+    let c = checked(&[("p", by)], "p", false).unwrap();
+    assert_eq!(
+        c.unchecked,
+        [
+            "p step 1: move by [0.0, 0.0, 20.0] from where the robot stands when it begins: checked when it runs"
+        ]
+    );
+    // From the robot's counts at the run, and round to the next cycle from above-stack: two
+    // starts, so it still depends on the run.
+    let c = checked_from(&[("p", by)], "p", false, Some(counts_at_p1())).unwrap();
+    assert_eq!(c.unchecked.len(), 1, "{:?}", c.unchecked);
+    // A jog up 800 mm from P1 (and back, so each cycle begins there) is planned from the
+    // run's start, and refused.
+    let far = "[[step]]\nmove = { by = [0, 0, 800] }\n[[step]]\nmove = { by = [0, 0, -800] }\n";
+    let e = checked_from(&[("p", far)], "p", false, Some(counts_at_p1())).unwrap_err();
+    assert!(
+        e.contains("step 1: move from where the steps before it end"),
+        "{e}"
+    );
+    // A loop that jogs the same way each time: its start differs each time round.
+    let loops = "[[step]]\nmove = { position = \"above-stack\" }\n[[step]]\nlabel = \"jog\"\n\
+                 move = { by = [0, 0, 5] }\n[[step]]\nloop = { to = \"jog\", count = 3 }\n";
+    let c = checked(&[("p", loops)], "p", false).unwrap();
+    assert_eq!(c.unchecked.len(), 1, "{:?}", c.unchecked);
+    assert!(
+        c.unchecked[0].starts_with("p step 2 (jog): move by"),
+        "{:?}",
+        c.unchecked
+    );
 }

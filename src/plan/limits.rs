@@ -6,14 +6,14 @@
 //! the PLC will command.
 
 use crate::geometry::Profile;
-use crate::kinematics::{JOINTS, Joints};
+use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
 use super::{PlanError, Samples};
 
 /// Checks a joint move's target values against every joint's position limits (half a pulse of
 /// slack, as for samples); a value that is not a number is beyond any limit.
-pub(super) fn check_target(robot: &Robot, to: &Joints) -> Result<(), PlanError> {
+pub fn check_target(robot: &Robot, to: &Joints) -> Result<(), PlanError> {
     for (joint, &value) in robot.joints.iter().zip(to) {
         let slack = joint.step.abs() / 2.0;
         if !(joint.min - slack..=joint.max + slack).contains(&value) {
@@ -27,6 +27,18 @@ pub(super) fn check_target(robot: &Robot, to: &Joints) -> Result<(), PlanError> 
         }
     }
     Ok(())
+}
+
+/// The counts that put the tool at `pose` (the inverse kinematics' own choice of turn, the
+/// wrist at `pose`'s angle), checked against every joint's limits: what a move to `pose` must
+/// reach, wherever it starts.
+///
+/// # Errors
+/// The pose out of the robot's reach, or a joint beyond its limits there.
+pub fn check_pose(robot: &Robot, pose: &crate::geometry::Pose) -> Result<[i64; JOINTS], PlanError> {
+    let q = robot.kinematics.ik(pose, None)?;
+    check_target(robot, &q)?;
+    Ok(robot.counts_of(&q))
 }
 
 /// A limit as the user wrote it: the config's degrees went to radians and back, which leaves

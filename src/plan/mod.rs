@@ -39,6 +39,7 @@ pub use dynamics::DriveFigures;
 pub use error::{Creep, PlanError};
 pub use joint_path::JointPath;
 use judge::{max_hz, settings, simulate, simulate_within};
+pub use limits::{check_pose, check_target};
 pub use line_parts::{MovePlan, line_as_path, plan_line};
 pub use path::{
     MIN_PART_S, PathPlan, PathRequest, SECTION_START_SLACK_MM, SectionPlan, plan_path, plan_section,

@@ -67,8 +67,25 @@ impl RobotHandle {
             programs: &programs.docs,
             broken: &programs.broken,
             require_wait_timeout: self.cell.settings.require_wait_timeout,
+            start: self.where_next_begins(),
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
+    }
+
+    /// Where the robot will be when the next order begins, per joint: where the last order
+    /// queued or running is planned to end, else where the PLC last said it is; `None` while its
+    /// counts mean nothing (not homed, no link).
+    fn where_next_begins(&self) -> Option<[i64; crate::kinematics::JOINTS]> {
+        let state = self.shared.state(|s| s.clone());
+        if !state.homed || !state.link.connected {
+            return None;
+        }
+        let ahead = state.current_move.is_some() || !state.queued.is_empty();
+        match self.shared.planned_end() {
+            Some(end) if ahead => Some(end),
+            _ if ahead => None,
+            _ => self.counts_by_joint(),
+        }
     }
 
     /// A cycle ended after `seconds` (metrics).
