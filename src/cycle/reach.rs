@@ -213,8 +213,8 @@ fn successors(ops: &[Op], i: usize) -> Vec<usize> {
             to,
             exit: super::LoopExit::Stop,
         } => vec![*to],
-        OpKind::Loop { to, .. } => vec![next, *to],
-        OpKind::Wait {
+        OpKind::Loop { to, .. }
+        | OpKind::Wait {
             on_timeout: Some(to),
             ..
         } => vec![next, *to],
@@ -245,36 +245,36 @@ enum Unplanned {
 /// Plans motion op `op` from `from`: where it ends.
 fn plan_end(ctx: &Context<'_>, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOINTS], Unplanned> {
     let robot = ctx.robot;
-    match &op.kind {
-        OpKind::Path(order) => {
-            let lookup = |name: &str| {
-                ctx.taught.get(name).map(|p| {
-                    let [x, y, z, a] = p.pose;
-                    Pose::from_mm_deg(x, y, z, a)
-                })
-            };
-            let req = order.request(robot, &OrderLimits::of(robot), from, &lookup)?;
-            let plan = crate::plan::plan_path(robot, &req)?;
-            Ok(plan.sections.last().map_or(from, |s| s.end_counts()))
+    let path_end = |req| -> Result<[i64; JOINTS], Unplanned> {
+        let plan = crate::plan::plan_path(robot, &req)?;
+        Ok(plan
+            .sections
+            .last()
+            .map_or(from, crate::plan::SectionPlan::end_counts))
+    };
+    if let OpKind::Path(order) = &op.kind {
+        let lookup = |name: &str| {
+            ctx.taught.get(name).map(|p| {
+                let [x, y, z, a] = p.pose;
+                Pose::from_mm_deg(x, y, z, a)
+            })
+        };
+        return path_end(order.request(robot, &OrderLimits::of(robot), from, &lookup)?);
+    }
+    let order = checked(ctx, op)?;
+    match crate::daemon::plan_order(robot, &order, from) {
+        Ok(plan) => Ok(plan.end_counts()),
+        Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => Ok(from),
+        Err(PlanError::LaterSegment { .. }) => {
+            let to = order
+                .pose_target(&robot.pose_of(&from))
+                .expect("a line has a pose");
+            path_end(line_as_path(&MoveRequest {
+                from: Origin::Counts(from),
+                to,
+                motion: order.motion,
+            }))
         }
-        _ => {
-            let order = checked(ctx, op)?;
-            match crate::daemon::plan_order(robot, &order, from) {
-                Ok(plan) => Ok(plan.end_counts()),
-                Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => Ok(from),
-                Err(PlanError::LaterSegment { .. }) => {
-                    let start = robot.pose_of(&from);
-                    let to = order.pose_target(&start).expect("a line has a pose");
-                    let req = line_as_path(&MoveRequest {
-                        from: Origin::Counts(from),
-                        to,
-                        motion: order.motion,
-                    });
-                    let plan = crate::plan::plan_path(robot, &req)?;
-                    Ok(plan.sections.last().map_or(from, |s| s.end_counts()))
-                }
-                Err(e) => Err(e.into()),
-            }
-        }
+        Err(e) => Err(e.into()),
     }
 }

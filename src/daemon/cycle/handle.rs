@@ -30,6 +30,9 @@ impl RobotHandle {
             ));
         }
         let checked = self.check_program(program)?;
+        for note in &checked.unchecked {
+            tracing::info!(robot = %self.robot.name, program, "not checked before the run: {note}");
+        }
         let handle = self.clone();
         tracing::info!(robot = %self.robot.name, program, count, ops = checked.ops.len(), "cycle starts");
         self.cycles.start(
