@@ -18,6 +18,17 @@ pub use profile::{Profile, ProfileError, ProfileRequest};
 
 use nalgebra::Vector3;
 
+/// A number as a message shows it: `decimals` places when it is of a size a person writes
+/// (1e-4 to 1e9), else in exponent form (`1e308` is not written out in 309 digits).
+#[must_use]
+pub fn shown(value: f64, decimals: usize) -> String {
+    if value.is_finite() && value != 0.0 && !(1e-4..1e9).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        format!("{value:.decimals$}")
+    }
+}
+
 /// A tool pose in the base frame: position in mm and a tool angle about z in radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {

@@ -45,7 +45,10 @@ pub enum ProfileError {
         value: f64,
     },
     /// More periods than any table could hold.
-    #[error("the move needs {periods} periods of {period_s} s; at most {max} are allowed")]
+    #[error(
+        "the move needs {} periods of {period_s} s; at most {max} are allowed",
+        super::shown(*.periods, 0)
+    )]
     TooManyPeriods {
         /// Periods needed.
         periods: f64,

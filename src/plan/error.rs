@@ -160,7 +160,8 @@ pub enum PlanError {
     },
     /// A joint would leave its position limits.
     #[error(
-        "joint {joint} would reach {value:.4} {unit} at t = {t_s:.3} s; its limits are {min} to {max} {unit}"
+        "joint {joint} would reach {} {unit} at t = {t_s:.3} s; its limits are {min} to {max} {unit}",
+        crate::geometry::shown(*.value, 4)
     )]
     OutOfLimit {
         /// Joint name.
@@ -177,7 +178,10 @@ pub enum PlanError {
         t_s: f64,
     },
     /// A joint move's target is beyond a joint's position limits.
-    #[error("joint {joint} target {value:.4} {unit} is beyond its limits {min} to {max} {unit}")]
+    #[error(
+        "joint {joint} target {} {unit} is beyond its limits {min} to {max} {unit}",
+        crate::geometry::shown(*.value, 4)
+    )]
     TargetOutOfLimit {
         /// Joint name.
         joint: String,

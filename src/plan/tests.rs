@@ -673,3 +673,34 @@ fn an_s_curve_seed_move_is_valid_a_little_slower_and_gentler_from_rest() {
         }
     }
 }
+
+/// Issue 44: two refusals wrote enormous numbers out in full (`1e308`, 309 digits).
+#[test]
+fn huge_numbers_in_a_refusal_are_shown_in_exponent_form() {
+    let robot = seed_robot();
+    let e = plan_joint_move(
+        &robot,
+        &JointMoveRequest {
+            from: Origin::Counts([0; crate::kinematics::JOINTS]),
+            to: [1e300, 0.0, 0.0, 0.0],
+            motion: robot.motion,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("target 5.729577951308233e301 deg is beyond its limits"),
+        "{e}"
+    );
+    assert!(e.len() < 120, "{e}");
+    let e = crate::geometry::ProfileError::TooManyPeriods {
+        periods: 5.714_587_338_617_852e303,
+        period_s: 0.05,
+        max: 1_000_000,
+    }
+    .to_string();
+    assert_eq!(
+        e,
+        "the move needs 5.714587338617852e303 periods of 0.05 s; at most 1000000 are allowed"
+    );
+}

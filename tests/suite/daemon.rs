@@ -891,3 +891,42 @@ async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
     assert!(trapezoid_pulses >= 95, "{trapezoid_pulses}");
     assert!(s_curve_pulses <= 20, "{s_curve_pulses}");
 }
+
+/// Issue 44: a 0.001 mm move, which never started, reported `seq 1, bank 0`; a move with no
+/// motion of its own behind a running move showed stage `uploading` while it waited.
+#[tokio::test]
+async fn a_move_with_no_motion_of_its_own_has_no_seq_bank_or_upload() {
+    let shared = mock_at_seed_start("");
+    let (_d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
+    wait_connected(&h).await;
+    let tiny = MoveOrder {
+        by: Some(vec![0.001, 0.0, 0.0]),
+        ..MoveOrder::default()
+    };
+    let r = h.wait(h.submit(tiny).unwrap(), LIMIT).await.unwrap();
+    assert_eq!(r.stage, Stage::Done, "{r:?}");
+    assert_eq!((r.seq, r.bank, r.upload_s), (None, None, None), "{r:?}");
+    assert!(shared.with(|m| m.starts().is_empty()));
+    // Behind a running move, one to where that one ends waits queued, and ends with it.
+    let out = MoveOrder {
+        speed_mm_s: Some(100.0),
+        ..order(P2)
+    };
+    let lead = h.submit(out).unwrap();
+    let follower = h.submit(order(P2)).unwrap();
+    let mut seen = Vec::new();
+    loop {
+        let r = h.report(follower).unwrap();
+        if seen.last() != Some(&r.stage) {
+            seen.push(r.stage);
+        }
+        if r.stage.is_final() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    assert_eq!(seen, [Stage::Queued, Stage::Done], "{seen:?}");
+    let r = h.report(follower).unwrap();
+    assert_eq!((r.seq, r.bank, r.upload_s), (None, None, None), "{r:?}");
+    assert_eq!(h.report(lead).unwrap().stage, Stage::Done);
+}

@@ -187,11 +187,12 @@ impl Worker {
         };
         let planned = self.planned(id, &plan, turn, turn.chain.as_ref().map(|c| c.bank));
         let targets = planned.targets.expect("a plan knows its targets");
-        self.record_plan(id, &plan, &planned);
         if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
+            // Nothing to upload or start: no sequence number, no bank, no upload stage.
             self.in_place(id, from, targets, lead);
             return None;
         }
+        self.record_plan(id, &plan, &planned);
         Some((plan, planned))
     }
 
