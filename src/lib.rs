@@ -66,6 +66,7 @@ pub mod geometry;
 pub mod kinematics;
 pub mod mewtocol;
 pub mod mock;
+pub mod order;
 pub mod plan;
 pub mod plc;
 pub mod plot;
@@ -74,3 +75,4 @@ pub mod sim;
 pub mod table;
 #[cfg(test)]
 mod testing;
+pub mod wire;

@@ -40,3 +40,14 @@ pub const CHANNELS: usize = 4;
 pub const BANKS: u16 = 2;
 /// The last DT word of an FP-X C30/C60 (PLC.md §3, "Special registers").
 pub const DT_LAST: u16 = 32_764;
+
+/// RUN or PROG (`run`, `prog` in the daemon's API): whether the PLC runs its program, the
+/// contract's with it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlcMode {
+    /// The program runs.
+    Run,
+    /// Programming mode: the program does not run.
+    Prog,
+}

@@ -13,9 +13,12 @@ use thiserror::Error;
 use super::condition::{self, Condition, Names};
 use super::program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
 use crate::config::parse_duration_s;
-use crate::daemon::{MoveOrder, OrderLimits, PathOrder, Position, StepAt, Values};
+use crate::gateway::Values;
 use crate::gateway::{Address, Area, Range};
+use crate::order::{MoveOrder, OrderLimits, PathOrder};
+use crate::robot::Position;
 use crate::robot::Robot;
+use crate::wire::StepAt;
 
 /// The longest a wait's timeout may be, s (a shift).
 pub const MAX_TIMEOUT_S: f64 = 12.0 * 3600.0;
@@ -443,7 +446,7 @@ impl Flattener<'_, '_> {
             *inner = Some(p.to_owned());
         }
         if let Some(p) = inner.as_deref() {
-            crate::daemon::permit::resolve(p, self.ctx.names.permit)
+            crate::order::permit::resolve(p, self.ctx.names.permit)
                 .map_err(|e| here(e.to_string()))?;
         }
         Ok(())

@@ -15,8 +15,8 @@ use std::fmt;
 
 use thiserror::Error;
 
-use crate::daemon::permit::PermitNames;
 use crate::gateway::{AccessList, Address, Area, Range};
+use crate::order::permit::PermitNames;
 
 /// A condition that does not parse or resolve.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

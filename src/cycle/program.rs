@@ -31,7 +31,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::daemon::MoveOrder;
+use crate::order::MoveOrder;
 
 /// A cycle program as written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]

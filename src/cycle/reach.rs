@@ -10,9 +10,9 @@
 use std::collections::HashMap;
 
 use super::check::{Context, Op, OpKind, ProgramError};
-use crate::daemon::{CheckedOrder, OrderLimits, Target};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
+use crate::order::{CheckedOrder, OrderError, OrderLimits, Target, plan_order};
 use crate::plan::{MoveRequest, Origin, PlanError, check_pose, check_target, line_as_path};
 
 /// Where the robot stands when an op begins, over every way the program comes to it.
@@ -223,7 +223,7 @@ fn successors(ops: &[Op], i: usize) -> Vec<usize> {
 }
 
 /// A move op's order, checked as the daemon checks it.
-fn checked(ctx: &Context<'_>, op: &Op) -> Result<CheckedOrder, crate::daemon::OrderError> {
+fn checked(ctx: &Context<'_>, op: &Op) -> Result<CheckedOrder, OrderError> {
     let OpKind::Move(order) = &op.kind else {
         unreachable!("only a move has a target");
     };
@@ -236,7 +236,7 @@ fn checked(ctx: &Context<'_>, op: &Op) -> Result<CheckedOrder, crate::daemon::Or
 enum Unplanned {
     /// Its order is wrong (a field, a name).
     #[error(transparent)]
-    Order(#[from] crate::daemon::OrderError),
+    Order(#[from] OrderError),
     /// The planner refused it.
     #[error(transparent)]
     Plan(#[from] PlanError),
@@ -262,7 +262,7 @@ fn plan_end(ctx: &Context<'_>, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOI
         return path_end(order.request(robot, &OrderLimits::of(robot), from, &lookup)?);
     }
     let order = checked(ctx, op)?;
-    match crate::daemon::plan_order(robot, &order, from) {
+    match plan_order(robot, &order, from) {
         Ok(plan) => Ok(plan.end_counts()),
         Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => Ok(from),
         Err(PlanError::LaterSegment { .. }) => {

@@ -5,9 +5,9 @@ use std::collections::BTreeMap;
 
 use super::*;
 use crate::contract::{InputWord, Layout};
-use crate::daemon::Position;
-use crate::daemon::permit::PermitNames;
 use crate::gateway::{AccessList, Address};
+use crate::order::permit::PermitNames;
+use crate::robot::Position;
 use crate::robot::seed_robot;
 
 const PRESS_LOAD: &str = r#"

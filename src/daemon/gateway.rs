@@ -3,7 +3,6 @@
 //! it owns, one exchange at a time between its own: a motion exchange never waits behind more
 //! than one gateway exchange.
 
-use serde::{Deserialize, Serialize};
 use thiserror::Error;
 use tokio::sync::oneshot;
 
@@ -15,32 +14,7 @@ pub const MAX_WORDS: u32 = 1_000;
 /// Bits at most one gateway request may read or write.
 pub const MAX_BITS: u32 = 2_000;
 
-/// What a gateway request reads or writes (read back, an empty list is words).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Values {
-    /// DT words.
-    Words(Vec<u16>),
-    /// X, Y or R bits.
-    Bits(Vec<bool>),
-}
-
-impl Values {
-    /// How many words or bits.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        match self {
-            Self::Words(w) => w.len(),
-            Self::Bits(b) => b.len(),
-        }
-    }
-
-    /// Whether there are none.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
+pub use crate::gateway::Values;
 
 /// Why a gateway request failed.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

@@ -16,12 +16,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
-use super::order::{
-    Accepted, CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder,
-    SectionPart, Target, plan_order,
-};
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::report::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
 use super::request::{CommandError, Reply, Request};
 use super::setup::{DaemonOptions, RobotSetup};
 use super::shared::Shared;
@@ -30,9 +25,14 @@ use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
+use crate::order::{
+    Accepted, CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder,
+    SectionPart, Target, plan_order,
+};
 use crate::plan::{MoveRequest, Origin, PathPlan, PlanError, SectionPlan, line_as_path, plan_path};
 use crate::plc::PlcMode;
 use crate::robot::{Motion, Robot};
+use crate::wire::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
 
 /// Why a move was not accepted.
 #[derive(Debug, Error)]
@@ -83,9 +83,6 @@ pub enum SubmitError {
 /// The most starts a robot's queue holds, the running one included: an order that would pass
 /// it is refused whole.
 pub const MAX_QUEUED_STARTS: usize = 1_000;
-
-/// The most elements a path order may have (checked before anything is planned).
-pub const MAX_PATH_ELEMENTS: usize = 500;
 
 /// One robot, as the API and the CLI see it.
 #[derive(Debug, Clone)]
@@ -167,7 +164,6 @@ impl RobotHandle {
         let mut checked =
             order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
         checked.permit = self.permit(order.permit.as_deref())?;
-        checked.gate = gate.cloned();
         self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
         // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
@@ -214,17 +210,19 @@ impl RobotHandle {
             .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1));
         let id = self.shared.next_id();
         let report = MoveReport::new(id, &self.robot.name, order);
-        self.enqueue(vec![(report, checked)], end)
+        self.enqueue(vec![(report, checked)], end, gate.cloned())
             .map(|ids| (ids, moves))
     }
 
     /// Queues every start of one order, whole or not at all: refused with nothing queued when
     /// the queue would pass [`MAX_QUEUED_STARTS`] or the worker is gone. `end`: where the last
-    /// is planned to end, for the next order.
+    /// is planned to end, for the next order; `gate`: what a single start waits for once
+    /// uploaded (a cycle's move prepared ahead).
     fn enqueue(
         &self,
         starts: Vec<(MoveReport, CheckedOrder)>,
         end: Option<[i64; JOINTS]>,
+        gate: Option<super::gate::Gate>,
     ) -> Result<Vec<MoveId>, SubmitError> {
         let queued = self
             .shared
@@ -244,13 +242,14 @@ impl RobotHandle {
             }
         });
         self.shared.state(|s| s.queued.extend(&ids));
-        for (report, mut checked) in starts {
-            checked.epoch = self.epoch;
-            if self
-                .requests
-                .send(Request::Move(report.id, checked))
-                .is_err()
-            {
+        for (report, order) in starts {
+            let given = super::request::Given {
+                id: report.id,
+                order,
+                gate: gate.clone(),
+                epoch: self.epoch,
+            };
+            if self.requests.send(Request::Move(given)).is_err() {
                 // The worker is gone: it took none of them.
                 self.withdraw(&ids);
                 return Err(SubmitError::ShuttingDown);
@@ -306,7 +305,7 @@ impl RobotHandle {
             signals: &self.cell.settings.signals,
             inputs: &self.cell.inputs,
         };
-        super::permit::resolve(text, names).map_err(|e| super::order::permit_refused(&e).into())
+        super::permit::resolve(text, names).map_err(|e| crate::order::permit_refused(&e).into())
     }
 
     /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
@@ -398,9 +397,7 @@ impl RobotHandle {
                     }),
                     motion,
                     permit,
-                    gate: None,
                     accepted: None,
-                    epoch: None,
                 };
                 let shown = SectionReport::new(
                     n + 1,
@@ -419,7 +416,7 @@ impl RobotHandle {
                 starts.push((report, checked));
             }
         }
-        self.enqueue(starts, end)
+        self.enqueue(starts, end, None)
     }
 
     /// The counts the PLC last reported, per joint.

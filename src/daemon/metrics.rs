@@ -19,8 +19,8 @@ use prometheus_client::metrics::histogram::Histogram;
 use prometheus_client::metrics::info::Info;
 use prometheus_client::registry::Registry;
 
-use super::report::Stage;
 use crate::plc::ExchangeCounts;
+use crate::wire::Stage;
 
 /// The label every per-robot series carries.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]

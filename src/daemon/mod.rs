@@ -32,8 +32,6 @@ mod ids;
 pub mod metrics;
 pub mod modbus_face;
 pub mod notify;
-mod order;
-pub mod permit;
 pub mod positions;
 mod report;
 mod request;
@@ -42,21 +40,24 @@ mod setup;
 mod shared;
 mod worker;
 
-pub use cell::{MIRROR_EVERY, ModeError, Owner, mirror_face};
-pub use cycle::{CycleError, CycleState, CycleStatus, StepAt};
-pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{Daemon, MAX_PATH_ELEMENTS, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
-pub use ids::{MoveIds, write_atomically};
-pub(crate) use order::plan_order;
-pub use order::{
-    CheckedOrder, MAX_ACCEL_TIME_S, MoveOrder, OrderError, OrderLimits, PERIOD_RANGE_S, PathOrder,
-    SectionOrder, SectionPart, TOLERANCE_RANGE_MM, Target,
+pub use crate::order::permit;
+pub(crate) use crate::order::plan_order;
+pub use crate::order::{
+    CheckedOrder, MAX_ACCEL_TIME_S, MAX_PATH_ELEMENTS, MoveOrder, OrderError, OrderLimits,
+    PERIOD_RANGE_S, PathOrder, SectionOrder, SectionPart, TOLERANCE_RANGE_MM, Target,
 };
-pub use positions::{Position, PositionError, TaughtPositions};
-pub use report::{
-    FaceRefusal, FaceState, GatewayStats, KEPT, LinkState, MoveAccepted, MoveId, MoveReport, Moves,
+pub use crate::wire::{CycleState, CycleStatus, StepAt};
+pub use crate::wire::{
+    FaceRefusal, FaceState, GatewayStats, LinkState, MoveAccepted, MoveId, MoveReport,
     PathAccepted, PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
+pub use cell::{MIRROR_EVERY, ModeError, Owner, mirror_face};
+pub use cycle::CycleError;
+pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
+pub use handle::{Daemon, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
+pub use ids::{MoveIds, write_atomically};
+pub use positions::{Position, PositionError, TaughtPositions};
+pub use report::{KEPT, Moves};
 pub use request::{CommandError, ConflictReason};
 pub use setup::{DaemonOptions, RobotSetup, host_word};
 pub use shared::Incidents;

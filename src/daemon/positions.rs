@@ -26,7 +26,6 @@ use thiserror::Error;
 
 use super::ids::write_atomically;
 use crate::contract::machine::Blocker;
-use crate::kinematics::JOINTS;
 
 /// The file's name in the state directory.
 pub const POSITIONS_FILE: &str = "positions.json";
@@ -34,17 +33,7 @@ pub const POSITIONS_FILE: &str = "positions.json";
 const VERSION: u32 = 1;
 pub use crate::robot::POSITION_NAME_RULE as NAME_RULE;
 
-/// One taught position.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Position {
-    /// x, y, z in mm and the tool angle a in degrees.
-    pub pose: [f64; 4],
-    /// The counts it was taught at, per joint in the joints' order.
-    pub joint_counts: [i64; JOINTS],
-    /// When it was taught, seconds since 1970.
-    pub saved_unix_s: u64,
-}
+pub use crate::robot::Position;
 
 /// Every robot's positions, by robot name and position name.
 type Book = BTreeMap<String, BTreeMap<String, Position>>;

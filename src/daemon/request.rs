@@ -5,10 +5,10 @@
 use thiserror::Error;
 use tokio::sync::oneshot;
 
-use super::order::CheckedOrder;
-use super::report::MoveId;
 use crate::contract::State;
+use crate::order::CheckedOrder;
 use crate::plc::exchange::fault_meaning;
+use crate::wire::MoveId;
 
 /// Why a stop, home or clear-fault did not happen.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -90,12 +90,26 @@ pub(super) type Reply = oneshot::Sender<Result<(), CommandError>>;
 /// What the worker is asked to do (stops come on their own channel, to overtake).
 #[derive(Debug)]
 pub(super) enum Request {
-    /// Run a checked order as move `id`.
-    Move(MoveId, CheckedOrder),
+    /// Run a checked order.
+    Move(Given),
     /// Home the robot (answered when the home routine has ended).
     Home(Reply),
     /// Clear a latched fault.
     ClearFault(Reply),
+}
+
+/// An order given to the worker: a move it runs in its turn.
+#[derive(Debug)]
+pub(super) struct Given {
+    /// The move.
+    pub id: MoveId,
+    /// Its order, checked (and planned, when its start was known).
+    pub order: CheckedOrder,
+    /// The gate its start waits for once it is uploaded (a cycle's move prepared ahead).
+    pub gate: Option<super::gate::Gate>,
+    /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
+    /// another incident came; `None`: whenever.
+    pub epoch: Option<u64>,
 }
 
 #[cfg(test)]

@@ -7,10 +7,11 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use super::ids::MoveIds;
 use super::metrics::RobotMetrics;
-use super::report::{MoveId, Moves, RobotState};
+use super::report::Moves;
 use crate::contract::machine::Blocker;
 use crate::kinematics::JOINTS;
 use crate::plc::exchange::Beat;
+use crate::wire::{MoveId, RobotState};
 
 /// State shared by a robot's worker and its handle.
 #[derive(Debug)]

@@ -425,6 +425,33 @@ fn list_text(list: &[Range]) -> String {
     parts.join(", ")
 }
 
+/// What a gateway request reads or writes (read back, an empty list is words).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Values {
+    /// DT words.
+    Words(Vec<u16>),
+    /// X, Y or R bits.
+    Bits(Vec<bool>),
+}
+
+impl Values {
+    /// How many words or bits.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Words(w) => w.len(),
+            Self::Bits(b) => b.len(),
+        }
+    }
+
+    /// Whether there are none.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

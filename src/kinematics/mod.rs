@@ -218,7 +218,63 @@ pub fn unwrap_near(angle: f64, near: f64) -> f64 {
         return angle + 0.0;
     }
     // Whole turns, rounded as `round` does without its library call.
-    angle + crate::robot::nearest_count((near - angle) / turn) as f64 * turn
+    angle + nearest_count((near - angle) / turn) as f64 * turn
+}
+
+/// `x.round() as i64` (halves away from zero), without the call `round` is on a plain x86-64
+/// target: the truncation is one instruction and the fraction it leaves is exact. Planning
+/// rounds every joint at every millisecond sample.
+pub fn nearest_count(x: f64) -> i64 {
+    if x.is_nan() || x.abs() >= 4.0e15 {
+        return x.round() as i64;
+    }
+    let whole = x as i64;
+    let fraction = x - whole as f64;
+    whole + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
+}
+
+#[cfg(test)]
+mod rounding_tests {
+    use super::nearest_count;
+    use proptest::prelude::*;
+
+    #[test]
+    fn nearest_count_rounds_halves_away_from_zero_as_round_does() {
+        let edges = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.499_999_999_999_999_94,
+            -0.499_999_999_999_999_94,
+            4.0e15,
+            -4.0e15,
+            4.5e15,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1234.5,
+            -1234.5,
+        ];
+        for x in edges {
+            assert_eq!(nearest_count(x), x.round() as i64, "{x}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn nearest_count_is_round(x in prop_oneof![-1e7..1e7_f64, -1e16..1e16_f64, any::<f64>()]) {
+            prop_assert_eq!(nearest_count(x), x.round() as i64);
+            let half = x.trunc() + 0.5;
+            prop_assert_eq!(nearest_count(half), half.round() as i64);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -229,7 +285,7 @@ mod tests {
     /// `unwrap_near` worked with the division at every call.
     fn unwrap_dividing(angle: f64, near: f64) -> f64 {
         let turn = std::f64::consts::TAU;
-        angle + crate::robot::nearest_count((near - angle) / turn) as f64 * turn
+        angle + nearest_count((near - angle) / turn) as f64 * turn
     }
 
     proptest! {

@@ -22,7 +22,6 @@ use std::future::Future;
 
 pub mod exchange;
 
-use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::gateway::Area;
@@ -49,15 +48,7 @@ pub struct ExchangeSizes {
     pub read_bits: u16,
 }
 
-/// RUN or PROG (`run`, `prog` in the daemon's API).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PlcMode {
-    /// The program runs.
-    Run,
-    /// Programming mode: the program does not run.
-    Prog,
-}
+pub use crate::contract::PlcMode;
 
 /// Why the PLC answered "no": a different thing from a failed link.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

@@ -2,7 +2,9 @@
 //! channels, and its motion defaults. `config` builds these from TOML; `plan` consumes them.
 
 use crate::geometry::Pose;
-use crate::kinematics::{JOINTS, JointKind, Joints, Kinematics, KinematicsError, Model};
+use crate::kinematics::{
+    JOINTS, JointKind, Joints, Kinematics, KinematicsError, Model, nearest_count,
+};
 use crate::table::{ChannelLimits, FrequencyModel, OutputMethod};
 
 /// One joint and the pulse channel that drives it.
@@ -59,18 +61,6 @@ impl Dynamics {
     pub fn is_set(&self) -> bool {
         self.max_accel.is_some() || self.start_hz.is_some() || self.max_jerk.is_some()
     }
-}
-
-/// `x.round() as i64` (halves away from zero), without the call `round` is on a plain x86-64
-/// target: the truncation is one instruction and the fraction it leaves is exact. Planning
-/// rounds every joint at every millisecond sample.
-pub(crate) fn nearest_count(x: f64) -> i64 {
-    if x.is_nan() || x.abs() >= 4.0e15 {
-        return x.round() as i64;
-    }
-    let whole = x as i64;
-    let fraction = x - whole as f64;
-    whole + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
 }
 
 /// [`Robot::counts_of`] at every sample of a move: each joint's value times its step's
@@ -381,6 +371,18 @@ pub fn seed_robot() -> Robot {
 pub const POSITION_NAME_RULE: &str =
     "a position name is 1 to 32 letters, digits, '_' or '-', not starting with '-'";
 
+/// One taught position.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Position {
+    /// x, y, z in mm and the tool angle a in degrees.
+    pub pose: [f64; 4],
+    /// The counts it was taught at, per joint in the joints' order.
+    pub joint_counts: [i64; JOINTS],
+    /// When it was taught, seconds since 1970.
+    pub saved_unix_s: u64,
+}
+
 /// Whether `name` follows [`POSITION_NAME_RULE`].
 #[must_use]
 pub fn is_position_name(name: &str) -> bool {
@@ -393,37 +395,7 @@ pub fn is_position_name(name: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::nearest_count;
     use proptest::prelude::*;
-
-    #[test]
-    fn nearest_count_rounds_halves_away_from_zero_as_round_does() {
-        let edges = [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.5,
-            -1.5,
-            2.5,
-            -2.5,
-            0.499_999_999_999_999_94,
-            -0.499_999_999_999_999_94,
-            4.0e15,
-            -4.0e15,
-            4.5e15,
-            1e300,
-            -1e300,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-            1234.5,
-            -1234.5,
-        ];
-        for x in edges {
-            assert_eq!(nearest_count(x), x.round() as i64, "{x}");
-        }
-    }
 
     proptest! {
         #[test]
@@ -451,13 +423,6 @@ mod tests {
             for q in [seed_joints, on_halves] {
                 prop_assert_eq!(counter.counts_of(&q), robot.counts_of(&q), "{:?}", q);
             }
-        }
-
-        #[test]
-        fn nearest_count_is_round(x in prop_oneof![-1e7..1e7_f64, -1e16..1e16_f64, any::<f64>()]) {
-            prop_assert_eq!(nearest_count(x), x.round() as i64);
-            let half = x.trunc() + 0.5;
-            prop_assert_eq!(nearest_count(half), half.round() as i64);
         }
     }
 }

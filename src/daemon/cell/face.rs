@@ -66,10 +66,10 @@ impl RobotHandle {
     }
 
     /// The face's command side, for the robot's state.
-    pub(crate) fn face_state(&self) -> Option<crate::daemon::report::FaceState> {
+    pub(crate) fn face_state(&self) -> Option<crate::wire::FaceState> {
         let cell = self.cell.face.as_ref()?;
         let face = cell.face();
-        Some(crate::daemon::report::FaceState {
+        Some(crate::wire::FaceState {
             program: face.selected().map_or(0, |(n, _)| u16::from(n)),
             program_name: face.selected().map(|(_, name)| name.to_owned()),
             enabled: face.enabled(),

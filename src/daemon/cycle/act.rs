@@ -11,9 +11,9 @@ use tokio::sync::watch;
 use super::control::Control;
 use crate::contract::INPUT_WORDS;
 use crate::cycle::Condition;
-use crate::daemon::report::{MoveId, MoveReport, Stage};
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle};
 use crate::gateway::Address;
+use crate::wire::{MoveId, MoveReport, Stage};
 
 /// How a step's motion ended.
 #[derive(Debug, Clone, PartialEq)]

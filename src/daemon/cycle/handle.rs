@@ -1,8 +1,9 @@
 //! What a robot's handle does with its cycle: run one (checked whole first), watch, stop, pause
 //! and resume it, and the metrics its runner reports.
 
-use super::{CycleError, CycleStatus};
+use super::CycleError;
 use crate::daemon::RobotHandle;
+use crate::wire::CycleStatus;
 
 impl RobotHandle {
     /// The robot's cycle, if one ran since the daemon started.
@@ -97,7 +98,7 @@ impl RobotHandle {
     }
 
     /// A cycle's wait step at `at` waited `seconds` (metrics).
-    pub(crate) fn waited(&self, at: &super::StepAt, seconds: f64) {
+    pub(crate) fn waited(&self, at: &crate::wire::StepAt, seconds: f64) {
         self.shared
             .metrics
             .cycle_waited(&at.program, at.step, seconds);

@@ -3,7 +3,6 @@
 //! status anyone can read, steered by a control value (stop, pause, resume).
 //!
 //! ```text
-//! status.rs   CycleStatus: the state, step, count, what it waits for and since when
 //! control.rs  Control: a stop (now, or at the step's end), a pause, the resumes asked for
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
 //!             dwell
@@ -19,9 +18,7 @@ mod control;
 mod handle;
 mod run;
 mod slot;
-mod status;
 
 pub(crate) use run::run;
 pub use slot::CycleError;
 pub(crate) use slot::CycleSlot;
-pub use status::{CycleState, CycleStatus, StepAt};

@@ -26,12 +26,12 @@ use tokio::sync::watch;
 use super::act::{self, Inputs, MotionEnd, WaitEnd};
 use super::control::Control;
 use super::slot::SharedStatus;
-use super::status::{CycleState, CycleStatus};
 use crate::cycle::{Checked, LoopExit, OpKind};
 use crate::daemon::RobotHandle;
 use crate::daemon::gate::Gate;
-use crate::daemon::report::MoveId;
 use crate::daemon::shared::Incidents;
+use crate::wire::MoveId;
+use crate::wire::{CycleState, CycleStatus};
 
 /// Moves kept in the status, the newest last.
 const MOVES_SHOWN: usize = 10;

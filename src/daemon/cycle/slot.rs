@@ -9,7 +9,7 @@ use thiserror::Error;
 use tokio::sync::watch;
 
 use super::control::Control;
-use super::status::{CycleState, CycleStatus};
+use crate::wire::{CycleState, CycleStatus};
 
 /// Why a cycle request was refused.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

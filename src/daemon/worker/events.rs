@@ -6,10 +6,10 @@ use super::{Worker, describe, link_broken, now};
 use crate::contract::Permit;
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault, describe_unmet};
-use crate::daemon::order::MoveOrder;
-use crate::daemon::report::{MoveId, MoveReport, RobotPhase, Stage};
 use crate::daemon::request::CommandError;
+use crate::order::MoveOrder;
 use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
+use crate::wire::{MoveId, MoveReport, RobotPhase, Stage};
 
 /// A move that stopped short, waiting for the status block that shows where the PLC stopped it.
 #[derive(Debug)]

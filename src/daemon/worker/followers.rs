@@ -4,7 +4,7 @@
 
 use super::Worker;
 use crate::contract::CHANNELS;
-use crate::daemon::report::{MoveId, Stage};
+use crate::wire::{MoveId, Stage};
 
 /// A move with no motion of its own queued behind a running start (its lead): it ends with
 /// that start.

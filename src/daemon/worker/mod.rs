@@ -37,17 +37,17 @@ use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 
 use super::gate::Gate;
-use super::order::CheckedOrder;
-use super::report::{MoveId, Stage};
 use super::request::{CommandError, ConflictReason, Reply, Request};
 use super::setup::{DaemonOptions, RobotSetup};
 use super::shared::Shared;
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
+use crate::order::CheckedOrder;
 use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
 use crate::plc::{AnyPlc, Plc, PlcError};
 use crate::robot::Robot;
+use crate::wire::{MoveId, Stage};
 
 /// Opens the robot's PLC link (called again after every link failure).
 pub type Connector =
@@ -75,6 +75,8 @@ pub(super) struct Channels {
 struct Queued {
     id: MoveId,
     order: CheckedOrder,
+    gate: Option<Gate>,
+    epoch: Option<u64>,
     accepted: std::time::Instant,
 }
 
@@ -387,9 +389,11 @@ impl Worker {
         // Something to do: the status block is read at once, not at the next idle poll.
         self.next_poll = tokio::time::Instant::now();
         match request {
-            Request::Move(id, order) => self.queue.push_back(Queued {
-                id,
-                order,
+            Request::Move(given) => self.queue.push_back(Queued {
+                id: given.id,
+                order: given.order,
+                gate: given.gate,
+                epoch: given.epoch,
                 accepted: now(),
             }),
             command => self.commands.push(command),

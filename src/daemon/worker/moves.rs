@@ -13,13 +13,13 @@ use super::{Queued, Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
 use crate::contract::{CHANNELS, describe_unmet};
 use crate::daemon::gate::{Gate, GateState};
-use crate::daemon::order::plan_order;
-use crate::daemon::order::{CheckedOrder, SectionOrder};
-use crate::daemon::report::{MoveId, Predicted, Stage};
+use crate::order::plan_order;
+use crate::order::{CheckedOrder, SectionOrder};
 use crate::plan::{Plan, PlanError};
 use crate::plc::exchange::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
+use crate::wire::{MoveId, Predicted, Stage};
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -28,7 +28,7 @@ impl Worker {
     /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
         let incidents = self.shared.incidents();
-        if queued.order.epoch.is_some_and(|e| e != incidents.count) {
+        if queued.epoch.is_some_and(|e| e != incidents.count) {
             // A cycle's move asked for before the PLC restarted, stalled or was lost.
             let why = format!(
                 "cancelled: {} since its cycle asked for it",
@@ -49,7 +49,7 @@ impl Worker {
         let tables = plan
             .valid_tables(&self.robot)
             .expect("plan_move returns valid tables");
-        let gate = turn.order.gate.as_ref();
+        let gate = turn.gate.as_ref();
         if gate.is_some_and(|g| g.state() == GateState::Shut) {
             // Its cycle went another way while it was queued: nothing written.
             return self.unprepared(id, CYCLE_WENT_ON, None);
@@ -76,7 +76,7 @@ impl Worker {
         };
         let upload_s = began.elapsed().as_secs_f64();
         self.shared.metrics.uploaded(upload_s);
-        let prepared = turn.order.gate.is_some();
+        let prepared = turn.gate.is_some();
         self.shared.moves(|m| {
             m.update(id, |r| {
                 r.upload_s = Some(upload_s);
@@ -85,7 +85,7 @@ impl Worker {
                 }
             });
         });
-        if let Some(gate) = &turn.order.gate {
+        if let Some(gate) = &turn.gate {
             match self.hold_for(gate).await {
                 Ok(()) => {}
                 Err(Held::Cancelled(why)) => return self.unprepared(id, why, None),
@@ -97,7 +97,7 @@ impl Worker {
         }
         // A prepared move released on a status block read within a poll (the one that met
         // its wait) starts on it, as a move's turn is planned on one; else on a fresh read.
-        let fresh = turn.order.gate.is_some()
+        let fresh = turn.gate.is_some()
             && self.machine.read_at().is_some_and(|at| {
                 now().saturating_duration_since(at) < self.settings.poll_interval
             })
@@ -139,7 +139,7 @@ impl Worker {
             .unwrap_or_default();
         // A gated move's permit is for when its gate opens: the PLC and `may_start` check it
         // then.
-        if queued.order.gate.is_none() && !queued.order.permit.holds(&inputs) {
+        if queued.gate.is_none() && !queued.order.permit.holds(&inputs) {
             // Nothing planned or written: the host's own check, for a clear message (the PLC's
             // check at the start is the one that counts).
             let blocker = Blocker::PermitNotMet {
@@ -162,6 +162,7 @@ impl Worker {
         Ok(Some(Turn {
             id: queued.id,
             order: queued.order,
+            gate: queued.gate,
             chain,
             from,
         }))
@@ -655,6 +656,7 @@ impl Worker {
 pub(super) struct Turn {
     id: MoveId,
     order: CheckedOrder,
+    gate: Option<Gate>,
     chain: Option<Planned>,
     from: [i32; CHANNELS],
 }

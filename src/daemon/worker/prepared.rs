@@ -8,8 +8,8 @@ use std::time::Duration;
 use super::{Queued, Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
-use crate::daemon::report::{MoveId, Stage};
 use crate::plc::exchange::ContractError;
+use crate::wire::{MoveId, Stage};
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
 /// it as any move, after its wait.
@@ -115,8 +115,7 @@ impl Worker {
     /// another way), and every move queued behind one (planned from where it would have ended).
     pub(super) fn drop_shut(&mut self) {
         let shut = |q: &Queued| {
-            q.order
-                .gate
+            q.gate
                 .as_ref()
                 .is_some_and(|g| g.state() == GateState::Shut)
         };

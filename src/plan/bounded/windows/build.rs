@@ -63,7 +63,7 @@ fn count_after(b: f64, count: i64, d: i64) -> i64 {
             b < c as f64 - 0.5
         }
     };
-    let mut after = crate::robot::nearest_count(b);
+    let mut after = crate::kinematics::nearest_count(b);
     if (after - count) * d < 1 || past(after) {
         // Off by more than a tie (a count beyond any a track reaches): the rule itself.
         after = count;

@@ -1,5 +1,7 @@
-//! A move as the cell's software asks for it (API, CLI), and its check into a planner request.
-//! A bad order is refused here, naming the field and the limit, before anything is queued.
+//! PURE. A move as the cell's software asks for it (API, CLI, a cycle's step), and its check
+//! into a planner request. A bad order is refused here, naming the field and the limit, before
+//! anything is queued. The daemon, the cycle programs, the cell face and the CLI all speak it;
+//! it imports none of them.
 //!
 //! An order has exactly one target: `to` (a pose: a straight line to it), `by` (a jog: a
 //! straight line by an offset from where the move starts), `joints` (a joint-space move to joint
@@ -14,7 +16,6 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::positions::{NAME_RULE, Position, check_name};
 use crate::config::parse_duration_s;
 use crate::config::{PathDoc, PathFileError};
 use crate::geometry::{Path, Pose};
@@ -24,6 +25,12 @@ use crate::plan::{
     plan_move, plan_section,
 };
 use crate::robot::{Method, Motion, Ramp, Robot};
+use crate::robot::{POSITION_NAME_RULE as NAME_RULE, Position, is_position_name};
+
+pub mod permit;
+
+/// The most elements a path order may have (checked before anything is planned).
+pub const MAX_PATH_ELEMENTS: usize = 500;
 
 /// A move order: one target (`to`, `by`, `joints` or `position`) and optional motion overrides
 /// (the robot's defaults otherwise).
@@ -115,7 +122,7 @@ impl PathOrder {
     }
 
     /// Checks the order's motion fields against `limits` and reads its document (at most
-    /// [`MAX_PATH_ELEMENTS`](super::MAX_PATH_ELEMENTS) elements), before anything is planned.
+    /// [`MAX_PATH_ELEMENTS`](MAX_PATH_ELEMENTS) elements), before anything is planned.
     ///
     /// # Errors
     /// The field at fault, its value and the limit.
@@ -127,7 +134,7 @@ impl PathOrder {
         let motion = self.as_move(None).motion(robot.motion, *limits)?;
         let doc = PathDoc::from_json(self.path.clone())
             .map_err(|e| path_refused("(the document)", e.to_string()))?;
-        let max = super::MAX_PATH_ELEMENTS;
+        let max = MAX_PATH_ELEMENTS;
         if doc.elements.len() > max {
             return Err(path_refused(
                 &format!("{} elements", doc.elements.len()),
@@ -145,7 +152,7 @@ impl PathOrder {
     ///
     /// # Errors
     /// A motion field out of `limits`, a document that is wrong or has more than
-    /// [`MAX_PATH_ELEMENTS`](super::MAX_PATH_ELEMENTS) elements, an unknown taught position.
+    /// [`MAX_PATH_ELEMENTS`](MAX_PATH_ELEMENTS) elements, an unknown taught position.
     pub fn request(
         &self,
         robot: &Robot,
@@ -231,7 +238,7 @@ pub const TOLERANCE_RANGE_MM: std::ops::RangeInclusive<f64> = 0.001..=10.0;
 
 /// A path document that is wrong, as an order error on its `path` field.
 /// A `permit` refused: it is not one the PLC can check.
-pub(crate) fn permit_refused(e: &super::permit::PermitError) -> OrderError {
+pub(crate) fn permit_refused(e: &permit::PermitError) -> OrderError {
     refuse("permit", &e.text, e.reason.clone())
 }
 
@@ -448,13 +455,8 @@ pub struct CheckedOrder {
     pub motion: Motion,
     /// Its permit over the cell's inputs: written with its start, enforced by the PLC.
     pub permit: Permit,
-    /// A gate its start waits for once it is uploaded (a cycle's move prepared during its wait).
-    pub gate: Option<super::gate::Gate>,
     /// Its plan when it was accepted ([`plan_order`] takes it when asked from those counts).
     pub accepted: Option<Arc<Accepted>>,
-    /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
-    /// another incident came (the PLC restarted, stalled or was lost since); `None`: whenever.
-    pub epoch: Option<u64>,
 }
 
 /// An order's plan when it was accepted, and the counts it was planned from: planning is a
@@ -573,9 +575,7 @@ impl MoveOrder {
             target: self.target(taught)?,
             motion: self.motion(defaults, *limits)?,
             permit: Permit::NONE,
-            gate: None,
             accepted: None,
-            epoch: None,
         })
     }
 
@@ -647,7 +647,9 @@ impl MoveOrder {
         }
         let name = self.position.as_deref().unwrap_or_default();
         let shown = format!("{name:?}");
-        check_name(name).map_err(|_| refuse("position", &shown, NAME_RULE))?;
+        if !is_position_name(name) {
+            return Err(refuse("position", &shown, NAME_RULE));
+        }
         let position = taught.get(name).ok_or_else(|| {
             let known: Vec<&str> = taught.keys().map(String::as_str).collect();
             let known = if known.is_empty() {
