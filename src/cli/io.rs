@@ -2,7 +2,8 @@
 //! (`GET` / `PUT /v1/robots/{name}/registers/{address}`), as the robot's access list allows.
 //! `read ADDR [--count N]` and `write ADDR VALUE...`; addresses as Panasonic writes them (`DT100`,
 //! `X1F`, `Y7`, `R0010`), DT words as numbers -32768..=65535 (or `0x` hex), bits as 1/0,
-//! true/false or on/off.
+//! true/false or on/off. `force`, `release` and `cell` reach a mock PLC's simulated cell instead,
+//! never the daemon (`io_mock.rs`).
 //!
 //! ```text
 //!  stdout:  a line per address, `DT100 = 1234`, `R10 = 1` (or the API's answer, --json)
@@ -38,6 +39,13 @@ pub enum IoAction {
     Read(ReadArgs),
     /// Write DT words or Y, R bits from ADDR on, one VALUE per address.
     Write(WriteArgs),
+    /// On a mock PLC only (`linterpd mock-plc --control PATH`): force an input of its simulated
+    /// cell on or off until released.
+    Force(super::io_mock::ForceArgs),
+    /// On a mock PLC only: release a forced input (`all`: every one); its model takes it back.
+    Release(super::io_mock::ReleaseArgs),
+    /// On a mock PLC only: its simulated cell's state and what is forced.
+    Cell(super::io_mock::MockSocket),
 }
 
 /// Arguments of `linterpd io read`.
@@ -68,20 +76,37 @@ pub struct WriteArgs {
 
 /// Runs `linterpd io`.
 pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let (address, target) = match &args.action {
-        IoAction::Read(a) => (&a.address, &a.robot),
-        IoAction::Write(a) => (&a.address, &a.robot),
-    };
-    let start = parse_address(address)?;
-    let (method, query, body) = match &args.action {
-        IoAction::Read(a) => (Method::GET, format!("?count={}", a.count), None),
+    match &args.action {
+        IoAction::Read(a) => {
+            let start = parse_address(&a.address)?;
+            let query = format!("?count={}", a.count);
+            registers(start, &a.robot, (Method::GET, query, None), out)
+        }
         IoAction::Write(a) => {
+            let start = parse_address(&a.address)?;
             let values = parse_values(start.area, &a.values)?;
             let body = serde_json::to_value(RegisterWrite { values })
                 .map_err(|e| Failure::Runtime(e.into()))?;
-            (Method::PUT, String::new(), Some(body))
+            registers(
+                start,
+                &a.robot,
+                (Method::PUT, String::new(), Some(body)),
+                out,
+            )
         }
-    };
+        IoAction::Force(a) => super::io_mock::force(a, out),
+        IoAction::Release(a) => super::io_mock::release(a, out),
+        IoAction::Cell(a) => super::io_mock::cell(a, out),
+    }
+}
+
+/// Reads or writes registers from `start` through the daemon's gateway, printing them.
+fn registers(
+    start: Address,
+    target: &Robot,
+    (method, query, body): (Method, String, Option<Value>),
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
     let daemon = &target.daemon;
     daemon.block_on(async {
         let client = Client::new(&daemon.socket);

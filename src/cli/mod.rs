@@ -28,6 +28,7 @@ pub mod demo;
 mod failure;
 pub mod home;
 pub mod io;
+pub mod io_mock;
 pub mod logging;
 pub mod mock_plc;
 pub mod mode;

@@ -45,6 +45,7 @@ mod motion;
 mod path_file;
 mod plc;
 mod raw;
+pub mod suggest;
 mod units;
 mod validate;
 
