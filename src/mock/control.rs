@@ -68,9 +68,13 @@ fn on_off(value: &str) -> Option<bool> {
     }
 }
 
-/// Binds the control socket at `path`, replacing a socket file left behind (no other file).
+/// Binds the control socket at `path` (its directory made when missing), replacing a socket
+/// file left behind (no other file).
 pub fn bind(path: &Path) -> std::io::Result<UnixListener> {
     use std::os::unix::fs::FileTypeExt;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
     if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_socket()) {
         std::fs::remove_file(path)?;
     }
