@@ -30,6 +30,10 @@ pub struct IoArgs {
     /// What to do.
     #[command(subcommand)]
     pub action: IoAction,
+    /// The robot and the daemon (before or after the action; `force`, `release` and `cell` reach
+    /// a mock, never the daemon).
+    #[command(flatten)]
+    pub robot: Robot,
 }
 
 /// The `io` subcommands.
@@ -56,9 +60,6 @@ pub struct ReadArgs {
     /// How many words or bits.
     #[arg(long, default_value_t = 1)]
     pub count: u32,
-    /// The robot and the daemon.
-    #[command(flatten)]
-    pub robot: Robot,
 }
 
 /// Arguments of `linterpd io write`.
@@ -69,9 +70,6 @@ pub struct WriteArgs {
     /// A value per address: DT words -32768..=65535 (or 0x hex), bits 1/0, true/false, on/off.
     #[arg(required = true, num_args = 1.., allow_negative_numbers = true)]
     pub values: Vec<String>,
-    /// The robot and the daemon.
-    #[command(flatten)]
-    pub robot: Robot,
 }
 
 /// Runs `linterpd io`.
@@ -80,7 +78,7 @@ pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         IoAction::Read(a) => {
             let start = parse_address(&a.address)?;
             let query = format!("?count={}", a.count);
-            registers(start, &a.robot, (Method::GET, query, None), out)
+            registers(start, &args.robot, (Method::GET, query, None), out)
         }
         IoAction::Write(a) => {
             let start = parse_address(&a.address)?;
@@ -89,7 +87,7 @@ pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
                 .map_err(|e| Failure::Runtime(e.into()))?;
             registers(
                 start,
-                &a.robot,
+                &args.robot,
                 (Method::PUT, String::new(), Some(body)),
                 out,
             )
@@ -257,6 +255,15 @@ mod tests {
             panic!()
         };
         assert_eq!(w.values, ["-5", "7"]);
-        assert_eq!(w.robot.robot.as_deref(), Some("r"));
+        assert_eq!(a.robot.robot.as_deref(), Some("r"));
+    }
+
+    #[test]
+    fn io_read_accepts_json_socket_and_robot_before_the_action() {
+        let a = args(&[
+            "linterpd", "io", "--json", "--socket", "/s", "--robot", "r", "read", "DT100",
+        ]);
+        assert!(a.robot.daemon.json && a.robot.robot.as_deref() == Some("r"));
+        assert_eq!(a.robot.daemon.socket, std::path::Path::new("/s"));
     }
 }

@@ -1,7 +1,7 @@
 //! `linterpd status`: each robot's phase, link, PLC state, pose and moves, from the daemon, in
-//! words (never `null`); exits like `systemctl status`: 0 when every robot's link is up and no
-//! fault is latched, 3 when a robot's PLC link is down or stalled, else 1 when a robot reports a
-//! fault (with `--json` too).
+//! words (never `null`); exits like `systemctl status`: 0 when every robot's link is up, no
+//! fault is latched and no cycle is faulted, 3 when a robot's PLC link is down or stalled, else
+//! 1 when a robot reports a fault or its cycle is faulted (with `--json` too).
 //!
 //! ```text
 //! press-loader: idle; link up; PLC in RUN, program idle, homed, heartbeat 12 ms ago;
@@ -25,7 +25,7 @@ use crate::plc::PlcMode;
 #[derive(Debug, Args)]
 pub struct StatusArgs {
     /// One robot only.
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// The daemon and output options.
     #[command(flatten)]
@@ -154,14 +154,18 @@ fn describe_face(face: &crate::daemon::FaceState) -> String {
 }
 
 /// The exit code for these robots: 3 if a PLC link is down or stalled, else 1 if a robot reports
-/// a fault, else 0.
+/// a fault or its cycle is faulted, else 0.
 fn exit_code(robots: &[RobotState]) -> u8 {
     let down = robots.iter().any(|r| {
         !r.link.connected || matches!(r.phase, RobotPhase::LinkDown | RobotPhase::Stalled)
     });
-    let faulted = robots
-        .iter()
-        .any(|r| r.fault.is_some() || r.state == Some(State::Fault));
+    let faulted = robots.iter().any(|r| {
+        r.fault.is_some()
+            || r.state == Some(State::Fault)
+            || r.cycle
+                .as_ref()
+                .is_some_and(|c| c.state == crate::daemon::CycleState::Faulted)
+    });
     if down {
         EXIT_NOT_DONE
     } else if faulted {
@@ -289,6 +293,18 @@ mod tests {
             "{text}"
         );
         assert_eq!(exit_code(&[r]), EXIT_FAILURE);
+    }
+
+    #[test]
+    fn status_exits_1_for_a_faulted_cycle_on_a_healthy_robot() {
+        let mut r = idle();
+        let mut cycle = crate::daemon::CycleStatus::starting("press-load", Some(3));
+        cycle.state = crate::daemon::CycleState::Faulted;
+        r.cycle = Some(cycle.clone());
+        assert_eq!(exit_code(&[r.clone()]), EXIT_FAILURE);
+        cycle.state = crate::daemon::CycleState::Paused;
+        r.cycle = Some(cycle);
+        assert_eq!(exit_code(&[r]), EXIT_OK, "a paused cycle is no fault");
     }
 
     #[test]
