@@ -47,6 +47,9 @@ impl RobotHandle {
                 self.robot.name, self.robot.name
             )));
         };
+        if let Some(missing) = crate::cycle::names::missing(dir, name) {
+            return Err(CycleError::Program(missing));
+        }
         let programs = crate::cycle::load::programs(dir).map_err(CycleError::Program)?;
         crate::cycle::numbers(&programs).map_err(|e| CycleError::Program(e.to_string()))?;
         let taught = self.positions.of(&self.robot.name);
