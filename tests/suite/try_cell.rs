@@ -94,6 +94,13 @@ fn try_config_runs_three_press_cycles_with_the_press_models_waits_and_permits_me
     );
     let _serve = serve_try(dir.path());
 
+    let ready = run(dir.path(), &["status", "--wait", "10s"]);
+    assert_eq!(ready.status.code(), Some(0), "{}", ready.describe());
+    assert!(
+        ready.stdout.contains("link up; PLC in RUN"),
+        "{}",
+        ready.stdout
+    );
     let args = ["cycle", "run", "press-load", "--count", "3", "--follow"];
     let follow = Spawned::spawn("cycle run --follow", client(dir.path(), &args)).finish(CYCLES);
     assert_eq!(follow.status.code(), Some(0), "{}", follow.describe());
@@ -135,6 +142,38 @@ fn try_config_runs_three_press_cycles_with_the_press_models_waits_and_permits_me
     );
     let status = run(dir.path(), &["cycle", "status"]);
     assert_eq!(status.status.code(), Some(0), "{}", status.describe());
+}
+
+#[test]
+fn readme_try_section_runs_what_the_test_runs() {
+    let readme = std::fs::read_to_string(repo("README.md")).unwrap();
+    let section = readme
+        .split("## Try the daemon on a simulated cell")
+        .nth(1)
+        .and_then(|s| s.split("\n## ").next())
+        .expect("README.md has the try section");
+    let block = section
+        .split("```sh\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .unwrap();
+    let commands: Vec<&str> = block.lines().collect();
+    assert!(commands.len() <= 5, "at most five commands: {commands:?}");
+    assert_eq!(
+        commands,
+        [
+            "RUST_LOG=warn target/release/linterpd mock-plc --listen 127.0.0.1:9094 --cell \
+             config/examples/cells/press.toml --control target/try/mock.sock &",
+            "RUST_LOG=warn target/release/linterpd serve --config config/try.toml &",
+            "export LINTERPD_SOCKET=target/try/api.sock",
+            "target/release/linterpd status --wait 10s",
+            "target/release/linterpd cycle run press-load --count 3 --follow",
+        ],
+        "the commands the tests here run (but for the mock's port, 0 in a test)"
+    );
+    let try_toml = std::fs::read_to_string(repo("config/try.toml")).unwrap();
+    assert!(try_toml.contains("tcp = { address = \"127.0.0.1:9094\" }"));
+    assert!(try_toml.contains("socket = \"../target/try/api.sock\""));
 }
 
 #[test]
