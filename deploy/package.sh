@@ -36,4 +36,7 @@ mkdir -p "$out/completions" "$out/man"
 "$bin" completions fish > "$out/completions/linterpd.fish"
 "$bin" man --dir "$out/man"
 gzip -9n "$out"/man/*.1
+# cargo-deb warns "No usable systemd units found for `linterpd` in `deploy/debian/`": expected,
+# the unit is one of Cargo.toml's assets, and cargo-deb handles it there (check with `dpkg-deb
+# -e target/debian/linterpd_*.deb x && cat x/prerm`: a stop on remove, nothing on upgrade).
 cargo deb --no-build --strip --locked "$@"
