@@ -12,6 +12,7 @@
 //!  exit:    0; 1 when a page cannot be written
 //! ```
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -77,7 +78,7 @@ fn write_pages(cmd: &clap::Command, dir: &std::path::Path) -> std::io::Result<()
     page(cmd, &mut file)
 }
 
-/// `cmd`'s page: clap_mangen's sections, then EXIT STATUS.
+/// `cmd`'s page: `clap_mangen`'s sections, then EXIT STATUS.
 fn page(cmd: &clap::Command, out: &mut dyn std::io::Write) -> std::io::Result<()> {
     clap_mangen::Man::new(cmd.clone()).render(out)?;
     let name = cmd.get_display_name().unwrap_or(cmd.get_name());
@@ -148,11 +149,7 @@ fn own_codes(name: &str) -> Vec<(&'static str, &'static str)> {
 fn exit_status(name: &str) -> String {
     let mut roff = String::from(".SH \"EXIT STATUS\"\n");
     for (code, meaning) in EXIT_CODES.iter().chain(&own_codes(name)) {
-        roff.push_str(&format!(
-            ".TP\n\\fB{}\\fR\n{}\n",
-            escape(code),
-            escape(meaning)
-        ));
+        let _ = write!(roff, ".TP\n\\fB{}\\fR\n{}\n", escape(code), escape(meaning));
     }
     roff
 }

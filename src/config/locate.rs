@@ -3,6 +3,8 @@
 //! the text for a syntax error the TOML parser reports with a span but without a key path; and
 //! the nearest valid key of an unknown one ("did you mean").
 
+use std::fmt::Write as _;
+
 use super::ConfigError;
 
 /// The 1-based line holding byte `offset` of `text`.
@@ -35,7 +37,9 @@ fn key_path(path: &serde_path_to_error::Path, read: Option<&str>) -> Option<Stri
         match segment {
             Segment::Map { key } if key.starts_with("$__serde_spanned_private") => {}
             Segment::Seq { index } => match parts.last_mut() {
-                Some(last) => last.push_str(&format!("[{index}]")),
+                Some(last) => {
+                    let _ = write!(last, "[{index}]");
+                }
                 None => parts.push(format!("[{index}]")),
             },
             Segment::Map { key } | Segment::Enum { variant: key } => parts.push(key.clone()),

@@ -316,12 +316,11 @@ fn shipped_with_cell_uncommented() -> String {
         let code = line
             .strip_prefix("# ")
             .filter(|code| block && (code.starts_with('[') || code.contains(" = ")));
-        match code {
-            Some(code) => out.push_str(code),
-            None => {
-                block = false;
-                out.push_str(line);
-            }
+        if let Some(code) = code {
+            out.push_str(code);
+        } else {
+            block = false;
+            out.push_str(line);
         }
         out.push('\n');
     }

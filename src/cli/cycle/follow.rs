@@ -197,14 +197,14 @@ mod tests {
     use super::*;
     use crate::daemon::StepAt;
 
-    fn at(step: usize, label: Option<&str>, does: &str) -> Option<StepAt> {
-        Some(StepAt {
+    fn at(step: usize, label: Option<&str>, does: &str) -> StepAt {
+        StepAt {
             program: "press-load".into(),
             step,
             label: label.map(str::to_owned),
             does: does.into(),
             called_from: Vec::new(),
-        })
+        }
     }
 
     #[test]
@@ -212,14 +212,14 @@ mod tests {
         let mut watch = Watch::default();
         let mut s = CycleStatus::starting("press-load", Some(3));
         assert_eq!(watch.see(&s), None, "nothing to say before the first step");
-        s.step = at(1, Some("pick"), "move to [-926.57, 535.03, 130.0]");
+        s.step = Some(at(1, Some("pick"), "move to [-926.57, 535.03, 130.0]"));
         assert_eq!(
             watch.see(&s).as_deref(),
             Some("press-load: cycle 1 of 3, step 1 (pick): move to [-926.57, 535.03, 130.0]")
         );
         assert_eq!(watch.see(&s), None, "the same step is said once");
         s.state = CycleState::Waiting;
-        s.step = at(6, Some("before-press"), "wait for press_open (X5)");
+        s.step = Some(at(6, Some("before-press"), "wait for press_open (X5)"));
         s.waiting_for = Some("press_open (X5)".into());
         s.waiting_s = Some(0.4);
         s.done = 1;
@@ -248,11 +248,11 @@ mod tests {
         assert_eq!(end(&s), Some(End::Done));
         s.state = CycleState::Faulted;
         s.done = 0;
-        s.step = at(
+        s.step = Some(at(
             6,
             Some("before-press"),
             "wait for press_open (X5) & !press_moving (X6)",
-        );
+        ));
         s.reason = Some("wait timed out after 2 s".into());
         let Some(End::NotDone(why)) = end(&s) else {
             panic!()
