@@ -25,20 +25,24 @@
 //! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures
-//! config/      PURE  strict TOML -> validated robots (errors name key, value and line)
+//! config/      PURE  strict TOML -> validated robots (errors name the file, line, key path and
+//!                    value, and the nearest valid key of a misspelt one)
 //! gateway/     PURE  the register gateway's addresses (DT, X, Y, R), access lists, and who may use
 //!                    its Modbus face (IPs, CIDR networks)
 //! contract/    PURE  the register contract (version 3): DT layout, status and command blocks,
 //!                    the cell's input words and a start's permit, and the host's side as one
 //!                    state machine over the status block (machine/)
 //! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
-//!                    into ops (and the loading of a programs directory)
+//!                    into ops (and the loading of a programs directory, and whether a program
+//!                    is there)
 //! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
 //!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
 //! mock/        the mock PLC: DT/R memory, the contract's PLC program, F174 engines on sim's model,
-//!                    fault injection, pulse trace (a synchronous core, time is an argument);
-//!                    around it the MEWTOCOL and Modbus servers and the serial-line emulation
+//!                    fault injection, pulse trace (a synchronous core, time is an argument), a
+//!                    simulated cell driving its inputs (cell/, PURE: press, stack, sensors);
+//!                    around it the MEWTOCOL and Modbus servers, the serial-line emulation and
+//!                    the control socket that forces inputs by hand
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract's exchanges
 //!                    (`plc::exchange`: status reads, verified banks, a start written once)
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)

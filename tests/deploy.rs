@@ -147,13 +147,15 @@ const UNIT: &str = "deploy/linterpd.service";
 const EXEC_START: &str = "ExecStart=/usr/bin/linterpd serve --config /etc/linterpd/linterpd.toml";
 
 /// `systemd-analyze verify` on `unit_text`, saved as `linterpd.service` in a temp dir. Its
-/// warnings go to stderr with exit status 0, so any stderr line counts as a failure.
+/// warnings go to stderr with exit status 0, so any stderr line counts as a failure. The man
+/// pages `Documentation=` names are the package's, not on this machine: `--man=no`
+/// (`unit_documents_its_man_pages_and_the_installed_docs` checks them against the package).
 fn systemd_analyze_verify(unit_text: &str) -> Result<(), String> {
     let dir = TempDir::new("unit");
     let path = dir.path().join("linterpd.service");
     std::fs::write(&path, unit_text).unwrap();
     let output = Command::new("systemd-analyze")
-        .arg("verify")
+        .args(["verify", "--man=no"])
         .arg(&path)
         .output()
         .unwrap_or_else(|e| {
@@ -1225,6 +1227,21 @@ fn deb_installs_the_unit_sysusers_conffile_completions_and_man_pages() {
     }
 }
 
+/// The repository's files a glob of one `*` in its last part matches (`docs/*`).
+fn glob(pattern: &str) -> Vec<PathBuf> {
+    let (dir, name) = pattern.rsplit_once('/').unwrap_or((".", pattern));
+    let (prefix, suffix) = name.split_once('*').expect("a glob");
+    std::fs::read_dir(repo_file(dir))
+        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .filter(|p| {
+            let n = p.file_name().unwrap().to_str().unwrap();
+            n.starts_with(prefix) && n.ends_with(suffix)
+        })
+        .collect()
+}
+
 #[test]
 fn deb_assets_exist_in_the_repository_or_are_made_by_the_package_script() {
     let script = read(PACKAGE_SCRIPT);
@@ -1244,6 +1261,10 @@ fn deb_assets_exist_in_the_repository_or_are_made_by_the_package_script() {
             assert!(made, "{PACKAGE_SCRIPT} does not make {source}");
             continue;
         }
+        if source.contains('*') {
+            assert!(!glob(&source).is_empty(), "asset {source} matches nothing");
+            continue;
+        }
         assert!(
             repo_file(&source).is_file(),
             "asset {source} is not in the repository"
@@ -1251,6 +1272,122 @@ fn deb_assets_exist_in_the_repository_or_are_made_by_the_package_script() {
     }
     for script in ["deploy/debian/postinst", "deploy/debian/postrm"] {
         assert!(read(script).contains("#DEBHELPER#"), "{script}");
+    }
+}
+
+#[test]
+fn deb_stops_the_service_on_remove_and_never_restarts_it_on_upgrade() {
+    // `apt remove` left the daemon running from a deleted binary; an upgrade must not restart a
+    // robot under way: cargo-deb's systemd-units, as README.md's "Upgrading" says.
+    let manifest: toml::Table = toml::from_str(&read("Cargo.toml")).unwrap();
+    let deb = &manifest["package"]["metadata"]["deb"];
+    let units = deb["systemd-units"].as_table().expect("systemd-units");
+    let option = |key: &str| units.get(key).and_then(toml::Value::as_bool);
+    assert_eq!(units["unit-name"].as_str(), Some("linterpd"));
+    assert_eq!(
+        option("enable"),
+        Some(false),
+        "enabled by the operator, once configured"
+    );
+    assert_eq!(
+        option("start"),
+        Some(false),
+        "started by the operator, once configured"
+    );
+    assert_eq!(option("restart-after-upgrade"), Some(false));
+    assert_eq!(
+        option("stop-on-upgrade"),
+        Some(false),
+        "stopped on removal only, not on upgrade"
+    );
+    let assets = deb_assets();
+    assert!(assets.contains(&(
+        "deploy/needrestart.conf".to_owned(),
+        "etc/needrestart/conf.d/linterpd.conf".to_owned()
+    )));
+    assert!(read("deploy/needrestart.conf").contains("{qr(^linterpd\\.service$)} = 0;"));
+    let readme = read("README.md");
+    assert!(
+        readme.contains("### Upgrading"),
+        "README.md says how to upgrade"
+    );
+}
+
+#[test]
+fn deb_installs_the_docs_and_examples_the_readme_links_to() {
+    let assets = deb_assets();
+    let installed = |source: &str, dest: &str| assets.iter().any(|(s, d)| s == source && d == dest);
+    assert!(installed("docs/*", "usr/share/doc/linterpd/docs/"));
+    for dir in [
+        "config/examples",
+        "config/examples/cycles",
+        "config/examples/cells",
+    ] {
+        assert!(
+            installed(
+                &format!("{dir}/*.toml"),
+                &format!("usr/share/doc/linterpd/{dir}/")
+            ),
+            "{dir}"
+        );
+    }
+    // Every link of the README to a document or example lands on an installed file.
+    let readme = read("README.md");
+    for link in readme.split("](").skip(1) {
+        let target = link.split([')', '#']).next().unwrap();
+        if target.is_empty() || target.starts_with("http") {
+            continue;
+        }
+        let shipped = assets.iter().any(|(s, d)| {
+            let installed_as = d.strip_prefix("usr/share/doc/linterpd/");
+            installed_as == Some(target)
+                || (s.ends_with('*') || s.ends_with("*.toml"))
+                    && installed_as.is_some_and(|dir| {
+                        target.starts_with(dir)
+                            && !target[dir.len()..].contains('/')
+                            && glob(s).iter().any(|p| p.ends_with(target))
+                    })
+        });
+        assert!(
+            shipped,
+            "README.md links to {target}, which the package does not install"
+        );
+    }
+}
+
+#[test]
+fn unit_documents_its_man_pages_and_the_installed_docs() {
+    let unit = read(UNIT);
+    let docs: Vec<&str> = unit
+        .lines()
+        .filter_map(|l| l.strip_prefix("Documentation="))
+        .flat_map(str::split_whitespace)
+        .collect();
+    assert!(docs.contains(&"man:linterpd(1)"), "{docs:?}");
+    for doc in docs {
+        if let Some(file) = doc.strip_prefix("file:/usr/share/doc/linterpd/") {
+            assert!(repo_file(file).is_file(), "{doc}");
+            let shipped = deb_assets().iter().any(|(s, d)| {
+                d.trim_start_matches("usr/share/doc/linterpd/") == file
+                    || (s.ends_with('*')
+                        && file.starts_with(d.trim_start_matches("usr/share/doc/linterpd/")))
+            });
+            assert!(shipped, "{doc} is not installed by the package");
+        } else if let Some(page) = doc.strip_prefix("man:") {
+            // linterpd man --dir writes linterpd.1, linterpd-serve.1, ...
+            let name = page.trim_end_matches("(1)");
+            let dir = TempDir::new("unit-man");
+            let out = Command::new(env!("CARGO_BIN_EXE_linterpd"))
+                .arg("man")
+                .arg("--dir")
+                .arg(dir.path())
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "{}", describe(&out));
+            assert!(dir.path().join(format!("{name}.1")).is_file(), "{doc}");
+        } else {
+            panic!("{doc}: a man: or file: document");
+        }
     }
 }
 

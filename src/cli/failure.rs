@@ -20,6 +20,9 @@ pub const EXIT_NOT_DONE: u8 = 3;
 /// Exit code when the daemon cannot be reached (not running, wrong socket, no permission), or it
 /// cannot reach the PLC now (503).
 pub const EXIT_UNREACHABLE: u8 = 4;
+/// Exit code of an attached `move`, `run` or `cycle run --follow` ended by Ctrl-C (SIGINT), once
+/// it stopped what it started (128 + SIGINT's number, as a shell reports it).
+pub const EXIT_INTERRUPTED: u8 = 130;
 
 /// A failed run: what went wrong and whose fault it was.
 #[derive(Debug)]
@@ -32,6 +35,8 @@ pub enum Failure {
     NotDone(anyhow::Error),
     /// The daemon cannot be reached, or it cannot reach the PLC (exit 4).
     Unreachable(anyhow::Error),
+    /// Ctrl-C ended an attached command; what it started was stopped (exit 130).
+    Interrupted(anyhow::Error),
     /// Exit with this code; the output already said why (`status`), nothing more is printed.
     Quiet(u8),
 }
@@ -45,6 +50,7 @@ impl Failure {
             Self::Runtime(_) => EXIT_FAILURE,
             Self::NotDone(_) => EXIT_NOT_DONE,
             Self::Unreachable(_) => EXIT_UNREACHABLE,
+            Self::Interrupted(_) => EXIT_INTERRUPTED,
             Self::Quiet(code) => *code,
         }
     }
@@ -53,9 +59,11 @@ impl Failure {
     #[must_use]
     pub fn error(&self) -> Option<&anyhow::Error> {
         match self {
-            Self::BadInput(e) | Self::Runtime(e) | Self::NotDone(e) | Self::Unreachable(e) => {
-                Some(e)
-            }
+            Self::BadInput(e)
+            | Self::Runtime(e)
+            | Self::NotDone(e)
+            | Self::Unreachable(e)
+            | Self::Interrupted(e) => Some(e),
             Self::Quiet(_) => None,
         }
     }

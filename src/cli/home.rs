@@ -11,7 +11,7 @@ use super::{DaemonArgs, Failure};
 #[derive(Debug, Args)]
 pub struct HomeArgs {
     /// The robot (needed when the daemon runs several).
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// The daemon and output options.
     #[command(flatten)]

@@ -2,7 +2,8 @@
 //! (`GET` / `PUT /v1/robots/{name}/registers/{address}`), as the robot's access list allows.
 //! `read ADDR [--count N]` and `write ADDR VALUE...`; addresses as Panasonic writes them (`DT100`,
 //! `X1F`, `Y7`, `R0010`), DT words as numbers -32768..=65535 (or `0x` hex), bits as 1/0,
-//! true/false or on/off.
+//! true/false or on/off. `force`, `release` and `cell` reach a mock PLC's simulated cell instead,
+//! never the daemon (`io_mock.rs`).
 //!
 //! ```text
 //!  stdout:  a line per address, `DT100 = 1234`, `R10 = 1` (or the API's answer, --json)
@@ -29,6 +30,10 @@ pub struct IoArgs {
     /// What to do.
     #[command(subcommand)]
     pub action: IoAction,
+    /// The robot and the daemon (before or after the action; `force`, `release` and `cell` reach
+    /// a mock, never the daemon).
+    #[command(flatten)]
+    pub robot: Robot,
 }
 
 /// The `io` subcommands.
@@ -38,6 +43,13 @@ pub enum IoAction {
     Read(ReadArgs),
     /// Write DT words or Y, R bits from ADDR on, one VALUE per address.
     Write(WriteArgs),
+    /// On a mock PLC only (`linterpd mock-plc --control PATH`): force an input of its simulated
+    /// cell on or off until released.
+    Force(super::io_mock::ForceArgs),
+    /// On a mock PLC only: release a forced input (`all`: every one); its model takes it back.
+    Release(super::io_mock::ReleaseArgs),
+    /// On a mock PLC only: its simulated cell's state and what is forced.
+    Cell(super::io_mock::MockSocket),
 }
 
 /// Arguments of `linterpd io read`.
@@ -48,9 +60,6 @@ pub struct ReadArgs {
     /// How many words or bits.
     #[arg(long, default_value_t = 1)]
     pub count: u32,
-    /// The robot and the daemon.
-    #[command(flatten)]
-    pub robot: Robot,
 }
 
 /// Arguments of `linterpd io write`.
@@ -61,27 +70,41 @@ pub struct WriteArgs {
     /// A value per address: DT words -32768..=65535 (or 0x hex), bits 1/0, true/false, on/off.
     #[arg(required = true, num_args = 1.., allow_negative_numbers = true)]
     pub values: Vec<String>,
-    /// The robot and the daemon.
-    #[command(flatten)]
-    pub robot: Robot,
 }
 
 /// Runs `linterpd io`.
 pub fn run(args: &IoArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let (address, target) = match &args.action {
-        IoAction::Read(a) => (&a.address, &a.robot),
-        IoAction::Write(a) => (&a.address, &a.robot),
-    };
-    let start = parse_address(address)?;
-    let (method, query, body) = match &args.action {
-        IoAction::Read(a) => (Method::GET, format!("?count={}", a.count), None),
+    match &args.action {
+        IoAction::Read(a) => {
+            let start = parse_address(&a.address)?;
+            let query = format!("?count={}", a.count);
+            registers(start, &args.robot, (Method::GET, query, None), out)
+        }
         IoAction::Write(a) => {
+            let start = parse_address(&a.address)?;
             let values = parse_values(start.area, &a.values)?;
             let body = serde_json::to_value(RegisterWrite { values })
                 .map_err(|e| Failure::Runtime(e.into()))?;
-            (Method::PUT, String::new(), Some(body))
+            registers(
+                start,
+                &args.robot,
+                (Method::PUT, String::new(), Some(body)),
+                out,
+            )
         }
-    };
+        IoAction::Force(a) => super::io_mock::force(a, out),
+        IoAction::Release(a) => super::io_mock::release(a, out),
+        IoAction::Cell(a) => super::io_mock::cell(a, out),
+    }
+}
+
+/// Reads or writes registers from `start` through the daemon's gateway, printing them.
+fn registers(
+    start: Address,
+    target: &Robot,
+    (method, query, body): (Method, String, Option<Value>),
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
     let daemon = &target.daemon;
     daemon.block_on(async {
         let client = Client::new(&daemon.socket);
@@ -232,6 +255,15 @@ mod tests {
             panic!()
         };
         assert_eq!(w.values, ["-5", "7"]);
-        assert_eq!(w.robot.robot.as_deref(), Some("r"));
+        assert_eq!(a.robot.robot.as_deref(), Some("r"));
+    }
+
+    #[test]
+    fn io_read_accepts_json_socket_and_robot_before_the_action() {
+        let a = args(&[
+            "linterpd", "io", "--json", "--socket", "/s", "--robot", "r", "read", "DT100",
+        ]);
+        assert!(a.robot.daemon.json && a.robot.robot.as_deref() == Some("r"));
+        assert_eq!(a.robot.daemon.socket, std::path::Path::new("/s"));
     }
 }

@@ -1,9 +1,11 @@
 //! `linterpd mock-plc`: serve the mock PLC over MEWTOCOL-COM or Modbus, on a TCP listener or a
-//! serial port, until SIGINT or SIGTERM.
+//! serial port, until SIGINT or SIGTERM; with `--cell FILE`, a simulated cell (a press, a stack,
+//! sensors: `crate::mock::cell`) drives its inputs; with `--control PATH`, a Unix socket takes
+//! `linterpd io force` requests for them.
 //!
 //! ```text
 //!  stdout, first line:  listening on 127.0.0.1:40123     (the bound port; or the serial path)
-//!  stderr:              tracing log of connections, starts, stops and injected faults
+//!  stderr:              tracing log of connections, starts, stops, injected faults, forces
 //!  exit:                0 after a signal; 2 for bad arguments; 1 when serving fails
 //! ```
 
@@ -19,9 +21,10 @@ use tokio_serial::SerialPortBuilderExt;
 use super::plan::ModelArg;
 use super::{Failure, bad_input};
 use crate::config::parse_duration_s;
+use crate::mock::cell::{Cell, Description};
 use crate::mock::{
     FaultScript, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, MockVariant,
-    ModbusServer, ModbusServerOptions, SharedMock, StationFilter, write_csv,
+    ModbusServer, ModbusServerOptions, SharedMock, StationFilter, control, write_csv,
 };
 use crate::table::FrequencyModel;
 
@@ -73,6 +76,14 @@ pub struct MockPlcArgs {
     /// find.
     #[arg(long, value_enum, default_value = "listing")]
     pub variant: VariantArg,
+    /// A cell description (TOML: signals, a press, a stack, sensors, constants) whose models
+    /// drive the inputs every scan, e.g. config/examples/cells/press.toml.
+    #[arg(long)]
+    pub cell: Option<PathBuf>,
+    /// A Unix socket taking `linterpd io force|release|cell --mock PATH` requests: force an
+    /// input on or off, release it, show the cell.
+    #[arg(long)]
+    pub control: Option<PathBuf>,
 }
 
 /// `--variant`: the listing, or one defect a real FP-X might have.
@@ -152,6 +163,15 @@ struct Settings {
     config: MockConfig,
     trace: Option<PathBuf>,
     faults: FaultScript,
+    cell: Option<Description>,
+    control: Option<PathBuf>,
+}
+
+/// Reads and checks the cell description at `path`, naming the file in any error.
+pub fn read_cell(path: &std::path::Path) -> anyhow::Result<Description> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the cell description {}", path.display()))?;
+    Description::from_toml(&text).with_context(|| format!("cell description {}", path.display()))
 }
 
 fn parse_station(text: &str, protocol: ProtocolArg) -> anyhow::Result<StationFilter> {
@@ -206,6 +226,7 @@ fn validate(args: &MockPlcArgs) -> anyhow::Result<Settings> {
     MockPlc::new(config).with_context(|| format!("--scan '{}'", args.scan))?;
     let faults = FaultScript::parse(args.faults.as_deref().unwrap_or(""))
         .with_context(|| format!("--faults '{}'", args.faults.as_deref().unwrap_or("")))?;
+    let cell = args.cell.as_deref().map(read_cell).transpose()?;
     Ok(Settings {
         endpoint,
         protocol: args.protocol,
@@ -214,6 +235,8 @@ fn validate(args: &MockPlcArgs) -> anyhow::Result<Settings> {
         config,
         trace: args.trace.clone(),
         faults,
+        cell,
+        control: args.control.clone(),
     })
 }
 
@@ -232,6 +255,9 @@ fn new_mock(settings: &Settings) -> anyhow::Result<SharedMock> {
     let mut mock = MockPlc::new(settings.config)?;
     mock.set_faults(settings.faults.clone());
     mock.record_pulses(settings.trace.is_some());
+    if let Some(description) = &settings.cell {
+        mock.set_cell(Cell::new(description.clone()));
+    }
     Ok(SharedMock::new(mock))
 }
 
@@ -239,6 +265,15 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
     let shared = new_mock(&settings).map_err(bad_input)?;
     shared.with(|_| ()); // scan 0: the status block is live (magic, RUN) before anyone connects
     let driver = tokio::spawn(shared.clone().run_scans());
+    let control = match &settings.control {
+        Some(path) => {
+            let listener = control::bind(path)
+                .with_context(|| format!("cannot listen on --control '{}'", path.display()))
+                .map_err(bad_input)?;
+            Some(tokio::spawn(control::serve(listener, shared.clone())))
+        }
+        None => None,
+    };
     let (server, shown) = start_server(&settings, &shared).await?;
     writeln!(out, "listening on {shown}")
         .and_then(|()| out.flush())
@@ -252,6 +287,9 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         variant = settings.config.variant.name(),
         "mock PLC in RUN, listening on {shown}"
     );
+    if settings.cell.is_some() {
+        tracing::info!(cell = %shared.with(|m| m.cell().describe()), "simulated cell");
+    }
     let outcome = tokio::select! {
         () = shutdown_signal() => Ok(()),
         ended = server => Err(anyhow!("the server stopped: {}", match ended {
@@ -261,6 +299,12 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         })),
     };
     driver.abort();
+    if let Some(task) = control {
+        task.abort();
+    }
+    if let Some(path) = &settings.control {
+        let _ = std::fs::remove_file(path);
+    }
     tracing::info!("mock PLC stopping");
     if let Some(path) = &settings.trace {
         write_trace(&shared, path).map_err(Failure::Runtime)?;
@@ -424,6 +468,45 @@ mod tests {
         }
         let s = parse(&["linterpd", "mock-plc", "--listen", "127.0.0.1:0"]).unwrap();
         assert_eq!(s.config.variant, MockVariant::Listing);
+    }
+
+    #[test]
+    fn a_cell_description_is_read_and_a_bad_one_names_its_file_and_key() {
+        let base = ["linterpd", "mock-plc", "--listen", "127.0.0.1:0", "--cell"];
+        let shipped = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/config/examples/cells/press.toml"
+        );
+        let s = parse(&[&base[..], &[shipped]].concat()).unwrap();
+        assert_eq!(s.cell.unwrap().models.len(), 2);
+        let dir = std::env::temp_dir().join(format!("linterpd-cellarg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bad = dir.join("bad.toml");
+        std::fs::write(
+            &bad,
+            "[[press]]\ngo = \"Y0\"\nopen = \"X5\"\nstroke = \"-1s\"\n",
+        )
+        .unwrap();
+        let e = format!(
+            "{:#}",
+            parse(&[&base[..], &[bad.to_str().unwrap()]].concat()).unwrap_err()
+        );
+        assert!(
+            e.starts_with(&format!(
+                "cell description {}: press[0].stroke = \"-1s\"",
+                bad.display()
+            )),
+            "{e}"
+        );
+        let e = format!(
+            "{:#}",
+            parse(&[&base[..], &["/nonexistent/cell.toml"]].concat()).unwrap_err()
+        );
+        assert!(
+            e.starts_with("cannot read the cell description /nonexistent/cell.toml"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

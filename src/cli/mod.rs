@@ -13,7 +13,12 @@
 //!     `systemctl status` exits 3 for a unit that is not running)
 //!  4  the daemon cannot be reached (not running, wrong socket, no permission on it), or it
 //!     cannot reach the PLC now (503: link-down, stalled, shutting-down)
+//!  130  Ctrl-C ended an attached `move`, `run` or `cycle run --follow`, which stopped what it
+//!     started first (`--detach`: left it running, exit 0)
 //! ```
+//! `status` and `cycle status` also exit 1 for a faulted cycle. `--socket`, `--json` and
+//! `--robot` are taken before or after a subcommand's action (`cycle --json run X`, `cycle run X
+//! --json`).
 //! A refusal's message ends with the API's `reason` word, e.g. `(reason: not-homed)`. Output to a
 //! closed pipe (`linterpd plan ... | head -1`) ends quietly with 0.
 
@@ -27,7 +32,9 @@ pub mod cycle;
 pub mod demo;
 mod failure;
 pub mod home;
+mod interrupt;
 pub mod io;
+pub mod io_mock;
 pub mod logging;
 pub mod mock_plc;
 pub mod mode;
@@ -41,7 +48,8 @@ pub mod stop;
 use clap::{Parser, Subcommand};
 
 pub use failure::{
-    EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_NOT_DONE, EXIT_OK, EXIT_UNREACHABLE, Failure, bad_input,
+    EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_NOT_DONE, EXIT_OK, EXIT_UNREACHABLE,
+    Failure, bad_input,
 };
 
 /// What `--version` prints after the name: the package version and the commit it was built
@@ -125,14 +133,14 @@ impl Command {
     }
 }
 
-/// How to reach the daemon, and how to print.
+/// How to reach the daemon, and how to print (taken before or after a subcommand's action).
 #[derive(Debug, clap::Args)]
 pub struct DaemonArgs {
     /// The daemon's API socket.
-    #[arg(long, env = "LINTERPD_SOCKET", default_value = client::DEFAULT_SOCKET)]
+    #[arg(long, global = true, env = "LINTERPD_SOCKET", default_value = client::DEFAULT_SOCKET)]
     pub socket: std::path::PathBuf,
     /// Print JSON (the API's own answers) instead of text.
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub json: bool,
 }
 

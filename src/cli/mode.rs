@@ -22,7 +22,7 @@ pub struct ModeArgs {
     #[arg(value_parser = parse_mode)]
     pub mode: Option<Mode>,
     /// The robot (needed when the daemon runs several).
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// The daemon and output options.
     #[command(flatten)]

@@ -25,6 +25,9 @@ pub struct PosArgs {
     /// What to do.
     #[command(subcommand)]
     pub action: PosAction,
+    /// The robot and the daemon (before or after the action).
+    #[command(flatten)]
+    pub robot: Robot,
 }
 
 /// The `pos` subcommands.
@@ -33,7 +36,7 @@ pub enum PosAction {
     /// Save the robot's pose now (from the PLC's counts) as NAME, replacing one of that name.
     Save(Named),
     /// List the robot's taught positions.
-    List(Robot),
+    List,
     /// Show one taught position.
     Show(Named),
     /// Delete a taught position.
@@ -45,16 +48,13 @@ pub enum PosAction {
 pub struct Named {
     /// The position's name: 1 to 32 letters, digits, '_' or '-', not starting with '-'.
     pub name: String,
-    /// The robot and the daemon.
-    #[command(flatten)]
-    pub robot: Robot,
 }
 
 /// A robot of the daemon.
 #[derive(Debug, Args)]
 pub struct Robot {
     /// The robot (needed when the daemon runs several).
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// The daemon and output options.
     #[command(flatten)]
@@ -63,12 +63,13 @@ pub struct Robot {
 
 /// Runs `linterpd pos`.
 pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let (method, name, target) = match &args.action {
-        PosAction::Save(n) => (Method::PUT, Some(n.name.as_str()), &n.robot),
-        PosAction::List(r) => (Method::GET, None, r),
-        PosAction::Show(n) => (Method::GET, Some(n.name.as_str()), &n.robot),
-        PosAction::Delete(n) => (Method::DELETE, Some(n.name.as_str()), &n.robot),
+    let (method, name) = match &args.action {
+        PosAction::Save(n) => (Method::PUT, Some(n.name.as_str())),
+        PosAction::List => (Method::GET, None),
+        PosAction::Show(n) => (Method::GET, Some(n.name.as_str())),
+        PosAction::Delete(n) => (Method::DELETE, Some(n.name.as_str())),
     };
+    let target = &args.robot;
     if let Some(name) = name {
         check_name(name).map_err(super::bad_input)?;
     }
@@ -99,7 +100,7 @@ fn text(action: &PosAction, robot: &str, answer: &Value) -> anyhow::Result<Strin
             warn(saved.warning.as_deref());
             saved_text(robot, &saved)
         }
-        PosAction::List(_) => {
+        PosAction::List => {
             let list: PositionList = Received::read(json, "a list of positions")?.value;
             warn(list.warning.as_deref());
             list_text(robot, &list)
@@ -184,16 +185,7 @@ mod tests {
             warning: None,
         };
         assert_eq!(list_text("r", &list).lines().count(), 2);
-        let list = |json| {
-            let action = PosAction::List(Robot {
-                robot: None,
-                daemon: DaemonArgs {
-                    socket: "/nonexistent".into(),
-                    json: false,
-                },
-            });
-            text(&action, "r", &json)
-        };
+        let list = |json| text(&PosAction::List, "r", &json);
         assert_eq!(
             list(json!({"positions": []})).unwrap(),
             "r: no taught positions"
@@ -214,8 +206,14 @@ mod tests {
             panic!()
         };
         assert!(
-            matches!(&args.action, PosAction::Save(n) if n.name == "pick" && n.robot.daemon.json)
+            matches!(&args.action, PosAction::Save(n) if n.name == "pick")
+                && args.robot.daemon.json
         );
+        let cli = crate::cli::Cli::try_parse_from(["linterpd", "pos", "--json", "list"]).unwrap();
+        let crate::cli::Command::Pos(args) = cli.command else {
+            panic!()
+        };
+        assert!(matches!(args.action, PosAction::List) && args.robot.daemon.json);
         let cli = crate::cli::Cli::try_parse_from(["linterpd", "pos", "show", "a b"]).unwrap();
         let crate::cli::Command::Pos(args) = cli.command else {
             panic!()

@@ -1,16 +1,19 @@
 //! `linterpd status`: each robot's phase, link, PLC state, pose and moves, from the daemon, in
-//! words (never `null`); exits like `systemctl status`: 0 when every robot's link is up and no
-//! fault is latched, 3 when a robot's PLC link is down or stalled, else 1 when a robot reports a
-//! fault (with `--json` too).
+//! words (never `null`); exits like `systemctl status`: 0 when every robot's link is up, no
+//! fault is latched and no cycle is faulted, 3 when a robot's PLC link is down or stalled, else
+//! 1 when a robot reports a fault or its cycle is faulted (with `--json` too).
 //!
 //! ```text
 //! press-loader: idle; link up; PLC in RUN, program idle, homed, heartbeat 12 ms ago;
 //!   pose (0.000, 500.000, 0.000 mm, 0.000 deg); no move running, nothing queued
 //! ```
-//! (one line per robot; wrapped here).
+//! (one line per robot; wrapped here). `--wait 10s` first waits, at most that long, for the
+//! daemon to answer and every robot's link to be up with its PLC read (a script's "is it ready?"
+//! after starting the daemon), then says the same.
 
 use std::fmt::Write as _;
 
+use anyhow::Context as _;
 use clap::Args;
 use hyper::Method;
 use serde_json::Value;
@@ -25,8 +28,12 @@ use crate::plc::PlcMode;
 #[derive(Debug, Args)]
 pub struct StatusArgs {
     /// One robot only.
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
+    /// Wait, at most this long (e.g. `10s`), for the daemon to answer and every robot's PLC link
+    /// to be up with its PLC read; then print and exit as without it.
+    #[arg(long, allow_hyphen_values = true)]
+    pub wait: Option<String>,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
@@ -154,14 +161,18 @@ fn describe_face(face: &crate::daemon::FaceState) -> String {
 }
 
 /// The exit code for these robots: 3 if a PLC link is down or stalled, else 1 if a robot reports
-/// a fault, else 0.
+/// a fault or its cycle is faulted, else 0.
 fn exit_code(robots: &[RobotState]) -> u8 {
     let down = robots.iter().any(|r| {
         !r.link.connected || matches!(r.phase, RobotPhase::LinkDown | RobotPhase::Stalled)
     });
-    let faulted = robots
-        .iter()
-        .any(|r| r.fault.is_some() || r.state == Some(State::Fault));
+    let faulted = robots.iter().any(|r| {
+        r.fault.is_some()
+            || r.state == Some(State::Fault)
+            || r.cycle
+                .as_ref()
+                .is_some_and(|c| c.state == crate::daemon::CycleState::Faulted)
+    });
     if down {
         EXIT_NOT_DONE
     } else if faulted {
@@ -179,15 +190,54 @@ fn robots(answer: &Value) -> anyhow::Result<Vec<RobotState>> {
     })
 }
 
+/// Whether every robot is ready for orders: its link up and its PLC read.
+fn ready(robots: &[RobotState]) -> bool {
+    robots
+        .iter()
+        .all(|r| r.link.connected && r.plc_mode.is_some() && r.state.is_some())
+}
+
+/// How often `--wait` asks.
+const WAIT_POLL: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// The daemon's answer at `path`, waiting until `until` (if given) for it to answer and for
+/// its robots to be [`ready`].
+async fn answer(
+    client: &Client,
+    path: &str,
+    until: Option<tokio::time::Instant>,
+) -> Result<Value, Failure> {
+    loop {
+        let answer = client.expect(Method::GET, path, None).await;
+        let Some(until) = until else { return answer };
+        let done = match &answer {
+            Ok(value) => robots(value).is_ok_and(|r| ready(&r)),
+            Err(Failure::Unreachable(_)) => false,
+            Err(_) => true,
+        };
+        if done || tokio::time::Instant::now() >= until {
+            return answer;
+        }
+        tokio::time::sleep(WAIT_POLL).await;
+    }
+}
+
 /// Runs `linterpd status`.
 pub fn run(args: &StatusArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+    let wait = args
+        .wait
+        .as_deref()
+        .map(|t| super::args::parse_duration(t).context("--wait"))
+        .transpose()
+        .map_err(Failure::BadInput)?;
     args.daemon.block_on(async {
         let client = Client::new(&args.daemon.socket);
         let path = args
             .robot
             .as_ref()
             .map_or("/v1/robots".to_owned(), |r| format!("/v1/robots/{r}"));
-        let answer = client.expect(Method::GET, &path, None).await?;
+        let until = wait.map(|w| tokio::time::Instant::now() + w);
+        let answer = answer(&client, &path, until).await?;
         let robots = robots(&answer).map_err(Failure::Runtime)?;
         let text: Vec<String> = robots.iter().map(line).collect();
         super::print(out, args.daemon.json, &answer, &text.join("\n"))?;
@@ -289,6 +339,30 @@ mod tests {
             "{text}"
         );
         assert_eq!(exit_code(&[r]), EXIT_FAILURE);
+    }
+
+    #[test]
+    fn a_robot_is_ready_once_linked_with_its_plc_read() {
+        assert!(ready(&[idle()]));
+        let mut never_read = idle();
+        never_read.plc_mode = None;
+        never_read.state = None;
+        assert!(!ready(&[idle(), never_read]));
+        let mut down = idle();
+        down.link.connected = false;
+        assert!(!ready(&[down]));
+    }
+
+    #[test]
+    fn status_exits_1_for_a_faulted_cycle_on_a_healthy_robot() {
+        let mut r = idle();
+        let mut cycle = crate::daemon::CycleStatus::starting("press-load", Some(3));
+        cycle.state = crate::daemon::CycleState::Faulted;
+        r.cycle = Some(cycle.clone());
+        assert_eq!(exit_code(&[r.clone()]), EXIT_FAILURE);
+        cycle.state = crate::daemon::CycleState::Paused;
+        r.cycle = Some(cycle);
+        assert_eq!(exit_code(&[r]), EXIT_OK, "a paused cycle is no fault");
     }
 
     #[test]

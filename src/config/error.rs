@@ -60,6 +60,14 @@ pub enum ConfigError {
         /// The robots' names, comma separated, in file order.
         known: String,
     },
+    /// What is wrong with a file, named.
+    #[error("{}: {error}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it (shown in this error's message, not as its source).
+        error: Box<ConfigError>,
+    },
     /// The file could not be read.
     #[error("cannot read config file {}", path.display())]
     Read {

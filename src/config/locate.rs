@@ -1,5 +1,9 @@
-//! Places in the config text: byte offset -> line number, and the key path of a line, read off
-//! the text for errors the TOML parser reports with a span but without a key path.
+//! Places in the config text: byte offset -> line number; the key path of a schema error, as
+//! serde walked it (`serde_path_to_error`: exact inside inline tables and arrays), else read off
+//! the text for a syntax error the TOML parser reports with a span but without a key path; and
+//! the nearest valid key of an unknown one ("did you mean").
+
+use std::fmt::Write as _;
 
 use super::ConfigError;
 
@@ -9,13 +13,63 @@ pub(super) fn line_of(text: &str, offset: usize) -> usize {
     text.as_bytes()[..end].split(|&b| b == b'\n').count()
 }
 
-/// A TOML or schema error, placed on its line.
-pub(super) fn syntax_error(text: &str, error: &toml::de::Error) -> ConfigError {
+/// Parses `text` into `T` strictly: a syntax error placed on its line, a schema error (unknown
+/// key, wrong type, missing key) on its line with the exact key path serde walked, and the
+/// nearest valid key of an unknown one.
+pub(super) fn parse<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ConfigError> {
+    let de = toml::Deserializer::parse(text).map_err(|e| syntax_error(text, &e, None))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let offset = e.inner().span().map_or(0, |span| span.start);
+        let path = key_path(e.path(), key_at(text, offset).as_deref());
+        syntax_error(text, e.inner(), path)
+    })
+}
+
+/// A serde path as a config key path (`robots.press-loader.plc.serial.parity`), without the
+/// segments `toml::Spanned` walks through. A key serde could not see (a robot's name, a
+/// `Spanned` map key) is taken from `read`, the path read off the line, where their segments
+/// before it agree; `None` when nothing is left.
+fn key_path(path: &serde_path_to_error::Path, read: Option<&str>) -> Option<String> {
+    use serde_path_to_error::Segment;
+    let read: Vec<&str> = read.map(|r| r.split('.').collect()).unwrap_or_default();
+    let mut parts: Vec<String> = Vec::new();
+    for segment in path {
+        match segment {
+            Segment::Map { key } if key.starts_with("$__serde_spanned_private") => {}
+            Segment::Seq { index } => match parts.last_mut() {
+                Some(last) => {
+                    let _ = write!(last, "[{index}]");
+                }
+                None => parts.push(format!("[{index}]")),
+            },
+            Segment::Map { key } | Segment::Enum { variant: key } => parts.push(key.clone()),
+            Segment::Unknown => {
+                let agree =
+                    read.len() > parts.len() && parts.iter().zip(&read).all(|(p, r)| p == r);
+                parts.push(if agree { read[parts.len()] } else { "?" }.to_owned());
+            }
+        }
+    }
+    (!parts.is_empty()).then(|| parts.join("."))
+}
+
+/// A TOML or schema error, placed on its line, with `path` (else the key read off the line) and
+/// the nearest valid key when it names an unknown one.
+pub(super) fn syntax_error(
+    text: &str,
+    error: &toml::de::Error,
+    path: Option<String>,
+) -> ConfigError {
     let offset = error.span().map_or(0, |span| span.start);
+    let message = error.message().trim_end().to_owned();
+    let message = match super::suggest::hint(&message) {
+        Some(hint) => format!("{message}; {hint}"),
+        None => message,
+    };
     ConfigError::Syntax {
         line: line_of(text, offset),
-        key: key_at(text, offset),
-        message: error.message().trim_end().to_owned(),
+        key: path.or_else(|| key_at(text, offset)),
+        message,
     }
 }
 

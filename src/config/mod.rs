@@ -46,6 +46,7 @@ mod motion;
 mod path_file;
 mod plc;
 mod raw;
+pub mod suggest;
 mod units;
 mod validate;
 
@@ -79,23 +80,33 @@ pub struct Config {
 impl Config {
     /// Parses and checks a config text.
     pub fn from_toml(text: &str) -> Result<Config, ConfigError> {
-        let raw: raw::RawConfig =
-            toml::from_str(text).map_err(|e| locate::syntax_error(text, &e))?;
+        let raw: raw::RawConfig = locate::parse(text)?;
         validate::config(text, raw)
     }
 
-    /// Reads, parses and checks a config file.
+    /// Reads, parses and checks a config file; an error names the file. Relative paths (a
+    /// cell's `programs`, `[daemon]`'s `socket`, `state_dir` and `token_file`) are taken from
+    /// the file's directory.
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
         let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
             path: path.to_owned(),
             source,
         })?;
-        let mut config = Self::from_toml(&text)?;
+        let mut config = Self::from_toml(&text).map_err(|e| ConfigError::InFile {
+            path: path.to_owned(),
+            error: Box::new(e),
+        })?;
         let dir = path.parent().unwrap_or(Path::new("."));
         for cell in config.cells.values_mut() {
             if let Some(programs) = &mut cell.programs {
                 *programs = dir.join(&*programs);
             }
+        }
+        let daemon = &mut config.daemon;
+        daemon.socket = dir.join(&daemon.socket);
+        daemon.state_dir = dir.join(&daemon.state_dir);
+        if let Some(token) = &mut daemon.token_file {
+            *token = dir.join(&*token);
         }
         Ok(config)
     }
@@ -298,6 +309,47 @@ mod tests {
             message(&text),
             "config line 7: robots.r.motion.speed_mm_s: invalid type: string \"fast\", expected f64"
         );
+    }
+
+    #[test]
+    fn config_parity_typo_inside_an_inline_table_names_parity_not_serial() {
+        let text = SHIPPED.replace("parity = \"odd\"", "partiy = \"odd\"");
+        let e = message(&text);
+        assert!(
+            e.contains(": robots.press-loader.plc.serial.partiy: unknown field `partiy`")
+                && e.ends_with("did you mean `parity`?"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn config_error_of_a_file_names_the_file() {
+        let dir = std::env::temp_dir().join(format!("linterpd-config-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("linterpd.toml");
+        std::fs::write(&path, edited(&[(7, "sped_mm_s = 240.0")])).unwrap();
+        let e = Config::load(&path).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "{}: config line 7: robots.r.motion.sped_mm_s: unknown field `sped_mm_s`",
+                path.display()
+            )) && e.ends_with("did you mean `speed_mm_s`?"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn relative_daemon_paths_are_taken_from_the_config_files_directory() {
+        let dir = std::env::temp_dir().join(format!("linterpd-config-rel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("try.toml");
+        let text = format!("{MINIMAL}[daemon]\nsocket = \"run/api.sock\"\nstate_dir = \"/abs\"\n");
+        std::fs::write(&path, text).unwrap();
+        let d = Config::load(&path).unwrap().daemon;
+        assert_eq!(d.socket, dir.join("run/api.sock"));
+        assert_eq!(d.state_dir, Path::new("/abs"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

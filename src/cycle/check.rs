@@ -67,6 +67,10 @@ pub struct Context<'a> {
     /// The robot's counts where the program will begin (the run's), when known: the first
     /// motion is checked from there ([`super::reach`]).
     pub start: Option<[i64; crate::kinematics::JOINTS]>,
+    /// Whether `taught` holds the poses the positions were taught at (the daemon's); `false`
+    /// (`check-config`, which knows only their names): a move to a position is checked for its
+    /// name only, its reach when it runs.
+    pub poses_known: bool,
 }
 
 /// How a loop ends.
@@ -147,7 +151,10 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
         return Err(whole(format!("cannot be read: {why}")));
     }
     let Some(doc) = ctx.programs.get(name) else {
-        return Err(whole(format!("no such program; {}", known(ctx))));
+        return Err(whole(format!(
+            "no such program; {}",
+            there_are(ctx.programs, ctx.broken)
+        )));
     };
     let number = number(name, doc)?;
     if let Some(n) = number
@@ -173,16 +180,20 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
     })
 }
 
-/// The programs there are, in words.
-fn known(ctx: &Context<'_>) -> String {
-    let names: Vec<&str> = ctx.programs.keys().map(String::as_str).collect();
+/// The programs there are, in words: those that can be read, and apart, those that cannot.
+#[must_use]
+pub fn there_are(
+    programs: &BTreeMap<String, ProgramDoc>,
+    broken: &BTreeMap<String, String>,
+) -> String {
+    let names: Vec<&str> = programs.keys().map(String::as_str).collect();
     let mut text = if names.is_empty() {
         "there are none".to_owned()
     } else {
         format!("there are: {}", names.join(", "))
     };
-    if !ctx.broken.is_empty() {
-        let broken: Vec<&str> = ctx.broken.keys().map(String::as_str).collect();
+    if !broken.is_empty() {
+        let broken: Vec<&str> = broken.keys().map(String::as_str).collect();
         let _ = write!(text, " (and, unreadable: {})", broken.join(", "));
     }
     text
@@ -304,7 +315,7 @@ impl Flattener<'_, '_> {
                     if !self.ctx.programs.contains_key(&callee) {
                         return Err(here(format!(
                             "call = {callee:?}: no such program; {}",
-                            known(self.ctx)
+                            there_are(self.ctx.programs, self.ctx.broken)
                         )));
                     }
                     let mut from = called_from.to_vec();

@@ -1,6 +1,7 @@
-//! PURE (but [`load`]). Cycle programs: what a press loader does in step with its cell, as a TOML
-//! document of steps (move, path, wait, set, dwell, call, loop), checked whole against the robot
-//! and its cell before anything runs, and flattened into ops the daemon's cycle runner carries
+//! PURE (but [`load`], which reads the programs directory). Cycle programs: what
+//! a press loader does in step with its cell, as a TOML document of steps (move, path, wait,
+//! set, dwell, call, loop), checked whole against the robot and its cell before anything runs,
+//! and flattened into ops the daemon's cycle runner carries
 //! out (`crate::daemon`'s cycle module). docs/CYCLES.md is the user's reference.
 //!
 //! ```text

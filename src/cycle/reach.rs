@@ -182,6 +182,9 @@ impl Reach<'_> {
     fn target(&self, op: &Op) -> Result<Option<[i64; JOINTS]>, String> {
         let robot = self.ctx.robot;
         let checked = checked(self.ctx, op).map_err(|e| e.to_string())?;
+        if !self.ctx.poses_known && matches!(&op.kind, OpKind::Move(o) if o.position.is_some()) {
+            return Ok(None);
+        }
         match checked.target {
             Target::Pose { to, a_given: true } => {
                 check_pose(robot, &to).map(Some).map_err(|e| e.to_string())

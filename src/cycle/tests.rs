@@ -116,6 +116,7 @@ fn checked_from(
         broken: &BTreeMap::new(),
         require_wait_timeout: require_timeout,
         start,
+        poses_known: true,
     };
     check(run, &ctx).map_err(|e| e.to_string())
 }

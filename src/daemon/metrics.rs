@@ -154,13 +154,14 @@ impl Metrics {
     #[must_use]
     pub fn new() -> Self {
         let mut registry = Registry::default();
+        // (`register` adds the help text's period.)
         let build = Info::new(vec![
             ("version", env!("CARGO_PKG_VERSION")),
             ("commit", env!("LINTERPD_COMMIT")),
         ]);
         registry.register(
             "linterpd_build",
-            "The running linterpd's version and commit.",
+            "The running linterpd's version and commit",
             build,
         );
         let inner = Inner {
@@ -258,81 +259,83 @@ impl Metrics {
 }
 
 impl Inner {
+    /// Registers every family. `Registry::register` ends each help text with a period itself: the
+    /// texts here have none (a collector's, written as they are, do).
     fn registered(mut self) -> Self {
         let r = &mut self.registry;
         r.register(
             "linterpd_moves",
-            "Moves that ended, by outcome.",
+            "Moves that ended, by outcome",
             self.moves.clone(),
         );
         r.register(
             "linterpd_link_reconnects",
-            "PLC link reopened after it was lost (the first opening is not counted).",
+            "PLC link reopened after it was lost (the first opening is not counted)",
             self.reconnects.clone(),
         );
         r.register(
             "linterpd_gateway_requests",
-            "Register gateway requests answered (read or write).",
+            "Register gateway requests answered (read or write)",
             self.gateway_requests.clone(),
         );
         r.register(
             "linterpd_gateway_errors",
-            "Register gateway requests that failed (link down, PLC error).",
+            "Register gateway requests that failed (link down, PLC error)",
             self.gateway_errors.clone(),
         );
         r.register(
             "linterpd_upload_seconds",
-            "Time to write and verify a move's bank.",
+            "Time to write and verify a move's bank",
             self.upload.clone(),
         );
         r.register(
             "linterpd_motion_seconds",
-            "Time from a move's start to its end on the PLC (moves that ended done).",
+            "Time from a move's start to its end on the PLC (moves that ended done)",
             self.motion.clone(),
         );
         r.register(
             "linterpd_gateway_motion_wait_seconds",
-            "How long a due status read waited behind a gateway exchange.",
+            "How long a due status read waited behind a gateway exchange",
             self.gateway_wait.clone(),
         );
         r.register(
             "linterpd_cycles",
-            "Cycle programs' cycles run to their end.",
+            "Cycle programs' cycles run to their end",
             self.cycles.clone(),
         );
         r.register(
             "linterpd_cycle_seconds",
-            "Time a cycle took, from its first step to the end of its last.",
+            "Time a cycle took, from its first step to the end of its last",
             self.cycle_time.clone(),
         );
         r.register(
             "linterpd_cycle_wait_seconds",
-            "Time a cycle's wait step waited, by program and step.",
+            "Time a cycle's wait step waited, by program and step",
             self.cycle_wait.clone(),
         );
         r.register(
             "linterpd_face_commands",
-            "Cell face commands taken from the line (an edge of a command bit), by command.",
+            "Cell face commands taken from the line (an edge of a command bit), by command",
             self.face_commands.clone(),
         );
         r.register(
             "linterpd_face_refusals",
-            "Cell face commands refused, by the refusal word's code.",
+            "Cell face commands refused, by the refusal word's code",
             self.face_refusals.clone(),
         );
         r.register(
             "linterpd_link_up",
-            "1 while the PLC link is up and the contract answers.",
+            "1 while the PLC link is up and the contract answers",
             self.link_up.clone(),
         );
         r.register(
             "linterpd_plc_fault",
-            "The PLC program's fault code (0: none), as last read.",
+            "The PLC program's fault code (0: none), as last read",
             self.fault.clone(),
         );
         r.register(
             "linterpd_heartbeat_age_seconds",
-            "Time since the PLC program's heartbeat last changed.",
+            "Time since the PLC program's heartbeat last changed",
             self.heartbeat_age.clone(),
         );
         r.register_collector(Box::new(Arc::clone(&self.exchanges)));
@@ -468,6 +471,18 @@ mod tests {
         text.lines()
             .find(|l| l.starts_with(start))
             .unwrap_or_else(|| panic!("no {start:?} in\n{text}"))
+    }
+
+    #[test]
+    fn metrics_help_lines_end_in_one_period_not_two() {
+        let metrics = Metrics::new();
+        let _ = metrics.robot("a");
+        let text = metrics.encode();
+        let help: Vec<&str> = text.lines().filter(|l| l.starts_with("# HELP")).collect();
+        assert!(help.len() > 10, "{text}");
+        for line in help {
+            assert!(line.ends_with('.') && !line.ends_with(".."), "{line}");
+        }
     }
 
     #[test]

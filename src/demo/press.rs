@@ -1,14 +1,16 @@
 //! `linterpd demo --cycle`: the shipped press-loading cycle (config/examples/cycles/
 //! press-load.toml) run by the daemon's cycle runner on the seed robot, against the mock PLC
-//! and a simulated press, 10 cycles.
+//! running the shipped press cell (config/examples/cells/press.toml, `crate::mock::cell`), 10
+//! cycles.
 //!
 //! ```text
-//!  the press (a task on the mock's inputs): part present (X2) always; open (X5) and still
-//!      (X6 off) until the robot sets press_go (Y0); then closed and moving for 0.8 s, still
-//!      and closed 0.2 s more, open again
-//!  once, in cycle 4, while the robot moves into the press: the press opens its guard (X5
-//!      off) for 0.3 s -> the PLC holds the move within a scan, the cycle pauses naming X5;
-//!      the demo, as the operator, resumes it once X5 is back
+//!  the cell (the mock steps it every scan): a stack of blanks, part present (X2) while any is
+//!      left, one taken per rise of the gripper (Y1); the press open (X5) and still (X6 off)
+//!      until press_go (Y0) rises, then closed and moving for its stroke (0.8 s), closed and
+//!      still for its settle (0.2 s), open again; the robot's signals are the cell's
+//!  once, in cycle 4, while the robot moves into the press: the demo, as the guard, forces X5
+//!      off for 0.3 s -> the PLC holds the move within a scan, the cycle pauses naming X5;
+//!      the demo releases X5 (the press model has it back) and, as the operator, resumes
 //!  measured: each cycle's time and its time waiting; the moves' motion time; the hold
 //! ```
 
@@ -19,18 +21,19 @@ use super::rig::{self, Rig};
 use super::{DemoError, DemoOptions, P1};
 use crate::config::CellSettings;
 use crate::daemon::{CycleState, Daemon, DaemonOptions, RobotHandle, RobotSetup, Stage};
-use crate::gateway::{AccessList, Area, GatewaySettings};
+use crate::gateway::{AccessList, GatewaySettings};
+use crate::mock::cell::{Cell, Description};
 use crate::plc::exchange::ContractSettings;
 use crate::robot::seed_robot;
 
 /// The shipped press-loading program.
 pub const PRESS_LOAD: &str = include_str!("../../config/examples/cycles/press-load.toml");
+/// The shipped press cell the mock simulates.
+pub const PRESS_CELL: &str = include_str!("../../config/examples/cells/press.toml");
 /// Cycles the demo runs.
 pub const PRESS_CYCLES: u64 = 10;
-/// The press's stroke: closed and moving, s.
-const STROKE_S: f64 = 0.8;
-/// Closed and still after the stroke, before it opens, s.
-const SETTLE_S: f64 = 0.2;
+/// The signal the guard's glitch forces off.
+const GUARD: &str = "press_open";
 /// How long the guard opens in cycle 4, s.
 const GLITCH_S: f64 = 0.3;
 /// The step of the move into the press (press-load.toml).
@@ -90,32 +93,18 @@ pub struct PressDemo {
     pub total_s: f64,
 }
 
-/// The press's state as the simulator keeps it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Press {
-    Open,
-    Stroke { until: Instant },
-    Settle { until: Instant },
-}
-
 /// Runs the press demo.
 ///
 /// # Panics
-/// Never: the demo's signals and ranges are written here and parse.
+/// Never: the demo's ranges are written here and parse.
 pub async fn run(options: DemoOptions) -> Result<PressDemo, DemoError> {
     let robot = seed_robot();
+    let cell = Description::from_toml(PRESS_CELL)
+        .map_err(|e| DemoError::Rig(format!("config/examples/cells/press.toml: {e}")))?;
     let rig = Rig::start(&robot, P1, options.frequency_model)?;
     let dir = programs_dir()?;
-    let signals = [
-        ("press_open", "X5"),
-        ("press_moving", "X6"),
-        ("part_present", "X2"),
-        ("gripper", "Y1"),
-        ("press_go", "Y0"),
-    ]
-    .into_iter()
-    .map(|(n, a)| (n.to_owned(), a.parse().expect("a signal of the demo")))
-    .collect();
+    let signals = cell.signals.clone();
+    rig.mock.with(|m| m.set_cell(Cell::new(cell)));
     let access = AccessList::new(
         vec!["X0-X1F".parse().expect("a range")],
         vec!["Y0-Y7".parse().expect("a range")],
@@ -164,16 +153,11 @@ fn programs_dir() -> Result<PathBuf, DemoError> {
 async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> {
     rig::connected(handle).await?;
     let mock = &rig.mock;
-    mock.with(|m| {
-        let _ = m.set_input(2, true);
-        let _ = m.set_input(5, true);
-    });
     tokio::time::sleep(Duration::from_millis(50)).await;
     let began = Instant::now();
     handle
         .run_cycle("press-load", Some(PRESS_CYCLES))
         .map_err(|e| DemoError::Rig(e.to_string()))?;
-    let mut press = Press::Open;
     let mut cycles = Vec::new();
     let mut cycle_began = Instant::now();
     let mut glitch: Option<Instant> = None;
@@ -185,7 +169,6 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
             return Err(DemoError::Rig(format!("the cycles took over {LIMIT:?}")));
         }
         tokio::time::sleep(Duration::from_millis(2)).await;
-        press = step_press(mock, press);
         let Some(s) = handle.cycle() else { continue };
         if s.done as usize > cycles.len() {
             let motion_s = handle
@@ -209,9 +192,8 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
         let moving = handle.state().current_move.is_some();
         if s.done == 3 && step == INTO_PRESS_STEP && moving && glitch.is_none() && hold.is_none() {
             tokio::time::sleep(Duration::from_millis(150)).await;
-            mock.with(|m| {
-                let _ = m.set_input(5, false);
-            });
+            mock.with(|m| m.cell_mut().force(GUARD, false))
+                .map_err(|e| DemoError::Rig(e.to_string()))?;
             glitch = Some(Instant::now());
         }
         if let Some(at) = glitch {
@@ -224,9 +206,8 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
                 });
             }
             if at.elapsed().as_secs_f64() >= GLITCH_S && hold.is_some() && resumed_at.is_none() {
-                mock.with(|m| {
-                    let _ = m.set_input(5, true);
-                });
+                mock.with(|m| m.cell_mut().release(GUARD))
+                    .map_err(|e| DemoError::Rig(e.to_string()))?;
                 tokio::time::sleep(Duration::from_millis(20)).await;
                 handle
                     .resume_cycle()
@@ -260,34 +241,6 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
         motion_s: done.iter().filter_map(|r| r.motion_s).sum(),
         moves: (done.len(), reports.len() - done.len()),
         total_s: began.elapsed().as_secs_f64(),
-    })
-}
-
-/// One step of the simulated press on the mock's inputs and outputs.
-fn step_press(mock: &crate::mock::SharedMock, press: Press) -> Press {
-    let now = Instant::now();
-    mock.with(|m| {
-        let go = m.memory().bit(Area::Y, 0).unwrap_or(false);
-        let next = match press {
-            Press::Open if go => Press::Stroke {
-                until: now + Duration::from_secs_f64(STROKE_S),
-            },
-            Press::Stroke { until } if now >= until => Press::Settle {
-                until: now + Duration::from_secs_f64(SETTLE_S),
-            },
-            Press::Settle { until } if now >= until && !go => Press::Open,
-            other => other,
-        };
-        if next != press {
-            let (open, moving) = match next {
-                Press::Open => (true, false),
-                Press::Stroke { .. } => (false, true),
-                Press::Settle { .. } => (false, false),
-            };
-            let _ = m.set_input(5, open);
-            let _ = m.set_input(6, moving);
-        }
-        next
     })
 }
 

@@ -10,6 +10,8 @@
 //! engine.rs      one F174 pulse channel on the shared execution model (crate::sim)
 //! trace.rs       pulse trace (CSV) and anomalies (clamped rows, run-ons)
 //! faults.rs      seeded, scriptable fault injection
+//! cell/          PURE  a simulated cell (press, stack, sensors) driving the inputs every scan
+//! control.rs     the control socket: force and release the cell's inputs, by hand
 //! clock.rs       virtual and real clocks for drivers
 //! in_process.rs  a crate::plc::Plc handle on a shared mock
 //! shared.rs      SharedMock: the mock behind Arc<Mutex<_>> with its clock and scan driver
@@ -24,7 +26,9 @@
 //! own, so every pulse lands at its model time, not at a scan.
 
 mod answer;
+pub mod cell;
 mod clock;
+pub mod control;
 mod engine;
 mod faults;
 mod in_process;
@@ -142,6 +146,8 @@ pub struct MockPlc {
     commands: u64,
     /// Replies of several frames left unanswered (the `one-frame-replies` variant).
     unanswered_multi_frame: u64,
+    /// The simulated cell driving the inputs (none by default).
+    cell: cell::Cell,
 }
 
 impl MockPlc {
@@ -172,6 +178,7 @@ impl MockPlc {
             faults: FaultInjector::default(),
             commands: 0,
             unanswered_multi_frame: 0,
+            cell: cell::Cell::default(),
         };
         // The first scan (R9013) runs at power-up, before anybody can write to the PLC.
         mock.advance_to(0.0);
@@ -209,6 +216,7 @@ impl MockPlc {
             }
             self.advance_engines(at_s);
             self.apply_due_faults(at_s);
+            self.step_cell(at_s);
             if self.mode == PlcMode::Run {
                 self.scan(at_s);
             }
@@ -223,6 +231,40 @@ impl MockPlc {
         for e in &mut self.engines {
             e.advance(to_s, &mut self.recorder);
         }
+    }
+
+    /// The cell's models stepped at `at_s` on what the PLC shows, their inputs written (the
+    /// outside world runs in PROG mode too).
+    fn step_cell(&mut self, at_s: f64) {
+        if self.cell.is_idle() {
+            return;
+        }
+        let memory = &self.memory;
+        let bit = |a: crate::gateway::Address| memory.bit(a.area, a.index).unwrap_or(false);
+        let seen = cell::Seen {
+            bit: &bit,
+            counts: std::array::from_fn(|c| self.engines[c].count()),
+        };
+        for (a, on) in self.cell.step(at_s, &seen) {
+            // Checked against the mock's memory when the description was read.
+            let _ = self.memory.set_bit(a.area, a.index, on);
+        }
+    }
+
+    /// The simulated cell.
+    #[must_use]
+    pub fn cell(&self) -> &cell::Cell {
+        &self.cell
+    }
+
+    /// The simulated cell, to force an input.
+    pub fn cell_mut(&mut self) -> &mut cell::Cell {
+        &mut self.cell
+    }
+
+    /// Runs `cell` from now on (its inputs are written from the next scan).
+    pub fn set_cell(&mut self, cell: cell::Cell) {
+        self.cell = cell;
     }
 
     fn scan(&mut self, at_s: f64) {
@@ -418,7 +460,8 @@ impl MockPlc {
         self.memory.set_bit(area, bit, on)
     }
 
-    /// Sets input X`bit` (word * 16 + bit), as the wiring would.
+    /// Sets input X`bit` (word * 16 + bit), as the wiring would (a bit the cell drives is set
+    /// again by the cell at the next scan: force it through [`Self::cell_mut`] instead).
     pub fn set_input(&mut self, bit: u32, on: bool) -> Result<(), MemoryError> {
         self.memory.set_bit(crate::gateway::Area::X, bit, on)
     }

@@ -1056,3 +1056,28 @@ fn a_permit_that_drops_stops_every_channel_within_one_scan_and_drops_the_waiting
     // The waiting start never ran.
     assert!(m.starts().iter().all(|r| r.block.seq != 2));
 }
+
+#[test]
+fn a_cell_drives_the_inputs_every_scan_from_the_outputs_and_the_status_block_copies_them() {
+    let text = include_str!("../../config/examples/cells/press.toml");
+    let description = cell::Description::from_toml(text).unwrap();
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_cell(cell::Cell::new(description));
+    m.advance_to(SCAN);
+    // X2 part present, X5 open: both in WX0, the first input word.
+    assert_eq!(m.status().inputs[0], (1 << 2) | (1 << 5));
+    m.write_bit(crate::gateway::Area::Y, 0, true).unwrap();
+    m.advance_to(3.0 * SCAN);
+    assert_eq!(
+        m.status().inputs[0],
+        (1 << 2) | (1 << 6),
+        "stroking: closed, moving"
+    );
+    m.advance_to(0.9);
+    assert_eq!(m.status().inputs[0], 1 << 2, "settling: closed, still");
+    m.advance_to(1.1);
+    assert_eq!(m.status().inputs[0], (1 << 2) | (1 << 5), "open again");
+    m.cell_mut().force("part_present", false).unwrap();
+    m.advance_to(1.2);
+    assert_eq!(m.status().inputs[0], 1 << 5, "forced off");
+}

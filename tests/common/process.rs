@@ -190,17 +190,26 @@ impl Spawned {
 
     /// Sends SIGTERM and waits up to `timeout` for the child to exit; returns its status.
     pub fn terminate(&mut self, timeout: Duration) -> ExitStatus {
-        let pid = self.id().to_string();
-        // The shell's builtin kill: no dependency on procps, no unsafe code.
-        let sent = Command::new("sh")
-            .args(["-c", "kill -TERM \"$1\"", "sh", &pid])
-            .status()
-            .unwrap_or_else(|e| panic!("{}: could not run kill -TERM {pid}: {e}", self.name));
-        assert!(sent.success(), "{}: kill -TERM {pid} failed", self.name);
+        self.signal("TERM");
         self.wait_for("the process to exit after SIGTERM", timeout, |out| {
             out.closed().then_some(())
         });
         self.reap()
+    }
+
+    /// Sends SIGINT, as Ctrl-C on a terminal does (the child exits by itself: `finish`).
+    pub fn interrupt(&mut self) {
+        self.signal("INT");
+    }
+
+    fn signal(&self, name: &str) {
+        let pid = self.id().to_string();
+        // The shell's builtin kill: no dependency on procps, no unsafe code.
+        let sent = Command::new("sh")
+            .args(["-c", &format!("kill -{name} \"$1\""), "sh", &pid])
+            .status()
+            .unwrap_or_else(|e| panic!("{}: could not run kill -{name} {pid}: {e}", self.name));
+        assert!(sent.success(), "{}: kill -{name} {pid} failed", self.name);
     }
 
     /// Everything the child printed so far.

@@ -139,3 +139,28 @@ fn the_binary_runs_the_demo_and_names_the_seeds_move() {
     assert!(!stdout.contains("the PLC idled"), "{stdout}");
     assert!(!stdout.contains("Picture:"), "{stdout}");
 }
+
+#[test]
+fn readme_quick_start_says_what_the_demo_runs() {
+    // It said "the seed paper's move and four others" while the demo ran seven moves, a
+    // pick-and-place path and a drive-limits comparison.
+    let readme = include_str!("../../README.md");
+    let quick = readme
+        .split("## Quick start")
+        .nth(1)
+        .and_then(|s| s.split("cargo run --release -- demo").next())
+        .unwrap();
+    let moves: usize = linterpd::demo::steps().iter().map(Vec::len).sum();
+    assert_eq!(moves, 7);
+    let last_batch = linterpd::demo::steps().last().unwrap().len();
+    assert_eq!(last_batch, 4);
+    for said in [
+        "seven moves",
+        "the last four queued at\n# once and three of them chained",
+        "pick-and-place path",
+        "drive-limits comparison",
+    ] {
+        assert!(quick.contains(said), "{said:?} in\n{quick}");
+    }
+    assert!(!quick.contains("four others"), "{quick}");
+}

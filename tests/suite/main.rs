@@ -28,4 +28,5 @@ mod modbus_face;
 mod path_progress;
 mod paths;
 mod permits;
+mod try_cell;
 mod upload_faults;

@@ -9,7 +9,8 @@
 //!  exit:    0 done; 2 bad arguments or a move the daemon refuses as impossible (400/404/422);
 //!           3 refused for the robot's state (409: not-homed, faulted, ...), ended stopped,
 //!           failed or cancelled, or --timeout ran out; 4 no daemon, or it cannot reach the
-//!           PLC (503: link-down, stalled)
+//!           PLC (503: link-down, stalled); 130 Ctrl-C, which stopped the robot first
+//!           (`--detach`: Ctrl-C leaves the move running, exit 0)
 //! ```
 
 mod bars;
@@ -32,6 +33,7 @@ use super::args::{
     parse_speed_mm_s,
 };
 use super::client::{Client, Received};
+use super::interrupt::Interrupt;
 use super::{DaemonArgs, Failure};
 use crate::daemon::{MoveAccepted, MoveOrder, MoveReport, Stage};
 use crate::robot::Ramp;
@@ -53,7 +55,7 @@ pub struct MoveArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub joints: Option<String>,
     /// The robot (needed when the daemon runs several).
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// Speed, acceleration, method, period and tolerance.
     #[command(flatten)]
@@ -66,6 +68,9 @@ pub struct MoveArgs {
     /// Return once the move is accepted, printing its id.
     #[arg(long)]
     pub no_wait: bool,
+    /// Ctrl-C stops following and leaves the move running (without it, Ctrl-C stops the robot).
+    #[arg(long, conflicts_with = "no_wait")]
+    pub detach: bool,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
@@ -182,6 +187,9 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     let order = order(args).map_err(Failure::BadInput)?;
     let timeout = timeout(args.timeout.as_deref())?;
     args.daemon.block_on(async {
+        let mut interrupt = (!args.no_wait)
+            .then(|| Interrupt::catch(args.detach))
+            .transpose()?;
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "moves", &order).await?;
         let accepted: Received<MoveAccepted> =
@@ -206,25 +214,42 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
             };
             return super::print(out, args.daemon.json, &accepted.json, &accepted_line);
         }
-        let mut outcome = Ok(());
-        for (n, &id) in ids.iter().enumerate() {
-            let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
-            let line = if ids.len() > 1 {
-                format!("start {}/{}: {}", n + 1, ids.len(), summary(&last.value))
-            } else {
-                summary(&last.value)
-            };
-            // The JSON is the last start's report; a start before it is summed up in text only.
-            let printed = if args.daemon.json && n + 1 < ids.len() {
-                Ok(())
-            } else {
-                super::print(out, args.daemon.json, &last.json, &line)
-            };
-            // The verdict counts even when the summary cannot be written (a closed pipe).
-            outcome = outcome.and(verdict(&last.value)).and(printed);
+        let work = async {
+            let mut outcome = Ok(());
+            for (n, &id) in ids.iter().enumerate() {
+                let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
+                let line = if ids.len() > 1 {
+                    format!("start {}/{}: {}", n + 1, ids.len(), summary(&last.value))
+                } else {
+                    summary(&last.value)
+                };
+                // The JSON is the last start's report; a start before it is summed up in text
+                // only.
+                let printed = if args.daemon.json && n + 1 < ids.len() {
+                    Ok(())
+                } else {
+                    super::print(out, args.daemon.json, &last.json, &line)
+                };
+                // The verdict counts even when the summary cannot be written (a closed pipe).
+                outcome = outcome.and(verdict(&last.value)).and(printed);
+            }
+            outcome
+        };
+        let running = format!("move {id} goes on (`linterpd stop` stops it)");
+        let stop = async || stop_robot(&client, &robot, &format!("move {id}")).await;
+        match &mut interrupt {
+            Some(interrupt) => interrupt.attached(work, &running, stop).await,
+            None => work.await,
         }
-        outcome
     })
+}
+
+/// Stops the robot on Ctrl-C (its queued moves are cancelled with it); what was stopped.
+async fn stop_robot(client: &Client, robot: &str, what: &str) -> Result<String, Failure> {
+    client
+        .expect(Method::POST, &format!("/v1/robots/{robot}/stop"), None)
+        .await?;
+    Ok(format!("{robot} stopped, {what} with it"))
 }
 
 /// `--timeout`, if given.
@@ -270,7 +295,8 @@ fn verdict(last: &MoveReport) -> Result<(), Failure> {
     )))
 }
 
-/// One line: what happened, how long it took, how far from the target it ended.
+/// One line: what happened, how long it took, how far from the target it ended. Why a move did
+/// not end done is not in it: the verdict says it once, on stderr.
 fn summary(r: &MoveReport) -> String {
     let secs = |s: Option<f64>| s.map_or("-".to_owned(), |v| format!("{v:.3} s"));
     let mut line = format!(
@@ -290,9 +316,6 @@ fn summary(r: &MoveReport) -> String {
             ", predicted path deviation {:.4} mm",
             p.path_deviation_mm
         );
-    }
-    if let Some(e) = &r.error {
-        let _ = write!(line, ": {e}");
     }
     line
 }
@@ -403,6 +426,20 @@ mod tests {
         .unwrap_err();
         assert_eq!(e.exit_code(), crate::cli::EXIT_NOT_DONE);
         assert_eq!(e.to_string(), "move 3 ended cancelled: cancelled by a stop");
+    }
+
+    #[test]
+    fn a_permit_refusal_is_said_once_by_the_verdict_not_by_the_summary_too() {
+        let report = Received::<MoveReport>::read(
+            json!({"id": 1, "robot": "r", "stage": "failed", "error": "not started: its permit \
+                does not hold: X5 is off (the permit needs it on); nothing was written"}),
+            "a report",
+        )
+        .unwrap()
+        .value;
+        assert_eq!(summary(&report), "move 1 failed: upload -, motion -");
+        let e = verdict(&report).unwrap_err().to_string();
+        assert_eq!(e.matches("its permit does not hold").count(), 1, "{e}");
     }
 
     #[test]

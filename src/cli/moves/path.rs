@@ -17,8 +17,9 @@ use clap::Args;
 use serde_json::Value;
 
 use super::super::client::{Client, Received};
+use super::super::interrupt::Interrupt;
 use super::super::{DaemonArgs, Failure};
-use super::{MotionFlags, bars, follow, post, summary, timeout, verdict};
+use super::{MotionFlags, bars, follow, post, stop_robot, summary, timeout, verdict};
 use crate::config::PathDoc;
 use crate::daemon::{MoveOrder, MoveReport, PathAccepted, PathOrder};
 
@@ -30,7 +31,7 @@ pub struct RunArgs {
     /// must be there. A regular file of at most 1 MiB (anything else is refused unread).
     pub file: PathBuf,
     /// The robot (needed when the daemon runs several).
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub robot: Option<String>,
     /// Speed, acceleration, method, period and tolerance.
     #[command(flatten)]
@@ -41,6 +42,9 @@ pub struct RunArgs {
     /// Return once the path is accepted, printing its sections' ids.
     #[arg(long)]
     pub no_wait: bool,
+    /// Ctrl-C stops following and leaves the path running (without it, Ctrl-C stops the robot).
+    #[arg(long, conflicts_with = "no_wait")]
+    pub detach: bool,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
@@ -71,6 +75,9 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
     let order = order(args).map_err(Failure::BadInput)?;
     let timeout = timeout(args.timeout.as_deref())?;
     args.daemon.block_on(async {
+        let mut interrupt = (!args.no_wait)
+            .then(|| Interrupt::catch(args.detach))
+            .transpose()?;
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "paths", &order).await?;
         let accepted: Received<PathAccepted> =
@@ -86,24 +93,32 @@ pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
             );
         }
         let labels = start_labels(&accepted.value.reports, ids.len());
-        let mut finals = Vec::with_capacity(ids.len());
-        let mut outcome = Ok(());
-        for (&id, label) in ids.iter().zip(&labels) {
-            let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
-            if !args.daemon.json {
-                let elements = bars::elements(&last.value)
-                    .map(|e| format!(" (element {e})"))
-                    .unwrap_or_default();
-                writeln!(out, "{label}{elements}: {}", summary(&last.value))
-                    .map_err(|e| Failure::Runtime(e.into()))?;
+        let work = async {
+            let mut finals = Vec::with_capacity(ids.len());
+            let mut outcome = Ok(());
+            for (&id, label) in ids.iter().zip(&labels) {
+                let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
+                if !args.daemon.json {
+                    let elements = bars::elements(&last.value)
+                        .map(|e| format!(" (element {e})"))
+                        .unwrap_or_default();
+                    writeln!(out, "{label}{elements}: {}", summary(&last.value))
+                        .map_err(|e| Failure::Runtime(e.into()))?;
+                }
+                outcome = outcome.and(verdict(&last.value));
+                finals.push(last.json);
             }
-            outcome = outcome.and(verdict(&last.value));
-            finals.push(last.json);
+            if args.daemon.json {
+                super::super::print(out, true, &Value::Array(finals), "")?;
+            }
+            outcome
+        };
+        let running = "the path goes on (`linterpd stop` stops it)";
+        let stop = async || stop_robot(&client, &robot, "the path").await;
+        match &mut interrupt {
+            Some(interrupt) => interrupt.attached(work, running, stop).await,
+            None => work.await,
         }
-        if args.daemon.json {
-            super::super::print(out, true, &Value::Array(finals), "")?;
-        }
-        outcome
     })
 }
 

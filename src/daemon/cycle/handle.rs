@@ -53,6 +53,13 @@ impl RobotHandle {
         };
         let programs =
             crate::cycle::load::programs(dir).map_err(|e| CycleError::Program(e.to_string()))?;
+        if !programs.docs.contains_key(name) && !programs.broken.contains_key(name) {
+            return Err(CycleError::Program(format!(
+                "program {name:?}: no such program; {} (in {}, which has no {name}.toml)",
+                crate::cycle::check::there_are(&programs.docs, &programs.broken),
+                dir.display()
+            )));
+        }
         for (program, why) in &programs.broken {
             // Said once each time a program is run; it keeps no other from running.
             tracing::warn!(robot = %self.robot.name, program, "a cycle program cannot be read: {why}");
@@ -72,6 +79,7 @@ impl RobotHandle {
             broken: &programs.broken,
             require_wait_timeout: self.cell.settings.require_wait_timeout,
             start: self.where_next_begins(),
+            poses_known: true,
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
     }

@@ -61,6 +61,23 @@ pub enum ServeError {
         #[source]
         source: io::Error,
     },
+    /// The socket's directory is missing and cannot be made.
+    #[error(
+        "cannot create the socket's directory {} ([daemon] socket = \"{}\"): set [daemon] socket \
+         to a path in a directory you may write (config/try.toml: a user's directory), or run the \
+         service, whose RuntimeDirectory= makes /run/linterpd",
+        dir.display(),
+        socket.display()
+    )]
+    SocketDir {
+        /// The directory.
+        dir: PathBuf,
+        /// The socket, as configured.
+        socket: PathBuf,
+        /// Why.
+        #[source]
+        source: io::Error,
+    },
     /// Another daemon holds the socket's lock.
     #[error(
         "another linterpd daemon already serves {} (it holds {}): stop it first, or give this one \

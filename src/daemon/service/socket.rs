@@ -1,6 +1,8 @@
 //! The API's Unix socket: one daemon per socket, held by a lock file beside it (`api.sock.lock`),
 //! so a second `linterpd serve` refuses to start instead of deleting the live daemon's socket.
-//! Only the holder of the lock replaces a socket file left behind by a daemon that died.
+//! Only the holder of the lock replaces a socket file left behind by a daemon that died. The
+//! socket's directory is made when missing (mode 0750, as the unit's `RuntimeDirectory=` does),
+//! so a daemon started by hand needs no root to prepare it.
 
 use std::fs::{File, OpenOptions, TryLockError};
 use std::os::unix::fs::{FileTypeExt, PermissionsExt};
@@ -18,9 +20,31 @@ pub fn lock_path(socket: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Takes the socket's lock for as long as the returned file lives; refuses when another daemon
-/// holds it.
+/// The socket directory's mode when the daemon makes it (the unit's `RuntimeDirectoryMode=`).
+const SOCKET_DIR_MODE: u32 = 0o750;
+
+/// Makes the socket's directory (and its parents) when missing; refuses naming `[daemon] socket`
+/// and what to do when it cannot.
+pub(super) fn ensure_socket_dir(socket: &Path) -> Result<(), ServeError> {
+    use std::os::unix::fs::DirBuilderExt;
+    let Some(dir) = socket.parent().filter(|d| !d.as_os_str().is_empty()) else {
+        return Ok(());
+    };
+    std::fs::DirBuilder::new()
+        .recursive(true)
+        .mode(SOCKET_DIR_MODE)
+        .create(dir)
+        .map_err(|source| ServeError::SocketDir {
+            dir: dir.to_owned(),
+            socket: socket.to_owned(),
+            source,
+        })
+}
+
+/// Takes the socket's lock for as long as the returned file lives, making the socket's
+/// directory first when it is missing; refuses when another daemon holds it.
 pub fn lock(socket: &Path) -> Result<File, ServeError> {
+    ensure_socket_dir(socket)?;
     let path = lock_path(socket);
     let file = OpenOptions::new()
         .create(true)
@@ -92,6 +116,31 @@ mod tests {
         assert!(socket.exists(), "the live socket is still there");
         drop(first);
         assert!(lock(&socket).is_ok(), "free once the first daemon is gone");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_missing_socket_directory_is_made_and_one_that_cannot_be_is_named_with_the_key() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = temp("sockdir");
+        let socket = dir.join("run/linterpd/api.sock");
+        let held = lock(&socket).unwrap();
+        let mode = std::fs::metadata(socket.parent().unwrap())
+            .unwrap()
+            .permissions()
+            .mode();
+        assert_eq!(mode & !SOCKET_DIR_MODE & 0o777, 0, "{mode:o}");
+        drop(held);
+        std::fs::write(dir.join("file"), "").unwrap();
+        let e = lock(&dir.join("file/api.sock")).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "cannot create the socket's directory {}/file ([daemon] socket = \"{}/file/api.sock\")",
+                dir.display(),
+                dir.display()
+            )) && e.contains("set [daemon] socket to a path in a directory you may write"),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

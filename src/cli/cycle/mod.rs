@@ -2,13 +2,20 @@
 //!
 //! ```text
 //! linterpd cycle run press-load --count 10   -> press-load: running, 0 of 10 done
+//! linterpd cycle run press-load --count 3 --follow
+//!                                            -> a line per step until done (exit 0), a fault or
+//!                                               a stop (exit 3); Ctrl-C stops it now (exit 130)
 //! linterpd cycle status                      -> press-load: waiting for press_open (X5) for 2.4 s
 //!                                               at step 3 (load) of press-load; 4 of 10 done
+//!                                               (exit 1 when the cycle is faulted)
 //! linterpd cycle stop [--now]                -> press-load: stops at the end of step 3
 //! linterpd cycle pause | resume
 //! ```
 //! The programs are the robot's `[robots.NAME.cell] programs` directory's `*.toml` files; the
 //! daemon checks one whole (every step, every name, every position) before it runs anything.
+//! `--json`, `--socket` and `--robot` go before or after the action.
+
+mod follow;
 
 use std::fmt::Write as _;
 
@@ -16,8 +23,9 @@ use clap::{Args, Subcommand};
 use hyper::Method;
 use serde_json::json;
 
-use super::client::Client;
-use super::{DaemonArgs, Failure};
+use super::client::{Client, Received};
+use super::interrupt::Interrupt;
+use super::{DaemonArgs, EXIT_FAILURE, Failure};
 use crate::daemon::{CycleState, CycleStatus};
 
 /// Arguments of `linterpd cycle`.
@@ -44,6 +52,14 @@ pub enum CycleAction {
         /// How many cycles (1 and up); without it the cycle repeats until stopped.
         #[arg(long)]
         count: Option<u64>,
+        /// Follow it: a line each time it moves on (the cycle, the step, what it waits for);
+        /// exit 0 once the count is done, 3 when it faults or is stopped (naming the step and
+        /// the wait). Ctrl-C stops the cycle and the robot at once (exit 130).
+        #[arg(long)]
+        follow: bool,
+        /// With --follow: Ctrl-C stops following and leaves the cycle running (exit 0).
+        #[arg(long, requires = "follow")]
+        detach: bool,
     },
     /// Stop the cycle at the end of the current step (`--now`: stop the robot at once).
     Stop {
@@ -55,7 +71,7 @@ pub enum CycleAction {
     Pause,
     /// Go on after a pause, a hold, or a fault once it was cleared (`linterpd clear-fault`).
     Resume,
-    /// The cycle's state, step, count and what it waits for.
+    /// The cycle's state, step, count and what it waits for; exit 1 when it is faulted.
     Status,
 }
 
@@ -63,38 +79,63 @@ pub enum CycleAction {
 pub fn run(args: &CycleArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let daemon = &args.daemon;
     daemon.block_on(async {
+        let (follow, detach) = match &args.action {
+            CycleAction::Run { follow, detach, .. } => (*follow, *detach),
+            _ => (false, false),
+        };
+        // Caught before the run is asked for: no Ctrl-C falls between the order and the watch.
+        let mut interrupt = follow.then(|| Interrupt::catch(detach)).transpose()?;
         let client = Client::new(&daemon.socket);
         let robot = client
             .robot(args.robot.as_deref())
             .await
             .map_err(Failure::from_client)?;
         let base = format!("/v1/robots/{robot}/cycles");
-        let answer = match &args.action {
-            CycleAction::Run { program, count } => {
-                let body = json!({ "program": program, "count": count });
-                client.expect(Method::POST, &base, Some(&body)).await?
-            }
-            CycleAction::Stop { now } => {
-                let body = json!({ "now": now });
+        let answer = request(&client, &base, &args.action).await?;
+        let status: Received<CycleStatus> =
+            Received::read(answer, "a cycle's status").map_err(Failure::Runtime)?;
+        if let Some(interrupt) = &mut interrupt {
+            let program = status.value.program.clone();
+            let work = follow::follow(&client, &robot, status, daemon.json, out);
+            let running = format!("{program} goes on (`linterpd cycle stop` ends it)");
+            let stop = async || {
+                let body = json!({ "now": true });
                 let path = format!("{base}/stop");
-                client.expect(Method::POST, &path, Some(&body)).await?
-            }
-            CycleAction::Pause => {
-                client
-                    .expect(Method::POST, &format!("{base}/pause"), None)
-                    .await?
-            }
-            CycleAction::Resume => {
-                client
-                    .expect(Method::POST, &format!("{base}/resume"), None)
-                    .await?
-            }
-            CycleAction::Status => client.expect(Method::GET, &base, None).await?,
-        };
-        let status: CycleStatus = serde_json::from_value(answer.clone())
-            .map_err(|e| Failure::Runtime(anyhow::anyhow!("the daemon's cycle status: {e}")))?;
-        super::print(out, daemon.json, &answer, &describe(&status))
+                client.expect(Method::POST, &path, Some(&body)).await?;
+                Ok(format!("{program} stopped, the robot stopped at once"))
+            };
+            return interrupt.attached(work, &running, stop).await;
+        }
+        super::print(out, daemon.json, &status.json, &describe(&status.value))?;
+        match (&args.action, status.value.state) {
+            (CycleAction::Status, CycleState::Faulted) => Err(Failure::Quiet(EXIT_FAILURE)),
+            _ => Ok(()),
+        }
     })
+}
+
+/// Asks the daemon for `action` on the cycles at `base`; its answer (a cycle's status).
+async fn request(
+    client: &Client,
+    base: &str,
+    action: &CycleAction,
+) -> Result<serde_json::Value, Failure> {
+    let (method, path, body) = match action {
+        CycleAction::Run { program, count, .. } => (
+            Method::POST,
+            base.to_owned(),
+            Some(json!({ "program": program, "count": count })),
+        ),
+        CycleAction::Stop { now } => (
+            Method::POST,
+            format!("{base}/stop"),
+            Some(json!({ "now": now })),
+        ),
+        CycleAction::Pause => (Method::POST, format!("{base}/pause"), None),
+        CycleAction::Resume => (Method::POST, format!("{base}/resume"), None),
+        CycleAction::Status => (Method::GET, base.to_owned(), None),
+    };
+    client.expect(method, &path, body.as_ref()).await
 }
 
 /// A cycle's status in one line.
@@ -148,6 +189,7 @@ pub fn describe(s: &CycleStatus) -> String {
 mod tests {
     use super::*;
     use crate::daemon::StepAt;
+    use clap::Parser;
 
     #[test]
     fn a_waiting_cycle_says_what_it_waits_for_where_and_how_far_it_got() {
@@ -171,6 +213,64 @@ mod tests {
              from press-load step 2: wait for press_open (X5); 4 of 10 done, last cycle 7.12 s \
              (1.50 s of it waiting)"
         );
+    }
+
+    fn cycle(line: &[&str]) -> CycleArgs {
+        let cli = crate::cli::Cli::try_parse_from(line).unwrap();
+        let crate::cli::Command::Cycle(args) = cli.command else {
+            panic!("not cycle")
+        };
+        args
+    }
+
+    #[test]
+    fn cycle_run_accepts_json_after_the_subcommand() {
+        let args = cycle(&[
+            "linterpd",
+            "cycle",
+            "run",
+            "press-load",
+            "--count",
+            "3",
+            "--json",
+        ]);
+        assert!(args.daemon.json);
+        assert!(matches!(
+            args.action,
+            CycleAction::Run { count: Some(3), .. }
+        ));
+        let args = cycle(&["linterpd", "cycle", "--json", "run", "press-load"]);
+        assert!(args.daemon.json);
+    }
+
+    #[test]
+    fn cycle_status_accepts_socket_and_robot_after_the_subcommand() {
+        let args = cycle(&[
+            "linterpd",
+            "cycle",
+            "status",
+            "--socket",
+            "/tmp/x.sock",
+            "--robot",
+            "r",
+        ]);
+        assert_eq!(args.daemon.socket, std::path::Path::new("/tmp/x.sock"));
+        assert_eq!(args.robot.as_deref(), Some("r"));
+    }
+
+    #[test]
+    fn cycle_run_detach_needs_follow() {
+        let line = ["linterpd", "cycle", "run", "p", "--detach"];
+        assert!(crate::cli::Cli::try_parse_from(line).is_err());
+        let args = cycle(&["linterpd", "cycle", "run", "p", "--follow", "--detach"]);
+        assert!(matches!(
+            args.action,
+            CycleAction::Run {
+                follow: true,
+                detach: true,
+                ..
+            }
+        ));
     }
 
     #[test]

@@ -1,7 +1,12 @@
 //! `linterpd check-config`: read a configuration file as the daemon would and say what it holds
 //! (text, or with `--json` one document: `{"config", "robots": [{"name", "kinematics",
-//! "joints": [{"name", "channel"}], "link"}]}`), or the first thing wrong with it (line, key,
-//! value, limit) on stderr with exit 2. Needs no daemon.
+//! "joints": [{"name", "channel"}], "link", "programs"?: {"dir", "checked": [{"name", "number",
+//! "ops"}], "positions"}}]}`), or what is wrong with it on stderr with exit 2: the first fault of
+//! the file (the file, line, key path, value, limit, and the nearest valid key of an unknown
+//! one), or every cycle program of a robot's `programs` directory that does not check (each as
+//! `cycle run` would say it; `programs.rs`). Needs no daemon.
+
+mod programs;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -64,10 +69,32 @@ fn describe(link: &LinkSettings) -> String {
 /// Runs `linterpd check-config`.
 pub fn run(args: &CheckConfigArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let config = Config::load(&args.config).map_err(bad_input)?;
+    let programs: Vec<Option<programs::Programs>> = config
+        .robots
+        .iter()
+        .map(|robot| programs::check(&config, robot))
+        .collect();
+    let faults: Vec<String> = programs
+        .iter()
+        .flatten()
+        .flat_map(|p| p.faults.iter().map(|f| format!("  {f}")))
+        .collect();
+    if !faults.is_empty() {
+        return Err(bad_input(anyhow::anyhow!(
+            "{}: {} in its cycle programs:\n{}",
+            args.config.display(),
+            if faults.len() == 1 {
+                "one fault".to_owned()
+            } else {
+                format!("{} faults", faults.len())
+            },
+            faults.join("\n")
+        )));
+    }
     let written = if args.json {
-        writeln!(out, "{}", document(args, &config))
+        writeln!(out, "{}", document(args, &config, &programs))
     } else {
-        out.write_all(text(args, &config).as_bytes())
+        out.write_all(text(args, &config, &programs).as_bytes())
     };
     written.map_err(|e| Failure::Runtime(e.into()))
 }
@@ -76,13 +103,48 @@ fn link_of(config: &Config, robot: &str) -> Option<String> {
     config.link(robot).map(describe)
 }
 
-fn text(args: &CheckConfigArgs, config: &Config) -> String {
+/// A robot's programs in a line.
+fn describe_programs(p: &programs::Programs) -> String {
+    let names: Vec<String> = p
+        .checked
+        .iter()
+        .map(|c| match c.number {
+            Some(n) => format!("{} (number {n})", c.name),
+            None => c.name.clone(),
+        })
+        .collect();
+    let mut line = format!(
+        "cycle programs in {}: {}",
+        p.dir.display(),
+        if names.is_empty() {
+            "none".to_owned()
+        } else {
+            format!("{}, each checked", names.join(", "))
+        }
+    );
+    if !p.positions.is_empty() {
+        let positions: Vec<&str> = p.positions.iter().map(String::as_str).collect();
+        let _ = write!(
+            line,
+            "; they move to the taught positions {} (`linterpd pos save NAME`; checked when a \
+             cycle runs)",
+            positions.join(", ")
+        );
+    }
+    line
+}
+
+fn text(
+    args: &CheckConfigArgs,
+    config: &Config,
+    programs: &[Option<programs::Programs>],
+) -> String {
     let mut text = format!(
         "{}: {} robot(s)\n",
         args.config.display(),
         config.robots.len()
     );
-    for robot in &config.robots {
+    for (i, robot) in config.robots.iter().enumerate() {
         let joints: Vec<String> = robot
             .joints
             .iter()
@@ -96,26 +158,47 @@ fn text(args: &CheckConfigArgs, config: &Config) -> String {
             robot.kinematics.name(),
             joints.join(", ")
         );
+        if let Some(p) = programs.get(i).and_then(Option::as_ref) {
+            let _ = writeln!(text, "    {}", describe_programs(p));
+        }
     }
     text
 }
 
-fn document(args: &CheckConfigArgs, config: &Config) -> Value {
+fn document(
+    args: &CheckConfigArgs,
+    config: &Config,
+    programs: &[Option<programs::Programs>],
+) -> Value {
     let robots: Vec<Value> = config
         .robots
         .iter()
-        .map(|robot| {
+        .zip(programs)
+        .map(|(robot, programs)| {
             let joints: Vec<Value> = robot
                 .joints
                 .iter()
                 .map(|j| json!({ "name": j.name, "channel": j.channel }))
                 .collect();
-            json!({
+            let mut robot_json = json!({
                 "name": robot.name,
                 "kinematics": robot.kinematics.name(),
                 "joints": joints,
                 "link": link_of(config, &robot.name),
-            })
+            });
+            if let Some(p) = programs {
+                let checked: Vec<Value> = p
+                    .checked
+                    .iter()
+                    .map(|c| json!({ "name": c.name, "number": c.number, "ops": c.ops }))
+                    .collect();
+                robot_json["programs"] = json!({
+                    "dir": p.dir.display().to_string(),
+                    "checked": checked,
+                    "positions": p.positions,
+                });
+            }
+            robot_json
         })
         .collect();
     json!({ "config": args.config.display().to_string(), "robots": robots })
