@@ -140,6 +140,7 @@ async fn run(busy: bool) -> Figures {
                 to: Some(to.to_vec()),
                 ..MoveOrder::default()
             })
+            .await
             .unwrap();
         let r = h.wait(id, Duration::from_secs(60)).await.unwrap();
         assert_eq!(r.stage, Stage::Done, "{r:?}");

@@ -172,7 +172,7 @@ pub async fn soak(link: SoakLink, moves: usize) -> Summary {
         at_a = targets.last() == Some(&A);
         let mut ids = Vec::new();
         for &to in targets {
-            match h.submit(order(to)) {
+            match h.submit(order(to)).await {
                 Ok(id) => ids.push(id),
                 Err(_) => summary.refused += 1,
             }

@@ -136,6 +136,7 @@ async fn latencies(
                 tolerance_mm,
                 ..MoveOrder::default()
             })
+            .await
             .unwrap();
         let mut first = None;
         for id in &ids {

@@ -60,5 +60,5 @@ pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{KEPT, Moves};
 pub use request::{CommandError, ConflictReason};
 pub use setup::{DaemonOptions, RobotSetup, host_word};
-pub use shared::Incidents;
+pub use shared::{Incidents, Reads, Snapshot};
 pub use worker::Connector;

@@ -6,9 +6,10 @@ use thiserror::Error;
 use tokio::sync::oneshot;
 
 use crate::contract::State;
+use crate::kinematics::JOINTS;
 use crate::order::CheckedOrder;
 use crate::plc::exchange::fault_meaning;
-use crate::wire::MoveId;
+use crate::wire::{MoveId, MoveReport};
 
 /// Why a stop, home or clear-fault did not happen.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -90,26 +91,29 @@ pub(super) type Reply = oneshot::Sender<Result<(), CommandError>>;
 /// What the worker is asked to do (stops come on their own channel, to overtake).
 #[derive(Debug)]
 pub(super) enum Request {
-    /// Run a checked order.
-    Move(Given),
+    /// Queue a checked order's starts (one, or the parts of a path or of a line cut), whole or
+    /// not at all; answered with their ids.
+    Moves(Batch),
     /// Home the robot (answered when the home routine has ended).
     Home(Reply),
     /// Clear a latched fault.
     ClearFault(Reply),
 }
 
-/// An order given to the worker: a move it runs in its turn.
+/// One order's starts given to the worker, each a move it runs in its turn.
 #[derive(Debug)]
-pub(super) struct Given {
-    /// The move.
-    pub id: MoveId,
-    /// Its order, checked (and planned, when its start was known).
-    pub order: CheckedOrder,
-    /// The gate its start waits for once it is uploaded (a cycle's move prepared ahead).
+pub(super) struct Batch {
+    /// Each start's report (as accepted) and checked order (planned, when its start was known).
+    pub starts: Vec<(MoveReport, CheckedOrder)>,
+    /// Where the last start is planned to end (the next order is planned from there).
+    pub end: Option<[i64; JOINTS]>,
+    /// The gate a single start waits for once it is uploaded (a cycle's move prepared ahead).
     pub gate: Option<super::gate::Gate>,
     /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
     /// another incident came; `None`: whenever.
     pub epoch: Option<u64>,
+    /// The answer: the starts' ids, or why none was queued.
+    pub reply: oneshot::Sender<Result<Vec<MoveId>, super::SubmitError>>,
 }
 
 #[cfg(test)]

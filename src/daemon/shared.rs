@@ -1,9 +1,20 @@
-//! What a robot's worker and its handle share: the robot's state as last read, the move
-//! reports, the flag a stop raises before it is taken, and why a new order would be refused now.
-//! Neither side owns the other: both hold this.
+//! What a robot's owner (its worker task) publishes, and what its handles read: one snapshot of
+//! the robot ([`Snapshot`]: the state the API shows, why an order would be refused, where the
+//! last accepted order ends, when the status block was last read, the PLC's incidents), sent on
+//! a `watch` by the worker alone; the move reports, written by the worker alone and read by
+//! every handle; and the few signals a handle raises for the worker between two of its
+//! exchanges.
+//!
+//! ```text
+//!  worker --Publisher (watch::Sender<Snapshot>)--> handles, API, cycle, console (Receivers)
+//!  worker --Moves (writes)--> handles (reads: a report, a move's feed)
+//!  handle --stop_pending, inputs_watched, read_soon--> worker
+//! ```
 
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+
+use tokio::sync::watch;
 
 use super::ids::MoveIds;
 use super::metrics::RobotMetrics;
@@ -13,10 +24,156 @@ use crate::kinematics::JOINTS;
 use crate::plc::exchange::Beat;
 use crate::wire::{MoveId, RobotState};
 
-/// State shared by a robot's worker and its handle.
+/// What made the PLC untrustworthy under the host, counted ([`Publisher::incident`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Incidents {
+    /// How many so far.
+    pub count: u64,
+    /// The last one, in words.
+    pub last: Option<String>,
+}
+
+/// One robot as its worker last published it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// The state the API shows (but the cycle, the mode and the cell face, which have owners
+    /// of their own).
+    pub state: RobotState,
+    /// Why a new order would be refused now (`None`: it would be queued).
+    pub refusal: Option<Blocker>,
+    /// Where the last order accepted is planned to end, per joint, while it is queued or runs
+    /// (the next order is planned from there).
+    pub planned_end: Option<[i64; JOINTS]>,
+    /// When the last status block was read (tokio's clock; `None`: never, or the link was lost
+    /// since).
+    pub read_at: Option<tokio::time::Instant>,
+    /// Counts the status blocks read and the links lost: a cycle's wait decides on each.
+    pub reads: u64,
+    /// What made the PLC untrustworthy under the host (it restarted, stalled, went to PROG
+    /// mode, or the link was lost past a move's end): a cycle faults on each, whatever its
+    /// step, and what it asked for before one is refused after it.
+    pub incidents: Incidents,
+}
+
+impl Snapshot {
+    fn new(name: &str) -> Self {
+        Self {
+            state: RobotState {
+                name: name.to_owned(),
+                ..RobotState::default()
+            },
+            refusal: Some(Blocker::LinkDown),
+            planned_end: None,
+            read_at: None,
+            reads: 0,
+            incidents: Incidents::default(),
+        }
+    }
+
+    /// How long ago the last status block was read.
+    #[must_use]
+    pub fn since_read(&self) -> Option<std::time::Duration> {
+        self.read_at.map(|at| at.elapsed())
+    }
+}
+
+/// The status blocks a robot's worker reads, one after another: what a cycle's wait decides
+/// on.
+#[derive(Debug, Clone)]
+pub struct Reads {
+    snapshots: watch::Receiver<Snapshot>,
+    /// The reads counted when last waited for (or when this was made).
+    seen: u64,
+}
+
+impl Reads {
+    /// Waits for the next status block read (or link lost) after the last one seen; `Err` once
+    /// the worker is gone.
+    pub async fn next(&mut self) -> Result<(), watch::error::RecvError> {
+        let seen = self.seen;
+        let reads = self.snapshots.wait_for(|s| s.reads != seen).await?.reads;
+        self.seen = reads;
+        Ok(())
+    }
+}
+
+/// The worker's side of the snapshot: the one sender.
+#[derive(Debug)]
+pub(super) struct Publisher(watch::Sender<Snapshot>);
+
+impl Publisher {
+    /// The robot's state, changed by `f` and published (its readers woken only when it
+    /// changed).
+    pub(super) fn state<T>(&self, f: impl FnOnce(&mut RobotState) -> T) -> T {
+        let mut out = None;
+        self.0.send_if_modified(|s| {
+            let before = s.state.clone();
+            out = Some(f(&mut s.state));
+            s.state != before
+        });
+        out.expect("send_if_modified runs its closure")
+    }
+
+    /// The snapshot as published.
+    pub(super) fn get(&self) -> watch::Ref<'_, Snapshot> {
+        self.0.borrow()
+    }
+
+    /// A status block was read now.
+    pub(super) fn fresh_read(&self) {
+        self.0.send_modify(|s| {
+            s.read_at = Some(tokio::time::Instant::now());
+            s.reads = s.reads.wrapping_add(1);
+        });
+    }
+
+    /// The link was lost: no read is fresh.
+    pub(super) fn no_read(&self) {
+        self.0.send_modify(|s| {
+            s.read_at = None;
+            s.reads = s.reads.wrapping_add(1);
+        });
+    }
+
+    /// The PLC restarted, stalled or went to PROG mode, or the link was lost past a move's end
+    /// (`why`): counted, and every watcher woken.
+    pub(super) fn incident(&self, why: String) {
+        self.0.send_modify(|s| {
+            s.incidents.count += 1;
+            s.incidents.last = Some(why);
+        });
+    }
+
+    /// The incidents so far.
+    pub(super) fn incidents(&self) -> Incidents {
+        self.0.borrow().incidents.clone()
+    }
+
+    /// Why a new order would be refused now.
+    pub(super) fn set_refusal(&self, refusal: Option<Blocker>) {
+        self.0.send_if_modified(|s| {
+            let changed = s.refusal != refusal;
+            s.refusal = refusal;
+            changed
+        });
+    }
+
+    /// Where the last order accepted ends.
+    pub(super) fn set_planned_end(&self, end: Option<[i64; JOINTS]>) {
+        self.0.send_if_modified(|s| {
+            let changed = s.planned_end != end;
+            s.planned_end = end;
+            changed
+        });
+    }
+}
+
+/// What a robot's worker and its handles hold together.
 #[derive(Debug)]
 pub(super) struct Shared {
-    state: Mutex<RobotState>,
+    /// The worker's snapshot, as published.
+    published: watch::Receiver<Snapshot>,
+    /// The move reports: written by the worker alone.
     moves: Mutex<Moves>,
     /// Set when a stop is asked for: an upload in progress gives up at its next write.
     pub stop_pending: Arc<AtomicBool>,
@@ -27,31 +184,10 @@ pub(super) struct Shared {
     /// fresh block, not one an idle poll away).
     pub read_soon: tokio::sync::Notify,
     ids: Arc<MoveIds>,
-    /// Where the last accepted order is planned to end, per joint (for checking the next).
-    planned_end: Mutex<Option<[i64; JOINTS]>>,
-    /// Why a new order would be refused now (`None`: it would be queued).
-    refusal: Mutex<Option<Blocker>>,
     /// When the worker last made progress (went round its loop, or an exchange of an upload).
     pub beat: Arc<Beat>,
     /// The robot's lifetime counters and histograms.
     pub metrics: RobotMetrics,
-    /// Counts the status blocks read (and the links lost): a cycle's `wait` wakes on each.
-    reads: tokio::sync::watch::Sender<u64>,
-    /// When the last status block was read (tokio's clock).
-    read_at: Mutex<Option<tokio::time::Instant>>,
-    /// Counts what made the PLC untrustworthy under the host (it restarted, stalled, went to
-    /// PROG mode, or the link was lost past a move's end): a cycle faults on each, whatever its
-    /// step, and what it asked for before one is refused after it.
-    incidents: tokio::sync::watch::Sender<Incidents>,
-}
-
-/// What made the PLC untrustworthy under the host, counted ([`Shared::incident`]).
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Incidents {
-    /// How many so far.
-    pub count: u64,
-    /// The last one, in words.
-    pub last: Option<String>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -60,100 +196,43 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Shared {
-    pub(super) fn new(name: &str, ids: Arc<MoveIds>, metrics: RobotMetrics) -> Self {
-        Self {
-            state: Mutex::new(RobotState {
-                name: name.to_owned(),
-                ..RobotState::default()
-            }),
+    /// What robot `name`'s worker and handles hold, and the worker's publisher.
+    pub(super) fn new(name: &str, ids: Arc<MoveIds>, metrics: RobotMetrics) -> (Self, Publisher) {
+        let (tx, published) = watch::channel(Snapshot::new(name));
+        let shared = Self {
+            published,
             moves: Mutex::new(Moves::default()),
             stop_pending: Arc::new(AtomicBool::new(false)),
             inputs_watched: AtomicBool::new(false),
             read_soon: tokio::sync::Notify::new(),
             ids,
-            planned_end: Mutex::new(None),
-            refusal: Mutex::new(Some(Blocker::LinkDown)),
             beat: Arc::new(Beat::default()),
             metrics,
-            reads: tokio::sync::watch::Sender::new(0),
-            read_at: Mutex::new(None),
-            incidents: tokio::sync::watch::Sender::new(Incidents::default()),
+        };
+        (shared, Publisher(tx))
+    }
+
+    /// The robot as its worker last published it.
+    pub(super) fn snapshot(&self) -> Snapshot {
+        self.published.borrow().clone()
+    }
+
+    /// A reader of the snapshot: wakes on every change.
+    pub(super) fn watch(&self) -> watch::Receiver<Snapshot> {
+        self.published.clone()
+    }
+
+    /// The status reads from now on ([`Reads::next`]).
+    pub(super) fn reads(&self) -> Reads {
+        Reads {
+            seen: self.published.borrow().reads,
+            snapshots: self.published.clone(),
         }
     }
 
-    /// How long ago the last status block was read (`None`: never, or the link was lost since).
-    pub(super) fn since_read(&self) -> Option<std::time::Duration> {
-        lock(&self.read_at).map(|at| at.elapsed())
-    }
-
-    /// A status block was read, or the link lost: what [`Self::watch_reads`] wakes on.
-    pub(super) fn status_read(&self) {
-        self.reads.send_modify(|n| *n = n.wrapping_add(1));
-    }
-
-    /// A status block was read now.
-    pub(super) fn fresh_read(&self) {
-        *lock(&self.read_at) = Some(tokio::time::Instant::now());
-        self.status_read();
-    }
-
-    /// The link was lost: no read is fresh.
-    pub(super) fn no_read(&self) {
-        *lock(&self.read_at) = None;
-        self.status_read();
-    }
-
-    /// The PLC restarted, stalled or went to PROG mode, or the link was lost past a move's end
-    /// (`why`): counted, and every watcher woken.
-    pub(super) fn incident(&self, why: String) {
-        self.incidents.send_modify(|i| {
-            i.count += 1;
-            i.last = Some(why);
-        });
-    }
-
-    /// The incidents so far.
-    pub(super) fn incidents(&self) -> Incidents {
-        self.incidents.borrow().clone()
-    }
-
-    /// Wakes on every incident.
-    pub(super) fn watch_incidents(&self) -> tokio::sync::watch::Receiver<Incidents> {
-        self.incidents.subscribe()
-    }
-
-    /// Wakes on every status block read (and every link lost).
-    pub(super) fn watch_reads(&self) -> tokio::sync::watch::Receiver<u64> {
-        self.reads.subscribe()
-    }
-
-    pub(super) fn state<T>(&self, f: impl FnOnce(&mut RobotState) -> T) -> T {
-        f(&mut lock(&self.state))
-    }
-
+    /// The moves' reports (changed by the worker alone).
     pub(super) fn moves<T>(&self, f: impl FnOnce(&mut Moves) -> T) -> T {
         f(&mut lock(&self.moves))
-    }
-
-    pub(super) fn planned_end(&self) -> Option<[i64; JOINTS]> {
-        *lock(&self.planned_end)
-    }
-
-    pub(super) fn set_planned_end(&self, end: Option<[i64; JOINTS]>) {
-        *lock(&self.planned_end) = end;
-    }
-
-    /// Forgets where queued orders were planned to end (after a move that will not get there).
-    pub(super) fn forget_planned_end(&self) {
-        self.set_planned_end(None);
-    }
-
-    pub(super) fn refusal(&self) -> Option<Blocker> {
-        *lock(&self.refusal)
-    }
-
-    pub(super) fn set_refusal(&self, refusal: Option<Blocker>) {
-        *lock(&self.refusal) = refusal;
     }
 
     pub(super) fn next_id(&self) -> MoveId {

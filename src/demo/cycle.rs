@@ -87,6 +87,7 @@ async fn back_to_p1(handle: &RobotHandle, rig: &Rig, name: &'static str) -> Resu
     };
     let id = handle
         .submit(order)
+        .await
         .map_err(|source| DemoError::Refused { name, source })?;
     let report = handle.wait(id, BATCH_LIMIT).await;
     match report {
@@ -119,6 +120,7 @@ async fn run_cycle(
     };
     let ids = handle
         .submit_path(&order)
+        .await
         .map_err(|source| DemoError::Refused { name, source })?;
     let mut reports = Vec::new();
     for id in ids {

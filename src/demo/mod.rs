@@ -313,13 +313,13 @@ async fn run_batch(
 ) -> Result<Vec<DemoMove>, DemoError> {
     let mut ids = Vec::new();
     for step in batch {
-        let started =
-            handle
-                .submit_starts(step.order.clone())
-                .map_err(|source| DemoError::Refused {
-                    name: step.name,
-                    source,
-                })?;
+        let started = handle
+            .submit_starts(step.order.clone())
+            .await
+            .map_err(|source| DemoError::Refused {
+                name: step.name,
+                source,
+            })?;
         // Each step is measured as one start: none of the demo's lines passes a reversal.
         let [id] = started[..] else {
             return Err(DemoError::NotDone {

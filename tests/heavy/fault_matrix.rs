@@ -450,10 +450,10 @@ impl Violations {
 async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId> {
     let mut ids = Vec::new();
     match flow {
-        Flow::Single => ids.extend(h.submit(order(B)).ok()),
+        Flow::Single => ids.extend(h.submit(order(B)).await.ok()),
         Flow::Chained | Flow::ChainedUnread => {
-            ids.extend(h.submit(order(B)).ok());
-            ids.extend(h.submit(order(C)).ok());
+            ids.extend(h.submit(order(B)).await.ok());
+            ids.extend(h.submit(order(C)).await.ok());
         }
         Flow::ChainedSlow => {
             // The first runs about 1.4 s at 40 mm/s; the second, sampled every 20 ms, takes
@@ -466,12 +466,12 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 period: Some("20ms".into()),
                 ..order(C)
             };
-            ids.extend(h.submit(slow).ok());
-            ids.extend(h.submit(fine).ok());
+            ids.extend(h.submit(slow).await.ok());
+            ids.extend(h.submit(fine).await.ok());
         }
         Flow::StopChained => {
-            ids.extend(h.submit(order(B)).ok());
-            ids.extend(h.submit(order(C)).ok());
+            ids.extend(h.submit(order(B)).await.ok());
+            ids.extend(h.submit(order(C)).await.ok());
             tokio::time::sleep(Duration::from_millis(250)).await;
             let stop = tokio::time::timeout(BOUND, h.stop()).await;
             v.check(stop.is_ok(), || "I3: the stop did not answer".into());
@@ -485,14 +485,14 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 }
                 tokio::time::sleep(Duration::from_millis(10)).await;
             }
-            match h.submit_path(&pick_and_place()) {
+            match h.submit_path(&pick_and_place()).await {
                 Ok(parts) => ids.extend(parts),
                 Err(e) => v.0.push(format!("the path was refused: {e}")),
             }
         }
         Flow::ZeroBehind => {
-            ids.extend(h.submit(order(B)).ok());
-            ids.extend(h.submit(order(B)).ok());
+            ids.extend(h.submit(order(B)).await.ok());
+            ids.extend(h.submit(order(B)).await.ok());
         }
         Flow::PathOffStart => {
             for _ in 0..500 {
@@ -501,26 +501,26 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 }
                 tokio::time::sleep(Duration::from_millis(10)).await;
             }
-            match h.submit_path(&path_off_start()) {
+            match h.submit_path(&path_off_start()).await {
                 Ok(parts) => ids.extend(parts),
                 Err(e) => v.0.push(format!("the path off its start was refused: {e}")),
             }
         }
         Flow::RefusedWhileRunning => {
-            ids.extend(h.submit(order(B)).ok());
+            ids.extend(h.submit(order(B)).await.ok());
             tokio::time::sleep(Duration::from_millis(150)).await;
             let before = h.state().queued;
             let fast = MoveOrder {
                 speed_mm_s: Some(1e308),
                 ..order(C)
             };
-            v.check(h.submit(fast).is_err(), || {
+            v.check(h.submit(fast).await.is_err(), || {
                 "a speed of 1e308 was accepted".into()
             });
             let element: Vec<_> = (0..600).map(|_| serde_json::json!({"line": C})).collect();
             let long: linterpd::daemon::PathOrder =
                 serde_json::from_value(serde_json::json!({"path": {"element": element}})).unwrap();
-            v.check(h.submit_path(&long).is_err(), || {
+            v.check(h.submit_path(&long).await.is_err(), || {
                 "a path of 600 elements was accepted".into()
             });
             let after = h.state().queued;
@@ -533,7 +533,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             let home = tokio::time::timeout(BOUND, h.home()).await;
             v.check(home.is_ok(), || "I3: home did not answer".into());
             if matches!(home, Ok(Ok(()))) {
-                ids.extend(h.submit(order(B)).ok());
+                ids.extend(h.submit(order(B)).await.ok());
             }
         }
     }
@@ -700,10 +700,12 @@ fn output_writes(shared: &SharedMock) -> Vec<linterpd::mock::HostWrite> {
 fn watch_incidents(h: &RobotHandle) -> Arc<std::sync::Mutex<Vec<linterpd::daemon::CycleState>>> {
     let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
     let mut incidents = h.watch_incidents();
-    incidents.borrow_and_update();
+    let mut count = incidents.borrow_and_update().incidents.count;
     let (h, found) = (h.clone(), Arc::clone(&seen));
     tokio::spawn(async move {
-        while incidents.changed().await.is_ok() {
+        while let Ok(now) = incidents.wait_for(|s| s.incidents.count != count).await {
+            count = now.incidents.count;
+            drop(now);
             if let Some(c) = h.cycle() {
                 found.lock().unwrap().push(c.state);
             }
@@ -930,7 +932,7 @@ async fn recover(fault: Fault, h: &RobotHandle, shared: &SharedMock, v: &mut Vio
         v.0.push(format!("I4: {e}"));
         return;
     }
-    let Ok(id) = h.submit(order(A)) else {
+    let Ok(id) = h.submit(order(A)).await else {
         v.0.push(format!(
             "I4: the move after {fault:?} was refused: {:?}",
             h.state()
@@ -1063,7 +1065,14 @@ async fn matrix(flow: Flow, faults: &[Fault]) -> (usize, Vec<String>) {
     for &fault in faults {
         for k in 1..=n {
             cases += 1;
+            let began = std::time::Instant::now();
             let v = case(flow, fault, k).await;
+            if std::env::var_os("MATRIX_TRACE").is_some() {
+                eprintln!(
+                    "{flow:?} {fault:?} @{k}: {:.3} s",
+                    began.elapsed().as_secs_f64()
+                );
+            }
             broken.extend(
                 v.0.into_iter()
                     .map(|e| format!("{flow:?} {fault:?} @{k}: {e}")),

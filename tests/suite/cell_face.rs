@@ -251,17 +251,17 @@ async fn one_controller_at_a_time_and_exactly_one_of_two_racing_wins() {
         c.status().await[status_word::REFUSED],
         Refusal::Local.code()
     );
-    assert!(c.h.owned_by(Mode::Local).is_ok());
+    assert!(c.h.owned_by(Mode::Local).await.is_ok());
     // Remote: the CLI's is refused, naming the mode.
-    c.h.set_mode(Mode::Remote).unwrap();
-    let e = c.h.owned_by(Mode::Local).unwrap_err();
+    c.h.set_mode(Mode::Remote).await.unwrap();
+    let e = c.h.owned_by(Mode::Local).await.unwrap_err();
     assert!(e.to_string().contains("remote mode"), "{e}");
     // Racing a mode change back to local against the face's start: exactly one wins.
     c.write(0, &[0, 0, ON, 0]).await; // the baseline after the mode change
     c.strobe(3, check_of(3)).await;
     c.bits(ON).await;
     let h = c.h.clone();
-    let to_local = tokio::spawn(async move { h.set_mode(Mode::Local) });
+    let to_local = tokio::spawn(async move { h.set_mode(Mode::Local).await });
     c.bits(ON | bit::START).await;
     let mode_won = to_local.await.unwrap();
     let face_won = c.h.cycle().is_some();
@@ -274,7 +274,7 @@ async fn one_controller_at_a_time_and_exactly_one_of_two_racing_wins() {
         assert!(matches!(mode_won, Err(ModeError::Busy { .. })));
         assert_eq!(c.h.mode(), Mode::Remote);
         // And a local run now is refused, while the face's cycle runs.
-        assert!(c.h.owned_by(Mode::Local).is_err());
+        assert!(c.h.owned_by(Mode::Local).await.is_err());
     } else {
         // The mode changed first: the start was the new baseline's write (no edge), and
         // nothing ran.
@@ -315,10 +315,12 @@ async fn move_enable_dropping_stops_the_robot_and_pauses_the_cycle_until_a_fresh
         "{status:?}"
     );
     // No motion while it is off, from anyone; a start is refused naming it.
-    let e = c.h.submit(linterpd::daemon::MoveOrder {
-        to: Some(P1.to_vec()),
-        ..Default::default()
-    });
+    let e =
+        c.h.submit(linterpd::daemon::MoveOrder {
+            to: Some(P1.to_vec()),
+            ..Default::default()
+        })
+        .await;
     assert!(e.unwrap_err().to_string().contains("move-enable is off"));
     c.bits(bit::START).await;
     assert_eq!(
@@ -348,7 +350,7 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
     let s = c.until("stopped", |s| !on(s, status_bit::WAITING)).await;
     assert_eq!(c.h.cycle().unwrap().state, CycleState::Stopped, "{s:?}");
     // Home: refused without a taught home, then to it.
-    c.h.set_mode(Mode::Remote).unwrap();
+    c.h.set_mode(Mode::Remote).await.unwrap();
     c.write(0, &[0, 0, ON, 0]).await;
     c.edge(bit::HOME).await;
     assert_eq!(
@@ -361,12 +363,13 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
         on(&s, status_bit::IN_HOME) && s[status_word::POSITION] == 1,
         "{s:?}"
     );
-    c.h.set_mode(Mode::Local).unwrap();
+    c.h.set_mode(Mode::Local).await.unwrap();
     let id =
         c.h.submit(linterpd::daemon::MoveOrder {
             to: Some(P2.to_vec()),
             ..Default::default()
         })
+        .await
         .unwrap();
     c.h.wait(id, LIMIT).await;
     c.h.save_position("out").unwrap();
@@ -375,7 +378,7 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
         !on(&s, status_bit::IN_HOME) && s[status_word::POSITION] == 2,
         "{s:?}"
     );
-    c.h.set_mode(Mode::Remote).unwrap();
+    c.h.set_mode(Mode::Remote).await.unwrap();
     c.write(0, &[0, 0, ON, 0]).await;
     c.edge(bit::HOME).await;
     let s = c.until("in home", |s| on(s, status_bit::IN_HOME)).await;

@@ -813,6 +813,17 @@ async fn a_clear_before_a_second_restart_does_not_resume_the_cycle() {
     shared.with(linterpd::mock::MockPlc::power_cycle);
     until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     h.clear_fault().await.unwrap();
+    // The daemon has written its host word again and read it echoed (a restart before that is
+    // one the daemon cannot tell from its word not taken yet: the PLC is unhomed either way).
+    for _ in 0..400 {
+        if shared.with(|m| m.status().host) != 0 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let mut reads = h.watch_reads();
+    reads.next().await.unwrap();
+    reads.next().await.unwrap();
     let seen = h.incidents().count;
     shared.with(linterpd::mock::MockPlc::power_cycle);
     for _ in 0..400 {

@@ -144,7 +144,7 @@ async fn wait_connected(h: &RobotHandle) {
 }
 
 async fn run(h: &RobotHandle, p: [f64; 3]) -> MoveReport {
-    let id = h.submit(order(p)).unwrap();
+    let id = h.submit(order(p)).await.unwrap();
     h.wait(id, LIMIT).await.unwrap()
 }
 
@@ -196,8 +196,8 @@ async fn two_queued_moves_run_back_to_back_without_a_host_round_trip() {
             ContractSettings::default(),
         );
         wait_connected(&h).await;
-        let a = h.submit(order(P2)).unwrap();
-        let b = h.submit(order(P1)).unwrap();
+        let a = h.submit(order(P2)).await.unwrap();
+        let b = h.submit(order(P1)).await.unwrap();
         let rb = h.wait(b, LIMIT).await.unwrap();
         let ra = h.report(a).unwrap();
         assert_eq!(ra.stage, Stage::Done, "{link:?} {ra:?}");
@@ -225,7 +225,7 @@ async fn stop_mid_move_stops_every_channel() {
         let shared = mock_at_seed_start("");
         let (d, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
-        let id = h.submit(order(P2)).unwrap();
+        let id = h.submit(order(P2)).await.unwrap();
         let mut feed = h.subscribe(id).unwrap();
         feed.wait_for(|r| r.stage == Stage::Running && r.progress > 0.3)
             .await
@@ -253,7 +253,7 @@ async fn stop_mid_move_stops_every_channel() {
 async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, want: &str) {
     let (d, h) = daemon(connector(link, shared, None), settings);
     tokio::time::sleep(settings.watch.heartbeat_timeout + Duration::from_millis(300)).await;
-    let e = h.submit(order(P2)).unwrap_err();
+    let e = h.submit(order(P2)).await.unwrap_err();
     assert!(matches!(e, SubmitError::NotNow { .. }), "{link:?}: {e:?}");
     assert!(e.to_string().contains(want), "{link:?}: {e}");
     assert!(h.reports().is_empty(), "nothing queued");
@@ -339,7 +339,7 @@ async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
         let shared = mock_at_seed_start("");
         let (first, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
-        let id = h.submit(order(P2)).unwrap();
+        let id = h.submit(order(P2)).await.unwrap();
         h.subscribe(id)
             .unwrap()
             .wait_for(|r| r.stage == Stage::Running)
@@ -384,9 +384,13 @@ async fn bad_orders_are_refused_and_nothing_is_queued() {
             to: Some(vec![1.0, 2.0]),
             ..MoveOrder::default()
         })
+        .await
         .unwrap_err();
     assert!(e.to_string().starts_with("to = [1.0, 2.0]"), "{e}");
-    let e = h.submit(order([-1144.43, 659.60, 500.0])).unwrap_err();
+    let e = h
+        .submit(order([-1144.43, 659.60, 500.0]))
+        .await
+        .unwrap_err();
     assert!(e.to_string().contains("joint d2 would reach"), "{e}");
     assert!(h.state().queued.is_empty());
     assert!(h.reports().is_empty());
@@ -407,7 +411,7 @@ async fn while_the_link_is_down_orders_are_refused_and_a_stop_answers_at_once() 
     });
     let (d, h) = daemon(connect, ContractSettings::default());
     tokio::time::sleep(Duration::from_millis(50)).await;
-    let e = h.submit(order(P2)).unwrap_err();
+    let e = h.submit(order(P2)).await.unwrap_err();
     assert!(
         e.to_string()
             .starts_with("the PLC link is down: link failed during connect: refused"),
@@ -511,12 +515,14 @@ async fn a_running_move_stays_watched_while_the_next_one_uploads() {
             tolerance_mm: Some(0.05),
             ..order(P2)
         })
+        .await
         .unwrap();
     let b = h
         .submit(MoveOrder {
             period: Some("20ms".into()),
             ..order(P1)
         })
+        .await
         .unwrap();
     // Seen running, `a` has `b`'s upload begin behind it.
     for _ in 0..1_000 {
@@ -575,8 +581,8 @@ async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
     let shared = mock_at_seed_start("");
     let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
     wait_connected(&h).await;
-    let ahead = h.submit(order(P2)).unwrap();
-    let same = h.submit(order(P2)).unwrap();
+    let ahead = h.submit(order(P2)).await.unwrap();
+    let same = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(ahead).unwrap();
     feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
     tokio::time::sleep(Duration::from_millis(100)).await;
@@ -599,8 +605,8 @@ async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
     let shared = mock_at_seed_start("");
     let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
     wait_connected(&h).await;
-    let ahead = h.submit(order(P2)).unwrap();
-    let same = h.submit(order(P2)).unwrap();
+    let ahead = h.submit(order(P2)).await.unwrap();
+    let same = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(ahead).unwrap();
     feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
     h.stop().await.unwrap();
@@ -632,6 +638,7 @@ async fn a_move_to_exactly_the_current_pose_ends_done_without_a_start() {
                 to: Some(to),
                 ..MoveOrder::default()
             })
+            .await
             .unwrap();
         let report = h.wait(id, LIMIT).await.unwrap();
         assert_eq!(report.stage, Stage::Done, "{report:?}");
@@ -649,6 +656,7 @@ async fn a_move_to_exactly_the_current_pose_ends_done_without_a_start() {
             joints: Some(user),
             ..MoveOrder::default()
         })
+        .await
         .unwrap();
     assert_eq!(h.wait(id, LIMIT).await.unwrap().stage, Stage::Done);
     assert!(shared.with(|m| m.starts().is_empty()), "nothing started");
@@ -687,7 +695,7 @@ async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
     };
     let (d, h) = daemon(connect, ContractSettings::default());
     wait_connected(&h).await;
-    let id = h.submit(order(P2)).unwrap();
+    let id = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(id).unwrap();
     let running = feed
         .wait_for(|r| r.stage == Stage::Running)
@@ -805,7 +813,7 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_within_them_on_the_p
     let mut asked = order(P2);
     asked.profile = Some("s-curve".to_owned());
     asked.jerk_mm_s3 = Some(20_000.0);
-    let id = h.submit(asked).unwrap();
+    let id = h.submit(asked).await.unwrap();
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
     let span_s = assert_d3_within(&shared, 300.0);
@@ -832,7 +840,7 @@ async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_within_it_and_refuses_
     // A trapezoid asked for: refused naming d3, and nothing moves.
     let mut trapezoid = order(P2);
     trapezoid.profile = Some("trapezoid".to_owned());
-    let refused = h.submit(trapezoid).unwrap_err();
+    let refused = h.submit(trapezoid).await.unwrap_err();
     assert!(
         refused
             .to_string()
@@ -843,7 +851,7 @@ async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_within_it_and_refuses_
     assert!(pulse_times(&shared, 2).is_empty());
     assert_eq!(shared.with(|m| std::array::from_fn(|c| m.count(c))), start);
     // The robot's own S-curve runs within d3's jerk, as `plan` shows.
-    let id = h.submit(order(P2)).unwrap();
+    let id = h.submit(order(P2)).await.unwrap();
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
     let times = pulse_times(&shared, 2);
@@ -873,7 +881,7 @@ async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
         let mut asked = order(P2);
         asked.profile = profile.map(str::to_owned);
         asked.jerk_mm_s3 = profile.map(|_| 5000.0);
-        let id = h.submit(asked).unwrap();
+        let id = h.submit(asked).await.unwrap();
         let there = h.wait(id, LIMIT).await.unwrap();
         assert_on_target(&there);
         let times = pulse_times(&shared, 2);
@@ -903,7 +911,7 @@ async fn a_move_with_no_motion_of_its_own_has_no_seq_bank_or_upload() {
         by: Some(vec![0.001, 0.0, 0.0]),
         ..MoveOrder::default()
     };
-    let r = h.wait(h.submit(tiny).unwrap(), LIMIT).await.unwrap();
+    let r = h.wait(h.submit(tiny).await.unwrap(), LIMIT).await.unwrap();
     assert_eq!(r.stage, Stage::Done, "{r:?}");
     assert_eq!((r.seq, r.bank, r.upload_s), (None, None, None), "{r:?}");
     assert!(shared.with(|m| m.starts().is_empty()));
@@ -912,8 +920,8 @@ async fn a_move_with_no_motion_of_its_own_has_no_seq_bank_or_upload() {
         speed_mm_s: Some(100.0),
         ..order(P2)
     };
-    let lead = h.submit(out).unwrap();
-    let follower = h.submit(order(P2)).unwrap();
+    let lead = h.submit(out).await.unwrap();
+    let follower = h.submit(order(P2)).await.unwrap();
     let mut seen = Vec::new();
     loop {
         let r = h.report(follower).unwrap();

@@ -256,6 +256,7 @@ async fn a_move_runs_to_its_target_while_a_client_keeps_the_gateway_busy() {
             to: Some(P2.to_vec()),
             ..MoveOrder::default()
         })
+        .await
         .unwrap();
     let mut feed = h.subscribe(id).unwrap();
     let limit = Duration::from_secs(60);

@@ -60,6 +60,7 @@ async fn a_jog_ends_on_its_offset_and_a_queued_jog_is_relative_to_the_one_before
             speed_mm_s: Some(60.0),
             ..MoveOrder::default()
         })
+        .await
         .unwrap();
     let back = s
         .handle
@@ -68,6 +69,7 @@ async fn a_jog_ends_on_its_offset_and_a_queued_jog_is_relative_to_the_one_before
             speed_mm_s: Some(60.0),
             ..MoveOrder::default()
         })
+        .await
         .unwrap();
     let rb = s.handle.wait(back, LIMIT).await.unwrap();
     assert_eq!(s.handle.report(out).unwrap().stage, Stage::Done);
@@ -82,6 +84,7 @@ async fn a_jog_ends_on_its_offset_and_a_queued_jog_is_relative_to_the_one_before
             by: Some(vec![0.0, 0.0, 500.0]),
             ..MoveOrder::default()
         })
+        .await
         .unwrap_err();
     assert!(e.to_string().starts_with("joint d2 would reach"), "{e}");
     s.daemon.shut_down().await;
@@ -229,6 +232,7 @@ async fn positions_are_saved_listed_shown_deleted_and_moved_to() {
             to: Some(P2.to_vec()),
             ..MoveOrder::default()
         })
+        .await
         .unwrap();
     let busy = s.call("PUT", "positions/mid").await;
     assert_eq!(busy.status, StatusCode::CONFLICT, "{}", busy.text());

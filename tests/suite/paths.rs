@@ -104,24 +104,25 @@ async fn a_path_that_cannot_run_is_refused_whole_and_nothing_moves() {
     let dir = TempDir::new("paths-refused");
     let s = Served::start(&shared, None, dir.path(), "api.sock").await;
     let before = s.handle.state().counts;
-    let refuse = |body: serde_json::Value| {
+    let refuse = async |body: serde_json::Value| {
         let order: PathOrder = serde_json::from_value(body).unwrap();
-        s.handle.submit_path(&order).unwrap_err().to_string()
+        s.handle.submit_path(&order).await.unwrap_err().to_string()
     };
     // A start the robot is not at.
-    let e = refuse(json!({"path": {"start": P2, "element": [{"line": P1}]}}));
+    let e = refuse(json!({"path": {"start": P2, "element": [{"line": P1}]}})).await;
     assert!(e.contains("the path starts at ["), "{e}");
     assert!(e.contains("move to the path's start first"), "{e}");
     // Its second section leaves d3's limits: nothing of the first runs either.
     let e = refuse(json!({"path": {"element": [
         {"line": [P1[0], P1[1], P1[2] + 50.0]},
         {"line": [P1[0], P1[1], P1[2] + 5000.0]},
-    ]}}));
+    ]}}))
+    .await;
     assert!(e.starts_with("path section 2 (element 2): joint"), "{e}");
     // A document that is wrong names its element and key.
-    let e = refuse(json!({"path": {"element": [{"arc": P2}]}}));
+    let e = refuse(json!({"path": {"element": [{"arc": P2}]}})).await;
     assert!(e.contains("element 1: an arc needs `via"), "{e}");
-    let e = refuse(json!({"path": {"element": [{"line": "@nowhere"}]}}));
+    let e = refuse(json!({"path": {"element": [{"line": "@nowhere"}]}})).await;
     assert!(e.contains("no taught position named 'nowhere'"), "{e}");
     assert_eq!(s.handle.state().queued, Vec::<u64>::new());
     assert_eq!(s.handle.state().counts, before);
@@ -378,6 +379,7 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
             tolerance_mm: Some(0.05),
             ..linterpd::daemon::MoveOrder::default()
         })
+        .await
         .unwrap();
     let back = h
         .submit(linterpd::daemon::MoveOrder {
@@ -385,9 +387,10 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
             tolerance_mm: Some(0.05),
             ..linterpd::daemon::MoveOrder::default()
         })
+        .await
         .unwrap();
     let order: PathOrder = serde_json::from_value(lift_and_place()).unwrap();
-    let ids = h.submit_path(&order).unwrap();
+    let ids = h.submit_path(&order).await.unwrap();
     assert_eq!(ids.len(), 3);
     for id in [over, back].into_iter().chain(ids) {
         let report = h.wait(id, LIMIT).await.unwrap();
@@ -681,7 +684,7 @@ proptest::proptest! {
             while s.handle.state().counts != Some(start) {
                 tokio::time::sleep(std::time::Duration::from_millis(5)).await;
             }
-            let ids = match s.handle.submit_path(&path_order) {
+            let ids = match s.handle.submit_path(&path_order).await {
                 Ok(ids) => ids,
                 // From the robot's counts the tolerance may be out of reach (the daemon says
                 // which works): nothing moved.
@@ -736,6 +739,7 @@ async fn a_path_of_1000_stopped_elements_is_refused_whole_naming_the_limit() {
             to: Some(P2.to_vec()),
             ..linterpd::daemon::MoveOrder::default()
         })
+        .await
         .unwrap();
     let element: Vec<_> = (0..1_000)
         .map(|k| {

@@ -43,7 +43,10 @@ async fn a_move_whose_permit_does_not_hold_starts_nothing_and_says_which_input()
     taking_moves(&h).await;
     shared.with(|m| m.set_input(6, true).unwrap()); // the press moves
     let before = shared.with(|m| (0..4).map(|c| m.count(c)).collect::<Vec<_>>());
-    let id = h.submit(to(P2, "press_open & !press_moving")).unwrap();
+    let id = h
+        .submit(to(P2, "press_open & !press_moving"))
+        .await
+        .unwrap();
     let r = h.wait(id, LIMIT).await.unwrap();
     assert_eq!(r.stage, Stage::Failed, "{r:?}");
     let why = r.error.unwrap();
@@ -62,7 +65,10 @@ async fn a_move_whose_permit_does_not_hold_starts_nothing_and_says_which_input()
         m.set_input(5, true).unwrap();
     });
     tokio::time::sleep(Duration::from_millis(50)).await;
-    let id = h.submit(to(P2, "press_open & !press_moving")).unwrap();
+    let id = h
+        .submit(to(P2, "press_open & !press_moving"))
+        .await
+        .unwrap();
     let r = h.wait(id, LIMIT).await.unwrap();
     assert_eq!(r.stage, Stage::Done, "{r:?}");
     let started = shared.with(|m| m.starts().to_vec());
@@ -82,7 +88,7 @@ async fn a_permit_that_drops_mid_move_holds_the_robot_and_the_report_names_the_i
         m.record_pulses(true);
     });
     tokio::time::sleep(Duration::from_millis(50)).await;
-    let id = h.submit(to(P2, "press_open")).unwrap();
+    let id = h.submit(to(P2, "press_open")).await.unwrap();
     // Once it runs, the press closes.
     for _ in 0..500 {
         if h.report(id).unwrap().stage == Stage::Running {
@@ -133,7 +139,7 @@ async fn a_permit_the_plc_cannot_check_is_refused_naming_it_and_nothing_is_queue
         ),
         ("door", "neither a signal (press_moving, press_open)"),
     ] {
-        let e = h.submit(to(P1, permit)).unwrap_err();
+        let e = h.submit(to(P1, permit)).await.unwrap_err();
         let text = e.to_string();
         assert!(matches!(e, SubmitError::Order(_)), "{e:?}");
         assert!(text.contains("permit") && text.contains(words), "{text}");
@@ -159,7 +165,7 @@ async fn a_stopped_or_held_moves_report_says_where_the_plc_stopped_it() {
             speed_mm_s: Some(60.0),
             ..to(P2, "press_open")
         };
-        let id = h.submit(order).unwrap();
+        let id = h.submit(order).await.unwrap();
         for _ in 0..2_000 {
             if shared.with(|m| m.status().state) == State::Running.word() {
                 break;

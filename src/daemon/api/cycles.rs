@@ -50,7 +50,7 @@ pub(super) async fn run(
     let order: CycleOrder = handlers::parse_body(&body)?;
     tracing::info!(robot = %name, program = %order.program, count = order.count, "cycle run requested");
     let status = {
-        let _owner = robot.owned_by(Mode::Local)?;
+        let _owner = robot.owned_by(Mode::Local).await?;
         robot.run_cycle(&order.program, order.count)?
     };
     Ok((StatusCode::ACCEPTED, Json(status)))
@@ -88,7 +88,7 @@ pub(super) async fn pause(
 ) -> Result<Json<CycleStatus>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle pause requested");
-    let _owner = robot.owned_by(Mode::Local)?;
+    let _owner = robot.owned_by(Mode::Local).await?;
     Ok(Json(robot.pause_cycle()?))
 }
 
@@ -98,6 +98,6 @@ pub(super) async fn resume(
 ) -> Result<Json<CycleStatus>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle resume requested");
-    let _owner = robot.owned_by(Mode::Local)?;
+    let _owner = robot.owned_by(Mode::Local).await?;
     Ok(Json(robot.resume_cycle()?))
 }

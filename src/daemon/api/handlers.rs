@@ -41,8 +41,8 @@ pub(super) async fn submit(
     let robot = api.robot(&name)?;
     let order = parse_order(&body)?;
     let ids = {
-        let _owner = robot.owned_by(Mode::Local)?;
-        robot.submit_starts(order.clone())?
+        let _owner = robot.owned_by(Mode::Local).await?;
+        robot.submit_starts(order.clone()).await?
     };
     let id = ids[ids.len() - 1];
     tracing::info!(robot = %name, move_id = id, starts = ids.len(), "move accepted");
@@ -60,18 +60,12 @@ pub(super) async fn submit_path(
 ) -> Result<(StatusCode, Json<PathAccepted>), ApiError> {
     let robot = api.robot(&name)?;
     let order: PathOrder = parse_body(&body)?;
-    // A path takes milliseconds to plan (13 ms and more): off the runtime, so the workers'
-    // status polls are not held up behind it.
-    let planner = robot.clone();
-    let ids = tokio::task::spawn_blocking(move || -> Result<Vec<u64>, ApiError> {
-        let _owner = planner.owned_by(Mode::Local)?;
-        Ok(planner.submit_path(&order)?)
-    })
-    .await
-    .map_err(|e| ApiError::Other {
-        status: StatusCode::INTERNAL_SERVER_ERROR,
-        message: format!("the path's planning task failed: {e}"),
-    })??;
+    // A path takes milliseconds to plan (13 ms and more): the handle plans it off the runtime,
+    // so the workers' status polls are not held up behind it.
+    let ids = {
+        let _owner = robot.owned_by(Mode::Local).await?;
+        robot.submit_path(&order).await?
+    };
     tracing::info!(robot = %name, sections = ids.len(), first_move_id = ids.first().copied().unwrap_or(0), "path accepted");
     // Queued: the answer is 202 whatever follows; a report that ended and was dropped since
     // (only ended ones are) is left out.
@@ -125,7 +119,7 @@ pub(super) async fn clear_fault(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "fault clear requested");
-    drop(robot.owned_by(Mode::Local)?);
+    drop(robot.owned_by(Mode::Local).await?);
     robot.clear_fault().await?;
     Ok(Json(serde_json::json!({ "cleared": true })))
 }
@@ -136,7 +130,7 @@ pub(super) async fn home(
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "home requested");
-    drop(robot.owned_by(Mode::Local)?);
+    drop(robot.owned_by(Mode::Local).await?);
     robot.home().await?;
     Ok(Json(serde_json::json!({ "homed": true })))
 }

@@ -39,6 +39,6 @@ pub(super) async fn put(
     let robot = api.robot(&name)?;
     let asked: ModeBody = handlers::parse_body(&body)?;
     tracing::info!(robot = %name, mode = %asked.mode, "mode change requested");
-    let mode = robot.set_mode(asked.mode)?;
+    let mode = robot.set_mode(asked.mode).await?;
     Ok(Json(ModeBody { mode }))
 }

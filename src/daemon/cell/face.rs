@@ -142,7 +142,9 @@ impl RobotHandle {
                 Ok(())
             }
             Action::Reset => {
-                self.owned_by(Mode::Remote).map_err(|_| Refusal::Local)?;
+                self.owned_by(Mode::Remote)
+                    .await
+                    .map_err(|_| Refusal::Local)?;
                 match self.clear_fault().await {
                     Ok(()) => Ok(()),
                     Err(CommandError::Conflict {
@@ -152,7 +154,10 @@ impl RobotHandle {
                 }
             }
             Action::Pause => {
-                let _owner = self.owned_by(Mode::Remote).map_err(|_| Refusal::Local)?;
+                let _owner = self
+                    .owned_by(Mode::Remote)
+                    .await
+                    .map_err(|_| Refusal::Local)?;
                 self.pause_cycle().map(|_| ()).map_err(|_| Refusal::NotNow)
             }
             Action::Select { number } => {
@@ -160,8 +165,8 @@ impl RobotHandle {
                 cell.face().select(*number, &name);
                 Ok(())
             }
-            Action::Start { count } => self.face_start(cell, *count),
-            Action::Home => self.face_home(&cell.settings),
+            Action::Start { count } => self.face_start(cell, *count).await,
+            Action::Home => self.face_home(&cell.settings).await,
         }
     }
 
@@ -187,8 +192,11 @@ impl RobotHandle {
         }
     }
 
-    fn face_start(&self, cell: &FaceCell, count: Option<u64>) -> Result<(), Refusal> {
-        let _owner = self.owned_by(Mode::Remote).map_err(|_| Refusal::Local)?;
+    async fn face_start(&self, cell: &FaceCell, count: Option<u64>) -> Result<(), Refusal> {
+        let _owner = self
+            .owned_by(Mode::Remote)
+            .await
+            .map_err(|_| Refusal::Local)?;
         if let Some(c) = self.cycle().filter(|c| !c.state.is_final()) {
             return match c.state {
                 CycleState::Paused | CycleState::Faulted => {
@@ -218,8 +226,11 @@ impl RobotHandle {
         })
     }
 
-    fn face_home(&self, settings: &FaceSettings) -> Result<(), Refusal> {
-        let _owner = self.owned_by(Mode::Remote).map_err(|_| Refusal::Local)?;
+    async fn face_home(&self, settings: &FaceSettings) -> Result<(), Refusal> {
+        let _owner = self
+            .owned_by(Mode::Remote)
+            .await
+            .map_err(|_| Refusal::Local)?;
         if self.cycle().is_some_and(|c| !c.state.is_final()) {
             return Err(Refusal::Busy);
         }
@@ -228,7 +239,7 @@ impl RobotHandle {
             position: Some(settings.home.clone()),
             ..MoveOrder::default()
         };
-        self.submit(order).map(|_| ()).map_err(|e| {
+        self.submit(order).await.map(|_| ()).map_err(|e| {
             tracing::warn!(robot = %self.robot().name, "cell face home refused: {e}");
             Refusal::NotReady
         })
@@ -276,7 +287,7 @@ impl RobotHandle {
             plc_fault: state.fault.filter(|f| *f != 0),
             moving,
             cycle,
-            heartbeat: *self.watch_reads().borrow(),
+            heartbeat: self.snapshot().reads,
             position,
             in_home: at(&settings.home),
         }

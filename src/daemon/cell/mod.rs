@@ -8,14 +8,17 @@
 //!  both:   stop (CLI, API, the face's stop and stop-now)
 //!  set_mode: only while no cycle is under way and no move is queued or running
 //! ```
-//! The mode is held (a read lock) while an order is taken, and changed under the write lock, so
-//! an order is taken in the mode it was checked in: of two controllers racing, exactly one wins.
+//! The mode is held (a read lock, across the order's planning and its queueing) while an order is
+//! taken, and changed under the write lock, so an order is taken in the mode it was checked in:
+//! of two controllers racing, exactly one wins.
 
 mod face;
 mod mirror;
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{PoisonError, RwLock, RwLockReadGuard};
+
+use tokio::sync::{OwnedRwLockReadGuard, RwLock};
 
 use thiserror::Error;
 
@@ -33,7 +36,7 @@ pub(crate) struct Cell {
     pub settings: CellSettings,
     pub inputs: [InputWord; INPUT_WORDS],
     /// Taken to hold the mode while an order is taken, and to change it.
-    mode: RwLock<Mode>,
+    mode: Arc<RwLock<Mode>>,
     /// The mode as last set, read without the lock (`RobotHandle::mode`), so code that holds
     /// the mode may read it again.
     remote: AtomicBool,
@@ -47,7 +50,7 @@ impl Cell {
         Self {
             settings,
             inputs,
-            mode: RwLock::new(mode),
+            mode: Arc::new(RwLock::new(mode)),
             remote: AtomicBool::new(mode == Mode::Remote),
             face,
         }
@@ -94,7 +97,7 @@ fn not_yours(mode: Mode) -> &'static str {
 
 /// The mode held while an order is taken: it cannot change until this is dropped.
 #[derive(Debug)]
-pub struct Owner<'a>(#[allow(dead_code, reason = "held, not read")] RwLockReadGuard<'a, Mode>);
+pub struct Owner(#[allow(dead_code, reason = "held, not read")] OwnedRwLockReadGuard<Mode>);
 
 impl RobotHandle {
     /// Who drives the robot.
@@ -108,13 +111,10 @@ impl RobotHandle {
     }
 
     /// The mode, held, when `who` drives the robot; refused otherwise. Hold it while the order
-    /// is taken (it is a lock: never across an `.await`, and never taken twice by one caller).
-    pub fn owned_by(&self, who: Mode) -> Result<Owner<'_>, ModeError> {
-        let mode = self
-            .cell
-            .mode
-            .read()
-            .unwrap_or_else(PoisonError::into_inner);
+    /// is taken (never taken twice by one caller: a mode change waiting between would wait for
+    /// ever).
+    pub async fn owned_by(&self, who: Mode) -> Result<Owner, ModeError> {
+        let mode = Arc::clone(&self.cell.mode).read_owned().await;
         if *mode == who {
             Ok(Owner(mode))
         } else {
@@ -124,12 +124,8 @@ impl RobotHandle {
 
     /// Sets who drives the robot: refused while a cycle is under way or a move is queued or
     /// running, and `remote` without a cell face.
-    pub fn set_mode(&self, to: Mode) -> Result<Mode, ModeError> {
-        let mut mode = self
-            .cell
-            .mode
-            .write()
-            .unwrap_or_else(PoisonError::into_inner);
+    pub async fn set_mode(&self, to: Mode) -> Result<Mode, ModeError> {
+        let mut mode = self.cell.mode.write().await;
         if *mode == to {
             return Ok(to);
         }
@@ -148,9 +144,8 @@ impl RobotHandle {
                 ),
             });
         }
-        let running = self
-            .shared
-            .state(|s| s.current_move.or_else(|| s.queued.first().copied()));
+        let state = self.shared.snapshot().state;
+        let running = state.current_move.or_else(|| state.queued.first().copied());
         if let Some(id) = running {
             return Err(ModeError::Busy {
                 what: format!("move {id} is queued or running: wait for it, or stop the robot"),

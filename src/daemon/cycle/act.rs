@@ -36,19 +36,23 @@ pub(super) enum MotionEnd {
 
 /// Queues `order`: the ids of its starts, or how the step ends when it cannot be queued (held
 /// from outside the PLC, or refused).
-pub(super) fn submit_move(
+pub(super) async fn submit_move(
     handle: &RobotHandle,
     order: MoveOrder,
     control: &watch::Receiver<Control>,
 ) -> Result<Vec<MoveId>, MotionEnd> {
-    if let Some(why) = control.borrow().hold {
+    let hold = control.borrow().hold;
+    if let Some(why) = hold {
         return Err(MotionEnd::Held {
             why: why.to_owned(),
         });
     }
-    handle.submit_starts(order).map_err(|e| MotionEnd::Failed {
-        why: format!("refused: {e}"),
-    })
+    handle
+        .submit_starts(order)
+        .await
+        .map_err(|e| MotionEnd::Failed {
+            why: format!("refused: {e}"),
+        })
 }
 
 /// Queues `order` (a path) and follows every start of it to its end.
@@ -58,21 +62,17 @@ pub(super) async fn run_path(
     control: &mut watch::Receiver<Control>,
     started: &mut Vec<MoveId>,
 ) -> MotionEnd {
-    if let Some(why) = control.borrow().hold {
+    let hold = control.borrow().hold;
+    if let Some(why) = hold {
         return MotionEnd::Held {
             why: why.to_owned(),
         };
     }
-    // Planned off the runtime (a path takes milliseconds), as the API plans one.
-    let (planner, order) = (handle.clone(), order.clone());
-    let submitted = tokio::task::spawn_blocking(move || planner.submit_path(&order)).await;
-    match submitted {
-        Ok(Ok(ids)) => follow(handle, &ids, control, started).await,
-        Ok(Err(e)) => MotionEnd::Failed {
-            why: format!("refused: {e}"),
-        },
+    // The handle plans it off the runtime (a path takes milliseconds), as for the API.
+    match handle.submit_path(order).await {
+        Ok(ids) => follow(handle, &ids, control, started).await,
         Err(e) => MotionEnd::Failed {
-            why: format!("the path's planning task failed: {e}"),
+            why: format!("refused: {e}"),
         },
     }
 }
@@ -202,7 +202,7 @@ async fn wait_loop(
     extra: &[Address],
     deadline: Option<tokio::time::Instant>,
     control: &mut watch::Receiver<Control>,
-    reads: &mut watch::Receiver<u64>,
+    reads: &mut crate::daemon::Reads,
 ) -> WaitEnd {
     loop {
         let inputs = Inputs::read(handle, extra).await;
@@ -219,7 +219,12 @@ async fn wait_loop(
             }
         };
         tokio::select! {
-            _ = reads.changed() => {}
+            read = reads.next() => {
+                if read.is_err() {
+                    // The robot's worker is gone (the daemon shuts down): nothing more is read.
+                    return WaitEnd::StoppedNow;
+                }
+            }
             () = expired => return WaitEnd::TimedOut,
             changed = control.changed() => {
                 let c = *control.borrow();

@@ -88,12 +88,13 @@ impl RobotHandle {
     /// queued or running is planned to end, else where the PLC last said it is; `None` while its
     /// counts mean nothing (not homed, no link).
     fn where_next_begins(&self) -> Option<[i64; crate::kinematics::JOINTS]> {
-        let state = self.shared.state(|s| s.clone());
+        let snapshot = self.shared.snapshot();
+        let state = snapshot.state;
         if !state.homed || !state.link.connected {
             return None;
         }
         let ahead = state.current_move.is_some() || !state.queued.is_empty();
-        match self.shared.planned_end() {
+        match snapshot.planned_end {
             Some(end) if ahead => Some(end),
             _ if ahead => None,
             _ => self.counts_by_joint(),

@@ -28,8 +28,8 @@ use super::control::Control;
 use super::slot::SharedStatus;
 use crate::cycle::{Checked, LoopExit, OpKind};
 use crate::daemon::RobotHandle;
+use crate::daemon::Snapshot;
 use crate::daemon::gate::Gate;
-use crate::daemon::shared::Incidents;
 use crate::wire::MoveId;
 use crate::wire::{CycleState, CycleStatus};
 
@@ -45,7 +45,7 @@ pub(crate) async fn run(
     status: SharedStatus,
 ) {
     let incidents = handle.watch_incidents();
-    let epoch = incidents.borrow().count;
+    let epoch = incidents.borrow().incidents.count;
     let mut runner = Runner {
         handle: handle.under(epoch),
         base: handle,
@@ -79,8 +79,9 @@ struct Runner {
     handle: RobotHandle,
     /// The robot, as any client.
     base: RobotHandle,
-    /// The PLC's incidents (restarts, stalls and PROG mode, links lost past a move's end).
-    incidents: watch::Receiver<Incidents>,
+    /// The robot's snapshot, for its incidents (restarts, stalls and PROG mode, links lost past
+    /// a move's end).
+    incidents: watch::Receiver<Snapshot>,
     /// The incident count the cycle acts under: from its start, or the fault clear it was
     /// resumed after. Any incident since faults it, whatever it is doing.
     epoch: u64,
@@ -231,7 +232,7 @@ impl Runner {
 
     /// What an incident since the cycle's epoch was, if one came.
     fn incident(&self) -> Option<String> {
-        let now = self.incidents.borrow();
+        let now = &self.incidents.borrow().incidents;
         (now.count != self.epoch).then(|| now.last.clone().unwrap_or_default())
     }
 
@@ -239,7 +240,7 @@ impl Runner {
     /// waits for a resume after `clear-fault` (`false`: a stop came instead).
     async fn faulted(&mut self, why: String) -> bool {
         tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
-        self.reported = self.incidents.borrow().count;
+        self.reported = self.incidents.borrow().incidents.count;
         let _ = self.base.stop_robot().await;
         self.drop_ahead().await;
         self.set(|s| {
@@ -281,7 +282,7 @@ impl Runner {
                 }
                 why = until_incident(&mut incidents, reported) => {
                     tracing::warn!(robot = %self.handle.robot().name, "cycle faulted while it stood: {why}");
-                    self.reported = incidents.borrow().count;
+                    self.reported = incidents.borrow().incidents.count;
                     self.set(|s| {
                         s.state = CycleState::Faulted;
                         s.reason = Some(why);
@@ -309,9 +310,9 @@ impl Runner {
                 }
                 let relative = order.by.is_some();
                 let mut started = Vec::new();
-                let end = match act::submit_move(&self.handle, order, &self.control) {
+                let end = match act::submit_move(&self.handle, order, &self.control).await {
                     Ok(ids) => {
-                        self.prepare(pc);
+                        self.prepare(pc).await;
                         act::follow(&self.handle, &ids, &mut self.control, &mut started).await
                     }
                     Err(end) => end,
@@ -342,7 +343,7 @@ impl Runner {
                 timeout,
                 on_timeout,
             } => {
-                self.prepare(pc);
+                self.prepare(pc).await;
                 self.wait(pc, &until, timeout, on_timeout).await.0
             }
             OpKind::Set(writes) => {
@@ -366,9 +367,12 @@ impl Runner {
                     // A loop whose steps take no time (outputs, conditions) goes round at the
                     // pace of the status reads, not as fast as the runtime can spin.
                     let mut reads = self.handle.watch_reads();
-                    let _ =
-                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.changed())
-                            .await;
+                    let read =
+                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.next()).await;
+                    if matches!(read, Ok(Err(_))) {
+                        // The robot's worker is gone: the cycle ends with it.
+                        return Next::Stopped;
+                    }
                 }
                 next
             }
@@ -406,7 +410,7 @@ impl Runner {
     /// Prepares the next moves after op `pc` ([`Self::next_move`]) up to one that moves,
     /// unless a stop, a pause or a hold is asked for; one the robot refuses now is left to run
     /// at its step.
-    fn prepare(&mut self, pc: usize) {
+    async fn prepare(&mut self, pc: usize) {
         let c = *self.control.borrow();
         if c.stop || c.stop_now || c.pause || c.hold.is_some() {
             return;
@@ -426,7 +430,7 @@ impl Runner {
                 return;
             };
             let gate = Gate::new();
-            let Ok((id, moves)) = self.handle.submit_gated(order.clone(), &gate) else {
+            let Ok((id, moves)) = self.handle.submit_gated(order.clone(), &gate).await else {
                 return;
             };
             self.ahead.push_back(Ahead {
@@ -456,7 +460,7 @@ impl Runner {
     /// The move of op `at`, prepared ahead and released now: followed to its end (the move
     /// after it prepared meanwhile); run afresh when it was cancelled before its start.
     async fn prepared(&mut self, at: usize, id: MoveId) -> Next {
-        self.prepare(at);
+        self.prepare(at).await;
         let mut started = Vec::new();
         let end = act::follow(&self.handle, &[id], &mut self.control, &mut started).await;
         let cancelled_before_start = self.handle.report(id).is_some_and(|r| {
@@ -560,9 +564,11 @@ impl Runner {
                 {
                     // Decided on a fresh status block, not one from before the steps ran.
                     let mut reads = self.handle.watch_reads();
-                    let _ =
-                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.changed())
-                            .await;
+                    let read =
+                        tokio::time::timeout(std::time::Duration::from_secs(1), reads.next()).await;
+                    if matches!(read, Ok(Err(_))) {
+                        return Next::Stopped;
+                    }
                 }
                 let met = Inputs::read(&self.handle, &until.reads())
                     .await
@@ -591,10 +597,10 @@ impl Runner {
 }
 
 /// Waits until the incident count is other than `epoch`: the last incident, in words.
-async fn until_incident(incidents: &mut watch::Receiver<Incidents>, epoch: u64) -> String {
+async fn until_incident(incidents: &mut watch::Receiver<Snapshot>, epoch: u64) -> String {
     loop {
         {
-            let now = incidents.borrow_and_update();
+            let now = &incidents.borrow_and_update().incidents;
             if now.count != epoch {
                 return now.last.clone().unwrap_or_default();
             }

@@ -53,14 +53,14 @@ impl Worker {
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
         let events = self.machine.on_status(&status, now());
-        let incidents_before = self.shared.incidents().count;
+        let incidents_before = self.out.incidents().count;
         // Counted before anything reads this block: a cycle must not take a wait met on the
         // block that shows its PLC restarted.
         self.note_incidents(&events);
         self.publish_refusal();
         self.note_status(&status);
         let result = self.apply(events).await;
-        let trusted = self.shared.incidents().count == incidents_before;
+        let trusted = self.out.incidents().count == incidents_before;
         self.settle(trusted.then_some(&status));
         self.publish_refusal();
         self.publish_phase();
@@ -72,7 +72,7 @@ impl Worker {
         let pose = self.robot.pose_of(&self.by_joint(counts)).to_mm_deg();
         let heartbeat_age = self.machine.heartbeat_age(now());
         let homed = self.machine.homed();
-        self.shared.state(|s| {
+        self.out.state(|s| {
             s.link.connected = true;
             s.link.error = None;
             s.counts = Some(counts);
@@ -83,7 +83,7 @@ impl Worker {
             s.heartbeat_age_ms = heartbeat_age.map(|d| d.as_millis() as u64);
             s.homed = homed;
         });
-        self.shared.fresh_read();
+        self.out.fresh_read();
     }
 
     /// Publishes why a new order would be refused now.
@@ -94,14 +94,14 @@ impl Worker {
             self.machine.blocker(now())
         };
         let refusal = blocker.filter(Blocker::refuses_orders);
-        self.shared.set_refusal(refusal);
+        self.out.set_refusal(refusal);
         let text = refusal.map(|b| b.to_string());
-        self.shared.state(|s| s.refuses = text);
+        self.out.state(|s| s.refuses = text);
     }
 
     pub(super) fn publish_phase(&self) {
         let phase = RobotPhase::from(self.machine.phase());
-        self.shared.state(|s| s.phase = phase);
+        self.out.state(|s| s.phase = phase);
     }
 
     /// Applies the machine's events, carrying out the exchanges they ask for.
@@ -122,7 +122,7 @@ impl Worker {
         for event in events {
             if let Some(why) = incident(event) {
                 tracing::warn!(robot = %self.robot.name, "incident: {why}");
-                self.shared.incident(why);
+                self.out.incident(why);
             }
         }
     }
@@ -217,7 +217,7 @@ impl Worker {
                 .as_secs_f64(),
         );
         self.shared.moves(|m| m.insert(report));
-        self.shared.state(|s| s.current_move = Some(id));
+        self.out.state(|s| s.current_move = Some(id));
         self.started.insert(id, now());
         self.next_seq = seq.wrapping_add(1).max(1);
         self.next_bank = 1 - planned.bank.min(1);
@@ -241,7 +241,7 @@ impl Worker {
                         r.deadline_s = deadline_s.or(r.deadline_s);
                     });
                 });
-                self.shared.state(|s| {
+                self.out.state(|s| {
                     s.current_move = Some(tag);
                     s.queued.retain(|q| *q != tag);
                 });
@@ -384,7 +384,7 @@ impl Worker {
                     since: now(),
                 });
                 // The PLC runs it no more; its report ends with the counts it stopped at.
-                self.shared.state(|s| {
+                self.out.state(|s| {
                     if s.current_move == Some(id) {
                         s.current_move = None;
                     }

@@ -24,7 +24,7 @@ impl Worker {
         let Some(job) = self.gateway.front_mut() else {
             return Ok(());
         };
-        let incidents = self.shared.incidents();
+        let incidents = self.out.incidents();
         if job.epoch.is_some_and(|e| e != incidents.count) {
             // Asked for before the PLC restarted, stalled or was lost: a cycle's output is
             // never written to a PLC it no longer knows.
@@ -44,7 +44,7 @@ impl Worker {
         let ended = Instant::now();
         // How long a status read that fell due meanwhile waited for this exchange.
         let held = ended.saturating_duration_since(began.max(self.next_poll));
-        self.shared.state(|s| {
+        self.out.state(|s| {
             s.gateway.exchanges += 1;
             s.gateway.longest_exchange_ms =
                 s.gateway.longest_exchange_ms.max(millis(ended - began));
@@ -61,7 +61,7 @@ impl Worker {
                 job.piece_done(&piece, read);
                 if job.next_piece(sizes).is_none() {
                     let job = self.gateway.pop_front().expect("front");
-                    self.shared.state(|s| s.gateway.requests += 1);
+                    self.out.state(|s| s.gateway.requests += 1);
                     self.shared.metrics.gateway_request(false);
                     job.finish();
                 }
@@ -69,7 +69,7 @@ impl Worker {
             }
             Err(e) => {
                 let job = self.gateway.pop_front().expect("front");
-                self.shared.state(|s| {
+                self.out.state(|s| {
                     s.gateway.requests += 1;
                     s.gateway.failed += 1;
                 });
@@ -95,9 +95,9 @@ impl Worker {
         if self.gateway.is_empty() {
             return;
         }
-        let detail = self.shared.state(|s| s.link.error.clone());
+        let detail = self.out.state(|s| s.link.error.clone());
         for job in std::mem::take(&mut self.gateway) {
-            self.shared.state(|s| {
+            self.out.state(|s| {
                 s.gateway.requests += 1;
                 s.gateway.failed += 1;
             });

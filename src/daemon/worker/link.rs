@@ -39,7 +39,7 @@ impl Worker {
                 self.backoff = BACKOFF_MIN;
                 // The first opening is a connection, not a reconnection.
                 let again = std::mem::replace(&mut self.opened_before, true);
-                self.shared.state(|s| s.link.reconnects += u64::from(again));
+                self.out.state(|s| s.link.reconnects += u64::from(again));
                 if again {
                     self.shared.metrics.reconnected();
                 }
@@ -50,7 +50,7 @@ impl Worker {
             }
             Err(e) => {
                 let text = describe(&e);
-                let changed = self.shared.state(|s| {
+                let changed = self.out.state(|s| {
                     s.link.connected = false;
                     let changed = s.link.error.as_deref() != Some(text.as_str());
                     s.link.error = Some(text.clone());
@@ -81,7 +81,7 @@ impl Worker {
             let _ = self.take_stops().await;
         }
         for command in std::mem::take(&mut self.commands) {
-            let detail = self.shared.state(|s| s.link.error.clone());
+            let detail = self.out.state(|s| s.link.error.clone());
             super::answer(command, Err(super::CommandError::LinkDown { detail }));
         }
         self.expire_queue();
@@ -99,10 +99,7 @@ impl Worker {
     pub(super) fn link_failed(&mut self, e: &ContractError) {
         let text = describe(e);
         // A link that opens and fails at once fails again on every retry: say it once.
-        if self
-            .shared
-            .state(|s| s.link.error.as_deref() != Some(text.as_str()))
-        {
+        if self.out.get().state.link.error.as_deref() != Some(text.as_str()) {
             tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
         } else {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
@@ -111,14 +108,14 @@ impl Worker {
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
         self.machine.link_lost(now());
-        self.shared.state(|s| {
+        self.out.state(|s| {
             s.link.connected = false;
             s.link.error = Some(text);
             // Unknown until the link is back; the rest stays as last read.
             s.heartbeat_age_ms = None;
             s.inputs = None;
         });
-        self.shared.no_read();
+        self.out.no_read();
         self.publish_refusal();
         self.publish_phase();
     }
@@ -127,7 +124,7 @@ impl Worker {
     /// contract does not define): nothing moves until it does.
     pub(super) fn contract_unusable(&mut self, e: &ContractError) {
         let text = describe(e);
-        let changed = self.shared.state(|s| {
+        let changed = self.out.state(|s| {
             let changed = s.link.error.as_deref() != Some(text.as_str());
             s.link.connected = false;
             s.link.error = Some(text.clone());
@@ -137,12 +134,12 @@ impl Worker {
             tracing::error!(robot = %self.robot.name, error = %text, "the PLC program does not answer as the contract says");
         }
         self.machine.link_lost(now());
-        self.shared.set_refusal(Some(Blocker::LinkDown));
+        self.out.set_refusal(Some(Blocker::LinkDown));
         self.publish_phase();
     }
 
     pub(super) fn note_error(&self, e: &ContractError) {
         tracing::warn!(robot = %self.robot.name, error = %describe(e), "PLC exchange failed");
-        self.shared.state(|s| s.link.error = Some(describe(e)));
+        self.out.state(|s| s.link.error = Some(describe(e)));
     }
 }

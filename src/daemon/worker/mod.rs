@@ -39,7 +39,7 @@ use tokio::sync::{mpsc, watch};
 use super::gate::Gate;
 use super::request::{CommandError, ConflictReason, Reply, Request};
 use super::setup::{DaemonOptions, RobotSetup};
-use super::shared::Shared;
+use super::shared::{Publisher, Shared};
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
@@ -117,6 +117,8 @@ pub(super) struct Worker {
     gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
     shutdown: watch::Receiver<bool>,
     shared: Arc<Shared>,
+    /// What the worker publishes: the robot's snapshot (it alone sends on it).
+    out: Publisher,
     /// The open link and what is known of it; `None` while the link is down.
     session: Option<session::Session>,
     /// Register gateway requests, served one exchange at a time between the worker's own.
@@ -165,6 +167,7 @@ impl Worker {
         options: &DaemonOptions,
         channels: Channels,
         shared: Arc<Shared>,
+        out: Publisher,
     ) -> Self {
         let machine = Machine::new(setup.settings.watch, options.host);
         Self {
@@ -178,6 +181,7 @@ impl Worker {
             gateway_rx: channels.gateway,
             shutdown: channels.shutdown,
             shared,
+            out,
             session: None,
             gateway: VecDeque::new(),
             next_poll: tokio::time::Instant::now(),
@@ -326,7 +330,7 @@ impl Worker {
         session.mode_read = Some(now());
         match session.contract.plc().mode().await {
             Ok(mode) => {
-                self.shared.state(|s| s.plc_mode = Some(mode));
+                self.out.state(|s| s.plc_mode = Some(mode));
                 Ok(())
             }
             Err(e) if e.is_link_failure() => Err(ContractError::Plc(e)),
@@ -389,15 +393,45 @@ impl Worker {
         // Something to do: the status block is read at once, not at the next idle poll.
         self.next_poll = tokio::time::Instant::now();
         match request {
-            Request::Move(given) => self.queue.push_back(Queued {
-                id: given.id,
-                order: given.order,
-                gate: given.gate,
-                epoch: given.epoch,
-                accepted: now(),
-            }),
+            Request::Moves(batch) => self.accept(batch),
             command => self.commands.push(command),
         }
+    }
+
+    /// Queues a batch of starts, whole or not at all (the queue would pass
+    /// [`MAX_QUEUED_STARTS`](super::MAX_QUEUED_STARTS)): their reports recorded, the queue and
+    /// where it ends published, and the asker answered.
+    fn accept(&mut self, batch: super::request::Batch) {
+        let queued = self
+            .out
+            .state(|s| s.queued.len() + usize::from(s.current_move.is_some()));
+        let limit = super::MAX_QUEUED_STARTS;
+        if queued + batch.starts.len() > limit {
+            let _ = batch.reply.send(Err(super::SubmitError::QueueFull {
+                queued,
+                adding: batch.starts.len(),
+                limit,
+            }));
+            return;
+        }
+        let ids: Vec<MoveId> = batch.starts.iter().map(|(r, _)| r.id).collect();
+        self.shared.moves(|m| {
+            for (report, _) in &batch.starts {
+                m.insert(report.clone());
+            }
+        });
+        self.out.state(|s| s.queued.extend(&ids));
+        for (report, order) in batch.starts {
+            self.queue.push_back(Queued {
+                id: report.id,
+                order,
+                gate: batch.gate.clone(),
+                epoch: batch.epoch,
+                accepted: now(),
+            });
+        }
+        self.out.set_planned_end(batch.end);
+        let _ = batch.reply.send(Ok(ids));
     }
 
     /// Writes a stop if one was asked for; the moves given to the PLC end as it shows, every
@@ -432,13 +466,15 @@ impl Worker {
             );
         }
         self.cancel_queue("cancelled by a stop request");
+        // Orders asked after it plan from where the robot stops, not from a queue's end.
+        self.out.set_planned_end(None);
         if result.is_ok() {
             self.machine.stop_written(now());
         }
         let answer_for = match &result {
             Ok(()) => Ok(()),
             Err(_) if self.session.is_none() => Err(CommandError::LinkDown {
-                detail: self.shared.state(|s| s.link.error.clone()),
+                detail: self.out.state(|s| s.link.error.clone()),
             }),
             Err(e) if link_broken(e) => Err(CommandError::LinkDown {
                 detail: Some(describe(e)),
@@ -477,7 +513,7 @@ impl Worker {
                     }
                 },
                 (Request::Home(reply), Ok(())) => self.home(reply).await?,
-                (Request::Move(..), Ok(())) => unreachable!("moves are queued, not commands"),
+                (Request::Moves(..), Ok(())) => unreachable!("moves are queued, not commands"),
             }
         }
         Ok(())
@@ -491,7 +527,7 @@ impl Worker {
             }
             _ => {
                 return Err(CommandError::LinkDown {
-                    detail: self.shared.state(|s| s.link.error.clone()),
+                    detail: self.out.state(|s| s.link.error.clone()),
                 });
             }
         };
@@ -590,6 +626,6 @@ fn answer(command: Request, result: Result<(), CommandError>) {
         Request::Home(reply) | Request::ClearFault(reply) => {
             let _ = reply.send(result);
         }
-        Request::Move(..) => {}
+        Request::Moves(..) => {}
     }
 }

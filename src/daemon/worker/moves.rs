@@ -27,7 +27,7 @@ const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 impl Worker {
     /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
-        let incidents = self.shared.incidents();
+        let incidents = self.out.incidents();
         if queued.epoch.is_some_and(|e| e != incidents.count) {
             // A cycle's move asked for before the PLC restarted, stalled or was lost.
             let why = format!(
@@ -637,7 +637,7 @@ impl Worker {
         if ended {
             self.shared.metrics.move_ended(stage);
         }
-        self.shared.state(|s| {
+        self.out.state(|s| {
             s.queued.retain(|q| *q != id);
             if s.current_move == Some(id) {
                 s.current_move = None;
@@ -646,7 +646,7 @@ impl Worker {
         if stage != Stage::Done {
             // Later orders are checked from where the robot really is, not from a target this
             // move will not reach.
-            self.shared.forget_planned_end();
+            self.out.set_planned_end(None);
         }
     }
 }

@@ -2,13 +2,14 @@
 //! clear a fault, read state and reports, follow a move's progress, teach positions) and the
 //! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
 
+mod submit;
+
 use super::cell::Cell;
 use super::cycle::CycleSlot;
 use super::request::ConflictReason;
-use crate::contract::Permit;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
-use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use thiserror::Error;
@@ -21,18 +22,14 @@ use super::request::{CommandError, Reply, Request};
 use super::setup::{DaemonOptions, RobotSetup};
 use super::shared::Shared;
 use super::worker::{Channels, Worker};
+use crate::contract::CHANNELS;
 use crate::contract::machine::Blocker;
 use crate::gateway::{Address, GatewaySettings, Range};
-use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
-use crate::order::{
-    Accepted, CheckedOrder, MoveOrder, OrderError, OrderLimits, PathOrder, SectionOrder,
-    SectionPart, Target, plan_order,
-};
-use crate::plan::{MoveRequest, Origin, PathPlan, PlanError, SectionPlan, line_as_path, plan_path};
-use crate::plc::PlcMode;
-use crate::robot::{Motion, Robot};
-use crate::wire::{MoveId, MoveReport, RobotPhase, RobotState, SectionReport, Stage};
+use crate::order::OrderError;
+use crate::plan::PlanError;
+use crate::robot::Robot;
+use crate::wire::{MoveId, MoveReport, RobotPhase, RobotState};
 
 /// Why a move was not accepted.
 #[derive(Debug, Error)]
@@ -96,6 +93,8 @@ pub struct RobotHandle {
     pub(super) positions: Arc<TaughtPositions>,
     pub(super) cell: Arc<Cell>,
     pub(super) cycles: Arc<CycleSlot>,
+    /// Orders are taken one at a time, each planned from where the one before it ends.
+    lane: Arc<tokio::sync::Mutex<()>>,
     /// The PLC's incident count this handle acts under (a cycle's): its moves and writes are
     /// refused once another incident came ([`Shared::incident`]); `None`: whenever.
     epoch: Option<u64>,
@@ -117,311 +116,14 @@ impl RobotHandle {
         &self.robot
     }
 
-    /// Checks an order, refuses it at once if the robot cannot take a move now (link down, not
-    /// homed, a fault), plans it from where the robot will be when its turn comes (refusing it,
-    /// with nothing queued, if that fails), and queues it. A jog (`by`) behind a queued or running
-    /// move is anchored here, where that move is planned to end; with none it is anchored to the
-    /// PLC's counts when it begins. A `position` is looked up here: a later change of it does
-    /// not move this order.
-    ///
-    /// Returns the id of the move's last start: the move has ended when it has (see
-    /// [`RobotHandle::submit_starts`]).
-    pub fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
-        let ids = self.submit_starts(order)?;
-        Ok(ids[ids.len() - 1])
-    }
-
-    /// [`RobotHandle::submit`], returning the id of every start the move runs as, in order. A
-    /// line on which a joint reverses while another moves is queued as the starts
-    /// of a path of that one line, cut at the reversal and chained at speed
-    /// ([`crate::plan::plan_line`]); any other order is one start.
-    pub fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_behind(order, None).map(|(ids, _)| ids)
-    }
-
-    /// [`RobotHandle::submit`] of a move that is uploaded now and started only once `gate`
-    /// opens (a cycle's move prepared during the wait before it). One start only: an order
-    /// that would run as several is refused (the cycle then runs it after its wait). With its
-    /// id, whether it moves: `false` when it is planned to end within a pulse of where it
-    /// begins (it then ends with the move ahead of it, with no start of its own).
-    pub(crate) fn submit_gated(
-        &self,
-        order: MoveOrder,
-        gate: &super::gate::Gate,
-    ) -> Result<(MoveId, bool), SubmitError> {
-        let (ids, moves) = self.submit_behind(order, Some(gate))?;
-        Ok((ids[0], moves))
-    }
-
-    /// The ids of `order`'s starts, and whether it moves the robot (as far as it can be told
-    /// before its turn: no counts read yet, it is taken to).
-    fn submit_behind(
-        &self,
-        order: MoveOrder,
-        gate: Option<&super::gate::Gate>,
-    ) -> Result<(Vec<MoveId>, bool), SubmitError> {
-        let taught = self.positions.of(&self.robot.name);
-        let mut checked =
-            order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
-        checked.permit = self.permit(order.permit.as_deref())?;
-        self.can_move_now()?;
-        // Behind a move that is queued or running, an order starts where that one is planned
-        // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
-        // none, a jog stays relative and is anchored to the PLC's counts when it begins (the
-        // counts read here may be a poll old); it is checked from them here.
-        let ahead = self
-            .shared
-            .state(|s| s.current_move.is_some() || !s.queued.is_empty());
-        let planned_end = self.shared.planned_end().filter(|_| ahead);
-        let from = planned_end.or_else(|| self.counts_by_joint());
-        let mut checked = match planned_end {
-            Some(end) => checked.anchored_at(&self.robot, end),
-            None => checked,
-        };
-        let mut end = None;
-        if let Some(counts) = from {
-            match plan_order(&self.robot, &checked, counts) {
-                // Kept: begun from these counts, the order takes this plan.
-                Ok(plan) => {
-                    end = Some(plan.end_counts());
-                    checked.accepted = Some(Arc::new(Accepted { counts, plan }));
-                }
-                // Where it starts already: it ends done there without a start (behind a move,
-                // with that move).
-                Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
-                    end = Some(counts);
-                }
-                Err(e @ PlanError::LaterSegment { .. }) if gate.is_some() => {
-                    return Err(e.into());
-                }
-                Err(e @ PlanError::LaterSegment { .. }) => {
-                    return match checked.pose_target(&self.robot.pose_of(&counts)) {
-                        Some(to) => self
-                            .submit_line_in_parts(&order, &checked, counts, to)
-                            .map(|ids| (ids, true)),
-                        None => Err(e.into()),
-                    };
-                }
-                Err(e) => return Err(e.into()),
-            }
-        }
-        let moves = from
-            .zip(end)
-            .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1));
-        let id = self.shared.next_id();
-        let report = MoveReport::new(id, &self.robot.name, order);
-        self.enqueue(vec![(report, checked)], end, gate.cloned())
-            .map(|ids| (ids, moves))
-    }
-
-    /// Queues every start of one order, whole or not at all: refused with nothing queued when
-    /// the queue would pass [`MAX_QUEUED_STARTS`] or the worker is gone. `end`: where the last
-    /// is planned to end, for the next order; `gate`: what a single start waits for once
-    /// uploaded (a cycle's move prepared ahead).
-    fn enqueue(
-        &self,
-        starts: Vec<(MoveReport, CheckedOrder)>,
-        end: Option<[i64; JOINTS]>,
-        gate: Option<super::gate::Gate>,
-    ) -> Result<Vec<MoveId>, SubmitError> {
-        let queued = self
-            .shared
-            .state(|s| s.queued.len() + usize::from(s.current_move.is_some()));
-        if queued + starts.len() > MAX_QUEUED_STARTS {
-            return Err(SubmitError::QueueFull {
-                queued,
-                adding: starts.len(),
-                limit: MAX_QUEUED_STARTS,
-            });
-        }
-        let ids: Vec<MoveId> = starts.iter().map(|(r, _)| r.id).collect();
-        // Reports first (the worker reports on them from its first step), then the queue.
-        self.shared.moves(|m| {
-            for (report, _) in &starts {
-                m.insert(report.clone());
-            }
-        });
-        self.shared.state(|s| s.queued.extend(&ids));
-        for (report, order) in starts {
-            let given = super::request::Given {
-                id: report.id,
-                order,
-                gate: gate.clone(),
-                epoch: self.epoch,
-            };
-            if self.requests.send(Request::Move(given)).is_err() {
-                // The worker is gone: it took none of them.
-                self.withdraw(&ids);
-                return Err(SubmitError::ShuttingDown);
-            }
-        }
-        self.shared.set_planned_end(end);
-        Ok(ids)
-    }
-
-    /// Ends the reports of `ids`, never taken by the worker, cancelled.
-    fn withdraw(&self, ids: &[MoveId]) {
-        self.shared.moves(|m| {
-            for &id in ids {
-                m.update(id, |r| {
-                    r.stage = Stage::Cancelled;
-                    r.error = Some("cancelled: the daemon is shutting down".to_owned());
-                });
-            }
-        });
-        self.shared.state(|s| s.queued.retain(|q| !ids.contains(q)));
-    }
-
-    /// A line order from `counts` to `to` that one start cannot run
-    /// ([`PlanError::LaterSegment`]), planned as a path of that one line and queued as its
-    /// starts: their ids, in order. Each start's report is the order with its target at the
-    /// pose where that start ends.
-    fn submit_line_in_parts(
-        &self,
-        order: &MoveOrder,
-        checked: &CheckedOrder,
-        counts: [i64; JOINTS],
-        to: Pose,
-    ) -> Result<Vec<MoveId>, SubmitError> {
-        let req = line_as_path(&MoveRequest {
-            from: Origin::Counts(counts),
-            to,
-            motion: checked.motion,
-        });
-        let planned = plan_path(&self.robot, &req)?;
-        let (motion, permit) = (checked.motion, checked.permit);
-        self.queue_sections(planned, req.path_accel_mm_s2, motion, permit, |end| {
-            order.ending_at(end)
-        })
-    }
-
-    /// An order's `permit` resolved against the robot's signals and input words (none: no
-    /// permit).
-    fn permit(&self, text: Option<&str>) -> Result<Permit, SubmitError> {
-        let Some(text) = text else {
-            return Ok(Permit::NONE);
-        };
-        let names = super::permit::PermitNames {
-            signals: &self.cell.settings.signals,
-            inputs: &self.cell.inputs,
-        };
-        super::permit::resolve(text, names).map_err(|e| crate::order::permit_refused(&e).into())
-    }
-
-    /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
-    fn can_move_now(&self) -> Result<(), SubmitError> {
-        if let Some(why) = self.untrusted() {
-            return Err(SubmitError::Untrusted { why });
-        }
-        if self.face_holds_motion() {
-            return Err(SubmitError::MoveEnableOff);
-        }
-        let Some(blocker) = self.shared.refusal() else {
-            return Ok(());
-        };
-        let detail = match blocker {
-            Blocker::LinkDown => self.shared.state(|s| s.link.error.clone()),
-            Blocker::Stalled if self.state().plc_mode == Some(PlcMode::Prog) => {
-                Some("it reports PROG mode".to_owned())
-            }
-            _ => None,
-        };
-        Err(SubmitError::NotNow { blocker, detail })
-    }
-
-    /// Checks a path, plans every section of it from where the robot will be when it starts
-    /// (behind the moves queued or running, or where it is), refusing it whole if any section
-    /// cannot be planned; then queues the sections, one move each, in order. Each is planned
-    /// again from the counts where it begins, and only if the robot is there: a section whose
-    /// move before it did not end done is cancelled with it. Returns the sections' move ids.
-    pub fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
-        // Every field is checked before the robot's state: a bad order is a bad order.
-        let limits = OrderLimits::of(&self.robot);
-        order.check(&self.robot, &limits)?;
-        let permit = self.permit(order.permit.as_deref())?;
-        self.can_move_now()?;
-        let ahead = self
-            .shared
-            .state(|s| s.current_move.is_some() || !s.queued.is_empty());
-        let counts = self
-            .shared
-            .planned_end()
-            .filter(|_| ahead)
-            .or_else(|| self.counts_by_joint())
-            .ok_or(SubmitError::NotNow {
-                blocker: Blocker::LinkDown,
-                detail: Some("no counts read from the PLC yet".to_owned()),
-            })?;
-        let taught = self.positions.of(&self.robot.name);
-        let lookup = |name: &str| {
-            taught.get(name).map(|p| {
-                let [x, y, z, a] = p.pose;
-                Pose::from_mm_deg(x, y, z, a)
-            })
-        };
-        let req = order.request(&self.robot, &limits, counts, &lookup)?;
-        let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
-        let planned = plan_path(&self.robot, &req)?;
-        self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
-            order.section_report(end)
-        })
-    }
-
-    /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the
-    /// order a start's report shows, from the pose where that start ends.
-    fn queue_sections(
-        &self,
-        planned: PathPlan,
-        path_accel_mm_s2: f64,
-        motion: Motion,
-        permit: Permit,
-        report: impl Fn(&Pose) -> MoveOrder,
-    ) -> Result<Vec<MoveId>, SubmitError> {
-        let of = planned.sections.len();
-        let end = planned.sections.last().map(SectionPlan::end_counts);
-        let mut starts = Vec::new();
-        for (n, section) in planned.sections.into_iter().enumerate() {
-            let shared = Arc::new(SectionOrder {
-                path: section.path,
-                path_accel_mm_s2,
-                accepted: section.starts,
-                planned: OnceLock::new(),
-            });
-            let parts = shared.accepted.len();
-            for (part, plan) in shared.accepted.iter().enumerate() {
-                let checked = CheckedOrder {
-                    target: Target::Section(SectionPart {
-                        section: Arc::clone(&shared),
-                        part,
-                        parts,
-                    }),
-                    motion,
-                    permit,
-                    accepted: None,
-                };
-                let shown = SectionReport::new(
-                    n + 1,
-                    of,
-                    &shared.path,
-                    &|s| plan.time_at_course_mm(s),
-                    &plan.window,
-                );
-                let id = self.shared.next_id();
-                let mut report = MoveReport::new(
-                    id,
-                    &self.robot.name,
-                    report(&self.robot.pose_of(&plan.end_counts())),
-                );
-                report.section = Some(shown);
-                starts.push((report, checked));
-            }
-        }
-        self.enqueue(starts, end, None)
-    }
-
     /// The counts the PLC last reported, per joint.
     pub(super) fn counts_by_joint(&self) -> Option<[i64; JOINTS]> {
-        let counts = self.shared.state(|s| s.counts)?;
+        self.joints_of(self.shared.snapshot().state.counts)
+    }
+
+    /// Per-joint counts of per-channel ones.
+    fn joints_of(&self, counts: Option<[i64; CHANNELS]>) -> Option<[i64; JOINTS]> {
+        let counts = counts?;
         Some(std::array::from_fn(|j| {
             counts[usize::from(self.robot.joints[j].channel)]
         }))
@@ -452,7 +154,7 @@ impl RobotHandle {
         check_name(name)?;
         if let Some(
             blocker @ (Blocker::LinkDown | Blocker::Stalled | Blocker::NotHomed | Blocker::Homing),
-        ) = self.shared.refusal()
+        ) = self.shared.snapshot().refusal
         {
             return Err(PositionError::NotNow { blocker });
         }
@@ -501,7 +203,6 @@ impl RobotHandle {
     /// (the cycle's own stop, when it faults).
     pub(crate) async fn stop_robot(&self) -> Result<(), CommandError> {
         self.shared.stop_pending.store(true, Ordering::SeqCst);
-        self.shared.forget_planned_end();
         let (tx, rx) = oneshot::channel();
         self.stops
             .send(tx)
@@ -529,7 +230,7 @@ impl RobotHandle {
         };
         // Only a clear that happened lets a faulted cycle be resumed.
         if cleared.is_ok() {
-            self.cycles.fault_cleared(self.shared.incidents().count);
+            self.cycles.fault_cleared(self.incidents().count);
         }
         cleared
     }
@@ -588,7 +289,7 @@ impl RobotHandle {
     /// The robot's state as last read.
     #[must_use]
     pub fn state(&self) -> RobotState {
-        let mut state = self.shared.state(|s| s.clone());
+        let mut state = self.shared.snapshot().state;
         state.cycle = self.cycles.status();
         state.mode = self.mode();
         state.face = self.face_state();
@@ -629,14 +330,20 @@ impl RobotHandle {
     /// Wakes on every status block the worker reads (and every link lost): what a cycle's wait
     /// decides on.
     #[must_use]
-    pub fn watch_reads(&self) -> watch::Receiver<u64> {
-        self.shared.watch_reads()
+    pub fn watch_reads(&self) -> super::shared::Reads {
+        self.shared.reads()
+    }
+
+    /// The robot as its worker last published it.
+    #[must_use]
+    pub fn snapshot(&self) -> super::shared::Snapshot {
+        self.shared.snapshot()
     }
 
     /// How long ago the worker last read the status block (`None`: never since the link came).
     #[must_use]
     pub fn since_status_read(&self) -> Option<Duration> {
-        self.shared.since_read()
+        self.shared.snapshot().since_read()
     }
 
     /// Whether a cycle waits on the inputs now: the worker then reads the status block at its
@@ -668,7 +375,7 @@ impl RobotHandle {
     /// What happened since this handle's epoch, if anything did.
     fn untrusted(&self) -> Option<String> {
         let epoch = self.epoch?;
-        let incidents = self.shared.incidents();
+        let incidents = self.shared.snapshot().incidents;
         (incidents.count != epoch).then(|| incidents.last.unwrap_or_default())
     }
 
@@ -676,13 +383,13 @@ impl RobotHandle {
     /// end): a cycle faults on every one, whatever its step.
     #[must_use]
     pub fn incidents(&self) -> super::shared::Incidents {
-        self.shared.incidents()
+        self.shared.snapshot().incidents
     }
 
     /// Wakes on every incident ([`Self::incidents`]).
     #[must_use]
-    pub fn watch_incidents(&self) -> watch::Receiver<super::shared::Incidents> {
-        self.shared.watch_incidents()
+    pub fn watch_incidents(&self) -> watch::Receiver<super::shared::Snapshot> {
+        self.shared.watch()
     }
 
     /// How long ago the robot's worker last went round its loop.
@@ -710,11 +417,9 @@ impl Daemon {
         let metrics = super::metrics::Metrics::new();
         for setup in robots {
             let name = setup.robot.name.clone();
-            let shared = Arc::new(Shared::new(
-                &name,
-                Arc::clone(&options.ids),
-                metrics.robot(&name),
-            ));
+            let (shared, publisher) =
+                Shared::new(&name, Arc::clone(&options.ids), metrics.robot(&name));
+            let shared = Arc::new(shared);
             let (requests, requests_rx) = mpsc::unbounded_channel();
             let (stops, stops_rx) = mpsc::unbounded_channel();
             let (gateway, gateway_rx) = mpsc::unbounded_channel();
@@ -728,6 +433,7 @@ impl Daemon {
                 positions: Arc::clone(&options.positions),
                 cell: Arc::new(Cell::new(setup.cell.clone(), setup.settings.layout.inputs)),
                 cycles: Arc::new(CycleSlot::default()),
+                lane: Arc::default(),
                 epoch: None,
             };
             let worker = Worker::new(
@@ -740,6 +446,7 @@ impl Daemon {
                     shutdown: shutdown.subscribe(),
                 },
                 shared,
+                publisher,
             );
             let task_name = name.clone();
             workers.spawn(async move {

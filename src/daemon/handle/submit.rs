@@ -1,0 +1,340 @@
+//! A robot's orders as its handle takes them: checked (every field, the permit, whether the
+//! robot can move now), planned off the async runtime from where the robot will be when the
+//! order's turn comes, and given to the robot's worker, which queues them whole or not at all
+//! and answers with their ids. Orders are taken one at a time per robot (its `lane`), so each is
+//! planned from where the one before it ends.
+
+use std::sync::{Arc, OnceLock};
+
+use super::RobotHandle;
+use crate::contract::Permit;
+use crate::contract::machine::Blocker;
+use crate::daemon::SubmitError;
+use crate::daemon::gate::Gate;
+use crate::daemon::request::{Batch, Request};
+use crate::geometry::Pose;
+use crate::kinematics::JOINTS;
+use crate::order::{
+    Accepted, CheckedOrder, MoveOrder, OrderLimits, PathOrder, SectionOrder, SectionPart, Target,
+    plan_order,
+};
+use crate::plan::{
+    MoveRequest, Origin, PathPlan, PathRequest, Plan, PlanError, SectionPlan, line_as_path,
+    plan_path,
+};
+use crate::plc::PlcMode;
+use crate::robot::Motion;
+use crate::wire::{MoveId, MoveReport, SectionReport};
+
+/// Where the next order begins: where the last one queued or running ends, else where the PLC
+/// last said the robot is (`None`: no counts read yet).
+struct Start {
+    counts: Option<[i64; JOINTS]>,
+    /// Whether it is behind a move queued or running (then `counts` is that move's end).
+    behind: bool,
+}
+
+impl RobotHandle {
+    /// Checks an order, refuses it at once if the robot cannot take a move now (link down, not
+    /// homed, a fault), plans it from where the robot will be when its turn comes (refusing it,
+    /// with nothing queued, if that fails), and queues it. A jog (`by`) behind a queued or running
+    /// move is anchored here, where that move is planned to end; with none it is anchored to the
+    /// PLC's counts when it begins. A `position` is looked up here: a later change of it does
+    /// not move this order.
+    ///
+    /// Returns the id of the move's last start: the move has ended when it has (see
+    /// [`RobotHandle::submit_starts`]).
+    pub async fn submit(&self, order: MoveOrder) -> Result<MoveId, SubmitError> {
+        let ids = self.submit_starts(order).await?;
+        Ok(ids[ids.len() - 1])
+    }
+
+    /// [`RobotHandle::submit`], returning the id of every start the move runs as, in order. A
+    /// line on which a joint reverses while another moves is queued as the starts
+    /// of a path of that one line, cut at the reversal and chained at speed
+    /// ([`crate::plan::plan_line`]); any other order is one start.
+    pub async fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_behind(order, None).await.map(|(ids, _)| ids)
+    }
+
+    /// [`RobotHandle::submit`] of a move that is uploaded now and started only once `gate`
+    /// opens (a cycle's move prepared during the wait before it). One start only: an order
+    /// that would run as several is refused (the cycle then runs it after its wait). With its
+    /// id, whether it moves: `false` when it is planned to end within a pulse of where it
+    /// begins (it then ends with the move ahead of it, with no start of its own).
+    pub(crate) async fn submit_gated(
+        &self,
+        order: MoveOrder,
+        gate: &Gate,
+    ) -> Result<(MoveId, bool), SubmitError> {
+        let (ids, moves) = self.submit_behind(order, Some(gate)).await?;
+        Ok((ids[0], moves))
+    }
+
+    /// The ids of `order`'s starts, and whether it moves the robot (as far as it can be told
+    /// before its turn: no counts read yet, it is taken to).
+    async fn submit_behind(
+        &self,
+        order: MoveOrder,
+        gate: Option<&Gate>,
+    ) -> Result<(Vec<MoveId>, bool), SubmitError> {
+        let taught = self.positions.of(&self.robot.name);
+        let mut checked =
+            order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
+        checked.permit = self.permit(order.permit.as_deref())?;
+        self.can_move_now()?;
+        let _turn = self.lane.lock().await;
+        // Behind a move that is queued or running, an order starts where that one is planned
+        // to end: a jog is anchored there now, so jogs queued back to back add up exactly. With
+        // none, a jog stays relative and is anchored to the PLC's counts when it begins (the
+        // counts read here may be a poll old); it is checked from them here.
+        let start = self.start();
+        let mut checked = match (start.behind, start.counts) {
+            (true, Some(end)) => checked.anchored_at(&self.robot, end),
+            _ => checked,
+        };
+        let mut end = None;
+        if let Some(counts) = start.counts {
+            match self.planned(&checked, counts).await {
+                // Kept: begun from these counts, the order takes this plan.
+                Ok(plan) => {
+                    end = Some(plan.end_counts());
+                    checked.accepted = Some(Arc::new(Accepted { counts, plan }));
+                }
+                // Where it starts already: it ends done there without a start (behind a move,
+                // with that move).
+                Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
+                    end = Some(counts);
+                }
+                Err(e @ PlanError::LaterSegment { .. }) if gate.is_some() => {
+                    return Err(e.into());
+                }
+                Err(e @ PlanError::LaterSegment { .. }) => {
+                    return match checked.pose_target(&self.robot.pose_of(&counts)) {
+                        Some(to) => self
+                            .submit_line_in_parts(&order, &checked, counts, to)
+                            .await
+                            .map(|ids| (ids, true)),
+                        None => Err(e.into()),
+                    };
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        let moves = start
+            .counts
+            .zip(end)
+            .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1));
+        let id = self.shared.next_id();
+        let report = MoveReport::new(id, &self.robot.name, order);
+        self.enqueue(vec![(report, checked)], end, gate.cloned())
+            .await
+            .map(|ids| (ids, moves))
+    }
+
+    /// Where the next order begins ([`Start`]).
+    fn start(&self) -> Start {
+        let snapshot = self.shared.snapshot();
+        let behind = snapshot.state.current_move.is_some() || !snapshot.state.queued.is_empty();
+        let counts = match snapshot.planned_end {
+            Some(end) if behind => Some(end),
+            _ => self.joints_of(snapshot.state.counts),
+        };
+        Start { counts, behind }
+    }
+
+    /// `checked` planned from `counts`, off the async runtime.
+    async fn planned(
+        &self,
+        checked: &CheckedOrder,
+        counts: [i64; JOINTS],
+    ) -> Result<Plan, PlanError> {
+        let (robot, checked) = (Arc::clone(&self.robot), checked.clone());
+        off_runtime(move || plan_order(&robot, &checked, counts)).await
+    }
+
+    /// Gives one order's starts to the worker, whole or not at all: refused with nothing queued
+    /// when the queue would pass [`MAX_QUEUED_STARTS`](crate::daemon::MAX_QUEUED_STARTS) or the
+    /// worker is gone. `end`: where the last is planned to end, for the next order; `gate`: what
+    /// a single start waits for once uploaded (a cycle's move prepared ahead).
+    async fn enqueue(
+        &self,
+        starts: Vec<(MoveReport, CheckedOrder)>,
+        end: Option<[i64; JOINTS]>,
+        gate: Option<Gate>,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        let (reply, answer) = tokio::sync::oneshot::channel();
+        let batch = Batch {
+            starts,
+            end,
+            gate,
+            epoch: self.epoch,
+            reply,
+        };
+        self.requests
+            .send(Request::Moves(batch))
+            .map_err(|_| SubmitError::ShuttingDown)?;
+        answer.await.map_err(|_| SubmitError::ShuttingDown)?
+    }
+
+    /// A line order from `counts` to `to` that one start cannot run
+    /// ([`PlanError::LaterSegment`]), planned as a path of that one line and queued as its
+    /// starts: their ids, in order. Each start's report is the order with its target at the
+    /// pose where that start ends.
+    async fn submit_line_in_parts(
+        &self,
+        order: &MoveOrder,
+        checked: &CheckedOrder,
+        counts: [i64; JOINTS],
+        to: Pose,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        let req = line_as_path(&MoveRequest {
+            from: Origin::Counts(counts),
+            to,
+            motion: checked.motion,
+        });
+        let path_accel_mm_s2 = req.path_accel_mm_s2;
+        let planned = self.planned_path(req).await?;
+        let (motion, permit) = (checked.motion, checked.permit);
+        self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
+            order.ending_at(end)
+        })
+        .await
+    }
+
+    /// `req` planned off the async runtime.
+    async fn planned_path(&self, req: PathRequest) -> Result<PathPlan, PlanError> {
+        let robot = Arc::clone(&self.robot);
+        off_runtime(move || plan_path(&robot, &req)).await
+    }
+
+    /// An order's `permit` resolved against the robot's signals and input words (none: no
+    /// permit).
+    fn permit(&self, text: Option<&str>) -> Result<Permit, SubmitError> {
+        let Some(text) = text else {
+            return Ok(Permit::NONE);
+        };
+        let names = crate::order::permit::PermitNames {
+            signals: &self.cell.settings.signals,
+            inputs: &self.cell.inputs,
+        };
+        crate::order::permit::resolve(text, names)
+            .map_err(|e| crate::order::permit_refused(&e).into())
+    }
+
+    /// Refuses at once when the robot cannot take a move now (link down, not homed, a fault).
+    fn can_move_now(&self) -> Result<(), SubmitError> {
+        if let Some(why) = self.untrusted() {
+            return Err(SubmitError::Untrusted { why });
+        }
+        if self.face_holds_motion() {
+            return Err(SubmitError::MoveEnableOff);
+        }
+        let snapshot = self.shared.snapshot();
+        let Some(blocker) = snapshot.refusal else {
+            return Ok(());
+        };
+        let detail = match blocker {
+            Blocker::LinkDown => snapshot.state.link.error.clone(),
+            Blocker::Stalled if snapshot.state.plc_mode == Some(PlcMode::Prog) => {
+                Some("it reports PROG mode".to_owned())
+            }
+            _ => None,
+        };
+        Err(SubmitError::NotNow { blocker, detail })
+    }
+
+    /// Checks a path, plans every section of it from where the robot will be when it starts
+    /// (behind the moves queued or running, or where it is), refusing it whole if any section
+    /// cannot be planned; then queues the sections, one move each, in order. Each is planned
+    /// again from the counts where it begins, and only if the robot is there: a section whose
+    /// move before it did not end done is cancelled with it. Returns the sections' move ids.
+    pub async fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
+        // Every field is checked before the robot's state: a bad order is a bad order.
+        let limits = OrderLimits::of(&self.robot);
+        order.check(&self.robot, &limits)?;
+        let permit = self.permit(order.permit.as_deref())?;
+        self.can_move_now()?;
+        let _turn = self.lane.lock().await;
+        let counts = self.start().counts.ok_or(SubmitError::NotNow {
+            blocker: Blocker::LinkDown,
+            detail: Some("no counts read from the PLC yet".to_owned()),
+        })?;
+        let taught = self.positions.of(&self.robot.name);
+        let lookup = |name: &str| {
+            taught.get(name).map(|p| {
+                let [x, y, z, a] = p.pose;
+                Pose::from_mm_deg(x, y, z, a)
+            })
+        };
+        let req = order.request(&self.robot, &limits, counts, &lookup)?;
+        let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
+        let planned = self.planned_path(req).await?;
+        self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
+            order.section_report(end)
+        })
+        .await
+    }
+
+    /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the
+    /// order a start's report shows, from the pose where that start ends.
+    async fn queue_sections(
+        &self,
+        planned: PathPlan,
+        path_accel_mm_s2: f64,
+        motion: Motion,
+        permit: Permit,
+        report: impl Fn(&Pose) -> MoveOrder,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        let of = planned.sections.len();
+        let end = planned.sections.last().map(SectionPlan::end_counts);
+        let mut starts = Vec::new();
+        for (n, section) in planned.sections.into_iter().enumerate() {
+            let shared = Arc::new(SectionOrder {
+                path: section.path,
+                path_accel_mm_s2,
+                accepted: section.starts,
+                planned: OnceLock::new(),
+            });
+            let parts = shared.accepted.len();
+            for (part, plan) in shared.accepted.iter().enumerate() {
+                let checked = CheckedOrder {
+                    target: Target::Section(SectionPart {
+                        section: Arc::clone(&shared),
+                        part,
+                        parts,
+                    }),
+                    motion,
+                    permit,
+                    accepted: None,
+                };
+                let shown = SectionReport::new(
+                    n + 1,
+                    of,
+                    &shared.path,
+                    &|s| plan.time_at_course_mm(s),
+                    &plan.window,
+                );
+                let id = self.shared.next_id();
+                let mut report = MoveReport::new(
+                    id,
+                    &self.robot.name,
+                    report(&self.robot.pose_of(&plan.end_counts())),
+                );
+                report.section = Some(shown);
+                starts.push((report, checked));
+            }
+        }
+        self.enqueue(starts, end, None).await
+    }
+}
+
+/// Runs `plan` on the blocking pool: planning takes milliseconds of CPU, which an async task
+/// must not hold its thread for.
+async fn off_runtime<T: Send + 'static>(
+    plan: impl FnOnce() -> Result<T, PlanError> + Send + 'static,
+) -> Result<T, PlanError> {
+    tokio::task::spawn_blocking(plan)
+        .await
+        .unwrap_or_else(|e| std::panic::resume_unwind(e.into_panic()))
+}
