@@ -80,12 +80,6 @@ impl Plc for FakePlc {
     async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
         self.write_words(start, words).await
     }
-    async fn read_relay(&mut self, _relay: u16) -> Result<bool, PlcError> {
-        Ok(false)
-    }
-    async fn write_relay(&mut self, _relay: u16, _on: bool) -> Result<(), PlcError> {
-        Ok(())
-    }
     async fn read_bits(
         &mut self,
         _area: crate::gateway::Area,
