@@ -28,7 +28,10 @@ use crate::gateway::Area;
 
 pub use any::{AnyPlc, connect};
 pub use counts::ExchangeCounts;
-pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_hint, open_serial, open_tcp};
+pub use link::{
+    BoxedLink, ByteStream, ReadFilter, ReadFiltered, SharedStream, drain, open_hint, open_serial,
+    open_tcp,
+};
 pub use mewtocol::{EXCHANGE_BUDGET, MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
 pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
 pub use settings::{
