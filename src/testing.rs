@@ -25,3 +25,12 @@ pub(crate) fn course_jerk(plan: &crate::plan::Plan) -> f64 {
     }
     peak
 }
+
+/// An empty directory for a test: `linterpd-{name}-{pid}` under the system's temporary
+/// directory, emptied first if a run before left it.
+pub(crate) fn fresh_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

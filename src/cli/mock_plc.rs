@@ -274,6 +274,7 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         }
         None => None,
     };
+    let shutdown = shutdown_signal();
     let (server, shown) = start_server(&settings, &shared).await?;
     writeln!(out, "listening on {shown}")
         .and_then(|()| out.flush())
@@ -291,7 +292,7 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         tracing::info!(cell = %shared.with(|m| m.cell().describe()), "simulated cell");
     }
     let outcome = tokio::select! {
-        () = shutdown_signal() => Ok(()),
+        () = shutdown => Ok(()),
         ended = server => Err(anyhow!("the server stopped: {}", match ended {
             Ok(Ok(())) => "its link closed".to_owned(),
             Ok(Err(e)) => format!("{e:#}"),
@@ -383,15 +384,21 @@ fn spawn_serial(
     }
 }
 
-async fn shutdown_signal() {
+/// Ends at SIGTERM or SIGINT. SIGTERM is listened for from the call on, not from the first
+/// poll: called before "listening on" is printed, a SIGTERM sent as soon as that line is read is
+/// not lost (it would kill the process instead of ending it with 0).
+fn shutdown_signal() -> impl Future<Output = ()> {
     use tokio::signal::unix::{SignalKind, signal};
-    let Ok(mut term) = signal(SignalKind::terminate()) else {
-        let _ = tokio::signal::ctrl_c().await;
-        return;
-    };
-    tokio::select! {
-        _ = tokio::signal::ctrl_c() => tracing::info!("SIGINT"),
-        _ = term.recv() => tracing::info!("SIGTERM"),
+    let term = signal(SignalKind::terminate());
+    async move {
+        let Ok(mut term) = term else {
+            let _ = tokio::signal::ctrl_c().await;
+            return;
+        };
+        tokio::select! {
+            _ = tokio::signal::ctrl_c() => tracing::info!("SIGINT"),
+            _ = term.recv() => tracing::info!("SIGTERM"),
+        }
     }
 }
 

@@ -155,13 +155,7 @@ fn kind(t: std::fs::FileType) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn temp(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::testing::fresh_dir;
 
     #[test]
     fn dev_zero_is_refused_before_it_is_read_naming_the_file_and_the_limit() {
@@ -177,7 +171,7 @@ mod tests {
 
     #[test]
     fn a_directory_is_not_a_file() {
-        let dir = temp("files-dir");
+        let dir = fresh_dir("files-dir");
         let e = read_regular(&dir).unwrap_err().to_string();
         assert!(e.contains("is not a regular file (a directory)"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
@@ -185,7 +179,7 @@ mod tests {
 
     #[test]
     fn a_file_over_1_mib_is_refused_and_one_at_the_limit_is_read() {
-        let dir = temp("files-size");
+        let dir = fresh_dir("files-size");
         let big = dir.join("big.toml");
         std::fs::write(&big, vec![b'#'; MAX_FILE_BYTES as usize + 1]).unwrap();
         let e = read_regular(&big).unwrap_err().to_string();
@@ -214,7 +208,7 @@ mod tests {
     /// `file = "/etc/passwd"` was opened.
     #[test]
     fn a_file_outside_its_directory_is_refused_naming_it() {
-        let dir = temp("files-inside");
+        let dir = fresh_dir("files-inside");
         let programs = dir.join("programs");
         std::fs::create_dir_all(programs.join("paths")).unwrap();
         std::fs::write(dir.join("x.toml"), "outside").unwrap();

@@ -146,17 +146,11 @@ pub fn write_atomically(path: &Path, text: &str) -> io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("linterpd-ids-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::testing::fresh_dir;
 
     #[test]
     fn ids_go_on_after_a_restart_and_never_repeat() {
-        let dir = temp_dir("restart");
+        let dir = fresh_dir("ids-restart");
         let first = MoveIds::in_state_dir(&dir).unwrap();
         let a: Vec<u64> = (0..3).map(|_| first.next()).collect();
         assert_eq!(a, [1, 2, 3]);
@@ -171,7 +165,7 @@ mod tests {
 
     #[test]
     fn a_block_used_up_reserves_the_next() {
-        let dir = temp_dir("block");
+        let dir = fresh_dir("ids-block");
         let ids = MoveIds::in_state_dir(&dir).unwrap();
         for _ in 0..BLOCK {
             ids.next();
@@ -188,7 +182,7 @@ mod tests {
 
     #[test]
     fn a_corrupt_file_is_an_error_naming_it() {
-        let dir = temp_dir("corrupt");
+        let dir = fresh_dir("ids-corrupt");
         std::fs::write(dir.join(FILE), "twelve").unwrap();
         let e = MoveIds::in_state_dir(&dir).unwrap_err().to_string();
         assert!(e.contains("move-ids") && e.contains("twelve"), "{e}");

@@ -142,6 +142,18 @@ impl ContactArea {
     }
 }
 
+/// Refuses `address` of `area` past `max`.
+fn at_most(area: &'static str, address: u16, max: u16) -> Result<(), MessageError> {
+    if address > max {
+        return Err(MessageError::AddressOutOfRange {
+            area,
+            address: address.into(),
+            max: max.into(),
+        });
+    }
+    Ok(())
+}
+
 /// One contact: area, word 0..=999 and bit 0..=15 (`R1` = word 0, bit 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Contact {
@@ -153,21 +165,8 @@ pub struct Contact {
 impl Contact {
     /// Contact `area` `word`.`bit`.
     pub fn new(area: ContactArea, word: u16, bit: u8) -> Result<Self, MessageError> {
-        let max = u32::from(CONTACT_WORD_MAX);
-        if word > CONTACT_WORD_MAX {
-            return Err(MessageError::AddressOutOfRange {
-                area: area.name(),
-                address: word.into(),
-                max,
-            });
-        }
-        if bit > 15 {
-            return Err(MessageError::AddressOutOfRange {
-                area: "bit",
-                address: bit.into(),
-                max: 15,
-            });
-        }
+        at_most(area.name(), word, CONTACT_WORD_MAX)?;
+        at_most("bit", bit.into(), 15)?;
         Ok(Self { area, word, bit })
     }
 
@@ -221,14 +220,7 @@ pub struct ContactWords {
 impl ContactWords {
     /// Words `start` ..= `end` of `area`.
     pub fn new(area: ContactArea, start: u16, end: u16) -> Result<Self, MessageError> {
-        let max = u32::from(CONTACT_WORDS_MAX);
-        if end > CONTACT_WORDS_MAX {
-            return Err(MessageError::AddressOutOfRange {
-                area: area.name(),
-                address: end.into(),
-                max,
-            });
-        }
+        at_most(area.name(), end, CONTACT_WORDS_MAX)?;
         if start > end {
             return Err(MessageError::StartAfterEnd {
                 start: start.into(),

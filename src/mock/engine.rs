@@ -302,22 +302,9 @@ impl Engine {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::{ControlCode, Duty, OutputMethod};
 
     fn seg(direction: Direction, rows: &[(u32, i64)]) -> Segment {
-        Segment {
-            control: ControlCode {
-                output: OutputMethod::PulseSign,
-                direction,
-                absolute: true,
-                range: FrequencyRange::High,
-                duty: Duty::Half,
-            },
-            rows: rows
-                .iter()
-                .map(|&(freq_hz, target)| Row { freq_hz, target })
-                .collect(),
-        }
+        crate::table::pulse_sign_segment(direction, FrequencyRange::High, rows)
     }
 
     fn recorder() -> Recorder {

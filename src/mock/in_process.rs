@@ -119,20 +119,6 @@ impl Plc for InProcess {
         self.write_words(start, words)
     }
 
-    fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send {
-        let result = self.exchange(|m| m.read_relay(u32::from(relay)));
-        ready(result.map_err(|e| refused(format!("read relay number {relay}"), e)))
-    }
-
-    fn write_relay(
-        &mut self,
-        relay: u16,
-        on: bool,
-    ) -> impl Future<Output = Result<(), PlcError>> + Send {
-        let result = self.exchange(|m| m.write_relay(u32::from(relay), on));
-        ready(result.map_err(|e| refused(format!("write relay number {relay}"), e)))
-    }
-
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send {
         ready(Ok(self.exchange(|m| m.mode())))
     }

@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::task::{Context, Poll};
 use std::time::Duration;
 
-use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::io::{AsyncRead, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_modbus::server::Service;
 use tokio_modbus::{ExceptionCode, Request, Response, SlaveRequest};
@@ -35,7 +35,7 @@ use super::shared::SharedMock;
 use super::wire::WireStream;
 use super::{IO_WORDS, LinkFault, MemoryError, MockPlc, RELAY_LAST};
 use crate::gateway::Area;
-use crate::plc::{BoxedLink, RELAY_COIL_BASE};
+use crate::plc::{BoxedLink, RELAY_COIL_BASE, ReadFilter, ReadFiltered};
 
 /// Registers one read (03) may ask for (Modbus spec).
 const MAX_READ_REGISTERS: u16 = 125;
@@ -122,10 +122,7 @@ impl ModbusServer {
                 None => Box::new(stream),
             };
             let service = server.service(rtu);
-            let link = Closable {
-                inner: link,
-                closed: Arc::clone(&service.closed),
-            };
+            let link = ReadFiltered::new(link, Closing(Arc::clone(&service.closed)));
             std::future::ready(Ok(Some((service, link))))
         }
     }
@@ -148,7 +145,8 @@ impl ModbusServer {
 }
 
 /// What accepting a TCP connection yields to tokio-modbus's server.
-type Accepted = std::future::Ready<io::Result<Option<(MockService, Closable<BoxedLink>)>>>;
+type Accepted =
+    std::future::Ready<io::Result<Option<(MockService, ReadFiltered<BoxedLink, Closing>)>>>;
 
 type Answer = Pin<Box<dyn Future<Output = Result<Option<Response>, ExceptionCode>> + Send>>;
 
@@ -297,43 +295,22 @@ fn execute(mock: &mut MockPlc, request: &Request<'_>) -> Result<Response, Except
     }
 }
 
-/// A stream that reads as closed (end of stream) once its flag is set, so tokio-modbus ends the
+/// A stream's reads as closed (end of stream) once the flag is set, so tokio-modbus ends the
 /// connection after a scripted `close`.
 #[derive(Debug)]
-struct Closable<S> {
-    inner: S,
-    closed: Arc<AtomicBool>,
-}
+struct Closing(Arc<AtomicBool>);
 
-impl<S: AsyncRead + Unpin> AsyncRead for Closable<S> {
+impl<S: AsyncRead + Unpin> ReadFilter<S> for Closing {
     fn poll_read(
-        self: Pin<&mut Self>,
+        &mut self,
+        inner: &mut S,
         cx: &mut Context<'_>,
         buf: &mut ReadBuf<'_>,
     ) -> Poll<io::Result<()>> {
-        let this = self.get_mut();
-        if this.closed.load(Ordering::SeqCst) {
+        if self.0.load(Ordering::SeqCst) {
             return Poll::Ready(Ok(()));
         }
-        Pin::new(&mut this.inner).poll_read(cx, buf)
-    }
-}
-
-impl<S: AsyncWrite + Unpin> AsyncWrite for Closable<S> {
-    fn poll_write(
-        self: Pin<&mut Self>,
-        cx: &mut Context<'_>,
-        buf: &[u8],
-    ) -> Poll<io::Result<usize>> {
-        Pin::new(&mut self.get_mut().inner).poll_write(cx, buf)
-    }
-
-    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().inner).poll_flush(cx)
-    }
-
-    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().inner).poll_shutdown(cx)
+        Pin::new(inner).poll_read(cx, buf)
     }
 }
 

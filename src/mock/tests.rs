@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use super::*;
 use crate::contract::{CommandBlock, Fault, State};
-use crate::table::{ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row, Segment};
+use crate::table::{Direction, FrequencyRange, Segment};
 
 const SCAN: f64 = DEFAULT_SCAN_S;
 
@@ -18,21 +18,7 @@ fn mock(model: FrequencyModel) -> MockPlc {
     m
 }
 
-fn seg(direction: Direction, range: FrequencyRange, rows: &[(u32, i64)]) -> Segment {
-    Segment {
-        control: ControlCode {
-            output: OutputMethod::PulseSign,
-            direction,
-            absolute: true,
-            range,
-            duty: Duty::Half,
-        },
-        rows: rows
-            .iter()
-            .map(|&(freq_hz, target)| Row { freq_hz, target })
-            .collect(),
-    }
-}
+use crate::table::pulse_sign_segment as seg;
 
 fn up(rows: &[(u32, i64)]) -> Segment {
     seg(Direction::Up, FrequencyRange::High, rows)

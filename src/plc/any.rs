@@ -68,20 +68,6 @@ impl Plc for AnyPlc {
         }
     }
 
-    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
-        match self {
-            Self::Mewtocol(c) => c.read_relay(relay).await,
-            Self::Modbus(c) => c.read_relay(relay).await,
-        }
-    }
-
-    async fn write_relay(&mut self, relay: u16, on: bool) -> Result<(), PlcError> {
-        match self {
-            Self::Mewtocol(c) => c.write_relay(relay, on).await,
-            Self::Modbus(c) => c.write_relay(relay, on).await,
-        }
-    }
-
     async fn mode(&mut self) -> Result<PlcMode, PlcError> {
         match self {
             Self::Mewtocol(c) => c.mode().await,

@@ -1,5 +1,6 @@
 //! IO. Opening a PLC's byte stream (a serial port or a TCP connection), a stream handle the Modbus
-//! client can take back from tokio-modbus, and draining late bytes off a stream.
+//! client can take back from tokio-modbus, draining late bytes off a stream, and a stream whose
+//! reads pass through a filter (the Modbus servers' guards) while its writes go straight through.
 //!
 //! The protocol clients never open anything themselves: they are generic over
 //! [`AsyncRead`] + [`AsyncWrite`], so tests run them over `tokio::io::duplex`, a pseudo-terminal or
@@ -197,6 +198,62 @@ impl<T: AsyncWrite + Unpin> AsyncWrite for SharedStream<T> {
 
     fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         Pin::new(&mut *self.lock()).poll_shutdown(cx)
+    }
+}
+
+/// What a [`ReadFiltered`] stream makes of its reads: bytes from the stream beneath, changed,
+/// held back or cut off.
+pub trait ReadFilter<S> {
+    /// Fills `buf` as [`AsyncRead::poll_read`] does, reading `inner` as it needs.
+    fn poll_read(
+        &mut self,
+        inner: &mut S,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<io::Result<()>>;
+}
+
+/// A byte stream whose reads pass through a [`ReadFilter`] and whose writes go straight to the
+/// stream beneath.
+#[derive(Debug)]
+pub struct ReadFiltered<S, F> {
+    inner: S,
+    filter: F,
+}
+
+impl<S, F> ReadFiltered<S, F> {
+    /// `inner`, its reads through `filter`.
+    pub fn new(inner: S, filter: F) -> Self {
+        Self { inner, filter }
+    }
+}
+
+impl<S: AsyncRead + Unpin, F: ReadFilter<S> + Unpin> AsyncRead for ReadFiltered<S, F> {
+    fn poll_read(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<io::Result<()>> {
+        let this = self.get_mut();
+        this.filter.poll_read(&mut this.inner, cx, buf)
+    }
+}
+
+impl<S: AsyncWrite + Unpin, F: Unpin> AsyncWrite for ReadFiltered<S, F> {
+    fn poll_write(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &[u8],
+    ) -> Poll<io::Result<usize>> {
+        Pin::new(&mut self.get_mut().inner).poll_write(cx, buf)
+    }
+
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().inner).poll_flush(cx)
+    }
+
+    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().inner).poll_shutdown(cx)
     }
 }
 

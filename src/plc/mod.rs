@@ -28,7 +28,10 @@ use crate::gateway::Area;
 
 pub use any::{AnyPlc, connect};
 pub use counts::ExchangeCounts;
-pub use link::{BoxedLink, ByteStream, SharedStream, drain, open_hint, open_serial, open_tcp};
+pub use link::{
+    BoxedLink, ByteStream, ReadFilter, ReadFiltered, SharedStream, drain, open_hint, open_serial,
+    open_tcp,
+};
 pub use mewtocol::{EXCHANGE_BUDGET, MewtocolClient, MewtocolOptions, STATION_ANY, relay_name};
 pub use modbus::{ModbusClient, ModbusFraming, ModbusOptions, RELAY_COIL_BASE, exception_meaning};
 pub use settings::{
@@ -152,14 +155,18 @@ pub trait Plc: Send {
         start: u16,
         words: &[u16],
     ) -> impl Future<Output = Result<(), PlcError>> + Send;
-    /// Reads relay R`relay` (`relay` = word * 16 + bit).
-    fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send;
-    /// Writes relay R`relay`.
+    /// Reads relay R`relay` (`relay` = word * 16 + bit): one bit of R, whatever the link.
+    fn read_relay(&mut self, relay: u16) -> impl Future<Output = Result<bool, PlcError>> + Send {
+        async move { Ok(self.read_bits(Area::R, u32::from(relay), 1).await?[0]) }
+    }
+    /// Writes relay R`relay`: one bit of R, whatever the link.
     fn write_relay(
         &mut self,
         relay: u16,
         on: bool,
-    ) -> impl Future<Output = Result<(), PlcError>> + Send;
+    ) -> impl Future<Output = Result<(), PlcError>> + Send {
+        self.write_bit(Area::R, u32::from(relay), on)
+    }
     /// Reads whether the PLC is in RUN or PROG mode.
     fn mode(&mut self) -> impl Future<Output = Result<PlcMode, PlcError>> + Send;
     /// Reads `count` bits of `area` (X, Y or R) from bit `start` (word * 16 + bit).

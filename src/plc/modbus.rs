@@ -390,14 +390,6 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send + fmt::Debug + 'static> Plc for Mo
         self.write_chunk(start, words, 0).await
     }
 
-    async fn read_relay(&mut self, relay: u16) -> Result<bool, PlcError> {
-        Ok(self.read_bits(Area::R, u32::from(relay), 1).await?[0])
-    }
-
-    async fn write_relay(&mut self, relay: u16, on: bool) -> Result<(), PlcError> {
-        self.write_bit(Area::R, u32::from(relay), on).await
-    }
-
     async fn read_bits(
         &mut self,
         area: Area,

@@ -113,22 +113,16 @@ async fn listener() -> (TcpListener, SocketAddr) {
 
 /// A Modbus TCP server on port 0 serving `memory`.
 async fn serve_tcp(memory: &Memory) -> SocketAddr {
-    let (listener, address) = listener().await;
-    let memory = memory.clone();
-    tokio::spawn(async move {
-        let on_connected = move |stream: TcpStream, _| {
-            let service = memory.clone();
-            async move { Ok(Some((service, stream))) }
-        };
-        let _ = tcp_server::Server::new(listener)
-            .serve(&on_connected, |_| {})
-            .await;
-    });
-    address
+    serve(memory, ModbusFraming::Tcp).await
 }
 
 /// A Modbus RTU server (RTU frames, no transaction id) over TCP on port 0 serving `memory`.
 async fn serve_rtu(memory: &Memory) -> SocketAddr {
+    serve(memory, ModbusFraming::Rtu).await
+}
+
+/// A server on port 0 serving `memory` in `framing` over TCP.
+async fn serve(memory: &Memory, framing: ModbusFraming) -> SocketAddr {
     let (listener, address) = listener().await;
     let memory = memory.clone();
     tokio::spawn(async move {
@@ -136,9 +130,18 @@ async fn serve_rtu(memory: &Memory) -> SocketAddr {
             let service = memory.clone();
             async move { Ok(Some((service, stream))) }
         };
-        let _ = rtu_over_tcp::Server::new(listener)
-            .serve(&on_connected, |_| {})
-            .await;
+        let _ = match framing {
+            ModbusFraming::Tcp => {
+                tcp_server::Server::new(listener)
+                    .serve(&on_connected, |_| {})
+                    .await
+            }
+            ModbusFraming::Rtu => {
+                rtu_over_tcp::Server::new(listener)
+                    .serve(&on_connected, |_| {})
+                    .await
+            }
+        };
     });
     address
 }

@@ -4,6 +4,7 @@ use std::ops::Range;
 
 use nalgebra::Vector3;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -135,6 +136,47 @@ fn equal_scale(x: Range<f64>, y: Range<f64>, w: f64, h: f64) -> (Range<f64>, Ran
     (widen(x, mm_per_px * w), widen(y, mm_per_px * h))
 }
 
+/// How a panel's axes are labelled: their names, how many labels each has and with how many
+/// decimals, and the room left of the y axis for its labels, px.
+struct Axes {
+    names: [String; 2],
+    labels: [usize; 2],
+    decimals: [usize; 2],
+    y_label_px: u32,
+}
+
+/// A panel's chart on `area` over `ranges` (x, y), with its caption and mesh drawn the panels'
+/// one way.
+fn chart<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: String,
+    (x, y): (Range<f64>, Range<f64>),
+    axes: &Axes,
+) -> Result<ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>, Failed> {
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 16))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(axes.y_label_px)
+        .build_cartesian_2d(x, y)?;
+    let [x_decimals, y_decimals] = axes.decimals;
+    chart
+        .configure_mesh()
+        .x_desc(axes.names[0].as_str())
+        .y_desc(axes.names[1].as_str())
+        .x_labels(axes.labels[0])
+        .y_labels(axes.labels[1])
+        .x_label_formatter(&|v| format!("{v:.x_decimals$}"))
+        .y_label_formatter(&|v| format!("{v:.y_decimals$}"))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(GRID)
+        .bold_line_style(GRID_BOLD)
+        .axis_style(AXIS_GREY)
+        .draw()?;
+    Ok(chart)
+}
+
 fn path_panel(
     area: &Area<'_>,
     picture: &Picture<'_>,
@@ -168,26 +210,13 @@ fn path_panel(
         picture.noun,
         picture.magnify
     );
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 16))
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d(x, y)?;
-    chart
-        .configure_mesh()
-        .x_desc(names[0])
-        .y_desc(names[1])
-        .x_labels(6)
-        .y_labels(6)
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_label_formatter(&|v| format!("{v:.0}"))
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(GRID)
-        .bold_line_style(GRID_BOLD)
-        .axis_style(AXIS_GREY)
-        .draw()?;
+    let axes_drawn = Axes {
+        names: [names[0].to_owned(), names[1].to_owned()],
+        labels: [6, 6],
+        decimals: [0, 0],
+        y_label_px: 64,
+    };
+    let mut chart = chart(area, caption, (x, y), &axes_drawn)?;
     for (pts, s) in points.into_iter().zip(picture.series) {
         chart.draw_series(LineSeries::new(pts, colour(s.rgb).stroke_width(2)))?;
     }
@@ -212,33 +241,21 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
         .chain(picture.tolerances_mm.iter().copied())
         .fold(0.0, f64::max);
     let top = if top > 0.0 { top * 1.12 } else { 0.01 };
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            format!(
-                "deviation from the {noun}, true scale (largest in each {:.2} mm of the {noun})",
-                picture.stretch_mm,
-                noun = picture.noun
-            ),
-            (FONT, 16),
-        )
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(74)
-        .build_cartesian_2d(0.0..length_mm, 0.0..top)?;
-    chart
-        .configure_mesh()
-        .x_desc(format!("distance along the {} (mm)", picture.noun))
-        .y_desc("deviation (mm)")
-        .x_labels(10)
-        .y_labels(8)
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_label_formatter(&|v| format!("{v:.3}"))
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(GRID)
-        .bold_line_style(GRID_BOLD)
-        .axis_style(AXIS_GREY)
-        .draw()?;
+    let caption = format!(
+        "deviation from the {noun}, true scale (largest in each {:.2} mm of the {noun})",
+        picture.stretch_mm,
+        noun = picture.noun
+    );
+    let axes = Axes {
+        names: [
+            format!("distance along the {} (mm)", picture.noun),
+            "deviation (mm)".to_owned(),
+        ],
+        labels: [10, 8],
+        decimals: [0, 3],
+        y_label_px: 74,
+    };
+    let mut chart = chart(area, caption, (0.0..length_mm, 0.0..top), &axes)?;
     for &tolerance in &picture.tolerances_mm {
         let style = TOLERANCE.stroke_width(1);
         chart.draw_series(DashedLineSeries::new(

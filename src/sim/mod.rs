@@ -112,23 +112,9 @@ pub fn row_timings(tables: &[ChannelTable], max_hz: &[u32], settings: Settings) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::{ControlCode, Direction, Duty, FrequencyRange, OutputMethod, Row, Segment};
+    use crate::table::{Direction, FrequencyRange};
 
-    fn segment(direction: Direction, range: FrequencyRange, rows: &[(u32, i64)]) -> Segment {
-        Segment {
-            control: ControlCode {
-                output: OutputMethod::PulseSign,
-                direction,
-                absolute: true,
-                range,
-                duty: Duty::Half,
-            },
-            rows: rows
-                .iter()
-                .map(|&(freq_hz, target)| Row { freq_hz, target })
-                .collect(),
-        }
-    }
+    use crate::table::pulse_sign_segment as segment;
 
     const IDEAL: Settings = Settings {
         model: FrequencyModel::Ideal,

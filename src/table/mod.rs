@@ -360,28 +360,42 @@ fn segment_problems(
     }
 }
 
+/// For tests elsewhere in the crate: a segment of `rows` (frequency, absolute target) in
+/// pulse and sign output, `direction` and `range`, half duty.
+#[cfg(test)]
+pub(crate) fn pulse_sign_segment(
+    direction: Direction,
+    range: FrequencyRange,
+    rows: &[(u32, i64)],
+) -> Segment {
+    Segment {
+        control: ControlCode {
+            output: OutputMethod::PulseSign,
+            direction,
+            absolute: true,
+            range,
+            duty: Duty::Half,
+        },
+        rows: rows
+            .iter()
+            .map(|&(freq_hz, target)| Row { freq_hz, target })
+            .collect(),
+    }
+}
+
 /// For tests elsewhere in the crate: a valid table on `channel` of one rising segment (pulse and
 /// sign, high range), a row at 1 kHz to each of `targets`, within 20 kHz and 2000 words.
 #[cfg(test)]
 pub(crate) fn rising(channel: u8, targets: &[i64]) -> ValidTable {
-    let control = ControlCode {
-        output: OutputMethod::PulseSign,
-        direction: Direction::Up,
-        absolute: true,
-        range: FrequencyRange::High,
-        duty: Duty::Half,
-    };
-    let rows = targets
-        .iter()
-        .map(|&target| Row {
-            freq_hz: 1_000,
-            target,
-        })
-        .collect();
+    let rows: Vec<(u32, i64)> = targets.iter().map(|&target| (1_000, target)).collect();
     let table = ChannelTable {
         channel,
         start: 0,
-        segments: vec![Segment { control, rows }],
+        segments: vec![pulse_sign_segment(
+            Direction::Up,
+            FrequencyRange::High,
+            &rows,
+        )],
     };
     let limits = ChannelLimits {
         max_freq_hz: 20_000,

@@ -30,7 +30,7 @@ use tokio_modbus::{ExceptionCode, Request, Response};
 use super::RobotHandle;
 use crate::gateway::ModbusFace;
 use map::Ask;
-use screen::Screened;
+use screen::{Screened, screened};
 
 /// A robot's Modbus face, bound and waiting to serve.
 #[derive(Debug)]
@@ -112,7 +112,7 @@ fn admit(
     }
     tracing::info!(robot, %peer, "Modbus client connected");
     let _ = stream.set_nodelay(true);
-    Some(Screened::new(stream))
+    Some(screened(stream))
 }
 
 /// The tokio-modbus service of one connection: the robot's gateway.

@@ -22,7 +22,9 @@ use std::pin::Pin;
 use std::task::{Context, Poll, ready};
 
 use bytes::{Buf, BytesMut};
-use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::io::{AsyncRead, ReadBuf};
+
+use crate::plc::{ReadFilter, ReadFiltered};
 
 use super::map::{MAX_WRITE_COILS, MAX_WRITE_REGISTERS};
 
@@ -92,9 +94,16 @@ fn frame_bytes(raw: &[u8]) -> Option<usize> {
 
 /// A connection's stream with every request frame [`screen`]ed on its way in; writes go
 /// straight through.
-#[derive(Debug)]
-pub(super) struct Screened<S> {
-    inner: S,
+pub(super) type Screened<S> = ReadFiltered<S, Screen>;
+
+/// `inner` with every request frame [`screen`]ed on its way in.
+pub(super) fn screened<S>(inner: S) -> Screened<S> {
+    ReadFiltered::new(inner, Screen::default())
+}
+
+/// The screening of a connection's reads.
+#[derive(Debug, Default)]
+pub(super) struct Screen {
     /// Bytes read, not yet a whole frame.
     raw: BytesMut,
     /// Screened bytes for the codec.
@@ -104,17 +113,7 @@ pub(super) struct Screened<S> {
     eof: bool,
 }
 
-impl<S> Screened<S> {
-    pub(super) fn new(inner: S) -> Self {
-        Self {
-            inner,
-            raw: BytesMut::new(),
-            ready: BytesMut::new(),
-            unframed: false,
-            eof: false,
-        }
-    }
-
+impl Screen {
     /// Moves every whole frame of `raw` to `ready`, screened.
     fn take_frames(&mut self) {
         while !self.raw.is_empty() {
@@ -134,56 +133,38 @@ impl<S> Screened<S> {
     }
 }
 
-impl<S: AsyncRead + Unpin> AsyncRead for Screened<S> {
+impl<S: AsyncRead + Unpin> ReadFilter<S> for Screen {
     fn poll_read(
-        self: Pin<&mut Self>,
+        &mut self,
+        inner: &mut S,
         cx: &mut Context<'_>,
         buf: &mut ReadBuf<'_>,
     ) -> Poll<io::Result<()>> {
-        let this = self.get_mut();
         loop {
-            if !this.ready.is_empty() {
-                let n = this.ready.len().min(buf.remaining());
-                buf.put_slice(&this.ready[..n]);
-                this.ready.advance(n);
+            if !self.ready.is_empty() {
+                let n = self.ready.len().min(buf.remaining());
+                buf.put_slice(&self.ready[..n]);
+                self.ready.advance(n);
                 return Poll::Ready(Ok(()));
             }
-            if this.eof {
+            if self.eof {
                 // A partial frame at the end goes on as it is: the codec says what it makes of it.
-                this.ready = this.raw.split();
-                if this.ready.is_empty() {
+                self.ready = self.raw.split();
+                if self.ready.is_empty() {
                     return Poll::Ready(Ok(()));
                 }
                 continue;
             }
             let mut chunk = [0; 1_024];
             let mut read = ReadBuf::new(&mut chunk);
-            ready!(Pin::new(&mut this.inner).poll_read(cx, &mut read))?;
+            ready!(Pin::new(&mut *inner).poll_read(cx, &mut read))?;
             if read.filled().is_empty() {
-                this.eof = true;
+                self.eof = true;
             } else {
-                this.raw.extend_from_slice(read.filled());
-                this.take_frames();
+                self.raw.extend_from_slice(read.filled());
+                self.take_frames();
             }
         }
-    }
-}
-
-impl<S: AsyncWrite + Unpin> AsyncWrite for Screened<S> {
-    fn poll_write(
-        self: Pin<&mut Self>,
-        cx: &mut Context<'_>,
-        buf: &[u8],
-    ) -> Poll<io::Result<usize>> {
-        Pin::new(&mut self.get_mut().inner).poll_write(cx, buf)
-    }
-
-    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().inner).poll_flush(cx)
-    }
-
-    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().inner).poll_shutdown(cx)
     }
 }
 
@@ -285,7 +266,7 @@ mod tests {
             client.write_all(&sent[..1]).await.unwrap();
             client.write_all(&sent[1..]).await.unwrap();
         });
-        let mut screened = Screened::new(server);
+        let mut screened = screened(server);
         let mut got = Vec::new();
         screened.read_to_end(&mut got).await.unwrap();
         writer.await.unwrap();
@@ -303,7 +284,7 @@ mod tests {
             .unwrap();
         drop(client);
         let mut got = Vec::new();
-        Screened::new(server).read_to_end(&mut got).await.unwrap();
+        screened(server).read_to_end(&mut got).await.unwrap();
         assert_eq!(got, [0, 1, 0, 0, 0, 6, 1, 0x03]);
     }
 }

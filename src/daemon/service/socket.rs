@@ -92,17 +92,11 @@ pub fn bind_unix(path: &Path, mode: u32) -> Result<UnixListener, ServeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn temp(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::testing::fresh_dir;
 
     #[test]
     fn a_second_daemon_on_the_same_socket_is_refused_and_the_first_keeps_its_socket() {
-        let dir = temp("lock");
+        let dir = fresh_dir("lock");
         let socket = dir.join("api.sock");
         let first = lock(&socket).unwrap();
         let rt = tokio::runtime::Builder::new_current_thread()
@@ -122,7 +116,7 @@ mod tests {
     #[test]
     fn a_missing_socket_directory_is_made_and_one_that_cannot_be_is_named_with_the_key() {
         use std::os::unix::fs::PermissionsExt;
-        let dir = temp("sockdir");
+        let dir = fresh_dir("sockdir");
         let socket = dir.join("run/linterpd/api.sock");
         let held = lock(&socket).unwrap();
         let mode = std::fs::metadata(socket.parent().unwrap())
@@ -146,7 +140,7 @@ mod tests {
 
     #[test]
     fn a_stale_socket_is_replaced_and_gets_its_mode() {
-        let dir = temp("sock");
+        let dir = fresh_dir("sock");
         let path = dir.join("api.sock");
         let rt = tokio::runtime::Builder::new_current_thread()
             .enable_all()

@@ -12,6 +12,8 @@
 //! counts it was planned from (`from`), and the PLC refuses it (fault 5) from any others.
 
 mod describe;
+#[cfg(any(test, feature = "testing"))]
+pub mod driver;
 #[cfg(test)]
 mod tests;
 mod upload;
@@ -845,10 +847,10 @@ impl<P: Plc> Contract<P> {
     }
 
     /// The next read toward the proof a start needs after its upload, the one the daemon makes
-    /// and the tests' drivers make: while the machine wants two more reads to see the heartbeat
-    /// move ([`Machine::proof_wants_two_reads`]), the first is the heartbeat word alone, given to
-    /// the machine here; then the status block, which the caller gives the machine
-    /// ([`Machine::on_status`], carrying out what it asks for) before it asks
+    /// and the tests' driver (`driver`) makes: while the machine wants two more reads to see the
+    /// heartbeat move ([`Machine::proof_wants_two_reads`]), the first is the heartbeat word
+    /// alone, given to the machine here; then the status block, which the caller gives the
+    /// machine ([`Machine::on_status`], carrying out what it asks for) before it asks
     /// [`Machine::may_start`].
     pub async fn proof_read(&mut self, machine: &mut Machine) -> Result<Status, ContractError> {
         if machine.proof_wants_two_reads(tokio::time::Instant::now().into_std()) {

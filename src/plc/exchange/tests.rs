@@ -1,5 +1,6 @@
+use super::driver::{until_it_may_start, until_ready};
 use super::*;
-use crate::contract::machine::{Event, Planned, WatchSettings};
+use crate::contract::machine::{Planned, WatchSettings};
 use crate::plc::PlcMode;
 use crate::table::{ChannelLimits, Segment, validate};
 
@@ -78,12 +79,6 @@ impl Plc for FakePlc {
     }
     async fn write_words_once(&mut self, start: u16, words: &[u16]) -> Result<(), PlcError> {
         self.write_words(start, words).await
-    }
-    async fn read_relay(&mut self, _relay: u16) -> Result<bool, PlcError> {
-        Ok(false)
-    }
-    async fn write_relay(&mut self, _relay: u16, _on: bool) -> Result<(), PlcError> {
-        Ok(())
     }
     async fn read_bits(
         &mut self,
@@ -443,107 +438,6 @@ async fn wrong_magic_and_wrong_version_are_refused_naming_the_values() {
 
 fn machine() -> Machine {
     Machine::new(WatchSettings::default(), 0xBEEF)
-}
-
-// The tests' driver of the machine up to a start, with the daemon's exchanges in its order
-// (before the upload, status reads until the PLC takes a start; after it, the daemon's own
-// [`Contract::proof_read`] until the start may be written). tests/common/exchange.rs has the
-// whole of it, to the start's end, for the integration tests.
-
-/// Reads the status block into `machine` (carrying out the host word and stop it asks for)
-/// until a start can be written, as long as the heartbeat stands still no longer than its
-/// limit: the heartbeat seen moving, the host word echoed, no fault, the ready bits set.
-async fn until_ready<P: Plc>(
-    c: &mut Contract<P>,
-    machine: &mut Machine,
-) -> Result<Status, ContractError> {
-    let limit = machine.settings().heartbeat_timeout;
-    let began = tokio::time::Instant::now();
-    let mut first = None;
-    loop {
-        let status = c.status().await?;
-        let now = tokio::time::Instant::now().into_std();
-        for event in machine.on_status(&status, now) {
-            carry_out(c, &event, machine).await?;
-        }
-        let moved = *first.get_or_insert(status.block.heartbeat) != status.block.heartbeat;
-        let still = machine.heartbeat_age(now).unwrap_or_default();
-        match machine.blocker(now) {
-            None if moved => return Ok(status),
-            Some(b @ (Blocker::Faulted { .. } | Blocker::NotReady { .. } | Blocker::NotHomed)) => {
-                return Err(ContractError::Blocked(b));
-            }
-            _ if still > limit => return Err(stalled(c, still, limit).await),
-            Some(b) if began.elapsed() > limit * 4 => return Err(ContractError::Blocked(b)),
-            _ => tokio::time::sleep(c.settings().scan_time.min(limit / 4)).await,
-        }
-    }
-}
-
-/// After the upload of `start` (begun with [`Machine::upload_begun`]): the daemon's reads
-/// toward the heartbeat proof until the start may be written. Counts other than `start.from`,
-/// a stalled PLC or anything else that blocks it end the upload with the reason.
-async fn until_it_may_start<P: Plc>(
-    c: &mut Contract<P>,
-    machine: &mut Machine,
-    start: &Planned,
-) -> Result<(), ContractError> {
-    loop {
-        let status = c.proof_read(machine).await?;
-        let now = tokio::time::Instant::now().into_std();
-        for event in machine.on_status(&status, now) {
-            carry_out(c, &event, machine).await?;
-        }
-        let blocker = match machine.may_start(start, now) {
-            Ok(()) => return Ok(()),
-            Err(Blocker::Unproven) => {
-                tokio::time::sleep(c.settings().scan_time / 2).await;
-                continue;
-            }
-            Err(blocker) => blocker,
-        };
-        machine.upload_ended();
-        return Err(match blocker {
-            Blocker::NotAtFrom {
-                channel,
-                count,
-                from,
-            } => ContractError::NotAtFrom {
-                channel,
-                count,
-                from,
-            },
-            Blocker::Stalled => {
-                let limit = machine.settings().heartbeat_timeout;
-                let still = machine.heartbeat_age(now).unwrap_or_default();
-                stalled(c, still, limit).await
-            }
-            other => ContractError::Blocked(other),
-        });
-    }
-}
-
-/// What the machine asks for that needs only the link: the host word, a stop.
-async fn carry_out<P: Plc>(
-    c: &mut Contract<P>,
-    event: &Event,
-    machine: &Machine,
-) -> Result<(), ContractError> {
-    match event {
-        Event::WriteHost => c.write_host(machine.host()).await,
-        Event::WriteStop => c.stop().await,
-        _ => Ok(()),
-    }
-}
-
-/// A stalled PLC, named with its mode when it says PROG.
-async fn stalled<P: Plc>(c: &mut Contract<P>, still: Duration, limit: Duration) -> ContractError {
-    let prog = matches!(c.plc().mode().await, Ok(PlcMode::Prog));
-    ContractError::Stalled {
-        still_ms: still.as_millis() as u64,
-        limit_ms: limit.as_millis() as u64,
-        mode: if prog { ", and in PROG mode" } else { "" },
-    }
 }
 
 /// The start of `table(0)` from [`FROM`] in bank 0 with sequence number 1.
