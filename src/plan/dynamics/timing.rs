@@ -16,14 +16,14 @@ use crate::geometry::{Pace, Pose};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::{Motion, OverSpeed, Robot};
 
-use super::super::PlanError;
+use crate::plan::error::PlanError;
 
 /// The grid's spacing along the path, mm.
 const GRID_MM: f64 = 0.5;
 /// The fewest and the most grid points.
 const GRID_POINTS: (usize, usize) = (64, 4_000);
 /// The shares of every joint's acceleration limit a path section is timed to again, in turn,
-/// when the rows of the timing before were refused for a drive ([`PathLimits::accel_share`]).
+/// when the rows of the timing before were refused for a drive ([`Shares::accel`]).
 pub(in crate::plan) const RETIMING: [f64; 2] = [0.85, 0.7];
 /// The fewest grid steps on one piece of a path.
 const PIECE_STEPS: usize = 4;
@@ -71,18 +71,32 @@ pub(in crate::plan) struct PathLimits {
     /// for the row from rest that leaves the joint the most acceleration ([`rest_accels`]),
     /// not for a period.
     pub rows_any_length: bool,
+    /// The shares of the limits the timing plans to ([`Shares`]).
+    pub shares: Shares,
+}
+
+/// The shares of the limits a path is timed to ([`PathLimits`]).
+#[derive(Debug, Clone, Copy)]
+pub(in crate::plan) struct Shares {
     /// The share of every joint's acceleration limit (`max_accel`, and what `start_hz` and a
-    /// kink leave) the timing plans to: 1, or less when a first timing's rows were refused
-    /// ([`RETIMING`]).
-    pub accel_share: f64,
-    /// The share of every channel's top frequency the timing plans to: 1, or less where an
-    /// averaged S-curve's speeds passed it (the average of a motion speeding up after a stretch
-    /// slowed for a channel reaches that stretch faster than the motion did).
-    pub speed_share: f64,
-    /// The share of the centripetal limit the timing plans to: 1, or less where an averaged
-    /// S-curve passed it (the average of a motion that slowed for an arc enters the arc faster
-    /// than the motion did).
-    pub centripetal_share: f64,
+    /// kink leave): 1, or less when a first timing's rows were refused ([`RETIMING`]).
+    pub accel: f64,
+    /// The share of every channel's top frequency: 1, or less where an averaged S-curve's
+    /// speeds passed it (the average of a motion speeding up after a stretch slowed for a
+    /// channel reaches that stretch faster than the motion did).
+    pub speed: f64,
+    /// The share of the centripetal limit: 1, or less where an averaged S-curve passed it (the
+    /// average of a motion that slowed for an arc enters the arc faster than the motion did).
+    pub centripetal: f64,
+}
+
+impl Shares {
+    /// Every limit whole.
+    pub(in crate::plan) const WHOLE: Self = Self {
+        accel: 1.0,
+        speed: 1.0,
+        centripetal: 1.0,
+    };
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
@@ -234,7 +248,7 @@ pub(in crate::plan) fn pace(
         &along,
         &times,
         REST_ROW_PERIODS * limits.rest_row_s,
-        limits.accel_share,
+        limits.shares.accel,
     ));
     let x = if zones.is_empty() {
         first
@@ -299,7 +313,7 @@ fn rest_accels(
         out[j] = Some(RestLimit {
             accel: 2.0 * room_hz / (REST_ROW_PERIODS * row_s)
                 * joint.step.abs()
-                * limits.accel_share,
+                * limits.shares.accel,
             row_s,
         });
     }
@@ -428,7 +442,7 @@ fn grid(
             let last = along.s_mm.len() - 1;
             let k = mid(i.saturating_sub(1), i.max(1)).max(mid(i.min(last - 1), (i + 1).min(last)));
             if k > 0.0 {
-                x_max = x_max.min(limits.centripetal_mm_s2 * limits.centripetal_share / k);
+                x_max = x_max.min(limits.centripetal_mm_s2 * limits.shares.centripetal / k);
             }
             let mut accels = Vec::with_capacity(JOINTS + 1);
             if tangential.is_finite() {
@@ -439,7 +453,7 @@ fn grid(
                 if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, kink_at[i])
                     && jump[j] > KINK_MIN_PER_MM
                 {
-                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.accel_share * limits.rest_row_s
+                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.shares.accel * limits.rest_row_s
                         / jump[j];
                     x_max = x_max.min(v * v);
                 }
@@ -448,7 +462,7 @@ fn grid(
                     before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
                 if speeds && fastest_rate != 0.0 {
                     let v = SPEED_MARGIN
-                        * limits.speed_share
+                        * limits.shares.speed
                         * f64::from(joint.max_freq_hz)
                         * joint.step.abs();
                     x_max = x_max.min((v / fastest_rate).powi(2));
@@ -457,7 +471,7 @@ fn grid(
                 let accel = joint
                     .dynamics
                     .max_accel
-                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.accel_share)
+                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.shares.accel)
                     .min(zone);
                 if accel.is_finite() {
                     accels.push(AccelLimit::symmetric(d, dd, accel));
