@@ -412,23 +412,7 @@ fn grid(
     } else {
         f64::INFINITY
     };
-    let speeds = motion.over_speed == OverSpeed::SlowDown;
-    // Every point's lowest zone limit and kink, made once (a path of many blends has as many
-    // kinks and zones).
-    let mut zone_at = vec![[f64::INFINITY; JOINTS]; along.s_mm.len()];
-    for z in zones {
-        for at in &mut zone_at[z.from..=z.to.min(along.s_mm.len() - 1)] {
-            at[z.joint] = at[z.joint].min(z.accel);
-        }
-    }
-    let mut kink_at = vec![None; along.s_mm.len()];
-    for (i, jump) in &along.kinks {
-        kink_at[*i] = Some(jump);
-    }
-    let mut before_at = vec![None; along.s_mm.len()];
-    for (i, rate) in &along.rate_before {
-        before_at[*i] = Some(rate);
-    }
+    let at = PointLimits::new(robot, along, motion, limits, zones);
     along
         .s_mm
         .iter()
@@ -448,38 +432,95 @@ fn grid(
             if tangential.is_finite() {
                 accels.push(AccelLimit::symmetric(1.0, 0.0, tangential));
             }
-            for (j, joint) in robot.joints.iter().enumerate() {
-                let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
-                if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, kink_at[i])
-                    && jump[j] > KINK_MIN_PER_MM
-                {
-                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.shares.accel * limits.rest_row_s
-                        / jump[j];
-                    x_max = x_max.min(v * v);
-                }
-                // Where pieces meet, the speed at the point is the piece before's as well.
-                let fastest_rate =
-                    before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
-                if speeds && fastest_rate != 0.0 {
-                    let v = SPEED_MARGIN
-                        * limits.shares.speed
-                        * f64::from(joint.max_freq_hz)
-                        * joint.step.abs();
-                    x_max = x_max.min((v / fastest_rate).powi(2));
-                }
-                let zone = zone_at[i][j];
-                let accel = joint
-                    .dynamics
-                    .max_accel
-                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.shares.accel)
-                    .min(zone);
-                if accel.is_finite() {
-                    accels.push(AccelLimit::symmetric(d, dd, accel));
-                }
-            }
+            at.joints(i, &mut x_max, &mut accels);
             GridPoint { s, x_max, accels }
         })
         .collect()
+}
+
+/// The joints' limits at every grid point ([`grid`]): what holds at a point made once (a path
+/// of many blends has as many kinks and zones).
+struct PointLimits<'a> {
+    robot: &'a Robot,
+    along: &'a JointsAlong,
+    limits: &'a PathLimits,
+    /// Whether a joint's speed is held within its channel's top frequency (`slow-down`).
+    speeds: bool,
+    /// Every point's lowest zone limit, by joint.
+    zone_at: Vec<[f64; JOINTS]>,
+    /// Every point's kink: every joint's jump in rate, per mm.
+    kink_at: Vec<Option<&'a Joints>>,
+    /// Where two pieces meet, every joint's rate on the piece before.
+    before_at: Vec<Option<&'a Joints>>,
+}
+
+impl<'a> PointLimits<'a> {
+    fn new(
+        robot: &'a Robot,
+        along: &'a JointsAlong,
+        motion: &Motion,
+        limits: &'a PathLimits,
+        zones: &[Zone],
+    ) -> Self {
+        let mut zone_at = vec![[f64::INFINITY; JOINTS]; along.s_mm.len()];
+        for z in zones {
+            for at in &mut zone_at[z.from..=z.to.min(along.s_mm.len() - 1)] {
+                at[z.joint] = at[z.joint].min(z.accel);
+            }
+        }
+        let mut kink_at = vec![None; along.s_mm.len()];
+        for (i, jump) in &along.kinks {
+            kink_at[*i] = Some(jump);
+        }
+        let mut before_at = vec![None; along.s_mm.len()];
+        for (i, rate) in &along.rate_before {
+            before_at[*i] = Some(rate);
+        }
+        Self {
+            robot,
+            along,
+            limits,
+            speeds: motion.over_speed == OverSpeed::SlowDown,
+            zone_at,
+            kink_at,
+            before_at,
+        }
+    }
+
+    /// Every joint's limits at point `i`: its speed at a kink and within its channel's top
+    /// frequency, lowering `x_max`, and its acceleration (in a zone, the zone's), pushed onto
+    /// `accels`.
+    fn joints(&self, i: usize, x_max: &mut f64, accels: &mut Vec<AccelLimit>) {
+        let (along, limits) = (self.along, self.limits);
+        for (j, joint) in self.robot.joints.iter().enumerate() {
+            let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
+            if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, self.kink_at[i])
+                && jump[j] > KINK_MIN_PER_MM
+            {
+                let v = KINK_SHARE * a * ACCEL_MARGIN * limits.shares.accel * limits.rest_row_s
+                    / jump[j];
+                *x_max = x_max.min(v * v);
+            }
+            // Where pieces meet, the speed at the point is the piece before's as well.
+            let fastest_rate =
+                self.before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
+            if self.speeds && fastest_rate != 0.0 {
+                let v = SPEED_MARGIN
+                    * limits.shares.speed
+                    * f64::from(joint.max_freq_hz)
+                    * joint.step.abs();
+                *x_max = x_max.min((v / fastest_rate).powi(2));
+            }
+            let accel = joint
+                .dynamics
+                .max_accel
+                .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.shares.accel)
+                .min(self.zone_at[i][j]);
+            if accel.is_finite() {
+                accels.push(AccelLimit::symmetric(d, dd, accel));
+            }
+        }
+    }
 }
 
 fn solve(grid: &[GridPoint]) -> Result<Vec<f64>, PlanError> {
