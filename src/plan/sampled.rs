@@ -1,6 +1,8 @@
 //! PURE. A course sampled for one motion: the profile its method samples it on, the joints'
 //! values and counts at every point, checked against the joints' position limits and the
-//! channels' top frequencies; under `slow-down`, at the fastest speed every channel fits.
+//! channels' top frequencies; under `slow-down`, at the fastest speed every channel fits. The
+//! samples say where a start is cut: a part's window and samples, and where a joint reverses
+//! while another moves.
 
 use crate::geometry::{Pace, Profile, ProfileRequest};
 use crate::kinematics::{JOINTS, Joints};

@@ -4,13 +4,20 @@
 //! plan every drive follows ([`plan_fastest`]). How one timing is planned is the course's own
 //! ([`Timed`]: `line.rs`, `joint_move.rs`, `path/section.rs`).
 //!
-//! | course | robot | ramp | candidates, in order |
-//! |---|---|---|---|
-//! | line or section | no drive limits | trapezoid, or an S-curve whose pace keeps one speed | as asked |
-//! | section | no drive limits | S-curve, its pace changing speed (tight arcs, caps) | averaged; as asked where that is refused |
-//! | line or section | drive limits | trapezoid | time-optimal (a section again to 85 % and 70 % of the accelerations where a drive refuses its rows) |
-//! | line or section | drive limits | S-curve | averaged; slowed as a whole where that may be faster |
-//! | joint move | any | any | time-optimal: one trapezoid, the slowest joint's |
+//! ```text
+//! course          robot             ramp                       candidates, in order
+//! line, section   no drive limits   trapezoid; an S-curve      as asked
+//!                                   whose pace keeps one speed
+//! section         no drive limits   S-curve, its pace changing averaged; as asked where that
+//!                                   speed (tight arcs, caps)   is refused
+//! line, section   drive limits      trapezoid                  time-optimal (a section again to
+//!                                                              85 % and 70 % of the accelerations
+//!                                                              where a drive refuses its rows)
+//! line, section   drive limits      S-curve                    averaged; slowed as a whole where
+//!                                                              that may be faster
+//! joint move      any               any                        time-optimal: one trapezoid, the
+//!                                                              slowest joint's
+//! ```
 //!
 //! Under bounded-error every time-optimal and averaged timing is tried with the standstills'
 //! zones planned for rows of any length first, and where that is refused for rows of a period

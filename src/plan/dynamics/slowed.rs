@@ -5,8 +5,8 @@
 //! `sqrt(k)` of itself, every acceleration to `k` (a joint's `q' s'' + q'' s'^2` alike) and
 //! every jerk to `k^1.5`: the shape of the motion stays, and what each drive is asked for
 //! shrinks with `k`. The planner's strategy takes the largest `k` found (to within 5 %) whose
-//! tables the drives follow (`crate::plan::strategy`). It is not time-optimal: the time-optimal timing steps its acceleration on and off,
-//! which a jerk limit forbids.
+//! tables the drives follow (`crate::plan::strategy`). It is not time-optimal: the time-optimal
+//! timing steps its acceleration on and off, which a jerk limit forbids.
 
 use crate::kinematics::JOINTS;
 use crate::plan::error::PlanError;

@@ -114,11 +114,11 @@ pub(super) struct Ahead {
     pub(super) plan: Result<Plan, PlanError>,
 }
 
-/// The parts a bounded-error section is cut into at reversals ([`Sampled::reversal_cut`], before any is
-/// planned), planned side by side on the machine's cores, each from the counts the samples give
-/// at its first point (the first from `start`): [`parts`] takes such a plan only when the part
-/// before did end on those counts, so the result is the one planning them in turn gives. Empty
-/// when there is nothing to plan side by side.
+/// The parts a bounded-error section is cut into at reversals ([`Sampled::reversal_cut`],
+/// before any is planned), planned side by side on the machine's cores, each from the counts the
+/// samples give at its first point (the first from `start`): [`parts`] takes such a plan only
+/// when the part before did end on those counts, so the result is the one planning them in turn
+/// gives. Empty when there is nothing to plan side by side.
 pub(super) fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS]) -> Vec<Ahead> {
     // A joint move's polyline remembers where its last search ended: not measured side by side.
     if sampled.bounded().is_none() || sampled.course.path().is_none() {
@@ -167,11 +167,11 @@ fn too_big(e: &PlanError) -> bool {
     )
 }
 
-/// Where to cut a part from sample point `first` to `end` whose `plan` gives a
-/// channel a later F174 segment (a run that no one frequency range plays within its windows):
-/// at the last sample point before the segment begins, for the same reason as at a reversal
-/// ([`Sampled::reversal_cut`]), or at the first point after `first` when it begins before that. `None`
-/// when it has none, or the part is one sample interval long.
+/// Where to cut a part from sample point `first` to `end` whose `plan` gives a channel a later
+/// F174 segment (a run that no one frequency range plays within its windows): at the last sample
+/// point before the segment begins, for the same reason as at a reversal
+/// ([`Sampled::reversal_cut`]), or at the first point after `first` when it begins before that.
+/// `None` when it has none, or the part is one sample interval long.
 fn segment_cut(sampled: &Sampled, plan: &Plan, first: usize, end: usize) -> Option<usize> {
     let (_, at_s) = plan.later_segment()?;
     let at_s = plan.window.from_s + at_s;
