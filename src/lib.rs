@@ -18,10 +18,12 @@
 //! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
 //! robot/       PURE  a robot as planned for: model, joints and channels, drive limits, motion
 //!                    defaults
-//! plan/        PURE  move request (a line, or a line in joint space) -> joint samples -> pulse
-//!                    tables (constant-period, seed-exact, bounded-error), limits and over-speed
-//!                    policy; under drive limits the time-optimal timing and every row checked
-//!                    against the drive (plan/dynamics)
+//! plan/        PURE  move request (a line, a path section, a line in joint space) -> the
+//!                    strategy's candidate timings as values (as asked, time-optimal, averaged or
+//!                    slowed S-curve), the fastest plan every drive follows kept (strategy.rs) ->
+//!                    joint samples -> pulse tables (constant-period, seed-exact,
+//!                    bounded-error), limits and over-speed policy; what the drives follow: the
+//!                    time-optimal timing and every row checked (plan/dynamics)
 //! table/       PURE  Row, Segment, ControlCode, FrequencyRange, frequency models; validation;
 //!                    the DT word image (encode, decode)
 //! sim/         PURE  executes a start as ACCURACY.md says -> pulse events and accuracy figures

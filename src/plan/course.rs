@@ -15,7 +15,9 @@ use crate::geometry::{Line, Pace, Path, Polyline, Profile, ToolPath};
 use crate::kinematics::{JOINTS, Joints};
 use crate::robot::Robot;
 
-use super::{JointPath, PlanError, Samples, samples};
+use super::error::PlanError;
+use super::joint_path::JointPath;
+use super::samples::{self, Samples};
 
 /// The longest chord of a joint-space path's tool polyline, mm.
 const TRACE_CHORD_MM: f64 = 0.25;

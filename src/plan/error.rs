@@ -369,6 +369,24 @@ pub enum PlanError {
     },
 }
 
+impl PlanError {
+    /// Whether a drive refused a table's rows: a row step over its `max_accel`, a row from or
+    /// into rest over its `start_hz`. A timing to lower shares of the limits may be followed.
+    pub(super) fn refuses_rows(&self) -> bool {
+        matches!(self, Self::RowStep { .. } | Self::RestRow { .. })
+    }
+
+    /// Whether a drive refused: its rows ([`Self::refuses_rows`]), or the planned motion over
+    /// its `max_accel` or its `max_jerk`. A slower motion may be followed.
+    pub(super) fn refused_by_a_drive(&self) -> bool {
+        self.refuses_rows()
+            || matches!(
+                self,
+                Self::SCurveOverMaxAccel { .. } | Self::OverMaxJerk { .. }
+            )
+    }
+}
+
 /// [`PlanError::ToleranceTooSmall`]'s message.
 fn tolerance_refusal(
     tolerance_mm: f64,

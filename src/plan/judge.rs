@@ -5,11 +5,11 @@
 use crate::geometry::{Line, Profile};
 use crate::kinematics::JOINTS;
 use crate::robot::{Motion, Robot};
-use crate::sim::{self, Figures, Settings};
+use crate::sim::{self, Figures};
 use crate::table::ChannelTable;
 
-use super::Window;
 use super::course::Course;
+use super::planned::{Window, max_hz, settings};
 
 /// Plays `tables` in the execution model and measures them against the course and profile
 /// over `window`.
@@ -31,20 +31,6 @@ pub(super) fn simulate(
         f64::INFINITY,
     )
     .expect("no limit")
-}
-
-/// Every joint's channel's top frequency, Hz.
-pub(super) fn max_hz(robot: &Robot) -> [u32; JOINTS] {
-    std::array::from_fn(|j| robot.joints[j].max_freq_hz)
-}
-
-/// How the planner plays its own tables: the motion's frequency model, no time between a
-/// channel's segments (its report; the mock PLC adds its scan).
-pub(super) fn settings(motion: &Motion) -> Settings {
-    Settings {
-        model: motion.frequency_model,
-        segment_gap_s: 0.0,
-    }
 }
 
 /// [`simulate`], giving up as soon as the path deviation passes `path_limit_mm`. The run is
@@ -173,7 +159,7 @@ impl sim::Planned for OnLine<'_> {
 
 /// The planned position of a start on a path section: the profile's distance from `from_s` on,
 /// through the pace, along the path (the same values as [`Course::positions`]), and near it
-/// without a root or a division on a line piece ([`Path::near`]).
+/// without a root or a division on a line piece ([`crate::geometry::Path::near`]).
 pub(super) struct OnPath<'a> {
     path: &'a crate::geometry::Path,
     pace: &'a crate::geometry::Pace,

@@ -9,7 +9,8 @@ use crate::geometry::Profile;
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
-use super::{PlanError, Samples};
+use super::error::PlanError;
+use super::samples::Samples;
 
 /// Checks a joint move's target values against every joint's position limits (half a pulse of
 /// slack, as for samples); a value that is not a number is beyond any limit.

@@ -7,7 +7,7 @@ use crate::geometry::{Pose, Profile};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::Robot;
 
-use super::PlanError;
+use super::error::PlanError;
 use super::joint_path::JointPath;
 
 /// Counts of every joint at every interpolation point 0..=N.

@@ -1,7 +1,12 @@
 //! The planner on the seed's robot and move.
 
+use super::line::resolve_line;
+use super::sampled::Sampler;
 use super::*;
+use crate::kinematics::Kinematics;
 use crate::robot::seed_robot;
+use crate::robot::{Method, OverSpeed};
+use crate::table::ChannelTable;
 use crate::table::FrequencyModel;
 
 /// The seed's move on the seed's robot (also for the drive-limits tests, whose robots move the

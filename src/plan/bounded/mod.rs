@@ -32,7 +32,11 @@ use crate::sim::{Figures, PulseEvent};
 use crate::table::{ChannelTable, FrequencyRange};
 
 use super::course::Course;
-use super::{Creep, PlanError, Samples, Window, simulate_within};
+use super::error::{Creep, PlanError};
+use super::judge::simulate_within;
+use super::part::check_tables;
+use super::planned::{Window, settings};
+use super::samples::Samples;
 use budget::Budget;
 use pulses::{Counts, Run, Track};
 use rows::{Bounds, Channel};
@@ -490,7 +494,7 @@ impl Move<'_> {
         drive: &mut Option<DriveRefusal>,
     ) -> Result<Option<Verified>, PlanError> {
         let tables = self.tables(tracks, deltas, off_window);
-        super::check_tables(self.robot, &tables, self.motion.method)?;
+        check_tables(self.robot, &tables, self.motion.method)?;
         let run = simulate_within(
             self.robot,
             &tables,
@@ -510,7 +514,7 @@ impl Move<'_> {
                 self.samples,
                 self.profile.period_s,
                 self.window,
-                super::settings(self.motion),
+                settings(self.motion),
             )
         {
             *drive = Some(DriveRefusal {

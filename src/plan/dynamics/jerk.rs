@@ -15,7 +15,8 @@
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::{JERK_SPAN_S, Robot};
 
-use super::super::{Plan, PlanError};
+use crate::plan::error::PlanError;
+use crate::plan::planned::Plan;
 
 /// The step between the joints' samples, s.
 const STEP_S: f64 = 0.001;

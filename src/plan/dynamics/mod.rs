@@ -3,8 +3,11 @@
 //! and every table's rows checked against them ([`rows`]); a line and a joint move under them
 //! ([`moves`]); an S-curve as the time-optimal motion averaged to its jerk
 //! ([`averaged`](mod@averaged)) or slowed as a whole until the drives follow it
-//! ([`slowed`](mod@slowed)), whichever is faster, its joints' jerk measured on the planned
-//! motion ([`jerk`]).
+//! ([`slowed`](mod@slowed)), its joints' jerk measured on the planned motion ([`jerk`]).
+//!
+//! It imports nothing of the planner above it but its vocabulary (`crate::plan::error`,
+//! `crate::plan::planned`, `crate::plan::samples`): which timing is planned, and which plan
+//! kept, is the planner's strategy (`crate::plan::strategy`).
 
 mod averaged;
 mod jerk;
@@ -13,16 +16,11 @@ mod rows;
 mod slowed;
 mod timing;
 
-pub(super) use averaged::{Shares, averaged, averaged_line, faster_s_curve, probe};
-use moves::timed_line_at;
-pub(super) use moves::{joint_move_motion, rest_rows_first, timed_line};
-pub use rows::DriveFigures;
+pub(super) use averaged::{Averaging, averaged};
+pub(super) use moves::{joint_move_motion, timed_line};
 pub(super) use rows::{judge, planned_accels};
-use slowed::refused_by_a_drive;
-pub(super) use slowed::{
-    clearly_over_max_accel, followed, jerk_needs_s_curve, slowed, within_limits,
-};
-pub(super) use timing::{PathLimits, RETIMING, Shape, pace};
+pub(super) use slowed::{clearly_over_max_accel, jerk_needs_s_curve, slowed, within_limits};
+pub(super) use timing::{PathLimits, RETIMING, Shape, Shares, pace};
 
 #[cfg(test)]
 mod tests;

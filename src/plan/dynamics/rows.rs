@@ -21,27 +21,9 @@ use crate::robot::{Joint, Robot};
 use crate::sim::{self, RowTiming, Settings};
 use crate::table::{ChannelTable, Direction, FrequencyModel, FrequencyRange};
 
-use super::super::{PlanError, Samples, Window};
-
-/// How one joint's drive is asked to follow its table in one start.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct DriveFigures {
-    /// The fastest row's real frequency, Hz.
-    pub peak_hz: f64,
-    /// The joint's fastest planned speed, deg/s or mm/s.
-    pub peak_speed: f64,
-    /// The joint's largest planned acceleration, deg/s^2 or mm/s^2 (from the samples: over
-    /// a period for constant-period, over a millisecond for bounded-error).
-    pub peak_accel: f64,
-    /// The joint's largest planned jerk, deg/s^3 or mm/s^3: the change of its acceleration over
-    /// 10 ms (measured for an S-curve on a robot with a joint's `max_jerk`, else `None`).
-    pub peak_jerk: Option<f64>,
-    /// The largest step between two consecutive rows as a share of what `max_accel` allows
-    /// (`None` without `max_accel`, or with fewer than two rows).
-    pub step_load: Option<f64>,
-    /// The fastest row from or into standstill, Hz.
-    pub rest_hz: f64,
-}
+use crate::plan::error::PlanError;
+use crate::plan::planned::{DriveFigures, Window};
+use crate::plan::samples::Samples;
 
 /// One row as the drive sees it.
 #[derive(Debug, Clone, Copy)]

@@ -4,21 +4,16 @@
 //! can. Slowing time by `1 / sqrt(k)` takes every speed (the tool's and each joint's) to
 //! `sqrt(k)` of itself, every acceleration to `k` (a joint's `q' s'' + q'' s'^2` alike) and
 //! every jerk to `k^1.5`: the shape of the motion stays, and what each drive is asked for
-//! shrinks with `k`. The largest `k` found (to within 5 %) whose tables the drives follow is
-//! taken. It is not time-optimal: the time-optimal timing steps its acceleration on and off,
-//! which a jerk limit forbids.
+//! shrinks with `k`. The planner's strategy takes the largest `k` found (to within 5 %) whose
+//! tables the drives follow (`crate::plan::strategy`). It is not time-optimal: the time-optimal
+//! timing steps its acceleration on and off, which a jerk limit forbids.
 
-use super::jerk::peak_jerks;
-use crate::plan::{Plan, PlanError};
+use crate::kinematics::JOINTS;
+use crate::plan::error::PlanError;
+use crate::plan::planned::Plan;
 use crate::robot::{Motion, Ramp, Robot};
 
-/// How many times the share is halved looking for one the drives follow: down to 1/64 (the
-/// tool at 12.5 % of the speed asked; slower, a move's rows would outgrow its table area
-/// before the drive's refusal could be named).
-const HALVINGS: usize = 6;
-
-/// How close the share found is to the largest the drives follow (a ratio).
-const CLOSE: f64 = 1.05;
+use super::jerk::peak_jerks;
 
 /// How far a joint's planned acceleration (measured on the samples) may pass its `max_accel`.
 const ACCEL_SLACK: f64 = 0.02;
@@ -81,7 +76,7 @@ const CLEARLY_OVER: f64 = 1.1;
 /// refused anyway is spared them. `speed_pct` is the speed the motion is at.
 pub(in crate::plan) fn clearly_over_max_accel(
     robot: &Robot,
-    accels: &[f64; crate::kinematics::JOINTS],
+    accels: &[f64; JOINTS],
     speed_pct: f64,
 ) -> Result<(), PlanError> {
     for (joint, &accel) in robot.joints.iter().zip(accels) {
@@ -118,7 +113,7 @@ pub(in crate::plan) fn jerk_needs_s_curve(robot: &Robot, ramp: Ramp) -> Result<(
     }
 }
 
-/// `asked` slowed in time to share `k` of its accelerations ([`followed`]).
+/// `asked` slowed in time to share `k` of its accelerations.
 #[must_use]
 pub(in crate::plan) fn slowed(asked: &Motion, k: f64) -> Motion {
     let ramp = match asked.ramp {
@@ -133,61 +128,4 @@ pub(in crate::plan) fn slowed(asked: &Motion, k: f64) -> Motion {
         ramp,
         ..*asked
     }
-}
-
-/// Whether `outcome` is a drive's refusal: a row step over its `max_accel`, a row from or into
-/// rest over its `start_hz`, a motion over its `max_accel` or its `max_jerk`. A slower motion may be followed.
-pub(super) fn refused_by_a_drive<T>(outcome: &Result<T, PlanError>) -> bool {
-    matches!(
-        outcome,
-        Err(PlanError::RowStep { .. }
-            | PlanError::RestRow { .. }
-            | PlanError::SCurveOverMaxAccel { .. }
-            | PlanError::OverMaxJerk { .. })
-    )
-}
-
-/// `plan` at share 1 of the accelerations, or, when a drive would not follow it, at the
-/// largest share found that every drive follows; `plan(k)` plans the motion slowed to share
-/// `k` ([`slowed`]) and refuses one over a joint's `max_accel` or `max_jerk`
-/// ([`within_limits`]). No share below `floor` is tried (a faster plan is at hand: a motion
-/// slowed to share `k` takes `1 / sqrt(k)` of its time). The refusal of the slowest tried when
-/// none is followed; any other refusal at the largest share followed.
-pub(in crate::plan) fn followed<T>(
-    floor: f64,
-    plan: impl Fn(f64) -> Result<T, PlanError>,
-) -> Result<T, PlanError> {
-    let first = plan(1.0);
-    if !refused_by_a_drive(&first) {
-        return first;
-    }
-    let (mut bad, mut last) = (1.0, first);
-    let mut found = None;
-    for _ in 0..HALVINGS {
-        let k = bad * 0.5;
-        if k < floor {
-            return last;
-        }
-        let outcome = plan(k);
-        if !refused_by_a_drive(&outcome) {
-            found = Some((k, outcome));
-            break;
-        }
-        (bad, last) = (k, outcome);
-    }
-    let Some((mut good, mut best)) = found else {
-        return last;
-    };
-    // The outcome at the largest share followed: a plan, or why it is refused otherwise (a
-    // slower motion has more rows: the fastest followed is the likeliest to fit its tables).
-    while bad / good > CLOSE {
-        let k = (good * bad).sqrt();
-        let outcome = plan(k);
-        if refused_by_a_drive(&outcome) {
-            bad = k;
-        } else {
-            (good, best) = (k, outcome);
-        }
-    }
-    best
 }

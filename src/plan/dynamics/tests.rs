@@ -459,7 +459,8 @@ fn seed_s_curve_slowed(robot: &Robot, method: Method, k: f64) -> Plan {
 }
 
 /// The seed's move's `s-curve:20000` under `robot`'s limits slowed as a whole until the drives
-/// follow it ([`super::followed`]), as it was planned before the averaged motion.
+/// follow it ([`crate::plan::strategy::followed`]), as it was planned before the averaged
+/// motion.
 fn seed_s_curve_slowed_as_a_whole(robot: &Robot, method: Method) -> Plan {
     seed_s_curve_slowed_checked(robot, method, None)
 }
@@ -469,16 +470,16 @@ fn seed_s_curve_slowed_as_a_whole(robot: &Robot, method: Method) -> Plan {
 type SlowedCheck<'a> = dyn Fn(f64, &[f64; 4], f64) -> Result<(), PlanError> + 'a;
 
 /// [`seed_s_curve_slowed_as_a_whole`], every slowed motion first checked by `check` on its
-/// samples (`crate::plan::plan_course_checked`).
+/// samples (`crate::plan::part::plan_course_checked`).
 fn seed_s_curve_slowed_checked(robot: &Robot, method: Method, check: Option<&SlowedCheck>) -> Plan {
     let asked = s_curve(robot, method, 20_000.0);
-    let (line, values, counts) = crate::plan::resolve_line(robot, &asked).unwrap();
-    let start = crate::plan::Start { values, counts };
+    let (line, values, counts) = crate::plan::line::resolve_line(robot, &asked).unwrap();
+    let start = crate::plan::start::Start { values, counts };
     let course = crate::plan::course::Course::Line(line);
-    super::followed(0.0, |k| {
+    crate::plan::strategy::followed(0.0, |k| {
         let checked = check.map(|c| move |a: &[f64; 4], f: f64| c(k, a, f));
         let motion = super::slowed(&asked.motion, k);
-        let mut plan = crate::plan::plan_course_checked(
+        let mut plan = crate::plan::part::plan_course_checked(
             robot,
             &course,
             &start,
@@ -788,31 +789,6 @@ fn a_path_s_curve_keeps_every_joint_s_max_jerk_through_its_blends() {
         let d3 = start.drive[2].peak_jerk.expect("measured");
         assert!(d3 <= 20_000.0, "{d3}");
     }
-}
-
-/// The search for the largest share every drive follows tries no share below its floor: a
-/// motion followed only at 0.45 of its accelerations is found from a floor of 0, and from a
-/// floor of 0.6 only share 1 is tried, its refusal the answer.
-#[test]
-fn slowing_as_a_whole_tries_no_share_below_its_floor() {
-    let refusal = |k: f64| PlanError::SCurveOverMaxAccel {
-        joint: "d3".into(),
-        accel: 300.0 * 0.45 / k,
-        max_accel: 300.0,
-        unit: "mm",
-        speed_pct: k.sqrt() * 100.0,
-    };
-    let tried = std::cell::RefCell::new(Vec::new());
-    let plan = |k: f64| {
-        tried.borrow_mut().push(k);
-        if k <= 0.45 { Ok(k) } else { Err(refusal(k)) }
-    };
-    let found = super::followed(0.0, plan).unwrap();
-    assert!((0.45 / 1.05..=0.45).contains(&found), "{found}");
-    tried.borrow_mut().clear();
-    let e = super::followed(0.6, plan).unwrap_err();
-    assert_eq!(*tried.borrow(), vec![1.0]);
-    assert!(matches!(e, PlanError::SCurveOverMaxAccel { .. }), "{e}");
 }
 
 /// The check on the samples refuses only what the planned motion's check would: the seed's

@@ -16,14 +16,14 @@ use crate::geometry::{Pace, Pose};
 use crate::kinematics::{JOINTS, Joints, Kinematics};
 use crate::robot::{Motion, OverSpeed, Robot};
 
-use super::super::PlanError;
+use crate::plan::error::PlanError;
 
 /// The grid's spacing along the path, mm.
 const GRID_MM: f64 = 0.5;
 /// The fewest and the most grid points.
 const GRID_POINTS: (usize, usize) = (64, 4_000);
 /// The shares of every joint's acceleration limit a path section is timed to again, in turn,
-/// when the rows of the timing before were refused for a drive ([`PathLimits::accel_share`]).
+/// when the rows of the timing before were refused for a drive ([`Shares::accel`]).
 pub(in crate::plan) const RETIMING: [f64; 2] = [0.85, 0.7];
 /// The fewest grid steps on one piece of a path.
 const PIECE_STEPS: usize = 4;
@@ -71,18 +71,32 @@ pub(in crate::plan) struct PathLimits {
     /// for the row from rest that leaves the joint the most acceleration ([`rest_accels`]),
     /// not for a period.
     pub rows_any_length: bool,
+    /// The shares of the limits the timing plans to ([`Shares`]).
+    pub shares: Shares,
+}
+
+/// The shares of the limits a path is timed to ([`PathLimits`]).
+#[derive(Debug, Clone, Copy)]
+pub(in crate::plan) struct Shares {
     /// The share of every joint's acceleration limit (`max_accel`, and what `start_hz` and a
-    /// kink leave) the timing plans to: 1, or less when a first timing's rows were refused
-    /// ([`RETIMING`]).
-    pub accel_share: f64,
-    /// The share of every channel's top frequency the timing plans to: 1, or less where an
-    /// averaged S-curve's speeds passed it (the average of a motion speeding up after a stretch
-    /// slowed for a channel reaches that stretch faster than the motion did).
-    pub speed_share: f64,
-    /// The share of the centripetal limit the timing plans to: 1, or less where an averaged
-    /// S-curve passed it (the average of a motion that slowed for an arc enters the arc faster
-    /// than the motion did).
-    pub centripetal_share: f64,
+    /// kink leave): 1, or less when a first timing's rows were refused ([`RETIMING`]).
+    pub accel: f64,
+    /// The share of every channel's top frequency: 1, or less where an averaged S-curve's
+    /// speeds passed it (the average of a motion speeding up after a stretch slowed for a
+    /// channel reaches that stretch faster than the motion did).
+    pub speed: f64,
+    /// The share of the centripetal limit: 1, or less where an averaged S-curve passed it (the
+    /// average of a motion that slowed for an arc enters the arc faster than the motion did).
+    pub centripetal: f64,
+}
+
+impl Shares {
+    /// Every limit whole.
+    pub(in crate::plan) const WHOLE: Self = Self {
+        accel: 1.0,
+        speed: 1.0,
+        centripetal: 1.0,
+    };
 }
 
 /// The joints along the grid: values, first and second derivatives by distance.
@@ -234,7 +248,7 @@ pub(in crate::plan) fn pace(
         &along,
         &times,
         REST_ROW_PERIODS * limits.rest_row_s,
-        limits.accel_share,
+        limits.shares.accel,
     ));
     let x = if zones.is_empty() {
         first
@@ -299,7 +313,7 @@ fn rest_accels(
         out[j] = Some(RestLimit {
             accel: 2.0 * room_hz / (REST_ROW_PERIODS * row_s)
                 * joint.step.abs()
-                * limits.accel_share,
+                * limits.shares.accel,
             row_s,
         });
     }
@@ -398,23 +412,7 @@ fn grid(
     } else {
         f64::INFINITY
     };
-    let speeds = motion.over_speed == OverSpeed::SlowDown;
-    // Every point's lowest zone limit and kink, made once (a path of many blends has as many
-    // kinks and zones).
-    let mut zone_at = vec![[f64::INFINITY; JOINTS]; along.s_mm.len()];
-    for z in zones {
-        for at in &mut zone_at[z.from..=z.to.min(along.s_mm.len() - 1)] {
-            at[z.joint] = at[z.joint].min(z.accel);
-        }
-    }
-    let mut kink_at = vec![None; along.s_mm.len()];
-    for (i, jump) in &along.kinks {
-        kink_at[*i] = Some(jump);
-    }
-    let mut before_at = vec![None; along.s_mm.len()];
-    for (i, rate) in &along.rate_before {
-        before_at[*i] = Some(rate);
-    }
+    let at = PointLimits::new(robot, along, motion, limits, zones);
     along
         .s_mm
         .iter()
@@ -428,44 +426,101 @@ fn grid(
             let last = along.s_mm.len() - 1;
             let k = mid(i.saturating_sub(1), i.max(1)).max(mid(i.min(last - 1), (i + 1).min(last)));
             if k > 0.0 {
-                x_max = x_max.min(limits.centripetal_mm_s2 * limits.centripetal_share / k);
+                x_max = x_max.min(limits.centripetal_mm_s2 * limits.shares.centripetal / k);
             }
             let mut accels = Vec::with_capacity(JOINTS + 1);
             if tangential.is_finite() {
                 accels.push(AccelLimit::symmetric(1.0, 0.0, tangential));
             }
-            for (j, joint) in robot.joints.iter().enumerate() {
-                let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
-                if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, kink_at[i])
-                    && jump[j] > KINK_MIN_PER_MM
-                {
-                    let v = KINK_SHARE * a * ACCEL_MARGIN * limits.accel_share * limits.rest_row_s
-                        / jump[j];
-                    x_max = x_max.min(v * v);
-                }
-                // Where pieces meet, the speed at the point is the piece before's as well.
-                let fastest_rate =
-                    before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
-                if speeds && fastest_rate != 0.0 {
-                    let v = SPEED_MARGIN
-                        * limits.speed_share
-                        * f64::from(joint.max_freq_hz)
-                        * joint.step.abs();
-                    x_max = x_max.min((v / fastest_rate).powi(2));
-                }
-                let zone = zone_at[i][j];
-                let accel = joint
-                    .dynamics
-                    .max_accel
-                    .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.accel_share)
-                    .min(zone);
-                if accel.is_finite() {
-                    accels.push(AccelLimit::symmetric(d, dd, accel));
-                }
-            }
+            at.joints(i, &mut x_max, &mut accels);
             GridPoint { s, x_max, accels }
         })
         .collect()
+}
+
+/// The joints' limits at every grid point ([`grid`]): what holds at a point made once (a path
+/// of many blends has as many kinks and zones).
+struct PointLimits<'a> {
+    robot: &'a Robot,
+    along: &'a JointsAlong,
+    limits: &'a PathLimits,
+    /// Whether a joint's speed is held within its channel's top frequency (`slow-down`).
+    speeds: bool,
+    /// Every point's lowest zone limit, by joint.
+    zone_at: Vec<[f64; JOINTS]>,
+    /// Every point's kink: every joint's jump in rate, per mm.
+    kink_at: Vec<Option<&'a Joints>>,
+    /// Where two pieces meet, every joint's rate on the piece before.
+    before_at: Vec<Option<&'a Joints>>,
+}
+
+impl<'a> PointLimits<'a> {
+    fn new(
+        robot: &'a Robot,
+        along: &'a JointsAlong,
+        motion: &Motion,
+        limits: &'a PathLimits,
+        zones: &[Zone],
+    ) -> Self {
+        let mut zone_at = vec![[f64::INFINITY; JOINTS]; along.s_mm.len()];
+        for z in zones {
+            for at in &mut zone_at[z.from..=z.to.min(along.s_mm.len() - 1)] {
+                at[z.joint] = at[z.joint].min(z.accel);
+            }
+        }
+        let mut kink_at = vec![None; along.s_mm.len()];
+        for (i, jump) in &along.kinks {
+            kink_at[*i] = Some(jump);
+        }
+        let mut before_at = vec![None; along.s_mm.len()];
+        for (i, rate) in &along.rate_before {
+            before_at[*i] = Some(rate);
+        }
+        Self {
+            robot,
+            along,
+            limits,
+            speeds: motion.over_speed == OverSpeed::SlowDown,
+            zone_at,
+            kink_at,
+            before_at,
+        }
+    }
+
+    /// Every joint's limits at point `i`: its speed at a kink and within its channel's top
+    /// frequency, lowering `x_max`, and its acceleration (in a zone, the zone's), pushed onto
+    /// `accels`.
+    fn joints(&self, i: usize, x_max: &mut f64, accels: &mut Vec<AccelLimit>) {
+        let (along, limits) = (self.along, self.limits);
+        for (j, joint) in self.robot.joints.iter().enumerate() {
+            let (d, dd) = (along.dq[i][j], along.ddq[i][j]);
+            if let (Some(a), Some(jump)) = (joint.dynamics.max_accel, self.kink_at[i])
+                && jump[j] > KINK_MIN_PER_MM
+            {
+                let v = KINK_SHARE * a * ACCEL_MARGIN * limits.shares.accel * limits.rest_row_s
+                    / jump[j];
+                *x_max = x_max.min(v * v);
+            }
+            // Where pieces meet, the speed at the point is the piece before's as well.
+            let fastest_rate =
+                self.before_at[i].map_or(d.abs(), |before| d.abs().max(before[j].abs()));
+            if self.speeds && fastest_rate != 0.0 {
+                let v = SPEED_MARGIN
+                    * limits.shares.speed
+                    * f64::from(joint.max_freq_hz)
+                    * joint.step.abs();
+                *x_max = x_max.min((v / fastest_rate).powi(2));
+            }
+            let accel = joint
+                .dynamics
+                .max_accel
+                .map_or(f64::INFINITY, |a| a * ACCEL_MARGIN * limits.shares.accel)
+                .min(self.zone_at[i][j]);
+            if accel.is_finite() {
+                accels.push(AccelLimit::symmetric(d, dd, accel));
+            }
+        }
+    }
 }
 
 fn solve(grid: &[GridPoint]) -> Result<Vec<f64>, PlanError> {

@@ -222,7 +222,7 @@ impl<'a> Track<'a> {
     /// the caller then takes step 3).
     fn stretch_pieces(&self, span: &Span, delta: f64, w: &mut Windows) -> bool {
         let u = self.counts();
-        let (d, k0, n) = (span.d(), span.start.first, span.n as i64);
+        let d = span.d();
         let df = d as f64;
         // The searches' ends: back to the stretch's first sample, on to its last.
         let mut from = span.first_interval;
@@ -245,11 +245,25 @@ impl<'a> Track<'a> {
             df,
             offset: df * delta,
         };
-        // Earliest: before the stretch's first sample, the stretch's start; then the interval
-        // whose first sample the level has reached and whose next it has not.
+        self.early_pieces(span, &early, (from, to), &mut w.early)
+            && self.late_pieces(span, &late, to, &mut w.late)
+    }
+
+    /// Step 2's earliest landings of `span`'s pulses at `early`'s levels, the stretch's samples
+    /// `from` to `to`: before its first sample, the stretch's start; then the interval whose
+    /// first sample the level has reached and whose next it has not. False if they do not close.
+    fn early_pieces(
+        &self,
+        span: &Span,
+        early: &Levels,
+        (from, to): (usize, usize),
+        pieces: &mut Vec<Piece>,
+    ) -> bool {
+        let u = self.counts();
+        let (k0, n, df) = (span.start.first, span.n as i64, early.df);
         let mut m = early.first_reaching(0, n, u[from], false);
         if m > 0 {
-            w.early.push(Piece::at(k0, self.t(from)));
+            pieces.push(Piece::at(k0, self.t(from)));
         }
         let mut j = from;
         while m < n {
@@ -265,16 +279,22 @@ impl<'a> Track<'a> {
             if j > to {
                 return false;
             }
-            let Some((next, last)) =
-                self.run_on(&mut w.early, k0, (j, to), &early, Side::Early, (m, n))
+            let Some((next, last)) = self.run_on(pieces, k0, (j, to), early, Side::Early, (m, n))
             else {
                 return false;
             };
             (m, j) = (next, last);
         }
-        // Latest: the interval whose next sample the level has not passed, from the one the
-        // pulse crosses in (no earlier one: the level is past the half count); past the
-        // stretch's last sample, its end.
+        true
+    }
+
+    /// Step 2's latest landings of `span`'s pulses at `late`'s levels, the stretch's last
+    /// sample `to`: the interval whose next sample the level has not passed, from the one the
+    /// pulse crosses in (no earlier one: the level is past the half count); past the stretch's
+    /// last sample, its end. False if they do not close.
+    fn late_pieces(&self, span: &Span, late: &Levels, to: usize, pieces: &mut Vec<Piece>) -> bool {
+        let u = self.counts();
+        let (k0, n, df) = (span.start.first, span.n as i64, late.df);
         let (mut m, mut j) = (0, span.first_interval);
         while m < n {
             let level = late.level(m);
@@ -286,11 +306,10 @@ impl<'a> Track<'a> {
                 }
             }
             if j > to {
-                w.late.push(Piece::at(k0 + m as usize, self.t(to + 1)));
+                pieces.push(Piece::at(k0 + m as usize, self.t(to + 1)));
                 break;
             }
-            let Some((next, last)) =
-                self.run_on(&mut w.late, k0, (j, to), &late, Side::Late, (m, n))
+            let Some((next, last)) = self.run_on(pieces, k0, (j, to), late, Side::Late, (m, n))
             else {
                 return false;
             };
