@@ -35,6 +35,9 @@
 //! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
 //!                    into ops (and the loading of a programs directory, and whether a program
 //!                    is there)
+//! console/     PURE  the operator's console's decisions: the jog lease machine, the control seat
+//!                    and roles, a snapshot's changes as a merge patch, failed logins
+//!                    rate-limited, a jog's pieces and worst-case travel
 //! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
 //!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
@@ -61,6 +64,7 @@ pub mod cell;
 pub mod cli;
 pub mod commission;
 pub mod config;
+pub mod console;
 pub mod contract;
 pub mod cycle;
 pub mod daemon;

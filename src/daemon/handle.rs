@@ -99,6 +99,9 @@ pub struct RobotHandle {
     /// The PLC's incident count this handle acts under (a cycle's): its moves and writes are
     /// refused once another incident came ([`Shared::incident`]); `None`: whenever.
     epoch: Option<u64>,
+    /// The speed override, 1 to 100 %: every order checked after it is set is planned at it
+    /// ([`Self::limits`]).
+    speed_override: Arc<std::sync::atomic::AtomicU8>,
 }
 
 /// A position saved from the robot's pose.
@@ -161,8 +164,7 @@ impl RobotHandle {
         gate: Option<&super::gate::Gate>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
         let taught = self.positions.of(&self.robot.name);
-        let mut checked =
-            order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
+        let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
         checked.permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
         // Behind a move that is queued or running, an order starts where that one is planned
@@ -336,7 +338,7 @@ impl RobotHandle {
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
         // Every field is checked before the robot's state: a bad order is a bad order.
-        let limits = OrderLimits::of(&self.robot);
+        let limits = self.limits();
         order.check(&self.robot, &limits)?;
         let permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
@@ -417,6 +419,25 @@ impl RobotHandle {
             }
         }
         self.enqueue(starts, end, None)
+    }
+
+    /// The speed override, 1 to 100 %.
+    #[must_use]
+    pub fn speed_override(&self) -> u8 {
+        self.speed_override.load(Ordering::SeqCst)
+    }
+
+    /// Sets the speed override (`percent` clamped to 1 to 100): every move checked from now on
+    /// is planned at that share of its speed; moves already accepted keep theirs.
+    pub fn set_speed_override(&self, percent: u8) -> u8 {
+        let percent = percent.clamp(1, 100);
+        self.speed_override.store(percent, Ordering::SeqCst);
+        percent
+    }
+
+    /// What an order is checked against: the robot's limits under the speed override.
+    fn limits(&self) -> OrderLimits {
+        OrderLimits::of(&self.robot).overridden(self.speed_override())
     }
 
     /// The counts the PLC last reported, per joint.
@@ -729,6 +750,7 @@ impl Daemon {
                 cell: Arc::new(Cell::new(setup.cell.clone(), setup.settings.layout.inputs)),
                 cycles: Arc::new(CycleSlot::default()),
                 epoch: None,
+                speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
             };
             let worker = Worker::new(
                 setup,

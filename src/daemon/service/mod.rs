@@ -27,6 +27,7 @@ use tokio::net::TcpListener;
 use tokio::task::JoinSet;
 
 use super::api::{self, Api, BearerToken, TokenError};
+use super::console::{Console, LiveHub, SnapshotSetup, UsersError};
 use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
@@ -50,6 +51,9 @@ pub enum ServeError {
     /// The token file cannot be used.
     #[error(transparent)]
     Token(#[from] TokenError),
+    /// A console user's token file cannot be used.
+    #[error(transparent)]
+    ConsoleUsers(#[from] UsersError),
     /// A socket could not be set up.
     #[error("cannot {operation} {}", target.display())]
     Socket {
@@ -136,6 +140,23 @@ pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError
                 gateway: config.gateway(&robot.name).cloned().unwrap_or_default(),
                 cell: config.cells.get(&robot.name).cloned().unwrap_or_default(),
             })
+        })
+        .collect()
+}
+
+/// What each robot's live snapshot needs from the config: its cell's signals and the input
+/// words its PLC copies.
+#[must_use]
+pub fn snapshot_setups(config: &Config) -> std::collections::BTreeMap<String, SnapshotSetup> {
+    config
+        .robots
+        .iter()
+        .map(|r| {
+            let setup = SnapshotSetup {
+                cell: config.cells.get(&r.name).cloned().unwrap_or_default(),
+                inputs: config.link(&r.name).map(|l| l.layout.inputs),
+            };
+            (r.name.clone(), setup)
         })
         .collect()
 }
@@ -266,9 +287,19 @@ pub async fn serve(
         None => None,
     };
     let faces = bind_modbus_faces(config).await?;
+    let console_tcp = match &config.console {
+        Some(console) => Some(bind_tcp(console.listen).await?),
+        None => None,
+    };
+    if let Some(console) = &config.console {
+        // Its users' token files are read now: a bad one stops the start before any worker.
+        super::console::Sessions::new(console)?;
+    }
     let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
+    let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), &closing);
+    let api = api.with_live(hub.clone());
     let mut servers = JoinSet::new();
     let stop = closing.clone();
     let router = api.router(None);
@@ -281,6 +312,28 @@ pub async fn serve(
         let router = api.router(token);
         servers.spawn(async move {
             api::serve(tcp, router, stop.cancelled_owned()).await;
+            Ok(())
+        });
+    }
+    if let (Some(settings), Some(tcp)) = (&config.console, console_tcp) {
+        let console = Console::new(
+            settings,
+            &config.robot_consoles,
+            &config.cells,
+            daemon.robots(),
+            hub,
+            api.clone(),
+            &closing,
+        )?;
+        let allow = settings.allow.clone();
+        tracing::info!(
+            listen = %tcp.local_addr().map_or(settings.listen, |a| a),
+            users = settings.users.len(),
+            "console listening"
+        );
+        let stop = closing.clone();
+        servers.spawn(async move {
+            super::console::serve(tcp, console.router(), allow, stop.cancelled_owned()).await;
             Ok(())
         });
     }

@@ -1,0 +1,1 @@
+import { html, render } from "/assets/vendor/htm-preact-standalone.module.js";
