@@ -264,7 +264,7 @@ mod tests {
     #[test]
     fn a_console_listens_on_loopback_by_default_with_its_users() {
         let c = Config::from_toml(&with_console("")).unwrap();
-        let console = c.console.unwrap();
+        let console = c.console.clone().unwrap();
         assert_eq!(console.listen, DEFAULT_CONSOLE_LISTEN.parse().unwrap());
         assert_eq!(console.users["ann"].role, Role::Operator);
         assert_eq!(console.session, DEFAULT_SESSION);

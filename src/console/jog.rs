@@ -192,15 +192,24 @@ mod tests {
     #[test]
     fn the_start_hz_speed_keeps_every_channel_under_its_drive() {
         let mut robot = seed_robot();
-        assert_eq!(
-            start_hz_speed(&robot, &robot.pose_of(&[0, 4000, 2000, 0]), JogAxis::Z),
-            None
-        );
-        robot.joints[2].dynamics.start_hz = Some(1000.0);
-        let pose = robot.pose_of(&[0, 4000, 2000, 0]);
-        let v = start_hz_speed(&robot, &pose, JogAxis::Z).unwrap();
-        // z is d3 alone on the seed's robot: its channel runs at v / step.
-        let hz = v / robot.joints[2].step.abs();
-        assert!((hz - 900.0).abs() < 1.0, "{hz} Hz at {v} mm/s");
+        let pose = Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0);
+        assert_eq!(start_hz_speed(&robot, &pose, JogAxis::X), None);
+        for joint in &mut robot.joints {
+            joint.dynamics.start_hz = Some(1000.0);
+        }
+        for axis in [JogAxis::X, JogAxis::Y, JogAxis::Z] {
+            let v = start_hz_speed(&robot, &pose, axis).unwrap();
+            // Every channel's rate over a short stretch at that speed.
+            let model = &robot.kinematics;
+            let here = model.ik(&pose, None).unwrap();
+            let ahead = model.ik(&moved(&pose, axis, 0.1), Some(&here)).unwrap();
+            let highest = (0..4)
+                .map(|j| ((ahead[j] - here[j]) / robot.joints[j].step).abs() / 0.1 * v)
+                .fold(0.0, f64::max);
+            assert!(
+                (highest - 900.0).abs() < 5.0,
+                "{axis:?}: {highest} Hz at {v} mm/s"
+            );
+        }
     }
 }

@@ -103,8 +103,8 @@ pub enum Refusal {
 
 fn article(role: Role) -> &'static str {
     match role {
-        Role::Admin => "an",
-        Role::Viewer | Role::Operator => "a",
+        Role::Admin | Role::Operator => "an",
+        Role::Viewer => "a",
     }
 }
 

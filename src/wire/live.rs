@@ -35,6 +35,10 @@ pub struct Live {
     /// The move running now (its report, with its progress).
     #[serde(default)]
     pub current: Option<MoveReport>,
+    /// Where the move running now goes: the tool's x, y, z (mm) at its start and at its end,
+    /// from its planned counts (the line the robot view draws).
+    #[serde(default)]
+    pub path: Option<[[f64; 3]; 2]>,
     /// The newest move that ended.
     #[serde(default)]
     pub last: Option<MoveReport>,

@@ -273,6 +273,14 @@ pub fn snapshot(
         tracker.running = state.current_move;
     }
     let current = state.current_move.and_then(|id| handle.report(id));
+    let path = current.as_ref().and_then(|r| {
+        let position = |counts: [i64; 4]| {
+            let by_joint = std::array::from_fn(|j| counts[usize::from(robot.joints[j].channel)]);
+            let p = robot.pose_of(&by_joint).position_mm;
+            [p.x, p.y, p.z]
+        };
+        Some([position(r.start_counts?), position(r.target_counts?)])
+    });
     let last: Option<MoveReport> = tracker.last.and_then(|id| handle.report(id));
     Live {
         signals: signals(&setup.cell, setup.inputs.as_ref(), state.inputs.as_ref()),
@@ -280,6 +288,7 @@ pub fn snapshot(
         joints,
         speed_mm_s,
         current,
+        path,
         last,
         speed_override_pct: handle.speed_override(),
         console: side.clone(),

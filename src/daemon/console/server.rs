@@ -298,7 +298,9 @@ mod tests {
 
     #[test]
     fn api_requests_are_told_apart_for_the_seat() {
-        let c = |m: Method, p: &str| classify(&m, p);
+        fn c(m: Method, p: &str) -> (Option<&str>, Option<Command>) {
+            classify(&m, p)
+        }
         assert_eq!(
             c(Method::GET, "/v1/robots/r/positions"),
             (Some("r"), Some(Command::View))
