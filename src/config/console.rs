@@ -268,7 +268,7 @@ mod tests {
         assert_eq!(console.listen, DEFAULT_CONSOLE_LISTEN.parse().unwrap());
         assert_eq!(console.users["ann"].role, Role::Operator);
         assert_eq!(console.session, DEFAULT_SESSION);
-        assert_eq!(c.robot_console("r").manual_speed_mm_s, 50.0);
+        assert!((c.robot_console("r").manual_speed_mm_s - 50.0).abs() < 1e-12);
     }
 
     #[test]
@@ -339,13 +339,11 @@ mod tests {
             "{}[robots.r.console]\nmanual_speed_mm_s = 120\n",
             with_console("")
         );
-        assert_eq!(
-            Config::from_toml(&ok)
-                .unwrap()
-                .robot_console("r")
-                .manual_speed_mm_s,
-            120.0
-        );
+        let speed = Config::from_toml(&ok)
+            .unwrap()
+            .robot_console("r")
+            .manual_speed_mm_s;
+        assert!((speed - 120.0).abs() < 1e-12);
     }
 
     #[test]

@@ -359,6 +359,7 @@ fn end(session: SessionId, by: EndedBy) -> Vec<Action> {
 }
 
 /// What the robot's state says about jogging now.
+#[allow(clippy::struct_excessive_bools)] // five facts, each a yes or no
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct JogFacts {
     /// The PLC link is up and its heartbeat fresh.

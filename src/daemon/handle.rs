@@ -428,7 +428,9 @@ impl RobotHandle {
     }
 
     /// Sets the speed override (`percent` clamped to 1 to 100): every move checked from now on
-    /// is planned at that share of its speed; moves already accepted keep theirs.
+    /// is planned at that share of its speed; moves already accepted keep theirs. Returns the
+    /// override set.
+    #[must_use = "the override set, clamped to 1 to 100"]
     pub fn set_speed_override(&self, percent: u8) -> u8 {
         let percent = percent.clamp(1, 100);
         self.speed_override.store(percent, Ordering::SeqCst);

@@ -85,6 +85,9 @@ impl std::fmt::Debug for ConsoleRig {
 
 impl ConsoleRig {
     /// Starts the mock, the daemon and the console; returns once the daemon has read the PLC.
+    ///
+    /// # Panics
+    /// Never: the demo's ranges and address are written here and parse.
     pub async fn start(options: ConsoleOptions) -> Result<Self, DemoError> {
         let robot = seed_robot();
         let cell = Description::from_toml(PRESS_CELL)

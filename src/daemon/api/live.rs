@@ -1,6 +1,6 @@
 //! The live stream on the API (`linterpd status --watch`, `cycle run --follow`): NDJSON, the
 //! whole snapshot first, then a merge patch per change ([`crate::wire::LiveMessage`]), from the
-//! same publisher as the console's WebSockets. And the speed override, read and set.
+//! same publisher as the console's `WebSocket`s. And the speed override, read and set.
 //!
 //! ```text
 //! GET /v1/live                          every robot's stream, interleaved

@@ -136,7 +136,6 @@ impl Console {
     }
 
     /// The routes: the page, login, the WebSocket, and the API behind the guard.
-    #[must_use]
     pub fn router(&self) -> Router {
         let guarded = self
             .api

@@ -1,7 +1,7 @@
 //! The live stream: one publisher task per robot builds the robot's [`Live`] snapshot in one
 //! function ([`snapshot`]) each time it wakes, in one place ([`publish`]: on every status read
 //! the worker makes, `RobotHandle::watch_reads`, and on every change of the console's own side),
-//! and pushes what changed, once, to every subscriber: the WebSockets of the console, the API's
+//! and pushes what changed, once, to every subscriber: the `WebSocket`s of the console, the API's
 //! NDJSON streams (`status --watch`, `cycle run --follow`), the console's control tasks. N
 //! subscribers cost no PLC exchange and one snapshot: nobody reads the robot per subscriber.
 //!
@@ -137,6 +137,17 @@ impl LiveHub {
         setups: &BTreeMap<String, SnapshotSetup>,
         closing: &CancellationToken,
     ) -> Self {
+        Self::with_capacity(robots, setups, closing, CAPACITY)
+    }
+
+    /// [`Self::start`], a subscriber dropped `capacity` messages behind.
+    #[must_use]
+    pub fn with_capacity(
+        robots: &BTreeMap<String, RobotHandle>,
+        setups: &BTreeMap<String, SnapshotSetup>,
+        closing: &CancellationToken,
+        capacity: usize,
+    ) -> Self {
         let mut streams = BTreeMap::new();
         for (name, handle) in robots {
             let setup = setups.get(name).cloned().unwrap_or_default();
@@ -151,7 +162,7 @@ impl LiveHub {
                 value,
             });
             let (latest_tx, latest) = watch::channel(first);
-            let (patches, _) = broadcast::channel(CAPACITY);
+            let (patches, _) = broadcast::channel(capacity.max(1));
             let stream = RobotStream {
                 name: name.clone(),
                 latest,

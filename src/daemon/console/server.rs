@@ -298,38 +298,38 @@ mod tests {
 
     #[test]
     fn api_requests_are_told_apart_for_the_seat() {
-        fn c(m: Method, p: &str) -> (Option<&str>, Option<Command>) {
-            classify(&m, p)
+        fn c<'p>(m: &Method, p: &'p str) -> (Option<&'p str>, Option<Command>) {
+            classify(m, p)
         }
         assert_eq!(
-            c(Method::GET, "/v1/robots/r/positions"),
+            c(&Method::GET, "/v1/robots/r/positions"),
             (Some("r"), Some(Command::View))
         );
         assert_eq!(
-            c(Method::POST, "/v1/robots/r/stop"),
+            c(&Method::POST, "/v1/robots/r/stop"),
             (Some("r"), Some(Command::Stop))
         );
         assert_eq!(
-            c(Method::POST, "/v1/robots/r/cycles/stop"),
+            c(&Method::POST, "/v1/robots/r/cycles/stop"),
             (Some("r"), Some(Command::Stop))
         );
         assert_eq!(
-            c(Method::POST, "/v1/robots/r/moves"),
+            c(&Method::POST, "/v1/robots/r/moves"),
             (Some("r"), Some(Command::Operate))
         );
         assert_eq!(
-            c(Method::DELETE, "/v1/robots/r/positions/pick"),
+            c(&Method::DELETE, "/v1/robots/r/positions/pick"),
             (Some("r"), Some(Command::Delete))
         );
         assert_eq!(
-            c(Method::PUT, "/v1/robots/r/mode"),
+            c(&Method::PUT, "/v1/robots/r/mode"),
             (Some("r"), Some(Command::Mode))
         );
         assert_eq!(
-            c(Method::PUT, "/v1/robots/r/speed-override"),
+            c(&Method::PUT, "/v1/robots/r/speed-override"),
             (Some("r"), Some(Command::Operate))
         );
-        assert_eq!(c(Method::GET, "/v1/robots").0, None);
+        assert_eq!(c(&Method::GET, "/v1/robots").0, None);
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Console logins: users from `[console.users]` (an argon2 password hash, or a token file),
-//! failed logins rate-limited (`console::limiter`), sessions as random ids in an HttpOnly
+//! failed logins rate-limited (`console::limiter`), sessions as random ids in an `HttpOnly`
 //! SameSite=Strict cookie, each ending [`crate::config::ConsoleSettings::session`] after its
 //! login.
 

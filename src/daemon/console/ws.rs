@@ -12,7 +12,7 @@
 //!      {"type":"take-seat","robot":"r"}  {"type":"leave-seat","robot":"r"}
 //! ```
 //! The upgrade is refused (403) without a session or from another `Origin` (browsers do not
-//! apply same-origin rules to WebSockets). When the socket closes, for any reason, every
+//! apply same-origin rules to a `WebSocket`). When the socket closes, for any reason, every
 //! robot's jog of this session stops. A page that falls [`super::CAPACITY`] messages behind is
 //! closed (code 1008, "too slow"): it reconnects from a whole snapshot.
 

@@ -287,14 +287,7 @@ pub async fn serve(
         None => None,
     };
     let faces = bind_modbus_faces(config).await?;
-    let console_tcp = match &config.console {
-        Some(console) => Some(bind_tcp(console.listen).await?),
-        None => None,
-    };
-    if let Some(console) = &config.console {
-        // Its users' token files are read now: a bad one stops the start before any worker.
-        super::console::Sessions::new(console)?;
-    }
+    let console_tcp = bind_console(config).await?;
     let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
@@ -316,43 +309,20 @@ pub async fn serve(
         });
     }
     if let (Some(settings), Some(tcp)) = (&config.console, console_tcp) {
+        let robots = daemon.robots();
         let console = Console::new(
             settings,
             &config.robot_consoles,
             &config.cells,
-            daemon.robots(),
+            robots,
             hub,
             api.clone(),
             &closing,
         )?;
-        let allow = settings.allow.clone();
-        tracing::info!(
-            listen = %tcp.local_addr().map_or(settings.listen, |a| a),
-            users = settings.users.len(),
-            "console listening"
-        );
         let stop = closing.clone();
-        servers.spawn(async move {
-            super::console::serve(tcp, console.router(), allow, stop.cancelled_owned()).await;
-            Ok(())
-        });
+        servers.spawn(serve_console(tcp, console, settings.clone(), stop));
     }
-    for (name, face) in faces {
-        let Some(robot) = daemon.robot(&name).cloned() else {
-            continue;
-        };
-        let stop = closing.clone();
-        servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
-    }
-    for robot in daemon.robots().values() {
-        if robot.face_settings().is_some_and(|f| f.plc.is_some()) {
-            let (robot, stop) = (robot.clone(), closing.clone());
-            servers.spawn(async move {
-                super::mirror_face(robot, stop.cancelled_owned()).await;
-                Ok(())
-            });
-        }
-    }
+    spawn_faces(&daemon, faces, &closing, &mut servers);
     let listen = settings.listen.map(tracing::field::display);
     tracing::info!(socket = %settings.socket.display(), listen, "API listening");
     log_notify(notifier.ready(), "READY=1");
@@ -392,6 +362,63 @@ pub async fn serve(
     servers.abort_all();
     let _ = std::fs::remove_file(&settings.socket);
     failed.map_or(Ok(()), Err)
+}
+
+/// The Modbus faces' servers and the mirrored cell faces, until `closing`.
+fn spawn_faces(
+    daemon: &Daemon,
+    faces: Vec<(String, ModbusFaceServer)>,
+    closing: &tokio_util::sync::CancellationToken,
+    servers: &mut JoinSet<io::Result<()>>,
+) {
+    for (name, face) in faces {
+        let Some(robot) = daemon.robot(&name).cloned() else {
+            continue;
+        };
+        let stop = closing.clone();
+        servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
+    }
+    for robot in daemon.robots().values() {
+        if robot.face_settings().is_some_and(|f| f.plc.is_some()) {
+            let (robot, stop) = (robot.clone(), closing.clone());
+            servers.spawn(async move {
+                super::mirror_face(robot, stop.cancelled_owned()).await;
+                Ok(())
+            });
+        }
+    }
+}
+
+/// The console's listener, when the config has a console; its users' token files are read
+/// first, so a bad one stops the start before any worker.
+async fn bind_console(config: &Config) -> Result<Option<TcpListener>, ServeError> {
+    let Some(console) = &config.console else {
+        return Ok(None);
+    };
+    super::console::Sessions::new(console)?;
+    Ok(Some(bind_tcp(console.listen).await?))
+}
+
+/// Serves the console on `tcp` until `closing`.
+async fn serve_console(
+    tcp: TcpListener,
+    console: Console,
+    settings: crate::config::ConsoleSettings,
+    closing: tokio_util::sync::CancellationToken,
+) -> io::Result<()> {
+    tracing::info!(
+        listen = %tcp.local_addr().map_or(settings.listen, |a| a),
+        users = settings.users.len(),
+        "console listening"
+    );
+    super::console::serve(
+        tcp,
+        console.router(),
+        settings.allow,
+        closing.cancelled_owned(),
+    )
+    .await;
+    Ok(())
 }
 
 /// SIGHUP as a stream (nothing comes if its handler cannot be installed).
