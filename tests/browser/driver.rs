@@ -1,4 +1,4 @@
-//! Debian's chromedriver and chromium, driven over WebDriver by fantoccini: no driver downloads.
+//! Debian's chromedriver and chromium, driven over `WebDriver` by fantoccini: no driver downloads.
 //! A chromedriver per test on a free port (started here, killed by its id when the test ends);
 //! each browser headless with its own fresh profile directory; the console's page logged in.
 
@@ -151,7 +151,7 @@ impl Browser {
         self.client.find(Locator::Css(&css(test_id))).await.is_ok()
     }
 
-    /// Waits (on the page's own changes: a MutationObserver) until `js` (an expression) is true.
+    /// Waits (on the page's own changes: a `MutationObserver`) until `js` (an expression) is true.
     pub async fn until(&self, js: &str) {
         let script = format!(
             "const done = arguments[arguments.length - 1];
@@ -221,8 +221,7 @@ impl Browser {
                 .split(|b| *b == 0)
                 .map(|a| String::from_utf8_lossy(a).into_owned())
                 .collect();
-            let main =
-                args.iter().any(|a| *a == marker) && !args.iter().any(|a| a.starts_with("--type="));
+            let main = args.contains(&marker) && !args.iter().any(|a| a.starts_with("--type="));
             if main {
                 let _ = Command::new("kill")
                     .arg("-KILL")

@@ -1,4 +1,4 @@
-//! The console in a real browser (issue 46): Debian's chromium, headless, driven over WebDriver
+//! The console in a real browser (issue 46): Debian's chromium, headless, driven over `WebDriver`
 //! (fantoccini, Debian's chromedriver) against the daemon and the mock PLC in process (the
 //! seed's robot in the simulated press cell, `linterpd::demo::console::ConsoleRig`), every
 //! element found by its `data-test-id`. The second suite: `cargo test --features browser --test
