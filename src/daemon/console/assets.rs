@@ -74,4 +74,12 @@ mod tests {
         assert!(app.contains("/assets/vendor/htm-preact-standalone.module.js"));
         assert!(find("nope.js").is_none());
     }
+
+    #[test]
+    fn the_page_weighs_at_most_100_kb_even_uncompressed() {
+        // The goal is 100 KB gzipped; served as is, the page and everything it loads stay
+        // under it uncompressed (docs/BENCHMARKS.md gives the gzipped figure).
+        let bytes: usize = page_files().iter().map(|a| a.bytes.len()).sum();
+        assert!(bytes <= 100 * 1024, "{bytes} bytes");
+    }
 }
