@@ -29,7 +29,13 @@ fn cpu_s(pid: u32) -> f64 {
 }
 
 /// One HTTP/1.1 request on its own connection; the status, the Set-Cookie value, the body.
-async fn http(addr: &str, method: &str, path: &str, cookie: &str, body: &str) -> (u16, String, String) {
+async fn http(
+    addr: &str,
+    method: &str,
+    path: &str,
+    cookie: &str,
+    body: &str,
+) -> (u16, String, String) {
     let mut s = TcpStream::connect(addr).await.unwrap();
     let req = format!(
         "{method} {path} HTTP/1.1\r\nhost: {addr}\r\norigin: http://{addr}\r\ncookie: {cookie}\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
@@ -59,9 +65,12 @@ async fn login(addr: &str, user: &str) -> String {
 type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<TcpStream>>;
 
 async fn ws(addr: &str, cookie: &str) -> Ws {
-    let mut r = format!("ws://{addr}/console/ws").into_client_request().unwrap();
+    let mut r = format!("ws://{addr}/console/ws")
+        .into_client_request()
+        .unwrap();
     r.headers_mut().insert("cookie", cookie.parse().unwrap());
-    r.headers_mut().insert("origin", format!("http://{addr}").parse().unwrap());
+    r.headers_mut()
+        .insert("origin", format!("http://{addr}").parse().unwrap());
     tokio_tungstenite::connect_async(r).await.unwrap().0
 }
 
@@ -77,8 +86,14 @@ async fn moves(addr: &str, cookie: &str) -> Duration {
         let id: serde_json::Value = serde_json::from_str(&answer).unwrap();
         let id = id["id"].as_u64().unwrap();
         loop {
-            let (_, _, report) =
-                http(addr, "GET", &format!("/v1/robots/press-loader/moves/{id}"), cookie, "").await;
+            let (_, _, report) = http(
+                addr,
+                "GET",
+                &format!("/v1/robots/press-loader/moves/{id}"),
+                cookie,
+                "",
+            )
+            .await;
             let r: serde_json::Value = serde_json::from_str(&report).unwrap();
             if ["done", "stopped", "failed", "cancelled"].contains(&r["stage"].as_str().unwrap()) {
                 break;
@@ -91,7 +106,11 @@ async fn moves(addr: &str, cookie: &str) -> Duration {
 
 #[tokio::main]
 async fn main() {
-    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
     let addr = format!("127.0.0.1:{port}");
     let mut daemon = Command::new(env!("CARGO_BIN_EXE_linterpd"))
         .args(["demo", "--console", "--listen", &addr])
@@ -100,14 +119,18 @@ async fn main() {
         .spawn()
         .unwrap();
     let mut line = String::new();
-    BufReader::new(daemon.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    BufReader::new(daemon.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
     assert!(line.starts_with("the console:"), "{line}");
     let pid = daemon.id();
     let operator = login(&addr, "operator").await;
     let mut seat = ws(&addr, &operator).await;
-    seat.send(Message::Text(r#"{"type":"take-seat","robot":"press-loader"}"#.into()))
-        .await
-        .unwrap();
+    seat.send(Message::Text(
+        r#"{"type":"take-seat","robot":"press-loader"}"#.into(),
+    ))
+    .await
+    .unwrap();
     tokio::time::sleep(Duration::from_millis(300)).await;
 
     let cpu0 = cpu_s(pid);

@@ -592,3 +592,59 @@ async fn the_speed_override_plans_every_later_move_at_its_share() {
     assert_eq!(rig.handle.state().phase, RobotPhase::Idle);
     rig.stop().await;
 }
+
+#[tokio::test]
+async fn status_watch_prints_a_line_at_each_change_from_the_stream() {
+    use std::io::{BufRead as _, BufReader};
+    let shared = crate::common::exchange::mock_at_seed_start("");
+    let dir = crate::common::process::TempDir::new("watch");
+    let s = crate::common::served::Served::start(&shared, None, dir.path(), "api.sock").await;
+    let socket = dir.path().join("api.sock");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_linterpd"))
+        .args(["status", "--watch", "--socket"])
+        .arg(&socket)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
+    std::thread::spawn(move || {
+        for line in lines {
+            if tx.send(line.unwrap()).is_err() {
+                return;
+            }
+        }
+    });
+    let first = tokio::time::timeout(LIMIT, rx.recv())
+        .await
+        .unwrap()
+        .unwrap();
+    assert!(first.starts_with("press-loader: idle; link up"), "{first}");
+    let id = s
+        .handle
+        .submit(MoveOrder {
+            by: Some(vec![0.0, 0.0, 20.0]),
+            ..MoveOrder::default()
+        })
+        .unwrap();
+    let mut seen = Vec::new();
+    loop {
+        let line = tokio::time::timeout(LIMIT, rx.recv())
+            .await
+            .unwrap()
+            .unwrap();
+        let done = line.starts_with("press-loader: idle;")
+            && seen.iter().any(|l: &String| l.contains("running"));
+        seen.push(line);
+        if done {
+            break;
+        }
+    }
+    assert!(
+        seen.iter()
+            .any(|l| l.contains(&format!("move {id} running"))),
+        "{seen:#?}"
+    );
+    let _ = child.kill();
+    let _ = child.wait();
+}
