@@ -371,6 +371,52 @@ function SpeedPlot({ live }) {
   return html`<div ref=${el} data-test-id="speed-plot"></div>`;
 }
 
+// The tool's distance from the running move's planned line at each status read, against the
+// distance along it; kept for the last move, with its predicted largest deviation.
+function lineOffset(path, pose) {
+  const [a, b] = path;
+  const d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+  const len = Math.hypot(...d);
+  const p = [pose[0] - a[0], pose[1] - a[1], pose[2] - a[2]];
+  if (len < 1e-9) return [0, Math.hypot(...p)];
+  const along = (p[0] * d[0] + p[1] * d[1] + p[2] * d[2]) / len;
+  const off = [p[0] - (d[0] * along) / len, p[1] - (d[1] * along) / len, p[2] - (d[2] * along) / len];
+  return [along, Math.hypot(...off)];
+}
+
+function DeviationPlot({ live }) {
+  const el = useRef(null);
+  const plot = useRef(null);
+  const run = useRef({ id: null, along: [], dev: [] });
+  const [shown, setShown] = useState(null);
+  useEffect(() => {
+    const cur = live.current;
+    const pose = live.state.pose;
+    if (cur && live.path && pose) {
+      if (run.current.id !== cur.id) run.current = { id: cur.id, along: [], dev: [], predicted: cur.predicted };
+      const [along, dev] = lineOffset(live.path, pose);
+      run.current.along.push(along); run.current.dev.push(dev);
+    } else if (run.current.id !== null && run.current.along.length > 1) {
+      setShown(run.current);
+      run.current = { id: null, along: [], dev: [] };
+    }
+  }, [live.reads]);
+  useEffect(() => {
+    if (!shown || !window.uPlot || !el.current) return undefined;
+    if (plot.current) plot.current.destroy();
+    const order = shown.along.map((_, i) => i).sort((i, j) => shown.along[i] - shown.along[j]);
+    plot.current = new window.uPlot({
+      width: 420, height: 140, scales: { x: { time: false } },
+      series: [{ label: "mm along the line" }, { label: "distance from the line, mm", stroke: "#c62828" }],
+    }, [order.map((i) => shown.along[i]), order.map((i) => shown.dev[i])], el.current);
+    return () => plot.current && plot.current.destroy();
+  }, [shown]);
+  return html`<div data-test-id="deviation-plot">
+    ${shown && html`<small>move ${shown.id}: the tool's distance from its line at each status read
+      (largest ${fmt(Math.max(...shown.dev), 3)} mm${shown.predicted ? `; predicted path deviation ${fmt(shown.predicted.path_deviation_mm, 4)} mm, tracking ${fmt(shown.predicted.tracking_error_mm, 4)} mm` : ""})</small>`}
+    <div ref=${el}></div></div>`;
+}
+
 function Moves({ live }) {
   const cur = live.current;
   const last = live.last;
@@ -383,6 +429,7 @@ function Moves({ live }) {
       ${last.predicted && html`, predicted deviation ${fmt(last.predicted.path_deviation_mm, 4)} mm`}
       ${last.final_error_pulses && html`, final error ${last.final_error_pulses.join(" ")} pulses`}
       ${last.error && html`<br /><span class="warn">${last.error}</span>`}</div>`}
+    <${DeviationPlot} live=${live} />
     <${SpeedPlot} live=${live} />
   </section>`;
 }

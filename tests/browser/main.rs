@@ -207,6 +207,13 @@ async fn the_pose_on_the_page_tracks_the_mock_while_a_move_runs() {
         end[2]
     );
     assert!(changes >= 3.0, "{changes} pose changes on the page");
+    // The move's deviation from its line, plotted once it ended.
+    b.until(&format!(
+        "{}.includes('move {id}:')",
+        Browser::js_text("deviation-plot")
+    ))
+    .await;
+    b.screenshot("console-move").await;
     b.close().await;
     rig.stop().await;
 }
