@@ -54,8 +54,12 @@
 //!                    handles, taught positions, permits, the cycle runner (cycle/), the mode and
 //!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
 //!                    PLC), the HTTP/JSON API, the register gateway and its Modbus TCP face,
-//!                    systemd notification
+//!                    systemd notification, the operator's console's server (console/: the live
+//!                    stream, a control task per robot for the seat and the jog lease, the page,
+//!                    its WebSocket and logins)
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
+//!                    (`--console`: the console on the mock in the press cell, the console
+//!                    tests' rig)
 //! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
 //!                    a pure part (rate fits, frequency models), reported with config lines
 //! ```
