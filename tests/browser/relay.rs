@@ -12,6 +12,8 @@ use tokio::sync::watch;
 pub struct Relay {
     pub addr: SocketAddr,
     frozen: watch::Sender<bool>,
+    /// When bytes from the browser last went through to the console.
+    last_up: std::sync::Arc<std::sync::Mutex<Option<std::time::Instant>>>,
 }
 
 impl Relay {
@@ -20,6 +22,8 @@ impl Relay {
         let addr = listener.local_addr().unwrap();
         let (frozen, _) = watch::channel(false);
         let f = frozen.clone();
+        let last_up = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let up = std::sync::Arc::clone(&last_up);
         tokio::spawn(async move {
             while let Ok((client, _)) = listener.accept().await {
                 let Ok(server) = TcpStream::connect(upstream).await else {
@@ -27,11 +31,25 @@ impl Relay {
                 };
                 let (cr, cw) = client.into_split();
                 let (sr, sw) = server.into_split();
-                tokio::spawn(pipe(cr, sw, f.subscribe()));
-                tokio::spawn(pipe(sr, cw, f.subscribe()));
+                tokio::spawn(pipe(
+                    cr,
+                    sw,
+                    f.subscribe(),
+                    Some(std::sync::Arc::clone(&up)),
+                ));
+                tokio::spawn(pipe(sr, cw, f.subscribe(), None));
             }
         });
-        Self { addr, frozen }
+        Self {
+            addr,
+            frozen,
+            last_up,
+        }
+    }
+
+    /// When bytes from the browser (its last keep-alive, once frozen) last reached the console.
+    pub fn last_up(&self) -> Option<std::time::Instant> {
+        *self.last_up.lock().unwrap()
     }
 
     /// From now on nothing passes either way; no connection is closed.
@@ -44,6 +62,7 @@ async fn pipe(
     mut from: tokio::net::tcp::OwnedReadHalf,
     mut to: tokio::net::tcp::OwnedWriteHalf,
     mut frozen: watch::Receiver<bool>,
+    seen: Option<std::sync::Arc<std::sync::Mutex<Option<std::time::Instant>>>>,
 ) {
     let mut buf = vec![0_u8; 16 * 1024];
     loop {
@@ -57,6 +76,9 @@ async fn pipe(
         }
         if to.write_all(&buf[..n]).await.is_err() {
             return;
+        }
+        if let Some(seen) = &seen {
+            *seen.lock().unwrap() = Some(std::time::Instant::now());
         }
     }
 }
