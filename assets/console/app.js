@@ -298,7 +298,7 @@ function Jog({ name, info, live, session, send, act, can }) {
     </div>
     <div class="pad">
       ${keys.map((k) => html`<div class="axis">
-        ${[false, true].map((positive) => html`<button class="jogkey" disabled=${!can}
+        ${[false, true].map((positive) => html`<button class="jogkey" disabled=${!can || (mode === "step" && live.state.current_move !== null)}
           data-test-id=${`jog-${typeof k === "number" ? `j${k + 1}` : k}-${positive ? "plus" : "minus"}`}
           onPointerDown=${down(k, positive)} onPointerUp=${up} onPointerCancel=${up}
           onLostPointerCapture=${up} onClick=${stepJog(k, positive)}>${label(k)}${positive ? "+" : "−"}</button>`)}

@@ -57,9 +57,16 @@ async fn until_live(rig: &ConsoleRig, what: &str, f: impl Fn(&Live) -> bool) -> 
             latest.changed().await.unwrap();
         }
     };
-    tokio::time::timeout(LIMIT, wait)
-        .await
-        .unwrap_or_else(|_| panic!("never: {what}: {:?}", live(rig).console))
+    tokio::time::timeout(LIMIT, wait).await.unwrap_or_else(|_| {
+        let l = live(rig);
+        panic!(
+            "never: {what}: phase {:?}, joints {:?}, last {:?}, {:?}",
+            l.state.phase,
+            l.joints,
+            l.last.map(|r| (r.id, r.stage, r.error, r.order)),
+            l.console
+        )
+    })
 }
 
 fn counts(rig: &ConsoleRig) -> [i64; 4] {
@@ -247,6 +254,11 @@ async fn a_step_jog_moves_exactly_the_step() {
     b.click("jog-step-10").await;
     b.click("jog-frame-joints").await;
     b.click("jog-j1-minus").await;
+    // The order was taken (or the page says why not).
+    b.until("document.querySelector('[data-test-id=\"current-move\"]') || document.querySelector('[data-test-id=\"error\"]') || document.querySelector('[data-test-id=\"joint-0\"]').textContent === '50.00'").await;
+    if b.has("error").await {
+        panic!("the joint step was refused: {}", b.text("error").await);
+    }
     let l = until_live(&rig, "the joint step ended", |l| {
         l.last
             .as_ref()
