@@ -37,6 +37,9 @@
 //! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
 //!                    into ops (and the loading of a programs directory, and whether a program
 //!                    is there)
+//! console/     PURE  the operator's console's decisions: the jog lease machine, the control seat
+//!                    and roles, a snapshot's changes as a merge patch, failed logins
+//!                    rate-limited, a jog's pieces and worst-case travel
 //! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
 //!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
@@ -53,8 +56,12 @@
 //!                    handles, taught positions, permits, the cycle runner (cycle/), the mode and
 //!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
 //!                    PLC), the HTTP/JSON API, the register gateway and its Modbus TCP face,
-//!                    systemd notification
+//!                    systemd notification, the operator's console's server (console/: the live
+//!                    stream, a control task per robot for the seat and the jog lease, the page,
+//!                    its WebSocket and logins)
 //! demo/        `linterpd demo`: the daemon driving the mock PLC in process, measured from its trace
+//!                    (`--console`: the console on the mock in the press cell, the console
+//!                    tests' rig)
 //! commission/  `linterpd commission`: link, contract and pulse checks of a real unit, judged by
 //!                    a pure part (rate fits, frequency models), reported with config lines
 //! ```
@@ -63,6 +70,7 @@ pub mod cell;
 pub mod cli;
 pub mod commission;
 pub mod config;
+pub mod console;
 pub mod contract;
 pub mod cycle;
 pub mod daemon;

@@ -45,6 +45,14 @@ pub struct DemoArgs {
     /// against a simulated press instead, with one hold of the press's guard mid-cycle.
     #[arg(long)]
     pub cycle: bool,
+    /// Serve the operator's console on the seed's robot in the simulated press cell instead, on
+    /// `--listen` (loopback), until Ctrl-C; log in as operator / operator-demo (or viewer /
+    /// viewer-demo, admin / admin-demo).
+    #[arg(long, conflicts_with = "cycle")]
+    pub console: bool,
+    /// Where `--console` listens.
+    #[arg(long, default_value = "127.0.0.1:8470", requires = "console")]
+    pub listen: std::net::SocketAddr,
 }
 
 /// Runs `linterpd demo`.
@@ -67,6 +75,9 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
         .build()
         .context("cannot start the async runtime")
         .map_err(Failure::Runtime)?;
+    if args.console {
+        return runtime.block_on(console(args, out));
+    }
     if args.cycle {
         let demo = runtime
             .block_on(crate::demo::press::run(options))
@@ -91,5 +102,40 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
             .context("cannot write to stdout")
             .map_err(Failure::Runtime)?;
     }
+    Ok(())
+}
+
+/// `demo --console`: the console on the mock until Ctrl-C.
+async fn console(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    if !args.listen.ip().is_loopback() {
+        return Err(Failure::BadInput(anyhow::anyhow!(
+            "--listen {}: the demo's console listens on loopback only (its passwords are known)",
+            args.listen
+        )));
+    }
+    let options = crate::demo::console::ConsoleOptions {
+        listen: args.listen,
+        baud: Some(args.baud),
+        ..crate::demo::console::ConsoleOptions::default()
+    };
+    let rig = crate::demo::console::ConsoleRig::start(options)
+        .await
+        .context("demo --console")
+        .map_err(Failure::Runtime)?;
+    let users: Vec<String> = crate::demo::console::USERS
+        .iter()
+        .map(|(name, role, password)| format!("{name} / {password} ({})", role.name()))
+        .collect();
+    writeln!(
+        out,
+        "the console: http://{}/ (log in as {}); the robot on a mock PLC in a simulated press \
+         cell; Ctrl-C ends it",
+        rig.addr,
+        users.join(", ")
+    )
+    .and_then(|()| out.flush())
+    .map_err(|e| Failure::Runtime(e.into()))?;
+    let _ = tokio::signal::ctrl_c().await;
+    rig.stop().await;
     Ok(())
 }

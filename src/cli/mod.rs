@@ -28,6 +28,7 @@ pub mod clear_fault;
 pub mod client;
 pub mod commission;
 pub mod completions;
+pub mod console;
 pub mod cycle;
 pub mod demo;
 mod failure;
@@ -108,6 +109,9 @@ pub enum Command {
     Home(home::HomeArgs),
     /// Clear a fault latched on a robot's PLC (refused when there is none, or while it moves).
     ClearFault(clear_fault::ClearFaultArgs),
+    /// The operator's console: `hash-password` makes a user's password hash for
+    /// `[console.users.NAME]`.
+    Console(console::ConsoleArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),
     /// Check a real unit with the drives' power off: the link, the contract, tiny pulse tables
@@ -212,6 +216,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Mode(args) => mode::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),
+        Command::Console(args) => console::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),
         Command::Commission(args) => commission::run(&args, out),
         Command::Serve(args) => serve::run(&args),

@@ -9,7 +9,9 @@
 //! ```
 //! (one line per robot; wrapped here). `--wait 10s` first waits, at most that long, for the
 //! daemon to answer and every robot's link to be up with its PLC read (a script's "is it ready?"
-//! after starting the daemon), then says the same.
+//! after starting the daemon), then says the same. `--watch` follows the daemon's live stream
+//! (`GET /v1/live`, the console's): a robot's line again each time it changes (the heartbeat's
+//! age aside), until Ctrl-C or the daemon ends it; `--json` prints the stream's lines as sent.
 
 use std::fmt::Write as _;
 
@@ -34,6 +36,10 @@ pub struct StatusArgs {
     /// to be up with its PLC read; then print and exit as without it.
     #[arg(long, allow_hyphen_values = true)]
     pub wait: Option<String>,
+    /// Follow the daemon's live stream: a robot's line each time it changes, until Ctrl-C
+    /// (`--json`: the stream's messages as sent, a whole snapshot then merge patches).
+    #[arg(long)]
+    pub watch: bool,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
@@ -238,6 +244,9 @@ pub fn run(args: &StatusArgs, out: &mut dyn std::io::Write) -> Result<(), Failur
             .map_or("/v1/robots".to_owned(), |r| format!("/v1/robots/{r}"));
         let until = wait.map(|w| tokio::time::Instant::now() + w);
         let answer = answer(&client, &path, until).await?;
+        if args.watch {
+            return watch(&client, args.robot.as_deref(), args.daemon.json, out).await;
+        }
         let robots = robots(&answer).map_err(Failure::Runtime)?;
         let text: Vec<String> = robots.iter().map(line).collect();
         super::print(out, args.daemon.json, &answer, &text.join("\n"))?;
@@ -248,10 +257,73 @@ pub fn run(args: &StatusArgs, out: &mut dyn std::io::Write) -> Result<(), Failur
     })
 }
 
+/// What `--watch` compares to decide a robot's line changed: its line with the heartbeat's age
+/// (which changes at every read) left out.
+fn watched(r: &RobotState) -> String {
+    let mut steady = r.clone();
+    steady.heartbeat_age_ms = steady.heartbeat_age_ms.map(|_| 0);
+    line(&steady)
+}
+
+/// `status --watch`: a robot's line each time it changes, from the live stream, until the
+/// stream ends (exit 4: the daemon went away) or Ctrl-C.
+async fn watch(
+    client: &Client,
+    robot: Option<&str>,
+    json: bool,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
+    let mut feed = match client.live(robot).await.map_err(Failure::from_client)? {
+        Ok(feed) => feed,
+        Err(answer) => {
+            return Err(Failure::from_status(
+                answer.status,
+                anyhow::anyhow!("{}", answer.error()),
+            ));
+        }
+    };
+    let mut said: std::collections::BTreeMap<String, String> = std::collections::BTreeMap::new();
+    loop {
+        let update = tokio::select! {
+            next = feed.next() => next.map_err(Failure::Runtime)?,
+            _ = tokio::signal::ctrl_c() => return Ok(()),
+        };
+        let Some(update) = update else {
+            return Err(Failure::Unreachable(anyhow::anyhow!(
+                "the daemon ended the live stream (it shut down, or this reader fell behind)"
+            )));
+        };
+        let key = watched(&update.live.state);
+        if said.get(&update.robot) == Some(&key) && !json {
+            continue;
+        }
+        said.insert(update.robot.clone(), key);
+        let text = line(&update.live.state);
+        let written = if json {
+            writeln!(out, "{}", update.line)
+        } else {
+            writeln!(out, "{text}")
+        };
+        written
+            .and_then(|()| out.flush())
+            .map_err(|e| Failure::Runtime(e.into()))?;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn watch_sees_no_change_in_the_heartbeats_age_alone() {
+        let a = idle();
+        let mut b = idle();
+        b.heartbeat_age_ms = Some(250);
+        assert_eq!(watched(&a), watched(&b));
+        b.pose = Some([1.0, 500.0, 0.0, 0.0]);
+        assert_ne!(watched(&a), watched(&b));
+    }
 
     fn state(json: Value) -> RobotState {
         Received::read(json, "a robot's state").unwrap().value

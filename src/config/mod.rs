@@ -30,11 +30,13 @@
 //! serial = { path = "/dev/ttyUSB0" }
 //! [daemon]                          # optional: the API of `linterpd serve` (see `daemon`)
 //! socket = "/run/linterpd/api.sock"
+//! [console]                         # optional: the operator's console (see `console`)
 //! ```
 //! `config/linterpd.toml` is the commented example.
 
 mod cell;
 mod check;
+mod console;
 mod daemon;
 mod error;
 pub mod files;
@@ -54,6 +56,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use cell::{CellSettings, FaceSettings};
+pub use console::{
+    ConsoleSettings, ConsoleUser, DEFAULT_CONSOLE_LISTEN, RobotConsoleSettings, Secret,
+};
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
@@ -75,6 +80,10 @@ pub struct Config {
     pub cells: BTreeMap<String, CellSettings>,
     /// How `linterpd serve` offers its API (`[daemon]`; every default without one).
     pub daemon: DaemonSettings,
+    /// The operator's console (`[console]`; none without one).
+    pub console: Option<ConsoleSettings>,
+    /// Each robot's `[robots.NAME.console]`, by robot name.
+    pub robot_consoles: BTreeMap<String, RobotConsoleSettings>,
 }
 
 impl Config {
@@ -108,6 +117,11 @@ impl Config {
         if let Some(token) = &mut daemon.token_file {
             *token = dir.join(&*token);
         }
+        for user in config.console.iter_mut().flat_map(|c| c.users.values_mut()) {
+            if let Secret::TokenFile(file) = &mut user.secret {
+                *file = dir.join(&*file);
+            }
+        }
         Ok(config)
     }
 
@@ -135,6 +149,12 @@ impl Config {
     #[must_use]
     pub fn link(&self, name: &str) -> Option<&LinkSettings> {
         self.links.get(name)
+    }
+
+    /// Robot `name`'s console settings (every default without a `[robots.NAME.console]`).
+    #[must_use]
+    pub fn robot_console(&self, name: &str) -> RobotConsoleSettings {
+        self.robot_consoles.get(name).copied().unwrap_or_default()
     }
 
     /// The register gateway of robot `name`, if its table has a `gateway` section.

@@ -22,6 +22,35 @@ pub(super) struct RawConfig {
     pub robots: BTreeMap<Spanned<String>, Spanned<RawRobot>>,
     /// `[daemon]`: how `linterpd serve` offers its API; checked by `daemon`.
     pub daemon: Option<Spanned<RawDaemon>>,
+    /// `[console]`: the operator's console; checked by `console`.
+    pub console: Option<Spanned<RawConsole>>,
+}
+
+/// `[console]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawConsole {
+    pub listen: Option<Spanned<String>>,
+    pub allow: Option<Vec<Spanned<String>>>,
+    pub origins: Option<Vec<Spanned<String>>>,
+    pub session: Option<Spanned<String>>,
+    pub users: Option<BTreeMap<Spanned<String>, Spanned<RawConsoleUser>>>,
+}
+
+/// `[console.users.NAME]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawConsoleUser {
+    pub role: Spanned<String>,
+    pub password_hash: Option<Spanned<String>>,
+    pub token_file: Option<Spanned<String>>,
+}
+
+/// `[robots.NAME.console]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawRobotConsole {
+    pub manual_speed_mm_s: Option<Spanned<f64>>,
 }
 
 /// `[daemon]`.
@@ -47,6 +76,7 @@ pub(super) struct RawRobot {
     pub plc: Option<Spanned<RawPlc>>,
     pub gateway: Option<Spanned<RawGateway>>,
     pub cell: Option<Spanned<RawCell>>,
+    pub console: Option<Spanned<RawRobotConsole>>,
 }
 
 /// `[robots.NAME.cell]`: the cell's signals and cycle programs; checked by `cell`.

@@ -8,7 +8,7 @@ use super::check::At;
 use super::raw::{RawConfig, RawRobot};
 use std::collections::BTreeMap;
 
-use super::{Config, ConfigError, cell, daemon, gateway, joints, kinematics, motion, plc};
+use super::{Config, ConfigError, cell, console, daemon, gateway, joints, kinematics, motion, plc};
 use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
@@ -27,8 +27,13 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     let mut links = BTreeMap::new();
     let mut gateways = BTreeMap::new();
     let mut cells = BTreeMap::new();
+    let mut robot_consoles = BTreeMap::new();
     for (name, raw) in &entries {
         let robot = self::robot(text, name, raw)?;
+        if let Some(table) = &raw.get_ref().console {
+            let at = At::new(text, "robots").child(&robot.name).child("console");
+            robot_consoles.insert(robot.name.clone(), console::robot(&at, table)?);
+        }
         let link = self::link(text, &robot, raw)?;
         if let Some(g) = self::gateway(text, &robot, raw, link.as_ref())? {
             gateways.insert(robot.name.clone(), g);
@@ -63,12 +68,19 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         return Err(ConfigError::NoRobots);
     }
     let daemon = daemon::settings(&At::new(text, "daemon"), raw.daemon.as_ref())?;
+    let console = raw
+        .console
+        .as_ref()
+        .map(|c| console::settings(&At::new(text, "console"), c))
+        .transpose()?;
     Ok(Config {
         robots,
         links,
         gateways,
         cells,
         daemon,
+        console,
+        robot_consoles,
     })
 }
 

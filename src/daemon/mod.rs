@@ -20,10 +20,13 @@
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
 //! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
+//! console/    the operator's console's server: the live stream (one publisher per robot), the
+//!             seat and jog lease's control task per robot, the page, its WebSocket and logins
 //! ```
 
 pub mod api;
 mod cell;
+pub mod console;
 mod cycle;
 pub mod gate;
 mod gateway;

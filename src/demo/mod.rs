@@ -18,6 +18,7 @@
 //! deviation along it). Last, planned only ([`drives`]): a line near a short arm's axis under
 //! whole-move slow-down beside its time-optimal timing under drive limits.
 
+pub mod console;
 mod cycle;
 pub mod drives;
 pub mod press;

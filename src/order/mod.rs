@@ -209,14 +209,27 @@ impl PathOrder {
 pub struct OrderLimits {
     /// The fastest speed an order may ask for, mm/s.
     pub max_speed_mm_s: f64,
+    /// The speed override, a share of 1 (0.01 to 1): the speed an order asks for (or the
+    /// robot's default) is planned at this share of it. The console's override; 1 otherwise.
+    pub speed_override: f64,
 }
 
 impl OrderLimits {
-    /// The limits of `robot`.
+    /// The limits of `robot`, at full speed.
     #[must_use]
     pub fn of(robot: &Robot) -> Self {
         Self {
             max_speed_mm_s: robot.max_speed_mm_s,
+            speed_override: 1.0,
+        }
+    }
+
+    /// These limits under a speed override of `percent` (1 to 100; clamped).
+    #[must_use]
+    pub fn overridden(self, percent: u8) -> Self {
+        Self {
+            speed_override: f64::from(percent.clamp(1, 100)) / 100.0,
+            ..self
         }
     }
 }
@@ -225,6 +238,7 @@ impl Default for OrderLimits {
     fn default() -> Self {
         Self {
             max_speed_mm_s: crate::robot::DEFAULT_MAX_SPEED_MM_S,
+            speed_override: 1.0,
         }
     }
 }
@@ -742,6 +756,9 @@ impl MoveOrder {
             (None, None, method) => method,
         };
         m.ramp = self.ramp(defaults.ramp)?;
+        // The speed override: every order's speed (asked, or the robot's default) is planned
+        // at its share, once checked against the robot's limit as asked.
+        m.speed_mm_s *= limits.speed_override.clamp(0.01, 1.0);
         Ok(m)
     }
 
@@ -1100,6 +1117,7 @@ mod tests {
         };
         let limits = OrderLimits {
             max_speed_mm_s: 800.0,
+            ..OrderLimits::default()
         };
         let e = fast(1e308)
             .check_with(m, &limits, &BTreeMap::new())
@@ -1109,6 +1127,29 @@ mod tests {
             "speed_mm_s = 1e308: must be at most 800 mm/s, the robot's max_speed_mm_s"
         );
         assert!(fast(800.0).check_with(m, &limits, &BTreeMap::new()).is_ok());
+    }
+
+    #[test]
+    fn the_speed_override_scales_the_asked_and_the_default_speed_after_the_check() {
+        let m = seed_robot().motion;
+        let limits = OrderLimits {
+            max_speed_mm_s: 800.0,
+            ..OrderLimits::default()
+        }
+        .overridden(25);
+        let asked = MoveOrder {
+            speed_mm_s: Some(800.0),
+            ..order(vec![1.0, 2.0, 3.0])
+        };
+        let checked = asked.check_with(m, &limits, &BTreeMap::new()).unwrap();
+        assert!((checked.motion.speed_mm_s - 200.0).abs() < 1e-9);
+        let default = order(vec![1.0, 2.0, 3.0])
+            .check_with(m, &limits, &BTreeMap::new())
+            .unwrap();
+        assert!((default.motion.speed_mm_s - m.speed_mm_s / 4.0).abs() < 1e-9);
+        // 0 % is taken as 1 %: an override never stops the robot by itself.
+        let one = OrderLimits::default().overridden(0);
+        assert!((one.speed_override - 0.01).abs() < 1e-12);
     }
 
     #[test]

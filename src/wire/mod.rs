@@ -7,13 +7,17 @@
 //!            PathAccepted
 //! state.rs   RobotState (LinkState, RobotPhase, GatewayStats, FaceState, FaceRefusal)
 //! cycle.rs   CycleStatus, CycleState, StepAt
+//! live.rs    Live (a robot's live state for the console and `status --watch`), LiveMessage
+//!            (the stream: the whole snapshot, then merge patches)
 //! ```
 
 mod cycle;
+mod live;
 mod report;
 mod state;
 
 pub use cycle::{CycleState, CycleStatus, StepAt};
+pub use live::{ActiveJog, ConsoleLive, JogLive, Live, LiveMessage, SeatHolder, SignalValue};
 pub use report::{
     MoveAccepted, MoveId, MoveReport, PathAccepted, PieceKind, PieceReport, Predicted,
     SectionReport, Stage,

@@ -2,6 +2,7 @@
 #![allow(dead_code, unreachable_pub, missing_docs)]
 
 pub mod cli;
+pub mod console;
 pub mod daemon;
 pub mod exchange;
 pub mod http;

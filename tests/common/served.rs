@@ -60,7 +60,13 @@ impl Served {
             spawn_with(connect, ContractSettings::default(), &options, [0; JOINTS]);
         let path = dir.join(socket);
         let listener = UnixListener::bind(&path).unwrap();
-        let router = Api::new(daemon.robots().clone()).router(None);
+        let api = Api::new(daemon.robots().clone());
+        let hub = linterpd::daemon::console::LiveHub::start(
+            daemon.robots(),
+            &std::collections::BTreeMap::new(),
+            &api.closing(),
+        );
+        let router = api.with_live(hub).router(None);
         tokio::spawn(linterpd::daemon::api::serve(
             listener,
             router,

@@ -699,7 +699,7 @@ fn output_writes(shared: &SharedMock) -> Vec<linterpd::mock::HostWrite> {
 /// incident came (the watcher runs before the cycle's runner has taken it, or just after).
 fn watch_incidents(h: &RobotHandle) -> Arc<std::sync::Mutex<Vec<linterpd::daemon::CycleState>>> {
     let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
-    let mut incidents = h.watch_incidents();
+    let mut incidents = h.watch_snapshot();
     let mut count = incidents.borrow_and_update().incidents.count;
     let (h, found) = (h.clone(), Arc::clone(&seen));
     tokio::spawn(async move {

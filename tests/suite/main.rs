@@ -15,6 +15,7 @@ mod cli_compare;
 mod cli_daemon;
 mod cli_plan;
 mod commission;
+mod console;
 mod contract_exchange;
 mod cycles;
 mod daemon;

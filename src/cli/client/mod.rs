@@ -2,6 +2,7 @@
 //! client on one connection per request), JSON in and out, and the NDJSON progress feed.
 
 mod access;
+mod live;
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +23,7 @@ use crate::daemon::api::ErrorBody;
 pub const DEFAULT_SOCKET: &str = "/run/linterpd/api.sock";
 
 pub use access::{NoPermission, NotRunning};
+pub use live::{LiveFeed, LiveUpdate};
 
 /// A client for the daemon at one socket.
 #[derive(Debug, Clone)]

@@ -1,8 +1,11 @@
-//! `linterpd cycle run --follow`: the cycle's status read every [`POLL`] and a line printed each
+//! `linterpd cycle run --follow`: the cycle's status from the daemon's live stream (`GET
+//! /v1/robots/{name}/live`, the console's stream: a change each status read the daemon makes,
+//! no request of its own) and a line printed each
 //! time it moves on (the cycle, the step, what it waits for), until the count is done (exit 0),
 //! or it faults or is stopped (exit 3, naming the step and the wait or the reason). A pause (a
 //! hold, `cycle pause`) is said and followed on: `cycle resume` goes on. The lines are decided
-//! by [`Watch`], a pure function of the statuses seen.
+//! by [`Watch`], a pure function of the statuses seen. A daemon without the stream (an older
+//! one: 404), or a stream that ends, is read every [`POLL`] instead.
 //!
 //! ```text
 //! press-load: cycle 1 of 3, step 1 (pick): move to [-926.57, 535.03, 130.0]
@@ -157,6 +160,7 @@ pub(super) async fn follow(
     let mut watch = Watch::default();
     let path = format!("/v1/robots/{robot}/cycles");
     let mut status = first;
+    let mut stream = client.live(Some(robot)).await.ok().and_then(Result::ok);
     let mut ticks = tokio::time::interval(POLL);
     ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
@@ -166,6 +170,22 @@ pub(super) async fn follow(
                 End::Done => Ok(()),
                 End::NotDone(why) => Err(Failure::NotDone(anyhow!(why))),
             };
+        }
+        if let Some(feed) = &mut stream {
+            match feed.next().await {
+                Ok(Some(update)) => {
+                    // The whole snapshot first may predate the run (it is as old as the last
+                    // status read): only what was published after the stream opened counts.
+                    let fresh = update.line["type"] == "patch";
+                    if let Some(cycle) = update.live.state.cycle.filter(|_| fresh) {
+                        let json = serde_json::to_value(&cycle).unwrap_or_default();
+                        status = Received { value: cycle, json };
+                    }
+                    continue;
+                }
+                // Ended (the daemon closed it, or this reader fell behind): poll from here.
+                Ok(None) | Err(_) => stream = None,
+            }
         }
         ticks.tick().await;
         let answer: Value = client.expect(Method::GET, &path, None).await?;

@@ -19,6 +19,8 @@
 //! DELETE /v1/robots/{name}/positions/{pos} {"deleted": NamedPosition}    | 400 | 404 | 500
 //! POST /v1/robots/{name}/cycles            202 CycleStatus  (cycles.rs: run, stop, pause,
 //! GET  /v1/robots/{name}/cycles            CycleStatus       resume a cycle program)
+//! GET  /v1/live, /v1/robots/{name}/live   application/x-ndjson: the live stream (live.rs)
+//! GET, PUT /v1/robots/{name}/speed-override {"percent": 1..=100}
 //! GET  /metrics                            Prometheus text
 //! ```
 //! The answers are typed ([`crate::daemon::RobotState`], [`crate::daemon::MoveReport`],
@@ -36,10 +38,12 @@ mod cycles;
 mod error;
 mod handlers;
 mod listen;
+mod live;
 pub mod metrics;
 pub mod mode;
 mod registers;
 pub use cycles::{CycleOrder, CycleStop};
+pub use live::SpeedOverride;
 pub use registers::{RegisterWrite, Registers};
 
 use std::collections::BTreeMap;
@@ -62,6 +66,8 @@ use super::RobotHandle;
 pub struct Api {
     robots: Arc<BTreeMap<String, RobotHandle>>,
     closing: CancellationToken,
+    /// The live streams (`GET .../live`), when the daemon publishes them.
+    live: Option<super::console::LiveHub>,
 }
 
 impl Api {
@@ -71,6 +77,16 @@ impl Api {
         Self {
             robots: Arc::new(robots),
             closing: CancellationToken::new(),
+            live: None,
+        }
+    }
+
+    /// This API with the live streams of `hub` (`GET /v1/live`, `GET /v1/robots/{name}/live`).
+    #[must_use]
+    pub fn with_live(self, hub: super::console::LiveHub) -> Self {
+        Self {
+            live: Some(hub),
+            ..self
         }
     }
 
@@ -86,6 +102,12 @@ impl Api {
         let router = Router::new()
             .route("/v1/robots", get(handlers::robots))
             .route(robot, get(handlers::robot))
+            .route("/v1/live", get(live::all))
+            .route(&format!("{robot}/live"), get(live::one))
+            .route(
+                &format!("{robot}/speed-override"),
+                get(live::get_override).put(live::put_override),
+            )
             .route(&format!("{robot}/moves"), post(handlers::submit))
             .route(&format!("{robot}/paths"), post(handlers::submit_path))
             .route(&format!("{robot}/moves/{{id}}"), get(handlers::report))

@@ -44,7 +44,7 @@ pub(crate) async fn run(
     control: watch::Receiver<Control>,
     status: SharedStatus,
 ) {
-    let incidents = handle.watch_incidents();
+    let incidents = handle.watch_snapshot();
     let epoch = incidents.borrow().incidents.count;
     let mut runner = Runner {
         handle: handle.under(epoch),

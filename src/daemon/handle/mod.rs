@@ -98,6 +98,9 @@ pub struct RobotHandle {
     /// The PLC's incident count this handle acts under (a cycle's): its moves and writes are
     /// refused once another incident came ([`Shared::incident`]); `None`: whenever.
     epoch: Option<u64>,
+    /// The speed override, 1 to 100 %: every order checked after it is set is planned at it
+    /// ([`Self::limits`]).
+    speed_override: Arc<std::sync::atomic::AtomicU8>,
 }
 
 /// A position saved from the robot's pose.
@@ -114,6 +117,27 @@ impl RobotHandle {
     #[must_use]
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+
+    /// The speed override, 1 to 100 %.
+    #[must_use]
+    pub fn speed_override(&self) -> u8 {
+        self.speed_override.load(Ordering::SeqCst)
+    }
+
+    /// Sets the speed override (`percent` clamped to 1 to 100): every move checked from now on
+    /// is planned at that share of its speed; moves already accepted keep theirs. Returns the
+    /// override set.
+    #[must_use = "the override set, clamped to 1 to 100"]
+    pub fn set_speed_override(&self, percent: u8) -> u8 {
+        let percent = percent.clamp(1, 100);
+        self.speed_override.store(percent, Ordering::SeqCst);
+        percent
+    }
+
+    /// What an order is checked against: the robot's limits under the speed override.
+    pub(super) fn limits(&self) -> crate::order::OrderLimits {
+        crate::order::OrderLimits::of(&self.robot).overridden(self.speed_override())
     }
 
     /// The counts the PLC last reported, per joint.
@@ -386,9 +410,10 @@ impl RobotHandle {
         self.shared.snapshot().incidents
     }
 
-    /// Wakes on every incident ([`Self::incidents`]).
+    /// The snapshot as the worker publishes it, waking on every change (every status read,
+    /// every incident: [`Self::incidents`]).
     #[must_use]
-    pub fn watch_incidents(&self) -> watch::Receiver<super::shared::Snapshot> {
+    pub fn watch_snapshot(&self) -> watch::Receiver<super::shared::Snapshot> {
         self.shared.watch()
     }
 
@@ -435,6 +460,7 @@ impl Daemon {
                 cycles: Arc::new(CycleSlot::default()),
                 lane: Arc::default(),
                 epoch: None,
+                speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
             };
             let worker = Worker::new(
                 setup,

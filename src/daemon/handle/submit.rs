@@ -15,8 +15,7 @@ use crate::daemon::request::{Batch, Request};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
 use crate::order::{
-    Accepted, CheckedOrder, MoveOrder, OrderLimits, PathOrder, SectionOrder, SectionPart, Target,
-    plan_order,
+    Accepted, CheckedOrder, MoveOrder, PathOrder, SectionOrder, SectionPart, Target, plan_order,
 };
 use crate::plan::{
     MoveRequest, Origin, PathPlan, PathRequest, Plan, PlanError, SectionPlan, line_as_path,
@@ -79,8 +78,7 @@ impl RobotHandle {
         gate: Option<&Gate>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
         let taught = self.positions.of(&self.robot.name);
-        let mut checked =
-            order.check_with(self.robot.motion, &OrderLimits::of(&self.robot), &taught)?;
+        let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
         checked.permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
@@ -251,7 +249,7 @@ impl RobotHandle {
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub async fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
         // Every field is checked before the robot's state: a bad order is a bad order.
-        let limits = OrderLimits::of(&self.robot);
+        let limits = self.limits();
         order.check(&self.robot, &limits)?;
         let permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;

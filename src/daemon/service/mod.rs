@@ -27,6 +27,7 @@ use tokio::net::TcpListener;
 use tokio::task::JoinSet;
 
 use super::api::{self, Api, BearerToken, TokenError};
+use super::console::{Console, LiveHub, SnapshotSetup, UsersError};
 use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
@@ -50,6 +51,9 @@ pub enum ServeError {
     /// The token file cannot be used.
     #[error(transparent)]
     Token(#[from] TokenError),
+    /// A console user's token file cannot be used.
+    #[error(transparent)]
+    ConsoleUsers(#[from] UsersError),
     /// A socket could not be set up.
     #[error("cannot {operation} {}", target.display())]
     Socket {
@@ -136,6 +140,23 @@ pub fn robots_from_config(config: &Config) -> Result<Vec<RobotSetup>, ServeError
                 gateway: config.gateway(&robot.name).cloned().unwrap_or_default(),
                 cell: config.cells.get(&robot.name).cloned().unwrap_or_default(),
             })
+        })
+        .collect()
+}
+
+/// What each robot's live snapshot needs from the config: its cell's signals and the input
+/// words its PLC copies.
+#[must_use]
+pub fn snapshot_setups(config: &Config) -> std::collections::BTreeMap<String, SnapshotSetup> {
+    config
+        .robots
+        .iter()
+        .map(|r| {
+            let setup = SnapshotSetup {
+                cell: config.cells.get(&r.name).cloned().unwrap_or_default(),
+                inputs: config.link(&r.name).map(|l| l.layout.inputs),
+            };
+            (r.name.clone(), setup)
         })
         .collect()
 }
@@ -266,9 +287,12 @@ pub async fn serve(
         None => None,
     };
     let faces = bind_modbus_faces(config).await?;
+    let console_tcp = bind_console(config).await?;
     let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
+    let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), &closing);
+    let api = api.with_live(hub.clone());
     let mut servers = JoinSet::new();
     let stop = closing.clone();
     let router = api.router(None);
@@ -284,22 +308,21 @@ pub async fn serve(
             Ok(())
         });
     }
-    for (name, face) in faces {
-        let Some(robot) = daemon.robot(&name).cloned() else {
-            continue;
-        };
+    if let (Some(settings), Some(tcp)) = (&config.console, console_tcp) {
+        let robots = daemon.robots();
+        let console = Console::new(
+            settings,
+            &config.robot_consoles,
+            &config.cells,
+            robots,
+            hub,
+            api.clone(),
+            &closing,
+        )?;
         let stop = closing.clone();
-        servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
+        servers.spawn(serve_console(tcp, console, settings.clone(), stop));
     }
-    for robot in daemon.robots().values() {
-        if robot.face_settings().is_some_and(|f| f.plc.is_some()) {
-            let (robot, stop) = (robot.clone(), closing.clone());
-            servers.spawn(async move {
-                super::mirror_face(robot, stop.cancelled_owned()).await;
-                Ok(())
-            });
-        }
-    }
+    spawn_faces(&daemon, faces, &closing, &mut servers);
     let listen = settings.listen.map(tracing::field::display);
     tracing::info!(socket = %settings.socket.display(), listen, "API listening");
     log_notify(notifier.ready(), "READY=1");
@@ -339,6 +362,63 @@ pub async fn serve(
     servers.abort_all();
     let _ = std::fs::remove_file(&settings.socket);
     failed.map_or(Ok(()), Err)
+}
+
+/// The Modbus faces' servers and the mirrored cell faces, until `closing`.
+fn spawn_faces(
+    daemon: &Daemon,
+    faces: Vec<(String, ModbusFaceServer)>,
+    closing: &tokio_util::sync::CancellationToken,
+    servers: &mut JoinSet<io::Result<()>>,
+) {
+    for (name, face) in faces {
+        let Some(robot) = daemon.robot(&name).cloned() else {
+            continue;
+        };
+        let stop = closing.clone();
+        servers.spawn(async move { face.serve(robot, stop.cancelled_owned()).await });
+    }
+    for robot in daemon.robots().values() {
+        if robot.face_settings().is_some_and(|f| f.plc.is_some()) {
+            let (robot, stop) = (robot.clone(), closing.clone());
+            servers.spawn(async move {
+                super::mirror_face(robot, stop.cancelled_owned()).await;
+                Ok(())
+            });
+        }
+    }
+}
+
+/// The console's listener, when the config has a console; its users' token files are read
+/// first, so a bad one stops the start before any worker.
+async fn bind_console(config: &Config) -> Result<Option<TcpListener>, ServeError> {
+    let Some(console) = &config.console else {
+        return Ok(None);
+    };
+    super::console::Sessions::new(console)?;
+    Ok(Some(bind_tcp(console.listen).await?))
+}
+
+/// Serves the console on `tcp` until `closing`.
+async fn serve_console(
+    tcp: TcpListener,
+    console: Console,
+    settings: crate::config::ConsoleSettings,
+    closing: tokio_util::sync::CancellationToken,
+) -> io::Result<()> {
+    tracing::info!(
+        listen = %tcp.local_addr().map_or(settings.listen, |a| a),
+        users = settings.users.len(),
+        "console listening"
+    );
+    super::console::serve(
+        tcp,
+        console.router(),
+        settings.allow,
+        closing.cancelled_owned(),
+    )
+    .await;
+    Ok(())
 }
 
 /// SIGHUP as a stream (nothing comes if its handler cannot be installed).

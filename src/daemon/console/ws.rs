@@ -1,0 +1,247 @@
+//! The console's WebSocket, one per page: the live stream of every robot out (a `hello`, then
+//! each robot's whole snapshot, then its merge patches), the page's jog and seat requests in.
+//!
+//! ```text
+//! out: {"type":"hello","user":"ann","role":"operator"}
+//!      {"type":"full",...} {"type":"patch",...}                 (wire::LiveMessage)
+//!      {"type":"error","robot":"r","error":"...","for":"jog"}   a request refused
+//! in:  {"type":"jog","robot":"r","axis":"x","positive":true,"seq":1}   button down
+//!      {"type":"keep","robot":"r","seq":2}                       at most every 100 ms while held
+//!      {"type":"release","robot":"r"}                            pointerup, pointercancel, ...
+//!      {"type":"hidden"}                                         blur, visibilitychange, pagehide
+//!      {"type":"take-seat","robot":"r"}  {"type":"leave-seat","robot":"r"}
+//! ```
+//! The upgrade is refused (403) without a session or from another `Origin` (browsers do not
+//! apply same-origin rules to a `WebSocket`). When the socket closes, for any reason, every
+//! robot's jog of this session stops. A page that falls [`super::CAPACITY`] messages behind is
+//! closed (code 1008, "too slow"): it reconnects from a whole snapshot.
+
+use std::sync::Arc;
+
+use axum::extract::State;
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
+use axum::http::{HeaderMap, StatusCode};
+use axum::response::Response;
+use serde::Deserialize;
+use serde_json::json;
+use tokio::sync::{broadcast, mpsc, oneshot};
+
+use super::ConsoleState;
+use super::control::{Request, Who};
+use super::server::{origin_allowed, refuse, session_of};
+use crate::console::{Event, JogAxis};
+
+/// What a page sends.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum Incoming {
+    Jog {
+        robot: String,
+        axis: JogAxis,
+        positive: bool,
+        seq: u64,
+    },
+    Keep {
+        robot: String,
+        seq: u64,
+    },
+    Release {
+        robot: String,
+    },
+    Hidden,
+    TakeSeat {
+        robot: String,
+    },
+    LeaveSeat {
+        robot: String,
+    },
+}
+
+pub(super) async fn upgrade(
+    State(state): State<Arc<ConsoleState>>,
+    headers: HeaderMap,
+    upgrade: WebSocketUpgrade,
+) -> Response {
+    if let Err(e) = origin_allowed(&headers, &state.origins) {
+        tracing::warn!(error = %e, "console WebSocket refused");
+        return refuse(StatusCode::FORBIDDEN, &e, "origin");
+    }
+    let Some((_, session)) = session_of(&state, &headers) else {
+        return refuse(StatusCode::UNAUTHORIZED, "log in first", "login");
+    };
+    let who = Who {
+        session: session.id,
+        user: session.user,
+        role: session.role,
+    };
+    upgrade
+        .max_message_size(64 * 1024)
+        .on_upgrade(move |socket| run(socket, state, who))
+}
+
+/// Messages out waiting for the socket, at most.
+const OUTBOX: usize = super::CAPACITY;
+
+async fn run(mut socket: WebSocket, state: Arc<ConsoleState>, who: Who) {
+    let (out, mut outbox) = mpsc::channel::<String>(OUTBOX);
+    let (lagged_tx, mut lagged) = mpsc::channel::<String>(1);
+    let hello = json!({"type": "hello", "user": who.user, "role": who.role.name()});
+    let _ = out.try_send(hello.to_string());
+    let mut forwarders = Vec::new();
+    for stream in state.hub.robots().values() {
+        let (stream, out, lagged) = (stream.clone(), out.clone(), lagged_tx.clone());
+        forwarders.push(tokio::spawn(async move {
+            let mut sub = stream.subscribe();
+            if out.send(sub.first).await.is_err() {
+                return;
+            }
+            loop {
+                match sub.rest.recv().await {
+                    Ok(frame) if frame.seq <= sub.seq => {}
+                    Ok(frame) => {
+                        if out.send(frame.text.clone()).await.is_err() {
+                            return;
+                        }
+                    }
+                    Err(broadcast::error::RecvError::Lagged(n)) => {
+                        let _ = lagged
+                            .send(format!(
+                                "too slow: {n} messages of {} missed",
+                                stream.name()
+                            ))
+                            .await;
+                        return;
+                    }
+                    Err(broadcast::error::RecvError::Closed) => return,
+                }
+            }
+        }));
+    }
+    let closing = state.closing.clone();
+    loop {
+        tokio::select! {
+            () = closing.cancelled() => break,
+            why = lagged.recv() => {
+                let reason = why.unwrap_or_default();
+                tracing::info!(user = %who.user, %reason, "console WebSocket closed");
+                let _ = socket
+                    .send(Message::Close(Some(CloseFrame { code: 1008, reason: reason.into() })))
+                    .await;
+                break;
+            }
+            text = outbox.recv() => {
+                let Some(text) = text else { break };
+                if socket.send(Message::Text(text.into())).await.is_err() {
+                    break;
+                }
+            }
+            incoming = socket.recv() => match incoming {
+                Some(Ok(Message::Text(text))) => {
+                    if let Some(error) = take(&state, &who, text.as_str()).await {
+                        let _ = out.try_send(error.to_string());
+                    }
+                }
+                Some(Ok(Message::Close(_)) | Err(_)) | None => break,
+                Some(Ok(_)) => {}
+            },
+        }
+    }
+    for f in forwarders {
+        f.abort();
+    }
+    for control in state.controls.values() {
+        control
+            .send(Request::Lease(Event::Closed {
+                session: who.session,
+            }))
+            .await;
+    }
+}
+
+/// Takes one message from the page; an error to send back, if any.
+async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json::Value> {
+    let incoming: Incoming = match serde_json::from_str(text) {
+        Ok(m) => m,
+        Err(e) => {
+            return Some(json!({"type": "error", "error": format!("a console message: {e}")}));
+        }
+    };
+    let control = |robot: &str| {
+        state.controls.get(robot).ok_or_else(|| {
+            let known: Vec<&str> = state.controls.keys().map(String::as_str).collect();
+            json!({"type": "error", "robot": robot,
+                   "error": format!("no robot {robot:?}; robots: {}", known.join(", "))})
+        })
+    };
+    let session = who.session;
+    match incoming {
+        Incoming::Jog {
+            robot,
+            axis,
+            positive,
+            seq,
+        } => {
+            let c = match control(&robot) {
+                Ok(c) => c,
+                Err(e) => return Some(e),
+            };
+            let (reply, answer) = oneshot::channel();
+            let request = Request::Jog {
+                who: who.clone(),
+                axis,
+                positive,
+                seq,
+                reply,
+            };
+            if !c.send(request).await {
+                return None;
+            }
+            match answer.await {
+                Ok(Err(e)) => {
+                    Some(json!({"type": "error", "robot": robot, "for": "jog", "error": e}))
+                }
+                _ => None,
+            }
+        }
+        Incoming::Keep { robot, seq } => {
+            let c = control(&robot).ok()?;
+            c.send(Request::Lease(Event::KeepAlive { session, seq }))
+                .await;
+            None
+        }
+        Incoming::Release { robot } => {
+            let c = control(&robot).ok()?;
+            c.send(Request::Lease(Event::Release { session })).await;
+            None
+        }
+        Incoming::Hidden => {
+            for c in state.controls.values() {
+                c.send(Request::Lease(Event::Hidden { session })).await;
+            }
+            None
+        }
+        Incoming::TakeSeat { robot } => {
+            let c = match control(&robot) {
+                Ok(c) => c,
+                Err(e) => return Some(e),
+            };
+            let (reply, answer) = oneshot::channel();
+            c.send(Request::TakeSeat {
+                who: who.clone(),
+                reply,
+            })
+            .await;
+            match answer.await {
+                Ok(Err(e)) => Some(
+                    json!({"type": "error", "robot": robot, "for": "take-seat", "error": e.to_string()}),
+                ),
+                _ => None,
+            }
+        }
+        Incoming::LeaveSeat { robot } => {
+            let c = control(&robot).ok()?;
+            c.send(Request::LeaveSeat { session }).await;
+            None
+        }
+    }
+}
