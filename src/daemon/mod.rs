@@ -62,6 +62,6 @@ pub use ids::{MoveIds, write_atomically};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{KEPT, Moves};
 pub use request::{CommandError, ConflictReason};
+pub use setup::Connector;
 pub use setup::{DaemonOptions, RobotSetup, host_word};
 pub use shared::{Incidents, Reads, Snapshot};
-pub use worker::Connector;

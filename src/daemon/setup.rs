@@ -2,17 +2,23 @@
 //! link, its home counts, its gateway) and what every robot of one daemon shares (the host word,
 //! move ids, `start_within`, taught positions).
 
+use std::future::Future;
+use std::pin::Pin;
 use std::sync::Arc;
 use std::time::Duration;
 
 use super::ids::MoveIds;
 use super::positions::TaughtPositions;
-use super::worker::Connector;
 use crate::config::CellSettings;
 use crate::gateway::GatewaySettings;
 use crate::kinematics::JOINTS;
 use crate::plc::exchange::ContractSettings;
+use crate::plc::{AnyPlc, PlcError};
 use crate::robot::Robot;
+
+/// Opens the robot's PLC link (called again after every link failure).
+pub type Connector =
+    Box<dyn FnMut() -> Pin<Box<dyn Future<Output = Result<AnyPlc, PlcError>> + Send>> + Send>;
 
 /// One robot as the daemon runs it.
 pub struct RobotSetup {

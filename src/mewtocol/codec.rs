@@ -208,7 +208,8 @@ impl Encoder<Frame> for ServerCodec {
 mod tests {
     use super::*;
     use crate::mewtocol::address::{Contact, ContactArea, DtRange};
-    use crate::mewtocol::error::{FrameError, PlcError, PlcErrorCode};
+    use crate::mewtocol::error::{PlcError, PlcErrorCode};
+    use crate::mewtocol::frame::FrameError;
     use crate::mewtocol::multi::response_frames;
     use crate::mewtocol::reply::Reply;
 

@@ -15,7 +15,7 @@
 
 use bytes::{Buf, Bytes, BytesMut};
 
-use super::error::FrameError;
+use super::frame::FrameError;
 use super::frame::{BccMode, CR, ENVELOPE_LEN, Frame, Header, MORE, NO_CHECK, Station};
 use super::frame::{bcc, parse_hex_byte};
 

@@ -1,7 +1,8 @@
 //! The errors of each MEWTOCOL-COM layer, and the PLC's own `!` refusals.
 //!
 //! ```text
-//! FrameError    the bytes are not a well-formed frame (BCC, length, station, terminator)
+//! FrameError    (in frame.rs, beside the frame) the bytes are not a well-formed frame (BCC,
+//!               length, station, terminator)
 //! MessageError  a well-formed frame whose text is not a valid command or reply, or a command
 //!               whose values cannot be sent (address range, word count)
 //! PlcError      a well-formed `!` reply: the PLC understood and said no (PLC.md §1, error codes)
@@ -12,60 +13,7 @@ use std::fmt;
 
 use thiserror::Error;
 
-/// A frame that is malformed on the link: the link, not the PLC, failed.
-#[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum FrameError {
-    /// The BCC field does not match the XOR of the frame.
-    #[error("bad bcc: frame computes to {expected:02X}, field says {found:02X}")]
-    BadBcc {
-        /// XOR computed over the received frame.
-        expected: u8,
-        /// Value in the frame's BCC field.
-        found: u8,
-    },
-    /// The BCC field is neither two hex digits nor `**`.
-    #[error("bad bcc field {:?}: expected two hex digits or \"**\"", String::from_utf8_lossy(.found))]
-    BadBccDigits {
-        /// The two characters found.
-        found: [u8; 2],
-    },
-    /// No CR within the header's frame length limit, or a frame too long to encode.
-    #[error("frame of {len} bytes or more has no cr within its header's limit of {max} bytes")]
-    FrameTooLong {
-        /// Bytes seen (or to be encoded).
-        len: usize,
-        /// The header's limit, CR included.
-        max: usize,
-    },
-    /// A frame shorter than header, station, BCC and CR.
-    #[error("frame of {len} bytes is shorter than the minimum of {min}")]
-    FrameTooShort {
-        /// Length from header to CR.
-        len: usize,
-        /// Shortest possible frame.
-        min: usize,
-    },
-    /// A new header arrived before the current frame's CR.
-    #[error("frame cut off after {len} bytes by a new header")]
-    Truncated {
-        /// Bytes of the cut-off frame, header included.
-        len: usize,
-    },
-    /// The station field is not `01`..`99`, `EE` or `FF`.
-    #[error("bad station {:?}: expected 01..99, EE or FF", String::from_utf8_lossy(.found))]
-    BadStation {
-        /// The two characters found.
-        found: [u8; 2],
-    },
-    /// A station number outside 1..=99.
-    #[error("station {number} is out of range 1..={max}")]
-    StationOutOfRange {
-        /// The number given.
-        number: u8,
-        /// Highest station number.
-        max: u8,
-    },
-}
+use super::frame::{FrameError, Header};
 
 /// A well-formed frame whose text is not a valid command or reply, or a command that cannot be sent.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -130,7 +78,7 @@ pub enum MessageError {
         /// Words one frame carries.
         max: usize,
         /// The frame's header.
-        header: super::frame::Header,
+        header: Header,
     },
     /// A write with no words, or a reply's word count that does not match the request.
     #[error("expected {expected} words, got {found}")]

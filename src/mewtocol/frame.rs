@@ -16,7 +16,7 @@
 
 use bytes::{BufMut, Bytes, BytesMut};
 
-use super::error::FrameError;
+use thiserror::Error;
 
 /// Carriage return, the frame terminator (PLC.md §1; MEWTOCOL-COM manual, "Command and response").
 pub const CR: u8 = b'\r';
@@ -256,6 +256,61 @@ pub(super) fn hex_digit(c: u8) -> Option<u8> {
 #[must_use]
 pub(super) fn parse_hex_byte(chars: [u8; 2]) -> Option<u8> {
     Some(hex_digit(chars[0])? << 4 | hex_digit(chars[1])?)
+}
+
+/// A frame that is malformed on the link: the link, not the PLC, failed.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum FrameError {
+    /// The BCC field does not match the XOR of the frame.
+    #[error("bad bcc: frame computes to {expected:02X}, field says {found:02X}")]
+    BadBcc {
+        /// XOR computed over the received frame.
+        expected: u8,
+        /// Value in the frame's BCC field.
+        found: u8,
+    },
+    /// The BCC field is neither two hex digits nor `**`.
+    #[error("bad bcc field {:?}: expected two hex digits or \"**\"", String::from_utf8_lossy(.found))]
+    BadBccDigits {
+        /// The two characters found.
+        found: [u8; 2],
+    },
+    /// No CR within the header's frame length limit, or a frame too long to encode.
+    #[error("frame of {len} bytes or more has no cr within its header's limit of {max} bytes")]
+    FrameTooLong {
+        /// Bytes seen (or to be encoded).
+        len: usize,
+        /// The header's limit, CR included.
+        max: usize,
+    },
+    /// A frame shorter than header, station, BCC and CR.
+    #[error("frame of {len} bytes is shorter than the minimum of {min}")]
+    FrameTooShort {
+        /// Length from header to CR.
+        len: usize,
+        /// Shortest possible frame.
+        min: usize,
+    },
+    /// A new header arrived before the current frame's CR.
+    #[error("frame cut off after {len} bytes by a new header")]
+    Truncated {
+        /// Bytes of the cut-off frame, header included.
+        len: usize,
+    },
+    /// The station field is not `01`..`99`, `EE` or `FF`.
+    #[error("bad station {:?}: expected 01..99, EE or FF", String::from_utf8_lossy(.found))]
+    BadStation {
+        /// The two characters found.
+        found: [u8; 2],
+    },
+    /// A station number outside 1..=99.
+    #[error("station {number} is out of range 1..={max}")]
+    StationOutOfRange {
+        /// The number given.
+        number: u8,
+        /// Highest station number.
+        max: u8,
+    },
 }
 
 #[cfg(test)]

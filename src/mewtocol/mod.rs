@@ -40,8 +40,8 @@ pub use address::{
 pub use codec::{Addressed, ClientCodec, ClientEvent, Request, ServerCodec, ServerEvent};
 pub use command::{Command, Mode, max_write_words};
 pub use decoder::{Decoded, FrameDecoder};
-pub use error::{CodecError, FrameError, MessageError, PlcError, PlcErrorCode};
-pub use frame::{BccMode, CR, Frame, Header, MORE, NO_CHECK, Station, bcc};
+pub use error::{CodecError, MessageError, PlcError, PlcErrorCode};
+pub use frame::{BccMode, CR, Frame, FrameError, Header, MORE, NO_CHECK, Station, bcc};
 pub use multi::{
     Joined, MAX_REPLY_BODY, Progress, ReplyAssembler, ReplyWire, reply_wire, response_frames,
 };

@@ -4,12 +4,14 @@
 
 use crate::geometry::{Line, Profile};
 use crate::kinematics::JOINTS;
-use crate::robot::{Motion, Robot};
+use crate::robot::{Method, Motion, Robot};
 use crate::sim::{self, Figures};
 use crate::table::ChannelTable;
 
 use super::course::Course;
+use super::error::PlanError;
 use super::planned::{Window, max_hz, settings};
+use super::seed_exact;
 
 /// Plays `tables` in the execution model and measures them against the course and profile
 /// over `window`.
@@ -191,4 +193,38 @@ impl sim::Planned for OnPath<'_> {
         self.hint.set(hint);
         near.unwrap_or_else(|| (self.path.at(s_mm).position_mm, 0.0))
     }
+}
+
+pub(super) fn check_tables(
+    robot: &Robot,
+    tables: &[ChannelTable],
+    method: Method,
+) -> Result<Vec<String>, PlanError> {
+    let seed_exact = method.is_seed_exact();
+    let mut out = if seed_exact {
+        seed_exact::problems()
+    } else {
+        Vec::new()
+    };
+    for (j, table) in tables.iter().enumerate() {
+        let found = crate::table::problems(table, robot.channel_limits(j));
+        if found.is_empty() {
+            continue;
+        }
+        if !seed_exact {
+            let more = found.len() - 1;
+            let first = found.into_iter().next().expect("not empty");
+            return Err(PlanError::InvalidTable {
+                joint: robot.joints[j].name.clone(),
+                first,
+                more,
+            });
+        }
+        out.extend(
+            found
+                .iter()
+                .map(|p| format!("joint {}: {p}", robot.joints[j].name)),
+        );
+    }
+    Ok(out)
 }

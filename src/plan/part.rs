@@ -4,12 +4,12 @@
 
 use crate::geometry::Profile;
 use crate::kinematics::JOINTS;
-use crate::robot::{Method, Motion, Robot};
+use crate::robot::{Motion, Robot};
 use crate::table::ChannelTable;
 
 use super::course::Course;
 use super::error::PlanError;
-use super::judge::simulate;
+use super::judge::{check_tables, simulate};
 use super::planned::{DriveFigures, Plan, Window, max_hz, settings};
 use super::sampled::Sampled;
 use super::samples::Samples;
@@ -224,38 +224,4 @@ fn build_tables(
             }
         })
         .collect()
-}
-
-pub(super) fn check_tables(
-    robot: &Robot,
-    tables: &[ChannelTable],
-    method: Method,
-) -> Result<Vec<String>, PlanError> {
-    let seed_exact = method.is_seed_exact();
-    let mut out = if seed_exact {
-        seed_exact::problems()
-    } else {
-        Vec::new()
-    };
-    for (j, table) in tables.iter().enumerate() {
-        let found = crate::table::problems(table, robot.channel_limits(j));
-        if found.is_empty() {
-            continue;
-        }
-        if !seed_exact {
-            let more = found.len() - 1;
-            let first = found.into_iter().next().expect("not empty");
-            return Err(PlanError::InvalidTable {
-                joint: robot.joints[j].name.clone(),
-                first,
-                more,
-            });
-        }
-        out.extend(
-            found
-                .iter()
-                .map(|p| format!("joint {}: {p}", robot.joints[j].name)),
-        );
-    }
-    Ok(out)
 }

@@ -28,8 +28,6 @@ pub(crate) use prepared::PREPARED_CANCELLED;
 mod session;
 
 use std::collections::{HashMap, VecDeque};
-use std::future::Future;
-use std::pin::Pin;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
@@ -38,20 +36,16 @@ use tokio::sync::{mpsc, watch};
 
 use super::gate::Gate;
 use super::request::{CommandError, ConflictReason, Reply, Request};
-use super::setup::{DaemonOptions, RobotSetup};
+use super::setup::{Connector, DaemonOptions, RobotSetup};
 use super::shared::{Publisher, Shared};
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
 use crate::order::CheckedOrder;
 use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
-use crate::plc::{AnyPlc, Plc, PlcError};
+use crate::plc::{AnyPlc, Plc};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
-
-/// Opens the robot's PLC link (called again after every link failure).
-pub type Connector =
-    Box<dyn FnMut() -> Pin<Box<dyn Future<Output = Result<AnyPlc, PlcError>> + Send>> + Send>;
 
 /// Polling while nothing is in flight (the heartbeat's freshness comes from these reads).
 const IDLE_POLL: Duration = Duration::from_millis(250);

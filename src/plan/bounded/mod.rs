@@ -33,8 +33,7 @@ use crate::table::{ChannelTable, FrequencyRange};
 
 use super::course::Course;
 use super::error::{Creep, PlanError};
-use super::judge::simulate_within;
-use super::part::check_tables;
+use super::judge::{check_tables, simulate_within};
 use super::planned::{Window, settings};
 use super::samples::Samples;
 use budget::Budget;
