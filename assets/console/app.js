@@ -216,7 +216,7 @@ function Joints({ info, live }) {
   return html`<section data-test-id="joints"><h2>Joints</h2>
     ${info.joints.map((j, i) => {
       const v = live.joints ? live.joints[i] : null;
-      const share = v === null ? 0 : Math.min(1, Math.max(0, (v - j.min) / (j.max - j.min)));
+      const share = v == null ? 0 : Math.min(1, Math.max(0, (v - j.min) / (j.max - j.min)));
       return html`<div class="joint"><span class="jname">${j.name}</span>
         <span class="bar"><span class="mark" style=${`left:${share * 100}%`}></span></span>
         <span data-test-id=${`joint-${i}`}>${fmt(v, 2)}</span> ${j.unit}
@@ -231,7 +231,7 @@ function Signals({ live }) {
     ${live.signals.map((s) => html`<div class="signal">
       <span class=${`lamp ${s.value === true ? "on" : s.value === false ? "off" : "unknown"}`}
         data-test-id=${`signal-${s.name}`} data-value=${String(s.value)}></span>
-      ${s.name} <small>${s.address}${s.value === null ? " (not in the status block)" : ""}</small></div>`)}
+      ${s.name} <small>${s.address}${s.value == null ? " (not in the status block)" : ""}</small></div>`)}
   </section>`;
 }
 
@@ -298,7 +298,7 @@ function Jog({ name, info, live, session, send, act, can }) {
     </div>
     <div class="pad">
       ${keys.map((k) => html`<div class="axis">
-        ${[false, true].map((positive) => html`<button class="jogkey" disabled=${!can || (mode === "step" && live.state.current_move !== null)}
+        ${[false, true].map((positive) => html`<button class="jogkey" disabled=${!can || (mode === "step" && live.state.current_move != null)}
           data-test-id=${`jog-${typeof k === "number" ? `j${k + 1}` : k}-${positive ? "plus" : "minus"}`}
           onPointerDown=${down(k, positive)} onPointerUp=${up} onPointerCancel=${up}
           onLostPointerCapture=${up} onClick=${stepJog(k, positive)}>${label(k)}${positive ? "+" : "−"}</button>`)}
@@ -396,7 +396,7 @@ function DeviationPlot({ live }) {
       if (run.current.id !== cur.id) run.current = { id: cur.id, along: [], dev: [], predicted: cur.predicted };
       const [along, dev] = lineOffset(live.path, pose);
       run.current.along.push(along); run.current.dev.push(dev);
-    } else if (run.current.id !== null && run.current.along.length > 1) {
+    } else if (run.current.id != null && run.current.along.length > 1) {
       setShown(run.current);
       run.current = { id: null, along: [], dev: [] };
     }
