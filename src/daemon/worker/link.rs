@@ -22,6 +22,7 @@ impl Worker {
     pub(super) async fn reconnect(&mut self) {
         self.expire_offline();
         let expiry = self
+            .dispatch
             .machine
             .expires_while_down()
             .map(tokio::time::Instant::from_std);
@@ -63,6 +64,7 @@ impl Worker {
                 }
                 self.publish_refusal();
                 let until_expiry = self
+                    .dispatch
                     .machine
                     .expires_while_down()
                     .map(|at| at.saturating_duration_since(now()));
@@ -90,7 +92,7 @@ impl Worker {
 
     /// Starts in flight past their planned end while the link is down end as unknown.
     fn expire_offline(&mut self) {
-        let events = self.machine.tick(now());
+        let events = self.dispatch.machine.tick(now());
         self.apply_offline(events);
         self.settle_late();
         self.publish_phase();
@@ -99,15 +101,15 @@ impl Worker {
     pub(super) fn link_failed(&mut self, e: &ContractError) {
         let text = describe(e);
         // A link that opens and fails at once fails again on every retry: say it once.
-        if self.out.get().state.link.error.as_deref() != Some(text.as_str()) {
-            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
-        } else {
+        if self.out.get().state.link.error.as_deref() == Some(text.as_str()) {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
+        } else {
+            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
         }
         self.session = None;
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
-        self.machine.link_lost(now());
+        self.dispatch.machine.link_lost(now());
         self.out.state(|s| {
             s.link.connected = false;
             s.link.error = Some(text);
@@ -133,7 +135,7 @@ impl Worker {
         if changed {
             tracing::error!(robot = %self.robot.name, error = %text, "the PLC program does not answer as the contract says");
         }
-        self.machine.link_lost(now());
+        self.dispatch.machine.link_lost(now());
         self.out.set_refusal(Some(Blocker::LinkDown));
         self.publish_phase();
     }

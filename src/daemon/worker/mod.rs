@@ -1,20 +1,23 @@
 //! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
 //! the contract (docs/CONTRACT.md, "What the host does for one move") with the pure
-//! [`Machine`] deciding what every status block means, and applies what the machine says in one
-//! place ([`events`]).
+//! [`Dispatcher`] deciding about the moves (the queue, one record per move in flight, how a
+//! move starts) and its [`Machine`] what every status block means, and applies what the
+//! machine says in one place ([`events`]).
 //!
 //! ```text
 //! run: loop { stops first | link down: reconnect | requests, queue expiry | begin a move | poll }
-//!   mod.rs     the loop, waiting on requests, stops, home and clear-fault, shutdown
-//!   link.rs    (re)connecting, a link that fails or a PLC program that does not answer right
-//!   events.rs  reading the status block into the machine; applying its events to the reports
-//!   moves.rs   the queue (start_within), planning, upload, the start written once
+//!   mod.rs       the loop, waiting on requests, stops, home and clear-fault, shutdown
+//!   dispatch.rs  PURE: the queue, InFlight records, StartMode, followers, settling moves
+//!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
+//!   events.rs    reading the status block into the machine; applying its events to the reports
+//!   moves.rs     a turn, planning, upload, the start written once
 //! ```
 //!
 //! A stop overtakes everything: it is taken between any two exchanges (an upload in progress is
 //! abandoned between two of its writes, never mid-frame) and cancels every queued move. A request
 //! wakes the worker at once: nothing waits for the next poll.
 
+mod dispatch;
 mod events;
 mod followers;
 mod gateway;
@@ -24,10 +27,10 @@ mod pace;
 mod placement;
 mod preload;
 mod prepared;
-pub(crate) use prepared::PREPARED_CANCELLED;
+pub(crate) use dispatch::PREPARED_CANCELLED;
 mod session;
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::Arc;
@@ -43,11 +46,11 @@ use super::shared::{Publisher, Shared};
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
-use crate::order::CheckedOrder;
-use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
+use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings};
 use crate::plc::{AnyPlc, Plc, PlcError};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
+use dispatch::{Dispatcher, Queued};
 
 /// Opens the robot's PLC link (called again after every link failure).
 pub type Connector =
@@ -68,16 +71,6 @@ pub(super) struct Channels {
     pub gateway: mpsc::UnboundedReceiver<super::gateway::Job>,
     /// The daemon shutting down.
     pub shutdown: watch::Receiver<bool>,
-}
-
-/// An order waiting its turn.
-#[derive(Debug)]
-struct Queued {
-    id: MoveId,
-    order: CheckedOrder,
-    gate: Option<Gate>,
-    epoch: Option<u64>,
-    accepted: std::time::Instant,
 }
 
 /// The time now, on tokio's clock (paused in tests), as the pure core takes it.
@@ -127,12 +120,8 @@ pub(super) struct Worker {
     next_poll: tokio::time::Instant,
     /// Whether a gateway exchange goes before the next status read, if both are due.
     gateway_turn: bool,
-    machine: Machine,
-    queue: VecDeque<Queued>,
-    /// Since when the head of the queue could have been given to the PLC but for a problem.
-    room_since: Option<std::time::Instant>,
-    next_seq: u16,
-    next_bank: u16,
+    /// The queue, the moves in flight and the contract's machine: what the worker decides.
+    dispatch: Dispatcher,
     backoff: Duration,
     /// Stops taken while waiting, answered by the next `take_stops`.
     pending_stops: Vec<Reply>,
@@ -140,25 +129,8 @@ pub(super) struct Worker {
     commands: Vec<Request>,
     /// Answers waiting for the home routine's end.
     homing: Vec<Reply>,
-    /// The last start written and its bank, for writing it again after a lost reply.
-    last_start: Option<(MoveId, VerifiedBank)>,
-    /// The queued parts of a path whose tables were written and read back ahead of their
-    /// turns, and what was written (the bank, where, the words, which each start must match).
-    /// Emptied by every bank written whole, which may overwrite them.
-    preloaded: Vec<(MoveId, crate::plc::exchange::Preload)>,
-    /// When each running move was seen starting.
-    started: HashMap<MoveId, std::time::Instant>,
-    /// The permit of each move written with one, until it ends (to name the input that held
-    /// it).
-    permits: HashMap<MoveId, crate::contract::Permit>,
-    /// When the last stop was asked for (a move stopped soon after was stopped by request).
-    stop_asked: Option<std::time::Instant>,
     /// Whether the link was ever opened (a later opening is a reconnection).
     opened_before: bool,
-    /// Moves with no motion of their own, each ending with the start ahead of it.
-    followers: Vec<followers::Follower>,
-    /// Moves that stopped short, their reports waiting for the counts the PLC stopped at.
-    settling: Vec<events::Settling>,
 }
 
 impl Worker {
@@ -186,23 +158,12 @@ impl Worker {
             gateway: VecDeque::new(),
             next_poll: tokio::time::Instant::now(),
             gateway_turn: false,
-            machine,
-            queue: VecDeque::new(),
-            room_since: None,
-            next_seq: 1,
-            next_bank: 0,
+            dispatch: Dispatcher::new(machine, options.start_within),
             backoff: link::BACKOFF_MIN,
             pending_stops: Vec::new(),
             commands: Vec::new(),
             homing: Vec::new(),
-            last_start: None,
-            preloaded: Vec::new(),
-            started: HashMap::new(),
-            permits: HashMap::new(),
-            stop_asked: None,
             opened_before: false,
-            followers: Vec::new(),
-            settling: Vec::new(),
         }
     }
 
@@ -238,7 +199,7 @@ impl Worker {
         self.drop_shut();
         self.expire_queue();
         if self.has_room() {
-            let queued = self.queue.pop_front().expect("not empty");
+            let queued = self.dispatch.pop().expect("not empty");
             self.next_poll = tokio::time::Instant::now();
             return self.begin(queued).await;
         }
@@ -253,7 +214,7 @@ impl Worker {
             self.poll().await?;
             self.gateway_turn = true;
             self.expire_queue();
-            let idle = matches!(self.machine.phase(), Phase::Idle | Phase::Unhomed);
+            let idle = matches!(self.dispatch.machine.phase(), Phase::Idle | Phase::Unhomed);
             let mode_read = self.session()?.mode_read;
             if idle && mode_read.is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL) {
                 self.read_mode().await?;
@@ -284,28 +245,18 @@ impl Worker {
         Ok(&mut self.session()?.contract)
     }
 
-    /// Whether the head of the queue can begin now: the PLC takes a start, and the head does
-    /// not wait for the running move to end ([`Self::waits_for_rest`]).
+    /// Whether the head of the queue can begin now ([`Dispatcher::has_room`]).
     fn has_room(&self) -> bool {
-        let Some(head) = self.queue.front() else {
-            return false;
-        };
-        self.machine.blocker(now()).is_none() && !self.waits_for_rest(&head.order)
-    }
-
-    /// Whether `order` must wait for the running move to end: the first part of a section cut
-    /// into parts begins only from rest (its parts are preloaded and paced before it starts).
-    fn waits_for_rest(&self, order: &CheckedOrder) -> bool {
-        order.leads_parts() && self.machine.chain_behind().is_some()
+        self.dispatch.has_room(now())
     }
 
     /// How long until the next status read: short while anything is in flight or queued.
     fn poll_pause(&self) -> Duration {
         let busy = !matches!(
-            self.machine.phase(),
+            self.dispatch.machine.phase(),
             Phase::Idle | Phase::Unhomed | Phase::Stalled
-        ) || !self.queue.is_empty()
-            || !self.settling.is_empty()
+        ) || !self.dispatch.queue().is_empty()
+            || self.dispatch.any_settling()
             || self
                 .shared
                 .inputs_watched
@@ -316,7 +267,7 @@ impl Worker {
         // Near a move's planned end reads come a scan apart: the next step (a start from rest,
         // a cycle's output) waits on seeing it end.
         let pace = self.settings.poll_interval;
-        if self.machine.near_planned_end(now(), 2 * pace) {
+        if self.dispatch.machine.near_planned_end(now(), 2 * pace) {
             self.settings.scan_time.min(pace)
         } else {
             pace
@@ -422,12 +373,13 @@ impl Worker {
         });
         self.out.state(|s| s.queued.extend(&ids));
         for (report, order) in batch.starts {
-            self.queue.push_back(Queued {
+            self.dispatch.push(Queued {
                 id: report.id,
                 order,
                 gate: batch.gate.clone(),
                 epoch: batch.epoch,
                 accepted: now(),
+                preload: None,
             });
         }
         self.out.set_planned_end(batch.end);
@@ -452,7 +404,7 @@ impl Worker {
             )),
         };
         self.shared.stop_pending.store(false, Ordering::SeqCst);
-        self.stop_asked = Some(now());
+        self.dispatch.stop_asked(now());
         // Orders sent before this stop join the queue, to be cancelled with it.
         while let Ok(request) = self.requests.try_recv() {
             self.take_request(request);
@@ -469,7 +421,7 @@ impl Worker {
         // Orders asked after it plan from where the robot stops, not from a queue's end.
         self.out.set_planned_end(None);
         if result.is_ok() {
-            self.machine.stop_written(now());
+            self.dispatch.machine.stop_written(now());
         }
         let answer_for = match &result {
             Ok(()) => Ok(()),
@@ -521,8 +473,10 @@ impl Worker {
 
     /// Whether `command` may be written now: a link, and a PLC in a state that takes it.
     fn command_allowed(&self, command: &Request) -> Result<(), CommandError> {
-        let last = match (&self.session, self.machine.last()) {
-            (Some(_), Some(last)) if !matches!(self.machine.phase(), Phase::LinkDown { .. }) => {
+        let last = match (&self.session, self.dispatch.machine.last()) {
+            (Some(_), Some(last))
+                if !matches!(self.dispatch.machine.phase(), Phase::LinkDown { .. }) =>
+            {
                 *last
             }
             _ => {
@@ -531,7 +485,7 @@ impl Worker {
                 });
             }
         };
-        let in_flight = !self.machine.given().is_empty();
+        let in_flight = !self.dispatch.machine.given().is_empty();
         match command {
             Request::ClearFault(_) if matches!(last.state, State::Running | State::Homing) => {
                 Err(ConflictReason::PlcBusy { state: last.state })
@@ -565,7 +519,7 @@ impl Worker {
                 if let CommandWrite::Unconfirmed(e) = &write {
                     tracing::warn!(robot = %self.robot.name, error = %e, "home command unconfirmed");
                 }
-                self.machine.home_written(now());
+                self.dispatch.machine.home_written(now());
                 self.homing.push(reply);
                 tracing::info!(robot = %self.robot.name, from = %from.map(|c| c.to_string()).join(","), "homing");
                 Ok(())
@@ -581,7 +535,7 @@ impl Worker {
     /// On shutdown: a start still waiting on the PLC is withdrawn (command back to 0), so no
     /// start is left pending; a running move runs on to its end under the PLC program.
     async fn shut_down(&mut self) {
-        if let Phase::Chained { next, .. } = self.machine.phase().clone()
+        if let Phase::Chained { next, .. } = self.dispatch.machine.phase().clone()
             && let Some(session) = self.session.as_mut()
         {
             let result = session.contract.withdraw().await;

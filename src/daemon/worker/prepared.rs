@@ -5,19 +5,12 @@
 
 use std::time::Duration;
 
-use super::{Queued, Worker, now};
+use super::dispatch::{CYCLE_WENT_ON, PREPARED_CANCELLED};
+use super::{Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::plc::exchange::ContractError;
 use crate::wire::{MoveId, Stage};
-
-/// How a prepared move cancelled before its start begins its report's error: the cycle then runs
-/// it as any move, after its wait.
-pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
-
-/// Why a prepared move whose gate shut before its start was not started.
-pub(super) const CYCLE_WENT_ON: &str =
-    "its cycle went another way (a fault, a stop, a pause, a timeout)";
 
 /// Why a held bank was not started.
 pub(super) enum Held {
@@ -44,7 +37,9 @@ impl Worker {
             match gate.state() {
                 // Started from rest only: never chained behind the move still running ahead
                 // of it (the steps between, outputs and waits, come after that one's end).
-                GateState::Open if self.machine.uploading_behind().is_none() => return Ok(()),
+                GateState::Open if self.dispatch.machine.uploading_behind().is_none() => {
+                    return Ok(());
+                }
                 GateState::Shut => return Err(Held::Cancelled(CYCLE_WENT_ON)),
                 GateState::Open | GateState::Closed => {}
             }
@@ -74,9 +69,10 @@ impl Worker {
                 self.poll().await.map_err(Held::Link)?;
                 self.next_poll = tokio::time::Instant::now() + self.poll_pause();
                 // Behind a running move, which may end meanwhile (followed as ever), or alone.
-                let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
+                let uploading = matches!(self.dispatch.machine.phase(), Phase::Uploading { .. });
                 if !uploading
                     || self
+                        .dispatch
                         .machine
                         .blocker(now())
                         .is_some_and(|b| b != Blocker::Full)
@@ -98,7 +94,7 @@ impl Worker {
         why: &str,
         link: Option<ContractError>,
     ) -> Result<(), ContractError> {
-        self.machine.upload_ended();
+        self.dispatch.machine.upload_ended();
         self.publish_phase();
         tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
         self.finish(
@@ -111,24 +107,12 @@ impl Worker {
         link.map_or(Ok(()), Err)
     }
 
-    /// Ends the queued prepared moves whose gate shut before their turn (their cycle went
-    /// another way), and every move queued behind one (planned from where it would have ended).
+    /// Ends the queued prepared moves whose gate shut before their turn, and every move queued
+    /// behind one ([`Dispatcher::drop_shut`]).
+    ///
+    /// [`Dispatcher::drop_shut`]: super::dispatch::Dispatcher::drop_shut
     pub(super) fn drop_shut(&mut self) {
-        let shut = |q: &Queued| {
-            q.gate
-                .as_ref()
-                .is_some_and(|g| g.state() == GateState::Shut)
-        };
-        let Some(at) = self.queue.iter().position(shut) else {
-            return;
-        };
-        for (k, queued) in self.queue.split_off(at).into_iter().enumerate() {
-            let why = if k == 0 {
-                format!("{PREPARED_CANCELLED}: {CYCLE_WENT_ON}")
-            } else {
-                "cancelled: the move before it did not start".to_owned()
-            };
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
-        }
+        let ends = self.dispatch.drop_shut();
+        self.finish_all(ends);
     }
 }
