@@ -213,6 +213,11 @@ impl Dispatcher {
         }
     }
 
+    /// How long a move may wait for its turn once the PLC has room for it.
+    pub(super) fn start_within(&self) -> Duration {
+        self.start_within
+    }
+
     /// The queue, its head first.
     pub(super) fn queue(&self) -> &VecDeque<Queued> {
         &self.queue

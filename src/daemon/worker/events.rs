@@ -72,7 +72,7 @@ impl Worker {
 
     /// Publishes why a new order would be refused now.
     pub(super) fn publish_refusal(&self) {
-        let blocker = if self.session.is_none() {
+        let blocker = if self.conn.session.is_none() {
             Some(Blocker::LinkDown)
         } else {
             self.dispatch.machine.blocker(now())
@@ -121,7 +121,7 @@ impl Worker {
 
     async fn apply_one(&mut self, event: Event) -> Result<(), ContractError> {
         tracing::debug!(robot = %self.robot.name, ?event, phase = self.dispatch.machine.phase().name(), "machine event");
-        let Some(link) = self.session.as_mut().map(|s| &mut s.contract) else {
+        let Some(link) = self.conn.session.as_mut().map(|s| &mut s.contract) else {
             self.report_event(event);
             return Ok(());
         };
@@ -257,14 +257,14 @@ impl Worker {
             }
             Event::Homed => {
                 tracing::info!(robot = %self.robot.name, "homed");
-                for reply in std::mem::take(&mut self.homing) {
+                for reply in std::mem::take(&mut self.inbox.homing) {
                     let _ = reply.send(Ok(()));
                 }
             }
             Event::HomeFailed { fault } => {
                 let why = CommandError::HomeFailed { fault };
                 tracing::error!(robot = %self.robot.name, "{why}");
-                for reply in std::mem::take(&mut self.homing) {
+                for reply in std::mem::take(&mut self.inbox.homing) {
                     let _ = reply.send(Err(why.clone()));
                 }
             }

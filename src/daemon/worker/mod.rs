@@ -98,39 +98,44 @@ fn link_broken(e: &ContractError) -> bool {
     matches!(e, ContractError::Plc(p) if p.is_link_failure())
 }
 
-/// One robot's link owner.
+/// One robot's link owner: the driver of its [`Dispatcher`] over its link.
 pub(super) struct Worker {
     robot: Robot,
     settings: ContractSettings,
-    connect: Connector,
     home_counts: [i64; JOINTS],
-    start_within: Duration,
-    requests: mpsc::UnboundedReceiver<Request>,
-    stops: mpsc::UnboundedReceiver<Reply>,
-    gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
-    shutdown: watch::Receiver<bool>,
     shared: Arc<Shared>,
     /// What the worker publishes: the robot's snapshot (it alone sends on it).
     out: Publisher,
-    /// The open link and what is known of it; `None` while the link is down.
-    session: Option<session::Session>,
-    /// Register gateway requests, served one exchange at a time between the worker's own.
-    gateway: VecDeque<super::gateway::Job>,
-    /// When the status block is next to be read.
-    next_poll: tokio::time::Instant,
-    /// Whether a gateway exchange goes before the next status read, if both are due.
-    gateway_turn: bool,
+    /// The link: how to open it, the open session, the backoff.
+    conn: link::Connection,
+    /// What comes in, and what was taken in and waits to be carried out.
+    inbox: Inbox,
     /// The queue, the moves in flight and the contract's machine: what the worker decides.
     dispatch: Dispatcher,
-    backoff: Duration,
+    /// When the status block is next to be read.
+    next_poll: tokio::time::Instant,
+}
+
+/// What the worker receives, and what it took in that waits for its turn.
+struct Inbox {
+    /// Moves, homes, clear-faults.
+    requests: mpsc::UnboundedReceiver<Request>,
+    /// Stops (they overtake everything).
+    stops: mpsc::UnboundedReceiver<Reply>,
+    /// Register gateway requests.
+    gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
+    /// The daemon shutting down.
+    shutdown: watch::Receiver<bool>,
+    /// Register gateway requests, served one exchange at a time between the worker's own.
+    gateway: VecDeque<super::gateway::Job>,
+    /// Whether a gateway exchange goes before the next status read, if both are due.
+    gateway_turn: bool,
     /// Stops taken while waiting, answered by the next `take_stops`.
     pending_stops: Vec<Reply>,
     /// Home and clear-fault requests taken while waiting.
     commands: Vec<Request>,
     /// Answers waiting for the home routine's end.
     homing: Vec<Reply>,
-    /// Whether the link was ever opened (a later opening is a reconnection).
-    opened_before: bool,
 }
 
 impl Worker {
@@ -145,25 +150,23 @@ impl Worker {
         Self {
             robot: setup.robot,
             settings: setup.settings,
-            connect: setup.connect,
             home_counts: setup.home_counts,
-            start_within: options.start_within,
-            requests: channels.requests,
-            stops: channels.stops,
-            gateway_rx: channels.gateway,
-            shutdown: channels.shutdown,
             shared,
             out,
-            session: None,
-            gateway: VecDeque::new(),
-            next_poll: tokio::time::Instant::now(),
-            gateway_turn: false,
+            conn: link::Connection::new(setup.connect),
+            inbox: Inbox {
+                requests: channels.requests,
+                stops: channels.stops,
+                gateway_rx: channels.gateway,
+                shutdown: channels.shutdown,
+                gateway: VecDeque::new(),
+                gateway_turn: false,
+                pending_stops: Vec::new(),
+                commands: Vec::new(),
+                homing: Vec::new(),
+            },
             dispatch: Dispatcher::new(machine, options.start_within),
-            backoff: link::BACKOFF_MIN,
-            pending_stops: Vec::new(),
-            commands: Vec::new(),
-            homing: Vec::new(),
-            opened_before: false,
+            next_poll: tokio::time::Instant::now(),
         }
     }
 
@@ -171,11 +174,11 @@ impl Worker {
     pub(super) async fn run(mut self) {
         loop {
             self.shared.beat.mark();
-            if *self.shutdown.borrow() {
+            if *self.inbox.shutdown.borrow() {
                 self.shut_down().await;
                 return;
             }
-            if self.session.is_none() {
+            if self.conn.session.is_none() {
                 self.reconnect().await;
                 continue;
             }
@@ -206,13 +209,13 @@ impl Worker {
         let poll_due = tokio::time::Instant::now() >= self.next_poll;
         // Gateway exchanges go between the worker's own, one at a time; when the status read is
         // due too they take turns, so neither waits behind more than one of the other.
-        if !self.gateway.is_empty() && (!poll_due || self.gateway_turn) {
-            self.gateway_turn = false;
+        if !self.inbox.gateway.is_empty() && (!poll_due || self.inbox.gateway_turn) {
+            self.inbox.gateway_turn = false;
             return self.gateway_exchange().await;
         }
         if poll_due {
             self.poll().await?;
-            self.gateway_turn = true;
+            self.inbox.gateway_turn = true;
             self.expire_queue();
             let idle = matches!(self.dispatch.machine.phase(), Phase::Idle | Phase::Unhomed);
             let mode_read = self.session()?.mode_read;
@@ -226,7 +229,7 @@ impl Worker {
                 return Ok(());
             }
         }
-        if self.gateway.is_empty() {
+        if self.inbox.gateway.is_empty() {
             self.wait_until(self.next_poll, None).await;
         }
         Ok(())
@@ -235,7 +238,7 @@ impl Worker {
     /// The open link's session. Every exchange is made from a step the loop runs only while
     /// the link is up ([`Self::run`]); without one this is the link-down refusal, never a panic.
     fn session(&mut self) -> Result<&mut session::Session, ContractError> {
-        self.session.as_mut().ok_or(ContractError::Blocked(
+        self.conn.session.as_mut().ok_or(ContractError::Blocked(
             crate::contract::machine::Blocker::LinkDown,
         ))
     }
@@ -309,20 +312,20 @@ impl Worker {
         };
         tokio::select! {
             biased;
-            _ = self.shutdown.changed() => {}
-            stop = self.stops.recv() => {
+            _ = self.inbox.shutdown.changed() => {}
+            stop = self.inbox.stops.recv() => {
                 if let Some(reply) = stop {
-                    self.pending_stops.push(reply);
+                    self.inbox.pending_stops.push(reply);
                 }
             }
-            request = self.requests.recv() => {
+            request = self.inbox.requests.recv() => {
                 if let Some(request) = request {
                     self.take_request(request);
                 }
             }
-            job = self.gateway_rx.recv() => {
+            job = self.inbox.gateway_rx.recv() => {
                 if let Some(job) = job {
-                    self.gateway.push_back(job);
+                    self.inbox.gateway.push_back(job);
                 }
             }
             () = tokio::time::sleep_until(until) => {}
@@ -335,7 +338,7 @@ impl Worker {
 
     /// Takes every request already sent, without waiting.
     pub(super) fn take_pending_requests(&mut self) {
-        while let Ok(request) = self.requests.try_recv() {
+        while let Ok(request) = self.inbox.requests.try_recv() {
             self.take_request(request);
         }
     }
@@ -345,7 +348,7 @@ impl Worker {
         self.next_poll = tokio::time::Instant::now();
         match request {
             Request::Moves(batch) => self.accept(batch),
-            command => self.commands.push(command),
+            command => self.inbox.commands.push(command),
         }
     }
 
@@ -389,15 +392,15 @@ impl Worker {
     /// Writes a stop if one was asked for; the moves given to the PLC end as it shows, every
     /// queued move is cancelled.
     async fn take_stops(&mut self) -> Result<(), ContractError> {
-        let mut replies = std::mem::take(&mut self.pending_stops);
-        while let Ok(reply) = self.stops.try_recv() {
+        let mut replies = std::mem::take(&mut self.inbox.pending_stops);
+        while let Ok(reply) = self.inbox.stops.try_recv() {
             replies.push(reply);
         }
         if replies.is_empty() {
             return Ok(());
         }
         self.next_poll = tokio::time::Instant::now();
-        let result = match self.session.as_mut() {
+        let result = match self.conn.session.as_mut() {
             Some(session) => session.contract.stop().await,
             None => Err(ContractError::Blocked(
                 crate::contract::machine::Blocker::LinkDown,
@@ -406,10 +409,10 @@ impl Worker {
         self.shared.stop_pending.store(false, Ordering::SeqCst);
         self.dispatch.stop_asked(now());
         // Orders sent before this stop join the queue, to be cancelled with it.
-        while let Ok(request) = self.requests.try_recv() {
+        while let Ok(request) = self.inbox.requests.try_recv() {
             self.take_request(request);
         }
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             answer(
                 command,
                 Err(CommandError::Conflict {
@@ -425,7 +428,7 @@ impl Worker {
         }
         let answer_for = match &result {
             Ok(()) => Ok(()),
-            Err(_) if self.session.is_none() => Err(CommandError::LinkDown {
+            Err(_) if self.conn.session.is_none() => Err(CommandError::LinkDown {
                 detail: self.out.state(|s| s.link.error.clone()),
             }),
             Err(e) if link_broken(e) => Err(CommandError::LinkDown {
@@ -447,7 +450,7 @@ impl Worker {
 
     /// Home and clear-fault requests, each checked against what the PLC shows.
     async fn run_commands(&mut self) -> Result<(), ContractError> {
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             let checked = self.command_allowed(&command);
             match (command, checked) {
                 (command, Err(e)) => answer(command, Err(e)),
@@ -473,7 +476,7 @@ impl Worker {
 
     /// Whether `command` may be written now: a link, and a PLC in a state that takes it.
     fn command_allowed(&self, command: &Request) -> Result<(), CommandError> {
-        let last = match (&self.session, self.dispatch.machine.last()) {
+        let last = match (&self.conn.session, self.dispatch.machine.last()) {
             (Some(_), Some(last))
                 if !matches!(self.dispatch.machine.phase(), Phase::LinkDown { .. }) =>
             {
@@ -520,7 +523,7 @@ impl Worker {
                     tracing::warn!(robot = %self.robot.name, error = %e, "home command unconfirmed");
                 }
                 self.dispatch.machine.home_written(now());
-                self.homing.push(reply);
+                self.inbox.homing.push(reply);
                 tracing::info!(robot = %self.robot.name, from = %from.map(|c| c.to_string()).join(","), "homing");
                 Ok(())
             }
@@ -536,7 +539,7 @@ impl Worker {
     /// start is left pending; a running move runs on to its end under the PLC program.
     async fn shut_down(&mut self) {
         if let Phase::Chained { next, .. } = self.dispatch.machine.phase().clone()
-            && let Some(session) = self.session.as_mut()
+            && let Some(session) = self.conn.session.as_mut()
         {
             let result = session.contract.withdraw().await;
             match &result {
@@ -557,16 +560,16 @@ impl Worker {
         self.settle(None);
         self.cancel_queue("cancelled: the daemon shut down");
         self.cancel_followers("cancelled: the daemon shut down");
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             answer(command, Err(CommandError::ShuttingDown));
         }
-        for reply in std::mem::take(&mut self.homing) {
+        for reply in std::mem::take(&mut self.inbox.homing) {
             let _ = reply.send(Err(CommandError::ShuttingDown));
         }
-        while let Ok(job) = self.gateway_rx.try_recv() {
-            self.gateway.push_back(job);
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
         }
-        for job in std::mem::take(&mut self.gateway) {
+        for job in std::mem::take(&mut self.inbox.gateway) {
             let _ = job
                 .reply
                 .send(Err(super::gateway::GatewayError::ShuttingDown));

@@ -233,7 +233,7 @@ impl Worker {
     /// for the heartbeat, the first is of its word alone.
     async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
         loop {
-            let Some(session) = self.session.as_mut() else {
+            let Some(session) = self.conn.session.as_mut() else {
                 return Err(ContractError::Blocked(Blocker::LinkDown));
             };
             let status = session
@@ -520,7 +520,8 @@ impl Worker {
                 r.start_counts = Some(planned.from.map(i64::from));
                 r.target_counts = planned.targets.map(|t| t.map(i64::from));
                 r.predicted = Some(predicted);
-                r.deadline_s = Some((limit + self.start_within + DEADLINE_MARGIN).as_secs_f64());
+                r.deadline_s =
+                    Some((limit + self.dispatch.start_within() + DEADLINE_MARGIN).as_secs_f64());
             });
         });
     }
@@ -553,7 +554,7 @@ impl Worker {
     ///
     /// [`Dispatcher::expire`]: super::dispatch::Dispatcher::expire
     pub(super) fn expire_queue(&mut self) {
-        let ends = self.dispatch.expire(self.session.is_some(), now());
+        let ends = self.dispatch.expire(self.conn.session.is_some(), now());
         if let Some(head) = ends.first() {
             let why = head.error.as_deref().unwrap_or_default();
             tracing::warn!(robot = %self.robot.name, id = head.id, "{why}");

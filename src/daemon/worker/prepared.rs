@@ -44,10 +44,10 @@ impl Worker {
                 GateState::Open | GateState::Closed => {}
             }
             self.take_pending_requests();
-            if *self.shutdown.borrow() {
+            if *self.inbox.shutdown.borrow() {
                 return Err(Held::Cancelled("the daemon is shutting down"));
             }
-            let stopping = !self.pending_stops.is_empty()
+            let stopping = !self.inbox.pending_stops.is_empty()
                 || self
                     .shared
                     .stop_pending
@@ -55,13 +55,13 @@ impl Worker {
             if stopping {
                 return Err(Held::Cancelled("a stop was asked for"));
             }
-            if !self.commands.is_empty() {
+            if !self.inbox.commands.is_empty() {
                 return Err(Held::Cancelled("a command came (home, clear-fault)"));
             }
-            while let Ok(job) = self.gateway_rx.try_recv() {
-                self.gateway.push_back(job);
+            while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+                self.inbox.gateway.push_back(job);
             }
-            if !self.gateway.is_empty() {
+            if !self.inbox.gateway.is_empty() {
                 self.gateway_exchange().await.map_err(Held::Link)?;
                 continue;
             }
