@@ -7,7 +7,8 @@
 //! out over its session and into the reports.
 //!
 //! ```text
-//!   accept -> queue --turn--> Turn { mode: FromRest | Chained | Gated } --start_written--> InFlight
+//!   accept -> queue --turn--> Turn { mode: FromRest | Chained | Gated }
+//!     --Activity: Uploading -> (Holding ->) Proving--start_written--> InFlight
 //!   expire / cancel / drop_shut / in_place / settled / finished -> Finish (a report's end)
 //! ```
 
@@ -18,7 +19,7 @@ use crate::contract::machine::{Blocker, Machine, Planned, Status};
 use crate::contract::{CHANNELS, Permit};
 use crate::daemon::gate::{Gate, GateState};
 use crate::order::CheckedOrder;
-use crate::plc::exchange::{Preload, VerifiedBank};
+use crate::plc::exchange::{Preload, Upload, VerifiedBank};
 use crate::wire::{MoveId, Stage};
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
@@ -116,6 +117,86 @@ pub(super) enum TurnDecision {
     NothingToChainBehind(MoveId),
 }
 
+/// What the worker is doing with the move whose turn came: one step of it each round of the
+/// worker's loop, between which nothing else is taken (a stop aborts an upload between two of
+/// its exchanges through the contract; a held bank takes in requests and serves the gateway).
+#[derive(Debug, Default)]
+pub(super) enum Activity {
+    /// No move between its turn and its start: the loop serves requests, the queue, the status
+    /// reads and the gateway.
+    #[default]
+    Idle,
+    /// Its bank written and read back, one exchange a step, the start the PLC runs watched.
+    Uploading(Box<Uploading>),
+    /// A prepared move's bank, verified, held until its gate opens.
+    Holding(Box<Uploaded>),
+    /// Its bank verified: reading the status block until the PLC may take its start (the
+    /// heartbeat seen moving, the counts at its `from`).
+    Proving(Box<Uploaded>),
+}
+
+/// A move whose bank is being written.
+#[derive(Debug)]
+pub(super) struct Uploading {
+    pub turn: Turn,
+    pub planned: Planned,
+    pub upload: Upload,
+    /// When its turn's upload began (the preloads of a section's parts count).
+    pub began: Instant,
+    /// How often the status block is read between two of the upload's exchanges.
+    pub every: Duration,
+    /// Whether nothing ran when its turn came: it keeps the parts preloaded around it.
+    pub from_rest: bool,
+}
+
+/// A move whose bank is written and verified, not yet started.
+#[derive(Debug)]
+pub(super) struct Uploaded {
+    pub turn: Turn,
+    pub planned: Planned,
+    pub bank: VerifiedBank,
+    /// How long its upload took, s.
+    pub upload_s: f64,
+}
+
+/// What a held bank's step does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Hold {
+    /// Start it: its gate opened and nothing runs ahead of it.
+    Release,
+    /// Cancel it before its start, for this reason.
+    Cancel(&'static str),
+    /// Hold it on.
+    Wait,
+}
+
+impl Hold {
+    /// A held bank whose gate is `gate` while a start `runs_ahead` of it: started from rest only,
+    /// never chained behind the move still running ahead of it (the steps between, outputs and
+    /// waits, come after that one's end).
+    pub(super) fn on_gate(gate: GateState, runs_ahead: bool) -> Self {
+        match gate {
+            GateState::Open if !runs_ahead => Self::Release,
+            GateState::Shut => Self::Cancel(CYCLE_WENT_ON),
+            GateState::Open | GateState::Closed => Self::Wait,
+        }
+    }
+
+    /// A held bank once the worker took in what was sent: anything but the gateway and the
+    /// status reads cancels it.
+    pub(super) fn on_requests(shutting_down: bool, stopping: bool, commands: bool) -> Self {
+        if shutting_down {
+            Self::Cancel("the daemon is shutting down")
+        } else if stopping {
+            Self::Cancel("a stop was asked for")
+        } else if commands {
+            Self::Cancel("a command came (home, clear-fault)")
+        } else {
+            Self::Wait
+        }
+    }
+}
+
 /// A move with no motion of its own queued behind a running start (its lead): it ends with
 /// that start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -196,6 +277,8 @@ pub(super) struct Dispatcher {
     next_bank: u16,
     /// When the last stop was asked for (a move stopped soon after was stopped by request).
     stop_asked: Option<Instant>,
+    /// What is done with the move whose turn came.
+    pub activity: Activity,
 }
 
 impl Dispatcher {
@@ -210,6 +293,7 @@ impl Dispatcher {
             next_seq: 1,
             next_bank: 0,
             stop_asked: None,
+            activity: Activity::Idle,
         }
     }
 

@@ -1,22 +1,30 @@
 //! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
-//! the contract (docs/CONTRACT.md, "What the host does for one move") with the pure
-//! [`Dispatcher`] deciding about the moves (the queue, one record per move in flight, how a
-//! move starts) and its [`Machine`] what every status block means, and applies what the
-//! machine says in one place ([`events`]).
+//! the contract (docs/CONTRACT.md, "What the host does for one move"). Its decisions are the
+//! pure [`Dispatcher`]'s (the queue, one record per move in flight, how a move starts, what the
+//! worker is doing as one [`Activity`], and the contract's [`Machine`] deciding what every
+//! status block means); the worker is its driver: one loop that makes the exchanges they ask
+//! for over the link's session, feeds back what came of them, and applies what the machine
+//! says in one place ([`events`]).
 //!
 //! ```text
-//! run: loop { stops first | link down: reconnect | requests, queue expiry | begin a move | poll }
+//! run: loop { link down: reconnect | step: by the activity, one step a round }
+//!   Idle:       stops first | commands | queue expiry | begin a move | poll | gateway | wait
+//!   Uploading:  one exchange of the bank (the running start watched between)
+//!   Holding:    a prepared bank held until its gate opens (reads, gateway, wait)
+//!   Proving:    one proof read until the PLC may take the start; then the start written once
 //!   mod.rs       the loop, waiting on requests, stops, home and clear-fault, shutdown
-//!   dispatch.rs  PURE: the queue, InFlight records, StartMode, followers, settling moves
+//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers)
+//!   activity.rs  the steps of the move whose turn came
 //!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
 //!   events.rs    reading the status block into the machine; applying its events to the reports
-//!   moves.rs     a turn, planning, upload, the start written once
+//!   moves.rs     a turn, planning, preloading a section's parts, the start written once
 //! ```
 //!
 //! A stop overtakes everything: it is taken between any two exchanges (an upload in progress is
 //! abandoned between two of its writes, never mid-frame) and cancels every queued move. A request
 //! wakes the worker at once: nothing waits for the next poll.
 
+mod activity;
 mod dispatch;
 mod events;
 mod followers;
@@ -50,7 +58,7 @@ use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettin
 use crate::plc::{AnyPlc, Plc, PlcError};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
-use dispatch::{Dispatcher, Queued};
+use dispatch::{Activity, Dispatcher, Queued};
 
 /// Opens the robot's PLC link (called again after every link failure).
 pub type Connector =
@@ -174,11 +182,13 @@ impl Worker {
     pub(super) async fn run(mut self) {
         loop {
             self.shared.beat.mark();
-            if *self.inbox.shutdown.borrow() {
+            // A move between its turn and its start goes on to its start or its end first.
+            let idle = matches!(self.dispatch.activity, Activity::Idle);
+            if idle && *self.inbox.shutdown.borrow() {
                 self.shut_down().await;
                 return;
             }
-            if self.conn.session.is_none() {
+            if idle && self.conn.session.is_none() {
                 self.reconnect().await;
                 continue;
             }
@@ -192,9 +202,10 @@ impl Worker {
         }
     }
 
-    /// One round: a stop first, then commands, the queue, a move to begin, the status block when
-    /// its read is due, else one register gateway exchange; then a wait for what comes next.
-    async fn step(&mut self) -> Result<(), ContractError> {
+    /// One round while no move is between its turn and its start: a stop first, then commands,
+    /// the queue, a move to begin, the status block when its read is due, else one register
+    /// gateway exchange; then a wait for what comes next.
+    async fn idle_step(&mut self) -> Result<(), ContractError> {
         // Requests come in here too: a busy gateway never leaves the worker without a wait.
         self.take_pending_requests();
         self.take_stops().await?;

@@ -5,21 +5,17 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use super::dispatch::{CYCLE_WENT_ON, Finish, Queued, StartMode, Turn, TurnDecision};
+use super::dispatch::{Finish, Queued, StartMode, Turn, TurnDecision};
 use super::pace::{LinkPace, Part};
 use super::placement::{Placement, directories_left};
 use super::preload::{self, Choice};
-use super::prepared::{Held, prepared_watch};
 use super::{Worker, describe, link_broken, now};
-use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
+use crate::contract::machine::{Blocker, Planned, ProgressCurve};
 use crate::contract::{CHANNELS, describe_unmet};
-use crate::daemon::gate::{Gate, GateState};
 use crate::order::plan_order;
 use crate::order::{CheckedOrder, SectionOrder};
 use crate::plan::{Plan, PlanError};
-use crate::plc::exchange::{
-    CommandWrite, ContractError, Preload, Upload, VerifiedBank, planned_bounds,
-};
+use crate::plc::exchange::{CommandWrite, ContractError, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
 use crate::wire::{MoveId, Predicted, Stage};
@@ -28,102 +24,13 @@ use crate::wire::{MoveId, Predicted, Stage};
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 
 impl Worker {
-    /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
-    pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
-        let incidents = self.out.incidents();
-        if queued.epoch.is_some_and(|e| e != incidents.count) {
-            // A cycle's move asked for before the PLC restarted, stalled or was lost.
-            let why = format!(
-                "cancelled: {} since its cycle asked for it",
-                incidents.last.unwrap_or_default()
-            );
-            tracing::warn!(robot = %self.robot.name, id = queued.id, "{why}");
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
-            self.cancel_queue("cancelled: the move before it did not start");
-            return Ok(());
-        }
-        let Some(mut turn) = self.turn(queued).await? else {
-            return Ok(());
-        };
-        let Some((plan, planned)) = self.plan_turn(&turn) else {
-            return Ok(());
-        };
-        let id = turn.id;
-        let tables = plan
-            .valid_tables(&self.robot)
-            .expect("plan_move returns valid tables");
-        let gate = turn.mode.gate().cloned();
-        let gate = gate.as_ref();
-        if gate.is_some_and(|g| g.state() == GateState::Shut) {
-            // Its cycle went another way while it was queued: nothing written.
-            return self.unprepared(id, CYCLE_WENT_ON, None);
-        }
-        self.dispatch.machine.upload_begun();
-        self.publish_phase();
-        let began = tokio::time::Instant::now();
-        let exchange = self.session()?.exchange;
-        let from_rest = turn.mode.ahead().is_none();
-        let own = turn.preload.take().filter(|p| p.bank() == planned.bank);
-        let bank = match self
-            .write_bank(&planned, &tables, own, from_rest, exchange, gate)
-            .await
-        {
-            Ok(bank) => bank,
-            Err(e) if gate.is_some() => {
-                let why = if gate.is_some_and(|g| g.state() == GateState::Shut) {
-                    CYCLE_WENT_ON.to_owned()
-                } else {
-                    describe(&e)
-                };
-                return self.unprepared(id, &why, link_broken(&e).then_some(e));
-            }
-            Err(e) => return self.not_started(id, e),
-        };
-        let upload_s = began.elapsed().as_secs_f64();
-        self.shared.metrics.uploaded(upload_s);
-        let prepared = gate.is_some();
-        self.shared.moves(|m| {
-            m.update(id, |r| {
-                r.upload_s = Some(upload_s);
-                if prepared {
-                    r.stage = Stage::Prepared;
-                }
-            });
-        });
-        if let Some(gate) = gate {
-            match self.hold_for(gate).await {
-                Ok(()) => {}
-                Err(Held::Cancelled(why)) => return self.unprepared(id, why, None),
-                Err(Held::Link(e)) => {
-                    let why = describe(&e);
-                    return self.unprepared(id, &why, Some(e));
-                }
-            }
-        }
-        // A prepared move released on a status block read within a poll (the one that met
-        // its wait) starts on it, as a move's turn is planned on one; else on a fresh read.
-        let fresh = gate.is_some()
-            && self.dispatch.machine.read_at().is_some_and(|at| {
-                now().saturating_duration_since(at) < self.settings.poll_interval
-            })
-            && self.dispatch.machine.may_start(&planned, now()).is_ok();
-        if !fresh && let Err(e) = self.until_it_may_start(&planned).await {
-            return self.not_started(id, e);
-        }
-        if turn.order.begins_at_speed() && self.lost_its_chain(id, turn.mode.ahead().map(|c| c.seq))
-        {
-            return Ok(());
-        }
-        self.write_start(&turn, planned, bank, upload_s).await
-    }
-
     /// Whether `queued` may begin now, and from where ([`Dispatcher::turn`]): on a fresh
     /// status block (the one just read, if read within a poll interval). Until then the order
     /// stays at the head of the queue; a part of a path that begins at speed with nothing
     /// running to chain behind fails.
     ///
     /// [`Dispatcher::turn`]: super::dispatch::Dispatcher::turn
-    async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
+    pub(super) async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
         let fresh =
             self.dispatch.machine.read_at().is_some_and(|at| {
                 now().saturating_duration_since(at) < self.settings.poll_interval
@@ -149,7 +56,7 @@ impl Worker {
     /// The plan of `turn` and its description for the contract; `None` when it ends here: it
     /// cannot be planned (failed, the queue behind it cancelled) or has nothing to start (within
     /// a pulse of where it begins).
-    fn plan_turn(&mut self, turn: &Turn) -> Option<(Plan, Planned)> {
+    pub(super) fn plan_turn(&mut self, turn: &Turn) -> Option<(Plan, Planned)> {
         let (id, from) = (turn.id, turn.from);
         let lead = turn.mode.ahead().map(|c| c.tag);
         let plan = match plan_order(&self.robot, &turn.order, self.by_joint(from.map(i64::from))) {
@@ -177,7 +84,7 @@ impl Worker {
 
     /// Writes the start of `turn` (its bank uploaded and verified, `planned`) once; whatever
     /// became of the write, its sequence number is spent.
-    async fn write_start(
+    pub(super) async fn write_start(
         &mut self,
         turn: &Turn,
         planned: Planned,
@@ -227,119 +134,6 @@ impl Worker {
         }
     }
 
-    /// The contract's first step once more, after the upload: the bank is started only once
-    /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
-    /// (or it chains behind the start whose targets are its `from`). When two reads are needed
-    /// for the heartbeat, the first is of its word alone.
-    async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
-        loop {
-            let Some(session) = self.conn.session.as_mut() else {
-                return Err(ContractError::Blocked(Blocker::LinkDown));
-            };
-            let status = session
-                .contract
-                .proof_read(&mut self.dispatch.machine)
-                .await?;
-            self.read(status).await?;
-            match self.dispatch.machine.may_start(planned, now()) {
-                Ok(()) => return Ok(()),
-                Err(Blocker::Unproven) => {
-                    tokio::time::sleep(self.settings.scan_time / 2).await;
-                }
-                Err(blocker) => return Err(ContractError::Blocked(blocker)),
-            }
-        }
-    }
-
-    /// Writes `tables` and the command block of `planned` into its bank and reads them back;
-    /// only the directories left and the block when its tables were preloaded into that bank
-    /// (`own`). A start written while nothing runs (`from_rest`) first preloads the parts of a
-    /// path that begin at speed behind it (`exchange`: how long a status read just took).
-    async fn write_bank(
-        &mut self,
-        planned: &Planned,
-        tables: &[ValidTable],
-        own: Option<Preload>,
-        from_rest: bool,
-        exchange: Duration,
-        gate: Option<&Gate>,
-    ) -> Result<VerifiedBank, ContractError> {
-        let own = if from_rest {
-            // Nothing preloaded before outlives a start from rest: its section's parts are
-            // preloaded afresh around it.
-            self.dispatch.forget_preloads();
-            self.preload_section(planned, tables, exchange).await?;
-            None
-        } else {
-            own
-        };
-        let link = self.link()?;
-        let upload = if let Some(preload) = own {
-            link.begin_upload_preloaded(&planned.into(), tables, &preload)
-        } else {
-            link.begin_upload(&planned.into(), tables)
-        };
-        let bank = match upload {
-            Ok(mut upload) => self.upload_watching(&mut upload, gate).await,
-            Err(e) => Err(e),
-        };
-        // Written whole from the directory's end (or partly, when it failed), a bank may lie
-        // over tables preloaded past its own, which no later start may rest on. Only a start
-        // from rest, whose section's parts were placed around it, keeps them.
-        if !matches!(&bank, Ok(bank) if bank.on_preload || from_rest) {
-            self.dispatch.forget_preloads();
-        }
-        bank
-    }
-
-    /// Makes `upload`'s exchanges. Between two, while a start the PLC was given may run, the
-    /// status block is read whenever the last read is a heartbeat timeout old: the running move
-    /// stays watched (its heartbeat, counts, state, progress) through an upload that lasts
-    /// seconds on a slow line, and is stopped as it would be between uploads. A prepared move
-    /// (`gate`) is uploaded behind a cycle's move, whose end (done, or held by its permit) the
-    /// cycle goes on from: its status block is read more often, at most a sixth of the link's
-    /// time ([`prepared_watch`]). An upload the machine gave up on meanwhile (the PLC stalled or
-    /// restarted) ends there, as does the upload of a prepared move whose gate shut.
-    async fn upload_watching(
-        &mut self,
-        upload: &mut Upload,
-        gate: Option<&Gate>,
-    ) -> Result<VerifiedBank, ContractError> {
-        let timeout = self.dispatch.machine.settings().heartbeat_timeout;
-        let every = match gate {
-            Some(_) => {
-                prepared_watch(self.session()?.exchange, self.settings.poll_interval).min(timeout)
-            }
-            None => timeout,
-        };
-        loop {
-            if gate.is_some_and(|g| g.state() == GateState::Shut) {
-                return Err(ContractError::Aborted);
-            }
-            let due = self
-                .dispatch
-                .machine
-                .read_at()
-                .is_none_or(|at| now().saturating_duration_since(at) >= every);
-            if due && !self.dispatch.machine.given().is_empty() {
-                self.poll().await?;
-                if !matches!(self.dispatch.machine.phase(), Phase::Uploading { .. }) {
-                    // Stalled, restarted, ...: this bank will not be started; the link is
-                    // needed for what comes next.
-                    let why = self
-                        .dispatch
-                        .machine
-                        .blocker(now())
-                        .unwrap_or(Blocker::Full);
-                    return Err(ContractError::Blocked(why));
-                }
-            }
-            if let Some(bank) = self.link()?.upload_step(upload).await? {
-                return Ok(bank);
-            }
-        }
-    }
-
     /// Before a start written while nothing runs (`first`, its `tables`): when the moves queued
     /// behind it are the parts of a path that begin at speed, their tables are written and read
     /// back now, in the banks they will start from (alternating, the second part in the bank
@@ -353,7 +147,7 @@ impl Worker {
     /// preloaded word lies outside its tables. A part that cannot be planned is left to fail
     /// at its own turn. Then every part of the section must be ready to start before the part
     /// ahead of it ends: if not, this start is refused before anything moves ([`LinkPace::check`]).
-    async fn preload_section(
+    pub(super) async fn preload_section(
         &mut self,
         first: &Planned,
         tables: &[ValidTable],
@@ -453,7 +247,7 @@ impl Worker {
 
     /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`
     /// was uploaded: started now, it would start at speed from rest, so it fails instead.
-    fn lost_its_chain(&mut self, id: MoveId, running: Option<u16>) -> bool {
+    pub(super) fn lost_its_chain(&mut self, id: MoveId, running: Option<u16>) -> bool {
         if self.dispatch.machine.uploading_behind().map(|c| c.seq) == running {
             return false;
         }
@@ -527,7 +321,11 @@ impl Worker {
     }
 
     /// Ends move `id`, whose start was not written, by `e`; a link failure goes on up.
-    fn not_started(&mut self, id: MoveId, e: ContractError) -> Result<(), ContractError> {
+    pub(super) fn not_started(
+        &mut self,
+        id: MoveId,
+        e: ContractError,
+    ) -> Result<(), ContractError> {
         self.dispatch.machine.upload_ended();
         self.publish_phase();
         let stage = if matches!(e, ContractError::Aborted) {

@@ -5,20 +5,12 @@
 
 use std::time::Duration;
 
-use super::dispatch::{CYCLE_WENT_ON, PREPARED_CANCELLED};
+use super::dispatch::{Hold, PREPARED_CANCELLED};
 use super::{Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::plc::exchange::ContractError;
 use crate::wire::{MoveId, Stage};
-
-/// Why a held bank was not started.
-pub(super) enum Held {
-    /// Cancelled before its start, for this reason.
-    Cancelled(&'static str),
-    /// The link failed.
-    Link(ContractError),
-}
 
 /// How often the status block is read during a prepared move's upload behind a running move,
 /// when a status read takes `exchange`: five exchanges of the upload to one read (at least
@@ -28,62 +20,54 @@ pub(super) fn prepared_watch(exchange: Duration, poll: Duration) -> Duration {
 }
 
 impl Worker {
-    /// Holds an uploaded, verified bank until `gate` opens: the status block read at the busy
-    /// pace (the cycle's wait is decided on it) and the gateway served meanwhile. Anything
-    /// else cancels it: the gate shut, a stop or a command asked for, the PLC no longer where
-    /// the upload left it (a restart, a fault), the link failing.
-    pub(super) async fn hold_for(&mut self, gate: &Gate) -> Result<(), Held> {
-        loop {
-            match gate.state() {
-                // Started from rest only: never chained behind the move still running ahead
-                // of it (the steps between, outputs and waits, come after that one's end).
-                GateState::Open if self.dispatch.machine.uploading_behind().is_none() => {
-                    return Ok(());
-                }
-                GateState::Shut => return Err(Held::Cancelled(CYCLE_WENT_ON)),
-                GateState::Open | GateState::Closed => {}
-            }
-            self.take_pending_requests();
-            if *self.inbox.shutdown.borrow() {
-                return Err(Held::Cancelled("the daemon is shutting down"));
-            }
-            let stopping = !self.inbox.pending_stops.is_empty()
-                || self
-                    .shared
-                    .stop_pending
-                    .load(std::sync::atomic::Ordering::SeqCst);
-            if stopping {
-                return Err(Held::Cancelled("a stop was asked for"));
-            }
-            if !self.inbox.commands.is_empty() {
-                return Err(Held::Cancelled("a command came (home, clear-fault)"));
-            }
-            while let Ok(job) = self.inbox.gateway_rx.try_recv() {
-                self.inbox.gateway.push_back(job);
-            }
-            if !self.inbox.gateway.is_empty() {
-                self.gateway_exchange().await.map_err(Held::Link)?;
-                continue;
-            }
-            if tokio::time::Instant::now() >= self.next_poll {
-                self.poll().await.map_err(Held::Link)?;
-                self.next_poll = tokio::time::Instant::now() + self.poll_pause();
-                // Behind a running move, which may end meanwhile (followed as ever), or alone.
-                let uploading = matches!(self.dispatch.machine.phase(), Phase::Uploading { .. });
-                if !uploading
-                    || self
-                        .dispatch
-                        .machine
-                        .blocker(now())
-                        .is_some_and(|b| b != Blocker::Full)
-                {
-                    return Err(Held::Cancelled("the PLC changed under it"));
-                }
-                continue;
-            }
-            let closed = (gate.state() == GateState::Closed).then_some(gate);
-            self.wait_until(self.next_poll, closed).await;
+    /// One step of holding an uploaded, verified bank until `gate` opens ([`Hold`]): the
+    /// status block read at the busy pace (the cycle's wait is decided on it) and the gateway
+    /// served meanwhile, else a wait for what comes next. Anything else cancels it: the gate
+    /// shut, a stop or a command asked for, the PLC no longer where the upload left it (a
+    /// restart, a fault); a link that fails is the error.
+    pub(super) async fn hold_step(&mut self, gate: &Gate) -> Result<Hold, ContractError> {
+        let runs_ahead = self.dispatch.machine.uploading_behind().is_some();
+        let on_gate = Hold::on_gate(gate.state(), runs_ahead);
+        if on_gate != Hold::Wait {
+            return Ok(on_gate);
         }
+        self.take_pending_requests();
+        let stopping = !self.inbox.pending_stops.is_empty()
+            || self
+                .shared
+                .stop_pending
+                .load(std::sync::atomic::Ordering::SeqCst);
+        let shutting_down = *self.inbox.shutdown.borrow();
+        let on_requests =
+            Hold::on_requests(shutting_down, stopping, !self.inbox.commands.is_empty());
+        if on_requests != Hold::Wait {
+            return Ok(on_requests);
+        }
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
+        }
+        if !self.inbox.gateway.is_empty() {
+            self.gateway_exchange().await?;
+            return Ok(Hold::Wait);
+        }
+        if tokio::time::Instant::now() >= self.next_poll {
+            self.poll().await?;
+            self.next_poll = tokio::time::Instant::now() + self.poll_pause();
+            // Behind a running move, which may end meanwhile (followed as ever), or alone.
+            let uploading = matches!(self.dispatch.machine.phase(), Phase::Uploading { .. });
+            let blocked = self
+                .dispatch
+                .machine
+                .blocker(now())
+                .is_some_and(|b| b != Blocker::Full);
+            if !uploading || blocked {
+                return Ok(Hold::Cancel("the PLC changed under it"));
+            }
+            return Ok(Hold::Wait);
+        }
+        let closed = (gate.state() == GateState::Closed).then_some(gate);
+        self.wait_until(self.next_poll, closed).await;
+        Ok(Hold::Wait)
     }
 
     /// Ends prepared move `id` before its start (cancelled, `why`; the cycle runs it afresh

@@ -378,3 +378,31 @@ fn a_move_stopped_soon_after_a_stop_was_stopped_by_request() {
     assert!(d.stopped_by_request(t0 + Duration::from_millis(1_999)));
     assert!(!d.stopped_by_request(t0 + STOP_ASKED_WINDOW));
 }
+
+#[test]
+fn a_held_bank_starts_from_rest_once_its_gate_opens_and_anything_else_cancels_it() {
+    assert_eq!(Hold::on_gate(GateState::Closed, false), Hold::Wait);
+    assert_eq!(
+        Hold::on_gate(GateState::Open, true),
+        Hold::Wait,
+        "never chained"
+    );
+    assert_eq!(Hold::on_gate(GateState::Open, false), Hold::Release);
+    assert_eq!(
+        Hold::on_gate(GateState::Shut, true),
+        Hold::Cancel(CYCLE_WENT_ON)
+    );
+    assert_eq!(Hold::on_requests(false, false, false), Hold::Wait);
+    assert_eq!(
+        Hold::on_requests(true, true, true),
+        Hold::Cancel("the daemon is shutting down")
+    );
+    assert_eq!(
+        Hold::on_requests(false, true, true),
+        Hold::Cancel("a stop was asked for")
+    );
+    assert_eq!(
+        Hold::on_requests(false, false, true),
+        Hold::Cancel("a command came (home, clear-fault)")
+    );
+}
