@@ -28,12 +28,7 @@ impl Worker {
     /// path behind it); a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
         let incidents = self.out.incidents();
-        if queued.epoch.is_some_and(|e| e != incidents.count) {
-            // A cycle's move asked for before the PLC restarted, stalled or was lost.
-            let why = format!(
-                "cancelled: {} since its cycle asked for it",
-                incidents.last.unwrap_or_default()
-            );
+        if let Some(why) = queued.stale(incidents.count, incidents.last.as_deref()) {
             tracing::warn!(robot = %self.robot.name, id = queued.id, "{why}");
             self.finish(queued.id, Stage::Cancelled, Some(why), None);
             self.cancel_queue("cancelled: the move before it did not start");

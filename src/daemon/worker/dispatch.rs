@@ -15,11 +15,11 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use crate::contract::machine::{Blocker, Machine, Planned, Status};
-use crate::contract::{CHANNELS, Permit};
+use crate::contract::machine::{Blocker, Machine, Outcome, Planned, Status};
+use crate::contract::{CHANNELS, Fault, Permit};
 use crate::daemon::gate::{Gate, GateState};
 use crate::order::CheckedOrder;
-use crate::plc::exchange::{Preload, Upload, VerifiedBank};
+use crate::plc::exchange::{Preload, Upload, VerifiedBank, describe_outcome};
 use crate::wire::{MoveId, Stage};
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
@@ -51,6 +51,19 @@ pub(super) struct Queued {
     /// Its tables, written and read back ahead of its turn (a part of a path chained at speed):
     /// the bank, where, and the words its start must match.
     pub preload: Option<Preload>,
+}
+
+impl Queued {
+    /// Why a cycle's move is not begun: its cycle asked for it before the PLC restarted,
+    /// stalled or was lost (`incidents` counted now, the `last` one in words).
+    pub(super) fn stale(&self, incidents: u64, last: Option<&str>) -> Option<String> {
+        self.epoch.filter(|&e| e != incidents).map(|_| {
+            format!(
+                "cancelled: {} since its cycle asked for it",
+                last.unwrap_or_default()
+            )
+        })
+    }
 }
 
 /// How a move whose turn came is started.
@@ -671,6 +684,54 @@ impl Dispatcher {
             .map(|f| f.id)
             .collect()
     }
+}
+
+/// How a move the PLC ended other than done is reported: its stage and why. `held`: why the
+/// PLC held it (its permit stopped holding), when it was written with a permit and stopped for
+/// it; `asked`: a stop was asked for just before; `start`: the start's name in words.
+pub(super) fn end_of(
+    outcome: Outcome,
+    held: Option<String>,
+    asked: bool,
+    start: &str,
+) -> (Stage, String) {
+    match (outcome, held) {
+        (Outcome::Stopped { fault }, _) if fault == Fault::StoppedFromOutside.word() => {
+            (Stage::Stopped, "stopped by the e-stop input".to_owned())
+        }
+        // The fault word outlives a stop until a clear fault: only a move with a permit was
+        // held by it.
+        (Outcome::Stopped { .. }, Some(held)) => (Stage::Stopped, held),
+        (Outcome::Stopped { .. }, None) if asked => {
+            (Stage::Stopped, "stopped by request".to_owned())
+        }
+        (Outcome::Stopped { .. }, None) => (
+            Stage::Stopped,
+            "stopped by the PLC (PROG mode, or its program)".to_owned(),
+        ),
+        (Outcome::Dropped, _) if asked => (Stage::Cancelled, "cancelled by a stop request".into()),
+        (Outcome::Dropped, _) => (
+            Stage::Cancelled,
+            format!("{start} {}", describe_outcome(&outcome)),
+        ),
+        _ => (
+            Stage::Failed,
+            format!("{start} {}", describe_outcome(&outcome)),
+        ),
+    }
+}
+
+/// Whether a move that ended `outcome` may have moved the robot: its report then waits for the
+/// counts the PLC stopped at ([`Dispatcher::settling`]).
+pub(super) fn moved(outcome: Outcome) -> bool {
+    matches!(
+        outcome,
+        Outcome::Stopped { .. }
+            | Outcome::Faulted { .. }
+            | Outcome::OutsideEnvelope { .. }
+            | Outcome::Overrun { .. }
+            | Outcome::WentIdle
+    )
 }
 
 /// How `followers` of move `lead` end, which ended `stage` (`why`) with its report's counts and

@@ -2,14 +2,14 @@
 //! where the daemon's reports follow the PLC, and where the machine's requests (the host word, a
 //! stop, a start written again, a withdrawal, a start found running) become exchanges.
 
-use super::dispatch::Settled;
+use super::dispatch::{Settled, end_of, moved};
 use super::{Worker, describe, link_broken, now};
 use crate::contract::Permit;
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::request::CommandError;
 use crate::order::MoveOrder;
-use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
+use crate::plc::exchange::{CommandWrite, ContractError};
 use crate::wire::{MoveId, MoveReport, RobotPhase, Stage};
 
 /// Planned duration given to a start found running whose tables could not be read.
@@ -325,44 +325,16 @@ impl Worker {
         let asked = self.dispatch.stopped_by_request(now());
         let held = matches!(outcome, Outcome::Stopped { fault } if fault == Fault::PermitDropped.word())
             && self.dispatch.permit(id).is_some();
-        let (stage, why) = match outcome {
-            Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
-                (Stage::Stopped, "stopped by the e-stop input".to_owned())
-            }
-            // The fault word outlives a stop until a clear fault: only a move with a permit was
-            // held by it.
-            Outcome::Stopped { .. } if held => (Stage::Stopped, self.held_because(id)),
-            Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),
-            Outcome::Stopped { .. } => (
-                Stage::Stopped,
-                "stopped by the PLC (PROG mode, or its program)".to_owned(),
-            ),
-            Outcome::Dropped if asked => (Stage::Cancelled, "cancelled by a stop request".into()),
-            Outcome::Dropped => (
-                Stage::Cancelled,
-                format!("{start} {}", describe_outcome(&outcome)),
-            ),
-            _ => (
-                Stage::Failed,
-                format!("{start} {}", describe_outcome(&outcome)),
-            ),
-        };
+        let because = held.then(|| self.held_because(id));
+        let (stage, why) = end_of(outcome, because, asked, &start);
         tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
         if held {
             self.shared.moves(|m| m.update(id, |r| r.held = true));
         }
-        let moved = matches!(
-            outcome,
-            Outcome::Stopped { .. }
-                | Outcome::Faulted { .. }
-                | Outcome::OutsideEnvelope { .. }
-                | Outcome::Overrun { .. }
-                | Outcome::WentIdle
-        );
         match self.dispatch.machine.last() {
             // Its counts are read once the channels have stopped: a scan after the block
             // that showed the end, with no channel of the robot busy.
-            Some(last) if moved => {
+            Some(last) if moved(outcome) => {
                 let beat = last.block.heartbeat;
                 self.dispatch.settling(id, stage, why, beat, now());
                 // The PLC runs it no more; its report ends with the counts it stopped at.

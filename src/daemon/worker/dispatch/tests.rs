@@ -406,3 +406,69 @@ fn a_held_bank_starts_from_rest_once_its_gate_opens_and_anything_else_cancels_it
         Hold::Cancel("a command came (home, clear-fault)")
     );
 }
+
+#[test]
+fn a_stopped_move_is_named_for_what_stopped_it() {
+    let stopped = |fault: Fault| Outcome::Stopped {
+        fault: fault.word(),
+    };
+    let held = Some("held by the PLC: its permit stopped holding (x0)".to_owned());
+    let cases: [(Outcome, Option<String>, bool, Stage, &str); 6] = [
+        (
+            stopped(Fault::StoppedFromOutside),
+            held.clone(),
+            true,
+            Stage::Stopped,
+            "stopped by the e-stop input",
+        ),
+        (
+            stopped(Fault::PermitDropped),
+            held.clone(),
+            true,
+            Stage::Stopped,
+            "held by the PLC: its permit stopped holding (x0)",
+        ),
+        (
+            stopped(Fault::PermitDropped),
+            None,
+            true,
+            Stage::Stopped,
+            "stopped by request",
+        ),
+        (
+            Outcome::Stopped { fault: 0 },
+            None,
+            false,
+            Stage::Stopped,
+            "stopped by the PLC (PROG mode, or its program)",
+        ),
+        (
+            Outcome::Dropped,
+            None,
+            true,
+            Stage::Cancelled,
+            "cancelled by a stop request",
+        ),
+        (Outcome::WentIdle, None, true, Stage::Failed, "start 8 "),
+    ];
+    for (k, (outcome, held, asked, stage, why)) in cases.into_iter().enumerate() {
+        let (got_stage, got_why) = end_of(outcome, held, asked, "start 8");
+        assert_eq!(got_stage, stage, "case {k}");
+        assert!(got_why.starts_with(why), "case {k}: {got_why}");
+    }
+    assert!(moved(Outcome::WentIdle));
+    assert!(!moved(Outcome::Dropped));
+}
+
+#[test]
+fn a_cycles_move_asked_for_before_an_incident_is_stale() {
+    let t0 = Instant::now();
+    let mut q = queued(1, None, t0);
+    assert_eq!(q.stale(3, Some("the PLC restarted")), None, "not a cycle's");
+    q.epoch = Some(3);
+    assert_eq!(q.stale(3, Some("the PLC restarted")), None);
+    assert_eq!(
+        q.stale(4, Some("the PLC restarted")).as_deref(),
+        Some("cancelled: the PLC restarted since its cycle asked for it")
+    );
+}
