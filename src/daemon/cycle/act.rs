@@ -129,7 +129,7 @@ pub(super) async fn follow(
 
 fn ended_short(r: &MoveReport) -> MotionEnd {
     let why = r.error.clone().unwrap_or_else(|| r.stage.name().to_owned());
-    if r.held {
+    if r.held() {
         MotionEnd::Held { why }
     } else {
         MotionEnd::Failed {

@@ -463,11 +463,10 @@ impl Runner {
         self.prepare(at).await;
         let mut started = Vec::new();
         let end = act::follow(&self.handle, &[id], &mut self.control, &mut started).await;
-        let cancelled_before_start = self.handle.report(id).is_some_and(|r| {
-            r.error
-                .as_deref()
-                .is_some_and(|e| e.starts_with(crate::daemon::worker::PREPARED_CANCELLED))
-        });
+        let cancelled_before_start = self
+            .handle
+            .report(id)
+            .is_some_and(|r| r.end == Some(crate::wire::EndReason::CancelledBeforeStart));
         if cancelled_before_start {
             self.drop_ahead().await;
             return Next::Go(at);

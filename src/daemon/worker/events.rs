@@ -9,7 +9,7 @@ use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::request::CommandError;
 use crate::order::MoveOrder;
 use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
-use crate::wire::{MoveId, MoveReport, RobotPhase, Stage};
+use crate::wire::{EndReason, MoveId, MoveReport, RobotPhase, Stage};
 
 /// A move that stopped short, waiting for the status block that shows where the PLC stopped it.
 #[derive(Debug)]
@@ -362,7 +362,8 @@ impl Worker {
         };
         tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
         if held {
-            self.shared.moves(|m| m.update(id, |r| r.held = true));
+            self.shared
+                .moves(|m| m.update(id, |r| r.end = Some(EndReason::Held)));
         }
         let moved = matches!(
             outcome,

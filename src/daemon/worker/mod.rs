@@ -24,7 +24,6 @@ mod pace;
 mod placement;
 mod preload;
 mod prepared;
-pub(crate) use prepared::PREPARED_CANCELLED;
 mod session;
 
 use std::collections::{HashMap, VecDeque};

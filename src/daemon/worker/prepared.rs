@@ -9,11 +9,11 @@ use super::{Queued, Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::plc::exchange::ContractError;
-use crate::wire::{MoveId, Stage};
+use crate::wire::{EndReason, MoveId, Stage};
 
-/// How a prepared move cancelled before its start begins its report's error: the cycle then runs
-/// it as any move, after its wait.
-pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
+/// How a prepared move cancelled before its start begins its report's error (its end reason is
+/// [`EndReason::CancelledBeforeStart`]): the cycle then runs it as any move, after its wait.
+const PREPARED_CANCELLED: &str = "cancelled before its start";
 
 /// Why a prepared move whose gate shut before its start was not started.
 pub(super) const CYCLE_WENT_ON: &str =
@@ -101,12 +101,7 @@ impl Worker {
         self.machine.upload_ended();
         self.publish_phase();
         tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
-        self.finish(
-            id,
-            Stage::Cancelled,
-            Some(format!("{PREPARED_CANCELLED}: {why}")),
-            None,
-        );
+        self.cancel_prepared(id, why);
         self.cancel_queue("cancelled: the move before it did not start");
         link.map_or(Ok(()), Err)
     }
@@ -123,12 +118,27 @@ impl Worker {
             return;
         };
         for (k, queued) in self.queue.split_off(at).into_iter().enumerate() {
-            let why = if k == 0 {
-                format!("{PREPARED_CANCELLED}: {CYCLE_WENT_ON}")
+            if k == 0 {
+                self.cancel_prepared(queued.id, CYCLE_WENT_ON);
             } else {
-                "cancelled: the move before it did not start".to_owned()
-            };
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
+                let why = "cancelled: the move before it did not start".to_owned();
+                self.finish(queued.id, Stage::Cancelled, Some(why), None);
+            }
         }
+    }
+
+    /// Ends prepared move `id` cancelled before its start (`why`), its end reason said before
+    /// its final stage is.
+    fn cancel_prepared(&mut self, id: MoveId, why: &str) {
+        let end = Some(EndReason::CancelledBeforeStart);
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                if !r.stage.is_final() {
+                    r.end = end;
+                }
+            });
+        });
+        let why = format!("{PREPARED_CANCELLED}: {why}");
+        self.finish(id, Stage::Cancelled, Some(why), None);
     }
 }
