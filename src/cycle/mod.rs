@@ -22,9 +22,9 @@ pub mod program;
 mod reach;
 pub mod runner;
 
-pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check};
-pub use condition::{Condition, ConditionError, Names, Source};
-pub use load::Programs;
+pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramError, check};
+pub use condition::{Condition, ConditionError, ConditionFault, Names, Source};
+pub use load::{ProgramFileError, Programs};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
 pub use runner::Runner;
 

@@ -104,7 +104,12 @@ fn checked_from(
     let c = cell();
     let docs: BTreeMap<String, ProgramDoc> = programs
         .iter()
-        .map(|(n, t)| Ok(((*n).to_owned(), ProgramDoc::from_toml(t)?)))
+        .map(|(n, t)| {
+            Ok((
+                (*n).to_owned(),
+                ProgramDoc::from_toml(t).map_err(|e| e.to_string())?,
+            ))
+        })
         .collect::<Result<_, String>>()?;
     let ctx = Context {
         robot: &c.robot,
