@@ -159,13 +159,19 @@ fn read_path_files(
         let Some(name) = path.file.take() else {
             continue;
         };
-        let (file, step) = (program.to_owned(), i + 1);
+        let (file, at) = (program.to_owned(), i + 1);
         if path.path.is_some() {
-            return Err(ProgramFileError::BothPaths { file, step });
+            return Err(ProgramFileError::BothPaths { file, step: at });
         }
         let text = match read_inside(dir, &name) {
             Ok(text) => text,
-            Err(source) => return Err(ProgramFileError::PathFile { file, step, source }),
+            Err(source) => {
+                return Err(ProgramFileError::PathFile {
+                    file,
+                    step: at,
+                    source,
+                });
+            }
         };
         let value = PathDoc::from_toml(&text)
             .and_then(|_| {
@@ -174,7 +180,7 @@ fn read_path_files(
             })
             .map_err(|source| ProgramFileError::PathDoc {
                 file,
-                step,
+                step: at,
                 path: name,
                 source,
             })?;

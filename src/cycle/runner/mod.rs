@@ -28,6 +28,9 @@
 //! unprepares it; a move cancelled before its start is run afresh at its step.
 
 mod control;
+mod steps;
+#[cfg(test)]
+mod tests;
 
 use std::collections::{HashMap, VecDeque};
 use std::time::{Duration, Instant};
@@ -266,10 +269,6 @@ pub struct Runner<G> {
     marks: Marks,
     phase: Phase,
 }
-
-mod steps;
-#[cfg(test)]
-mod tests;
 
 impl<G> Runner<G> {
     /// A run of `program`, `count` times (or until stopped), beginning `now` under the PLC's
