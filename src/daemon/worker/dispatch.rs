@@ -20,11 +20,11 @@ use crate::contract::{CHANNELS, Fault, Permit};
 use crate::daemon::gate::{Gate, GateState};
 use crate::order::CheckedOrder;
 use crate::plc::exchange::{Preload, Upload, VerifiedBank, describe_outcome};
-use crate::wire::{MoveId, Stage};
+use crate::wire::{EndReason, MoveId, Stage};
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
 /// it as any move, after its wait.
-pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
+pub(super) const PREPARED_CANCELLED: &str = "cancelled before its start";
 
 /// Why a prepared move whose gate shut before its start was not started.
 pub(super) const CYCLE_WENT_ON: &str =
@@ -254,6 +254,9 @@ pub(super) struct Finish {
     pub stage: Stage,
     pub error: Option<String>,
     pub final_error: Option<[i64; CHANNELS]>,
+    /// Why it ended, where the report says more than its stage (a prepared move cancelled
+    /// before its start).
+    pub end: Option<EndReason>,
 }
 
 impl Finish {
@@ -263,6 +266,7 @@ impl Finish {
             stage,
             error: Some(error.into()),
             final_error: None,
+            end: None,
         }
     }
 }
@@ -459,12 +463,14 @@ impl Dispatcher {
             .into_iter()
             .enumerate()
             .map(|(k, q)| {
-                let why = if k == 0 {
-                    prepared.as_str()
+                if k == 0 {
+                    Finish {
+                        end: Some(EndReason::CancelledBeforeStart),
+                        ..Finish::new(q.id, Stage::Cancelled, prepared.as_str())
+                    }
                 } else {
-                    BEHIND_NOT_STARTED
-                };
-                Finish::new(q.id, Stage::Cancelled, why)
+                    Finish::new(q.id, Stage::Cancelled, BEHIND_NOT_STARTED)
+                }
             })
             .collect()
     }
@@ -605,6 +611,7 @@ impl Dispatcher {
             final_error: Some(std::array::from_fn(|c| {
                 i64::from(from[c]) - i64::from(targets[c])
             })),
+            end: None,
         })
     }
 
@@ -755,6 +762,7 @@ pub(super) fn follower_ends(
                     stage: Stage::Done,
                     error: None,
                     final_error: Some(std::array::from_fn(|c| counts[c] - targets[c])),
+                    end: None,
                 },
                 _ => Finish::new(
                     f.id,

@@ -10,7 +10,7 @@ use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::request::CommandError;
 use crate::order::MoveOrder;
 use crate::plc::exchange::{CommandWrite, ContractError};
-use crate::wire::{MoveId, MoveReport, RobotPhase, Stage};
+use crate::wire::{EndReason, MoveId, MoveReport, RobotPhase, Stage};
 
 /// Planned duration given to a start found running whose tables could not be read.
 const UNKNOWN_DURATION: std::time::Duration = std::time::Duration::from_secs(60);
@@ -329,7 +329,8 @@ impl Worker {
         let (stage, why) = end_of(outcome, because, asked, &start);
         tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
         if held {
-            self.shared.moves(|m| m.update(id, |r| r.held = true));
+            self.shared
+                .moves(|m| m.update(id, |r| r.end = Some(EndReason::Held)));
         }
         match self.dispatch.machine.last() {
             // Its counts are read once the channels have stopped: a scan after the block

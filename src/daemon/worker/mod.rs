@@ -35,7 +35,6 @@ mod pace;
 mod placement;
 mod preload;
 mod prepared;
-pub(crate) use dispatch::PREPARED_CANCELLED;
 mod session;
 
 use std::collections::VecDeque;

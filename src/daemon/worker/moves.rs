@@ -18,7 +18,7 @@ use crate::plan::{Plan, PlanError};
 use crate::plc::exchange::{CommandWrite, ContractError, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
-use crate::wire::{MoveId, Predicted, Stage};
+use crate::wire::{EndReason, MoveId, Predicted, Stage};
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
@@ -366,9 +366,23 @@ impl Worker {
         self.finish_all(ends);
     }
 
+    /// Says why move `id` ends, on its report, before its final stage is said.
+    pub(super) fn mark_end(&self, id: MoveId, reason: EndReason) {
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                if !r.stage.is_final() {
+                    r.end = Some(reason);
+                }
+            });
+        });
+    }
+
     /// Ends the reports of `ends`, in order.
     pub(super) fn finish_all(&mut self, ends: Vec<Finish>) {
         for end in ends {
+            if let Some(reason) = end.end {
+                self.mark_end(end.id, reason);
+            }
             self.finish(end.id, end.stage, end.error, end.final_error);
         }
     }

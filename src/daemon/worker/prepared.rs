@@ -10,7 +10,7 @@ use super::{Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::plc::exchange::ContractError;
-use crate::wire::{MoveId, Stage};
+use crate::wire::{EndReason, MoveId, Stage};
 
 /// How often the status block is read during a prepared move's upload behind a running move,
 /// when a status read takes `exchange`: five exchanges of the upload to one read (at least
@@ -81,12 +81,7 @@ impl Worker {
         self.dispatch.machine.upload_ended();
         self.publish_phase();
         tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
-        self.finish(
-            id,
-            Stage::Cancelled,
-            Some(format!("{PREPARED_CANCELLED}: {why}")),
-            None,
-        );
+        self.cancel_prepared(id, why);
         self.cancel_queue("cancelled: the move before it did not start");
         link.map_or(Ok(()), Err)
     }
@@ -98,5 +93,13 @@ impl Worker {
     pub(super) fn drop_shut(&mut self) {
         let ends = self.dispatch.drop_shut();
         self.finish_all(ends);
+    }
+
+    /// Ends prepared move `id` cancelled before its start (`why`), its end reason said before
+    /// its final stage is.
+    fn cancel_prepared(&mut self, id: MoveId, why: &str) {
+        self.mark_end(id, EndReason::CancelledBeforeStart);
+        let why = format!("{PREPARED_CANCELLED}: {why}");
+        self.finish(id, Stage::Cancelled, Some(why), None);
     }
 }
