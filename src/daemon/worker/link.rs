@@ -99,10 +99,10 @@ impl Worker {
     pub(super) fn link_failed(&mut self, e: &ContractError) {
         let text = describe(e);
         // A link that opens and fails at once fails again on every retry: say it once.
-        if self.out.get().state.link.error.as_deref() != Some(text.as_str()) {
-            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
-        } else {
+        if self.out.get().state.link.error.as_deref() == Some(text.as_str()) {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
+        } else {
+            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
         }
         self.session = None;
         // The moves in flight are kept: after the reconnection the status block says whether the
