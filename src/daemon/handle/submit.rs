@@ -214,8 +214,9 @@ impl RobotHandle {
         let Some(text) = text else {
             return Ok(Permit::NONE);
         };
+        let live = self.live.get();
         let names = crate::order::permit::PermitNames {
-            signals: &self.cell.settings.signals,
+            signals: &live.cell.signals,
             inputs: &self.cell.inputs,
         };
         crate::order::permit::resolve(text, names)
