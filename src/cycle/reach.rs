@@ -268,7 +268,8 @@ fn plan_end(ctx: &Context<'_>, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOI
     match plan_order(robot, &order, from) {
         Ok(plan) => Ok(plan.end_counts()),
         Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => Ok(from),
-        Err(PlanError::LaterSegment { .. }) => {
+        // A line one start cannot run runs in parts: it ends where their path does.
+        Err(e) if matches!(e, PlanError::LaterSegment { .. }) || e.too_big() => {
             let to = order
                 .pose_target(&robot.pose_of(&from))
                 .expect("a line has a pose");
