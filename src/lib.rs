@@ -35,8 +35,8 @@
 //!                    the cell's input words and a start's permit, and the host's side as one
 //!                    state machine over the status block (machine/)
 //! cycle/       PURE  cycle programs: the document, conditions, the check that flattens a program
-//!                    into ops (and the loading of a programs directory, and whether a program
-//!                    is there)
+//!                    into ops, the runner that steps through them (events in, actions out)
+//!                    (and the loading of a programs directory, and whether a program is there)
 //! console/     PURE  the operator's console's decisions: the jog lease machine, the control seat
 //!                    and roles, a snapshot's changes as a merge patch, failed logins
 //!                    rate-limited, a jog's pieces and worst-case travel
@@ -53,7 +53,7 @@
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
-//!                    handles, taught positions, permits, the cycle runner (cycle/), the mode and
+//!                    handles, taught positions, permits, the cycle driver (cycle/), the mode and
 //!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
 //!                    PLC), the HTTP/JSON API, the register gateway and its Modbus TCP face,
 //!                    systemd notification, the operator's console's server (console/: the live

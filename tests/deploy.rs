@@ -322,6 +322,17 @@ fn unit_runs_as_linterpd_with_dialout_and_the_expected_hardening() {
 }
 
 #[test]
+fn systemctl_reload_exists_and_sends_the_daemon_sighup() {
+    // Issue 47: the unit had no ExecReload=, so `systemctl reload linterpd` was refused.
+    let reloads: Vec<String> = directives(&read(UNIT))
+        .into_iter()
+        .filter(|(section, key, _)| section == "Service" && key == "ExecReload")
+        .map(|(_, _, value)| value)
+        .collect();
+    assert_eq!(reloads, ["/bin/kill -HUP $MAINPID"], "{UNIT}");
+}
+
+#[test]
 fn unit_comments_every_hardening_group() {
     // An admin reading the unit learns why each setting is there: no directive in [Service]
     // without a comment somewhere in the five lines above it.

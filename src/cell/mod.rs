@@ -38,14 +38,19 @@ impl fmt::Display for Mode {
     }
 }
 
-impl std::str::FromStr for Mode {
-    type Err = String;
+/// A mode's name that is neither `local` nor `remote`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("mode {0:?}: `local` or `remote`")]
+pub struct ModeError(pub String);
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl std::str::FromStr for Mode {
+    type Err = ModeError;
+
+    fn from_str(s: &str) -> Result<Self, ModeError> {
         match s {
             "local" => Ok(Self::Local),
             "remote" => Ok(Self::Remote),
-            other => Err(format!("mode {other:?}: `local` or `remote`")),
+            other => Err(ModeError(other.to_owned())),
         }
     }
 }

@@ -3,7 +3,9 @@
 
 use std::fmt;
 
-use hyper::StatusCode;
+use anyhow::anyhow;
+use hyper::{Method, StatusCode};
+use serde_json::Value;
 
 /// Exit code for a run that worked.
 pub const EXIT_OK: u8 = 0;
@@ -123,6 +125,31 @@ impl fmt::Display for Failure {
 /// Bad input from anything that converts into an `anyhow::Error`.
 pub fn bad_input(e: impl Into<anyhow::Error>) -> Failure {
     Failure::BadInput(e.into())
+}
+
+impl super::client::Client {
+    /// Sends a request and returns the body of a success; a failed call or an error answer
+    /// becomes the [`Failure`] it calls for ([`Failure::from_status`]; daemon not
+    /// there: unreachable; anything else: runtime).
+    pub async fn expect(
+        &self,
+        method: Method,
+        path: &str,
+        body: Option<&Value>,
+    ) -> Result<Value, Failure> {
+        let answer = self
+            .call(method, path, body)
+            .await
+            .map_err(Failure::from_client)?;
+        if answer.status.is_success() {
+            Ok(answer.body)
+        } else {
+            Err(Failure::from_status(
+                answer.status,
+                anyhow!("{}", answer.error()),
+            ))
+        }
+    }
 }
 
 #[cfg(test)]

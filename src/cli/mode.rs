@@ -29,7 +29,7 @@ pub struct ModeArgs {
     pub daemon: DaemonArgs,
 }
 
-fn parse_mode(text: &str) -> Result<Mode, String> {
+fn parse_mode(text: &str) -> Result<Mode, crate::cell::ModeError> {
     text.parse()
 }
 

@@ -159,7 +159,7 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
         Some(m) => m
             .get_ref()
             .parse()
-            .map_err(|e: String| at.child("mode").invalid(m, e))?,
+            .map_err(|e: crate::cell::ModeError| at.child("mode").invalid(m, e.to_string()))?,
         None => Mode::Local,
     };
     Ok(FaceSettings {

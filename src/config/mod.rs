@@ -101,7 +101,13 @@ impl Config {
             path: path.to_owned(),
             source,
         })?;
-        let mut config = Self::from_toml(&text).map_err(|e| ConfigError::InFile {
+        Self::from_file_text(path, &text)
+    }
+
+    /// Parses and checks `text`, read from the file at `path`, as [`Config::load`] does: an
+    /// error names the file, and relative paths are taken from its directory.
+    pub fn from_file_text(path: &Path, text: &str) -> Result<Config, ConfigError> {
+        let mut config = Self::from_toml(text).map_err(|e| ConfigError::InFile {
             path: path.to_owned(),
             error: Box::new(e),
         })?;

@@ -37,12 +37,22 @@ enum Quantity {
     Text(String),
 }
 
+/// A quantity's text that is not a number of its unit.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("'{text}' is not a number of {unit}")]
+struct NotANumberOf {
+    text: String,
+    unit: &'static str,
+}
+
 impl Quantity {
-    fn value(&self, unit: &str) -> Result<f64, String> {
+    fn value(&self, unit: &'static str) -> Result<f64, NotANumberOf> {
         match self {
             Self::Number(v) => Ok(*v),
-            Self::Text(text) => super::units::number_in(text, unit)
-                .map_err(|_| format!("'{text}' is not a number of {unit}")),
+            Self::Text(text) => super::units::number_in(text, unit).map_err(|_| NotANumberOf {
+                text: text.clone(),
+                unit,
+            }),
         }
     }
 }
@@ -193,7 +203,9 @@ impl PathDoc {
             .path_accel
             .as_ref()
             .map(|q| {
-                let v = q.value("mm/s2").map_err(|e| invalid("path_accel", e))?;
+                let v = q
+                    .value("mm/s2")
+                    .map_err(|e| invalid("path_accel", e.to_string()))?;
                 if v.is_finite() && v > 0.0 {
                     Ok(v)
                 } else {
@@ -408,7 +420,9 @@ fn element(n: usize, e: &RawElement) -> Result<ElementDoc, PathFileError> {
             ));
         }
         (Some(q), _) => {
-            let r = q.value("mm").map_err(|p| invalid(&here("blend"), p))?;
+            let r = q
+                .value("mm")
+                .map_err(|p| invalid(&here("blend"), p.to_string()))?;
             if !(r.is_finite() && r > 0.0) {
                 return Err(invalid(&here("blend"), format!("{r} mm must be above 0")));
             }

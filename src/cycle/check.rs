@@ -12,7 +12,7 @@ use thiserror::Error;
 
 use super::condition::{self, Condition, Names};
 use super::program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
-use crate::config::parse_duration_s;
+use crate::config::{DurationError, parse_duration_s};
 use crate::gateway::Values;
 use crate::gateway::{Address, Area, Range};
 use crate::order::{MoveOrder, OrderLimits, PathOrder};
@@ -432,7 +432,7 @@ impl Flattener<'_, '_> {
             return self.set_step(set, here);
         }
         if let Some(text) = &step.dwell {
-            let d = duration("dwell", text, MAX_DWELL_S).map_err(here)?;
+            let d = duration("dwell", text, MAX_DWELL_S).map_err(|e| here(e.to_string()))?;
             return Ok(Action::Op(OpKind::Dwell(d), format!("dwell {text}")));
         }
         if let Some(callee) = &step.call {
@@ -534,7 +534,7 @@ impl Flattener<'_, '_> {
             .as_deref()
             .map(|t| duration("timeout", t, MAX_TIMEOUT_S))
             .transpose()
-            .map_err(here)?;
+            .map_err(|e| here(e.to_string()))?;
         if timeout.is_none() && self.ctx.require_wait_timeout {
             return Err(here(format!(
                 "wait = {text:?} has no timeout, and [robots.NAME.cell] require_wait_timeout = true"
@@ -644,12 +644,44 @@ enum Action {
     Call(String),
 }
 
-fn duration(key: &str, text: &str, max_s: f64) -> Result<Duration, String> {
-    let s = parse_duration_s(text).map_err(|e| format!("{key} = {text:?}: {e}"))?;
+/// A step's duration (a wait's timeout, a dwell) that cannot be.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DurationFault {
+    /// Not a duration.
+    #[error("{key} = {text:?}: {source}")]
+    Unparsed {
+        /// The key.
+        key: &'static str,
+        /// Its text.
+        text: String,
+        /// Why.
+        #[source]
+        source: DurationError,
+    },
+    /// Not above 0 or past its longest.
+    #[error("{key} = {text:?}: must be above 0 s and at most {max_s} s")]
+    OutOfRange {
+        /// The key.
+        key: &'static str,
+        /// Its text.
+        text: String,
+        /// The longest it may be, s.
+        max_s: f64,
+    },
+}
+
+fn duration(key: &'static str, text: &str, max_s: f64) -> Result<Duration, DurationFault> {
+    let s = parse_duration_s(text).map_err(|source| DurationFault::Unparsed {
+        key,
+        text: text.to_owned(),
+        source,
+    })?;
     if !(s > 0.0 && s <= max_s) {
-        return Err(format!(
-            "{key} = {text:?}: must be above 0 s and at most {max_s} s"
-        ));
+        return Err(DurationFault::OutOfRange {
+            key,
+            text: text.to_owned(),
+            max_s,
+        });
     }
     Ok(Duration::from_secs_f64(s))
 }

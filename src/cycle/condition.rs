@@ -15,7 +15,7 @@ use std::fmt;
 
 use thiserror::Error;
 
-use crate::gateway::{AccessList, Address, Area, Range};
+use crate::gateway::{AccessList, Address, Area, Denied, Range};
 use crate::order::permit::PermitNames;
 
 /// A condition that does not parse or resolve.
@@ -25,7 +25,98 @@ pub struct ConditionError {
     /// The condition as given.
     pub text: String,
     /// What is wrong.
-    pub reason: String,
+    pub reason: ConditionFault,
+}
+
+/// What is wrong with a condition, naming the term or the character.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum ConditionFault {
+    /// Nothing to decide.
+    #[error("is empty")]
+    Empty,
+    /// Digits that do not make a number.
+    #[error("{digits:?} is not a number")]
+    NotANumber {
+        /// The digits.
+        digits: String,
+    },
+    /// A character no term begins with.
+    #[error("{found:?} at character {at} is not understood")]
+    NotUnderstood {
+        /// The character.
+        found: char,
+        /// Where, from 1.
+        at: usize,
+    },
+    /// A `(` with no `)`.
+    #[error("a `(` is not closed")]
+    NotClosed,
+    /// Something else where a term belongs.
+    #[error("expected an input, a signal or `(`, found {found}")]
+    Unexpected {
+        /// What was found, as the parser names it.
+        found: String,
+    },
+    /// The text ends where a term belongs.
+    #[error("ends where an input, a signal or `(` was expected")]
+    EndsEarly,
+    /// A name that is no signal and no address.
+    #[error("{name:?} is neither a signal ({known}) nor an address (X5, R10A, DT100)")]
+    Unknown {
+        /// The name.
+        name: String,
+        /// The signals there are, in words.
+        known: String,
+    },
+    /// A compare with no number after it.
+    #[error("{name} {compare} needs a number after it")]
+    NoNumber {
+        /// The term compared.
+        name: String,
+        /// The compare.
+        compare: &'static str,
+    },
+    /// A bit compared with a value.
+    #[error("{name} is a bit: only a DT word is compared with a value")]
+    BitCompared {
+        /// The bit.
+        name: String,
+    },
+    /// A value no DT word holds.
+    #[error("{value} is outside a DT word's -32768..=32767 (compared as signed)")]
+    OutOfRange {
+        /// The value.
+        value: i64,
+    },
+    /// A DT word not compared.
+    #[error("{name} is a DT word: compare it (`{name} == 1`)")]
+    WordNotCompared {
+        /// The word.
+        name: String,
+    },
+    /// An address past its area.
+    #[error("{address} does not exist")]
+    NoSuchAddress {
+        /// The address.
+        address: Address,
+    },
+    /// An address the gateway may not read, outside the input words.
+    #[error(
+        "{address} is not in the input words the PLC copies and cannot be read: {denied} (add \
+         it to [robots.NAME.gateway] read, or copy its word into the status block)"
+    )]
+    NotReadable {
+        /// The address.
+        address: Address,
+        /// Why the gateway refuses it.
+        denied: Denied,
+    },
+    /// Terms after a whole condition.
+    #[error("{left} is left over after a whole condition")]
+    LeftOver {
+        /// The first of them, as the parser names it.
+        left: String,
+    },
 }
 
 /// Where a term's value comes from.
@@ -214,7 +305,7 @@ enum Token {
     Compare(Compare),
 }
 
-fn tokens(text: &str) -> Result<Vec<Token>, String> {
+fn tokens(text: &str) -> Result<Vec<Token>, ConditionFault> {
     let chars: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
     let mut i = 0;
@@ -245,7 +336,7 @@ fn tokens(text: &str) -> Result<Vec<Token>, String> {
                 let digits: String = chars[i..end].iter().collect();
                 let n = digits
                     .parse()
-                    .map_err(|_| format!("{digits:?} is not a number"))?;
+                    .map_err(|_| ConditionFault::NotANumber { digits })?;
                 (Token::Number(n), end - i)
             }
             (c, _) if c.is_ascii_alphabetic() || c == '_' => {
@@ -254,7 +345,7 @@ fn tokens(text: &str) -> Result<Vec<Token>, String> {
                     .unwrap_or(chars.len());
                 (Token::Word(chars[i..end].iter().collect()), end - i)
             }
-            (c, _) => return Err(format!("{c:?} at character {} is not understood", i + 1)),
+            (found, _) => return Err(ConditionFault::NotUnderstood { found, at: i + 1 }),
         };
         out.push(token);
         i += len;
@@ -273,7 +364,7 @@ impl Parser<'_> {
         self.tokens.get(self.at)
     }
 
-    fn any(&mut self) -> Result<Condition, String> {
+    fn any(&mut self) -> Result<Condition, ConditionFault> {
         let mut parts = vec![self.all()?];
         while self.peek() == Some(&Token::Or) {
             self.at += 1;
@@ -286,7 +377,7 @@ impl Parser<'_> {
         })
     }
 
-    fn all(&mut self) -> Result<Condition, String> {
+    fn all(&mut self) -> Result<Condition, ConditionFault> {
         let mut parts = vec![self.unary()?];
         while self.peek() == Some(&Token::And) {
             self.at += 1;
@@ -299,7 +390,7 @@ impl Parser<'_> {
         })
     }
 
-    fn unary(&mut self) -> Result<Condition, String> {
+    fn unary(&mut self) -> Result<Condition, ConditionFault> {
         match self.tokens.get(self.at).cloned() {
             Some(Token::Not) => {
                 self.at += 1;
@@ -309,7 +400,7 @@ impl Parser<'_> {
                 self.at += 1;
                 let inner = self.any()?;
                 if self.peek() != Some(&Token::Close) {
-                    return Err("a `(` is not closed".to_owned());
+                    return Err(ConditionFault::NotClosed);
                 }
                 self.at += 1;
                 Ok(inner)
@@ -318,14 +409,14 @@ impl Parser<'_> {
                 self.at += 1;
                 self.term(&name)
             }
-            Some(other) => Err(format!(
-                "expected an input, a signal or `(`, found {other:?}"
-            )),
-            None => Err("ends where an input, a signal or `(` was expected".to_owned()),
+            Some(other) => Err(ConditionFault::Unexpected {
+                found: format!("{other:?}"),
+            }),
+            None => Err(ConditionFault::EndsEarly),
         }
     }
 
-    fn term(&mut self, name: &str) -> Result<Condition, String> {
+    fn term(&mut self, name: &str) -> Result<Condition, ConditionFault> {
         let address = match self.names.permit.signals.get(name) {
             Some(a) => *a,
             None => name.parse::<Address>().map_err(|_| {
@@ -336,33 +427,31 @@ impl Parser<'_> {
                     .keys()
                     .map(String::as_str)
                     .collect();
-                format!(
-                    "{name:?} is neither a signal ({}) nor an address (X5, R10A, DT100)",
-                    if known.is_empty() {
+                ConditionFault::Unknown {
+                    name: name.to_owned(),
+                    known: if known.is_empty() {
                         "none named".to_owned()
                     } else {
                         known.join(", ")
-                    }
-                )
+                    },
+                }
             })?,
         };
         if let Some(Token::Compare(compare)) = self.peek().cloned() {
             self.at += 1;
             let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
-                return Err(format!(
-                    "{name} {} needs a number after it",
-                    compare.symbol()
-                ));
+                return Err(ConditionFault::NoNumber {
+                    name: name.to_owned(),
+                    compare: compare.symbol(),
+                });
             };
             self.at += 1;
             if address.area != Area::Dt {
-                return Err(format!(
-                    "{name} is a bit: only a DT word is compared with a value"
-                ));
+                return Err(ConditionFault::BitCompared {
+                    name: name.to_owned(),
+                });
             }
-            let value = i16::try_from(value).map_err(|_| {
-                format!("{value} is outside a DT word's -32768..=32767 (compared as signed)")
-            })?;
+            let value = i16::try_from(value).map_err(|_| ConditionFault::OutOfRange { value })?;
             self.readable(address)?;
             return Ok(Condition::Word {
                 address,
@@ -371,7 +460,9 @@ impl Parser<'_> {
             });
         }
         if address.area == Area::Dt {
-            return Err(format!("{name} is a DT word: compare it (`{name} == 1`)"));
+            return Err(ConditionFault::WordNotCompared {
+                name: name.to_owned(),
+            });
         }
         let source = if let Some((word, bit)) = self.names.permit.input_bit(address) {
             Source::Input { word, bit }
@@ -386,15 +477,13 @@ impl Parser<'_> {
         })
     }
 
-    fn readable(&self, address: Address) -> Result<(), String> {
+    fn readable(&self, address: Address) -> Result<(), ConditionFault> {
         let range =
-            Range::from_count(address, 1).ok_or_else(|| format!("{address} does not exist"))?;
-        self.names.access.check_read(&range).map_err(|e| {
-            format!(
-                "{address} is not in the input words the PLC copies and cannot be read: {e} (add it \
-                 to [robots.NAME.gateway] read, or copy its word into the status block)"
-            )
-        })
+            Range::from_count(address, 1).ok_or(ConditionFault::NoSuchAddress { address })?;
+        self.names
+            .access
+            .check_read(&range)
+            .map_err(|denied| ConditionFault::NotReadable { address, denied })
     }
 }
 
@@ -403,13 +492,13 @@ impl Parser<'_> {
 /// # Errors
 /// The text and what in it is wrong.
 pub fn parse(text: &str, names: Names<'_>) -> Result<Condition, ConditionError> {
-    let fail = |reason: String| ConditionError {
+    let fail = |reason: ConditionFault| ConditionError {
         text: text.to_owned(),
         reason,
     };
     let tokens = tokens(text).map_err(fail)?;
     if tokens.is_empty() {
-        return Err(fail("is empty".to_owned()));
+        return Err(fail(ConditionFault::Empty));
     }
     let mut p = Parser {
         tokens,
@@ -418,10 +507,9 @@ pub fn parse(text: &str, names: Names<'_>) -> Result<Condition, ConditionError> 
     };
     let c = p.any().map_err(fail)?;
     if p.at < p.tokens.len() {
-        return Err(fail(format!(
-            "{:?} is left over after a whole condition",
-            p.tokens[p.at]
-        )));
+        return Err(fail(ConditionFault::LeftOver {
+            left: format!("{:?}", p.tokens[p.at]),
+        }));
     }
     Ok(c)
 }

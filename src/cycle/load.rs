@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use crate::config::PathDoc;
-use crate::config::files::read_inside;
+use crate::config::PathFileError;
+use crate::config::files::{FileError, read_inside};
 
 use super::program::ProgramDoc;
 
@@ -48,6 +49,55 @@ pub enum LoadError {
     },
 }
 
+/// Why one program file cannot be read: the file, and in it the step whose path file cannot.
+#[derive(Debug, Error)]
+pub enum ProgramFileError {
+    /// The program file itself (it names the file).
+    #[error(transparent)]
+    File(#[from] FileError),
+    /// Its TOML.
+    #[error("{file}: {source}")]
+    Toml {
+        /// The program file.
+        file: String,
+        /// Where and why.
+        #[source]
+        source: toml::de::Error,
+    },
+    /// A path step with a file and a document.
+    #[error("{file}: step {step}: a path step has `file` or `path`, not both")]
+    BothPaths {
+        /// The program file.
+        file: String,
+        /// The step, from 1.
+        step: usize,
+    },
+    /// A path step's file (it names the file).
+    #[error("{file}: step {step}: {source}")]
+    PathFile {
+        /// The program file.
+        file: String,
+        /// The step, from 1.
+        step: usize,
+        /// Why.
+        #[source]
+        source: FileError,
+    },
+    /// A path step's file is not a path document.
+    #[error("{file}: step {step}: {path}: {source}")]
+    PathDoc {
+        /// The program file.
+        file: String,
+        /// The step, from 1.
+        step: usize,
+        /// The path file.
+        path: String,
+        /// Why.
+        #[source]
+        source: PathFileError,
+    },
+}
+
 /// Every program in `dir`, by name, each read on its own.
 ///
 /// # Errors
@@ -80,7 +130,7 @@ pub fn programs(dir: &Path) -> Result<Programs, LoadError> {
                 out.docs.insert(name, doc);
             }
             Err(why) => {
-                out.broken.insert(name, why);
+                out.broken.insert(name, why.to_string());
             }
         }
     }
@@ -88,30 +138,52 @@ pub fn programs(dir: &Path) -> Result<Programs, LoadError> {
 }
 
 /// Program file `file` of `dir`, its path files read in.
-fn program(dir: &Path, file: &str) -> Result<ProgramDoc, String> {
-    let text = read_inside(dir, file).map_err(|e| e.to_string())?;
-    let mut doc = ProgramDoc::from_toml(&text).map_err(|e| format!("{file}: {e}"))?;
-    read_path_files(&mut doc, dir).map_err(|e| format!("{file}: {e}"))?;
+fn program(dir: &Path, file: &str) -> Result<ProgramDoc, ProgramFileError> {
+    let text = read_inside(dir, file)?;
+    let mut doc = ProgramDoc::from_toml(&text).map_err(|source| ProgramFileError::Toml {
+        file: file.to_owned(),
+        source,
+    })?;
+    read_path_files(&mut doc, dir, file)?;
     Ok(doc)
 }
 
 /// Puts each path step's file in as its document.
-fn read_path_files(doc: &mut ProgramDoc, dir: &Path) -> Result<(), String> {
+fn read_path_files(
+    doc: &mut ProgramDoc,
+    dir: &Path,
+    program: &str,
+) -> Result<(), ProgramFileError> {
     for (i, step) in doc.step.iter_mut().enumerate() {
         let Some(path) = &mut step.path else { continue };
-        let Some(file) = path.file.take() else {
+        let Some(name) = path.file.take() else {
             continue;
         };
+        let (file, at) = (program.to_owned(), i + 1);
         if path.path.is_some() {
-            return Err(format!(
-                "step {}: a path step has `file` or `path`, not both",
-                i + 1
-            ));
+            return Err(ProgramFileError::BothPaths { file, step: at });
         }
-        let text = read_inside(dir, &file).map_err(|e| format!("step {}: {e}", i + 1))?;
-        PathDoc::from_toml(&text).map_err(|e| format!("step {}: {file}: {e}", i + 1))?;
-        let value: serde_json::Value =
-            toml::from_str(&text).map_err(|e| format!("step {}: {file}: {e}", i + 1))?;
+        let text = match read_inside(dir, &name) {
+            Ok(text) => text,
+            Err(source) => {
+                return Err(ProgramFileError::PathFile {
+                    file,
+                    step: at,
+                    source,
+                });
+            }
+        };
+        let value = PathDoc::from_toml(&text)
+            .and_then(|_| {
+                toml::from_str::<serde_json::Value>(&text)
+                    .map_err(|e| PathFileError::Syntax(e.to_string()))
+            })
+            .map_err(|source| ProgramFileError::PathDoc {
+                file,
+                step: at,
+                path: name,
+                source,
+            })?;
         path.path = Some(value);
     }
     Ok(())

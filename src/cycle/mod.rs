@@ -1,8 +1,8 @@
 //! PURE (but [`load`], which reads the programs directory). Cycle programs: what
 //! a press loader does in step with its cell, as a TOML document of steps (move, path, wait,
 //! set, dwell, call, loop), checked whole against the robot and its cell before anything runs,
-//! and flattened into ops the daemon's cycle runner carries
-//! out (`crate::daemon`'s cycle module). docs/CYCLES.md is the user's reference.
+//! and flattened into ops that [`Runner`] steps through, as the daemon's cycle driver
+//! (`crate::daemon`'s cycle module) carries its actions out. docs/CYCLES.md is the user's reference.
 //!
 //! ```text
 //! program.rs    the document: ProgramDoc, StepDoc (every key known)
@@ -11,6 +11,8 @@
 //! reach.rs      where the ops take the robot: targets in reach and limits, motions planned
 //!               from every start known before the run
 //! load.rs       a robot's programs directory, path files read in
+//! runner/       Runner: the program counter, loops, cycles, moves prepared ahead; events in,
+//!               actions out (the daemon's cycle driver carries them out)
 //! ```
 
 pub mod check;
@@ -18,11 +20,13 @@ pub mod condition;
 pub mod load;
 pub mod program;
 mod reach;
+pub mod runner;
 
-pub use check::{Checked, Context, LoopExit, Op, OpKind, ProgramError, check};
-pub use condition::{Condition, ConditionError, Names, Source};
-pub use load::Programs;
+pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramError, check};
+pub use condition::{Condition, ConditionError, ConditionFault, Names, Source};
+pub use load::{ProgramFileError, Programs};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
+pub use runner::Runner;
 
 #[cfg(test)]
 mod tests;

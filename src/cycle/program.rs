@@ -140,7 +140,7 @@ impl ProgramDoc {
     ///
     /// # Errors
     /// The TOML error, with its line.
-    pub fn from_toml(text: &str) -> Result<Self, String> {
-        toml::from_str(text).map_err(|e| e.to_string())
+    pub fn from_toml(text: &str) -> Result<Self, toml::de::Error> {
+        toml::from_str(text)
     }
 }

@@ -117,7 +117,7 @@ fn kind(op: &Op) -> &'static str {
 struct Reach<'c> {
     ctx: &'c Context<'c>,
     /// Each motion planned from a start, by op and start: its end, or why it cannot run.
-    planned: HashMap<(usize, [i64; JOINTS]), Result<[i64; JOINTS], String>>,
+    planned: HashMap<(usize, [i64; JOINTS]), Result<[i64; JOINTS], Unplanned>>,
 }
 
 impl Reach<'_> {
@@ -168,38 +168,34 @@ impl Reach<'_> {
 
     /// Where motion op `i` ends, planned from `from` as the daemon plans it (a move to where
     /// the robot is ends there; a line a joint reverses on runs as a path of that line).
-    fn end(&mut self, i: usize, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOINTS], String> {
+    fn end(&mut self, i: usize, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOINTS], Unplanned> {
         let ctx = self.ctx;
         self.planned
             .entry((i, from))
-            .or_insert_with(|| plan_end(ctx, op, from).map_err(|e| e.to_string()))
+            .or_insert_with(|| plan_end(ctx, op, from))
             .clone()
     }
 
     /// A move's absolute target, checked wherever it starts: its counts, `None` for a move
     /// whose target depends on where it starts (`by`; a pose without a tool angle keeps the
     /// start's angle, and only its reach is checked).
-    fn target(&self, op: &Op) -> Result<Option<[i64; JOINTS]>, String> {
+    fn target(&self, op: &Op) -> Result<Option<[i64; JOINTS]>, Unplanned> {
         let robot = self.ctx.robot;
-        let checked = checked(self.ctx, op).map_err(|e| e.to_string())?;
+        let checked = checked(self.ctx, op)?;
         if !self.ctx.poses_known && matches!(&op.kind, OpKind::Move(o) if o.position.is_some()) {
             return Ok(None);
         }
         match checked.target {
-            Target::Pose { to, a_given: true } => {
-                check_pose(robot, &to).map(Some).map_err(|e| e.to_string())
-            }
+            Target::Pose { to, a_given: true } => Ok(Some(check_pose(robot, &to)?)),
             Target::Pose { to, a_given: false } => {
                 let [x, y, z] = [to.position_mm.x, to.position_mm.y, to.position_mm.z];
-                let pose = robot
-                    .pose_with_wrist_at_zero(x, y, z)
-                    .map_err(|e| e.to_string())?;
-                check_pose(robot, &pose).map_err(|e| e.to_string())?;
+                let pose = robot.pose_with_wrist_at_zero(x, y, z)?;
+                check_pose(robot, &pose)?;
                 Ok(None)
             }
             Target::Joints(user) => {
                 let q = std::array::from_fn(|j| robot.joints[j].kind.from_user(user[j]));
-                check_target(robot, &q).map_err(|e| e.to_string())?;
+                check_target(robot, &q)?;
                 Ok(Some(robot.counts_of(&q)))
             }
             Target::By { .. } | Target::Section(_) => Ok(None),
@@ -234,9 +230,13 @@ fn checked(ctx: &Context<'_>, op: &Op) -> Result<CheckedOrder, OrderError> {
     order.check_with(robot.motion, &OrderLimits::of(robot), ctx.taught)
 }
 
-/// Why a motion cannot run from where it starts.
-#[derive(Debug, thiserror::Error)]
+/// Why a motion cannot run: its target out of reach or past a limit, or its plan refused from
+/// where it starts.
+#[derive(Debug, Clone, thiserror::Error)]
 enum Unplanned {
+    /// Its target is out of reach.
+    #[error(transparent)]
+    Kinematics(#[from] crate::kinematics::KinematicsError),
     /// Its order is wrong (a field, a name).
     #[error(transparent)]
     Order(#[from] OrderError),
@@ -268,7 +268,8 @@ fn plan_end(ctx: &Context<'_>, op: &Op, from: [i64; JOINTS]) -> Result<[i64; JOI
     match plan_order(robot, &order, from) {
         Ok(plan) => Ok(plan.end_counts()),
         Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => Ok(from),
-        Err(PlanError::LaterSegment { .. }) => {
+        // A line one start cannot run runs in parts: it ends where their path does.
+        Err(e) if matches!(e, PlanError::LaterSegment { .. }) || e.too_big() => {
             let to = order
                 .pose_target(&robot.pose_of(&from))
                 .expect("a line has a pose");

@@ -10,7 +10,7 @@ use crate::order::permit::PermitNames;
 use crate::robot::Position;
 use crate::robot::seed_robot;
 
-const PRESS_LOAD: &str = r#"
+pub(super) const PRESS_LOAD: &str = r#"
 number = 1
 description = "load one blank into the press"
 [[step]]
@@ -36,7 +36,7 @@ call = "eject"
 loop = { to = "pick", count = 3 }
 "#;
 
-const EJECT: &str = r"
+pub(super) const EJECT: &str = r"
 [[step]]
 move = { by = [0, 0, 50] }
 [[step]]
@@ -87,7 +87,11 @@ fn cell() -> Cell {
     }
 }
 
-fn checked(programs: &[(&str, &str)], run: &str, require_timeout: bool) -> Result<Checked, String> {
+pub(super) fn checked(
+    programs: &[(&str, &str)],
+    run: &str,
+    require_timeout: bool,
+) -> Result<Checked, String> {
     checked_from(programs, run, require_timeout, None)
 }
 
@@ -100,7 +104,12 @@ fn checked_from(
     let c = cell();
     let docs: BTreeMap<String, ProgramDoc> = programs
         .iter()
-        .map(|(n, t)| Ok(((*n).to_owned(), ProgramDoc::from_toml(t)?)))
+        .map(|(n, t)| {
+            Ok((
+                (*n).to_owned(),
+                ProgramDoc::from_toml(t).map_err(|e| e.to_string())?,
+            ))
+        })
         .collect::<Result<_, String>>()?;
     let ctx = Context {
         robot: &c.robot,

@@ -32,6 +32,7 @@ pub mod gate;
 mod gateway;
 mod handle;
 mod ids;
+mod live;
 pub mod metrics;
 pub mod modbus_face;
 pub mod notify;

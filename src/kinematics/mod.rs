@@ -224,6 +224,7 @@ pub fn unwrap_near(angle: f64, near: f64) -> f64 {
 /// `x.round() as i64` (halves away from zero), without the call `round` is on a plain x86-64
 /// target: the truncation is one instruction and the fraction it leaves is exact. Planning
 /// rounds every joint at every millisecond sample.
+#[must_use]
 pub fn nearest_count(x: f64) -> i64 {
     if x.is_nan() || x.abs() >= 4.0e15 {
         return x.round() as i64;

@@ -154,15 +154,63 @@ pub struct ScriptError {
     /// The item as written.
     pub item: String,
     /// What is wrong with it.
-    pub reason: String,
+    pub reason: ItemFault,
 }
 
-fn number<T: FromStr>(text: &str, what: &str) -> Result<T, String> {
-    text.parse()
-        .map_err(|_| format!("`{text}` is not a valid {what}"))
+/// What is wrong with a script item, naming the value.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum ItemFault {
+    /// Nothing between two commas.
+    #[error("empty item")]
+    Empty,
+    /// Not `ACTION@WHEN`.
+    #[error("expected ACTION@WHEN (e.g. drop@3, freeze@t=0.5, corrupt@1%)")]
+    NoTrigger,
+    /// A value that is not a number of its kind.
+    #[error("`{text}` is not a valid {what}")]
+    NotANumber {
+        /// The value.
+        text: String,
+        /// What it should be.
+        what: &'static str,
+    },
+    /// A MEWTOCOL error code of three digits.
+    #[error("MEWTOCOL error code {0} has more than two digits")]
+    ErrorCodeTooLong(u8),
+    /// Modbus exception 0.
+    #[error("Modbus exception code 0 does not exist")]
+    NoException0,
+    /// An action there is not.
+    #[error(
+        "unknown action `{0}`; expected drop, corrupt, close, delay<ms>, error<NN>, \
+         exception<N>, freeze, thaw, prog, run or restart"
+    )]
+    UnknownAction(String),
+    /// A time before the start.
+    #[error("time {0} s must be 0 or more")]
+    NegativeTime(String),
+    /// A percentage out of range (as written back).
+    #[error("percentage {0} must be above 0 and at most 100")]
+    Percentage(String),
+    /// Command 0.
+    #[error("command numbers start at 1")]
+    Command0,
+    /// A link fault at a time.
+    #[error("link faults fire on a command number or a percentage, not a time")]
+    LinkAtTime,
+    /// A core fault at random.
+    #[error("only link faults may fire at random; give a command number or t=")]
+    CoreAtRandom,
 }
 
-fn parse_action(name: &str) -> Result<Action, String> {
+fn number<T: FromStr>(text: &str, what: &'static str) -> Result<T, ItemFault> {
+    text.parse().map_err(|_| ItemFault::NotANumber {
+        text: text.to_owned(),
+        what,
+    })
+}
+
+fn parse_action(name: &str) -> Result<Action, ItemFault> {
     let link = |f| Ok(Action::Link(f));
     let core = |f| Ok(Action::Core(f));
     match name {
@@ -181,7 +229,7 @@ fn parse_action(name: &str) -> Result<Action, String> {
     }
 }
 
-fn parse_coded_action(name: &str) -> Result<Action, String> {
+fn parse_coded_action(name: &str) -> Result<Action, ItemFault> {
     if let Some(ms) = name.strip_prefix("delay") {
         let ms = ms.strip_suffix("ms").unwrap_or(ms);
         return Ok(Action::Link(LinkFault::Delay {
@@ -191,60 +239,49 @@ fn parse_coded_action(name: &str) -> Result<Action, String> {
     if let Some(code) = name.strip_prefix("error") {
         let code: u8 = number(code, "MEWTOCOL error code")?;
         if code > 99 {
-            return Err(format!(
-                "MEWTOCOL error code {code} has more than two digits"
-            ));
+            return Err(ItemFault::ErrorCodeTooLong(code));
         }
         return Ok(Action::Link(LinkFault::MewtocolError { code }));
     }
     if let Some(code) = name.strip_prefix("exception") {
         let code: u8 = number(code, "Modbus exception code")?;
         if code == 0 {
-            return Err("Modbus exception code 0 does not exist".into());
+            return Err(ItemFault::NoException0);
         }
         return Ok(Action::Link(LinkFault::ModbusException { code }));
     }
-    Err(format!(
-        "unknown action `{name}`; expected drop, corrupt, close, delay<ms>, error<NN>, \
-         exception<N>, freeze, thaw, prog, run or restart"
-    ))
+    Err(ItemFault::UnknownAction(name.to_owned()))
 }
 
-fn parse_trigger(text: &str) -> Result<Trigger, String> {
+fn parse_trigger(text: &str) -> Result<Trigger, ItemFault> {
     if let Some(s) = text.strip_prefix("t=") {
         let t: f64 = number(s, "time in seconds")?;
         if !t.is_finite() || t < 0.0 {
-            return Err(format!("time {s} s must be 0 or more"));
+            return Err(ItemFault::NegativeTime(s.to_owned()));
         }
         return Ok(Trigger::Time(t));
     }
     if let Some(p) = text.strip_suffix('%') {
         let p: f64 = number(p, "percentage")?;
         if !(p > 0.0 && p <= 100.0) {
-            return Err(format!("percentage {p} must be above 0 and at most 100"));
+            return Err(ItemFault::Percentage(p.to_string()));
         }
         return Ok(Trigger::Chance(p / 100.0));
     }
     let k: u64 = number(text, "command number")?;
     if k == 0 {
-        return Err("command numbers start at 1".into());
+        return Err(ItemFault::Command0);
     }
     Ok(Trigger::Command(k))
 }
 
-fn parse_item(text: &str) -> Result<FaultItem, String> {
-    let (name, when) = text
-        .split_once('@')
-        .ok_or_else(|| "expected ACTION@WHEN (e.g. drop@3, freeze@t=0.5, corrupt@1%)".to_owned())?;
+fn parse_item(text: &str) -> Result<FaultItem, ItemFault> {
+    let (name, when) = text.split_once('@').ok_or(ItemFault::NoTrigger)?;
     let action = parse_action(name.trim())?;
     let trigger = parse_trigger(when.trim())?;
     match (action, trigger) {
-        (Action::Link(_), Trigger::Time(_)) => {
-            Err("link faults fire on a command number or a percentage, not a time".into())
-        }
-        (Action::Core(_), Trigger::Chance(_)) => {
-            Err("only link faults may fire at random; give a command number or t=".into())
-        }
+        (Action::Link(_), Trigger::Time(_)) => Err(ItemFault::LinkAtTime),
+        (Action::Core(_), Trigger::Chance(_)) => Err(ItemFault::CoreAtRandom),
         _ => Ok(FaultItem { action, trigger }),
     }
 }
@@ -258,13 +295,13 @@ impl FaultScript {
         }
         for (i, raw) in text.split(',').enumerate() {
             let item = raw.trim();
-            let error = |reason: String| ScriptError {
+            let error = |reason: ItemFault| ScriptError {
                 index: i + 1,
                 item: item.to_owned(),
                 reason,
             };
             if item.is_empty() {
-                return Err(error("empty item".into()));
+                return Err(error(ItemFault::Empty));
             }
             if let Some(seed) = item.strip_prefix("seed=") {
                 script.seed = number(seed, "seed").map_err(error)?;

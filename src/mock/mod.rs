@@ -47,8 +47,8 @@ pub use answer::{Route, StationFilter, execute as execute_mewtocol, plc_status};
 pub use clock::{Clock, RealClock, VirtualClock};
 pub use engine::PulseError;
 pub use faults::{
-    Action, CoreFault, FaultInjector, FaultItem, FaultScript, Fired, LinkFault, ScriptError,
-    Trigger,
+    Action, CoreFault, FaultInjector, FaultItem, FaultScript, Fired, ItemFault, LinkFault,
+    ScriptError, Trigger,
 };
 pub use in_process::InProcess;
 pub use memory::{IO_WORDS, Memory, MemoryError, RELAY_LAST, RELAY_WORDS};

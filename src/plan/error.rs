@@ -367,9 +367,60 @@ pub enum PlanError {
         /// How many more.
         more: usize,
     },
+    /// A joint move whose tables do not fit one start ([`PlanError::too_big`]): a joint move
+    /// runs as one start and is never cut into parts.
+    #[error(
+        "{source}: a joint move runs as one start and is not cut into parts; ask for a faster \
+         speed, or a longer period (constant-period) or a larger tolerance (bounded-error) for \
+         fewer rows, or move there as a line (a pose target), which runs in parts chained at speed"
+    )]
+    JointMoveTooLong {
+        /// Why one start cannot hold it.
+        source: Box<PlanError>,
+    },
+    /// A line whose tables do not fit one start ([`PlanError::too_big`]) and that cannot run
+    /// as parts chained at speed either.
+    #[error(
+        "{source}; cut into parts chained at speed it cannot run either: {parts}; ask for a \
+         faster speed, or a longer period (constant-period) or a larger tolerance \
+         (bounded-error) for fewer rows, or send it as a path of shorter lines"
+    )]
+    NoParts {
+        /// Why one start cannot hold it.
+        source: Box<PlanError>,
+        /// Why its parts cannot be planned.
+        parts: Box<PlanError>,
+    },
 }
 
 impl PlanError {
+    /// This refusal of a line's one start for its size ([`Self::too_big`]), with `parts`, why
+    /// the line as a path of parts chained at speed cannot be planned either.
+    #[must_use]
+    pub fn no_parts(self, parts: PlanError) -> PlanError {
+        PlanError::NoParts {
+            source: Box::new(self),
+            // The line is the path's one section: its error is the line's.
+            parts: match parts {
+                PlanError::Section { source, .. } => source,
+                e => Box::new(e),
+            },
+        }
+    }
+
+    /// Whether a start's tables are refused only for their size (a channel's table needs more
+    /// words than its area holds, or more than 8 segments): shorter starts would fit.
+    #[must_use]
+    pub fn too_big(&self) -> bool {
+        matches!(
+            self,
+            Self::InvalidTable {
+                first: TableProblem::TooManySegments { .. } | TableProblem::AreaOverflow { .. },
+                ..
+            }
+        )
+    }
+
     /// Whether a drive refused a table's rows: a row step over its `max_accel`, a row from or
     /// into rest over its `start_hz`. A timing to lower shares of the limits may be followed.
     pub(super) fn refuses_rows(&self) -> bool {

@@ -29,6 +29,15 @@ pub enum MovePlan {
         /// Where, mm along the line.
         at_mm: f64,
     },
+    /// A line whose tables would not fit one start ([`PlanError::too_big`]: a channel's table
+    /// needs more words than its area holds): one section, cut into parts chained at speed
+    /// until each part's tables fit.
+    Long {
+        /// The line as a path of one element, and its starts.
+        path: PathPlan,
+        /// Why one start could not hold it (the first table that did not fit).
+        one_start: Box<PlanError>,
+    },
 }
 
 impl MovePlan {
@@ -36,7 +45,7 @@ impl MovePlan {
     pub fn starts(&self) -> impl Iterator<Item = &Plan> {
         let (one, parts) = match self {
             Self::One(plan) => (Some(plan.as_ref()), None),
-            Self::Parts { path, .. } => (None, Some(path.starts())),
+            Self::Parts { path, .. } | Self::Long { path, .. } => (None, Some(path.starts())),
         };
         one.into_iter().chain(parts.into_iter().flatten())
     }
@@ -60,12 +69,15 @@ pub fn line_as_path(req: &MoveRequest) -> PathRequest {
 }
 
 /// Plans the line `req` as it will run: [`plan_move`], or where that refuses one start because a
-/// joint reverses on the line while another moves, the line as a path ([`line_as_path`]).
+/// joint reverses on the line while another moves, or because its tables would not fit one
+/// start, the line as a path ([`line_as_path`]) cut into starts chained at speed.
 ///
 /// # Errors
-/// As [`plan_move`], and as [`plan_section`](super::plan_section) for a line cut into starts.
+/// As [`plan_move`], and as [`plan_section`](super::plan_section) for a line cut into starts;
+/// [`PlanError::NoParts`] for a line too long for one start that cannot run in parts.
 pub fn plan_line(robot: &crate::robot::Robot, req: &MoveRequest) -> Result<MovePlan, PlanError> {
     match plan_move(robot, req) {
+        Err(e) if e.too_big() => plan_long(robot, req, e),
         Err(PlanError::LaterSegment {
             joint,
             reverses,
@@ -84,6 +96,22 @@ pub fn plan_line(robot: &crate::robot::Robot, req: &MoveRequest) -> Result<MoveP
                 e => e,
             }),
         planned => planned.map(|plan| MovePlan::One(Box::new(plan))),
+    }
+}
+
+/// The line `req`, whose one start `one_start` refused for its size, as a path of that line:
+/// its parts each fit their areas ([`super::path`] cuts a part in halves until it does).
+fn plan_long(
+    robot: &crate::robot::Robot,
+    req: &MoveRequest,
+    one_start: PlanError,
+) -> Result<MovePlan, PlanError> {
+    match plan_path(robot, &line_as_path(req)) {
+        Ok(path) => Ok(MovePlan::Long {
+            path,
+            one_start: Box::new(one_start),
+        }),
+        Err(parts) => Err(one_start.no_parts(parts)),
     }
 }
 
@@ -204,5 +232,119 @@ mod tests {
                 MovePlan::One(Box::new(plan_move(&robot, &one_side).unwrap()))
             );
         }
+    }
+
+    /// The seed's line at 20 mm/s sampled every 10 ms: channel 0's one table needs more words
+    /// than its area (2000) holds.
+    fn long_slow_line() -> (Robot, MoveRequest) {
+        let robot = seed_robot();
+        let mut req = crate::plan::tests::seed_request(FrequencyModel::FpxDivider, false);
+        req.motion.speed_mm_s = 20.0;
+        req.motion.period_s = 0.01;
+        (robot, req)
+    }
+
+    #[test]
+    fn a_line_too_long_for_one_start_runs_in_parts_each_whole_in_its_areas() {
+        // Issue 47: "channel 0 table needs 3152 words; its area holds 2000", with no way out.
+        let (robot, req) = long_slow_line();
+        let one = plan_move(&robot, &req).unwrap_err();
+        assert!(one.too_big(), "{one}");
+        let MovePlan::Long { path, one_start } = plan_line(&robot, &req).unwrap() else {
+            panic!("not planned in parts for its size");
+        };
+        assert_eq!(*one_start, one);
+        let starts: Vec<&Plan> = path.starts().collect();
+        assert!(starts.len() >= 2, "{} starts", starts.len());
+        assert_eq!(
+            path.sections.len(),
+            1,
+            "one section: chained at speed, no stop"
+        );
+        for (k, plan) in starts.iter().enumerate() {
+            assert!(plan.valid(), "part {k}: {:?}", plan.problems);
+            assert!(plan.valid_tables(&robot).is_some(), "part {k}");
+            for (j, table) in plan.tables.iter().enumerate() {
+                let words: usize = table
+                    .segments
+                    .iter()
+                    .map(crate::table::Segment::words)
+                    .sum();
+                assert!(words <= robot.area_words, "part {k} joint {j}: {words}");
+            }
+        }
+        for pair in starts.windows(2) {
+            assert_eq!(pair[1].start_counts(), pair[0].end_counts());
+        }
+        let super::super::Origin::Pose(from) = req.from else {
+            unreachable!()
+        };
+        assert_eq!(
+            starts[0].start_counts(),
+            robot.counts_of(&robot.kinematics.ik(&from, None).unwrap())
+        );
+        let q = robot.kinematics.ik(&req.to, None).unwrap();
+        assert_eq!(starts[starts.len() - 1].end_counts(), robot.counts_of(&q));
+        // Every part runs on the line, within what its plan says (what `linterpd plan` shows)
+        // and as close as the seed's constant-period line runs as one start (under 0.1 mm).
+        let line = Line { from, to: req.to };
+        for (k, plan) in starts.iter().enumerate() {
+            let run = plan.execution_with_scan(0.0);
+            let d = sim::path_deviation_mm(
+                &robot,
+                &plan.start_counts(),
+                run.events.iter().copied(),
+                &line,
+            );
+            let said = plan.figures.path_deviation_mm;
+            assert!(
+                d <= said + 1e-6 && d < 0.1,
+                "part {k}: {d} mm off the line, {said} said"
+            );
+        }
+    }
+
+    #[test]
+    fn a_joint_move_too_long_for_one_start_is_refused_saying_why_and_what_to_do() {
+        let (robot, req) = long_slow_line();
+        let super::super::Origin::Pose(from) = req.from else {
+            unreachable!()
+        };
+        let joints = crate::plan::JointMoveRequest {
+            from: req.from,
+            to: robot
+                .kinematics
+                .ik(&req.to, robot.kinematics.ik(&from, None).ok().as_ref())
+                .unwrap(),
+            motion: req.motion,
+        };
+        let e = crate::plan::plan_joint_move(&robot, &joints).unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, PlanError::JointMoveTooLong { .. }), "{text}");
+        assert!(text.contains("words; its area holds 2000"), "{text}");
+        assert!(
+            text.contains(
+                "a joint move runs as one start and is not cut into parts; ask for a faster speed"
+            ),
+            "{text}"
+        );
+        assert!(text.contains("move there as a line"), "{text}");
+    }
+
+    #[test]
+    fn a_line_too_long_that_cannot_run_in_parts_says_both_and_what_to_do() {
+        let (robot, req) = long_slow_line();
+        let one = plan_move(&robot, &req).unwrap_err();
+        let parts = PlanError::PathAccel { accel_mm_s2: 0.0 };
+        let text = one.clone().no_parts(parts.clone()).to_string();
+        assert!(text.starts_with(&one.to_string()), "{text}");
+        assert!(
+            text.contains(&format!("; cut into parts chained at speed it cannot run either: {parts}; ask for a faster speed")),
+            "{text}"
+        );
+        assert!(
+            text.ends_with("or send it as a path of shorter lines"),
+            "{text}"
+        );
     }
 }

@@ -100,7 +100,15 @@ pub fn plan_move(robot: &Robot, req: &MoveRequest) -> Result<Plan, PlanError> {
 pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, PlanError> {
     let joints = joint_move::JointMove::new(robot, req)?;
     let strategy = strategy::Strategy::for_course(robot, &req.motion, strategy::Kind::Joints)?;
-    strategy::plan_fastest(&joints, &strategy)
+    strategy::plan_fastest(&joints, &strategy).map_err(|e| {
+        if e.too_big() {
+            PlanError::JointMoveTooLong {
+                source: Box::new(e),
+            }
+        } else {
+            e
+        }
+    })
 }
 
 #[cfg(test)]

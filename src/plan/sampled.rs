@@ -19,6 +19,13 @@ use super::start::Start;
 /// The most times `slow-down` lowers the speed before giving up.
 const SLOW_DOWN_ATTEMPTS: usize = 24;
 
+/// A slowed motion that fits every channel, its profile and samples.
+struct Slowed {
+    motion: Motion,
+    profile: Profile,
+    samples: Samples,
+}
+
 /// The grid `motion`'s method samples a course on: bounded-error's fine samples
 /// ([`bounded::SAMPLE_S`]), or the period.
 pub(super) fn grid_s(motion: &Motion) -> f64 {
@@ -212,8 +219,10 @@ impl Sampler<'_> {
     }
 
     /// The profile and samples of `motion`, or under `slow-down` of the fastest speed (within
-    /// 1 %) at which every channel fits; `motion.speed_mm_s` is set to the speed used. Speed and
-    /// acceleration scale together (the ramp time stays).
+    /// 1 %) at which every channel fits; `motion` is set to the motion used. Speed and
+    /// acceleration scale together (the ramp time stays); where that changes nothing (a line too
+    /// short to reach its speed runs its two ramps whatever the speed asked), the ramps are
+    /// stretched as the speed is cut.
     pub(super) fn fast_enough(&self, motion: &mut Motion) -> Result<(Profile, Samples), PlanError> {
         let (profile, samples, peak) = self.at(motion)?;
         if peak.load <= 1.0 {
@@ -223,8 +232,32 @@ impl Sampler<'_> {
             return Err(limits::over_speed(self.robot, &peak));
         }
         let asked = *motion;
+        let found = match self.slowed(asked, peak.clone(), false)? {
+            Ok(found) => found,
+            Err(_) => self
+                .slowed(asked, peak, true)?
+                .map_err(|peak| limits::over_speed(self.robot, &peak))?,
+        };
+        *motion = found.motion;
+        Ok((found.profile, found.samples))
+    }
+
+    /// The fastest cut of `asked`'s speed (within 1 %) at which every channel fits, its ramps
+    /// `stretched` as the speed is cut or not; `Err` with the last peak when none is found.
+    #[allow(clippy::type_complexity)]
+    fn slowed(
+        &self,
+        asked: Motion,
+        peak: limits::Peak,
+        stretched: bool,
+    ) -> Result<Result<Slowed, limits::Peak>, PlanError> {
         let scaled = |f: f64| Motion {
             speed_mm_s: asked.speed_mm_s * f,
+            accel_s: if stretched {
+                asked.accel_s / f
+            } else {
+                asked.accel_s
+            },
             ..asked
         };
         // Find a factor that fits. A triangular profile's peak speed goes with the square root of
@@ -242,7 +275,7 @@ impl Sampler<'_> {
             (bad, peak) = (factor, pk);
         }
         let Some((mut fits, mut profile, mut samples)) = good else {
-            return Err(limits::over_speed(self.robot, &peak));
+            return Ok(Err(peak));
         };
         // Then the fastest that fits, to within 1 %.
         while bad / fits > 1.01 {
@@ -254,7 +287,10 @@ impl Sampler<'_> {
                 bad = mid;
             }
         }
-        *motion = scaled(fits);
-        Ok((profile, samples))
+        Ok(Ok(Slowed {
+            motion: scaled(fits),
+            profile,
+            samples,
+        }))
     }
 }

@@ -132,6 +132,17 @@ fn a_move_report_is_written_as_before_and_reads_back() {
 }
 
 #[test]
+fn a_hold_is_written_as_held_and_a_cancel_before_the_start_not_at_all() {
+    let mut held = MoveReport::new(42, "press-loader", MoveOrder::default());
+    held.end = Some(EndReason::Held);
+    let with_held = REPORT_NEW.replace("\"error\":null}", "\"error\":null,\"held\":true}");
+    assert_json(&held, &with_held);
+    let mut cancelled = held.clone();
+    cancelled.end = Some(EndReason::CancelledBeforeStart);
+    assert_eq!(serde_json::to_string(&cancelled).unwrap(), REPORT_NEW);
+}
+
+#[test]
 fn every_phase_state_mode_stage_and_piece_kind_keeps_its_word() {
     // The words `Phase::name()`, `State::name()` and the daemon wrote before.
     let phases = [

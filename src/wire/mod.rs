@@ -3,7 +3,7 @@
 //! them back; their JSON is the API's (docs/API.md), pinned byte for byte by `json_tests`.
 //!
 //! ```text
-//! report.rs  MoveId, Stage, MoveReport (Predicted, SectionReport, PieceReport), MoveAccepted,
+//! report.rs  MoveId, Stage, MoveReport (EndReason, Predicted, SectionReport, PieceReport), MoveAccepted,
 //!            PathAccepted
 //! state.rs   RobotState (LinkState, RobotPhase, GatewayStats, FaceState, FaceRefusal)
 //! cycle.rs   CycleStatus, CycleState, StepAt
@@ -19,7 +19,7 @@ mod state;
 pub use cycle::{CycleState, CycleStatus, StepAt};
 pub use live::{ActiveJog, ConsoleLive, JogLive, Live, LiveMessage, SeatHolder, SignalValue};
 pub use report::{
-    MoveAccepted, MoveId, MoveReport, PathAccepted, PieceKind, PieceReport, Predicted,
+    EndReason, MoveAccepted, MoveId, MoveReport, PathAccepted, PieceKind, PieceReport, Predicted,
     SectionReport, Stage,
 };
 pub use state::{FaceRefusal, FaceState, GatewayStats, LinkState, RobotPhase, RobotState};

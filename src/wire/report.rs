@@ -129,10 +129,64 @@ pub struct MoveReport {
     /// A path section's move: which section, and when it runs each of the path's pieces.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub section: Option<SectionReport>,
-    /// Stopped by the PLC because its permit stopped holding (contract v3 fault 9): a hold, not
-    /// a fault; `error` names the input.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub held: bool,
+    /// Why it ended short, where a client acts on it: held by the PLC (contract v3 fault 9, on
+    /// the wire `"held": true`; `error` names the input), or a prepared move cancelled before
+    /// its start (the daemon's own: not on the wire, `error` says it in words).
+    #[serde(
+        rename = "held",
+        default,
+        with = "end_as_held",
+        skip_serializing_if = "end_as_held::not_held"
+    )]
+    pub end: Option<EndReason>,
+}
+
+/// Why a move ended short of its target, as a client acts on it (the words are in `error`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndReason {
+    /// Stopped by the PLC because its permit stopped holding: a hold, not a fault; run again,
+    /// it goes on from where the robot stopped.
+    Held,
+    /// A cycle's move prepared ahead, cancelled before its start (nothing moved): the cycle
+    /// runs it afresh at its step.
+    CancelledBeforeStart,
+}
+
+impl MoveReport {
+    /// Whether the PLC held it (its permit stopped holding).
+    #[must_use]
+    pub fn held(&self) -> bool {
+        self.end == Some(EndReason::Held)
+    }
+}
+
+/// The end reason on the wire: `"held": true` for a hold, nothing otherwise (as ever).
+#[allow(
+    clippy::ref_option,
+    clippy::trivially_copy_pass_by_ref,
+    reason = "serde's `with` passes the field by reference"
+)]
+mod end_as_held {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    use super::EndReason;
+
+    pub(super) fn not_held(end: &Option<EndReason>) -> bool {
+        *end != Some(EndReason::Held)
+    }
+
+    pub(super) fn serialize<S: Serializer>(
+        end: &Option<EndReason>,
+        out: S,
+    ) -> Result<S::Ok, S::Error> {
+        out.serialize_bool(!not_held(end))
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        from: D,
+    ) -> Result<Option<EndReason>, D::Error> {
+        Ok(bool::deserialize(from)?.then_some(EndReason::Held))
+    }
 }
 
 /// What `POST /v1/robots/{name}/moves` answers (202).
@@ -255,7 +309,7 @@ impl MoveReport {
             progress: 0.0,
             counts: None,
             final_error_pulses: None,
-            held: false,
+            end: None,
             error: None,
             section: None,
         }

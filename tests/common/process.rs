@@ -202,6 +202,11 @@ impl Spawned {
         self.signal("INT");
     }
 
+    /// Sends SIGHUP, as `systemctl reload` does (the unit's `ExecReload=`).
+    pub fn hangup(&self) {
+        self.signal("HUP");
+    }
+
     fn signal(&self, name: &str) {
         let pid = self.id().to_string();
         // The shell's builtin kill: no dependency on procps, no unsafe code.

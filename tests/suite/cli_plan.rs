@@ -622,3 +622,62 @@ fn corners_next_to_an_arc_are_blended_in_its_plane_and_refused_out_of_it() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The seed's move at 20 mm/s sampled every 10 ms, `extra` arguments after it.
+fn long_slow_line(extra: &[&str]) -> Output {
+    let mut args = vec!["plan"];
+    // The seed's --from, --to and --config; its own speed and period left out.
+    for pair in SEED.chunks(2) {
+        if !matches!(pair[0], "--speed" | "--period") {
+            args.extend(pair);
+        }
+    }
+    args.extend(["--speed", "20", "--period", "10ms"]);
+    args.extend(extra);
+    linterpd(&args)
+}
+
+#[test]
+fn a_line_too_long_for_one_start_is_planned_and_shown_in_parts_instead_of_refused() {
+    // Issue 47: refused "channel 0 table needs 3152 words; its area holds 2000", no way out.
+    let out = long_slow_line(&[]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let first = text.lines().next().unwrap_or_default();
+    assert!(
+        first.starts_with("cut      into ")
+            && first
+                .contains(" parts chained at speed, each whole in its areas: as one start, joint ")
+            && first.contains(" table needs ")
+            && first.ends_with("words; its area holds 2000"),
+        "{text}"
+    );
+    let parts: usize = first["cut      into ".len()..]
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{first}"));
+    assert!(parts >= 2, "{first}");
+    assert!(text.contains("1 (section 1, element 1): "), "{text}");
+    assert!(
+        text.contains(&format!(
+            "{parts} (section 1, element 1), chained at speed: "
+        )),
+        "{text}"
+    );
+    assert!(text.contains("valid    yes"), "{text}");
+    // The JSON lists the same starts, every one valid.
+    let out = long_slow_line(&["--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(doc["sections"].as_array().unwrap().len(), parts, "{doc}");
+    assert_eq!(doc["valid"], true);
+}

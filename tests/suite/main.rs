@@ -29,5 +29,6 @@ mod modbus_face;
 mod path_progress;
 mod paths;
 mod permits;
+mod reload;
 mod try_cell;
 mod upload_faults;

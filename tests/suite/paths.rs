@@ -777,3 +777,73 @@ async fn a_path_of_1000_stopped_elements_is_refused_whole_naming_the_limit() {
     );
     s.daemon.shut_down().await;
 }
+
+/// Issue 47: a line whose one start needs more words on channel 0 than its area holds was
+/// refused ("channel 0 table needs N words; its area holds 2000"). It runs as a path of that
+/// line, cut into parts chained at speed, each whole in its areas: the starts `linterpd plan`
+/// shows, reported as a path's parts are, the last on target.
+#[tokio::test]
+async fn a_line_too_long_for_one_start_runs_in_the_parts_plan_shows_to_its_target() {
+    use linterpd::daemon::MoveOrder;
+    use linterpd::plan::{MovePlan, MoveRequest, Origin, plan_line};
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("paths-long-line");
+    let s = Served::start(&shared, None, dir.path(), "api.sock").await;
+    let robot = seed_robot();
+    let from = s.handle.state().counts.unwrap();
+    let a_rad = robot.pose_of(&from).a_rad;
+    let order = MoveOrder {
+        to: Some(P2.to_vec()),
+        speed_mm_s: Some(80.0),
+        period: Some("2ms".to_owned()),
+        ..MoveOrder::default()
+    };
+    let req = MoveRequest {
+        from: Origin::Counts(from),
+        to: Pose {
+            position_mm: P2.into(),
+            a_rad,
+        },
+        motion: linterpd::robot::Motion {
+            speed_mm_s: 80.0,
+            period_s: 0.002,
+            ..robot.motion
+        },
+    };
+    let Ok(MovePlan::Long { path, .. }) = plan_line(&robot, &req) else {
+        panic!("the line is not planned in parts for its size");
+    };
+    let shown: Vec<_> = path
+        .starts()
+        .map(linterpd::plan::Plan::end_counts)
+        .collect();
+    assert!(shown.len() >= 2, "{shown:?}");
+
+    let ids = s.handle.submit_starts(order).await.unwrap();
+    assert_eq!(ids.len(), shown.len(), "the parts plan shows");
+    let mut parts = Vec::new();
+    for id in &ids {
+        let report = s.handle.wait(*id, LIMIT).await.unwrap();
+        assert_eq!(report.stage, Stage::Done, "{report:?}");
+        parts.push(report);
+    }
+    for (k, report) in parts.iter().enumerate() {
+        assert_eq!(report.target_counts, Some(shown[k]), "part {}", k + 1);
+        // Reported as a path's part: section 1 of 1, its one line element.
+        let section = report.section.as_ref().expect("a section");
+        assert_eq!((section.number, section.of), (1, 1));
+        assert_eq!(section.pieces.len(), 1);
+        assert_eq!(section.pieces[0].element, Some(1));
+    }
+    for pair in parts.windows(2) {
+        assert_eq!(pair[1].start_counts, pair[0].target_counts);
+    }
+    let last = &parts[parts.len() - 1];
+    assert_eq!(last.target_counts, Some(counts_at(P2, a_rad)));
+    assert_eq!(last.final_error_pulses, Some([0; 4]), "{last:?}");
+    assert_eq!(s.handle.state().counts, Some(counts_at(P2, a_rad)));
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), parts.len(), "{starts:?}");
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    s.daemon.shut_down().await;
+}

@@ -103,7 +103,7 @@ async fn a_permit_that_drops_mid_move_holds_the_robot_and_the_report_names_the_i
     });
     let r = h.wait(id, LIMIT).await.unwrap();
     assert_eq!(r.stage, Stage::Stopped, "{r:?}");
-    assert!(r.held, "{r:?}");
+    assert!(r.held(), "{r:?}");
     let why = r.error.unwrap();
     assert!(
         why.contains("held by the PLC") && why.contains("X5 is off"),
@@ -180,7 +180,7 @@ async fn a_stopped_or_held_moves_report_says_where_the_plc_stopped_it() {
         }
         let r = h.wait(id, LIMIT).await.unwrap();
         assert_eq!(r.stage, Stage::Stopped, "{r:?}");
-        assert_eq!(r.held, held, "{r:?}");
+        assert_eq!(r.held(), held, "{r:?}");
         let counts = r.counts.expect("counts");
         assert_eq!(counts, mock_counts(&shared), "held {held}: {r:?}");
         let targets = r.target_counts.expect("targets");

@@ -154,29 +154,6 @@ impl Client {
         Ok(Answer { status, body })
     }
 
-    /// Sends a request and returns the body of a success; a failed call or an error answer
-    /// becomes the [`super::Failure`] it calls for ([`super::Failure::from_status`]; daemon not
-    /// there: unreachable; anything else: runtime).
-    pub async fn expect(
-        &self,
-        method: Method,
-        path: &str,
-        body: Option<&Value>,
-    ) -> Result<Value, super::Failure> {
-        let answer = self
-            .call(method, path, body)
-            .await
-            .map_err(super::Failure::from_client)?;
-        if answer.status.is_success() {
-            Ok(answer.body)
-        } else {
-            Err(super::Failure::from_status(
-                answer.status,
-                anyhow!("{}", answer.error()),
-            ))
-        }
-    }
-
     /// Opens an NDJSON feed: an error answer is returned as it is, a success as a [`Feed`].
     pub async fn feed(&self, path: &str) -> anyhow::Result<Result<Feed, Answer>> {
         let mut sender = self.connect().await?;

@@ -19,7 +19,7 @@ use super::args::{MethodArg, PoseArg, parse_length_mm, parse_pose, parse_ramp, p
 use super::{Failure, bad_input};
 use crate::config::{Config, parse_duration_s};
 use crate::geometry::Pose;
-use crate::plan::{MovePlan, MoveRequest, Origin, Plan, line_as_path, plan_line};
+use crate::plan::{MovePlan, MoveRequest, Origin, PathPlan, Plan, line_as_path, plan_line};
 use crate::robot::{Method, Motion, OverSpeed, Robot};
 use crate::table::FrequencyModel;
 
@@ -140,32 +140,18 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
         return path::run(robot, args, file, out);
     }
     let request = request(robot, args).map_err(Failure::BadInput)?;
-    let plan = match plan_line(robot, &request).map_err(bad_input)? {
-        MovePlan::One(plan) => plan,
-        // A line cut where a joint reverses: shown as the path it runs as.
-        MovePlan::Parts {
-            path: planned,
-            joint,
-            reverses,
-            at_mm,
-        } => {
-            if args.output() == Format::Text {
-                let what = if reverses {
-                    "reverses"
-                } else {
-                    "changes frequency range"
-                };
-                let note = format!(
-                    "cut      where joint {joint} {what}, {at_mm:.1} mm along the line, while the \
-                     others move: in one start its next F174 segment would begin up to a PLC \
-                     scan late, off the line"
-                );
-                writeln!(out, "{note}")
-                    .context("writing the plan")
-                    .map_err(Failure::Runtime)?;
-            }
-            return path::write_planned(robot, args, &line_as_path(&request), &planned, out);
+    let planned = plan_line(robot, &request).map_err(bad_input)?;
+    // A line that cannot run as one start: shown as the path it runs as, after why.
+    if let Some((parts, note)) = cut_note(&planned) {
+        if args.output() == Format::Text {
+            writeln!(out, "{note}")
+                .context("writing the plan")
+                .map_err(Failure::Runtime)?;
         }
+        return path::write_planned(robot, args, &line_as_path(&request), parts, out);
+    }
+    let MovePlan::One(plan) = planned else {
+        unreachable!("cut_note names every line planned in parts")
     };
     write(robot, &request, &plan, args.output(), out)
         .context("writing the plan")
@@ -173,6 +159,39 @@ pub fn run(args: &PlanArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     match &args.svg {
         Some(path) => write_svg(path, || crate::plot::svg(robot, &[&plan])),
         None => Ok(()),
+    }
+}
+
+/// The path of parts a line runs as, with a line saying why it is cut; `None` for one start.
+fn cut_note(planned: &MovePlan) -> Option<(&PathPlan, String)> {
+    match planned {
+        MovePlan::One(_) => None,
+        MovePlan::Parts {
+            path,
+            joint,
+            reverses,
+            at_mm,
+        } => {
+            let what = if *reverses {
+                "reverses"
+            } else {
+                "changes frequency range"
+            };
+            let note = format!(
+                "cut      where joint {joint} {what}, {at_mm:.1} mm along the line, while the \
+                 others move: in one start its next F174 segment would begin up to a PLC scan \
+                 late, off the line"
+            );
+            Some((path, note))
+        }
+        MovePlan::Long { path, one_start } => {
+            let parts = path.starts().count();
+            let note = format!(
+                "cut      into {parts} parts chained at speed, each whole in its areas: as one \
+                 start, {one_start}"
+            );
+            Some((path, note))
+        }
     }
 }
 

@@ -172,12 +172,8 @@ impl RobotHandle {
 
     /// The program whose `number` is `number`.
     fn program_numbered(&self, number: u8) -> Result<String, Refusal> {
-        let dir = self
-            .cell
-            .settings
-            .programs
-            .as_ref()
-            .ok_or(Refusal::UnknownProgram)?;
+        let live = self.live.get();
+        let dir = live.cell.programs.as_ref().ok_or(Refusal::UnknownProgram)?;
         let programs = crate::cycle::load::programs(dir).map_err(|e| {
             tracing::warn!(robot = %self.robot().name, "cell face: the programs cannot be read: {e}");
             Refusal::UnknownProgram

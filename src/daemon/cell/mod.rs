@@ -33,7 +33,6 @@ use crate::contract::{INPUT_WORDS, InputWord};
 /// What a robot's handle knows of its cell.
 #[derive(Debug)]
 pub(crate) struct Cell {
-    pub settings: CellSettings,
     pub inputs: [InputWord; INPUT_WORDS],
     /// Taken to hold the mode while an order is taken, and to change it.
     mode: Arc<RwLock<Mode>>,
@@ -44,11 +43,10 @@ pub(crate) struct Cell {
 }
 
 impl Cell {
-    pub(crate) fn new(settings: CellSettings, inputs: [InputWord; INPUT_WORDS]) -> Self {
+    pub(crate) fn new(settings: &CellSettings, inputs: [InputWord; INPUT_WORDS]) -> Self {
         let mode = settings.face.as_ref().map_or(Mode::Local, |f| f.mode);
         let face = settings.face.clone().map(FaceCell::new);
         Self {
-            settings,
             inputs,
             mode: Arc::new(RwLock::new(mode)),
             remote: AtomicBool::new(mode == Mode::Remote),

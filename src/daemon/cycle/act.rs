@@ -1,5 +1,5 @@
 //! What a cycle's steps do to the robot, each through the robot's handle as any client would:
-//! a move or a path queued and followed to its end, a wait on the cell's inputs decided on every
+//! a move or a path followed to its end, a wait on the cell's inputs decided on every
 //! status block the worker reads, outputs written through the gateway, a dwell. Each gives way
 //! to a control request (stop now, or a stop / pause that waits for the step's end) as soon as
 //! one comes.
@@ -8,73 +8,48 @@ use std::time::Duration;
 
 use tokio::sync::watch;
 
-use super::control::Control;
+use super::status::Status;
 use crate::contract::INPUT_WORDS;
 use crate::cycle::Condition;
-use crate::daemon::{MoveOrder, PathOrder, RobotHandle};
-use crate::gateway::Address;
-use crate::wire::{MoveId, MoveReport, Stage};
+use crate::cycle::runner::{Control, Event, Motion, MotionEnd, Prepared, WaitEnd};
+use crate::daemon::RobotHandle;
+use crate::daemon::gate::Gate;
+use crate::gateway::{Address, Values};
+use crate::order::MoveOrder;
+use crate::wire::{EndReason, MoveId, MoveReport, Stage, StepAt};
 
-/// How a step's motion ended.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) enum MotionEnd {
-    /// Every start of it ended done.
-    Done,
-    /// The PLC held it (its permit dropped): the robot stands where it stopped.
-    Held {
-        /// The report's words (which input dropped).
-        why: String,
-    },
-    /// It was refused, failed, stopped or cancelled.
-    Failed {
-        /// Why.
-        why: String,
-    },
-    /// A stop asked for now: the robot was stopped.
-    StoppedNow,
+/// Queues `motion`: its starts, or why it was refused.
+pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> {
+    let submitted = match motion {
+        // The handle plans a path off the runtime (it takes milliseconds), as for the API.
+        Motion::Move(order) => handle.submit_starts(order).await,
+        Motion::Path(order) => handle.submit_path(&order).await,
+    };
+    match submitted {
+        Ok(ids) => Event::Queued(ids),
+        Err(e) => Event::Refused(e.to_string()),
+    }
 }
 
-/// Queues `order`: the ids of its starts, or how the step ends when it cannot be queued (held
-/// from outside the PLC, or refused).
-pub(super) async fn submit_move(
-    handle: &RobotHandle,
-    order: MoveOrder,
-    control: &watch::Receiver<Control>,
-) -> Result<Vec<MoveId>, MotionEnd> {
-    let hold = control.borrow().hold;
-    if let Some(why) = hold {
-        return Err(MotionEnd::Held {
-            why: why.to_owned(),
-        });
-    }
-    handle
-        .submit_starts(order)
-        .await
-        .map_err(|e| MotionEnd::Failed {
-            why: format!("refused: {e}"),
-        })
+/// Uploads `order` ahead, held behind a gate of its own (`None`: the robot refused it now).
+pub(super) async fn prepare(handle: &RobotHandle, order: MoveOrder) -> Event<Gate> {
+    let gate = Gate::new();
+    let prepared = handle.submit_gated(order, &gate).await;
+    Event::Prepared(
+        prepared
+            .ok()
+            .map(|(id, moves)| Prepared { id, moves, gate }),
+    )
 }
 
-/// Queues `order` (a path) and follows every start of it to its end.
-pub(super) async fn run_path(
-    handle: &RobotHandle,
-    order: &PathOrder,
-    control: &mut watch::Receiver<Control>,
-    started: &mut Vec<MoveId>,
-) -> MotionEnd {
-    let hold = control.borrow().hold;
-    if let Some(why) = hold {
-        return MotionEnd::Held {
-            why: why.to_owned(),
-        };
+/// Writes `writes` through the gateway, in order, up to the first that fails.
+pub(super) async fn write(handle: &RobotHandle, writes: Vec<(Address, Values)>) -> Event<Gate> {
+    for (address, values) in writes {
+        if let Err(e) = handle.write_registers(address, values).await {
+            return Event::Written(Some(format!("set {address}: {e}")));
+        }
     }
-    // The handle plans it off the runtime (a path takes milliseconds), as for the API.
-    match handle.submit_path(order).await {
-        Ok(ids) => follow(handle, &ids, control, started).await,
-        Err(e) => MotionEnd::Failed {
-            why: format!("refused: {e}"),
-        },
-    }
+    Event::Written(None)
 }
 
 /// Follows every start of `ids` to its end.
@@ -99,7 +74,7 @@ pub(super) async fn follow(
             tokio::select! {
                 ended = ended => break ended,
                 changed = control.changed() => {
-                    if changed.is_err() || control.borrow().stop_now {
+                    if changed.is_err() || control.borrow().stops_now() {
                         let _ = handle.stop().await;
                         return MotionEnd::StoppedNow;
                     }
@@ -108,9 +83,12 @@ pub(super) async fn follow(
         };
         // A hold from outside the PLC is set before the robot is stopped: the move that ends
         // short under it was held.
-        let held = control.borrow().hold;
+        let held = control.borrow().hold();
         match report.or_else(|| handle.report(id)) {
             Some(r) if r.stage == Stage::Done => {}
+            Some(r) if r.end == Some(EndReason::CancelledBeforeStart) => {
+                return MotionEnd::NotStarted;
+            }
             Some(_) if held.is_some() => {
                 return MotionEnd::Held {
                     why: held.unwrap_or_default().to_owned(),
@@ -129,7 +107,7 @@ pub(super) async fn follow(
 
 fn ended_short(r: &MoveReport) -> MotionEnd {
     let why = r.error.clone().unwrap_or_else(|| r.stage.name().to_owned());
-    if r.held {
+    if r.held() {
         MotionEnd::Held { why }
     } else {
         MotionEnd::Failed {
@@ -140,19 +118,6 @@ fn ended_short(r: &MoveReport) -> MotionEnd {
 
 /// The oldest status block a wait is decided on (two busy polls).
 pub(super) const FRESH: Duration = Duration::from_millis(40);
-
-/// How a wait ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum WaitEnd {
-    /// The condition held.
-    Met,
-    /// The timeout passed first.
-    TimedOut,
-    /// A stop asked for (now, or at the step's end: a wait moves nothing, so it ends at once).
-    StoppedNow,
-    /// A pause asked for: the wait gives way, and is waited again on resume.
-    Paused,
-}
 
 /// What a wait decides on: the cell's input words of a status block, and the words a condition
 /// reads beyond them (DT words, bits outside the input words), read through the gateway.
@@ -228,10 +193,10 @@ async fn wait_loop(
             () = expired => return WaitEnd::TimedOut,
             changed = control.changed() => {
                 let c = *control.borrow();
-                if changed.is_err() || c.stop_now || c.stop {
+                if changed.is_err() || c.stops() {
                     return WaitEnd::StoppedNow;
                 }
-                if c.pause {
+                if c.pause().is_some() {
                     return WaitEnd::Paused;
                 }
             }
@@ -267,8 +232,8 @@ impl Inputs {
 /// One word or bit read through the gateway (`None`: it could not be read).
 async fn read_one(handle: &RobotHandle, address: Address) -> Option<u16> {
     match handle.read_registers(address, 1).await {
-        Ok(crate::daemon::Values::Words(w)) => w.first().copied(),
-        Ok(crate::daemon::Values::Bits(b)) => b.first().map(|&on| u16::from(on)),
+        Ok(Values::Words(w)) => w.first().copied(),
+        Ok(Values::Bits(b)) => b.first().map(|&on| u16::from(on)),
         Err(_) => None,
     }
 }
@@ -281,11 +246,58 @@ pub(super) async fn dwell(for_: Duration, control: &mut watch::Receiver<Control>
         tokio::select! {
             () = tokio::time::sleep_until(end) => return true,
             changed = control.changed() => {
-                let c = *control.borrow();
-                if changed.is_err() || c.stop_now || c.stop {
+                if changed.is_err() || control.borrow().stops() {
                     return false;
                 }
             }
         }
     }
+}
+
+/// Unprepares moves prepared ahead: their gates shut, then waited out (cancelled before their
+/// start), so nothing is queued behind them.
+pub(super) async fn unprepare(handle: &RobotHandle, moves: Vec<Prepared<Gate>>) {
+    for prepared in &moves {
+        handle.shut_gate(&prepared.gate);
+    }
+    for prepared in moves {
+        let _ = handle.wait(prepared.id, Duration::from_secs(30)).await;
+    }
+}
+
+/// Whether a loop's `until` holds, decided on a fresh status block, not one from before the
+/// steps ran (`None`: the robot's worker is gone).
+pub(super) async fn decide(handle: &RobotHandle, until: &Condition) -> Option<bool> {
+    let stale = handle.since_status_read().is_none_or(|age| age > FRESH);
+    if stale && !pace(handle).await {
+        return None;
+    }
+    Some(Inputs::read(handle, &until.reads()).await.meet(until))
+}
+
+/// Lets one status read pass (at most a second): `false` when the robot's worker is gone.
+pub(super) async fn pace(handle: &RobotHandle) -> bool {
+    let mut reads = handle.watch_reads();
+    let read = tokio::time::timeout(Duration::from_secs(1), reads.next()).await;
+    !matches!(read, Ok(Err(_)))
+}
+
+/// A wait step at `at`: until `until` holds, at most `timeout`, the status saying so.
+pub(super) async fn wait_step(
+    handle: &RobotHandle,
+    status: &Status,
+    (at, until, timeout): (&StepAt, &Condition, Option<Duration>),
+    control: &mut watch::Receiver<Control>,
+) -> Event<Gate> {
+    let since = tokio::time::Instant::now();
+    status.waiting(Some(until.to_string()), Some(0.0));
+    let holds = |inputs: &Inputs| {
+        status.waited(since.elapsed().as_secs_f64());
+        inputs.meet(until)
+    };
+    let end = wait_until(handle, holds, &until.reads(), timeout, control).await;
+    let waited_s = since.elapsed().as_secs_f64();
+    handle.waited(at, waited_s);
+    status.waiting(None, None);
+    Event::Waited { end, waited_s }
 }

@@ -34,7 +34,8 @@ impl RobotHandle {
         for note in &checked.unchecked {
             tracing::info!(robot = %self.robot.name, program, "not checked before the run: {note}");
         }
-        let handle = self.clone();
+        // The cycle runs with the signals and lists it was checked with, whatever a reload does.
+        let handle = self.pinned();
         tracing::info!(robot = %self.robot.name, program, count, ops = checked.ops.len(), "cycle starts");
         self.cycles.start(
             CycleStatus::starting(program, count),
@@ -45,7 +46,8 @@ impl RobotHandle {
     /// Program `name` of the robot's programs directory, read and checked whole against the
     /// robot, its cell and its taught positions now.
     pub fn check_program(&self, name: &str) -> Result<crate::cycle::Checked, CycleError> {
-        let Some(dir) = &self.cell.settings.programs else {
+        let live = self.live.get();
+        let Some(dir) = &live.cell.programs else {
             return Err(CycleError::Program(format!(
                 "robot {} has no cycle programs: set [robots.{}.cell] programs",
                 self.robot.name, self.robot.name
@@ -70,14 +72,14 @@ impl RobotHandle {
             taught: &taught,
             names: crate::cycle::Names {
                 permit: crate::daemon::permit::PermitNames {
-                    signals: &self.cell.settings.signals,
+                    signals: &live.cell.signals,
                     inputs: &self.cell.inputs,
                 },
-                access: &self.gateway_settings.access,
+                access: &live.gateway.access,
             },
             programs: &programs.docs,
             broken: &programs.broken,
-            require_wait_timeout: self.cell.settings.require_wait_timeout,
+            require_wait_timeout: live.cell.require_wait_timeout,
             start: self.where_next_begins(),
             poses_known: true,
         };

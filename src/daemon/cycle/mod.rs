@@ -1,12 +1,15 @@
 //! Cycle programs run by the daemon: one cycle at a time per robot, driven through the robot's
 //! handle like any client (its moves are queued and reported as every move is), watched by a
-//! status anyone can read, steered by a control value (stop, pause, resume).
+//! status anyone can read, steered by a control value (stop, pause, hold, resume:
+//! [`crate::cycle::runner::Control`]). What the cycle does next is decided by the pure
+//! [`crate::cycle::Runner`]; this module carries its actions out.
 //!
 //! ```text
-//! control.rs  Control: a stop (now, or at the step's end), a pause, the resumes asked for
+//! run.rs      the driver: the runner's actions carried out, what came of them fed back, the
+//!             cycle's status written
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
-//!             dwell
-//! run.rs      the runner: a checked program's ops, one after another, in step with the control
+//!             dwell, a loop's condition decided, moves prepared ahead unprepared
+//! status.rs   the cycle's status as the driver writes it
 //! slot.rs     the robot's cycle: at most one running, its status, its controller
 //! handle.rs   RobotHandle's cycle methods: run (checked first), watch, stop, pause, resume
 //! ```
@@ -14,10 +17,10 @@
 //! fresh `run`); a restarted daemon has no cycle.
 
 mod act;
-mod control;
 mod handle;
 mod run;
 mod slot;
+mod status;
 
 pub(crate) use run::run;
 pub use slot::CycleError;

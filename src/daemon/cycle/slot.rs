@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use thiserror::Error;
 use tokio::sync::watch;
 
-use super::control::Control;
+use crate::cycle::runner::Control;
 use crate::wire::{CycleState, CycleStatus};
 
 /// Why a cycle request was refused.
@@ -140,10 +140,7 @@ impl CycleSlot {
             if s.state.is_final() {
                 return Err(conflict(s, "it has ended already"));
             }
-            c.control.send_modify(|k| {
-                k.stop = true;
-                k.stop_now |= now;
-            });
+            c.control.send_modify(|k| k.stop(now));
             Ok(s.clone())
         })
     }
@@ -152,7 +149,7 @@ impl CycleSlot {
     pub(crate) fn pause(&self) -> Result<CycleStatus, CycleError> {
         self.with_live(|c, s| match s.state {
             CycleState::Running | CycleState::Waiting => {
-                c.control.send_modify(|k| k.pause = true);
+                c.control.send_modify(Control::pause_asked);
                 Ok(s.clone())
             }
             _ => Err(conflict(s, "only a running or waiting cycle pauses")),
@@ -164,10 +161,7 @@ impl CycleSlot {
     pub(crate) fn hold(&self, why: &'static str) -> bool {
         match self.current().as_ref() {
             Some(c) if !lock(&c.status).state.is_final() => {
-                c.control.send_modify(|k| {
-                    k.pause = true;
-                    k.hold = Some(why);
-                });
+                c.control.send_modify(|k| k.hold_asked(why));
                 true
             }
             _ => false,
@@ -194,12 +188,7 @@ impl CycleSlot {
             }
             _ => return Err(conflict(&status, "only a paused or faulted cycle resumes")),
         };
-        c.control.send_modify(|k| {
-            k.pause = false;
-            k.hold = None;
-            k.resumes += 1;
-            k.epoch = epoch;
-        });
+        c.control.send_modify(|k| k.resume(epoch));
         // What the runner writes as it takes the resume; said here so the answer is true.
         status.state = CycleState::Running;
         status.reason = None;
@@ -222,10 +211,7 @@ impl CycleSlot {
     /// The robot was stopped from outside the cycle (`linterpd stop`): the cycle ends with it.
     pub(crate) fn robot_stopped(&self) {
         if let Some(c) = self.current().as_ref() {
-            c.control.send_modify(|k| {
-                k.stop = true;
-                k.stop_now = true;
-            });
+            c.control.send_modify(|k| k.stop(true));
         }
     }
 }

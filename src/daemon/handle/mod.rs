@@ -17,6 +17,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
+use super::live::{Live, LiveSettings};
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::request::{CommandError, Reply, Request};
 use super::setup::{DaemonOptions, RobotSetup};
@@ -88,7 +89,8 @@ pub struct RobotHandle {
     requests: mpsc::UnboundedSender<Request>,
     stops: mpsc::UnboundedSender<Reply>,
     gateway: mpsc::UnboundedSender<Job>,
-    pub(super) gateway_settings: Arc<GatewaySettings>,
+    /// The gateway's lists and the cell's signals and programs: a reload changes them.
+    pub(super) live: Live,
     pub(super) shared: Arc<Shared>,
     pub(super) positions: Arc<TaughtPositions>,
     pub(super) cell: Arc<Cell>,
@@ -267,17 +269,17 @@ impl RobotHandle {
         rx.await.map_err(|_| CommandError::ShuttingDown)?
     }
 
-    /// The robot's gateway settings (its access list, its Modbus face).
+    /// The robot's gateway settings (its access list, its Modbus face) as they are now.
     #[must_use]
-    pub fn gateway(&self) -> &GatewaySettings {
-        &self.gateway_settings
+    pub fn gateway(&self) -> GatewaySettings {
+        self.live.get().gateway.clone()
     }
 
     /// Reads `count` registers (DT words) or bits (X, Y, R) from `start`, if the access list
     /// allows, through the robot's link.
     pub async fn read_registers(&self, start: Address, count: u32) -> Result<Values, GatewayError> {
         let range = gateway::range(start, count)?;
-        self.gateway_settings.access.check_read(&range)?;
+        self.live.get().gateway.access.check_read(&range)?;
         self.gateway_job(range, None).await
     }
 
@@ -289,7 +291,7 @@ impl RobotHandle {
     ) -> Result<(), GatewayError> {
         gateway::check_values(start.area, &values)?;
         let range = gateway::range(start, values.len() as u32)?;
-        self.gateway_settings.access.check_write(&range)?;
+        self.live.get().gateway.access.check_write(&range)?;
         self.gateway_job(range, Some(values)).await.map(|_| ())
     }
 
@@ -396,6 +398,27 @@ impl RobotHandle {
         }
     }
 
+    /// This handle with the gateway's lists and the cell's signals and programs as they are now,
+    /// unchanged by a later reload (a cycle's, which runs as it was checked).
+    pub(crate) fn pinned(&self) -> Self {
+        Self {
+            live: self.live.pinned(),
+            ..self.clone()
+        }
+    }
+
+    /// A reload's new gateway lists: the next register request and cycle check use them (the
+    /// Modbus face stays as it was started).
+    pub(crate) fn reload_access(&self, access: crate::gateway::AccessList) {
+        self.live.set_access(access);
+    }
+
+    /// A reload's new cell signals, programs directory and `require_wait_timeout`: the next
+    /// order and cycle use them (the cell face stays as it was started).
+    pub(crate) fn reload_cell(&self, cell: crate::config::CellSettings) {
+        self.live.set_cell(cell);
+    }
+
     /// What happened since this handle's epoch, if anything did.
     fn untrusted(&self) -> Option<String> {
         let epoch = self.epoch?;
@@ -453,10 +476,13 @@ impl Daemon {
                 requests,
                 stops,
                 gateway,
-                gateway_settings: Arc::new(setup.gateway.clone()),
+                live: Live::new(LiveSettings {
+                    gateway: setup.gateway.clone(),
+                    cell: setup.cell.clone(),
+                }),
                 shared: Arc::clone(&shared),
                 positions: Arc::clone(&options.positions),
-                cell: Arc::new(Cell::new(setup.cell.clone(), setup.settings.layout.inputs)),
+                cell: Arc::new(Cell::new(&setup.cell, setup.settings.layout.inputs)),
                 cycles: Arc::new(CycleSlot::default()),
                 lane: Arc::default(),
                 epoch: None,

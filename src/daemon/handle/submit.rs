@@ -104,13 +104,12 @@ impl RobotHandle {
                 Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
                     end = Some(counts);
                 }
-                Err(e @ PlanError::LaterSegment { .. }) if gate.is_some() => {
-                    return Err(e.into());
-                }
-                Err(e @ PlanError::LaterSegment { .. }) => {
+                // One start only (a cycle then runs it after its wait, in parts).
+                Err(e) if runs_in_parts(&e) && gate.is_some() => return Err(e.into()),
+                Err(e) if runs_in_parts(&e) => {
                     return match checked.pose_target(&self.robot.pose_of(&counts)) {
                         Some(to) => self
-                            .submit_line_in_parts(&order, &checked, counts, to)
+                            .submit_line_in_parts(&order, &checked, (counts, to), e)
                             .await
                             .map(|ids| (ids, true)),
                         None => Err(e.into()),
@@ -175,16 +174,16 @@ impl RobotHandle {
         answer.await.map_err(|_| SubmitError::ShuttingDown)?
     }
 
-    /// A line order from `counts` to `to` that one start cannot run
-    /// ([`PlanError::LaterSegment`]), planned as a path of that one line and queued as its
-    /// starts: their ids, in order. Each start's report is the order with its target at the
-    /// pose where that start ends.
+    /// A line order from `counts` to `to` that one start cannot run (`one_start`: a joint's
+    /// later F174 segment, or tables too big for their areas), planned as a path of that one
+    /// line and queued as its starts, chained at speed: their ids, in order. Each start's
+    /// report is the order with its target at the pose where that start ends.
     async fn submit_line_in_parts(
         &self,
         order: &MoveOrder,
         checked: &CheckedOrder,
-        counts: [i64; JOINTS],
-        to: Pose,
+        (counts, to): ([i64; JOINTS], Pose),
+        one_start: PlanError,
     ) -> Result<Vec<MoveId>, SubmitError> {
         let req = line_as_path(&MoveRequest {
             from: Origin::Counts(counts),
@@ -192,7 +191,11 @@ impl RobotHandle {
             motion: checked.motion,
         });
         let path_accel_mm_s2 = req.path_accel_mm_s2;
-        let planned = self.planned_path(req).await?;
+        let planned = match self.planned_path(req).await {
+            Ok(planned) => planned,
+            Err(parts) if one_start.too_big() => return Err(one_start.no_parts(parts).into()),
+            Err(parts) => return Err(parts.into()),
+        };
         let (motion, permit) = (checked.motion, checked.permit);
         self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
             order.ending_at(end)
@@ -212,8 +215,9 @@ impl RobotHandle {
         let Some(text) = text else {
             return Ok(Permit::NONE);
         };
+        let live = self.live.get();
         let names = crate::order::permit::PermitNames {
-            signals: &self.cell.settings.signals,
+            signals: &live.cell.signals,
             inputs: &self.cell.inputs,
         };
         crate::order::permit::resolve(text, names)
@@ -325,6 +329,13 @@ impl RobotHandle {
         }
         self.enqueue(starts, end, None).await
     }
+}
+
+/// Whether a line order one start refused runs as a path of that line cut into starts chained
+/// at speed: a joint's channel would need a later F174 segment, or its tables are too big for
+/// their areas.
+fn runs_in_parts(e: &PlanError) -> bool {
+    matches!(e, PlanError::LaterSegment { .. }) || e.too_big()
 }
 
 /// Runs `plan` on the blocking pool: planning takes milliseconds of CPU, which an async task

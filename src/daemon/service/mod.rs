@@ -4,14 +4,18 @@
 //! ```text
 //! lock the socket -> bind socket(s), Modbus faces -> spawn Daemon -> READY=1 -> serve ...
 //!   STATUS= on change, WATCHDOG=1 while every worker makes progress (supervise.rs)
-//!   SIGHUP: the config is read again and checked; what changed is logged (not applied)
+//!   SIGHUP: the config is read again, checked and compared whole (reload.rs): the gateway's
+//!     lists and the cell's signals and programs are applied; the rest is named, section and
+//!     key, as needing a restart; a config that does not load is refused, the running one kept
 //!   a worker that dies: the daemon exits non-zero (systemd restarts it)
 //!   shutdown signal -> STOPPING=1 -> stop accepting, end event streams -> Daemon::shut_down
 //! ```
 
+mod reload;
 mod socket;
 mod supervise;
 
+pub use reload::{Change, ReloadError, Reloaded, Running};
 pub use socket::{bind_unix, lock, lock_path};
 pub use supervise::{healthy, status_line};
 
@@ -331,6 +335,7 @@ pub async fn serve(
         notifier,
         closing.clone(),
     ));
+    let mut running = config_path.map(running_config);
     let mut hangups = hangup_signals();
     tokio::pin!(shutdown);
     let failed = loop {
@@ -346,7 +351,7 @@ pub async fn serve(
                 tracing::error!("{why}; the daemon exits");
                 break Some(ServeError::WorkerFailed(why));
             }
-            Some(()) = hangups.recv() => recheck(config, config_path),
+            Some(()) = hangups.recv() => reload(running.as_mut().zip(config_path), daemon.robots()),
         }
     };
     tracing::info!("shutting down");
@@ -439,56 +444,26 @@ fn hangup_signals() -> tokio::sync::mpsc::Receiver<()> {
     rx
 }
 
-/// SIGHUP: reads the config again and says what changed. The running daemon keeps its config
-/// (a change is applied by restarting the service): a mistake in the file never stops it.
-fn recheck(running: &Config, path: Option<&Path>) {
-    let Some(path) = path else {
+/// The config file as the daemon starts with it, to compare a reload with (as good as empty
+/// when it cannot be read again: every key is then named as changed, needing a restart).
+fn running_config(path: &Path) -> Running {
+    Running::read(path).unwrap_or_else(|e| {
+        tracing::warn!(config = %path.display(), error = %e, "the config cannot be read again: a reload will name every key as needing a restart");
+        Running::default()
+    })
+}
+
+/// SIGHUP: reads the config file again, applies what may change live and logs every change
+/// (see `reload.rs`).
+fn reload(
+    running: Option<(&mut Running, &Path)>,
+    robots: &std::collections::BTreeMap<String, super::RobotHandle>,
+) {
+    let Some((running, path)) = running else {
         tracing::info!("SIGHUP: no config file to read again");
         return;
     };
-    match Config::load(path) {
-        Err(e) => tracing::error!(
-            config = %path.display(),
-            error = %e,
-            "SIGHUP: the config has an error; the daemon goes on with the one it started with"
-        ),
-        Ok(new) => {
-            let changed = changes(running, &new);
-            if changed.is_empty() {
-                tracing::info!(config = %path.display(), "SIGHUP: the config is unchanged");
-            } else {
-                tracing::warn!(
-                    config = %path.display(),
-                    changed = %changed.join(", "),
-                    "SIGHUP: the config changed; restart the service to apply it (systemctl restart linterpd)"
-                );
-            }
-        }
-    }
-}
-
-/// What differs between two configs: robots by name, and the `[daemon]` table.
-fn changes(old: &Config, new: &Config) -> Vec<String> {
-    let mut out = Vec::new();
-    for robot in &new.robots {
-        let before = old.robots.iter().find(|r| r.name == robot.name);
-        match before {
-            None => out.push(format!("robot {} added", robot.name)),
-            Some(b) if b != robot || old.link(&b.name) != new.link(&robot.name) => {
-                out.push(format!("robot {} changed", robot.name));
-            }
-            Some(_) => {}
-        }
-    }
-    for robot in &old.robots {
-        if !new.robots.iter().any(|r| r.name == robot.name) {
-            out.push(format!("robot {} removed", robot.name));
-        }
-    }
-    if old.daemon != new.daemon {
-        out.push("[daemon] changed".to_owned());
-    }
-    out
+    reload::log(path, &running.reload(path, robots));
 }
 
 fn log_notify(result: io::Result<()>, what: &str) {
@@ -513,8 +488,6 @@ pub async fn shutdown_signal() {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const SHIPPED: &str = include_str!("../../../config/linterpd.toml");
 
     fn temp(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
@@ -557,17 +530,5 @@ mod tests {
             "the OS error is kept"
         );
         std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn a_reread_config_names_what_changed() {
-        let old = Config::from_toml(SHIPPED).unwrap();
-        assert!(changes(&old, &old).is_empty());
-        let faster = SHIPPED.replace("speed_mm_s = 240.0", "speed_mm_s = 200.0");
-        let new = Config::from_toml(&faster).unwrap();
-        assert_eq!(changes(&old, &new), ["robot press-loader changed"]);
-        let other_port = SHIPPED.replace("/dev/ttyUSB0", "/dev/ttyUSB1");
-        let new = Config::from_toml(&other_port).unwrap();
-        assert_eq!(changes(&old, &new), ["robot press-loader changed"]);
     }
 }

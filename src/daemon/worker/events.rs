@@ -2,32 +2,16 @@
 //! where the daemon's reports follow the PLC, and where the machine's requests (the host word, a
 //! stop, a start written again, a withdrawal, a start found running) become exchanges.
 
+use super::dispatch::{Settled, end_of, moved};
 use super::{Worker, describe, link_broken, now};
 use crate::contract::Permit;
 use crate::contract::machine::{Blocker, Event, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault, describe_unmet};
 use crate::daemon::request::CommandError;
 use crate::order::MoveOrder;
-use crate::plc::exchange::{CommandWrite, ContractError, describe_outcome};
-use crate::wire::{MoveId, MoveReport, RobotPhase, Stage};
+use crate::plc::exchange::{CommandWrite, ContractError};
+use crate::wire::{EndReason, MoveId, MoveReport, RobotPhase, Stage};
 
-/// A move that stopped short, waiting for the status block that shows where the PLC stopped it.
-#[derive(Debug)]
-pub(super) struct Settling {
-    id: MoveId,
-    stage: Stage,
-    why: String,
-    /// The heartbeat of the block that showed its end.
-    beat: u16,
-    /// When that block was read.
-    since: std::time::Instant,
-}
-
-/// The longest a stopped move's report waits for a block that shows the channels still.
-const SETTLE_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
-
-/// A stop asked for this recently stopped the moves that end stopped.
-const STOP_ASKED_WINDOW: std::time::Duration = std::time::Duration::from_secs(2);
 /// Planned duration given to a start found running whose tables could not be read.
 const UNKNOWN_DURATION: std::time::Duration = std::time::Duration::from_secs(60);
 
@@ -52,7 +36,7 @@ impl Worker {
 
     /// Applies a status block just read.
     pub(super) async fn read(&mut self, status: Status) -> Result<(), ContractError> {
-        let events = self.machine.on_status(&status, now());
+        let events = self.dispatch.machine.on_status(&status, now());
         let incidents_before = self.out.incidents().count;
         // Counted before anything reads this block: a cycle must not take a wait met on the
         // block that shows its PLC restarted.
@@ -70,8 +54,8 @@ impl Worker {
     fn note_status(&self, status: &Status) {
         let counts = status.block.elapsed.map(i64::from);
         let pose = self.robot.pose_of(&self.by_joint(counts)).to_mm_deg();
-        let heartbeat_age = self.machine.heartbeat_age(now());
-        let homed = self.machine.homed();
+        let heartbeat_age = self.dispatch.machine.heartbeat_age(now());
+        let homed = self.dispatch.machine.homed();
         self.out.state(|s| {
             s.link.connected = true;
             s.link.error = None;
@@ -88,10 +72,10 @@ impl Worker {
 
     /// Publishes why a new order would be refused now.
     pub(super) fn publish_refusal(&self) {
-        let blocker = if self.session.is_none() {
+        let blocker = if self.conn.session.is_none() {
             Some(Blocker::LinkDown)
         } else {
-            self.machine.blocker(now())
+            self.dispatch.machine.blocker(now())
         };
         let refusal = blocker.filter(Blocker::refuses_orders);
         self.out.set_refusal(refusal);
@@ -100,7 +84,7 @@ impl Worker {
     }
 
     pub(super) fn publish_phase(&self) {
-        let phase = RobotPhase::from(self.machine.phase());
+        let phase = RobotPhase::from(self.dispatch.machine.phase());
         self.out.state(|s| s.phase = phase);
     }
 
@@ -136,13 +120,13 @@ impl Worker {
     }
 
     async fn apply_one(&mut self, event: Event) -> Result<(), ContractError> {
-        tracing::debug!(robot = %self.robot.name, ?event, phase = self.machine.phase().name(), "machine event");
-        let Some(link) = self.session.as_mut().map(|s| &mut s.contract) else {
+        tracing::debug!(robot = %self.robot.name, ?event, phase = self.dispatch.machine.phase().name(), "machine event");
+        let Some(link) = self.conn.session.as_mut().map(|s| &mut s.contract) else {
             self.report_event(event);
             return Ok(());
         };
         match event {
-            Event::WriteHost => link.write_host(self.machine.host()).await,
+            Event::WriteHost => link.write_host(self.dispatch.machine.host()).await,
             Event::WriteStop => {
                 tracing::warn!(robot = %self.robot.name, "writing a stop (a watchdog tripped)");
                 link.stop().await
@@ -171,11 +155,11 @@ impl Worker {
     /// Writes a start's command word again after its reply was lost and the PLC did not show
     /// it taken (the PLC ignores a repeated `seq` anyway).
     async fn rewrite_start(&mut self, tag: MoveId) -> Result<(), ContractError> {
-        let last_start = self.last_start.clone();
+        let bank = self.dispatch.start_of(tag).cloned();
         let link = self.link()?;
-        let written = match &last_start {
-            Some((id, bank)) if *id == tag => link.start(bank).await,
-            _ => Ok(CommandWrite::Unconfirmed(
+        let written = match &bank {
+            Some(bank) => link.start(bank).await,
+            None => Ok(CommandWrite::Unconfirmed(
                 crate::plc::PlcError::InvalidRequest {
                     operation: "write the start again".into(),
                     detail: "its bank is no longer known".into(),
@@ -184,14 +168,14 @@ impl Worker {
         };
         let confirmed = matches!(written, Ok(CommandWrite::Confirmed));
         tracing::warn!(robot = %self.robot.name, id = tag, confirmed, "start written again after a lost reply");
-        self.machine.start_rewritten(now(), confirmed);
+        self.dispatch.machine.start_rewritten(now(), confirmed);
         written.map(|_| ())
     }
 
     /// Follows a start found running that this run did not give: described from its bank read
     /// back, reported as a recovered move.
     async fn adopt(&mut self, seq: u16) -> Result<(), ContractError> {
-        let Some(status) = self.machine.last().copied() else {
+        let Some(status) = self.dispatch.machine.last().copied() else {
             return Ok(());
         };
         let id = self.shared.next_id();
@@ -211,18 +195,18 @@ impl Worker {
         report.start_counts = Some(planned.from.map(i64::from));
         report.target_counts = planned.targets.map(|t| t.map(i64::from));
         report.deadline_s = Some(
-            self.machine
+            self.dispatch
+                .machine
                 .settings()
                 .run_limit(planned.duration)
                 .as_secs_f64(),
         );
         self.shared.moves(|m| m.insert(report));
         self.out.state(|s| s.current_move = Some(id));
-        self.started.insert(id, now());
-        self.next_seq = seq.wrapping_add(1).max(1);
-        self.next_bank = 1 - planned.bank.min(1);
+        self.dispatch.started(id, now());
+        self.dispatch.spent(seq, planned.bank);
         let bank = planned.bank;
-        self.machine.adopt(planned, now());
+        self.dispatch.machine.adopt(planned, now());
         tracing::info!(robot = %self.robot.name, id, seq, bank, "following a move this run did not start");
         Ok(())
     }
@@ -231,7 +215,7 @@ impl Worker {
     fn report_event(&mut self, event: Event) {
         match event {
             Event::Started { tag } => {
-                self.started.insert(tag, now());
+                self.dispatch.started(tag, now());
                 let deadline_s = self.run_deadline(tag).map(|d| d.as_secs_f64());
                 self.shared.moves(|m| {
                     m.update(tag, |r| {
@@ -265,7 +249,7 @@ impl Worker {
             Event::Restarted => {
                 tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
                 self.cancel_queue("cancelled: the PLC restarted");
-                self.last_start = None;
+                self.dispatch.forget_starts();
             }
             Event::Stalled { still } => {
                 tracing::error!(robot = %self.robot.name, still_ms = still.as_millis() as u64, "the PLC heartbeat stands still");
@@ -273,14 +257,14 @@ impl Worker {
             }
             Event::Homed => {
                 tracing::info!(robot = %self.robot.name, "homed");
-                for reply in std::mem::take(&mut self.homing) {
+                for reply in std::mem::take(&mut self.inbox.homing) {
                     let _ = reply.send(Ok(()));
                 }
             }
             Event::HomeFailed { fault } => {
                 let why = CommandError::HomeFailed { fault };
                 tracing::error!(robot = %self.robot.name, "{why}");
-                for reply in std::mem::take(&mut self.homing) {
+                for reply in std::mem::take(&mut self.inbox.homing) {
                     let _ = reply.send(Err(why.clone()));
                 }
             }
@@ -295,15 +279,20 @@ impl Worker {
 
     /// The longest move `id` can take from its start until the daemon ends it.
     fn run_deadline(&self, id: MoveId) -> Option<std::time::Duration> {
-        let planned = self.machine.given().into_iter().find(|p| p.tag == id)?;
-        let watch = self.machine.settings();
+        let planned = self
+            .dispatch
+            .machine
+            .given()
+            .into_iter()
+            .find(|p| p.tag == id)?;
+        let watch = self.dispatch.machine.settings();
         Some(watch.run_limit(planned.duration) + watch.link_grace)
     }
 
     fn done(&mut self, id: MoveId, elapsed: Option<[i32; CHANNELS]>) {
         let motion_s = self
-            .started
-            .remove(&id)
+            .dispatch
+            .ran(id)
             .map(|t| now().saturating_duration_since(t).as_secs_f64());
         if let Some(seconds) = motion_s {
             self.shared.metrics.moved(seconds);
@@ -330,59 +319,25 @@ impl Worker {
     }
 
     fn ended(&mut self, id: MoveId, outcome: Outcome) {
-        self.started.remove(&id);
+        self.dispatch.ran(id);
         let seq = self.shared.moves(|m| m.get(id)).and_then(|r| r.seq);
         let start = seq.map_or_else(|| "the start".to_owned(), |s| format!("start {s}"));
-        let asked = self
-            .stop_asked
-            .is_some_and(|t| now().saturating_duration_since(t) < STOP_ASKED_WINDOW);
+        let asked = self.dispatch.stopped_by_request(now());
         let held = matches!(outcome, Outcome::Stopped { fault } if fault == Fault::PermitDropped.word())
-            && self.permits.contains_key(&id);
-        let (stage, why) = match outcome {
-            Outcome::Stopped { fault } if fault == Fault::StoppedFromOutside.word() => {
-                (Stage::Stopped, "stopped by the e-stop input".to_owned())
-            }
-            // The fault word outlives a stop until a clear fault: only a move with a permit was
-            // held by it.
-            Outcome::Stopped { .. } if held => (Stage::Stopped, self.held_because(id)),
-            Outcome::Stopped { .. } if asked => (Stage::Stopped, "stopped by request".to_owned()),
-            Outcome::Stopped { .. } => (
-                Stage::Stopped,
-                "stopped by the PLC (PROG mode, or its program)".to_owned(),
-            ),
-            Outcome::Dropped if asked => (Stage::Cancelled, "cancelled by a stop request".into()),
-            Outcome::Dropped => (
-                Stage::Cancelled,
-                format!("{start} {}", describe_outcome(&outcome)),
-            ),
-            _ => (
-                Stage::Failed,
-                format!("{start} {}", describe_outcome(&outcome)),
-            ),
-        };
+            && self.dispatch.permit(id).is_some();
+        let because = held.then(|| self.held_because(id));
+        let (stage, why) = end_of(outcome, because, asked, &start);
         tracing::warn!(robot = %self.robot.name, id, stage = stage.name(), "move ended: {why}");
         if held {
-            self.shared.moves(|m| m.update(id, |r| r.held = true));
+            self.shared
+                .moves(|m| m.update(id, |r| r.end = Some(EndReason::Held)));
         }
-        let moved = matches!(
-            outcome,
-            Outcome::Stopped { .. }
-                | Outcome::Faulted { .. }
-                | Outcome::OutsideEnvelope { .. }
-                | Outcome::Overrun { .. }
-                | Outcome::WentIdle
-        );
-        match self.machine.last() {
+        match self.dispatch.machine.last() {
             // Its counts are read once the channels have stopped: a scan after the block
             // that showed the end, with no channel of the robot busy.
-            Some(last) if moved => {
-                self.settling.push(Settling {
-                    id,
-                    stage,
-                    why,
-                    beat: last.block.heartbeat,
-                    since: now(),
-                });
+            Some(last) if moved(outcome) => {
+                let beat = last.block.heartbeat;
+                self.dispatch.settling(id, stage, why, beat, now());
                 // The PLC runs it no more; its report ends with the counts it stopped at.
                 self.out.state(|s| {
                     if s.current_move == Some(id) {
@@ -398,12 +353,8 @@ impl Worker {
     /// Ends the moves that stopped short and have waited too long for a block that shows their
     /// channels still (the link is down): with the counts last read.
     pub(super) fn settle_late(&mut self) {
-        let (late, waiting): (Vec<Settling>, Vec<Settling>) = std::mem::take(&mut self.settling)
-            .into_iter()
-            .partition(|s| now().saturating_duration_since(s.since) > SETTLE_LIMIT);
-        self.settling = late;
-        self.settle(None);
-        self.settling = waiting;
+        let late = self.dispatch.settled_late(now());
+        self.end_settled(late, None);
     }
 
     /// Ends the moves that stopped short once a status block read a scan after their end
@@ -411,20 +362,22 @@ impl Worker {
     /// error to their targets. `None`: the PLC can no longer tell (the link, a restart, a
     /// stall); they end with the counts last read.
     pub(super) fn settle(&mut self, status: Option<&Status>) {
-        let mask = self
-            .robot
+        let settled = self.dispatch.settled(status, self.channel_mask(), now());
+        self.end_settled(settled, status);
+    }
+
+    /// The robot's channels, as a bit mask.
+    fn channel_mask(&self) -> u16 {
+        self.robot
             .joints
             .iter()
-            .fold(0_u16, |m, j| m | 1 << j.channel);
-        let late = |s: &Settling| now().saturating_duration_since(s.since) > SETTLE_LIMIT;
-        let (done, waiting): (Vec<Settling>, Vec<Settling>) = std::mem::take(&mut self.settling)
-            .into_iter()
-            .partition(|s| match status {
-                Some(b) => (b.block.heartbeat != s.beat && b.block.busy & mask == 0) || late(s),
-                None => true,
-            });
-        self.settling = waiting;
-        for s in done {
+            .fold(0_u16, |m, j| m | 1 << j.channel)
+    }
+
+    /// Ends the reports of `settled`, their counts `status`'s when it shows the channels still.
+    fn end_settled(&mut self, settled: Vec<Settled>, status: Option<&Status>) {
+        let mask = self.channel_mask();
+        for s in settled {
             let counts = status
                 .filter(|b| b.block.busy & mask == 0)
                 .map(|b| b.block.elapsed.map(i64::from));
@@ -449,13 +402,14 @@ impl Worker {
     /// the last status block shows them.
     fn held_because(&self, id: MoveId) -> String {
         let inputs = self
+            .dispatch
             .machine
             .last()
             .map(|s| s.block.inputs)
             .unwrap_or_default();
         let unmet = self
-            .permits
-            .get(&id)
+            .dispatch
+            .permit(id)
             .map(|p| describe_unmet(p, &inputs, &self.settings.layout.inputs))
             .filter(|text| !text.is_empty());
         match unmet {

@@ -15,27 +15,27 @@ impl Worker {
     /// Carries out the next piece of the oldest gateway request; answers it when it is done or
     /// failed. A link failure also fails the link (the caller reconnects).
     pub(super) async fn gateway_exchange(&mut self) -> Result<(), ContractError> {
-        let Some(session) = self.session.as_mut() else {
+        let Some(session) = self.conn.session.as_mut() else {
             self.gateway_link_down();
             return Ok(());
         };
         let plc = session.contract.plc();
         let sizes = plc.exchange_sizes();
-        let Some(job) = self.gateway.front_mut() else {
+        let Some(job) = self.inbox.gateway.front_mut() else {
             return Ok(());
         };
         let incidents = self.out.incidents();
         if job.epoch.is_some_and(|e| e != incidents.count) {
             // Asked for before the PLC restarted, stalled or was lost: a cycle's output is
             // never written to a PLC it no longer knows.
-            let job = self.gateway.pop_front().expect("front");
+            let job = self.inbox.gateway.pop_front().expect("front");
             let why = incidents.last.unwrap_or_default();
             tracing::warn!(robot = %self.robot.name, range = %job.range, "a cycle's output not written: {why} since it was asked for");
             let _ = job.reply.send(Err(GatewayError::Untrusted { why }));
             return Ok(());
         }
         let Some(piece) = job.next_piece(sizes) else {
-            let job = self.gateway.pop_front().expect("front");
+            let job = self.inbox.gateway.pop_front().expect("front");
             job.finish();
             return Ok(());
         };
@@ -57,10 +57,10 @@ impl Worker {
         }
         match result {
             Ok(read) => {
-                let job = self.gateway.front_mut().expect("front");
+                let job = self.inbox.gateway.front_mut().expect("front");
                 job.piece_done(&piece, read);
                 if job.next_piece(sizes).is_none() {
-                    let job = self.gateway.pop_front().expect("front");
+                    let job = self.inbox.gateway.pop_front().expect("front");
                     self.out.state(|s| s.gateway.requests += 1);
                     self.shared.metrics.gateway_request(false);
                     job.finish();
@@ -68,7 +68,7 @@ impl Worker {
                 Ok(())
             }
             Err(e) => {
-                let job = self.gateway.pop_front().expect("front");
+                let job = self.inbox.gateway.pop_front().expect("front");
                 self.out.state(|s| {
                     s.gateway.requests += 1;
                     s.gateway.failed += 1;
@@ -89,14 +89,14 @@ impl Worker {
 
     /// Answers every gateway request waiting: the link is down.
     pub(super) fn gateway_link_down(&mut self) {
-        while let Ok(job) = self.gateway_rx.try_recv() {
-            self.gateway.push_back(job);
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
         }
-        if self.gateway.is_empty() {
+        if self.inbox.gateway.is_empty() {
             return;
         }
         let detail = self.out.state(|s| s.link.error.clone());
-        for job in std::mem::take(&mut self.gateway) {
+        for job in std::mem::take(&mut self.inbox.gateway) {
             self.out.state(|s| {
                 s.gateway.requests += 1;
                 s.gateway.failed += 1;

@@ -5,13 +5,38 @@
 use std::time::Duration;
 
 use super::session::Session;
-use super::{Worker, describe, now};
+use super::{Connector, Worker, describe, now};
 use crate::contract::machine::Blocker;
 use crate::plc::exchange::ContractError;
 
 /// Reconnection backoff bounds.
-pub(super) const BACKOFF_MIN: Duration = Duration::from_millis(100);
+const BACKOFF_MIN: Duration = Duration::from_millis(100);
 const BACKOFF_MAX: Duration = Duration::from_secs(5);
+
+/// The robot's link: how to open it, the session while it is open, and how long to wait before
+/// the next attempt while it is not.
+pub(super) struct Connection {
+    /// Opens the link (called again after every link failure).
+    pub connect: Connector,
+    /// The open link and what is known of it; `None` while the link is down.
+    pub session: Option<Session>,
+    /// The wait before the next attempt to open it.
+    pub backoff: Duration,
+    /// Whether the link was ever opened (a later opening is a reconnection).
+    pub opened_before: bool,
+}
+
+impl Connection {
+    /// Not opened yet.
+    pub(super) fn new(connect: Connector) -> Self {
+        Self {
+            connect,
+            session: None,
+            backoff: BACKOFF_MIN,
+            opened_before: false,
+        }
+    }
+}
 
 impl Worker {
     /// Opens the link again; while it is down, a move in flight is ended at the instant its
@@ -22,10 +47,11 @@ impl Worker {
     pub(super) async fn reconnect(&mut self) {
         self.expire_offline();
         let expiry = self
+            .dispatch
             .machine
             .expires_while_down()
             .map(tokio::time::Instant::from_std);
-        let attempt = (self.connect)();
+        let attempt = (self.conn.connect)();
         let opened = match expiry {
             Some(at) => tokio::select! {
                 opened = attempt => opened,
@@ -35,10 +61,10 @@ impl Worker {
         };
         match opened {
             Ok(plc) => {
-                self.session = Some(Session::open(plc, self.settings, &self.shared));
-                self.backoff = BACKOFF_MIN;
+                self.conn.session = Some(Session::open(plc, self.settings, &self.shared));
+                self.conn.backoff = BACKOFF_MIN;
                 // The first opening is a connection, not a reconnection.
-                let again = std::mem::replace(&mut self.opened_before, true);
+                let again = std::mem::replace(&mut self.conn.opened_before, true);
                 self.out.state(|s| s.link.reconnects += u64::from(again));
                 if again {
                     self.shared.metrics.reconnected();
@@ -63,11 +89,12 @@ impl Worker {
                 }
                 self.publish_refusal();
                 let until_expiry = self
+                    .dispatch
                     .machine
                     .expires_while_down()
                     .map(|at| at.saturating_duration_since(now()));
-                let wait = until_expiry.map_or(self.backoff, |d| self.backoff.min(d));
-                self.backoff = (self.backoff * 2).min(BACKOFF_MAX);
+                let wait = until_expiry.map_or(self.conn.backoff, |d| self.conn.backoff.min(d));
+                self.conn.backoff = (self.conn.backoff * 2).min(BACKOFF_MAX);
                 self.wait(wait).await;
                 self.offline_requests().await;
             }
@@ -77,10 +104,10 @@ impl Worker {
     /// While the link is down: stops and commands are answered at once (the link is down),
     /// queued moves are cancelled by a stop and expire after `start_within`.
     async fn offline_requests(&mut self) {
-        if !self.pending_stops.is_empty() {
+        if !self.inbox.pending_stops.is_empty() {
             let _ = self.take_stops().await;
         }
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             let detail = self.out.state(|s| s.link.error.clone());
             super::answer(command, Err(super::CommandError::LinkDown { detail }));
         }
@@ -90,7 +117,7 @@ impl Worker {
 
     /// Starts in flight past their planned end while the link is down end as unknown.
     fn expire_offline(&mut self) {
-        let events = self.machine.tick(now());
+        let events = self.dispatch.machine.tick(now());
         self.apply_offline(events);
         self.settle_late();
         self.publish_phase();
@@ -99,15 +126,15 @@ impl Worker {
     pub(super) fn link_failed(&mut self, e: &ContractError) {
         let text = describe(e);
         // A link that opens and fails at once fails again on every retry: say it once.
-        if self.out.get().state.link.error.as_deref() != Some(text.as_str()) {
-            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
-        } else {
+        if self.out.get().state.link.error.as_deref() == Some(text.as_str()) {
             tracing::debug!(robot = %self.robot.name, error = %text, "PLC link failed again; reconnecting");
+        } else {
+            tracing::warn!(robot = %self.robot.name, error = %text, "PLC link failed; reconnecting");
         }
-        self.session = None;
+        self.conn.session = None;
         // The moves in flight are kept: after the reconnection the status block says whether the
         // PLC went on with them (same host word) or restarted.
-        self.machine.link_lost(now());
+        self.dispatch.machine.link_lost(now());
         self.out.state(|s| {
             s.link.connected = false;
             s.link.error = Some(text);
@@ -133,7 +160,7 @@ impl Worker {
         if changed {
             tracing::error!(robot = %self.robot.name, error = %text, "the PLC program does not answer as the contract says");
         }
-        self.machine.link_lost(now());
+        self.dispatch.machine.link_lost(now());
         self.out.set_refusal(Some(Blocker::LinkDown));
         self.publish_phase();
     }

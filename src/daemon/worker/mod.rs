@@ -1,20 +1,31 @@
 //! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
-//! the contract (docs/CONTRACT.md, "What the host does for one move") with the pure
-//! [`Machine`] deciding what every status block means, and applies what the machine says in one
-//! place ([`events`]).
+//! the contract (docs/CONTRACT.md, "What the host does for one move"). Its decisions are the
+//! pure [`Dispatcher`]'s (the queue, one record per move in flight, how a move starts, what the
+//! worker is doing as one [`Activity`], and the contract's [`Machine`] deciding what every
+//! status block means); the worker is its driver: one loop that makes the exchanges they ask
+//! for over the link's session, feeds back what came of them, and applies what the machine
+//! says in one place ([`events`]).
 //!
 //! ```text
-//! run: loop { stops first | link down: reconnect | requests, queue expiry | begin a move | poll }
-//!   mod.rs     the loop, waiting on requests, stops, home and clear-fault, shutdown
-//!   link.rs    (re)connecting, a link that fails or a PLC program that does not answer right
-//!   events.rs  reading the status block into the machine; applying its events to the reports
-//!   moves.rs   the queue (start_within), planning, upload, the start written once
+//! run: loop { link down: reconnect | step: by the activity, one step a round }
+//!   Idle:       stops first | commands | queue expiry | begin a move | poll | gateway | wait
+//!   Uploading:  one exchange of the bank (the running start watched between)
+//!   Holding:    a prepared bank held until its gate opens (reads, gateway, wait)
+//!   Proving:    one proof read until the PLC may take the start; then the start written once
+//!   mod.rs       the loop, waiting on requests, stops, home and clear-fault, shutdown
+//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers)
+//!   activity.rs  the steps of the move whose turn came
+//!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
+//!   events.rs    reading the status block into the machine; applying its events to the reports
+//!   moves.rs     a turn, planning, preloading a section's parts, the start written once
 //! ```
 //!
 //! A stop overtakes everything: it is taken between any two exchanges (an upload in progress is
 //! abandoned between two of its writes, never mid-frame) and cancels every queued move. A request
 //! wakes the worker at once: nothing waits for the next poll.
 
+mod activity;
+mod dispatch;
 mod events;
 mod followers;
 mod gateway;
@@ -24,10 +35,9 @@ mod pace;
 mod placement;
 mod preload;
 mod prepared;
-pub(crate) use prepared::PREPARED_CANCELLED;
 mod session;
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
@@ -41,11 +51,11 @@ use super::shared::{Publisher, Shared};
 use crate::contract::machine::{Machine, Phase};
 use crate::contract::{CHANNELS, State};
 use crate::kinematics::JOINTS;
-use crate::order::CheckedOrder;
-use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings, VerifiedBank};
+use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettings};
 use crate::plc::{AnyPlc, Plc};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
+use dispatch::{Activity, Dispatcher, Queued};
 
 /// Polling while nothing is in flight (the heartbeat's freshness comes from these reads).
 const IDLE_POLL: Duration = Duration::from_millis(250);
@@ -62,16 +72,6 @@ pub(super) struct Channels {
     pub gateway: mpsc::UnboundedReceiver<super::gateway::Job>,
     /// The daemon shutting down.
     pub shutdown: watch::Receiver<bool>,
-}
-
-/// An order waiting its turn.
-#[derive(Debug)]
-struct Queued {
-    id: MoveId,
-    order: CheckedOrder,
-    gate: Option<Gate>,
-    epoch: Option<u64>,
-    accepted: std::time::Instant,
 }
 
 /// The time now, on tokio's clock (paused in tests), as the pure core takes it.
@@ -99,60 +99,44 @@ fn link_broken(e: &ContractError) -> bool {
     matches!(e, ContractError::Plc(p) if p.is_link_failure())
 }
 
-/// One robot's link owner.
+/// One robot's link owner: the driver of its [`Dispatcher`] over its link.
 pub(super) struct Worker {
     robot: Robot,
     settings: ContractSettings,
-    connect: Connector,
     home_counts: [i64; JOINTS],
-    start_within: Duration,
-    requests: mpsc::UnboundedReceiver<Request>,
-    stops: mpsc::UnboundedReceiver<Reply>,
-    gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
-    shutdown: watch::Receiver<bool>,
     shared: Arc<Shared>,
     /// What the worker publishes: the robot's snapshot (it alone sends on it).
     out: Publisher,
-    /// The open link and what is known of it; `None` while the link is down.
-    session: Option<session::Session>,
-    /// Register gateway requests, served one exchange at a time between the worker's own.
-    gateway: VecDeque<super::gateway::Job>,
+    /// The link: how to open it, the open session, the backoff.
+    conn: link::Connection,
+    /// What comes in, and what was taken in and waits to be carried out.
+    inbox: Inbox,
+    /// The queue, the moves in flight and the contract's machine: what the worker decides.
+    dispatch: Dispatcher,
     /// When the status block is next to be read.
     next_poll: tokio::time::Instant,
+}
+
+/// What the worker receives, and what it took in that waits for its turn.
+struct Inbox {
+    /// Moves, homes, clear-faults.
+    requests: mpsc::UnboundedReceiver<Request>,
+    /// Stops (they overtake everything).
+    stops: mpsc::UnboundedReceiver<Reply>,
+    /// Register gateway requests.
+    gateway_rx: mpsc::UnboundedReceiver<super::gateway::Job>,
+    /// The daemon shutting down.
+    shutdown: watch::Receiver<bool>,
+    /// Register gateway requests, served one exchange at a time between the worker's own.
+    gateway: VecDeque<super::gateway::Job>,
     /// Whether a gateway exchange goes before the next status read, if both are due.
     gateway_turn: bool,
-    machine: Machine,
-    queue: VecDeque<Queued>,
-    /// Since when the head of the queue could have been given to the PLC but for a problem.
-    room_since: Option<std::time::Instant>,
-    next_seq: u16,
-    next_bank: u16,
-    backoff: Duration,
     /// Stops taken while waiting, answered by the next `take_stops`.
     pending_stops: Vec<Reply>,
     /// Home and clear-fault requests taken while waiting.
     commands: Vec<Request>,
     /// Answers waiting for the home routine's end.
     homing: Vec<Reply>,
-    /// The last start written and its bank, for writing it again after a lost reply.
-    last_start: Option<(MoveId, VerifiedBank)>,
-    /// The queued parts of a path whose tables were written and read back ahead of their
-    /// turns, and what was written (the bank, where, the words, which each start must match).
-    /// Emptied by every bank written whole, which may overwrite them.
-    preloaded: Vec<(MoveId, crate::plc::exchange::Preload)>,
-    /// When each running move was seen starting.
-    started: HashMap<MoveId, std::time::Instant>,
-    /// The permit of each move written with one, until it ends (to name the input that held
-    /// it).
-    permits: HashMap<MoveId, crate::contract::Permit>,
-    /// When the last stop was asked for (a move stopped soon after was stopped by request).
-    stop_asked: Option<std::time::Instant>,
-    /// Whether the link was ever opened (a later opening is a reconnection).
-    opened_before: bool,
-    /// Moves with no motion of their own, each ending with the start ahead of it.
-    followers: Vec<followers::Follower>,
-    /// Moves that stopped short, their reports waiting for the counts the PLC stopped at.
-    settling: Vec<events::Settling>,
 }
 
 impl Worker {
@@ -167,36 +151,23 @@ impl Worker {
         Self {
             robot: setup.robot,
             settings: setup.settings,
-            connect: setup.connect,
             home_counts: setup.home_counts,
-            start_within: options.start_within,
-            requests: channels.requests,
-            stops: channels.stops,
-            gateway_rx: channels.gateway,
-            shutdown: channels.shutdown,
             shared,
             out,
-            session: None,
-            gateway: VecDeque::new(),
+            conn: link::Connection::new(setup.connect),
+            inbox: Inbox {
+                requests: channels.requests,
+                stops: channels.stops,
+                gateway_rx: channels.gateway,
+                shutdown: channels.shutdown,
+                gateway: VecDeque::new(),
+                gateway_turn: false,
+                pending_stops: Vec::new(),
+                commands: Vec::new(),
+                homing: Vec::new(),
+            },
+            dispatch: Dispatcher::new(machine, options.start_within),
             next_poll: tokio::time::Instant::now(),
-            gateway_turn: false,
-            machine,
-            queue: VecDeque::new(),
-            room_since: None,
-            next_seq: 1,
-            next_bank: 0,
-            backoff: link::BACKOFF_MIN,
-            pending_stops: Vec::new(),
-            commands: Vec::new(),
-            homing: Vec::new(),
-            last_start: None,
-            preloaded: Vec::new(),
-            started: HashMap::new(),
-            permits: HashMap::new(),
-            stop_asked: None,
-            opened_before: false,
-            followers: Vec::new(),
-            settling: Vec::new(),
         }
     }
 
@@ -204,11 +175,13 @@ impl Worker {
     pub(super) async fn run(mut self) {
         loop {
             self.shared.beat.mark();
-            if *self.shutdown.borrow() {
+            // A move between its turn and its start goes on to its start or its end first.
+            let idle = matches!(self.dispatch.activity, Activity::Idle);
+            if idle && *self.inbox.shutdown.borrow() {
                 self.shut_down().await;
                 return;
             }
-            if self.session.is_none() {
+            if idle && self.conn.session.is_none() {
                 self.reconnect().await;
                 continue;
             }
@@ -222,9 +195,10 @@ impl Worker {
         }
     }
 
-    /// One round: a stop first, then commands, the queue, a move to begin, the status block when
-    /// its read is due, else one register gateway exchange; then a wait for what comes next.
-    async fn step(&mut self) -> Result<(), ContractError> {
+    /// One round while no move is between its turn and its start: a stop first, then commands,
+    /// the queue, a move to begin, the status block when its read is due, else one register
+    /// gateway exchange; then a wait for what comes next.
+    async fn idle_step(&mut self) -> Result<(), ContractError> {
         // Requests come in here too: a busy gateway never leaves the worker without a wait.
         self.take_pending_requests();
         self.take_stops().await?;
@@ -232,22 +206,22 @@ impl Worker {
         self.drop_shut();
         self.expire_queue();
         if self.has_room() {
-            let queued = self.queue.pop_front().expect("not empty");
+            let queued = self.dispatch.pop().expect("not empty");
             self.next_poll = tokio::time::Instant::now();
             return self.begin(queued).await;
         }
         let poll_due = tokio::time::Instant::now() >= self.next_poll;
         // Gateway exchanges go between the worker's own, one at a time; when the status read is
         // due too they take turns, so neither waits behind more than one of the other.
-        if !self.gateway.is_empty() && (!poll_due || self.gateway_turn) {
-            self.gateway_turn = false;
+        if !self.inbox.gateway.is_empty() && (!poll_due || self.inbox.gateway_turn) {
+            self.inbox.gateway_turn = false;
             return self.gateway_exchange().await;
         }
         if poll_due {
             self.poll().await?;
-            self.gateway_turn = true;
+            self.inbox.gateway_turn = true;
             self.expire_queue();
-            let idle = matches!(self.machine.phase(), Phase::Idle | Phase::Unhomed);
+            let idle = matches!(self.dispatch.machine.phase(), Phase::Idle | Phase::Unhomed);
             let mode_read = self.session()?.mode_read;
             if idle && mode_read.is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL) {
                 self.read_mode().await?;
@@ -259,7 +233,7 @@ impl Worker {
                 return Ok(());
             }
         }
-        if self.gateway.is_empty() {
+        if self.inbox.gateway.is_empty() {
             self.wait_until(self.next_poll, None).await;
         }
         Ok(())
@@ -268,7 +242,7 @@ impl Worker {
     /// The open link's session. Every exchange is made from a step the loop runs only while
     /// the link is up ([`Self::run`]); without one this is the link-down refusal, never a panic.
     fn session(&mut self) -> Result<&mut session::Session, ContractError> {
-        self.session.as_mut().ok_or(ContractError::Blocked(
+        self.conn.session.as_mut().ok_or(ContractError::Blocked(
             crate::contract::machine::Blocker::LinkDown,
         ))
     }
@@ -278,28 +252,18 @@ impl Worker {
         Ok(&mut self.session()?.contract)
     }
 
-    /// Whether the head of the queue can begin now: the PLC takes a start, and the head does
-    /// not wait for the running move to end ([`Self::waits_for_rest`]).
+    /// Whether the head of the queue can begin now ([`Dispatcher::has_room`]).
     fn has_room(&self) -> bool {
-        let Some(head) = self.queue.front() else {
-            return false;
-        };
-        self.machine.blocker(now()).is_none() && !self.waits_for_rest(&head.order)
-    }
-
-    /// Whether `order` must wait for the running move to end: the first part of a section cut
-    /// into parts begins only from rest (its parts are preloaded and paced before it starts).
-    fn waits_for_rest(&self, order: &CheckedOrder) -> bool {
-        order.leads_parts() && self.machine.chain_behind().is_some()
+        self.dispatch.has_room(now())
     }
 
     /// How long until the next status read: short while anything is in flight or queued.
     fn poll_pause(&self) -> Duration {
         let busy = !matches!(
-            self.machine.phase(),
+            self.dispatch.machine.phase(),
             Phase::Idle | Phase::Unhomed | Phase::Stalled
-        ) || !self.queue.is_empty()
-            || !self.settling.is_empty()
+        ) || !self.dispatch.queue().is_empty()
+            || self.dispatch.any_settling()
             || self
                 .shared
                 .inputs_watched
@@ -310,7 +274,7 @@ impl Worker {
         // Near a move's planned end reads come a scan apart: the next step (a start from rest,
         // a cycle's output) waits on seeing it end.
         let pace = self.settings.poll_interval;
-        if self.machine.near_planned_end(now(), 2 * pace) {
+        if self.dispatch.machine.near_planned_end(now(), 2 * pace) {
             self.settings.scan_time.min(pace)
         } else {
             pace
@@ -352,20 +316,20 @@ impl Worker {
         };
         tokio::select! {
             biased;
-            _ = self.shutdown.changed() => {}
-            stop = self.stops.recv() => {
+            _ = self.inbox.shutdown.changed() => {}
+            stop = self.inbox.stops.recv() => {
                 if let Some(reply) = stop {
-                    self.pending_stops.push(reply);
+                    self.inbox.pending_stops.push(reply);
                 }
             }
-            request = self.requests.recv() => {
+            request = self.inbox.requests.recv() => {
                 if let Some(request) = request {
                     self.take_request(request);
                 }
             }
-            job = self.gateway_rx.recv() => {
+            job = self.inbox.gateway_rx.recv() => {
                 if let Some(job) = job {
-                    self.gateway.push_back(job);
+                    self.inbox.gateway.push_back(job);
                 }
             }
             () = tokio::time::sleep_until(until) => {}
@@ -378,7 +342,7 @@ impl Worker {
 
     /// Takes every request already sent, without waiting.
     pub(super) fn take_pending_requests(&mut self) {
-        while let Ok(request) = self.requests.try_recv() {
+        while let Ok(request) = self.inbox.requests.try_recv() {
             self.take_request(request);
         }
     }
@@ -388,7 +352,7 @@ impl Worker {
         self.next_poll = tokio::time::Instant::now();
         match request {
             Request::Moves(batch) => self.accept(batch),
-            command => self.commands.push(command),
+            command => self.inbox.commands.push(command),
         }
     }
 
@@ -416,12 +380,13 @@ impl Worker {
         });
         self.out.state(|s| s.queued.extend(&ids));
         for (report, order) in batch.starts {
-            self.queue.push_back(Queued {
+            self.dispatch.push(Queued {
                 id: report.id,
                 order,
                 gate: batch.gate.clone(),
                 epoch: batch.epoch,
                 accepted: now(),
+                preload: None,
             });
         }
         self.out.set_planned_end(batch.end);
@@ -431,27 +396,27 @@ impl Worker {
     /// Writes a stop if one was asked for; the moves given to the PLC end as it shows, every
     /// queued move is cancelled.
     async fn take_stops(&mut self) -> Result<(), ContractError> {
-        let mut replies = std::mem::take(&mut self.pending_stops);
-        while let Ok(reply) = self.stops.try_recv() {
+        let mut replies = std::mem::take(&mut self.inbox.pending_stops);
+        while let Ok(reply) = self.inbox.stops.try_recv() {
             replies.push(reply);
         }
         if replies.is_empty() {
             return Ok(());
         }
         self.next_poll = tokio::time::Instant::now();
-        let result = match self.session.as_mut() {
+        let result = match self.conn.session.as_mut() {
             Some(session) => session.contract.stop().await,
             None => Err(ContractError::Blocked(
                 crate::contract::machine::Blocker::LinkDown,
             )),
         };
         self.shared.stop_pending.store(false, Ordering::SeqCst);
-        self.stop_asked = Some(now());
+        self.dispatch.stop_asked(now());
         // Orders sent before this stop join the queue, to be cancelled with it.
-        while let Ok(request) = self.requests.try_recv() {
+        while let Ok(request) = self.inbox.requests.try_recv() {
             self.take_request(request);
         }
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             answer(
                 command,
                 Err(CommandError::Conflict {
@@ -463,11 +428,11 @@ impl Worker {
         // Orders asked after it plan from where the robot stops, not from a queue's end.
         self.out.set_planned_end(None);
         if result.is_ok() {
-            self.machine.stop_written(now());
+            self.dispatch.machine.stop_written(now());
         }
         let answer_for = match &result {
             Ok(()) => Ok(()),
-            Err(_) if self.session.is_none() => Err(CommandError::LinkDown {
+            Err(_) if self.conn.session.is_none() => Err(CommandError::LinkDown {
                 detail: self.out.state(|s| s.link.error.clone()),
             }),
             Err(e) if link_broken(e) => Err(CommandError::LinkDown {
@@ -489,7 +454,7 @@ impl Worker {
 
     /// Home and clear-fault requests, each checked against what the PLC shows.
     async fn run_commands(&mut self) -> Result<(), ContractError> {
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             let checked = self.command_allowed(&command);
             match (command, checked) {
                 (command, Err(e)) => answer(command, Err(e)),
@@ -515,8 +480,10 @@ impl Worker {
 
     /// Whether `command` may be written now: a link, and a PLC in a state that takes it.
     fn command_allowed(&self, command: &Request) -> Result<(), CommandError> {
-        let last = match (&self.session, self.machine.last()) {
-            (Some(_), Some(last)) if !matches!(self.machine.phase(), Phase::LinkDown { .. }) => {
+        let last = match (&self.conn.session, self.dispatch.machine.last()) {
+            (Some(_), Some(last))
+                if !matches!(self.dispatch.machine.phase(), Phase::LinkDown { .. }) =>
+            {
                 *last
             }
             _ => {
@@ -525,7 +492,7 @@ impl Worker {
                 });
             }
         };
-        let in_flight = !self.machine.given().is_empty();
+        let in_flight = !self.dispatch.machine.given().is_empty();
         match command {
             Request::ClearFault(_) if matches!(last.state, State::Running | State::Homing) => {
                 Err(ConflictReason::PlcBusy { state: last.state })
@@ -559,8 +526,8 @@ impl Worker {
                 if let CommandWrite::Unconfirmed(e) = &write {
                     tracing::warn!(robot = %self.robot.name, error = %e, "home command unconfirmed");
                 }
-                self.machine.home_written(now());
-                self.homing.push(reply);
+                self.dispatch.machine.home_written(now());
+                self.inbox.homing.push(reply);
                 tracing::info!(robot = %self.robot.name, from = %from.map(|c| c.to_string()).join(","), "homing");
                 Ok(())
             }
@@ -575,8 +542,8 @@ impl Worker {
     /// On shutdown: a start still waiting on the PLC is withdrawn (command back to 0), so no
     /// start is left pending; a running move runs on to its end under the PLC program.
     async fn shut_down(&mut self) {
-        if let Phase::Chained { next, .. } = self.machine.phase().clone()
-            && let Some(session) = self.session.as_mut()
+        if let Phase::Chained { next, .. } = self.dispatch.machine.phase().clone()
+            && let Some(session) = self.conn.session.as_mut()
         {
             let result = session.contract.withdraw().await;
             match &result {
@@ -597,16 +564,16 @@ impl Worker {
         self.settle(None);
         self.cancel_queue("cancelled: the daemon shut down");
         self.cancel_followers("cancelled: the daemon shut down");
-        for command in std::mem::take(&mut self.commands) {
+        for command in std::mem::take(&mut self.inbox.commands) {
             answer(command, Err(CommandError::ShuttingDown));
         }
-        for reply in std::mem::take(&mut self.homing) {
+        for reply in std::mem::take(&mut self.inbox.homing) {
             let _ = reply.send(Err(CommandError::ShuttingDown));
         }
-        while let Ok(job) = self.gateway_rx.try_recv() {
-            self.gateway.push_back(job);
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
         }
-        for job in std::mem::take(&mut self.gateway) {
+        for job in std::mem::take(&mut self.inbox.gateway) {
             let _ = job
                 .reply
                 .send(Err(super::gateway::GatewayError::ShuttingDown));

@@ -5,175 +5,60 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use super::dispatch::{Finish, Queued, StartMode, Turn, TurnDecision};
 use super::pace::{LinkPace, Part};
 use super::placement::{Placement, directories_left};
 use super::preload::{self, Choice};
-use super::prepared::{CYCLE_WENT_ON, Held, prepared_watch};
-use super::{Queued, Worker, describe, link_broken, now};
-use crate::contract::machine::{Blocker, Phase, Planned, ProgressCurve};
+use super::{Worker, describe, link_broken, now};
+use crate::contract::machine::{Blocker, Planned, ProgressCurve};
 use crate::contract::{CHANNELS, describe_unmet};
-use crate::daemon::gate::{Gate, GateState};
 use crate::order::plan_order;
 use crate::order::{CheckedOrder, SectionOrder};
 use crate::plan::{Plan, PlanError};
-use crate::plc::exchange::{CommandWrite, ContractError, Upload, VerifiedBank, planned_bounds};
+use crate::plc::exchange::{CommandWrite, ContractError, VerifiedBank, planned_bounds};
 use crate::robot::Robot;
 use crate::table::ValidTable;
-use crate::wire::{MoveId, Predicted, Stage};
+use crate::wire::{EndReason, MoveId, Predicted, Stage};
 
 /// Slack added to a move's deadline on top of its planned time and upload.
 const DEADLINE_MARGIN: Duration = Duration::from_secs(2);
 
 impl Worker {
-    /// Plans, uploads and starts `queued`; a move that cannot be started ends with the reason.
-    pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
-        let incidents = self.out.incidents();
-        if queued.epoch.is_some_and(|e| e != incidents.count) {
-            // A cycle's move asked for before the PLC restarted, stalled or was lost.
-            let why = format!(
-                "cancelled: {} since its cycle asked for it",
-                incidents.last.unwrap_or_default()
-            );
-            tracing::warn!(robot = %self.robot.name, id = queued.id, "{why}");
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
-            self.cancel_queue("cancelled: the move before it did not start");
-            return Ok(());
-        }
-        let Some(turn) = self.turn(queued).await? else {
-            return Ok(());
-        };
-        let Some((plan, planned)) = self.plan_turn(&turn) else {
-            return Ok(());
-        };
-        let id = turn.id;
-        let tables = plan
-            .valid_tables(&self.robot)
-            .expect("plan_move returns valid tables");
-        let gate = turn.gate.as_ref();
-        if gate.is_some_and(|g| g.state() == GateState::Shut) {
-            // Its cycle went another way while it was queued: nothing written.
-            return self.unprepared(id, CYCLE_WENT_ON, None);
-        }
-        self.machine.upload_begun();
-        self.publish_phase();
-        let began = tokio::time::Instant::now();
-        let exchange = self.session()?.exchange;
-        let from_rest = turn.chain.is_none();
-        let bank = match self
-            .write_bank(id, &planned, &tables, from_rest, exchange, gate)
-            .await
-        {
-            Ok(bank) => bank,
-            Err(e) if gate.is_some() => {
-                let why = if gate.is_some_and(|g| g.state() == GateState::Shut) {
-                    CYCLE_WENT_ON.to_owned()
-                } else {
-                    describe(&e)
-                };
-                return self.unprepared(id, &why, link_broken(&e).then_some(e));
-            }
-            Err(e) => return self.not_started(id, e),
-        };
-        let upload_s = began.elapsed().as_secs_f64();
-        self.shared.metrics.uploaded(upload_s);
-        let prepared = turn.gate.is_some();
-        self.shared.moves(|m| {
-            m.update(id, |r| {
-                r.upload_s = Some(upload_s);
-                if prepared {
-                    r.stage = Stage::Prepared;
-                }
-            });
-        });
-        if let Some(gate) = &turn.gate {
-            match self.hold_for(gate).await {
-                Ok(()) => {}
-                Err(Held::Cancelled(why)) => return self.unprepared(id, why, None),
-                Err(Held::Link(e)) => {
-                    let why = describe(&e);
-                    return self.unprepared(id, &why, Some(e));
-                }
-            }
-        }
-        // A prepared move released on a status block read within a poll (the one that met
-        // its wait) starts on it, as a move's turn is planned on one; else on a fresh read.
-        let fresh = turn.gate.is_some()
-            && self.machine.read_at().is_some_and(|at| {
+    /// Whether `queued` may begin now, and from where ([`Dispatcher::turn`]): on a fresh
+    /// status block (the one just read, if read within a poll interval). Until then the order
+    /// stays at the head of the queue; a part of a path that begins at speed with nothing
+    /// running to chain behind fails.
+    ///
+    /// [`Dispatcher::turn`]: super::dispatch::Dispatcher::turn
+    pub(super) async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
+        let fresh =
+            self.dispatch.machine.read_at().is_some_and(|at| {
                 now().saturating_duration_since(at) < self.settings.poll_interval
-            })
-            && self.machine.may_start(&planned, now()).is_ok();
-        if !fresh && let Err(e) = self.until_it_may_start(&planned).await {
-            return self.not_started(id, e);
+            });
+        if !fresh && let Err(e) = self.poll().await {
+            self.dispatch.push_front(queued);
+            return Err(e);
         }
-        if turn.order.begins_at_speed()
-            && self.lost_its_chain(id, turn.chain.as_ref().map(|c| c.seq))
-        {
-            return Ok(());
+        match self.dispatch.turn(queued, now()) {
+            TurnDecision::Begin(turn) => Ok(Some(*turn)),
+            TurnDecision::Wait => Ok(None),
+            TurnDecision::PermitNotMet(id, blocker) => {
+                self.not_started(id, ContractError::Blocked(blocker))?;
+                Ok(None)
+            }
+            TurnDecision::NothingToChainBehind(id) => {
+                self.fail_at_speed(id);
+                Ok(None)
+            }
         }
-        self.write_start(&turn, planned, bank, upload_s).await
-    }
-
-    /// Whether `queued` may begin now, and from where: a fresh status block (the one just
-    /// read, if read within a poll interval) gives the counts to plan from and whether the PLC
-    /// takes a start. Until then the order stays at the head of the queue; a part of a path
-    /// that begins at speed with nothing running to chain behind fails.
-    async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
-        let fresh = self
-            .machine
-            .read_at()
-            .is_some_and(|at| now().saturating_duration_since(at) < self.settings.poll_interval);
-        let polled = if fresh { Ok(()) } else { self.poll().await };
-        if polled.is_err() || self.machine.blocker(now()).is_some() {
-            self.queue.push_front(queued);
-            return polled.map(|()| None);
-        }
-        if self.waits_for_rest(&queued.order) {
-            // Its parts are preloaded and paced from rest ([`Worker::has_room`] waits for it).
-            self.queue.push_front(queued);
-            return Ok(None);
-        }
-        let inputs = self
-            .machine
-            .last()
-            .map(|s| s.block.inputs)
-            .unwrap_or_default();
-        // A gated move's permit is for when its gate opens: the PLC and `may_start` check it
-        // then.
-        if queued.gate.is_none() && !queued.order.permit.holds(&inputs) {
-            // Nothing planned or written: the host's own check, for a clear message (the PLC's
-            // check at the start is the one that counts).
-            let blocker = Blocker::PermitNotMet {
-                permit: queued.order.permit,
-                inputs,
-            };
-            self.not_started(queued.id, ContractError::Blocked(blocker))?;
-            return Ok(None);
-        }
-        let chain = self.machine.chain_behind().cloned();
-        if queued.order.begins_at_speed() && chain.is_none() {
-            self.fail_at_speed(queued.id);
-            return Ok(None);
-        }
-        let from = match (&chain, self.machine.last()) {
-            (Some(running), _) => running.targets.expect("chained only behind known targets"),
-            (None, Some(last)) => last.block.elapsed,
-            (None, None) => unreachable!("no blocker without a status block"),
-        };
-        Ok(Some(Turn {
-            id: queued.id,
-            order: queued.order,
-            gate: queued.gate,
-            chain,
-            from,
-        }))
     }
 
     /// The plan of `turn` and its description for the contract; `None` when it ends here: it
     /// cannot be planned (failed, the queue behind it cancelled) or has nothing to start (within
     /// a pulse of where it begins).
-    fn plan_turn(&mut self, turn: &Turn) -> Option<(Plan, Planned)> {
+    pub(super) fn plan_turn(&mut self, turn: &Turn) -> Option<(Plan, Planned)> {
         let (id, from) = (turn.id, turn.from);
-        let lead = turn.chain.as_ref().map(|c| c.tag);
+        let lead = turn.mode.ahead().map(|c| c.tag);
         let plan = match plan_order(&self.robot, &turn.order, self.by_joint(from.map(i64::from))) {
             Ok(plan) => plan,
             Err(PlanError::ZeroLength { .. } | PlanError::NoTravel { .. }) => {
@@ -186,7 +71,7 @@ impl Worker {
                 return None;
             }
         };
-        let planned = self.planned(id, &plan, turn, turn.chain.as_ref().map(|c| c.bank));
+        let planned = self.planned(id, &plan, turn);
         let targets = planned.targets.expect("a plan knows its targets");
         if (0..CHANNELS).all(|c| (targets[c] - from[c]).abs() <= 1) {
             // Nothing to upload or start: no sequence number, no bank, no upload stage.
@@ -199,7 +84,7 @@ impl Worker {
 
     /// Writes the start of `turn` (its bank uploaded and verified, `planned`) once; whatever
     /// became of the write, its sequence number is spent.
-    async fn write_start(
+    pub(super) async fn write_start(
         &mut self,
         turn: &Turn,
         planned: Planned,
@@ -209,25 +94,25 @@ impl Worker {
         let id = turn.id;
         let written = self.link()?.start(&bank).await;
         // A start whose fate is not known yet must never share its seq with the next.
-        self.next_seq = planned.seq.wrapping_add(1).max(1);
-        self.next_bank = 1 - planned.bank;
+        self.dispatch.spent(planned.seq, planned.bank);
         let written = match written {
             Ok(written) => written,
             Err(e) => return self.not_started(id, e),
         };
-        if !planned.permit.is_none() {
-            self.permits.insert(id, planned.permit);
-        }
+        let permit = planned.permit;
         let confirmed = matches!(written, CommandWrite::Confirmed);
         let (seq, planned_bank) = (planned.seq, planned.bank);
         // Chained when the move it was planned behind still runs (a prepared move, held past
         // that one's end, starts from rest).
-        let chain = turn
-            .chain
-            .as_ref()
-            .filter(|_| self.machine.uploading_behind().is_some());
-        self.machine.start_written(planned, now(), confirmed);
-        self.last_start = Some((id, bank));
+        let chain = match &turn.mode {
+            StartMode::Chained(ahead) => Some(ahead),
+            StartMode::FromRest | StartMode::Gated { .. } => None,
+        }
+        .filter(|_| self.dispatch.machine.uploading_behind().is_some());
+        self.dispatch
+            .machine
+            .start_written(planned, now(), confirmed);
+        self.dispatch.start_written(id, permit, bank);
         if chain.is_some() {
             self.shared
                 .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
@@ -236,8 +121,8 @@ impl Worker {
         // Chained: how long after the move before was seen running this start was written, of
         // the time that move runs (the chain's slack, as the pace check estimates it).
         let behind_s = chain
-            .and_then(|c| self.started.get(&c.tag))
-            .map(|seen| now().saturating_duration_since(*seen).as_secs_f64());
+            .and_then(|c| self.dispatch.started_at(c.tag))
+            .map(|seen| now().saturating_duration_since(seen).as_secs_f64());
         let runs_s = chain.map(|c| c.duration.as_secs_f64());
         tracing::info!(robot = %self.robot.name, id, seq, bank = planned_bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
         match written {
@@ -246,114 +131,6 @@ impl Worker {
                 Err(ContractError::Plc(e))
             }
             _ => Ok(()),
-        }
-    }
-
-    /// The contract's first step once more, after the upload: the bank is started only once
-    /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
-    /// (or it chains behind the start whose targets are its `from`). When two reads are needed
-    /// for the heartbeat, the first is of its word alone.
-    async fn until_it_may_start(&mut self, planned: &Planned) -> Result<(), ContractError> {
-        loop {
-            let Some(session) = self.session.as_mut() else {
-                return Err(ContractError::Blocked(Blocker::LinkDown));
-            };
-            let status = session.contract.proof_read(&mut self.machine).await?;
-            self.read(status).await?;
-            match self.machine.may_start(planned, now()) {
-                Ok(()) => return Ok(()),
-                Err(Blocker::Unproven) => {
-                    tokio::time::sleep(self.settings.scan_time / 2).await;
-                }
-                Err(blocker) => return Err(ContractError::Blocked(blocker)),
-            }
-        }
-    }
-
-    /// Writes `tables` and the command block of `planned` (move `id`) into its bank and reads
-    /// them back; only the directories left and the block when the tables were preloaded. A
-    /// start written while nothing runs (`from_rest`) first preloads the parts of a path that
-    /// begin at speed behind it (`exchange`: how long a status read just took).
-    async fn write_bank(
-        &mut self,
-        id: MoveId,
-        planned: &Planned,
-        tables: &[ValidTable],
-        from_rest: bool,
-        exchange: Duration,
-        gate: Option<&Gate>,
-    ) -> Result<VerifiedBank, ContractError> {
-        let own = if from_rest {
-            // Nothing preloaded before outlives a start from rest: its section's parts are
-            // preloaded afresh around it.
-            self.preloaded.clear();
-            self.preload_section(planned, tables, exchange).await?;
-            None
-        } else {
-            self.preloaded
-                .iter()
-                .position(|(of, preload)| *of == id && preload.bank() == planned.bank)
-                .map(|at| self.preloaded.remove(at).1)
-        };
-        let link = self.link()?;
-        let upload = if let Some(preload) = own {
-            link.begin_upload_preloaded(&planned.into(), tables, &preload)
-        } else {
-            link.begin_upload(&planned.into(), tables)
-        };
-        let bank = match upload {
-            Ok(mut upload) => self.upload_watching(&mut upload, gate).await,
-            Err(e) => Err(e),
-        };
-        // Written whole from the directory's end (or partly, when it failed), a bank may lie
-        // over tables preloaded past its own, which no later start may rest on. Only a start
-        // from rest, whose section's parts were placed around it, keeps them.
-        if !matches!(&bank, Ok(bank) if bank.on_preload || from_rest) {
-            self.preloaded.clear();
-        }
-        bank
-    }
-
-    /// Makes `upload`'s exchanges. Between two, while a start the PLC was given may run, the
-    /// status block is read whenever the last read is a heartbeat timeout old: the running move
-    /// stays watched (its heartbeat, counts, state, progress) through an upload that lasts
-    /// seconds on a slow line, and is stopped as it would be between uploads. A prepared move
-    /// (`gate`) is uploaded behind a cycle's move, whose end (done, or held by its permit) the
-    /// cycle goes on from: its status block is read more often, at most a sixth of the link's
-    /// time ([`prepared_watch`]). An upload the machine gave up on meanwhile (the PLC stalled or
-    /// restarted) ends there, as does the upload of a prepared move whose gate shut.
-    async fn upload_watching(
-        &mut self,
-        upload: &mut Upload,
-        gate: Option<&Gate>,
-    ) -> Result<VerifiedBank, ContractError> {
-        let timeout = self.machine.settings().heartbeat_timeout;
-        let every = match gate {
-            Some(_) => {
-                prepared_watch(self.session()?.exchange, self.settings.poll_interval).min(timeout)
-            }
-            None => timeout,
-        };
-        loop {
-            if gate.is_some_and(|g| g.state() == GateState::Shut) {
-                return Err(ContractError::Aborted);
-            }
-            let due = self
-                .machine
-                .read_at()
-                .is_none_or(|at| now().saturating_duration_since(at) >= every);
-            if due && !self.machine.given().is_empty() {
-                self.poll().await?;
-                if !matches!(self.machine.phase(), Phase::Uploading { .. }) {
-                    // Stalled, restarted, ...: this bank will not be started; the link is
-                    // needed for what comes next.
-                    let why = self.machine.blocker(now()).unwrap_or(Blocker::Full);
-                    return Err(ContractError::Blocked(why));
-                }
-            }
-            if let Some(bank) = self.link()?.upload_step(upload).await? {
-                return Ok(bank);
-            }
         }
     }
 
@@ -370,7 +147,7 @@ impl Worker {
     /// preloaded word lies outside its tables. A part that cannot be planned is left to fail
     /// at its own turn. Then every part of the section must be ready to start before the part
     /// ahead of it ends: if not, this start is refused before anything moves ([`LinkPace::check`]).
-    async fn preload_section(
+    pub(super) async fn preload_section(
         &mut self,
         first: &Planned,
         tables: &[ValidTable],
@@ -379,7 +156,8 @@ impl Worker {
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
         let Some(section) = self
-            .queue
+            .dispatch
+            .queue()
             .front()
             .filter(|q| q.order.begins_at_speed())
             .and_then(|q| q.order.section().cloned())
@@ -387,7 +165,8 @@ impl Worker {
             return Ok(());
         };
         let behind: Vec<(MoveId, CheckedOrder)> = self
-            .queue
+            .dispatch
+            .queue()
             .iter()
             .take_while(|q| {
                 q.order.begins_at_speed()
@@ -428,7 +207,7 @@ impl Worker {
             pace.preload += took;
             pace.preload_words += preloaded.words();
             directories.push(directories_left(&base, &tables));
-            self.preloaded.push((id, preloaded));
+            self.dispatch.preloaded(id, preloaded);
             ends_on = end_counts(&plan, ends_on);
             bank = 1 - bank;
         }
@@ -462,17 +241,17 @@ impl Worker {
             preload: Duration::ZERO,
             preload_words: 0,
             read_back: self.settings.verify,
-            watch_every: self.machine.settings().heartbeat_timeout,
+            watch_every: self.dispatch.machine.settings().heartbeat_timeout,
         })
     }
 
     /// Whether the start `running` (its seq) that move `id` was to chain behind ended while `id`
     /// was uploaded: started now, it would start at speed from rest, so it fails instead.
-    fn lost_its_chain(&mut self, id: MoveId, running: Option<u16>) -> bool {
-        if self.machine.uploading_behind().map(|c| c.seq) == running {
+    pub(super) fn lost_its_chain(&mut self, id: MoveId, running: Option<u16>) -> bool {
+        if self.dispatch.machine.uploading_behind().map(|c| c.seq) == running {
             return false;
         }
-        self.machine.upload_ended();
+        self.dispatch.machine.upload_ended();
         self.publish_phase();
         self.fail_at_speed(id);
         true
@@ -498,21 +277,15 @@ impl Worker {
     }
 
     /// The contract's description of a plan: its sequence number, bank, counts and envelope.
-    fn planned(&self, id: MoveId, plan: &Plan, turn: &Turn, running_bank: Option<u16>) -> Planned {
+    fn planned(&self, id: MoveId, plan: &Plan, turn: &Turn) -> Planned {
         let from = turn.from;
         let (envelope, targets) = planned_bounds(from, &channel_tables(plan));
-        // Never the PLC's latched seq: it would take the start for one already acted on.
-        let latched = self.machine.last().map(|s| s.block.seq);
-        let seq = if latched == Some(self.next_seq) {
-            self.next_seq.wrapping_add(1).max(1)
-        } else {
-            self.next_seq
-        };
         Planned {
             tag: id,
-            seq,
-            // Always the bank that is not running.
-            bank: running_bank.map_or(self.next_bank, |b| 1 - b),
+            seq: self.dispatch.next_seq(),
+            bank: self
+                .dispatch
+                .next_bank(turn.mode.ahead().map(|ahead| ahead.bank)),
             from,
             targets: Some(targets),
             envelope,
@@ -530,7 +303,7 @@ impl Worker {
             path_deviation_mm: plan.figures.path_deviation_mm,
             tracking_error_mm: plan.figures.tracking_error_mm,
         };
-        let watch = self.machine.settings();
+        let watch = self.dispatch.machine.settings();
         // The longest the daemon can take to end it: its run limit, the grace a lost link gets.
         let limit = watch.run_limit(planned.duration) + watch.link_grace;
         self.shared.moves(|m| {
@@ -541,14 +314,19 @@ impl Worker {
                 r.start_counts = Some(planned.from.map(i64::from));
                 r.target_counts = planned.targets.map(|t| t.map(i64::from));
                 r.predicted = Some(predicted);
-                r.deadline_s = Some((limit + self.start_within + DEADLINE_MARGIN).as_secs_f64());
+                r.deadline_s =
+                    Some((limit + self.dispatch.start_within() + DEADLINE_MARGIN).as_secs_f64());
             });
         });
     }
 
     /// Ends move `id`, whose start was not written, by `e`; a link failure goes on up.
-    fn not_started(&mut self, id: MoveId, e: ContractError) -> Result<(), ContractError> {
-        self.machine.upload_ended();
+    pub(super) fn not_started(
+        &mut self,
+        id: MoveId,
+        e: ContractError,
+    ) -> Result<(), ContractError> {
+        self.dispatch.machine.upload_ended();
         self.publish_phase();
         let stage = if matches!(e, ContractError::Aborted) {
             Stage::Cancelled
@@ -569,48 +347,43 @@ impl Worker {
         if link_broken(&e) { Err(e) } else { Ok(()) }
     }
 
-    /// Fails the head of the queue once it could not start for `start_within` after its turn
-    /// came (its turn comes when the PLC has room for it; the time a move ahead of it runs does
-    /// not count), and cancels the rest behind it.
+    /// Ends the head of the queue once it waited too long for its turn
+    /// ([`Dispatcher::expire`]), and the rest behind it.
+    ///
+    /// [`Dispatcher::expire`]: super::dispatch::Dispatcher::expire
     pub(super) fn expire_queue(&mut self) {
-        let now = now();
-        let blocker = if self.session.is_none() {
-            Some(Blocker::LinkDown)
-        } else {
-            self.machine.blocker(now)
-        };
-        let behind_a_move = self
-            .queue
-            .front()
-            .is_some_and(|q| self.waits_for_rest(&q.order));
-        if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) || behind_a_move {
-            self.room_since = None;
-            return;
+        let ends = self.dispatch.expire(self.conn.session.is_some(), now());
+        if let Some(head) = ends.first() {
+            let why = head.error.as_deref().unwrap_or_default();
+            tracing::warn!(robot = %self.robot.name, id = head.id, "{why}");
         }
-        let room = *self.room_since.get_or_insert(now);
-        let Some(head) = self.queue.front() else {
-            return;
-        };
-        let turn = head.accepted.max(room);
-        if now.saturating_duration_since(turn) <= self.start_within {
-            return;
-        }
-        let id = head.id;
-        self.queue.pop_front();
-        let why = format!(
-            "did not start within {:.0} s{}",
-            self.start_within.as_secs_f64(),
-            blocker.map(|b| format!(": {b}")).unwrap_or_default()
-        );
-        tracing::warn!(robot = %self.robot.name, id, "{why}");
-        self.finish(id, Stage::Failed, Some(why), None);
-        self.cancel_queue("cancelled: the move before it did not start");
+        self.finish_all(ends);
     }
 
     /// Cancels every queued move (never given to the PLC).
     pub(super) fn cancel_queue(&mut self, why: &str) {
-        for queued in std::mem::take(&mut self.queue) {
-            self.finish(queued.id, Stage::Cancelled, Some(why.to_owned()), None);
+        let ends = self.dispatch.cancel_queue(why);
+        self.finish_all(ends);
+    }
+
+    /// Says why move `id` ends, on its report, before its final stage is said.
+    pub(super) fn mark_end(&self, id: MoveId, reason: EndReason) {
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                if !r.stage.is_final() {
+                    r.end = Some(reason);
+                }
+            });
+        });
+    }
+
+    /// Ends the reports of `ends`, in order.
+    pub(super) fn finish_all(&mut self, ends: Vec<Finish>) {
+        for end in ends {
+            if let Some(reason) = end.end {
+                self.mark_end(end.id, reason);
+            }
+            self.finish(end.id, end.stage, end.error, end.final_error);
         }
     }
 
@@ -622,7 +395,6 @@ impl Worker {
         final_error: Option<[i64; CHANNELS]>,
     ) {
         self.end_followers(id, stage, error.as_deref());
-        self.permits.remove(&id);
         let mut ended = false;
         self.shared.moves(|m| {
             m.update(id, |r| {
@@ -649,16 +421,6 @@ impl Worker {
             self.out.set_planned_end(None);
         }
     }
-}
-
-/// A queued move whose turn came: what it is, the running start it chains behind (none: it
-/// starts from rest) and the counts per channel it begins from.
-pub(super) struct Turn {
-    id: MoveId,
-    order: CheckedOrder,
-    gate: Option<Gate>,
-    chain: Option<Planned>,
-    from: [i32; CHANNELS],
 }
 
 /// The parts of `section` (planned) as the pace check sees them: the first

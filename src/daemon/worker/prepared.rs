@@ -5,27 +5,12 @@
 
 use std::time::Duration;
 
-use super::{Queued, Worker, now};
+use super::dispatch::{Hold, PREPARED_CANCELLED};
+use super::{Worker, now};
 use crate::contract::machine::{Blocker, Phase};
 use crate::daemon::gate::{Gate, GateState};
 use crate::plc::exchange::ContractError;
-use crate::wire::{MoveId, Stage};
-
-/// How a prepared move cancelled before its start begins its report's error: the cycle then runs
-/// it as any move, after its wait.
-pub(crate) const PREPARED_CANCELLED: &str = "cancelled before its start";
-
-/// Why a prepared move whose gate shut before its start was not started.
-pub(super) const CYCLE_WENT_ON: &str =
-    "its cycle went another way (a fault, a stop, a pause, a timeout)";
-
-/// Why a held bank was not started.
-pub(super) enum Held {
-    /// Cancelled before its start, for this reason.
-    Cancelled(&'static str),
-    /// The link failed.
-    Link(ContractError),
-}
+use crate::wire::{EndReason, MoveId, Stage};
 
 /// How often the status block is read during a prepared move's upload behind a running move,
 /// when a status read takes `exchange`: five exchanges of the upload to one read (at least
@@ -35,59 +20,54 @@ pub(super) fn prepared_watch(exchange: Duration, poll: Duration) -> Duration {
 }
 
 impl Worker {
-    /// Holds an uploaded, verified bank until `gate` opens: the status block read at the busy
-    /// pace (the cycle's wait is decided on it) and the gateway served meanwhile. Anything
-    /// else cancels it: the gate shut, a stop or a command asked for, the PLC no longer where
-    /// the upload left it (a restart, a fault), the link failing.
-    pub(super) async fn hold_for(&mut self, gate: &Gate) -> Result<(), Held> {
-        loop {
-            match gate.state() {
-                // Started from rest only: never chained behind the move still running ahead
-                // of it (the steps between, outputs and waits, come after that one's end).
-                GateState::Open if self.machine.uploading_behind().is_none() => return Ok(()),
-                GateState::Shut => return Err(Held::Cancelled(CYCLE_WENT_ON)),
-                GateState::Open | GateState::Closed => {}
-            }
-            self.take_pending_requests();
-            if *self.shutdown.borrow() {
-                return Err(Held::Cancelled("the daemon is shutting down"));
-            }
-            let stopping = !self.pending_stops.is_empty()
-                || self
-                    .shared
-                    .stop_pending
-                    .load(std::sync::atomic::Ordering::SeqCst);
-            if stopping {
-                return Err(Held::Cancelled("a stop was asked for"));
-            }
-            if !self.commands.is_empty() {
-                return Err(Held::Cancelled("a command came (home, clear-fault)"));
-            }
-            while let Ok(job) = self.gateway_rx.try_recv() {
-                self.gateway.push_back(job);
-            }
-            if !self.gateway.is_empty() {
-                self.gateway_exchange().await.map_err(Held::Link)?;
-                continue;
-            }
-            if tokio::time::Instant::now() >= self.next_poll {
-                self.poll().await.map_err(Held::Link)?;
-                self.next_poll = tokio::time::Instant::now() + self.poll_pause();
-                // Behind a running move, which may end meanwhile (followed as ever), or alone.
-                let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
-                if !uploading
-                    || self
-                        .machine
-                        .blocker(now())
-                        .is_some_and(|b| b != Blocker::Full)
-                {
-                    return Err(Held::Cancelled("the PLC changed under it"));
-                }
-                continue;
-            }
-            let closed = (gate.state() == GateState::Closed).then_some(gate);
-            self.wait_until(self.next_poll, closed).await;
+    /// One step of holding an uploaded, verified bank until `gate` opens ([`Hold`]): the
+    /// status block read at the busy pace (the cycle's wait is decided on it) and the gateway
+    /// served meanwhile, else a wait for what comes next. Anything else cancels it: the gate
+    /// shut, a stop or a command asked for, the PLC no longer where the upload left it (a
+    /// restart, a fault); a link that fails is the error.
+    pub(super) async fn hold_step(&mut self, gate: &Gate) -> Result<Hold, ContractError> {
+        let runs_ahead = self.dispatch.machine.uploading_behind().is_some();
+        let on_gate = Hold::on_gate(gate.state(), runs_ahead);
+        if on_gate != Hold::Wait {
+            return Ok(on_gate);
         }
+        self.take_pending_requests();
+        let stopping = !self.inbox.pending_stops.is_empty()
+            || self
+                .shared
+                .stop_pending
+                .load(std::sync::atomic::Ordering::SeqCst);
+        let shutting_down = *self.inbox.shutdown.borrow();
+        let on_requests =
+            Hold::on_requests(shutting_down, stopping, !self.inbox.commands.is_empty());
+        if on_requests != Hold::Wait {
+            return Ok(on_requests);
+        }
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
+        }
+        if !self.inbox.gateway.is_empty() {
+            self.gateway_exchange().await?;
+            return Ok(Hold::Wait);
+        }
+        if tokio::time::Instant::now() >= self.next_poll {
+            self.poll().await?;
+            self.next_poll = tokio::time::Instant::now() + self.poll_pause();
+            // Behind a running move, which may end meanwhile (followed as ever), or alone.
+            let uploading = matches!(self.dispatch.machine.phase(), Phase::Uploading { .. });
+            let blocked = self
+                .dispatch
+                .machine
+                .blocker(now())
+                .is_some_and(|b| b != Blocker::Full);
+            if !uploading || blocked {
+                return Ok(Hold::Cancel("the PLC changed under it"));
+            }
+            return Ok(Hold::Wait);
+        }
+        let closed = (gate.state() == GateState::Closed).then_some(gate);
+        self.wait_until(self.next_poll, closed).await;
+        Ok(Hold::Wait)
     }
 
     /// Ends prepared move `id` before its start (cancelled, `why`; the cycle runs it afresh
@@ -98,37 +78,28 @@ impl Worker {
         why: &str,
         link: Option<ContractError>,
     ) -> Result<(), ContractError> {
-        self.machine.upload_ended();
+        self.dispatch.machine.upload_ended();
         self.publish_phase();
         tracing::info!(robot = %self.robot.name, id, "prepared move cancelled: {why}");
-        self.finish(
-            id,
-            Stage::Cancelled,
-            Some(format!("{PREPARED_CANCELLED}: {why}")),
-            None,
-        );
+        self.cancel_prepared(id, why);
         self.cancel_queue("cancelled: the move before it did not start");
         link.map_or(Ok(()), Err)
     }
 
-    /// Ends the queued prepared moves whose gate shut before their turn (their cycle went
-    /// another way), and every move queued behind one (planned from where it would have ended).
+    /// Ends the queued prepared moves whose gate shut before their turn, and every move queued
+    /// behind one ([`Dispatcher::drop_shut`]).
+    ///
+    /// [`Dispatcher::drop_shut`]: super::dispatch::Dispatcher::drop_shut
     pub(super) fn drop_shut(&mut self) {
-        let shut = |q: &Queued| {
-            q.gate
-                .as_ref()
-                .is_some_and(|g| g.state() == GateState::Shut)
-        };
-        let Some(at) = self.queue.iter().position(shut) else {
-            return;
-        };
-        for (k, queued) in self.queue.split_off(at).into_iter().enumerate() {
-            let why = if k == 0 {
-                format!("{PREPARED_CANCELLED}: {CYCLE_WENT_ON}")
-            } else {
-                "cancelled: the move before it did not start".to_owned()
-            };
-            self.finish(queued.id, Stage::Cancelled, Some(why), None);
-        }
+        let ends = self.dispatch.drop_shut();
+        self.finish_all(ends);
+    }
+
+    /// Ends prepared move `id` cancelled before its start (`why`), its end reason said before
+    /// its final stage is.
+    fn cancel_prepared(&mut self, id: MoveId, why: &str) {
+        self.mark_end(id, EndReason::CancelledBeforeStart);
+        let why = format!("{PREPARED_CANCELLED}: {why}");
+        self.finish(id, Stage::Cancelled, Some(why), None);
     }
 }

@@ -459,7 +459,7 @@ fn sensor(
     let follows = match (&s.when, s.channel, s.counts) {
         (Some(text), None, None) => Follows::Condition(
             When::parse(text, &|name| bit_of(&key("when"), name, signals).ok())
-                .map_err(|reason| invalid(&key("when"), text, reason))?,
+                .map_err(|reason| invalid(&key("when"), text, reason.to_string()))?,
         ),
         (None, Some(channel), Some([min, max])) => {
             let channel = usize::try_from(channel)

@@ -19,4 +19,4 @@ pub use description::{
     Stack,
 };
 pub use machine::{Cell, ForceError, Seen};
-pub use when::When;
+pub use when::{When, WhenError};

@@ -7,7 +7,35 @@
 //!  (X7 | R10) & !X6
 //! ```
 
+use thiserror::Error;
+
 use crate::gateway::Address;
+
+/// What is wrong with a condition, naming the word.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum WhenError {
+    /// Nothing to decide.
+    #[error("is empty: name a bit, e.g. \"gripper & !X6\"")]
+    Empty,
+    /// A character no condition has.
+    #[error("{0:?} is not part of a condition (! & | ( ) and names)")]
+    NotUnderstood(char),
+    /// A word after a whole condition.
+    #[error("{0:?} is not expected there")]
+    NotExpected(String),
+    /// The text ends where a bit belongs.
+    #[error("ends where a bit is expected")]
+    EndsEarly,
+    /// A `(` with no `)`.
+    #[error("has a \"(\" without its \")\"")]
+    NotClosed,
+    /// A name that is no signal and no bit.
+    #[error("{0:?} is neither a signal nor a bit")]
+    Unknown(String),
+    /// Something else where a bit belongs.
+    #[error("{0:?} is where a bit is expected")]
+    NotABit(String),
+}
 
 /// A parsed condition.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -27,10 +55,10 @@ impl When {
     ///
     /// # Errors
     /// What is wrong, naming the word.
-    pub fn parse(text: &str, resolve: &dyn Fn(&str) -> Option<Address>) -> Result<Self, String> {
+    pub fn parse(text: &str, resolve: &dyn Fn(&str) -> Option<Address>) -> Result<Self, WhenError> {
         let tokens = tokens(text)?;
         if tokens.is_empty() {
-            return Err("is empty: name a bit, e.g. \"gripper & !X6\"".to_owned());
+            return Err(WhenError::Empty);
         }
         let mut parser = Parser {
             tokens: &tokens,
@@ -40,7 +68,7 @@ impl When {
         let when = parser.any()?;
         match parser.tokens.get(parser.at) {
             None => Ok(when),
-            Some(t) => Err(format!("{:?} is not expected there", t.text())),
+            Some(t) => Err(WhenError::NotExpected(t.text())),
         }
     }
 
@@ -78,7 +106,7 @@ impl Token {
     }
 }
 
-fn tokens(text: &str) -> Result<Vec<Token>, String> {
+fn tokens(text: &str) -> Result<Vec<Token>, WhenError> {
     let mut out = Vec::new();
     let mut chars = text.chars().peekable();
     while let Some(&c) = chars.peek() {
@@ -104,11 +132,7 @@ fn tokens(text: &str) -> Result<Vec<Token>, String> {
                 out.push(Token::Word(word));
                 continue;
             }
-            other => {
-                return Err(format!(
-                    "{other:?} is not part of a condition (! & | ( ) and names)"
-                ));
-            }
+            other => return Err(WhenError::NotUnderstood(other)),
         };
         chars.next();
         out.push(token);
@@ -131,7 +155,7 @@ impl Parser<'_, '_> {
         is
     }
 
-    fn any(&mut self) -> Result<When, String> {
+    fn any(&mut self) -> Result<When, WhenError> {
         let mut terms = vec![self.all()?];
         while self.next_is(&Token::Or) {
             terms.push(self.all()?);
@@ -143,7 +167,7 @@ impl Parser<'_, '_> {
         })
     }
 
-    fn all(&mut self) -> Result<When, String> {
+    fn all(&mut self) -> Result<When, WhenError> {
         let mut factors = vec![self.factor()?];
         while self.next_is(&Token::And) {
             factors.push(self.factor()?);
@@ -155,9 +179,9 @@ impl Parser<'_, '_> {
         })
     }
 
-    fn factor(&mut self) -> Result<When, String> {
+    fn factor(&mut self) -> Result<When, WhenError> {
         let Some(token) = self.tokens.get(self.at).cloned() else {
-            return Err("ends where a bit is expected".to_owned());
+            return Err(WhenError::EndsEarly);
         };
         self.at += 1;
         match token {
@@ -167,13 +191,13 @@ impl Parser<'_, '_> {
                 if self.next_is(&Token::Close) {
                     Ok(inner)
                 } else {
-                    Err("has a \"(\" without its \")\"".to_owned())
+                    Err(WhenError::NotClosed)
                 }
             }
             Token::Word(word) => (self.resolve)(&word)
                 .map(When::Bit)
-                .ok_or_else(|| format!("{word:?} is neither a signal nor a bit")),
-            other => Err(format!("{:?} is where a bit is expected", other.text())),
+                .ok_or(WhenError::Unknown(word)),
+            other => Err(WhenError::NotABit(other.text())),
         }
     }
 }
@@ -212,7 +236,7 @@ mod tests {
 
     #[test]
     fn bad_conditions_say_what_is_wrong() {
-        let e = |text| When::parse(text, &resolve).unwrap_err();
+        let e = |text| When::parse(text, &resolve).unwrap_err().to_string();
         assert!(e("").starts_with("is empty"));
         assert_eq!(e("grip"), "\"grip\" is neither a signal nor a bit");
         assert_eq!(e("X5 &"), "ends where a bit is expected");

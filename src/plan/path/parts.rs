@@ -12,7 +12,6 @@ use rayon::prelude::*;
 
 use crate::kinematics::JOINTS;
 use crate::robot::{Motion, Robot};
-use crate::table::TableProblem;
 
 use super::super::course::Course;
 use super::super::error::PlanError;
@@ -87,7 +86,7 @@ pub(super) fn parts_in_turn(
                 plans.push(plan);
                 continue;
             }
-            Err(e) if too_big(&e) && end - first >= 2 * min_points => first + (end - first) / 2,
+            Err(e) if e.too_big() && end - first >= 2 * min_points => first + (end - first) / 2,
             Err(e @ PlanError::ToleranceTooSmall { .. }) => {
                 match late_cut(sampled, first, end, min_points) {
                     Some(cut) => cut,
@@ -153,18 +152,6 @@ pub(super) fn planned_ahead(sampled: &Sampled, start: [i64; JOINTS]) -> Vec<Ahea
             }
         })
         .collect()
-}
-
-/// Whether a start's tables are refused only for their size (more than a channel's area, or
-/// than 8 segments): a shorter start would fit.
-fn too_big(e: &PlanError) -> bool {
-    matches!(
-        e,
-        PlanError::InvalidTable {
-            first: TableProblem::TooManySegments { .. } | TableProblem::AreaOverflow { .. },
-            ..
-        }
-    )
 }
 
 /// Where to cut a part from sample point `first` to `end` whose `plan` gives a channel a later

@@ -1,0 +1,303 @@
+//! The worker's steps for the move whose turn came ([`Activity`]): begun (planned, its section's
+//! parts preloaded, its upload made ready), then one exchange of its upload a step, one step of
+//! holding a prepared bank, one proof read a step, and its start written once. Each step is
+//! one round of the worker's loop ([`Worker::run`]); what a step ends in is the next activity.
+
+use super::dispatch::{Activity, CYCLE_WENT_ON, Hold, Queued, Turn, Uploaded, Uploading};
+use super::prepared::prepared_watch;
+use super::{Worker, describe, link_broken, now};
+use crate::contract::machine::{Blocker, Phase, Planned};
+use crate::daemon::gate::GateState;
+use crate::plc::exchange::{ContractError, Preload, Upload, VerifiedBank};
+use crate::table::ValidTable;
+use crate::wire::Stage;
+
+impl Worker {
+    /// One step of what the worker is doing: a round of the idle loop, or one step of the move
+    /// whose turn came.
+    pub(super) async fn step(&mut self) -> Result<(), ContractError> {
+        match std::mem::take(&mut self.dispatch.activity) {
+            Activity::Idle => self.idle_step().await,
+            Activity::Uploading(uploading) => self.upload_step(uploading).await,
+            Activity::Holding(held) => self.hold(held).await,
+            Activity::Proving(uploaded) => self.prove(uploaded).await,
+        }
+    }
+
+    /// Plans `queued` and makes its upload ready (after preloading, from rest, the parts of a
+    /// path behind it); a move that cannot be started ends with the reason.
+    pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
+        let incidents = self.out.incidents();
+        if let Some(why) = queued.stale(incidents.count, incidents.last.as_deref()) {
+            tracing::warn!(robot = %self.robot.name, id = queued.id, "{why}");
+            self.finish(queued.id, Stage::Cancelled, Some(why), None);
+            self.cancel_queue("cancelled: the move before it did not start");
+            return Ok(());
+        }
+        let Some(mut turn) = self.turn(queued).await? else {
+            return Ok(());
+        };
+        let Some((plan, planned)) = self.plan_turn(&turn) else {
+            return Ok(());
+        };
+        let tables = plan
+            .valid_tables(&self.robot)
+            .expect("plan_move returns valid tables");
+        if turn
+            .mode
+            .gate()
+            .is_some_and(|g| g.state() == GateState::Shut)
+        {
+            // Its cycle went another way while it was queued: nothing written.
+            return self.unprepared(turn.id, CYCLE_WENT_ON, None);
+        }
+        self.dispatch.machine.upload_begun();
+        self.publish_phase();
+        let began = now();
+        let exchange = self.session()?.exchange;
+        let from_rest = turn.mode.ahead().is_none();
+        let own = turn.preload.take().filter(|p| p.bank() == planned.bank);
+        let gated = turn.mode.gate().is_some();
+        match self
+            .ready_upload(&planned, &tables, own, (from_rest, gated), exchange)
+            .await
+        {
+            Ok((upload, every)) => {
+                let uploading = Uploading {
+                    turn,
+                    planned,
+                    upload,
+                    began,
+                    every,
+                    from_rest,
+                };
+                self.dispatch.activity = Activity::Uploading(Box::new(uploading));
+                Ok(())
+            }
+            Err(e) => self.upload_failed(&turn, e),
+        }
+    }
+
+    /// The upload of `tables` and the command block of `planned` into its bank, to be read
+    /// back; only the directories left and the block when its tables were preloaded into that
+    /// bank (`own`). A start written while nothing runs (`from_rest`) first preloads the parts
+    /// of a path that begin at speed behind it (`exchange`: how long a status read just took).
+    /// With it, how often the status block is read between its exchanges, more often for a
+    /// prepared move (`gated`, [`Self::upload_step`]).
+    async fn ready_upload(
+        &mut self,
+        planned: &Planned,
+        tables: &[ValidTable],
+        own: Option<Preload>,
+        (from_rest, gated): (bool, bool),
+        exchange: std::time::Duration,
+    ) -> Result<(Upload, std::time::Duration), ContractError> {
+        let own = if from_rest {
+            // Nothing preloaded before outlives a start from rest: its section's parts are
+            // preloaded afresh around it.
+            self.dispatch.forget_preloads();
+            self.preload_section(planned, tables, exchange).await?;
+            None
+        } else {
+            own
+        };
+        let link = self.link()?;
+        let upload = match own {
+            Some(preload) => link.begin_upload_preloaded(&planned.into(), tables, &preload),
+            None => link.begin_upload(&planned.into(), tables),
+        }?;
+        let timeout = self.dispatch.machine.settings().heartbeat_timeout;
+        let every = if gated {
+            prepared_watch(self.session()?.exchange, self.settings.poll_interval).min(timeout)
+        } else {
+            timeout
+        };
+        Ok((upload, every))
+    }
+
+    /// One exchange of an upload; between two, while a start the PLC was given may run, the
+    /// status block is read whenever the last read is `every` old: the running move stays
+    /// watched (its heartbeat, counts, state, progress) through an upload that lasts seconds
+    /// on a slow line, and is stopped as it would be between uploads. A prepared move is
+    /// uploaded behind a cycle's move, whose end (done, or held by its permit) the cycle goes
+    /// on from: its status block is read more often, at most a sixth of the link's time
+    /// ([`prepared_watch`]). An upload the machine gave up on meanwhile (the PLC stalled or
+    /// restarted) ends there, as does the upload of a prepared move whose gate shut.
+    async fn upload_step(&mut self, mut uploading: Box<Uploading>) -> Result<(), ContractError> {
+        match self.upload_exchange(&mut uploading).await {
+            Ok(None) => {
+                self.dispatch.activity = Activity::Uploading(uploading);
+                Ok(())
+            }
+            Ok(Some(bank)) => {
+                self.uploaded(*uploading, bank);
+                Ok(())
+            }
+            Err(e) => self.upload_failed(&uploading.turn, e),
+        }
+    }
+
+    async fn upload_exchange(
+        &mut self,
+        uploading: &mut Uploading,
+    ) -> Result<Option<VerifiedBank>, ContractError> {
+        let gate = uploading.turn.mode.gate();
+        if gate.is_some_and(|g| g.state() == GateState::Shut) {
+            return Err(ContractError::Aborted);
+        }
+        let due = self
+            .dispatch
+            .machine
+            .read_at()
+            .is_none_or(|at| now().saturating_duration_since(at) >= uploading.every);
+        if due && !self.dispatch.machine.given().is_empty() {
+            self.poll().await?;
+            if !matches!(self.dispatch.machine.phase(), Phase::Uploading { .. }) {
+                // Stalled, restarted, ...: this bank will not be started; the link is needed
+                // for what comes next.
+                let why = self
+                    .dispatch
+                    .machine
+                    .blocker(now())
+                    .unwrap_or(Blocker::Full);
+                return Err(ContractError::Blocked(why));
+            }
+        }
+        self.link()?.upload_step(&mut uploading.upload).await
+    }
+
+    /// Its bank written and verified: a prepared move is held, any other proven.
+    fn uploaded(&mut self, uploading: Uploading, bank: VerifiedBank) {
+        // Written whole from the directory's end, a bank may lie over tables preloaded past
+        // its own, which no later start may rest on. Only a start from rest, whose section's
+        // parts were placed around it, keeps them.
+        if !(bank.on_preload || uploading.from_rest) {
+            self.dispatch.forget_preloads();
+        }
+        let Uploading { turn, planned, .. } = uploading;
+        let id = turn.id;
+        let upload_s = now()
+            .saturating_duration_since(uploading.began)
+            .as_secs_f64();
+        self.shared.metrics.uploaded(upload_s);
+        let prepared = turn.mode.gate().is_some();
+        self.shared.moves(|m| {
+            m.update(id, |r| {
+                r.upload_s = Some(upload_s);
+                if prepared {
+                    r.stage = Stage::Prepared;
+                }
+            });
+        });
+        let uploaded = Box::new(Uploaded {
+            turn,
+            planned,
+            bank,
+            upload_s,
+        });
+        self.dispatch.activity = if prepared {
+            Activity::Holding(uploaded)
+        } else {
+            Activity::Proving(uploaded)
+        };
+    }
+
+    /// Ends the move of `turn`, whose upload failed by `e`: a prepared move is cancelled before
+    /// its start, any other ends not started; a link failure goes on up.
+    fn upload_failed(&mut self, turn: &Turn, e: ContractError) -> Result<(), ContractError> {
+        self.dispatch.forget_preloads();
+        let Some(gate) = turn.mode.gate() else {
+            return self.not_started(turn.id, e);
+        };
+        let why = if gate.state() == GateState::Shut {
+            CYCLE_WENT_ON.to_owned()
+        } else {
+            describe(&e)
+        };
+        self.unprepared(turn.id, &why, link_broken(&e).then_some(e))
+    }
+
+    /// One step of holding a prepared move's bank ([`Self::hold_step`]). Released on a status
+    /// block read within a poll (the one that met its wait) it starts on it, as a move's turn
+    /// is planned on one; else on a fresh read.
+    async fn hold(&mut self, held: Box<Uploaded>) -> Result<(), ContractError> {
+        let gate = held.turn.mode.gate().expect("held behind a gate").clone();
+        let id = held.turn.id;
+        match self.hold_step(&gate).await {
+            Ok(Hold::Wait) => {
+                self.dispatch.activity = Activity::Holding(held);
+                Ok(())
+            }
+            Ok(Hold::Cancel(why)) => self.unprepared(id, why, None),
+            Ok(Hold::Release) => {
+                let fresh = self.dispatch.machine.read_at().is_some_and(|at| {
+                    now().saturating_duration_since(at) < self.settings.poll_interval
+                }) && self
+                    .dispatch
+                    .machine
+                    .may_start(&held.planned, now())
+                    .is_ok();
+                if fresh {
+                    self.start(*held).await
+                } else {
+                    self.dispatch.activity = Activity::Proving(held);
+                    Ok(())
+                }
+            }
+            Err(e) => {
+                let why = describe(&e);
+                self.unprepared(id, &why, Some(e))
+            }
+        }
+    }
+
+    /// The contract's first step once more, after the upload: the bank is started only once
+    /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
+    /// (or it chains behind the start whose targets are its `from`). When two reads are needed
+    /// for the heartbeat, the first is of its word alone. One read a step.
+    async fn prove(&mut self, uploaded: Box<Uploaded>) -> Result<(), ContractError> {
+        match self.proof_read(&uploaded.planned).await {
+            Ok(true) => self.start(*uploaded).await,
+            Ok(false) => {
+                tokio::time::sleep(self.settings.scan_time / 2).await;
+                self.dispatch.activity = Activity::Proving(uploaded);
+                Ok(())
+            }
+            Err(e) => self.not_started(uploaded.turn.id, e),
+        }
+    }
+
+    /// Reads the status block for `planned`'s start: whether the PLC may take it now (`false`:
+    /// the heartbeat is not proven yet).
+    async fn proof_read(&mut self, planned: &Planned) -> Result<bool, ContractError> {
+        let Some(session) = self.conn.session.as_mut() else {
+            return Err(ContractError::Blocked(Blocker::LinkDown));
+        };
+        let status = session
+            .contract
+            .proof_read(&mut self.dispatch.machine)
+            .await?;
+        self.read(status).await?;
+        match self.dispatch.machine.may_start(planned, now()) {
+            Ok(()) => Ok(true),
+            Err(Blocker::Unproven) => Ok(false),
+            Err(blocker) => Err(ContractError::Blocked(blocker)),
+        }
+    }
+
+    /// Writes the start of `uploaded`, unless it begins at speed and the start it was to chain
+    /// behind ended meanwhile.
+    async fn start(&mut self, uploaded: Uploaded) -> Result<(), ContractError> {
+        let Uploaded {
+            turn,
+            planned,
+            bank,
+            upload_s,
+        } = uploaded;
+        let ahead = turn.mode.ahead().map(|c| c.seq);
+        if turn.order.begins_at_speed() && self.lost_its_chain(turn.id, ahead) {
+            return Ok(());
+        }
+        self.write_start(&turn, planned, bank, upload_s).await
+    }
+}
