@@ -23,15 +23,44 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
+use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
 use super::raw::{RawConsole, RawConsoleUser, RawRobotConsole};
 use super::units::parse_duration_s;
-use crate::console::{DEFAULT_MANUAL_SPEED_MM_S, MAX_MANUAL_SPEED_MM_S, Role};
 use crate::gateway::ClientNet;
 use crate::robot::{POSITION_NAME_RULE, is_position_name};
+
+/// The most a robot's manual speed may be, mm/s: ISO 10218-1's reduced speed.
+pub const MAX_MANUAL_SPEED_MM_S: f64 = 250.0;
+/// A robot's manual speed when its config does not say, mm/s.
+pub const DEFAULT_MANUAL_SPEED_MM_S: f64 = 50.0;
+
+/// What a console user may do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    /// Sees everything, stops the robot.
+    Viewer,
+    /// Moves, jogs, runs cycles, teaches (holding the seat).
+    Operator,
+    /// Deletes positions, changes the mode.
+    Admin,
+}
+
+impl Role {
+    /// Its name, as config and the page write it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Viewer => "viewer",
+            Self::Operator => "operator",
+            Self::Admin => "admin",
+        }
+    }
+}
 
 /// Where the console listens when the config does not say.
 pub const DEFAULT_CONSOLE_LISTEN: &str = "127.0.0.1:8470";

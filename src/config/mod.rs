@@ -57,7 +57,8 @@ use std::path::Path;
 
 pub use cell::{CellSettings, FaceSettings};
 pub use console::{
-    ConsoleSettings, ConsoleUser, DEFAULT_CONSOLE_LISTEN, RobotConsoleSettings, Secret,
+    ConsoleSettings, ConsoleUser, DEFAULT_CONSOLE_LISTEN, DEFAULT_MANUAL_SPEED_MM_S,
+    MAX_MANUAL_SPEED_MM_S, RobotConsoleSettings, Role, Secret,
 };
 pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
 pub use error::ConfigError;

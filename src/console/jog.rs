@@ -28,10 +28,6 @@ use crate::robot::Robot;
 
 use super::lease::JogAxis;
 
-/// The most a robot's manual speed may be, mm/s: ISO 10218-1's reduced speed.
-pub const MAX_MANUAL_SPEED_MM_S: f64 = 250.0;
-/// A robot's manual speed when its config does not say, mm/s.
-pub const DEFAULT_MANUAL_SPEED_MM_S: f64 = 50.0;
 /// The share of a drive's `start_hz` a jog asks for at most (the joints' rates change along a
 /// piece; this keeps the whole piece under it).
 const START_HZ_SHARE: f64 = 0.9;

@@ -19,12 +19,11 @@ pub mod limiter;
 pub mod patch;
 pub mod seat;
 
-pub use jog::{
-    DEFAULT_MANUAL_SPEED_MM_S, MAX_MANUAL_SPEED_MM_S, Travel, TravelInputs, piece_order,
-    start_hz_speed,
-};
+/// A console user's role and the robots' manual speeds are config's words (config reads them).
+pub use crate::config::{DEFAULT_MANUAL_SPEED_MM_S, MAX_MANUAL_SPEED_MM_S, Role};
+pub use jog::{Travel, TravelInputs, piece_order, start_hz_speed};
 pub use lease::{
     Action, EndedBy, Event, JogAxis, JogFacts, LEASE, Lease, LeaseSettings, PIECE, SessionId,
 };
 pub use limiter::{Limited, LoginLimiter};
-pub use seat::{Asker, Command, Holder, Refusal, Role, Seat};
+pub use seat::{Asker, Command, Holder, Refusal, Seat};

@@ -10,34 +10,11 @@
 //! remote mode the cell face drives the robot, the seat is empty and cannot be taken, and the
 //! console only watches, stops, and (an admin) switches back to local.
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use thiserror::Error;
 
 use super::lease::SessionId;
-
-/// What a console user may do.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Role {
-    /// Sees everything, stops the robot.
-    Viewer,
-    /// Moves, jogs, runs cycles, teaches (holding the seat).
-    Operator,
-    /// Deletes positions, changes the mode.
-    Admin,
-}
-
-impl Role {
-    /// Its name, as config and the page write it.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Viewer => "viewer",
-            Self::Operator => "operator",
-            Self::Admin => "admin",
-        }
-    }
-}
+use crate::config::Role;
 
 /// What a session asks to do, as the seat rules tell them apart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

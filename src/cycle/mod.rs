@@ -22,7 +22,18 @@ pub mod program;
 mod reach;
 pub mod runner;
 
-pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramError, check};
+pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramError};
+
+/// Checks program `name` of `ctx.programs`, and every program it calls: each step on its own,
+/// then every target it can reach ([`reach`]).
+///
+/// # Errors
+/// The first fault found, naming the program, the step and the value.
+pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
+    let mut checked = check::flatten(name, ctx)?;
+    checked.unchecked = reach::check(&checked.ops, ctx)?;
+    Ok(checked)
+}
 pub use condition::{Condition, ConditionError, ConditionFault, Names, Source};
 pub use load::{ProgramFileError, Programs};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};

@@ -20,8 +20,10 @@
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
 //! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
-//! console/    the operator's console's server: the live stream (one publisher per robot), the
-//!             seat and jog lease's control task per robot, the page, its WebSocket and logins
+//! stream.rs   the live stream: one publisher per robot of its snapshot's changes, read by the
+//!             API's NDJSON feed and the console
+//! console/    the operator's console's server: the seat and jog lease's control task per robot,
+//!             the page, its WebSocket and logins
 //! ```
 
 pub mod api;
@@ -42,6 +44,7 @@ mod request;
 pub mod service;
 mod setup;
 mod shared;
+pub mod stream;
 mod worker;
 
 pub use crate::order::permit;

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::{MoveReport, RobotState};
 
 /// What the console and `status --watch` see of one robot, built in one place
-/// (`daemon::console::publish::snapshot`) from the daemon's state.
+/// (`daemon::stream::snapshot`) from the daemon's state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct Live {
     /// The robot's state, as `GET /v1/robots/{name}` gives it.

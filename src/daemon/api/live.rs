@@ -8,7 +8,7 @@
 //! GET /v1/robots/{name}/speed-override  {"percent": 100}
 //! PUT /v1/robots/{name}/speed-override  {"percent": 50} -> {"percent": 50}
 //! ```
-//! A reader that falls [`crate::daemon::console::CAPACITY`] messages behind is ended (its last
+//! A reader that falls [`crate::daemon::stream::CAPACITY`] messages behind is ended (its last
 //! line is `{"type":"lagged",...}`); it reconnects and starts from a whole snapshot.
 
 use std::convert::Infallible;
@@ -23,7 +23,7 @@ use tokio::sync::{broadcast, mpsc};
 
 use super::Api;
 use super::error::ApiError;
-use crate::daemon::console::RobotStream;
+use crate::daemon::stream::RobotStream;
 
 pub(super) async fn all(State(api): State<Api>) -> Result<Response, ApiError> {
     let hub = api.live.as_ref().ok_or_else(no_stream)?;
@@ -49,7 +49,7 @@ fn no_stream() -> ApiError {
 
 /// NDJSON lines of `robots`' streams until the daemon closes or the reader falls behind.
 fn stream(robots: Vec<RobotStream>, api: &Api) -> Response {
-    let (tx, rx) = mpsc::channel::<Bytes>(crate::daemon::console::CAPACITY);
+    let (tx, rx) = mpsc::channel::<Bytes>(crate::daemon::stream::CAPACITY);
     for robot in robots {
         let (tx, closing) = (tx.clone(), api.closing.clone());
         tokio::spawn(async move {

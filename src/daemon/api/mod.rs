@@ -67,7 +67,7 @@ pub struct Api {
     robots: Arc<BTreeMap<String, RobotHandle>>,
     closing: CancellationToken,
     /// The live streams (`GET .../live`), when the daemon publishes them.
-    live: Option<super::console::LiveHub>,
+    live: Option<super::stream::LiveHub>,
 }
 
 impl Api {
@@ -83,7 +83,7 @@ impl Api {
 
     /// This API with the live streams of `hub` (`GET /v1/live`, `GET /v1/robots/{name}/live`).
     #[must_use]
-    pub fn with_live(self, hub: super::console::LiveHub) -> Self {
+    pub fn with_live(self, hub: super::stream::LiveHub) -> Self {
         Self {
             live: Some(hub),
             ..self

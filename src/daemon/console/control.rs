@@ -18,7 +18,7 @@ use std::time::Duration;
 use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::CancellationToken;
 
-use super::publish::{Frame, RobotStream};
+use super::super::stream::{Frame, RobotStream};
 use crate::cell::Mode;
 use crate::console::{
     Action, Asker, Command, EndedBy, Event, JogAxis, JogFacts, Lease, LeaseSettings, Refusal, Role,

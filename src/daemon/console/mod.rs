@@ -15,7 +15,6 @@
 mod assets;
 mod control;
 mod listen;
-mod publish;
 mod server;
 mod session;
 mod ws;
@@ -29,10 +28,12 @@ use axum::routing::{get, post};
 use serde::Serialize;
 use tokio_util::sync::CancellationToken;
 
+pub use super::stream::{
+    CAPACITY, Frame, LiveHub, RobotStream, SnapshotSetup, Subscription, snapshot,
+};
 pub use assets::{ASSETS, Asset, INDEX, page_files};
 pub use control::{Control, Request as ControlRequest, Who};
 pub use listen::{admits, serve};
-pub use publish::{CAPACITY, Frame, LiveHub, RobotStream, SnapshotSetup, Subscription, snapshot};
 pub use session::{COOKIE, Sessions, UsersError, hash_password};
 
 use super::RobotHandle;

@@ -1,12 +1,13 @@
 //! The live stream: one publisher task per robot builds the robot's [`Live`] snapshot in one
-//! function ([`snapshot`]) each time it wakes, in one place ([`publish`]: on every status read
-//! the worker makes, `RobotHandle::watch_reads`, and on every change of the console's own side),
+//! function ([`snapshot`]) each time it wakes, in one place ([`publish`]: on every change of the
+//! snapshot the worker publishes, `RobotHandle::watch_snapshot`, a status read or an incident,
+//! and on every change of the console's own side),
 //! and pushes what changed, once, to every subscriber: the `WebSocket`s of the console, the API's
 //! NDJSON streams (`status --watch`, `cycle run --follow`), the console's control tasks. N
 //! subscribers cost no PLC exchange and one snapshot: nobody reads the robot per subscriber.
 //!
 //! ```text
-//!  worker --status read--> watch_reads --+
+//!  worker --snapshot---> watch_snapshot -+
 //!  control task --seat, jog--> side -----+--> publish: snapshot() -> diff -> Frame (seq, text)
 //!                                             |-> latest (watch): the whole snapshot, for a new
 //!                                             |   subscriber and the control tasks
@@ -15,9 +16,6 @@
 //! A subscriber that falls [`CAPACITY`] messages behind is dropped (its stream ends; it
 //! reconnects and starts from a whole snapshot): a slow reader never holds the publisher, and
 //! the publisher never holds the worker.
-//!
-//! When the worker publishes its own snapshot through a `watch` (the owner's refactoring),
-//! [`publish`]'s wake-up and the reads in [`snapshot`] are the two places that change.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
