@@ -7,9 +7,8 @@
 use std::io::{self, Write};
 
 use crate::geometry::Pose;
-use crate::kinematics::{Cylindrical, JointKind, Model};
 use crate::plan::{MoveRequest, Origin, PlanError, plan_line};
-use crate::robot::{Dynamics, OverSpeed, Robot, seed_robot};
+use crate::robot::{Dynamics, OverSpeed, Robot, short_arm};
 
 /// The two plans of the line, side by side.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,22 +21,6 @@ pub struct DriveComparison {
     pub timed_s: f64,
     /// The base channel's fastest row in each, Hz.
     pub peak_hz: [f64; 2],
-}
-
-/// A cylindrical robot whose arm reaches in to 50 mm from its axis, its base channel at
-/// 20 kHz: a line 100 mm from the axis swings the base at 1.4 rad/s at 240 mm/s, and 20 kHz
-/// allows 0.87 rad/s.
-pub(crate) fn short_arm(over_speed: OverSpeed) -> Robot {
-    let mut robot = seed_robot();
-    robot.kinematics = Model::Cylindrical(Cylindrical {
-        l0_mm: 50.0,
-        min_axis_distance_mm: 20.0,
-    });
-    robot.joints[0].max_freq_hz = 20_000;
-    robot.joints[0].min = JointKind::Revolute.from_user(-360.0);
-    robot.joints[0].max = JointKind::Revolute.from_user(360.0);
-    robot.motion.over_speed = over_speed;
-    robot
 }
 
 /// The short-armed robot under `slow-down`, with drive limits or without.

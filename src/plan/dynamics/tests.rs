@@ -3,13 +3,13 @@
 
 use std::fmt::Write as _;
 
-use crate::demo::drives::short_arm;
 use crate::geometry::{Corner, Element, Pose};
 use crate::kinematics::Kinematics;
 use crate::plan::{
     JointMoveRequest, MovePlan, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
     plan_line, plan_move, plan_path,
 };
+use crate::robot::short_arm;
 use crate::robot::{Dynamics, Method, Motion, OverSpeed, Ramp, Robot, seed_robot};
 use crate::table::FrequencyModel;
 
