@@ -34,3 +34,30 @@ pub(crate) fn fresh_dir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// A status block the contract's machine reads as sound: the contract's magic and version,
+/// homed and ready, `host`'s word, no fault.
+pub(crate) fn status(
+    state: crate::contract::State,
+    seq: u16,
+    heartbeat: u16,
+    elapsed: [i32; crate::contract::CHANNELS],
+    host: u16,
+) -> crate::contract::machine::Status {
+    use crate::contract::{Fault, MAGIC, StatusBlock, VERSION};
+    crate::contract::machine::Status {
+        block: StatusBlock {
+            magic: MAGIC,
+            version: VERSION,
+            heartbeat,
+            state: state.word(),
+            seq,
+            ready: 0b111,
+            elapsed,
+            host,
+            ..StatusBlock::default()
+        },
+        state,
+        fault: Fault::None,
+    }
+}

@@ -7,7 +7,6 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::*;
-use crate::contract::{MAGIC, VERSION};
 
 const HOST: u16 = 0xA5A5;
 const FROM: [i32; CHANNELS] = [100, 200, 300, 400];
@@ -19,21 +18,7 @@ fn settings() -> WatchSettings {
 
 /// A status block: the contract's magic and version, homed and ready, our host word.
 fn status(state: State, seq: u16, heartbeat: u16, elapsed: [i32; CHANNELS]) -> Status {
-    Status {
-        block: StatusBlock {
-            magic: MAGIC,
-            version: VERSION,
-            heartbeat,
-            state: state.word(),
-            seq,
-            ready: 0b111,
-            elapsed,
-            host: HOST,
-            ..StatusBlock::default()
-        },
-        state,
-        fault: Fault::None,
-    }
+    crate::testing::status(state, seq, heartbeat, elapsed, HOST)
 }
 
 fn with(mut s: Status, change: impl FnOnce(&mut Status)) -> Status {

@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 
 use super::*;
 use crate::contract::machine::WatchSettings;
-use crate::contract::{CommandBlock, Fault, MAGIC, PermitBit, State, StatusBlock, VERSION};
+use crate::contract::{CommandBlock, Fault, PermitBit, State, StatusBlock};
 use crate::order::Target;
 
 const HOST: u16 = 0xA5A5;
@@ -15,21 +15,7 @@ const START_WITHIN: Duration = Duration::from_secs(5);
 
 /// A status block: the contract's magic and version, homed and ready, our host word.
 fn status(state: State, seq: u16, heartbeat: u16, elapsed: [i32; CHANNELS]) -> Status {
-    Status {
-        block: StatusBlock {
-            magic: MAGIC,
-            version: VERSION,
-            heartbeat,
-            state: state.word(),
-            seq,
-            ready: 0b111,
-            elapsed,
-            host: HOST,
-            ..StatusBlock::default()
-        },
-        state,
-        fault: Fault::None,
-    }
+    crate::testing::status(state, seq, heartbeat, elapsed, HOST)
 }
 
 fn planned(tag: MoveId, seq: u16, from: [i32; CHANNELS], to: [i32; CHANNELS]) -> Planned {
