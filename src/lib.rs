@@ -40,6 +40,8 @@
 //! console/     PURE  the operator's console's decisions: the jog lease machine, the control seat
 //!                    and roles, a snapshot's changes as a merge patch, failed logins
 //!                    rate-limited, a jog's pieces and worst-case travel
+//! pallet/      PURE  palletising: a pattern's slots in fill order with their approach and retreat,
+//!                    what happens between layers and when full
 //! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
 //!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
@@ -81,6 +83,7 @@ pub mod kinematics;
 pub mod mewtocol;
 pub mod mock;
 pub mod order;
+pub mod pallet;
 pub mod plan;
 pub mod plc;
 pub mod plot;

@@ -8,7 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The modules that do no IO and read no clock (src/lib.rs, "Layout").
-const PURE: [&str; 12] = [
+const PURE: [&str; 13] = [
     "console",
     "geometry",
     "kinematics",
@@ -20,6 +20,7 @@ const PURE: [&str; 12] = [
     "cell",
     "cycle",
     "order",
+    "pallet",
     "wire",
 ];
 
