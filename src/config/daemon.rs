@@ -236,6 +236,34 @@ mod tests {
     }
 
     #[test]
+    fn the_journal_s_caps_are_read_and_out_of_range_ones_named() {
+        let d = Config::from_toml(&format!(
+            "{MINIMAL}[daemon.journal]\nfile_bytes = 65536\nfiles = 3\nqueue = 16\n"
+        ))
+        .unwrap()
+        .daemon;
+        assert_eq!(
+            d.journal,
+            JournalSettings {
+                file_bytes: 65_536,
+                files: 3,
+                queue: 16
+            }
+        );
+        assert_eq!(
+            Config::from_toml(MINIMAL).unwrap().daemon.journal,
+            JournalSettings::default()
+        );
+        let m = message(&format!("{MINIMAL}[daemon.journal]\nfiles = 1\n"));
+        assert!(
+            m.ends_with("daemon.journal.files = 1: must be from 2 to 1000"),
+            "{m}"
+        );
+        let m = message(&format!("{MINIMAL}[daemon.journal]\nsize = 1\n"));
+        assert!(m.contains("daemon.journal.size: unknown field `size`"), "{m}");
+    }
+
+    #[test]
     fn start_within_names_its_limits() {
         let m = message(&with_daemon("start_within = \"7200s\""));
         assert!(
