@@ -187,9 +187,10 @@ pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
 }
 
 /// The daemon-wide options `settings` describe: move ids counted on in the state directory (from
-/// the clock when it cannot be used), taught positions kept there, a fresh host word.
+/// the clock when it cannot be used), taught positions kept there, a fresh host word, the
+/// journal.
 #[must_use]
-pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
+pub fn daemon_options(settings: &DaemonSettings, journal: &Journal) -> DaemonOptions {
     let ids = match MoveIds::in_state_dir(&settings.state_dir) {
         Ok(ids) => ids,
         Err(e) => {
@@ -206,7 +207,7 @@ pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
         ids: Arc::new(ids),
         start_within: settings.start_within,
         positions: Arc::new(TaughtPositions::in_state_dir(&settings.state_dir)),
-        journal: crate::journal::Journal::off(),
+        journal: journal.clone(),
     }
 }
 
@@ -299,11 +300,7 @@ pub async fn serve(
     let faces = bind_modbus_faces(config).await?;
     let console_tcp = bind_console(config).await?;
     let journal = open_journal(settings)?;
-    let options = DaemonOptions {
-        journal: journal.clone(),
-        ..daemon_options(settings)
-    };
-    let mut daemon = Daemon::spawn(robots, &options);
+    let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
     let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), &closing);
