@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use super::segments::{Segment, segment_path, segments};
 use super::{Counters, JournalError, Message, Pending};
@@ -25,6 +25,18 @@ use crate::wire::journal::{Entry, Kind};
 pub(super) const SYNC_EVERY: Duration = Duration::from_secs(1);
 /// Most messages taken in one batch.
 const BATCH: usize = 1024;
+/// How long the writer sleeps with nothing to write and nothing to sync.
+const IDLE: Duration = Duration::from_secs(3600);
+
+/// What a batch left on the disk.
+enum Written {
+    /// Written and synced (or only synced: a flush).
+    Synced,
+    /// Written, its fsync still due.
+    Unsynced,
+    /// Nothing.
+    Nothing,
+}
 
 /// The newest segment, appended to.
 pub(super) struct Writer {
@@ -77,30 +89,38 @@ impl Writer {
         self.next_seq
     }
 
-    /// Runs until every sender is gone: batches in, lines out, fsync where it matters.
+    /// Runs until every sender is gone: batches in, lines out, fsync where it matters (and
+    /// within [`SYNC_EVERY`] of the first write not yet synced, however busy the queue).
     pub(super) fn run(mut self, rx: &Receiver<Message>) {
-        let mut dirty = false;
+        let mut dirty_since: Option<Instant> = None;
         loop {
-            let wait = if dirty { SYNC_EVERY } else { Duration::from_secs(3600) };
-            let first = match rx.recv_timeout(wait) {
-                Ok(m) => m,
-                Err(RecvTimeoutError::Timeout) => {
-                    dirty = dirty && !self.sync();
-                    continue;
+            let wait = dirty_since.map_or(IDLE, |t| SYNC_EVERY.saturating_sub(t.elapsed()));
+            match rx.recv_timeout(wait) {
+                Ok(first) => {
+                    let mut batch = vec![first];
+                    batch.extend(rx.try_iter().take(BATCH - 1));
+                    match self.take(batch) {
+                        Written::Synced => dirty_since = None,
+                        Written::Unsynced => {
+                            dirty_since.get_or_insert_with(Instant::now);
+                        }
+                        Written::Nothing => {}
+                    }
                 }
+                Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => break,
-            };
-            let mut batch = vec![first];
-            batch.extend(rx.try_iter().take(BATCH - 1));
-            dirty = self.take(batch, dirty);
+            }
+            if dirty_since.is_some_and(|t| t.elapsed() >= SYNC_EVERY) && self.sync() {
+                dirty_since = None;
+            }
         }
-        if dirty {
+        if dirty_since.is_some() {
             self.sync();
         }
     }
 
-    /// Writes a batch; returns whether some of it waits for its fsync.
-    fn take(&mut self, batch: Vec<Message>, dirty: bool) -> bool {
+    /// Writes a batch, and syncs it when it holds a durable entry or a flush.
+    fn take(&mut self, batch: Vec<Message>) -> Written {
         let mut entries = Vec::with_capacity(batch.len() + 1);
         let mut flushes = Vec::new();
         let dropped = self.counters.dropped.load(Ordering::Relaxed);
@@ -126,7 +146,11 @@ impl Writer {
         for done in flushes {
             let _ = done.send(());
         }
-        (dirty || written) && !synced
+        match (synced, written) {
+            (true, _) => Written::Synced,
+            (false, true) => Written::Unsynced,
+            (false, false) => Written::Nothing,
+        }
     }
 
     /// Numbers the entries and appends them, a new segment started where one would pass the
