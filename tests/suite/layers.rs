@@ -32,7 +32,15 @@ const KNOWN_CIRCLES: [(&str, &[&str]); 1] =
     [("daemon", &["cell", "cycle", "handle", "request", "worker"])];
 
 /// The modules that do IO: no pure module imports them.
-const IO: [&str; 6] = ["daemon", "cli", "plc", "demo", "commission", "mock"];
+const IO: [&str; 7] = [
+    "daemon",
+    "cli",
+    "plc",
+    "demo",
+    "commission",
+    "mock",
+    "journal",
+];
 
 type Module = Vec<String>;
 

@@ -23,6 +23,7 @@ mod demo;
 mod gateway;
 mod interop_rmodbus;
 mod io_cli;
+mod journal;
 mod jog_teach;
 mod layers;
 mod mock_servers;

@@ -103,6 +103,8 @@ pub struct RobotHandle {
     /// The speed override, 1 to 100 %: every order checked after it is set is planned at it
     /// ([`Self::limits`]).
     speed_override: Arc<std::sync::atomic::AtomicU8>,
+    /// The cell's journal (`DaemonOptions::journal`).
+    journal: crate::journal::Journal,
 }
 
 /// A position saved from the robot's pose.
@@ -119,6 +121,13 @@ impl RobotHandle {
     #[must_use]
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+
+    /// The cell's journal: what the robot's cycle records into (a pallet's slot placed, a
+    /// pallet full).
+    #[must_use]
+    pub fn journal(&self) -> &crate::journal::Journal {
+        &self.journal
     }
 
     /// The speed override, 1 to 100 %.
@@ -487,6 +496,7 @@ impl Daemon {
                 lane: Arc::default(),
                 epoch: None,
                 speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
+                journal: options.journal.clone(),
             };
             let worker = Worker::new(
                 setup,
