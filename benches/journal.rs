@@ -22,7 +22,10 @@ const P1: [f64; 3] = [-926.57, 535.03, 50.0];
 const CYCLES: u64 = 8;
 
 fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("linterpd-bench-journal-{}-{name}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "linterpd-bench-journal-{}-{name}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -46,7 +49,10 @@ fn fault(n: u64) -> Kind {
 }
 
 fn dir_bytes(dir: &Path) -> (usize, u64) {
-    let files: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap()).collect();
+    let files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .collect();
     let bytes = files.iter().map(|f| f.metadata().unwrap().len()).sum();
     (files.len(), bytes)
 }
@@ -92,7 +98,13 @@ async fn paced(rate: u64, for_s: u64) {
     }
     journal.flush().await;
     let c = journal.counts();
-    let read = journal.read(&Query { limit: usize::MAX, ..Query::default() }).unwrap().len();
+    let read = journal
+        .read(&Query {
+            limit: usize::MAX,
+            ..Query::default()
+        })
+        .unwrap()
+        .len();
     println!(
         "paced {rate} entries/s for {for_s} s (queue 4096): {} written, {} dropped, {} fsyncs; \
          {read} read back",
@@ -114,7 +126,10 @@ fn connector(shared: &SharedMock) -> linterpd::daemon::Connector {
             let server = MewtocolServer::new(shared, options);
             tokio::spawn(async move { server.serve(theirs).await });
             let options = MewtocolOptions::new(Station::new(1).unwrap(), HeaderChoice::Percent);
-            Ok(AnyPlc::Mewtocol(MewtocolClient::new(Box::new(ours) as BoxedLink, options)))
+            Ok(AnyPlc::Mewtocol(MewtocolClient::new(
+                Box::new(ours) as BoxedLink,
+                options,
+            )))
         })
     })
 }
@@ -137,22 +152,33 @@ fn mock_at_p1() -> SharedMock {
 /// journal is on, followed, and a task records `flood` entries a second meanwhile.
 async fn cycle_times(flood: Option<u64>) -> Vec<f64> {
     let shared = mock_at_p1();
-    let dir = temp(if flood.is_some() { "cycle-on" } else { "cycle-off" });
+    let dir = temp(if flood.is_some() {
+        "cycle-on"
+    } else {
+        "cycle-off"
+    });
     let up = [P1[0], P1[1], P1[2] + 60.0];
-    let program = format!("[[step]]\nmove = {{ to = {up:?} }}\n[[step]]\nmove = {{ to = {P1:?} }}\n");
+    let program =
+        format!("[[step]]\nmove = {{ to = {up:?} }}\n[[step]]\nmove = {{ to = {P1:?} }}\n");
     std::fs::write(dir.join("updown.toml"), program).unwrap();
     let journal = match flood {
         Some(_) => Journal::open(&dir.join("journal"), &JournalSettings::default()).unwrap(),
         None => Journal::off(),
     };
-    let options = DaemonOptions { journal: journal.clone(), ..DaemonOptions::default() };
+    let options = DaemonOptions {
+        journal: journal.clone(),
+        ..DaemonOptions::default()
+    };
     let setup = RobotSetup {
         robot: seed_robot(),
         settings: ContractSettings::default(),
         connect: connector(&shared),
         home_counts: [0; JOINTS],
         gateway: linterpd::gateway::GatewaySettings::default(),
-        cell: CellSettings { programs: Some(dir.clone()), ..CellSettings::default() },
+        cell: CellSettings {
+            programs: Some(dir.clone()),
+            ..CellSettings::default()
+        },
     };
     let daemon = Daemon::spawn(vec![setup], &options);
     let h = daemon.robot("press-loader").unwrap().clone();
@@ -162,7 +188,7 @@ async fn cycle_times(flood: Option<u64>) -> Vec<f64> {
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
     let flooding = flood.map(|rate| tokio::spawn(flood_task(journal.clone(), rate)));
-    h.run_cycle("updown", Some(CYCLES)).unwrap();
+    h.run_cycle("updown", Some(CYCLES)).await.unwrap();
     let mut times = Vec::new();
     let mut seen = 0;
     loop {
@@ -174,14 +200,20 @@ async fn cycle_times(flood: Option<u64>) -> Vec<f64> {
         if s.state == CycleState::Done {
             break;
         }
-        assert!(!s.state.is_final() && s.state != CycleState::Faulted, "{s:?}");
+        assert!(
+            !s.state.is_final() && s.state != CycleState::Faulted,
+            "{s:?}"
+        );
         tokio::time::sleep(Duration::from_millis(2)).await;
     }
     if let Some(task) = flooding {
         task.abort();
         journal.flush().await;
         let c = journal.counts();
-        println!("  flooded: {} entries written, {} dropped during the cycles", c.written, c.dropped);
+        println!(
+            "  flooded: {} entries written, {} dropped during the cycles",
+            c.written, c.dropped
+        );
     }
     closing.cancel();
     daemon.shut_down().await;
@@ -214,14 +246,24 @@ fn summary(times: &mut [f64]) -> String {
 
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
 async fn main() {
-    let big_queue = JournalSettings { queue: 200_000, ..JournalSettings::default() };
+    let big_queue = JournalSettings {
+        queue: 200_000,
+        ..JournalSettings::default()
+    };
     append_rate("commands (fsync batched)", 200_000, command, big_queue).await;
     append_rate("faults (each batch fsync'd)", 20_000, fault, big_queue).await;
-    let small = JournalSettings { file_bytes: 1 << 20, files: 4, queue: 200_000 };
+    let small = JournalSettings {
+        file_bytes: 1 << 20,
+        files: 4,
+        queue: 200_000,
+    };
     append_rate("commands, caps 4 x 1 MiB", 200_000, command, small).await;
     paced(10_000, 2).await;
     let mut off = cycle_times(None).await;
     println!("cycle, journal off: {}", summary(&mut off));
     let mut on = cycle_times(Some(10_000)).await;
-    println!("cycle, journal on, 10000 entries/s flooding it: {}", summary(&mut on));
+    println!(
+        "cycle, journal on, 10000 entries/s flooding it: {}",
+        summary(&mut on)
+    );
 }

@@ -71,7 +71,10 @@ pub fn run(args: &LogArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
         let cursor = match &args.since {
             Some(since) => print_all(args, &client, &[("since", since)], out).await?,
             None => {
-                let lines = args.lines.clamp(1, crate::daemon::api::MAX_ENTRIES).to_string();
+                let lines = args
+                    .lines
+                    .clamp(1, crate::daemon::api::MAX_ENTRIES)
+                    .to_string();
                 let page = fetch(args, &client, &[("limit", &lines), ("newest", "true")]).await?;
                 print_entries(&page.entries, daemon.json, out)?;
                 page.last_seq
@@ -89,9 +92,11 @@ fn check_since(since: &str) -> Result<(), Failure> {
     if parse_span_ms(since).is_ok() {
         return Ok(());
     }
-    parse_rfc3339(since)
-        .map(|_| ())
-        .map_err(|e| bad_input(anyhow::anyhow!("--since: {e}, or a span back from now (10m, 8h)")))
+    parse_rfc3339(since).map(|_| ()).map_err(|e| {
+        bad_input(anyhow::anyhow!(
+            "--since: {e}, or a span back from now (10m, 8h)"
+        ))
+    })
 }
 
 /// One page of the journal.
@@ -156,17 +161,30 @@ async fn follow(
     }
 }
 
-fn print_entries(entries: &[Entry], json: bool, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+fn print_entries(
+    entries: &[Entry],
+    json: bool,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
     for entry in entries {
-        let line = if json { entry.to_line() } else { entry.to_string() };
+        let line = if json {
+            entry.to_line()
+        } else {
+            entry.to_string()
+        };
         writeln!(out, "{line}").map_err(|e| Failure::Runtime(e.into()))?;
     }
     out.flush().map_err(|e| Failure::Runtime(e.into()))
 }
 
 /// `--counts`: every entry since (24 h without --since), counted per shift.
-async fn counts(args: &LogArgs, client: &Client, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let shift_ms = parse_span_ms(&args.shift).map_err(|e| bad_input(anyhow::anyhow!("--shift: {e}")))?;
+async fn counts(
+    args: &LogArgs,
+    client: &Client,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
+    let shift_ms =
+        parse_span_ms(&args.shift).map_err(|e| bad_input(anyhow::anyhow!("--shift: {e}")))?;
     let offset_ms = shift_start_ms(&args.shift_start)?;
     let since = args.since.clone().unwrap_or_else(|| "24h".to_owned());
     let mut entries = Vec::new();
@@ -199,7 +217,11 @@ async fn counts(args: &LogArgs, client: &Client, out: &mut dyn std::io::Write) -
 
 /// `HH:MM` as ms after midnight.
 fn shift_start_ms(text: &str) -> Result<u64, Failure> {
-    let bad = || bad_input(anyhow::anyhow!("--shift-start {text:?}: must be HH:MM (UTC), e.g. 06:00"));
+    let bad = || {
+        bad_input(anyhow::anyhow!(
+            "--shift-start {text:?}: must be HH:MM (UTC), e.g. 06:00"
+        ))
+    };
     let (h, m) = text.split_once(':').ok_or_else(bad)?;
     let (h, m): (u64, u64) = (h.parse().map_err(|_| bad())?, m.parse().map_err(|_| bad())?);
     if h > 23 || m > 59 {
@@ -254,7 +276,10 @@ mod tests {
     #[test]
     fn a_time_with_an_offset_is_sent_percent_encoded() {
         assert_eq!(
-            encode(&[("since", "2026-11-29T09:00:00+01:00"), ("robot", "press-loader")]),
+            encode(&[
+                ("since", "2026-11-29T09:00:00+01:00"),
+                ("robot", "press-loader")
+            ]),
             "since=2026-11-29T09%3A00%3A00%2B01%3A00&robot=press-loader"
         );
     }

@@ -260,7 +260,10 @@ mod tests {
             "{m}"
         );
         let m = message(&format!("{MINIMAL}[daemon.journal]\nsize = 1\n"));
-        assert!(m.contains("daemon.journal.size: unknown field `size`"), "{m}");
+        assert!(
+            m.contains("daemon.journal.size: unknown field `size`"),
+            "{m}"
+        );
     }
 
     #[test]

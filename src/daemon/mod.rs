@@ -44,6 +44,7 @@ pub mod notify;
 pub mod positions;
 mod report;
 mod request;
+mod robots;
 pub mod service;
 mod setup;
 mod shared;
@@ -61,14 +62,16 @@ pub use crate::wire::{
     FaceRefusal, FaceState, GatewayStats, LinkState, MoveAccepted, MoveId, MoveReport,
     PathAccepted, PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
-pub use cell::{MIRROR_EVERY, ModeError, Owner, mirror_face};
-pub use cycle::CycleError;
+pub use cell::{MIRROR_EVERY, mirror_face};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{Daemon, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
+pub use handle::{RobotHandle, Saved};
 pub use ids::{MoveIds, write_atomically};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{KEPT, Moves};
-pub use request::{CommandError, ConflictReason};
+pub use request::{
+    CommandError, ConflictReason, CycleError, MAX_QUEUED_STARTS, ModeError, Owner, SubmitError,
+};
+pub use robots::Daemon;
 pub use setup::Connector;
 pub use setup::{DaemonOptions, RobotSetup, host_word};
-pub use shared::{Incidents, Reads, Snapshot};
+pub use shared::{CellView, Incidents, Reads, Snapshot};

@@ -157,6 +157,7 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
     let began = Instant::now();
     handle
         .run_cycle("press-load", Some(PRESS_CYCLES))
+        .await
         .map_err(|e| DemoError::Rig(e.to_string()))?;
     let mut cycles = Vec::new();
     let mut cycle_began = Instant::now();
@@ -211,6 +212,7 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
                 tokio::time::sleep(Duration::from_millis(20)).await;
                 handle
                     .resume_cycle()
+                    .await
                     .map_err(|e| DemoError::Rig(e.to_string()))?;
                 resumed_at = Some(Instant::now());
             }

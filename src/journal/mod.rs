@@ -138,7 +138,11 @@ impl Journal {
         })));
         tracing::info!(dir = %dir.display(), next_seq = next, "journal open");
         if let Some((file, bytes)) = torn {
-            tracing::warn!(file, bytes, "the journal's last line was torn (a power cut?): cut off");
+            tracing::warn!(
+                file,
+                bytes,
+                "the journal's last line was torn (a power cut?): cut off"
+            );
             journal.record(None, Kind::TornLine { file, bytes });
         }
         Ok(journal)

@@ -111,7 +111,11 @@ fn last_entry(text: &[u8]) -> (usize, Option<Entry>) {
             .and_then(|l| Entry::from_line(l).ok())
         {
             // A whole entry missing only its line break is kept (the opener adds the break).
-            let keep = if text.get(end) == Some(&b'\n') { end + 1 } else { end };
+            let keep = if text.get(end) == Some(&b'\n') {
+                end + 1
+            } else {
+                end
+            };
             return (keep, Some(entry));
         }
         if start == 0 {

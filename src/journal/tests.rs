@@ -72,7 +72,10 @@ fn rotation_keeps_the_files_and_bytes_within_the_caps() {
         journal.record(Some("r"), command(n));
     }
     rt.block_on(journal.flush());
-    let files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap()).collect();
+    let files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .collect();
     let bytes: u64 = files.iter().map(|f| f.metadata().unwrap().len()).sum();
     assert_eq!(files.len(), 3, "{files:?}");
     assert!(files.iter().all(|f| f.metadata().unwrap().len() <= 4096));
@@ -82,7 +85,11 @@ fn rotation_keeps_the_files_and_bytes_within_the_caps() {
     let last = entries.last().unwrap();
     assert_eq!(last.seq, 2000);
     assert!(entries.windows(2).all(|w| w[1].seq == w[0].seq + 1));
-    assert!(entries.len() > 40 && entries.len() < 2000, "{}", entries.len());
+    assert!(
+        entries.len() > 40 && entries.len() < 2000,
+        "{}",
+        entries.len()
+    );
     assert_eq!(journal.counts().dropped, 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -116,7 +123,10 @@ fn a_torn_last_line_is_cut_off_journaled_and_the_numbers_go_on() {
             bytes: torn.len() as u64
         }
     );
-    assert_eq!(entries.iter().map(|e| e.seq).collect::<Vec<_>>(), vec![1, 2, 3, 4]);
+    assert_eq!(
+        entries.iter().map(|e| e.seq).collect::<Vec<_>>(),
+        vec![1, 2, 3, 4]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -166,7 +176,10 @@ fn a_full_queue_drops_and_counts_and_the_drop_is_journaled() {
         })
         .sum();
     assert_eq!(told, counts.dropped);
-    assert_eq!(counts.written + counts.dropped, 100_001 + told_entries(&journal));
+    assert_eq!(
+        counts.written + counts.dropped,
+        100_001 + told_entries(&journal)
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -199,14 +212,20 @@ fn a_query_takes_after_since_robot_and_the_newest() {
         limit: 5,
         ..Query::default()
     });
-    assert_eq!(after.iter().map(|e| e.seq).collect::<Vec<_>>(), vec![991, 992, 993, 994, 995]);
+    assert_eq!(
+        after.iter().map(|e| e.seq).collect::<Vec<_>>(),
+        vec![991, 992, 993, 994, 995]
+    );
     let newest = q(Query {
         limit: 3,
         newest: true,
         robot: Some("a".into()),
         ..Query::default()
     });
-    assert_eq!(newest.iter().map(|e| e.seq).collect::<Vec<_>>(), vec![997, 999, 1001]);
+    assert_eq!(
+        newest.iter().map(|e| e.seq).collect::<Vec<_>>(),
+        vec![997, 999, 1001]
+    );
     let since = q(Query {
         since_ms: Some(now_ms() + 60_000),
         limit: 10,

@@ -67,9 +67,10 @@ impl Writer {
         };
         let (file, tail) = super::segments::open_tail(&newest)?;
         let torn = tail.torn.map(|bytes| {
-            let name = newest.path.file_name().map_or_else(String::new, |n| {
-                n.to_string_lossy().into_owned()
-            });
+            let name = newest
+                .path
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
             (name, bytes)
         });
         let writer = Self {
@@ -167,9 +168,8 @@ impl Writer {
             }
             .to_line();
             let size = line.len() as u64 + 1;
-            if self.bytes + buffer.len() as u64 + size > self.settings.file_bytes && self.bytes
-                + buffer.len() as u64
-                > 0
+            if self.bytes + buffer.len() as u64 + size > self.settings.file_bytes
+                && self.bytes + buffer.len() as u64 > 0
             {
                 written |= self.write(&mut buffer);
                 self.rotate();
@@ -211,7 +211,9 @@ impl Writer {
                 self.file = file;
                 self.bytes = 0;
             }
-            Err(e) => tracing::warn!(error = %e, "the journal cannot start a new file; it goes on in the old one"),
+            Err(e) => {
+                tracing::warn!(error = %e, "the journal cannot start a new file; it goes on in the old one")
+            }
         }
         let Ok(all) = segments(&self.dir) else {
             return;
@@ -239,7 +241,10 @@ impl Writer {
     }
 
     fn failed(&self, lines: u64, e: &std::io::Error) {
-        let before = self.counters.failed.fetch_add(lines.max(1), Ordering::Relaxed);
+        let before = self
+            .counters
+            .failed
+            .fetch_add(lines.max(1), Ordering::Relaxed);
         if before == 0 || before.is_power_of_two() {
             tracing::warn!(error = %e, failures = before + 1, "the journal cannot write");
         }

@@ -58,7 +58,10 @@ async fn journaled(journal: &Journal, done: impl Fn(&[Entry]) -> bool) -> Vec<En
 async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_who() {
     let shared = mock_at_seed_start("");
     let dir = temp("follower");
-    let program = format!("[[step]]\nmove = {{ to = [{}, {}, {}] }}\n", P2[0], P2[1], P2[2]);
+    let program = format!(
+        "[[step]]\nmove = {{ to = [{}, {}, {}] }}\n",
+        P2[0], P2[1], P2[2]
+    );
     let programs = common::daemon::programs_dir("journal", "follower", &[("p", program)]);
     let journal = Journal::open(&dir.join("journal"), &JournalSettings::default()).unwrap();
     let options = DaemonOptions {
@@ -85,13 +88,21 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
         .with_journal(journal.clone())
         .router(None);
     let listener = tokio::net::UnixListener::bind(&socket).unwrap();
-    tokio::spawn(linterpd::daemon::api::serve(listener, router, closing.clone().cancelled_owned()));
+    tokio::spawn(linterpd::daemon::api::serve(
+        listener,
+        router,
+        closing.clone().cancelled_owned(),
+    ));
     taking_moves(&h).await;
 
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     let began = Instant::now();
     while h.cycle().is_none_or(|c| c.state != CycleState::Done) {
-        assert!(began.elapsed() < LIMIT, "the cycle never ended: {:?}", h.cycle());
+        assert!(
+            began.elapsed() < LIMIT,
+            "the cycle never ended: {:?}",
+            h.cycle()
+        );
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
     // The e-stop input opens: the PLC latches fault 3.
@@ -102,16 +113,29 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
         e.iter().any(|e| e.kind.name() == "fault") && e.iter().any(|e| e.kind.name() == "command")
     })
     .await;
-    let of = |name: &str| -> Vec<&Entry> { entries.iter().filter(|e| e.kind.name() == name).collect() };
+    let of =
+        |name: &str| -> Vec<&Entry> { entries.iter().filter(|e| e.kind.name() == name).collect() };
 
     assert_eq!(
         of("cycle-started")[0].kind,
-        Kind::CycleStarted { program: "p".into(), cycle: 1 }
+        Kind::CycleStarted {
+            program: "p".into(),
+            cycle: 1
+        }
     );
-    let Kind::CycleEnded { program, cycle, outcome, cycle_s } = &of("cycle-ended")[0].kind else {
+    let Kind::CycleEnded {
+        program,
+        cycle,
+        outcome,
+        cycle_s,
+    } = &of("cycle-ended")[0].kind
+    else {
         unreachable!()
     };
-    assert_eq!((program.as_str(), *cycle, *outcome), ("p", 1, CycleOutcome::Done));
+    assert_eq!(
+        (program.as_str(), *cycle, *outcome),
+        ("p", 1, CycleOutcome::Done)
+    );
     assert!(cycle_s.is_some_and(|s| s > 0.5), "{cycle_s:?}");
     assert_eq!(
         of("fault")[0].kind,
@@ -133,7 +157,11 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
         }
     );
     // In order, numbered from 1 without a gap.
-    assert!(entries.windows(2).all(|w| w[1].seq == w[0].seq + 1 && w[1].at_ms >= w[0].at_ms));
+    assert!(
+        entries
+            .windows(2)
+            .all(|w| w[1].seq == w[0].seq + 1 && w[1].at_ms >= w[0].at_ms)
+    );
     assert_eq!(entries[0].seq, 1);
 
     // Read back through the API: the command, by number.
@@ -146,7 +174,11 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
     assert_eq!(page["last_seq"], after + 1);
     let bad = api.get("/v1/journal?since=yesterday").await;
     assert_eq!(bad.status, 400);
-    assert!(bad.text().contains("\\\"yesterday\\\" is not"), "{}", bad.text());
+    assert!(
+        bad.text().contains("\\\"yesterday\\\" is not"),
+        "{}",
+        bad.text()
+    );
     closing.cancel();
     daemon.shut_down().await;
     let _ = std::fs::remove_dir_all(&dir);
@@ -172,7 +204,10 @@ fn log_until(socket: &Path, done: impl Fn(&[Value]) -> bool) -> Vec<Value> {
     loop {
         let (code, out, err) = linterpd(socket, &["log", "--json", "--since", "1h"]);
         assert_eq!(code, Some(0), "{out}{err}");
-        let lines: Vec<Value> = out.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        let lines: Vec<Value> = out
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
         if done(&lines) {
             return lines;
         }
@@ -182,7 +217,10 @@ fn log_until(socket: &Path, done: impl Fn(&[Value]) -> bool) -> Vec<Value> {
 }
 
 fn kinds(lines: &[Value]) -> Vec<String> {
-    lines.iter().map(|l| l["kind"].as_str().unwrap().to_owned()).collect()
+    lines
+        .iter()
+        .map(|l| l["kind"].as_str().unwrap().to_owned())
+        .collect()
 }
 
 #[test]
@@ -192,8 +230,12 @@ fn linterpd_log_reads_what_the_cli_and_a_reload_did_and_a_restart_numbers_on() {
     let (code, out, err) = linterpd(&socket, &["stop"]);
     assert_eq!(code, Some(0), "{out}{err}");
     running.serve.hangup();
-    running.serve.wait_for_stderr("SIGHUP", common::serve::READY);
-    let lines = log_until(&socket, |l| kinds(l).contains(&"config-reloaded".to_owned()));
+    running
+        .serve
+        .wait_for_stderr("SIGHUP", common::serve::READY);
+    let lines = log_until(&socket, |l| {
+        kinds(l).contains(&"config-reloaded".to_owned())
+    });
     assert_eq!(kinds(&lines)[0], "daemon-started");
     assert_eq!(lines[0]["seq"], 1);
     let uid = std::fs::metadata(&socket).unwrap().uid();
@@ -223,18 +265,29 @@ fn linterpd_log_reads_what_the_cli_and_a_reload_did_and_a_restart_numbers_on() {
     let mut again = Command::new(env!("CARGO_BIN_EXE_linterpd"));
     again.arg("serve").arg("--config").arg(&running.config);
     running.serve = common::process::Spawned::spawn("linterpd serve (again)", again);
-    running.serve.wait_for_stderr("API listening", common::serve::READY);
+    running
+        .serve
+        .wait_for_stderr("API listening", common::serve::READY);
     let lines = log_until(&socket, |l| {
         kinds(l).iter().filter(|k| *k == "daemon-started").count() == 2
     });
     let seqs: Vec<u64> = lines.iter().map(|l| l["seq"].as_u64().unwrap()).collect();
     assert!(seqs.windows(2).all(|w| w[1] == w[0] + 1), "{seqs:?}");
-    let stopping = lines.iter().position(|l| l["kind"] == "daemon-stopping").unwrap();
+    let stopping = lines
+        .iter()
+        .position(|l| l["kind"] == "daemon-stopping")
+        .unwrap();
     assert!(lines[stopping]["seq"].as_u64().unwrap() > last);
     assert_eq!(lines[stopping + 1]["kind"], "daemon-started");
     // --counts over the same entries: no cycle ran, one shift.
     let (code, out, err) = linterpd(&socket, &["log", "--counts", "--json", "--since", "1h"]);
     assert_eq!(code, Some(0), "{err}");
-    let shifts: Vec<Value> = out.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    assert!(!shifts.is_empty() && shifts.iter().all(|s| s["cycles"] == 0), "{out}");
+    let shifts: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(
+        !shifts.is_empty() && shifts.iter().all(|s| s["cycles"] == 0),
+        "{out}"
+    );
 }

@@ -103,9 +103,10 @@ fn who(request: &Request) -> (Source, Option<String>) {
 fn action(method: &Method, path: &str) -> (Option<String>, String) {
     let parts: Vec<&str> = path.trim_matches('/').split('/').collect();
     match parts.as_slice() {
-        ["v1", "robots", name, rest @ ..] if !rest.is_empty() => {
-            (Some((*name).to_owned()), format!("{method} {}", rest.join("/")))
-        }
+        ["v1", "robots", name, rest @ ..] if !rest.is_empty() => (
+            Some((*name).to_owned()),
+            format!("{method} {}", rest.join("/")),
+        ),
         _ => (None, format!("{method} {path}")),
     }
 }
@@ -125,8 +126,10 @@ async fn small_body(request: Request) -> (Request, Option<String>) {
             let bytes = axum::body::to_bytes(body, BODY_KEPT)
                 .await
                 .unwrap_or_default();
-            let text = serde_json::from_slice::<serde_json::Value>(&bytes)
-                .map_or_else(|_| String::from_utf8_lossy(&bytes).into_owned(), |v| v.to_string());
+            let text = serde_json::from_slice::<serde_json::Value>(&bytes).map_or_else(
+                |_| String::from_utf8_lossy(&bytes).into_owned(),
+                |v| v.to_string(),
+            );
             (Request::from_parts(parts, Body::from(bytes)), Some(text))
         }
     }
@@ -138,7 +141,9 @@ async fn refusal(response: Response) -> (Response, Option<String>) {
         return (response, None);
     }
     let (parts, body) = response.into_parts();
-    let bytes = axum::body::to_bytes(body, 64 * 1024).await.unwrap_or_default();
+    let bytes = axum::body::to_bytes(body, 64 * 1024)
+        .await
+        .unwrap_or_default();
     let why = serde_json::from_slice::<super::ErrorBody>(&bytes)
         .ok()
         .map(|e| e.reason.unwrap_or(e.error));
@@ -188,7 +193,10 @@ pub(super) async fn read(
         .map_err(|_| ApiError::ShuttingDown)?
         .map_err(|e| ApiError::Other {
             status: axum::http::StatusCode::INTERNAL_SERVER_ERROR,
-            message: format!("{e}: {}", std::error::Error::source(&e).map_or_else(String::new, ToString::to_string)),
+            message: format!(
+                "{e}: {}",
+                std::error::Error::source(&e).map_or_else(String::new, ToString::to_string)
+            ),
         })?;
     let last_seq = entries.last().map(|e| e.seq).or(params.after);
     Ok(Json(JournalPage { entries, last_seq }))
@@ -241,14 +249,23 @@ mod tests {
             action(&Method::PUT, "/v1/robots/a/mode"),
             (Some("a".into()), "PUT mode".into())
         );
-        assert_eq!(action(&Method::POST, "/v1/other"), (None, "POST /v1/other".into()));
+        assert_eq!(
+            action(&Method::POST, "/v1/other"),
+            (None, "POST /v1/other".into())
+        );
     }
 
     #[test]
     fn the_journal_s_counters_go_before_the_end_of_the_metrics() {
         let text = metrics_text(&Journal::off(), "a 1\n# EOF\n".into());
-        assert!(text.starts_with("a 1\n# HELP linterpd_journal_entries"), "{text}");
-        assert!(text.contains("linterpd_journal_dropped_total 0\n"), "{text}");
+        assert!(
+            text.starts_with("a 1\n# HELP linterpd_journal_entries"),
+            "{text}"
+        );
+        assert!(
+            text.contains("linterpd_journal_dropped_total 0\n"),
+            "{text}"
+        );
         assert!(text.ends_with("# EOF\n"), "{text}");
     }
 }

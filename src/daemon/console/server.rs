@@ -241,10 +241,12 @@ pub(super) async fn guard(
     };
     // The journal names the console's user as who sent a command.
     if let Some(Peer(peer)) = request.extensions().get::<Peer>().copied() {
-        request.extensions_mut().insert(crate::daemon::api::Caller::Console {
-            user: session.user.clone(),
-            ip: client_ip(peer),
-        });
+        request
+            .extensions_mut()
+            .insert(crate::daemon::api::Caller::Console {
+                user: session.user.clone(),
+                ip: client_ip(peer),
+            });
     }
     let method = request.method().clone();
     let changes = !matches!(method, Method::GET | Method::HEAD);

@@ -38,9 +38,9 @@ use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositio
 use crate::config::{Config, DaemonSettings};
 use crate::contract::machine::WatchSettings;
 use crate::journal::Journal;
-use crate::wire::journal::Kind;
 use crate::plc::exchange::ContractSettings;
 use crate::plc::{self, LinkSettings};
+use crate::wire::journal::Kind;
 
 /// Longest wait for open connections after the daemon has shut down.
 const DRAIN: Duration = Duration::from_secs(3);

@@ -226,9 +226,10 @@ fn state_entries(was: Option<CycleState>, after: &CycleStatus, out: &mut Vec<Kin
 
 /// Why a cycle faulted, with where: `cycle main step 3 (move to @in-press): ...`.
 fn cycle_fault(status: &CycleStatus) -> String {
-    let at = status.step.as_ref().map_or_else(String::new, |s| {
-        format!(" step {} ({})", s.step, s.does)
-    });
+    let at = status
+        .step
+        .as_ref()
+        .map_or_else(String::new, |s| format!(" step {} ({})", s.step, s.does));
     let why = status.reason.as_deref().unwrap_or("no reason given");
     format!("cycle {}{at}: {why}", status.program)
 }

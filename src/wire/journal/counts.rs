@@ -122,12 +122,27 @@ mod tests {
             ),
             at(day + 13 * HOUR + 9, ended(CycleOutcome::Stopped)),
             // 14-22 has nothing; 22-06 one fault.
-            at(day + 23 * HOUR, Kind::Fault { code: Some(3), reason: "e-stop".into() }),
+            at(
+                day + 23 * HOUR,
+                Kind::Fault {
+                    code: Some(3),
+                    reason: "e-stop".into(),
+                },
+            ),
         ];
         let shifts = per_shift(&entries, 8 * HOUR, 6 * HOUR);
         let got: Vec<(String, u64, u64, u64, u64, u64)> = shifts
             .iter()
-            .map(|s| (s.from.clone(), s.cycles, s.stopped, s.parts, s.pallets, s.faults))
+            .map(|s| {
+                (
+                    s.from.clone(),
+                    s.cycles,
+                    s.stopped,
+                    s.parts,
+                    s.pallets,
+                    s.faults,
+                )
+            })
             .collect();
         assert_eq!(
             got,

@@ -106,15 +106,35 @@ fn the_human_line_says_when_what_and_who() {
         robot: None,
         ..entry(Kind::DaemonStopping)
     };
-    assert_eq!(daemon.to_string(), "2026-11-28T08:48:01.123Z #41 daemon-stopping");
+    assert_eq!(
+        daemon.to_string(),
+        "2026-11-28T08:48:01.123Z #41 daemon-stopping"
+    );
 }
 
 #[test]
 fn faults_cycle_ends_pallets_and_reloads_are_durable_commands_are_batched() {
-    assert!(Kind::Fault { code: None, reason: String::new() }.durable());
-    assert!(Kind::PalletFull { pallet: "p".into(), parts: 1 }.durable());
+    assert!(
+        Kind::Fault {
+            code: None,
+            reason: String::new()
+        }
+        .durable()
+    );
+    assert!(
+        Kind::PalletFull {
+            pallet: "p".into(),
+            parts: 1
+        }
+        .durable()
+    );
     assert!(Kind::ModeChanged { mode: Mode::Local }.durable());
-    assert!(Kind::ConfigRefused { error: String::new() }.durable());
+    assert!(
+        Kind::ConfigRefused {
+            error: String::new()
+        }
+        .durable()
+    );
     assert!(!Kind::Resume.durable());
     assert!(
         !Kind::Command {
@@ -130,7 +150,12 @@ fn faults_cycle_ends_pallets_and_reloads_are_durable_commands_are_batched() {
 
 #[test]
 fn a_line_that_is_not_an_entry_is_refused() {
-    for line in ["", "{", "{\"seq\":1}", "{\"seq\":1,\"at\":\"x\",\"kind\":\"resume\"}"] {
+    for line in [
+        "",
+        "{",
+        "{\"seq\":1}",
+        "{\"seq\":1,\"at\":\"x\",\"kind\":\"resume\"}",
+    ] {
         assert!(Entry::from_line(line).is_err(), "{line}");
     }
 }

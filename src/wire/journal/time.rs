@@ -86,7 +86,10 @@ fn fraction(b: &[u8]) -> Option<(i64, &[u8])> {
     }
     let mut ms = 0;
     for i in 0..3 {
-        let digit = b.get(1 + i).filter(|c| c.is_ascii_digit()).map_or(0, |c| c - b'0');
+        let digit = b
+            .get(1 + i)
+            .filter(|c| c.is_ascii_digit())
+            .map_or(0, |c| c - b'0');
         ms = ms * 10 + i64::from(digit);
     }
     Some((ms, &b[1 + digits..]))
@@ -149,14 +152,25 @@ fn civil_from_days(days: i64) -> (i64, i64, i64) {
     let mp = (5 * doy + 2) / 153;
     let d = doy - (153 * mp + 2) / 5 + 1;
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    (if m <= 2 { yoe + era * 400 + 1 } else { yoe + era * 400 }, m, d)
+    (
+        if m <= 2 {
+            yoe + era * 400 + 1
+        } else {
+            yoe + era * 400
+        },
+        m,
+        d,
+    )
 }
 
 /// serde for [`super::Entry::at_ms`]: RFC 3339 on the wire.
 pub(super) mod as_rfc3339 {
     use serde::{Deserialize, Deserializer, Serializer};
 
-    #[allow(clippy::trivially_copy_pass_by_ref, reason = "serde's `with` passes by reference")]
+    #[allow(
+        clippy::trivially_copy_pass_by_ref,
+        reason = "serde's `with` passes by reference"
+    )]
     pub(in crate::wire::journal) fn serialize<S: Serializer>(
         ms: &u64,
         out: S,
@@ -196,14 +210,26 @@ mod tests {
         let utc = parse_rfc3339("2026-11-29T08:00:00Z").unwrap();
         assert_eq!(parse_rfc3339("2026-11-29T09:30:00+01:30"), Ok(utc));
         assert_eq!(parse_rfc3339("2026-11-29T03:00:00-05:00"), Ok(utc));
-        assert_eq!(parse_rfc3339("2026-11-29T08:00:00.123456789Z"), Ok(utc + 123));
+        assert_eq!(
+            parse_rfc3339("2026-11-29T08:00:00.123456789Z"),
+            Ok(utc + 123)
+        );
     }
 
     #[test]
     fn bad_times_and_spans_are_refused_naming_them() {
-        for text in ["", "2026-11-29", "2026-13-01T00:00:00Z", "2026-11-29T08:00:00", "x"] {
+        for text in [
+            "",
+            "2026-11-29",
+            "2026-13-01T00:00:00Z",
+            "2026-11-29T08:00:00",
+            "x",
+        ] {
             let e = parse_rfc3339(text).unwrap_err();
-            assert!(e.to_string().starts_with(&format!("{text:?} is not")), "{e}");
+            assert!(
+                e.to_string().starts_with(&format!("{text:?} is not")),
+                "{e}"
+            );
         }
         for text in ["", "10", "m", "10y", "0s", "-5m"] {
             assert!(parse_span_ms(text).is_err(), "{text}");

@@ -72,7 +72,12 @@ fn a_fault_is_not_cleared_by_the_link_going_down_and_up() {
         vec!["fault", "link-lost", "link-restored"],
         "{got:?}"
     );
-    assert_eq!(got[1], Kind::LinkLost { error: Some("timeout".into()) });
+    assert_eq!(
+        got[1],
+        Kind::LinkLost {
+            error: Some("timeout".into())
+        }
+    );
 }
 
 #[test]
@@ -88,7 +93,11 @@ fn a_run_of_three_cycles_journals_each_start_and_end() {
     assert_eq!(
         names(&got),
         vec![
-            "cycle-started", "cycle-ended", "cycle-started", "cycle-ended", "cycle-started",
+            "cycle-started",
+            "cycle-ended",
+            "cycle-started",
+            "cycle-ended",
+            "cycle-started",
             "cycle-ended"
         ]
     );
@@ -101,12 +110,15 @@ fn a_run_of_three_cycles_journals_each_start_and_end() {
             cycle_s: Some(4.5)
         }
     );
-    assert_eq!(got[1], Kind::CycleEnded {
-        program: "main".into(),
-        cycle: 1,
-        outcome: CycleOutcome::Done,
-        cycle_s: Some(4.5)
-    });
+    assert_eq!(
+        got[1],
+        Kind::CycleEnded {
+            program: "main".into(),
+            cycle: 1,
+            outcome: CycleOutcome::Done,
+            cycle_s: Some(4.5)
+        }
+    );
 }
 
 #[test]
@@ -124,9 +136,21 @@ fn hold_resume_fault_and_stop_of_a_cycle() {
     ]);
     assert_eq!(
         names(&got),
-        vec!["cycle-started", "hold", "resume", "fault", "cycle-ended", "cycle-started"]
+        vec![
+            "cycle-started",
+            "hold",
+            "resume",
+            "fault",
+            "cycle-ended",
+            "cycle-started"
+        ]
     );
-    assert_eq!(got[1], Kind::Hold { reason: Some("paused by request".into()) });
+    assert_eq!(
+        got[1],
+        Kind::Hold {
+            reason: Some("paused by request".into())
+        }
+    );
     assert_eq!(
         got[3],
         Kind::Fault {
@@ -136,7 +160,11 @@ fn hold_resume_fault_and_stop_of_a_cycle() {
     );
     assert!(matches!(
         got[4],
-        Kind::CycleEnded { cycle: 1, outcome: CycleOutcome::Stopped, .. }
+        Kind::CycleEnded {
+            cycle: 1,
+            outcome: CycleOutcome::Stopped,
+            ..
+        }
     ));
 }
 
