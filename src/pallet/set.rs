@@ -159,29 +159,52 @@ impl RobotPallets {
     pub fn check(frames: &BTreeMap<String, FrameDoc>, pallets: &BTreeMap<String, PalletDoc>) -> Result<Self, PalletError> {
         let mut out = Self::default();
         for (name, doc) in frames {
-            out.frames.insert(name.clone(), FrameSpec::check(name, doc)?);
+            out.add_frame(name, doc)?;
         }
         for (name, doc) in pallets {
-            let layout = Layout::check(name, doc)?;
-            if let Placement::Frame { frame: Some(f), .. } = &layout.placement {
-                if !out.frames.contains_key(f) {
-                    let known: Vec<&str> = out.frames.keys().map(String::as_str).collect();
-                    return Err(PalletError::Value {
-                        owner: format!("pallet {name:?}"),
-                        key: "frame".into(),
-                        value: format!("{f:?}"),
-                        reason: if known.is_empty() { "no frame is defined: add [robots.NAME.frames.NAME]".into() } else { format!("the frames defined are {}", known.join(", ")) },
-                    });
-                }
+            out.add_pallet(name, doc)?;
+        }
+        Ok(out)
+    }
+
+    /// Checks and adds a frame table.
+    ///
+    /// # Errors
+    /// A value refused, naming the frame, the key and the limit.
+    pub fn add_frame(&mut self, name: &str, doc: &FrameDoc) -> Result<(), PalletError> {
+        self.frames.insert(name.to_owned(), FrameSpec::check(name, doc)?);
+        Ok(())
+    }
+
+    /// Checks and adds a pallet table (after the frames it may sit in).
+    ///
+    /// # Errors
+    /// A value refused, naming the pallet, the key and the limit; a frame not defined.
+    pub fn add_pallet(&mut self, name: &str, doc: &PalletDoc) -> Result<(), PalletError> {
+        let layout = Layout::check(name, doc)?;
+        match &layout.placement {
+            Placement::Frame { frame: Some(f), .. } if !self.frames.contains_key(f) => {
+                let known: Vec<&str> = self.frames.keys().map(String::as_str).collect();
+                return Err(PalletError::Value {
+                    owner: format!("pallet {name:?}"),
+                    key: "frame".into(),
+                    value: format!("{f:?}"),
+                    reason: if known.is_empty() {
+                        "no frame is defined: add [robots.NAME.frames.NAME]".into()
+                    } else {
+                        format!("the frames defined are {}", known.join(", "))
+                    },
+                });
             }
-            if let Placement::Corners(c) = &layout.placement {
+            Placement::Corners(c) => {
                 for (i, p) in c.iter().enumerate() {
                     check_point(&format!("pallet {name:?}"), &format!("corners[{i}]"), p)?;
                 }
             }
-            out.layouts.insert(name.clone(), layout);
+            Placement::Frame { .. } => {}
         }
-        Ok(out)
+        self.layouts.insert(name.to_owned(), layout);
+        Ok(())
     }
 
     /// Whether pallet `name` needs taught positions to be laid out (its frame's points or its
