@@ -17,22 +17,37 @@ use crate::pallet::{PalletError, RobotPallets};
 use crate::robot::Robot;
 
 /// The robot's frames and pallets, checked; `None` when it has neither table.
-pub(super) fn pallets(text: &str, robot: &Robot, raw: &RawRobot) -> Result<Option<RobotPallets>, ConfigError> {
+pub(super) fn pallets(
+    text: &str,
+    robot: &Robot,
+    raw: &RawRobot,
+) -> Result<Option<RobotPallets>, ConfigError> {
     if raw.frames.is_none() && raw.pallets.is_none() {
         return Ok(None);
     }
     let at = At::new(text, "robots").child(&robot.name);
     let mut set = RobotPallets::default();
     for (name, doc) in raw.frames.iter().flatten() {
-        let place = Place { text, at: at.child("frames").child(name), span: doc.span() };
-        set.add_frame(name, doc.get_ref()).map_err(|e| place.error(e))?;
+        let place = Place {
+            text,
+            at: at.child("frames").child(name),
+            span: doc.span(),
+        };
+        set.add_frame(name, doc.get_ref())
+            .map_err(|e| place.error(e))?;
     }
     let none = BTreeMap::new();
     for (name, doc) in raw.pallets.iter().flatten() {
-        let place = Place { text, at: at.child("pallets").child(name), span: doc.span() };
-        set.add_pallet(name, doc.get_ref()).map_err(|e| place.error(e))?;
+        let place = Place {
+            text,
+            at: at.child("pallets").child(name),
+            span: doc.span(),
+        };
+        set.add_pallet(name, doc.get_ref())
+            .map_err(|e| place.error(e))?;
         if !set.needs_taught(name) {
-            set.pattern(name, robot, &none).map_err(|e| place.error(e))?;
+            set.pattern(name, robot, &none)
+                .map_err(|e| place.error(e))?;
         }
     }
     Ok(Some(set))
@@ -49,14 +64,31 @@ impl Place<'_> {
     /// `error` on the line of its key (else of the table), with the key's full path.
     fn error(&self, error: PalletError) -> ConfigError {
         let Some(key) = error.key().map(str::to_owned) else {
-            return ConfigError::Pallet { line: self.line(None), key: self.at.key().to_owned(), error: Box::new(error) };
+            return ConfigError::Pallet {
+                line: self.line(None),
+                key: self.at.key().to_owned(),
+                error: Box::new(error),
+            };
         };
         let line = self.line(Some(&key));
         let path = self.at.child(&key).key().to_owned();
         match error {
-            PalletError::Value { value, reason, .. } => ConfigError::Invalid { line, key: path, value, reason },
-            PalletError::Missing { reason, .. } => ConfigError::Missing { line, key: path, reason },
-            other => ConfigError::Pallet { line, key: path, error: Box::new(other) },
+            PalletError::Value { value, reason, .. } => ConfigError::Invalid {
+                line,
+                key: path,
+                value,
+                reason,
+            },
+            PalletError::Missing { reason, .. } => ConfigError::Missing {
+                line,
+                key: path,
+                reason,
+            },
+            other => ConfigError::Pallet {
+                line,
+                key: path,
+                error: Box::new(other),
+            },
         }
     }
 
@@ -72,7 +104,9 @@ impl Place<'_> {
                 let at = from + i;
                 let before = rest[..at].chars().next_back();
                 let after = rest[at + last.len()..].trim_start_matches([' ', '\t']);
-                if !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_') && after.starts_with('=') {
+                if !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
+                    && after.starts_with('=')
+                {
                     return Some(start + at);
                 }
                 from = at + last.len();
@@ -94,7 +128,10 @@ pub(super) fn tool(at: &At, raw: Option<&Spanned<RawTool>>) -> Result<[f64; 3], 
     for (i, v) in tool.get_ref().offset.get_ref().iter().enumerate() {
         let x = at.child("offset").index(i).finite(v)?;
         if x.abs() > max {
-            return Err(at.child("offset").index(i).invalid(v, format!("must be within -{max}..={max} mm")));
+            return Err(at
+                .child("offset")
+                .index(i)
+                .invalid(v, format!("must be within -{max}..={max} mm")));
         }
         offset[i] = x;
     }
@@ -120,8 +157,13 @@ mod tests {
     fn the_example_describes_96_interlocked_slots_and_the_robot_gets_them() {
         let config = Config::from_toml(EXAMPLE).unwrap();
         let robot = config.robot(None).unwrap();
-        assert_eq!(robot.kinematics.tool_mm, nalgebra::Vector3::new(40.0, 0.0, -60.0));
-        let patterns = config.patterns(robot, &std::collections::BTreeMap::new()).unwrap();
+        assert_eq!(
+            robot.kinematics.tool_mm,
+            nalgebra::Vector3::new(40.0, 0.0, -60.0)
+        );
+        let patterns = config
+            .patterns(robot, &std::collections::BTreeMap::new())
+            .unwrap();
         let out = &patterns["out"];
         assert_eq!((out.len(), out.layers()), (96, 4));
         assert_eq!(out.between_layers.as_deref(), Some("slip-sheet"));
@@ -129,21 +171,34 @@ mod tests {
         // 1's last of row 1 would, 90 mm further along x, 90 mm up.
         let (a, b) = (out.slot(3).unwrap(), out.slot(24).unwrap());
         let d = b.pose.position_mm - a.pose.position_mm;
-        assert!((d.x - 90.0).abs() < 1e-9 && d.y.abs() > 600.0 && (d.z - 90.0).abs() < 1e-9, "{d}");
+        assert!(
+            (d.x - 90.0).abs() < 1e-9 && d.y.abs() > 600.0 && (d.z - 90.0).abs() < 1e-9,
+            "{d}"
+        );
     }
 
     #[test]
     fn a_bad_pallet_value_names_its_line_key_value_and_limit() {
         let text = with(&PALLET.replace("rows = 2", "rows = 0"));
-        assert_eq!(message(&text), "config line 43: robots.r.pallets.out.rows = 0: must be within 1..=100");
+        assert_eq!(
+            message(&text),
+            "config line 43: robots.r.pallets.out.rows = 0: must be within 1..=100"
+        );
         let text = with(&format!("{PALLET}kinds.B = {{ turn_deg = 45 }}\n"));
         assert!(
-            message(&text).starts_with("config line 48: robots.r.pallets.out.kinds.B.turn_deg = 45: must be a quarter turn"),
+            message(&text).starts_with(
+                "config line 48: robots.r.pallets.out.kinds.B.turn_deg = 45: must be a quarter turn"
+            ),
             "{}",
             message(&text)
         );
         let text = with(&format!("{PALLET}colour = 1\n"));
-        assert!(message(&text).starts_with("config line 48: robots.r.pallets.out.colour: unknown field `colour`"), "{}", message(&text));
+        assert!(
+            message(&text)
+                .starts_with("config line 48: robots.r.pallets.out.colour: unknown field `colour`"),
+            "{}",
+            message(&text)
+        );
         let text = with("[robots.r.frames.f]\norigin = [0, 0, 0]\nx_point = [100, 0, 0]\n");
         assert_eq!(
             message(&text),
@@ -165,13 +220,21 @@ mod tests {
             PALLET.replace("[700, 0, 100]", "[1000, 0, 100]")
         ));
         let config = Config::from_toml(&text).unwrap();
-        let e = config.patterns(&config.robots[0], &std::collections::BTreeMap::new()).unwrap_err();
-        assert_eq!(e.to_string(), "frame \"f\": origin = \"@p0\": no position \"p0\" is taught");
+        let e = config
+            .patterns(&config.robots[0], &std::collections::BTreeMap::new())
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "frame \"f\": origin = \"@p0\": no position \"p0\" is taught"
+        );
     }
 
     #[test]
     fn a_tool_offset_out_of_limits_is_refused() {
         let e = message(&with("[robots.r.tool]\noffset = [0, 3000, 0]\n"));
-        assert_eq!(e, "config line 42: robots.r.tool.offset[1] = 3000: must be within -2000..=2000 mm");
+        assert_eq!(
+            e,
+            "config line 42: robots.r.tool.offset[1] = 3000: must be within -2000..=2000 mm"
+        );
     }
 }

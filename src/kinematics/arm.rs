@@ -179,15 +179,25 @@ mod tests {
     #[test]
     fn forward_of_inverse_is_the_tool_centre_on_every_model() {
         for arm in arms() {
-            for (x, y, z, a) in [(350.0, 420.0, 50.0, 0.0), (-500.0, 300.0, -20.0, 135.0), (200.0, 550.0, 10.0, -60.0)] {
+            for (x, y, z, a) in [
+                (350.0, 420.0, 50.0, 0.0),
+                (-500.0, 300.0, -20.0, 135.0),
+                (200.0, 550.0, 10.0, -60.0),
+            ] {
                 let pose = Pose::from_mm_deg(x, y, z, a);
                 let q = arm.ik(&pose, None).unwrap();
                 let back = arm.fk(&q);
-                assert!((back.position_mm - pose.position_mm).norm() < 1e-9, "{arm:?} {pose:?} {back:?}");
+                assert!(
+                    (back.position_mm - pose.position_mm).norm() < 1e-9,
+                    "{arm:?} {pose:?} {back:?}"
+                );
                 assert!((back.a_rad - pose.a_rad).abs() < 1e-12);
                 // The flange sits the offset, turned by a, away from the tool centre.
                 let flange = arm.model.fk(&q).position_mm;
-                assert!(((pose.position_mm - flange).norm() - 120f64.hypot(30.0).hypot(80.0)).abs() < 1e-9);
+                assert!(
+                    ((pose.position_mm - flange).norm() - 120f64.hypot(30.0).hypot(80.0)).abs()
+                        < 1e-9
+                );
             }
         }
     }

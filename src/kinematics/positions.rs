@@ -100,20 +100,23 @@ mod tests {
         ];
         for model in models {
             let tools = [Vector3::zeros(), Vector3::new(80.0, -20.0, -50.0)];
-            for arm in tools.map(|tool_mm| Arm { model: model.clone(), tool_mm }) {
-            let model = &arm;
-            let mut positions = Positions::new(model);
-            let mut q = [1.047, 50.0, 570.0, 0.0];
-            for i in 0..400u32 {
-                // A pseudo-random joint moves a step each time, now and then one stays put.
-                let j = (i * 7 + i / 3) as usize % 4;
-                q[j] += f64::from(i % 5) * 4.363e-5;
-                assert_eq!(
-                    positions.at(&q),
-                    model.fk(&q).position_mm,
-                    "{model:?} {q:?}"
-                );
-            }
+            for arm in tools.map(|tool_mm| Arm {
+                model: model.clone(),
+                tool_mm,
+            }) {
+                let model = &arm;
+                let mut positions = Positions::new(model);
+                let mut q = [1.047, 50.0, 570.0, 0.0];
+                for i in 0..400u32 {
+                    // A pseudo-random joint moves a step each time, now and then one stays put.
+                    let j = (i * 7 + i / 3) as usize % 4;
+                    q[j] += f64::from(i % 5) * 4.363e-5;
+                    assert_eq!(
+                        positions.at(&q),
+                        model.fk(&q).position_mm,
+                        "{model:?} {q:?}"
+                    );
+                }
             }
         }
     }

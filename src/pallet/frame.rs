@@ -212,8 +212,12 @@ mod tests {
     #[test]
     fn a_frame_from_three_points_puts_its_axes_where_the_points_say() {
         // Origin at (800, 100, 20), x along world +y, the xy point on world -x's side.
-        let f = Frame::from_points(v(800.0, 100.0, 20.0), v(800.0, 400.0, 20.0), v(500.0, 150.0, 20.0))
-            .unwrap();
+        let f = Frame::from_points(
+            v(800.0, 100.0, 20.0),
+            v(800.0, 400.0, 20.0),
+            v(500.0, 150.0, 20.0),
+        )
+        .unwrap();
         assert!((f.turn_rad() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         let p = f.point(&v(100.0, 50.0, 10.0));
         assert!((p - v(750.0, 200.0, 30.0)).norm() < 1e-9, "{p}");
@@ -243,12 +247,22 @@ mod tests {
     fn points_too_close_in_a_line_or_leaning_are_refused_with_the_limit() {
         let o = v(0.0, 0.0, 0.0);
         let e = Frame::from_points(o, v(5.0, 0.0, 0.0), v(0.0, 100.0, 0.0)).unwrap_err();
-        assert!(e.to_string().contains("5.000 mm") && e.to_string().contains("10 mm"), "{e}");
+        assert!(
+            e.to_string().contains("5.000 mm") && e.to_string().contains("10 mm"),
+            "{e}"
+        );
         let e = Frame::from_points(o, v(100.0, 0.0, 0.0), v(300.0, 2.0, 0.0)).unwrap_err();
-        assert!(e.to_string().starts_with("xy_point's distance from the x axis is 2.000 mm"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("xy_point's distance from the x axis is 2.000 mm"),
+            "{e}"
+        );
         // 100 mm along x, rising 10 mm: 5.7 degrees.
         let e = Frame::from_points(o, v(100.0, 0.0, 10.0), v(0.0, 100.0, 0.0)).unwrap_err();
-        assert!(e.to_string().contains("5.71 degrees") && e.to_string().contains("at most 5"), "{e}");
+        assert!(
+            e.to_string().contains("5.71 degrees") && e.to_string().contains("at most 5"),
+            "{e}"
+        );
         let e = Frame::from_points(o, v(f64::NAN, 0.0, 0.0), v(0.0, 1.0, 0.0)).unwrap_err();
         assert!(e.to_string().starts_with("x_point is NaN"), "{e}");
         // Taught upside down (the xy point on the -y side of a frame seen from above).
@@ -259,8 +273,8 @@ mod tests {
     #[test]
     fn a_slightly_tilted_frame_moves_points_fully_and_turns_the_tool_about_z_only() {
         // 100 mm along x rising 2 mm: 1.15 degrees.
-        let f = Frame::from_points(v(0.0, 0.0, 0.0), v(100.0, 0.0, 2.0), v(0.0, 100.0, 0.0))
-            .unwrap();
+        let f =
+            Frame::from_points(v(0.0, 0.0, 0.0), v(100.0, 0.0, 2.0), v(0.0, 100.0, 0.0)).unwrap();
         let p = f.point(&v(500.0, 0.0, 0.0));
         assert!((p.z - 500.0 * 2.0 / 100f64.hypot(2.0)).abs() < 1e-9, "{p}");
         assert!(f.turn_rad().abs() < 1e-12);

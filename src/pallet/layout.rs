@@ -92,7 +92,12 @@ struct Keys<'a> {
 }
 
 impl Keys<'_> {
-    fn bad(&self, key: &str, value: impl std::fmt::Display, reason: impl Into<String>) -> PalletError {
+    fn bad(
+        &self,
+        key: &str,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> PalletError {
         PalletError::Value {
             owner: self.owner.to_owned(),
             key: key.to_owned(),
@@ -145,7 +150,9 @@ impl Keys<'_> {
 
     fn name(&self, key: &str, v: Option<&String>) -> Result<Option<String>, PalletError> {
         match v {
-            Some(s) if s.trim().is_empty() => Err(self.bad(key, format!("{s:?}"), "must not be blank")),
+            Some(s) if s.trim().is_empty() => {
+                Err(self.bad(key, format!("{s:?}"), "must not be blank"))
+            }
             other => Ok(other.cloned()),
         }
     }
@@ -161,21 +168,36 @@ impl Layout {
         let k = Keys { owner: &owner };
         let layers = layers(&k, doc)?;
         let placement = placement(&k, doc)?;
-        let needs_grid = matches!(placement, Placement::Corners(_)) || layers.iter().any(|l| l.listed.is_none());
+        let needs_grid =
+            matches!(placement, Placement::Corners(_)) || layers.iter().any(|l| l.listed.is_none());
         let (rows, columns, pitch_mm) = grid(&k, doc, &placement, needs_grid)?;
-        let per_layer: usize = layers.iter().map(|l| l.listed.as_ref().map_or(rows * columns, Vec::len)).sum();
+        let per_layer: usize = layers
+            .iter()
+            .map(|l| l.listed.as_ref().map_or(rows * columns, Vec::len))
+            .sum();
         if per_layer > MAX_SLOTS {
-            return Err(k.bad("layers", format!("{} layers", layers.len()), format!("make {per_layer} slots; a pallet has at most {MAX_SLOTS}")));
+            return Err(k.bad(
+                "layers",
+                format!("{} layers", layers.len()),
+                format!("make {per_layer} slots; a pallet has at most {MAX_SLOTS}"),
+            ));
         }
-        let approach = doc.approach.as_ref().map(|r| reach(&k, "approach", r)).transpose()?;
+        let approach = doc
+            .approach
+            .as_ref()
+            .map(|r| reach(&k, "approach", r))
+            .transpose()?;
         let (retreat, retreat_key) = match &doc.retreat {
             Some(r) => (Some(reach(&k, "retreat", r)?), "retreat.slow_speed_mm_s"),
             None => (approach, "approach.slow_speed_mm_s"),
         };
-        let slow_speeds_mm_s = [("approach.slow_speed_mm_s", approach), (retreat_key, retreat)]
-            .into_iter()
-            .filter_map(|(key, r)| r.and_then(|r| r.slow).map(|s| (key, s.1)))
-            .collect();
+        let slow_speeds_mm_s = [
+            ("approach.slow_speed_mm_s", approach),
+            (retreat_key, retreat),
+        ]
+        .into_iter()
+        .filter_map(|(key, r)| r.and_then(|r| r.slow).map(|s| (key, s.1)))
+        .collect();
         let w = &doc.when_full;
         Ok(Self {
             name: name.to_owned(),
@@ -185,7 +207,9 @@ impl Layout {
             pitch_mm,
             layer_height_mm: k.positive("layer_height_mm", doc.layer_height_mm, MAX_LENGTH_MM)?,
             layers,
-            a_rad: k.within("a_deg", doc.a_deg.unwrap_or(0.0), -360.0, 360.0)?.to_radians(),
+            a_rad: k
+                .within("a_deg", doc.a_deg.unwrap_or(0.0), -360.0, 360.0)?
+                .to_radians(),
             approach,
             retreat,
             slow_speeds_mm_s,
@@ -213,7 +237,12 @@ impl Layout {
     /// Every slot, in fill order, with its approach and retreat, in world coordinates: the grid
     /// at `origin_mm` in `frame`, `pitch_mm` apart (for corners: as the corners' frame gives).
     #[must_use]
-    pub fn slots(&self, frame: &Frame, origin_mm: Vector3<f64>, pitch_mm: Vector2<f64>) -> Vec<Slot> {
+    pub fn slots(
+        &self,
+        frame: &Frame,
+        origin_mm: Vector3<f64>,
+        pitch_mm: Vector2<f64>,
+    ) -> Vec<Slot> {
         let centre = Vector2::new(
             (self.columns - 1) as f64 * pitch_mm.x / 2.0,
             (self.rows - 1) as f64 * pitch_mm.y / 2.0,
@@ -222,12 +251,30 @@ impl Layout {
         for (layer, kind) in self.layers.iter().enumerate() {
             for (row, column, [x, y, a]) in self.layer(kind, pitch_mm) {
                 let (xy, a) = kind.place(Vector2::new(x, y), a, centre);
-                let local = origin_mm + Vector3::new(xy.x, xy.y, layer as f64 * self.layer_height_mm);
-                let pose = frame.pose(&Pose { position_mm: local, a_rad: a });
-                let pose = Pose { a_rad: wrap(pose.a_rad), ..pose };
-                let (approach, slot_speed_mm_s) = self.approach.map_or((vec![], None), |r| r.way_in(frame, &pose));
+                let local =
+                    origin_mm + Vector3::new(xy.x, xy.y, layer as f64 * self.layer_height_mm);
+                let pose = frame.pose(&Pose {
+                    position_mm: local,
+                    a_rad: a,
+                });
+                let pose = Pose {
+                    a_rad: wrap(pose.a_rad),
+                    ..pose
+                };
+                let (approach, slot_speed_mm_s) = self
+                    .approach
+                    .map_or((vec![], None), |r| r.way_in(frame, &pose));
                 let retreat = self.retreat.map_or(vec![], |r| r.way_out(frame, &pose));
-                slots.push(Slot { index: slots.len(), layer, row, column, pose, approach, slot_speed_mm_s, retreat });
+                slots.push(Slot {
+                    index: slots.len(),
+                    layer,
+                    row,
+                    column,
+                    pose,
+                    approach,
+                    slot_speed_mm_s,
+                    retreat,
+                });
             }
         }
         slots
@@ -247,8 +294,16 @@ impl Layout {
         fill_order(kind.order, self.rows, self.columns)
             .into_iter()
             .map(|(r, c)| {
-                let brick = if r % 2 == 1 { kind.odd_rows_shift_mm } else { 0.0 };
-                (r, c, [c as f64 * pitch.x + brick, r as f64 * pitch.y, self.a_rad])
+                let brick = if r % 2 == 1 {
+                    kind.odd_rows_shift_mm
+                } else {
+                    0.0
+                };
+                (
+                    r,
+                    c,
+                    [c as f64 * pitch.x + brick, r as f64 * pitch.y, self.a_rad],
+                )
             })
             .collect()
     }
@@ -258,7 +313,11 @@ impl Layout {
 fn wrap(a: f64) -> f64 {
     let turn = std::f64::consts::TAU;
     let w = a - turn * (a / turn).round();
-    if w <= -std::f64::consts::PI { w + turn } else { w }
+    if w <= -std::f64::consts::PI {
+        w + turn
+    } else {
+        w
+    }
 }
 
 /// Rows and columns of a layer, in the order `order` fills them.
@@ -271,7 +330,11 @@ fn fill_order(order: OrderDoc, rows: usize, columns: usize) -> Vec<(usize, usize
     };
     for o in 0..outer {
         for i in 0..inner {
-            let i = if snake && o % 2 == 1 { inner - 1 - i } else { i };
+            let i = if snake && o % 2 == 1 {
+                inner - 1 - i
+            } else {
+                i
+            };
             out.push(match order {
                 OrderDoc::Rows | OrderDoc::SnakeRows => (o, i),
                 OrderDoc::Columns | OrderDoc::SnakeColumns => (i, o),
@@ -302,18 +365,33 @@ impl Kind {
 impl Reach {
     /// The point `height_mm` above the slot (moved sideways) and the slow stretch's start.
     fn points(&self, frame: &Frame, slot: &Pose) -> (Pose, Option<(Pose, f64)>) {
-        let offset = frame.direction(&Vector3::new(self.side_mm.x, self.side_mm.y, self.height_mm));
-        let at = |v: Vector3<f64>| Pose { position_mm: slot.position_mm + v, a_rad: slot.a_rad };
-        let slow = self.slow.map(|(mm, speed)| (at(offset.normalize() * mm), speed));
+        let offset = frame.direction(&Vector3::new(
+            self.side_mm.x,
+            self.side_mm.y,
+            self.height_mm,
+        ));
+        let at = |v: Vector3<f64>| Pose {
+            position_mm: slot.position_mm + v,
+            a_rad: slot.a_rad,
+        };
+        let slow = self
+            .slow
+            .map(|(mm, speed)| (at(offset.normalize() * mm), speed));
         (at(offset), slow)
     }
 
     /// Approach waypoints and the speed of the line into the slot.
     fn way_in(&self, frame: &Frame, slot: &Pose) -> (Vec<Waypoint>, Option<f64>) {
         let (above, slow) = self.points(frame, slot);
-        let mut way = vec![Waypoint { pose: above, speed_mm_s: None }];
+        let mut way = vec![Waypoint {
+            pose: above,
+            speed_mm_s: None,
+        }];
         if let Some((near, _)) = &slow {
-            way.push(Waypoint { pose: near.clone(), speed_mm_s: None });
+            way.push(Waypoint {
+                pose: near.clone(),
+                speed_mm_s: None,
+            });
         }
         (way, slow.map(|s| s.1))
     }
@@ -323,16 +401,26 @@ impl Reach {
         let (above, slow) = self.points(frame, slot);
         let mut way: Vec<Waypoint> = slow
             .into_iter()
-            .map(|(near, speed)| Waypoint { pose: near, speed_mm_s: Some(speed) })
+            .map(|(near, speed)| Waypoint {
+                pose: near,
+                speed_mm_s: Some(speed),
+            })
             .collect();
-        way.push(Waypoint { pose: above, speed_mm_s: None });
+        way.push(Waypoint {
+            pose: above,
+            speed_mm_s: None,
+        });
         way
     }
 }
 
 fn reach(k: &Keys<'_>, key: &str, r: &ReachDoc) -> Result<Reach, PalletError> {
     let height_mm = k.positive(&format!("{key}.height_mm"), r.height_mm, MAX_LENGTH_MM)?;
-    let side_mm = k.pair(&format!("{key}.side_mm"), r.side_mm.unwrap_or([0.0; 2]), MAX_LENGTH_MM)?;
+    let side_mm = k.pair(
+        &format!("{key}.side_mm"),
+        r.side_mm.unwrap_or([0.0; 2]),
+        MAX_LENGTH_MM,
+    )?;
     let length = side_mm.norm().hypot(height_mm);
     let slow = match (r.slow_mm, r.slow_speed_mm_s) {
         (None, None) => None,
@@ -340,24 +428,47 @@ fn reach(k: &Keys<'_>, key: &str, r: &ReachDoc) -> Result<Reach, PalletError> {
             k.positive(&format!("{key}.slow_mm"), mm, length)?,
             k.positive(&format!("{key}.slow_speed_mm_s"), speed, f64::MAX)?,
         )),
-        (Some(_), None) => return Err(k.missing(&format!("{key}.slow_speed_mm_s"), "slow_mm runs at a slow speed")),
-        (None, Some(_)) => return Err(k.missing(&format!("{key}.slow_mm"), "slow_speed_mm_s is the speed of the last slow_mm")),
+        (Some(_), None) => {
+            return Err(k.missing(
+                &format!("{key}.slow_speed_mm_s"),
+                "slow_mm runs at a slow speed",
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(k.missing(
+                &format!("{key}.slow_mm"),
+                "slow_speed_mm_s is the speed of the last slow_mm",
+            ));
+        }
     };
-    Ok(Reach { height_mm, side_mm, slow })
+    Ok(Reach {
+        height_mm,
+        side_mm,
+        slow,
+    })
 }
 
 fn layers(k: &Keys<'_>, doc: &PalletDoc) -> Result<Vec<Kind>, PalletError> {
     let names: Vec<Option<&str>> = match &doc.layers {
         LayersDoc::Count(n) => vec![None; k.count("layers", *n)?],
         LayersDoc::Kinds(names) => {
-            k.count("layers", names.len() as i64).map_err(|_| k.bad("layers", format!("{} kinds", names.len()), format!("a pallet has 1..={MAX_GRID} layers")))?;
+            k.count("layers", names.len() as i64).map_err(|_| {
+                k.bad(
+                    "layers",
+                    format!("{} kinds", names.len()),
+                    format!("a pallet has 1..={MAX_GRID} layers"),
+                )
+            })?;
             names.iter().map(|n| Some(n.as_str())).collect()
         }
     };
     let order = doc.order.unwrap_or_default();
     let mut checked = std::collections::BTreeMap::new();
     for (name, kind) in &doc.kinds {
-        checked.insert(name.as_str(), self::kind(k, &format!("kinds.{name}"), kind, order)?);
+        checked.insert(
+            name.as_str(),
+            self::kind(k, &format!("kinds.{name}"), kind, order)?,
+        );
     }
     let known: Vec<&str> = checked.keys().copied().collect();
     names
@@ -379,19 +490,39 @@ fn layers(k: &Keys<'_>, doc: &PalletDoc) -> Result<Vec<Kind>, PalletError> {
 
 impl Kind {
     fn plain(order: OrderDoc) -> Self {
-        Self { turn_rad: 0.0, mirror: None, shift_mm: Vector2::zeros(), odd_rows_shift_mm: 0.0, listed: None, order }
+        Self {
+            turn_rad: 0.0,
+            mirror: None,
+            shift_mm: Vector2::zeros(),
+            odd_rows_shift_mm: 0.0,
+            listed: None,
+            order,
+        }
     }
 }
 
-fn kind(k: &Keys<'_>, key: &str, doc: &super::doc::KindDoc, order: OrderDoc) -> Result<Kind, PalletError> {
+fn kind(
+    k: &Keys<'_>,
+    key: &str,
+    doc: &super::doc::KindDoc,
+    order: OrderDoc,
+) -> Result<Kind, PalletError> {
     let turn = doc.turn_deg.unwrap_or(0.0);
     if !(turn.is_finite() && turn % 90.0 == 0.0 && (-270.0..=270.0).contains(&turn)) {
-        return Err(k.bad(&format!("{key}.turn_deg"), turn, "must be a quarter turn: 0, 90, 180 or 270 (or their negatives)"));
+        return Err(k.bad(
+            &format!("{key}.turn_deg"),
+            turn,
+            "must be a quarter turn: 0, 90, 180 or 270 (or their negatives)",
+        ));
     }
     let listed = match &doc.slots {
         None => None,
         Some(list) if list.is_empty() || list.len() > MAX_SLOTS => {
-            return Err(k.bad(&format!("{key}.slots"), format!("{} slots", list.len()), format!("a listed layer has 1..={MAX_SLOTS} slots")));
+            return Err(k.bad(
+                &format!("{key}.slots"),
+                format!("{} slots", list.len()),
+                format!("a listed layer has 1..={MAX_SLOTS} slots"),
+            ));
         }
         Some(list) => Some(
             list.iter()
@@ -406,13 +537,26 @@ fn kind(k: &Keys<'_>, key: &str, doc: &super::doc::KindDoc, order: OrderDoc) -> 
         ),
     };
     if let (Some(_), Some(shift)) = (&listed, doc.odd_rows_shift_mm) {
-        return Err(k.bad(&format!("{key}.odd_rows_shift_mm"), shift, "a listed layer has no rows: place its slots where they go"));
+        return Err(k.bad(
+            &format!("{key}.odd_rows_shift_mm"),
+            shift,
+            "a listed layer has no rows: place its slots where they go",
+        ));
     }
     Ok(Kind {
         turn_rad: turn.to_radians(),
         mirror: doc.mirror,
-        shift_mm: k.pair(&format!("{key}.shift_mm"), doc.shift_mm.unwrap_or([0.0; 2]), MAX_LENGTH_MM)?,
-        odd_rows_shift_mm: k.within(&format!("{key}.odd_rows_shift_mm"), doc.odd_rows_shift_mm.unwrap_or(0.0), -MAX_LENGTH_MM, MAX_LENGTH_MM)?,
+        shift_mm: k.pair(
+            &format!("{key}.shift_mm"),
+            doc.shift_mm.unwrap_or([0.0; 2]),
+            MAX_LENGTH_MM,
+        )?,
+        odd_rows_shift_mm: k.within(
+            &format!("{key}.odd_rows_shift_mm"),
+            doc.odd_rows_shift_mm.unwrap_or(0.0),
+            -MAX_LENGTH_MM,
+            MAX_LENGTH_MM,
+        )?,
         listed,
         order: doc.order.unwrap_or(order),
     })
@@ -424,16 +568,32 @@ fn placement(k: &Keys<'_>, doc: &PalletDoc) -> Result<Placement, PalletError> {
         for (i, v) in o.iter().enumerate() {
             k.within(&format!("origin_mm[{i}]"), *v, -1e5, 1e5)?;
         }
-        return Ok(Placement::Frame { frame: k.name("frame", doc.frame.as_ref())?, origin_mm: Vector3::from(o) });
+        return Ok(Placement::Frame {
+            frame: k.name("frame", doc.frame.as_ref())?,
+            origin_mm: Vector3::from(o),
+        });
     };
-    let clash = [("frame", doc.frame.is_some()), ("origin_mm", doc.origin_mm.is_some()), ("pitch_mm", doc.pitch_mm.is_some())];
+    let clash = [
+        ("frame", doc.frame.is_some()),
+        ("origin_mm", doc.origin_mm.is_some()),
+        ("pitch_mm", doc.pitch_mm.is_some()),
+    ];
     if let Some((key, _)) = clash.iter().find(|(_, given)| *given) {
-        return Err(k.bad(key, "(given)", "corners place the grid: give corners or frame, origin_mm and pitch_mm, not both"));
+        return Err(k.bad(
+            key,
+            "(given)",
+            "corners place the grid: give corners or frame, origin_mm and pitch_mm, not both",
+        ));
     }
     Ok(Placement::Corners(corners.clone()))
 }
 
-fn grid(k: &Keys<'_>, doc: &PalletDoc, placement: &Placement, needed: bool) -> Result<(usize, usize, Vector2<f64>), PalletError> {
+fn grid(
+    k: &Keys<'_>,
+    doc: &PalletDoc,
+    placement: &Placement,
+    needed: bool,
+) -> Result<(usize, usize, Vector2<f64>), PalletError> {
     let why = "a grid layer needs rows, columns and pitch_mm";
     let rows = match doc.rows {
         Some(r) => k.count("rows", r)?,
@@ -448,13 +608,20 @@ fn grid(k: &Keys<'_>, doc: &PalletDoc, placement: &Placement, needed: bool) -> R
     if matches!(placement, Placement::Corners(_)) {
         for (key, n) in [("rows", rows), ("columns", columns)] {
             if n < 2 {
-                return Err(k.bad(key, n, "corners span the grid: at least 2 rows and 2 columns"));
+                return Err(k.bad(
+                    key,
+                    n,
+                    "corners span the grid: at least 2 rows and 2 columns",
+                ));
             }
         }
         return Ok((rows, columns, Vector2::zeros()));
     }
     let pitch = match doc.pitch_mm {
-        Some([x, y]) => Vector2::new(k.positive("pitch_mm[0]", x, MAX_LENGTH_MM)?, k.positive("pitch_mm[1]", y, MAX_LENGTH_MM)?),
+        Some([x, y]) => Vector2::new(
+            k.positive("pitch_mm[0]", x, MAX_LENGTH_MM)?,
+            k.positive("pitch_mm[1]", y, MAX_LENGTH_MM)?,
+        ),
         None if needed => return Err(k.missing("pitch_mm", why)),
         None => Vector2::zeros(),
     };

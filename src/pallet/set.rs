@@ -39,14 +39,20 @@ impl FrameSpec {
     /// A key refused or missing, naming the frame.
     pub fn check(name: &str, doc: &FrameDoc) -> Result<Self, PalletError> {
         let owner = format!("frame {name:?}");
-        let points = [Some(&doc.origin), doc.x_point.as_ref(), doc.xy_point.as_ref()];
+        let points = [
+            Some(&doc.origin),
+            doc.x_point.as_ref(),
+            doc.xy_point.as_ref(),
+        ];
         for (key, point) in POINT_KEYS.iter().zip(points) {
             if let Some(p) = point {
                 check_point(&owner, key, p)?;
             }
         }
         match (&doc.x_point, &doc.xy_point, doc.rotation_deg) {
-            (Some(x), Some(xy), None) => Ok(Self::Taught([doc.origin.clone(), x.clone(), xy.clone()])),
+            (Some(x), Some(xy), None) => {
+                Ok(Self::Taught([doc.origin.clone(), x.clone(), xy.clone()]))
+            }
             (None, None, rotation) => {
                 let rotation_deg = rotation.unwrap_or(0.0);
                 if !(rotation_deg.is_finite() && (-360.0..=360.0).contains(&rotation_deg)) {
@@ -57,7 +63,10 @@ impl FrameSpec {
                         reason: "must be a number within -360..=360".into(),
                     });
                 }
-                Ok(Self::Level { origin: doc.origin.clone(), rotation_deg })
+                Ok(Self::Level {
+                    origin: doc.origin.clone(),
+                    rotation_deg,
+                })
             }
             (Some(_), Some(_), Some(r)) => Err(PalletError::Value {
                 owner,
@@ -91,15 +100,20 @@ impl FrameSpec {
                 let [o, x, xy] = resolve3(&owner, p, taught)?;
                 Frame::from_points(o, x, xy)
             }
-            Self::Level { origin, rotation_deg } => {
-                Frame::level(taught.point(&owner, "origin", origin)?, *rotation_deg)
-            }
+            Self::Level {
+                origin,
+                rotation_deg,
+            } => Frame::level(taught.point(&owner, "origin", origin)?, *rotation_deg),
         };
         frame.map_err(|source| PalletError::Frame { owner, source })
     }
 }
 
-fn resolve3(owner: &str, p: &[PointDoc; 3], taught: &Taught<'_>) -> Result<[Vector3<f64>; 3], PalletError> {
+fn resolve3(
+    owner: &str,
+    p: &[PointDoc; 3],
+    taught: &Taught<'_>,
+) -> Result<[Vector3<f64>; 3], PalletError> {
     Ok([
         taught.point(owner, POINT_KEYS[0], &p[0])?,
         taught.point(owner, POINT_KEYS[1], &p[1])?,
@@ -108,15 +122,34 @@ fn resolve3(owner: &str, p: &[PointDoc; 3], taught: &Taught<'_>) -> Result<[Vect
 }
 
 fn check_point(owner: &str, key: &str, p: &PointDoc) -> Result<(), PalletError> {
-    let bad = |value: String, reason: String| PalletError::Value { owner: owner.to_owned(), key: key.to_owned(), value, reason };
+    let bad = |value: String, reason: String| PalletError::Value {
+        owner: owner.to_owned(),
+        key: key.to_owned(),
+        value,
+        reason,
+    };
     match p {
-        PointDoc::Given(v) => match v.iter().find(|x| !(x.is_finite() && x.abs() <= MAX_COORDINATE_MM)) {
-            Some(x) => Err(bad(format!("{v:?}"), format!("{x} is not a coordinate within -{MAX_COORDINATE_MM}..={MAX_COORDINATE_MM} mm"))),
+        PointDoc::Given(v) => match v
+            .iter()
+            .find(|x| !(x.is_finite() && x.abs() <= MAX_COORDINATE_MM))
+        {
+            Some(x) => Err(bad(
+                format!("{v:?}"),
+                format!(
+                    "{x} is not a coordinate within -{MAX_COORDINATE_MM}..={MAX_COORDINATE_MM} mm"
+                ),
+            )),
             None => Ok(()),
         },
         PointDoc::Taught(s) => match s.strip_prefix('@') {
             Some(n) if is_position_name(n) => Ok(()),
-            _ => Err(bad(format!("{s:?}"), format!("a point is [x, y, z] in mm or \"@name\" of a taught position ({})", crate::robot::POSITION_NAME_RULE))),
+            _ => Err(bad(
+                format!("{s:?}"),
+                format!(
+                    "a point is [x, y, z] in mm or \"@name\" of a taught position ({})",
+                    crate::robot::POSITION_NAME_RULE
+                ),
+            )),
         },
     }
 }
@@ -156,7 +189,10 @@ impl RobotPallets {
     ///
     /// # Errors
     /// The first value refused: the frame or pallet, the key and the limit.
-    pub fn check(frames: &BTreeMap<String, FrameDoc>, pallets: &BTreeMap<String, PalletDoc>) -> Result<Self, PalletError> {
+    pub fn check(
+        frames: &BTreeMap<String, FrameDoc>,
+        pallets: &BTreeMap<String, PalletDoc>,
+    ) -> Result<Self, PalletError> {
         let mut out = Self::default();
         for (name, doc) in frames {
             out.add_frame(name, doc)?;
@@ -172,7 +208,8 @@ impl RobotPallets {
     /// # Errors
     /// A value refused, naming the frame, the key and the limit.
     pub fn add_frame(&mut self, name: &str, doc: &FrameDoc) -> Result<(), PalletError> {
-        self.frames.insert(name.to_owned(), FrameSpec::check(name, doc)?);
+        self.frames
+            .insert(name.to_owned(), FrameSpec::check(name, doc)?);
         Ok(())
     }
 
@@ -214,7 +251,10 @@ impl RobotPallets {
         let taught = |p: &&PointDoc| matches!(p, PointDoc::Taught(_));
         match self.layouts.get(name).map(|l| &l.placement) {
             Some(Placement::Corners(c)) => c.iter().any(|p| taught(&p)),
-            Some(Placement::Frame { frame: Some(f), .. }) => self.frames.get(f).is_some_and(|s| s.points().iter().any(taught)),
+            Some(Placement::Frame { frame: Some(f), .. }) => self
+                .frames
+                .get(f)
+                .is_some_and(|s| s.points().iter().any(taught)),
             _ => false,
         }
     }
@@ -224,7 +264,11 @@ impl RobotPallets {
     ///
     /// # Errors
     /// The first pallet that cannot be laid out or reached, naming the slot.
-    pub fn patterns(&self, robot: &Robot, taught: &BTreeMap<String, Position>) -> Result<BTreeMap<String, Pattern>, PalletError> {
+    pub fn patterns(
+        &self,
+        robot: &Robot,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<BTreeMap<String, Pattern>, PalletError> {
         self.layouts
             .keys()
             .map(|name| Ok((name.clone(), self.pattern(name, robot, taught)?)))
@@ -235,12 +279,20 @@ impl RobotPallets {
     ///
     /// # Errors
     /// As [`Self::patterns`].
-    pub fn pattern(&self, name: &str, robot: &Robot, taught: &BTreeMap<String, Position>) -> Result<Pattern, PalletError> {
+    pub fn pattern(
+        &self,
+        name: &str,
+        robot: &Robot,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<Pattern, PalletError> {
         let layout = self.layouts.get(name).ok_or_else(|| PalletError::Value {
             owner: format!("robot {:?}", robot.name),
             key: "pallets".into(),
             value: format!("{name:?}"),
-            reason: format!("the pallets defined are {}", self.layouts.keys().cloned().collect::<Vec<_>>().join(", ")),
+            reason: format!(
+                "the pallets defined are {}",
+                self.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
         })?;
         let slots = self.lay_out(layout, &Taught(taught))?;
         for &(key, speed) in &layout.slow_speeds_mm_s {
@@ -249,7 +301,10 @@ impl RobotPallets {
                     owner: format!("pallet {name:?}"),
                     key: key.into(),
                     value: speed.to_string(),
-                    reason: format!("robot {:?} allows at most {} mm/s (motion.max_speed_mm_s)", robot.name, robot.max_speed_mm_s),
+                    reason: format!(
+                        "robot {:?} allows at most {} mm/s (motion.max_speed_mm_s)",
+                        robot.name, robot.max_speed_mm_s
+                    ),
                 });
             }
         }
@@ -274,10 +329,19 @@ impl RobotPallets {
             }
             Placement::Corners(c) => {
                 let p = resolve3(&owner, c, taught)?;
-                let frame = Frame::from_points(p[0], p[1], p[2]).map_err(|source| PalletError::Frame { owner, source })?;
+                let frame = Frame::from_points(p[0], p[1], p[2])
+                    .map_err(|source| PalletError::Frame { owner, source })?;
                 let (rows, columns) = layout.grid();
-                let far = frame.local(&Pose { position_mm: p[2], a_rad: 0.0 }).position_mm;
-                let pitch = Vector2::new((p[1] - p[0]).norm() / (columns - 1) as f64, far.y / (rows - 1) as f64);
+                let far = frame
+                    .local(&Pose {
+                        position_mm: p[2],
+                        a_rad: 0.0,
+                    })
+                    .position_mm;
+                let pitch = Vector2::new(
+                    (p[1] - p[0]).norm() / (columns - 1) as f64,
+                    far.y / (rows - 1) as f64,
+                );
                 Ok(layout.slots(&frame, Vector3::zeros(), pitch))
             }
         }
@@ -293,18 +357,32 @@ fn check_slot(pallet: &str, robot: &Robot, slot: &Slot) -> Result<(), PalletErro
         .enumerate()
         .map(|(i, w)| (format!("approach waypoint {}", i + 1), w.pose))
         .chain(std::iter::once(("the slot".to_owned(), slot.pose)))
-        .chain(slot.retreat.iter().enumerate().map(|(i, w)| (format!("retreat waypoint {}", i + 1), w.pose)));
+        .chain(
+            slot.retreat
+                .iter()
+                .enumerate()
+                .map(|(i, w)| (format!("retreat waypoint {}", i + 1), w.pose)),
+        );
     let mut last: Option<Pose> = None;
     for (what, pose) in poses {
         let fail = |reason: String| PalletError::Unreachable {
             pallet: pallet.to_owned(),
-            at: SlotAt { index: slot.index, layer: slot.layer, row: slot.row, column: slot.column, what: what.clone() },
+            at: SlotAt {
+                index: slot.index,
+                layer: slot.layer,
+                row: slot.row,
+                column: slot.column,
+                what: what.clone(),
+            },
             reason,
         };
         crate::plan::check_pose(robot, &pose).map_err(|e| fail(e.to_string()))?;
         if let Some(from) = last {
             let line = crate::geometry::Line { from, to: pose };
-            robot.kinematics.check_line(&line).map_err(|e| fail(format!("the line to it from the pose before: {e}")))?;
+            robot
+                .kinematics
+                .check_line(&line)
+                .map_err(|e| fail(format!("the line to it from the pose before: {e}")))?;
         }
         last = Some(pose);
     }

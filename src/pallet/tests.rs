@@ -49,7 +49,11 @@ kinds.B = { turn_deg = 180, shift_mm = [150, 0] }
 #[test]
 fn every_slot_of_a_brick_pallet_is_where_the_hand_worked_formula_puts_it() {
     let layout = Layout::check("brick", &doc(BRICK)).unwrap();
-    let slots = layout.slots(&Frame::world(), Vector3::new(700.0, 0.0, 100.0), nalgebra::Vector2::new(300.0, 200.0));
+    let slots = layout.slots(
+        &Frame::world(),
+        Vector3::new(700.0, 0.0, 100.0),
+        nalgebra::Vector2::new(300.0, 200.0),
+    );
     assert_eq!(slots.len(), 4 * 6);
     let mut expected = Vec::new();
     for layer in 0..4 {
@@ -58,11 +62,19 @@ fn every_slot_of_a_brick_pallet_is_where_the_hand_worked_formula_puts_it() {
             for c in 0..3 {
                 let [x, y, a] = if layer % 2 == 0 {
                     // Brick rows: row 1 half a column pitch along.
-                    [700.0 + 300.0 * c as f64 + if r == 1 { 150.0 } else { 0.0 }, 200.0 * r as f64, 0.0]
+                    [
+                        700.0 + 300.0 * c as f64 + if r == 1 { 150.0 } else { 0.0 },
+                        200.0 * r as f64,
+                        0.0,
+                    ]
                 } else {
                     // Turned half a turn: slot (r, c) lies where grid slot (1 - r, 2 - c) would,
                     // then the layer moves 150 mm along x; the tool turned half a turn.
-                    [700.0 + 300.0 * (2 - c) as f64 + 150.0, 200.0 * (1 - r) as f64, 180.0]
+                    [
+                        700.0 + 300.0 * (2 - c) as f64 + 150.0,
+                        200.0 * (1 - r) as f64,
+                        180.0,
+                    ]
                 };
                 expected.push((layer, r, c, [x, y, z, a]));
             }
@@ -70,7 +82,12 @@ fn every_slot_of_a_brick_pallet_is_where_the_hand_worked_formula_puts_it() {
     }
     for (slot, (layer, row, column, pose)) in slots.iter().zip(&expected) {
         assert_eq!((slot.layer, slot.row, slot.column), (*layer, *row, *column));
-        assert!(close(&slot.pose, *pose), "slot {}: {:?} != {pose:?}", slot.index, slot.pose.to_mm_deg());
+        assert!(
+            close(&slot.pose, *pose),
+            "slot {}: {:?} != {pose:?}",
+            slot.index,
+            slot.pose.to_mm_deg()
+        );
     }
 }
 
@@ -80,15 +97,31 @@ fn a_quarter_turned_and_mirrored_layer_and_the_snake_order_are_as_worked_by_hand
                 layers = [\"T\", \"M\"]\norder = \"snake-rows\"\na_deg = 10\n\
                 kinds.T = { turn_deg = 90 }\nkinds.M = { mirror = \"x\" }\n";
     let layout = Layout::check("t", &doc(text)).unwrap();
-    let slots = layout.slots(&Frame::world(), Vector3::zeros(), nalgebra::Vector2::new(300.0, 200.0));
+    let slots = layout.slots(
+        &Frame::world(),
+        Vector3::zeros(),
+        nalgebra::Vector2::new(300.0, 200.0),
+    );
     // Snake: row 0 columns 0, 1, 2; row 1 columns 2, 1, 0.
     let order: Vec<(usize, usize)> = slots[..6].iter().map(|s| (s.row, s.column)).collect();
     assert_eq!(order, [(0, 0), (0, 1), (0, 2), (1, 2), (1, 1), (1, 0)]);
     // Turned 90 about the centre (300, 100): (x, y) -> (300 - (y - 100), 100 + (x - 300)).
-    assert!(close(&slots[0].pose, [400.0, -200.0, 0.0, 100.0]), "{:?}", slots[0].pose.to_mm_deg());
-    assert!(close(&slots[3].pose, [200.0, 400.0, 0.0, 100.0]), "{:?}", slots[3].pose.to_mm_deg());
+    assert!(
+        close(&slots[0].pose, [400.0, -200.0, 0.0, 100.0]),
+        "{:?}",
+        slots[0].pose.to_mm_deg()
+    );
+    assert!(
+        close(&slots[3].pose, [200.0, 400.0, 0.0, 100.0]),
+        "{:?}",
+        slots[3].pose.to_mm_deg()
+    );
     // Mirrored across x = 300: column 0 lands on column 2's place, the angle mirrored.
-    assert!(close(&slots[6].pose, [600.0, 0.0, 100.0, -10.0]), "{:?}", slots[6].pose.to_mm_deg());
+    assert!(
+        close(&slots[6].pose, [600.0, 0.0, 100.0, -10.0]),
+        "{:?}",
+        slots[6].pose.to_mm_deg()
+    );
 }
 
 #[test]
@@ -129,7 +162,10 @@ fn the_approach_and_retreat_rise_above_the_slot_and_slow_for_the_last_millimetre
     assert_eq!(s.slot_speed_mm_s, Some(40.0));
     assert_eq!(s.retreat.len(), 1);
     assert!((s.retreat[0].pose.position_mm - (at + Vector3::new(0.0, 0.0, 50.0))).norm() < 1e-9);
-    assert_eq!((p.between_layers.as_deref(), p.when_full.signal.as_deref()), (Some("sheet"), Some("full")));
+    assert_eq!(
+        (p.between_layers.as_deref(), p.when_full.signal.as_deref()),
+        (Some("sheet"), Some("full"))
+    );
 }
 
 #[test]
@@ -142,15 +178,24 @@ fn a_slot_out_of_reach_is_refused_naming_the_slot() {
         .pattern("out", &seed_robot(), &BTreeMap::new())
         .unwrap_err()
         .to_string();
-    assert!(e.starts_with("pallet \"out\", slot 2 (layer 0, row 0, column 2), the slot: "), "{e}");
+    assert!(
+        e.starts_with("pallet \"out\", slot 2 (layer 0, row 0, column 2), the slot: "),
+        "{e}"
+    );
     assert!(e.contains("d3"), "{e}");
     // An approach too high for the lift (z 100 + 320 > 400): the waypoint is named.
-    let e = pallets("", &format!("[out]\n{BRICK}approach = {{ height_mm = 320 }}\n"))
-        .unwrap()
-        .pattern("out", &seed_robot(), &BTreeMap::new())
-        .unwrap_err()
-        .to_string();
-    assert!(e.starts_with("pallet \"out\", slot 0 (layer 0, row 0, column 0), approach waypoint 1: "), "{e}");
+    let e = pallets(
+        "",
+        &format!("[out]\n{BRICK}approach = {{ height_mm = 320 }}\n"),
+    )
+    .unwrap()
+    .pattern("out", &seed_robot(), &BTreeMap::new())
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("pallet \"out\", slot 0 (layer 0, row 0, column 0), approach waypoint 1: "),
+        "{e}"
+    );
     assert!(e.contains("d2") && e.contains("400"), "{e}");
 }
 
@@ -164,9 +209,17 @@ fn a_frame_taught_from_three_points_and_moved_moves_every_slot_with_it() {
          approach = { height_mm = 60 }\n",
     )
     .unwrap();
-    let points = [Vector3::new(-200.0, 800.0, 0.0), Vector3::new(200.0, 820.0, 0.0), Vector3::new(-220.0, 1100.0, 0.0)];
+    let points = [
+        Vector3::new(-200.0, 800.0, 0.0),
+        Vector3::new(200.0, 820.0, 0.0),
+        Vector3::new(-220.0, 1100.0, 0.0),
+    ];
     let taught = |p: &[Vector3<f64>; 3]| -> BTreeMap<String, Position> {
-        ["o", "x", "y"].iter().zip(p).map(|(n, v)| ((*n).to_owned(), position(v.x, v.y, v.z))).collect()
+        ["o", "x", "y"]
+            .iter()
+            .zip(p)
+            .map(|(n, v)| ((*n).to_owned(), position(v.x, v.y, v.z)))
+            .collect()
     };
     let before = set.pattern("p", &robot, &taught(&points)).unwrap();
     // Re-taught: turned 25 degrees about (0, 0) and moved (-150, 40, 20).
@@ -176,11 +229,18 @@ fn a_frame_taught_from_three_points_and_moved_moves_every_slot_with_it() {
     let after = set.pattern("p", &robot, &taught(&moved)).unwrap();
     assert_eq!(after.len(), 24);
     for (b, a) in before.slots().iter().zip(after.slots()) {
-        let expected = Pose { position_mm: turn * b.pose.position_mm + shift, a_rad: b.pose.a_rad + 25f64.to_radians() };
+        let expected = Pose {
+            position_mm: turn * b.pose.position_mm + shift,
+            a_rad: b.pose.a_rad + 25f64.to_radians(),
+        };
         let want = crate::plan::check_pose(&robot, &expected).unwrap();
         let got = crate::plan::check_pose(&robot, &a.pose).unwrap();
         for j in 0..4 {
-            assert!((want[j] - got[j]).abs() <= 1, "slot {} joint {j}: {got:?} vs {want:?}", a.index);
+            assert!(
+                (want[j] - got[j]).abs() <= 1,
+                "slot {} joint {j}: {got:?} vs {want:?}",
+                a.index
+            );
         }
         let up = turn * b.approach[0].pose.position_mm + shift;
         assert!((a.approach[0].pose.position_mm - up).norm() < 1e-6);
@@ -191,22 +251,51 @@ fn a_frame_taught_from_three_points_and_moved_moves_every_slot_with_it() {
 fn bad_keys_and_values_are_refused_naming_the_pallet_key_value_and_limit() {
     let cases = [
         ("rows = 0", "pallet \"b\": rows = 0: must be within 1..=100"),
-        ("pitch_mm = [300, -1]", "pallet \"b\": pitch_mm[1] = -1: must be above 0 and at most 5000"),
-        ("layer_height_mm = 0", "pallet \"b\": layer_height_mm = 0: must be above 0"),
-        ("layers = [\"A\", \"C\"]", "pallet \"b\": layers[1] = \"C\": the kinds defined are A, B"),
-        ("kinds.B = { turn_deg = 45 }", "pallet \"b\": kinds.B.turn_deg = 45: must be a quarter turn"),
-        ("approach = { height_mm = 50, slow_mm = 80, slow_speed_mm_s = 5 }", "approach.slow_mm = 80: must be above 0 and at most 50"),
-        ("frame = \"nowhere\"", "pallet \"b\": frame = \"nowhere\": no frame is defined"),
-        ("corners = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]", "pallet \"b\": origin_mm = (given): corners place the grid"),
-        ("when_full = { call = \" \" }", "pallet \"b\": when_full.call = \" \": must not be blank"),
+        (
+            "pitch_mm = [300, -1]",
+            "pallet \"b\": pitch_mm[1] = -1: must be above 0 and at most 5000",
+        ),
+        (
+            "layer_height_mm = 0",
+            "pallet \"b\": layer_height_mm = 0: must be above 0",
+        ),
+        (
+            "layers = [\"A\", \"C\"]",
+            "pallet \"b\": layers[1] = \"C\": the kinds defined are A, B",
+        ),
+        (
+            "kinds.B = { turn_deg = 45 }",
+            "pallet \"b\": kinds.B.turn_deg = 45: must be a quarter turn",
+        ),
+        (
+            "approach = { height_mm = 50, slow_mm = 80, slow_speed_mm_s = 5 }",
+            "approach.slow_mm = 80: must be above 0 and at most 50",
+        ),
+        (
+            "frame = \"nowhere\"",
+            "pallet \"b\": frame = \"nowhere\": no frame is defined",
+        ),
+        (
+            "corners = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]",
+            "pallet \"b\": origin_mm = (given): corners place the grid",
+        ),
+        (
+            "when_full = { call = \" \" }",
+            "pallet \"b\": when_full.call = \" \": must not be blank",
+        ),
     ];
     for (line, want) in cases {
         let key = line.split(" =").next().unwrap();
-        let kept: Vec<&str> = BRICK.lines().filter(|l| l.split(" =").next() != Some(key)).collect();
+        let kept: Vec<&str> = BRICK
+            .lines()
+            .filter(|l| l.split(" =").next() != Some(key))
+            .collect();
         let text = format!("[b]\n{}\n{line}\n", kept.join("\n"));
         let e = pallets("", &text).unwrap_err().to_string();
         assert!(e.starts_with(want) || e.contains(want), "{line}: {e}");
     }
-    let unknown = toml::from_str::<PalletDoc>(&format!("{BRICK}colour = 1\n")).unwrap_err().to_string();
+    let unknown = toml::from_str::<PalletDoc>(&format!("{BRICK}colour = 1\n"))
+        .unwrap_err()
+        .to_string();
     assert!(unknown.contains("unknown field `colour`"), "{unknown}");
 }

@@ -27,7 +27,10 @@ pub fn layers_svg(pattern: &Pattern, placed: usize) -> String {
     let layers = pattern.layers().max(1);
     let columns = layers.min(PER_ROW);
     let rows = layers.div_ceil(PER_ROW);
-    let (w, h) = (columns as f64 * PANEL_PX, rows as f64 * PANEL_PX + MARGIN_PX);
+    let (w, h) = (
+        columns as f64 * PANEL_PX,
+        rows as f64 * PANEL_PX + MARGIN_PX,
+    );
     let placed = placed.min(pattern.len());
     let mut svg = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" \
@@ -39,7 +42,10 @@ pub fn layers_svg(pattern: &Pattern, placed: usize) -> String {
     );
     let scale = Scale::of(pattern);
     for layer in 0..layers {
-        let (ox, oy) = ((layer % PER_ROW) as f64 * PANEL_PX, (layer / PER_ROW) as f64 * PANEL_PX + MARGIN_PX);
+        let (ox, oy) = (
+            (layer % PER_ROW) as f64 * PANEL_PX,
+            (layer / PER_ROW) as f64 * PANEL_PX + MARGIN_PX,
+        );
         let in_layer = pattern.slots().iter().filter(|s| s.layer == layer);
         let done = in_layer.clone().filter(|s| s.index < placed).count();
         let _ = writeln!(
@@ -55,7 +61,11 @@ pub fn layers_svg(pattern: &Pattern, placed: usize) -> String {
         for slot in in_layer {
             let (x, y) = scale.at(slot.pose.position_mm.x, slot.pose.position_mm.y);
             let half = scale.slot_px / 2.0;
-            let fill = if slot.index < placed { "#4a7fb5" } else { "none" };
+            let fill = if slot.index < placed {
+                "#4a7fb5"
+            } else {
+                "none"
+            };
             let (s, c) = slot.pose.a_rad.sin_cos();
             let _ = writeln!(
                 svg,
@@ -131,7 +141,10 @@ fn nearest_gap(pattern: &Pattern) -> Option<f64> {
 }
 
 fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 #[cfg(test)]
@@ -147,7 +160,12 @@ mod tests {
                 layer: i / 6,
                 row: (i % 6) / 3,
                 column: i % 3,
-                pose: Pose::from_mm_deg(300.0 * (i % 3) as f64, 200.0 * ((i % 6) / 3) as f64, 100.0 * (i / 6) as f64, 0.0),
+                pose: Pose::from_mm_deg(
+                    300.0 * (i % 3) as f64,
+                    200.0 * ((i % 6) / 3) as f64,
+                    100.0 * (i / 6) as f64,
+                    0.0,
+                ),
                 approach: vec![],
                 slot_speed_mm_s: None,
                 retreat: vec![],
@@ -162,7 +180,10 @@ mod tests {
         assert_eq!(svg.matches("<g transform").count(), 2);
         assert_eq!(svg.matches("fill=\"#4a7fb5\"").count(), 8);
         assert_eq!(svg.matches("fill=\"none\" stroke=\"#1d3d5e\"").count(), 4);
-        assert!(svg.contains("pallet &quot;out&quot;: 8 of 12 placed"), "{svg}");
+        assert!(
+            svg.contains("pallet &quot;out&quot;: 8 of 12 placed"),
+            "{svg}"
+        );
         assert!(svg.contains("layer 2 (2 of 6 placed)"), "{svg}");
         // Slot 1 (index 0) sits left of slot 2 and below slot 4 (row 1).
         let x_of = |n: usize| -> f64 {

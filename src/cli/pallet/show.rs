@@ -24,21 +24,34 @@ pub struct ShowArgs {
 }
 
 /// Runs `linterpd pallet show`.
-pub(super) fn run(args: &PalletArgs, show: &ShowArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+pub(super) fn run(
+    args: &PalletArgs,
+    show: &ShowArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
     let config = Config::load(&args.config).map_err(bad_input)?;
     let robot = config.robot(args.robot.as_deref()).map_err(bad_input)?;
     let set = config.pallets.get(&robot.name);
     let Some(set) = set.filter(|s| s.layouts.contains_key(&show.name)) else {
-        let known: Vec<&str> = set.iter().flat_map(|s| s.layouts.keys()).map(String::as_str).collect();
+        let known: Vec<&str> = set
+            .iter()
+            .flat_map(|s| s.layouts.keys())
+            .map(String::as_str)
+            .collect();
         return Err(bad_input(anyhow!(
             "robot {} has no pallet {:?}; {}",
             robot.name,
             show.name,
-            if known.is_empty() { "it has none".to_owned() } else { format!("it has {}", known.join(", ")) }
+            if known.is_empty() {
+                "it has none".to_owned()
+            } else {
+                format!("it has {}", known.join(", "))
+            }
         )));
     };
     let taught = if set.needs_taught(&show.name) {
-        crate::daemon::positions::TaughtPositions::in_state_dir(&config.daemon.state_dir).of(&robot.name)
+        crate::daemon::positions::TaughtPositions::in_state_dir(&config.daemon.state_dir)
+            .of(&robot.name)
     } else {
         BTreeMap::new()
     };
@@ -82,10 +95,14 @@ fn listing(robot: &str, pattern: &Pattern) -> String {
         let _ = writeln!(text, "between layers: {program}");
     }
     let w = &pattern.when_full;
-    let full: Vec<String> = [("signal", &w.signal), ("wait for", &w.wait_for), ("call", &w.call)]
-        .into_iter()
-        .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {v}")))
-        .collect();
+    let full: Vec<String> = [
+        ("signal", &w.signal),
+        ("wait for", &w.wait_for),
+        ("call", &w.call),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {v}")))
+    .collect();
     if !full.is_empty() {
         let _ = writeln!(text, "when full: {}", full.join(", "));
     }
