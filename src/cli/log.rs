@@ -68,17 +68,16 @@ pub fn run(args: &LogArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
         if args.counts {
             return counts(args, &client, out).await;
         }
-        let cursor = match &args.since {
-            Some(since) => print_all(args, &client, &[("since", since)], out).await?,
-            None => {
-                let lines = args
-                    .lines
-                    .clamp(1, crate::daemon::api::MAX_ENTRIES)
-                    .to_string();
-                let page = fetch(args, &client, &[("limit", &lines), ("newest", "true")]).await?;
-                print_entries(&page.entries, daemon.json, out)?;
-                page.last_seq
-            }
+        let cursor = if let Some(since) = &args.since {
+            print_all(args, &client, &[("since", since)], out).await?
+        } else {
+            let lines = args
+                .lines
+                .clamp(1, crate::daemon::api::MAX_ENTRIES)
+                .to_string();
+            let page = fetch(args, &client, &[("limit", &lines), ("newest", "true")]).await?;
+            print_entries(&page.entries, daemon.json, out)?;
+            page.last_seq
         };
         if args.follow {
             follow(args, &client, cursor, out).await?;

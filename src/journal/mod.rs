@@ -242,6 +242,7 @@ impl Journal {
 }
 
 /// The wall time now, ms since the Unix epoch.
+#[must_use]
 pub fn now_ms() -> u64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)

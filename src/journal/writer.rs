@@ -186,7 +186,7 @@ impl Writer {
         if buffer.is_empty() {
             return false;
         }
-        let lines = buffer.iter().filter(|b| **b == b'\n').count() as u64;
+        let lines = buffer.split(|b| *b == b'\n').count() as u64 - 1;
         match self.file.write_all(buffer) {
             Ok(()) => {
                 self.bytes += buffer.len() as u64;
@@ -212,7 +212,7 @@ impl Writer {
                 self.bytes = 0;
             }
             Err(e) => {
-                tracing::warn!(error = %e, "the journal cannot start a new file; it goes on in the old one")
+                tracing::warn!(error = %e, "the journal cannot start a new file; it goes on in the old one");
             }
         }
         let Ok(all) = segments(&self.dir) else {

@@ -16,9 +16,10 @@ use common::exchange::{P2, mock_at_seed_start};
 use common::http::Endpoint;
 use linterpd::config::{CellSettings, JournalSettings};
 use linterpd::daemon::api::Api;
-use linterpd::daemon::{CycleState, Daemon, DaemonOptions, RobotSetup};
+use linterpd::daemon::{CycleState, Daemon, DaemonOptions, RobotHandle, RobotSetup};
 use linterpd::journal::{Journal, Query};
 use linterpd::kinematics::JOINTS;
+use linterpd::mock::SharedMock;
 use linterpd::plc::exchange::ContractSettings;
 use linterpd::robot::seed_robot;
 use linterpd::wire::journal::{CycleOutcome, Entry, Kind, Source};
@@ -54,10 +55,17 @@ async fn journaled(journal: &Journal, done: impl Fn(&[Entry]) -> bool) -> Vec<En
     }
 }
 
-#[tokio::test]
-async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_who() {
-    let shared = mock_at_seed_start("");
-    let dir = temp("follower");
+/// The daemon on `shared` in `dir` with a journal and its follower, a program `p` of one move
+/// to P2, the API (with the journal) on a Unix socket; connected.
+struct Rig {
+    daemon: Daemon,
+    h: RobotHandle,
+    journal: Journal,
+    closing: CancellationToken,
+    socket: PathBuf,
+}
+
+async fn rig(shared: &SharedMock, dir: &Path) -> Rig {
     let program = format!(
         "[[step]]\nmove = {{ to = [{}, {}, {}] }}\n",
         P2[0], P2[1], P2[2]
@@ -71,7 +79,7 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
     let setup = RobotSetup {
         robot: seed_robot(),
         settings: ContractSettings::default(),
-        connect: duplex_connector(&shared, None),
+        connect: duplex_connector(shared, None),
         home_counts: [0; JOINTS],
         gateway: linterpd::gateway::GatewaySettings::default(),
         cell: CellSettings {
@@ -94,6 +102,26 @@ async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_wh
         closing.clone().cancelled_owned(),
     ));
     taking_moves(&h).await;
+    Rig {
+        daemon,
+        h,
+        journal,
+        closing,
+        socket,
+    }
+}
+
+#[tokio::test]
+async fn the_follower_journals_a_cycle_and_a_fault_and_the_api_a_command_with_who() {
+    let shared = mock_at_seed_start("");
+    let dir = temp("follower");
+    let Rig {
+        daemon,
+        h,
+        journal,
+        closing,
+        socket,
+    } = rig(&shared, &dir).await;
 
     h.run_cycle("p", Some(1)).await.unwrap();
     let began = Instant::now();

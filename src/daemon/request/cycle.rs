@@ -65,6 +65,10 @@ pub(crate) type CycleRunner = Box<
 pub(crate) type Answer = oneshot::Sender<Result<CycleStatus, CycleError>>;
 
 /// A request to the robot's cycle owner.
+#[allow(
+    clippy::large_enum_variant,
+    reason = "one request per cycle command, moved once into the owner's channel"
+)]
 pub(crate) enum CycleRequest {
     /// Run a cycle (`status`: as it starts) with `runner` as its driver: refused while another
     /// is under way.

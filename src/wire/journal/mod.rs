@@ -20,7 +20,7 @@ mod changes;
 mod counts;
 mod time;
 
-use std::fmt;
+use std::fmt::{self, Write as _};
 
 use serde::{Deserialize, Serialize};
 
@@ -332,13 +332,13 @@ impl Kind {
         };
         let mut text = format!("{action} from {}", source.name());
         if let Some(who) = who {
-            text.push_str(&format!(" ({who})"));
+            let _ = write!(text, " ({who})");
         }
         if let Some(status) = status {
-            text.push_str(&format!(" -> {status}"));
+            let _ = write!(text, " -> {status}");
         }
         if let Some(refused) = refused {
-            text.push_str(&format!(", refused: {refused}"));
+            let _ = write!(text, ", refused: {refused}");
         }
         text
     }
