@@ -243,6 +243,7 @@ impl Watch {
                 tokio::time::sleep(Duration::from_millis(20)).await;
                 handle
                     .resume_cycle()
+                    .await
                     .map_err(|e| DemoError::Rig(e.to_string()))?;
                 self.resumed_at = Some(Instant::now());
             }
@@ -277,6 +278,7 @@ async fn drive(handle: &RobotHandle, rig: &Rig) -> Result<PressDemo, DemoError> 
     let began = Instant::now();
     handle
         .run_cycle("press-load", Some(PRESS_CYCLES))
+        .await
         .map_err(|e| DemoError::Rig(e.to_string()))?;
     let mut watch = Watch {
         cycles: Vec::new(),
