@@ -320,7 +320,7 @@ pub(super) async fn drop_holds<P: Plc>(
     // The relay goes back whatever happened.
     let restored = switch(bench.contract, bench.pace, (w, DROP_BIT), on, &before).await;
     let saw = describe_drop(&run, at, (&name, on), hz, bench.pace.scan_s);
-    let saw = match restored_saw(restored, saw, &name, on) {
+    let saw = match restored_saw(restored, &saw, &name, on) {
         Ok(saw) => saw,
         Err((saw, hint)) => return s.record(k.fail(saw, hint)),
     };
@@ -334,7 +334,7 @@ pub(super) async fn drop_holds<P: Plc>(
 /// was seen and the hint.
 fn restored_saw(
     restored: Result<inputs::Switched, Failure>,
-    saw: String,
+    saw: &str,
     name: &str,
     on: bool,
 ) -> Result<String, (String, String)> {
