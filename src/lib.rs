@@ -54,6 +54,9 @@
 //!                    (`plc::exchange`: status reads, verified banks, a start written once)
 //! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
+//! journal/     IO  the cell's journal on disk: a writer thread fed over a bounded channel,
+//!                    segments in the state directory rotated by size and number, fsync'd
+//!                    where it matters, read by number, time and robot
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
 //!                    handles, taught positions, permits, the cycle driver (cycle/), the mode and
 //!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
@@ -79,6 +82,7 @@ pub mod daemon;
 pub mod demo;
 pub mod gateway;
 pub mod geometry;
+pub mod journal;
 pub mod kinematics;
 pub mod mewtocol;
 pub mod mock;

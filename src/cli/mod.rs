@@ -36,6 +36,7 @@ pub mod home;
 mod interrupt;
 pub mod io;
 pub mod io_mock;
+pub mod log;
 pub mod logging;
 pub mod mock_plc;
 pub mod mode;
@@ -104,6 +105,10 @@ pub enum Command {
     /// Show or set who drives a robot: local (the CLI and the API) or remote (the line's PLC or
     /// HMI through the cell face); `stop` works in both.
     Mode(mode::ModeArgs),
+    /// The cell's journal: faults, cycles, holds, mode changes, commands and who sent them,
+    /// pallets, reloads (`--since`, `--follow`, `--json`), or production counts per shift
+    /// (`--counts`).
+    Log(log::LogArgs),
     /// Home a robot: the PLC's home routine sets every joint to its home count
     /// (`home_counts` in the config); returns when it has ended.
     Home(home::HomeArgs),
@@ -214,6 +219,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Stop(args) => stop::run(&args, out),
         Command::Cycle(args) => cycle::run(&args, out),
         Command::Mode(args) => mode::run(&args, out),
+        Command::Log(args) => log::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::Console(args) => console::run(&args, out),

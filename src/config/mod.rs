@@ -60,7 +60,7 @@ pub use console::{
     ConsoleSettings, ConsoleUser, DEFAULT_CONSOLE_LISTEN, DEFAULT_MANUAL_SPEED_MM_S,
     MAX_MANUAL_SPEED_MM_S, RobotConsoleSettings, Role, Secret,
 };
-pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
+pub use daemon::{DEFAULT_SOCKET, DaemonSettings, JournalSettings};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
 pub use units::{DurationError, DurationProblem, number_in, parse_duration_s};

@@ -63,6 +63,16 @@ pub(super) struct RawDaemon {
     pub token_file: Option<Spanned<String>>,
     pub start_within: Option<Spanned<String>>,
     pub state_dir: Option<Spanned<String>>,
+    pub journal: Option<Spanned<RawJournal>>,
+}
+
+/// `[daemon.journal]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawJournal {
+    pub file_bytes: Option<Spanned<i64>>,
+    pub files: Option<Spanned<i64>>,
+    pub queue: Option<Spanned<i64>>,
 }
 
 /// `[robots.NAME]`.

@@ -20,6 +20,8 @@
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
 //! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
+//! journal.rs  the follower: each robot's published changes journaled (faults, cycles, holds,
+//!             modes, the face's commands)
 //! stream.rs   the live stream: one publisher per robot of its snapshot's changes, read by the
 //!             API's NDJSON feed and the console
 //! console/    the operator's console's server: the seat and jog lease's control task per robot,
@@ -34,6 +36,7 @@ pub mod gate;
 mod gateway;
 mod handle;
 mod ids;
+pub mod journal;
 mod live;
 pub mod metrics;
 pub mod modbus_face;

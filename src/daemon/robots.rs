@@ -120,7 +120,7 @@ fn spawn_robot(
         Arc::clone(&shared),
         (live, Arc::clone(&options.positions)),
         setup.settings.layout.inputs,
-        setup.cell.face.clone(),
+        (setup.cell.face.clone(), options.journal.clone()),
     );
     tokio::spawn(super::cycle::own(Arc::new(cycle_out), cycles_rx));
     let cell_requests = (cell_rx, shutdown.subscribe());

@@ -31,7 +31,15 @@ const PURE: [&str; 13] = [
 const KNOWN_CIRCLES: [(&str, &[&str]); 0] = [];
 
 /// The modules that do IO: no pure module imports them.
-const IO: [&str; 6] = ["daemon", "cli", "plc", "demo", "commission", "mock"];
+const IO: [&str; 7] = [
+    "daemon",
+    "cli",
+    "plc",
+    "demo",
+    "commission",
+    "mock",
+    "journal",
+];
 
 type Module = Vec<String>;
 

@@ -60,6 +60,8 @@ pub struct RobotHandle {
     /// The speed override, 1 to 100 %: every order checked after it is set is planned at it
     /// ([`Self::limits`]).
     speed_override: Arc<std::sync::atomic::AtomicU8>,
+    /// The cell's journal (`DaemonOptions::journal`).
+    journal: crate::journal::Journal,
 }
 
 /// Where a handle's requests go.
@@ -94,7 +96,7 @@ impl RobotHandle {
         shared: Arc<Shared>,
         (live, positions): (Live, Arc<TaughtPositions>),
         inputs: [InputWord; INPUT_WORDS],
-        face: Option<FaceSettings>,
+        (face, journal): (Option<FaceSettings>, crate::journal::Journal),
     ) -> Self {
         Self {
             robot: Arc::new(robot),
@@ -107,6 +109,7 @@ impl RobotHandle {
             lane: Arc::default(),
             epoch: None,
             speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
+            journal,
         }
     }
 
@@ -114,6 +117,13 @@ impl RobotHandle {
     #[must_use]
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+
+    /// The cell's journal: what the robot's cycle records into (a pallet's slot placed, a
+    /// pallet full).
+    #[must_use]
+    pub fn journal(&self) -> &crate::journal::Journal {
+        &self.journal
     }
 
     /// The speed override, 1 to 100 %.

@@ -37,8 +37,10 @@ use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
 use crate::config::{Config, DaemonSettings};
 use crate::contract::machine::WatchSettings;
+use crate::journal::Journal;
 use crate::plc::exchange::ContractSettings;
 use crate::plc::{self, LinkSettings};
+use crate::wire::journal::Kind;
 
 /// Longest wait for open connections after the daemon has shut down.
 const DRAIN: Duration = Duration::from_secs(3);
@@ -111,6 +113,9 @@ pub enum ServeError {
         #[source]
         source: io::Error,
     },
+    /// The journal cannot be opened in the state directory.
+    #[error(transparent)]
+    Journal(#[from] crate::journal::JournalError),
     /// A listener failed while serving.
     #[error("the API listener failed")]
     Serve(#[source] io::Error),
@@ -182,9 +187,10 @@ pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
 }
 
 /// The daemon-wide options `settings` describe: move ids counted on in the state directory (from
-/// the clock when it cannot be used), taught positions kept there, a fresh host word.
+/// the clock when it cannot be used), taught positions kept there, a fresh host word, the
+/// journal.
 #[must_use]
-pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
+pub fn daemon_options(settings: &DaemonSettings, journal: &Journal) -> DaemonOptions {
     let ids = match MoveIds::in_state_dir(&settings.state_dir) {
         Ok(ids) => ids,
         Err(e) => {
@@ -201,6 +207,7 @@ pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
         ids: Arc::new(ids),
         start_within: settings.start_within,
         positions: Arc::new(TaughtPositions::in_state_dir(&settings.state_dir)),
+        journal: journal.clone(),
     }
 }
 
@@ -286,9 +293,11 @@ pub async fn serve(
     ensure_state_dir(&settings.state_dir)?;
     let _lock = lock(&settings.socket)?;
     let bound = Bound::bind(config, settings).await?;
-    let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
-    let api = Api::new(daemon.robots().clone());
+    let journal = open_journal(settings)?;
+    let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal));
+    let api = Api::new(daemon.robots().clone()).with_journal(journal.clone());
     let closing = api.closing();
+    super::journal::follow(daemon.robots(), &journal, &closing);
     let mut servers = spawn_servers(config, &daemon, (api, token), bound, &closing)?;
     let listen = settings.listen.map(tracing::field::display);
     tracing::info!(socket = %settings.socket.display(), listen, "API listening");
@@ -298,8 +307,10 @@ pub async fn serve(
         notifier,
         closing.clone(),
     ));
-    let failed = run_until(shutdown, &mut daemon, &mut servers, config_path).await;
+    let reloads = (config_path, &journal);
+    let failed = run_until(shutdown, &mut daemon, &mut servers, reloads).await;
     tracing::info!("shutting down");
+    journal.record(None, Kind::DaemonStopping);
     log_notify(notifier.stopping(), "STOPPING=1");
     closing.cancel();
     daemon.shut_down().await;
@@ -311,6 +322,7 @@ pub async fn serve(
     .await;
     servers.abort_all();
     let _ = std::fs::remove_file(&settings.socket);
+    journal.flush().await;
     failed.map_or(Ok(()), Err)
 }
 
@@ -372,7 +384,9 @@ fn spawn_api<L: axum::serve::Listener>(
     listener: L,
     router: axum::Router,
     closing: &tokio_util::sync::CancellationToken,
-) {
+) where
+    L::Io: api::PeerCaller,
+{
     let stop = closing.clone();
     servers.spawn(async move {
         api::serve(listener, router, stop.cancelled_owned()).await;
@@ -381,12 +395,12 @@ fn spawn_api<L: axum::serve::Listener>(
 }
 
 /// Serves until `shutdown` completes, a server ends or a worker fails (what failed, if
-/// anything did), reloading `config_path` on every SIGHUP.
+/// anything did), reloading `config_path` on every SIGHUP (each reload journaled).
 async fn run_until(
     shutdown: impl Future<Output = ()>,
     daemon: &mut Daemon,
     servers: &mut JoinSet<io::Result<()>>,
-    config_path: Option<&Path>,
+    (config_path, journal): (Option<&Path>, &Journal),
 ) -> Option<ServeError> {
     let mut running = config_path.map(running_config);
     let mut hangups = hangup_signals();
@@ -404,7 +418,9 @@ async fn run_until(
                 tracing::error!("{why}; the daemon exits");
                 break Some(ServeError::WorkerFailed(why));
             }
-            Some(()) = hangups.recv() => reload(running.as_mut().zip(config_path), daemon.robots()),
+            Some(()) = hangups.recv() => {
+                reload(running.as_mut().zip(config_path), daemon.robots(), journal);
+            }
         }
     }
 }
@@ -498,12 +514,30 @@ fn running_config(path: &Path) -> Running {
 fn reload(
     running: Option<(&mut Running, &Path)>,
     robots: &std::collections::BTreeMap<String, super::RobotHandle>,
+    journal: &Journal,
 ) {
     let Some((running, path)) = running else {
         tracing::info!("SIGHUP: no config file to read again");
         return;
     };
-    reload::log(path, &running.reload(path, robots));
+    let result = running.reload(path, robots);
+    journal.record(None, reload::journaled(&result));
+    reload::log(path, &result);
+}
+
+/// Opens the journal in the state directory and journals the daemon's start.
+fn open_journal(settings: &DaemonSettings) -> Result<Journal, ServeError> {
+    let journal = Journal::open(
+        &settings.state_dir.join(crate::journal::DIR),
+        &settings.journal,
+    )?;
+    journal.record(
+        None,
+        Kind::DaemonStarted {
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+        },
+    );
+    Ok(journal)
 }
 
 fn log_notify(result: io::Result<()>, what: &str) {
