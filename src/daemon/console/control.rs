@@ -116,6 +116,7 @@ pub enum JogRefusal {
 
 impl Request {
     /// `who` holds a jog button down along `axis` (`positive` or not), its keep-alive `seq`.
+    #[must_use]
     pub fn jog(
         who: Who,
         (axis, positive, seq): (JogAxis, bool, u64),
