@@ -41,6 +41,7 @@ pub mod logging;
 pub mod mock_plc;
 pub mod mode;
 pub mod moves;
+pub mod pallet;
 pub mod plan;
 pub mod positions;
 pub mod serve;
@@ -117,6 +118,9 @@ pub enum Command {
     /// The operator's console: `hash-password` makes a user's password hash for
     /// `[console.users.NAME]`.
     Console(console::ConsoleArgs),
+    /// A robot's pallet patterns, from the config: `show` lists a pallet's slots (and draws
+    /// its layers with --svg).
+    Pallet(pallet::PalletArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),
     /// Check a real unit with the drives' power off: the link, the contract, tiny pulse tables
@@ -224,6 +228,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::Console(args) => console::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),
+        Command::Pallet(args) => pallet::run(&args, out),
         Command::Commission(args) => commission::run(&args, out),
         Command::Serve(args) => serve::run(&args),
         Command::Completions(args) => completions::run(&args, out),

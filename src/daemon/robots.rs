@@ -118,7 +118,11 @@ fn spawn_robot(
         setup.robot.clone(),
         to,
         Arc::clone(&shared),
-        (live, Arc::clone(&options.positions)),
+        (
+            live,
+            Arc::clone(&options.positions),
+            options.journal.clone(),
+        ),
         setup.settings.layout.inputs,
         (setup.cell.face.clone(), options.journal.clone()),
     );

@@ -94,7 +94,7 @@ impl RobotHandle {
         robot: Robot,
         to: Senders,
         shared: Arc<Shared>,
-        (live, positions): (Live, Arc<TaughtPositions>),
+        (live, positions, journal): (Live, Arc<TaughtPositions>, crate::journal::Journal),
         inputs: [InputWord; INPUT_WORDS],
         (face, journal): (Option<FaceSettings>, crate::journal::Journal),
     ) -> Self {
