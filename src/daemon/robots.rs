@@ -124,7 +124,7 @@ fn spawn_robot(
             options.journal.clone(),
         ),
         setup.settings.layout.inputs,
-        (setup.cell.face.clone(), options.journal.clone()),
+        setup.cell.face.clone(),
     );
     tokio::spawn(super::cycle::own(Arc::new(cycle_out), cycles_rx));
     let cell_requests = (cell_rx, shutdown.subscribe());

@@ -96,7 +96,7 @@ impl RobotHandle {
         shared: Arc<Shared>,
         (live, positions, journal): (Live, Arc<TaughtPositions>, crate::journal::Journal),
         inputs: [InputWord; INPUT_WORDS],
-        (face, journal): (Option<FaceSettings>, crate::journal::Journal),
+        face: Option<FaceSettings>,
     ) -> Self {
         Self {
             robot: Arc::new(robot),
