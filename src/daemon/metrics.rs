@@ -262,6 +262,13 @@ impl Inner {
     /// Registers every family. `Registry::register` ends each help text with a period itself: the
     /// texts here have none (a collector's, written as they are, do).
     fn registered(mut self) -> Self {
+        self.register_moves();
+        self.register_cell();
+        self
+    }
+
+    /// The moves', the link's and the gateway's families, in the order they are shown.
+    fn register_moves(&mut self) {
         let r = &mut self.registry;
         r.register(
             "linterpd_moves",
@@ -298,6 +305,12 @@ impl Inner {
             "How long a due status read waited behind a gateway exchange",
             self.gateway_wait.clone(),
         );
+    }
+
+    /// The cycles', the cell face's and the PLC's families, then the exchanges' collector, in
+    /// the order they are shown (after [`Self::register_moves`]'s).
+    fn register_cell(&mut self) {
+        let r = &mut self.registry;
         r.register(
             "linterpd_cycles",
             "Cycle programs' cycles run to their end",
@@ -339,7 +352,6 @@ impl Inner {
             self.heartbeat_age.clone(),
         );
         r.register_collector(Box::new(Arc::clone(&self.exchanges)));
-        self
     }
 }
 

@@ -1,21 +1,29 @@
 //! The daemon: one task per robot owns its PLC link and runs moves through the register contract
-//! (the worker); the rest of the program talks to it through a [`RobotHandle`] per robot.
+//! (the worker), one owns its cycle and one its cell (the mode, the cell face); the rest of the
+//! program talks to them through a [`RobotHandle`] per robot, which sends requests and reads
+//! what they publish.
 //!
 //! ```text
 //! API / CLI --submit/stop/home/clear--> RobotHandle --requests (stops overtake)--> worker task
-//!                                           |                                         |
-//!                                           +------------ Shared (state, reports) <---+
+//!                                         |  |  +--CycleRequest--> cycle owner --> its driver
+//!                                         |  +-----CellRequest---> cell owner (mode, face)
+//!                                         +<--- Shared: snapshot, reports, cycle, cell (watches)
 //! ```
 //! ```text
-//! handle.rs   RobotHandle, Daemon, RobotSetup, DaemonOptions
-//! shared.rs   what a handle and its worker share (neither owns the other)
-//! request.rs  requests to the worker and the typed CommandError (ConflictReason)
+//! handle/     RobotHandle: a thin sender of requests and a reader of what the owners publish
+//! robots.rs   Daemon: spawns per robot its handle, worker, cycle owner and cell owner
+//! setup.rs    RobotSetup, DaemonOptions
+//! shared.rs   what the owners publish (Snapshot, the cycle's status, CellView) and the reports
+//! request/    what a handle asks the worker, the cycle's owner and the cell's, and their typed
+//!             errors (CommandError, SubmitError, CycleError, ModeError)
 //! order.rs    a move order (to, by, joints or position), its check, and planning it
 //! positions.rs taught positions per robot, kept in the state directory
 //! report.rs   RobotState (RobotPhase), MoveReport (Stage, SectionReport), MoveAccepted,
 //!             PathAccepted: what the API writes and the CLI reads back
 //! ids.rs      move ids unique across restarts
-//! cell/       the robot in its cell: signals, the mode (local/remote), the cell face's daemon side
+//! cell/       the robot in its cell: the cell's owner task (the mode, local/remote; the cell
+//!             face's daemon side), the face mirrored in the PLC
+//! cycle/      cycle programs: the cycle's owner task, the driver of its pure Runner
 //! gateway.rs  register gateway requests (the cell's other registers, through the same link)
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it

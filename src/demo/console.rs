@@ -192,7 +192,7 @@ async fn serve_console(
 fn settings(options: &ConsoleOptions) -> Result<ConsoleSettings, DemoError> {
     let mut users = BTreeMap::new();
     for (name, role, password) in USERS {
-        let hash = hash_password(password).map_err(DemoError::Rig)?;
+        let hash = hash_password(password).map_err(|e| DemoError::Rig(e.to_string()))?;
         users.insert(
             name.to_owned(),
             ConsoleUser {

@@ -114,6 +114,24 @@ pub enum JogRefusal {
     OtherSession,
 }
 
+impl Request {
+    /// `who` holds a jog button down along `axis` (`positive` or not), its keep-alive `seq`.
+    #[must_use]
+    pub fn jog(
+        who: Who,
+        (axis, positive, seq): (JogAxis, bool, u64),
+        reply: oneshot::Sender<Result<(), JogRefusal>>,
+    ) -> Self {
+        Self::Jog {
+            who,
+            axis,
+            positive,
+            seq,
+            reply,
+        }
+    }
+}
+
 /// A robot's control task's handle.
 #[derive(Debug, Clone)]
 pub struct Control {
@@ -337,24 +355,29 @@ impl Task {
                 let refused = self.jog_refused(&who, axis, remote);
                 let ok = refused.is_ok();
                 let _ = reply.send(refused);
-                if !ok {
-                    Vec::new()
-                } else if self.lease.jogging().is_none() {
-                    self.jogger = Some(who.user.clone());
-                    let session = who.session;
-                    vec![Event::Start {
-                        session,
-                        axis,
-                        positive,
-                        seq,
-                    }]
+                if ok {
+                    self.jog_events(who, axis, positive, seq)
                 } else {
-                    let session = who.session;
-                    vec![Event::KeepAlive { session, seq }]
+                    Vec::new()
                 }
             }
             Request::Lease(event) => vec![event],
         }
+    }
+
+    /// A jog button held down by `who`, who may jog: the jog starts, or is kept alive.
+    fn jog_events(&mut self, who: Who, axis: JogAxis, positive: bool, seq: u64) -> Vec<Event> {
+        let session = who.session;
+        if self.lease.jogging().is_some() {
+            return vec![Event::KeepAlive { session, seq }];
+        }
+        self.jogger = Some(who.user);
+        vec![Event::Start {
+            session,
+            axis,
+            positive,
+            seq,
+        }]
     }
 
     /// Why `who` may not jog along `axis` now, if it may not.

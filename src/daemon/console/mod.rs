@@ -34,7 +34,7 @@ pub use super::stream::{
 pub use assets::{ASSETS, Asset, INDEX, page_files};
 pub use control::{Control, Request as ControlRequest, Who};
 pub use listen::{admits, serve};
-pub use session::{COOKIE, Sessions, UsersError, hash_password};
+pub use session::{COOKIE, HashError, Sessions, UsersError, hash_password};
 
 use super::RobotHandle;
 use super::api::Api;

@@ -63,12 +63,28 @@ fn serve_asset(a: &assets::Asset) -> Response {
         .into_response()
 }
 
+/// Why a request that changes something was refused for its `Origin`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub(super) enum OriginRefused {
+    /// It has none.
+    #[error("no Origin header: the console takes changes from its own page only")]
+    Missing,
+    /// Another site's.
+    #[error("Origin {origin} is not this console's ({own}) nor in console.origins")]
+    Foreign {
+        /// The request's.
+        origin: String,
+        /// The console's own (`http://` and the `Host`).
+        own: String,
+    },
+}
+
 /// Whether `origin` is the page's own (`Host`) or one the config allows.
-pub(super) fn origin_allowed(headers: &HeaderMap, extra: &[String]) -> Result<(), String> {
+pub(super) fn origin_allowed(headers: &HeaderMap, extra: &[String]) -> Result<(), OriginRefused> {
     let origin = headers
         .get(header::ORIGIN)
         .and_then(|v| v.to_str().ok())
-        .ok_or("no Origin header: the console takes changes from its own page only")?;
+        .ok_or(OriginRefused::Missing)?;
     let host = headers
         .get(header::HOST)
         .and_then(|v| v.to_str().ok())
@@ -77,10 +93,11 @@ pub(super) fn origin_allowed(headers: &HeaderMap, extra: &[String]) -> Result<()
     if own.iter().any(|o| o == origin) || extra.iter().any(|o| o == origin) {
         Ok(())
     } else {
-        Err(format!(
-            "Origin {origin} is not this console's ({}) nor in console.origins",
-            own[0]
-        ))
+        let [own, _] = own;
+        Err(OriginRefused::Foreign {
+            origin: origin.to_owned(),
+            own,
+        })
     }
 }
 
@@ -105,7 +122,7 @@ pub(super) async fn login(
     body: axum::body::Bytes,
 ) -> Response {
     if let Err(e) = origin_allowed(&headers, &state.origins) {
-        return refuse(StatusCode::FORBIDDEN, &e, "origin");
+        return refuse(StatusCode::FORBIDDEN, &e.to_string(), "origin");
     }
     let login: Login = match serde_json::from_slice(&body) {
         Ok(l) => l,
@@ -151,7 +168,7 @@ pub(super) async fn login(
 
 pub(super) async fn logout(State(state): State<Arc<ConsoleState>>, headers: HeaderMap) -> Response {
     if let Err(e) = origin_allowed(&headers, &state.origins) {
-        return refuse(StatusCode::FORBIDDEN, &e, "origin");
+        return refuse(StatusCode::FORBIDDEN, &e.to_string(), "origin");
     }
     if let Some((cookie, session)) = session_of(&state, &headers) {
         state.sessions.logout(&cookie);
@@ -251,7 +268,7 @@ pub(super) async fn guard(
     let method = request.method().clone();
     let changes = !matches!(method, Method::GET | Method::HEAD);
     if changes && let Err(e) = origin_allowed(request.headers(), &state.origins) {
-        return refuse(StatusCode::FORBIDDEN, &e, "origin");
+        return refuse(StatusCode::FORBIDDEN, &e.to_string(), "origin");
     }
     let path = request.uri().path().to_owned();
     let (robot, command) = classify(&method, &path);
@@ -345,7 +362,12 @@ mod tests {
     fn only_the_pages_own_origin_or_a_listed_one_passes() {
         let mut h = HeaderMap::new();
         h.insert(header::HOST, HeaderValue::from_static("10.0.0.2:8470"));
-        assert!(origin_allowed(&h, &[]).unwrap_err().contains("no Origin"));
+        assert!(
+            origin_allowed(&h, &[])
+                .unwrap_err()
+                .to_string()
+                .contains("no Origin")
+        );
         h.insert(
             header::ORIGIN,
             HeaderValue::from_static("http://10.0.0.2:8470"),
@@ -355,7 +377,7 @@ mod tests {
             header::ORIGIN,
             HeaderValue::from_static("http://evil.example"),
         );
-        let e = origin_allowed(&h, &[]).unwrap_err();
+        let e = origin_allowed(&h, &[]).unwrap_err().to_string();
         assert!(e.contains("Origin http://evil.example is not"), "{e}");
         assert!(origin_allowed(&h, &["http://evil.example".to_owned()]).is_ok());
     }

@@ -196,13 +196,18 @@ fn random_id() -> String {
     })
 }
 
+/// Why a password could not be hashed.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct HashError(argon2::password_hash::Error);
+
 /// An argon2id PHC string of `password` (`linterpd console hash-password`).
-pub fn hash_password(password: &str) -> Result<String, String> {
+pub fn hash_password(password: &str) -> Result<String, HashError> {
     use argon2::password_hash::PasswordHasher;
     argon2::Argon2::default()
         .hash_password(password.as_bytes())
         .map(|h| h.to_string())
-        .map_err(|e| e.to_string())
+        .map_err(HashError)
 }
 
 /// The value of cookie `name` in a `Cookie` header.

@@ -27,9 +27,10 @@ use serde_json::json;
 use tokio::sync::{broadcast, mpsc, oneshot};
 
 use super::ConsoleState;
-use super::control::{Request, Who};
+use super::control::{Control, Request, Who};
 use super::server::{origin_allowed, refuse, session_of};
 use crate::console::{Event, JogAxis};
+use crate::daemon::stream::RobotStream;
 
 /// What a page sends.
 #[derive(Debug, Deserialize)]
@@ -64,7 +65,7 @@ pub(super) async fn upgrade(
 ) -> Response {
     if let Err(e) = origin_allowed(&headers, &state.origins) {
         tracing::warn!(error = %e, "console WebSocket refused");
-        return refuse(StatusCode::FORBIDDEN, &e, "origin");
+        return refuse(StatusCode::FORBIDDEN, &e.to_string(), "origin");
     }
     let Some((_, session)) = session_of(&state, &headers) else {
         return refuse(StatusCode::UNAUTHORIZED, "log in first", "login");
@@ -82,41 +83,42 @@ pub(super) async fn upgrade(
 /// Messages out waiting for the socket, at most.
 const OUTBOX: usize = super::CAPACITY;
 
+/// Sends `stream`'s frames to the page's `out`, from the first; a page too slow to keep up is
+/// told why on `lagged`, and forwarding ends.
+async fn forward(stream: RobotStream, out: mpsc::Sender<String>, lagged: mpsc::Sender<String>) {
+    let mut sub = stream.subscribe();
+    if out.send(sub.first).await.is_err() {
+        return;
+    }
+    loop {
+        match sub.rest.recv().await {
+            Ok(frame) if frame.seq <= sub.seq => {}
+            Ok(frame) => {
+                if out.send(frame.text.clone()).await.is_err() {
+                    return;
+                }
+            }
+            Err(broadcast::error::RecvError::Lagged(n)) => {
+                let why = format!("too slow: {n} messages of {} missed", stream.name());
+                let _ = lagged.send(why).await;
+                return;
+            }
+            Err(broadcast::error::RecvError::Closed) => return,
+        }
+    }
+}
+
 async fn run(mut socket: WebSocket, state: Arc<ConsoleState>, who: Who) {
     let (out, mut outbox) = mpsc::channel::<String>(OUTBOX);
     let (lagged_tx, mut lagged) = mpsc::channel::<String>(1);
     let hello = json!({"type": "hello", "user": who.user, "role": who.role.name()});
     let _ = out.try_send(hello.to_string());
-    let mut forwarders = Vec::new();
-    for stream in state.hub.robots().values() {
-        let (stream, out, lagged) = (stream.clone(), out.clone(), lagged_tx.clone());
-        forwarders.push(tokio::spawn(async move {
-            let mut sub = stream.subscribe();
-            if out.send(sub.first).await.is_err() {
-                return;
-            }
-            loop {
-                match sub.rest.recv().await {
-                    Ok(frame) if frame.seq <= sub.seq => {}
-                    Ok(frame) => {
-                        if out.send(frame.text.clone()).await.is_err() {
-                            return;
-                        }
-                    }
-                    Err(broadcast::error::RecvError::Lagged(n)) => {
-                        let _ = lagged
-                            .send(format!(
-                                "too slow: {n} messages of {} missed",
-                                stream.name()
-                            ))
-                            .await;
-                        return;
-                    }
-                    Err(broadcast::error::RecvError::Closed) => return,
-                }
-            }
-        }));
-    }
+    let forwarders: Vec<_> = state
+        .hub
+        .robots()
+        .values()
+        .map(|stream| tokio::spawn(forward(stream.clone(), out.clone(), lagged_tx.clone())))
+        .collect();
     let closing = state.closing.clone();
     loop {
         tokio::select! {
@@ -158,6 +160,35 @@ async fn run(mut socket: WebSocket, state: Arc<ConsoleState>, who: Who) {
     }
 }
 
+/// Sends `request` to `robot`'s control task: the refusal `answer` brings, as the page's error
+/// `for` the message it answers (`None`: none came).
+async fn asked<E: std::fmt::Display>(
+    control: &Control,
+    request: Request,
+    answer: oneshot::Receiver<Result<(), E>>,
+    robot: &str,
+    for_: &str,
+) -> Option<serde_json::Value> {
+    if !control.send(request).await {
+        return None;
+    }
+    match answer.await {
+        Ok(Err(e)) => {
+            Some(json!({"type": "error", "robot": robot, "for": for_, "error": e.to_string()}))
+        }
+        _ => None,
+    }
+}
+
+/// Robot `robot`'s control task, or the page's error naming the robots there are.
+fn control_of<'s>(state: &'s ConsoleState, robot: &str) -> Result<&'s Control, serde_json::Value> {
+    state.controls.get(robot).ok_or_else(|| {
+        let known: Vec<&str> = state.controls.keys().map(String::as_str).collect();
+        json!({"type": "error", "robot": robot,
+               "error": format!("no robot {robot:?}; robots: {}", known.join(", "))})
+    })
+}
+
 /// Takes one message from the page; an error to send back, if any.
 async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json::Value> {
     let incoming: Incoming = match serde_json::from_str(text) {
@@ -166,13 +197,7 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             return Some(json!({"type": "error", "error": format!("a console message: {e}")}));
         }
     };
-    let control = |robot: &str| {
-        state.controls.get(robot).ok_or_else(|| {
-            let known: Vec<&str> = state.controls.keys().map(String::as_str).collect();
-            json!({"type": "error", "robot": robot,
-                   "error": format!("no robot {robot:?}; robots: {}", known.join(", "))})
-        })
-    };
+    let control = |robot: &str| control_of(state, robot);
     let session = who.session;
     match incoming {
         Incoming::Jog {
@@ -186,22 +211,9 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
                 Err(e) => return Some(e),
             };
             let (reply, answer) = oneshot::channel();
-            let request = Request::Jog {
-                who: who.clone(),
-                axis,
-                positive,
-                seq,
-                reply,
-            };
-            if !c.send(request).await {
-                return None;
-            }
-            match answer.await {
-                Ok(Err(e)) => Some(
-                    json!({"type": "error", "robot": robot, "for": "jog", "error": e.to_string()}),
-                ),
-                _ => None,
-            }
+            let (who, jog) = (who.clone(), (axis, positive, seq));
+            let request = Request::jog(who, jog, reply);
+            asked(c, request, answer, &robot, "jog").await
         }
         Incoming::Keep { robot, seq } => {
             let c = control(&robot).ok()?;
@@ -226,17 +238,9 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
                 Err(e) => return Some(e),
             };
             let (reply, answer) = oneshot::channel();
-            c.send(Request::TakeSeat {
-                who: who.clone(),
-                reply,
-            })
-            .await;
-            match answer.await {
-                Ok(Err(e)) => Some(
-                    json!({"type": "error", "robot": robot, "for": "take-seat", "error": e.to_string()}),
-                ),
-                _ => None,
-            }
+            let who = who.clone();
+            let request = Request::TakeSeat { who, reply };
+            asked(c, request, answer, &robot, "take-seat").await
         }
         Incoming::LeaveSeat { robot } => {
             let c = control(&robot).ok()?;

@@ -43,7 +43,7 @@ impl RobotHandle {
         let runner: crate::daemon::request::CycleRunner = Box::new(move |control, status| {
             Box::pin(super::run::run(handle, checked, count, control, status))
         });
-        let status = CycleStatus::starting(program, count);
+        let status = Box::new(CycleStatus::starting(program, count));
         self.ask_cycle(|reply| CycleRequest::Run {
             status,
             runner,

@@ -53,7 +53,7 @@ impl CycleSlot {
                 runner,
                 reply,
             } => {
-                let _ = reply.send(self.start(status, runner));
+                let _ = reply.send(self.start(*status, runner));
             }
             CycleRequest::Stop { now, reply } => {
                 let _ = reply.send(self.stop(now));
@@ -208,5 +208,107 @@ fn conflict(s: &CycleStatus, what: &'static str) -> CycleError {
         program: s.program.clone(),
         state: state_name(s.state),
         what,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use tokio::sync::{mpsc, oneshot, watch};
+
+    use super::own;
+    use crate::cycle::runner::Control;
+    use crate::daemon::request::{CycleError, CycleRequest, CycleRunner};
+    use crate::wire::{CycleState, CycleStatus};
+
+    /// A driver that hands its control and status out, and does nothing by itself.
+    fn handing_out(
+        taken: oneshot::Sender<(watch::Receiver<Control>, super::CycleOut)>,
+    ) -> CycleRunner {
+        Box::new(move |control, status| {
+            let _ = taken.send((control, status));
+            Box::pin(async {})
+        })
+    }
+
+    async fn ask<T>(
+        to: &mpsc::UnboundedSender<CycleRequest>,
+        request: impl FnOnce(oneshot::Sender<T>) -> CycleRequest,
+    ) -> T {
+        let (tx, rx) = oneshot::channel();
+        to.send(request(tx)).unwrap();
+        rx.await.unwrap()
+    }
+
+    #[tokio::test]
+    async fn a_faulted_cycle_resumes_only_after_a_clear_with_no_incident_since() {
+        let (out, published) = watch::channel(None);
+        let (to, requests) = mpsc::unbounded_channel();
+        tokio::spawn(own(Arc::new(out), requests));
+        let (taken, driver) = oneshot::channel();
+        let status = Box::new(CycleStatus::starting("p", Some(1)));
+        let runner = handing_out(taken);
+        ask(&to, |reply| CycleRequest::Run {
+            status,
+            runner,
+            reply,
+        })
+        .await
+        .unwrap();
+        let (control, status) = driver.await.unwrap();
+        // A second run is refused while the first is under way, naming it.
+        let (again, _) = oneshot::channel();
+        let (status2, runner2) = (
+            Box::new(CycleStatus::starting("q", None)),
+            handing_out(again),
+        );
+        let refused = ask(&to, |reply| CycleRequest::Run {
+            status: status2,
+            runner: runner2,
+            reply,
+        })
+        .await;
+        assert!(matches!(refused, Err(CycleError::Running { ref program, .. }) if program == "p"));
+        // The driver faults the cycle.
+        status.send_modify(|s| {
+            let s = s.as_mut().unwrap();
+            s.state = CycleState::Faulted;
+            s.reason = Some("the PLC restarted".to_owned());
+        });
+        let resume = |incidents| move |reply| CycleRequest::Resume { incidents, reply };
+        assert!(matches!(
+            ask(&to, resume(1)).await,
+            Err(CycleError::FaultNotCleared { .. })
+        ));
+        assert!(
+            ask(&to, |reply| CycleRequest::FaultCleared {
+                incidents: 1,
+                reply
+            })
+            .await
+        );
+        // Another incident since the clear: it needs another clear.
+        assert!(matches!(
+            ask(&to, resume(2)).await,
+            Err(CycleError::FaultNotCleared { .. })
+        ));
+        assert!(
+            ask(&to, |reply| CycleRequest::FaultCleared {
+                incidents: 2,
+                reply
+            })
+            .await
+        );
+        let resumed = ask(&to, resume(2)).await.unwrap();
+        assert_eq!(resumed.state, CycleState::Running);
+        assert_eq!(
+            published.borrow().as_ref().unwrap().state,
+            CycleState::Running
+        );
+        assert_eq!(control.borrow().pause(), None);
+        // A stop from outside the cycle reaches its control before the answer.
+        ask(&to, CycleRequest::RobotStopped).await;
+        assert!(control.borrow().stops_now());
     }
 }

@@ -74,7 +74,7 @@ pub(crate) enum CycleRequest {
     /// is under way.
     Run {
         /// The cycle's status as it starts.
-        status: CycleStatus,
+        status: Box<CycleStatus>,
         /// Its driver.
         runner: CycleRunner,
         /// The status, or why it was refused.

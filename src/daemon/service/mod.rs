@@ -292,50 +292,13 @@ pub async fn serve(
         .transpose()?;
     ensure_state_dir(&settings.state_dir)?;
     let _lock = lock(&settings.socket)?;
-    let unix = bind_unix(&settings.socket, settings.socket_mode)?;
-    let tcp = match settings.listen {
-        Some(address) => Some(bind_tcp(address).await?),
-        None => None,
-    };
-    let faces = bind_modbus_faces(config).await?;
-    let console_tcp = bind_console(config).await?;
+    let bound = Bound::bind(config, settings).await?;
     let journal = open_journal(settings)?;
     let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal));
-    let api = Api::new(daemon.robots().clone());
+    let api = Api::new(daemon.robots().clone()).with_journal(journal.clone());
     let closing = api.closing();
-    let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), &closing);
     super::journal::follow(daemon.robots(), &journal, &closing);
-    let api = api.with_live(hub.clone()).with_journal(journal.clone());
-    let mut servers = JoinSet::new();
-    let stop = closing.clone();
-    let router = api.router(None);
-    servers.spawn(async move {
-        api::serve(unix, router, stop.cancelled_owned()).await;
-        Ok(())
-    });
-    if let Some(tcp) = tcp {
-        let stop = closing.clone();
-        let router = api.router(token);
-        servers.spawn(async move {
-            api::serve(tcp, router, stop.cancelled_owned()).await;
-            Ok(())
-        });
-    }
-    if let (Some(settings), Some(tcp)) = (&config.console, console_tcp) {
-        let robots = daemon.robots();
-        let console = Console::new(
-            settings,
-            &config.robot_consoles,
-            &config.cells,
-            robots,
-            hub,
-            api.clone(),
-            &closing,
-        )?;
-        let stop = closing.clone();
-        servers.spawn(serve_console(tcp, console, settings.clone(), stop));
-    }
-    spawn_faces(&daemon, faces, &closing, &mut servers);
+    let mut servers = spawn_servers(config, &daemon, (api, token), bound, &closing)?;
     let listen = settings.listen.map(tracing::field::display);
     tracing::info!(socket = %settings.socket.display(), listen, "API listening");
     log_notify(notifier.ready(), "READY=1");
@@ -344,27 +307,8 @@ pub async fn serve(
         notifier,
         closing.clone(),
     ));
-    let mut running = config_path.map(running_config);
-    let mut hangups = hangup_signals();
-    tokio::pin!(shutdown);
-    let failed = loop {
-        tokio::select! {
-            () = &mut shutdown => break None,
-            Some(done) = servers.join_next() => {
-                break match done {
-                    Ok(Err(e)) => Some(ServeError::Serve(e)),
-                    _ => None,
-                };
-            }
-            why = daemon.worker_failed() => {
-                tracing::error!("{why}; the daemon exits");
-                break Some(ServeError::WorkerFailed(why));
-            }
-            Some(()) = hangups.recv() => {
-                reload(running.as_mut().zip(config_path), daemon.robots(), &journal);
-            }
-        }
-    };
+    let reloads = (config_path, &journal);
+    let failed = run_until(shutdown, &mut daemon, &mut servers, reloads).await;
     tracing::info!("shutting down");
     journal.record(None, Kind::DaemonStopping);
     log_notify(notifier.stopping(), "STOPPING=1");
@@ -380,6 +324,105 @@ pub async fn serve(
     let _ = std::fs::remove_file(&settings.socket);
     journal.flush().await;
     failed.map_or(Ok(()), Err)
+}
+
+/// What `serve` binds before any worker starts: a port taken, a socket in the way or a bad
+/// console users' file stops the start there.
+struct Bound {
+    unix: tokio::net::UnixListener,
+    tcp: Option<TcpListener>,
+    faces: Vec<(String, ModbusFaceServer)>,
+    console: Option<TcpListener>,
+}
+
+impl Bound {
+    async fn bind(config: &Config, settings: &DaemonSettings) -> Result<Self, ServeError> {
+        let unix = bind_unix(&settings.socket, settings.socket_mode)?;
+        let tcp = match settings.listen {
+            Some(address) => Some(bind_tcp(address).await?),
+            None => None,
+        };
+        Ok(Self {
+            unix,
+            tcp,
+            faces: bind_modbus_faces(config).await?,
+            console: bind_console(config).await?,
+        })
+    }
+}
+
+/// The API (on the socket, and on TCP with `token`), the console, the Modbus faces and the
+/// mirrored cell faces, serving `daemon`'s robots until `closing`.
+fn spawn_servers(
+    config: &Config,
+    daemon: &Daemon,
+    (api, token): (Api, Option<BearerToken>),
+    bound: Bound,
+    closing: &tokio_util::sync::CancellationToken,
+) -> Result<JoinSet<io::Result<()>>, ServeError> {
+    let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), closing);
+    let api = api.with_live(hub.clone());
+    let mut servers = JoinSet::new();
+    spawn_api(&mut servers, bound.unix, api.router(None), closing);
+    if let Some(tcp) = bound.tcp {
+        spawn_api(&mut servers, tcp, api.router(token), closing);
+    }
+    if let (Some(settings), Some(tcp)) = (&config.console, bound.console) {
+        let robots = daemon.robots();
+        let cells = (&config.robot_consoles, &config.cells);
+        let console = Console::new(settings, cells.0, cells.1, robots, hub, api, closing)?;
+        let stop = closing.clone();
+        servers.spawn(serve_console(tcp, console, settings.clone(), stop));
+    }
+    spawn_faces(daemon, bound.faces, closing, &mut servers);
+    Ok(servers)
+}
+
+/// The API served on `listener` by `router` until `closing`.
+fn spawn_api<L: axum::serve::Listener>(
+    servers: &mut JoinSet<io::Result<()>>,
+    listener: L,
+    router: axum::Router,
+    closing: &tokio_util::sync::CancellationToken,
+) where
+    L::Io: api::PeerCaller,
+{
+    let stop = closing.clone();
+    servers.spawn(async move {
+        api::serve(listener, router, stop.cancelled_owned()).await;
+        Ok(())
+    });
+}
+
+/// Serves until `shutdown` completes, a server ends or a worker fails (what failed, if
+/// anything did), reloading `config_path` on every SIGHUP (each reload journaled).
+async fn run_until(
+    shutdown: impl Future<Output = ()>,
+    daemon: &mut Daemon,
+    servers: &mut JoinSet<io::Result<()>>,
+    (config_path, journal): (Option<&Path>, &Journal),
+) -> Option<ServeError> {
+    let mut running = config_path.map(running_config);
+    let mut hangups = hangup_signals();
+    tokio::pin!(shutdown);
+    loop {
+        tokio::select! {
+            () = &mut shutdown => break None,
+            Some(done) = servers.join_next() => {
+                break match done {
+                    Ok(Err(e)) => Some(ServeError::Serve(e)),
+                    _ => None,
+                };
+            }
+            why = daemon.worker_failed() => {
+                tracing::error!("{why}; the daemon exits");
+                break Some(ServeError::WorkerFailed(why));
+            }
+            Some(()) = hangups.recv() => {
+                reload(running.as_mut().zip(config_path), daemon.robots(), journal);
+            }
+        }
+    }
 }
 
 /// The Modbus faces' servers and the mirrored cell faces, until `closing`.
