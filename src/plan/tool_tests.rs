@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::{MoveRequest, Origin, plan_move};
-use crate::geometry::{Line, Pose, ToolPath};
+use crate::geometry::{Line, Pose};
 use crate::kinematics::{Arm, Cartesian, Elbow, JointKind, Kinematics, Model, Scara};
 use crate::robot::{Dynamics, Joint, Method, Robot, seed_robot};
 use crate::table::OutputMethod;
