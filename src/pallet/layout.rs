@@ -389,7 +389,7 @@ impl Reach {
         }];
         if let Some((near, _)) = &slow {
             way.push(Waypoint {
-                pose: near.clone(),
+                pose: *near,
                 speed_mm_s: None,
             });
         }

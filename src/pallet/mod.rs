@@ -9,7 +9,7 @@
 //!   approach and retreat ([`Layout`]).
 //! - [`set`]: a robot's frames and pallets ([`RobotPallets`]), turned into patterns once the
 //!   taught positions are known, every slot checked against the robot's reach.
-//! - [`error`]: [`PalletError`].
+//! - [`error`], why a pallet or a frame cannot be used ([`PalletError`]).
 
 pub mod doc;
 pub mod error;

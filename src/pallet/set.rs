@@ -93,7 +93,7 @@ impl FrameSpec {
     ///
     /// # Errors
     /// A position not taught, or points that make no frame.
-    pub fn resolve(&self, name: &str, taught: &Taught<'_>) -> Result<Frame, PalletError> {
+    pub fn resolve(&self, name: &str, taught: Taught<'_>) -> Result<Frame, PalletError> {
         let owner = format!("frame {name:?}");
         let frame = match self {
             Self::Taught(p) => {
@@ -112,7 +112,7 @@ impl FrameSpec {
 fn resolve3(
     owner: &str,
     p: &[PointDoc; 3],
-    taught: &Taught<'_>,
+    taught: Taught<'_>,
 ) -> Result<[Vector3<f64>; 3], PalletError> {
     Ok([
         taught.point(owner, POINT_KEYS[0], &p[0])?,
@@ -159,7 +159,7 @@ fn check_point(owner: &str, key: &str, p: &PointDoc) -> Result<(), PalletError> 
 pub struct Taught<'a>(pub &'a BTreeMap<String, Position>);
 
 impl Taught<'_> {
-    fn point(&self, owner: &str, key: &str, p: &PointDoc) -> Result<Vector3<f64>, PalletError> {
+    fn point(self, owner: &str, key: &str, p: &PointDoc) -> Result<Vector3<f64>, PalletError> {
         match p {
             PointDoc::Given(v) => Ok(Vector3::from(*v)),
             PointDoc::Taught(s) => {
@@ -294,7 +294,7 @@ impl RobotPallets {
                 self.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
             ),
         })?;
-        let slots = self.lay_out(layout, &Taught(taught))?;
+        let slots = self.lay_out(layout, Taught(taught))?;
         for &(key, speed) in &layout.slow_speeds_mm_s {
             if speed > robot.max_speed_mm_s {
                 return Err(PalletError::Value {
@@ -312,12 +312,12 @@ impl RobotPallets {
             check_slot(name, robot, slot)?;
         }
         let mut pattern = Pattern::from_slots(name, slots)?;
-        pattern.between_layers = layout.between_layers.clone();
+        pattern.between_layers.clone_from(&layout.between_layers);
         pattern.when_full = layout.when_full.clone();
         Ok(pattern)
     }
 
-    fn lay_out(&self, layout: &Layout, taught: &Taught<'_>) -> Result<Vec<Slot>, PalletError> {
+    fn lay_out(&self, layout: &Layout, taught: Taught<'_>) -> Result<Vec<Slot>, PalletError> {
         let owner = format!("pallet {:?}", layout.name());
         match &layout.placement {
             Placement::Frame { frame, origin_mm } => {

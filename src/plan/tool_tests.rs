@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::{MoveRequest, Origin, plan_move};
-use crate::geometry::{Line, Pose, ToolPath};
+use crate::geometry::{Line, Pose};
 use crate::kinematics::{Arm, Cartesian, Elbow, JointKind, Kinematics, Model, Scara};
 use crate::robot::{Dynamics, Joint, Method, Robot, seed_robot};
 use crate::table::OutputMethod;
@@ -63,7 +63,7 @@ fn robots() -> Vec<(Robot, Pose, Pose)> {
         )
     };
     let (c0, c1) = line([100.0, 700.0, 100.0, 0.0], [400.0, 1100.0, 150.0, 30.0]);
-    let (s0, s1) = line([-200.0, 450.0, 100.0, 0.0], [250.0, 400.0, 150.0, 30.0]);
+    let (s0, s1) = line([100.0, 300.0, 100.0, 0.0], [300.0, 520.0, 150.0, 30.0]);
     vec![(cylindrical, c0, c1), (cartesian, c0, c1), (scara, s0, s1)]
 }
 
