@@ -544,7 +544,7 @@ mod tests {
         .unwrap()
     }
 
-    fn parsed(text: &str) -> Result<Condition, String> {
+    fn parsed(text: &str) -> Result<Condition, ConditionError> {
         let (signals, access) = (signals(), access());
         let names = Names {
             permit: PermitNames {
@@ -553,7 +553,7 @@ mod tests {
             },
             access: &access,
         };
-        parse(text, names).map_err(|e| e.to_string())
+        parse(text, names)
     }
 
     #[test]
@@ -623,7 +623,7 @@ mod tests {
             ("X40", "X40 is not in the input words"),
             ("X5 ; X6", "';' at character 4"),
         ] {
-            let e = parsed(text).unwrap_err();
+            let e = parsed(text).unwrap_err().to_string();
             assert!(
                 e.contains(words) && e.contains(&format!("{text:?}")),
                 "{text}: {e}"

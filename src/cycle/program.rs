@@ -1,6 +1,7 @@
 //! The cycle program document, as a TOML file (and the same keys as JSON): an optional program
 //! number, a description, and its steps in order. Every key is known (unknown ones are refused,
-//! naming them); what each step means is checked by [`super::check`].
+//! naming them); each step's shape (one action, the keys that go with it) is checked once as it
+//! becomes a [`super::step::Step`], what it means by [`super::check`].
 //!
 //! ```toml
 //! number = 1                     # 1..=255: the number the press line selects it by
@@ -48,7 +49,8 @@ pub struct ProgramDoc {
     pub step: Vec<StepDoc>,
 }
 
-/// One step as written: exactly one action key, and the keys that go with it.
+/// One step as written: exactly one action key, and the keys that go with it (as the file
+/// writes it; [`super::step::Step`] is the step the check reads).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct StepDoc {

@@ -87,11 +87,22 @@ fn cell() -> Cell {
     }
 }
 
+/// Why a test's program was refused: its TOML, or its check.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum Refused {
+    /// The TOML.
+    #[error(transparent)]
+    Toml(#[from] toml::de::Error),
+    /// The check.
+    #[error(transparent)]
+    Program(#[from] ProgramError),
+}
+
 pub(super) fn checked(
     programs: &[(&str, &str)],
     run: &str,
     require_timeout: bool,
-) -> Result<Checked, String> {
+) -> Result<Checked, Refused> {
     checked_from(programs, run, require_timeout, None)
 }
 
@@ -100,17 +111,17 @@ fn checked_from(
     run: &str,
     require_timeout: bool,
     start: Option<[i64; 4]>,
-) -> Result<Checked, String> {
+) -> Result<Checked, Refused> {
     let c = cell();
     let docs: BTreeMap<String, ProgramDoc> = programs
         .iter()
         .map(|(n, t)| {
             Ok((
                 (*n).to_owned(),
-                ProgramDoc::from_toml(t).map_err(|e| e.to_string())?,
+                ProgramDoc::from_toml(t)?,
             ))
         })
-        .collect::<Result<_, String>>()?;
+        .collect::<Result<_, Refused>>()?;
     let ctx = Context {
         robot: &c.robot,
         taught: &c.taught,
@@ -127,7 +138,7 @@ fn checked_from(
         start,
         poses_known: true,
     };
-    check(run, &ctx).map_err(|e| e.to_string())
+    Ok(check(run, &ctx)?)
 }
 
 #[test]
@@ -250,7 +261,7 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
         ),
     ];
     for (program, words) in cases {
-        let e = checked(&[("p", &program)], "p", true).unwrap_err();
+        let e = checked(&[("p", &program)], "p", true).unwrap_err().to_string();
         assert!(e.contains(words), "{program}\n=> {e}");
         if !words.starts_with("unknown field") {
             assert!(e.contains("program \"p\""), "{e}");
@@ -262,17 +273,17 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
 fn a_recursion_through_call_is_refused_naming_the_chain() {
     let a = "[[step]]\ncall = \"b\"\n";
     let b = "[[step]]\ndwell = \"1s\"\n[[step]]\ncall = \"a\"\n";
-    let e = checked(&[("a", a), ("b", b)], "a", false).unwrap_err();
+    let e = checked(&[("a", a), ("b", b)], "a", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"b\" step 2: call = \"a\" is a recursion: a -> b -> a"),
         "{e}"
     );
-    let e = checked(&[("a", "[[step]]\ncall = \"zz\"\n")], "a", false).unwrap_err();
+    let e = checked(&[("a", "[[step]]\ncall = \"zz\"\n")], "a", false).unwrap_err().to_string();
     assert!(
         e.contains("call = \"zz\": no such program; there are: a"),
         "{e}"
     );
-    let e = checked(&[("a", a)], "main", false).unwrap_err();
+    let e = checked(&[("a", a)], "main", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"main\": no such program; there are: a"),
         "{e}"
@@ -285,12 +296,12 @@ fn two_programs_with_one_number_are_refused_naming_each_other_and_the_rest_run()
     let p = "number = 4\n[[step]]\ndwell = \"1s\"\n";
     let other = "number = 5\n[[step]]\ndwell = \"1s\"\n";
     let programs = [("a", p), ("b", p), ("c", other)];
-    let e = checked(&programs, "a", false).unwrap_err();
+    let e = checked(&programs, "a", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"a\": number = 4 is program \"b\"'s number too"),
         "{e}"
     );
-    let e = checked(&programs, "b", false).unwrap_err();
+    let e = checked(&programs, "b", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"b\": number = 4 is program \"a\"'s number too"),
         "{e}"
@@ -302,7 +313,7 @@ fn two_programs_with_one_number_are_refused_naming_each_other_and_the_rest_run()
 fn a_loop_jumps_back_only_and_on_timeout_may_jump_forward() {
     let forward =
         "[[step]]\nloop = { to = \"end\", count = 2 }\n[[step]]\nlabel = \"end\"\ndwell = \"1s\"\n";
-    let e = checked(&[("p", forward)], "p", false).unwrap_err();
+    let e = checked(&[("p", forward)], "p", false).unwrap_err().to_string();
     assert!(e.contains("jumps forward"), "{e}");
     let skip = "[[step]]\nwait = \"X5\"\ntimeout = \"1s\"\non_timeout = \"end\"\n[[step]]\ndwell = \"1s\"\n[[step]]\nlabel = \"end\"\ndwell = \"2s\"\n";
     let c = checked(&[("p", skip)], "p", false).unwrap();
@@ -328,19 +339,19 @@ fn counts_at_p1() -> [i64; 4] {
 fn a_target_out_of_reach_or_past_a_limit_is_refused_when_checked_naming_the_step() {
     let beyond = "[[step]]\nmove = { position = \"above-stack\" }\n[[step]]\ndwell = \"1s\"\n\
                   [[step]]\nlabel = \"up\"\nmove = { to = [-926.57, 535.03, 900.0, 0.0] }\n";
-    let e = checked(&[("p", beyond)], "p", false).unwrap_err();
+    let e = checked(&[("p", beyond)], "p", false).unwrap_err().to_string();
     assert!(e.starts_with("program \"p\" step 3 (up): move: "), "{e}");
     assert!(
         e.contains("joint d2 target 900.0000 mm is beyond its limits"),
         "{e}"
     );
     let axis = "[[step]]\nmove = { to = [0.0, 0.0, 100.0] }\n";
-    let e = checked(&[("p", axis)], "p", false).unwrap_err();
+    let e = checked(&[("p", axis)], "p", false).unwrap_err().to_string();
     assert!(e.starts_with("program \"p\" step 1: move: "), "{e}");
     // In a called program too, named there.
     let calls = "[[step]]\ncall = \"far\"\n";
     let far = "[[step]]\ndwell = \"1s\"\n[[step]]\nmove = { joints = [0, 900, 600, 0] }\n";
-    let e = checked(&[("p", calls), ("far", far)], "p", false).unwrap_err();
+    let e = checked(&[("p", calls), ("far", far)], "p", false).unwrap_err().to_string();
     assert!(e.starts_with("program \"far\" step 2: move: "), "{e}");
 }
 
@@ -348,7 +359,7 @@ fn a_target_out_of_reach_or_past_a_limit_is_refused_when_checked_naming_the_step
 fn a_move_by_an_offset_is_checked_from_where_the_moves_before_it_end() {
     let up = "[[step]]\nmove = { position = \"in-press\" }\n[[step]]\nwait = \"X5\"\n\
               [[step]]\nmove = { by = [0, 0, 800] }\n";
-    let e = checked(&[("p", up)], "p", false).unwrap_err();
+    let e = checked(&[("p", up)], "p", false).unwrap_err().to_string();
     assert!(
         e.starts_with("program \"p\" step 3: move from where the steps before it end (-1144.4, 659.6, 186.6, 0.0): "),
         "{e}"
@@ -378,7 +389,7 @@ fn a_motion_whose_start_depends_on_the_run_is_named_as_checked_when_it_runs() {
     // A jog up 800 mm from P1 (and back, so each cycle begins there) is planned from the
     // run's start, and refused.
     let far = "[[step]]\nmove = { by = [0, 0, 800] }\n[[step]]\nmove = { by = [0, 0, -800] }\n";
-    let e = checked_from(&[("p", far)], "p", false, Some(counts_at_p1())).unwrap_err();
+    let e = checked_from(&[("p", far)], "p", false, Some(counts_at_p1())).unwrap_err().to_string();
     assert!(
         e.contains("step 1: move from where the steps before it end"),
         "{e}"
