@@ -12,11 +12,12 @@ use thiserror::Error;
 
 use super::condition::{self, Condition, Names};
 use super::program::{LoopDoc, ProgramDoc};
-use super::step::{Action, Step, WaitStep};
+use super::step::{Action, PalletStep, Step, WaitStep};
 use crate::config::{DurationError, parse_duration_s};
 use crate::gateway::Values;
 use crate::gateway::{Address, Area, Range};
 use crate::order::{MoveOrder, OrderLimits, PathOrder};
+use crate::pallet::Pattern;
 use crate::robot::Position;
 use crate::robot::Robot;
 use crate::wire::StepAt;
@@ -72,6 +73,9 @@ pub struct Context<'a> {
     /// (`check-config`, which knows only their names): a move to a position is checked for its
     /// name only, its reach when it runs.
     pub poses_known: bool,
+    /// The robot's pallet patterns, by name (for `place`, `pick`, `advance` and pallet
+    /// conditions).
+    pub pallets: &'a BTreeMap<String, Pattern>,
 }
 
 /// How a loop ends.
@@ -105,6 +109,30 @@ pub enum OpKind {
     Set(Vec<(Address, Values)>),
     /// A pause.
     Dwell(Duration),
+    /// A pallet's counter changed (on disk before the next op).
+    Pallet {
+        /// The pallet.
+        pallet: String,
+        /// The change.
+        act: PalletAct,
+    },
+    /// The way into (or out of) the pallet's slot in progress, as one blended path from where
+    /// the robot is.
+    PalletPath {
+        /// The pallet.
+        pallet: String,
+        /// Into the slot or out of it.
+        leg: Leg,
+        /// The speed where the pattern gives none, mm/s.
+        speed_mm_s: Option<f64>,
+    },
+    /// On to op `to` unless the condition holds (a pallet's between-layers and when-full steps).
+    Skip {
+        /// The condition the ops after this one run under.
+        unless: Condition,
+        /// The op after them.
+        to: usize,
+    },
     /// A jump back to op `to` until `exit`.
     Loop {
         /// The op jumped to.
@@ -112,6 +140,28 @@ pub enum OpKind {
         /// When it stops jumping.
         exit: LoopExit,
     },
+}
+
+/// A change of a pallet's counter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PalletAct {
+    /// The next slot marked in progress (refused while the last one waits for the operator).
+    Begin,
+    /// The robot is at the slot: its at-slot steps begin.
+    Arrived,
+    /// The slot is done: the counter moves on.
+    Advance,
+    /// The full pallet was changed: the counter starts again at slot 0.
+    Restart,
+}
+
+/// A pallet path's leg.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Leg {
+    /// Through the slot's approach waypoints into the slot.
+    In,
+    /// From the slot through its retreat waypoints.
+    Out,
 }
 
 /// One op and the step it came from.
@@ -216,13 +266,13 @@ fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
         .transpose()
 }
 
-struct Flattener<'c, 'o> {
-    ctx: &'c Context<'c>,
-    ops: &'o mut Vec<Op>,
+pub(super) struct Flattener<'c, 'o> {
+    pub(super) ctx: &'c Context<'c>,
+    pub(super) ops: &'o mut Vec<Op>,
 }
 
 /// The step being flattened: what its errors and its ops name.
-struct Here<'a> {
+pub(super) struct Here<'a> {
     program: &'a str,
     /// From 1.
     step: usize,
@@ -231,7 +281,7 @@ struct Here<'a> {
 }
 
 impl Here<'_> {
-    fn fail(&self, reason: String) -> ProgramError {
+    pub(super) fn fail(&self, reason: String) -> ProgramError {
         ProgramError {
             program: self.program.to_owned(),
             step: Some(self.step),
@@ -240,7 +290,7 @@ impl Here<'_> {
         }
     }
 
-    fn at(&self, does: String) -> StepAt {
+    pub(super) fn at(&self, does: String) -> StepAt {
         StepAt {
             program: self.program.to_owned(),
             step: self.step,
@@ -261,7 +311,7 @@ struct Fixup {
 }
 
 /// What a step turns into before its jumps are resolved.
-enum Flat {
+pub(super) enum Flat {
     /// An op.
     Op(OpKind, String),
     /// An op that jumps to a label (a loop; a wait's `on_timeout`).
@@ -273,6 +323,10 @@ enum Flat {
     },
     /// Another program, inlined here.
     Call(String),
+    /// A place (`pick` true: a pick) at a pallet's slot.
+    Pallet(PalletStep, bool),
+    /// A pallet advanced.
+    Advance(String),
 }
 
 impl Flattener<'_, '_> {
@@ -303,9 +357,7 @@ impl Flattener<'_, '_> {
             if let Some(label) = &written.label
                 && labels.insert(label.clone(), self.ops.len()).is_some()
             {
-                return Err(here.fail(format!(
-                    "label {label:?} is used by an earlier step too"
-                )));
+                return Err(here.fail(format!("label {label:?} is used by an earlier step too")));
             }
             let step = Step::try_from(written).map_err(|e| here.fail(e.to_string()))?;
             let flat = self.step(&step.action, &|r| here.fail(r))?;
@@ -329,6 +381,8 @@ impl Flattener<'_, '_> {
     ) -> Result<(), ProgramError> {
         let (kind, does) = match flat {
             Flat::Call(callee) => return self.call(&callee, chain, here),
+            Flat::Pallet(step, pick) => return self.place(&step, pick, here, chain),
+            Flat::Advance(pallet) => return self.advance(&pallet, here, chain),
             Flat::Op(kind, does) => (kind, does),
             Flat::Jump {
                 kind,
@@ -355,7 +409,7 @@ impl Flattener<'_, '_> {
 
     /// Program `callee` inlined at `here`: refused when it is a recursion, unreadable or
     /// missing.
-    fn call(
+    pub(super) fn call(
         &mut self,
         callee: &str,
         chain: &mut Vec<String>,
@@ -427,7 +481,7 @@ impl Flattener<'_, '_> {
         Ok(())
     }
 
-    fn step(
+    pub(super) fn step(
         &self,
         action: &Action,
         here: &dyn Fn(String) -> ProgramError,
@@ -443,6 +497,9 @@ impl Flattener<'_, '_> {
             }
             Action::Call(callee) => Ok(Flat::Call(callee.clone())),
             Action::Loop(l) => self.loop_step(l, here),
+            Action::Place(step) => Ok(Flat::Pallet(step.clone(), false)),
+            Action::Pick(step) => Ok(Flat::Pallet(step.clone(), true)),
+            Action::Advance(pallet) => Ok(Flat::Advance(pallet.clone())),
         }
     }
 
@@ -496,6 +553,7 @@ impl Flattener<'_, '_> {
         let text = &wait.until;
         let until =
             condition::parse(text, self.ctx.names).map_err(|e| here(format!("wait: {e}")))?;
+        self.pallets_known(&until, here)?;
         let timeout = wait
             .timeout
             .as_deref()
@@ -549,7 +607,7 @@ impl Flattener<'_, '_> {
 
     /// One output of a `set`: its address (a signal's, or written out) and its value, in the
     /// gateway's access list and the value's range.
-    fn write(
+    pub(super) fn write(
         &self,
         key: &str,
         value: &toml::Value,
@@ -607,10 +665,12 @@ impl Flattener<'_, '_> {
                 LoopExit::Count(c)
             }
             (None, Some("stop")) => LoopExit::Stop,
-            (None, Some(text)) => LoopExit::Until(
-                condition::parse(text, self.ctx.names)
-                    .map_err(|e| here(format!("loop until: {e}")))?,
-            ),
+            (None, Some(text)) => {
+                let until = condition::parse(text, self.ctx.names)
+                    .map_err(|e| here(format!("loop until: {e}")))?;
+                self.pallets_known(&until, here)?;
+                LoopExit::Until(until)
+            }
             (None, None) => {
                 return Err(here(format!(
                     "loop to {:?} has no exit: give count, until = \"<condition>\" or until = \"stop\"",

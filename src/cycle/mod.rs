@@ -19,6 +19,7 @@
 pub mod check;
 pub mod condition;
 pub mod load;
+mod place;
 pub mod program;
 mod reach;
 pub mod runner;
@@ -36,11 +37,13 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
     checked.unchecked = reach::check(&checked.ops, ctx)?;
     Ok(checked)
 }
-pub use condition::{Condition, ConditionError, ConditionFault, Names, Source};
+pub use condition::{
+    Condition, ConditionError, ConditionFault, Names, PalletTerm, PalletView, Source,
+};
 pub use load::{ProgramFileError, Programs};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
-pub use step::{ShapeError, Step};
 pub use runner::Runner;
+pub use step::{ShapeError, Step};
 
 #[cfg(test)]
 mod tests;

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 use thiserror::Error;
 
-use super::program::{LoopDoc, PathStep, StepDoc};
+use super::program::{LoopDoc, PalletStepDoc, PathStep, StepDoc};
 use crate::order::{MoveOrder, PathOrder};
 
 /// A step, converted: its label and what it does.
@@ -37,6 +37,25 @@ pub enum Action {
     Call(String),
     /// A jump back to a label.
     Loop(LoopDoc),
+    /// A place at a pallet's current slot.
+    Place(PalletStep),
+    /// A pick from a pallet's current slot.
+    Pick(PalletStep),
+    /// A pallet advanced to its next slot.
+    Advance(String),
+}
+
+/// A `place` or `pick` step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PalletStep {
+    /// The pallet.
+    pub pallet: String,
+    /// The steps run at the slot, converted.
+    pub at_slot: Vec<Step>,
+    /// Whether the pallet advances when they ran.
+    pub advance: bool,
+    /// The approach's and retreat's speed where the pattern gives none, mm/s.
+    pub speed_mm_s: Option<f64>,
 }
 
 /// A `wait` step's keys.
@@ -74,10 +93,21 @@ pub enum ShapeError {
     /// A path step with neither or both of `file` and `path`.
     #[error("a path step has `file` or `path`, one of them")]
     PathSource,
+    /// An at-slot step whose own shape is wrong.
+    #[error("at_slot step {step}: {source}")]
+    AtSlot {
+        /// The at-slot step, from 1.
+        step: usize,
+        /// Why.
+        #[source]
+        source: Box<ShapeError>,
+    },
 }
 
 /// The action keys, in the order a message lists them.
-const ACTIONS: [&str; 7] = ["move", "path", "wait", "set", "dwell", "call", "loop"];
+const ACTIONS: [&str; 10] = [
+    "move", "path", "wait", "set", "dwell", "call", "loop", "place", "pick", "advance",
+];
 
 impl TryFrom<&StepDoc> for Step {
     type Error = ShapeError;
@@ -91,6 +121,9 @@ impl TryFrom<&StepDoc> for Step {
             doc.dwell.is_some(),
             doc.call.is_some(),
             doc.loop_.is_some(),
+            doc.place.is_some(),
+            doc.pick.is_some(),
+            doc.advance.is_some(),
         ];
         let keys: Vec<&'static str> = ACTIONS
             .iter()
@@ -143,8 +176,38 @@ fn action(doc: &StepDoc) -> Result<Action, ShapeError> {
     if let Some(callee) = &doc.call {
         return Ok(Action::Call(callee.clone()));
     }
-    let l = doc.loop_.as_ref().ok_or(ShapeError::NoAction)?;
-    Ok(Action::Loop(l.clone()))
+    if let Some(l) = &doc.loop_ {
+        return Ok(Action::Loop(l.clone()));
+    }
+    if let Some(place) = &doc.place {
+        return pallet_step(place).map(Action::Place);
+    }
+    if let Some(pick) = &doc.pick {
+        return pallet_step(pick).map(Action::Pick);
+    }
+    let pallet = doc.advance.as_ref().ok_or(ShapeError::NoAction)?;
+    Ok(Action::Advance(pallet.clone()))
+}
+
+/// A place or pick step, its at-slot steps converted.
+fn pallet_step(doc: &PalletStepDoc) -> Result<PalletStep, ShapeError> {
+    let at_slot = doc
+        .at_slot
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            Step::try_from(s).map_err(|e| ShapeError::AtSlot {
+                step: i + 1,
+                source: Box::new(e),
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(PalletStep {
+        pallet: doc.pallet.clone(),
+        at_slot,
+        advance: doc.advance.unwrap_or(true),
+        speed_mm_s: doc.speed_mm_s,
+    })
 }
 
 /// The step's permit and its order's: one of them, or neither.
