@@ -107,7 +107,7 @@ async fn run(baud: u32) -> (Vec<f64>, Vec<f64>) {
     while h.state().refuses.is_some() || !h.state().link.connected {
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
-    h.run_cycle("toggle", None).unwrap();
+    h.run_cycle("toggle", None).await.unwrap();
     let (mut latency, mut seen) = (Vec::new(), Vec::new());
     for i in 0..TOGGLES {
         // The cycle waits (and the robot stands) a while before the input changes.

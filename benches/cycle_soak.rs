@@ -163,7 +163,7 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
     until_ready(&h).await;
     shared.with(|m| m.set_faults(SCRIPT.parse().unwrap()));
     let mut summary = Summary::default();
-    h.run_cycle("press", Some(cycles)).unwrap();
+    h.run_cycle("press", Some(cycles)).await.unwrap();
     // At most a minute of virtual time a cycle, all told.
     let limit = tokio::time::Instant::now() + Duration::from_secs(60 * cycles + 60);
     while tokio::time::Instant::now() < limit {
@@ -181,7 +181,7 @@ pub async fn cycle_soak(cycles: u64) -> Summary {
                 operator(&h, &shared, &mut summary).await;
             }
             CycleState::Paused => {
-                let _ = h.resume_cycle();
+                let _ = h.resume_cycle().await;
             }
             CycleState::Stopped => break,
             CycleState::Running | CycleState::Waiting => {}
@@ -231,7 +231,7 @@ async fn operator(h: &RobotHandle, shared: &SharedMock, summary: &mut Summary) {
     }
     until_ready(h).await;
     for _ in 0..50 {
-        if h.clear_fault().await.is_ok() && h.resume_cycle().is_ok() {
+        if h.clear_fault().await.is_ok() && h.resume_cycle().await.is_ok() {
             return;
         }
         tokio::time::sleep(Duration::from_millis(200)).await;

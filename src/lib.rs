@@ -15,7 +15,8 @@
 //! ```text
 //! geometry/    PURE  poses, the line P1P2, the polyline of a curved tool path, the trapezoidal
 //!                    profile s(t), the pace along a path, the time-optimal speed (TOPP-RA)
-//! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara
+//! kinematics/  PURE  trait Kinematics { fk, ik, check_line }; cylindrical, cartesian, scara; Arm: a
+//!                    model with its tool offset (every pose the tool centre's)
 //! robot/       PURE  a robot as planned for: model, joints and channels, drive limits, motion
 //!                    defaults
 //! plan/        PURE  move request (a line, a path section, a line in joint space) -> the
@@ -41,7 +42,8 @@
 //!                    and roles, a snapshot's changes as a merge patch, failed logins
 //!                    rate-limited, a jog's pieces and worst-case travel
 //! pallet/      PURE  palletising: a pattern's slots in fill order with their approach and retreat,
-//!                    what happens between layers and when full
+//!                    what happens between layers and when full; user frames; the pallet tables
+//!                    (grid, layer kinds, fill order) laid out and checked against the reach
 //! cell/        PURE  the robot in its press line: the mode (local/remote) and the cell face's
 //!                    registers, command edges, strobe and check word, refusals, status words
 //! mewtocol/    SANS-IO  MEWTOCOL-COM frames, BCC, typed commands and replies, tokio-util codecs
@@ -52,8 +54,12 @@
 //!                    the control socket that forces inputs by hand
 //! plc/         IO  trait Plc; MEWTOCOL-COM and Modbus clients; links; the contract's exchanges
 //!                    (`plc::exchange`: status reads, verified banks, a start written once)
-//! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only)
+//! plot/        PURE  the SVG of a move planned one or more ways (plotters, SVG backend only), and
+//!                    of a pallet's layers (plot/pallet.rs)
 //! cli/         the `linterpd` subcommands (one module each) and their output formats
+//! journal/     IO  the cell's journal on disk: a writer thread fed over a bounded channel,
+//!                    segments in the state directory rotated by size and number, fsync'd
+//!                    where it matters, read by number, time and robot
 //! daemon/      `linterpd serve`: a worker task per robot owning its PLC link, the move flow,
 //!                    handles, taught positions, permits, the cycle driver (cycle/), the mode and
 //!                    the cell face's actions (cell/, served on the Modbus face or mirrored in the
@@ -79,6 +85,7 @@ pub mod daemon;
 pub mod demo;
 pub mod gateway;
 pub mod geometry;
+pub mod journal;
 pub mod kinematics;
 pub mod mewtocol;
 pub mod mock;

@@ -247,7 +247,8 @@ fn short_arm() -> Robot {
     robot.kinematics = Model::Cylindrical(Cylindrical {
         l0_mm: 50.0,
         min_axis_distance_mm: 20.0,
-    });
+    })
+    .into();
     robot.joints[0].max_freq_hz = 20_000;
     robot.joints[0].min = (-360f64).to_radians();
     robot.joints[0].max = 360f64.to_radians();

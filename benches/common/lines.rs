@@ -46,7 +46,7 @@ pub(crate) fn gantry() -> Robot {
         };
     let mut robot = seed_robot();
     robot.name = "gantry".into();
-    robot.kinematics = Model::Cartesian(Cartesian);
+    robot.kinematics = Model::Cartesian(Cartesian).into();
     robot.joints = [
         joint("x", 0, JointKind::Prismatic, 0.01, 2_500.0, 100_000),
         joint("y", 1, JointKind::Prismatic, 0.01, 2_500.0, 100_000),

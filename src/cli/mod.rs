@@ -36,10 +36,12 @@ pub mod home;
 mod interrupt;
 pub mod io;
 pub mod io_mock;
+pub mod log;
 pub mod logging;
 pub mod mock_plc;
 pub mod mode;
 pub mod moves;
+pub mod pallet;
 pub mod plan;
 pub mod positions;
 pub mod serve;
@@ -104,6 +106,10 @@ pub enum Command {
     /// Show or set who drives a robot: local (the CLI and the API) or remote (the line's PLC or
     /// HMI through the cell face); `stop` works in both.
     Mode(mode::ModeArgs),
+    /// The cell's journal: faults, cycles, holds, mode changes, commands and who sent them,
+    /// pallets, reloads (`--since`, `--follow`, `--json`), or production counts per shift
+    /// (`--counts`).
+    Log(log::LogArgs),
     /// Home a robot: the PLC's home routine sets every joint to its home count
     /// (`home_counts` in the config); returns when it has ended.
     Home(home::HomeArgs),
@@ -112,6 +118,9 @@ pub enum Command {
     /// The operator's console: `hash-password` makes a user's password hash for
     /// `[console.users.NAME]`.
     Console(console::ConsoleArgs),
+    /// A robot's pallet patterns, from the config: `show` lists a pallet's slots (and draws
+    /// its layers with --svg).
+    Pallet(pallet::PalletArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),
     /// Check a real unit with the drives' power off: the link, the contract, tiny pulse tables
@@ -214,10 +223,12 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), Failure> {
         Command::Stop(args) => stop::run(&args, out),
         Command::Cycle(args) => cycle::run(&args, out),
         Command::Mode(args) => mode::run(&args, out),
+        Command::Log(args) => log::run(&args, out),
         Command::Home(args) => home::run(&args, out),
         Command::ClearFault(args) => clear_fault::run(&args, out),
         Command::Console(args) => console::run(&args, out),
         Command::CheckConfig(args) => check_config::run(&args, out),
+        Command::Pallet(args) => pallet::run(&args, out),
         Command::Commission(args) => commission::run(&args, out),
         Command::Serve(args) => serve::run(&args),
         Command::Completions(args) => completions::run(&args, out),

@@ -6,13 +6,14 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
+use super::error::Failure;
 use super::judge::scan_rate;
 use super::{CONTRACT_CHECKS, Check, Halt, LinkTiming, Session, Step};
 use crate::contract::{
     MAGIC, READY_DRIVES, READY_ESTOP_CLEAR, READY_HOMED, STATUS_WORDS, State, StatusBlock, VERSION,
 };
 use crate::plc::Plc;
-use crate::plc::exchange::{Contract, ContractError, fault_meaning};
+use crate::plc::exchange::{Contract, fault_meaning};
 
 /// How long the host word is watched after its echo: more than twice the 250 ms at which an
 /// idle `linterpd serve` reads the status block (and writes its own host word back).
@@ -55,8 +56,11 @@ pub(super) async fn step<P: Plc>(
         Ok(block) => block,
         Err(e) => {
             let c = check("magic", format!("DT{base} holds 0x{MAGIC:04X} (\"LI\")"));
-            s.record(c.fail(e, "the link failed while reading the status block"))
-                .map_err(halted(false))?;
+            s.record(c.fail(
+                e.to_string(),
+                "the link failed while reading the status block",
+            ))
+            .map_err(halted(false))?;
             return Err(Halted { recognised: false });
         }
     };
@@ -69,13 +73,9 @@ pub(super) async fn step<P: Plc>(
     Ok(Found { status })
 }
 
-async fn read_raw<P: Plc>(contract: &mut Contract<P>, base: u16) -> Result<StatusBlock, String> {
-    let words = contract
-        .plc()
-        .read_words(base, STATUS_WORDS as u16)
-        .await
-        .map_err(|e| format!("{e:#}"))?;
-    StatusBlock::from_words(&words).ok_or_else(|| format!("{} words read", words.len()))
+async fn read_raw<P: Plc>(contract: &mut Contract<P>, base: u16) -> Result<StatusBlock, Failure> {
+    let words = contract.plc().read_words(base, STATUS_WORDS as u16).await?;
+    StatusBlock::from_words(&words).ok_or(Failure::ShortStatus { read: words.len() })
 }
 
 fn magic_and_version(s: &mut Session<'_>, base: u16, block: &StatusBlock) -> Result<(), Halt> {
@@ -114,11 +114,8 @@ fn magic_and_version(s: &mut Session<'_>, base: u16, block: &StatusBlock) -> Res
 
 async fn status<P: Plc>(
     contract: &mut Contract<P>,
-) -> Result<crate::contract::machine::Status, String> {
-    contract
-        .status()
-        .await
-        .map_err(|e: ContractError| format!("{e:#}"))
+) -> Result<crate::contract::machine::Status, Failure> {
+    Ok(contract.status().await?)
 }
 
 /// Reads the status block every scan for `heartbeat_timeout`: the heartbeat moves, and never
@@ -137,17 +134,13 @@ async fn heartbeat<P: Plc>(
             limit.as_millis()
         ),
     );
-    let began = Instant::now();
-    let mut reads = Vec::new();
-    while began.elapsed() < limit || reads.len() < MIN_READS {
-        match status(contract).await {
-            Ok(st) => reads.push((began.elapsed().as_secs_f64(), st.block.heartbeat)),
-            Err(e) => {
-                return s.record(c.fail(e, "the status block must decode: check the listing"));
-            }
+    let reads = match heartbeats(contract, pace, limit).await {
+        Ok(reads) => reads,
+        Err(e) => {
+            let hint = "the status block must decode: check the listing";
+            return s.record(c.fail(e.to_string(), hint));
         }
-        tokio::time::sleep(pace.poll()).await;
-    }
+    };
     let rate = scan_rate(&reads);
     let saw = format!(
         "{} steps over {} reads in {:.2} s; it stood still for at most {:.1} ms",
@@ -173,11 +166,32 @@ async fn heartbeat<P: Plc>(
     s.record(c.pass(saw))
 }
 
+/// Reads the status block every poll for `limit` (and [`MIN_READS`] times at least): when each
+/// read came back, s, and its heartbeat.
+async fn heartbeats<P: Plc>(
+    contract: &mut Contract<P>,
+    pace: LinkTiming,
+    limit: Duration,
+) -> Result<Vec<(f64, u16)>, Failure> {
+    let began = Instant::now();
+    let mut reads = Vec::new();
+    while began.elapsed() < limit || reads.len() < MIN_READS {
+        let st = status(contract).await?;
+        reads.push((began.elapsed().as_secs_f64(), st.block.heartbeat));
+        tokio::time::sleep(pace.poll()).await;
+    }
+    Ok(reads)
+}
+
 /// A host word that is not 0 and not `current`.
 fn host_word(current: u16, heartbeat: u16) -> u16 {
     let word = 0xC000 | (heartbeat & 0x0FFF);
     if word == current { word ^ 1 } else { word }
 }
+
+/// What a check says when another host writes the host word.
+const ANOTHER_HOST: &str = "another host writes the host word: stop `linterpd serve` (or whatever \
+                            else talks to this PLC) before commissioning";
 
 /// Writes a host word, waits for its echo, then watches that nobody else writes another.
 async fn host_echo<P: Plc>(
@@ -202,17 +216,47 @@ async fn host_echo<P: Plc>(
         return s.record(c.fail(format!("{e:#}"), "the link failed writing the host word"));
     }
     let limit = s.target.link.heartbeat_timeout.max(pace.poll() * 20);
+    let echoed = match echo(contract, pace, (host, first.host), limit).await {
+        Ok(echoed) => echoed,
+        Err((saw, hint)) => return s.record(c.fail(saw, hint)),
+    };
+    let report = match kept(contract, pace, host, echoed).await {
+        Ok(reads) => {
+            let before = match first.host {
+                0 => "0 before (the PLC restarted since a host last wrote it)".to_owned(),
+                h => format!("0x{h:04X} before (a host wrote it earlier)"),
+            };
+            c.pass(format!(
+                "DT{} read {before}; wrote 0x{host:04X}, echoed after {:.1} ms and kept over \
+                 {reads} reads in {} ms",
+                layout.status_base + 20,
+                echoed.as_secs_f64() * 1e3,
+                HOST_WATCH.as_millis()
+            ))
+        }
+        Err((saw, hint)) => c.fail(saw, hint),
+    };
+    s.record(report)
+}
+
+/// Reads the status block until it echoes `host` (the word it held before being `was`): how
+/// long that took, or what a failed check saw and its hint.
+async fn echo<P: Plc>(
+    contract: &mut Contract<P>,
+    pace: LinkTiming,
+    (host, was): (u16, u16),
+    limit: Duration,
+) -> Result<Duration, (String, &'static str)> {
+    let layout = contract.settings().layout;
     let began = Instant::now();
-    let another = "another host writes the host word: stop `linterpd serve` (or whatever else \
-                   talks to this PLC) before commissioning";
-    let echoed = loop {
+    loop {
         tokio::time::sleep(pace.poll()).await;
         let st = match status(contract).await {
             Ok(st) => st.block,
-            Err(e) => return s.record(c.fail(e, "the link failed reading the status block")),
+            Err(e) => return Err((e.to_string(), "the link failed reading the status block")),
         };
         if st.host == host {
-            break began.elapsed();
+            return Ok(began.elapsed());
         }
         let saw = format!(
             "wrote 0x{host:04X}; DT{} reads 0x{:04X} after {} ms",
@@ -220,22 +264,32 @@ async fn host_echo<P: Plc>(
             st.host,
             began.elapsed().as_millis()
         );
-        if st.host != first.host {
-            return s.record(c.fail(saw, another));
+        if st.host != was {
+            return Err((saw, ANOTHER_HOST));
         }
         if began.elapsed() > limit {
             let at = layout.command_base + crate::contract::COMMAND_HOST_OFFSET;
             let ours = contract.plc().read_words(at, 1).await;
             let hint = match ours {
-                Ok(w) if w[0] != host => another,
+                Ok(w) if w[0] != host => ANOTHER_HOST,
                 _ => {
                     "the program must copy DT1048 into DT1020 every scan (listing, \"Status \
                       block\")"
                 }
             };
-            return s.record(c.fail(saw, hint));
+            return Err((saw, hint));
         }
-    };
+    }
+}
+
+/// Reads the status block for [`HOST_WATCH`] after the echo: how many reads kept `host`, or
+/// what a failed check saw and its hint.
+async fn kept<P: Plc>(
+    contract: &mut Contract<P>,
+    pace: LinkTiming,
+    host: u16,
+    echoed: Duration,
+) -> Result<usize, (String, &'static str)> {
     let watching = Instant::now();
     let mut reads = 0;
     while watching.elapsed() < HOST_WATCH {
@@ -243,30 +297,18 @@ async fn host_echo<P: Plc>(
         reads += 1;
         match status(contract).await {
             Ok(st) if st.block.host != host => {
-                return s.record(c.fail(
-                    format!(
-                        "wrote 0x{host:04X}, echoed after {:.1} ms, then it read 0x{:04X}",
-                        echoed.as_secs_f64() * 1e3,
-                        st.block.host
-                    ),
-                    another,
-                ));
+                let saw = format!(
+                    "wrote 0x{host:04X}, echoed after {:.1} ms, then it read 0x{:04X}",
+                    echoed.as_secs_f64() * 1e3,
+                    st.block.host
+                );
+                return Err((saw, ANOTHER_HOST));
             }
             Ok(_) => {}
-            Err(e) => return s.record(c.fail(e, "the link failed reading the status block")),
+            Err(e) => return Err((e.to_string(), "the link failed reading the status block")),
         }
     }
-    let before = match first.host {
-        0 => "0 before (the PLC restarted since a host last wrote it)".to_owned(),
-        h => format!("0x{h:04X} before (a host wrote it earlier)"),
-    };
-    s.record(c.pass(format!(
-        "DT{} read {before}; wrote 0x{host:04X}, echoed after {:.1} ms and kept over {reads} \
-         reads in {} ms",
-        layout.status_base + 20,
-        echoed.as_secs_f64() * 1e3,
-        HOST_WATCH.as_millis()
-    )))
+    Ok(reads)
 }
 
 fn bit(ready: u16, mask: u16) -> &'static str {
@@ -287,7 +329,7 @@ async fn ready_bits<P: Plc>(
     let st = match status(contract).await {
         Ok(st) => st,
         Err(e) => {
-            s.record(c.fail(e, "the link failed reading the status block"))?;
+            s.record(c.fail(e.to_string(), "the link failed reading the status block"))?;
             return Err(Halt);
         }
     };
@@ -301,7 +343,26 @@ async fn ready_bits<P: Plc>(
         st.state.name(),
         st.block.fault
     );
-    let problem = if ready & READY_ESTOP_CLEAR == 0 {
+    if let Some(hint) = not_ready(&st, s.target.link.layout.command_base) {
+        s.record(c.fail(saw, hint))?;
+        return Err(Halt);
+    }
+    if ready & READY_DRIVES != 0 {
+        s.record(c.pass_noting(
+            saw,
+            "drives ready is ON: with the drives' power off it should read OFF; if they are off, \
+             check X12's wiring",
+        ))?;
+    } else {
+        s.record(c.pass(saw))?;
+    }
+    Ok(st.block)
+}
+
+/// Why the pulses step cannot start from `st` (what to do about it), or `None`.
+fn not_ready(st: &crate::contract::machine::Status, command_base: u16) -> Option<String> {
+    let ready = st.block.ready;
+    if ready & READY_ESTOP_CLEAR == 0 {
         Some("close the e-stop circuit (X10): a start is refused while it is open".to_owned())
     } else if ready & READY_HOMED == 0 {
         Some(
@@ -318,28 +379,13 @@ async fn ready_bits<P: Plc>(
     } else if st.state == State::Fault {
         Some(format!(
             "the program has fault {} ({}) latched: find its cause, then clear it (write 3 to \
-             DT{})",
+             DT{command_base})",
             st.block.fault,
             fault_meaning(st.block.fault),
-            s.target.link.layout.command_base
         ))
     } else {
         None
-    };
-    if let Some(hint) = problem {
-        s.record(c.fail(saw, hint))?;
-        return Err(Halt);
     }
-    if ready & READY_DRIVES != 0 {
-        s.record(c.pass_noting(
-            saw,
-            "drives ready is ON: with the drives' power off it should read OFF; if they are off, \
-             check X12's wiring",
-        ))?;
-    } else {
-        s.record(c.pass(saw))?;
-    }
-    Ok(st.block)
 }
 
 #[cfg(test)]

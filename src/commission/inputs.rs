@@ -14,6 +14,7 @@
 
 use tokio::time::Instant;
 
+use super::error::Failure;
 use super::report::InputsFound;
 use super::{Check, Halt, INPUT_CHECKS, LinkTiming, Session, Step};
 use crate::contract::{INPUT_WORDS, InputArea, InputWord, StatusBlock, bit_name};
@@ -94,6 +95,61 @@ pub(super) struct Switched {
     pub last: StatusBlock,
 }
 
+impl Switched {
+    /// Nothing read yet after a write (the last read `before`).
+    fn before(before: &StatusBlock) -> Self {
+        Self {
+            reads: 0,
+            shown_after_s: None,
+            late: false,
+            elsewhere: None,
+            last: *before,
+        }
+    }
+
+    /// Whether and when `inputs[w]` showed the switch away from `was`, in words.
+    fn seen(&self, w: usize, was: bool) -> String {
+        match self.shown_after_s {
+            Some(t) => format!(
+                "showed in inputs[{w}] after {} read(s), the read sent {:.1} ms after the write's acknowledgement",
+                self.reads,
+                t * 1e3
+            ),
+            None => format!(
+                "inputs[{w}] read 0x{:04X} over {} reads, never {}",
+                self.last.inputs[w],
+                self.reads,
+                on_off(!was)
+            ),
+        }
+    }
+
+    /// Takes one read after the write: whether `inputs[w]` shows bit `bit` as `on` (sent
+    /// `sent_s` after the acknowledgement; later than `late_s` is late).
+    fn read(
+        &mut self,
+        block: StatusBlock,
+        (w, bit, on): (usize, u8, bool),
+        sent_s: f64,
+        late_s: f64,
+        before: &StatusBlock,
+    ) -> bool {
+        self.reads += 1;
+        self.last = block;
+        if is_on(block.inputs[w], bit) == on {
+            self.shown_after_s = Some(sent_s);
+            return true;
+        }
+        if sent_s > late_s {
+            self.late = true;
+        }
+        self.elsewhere = self.elsewhere.or_else(|| {
+            (0..INPUT_WORDS).find(|&j| j != w && is_on(block.inputs[j] ^ before.inputs[j], bit))
+        });
+        false
+    }
+}
+
 /// Writes relay `bit` of input word `w` to `on` and reads the status block until `inputs[w]`
 /// shows it ([`COPY_READS`] reads at most). `Err` when the write or a read failed.
 pub(super) async fn switch<P: Plc>(
@@ -102,42 +158,35 @@ pub(super) async fn switch<P: Plc>(
     (w, bit): (usize, u8),
     on: bool,
     before: &StatusBlock,
-) -> Result<Switched, String> {
+) -> Result<Switched, Failure> {
     let word = contract.settings().layout.inputs[w];
     let name = bit_name(word, bit);
     contract
         .plc()
         .write_relay(relay(word, bit), on)
         .await
-        .map_err(|e| format!("writing {name} {}: {e:#}", on_off(on)))?;
+        .map_err(|source| Failure::RelayWrite {
+            name: name.clone(),
+            on,
+            source,
+        })?;
     let acked = Instant::now();
-    let mut out = Switched {
-        reads: 0,
-        shown_after_s: None,
-        late: false,
-        elsewhere: None,
-        last: *before,
-    };
+    let mut out = Switched::before(before);
+    let late_s = COPY_SCANS * pace.scan_s.max(0.001);
     for _ in 0..COPY_READS {
         tokio::time::sleep(pace.poll()).await;
         let sent_s = acked.elapsed().as_secs_f64();
         let block = contract
             .status()
             .await
-            .map_err(|e| format!("reading the status block after {name}: {e:#}"))?
+            .map_err(|source| Failure::ReadAfterRelay {
+                name: name.clone(),
+                source,
+            })?
             .block;
-        out.reads += 1;
-        out.last = block;
-        if is_on(block.inputs[w], bit) == on {
-            out.shown_after_s = Some(sent_s);
-            return Ok(out);
+        if out.read(block, (w, bit, on), sent_s, late_s, before) {
+            break;
         }
-        if sent_s > COPY_SCANS * pace.scan_s.max(0.001) {
-            out.late = true;
-        }
-        out.elsewhere = out.elsewhere.or_else(|| {
-            (0..INPUT_WORDS).find(|&j| j != w && is_on(block.inputs[j] ^ before.inputs[j], bit))
-        });
     }
     Ok(out)
 }
@@ -148,28 +197,10 @@ pub(super) async fn step<P: Plc>(
     contract: &mut Contract<P>,
     pace: LinkTiming,
 ) -> Result<(), Halt> {
-    let layout = s.target.link.layout;
-    let words = layout.inputs;
-    let at = layout.status_base + crate::contract::STATUS_INPUTS_OFFSET;
+    let words = s.target.link.layout.inputs;
     let named: Vec<String> = words.iter().map(ToString::to_string).collect();
     let w = relay_word(&words);
-    let k = check(
-        "copied every scan",
-        match w {
-            Some(w) => format!(
-                "inputs[0..3] (DT{at}..DT{}) copy {} every scan: relay {} switched over the link \
-                 shows in inputs[{w}] within {COPY_SCANS} scans, and back",
-                at + 3,
-                named.join(", "),
-                bit_name(words[w], COPY_BIT)
-            ),
-            None => format!(
-                "inputs[0..3] (DT{at}..DT{}) copy {} every scan",
-                at + 3,
-                named.join(", ")
-            ),
-        },
-    );
+    let k = copy_check(s.target.link.layout, &named, w);
     let before = match contract.status().await {
         Ok(st) => st.block,
         Err(e) => return s.record(k.fail(format!("{e:#}"), "the link failed")),
@@ -195,6 +226,29 @@ pub(super) async fn step<P: Plc>(
     s.record(report)
 }
 
+/// The copy check, as its report names what it looks at (`w`: the R word switched, if any).
+fn copy_check(layout: crate::contract::Layout, named: &[String], w: Option<usize>) -> Check {
+    let words = layout.inputs;
+    let at = layout.status_base + crate::contract::STATUS_INPUTS_OFFSET;
+    check(
+        "copied every scan",
+        match w {
+            Some(w) => format!(
+                "inputs[0..3] (DT{at}..DT{}) copy {} every scan: relay {} switched over the link \
+                 shows in inputs[{w}] within {COPY_SCANS} scans, and back",
+                at + 3,
+                named.join(", "),
+                bit_name(words[w], COPY_BIT)
+            ),
+            None => format!(
+                "inputs[0..3] (DT{at}..DT{}) copy {} every scan",
+                at + 3,
+                named.join(", ")
+            ),
+        },
+    )
+}
+
 /// Switches the copy bit of R word `w`, then back; the check's report.
 async fn copy_and_back<P: Plc>(
     contract: &mut Contract<P>,
@@ -203,9 +257,7 @@ async fn copy_and_back<P: Plc>(
     (w, before): (usize, &StatusBlock),
     read: &str,
 ) -> super::CheckReport {
-    let words = contract.settings().layout.inputs;
-    let at = contract.settings().layout.status_base + crate::contract::STATUS_INPUTS_OFFSET;
-    let name = bit_name(words[w], COPY_BIT);
+    let name = bit_name(contract.settings().layout.inputs[w], COPY_BIT);
     let was = is_on(before.inputs[w], COPY_BIT);
     let there = switch(contract, pace, (w, COPY_BIT), !was, before).await;
     let back = switch(contract, pace, (w, COPY_BIT), was, before).await;
@@ -219,65 +271,73 @@ async fn copy_and_back<P: Plc>(
             );
         }
     };
-    let seen = |x: &Switched| match x.shown_after_s {
-        Some(t) => format!(
-            "showed in inputs[{w}] after {} read(s), the read sent {:.1} ms after the write's acknowledgement",
-            x.reads,
-            t * 1e3
-        ),
-        None => format!(
-            "inputs[{w}] read 0x{:04X} over {} reads, never {}",
-            x.last.inputs[w],
-            x.reads,
-            on_off(!was)
-        ),
-    };
     let saw = format!(
         "read {read}; {name} switched {}: {}; switched {} again: {}",
         on_off(!was),
-        seen(&there),
+        there.seen(w, was),
         on_off(was),
-        seen(&back)
+        back.seen(w, was)
     );
-    let word = words[w];
-    if let (None, Some(j)) = (there.shown_after_s, there.elsewhere) {
-        return k.config(
-            saw,
-            format!(
+    let copy = Copy {
+        layout: contract.settings().layout,
+        w,
+        name,
+        was,
+    };
+    match copy.problem(&there, &back, pace.scan_s) {
+        Some((hint, true)) => k.config(saw, hint),
+        Some((hint, false)) => k.fail(saw, hint),
+        None => k.pass(saw),
+    }
+}
+
+/// The relay the copy check switched: its word among the inputs, its name and what it was.
+struct Copy {
+    layout: crate::contract::Layout,
+    w: usize,
+    name: String,
+    was: bool,
+}
+
+impl Copy {
+    /// What went wrong, and whether only the config must change; `None` when the copy held.
+    fn problem(&self, there: &Switched, back: &Switched, scan_s: f64) -> Option<(String, bool)> {
+        let Self { w, name, was, .. } = self;
+        let words = self.layout.inputs;
+        let at = self.layout.status_base + crate::contract::STATUS_INPUTS_OFFSET;
+        let word = words[*w];
+        if let (None, Some(j)) = (there.shown_after_s, there.elsewhere) {
+            let hint = format!(
                 "{name} showed in inputs[{j}], which the config names {}: the program copies \
                  {word} into inputs[{j}] (DT{}); set inputs in [robots.NAME.plc.contract] to the \
                  words in the order the listing's copy block copies them",
                 words[j],
                 at + j as u16
-            ),
-        );
-    }
-    if there.shown_after_s.is_none() || back.shown_after_s.is_none() {
-        let left = if back.shown_after_s.is_none() {
-            format!(" ({name} may be left {}: switch it back)", on_off(!was))
-        } else {
-            String::new()
-        };
-        return k.fail(
-            saw,
-            format!(
+            );
+            return Some((hint, true));
+        }
+        if there.shown_after_s.is_none() || back.shown_after_s.is_none() {
+            let left = if back.shown_after_s.is_none() {
+                format!(" ({name} may be left {}: switch it back)", on_off(!was))
+            } else {
+                String::new()
+            };
+            let hint = format!(
                 "the contract says inputs[{w}] (DT{}) is a copy of {word} made every scan: the \
                  program does not copy it (the listing's copy block, F0 MV {word} DT{}), the \
                  config names another word, or the machine's own logic drives {name}{left}",
-                at + w as u16,
-                at + w as u16
-            ),
-        );
-    }
-    if there.late || back.late {
-        return k.fail(
-            saw,
-            format!(
+                at + *w as u16,
+                at + *w as u16
+            );
+            return Some((hint, false));
+        }
+        (there.late || back.late).then(|| {
+            let hint = format!(
                 "the copy came later than {COPY_SCANS} scans (mean scan {:.1} ms) after the write: \
                  the contract says inputs are copied first thing every scan",
-                pace.scan_s * 1e3
-            ),
-        );
+                scan_s * 1e3
+            );
+            (hint, false)
+        })
     }
-    k.pass(saw)
 }

@@ -31,6 +31,7 @@
 //! lines.rs     PURE  the config lines to paste, from the findings
 //! link/        the link step over the raw stream (MEWTOCOL headers, request sizes, round trip,
 //!              scan time, RUN/PROG); hands back the client it settled on
+//! error.rs     Failure: why an exchange failed (what a failed check quotes)
 //! contract.rs  the contract step over any Plc
 //! inputs.rs    the inputs step over any Plc: the status block's inputs, a relay of an R input
 //!              word switched and seen in its copy; which input bits the permit checks use
@@ -39,6 +40,7 @@
 //! ```
 
 mod contract;
+mod error;
 mod inputs;
 pub mod judge;
 mod lines;

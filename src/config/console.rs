@@ -120,25 +120,12 @@ impl Default for RobotConsoleSettings {
 /// The settings `[console]` describes.
 pub(super) fn settings(at: &At, raw: &Spanned<RawConsole>) -> Result<ConsoleSettings, ConfigError> {
     let r = raw.get_ref();
-    let listen: SocketAddr = match &r.listen {
-        None => DEFAULT_CONSOLE_LISTEN.parse().expect("a valid address"),
-        Some(text) => text.get_ref().parse().map_err(|_| {
-            at.child("listen").invalid(
-                text,
-                "must be an IP address and port, e.g. \"127.0.0.1:8470\"",
-            )
-        })?,
-    };
-    let mut allow = Vec::new();
-    for (i, text) in r.allow.as_deref().unwrap_or_default().iter().enumerate() {
-        let net: ClientNet =
-            text.get_ref()
-                .parse()
-                .map_err(|e: crate::gateway::ClientNetError| {
-                    at.child("allow").index(i).invalid(text, e.reason)
-                })?;
-        allow.push(net);
-    }
+    let (listen, allow) = super::gateway::listen_allow(
+        at,
+        (r.listen.as_ref(), r.allow.as_deref()),
+        DEFAULT_CONSOLE_LISTEN.parse().expect("a valid address"),
+        "127.0.0.1:8470",
+    )?;
     if let Some(text) = &r.listen
         && allow.is_empty()
         && !listen.ip().to_canonical().is_loopback()
@@ -158,16 +145,31 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawConsole>) -> Result<ConsoleSett
     }
     let session = match &r.session {
         None => DEFAULT_SESSION,
-        Some(text) => {
-            let at = at.child("session");
-            let s = parse_duration_s(text.get_ref()).map_err(|e| at.invalid(text, e.problem))?;
-            if !SESSION_RANGE_S.contains(&s) {
-                return Err(at.invalid(text, "must be at least 1 min and at most 7 days"));
-            }
-            Duration::from_secs_f64(s)
-        }
+        Some(text) => session(&at.child("session"), text)?,
     };
+    let users = users(at, raw)?;
+    Ok(ConsoleSettings {
+        listen,
+        allow,
+        origins,
+        session,
+        users,
+    })
+}
+
+/// How long a login lasts: `text`, from 1 min to 7 days.
+fn session(at: &At, text: &Spanned<String>) -> Result<Duration, ConfigError> {
+    let s = parse_duration_s(text.get_ref()).map_err(|e| at.invalid(text, e.problem))?;
+    if !SESSION_RANGE_S.contains(&s) {
+        return Err(at.invalid(text, "must be at least 1 min and at most 7 days"));
+    }
+    Ok(Duration::from_secs_f64(s))
+}
+
+/// `[console.users.NAME]`: at least one.
+fn users(at: &At, raw: &Spanned<RawConsole>) -> Result<BTreeMap<String, ConsoleUser>, ConfigError> {
     let mut users = BTreeMap::new();
+    let r = raw.get_ref();
     for (name, user) in r.users.as_ref().map(|u| u.iter()).into_iter().flatten() {
         let at = at.child("users").child(name.get_ref());
         if !is_position_name(name.get_ref()) {
@@ -182,13 +184,7 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawConsole>) -> Result<ConsoleSett
              password_hash (`linterpd console hash-password`) or a token_file",
         ));
     }
-    Ok(ConsoleSettings {
-        listen,
-        allow,
-        origins,
-        session,
-        users,
-    })
+    Ok(users)
 }
 
 fn user(at: &At, raw: &Spanned<RawConsoleUser>) -> Result<ConsoleUser, ConfigError> {

@@ -9,6 +9,12 @@
 //! start_within = "10s"               # a queued move that cannot start this long after its turn
 //!                                    # came ends failed (never runs later)
 //! state_dir = "/var/lib/linterpd"    # move ids (and taught positions) kept across restarts
+//!
+//! [daemon.journal]                   # the cell's journal in state_dir/journal (optional)
+//! file_bytes = 4194304               # a file's size cap, bytes (default 4 MiB; 64 KiB..1 GiB)
+//! files = 8                          # files kept, the oldest removed (default 8; 2..1000)
+//! queue = 4096                       # entries waiting for the disk before more are dropped
+//!                                    # and counted (default 4096; 16..1000000)
 //! ```
 
 use std::net::SocketAddr;
@@ -19,7 +25,7 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::raw::RawDaemon;
+use super::raw::{RawDaemon, RawJournal};
 use super::units::parse_duration_s;
 
 /// The API socket when the config names none (deploy/linterpd.service's `RuntimeDirectory`).
@@ -49,6 +55,30 @@ pub struct DaemonSettings {
     pub start_within: Duration,
     /// Where state kept across restarts lives.
     pub state_dir: PathBuf,
+    /// The cell's journal (in `state_dir/journal`).
+    pub journal: JournalSettings,
+}
+
+/// `[daemon.journal]`: how big the journal may grow, and how many entries may wait for the
+/// disk. At most `files` x `file_bytes` bytes are kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct JournalSettings {
+    /// A file's size cap, bytes: the next entry that would pass it starts a new file.
+    pub file_bytes: u64,
+    /// Files kept: the oldest is removed when a new one would make more.
+    pub files: u32,
+    /// Entries that may wait for the writer; more are dropped and counted.
+    pub queue: usize,
+}
+
+impl Default for JournalSettings {
+    fn default() -> Self {
+        Self {
+            file_bytes: 4 * 1024 * 1024,
+            files: 8,
+            queue: 4096,
+        }
+    }
 }
 
 impl Default for DaemonSettings {
@@ -60,6 +90,7 @@ impl Default for DaemonSettings {
             token_file: None,
             start_within: DEFAULT_START_WITHIN,
             state_dir: PathBuf::from(DEFAULT_STATE_DIR),
+            journal: JournalSettings::default(),
         }
     }
 }
@@ -94,6 +125,9 @@ pub(super) fn settings(
     if let Some(v) = &r.state_dir {
         settings.state_dir = path(&at.child("state_dir"), v)?;
     }
+    if let Some(v) = &r.journal {
+        settings.journal = journal(&at.child("journal"), v.get_ref())?;
+    }
     if let Some(v) = &r.listen {
         let address = listen(&at.child("listen"), v)?;
         if !address.ip().is_loopback() && settings.token_file.is_none() {
@@ -103,6 +137,30 @@ pub(super) fn settings(
             ));
         }
         settings.listen = Some(address);
+    }
+    Ok(settings)
+}
+
+/// `[daemon.journal]`, each key within its range.
+fn journal(at: &At, raw: &RawJournal) -> Result<JournalSettings, ConfigError> {
+    let mut settings = JournalSettings::default();
+    let within = |key: &str, v: &Spanned<i64>, min: i64, max: i64| {
+        if (min..=max).contains(v.get_ref()) {
+            Ok(*v.get_ref() as u64)
+        } else {
+            Err(at
+                .child(key)
+                .invalid(v, format!("must be from {min} to {max}")))
+        }
+    };
+    if let Some(v) = &raw.file_bytes {
+        settings.file_bytes = within("file_bytes", v, 65_536, 1 << 30)?;
+    }
+    if let Some(v) = &raw.files {
+        settings.files = within("files", v, 2, 1000)? as u32;
+    }
+    if let Some(v) = &raw.queue {
+        settings.queue = within("queue", v, 16, 1_000_000)? as usize;
     }
     Ok(settings)
 }
@@ -175,6 +233,37 @@ mod tests {
         assert_eq!(d.socket_mode, 0o600);
         assert_eq!(d.listen, Some("0.0.0.0:8420".parse().unwrap()));
         assert_eq!(d.token_file, Some(PathBuf::from("/etc/linterpd/token")));
+    }
+
+    #[test]
+    fn the_journal_s_caps_are_read_and_out_of_range_ones_named() {
+        let d = Config::from_toml(&format!(
+            "{MINIMAL}[daemon.journal]\nfile_bytes = 65536\nfiles = 3\nqueue = 16\n"
+        ))
+        .unwrap()
+        .daemon;
+        assert_eq!(
+            d.journal,
+            JournalSettings {
+                file_bytes: 65_536,
+                files: 3,
+                queue: 16
+            }
+        );
+        assert_eq!(
+            Config::from_toml(MINIMAL).unwrap().daemon.journal,
+            JournalSettings::default()
+        );
+        let m = message(&format!("{MINIMAL}[daemon.journal]\nfiles = 1\n"));
+        assert!(
+            m.ends_with("daemon.journal.files = 1: must be from 2 to 1000"),
+            "{m}"
+        );
+        let m = message(&format!("{MINIMAL}[daemon.journal]\nsize = 1\n"));
+        assert!(
+            m.contains("daemon.journal.size: unknown field `size`"),
+            "{m}"
+        );
     }
 
     #[test]

@@ -43,6 +43,17 @@ pub enum ConfigError {
         /// Why it is needed.
         reason: String,
     },
+    /// A pallet or frame that cannot be laid out or reached (a slot out of reach, points that
+    /// make no frame).
+    #[error("config line {line}: {key}: {error}")]
+    Pallet {
+        /// 1-based line of the pallet's or frame's table.
+        line: usize,
+        /// Its key path (`robots.press-loader.pallets.out`).
+        key: String,
+        /// What is wrong (shown in this error's message, not as its source).
+        error: Box<crate::pallet::PalletError>,
+    },
     /// The file defines no robot.
     #[error("config defines no robot: add a [robots.NAME] table")]
     NoRobots,

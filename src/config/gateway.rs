@@ -68,27 +68,46 @@ fn ranges(at: &At, raw: Option<&[Spanned<String>]>) -> Result<Vec<Range>, Config
         .collect()
 }
 
-fn modbus_face(at: &At, raw: &Spanned<RawModbusFace>) -> Result<ModbusFace, ConfigError> {
-    let r = raw.get_ref();
-    let listen = match &r.listen {
-        None => DEFAULT_MODBUS_LISTEN,
+/// A server's `listen` (`default` when not given; `example` in the message when it does not
+/// parse) and `allow`, the client networks it serves.
+pub(super) fn listen_allow(
+    at: &At,
+    (listen, allow): (Option<&Spanned<String>>, Option<&[Spanned<String>]>),
+    default: SocketAddr,
+    example: &str,
+) -> Result<(SocketAddr, Vec<ClientNet>), ConfigError> {
+    let listen = match listen {
+        None => default,
         Some(text) => text.get_ref().parse().map_err(|_| {
             at.child("listen").invalid(
                 text,
-                "must be an IP address and port, e.g. \"127.0.0.1:5020\"",
+                format!("must be an IP address and port, e.g. \"{example}\""),
             )
         })?,
     };
-    let mut allow = Vec::new();
-    for (i, text) in r.allow.as_deref().unwrap_or_default().iter().enumerate() {
-        let net: ClientNet =
+    let allow = allow
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+        .map(|(i, text)| {
             text.get_ref()
                 .parse()
                 .map_err(|e: crate::gateway::ClientNetError| {
                     at.child("allow").index(i).invalid(text, e.reason)
-                })?;
-        allow.push(net);
-    }
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    Ok((listen, allow))
+}
+
+fn modbus_face(at: &At, raw: &Spanned<RawModbusFace>) -> Result<ModbusFace, ConfigError> {
+    let r = raw.get_ref();
+    let (listen, allow) = listen_allow(
+        at,
+        (r.listen.as_ref(), r.allow.as_deref()),
+        DEFAULT_MODBUS_LISTEN,
+        "127.0.0.1:5020",
+    )?;
     let face = ModbusFace { listen, allow };
     if let Some(text) = &r.listen
         && face.allow.is_empty()

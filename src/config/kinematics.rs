@@ -206,7 +206,7 @@ mod tests {
         .replace("name = \"d2\"\nchannel = 1\nstep_mm = 0.025\nmin_mm = -50.0\nmax_mm = 400.0",
                  "name = \"theta2\"\nchannel = 1\nstep_deg = 0.01\nmin_deg = -150.0\nmax_deg = 150.0");
         let robot = &Config::from_toml(&text).unwrap().robots[0];
-        let Model::Scara(s) = robot.kinematics else {
+        let Model::Scara(s) = robot.kinematics.model else {
             panic!("scara")
         };
         assert_eq!(

@@ -45,6 +45,7 @@ mod joints;
 mod kinematics;
 mod locate;
 mod motion;
+mod pallets;
 mod path_file;
 mod plc;
 mod raw;
@@ -60,7 +61,7 @@ pub use console::{
     ConsoleSettings, ConsoleUser, DEFAULT_CONSOLE_LISTEN, DEFAULT_MANUAL_SPEED_MM_S,
     MAX_MANUAL_SPEED_MM_S, RobotConsoleSettings, Role, Secret,
 };
-pub use daemon::{DEFAULT_SOCKET, DaemonSettings};
+pub use daemon::{DEFAULT_SOCKET, DaemonSettings, JournalSettings};
 pub use error::ConfigError;
 pub use path_file::{ArcDoc, ElementDoc, PATH_FORMAT, PathDoc, PathFileError, Waypoint};
 pub use units::{DurationError, DurationProblem, number_in, parse_duration_s};
@@ -85,6 +86,9 @@ pub struct Config {
     pub console: Option<ConsoleSettings>,
     /// Each robot's `[robots.NAME.console]`, by robot name.
     pub robot_consoles: BTreeMap<String, RobotConsoleSettings>,
+    /// Each robot's frames and pallets (`[robots.NAME.frames.NAME]`,
+    /// `[robots.NAME.pallets.NAME]`), by robot name: checked; laid out by [`Config::patterns`].
+    pub pallets: BTreeMap<String, crate::pallet::RobotPallets>,
 }
 
 impl Config {
@@ -170,6 +174,24 @@ impl Config {
         self.gateways.get(name)
     }
 
+    /// `robot`'s pallet patterns by pallet name, laid out with the taught positions `taught`
+    /// (a frame's or corners' `"@name"` points) and every slot checked against the robot's reach
+    /// and joint limits; empty for a robot without pallets. A pallet that names no taught
+    /// position was already laid out and checked when the config was.
+    ///
+    /// # Errors
+    /// A pallet that cannot be laid out or reached, naming the pallet and the slot.
+    pub fn patterns(
+        &self,
+        robot: &Robot,
+        taught: &BTreeMap<String, crate::robot::Position>,
+    ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        match self.pallets.get(&robot.name) {
+            Some(set) => set.patterns(robot, taught),
+            None => Ok(BTreeMap::new()),
+        }
+    }
+
     fn names(&self) -> String {
         let names: Vec<&str> = self.robots.iter().map(|r| r.name.as_str()).collect();
         names.join(", ")
@@ -195,7 +217,7 @@ mod tests {
     fn shipped_file_describes_the_seed_press_loader() {
         let config = Config::from_toml(SHIPPED).unwrap();
         let robot = config.robot(Some("press-loader")).unwrap();
-        let Model::Cylindrical(k) = &robot.kinematics else {
+        let Model::Cylindrical(k) = &robot.kinematics.model else {
             panic!("press-loader is cylindrical")
         };
         assert_eq!((k.l0_mm, k.min_axis_distance_mm), (500.0, 50.0));

@@ -63,6 +63,16 @@ pub(super) struct RawDaemon {
     pub token_file: Option<Spanned<String>>,
     pub start_within: Option<Spanned<String>>,
     pub state_dir: Option<Spanned<String>>,
+    pub journal: Option<Spanned<RawJournal>>,
+}
+
+/// `[daemon.journal]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawJournal {
+    pub file_bytes: Option<Spanned<i64>>,
+    pub files: Option<Spanned<i64>>,
+    pub queue: Option<Spanned<i64>>,
 }
 
 /// `[robots.NAME]`.
@@ -77,6 +87,19 @@ pub(super) struct RawRobot {
     pub gateway: Option<Spanned<RawGateway>>,
     pub cell: Option<Spanned<RawCell>>,
     pub console: Option<Spanned<RawRobotConsole>>,
+    /// `[robots.NAME.frames.NAME]`: user frames; checked by `pallets`.
+    pub frames: Option<BTreeMap<String, Spanned<crate::pallet::doc::FrameDoc>>>,
+    /// `[robots.NAME.pallets.NAME]`: pallet patterns; checked by `pallets`.
+    pub pallets: Option<BTreeMap<String, Spanned<crate::pallet::doc::PalletDoc>>>,
+    /// `[robots.NAME.tool]`: the tool centre from the flange; checked by `pallets`.
+    pub tool: Option<Spanned<RawTool>>,
+}
+
+/// `[robots.NAME.tool]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTool {
+    pub offset: Spanned<[Spanned<f64>; 3]>,
 }
 
 /// `[robots.NAME.cell]`: the cell's signals and cycle programs; checked by `cell`.

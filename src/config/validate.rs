@@ -8,7 +8,9 @@ use super::check::At;
 use super::raw::{RawConfig, RawRobot};
 use std::collections::BTreeMap;
 
-use super::{Config, ConfigError, cell, console, daemon, gateway, joints, kinematics, motion, plc};
+use super::{
+    Config, ConfigError, cell, console, daemon, gateway, joints, kinematics, motion, pallets, plc,
+};
 use crate::plc::LinkSettings;
 use crate::robot::Robot;
 
@@ -28,8 +30,12 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     let mut gateways = BTreeMap::new();
     let mut cells = BTreeMap::new();
     let mut robot_consoles = BTreeMap::new();
+    let mut robot_pallets = BTreeMap::new();
     for (name, raw) in &entries {
         let robot = self::robot(text, name, raw)?;
+        if let Some(set) = pallets::pallets(text, &robot, raw.get_ref())? {
+            robot_pallets.insert(robot.name.clone(), set);
+        }
         if let Some(table) = &raw.get_ref().console {
             let at = At::new(text, "robots").child(&robot.name).child("console");
             robot_consoles.insert(robot.name.clone(), console::robot(&at, table)?);
@@ -81,6 +87,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         daemon,
         console,
         robot_consoles,
+        pallets: robot_pallets,
     })
 }
 
@@ -122,9 +129,13 @@ fn robot(
     let max_speed_mm_s = motion::max_speed(&at.child("motion"), r.motion.get_ref(), &motion)?;
     let joints = joints::joints(&at.child("joints"), &r.joints, &kinematics)?;
     joints::jerk_needs_s_curve(&at.child("joints"), &r.joints, &joints, motion.ramp)?;
+    let tool_mm = pallets::tool(&at.child("tool"), r.tool.as_ref())?.into();
     Ok(Robot {
         name: name.get_ref().clone(),
-        kinematics,
+        kinematics: crate::kinematics::Arm {
+            model: kinematics,
+            tool_mm,
+        },
         joints,
         motion,
         area_words,

@@ -20,6 +20,8 @@
 //! modbus_face/ the gateway's Modbus TCP server face, one per robot that configures it
 //! worker/     the link owner: contract::machine drives it
 //! service.rs  `linterpd serve`; api/ the HTTP API; notify.rs systemd
+//! journal.rs  the follower: each robot's published changes journaled (faults, cycles, holds,
+//!             modes, the face's commands)
 //! stream.rs   the live stream: one publisher per robot of its snapshot's changes, read by the
 //!             API's NDJSON feed and the console
 //! console/    the operator's console's server: the seat and jog lease's control task per robot,
@@ -34,6 +36,7 @@ pub mod gate;
 mod gateway;
 mod handle;
 mod ids;
+pub mod journal;
 mod live;
 pub mod metrics;
 pub mod modbus_face;
@@ -42,6 +45,7 @@ pub mod pallets;
 pub mod positions;
 mod report;
 mod request;
+mod robots;
 pub mod service;
 mod setup;
 mod shared;
@@ -59,14 +63,16 @@ pub use crate::wire::{
     FaceRefusal, FaceState, GatewayStats, LinkState, MoveAccepted, MoveId, MoveReport,
     PathAccepted, PieceKind, PieceReport, Predicted, RobotPhase, RobotState, SectionReport, Stage,
 };
-pub use cell::{MIRROR_EVERY, ModeError, Owner, mirror_face};
-pub use cycle::CycleError;
+pub use cell::{MIRROR_EVERY, mirror_face};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{Daemon, MAX_QUEUED_STARTS, RobotHandle, Saved, SubmitError};
+pub use handle::{RobotHandle, Saved};
 pub use ids::{MoveIds, write_atomically};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{KEPT, Moves};
-pub use request::{CommandError, ConflictReason};
+pub use request::{
+    CommandError, ConflictReason, CycleError, MAX_QUEUED_STARTS, ModeError, Owner, SubmitError,
+};
+pub use robots::Daemon;
 pub use setup::Connector;
 pub use setup::{DaemonOptions, RobotSetup, host_word};
-pub use shared::{Incidents, Reads, Snapshot};
+pub use shared::{CellView, Incidents, Reads, Snapshot};

@@ -11,6 +11,7 @@ use super::ids::MoveIds;
 use super::positions::TaughtPositions;
 use crate::config::CellSettings;
 use crate::gateway::GatewaySettings;
+use crate::journal::Journal;
 use crate::kinematics::JOINTS;
 use crate::plc::exchange::ContractSettings;
 use crate::plc::{AnyPlc, PlcError};
@@ -47,6 +48,8 @@ pub struct DaemonOptions {
     pub start_within: Duration,
     /// The robots' taught positions (by default in memory only).
     pub positions: Arc<TaughtPositions>,
+    /// The cell's journal (by default off: nothing recorded).
+    pub journal: Journal,
 }
 
 impl Default for DaemonOptions {
@@ -56,6 +59,7 @@ impl Default for DaemonOptions {
             ids: Arc::new(MoveIds::counting_from(1)),
             start_within: Duration::from_secs(10),
             positions: Arc::new(TaughtPositions::in_memory()),
+            journal: Journal::off(),
         }
     }
 }

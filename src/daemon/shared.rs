@@ -9,6 +9,8 @@
 //!  worker --Publisher (watch::Sender<Snapshot>)--> handles, API, cycle, console (Receivers)
 //!  worker --Moves (writes)--> handles (reads: a report, a move's feed)
 //!  handle --stop_pending, inputs_watched, read_soon--> worker
+//!  cycle owner, cycle driver --CycleOut (watch)--> handles (the cycle's status)
+//!  cell owner --watch::Sender<CellView>--> handles (the mode, the cell face)
 //! ```
 
 use std::sync::atomic::AtomicBool;
@@ -19,10 +21,12 @@ use tokio::sync::watch;
 use super::ids::MoveIds;
 use super::metrics::RobotMetrics;
 use super::report::Moves;
+use crate::cell::Mode;
+use crate::cell::face::Face;
 use crate::contract::machine::Blocker;
 use crate::kinematics::JOINTS;
 use crate::plc::exchange::Beat;
-use crate::wire::{MoveId, RobotState};
+use crate::wire::{CycleStatus, MoveId, RobotState};
 
 /// What made the PLC untrustworthy under the host, counted ([`Publisher::incident`]).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -76,6 +80,27 @@ impl Snapshot {
         self.read_at.map(|at| at.elapsed())
     }
 }
+
+/// The robot's cell as its owner (`daemon/cell`) last published it.
+#[derive(Debug, Clone)]
+pub struct CellView {
+    /// Who drives the robot.
+    pub mode: Mode,
+    /// The cell face's command side (`None`: the robot has none).
+    pub face: Option<Face>,
+}
+
+impl CellView {
+    /// Whether the face holds every motion: remote mode with move-enable off.
+    #[must_use]
+    pub fn holds_motion(&self) -> bool {
+        self.mode == Mode::Remote && self.face.as_ref().is_some_and(|f| !f.enabled())
+    }
+}
+
+/// What a robot's cycle owner and the cycle's driver publish its status on (`None`: no cycle
+/// ran since the daemon started).
+pub(crate) type CycleOut = Arc<watch::Sender<Option<CycleStatus>>>;
 
 /// The status blocks a robot's worker reads, one after another: what a cycle's wait decides
 /// on.
@@ -173,6 +198,10 @@ impl Publisher {
 pub(super) struct Shared {
     /// The worker's snapshot, as published.
     published: watch::Receiver<Snapshot>,
+    /// The cycle's status, as its owner and driver publish it.
+    pub cycle: watch::Receiver<Option<CycleStatus>>,
+    /// The mode and the cell face, as the cell's owner publishes them.
+    pub cell: watch::Receiver<CellView>,
     /// The move reports: written by the worker alone.
     moves: Mutex<Moves>,
     /// Set when a stop is asked for: an upload in progress gives up at its next write.
@@ -196,11 +225,19 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Shared {
-    /// What robot `name`'s worker and handles hold, and the worker's publisher.
-    pub(super) fn new(name: &str, ids: Arc<MoveIds>, metrics: RobotMetrics) -> (Self, Publisher) {
+    /// What robot `name`'s worker and handles hold, and the worker's publisher. `cycle` and
+    /// `cell`: what the cycle's and the cell's owners publish.
+    pub(super) fn new(
+        name: &str,
+        (ids, metrics): (Arc<MoveIds>, RobotMetrics),
+        cycle: watch::Receiver<Option<CycleStatus>>,
+        cell: watch::Receiver<CellView>,
+    ) -> (Self, Publisher) {
         let (tx, published) = watch::channel(Snapshot::new(name));
         let shared = Self {
             published,
+            cycle,
+            cell,
             moves: Mutex::new(Moves::default()),
             stop_pending: Arc::new(AtomicBool::new(false)),
             inputs_watched: AtomicBool::new(false),

@@ -14,17 +14,15 @@ use std::path::PathBuf;
 
 use tokio_util::sync::CancellationToken;
 
-use super::press::{PRESS_CELL, PRESS_LOAD};
+use super::press::{press_cell, press_robot, write_programs};
 use super::rig::{self, Rig};
 use super::{DEFAULT_BAUD, DemoError, DemoLink, P1};
 use crate::config::{CellSettings, ConsoleSettings, ConsoleUser, RobotConsoleSettings, Secret};
 use crate::console::Role;
 use crate::daemon::api::Api;
 use crate::daemon::console::{Console, LiveHub, SnapshotSetup, hash_password};
-use crate::daemon::{Daemon, DaemonOptions, RobotHandle, RobotSetup};
-use crate::gateway::{AccessList, GatewaySettings};
+use crate::daemon::{Daemon, DaemonOptions, RobotHandle};
 use crate::mock::SharedMock;
-use crate::mock::cell::{Cell, Description};
 use crate::plc::exchange::ContractSettings;
 use crate::robot::seed_robot;
 
@@ -90,90 +88,23 @@ impl ConsoleRig {
     /// Never: the demo's ranges and address are written here and parse.
     pub async fn start(options: ConsoleOptions) -> Result<Self, DemoError> {
         let robot = seed_robot();
-        let cell = Description::from_toml(PRESS_CELL)
-            .map_err(|e| DemoError::Rig(format!("config/examples/cells/press.toml: {e}")))?;
         let rig = Rig::start(&robot, P1, robot.motion.frequency_model)?;
-        let signals = cell.signals.clone();
-        rig.mock.with(|m| m.set_cell(Cell::new(cell)));
         let dir = std::env::temp_dir().join(format!(
             "linterpd-console-{}-{}",
             std::process::id(),
             rig.mock.now_s().to_bits()
         ));
-        std::fs::create_dir_all(&dir)
-            .and_then(|()| std::fs::write(dir.join("press-load.toml"), PRESS_LOAD))
-            .map_err(|e| DemoError::Rig(format!("{}: {e}", dir.display())))?;
-        let access = AccessList::new(
-            vec!["X0-X1F".parse().expect("a range")],
-            vec!["Y0-Y7".parse().expect("a range")],
-            &crate::contract::Layout::default(),
-        )
-        .map_err(|e| DemoError::Rig(e.to_string()))?;
-        let cell = CellSettings {
-            signals,
-            programs: Some(dir.clone()),
-            require_wait_timeout: true,
-            face: None,
-        };
-        let setup = RobotSetup {
-            robot: robot.clone(),
-            settings: ContractSettings::default(),
-            connect: rig.connector(options.baud, DemoLink::Mewtocol { long_frames: false }),
-            home_counts: [0; crate::kinematics::JOINTS],
-            gateway: GatewaySettings {
-                access,
-                modbus: None,
-            },
-            cell: cell.clone(),
-        };
+        write_programs(&dir)?;
+        let cell = press_cell(&rig, &dir)?;
+        let connect = rig.connector(options.baud, DemoLink::Mewtocol { long_frames: false });
+        let setup = press_robot(&robot, ContractSettings::default(), connect, cell.clone())?;
         let daemon = Daemon::spawn(vec![setup], &DaemonOptions::default());
         let handle = daemon
             .robot(&robot.name)
             .cloned()
             .ok_or_else(|| DemoError::Rig("the daemon has no robot".into()))?;
         rig::connected(&handle).await?;
-        let api = Api::new(daemon.robots().clone());
-        let closing = api.closing();
-        let setups = BTreeMap::from([(
-            robot.name.clone(),
-            SnapshotSetup {
-                cell: cell.clone(),
-                inputs: Some(crate::contract::Layout::default().inputs),
-            },
-        )]);
-        let hub = LiveHub::start(daemon.robots(), &setups, &closing);
-        let api = api.with_live(hub.clone());
-        let settings = settings(&options)?;
-        let per_robot = BTreeMap::from([(
-            robot.name.clone(),
-            RobotConsoleSettings {
-                manual_speed_mm_s: options.manual_speed_mm_s,
-            },
-        )]);
-        let cells = BTreeMap::from([(robot.name.clone(), cell)]);
-        let console = Console::new(
-            &settings,
-            &per_robot,
-            &cells,
-            daemon.robots(),
-            hub.clone(),
-            api,
-            &closing,
-        )
-        .map_err(|e| DemoError::Rig(e.to_string()))?;
-        let listener = tokio::net::TcpListener::bind(options.listen)
-            .await
-            .map_err(|e| DemoError::Rig(format!("cannot listen on {}: {e}", options.listen)))?;
-        let addr = listener
-            .local_addr()
-            .map_err(|e| DemoError::Rig(e.to_string()))?;
-        let stop = closing.clone();
-        tokio::spawn(crate::daemon::console::serve(
-            listener,
-            console.router(),
-            Vec::new(),
-            stop.cancelled_owned(),
-        ));
+        let (hub, addr, closing) = serve_console(&options, &daemon, &robot.name, cell).await?;
         Ok(Self {
             mock: rig.mock.clone(),
             handle,
@@ -203,6 +134,58 @@ impl ConsoleRig {
         }
         let _ = std::fs::remove_dir_all(&self.dir);
     }
+}
+
+/// The live streams and the console over `daemon`'s robot `name`, served on `options.listen`:
+/// the hub, the address it listens on and the token that closes it.
+async fn serve_console(
+    options: &ConsoleOptions,
+    daemon: &Daemon,
+    name: &str,
+    cell: CellSettings,
+) -> Result<(LiveHub, SocketAddr, CancellationToken), DemoError> {
+    let api = Api::new(daemon.robots().clone());
+    let closing = api.closing();
+    let setups = BTreeMap::from([(
+        name.to_owned(),
+        SnapshotSetup {
+            cell: cell.clone(),
+            inputs: Some(crate::contract::Layout::default().inputs),
+        },
+    )]);
+    let hub = LiveHub::start(daemon.robots(), &setups, &closing);
+    let api = api.with_live(hub.clone());
+    let settings = settings(options)?;
+    let per_robot = BTreeMap::from([(
+        name.to_owned(),
+        RobotConsoleSettings {
+            manual_speed_mm_s: options.manual_speed_mm_s,
+        },
+    )]);
+    let cells = BTreeMap::from([(name.to_owned(), cell)]);
+    let console = Console::new(
+        &settings,
+        &per_robot,
+        &cells,
+        daemon.robots(),
+        hub.clone(),
+        api,
+        &closing,
+    )
+    .map_err(|e| DemoError::Rig(e.to_string()))?;
+    let listener = tokio::net::TcpListener::bind(options.listen)
+        .await
+        .map_err(|e| DemoError::Rig(format!("cannot listen on {}: {e}", options.listen)))?;
+    let addr = listener
+        .local_addr()
+        .map_err(|e| DemoError::Rig(e.to_string()))?;
+    tokio::spawn(crate::daemon::console::serve(
+        listener,
+        console.router(),
+        Vec::new(),
+        closing.clone().cancelled_owned(),
+    ));
+    Ok((hub, addr, closing))
 }
 
 /// The console's settings: the demo's users, their passwords hashed now.

@@ -132,19 +132,21 @@ fn to(p: [f64; 3]) -> MoveOrder {
     }
 }
 
+/// A bounded-error line to `p` (0.05 mm).
+fn bounded(p: [f64; 3]) -> MoveOrder {
+    MoveOrder {
+        tolerance_mm: Some(0.05),
+        ..to(p)
+    }
+}
+
 /// The demo's moves, in batches: the moves of a batch are queued at once (the PLC chains them).
 #[must_use]
 pub fn steps() -> Vec<Vec<Step>> {
     let step = |name, order| Step { name, order };
     vec![
         vec![step("the seed's move, P1 -> P2", to(P2))],
-        vec![step(
-            "back to P1, bounded",
-            MoveOrder {
-                tolerance_mm: Some(0.05),
-                ..to(P1)
-            },
-        )],
+        vec![step("back to P1, bounded", bounded(P1))],
         vec![step(
             "P1 -> P2 at 120 mm/s",
             MoveOrder {
@@ -160,20 +162,8 @@ pub fn steps() -> Vec<Vec<Step>> {
                     ..to(P1)
                 },
             ),
-            step(
-                "P1 -> P2, bounded, chained",
-                MoveOrder {
-                    tolerance_mm: Some(0.05),
-                    ..to(P2)
-                },
-            ),
-            step(
-                "P2 -> P1, bounded, chained behind bounded",
-                MoveOrder {
-                    tolerance_mm: Some(0.05),
-                    ..to(P1)
-                },
-            ),
+            step("P1 -> P2, bounded, chained", bounded(P2)),
+            step("P2 -> P1, bounded, chained behind bounded", bounded(P1)),
             step("P1 -> P2, dT 50 ms, chained behind bounded", to(P2)),
         ],
     ]
@@ -274,11 +264,7 @@ pub async fn run(options: DemoOptions) -> Result<Demo, DemoError> {
     let (moves, cycles) = driven?;
     let drives =
         drives::compare().map_err(|e| DemoError::Rig(format!("the drive comparison: {e}")))?;
-    let svg = if options.svg {
-        Some(picture(&robot, &moves)?)
-    } else {
-        None
-    };
+    let svg = options.svg.then(|| picture(&robot, &moves)).transpose()?;
     Ok(Demo {
         robot,
         options,
@@ -312,40 +298,8 @@ async fn run_batch(
     batch: &[Step],
     scan_s: f64,
 ) -> Result<Vec<DemoMove>, DemoError> {
-    let mut ids = Vec::new();
-    for step in batch {
-        let started = handle
-            .submit_starts(step.order.clone())
-            .await
-            .map_err(|source| DemoError::Refused {
-                name: step.name,
-                source,
-            })?;
-        // Each step is measured as one start: none of the demo's lines passes a reversal.
-        let [id] = started[..] else {
-            return Err(DemoError::NotDone {
-                name: step.name,
-                stage: Stage::Queued,
-                why: format!("planned as {} starts, measured as one", started.len()),
-            });
-        };
-        ids.push(id);
-    }
-    let mut reports = Vec::new();
-    for (step, id) in batch.iter().zip(ids) {
-        let report = handle
-            .wait(id, BATCH_LIMIT)
-            .await
-            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
-        if report.stage != Stage::Done {
-            return Err(DemoError::NotDone {
-                name: step.name,
-                stage: report.stage,
-                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
-            });
-        }
-        reports.push(report);
-    }
+    let ids = submit(handle, batch).await?;
+    let reports = wait_done(handle, batch, ids).await?;
     let plans = batch
         .iter()
         .zip(&reports)
@@ -372,6 +326,54 @@ async fn run_batch(
         .collect::<Vec<_>>();
     measure_waits(&mut moves, &rig.mock.with(|m| m.starts().to_vec()));
     Ok(moves)
+}
+
+/// Submits every step of `batch` at once: the id of each one's start.
+async fn submit(handle: &RobotHandle, batch: &[Step]) -> Result<Vec<u64>, DemoError> {
+    let mut ids = Vec::new();
+    for step in batch {
+        let started = handle
+            .submit_starts(step.order.clone())
+            .await
+            .map_err(|source| DemoError::Refused {
+                name: step.name,
+                source,
+            })?;
+        // Each step is measured as one start: none of the demo's lines passes a reversal.
+        let [id] = started[..] else {
+            return Err(DemoError::NotDone {
+                name: step.name,
+                stage: Stage::Queued,
+                why: format!("planned as {} starts, measured as one", started.len()),
+            });
+        };
+        ids.push(id);
+    }
+    Ok(ids)
+}
+
+/// Waits for every move `ids` of `batch` to end: their reports, once each ended done.
+async fn wait_done(
+    handle: &RobotHandle,
+    batch: &[Step],
+    ids: Vec<u64>,
+) -> Result<Vec<MoveReport>, DemoError> {
+    let mut reports = Vec::new();
+    for (step, id) in batch.iter().zip(ids) {
+        let report = handle
+            .wait(id, BATCH_LIMIT)
+            .await
+            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
+        if report.stage != Stage::Done {
+            return Err(DemoError::NotDone {
+                name: step.name,
+                stage: report.stage,
+                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
+            });
+        }
+        reports.push(report);
+    }
+    Ok(reports)
 }
 
 /// Every chained move's [`ChainWait`], for `moves` run one after another, from the trace and

@@ -8,11 +8,13 @@
 //!
 //! Joint values are in radians or millimetres ([`JointKind`]); degrees only at the user's edge.
 
+mod arm;
 mod cartesian;
 mod cylindrical;
 mod positions;
 mod scara;
 
+pub use arm::Arm;
 pub use cartesian::Cartesian;
 pub use cylindrical::Cylindrical;
 pub use positions::Positions;

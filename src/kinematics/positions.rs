@@ -4,9 +4,7 @@
 
 use nalgebra::Vector3;
 
-#[cfg(doc)]
-use super::Kinematics;
-use super::{Joints, Model};
+use super::{Arm, Joints, Kinematics, Model};
 
 /// An angle with its sine and cosine.
 #[derive(Debug, Clone, Copy)]
@@ -39,23 +37,26 @@ impl Trig {
 /// Forward kinematics' position for a run of joint vectors (see the module docs).
 #[derive(Debug, Clone)]
 pub struct Positions<'a> {
-    model: &'a Model,
+    arm: &'a Arm,
     trig: [Trig; 2],
 }
 
 impl<'a> Positions<'a> {
     /// Positions of `model`'s tool.
     #[must_use]
-    pub fn new(model: &'a Model) -> Self {
+    pub fn new(arm: &'a Arm) -> Self {
         Self {
-            model,
+            arm,
             trig: [Trig::UNSET; 2],
         }
     }
 
     /// The tool position at joints `q`, exactly `model.fk(q).position_mm`.
     pub fn at(&mut self, q: &Joints) -> Vector3<f64> {
-        match self.model {
+        if self.arm.has_tool() {
+            return self.arm.fk(q).position_mm;
+        }
+        match &self.arm.model {
             Model::Cylindrical(k) => {
                 let [theta1, d2, d3, _] = *q;
                 let r = d3 + k.l0_mm;
@@ -80,7 +81,7 @@ impl<'a> Positions<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{Cartesian, Cylindrical, Elbow, Kinematics, Scara};
+    use crate::kinematics::{Cartesian, Cylindrical, Elbow, Scara};
 
     #[test]
     fn positions_are_fk_bit_for_bit_as_one_joint_moves_at_a_time() {
@@ -97,18 +98,25 @@ mod tests {
                 reach_margin_mm: 1.0,
             }),
         ];
-        for model in &models {
-            let mut positions = Positions::new(model);
-            let mut q = [1.047, 50.0, 570.0, 0.0];
-            for i in 0..400u32 {
-                // A pseudo-random joint moves a step each time, now and then one stays put.
-                let j = (i * 7 + i / 3) as usize % 4;
-                q[j] += f64::from(i % 5) * 4.363e-5;
-                assert_eq!(
-                    positions.at(&q),
-                    model.fk(&q).position_mm,
-                    "{model:?} {q:?}"
-                );
+        for model in models {
+            let tools = [Vector3::zeros(), Vector3::new(80.0, -20.0, -50.0)];
+            for arm in tools.map(|tool_mm| Arm {
+                model: model.clone(),
+                tool_mm,
+            }) {
+                let model = &arm;
+                let mut positions = Positions::new(model);
+                let mut q = [1.047, 50.0, 570.0, 0.0];
+                for i in 0..400u32 {
+                    // A pseudo-random joint moves a step each time, now and then one stays put.
+                    let j = (i * 7 + i / 3) as usize % 4;
+                    q[j] += f64::from(i % 5) * 4.363e-5;
+                    assert_eq!(
+                        positions.at(&q),
+                        model.fk(&q).position_mm,
+                        "{model:?} {q:?}"
+                    );
+                }
             }
         }
     }

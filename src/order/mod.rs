@@ -594,60 +594,12 @@ impl MoveOrder {
     }
 
     fn target(&self, taught: &BTreeMap<String, Position>) -> Result<Target, OrderError> {
-        let given: Vec<&'static str> = [
-            ("to", self.to.is_some()),
-            ("by", self.by.is_some()),
-            ("joints", self.joints.is_some()),
-            ("position", self.position.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(field, given)| given.then_some(field))
-        .collect();
-        match given.as_slice() {
-            [] => {
-                return Err(refuse(
-                    "to",
-                    &"null",
-                    "an order needs one of to, by, joints or position",
-                ));
-            }
-            [_] => {}
-            [first, second, ..] => {
-                return Err(refuse(
-                    second,
-                    &"(given)",
-                    format!(
-                        "an order takes one of to, by, joints or position; it also has {first}"
-                    ),
-                ));
-            }
-        }
+        self.one_target()?;
         if let Some(to) = &self.to {
-            finite(
-                "to",
-                to,
-                3..=4,
-                "[x, y, z] or [x, y, z, a] (mm, degrees)",
-                ["to[0] (x)", "to[1] (y)", "to[2] (z)", "to[3] (a)"],
-            )?;
-            let a_deg = to.get(3).copied();
-            return Ok(Target::Pose {
-                to: Pose::from_mm_deg(to[0], to[1], to[2], a_deg.unwrap_or(0.0)),
-                a_given: a_deg.is_some(),
-            });
+            return pose_target(to);
         }
         if let Some(by) = &self.by {
-            finite(
-                "by",
-                by,
-                3..=4,
-                "[dx, dy, dz] or [dx, dy, dz, da] (mm, degrees)",
-                ["by[0] (dx)", "by[1] (dy)", "by[2] (dz)", "by[3] (da)"],
-            )?;
-            return Ok(Target::By {
-                delta_mm: Vector3::new(by[0], by[1], by[2]),
-                delta_a_rad: by.get(3).copied().unwrap_or(0.0).to_radians(),
-            });
+            return by_target(by);
         }
         if let Some(joints) = &self.joints {
             finite(
@@ -659,25 +611,34 @@ impl MoveOrder {
             )?;
             return Ok(Target::Joints(std::array::from_fn(|j| joints[j])));
         }
-        let name = self.position.as_deref().unwrap_or_default();
-        let shown = format!("{name:?}");
-        if !is_position_name(name) {
-            return Err(refuse("position", &shown, NAME_RULE));
+        taught_target(self.position.as_deref().unwrap_or_default(), taught)
+    }
+
+    /// Refuses an order that gives none, or more than one, of `to`, `by`, `joints` and
+    /// `position`.
+    fn one_target(&self) -> Result<(), OrderError> {
+        let given: Vec<&'static str> = [
+            ("to", self.to.is_some()),
+            ("by", self.by.is_some()),
+            ("joints", self.joints.is_some()),
+            ("position", self.position.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(field, given)| given.then_some(field))
+        .collect();
+        match given.as_slice() {
+            [] => Err(refuse(
+                "to",
+                &"null",
+                "an order needs one of to, by, joints or position",
+            )),
+            [_] => Ok(()),
+            [first, second, ..] => Err(refuse(
+                second,
+                &"(given)",
+                format!("an order takes one of to, by, joints or position; it also has {first}"),
+            )),
         }
-        let position = taught.get(name).ok_or_else(|| {
-            let known: Vec<&str> = taught.keys().map(String::as_str).collect();
-            let known = if known.is_empty() {
-                "the robot has no taught positions".to_owned()
-            } else {
-                format!("taught positions: {}", known.join(", "))
-            };
-            refuse("position", &shown, format!("no such position; {known}"))
-        })?;
-        let [x, y, z, a] = position.pose;
-        Ok(Target::Pose {
-            to: Pose::from_mm_deg(x, y, z, a),
-            a_given: true,
-        })
     }
 
     fn motion(&self, defaults: Motion, limits: OrderLimits) -> Result<Motion, OrderError> {
@@ -696,29 +657,21 @@ impl MoveOrder {
             }
         }
         if let Some(t) = &self.accel_time {
-            m.accel_s = duration("accel_time", t, true)?;
-            if m.accel_s > MAX_ACCEL_TIME_S {
-                return Err(refuse(
-                    "accel_time",
-                    &format!("{t:?}"),
-                    format!("must be at most {MAX_ACCEL_TIME_S} s"),
-                ));
-            }
+            m.accel_s = accel_time(t)?;
         }
         if let Some(t) = &self.period {
-            m.period_s = duration("period", t, false)?;
-            if !PERIOD_RANGE_S.contains(&m.period_s) {
-                return Err(refuse(
-                    "period",
-                    &format!("{t:?}"),
-                    format!(
-                        "must be within {} ms to {} s",
-                        PERIOD_RANGE_S.start() * 1e3,
-                        PERIOD_RANGE_S.end()
-                    ),
-                ));
-            }
+            m.period_s = period(t)?;
         }
+        m.method = self.method(defaults.method)?;
+        m.ramp = self.ramp(defaults.ramp)?;
+        // The speed override: every order's speed (asked, or the robot's default) is planned
+        // at its share, once checked against the robot's limit as asked.
+        m.speed_mm_s *= limits.speed_override.clamp(0.01, 1.0);
+        Ok(m)
+    }
+
+    /// The method asked (`method`, `tolerance_mm`), the robot's `default` filling the gaps.
+    fn method(&self, default: Method) -> Result<Method, OrderError> {
         let tolerance = self
             .tolerance_mm
             .map(|t| {
@@ -726,7 +679,7 @@ impl MoveOrder {
                     .and_then(|t| within("tolerance_mm", t, &TOLERANCE_RANGE_MM, "mm"))
             })
             .transpose()?;
-        m.method = match (self.method.as_deref(), tolerance, defaults.method) {
+        Ok(match (self.method.as_deref(), tolerance, default) {
             (Some("constant-period"), None, _) => Method::ConstantPeriod,
             (Some("bounded-error") | None, Some(tolerance_mm), _)
             | (Some("bounded-error"), None, Method::BoundedError { tolerance_mm }) => {
@@ -754,12 +707,7 @@ impl MoveOrder {
                 ));
             }
             (None, None, method) => method,
-        };
-        m.ramp = self.ramp(defaults.ramp)?;
-        // The speed override: every order's speed (asked, or the robot's default) is planned
-        // at its share, once checked against the robot's limit as asked.
-        m.speed_mm_s *= limits.speed_override.clamp(0.01, 1.0);
-        Ok(m)
+        })
     }
 
     /// The ramps' shape asked (`profile`, `jerk_mm_s3`), the robot's filling the gaps.
@@ -836,6 +784,89 @@ pub(crate) fn plan_order(
             motion: order.motion,
         },
     )
+}
+
+/// A pose target `to`: `[x, y, z]` or `[x, y, z, a]`, mm and degrees.
+fn pose_target(to: &[f64]) -> Result<Target, OrderError> {
+    finite(
+        "to",
+        to,
+        3..=4,
+        "[x, y, z] or [x, y, z, a] (mm, degrees)",
+        ["to[0] (x)", "to[1] (y)", "to[2] (z)", "to[3] (a)"],
+    )?;
+    let a_deg = to.get(3).copied();
+    Ok(Target::Pose {
+        to: Pose::from_mm_deg(to[0], to[1], to[2], a_deg.unwrap_or(0.0)),
+        a_given: a_deg.is_some(),
+    })
+}
+
+/// A jog `by`: `[dx, dy, dz]` or `[dx, dy, dz, da]`, mm and degrees.
+fn by_target(by: &[f64]) -> Result<Target, OrderError> {
+    finite(
+        "by",
+        by,
+        3..=4,
+        "[dx, dy, dz] or [dx, dy, dz, da] (mm, degrees)",
+        ["by[0] (dx)", "by[1] (dy)", "by[2] (dz)", "by[3] (da)"],
+    )?;
+    Ok(Target::By {
+        delta_mm: Vector3::new(by[0], by[1], by[2]),
+        delta_a_rad: by.get(3).copied().unwrap_or(0.0).to_radians(),
+    })
+}
+
+/// The pose of the taught position `name`.
+fn taught_target(name: &str, taught: &BTreeMap<String, Position>) -> Result<Target, OrderError> {
+    let shown = format!("{name:?}");
+    if !is_position_name(name) {
+        return Err(refuse("position", &shown, NAME_RULE));
+    }
+    let position = taught.get(name).ok_or_else(|| {
+        let known: Vec<&str> = taught.keys().map(String::as_str).collect();
+        let known = if known.is_empty() {
+            "the robot has no taught positions".to_owned()
+        } else {
+            format!("taught positions: {}", known.join(", "))
+        };
+        refuse("position", &shown, format!("no such position; {known}"))
+    })?;
+    let [x, y, z, a] = position.pose;
+    Ok(Target::Pose {
+        to: Pose::from_mm_deg(x, y, z, a),
+        a_given: true,
+    })
+}
+
+/// The acceleration time asked, at most [`MAX_ACCEL_TIME_S`], s.
+fn accel_time(t: &str) -> Result<f64, OrderError> {
+    let accel_s = duration("accel_time", t, true)?;
+    if accel_s > MAX_ACCEL_TIME_S {
+        return Err(refuse(
+            "accel_time",
+            &format!("{t:?}"),
+            format!("must be at most {MAX_ACCEL_TIME_S} s"),
+        ));
+    }
+    Ok(accel_s)
+}
+
+/// The interpolation period asked, within [`PERIOD_RANGE_S`], s.
+fn period(t: &str) -> Result<f64, OrderError> {
+    let period_s = duration("period", t, false)?;
+    if !PERIOD_RANGE_S.contains(&period_s) {
+        return Err(refuse(
+            "period",
+            &format!("{t:?}"),
+            format!(
+                "must be within {} ms to {} s",
+                PERIOD_RANGE_S.start() * 1e3,
+                PERIOD_RANGE_S.end()
+            ),
+        ));
+    }
+    Ok(period_s)
 }
 
 #[cfg(test)]

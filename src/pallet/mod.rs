@@ -3,12 +3,31 @@
 //!
 //! - [`pattern`]: the checked pattern as the cycle runs it ([`Pattern`], [`Slot`], [`Waypoint`]).
 //! - [`counter`]: which slot is next, the slot in progress, and what a restart means ([`Counter`]).
-//!
-//! How a pattern is written (rows x columns x layers, per-layer variants, frames) and how the
-//! counter that says which slot is next survives a restart are built on these types.
+//! - [`frame`]: a user frame taught from three points or given as numbers ([`Frame`]).
+//! - [`doc`]: the `[robots.NAME.pallets.NAME]` and `[robots.NAME.frames.NAME]` tables as
+//!   written (serde).
+//! - [`layout`]: a pallet table checked and laid out in a frame: grid, layer kinds, fill order,
+//!   approach and retreat ([`Layout`]).
+//! - [`set`]: a robot's frames and pallets ([`RobotPallets`]), turned into patterns once the
+//!   taught positions are known, every slot checked against the robot's reach.
+//! - [`error`]: [`PalletError`].
 
 pub mod counter;
+pub mod doc;
+pub mod error;
+pub mod frame;
+pub mod layout;
 pub mod pattern;
+pub mod set;
 
 pub use counter::{Choice, Counter, CounterError};
+pub use error::{PalletError, SlotAt};
+pub use frame::{Frame, FrameError};
+pub use layout::Layout;
 pub use pattern::{Pattern, PatternError, Slot, Waypoint, WhenFull};
+pub use set::{FrameSpec, RobotPallets};
+
+use crate::geometry::Pose;
+
+#[cfg(test)]
+mod tests;

@@ -2,7 +2,7 @@
 //! to its target in proportion, the tool wherever forward kinematics puts it.
 
 use crate::geometry::{Polyline, Pose};
-use crate::kinematics::{Joints, Kinematics, Model};
+use crate::kinematics::{Arm, Joints, Kinematics};
 
 /// A straight line in joint space: every joint moves in proportion, from `from` to `to`.
 #[derive(Debug, Clone, PartialEq)]
@@ -12,13 +12,13 @@ pub struct JointPath {
     /// Joint values at the end, rad or mm.
     pub to: Joints,
     /// The robot's kinematics, for where the tool is along the way.
-    model: Model,
+    model: Arm,
 }
 
 impl JointPath {
     /// The path from `from` to `to` for a robot of kinematics `model`.
     #[must_use]
-    pub fn new(model: &Model, from: Joints, to: Joints) -> Self {
+    pub fn new(model: &Arm, from: Joints, to: Joints) -> Self {
         Self {
             from,
             to,

@@ -113,3 +113,5 @@ pub fn plan_joint_move(robot: &Robot, req: &JointMoveRequest) -> Result<Plan, Pl
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tool_tests;

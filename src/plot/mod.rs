@@ -23,6 +23,7 @@
 //! estimate, so no font library is needed.
 
 mod draw;
+pub mod pallet;
 mod track;
 
 use thiserror::Error;
@@ -35,6 +36,7 @@ use crate::sim::PulseEvent;
 use crate::table::FrequencyModel;
 
 pub use draw::{HEIGHT_PX, WIDTH_PX};
+pub use pallet::layers_svg;
 
 /// Why no SVG could be drawn.
 #[derive(Debug, Error)]

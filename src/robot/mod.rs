@@ -3,7 +3,7 @@
 
 use crate::geometry::Pose;
 use crate::kinematics::{
-    JOINTS, JointKind, Joints, Kinematics, KinematicsError, Model, nearest_count,
+    Arm, JOINTS, JointKind, Joints, Kinematics, KinematicsError, Model, nearest_count,
 };
 use crate::table::{ChannelLimits, FrequencyModel, OutputMethod};
 
@@ -225,8 +225,9 @@ pub struct Motion {
 pub struct Robot {
     /// The robot's name.
     pub name: String,
-    /// The kinematic model.
-    pub kinematics: Model,
+    /// The kinematic model with the robot's tool (`[robots.NAME.tool]`): every pose is the
+    /// tool centre's.
+    pub kinematics: Arm,
     /// The four joints, in the model's order.
     pub joints: [Joint; JOINTS],
     /// Motion defaults.
@@ -330,7 +331,8 @@ pub fn seed_robot() -> Robot {
         kinematics: Model::Cylindrical(Cylindrical {
             l0_mm: 500.0,
             min_axis_distance_mm: 50.0,
-        }),
+        })
+        .into(),
         joints: [
             joint(
                 "theta1",
@@ -367,6 +369,9 @@ pub fn seed_robot() -> Robot {
     }
 }
 
+/// The largest tool offset from the flange, mm, on any axis.
+pub const MAX_TOOL_OFFSET_MM: f64 = 2_000.0;
+
 /// The rule a taught position's name follows, as every refusal says it.
 pub const POSITION_NAME_RULE: &str =
     "a position name is 1 to 32 letters, digits, '_' or '-', not starting with '-'";
@@ -402,7 +407,8 @@ pub fn short_arm(over_speed: OverSpeed) -> Robot {
     robot.kinematics = Model::Cylindrical(crate::kinematics::Cylindrical {
         l0_mm: 50.0,
         min_axis_distance_mm: 20.0,
-    });
+    })
+    .into();
     robot.joints[0].max_freq_hz = 20_000;
     robot.joints[0].min = JointKind::Revolute.from_user(-360.0);
     robot.joints[0].max = JointKind::Revolute.from_user(360.0);

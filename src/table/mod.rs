@@ -12,8 +12,6 @@ mod code;
 mod image;
 mod range;
 
-use std::fmt;
-
 pub use code::{ControlCode, Direction, Duty, OutputMethod, quarter_duty_from_hz};
 pub use image::{DecodeError, decode, encode, encode_at, encoded_words};
 pub use range::{FrequencyModel, FrequencyRange};
@@ -88,9 +86,10 @@ pub struct ChannelLimits {
 }
 
 /// One reason a table must not be sent to a PLC.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum TableProblem {
     /// More segments than the directory holds.
+    #[error("channel {channel} needs {segments} segments; a start allows {MAX_SEGMENTS}")]
     TooManySegments {
         /// Channel.
         channel: u8,
@@ -98,6 +97,7 @@ pub enum TableProblem {
         segments: usize,
     },
     /// A segment without rows.
+    #[error("channel {channel} segment {segment} has no rows")]
     EmptySegment {
         /// Channel.
         channel: u8,
@@ -106,6 +106,11 @@ pub enum TableProblem {
     },
     /// A target that does not move the count in the segment's direction (a zero-length row or a
     /// reversal): on an FP-X the count would run on without end.
+    #[error(
+        "channel {channel} segment {segment} row {row}: target {target} from count {from} does \
+         not move {}; an FP-X would run on without end",
+        up_or_down(*direction)
+    )]
     AgainstDirection {
         /// Channel.
         channel: u8,
@@ -121,6 +126,10 @@ pub enum TableProblem {
         direction: Direction,
     },
     /// A frequency outside the segment's range or above the channel's maximum.
+    #[error(
+        "channel {channel} segment {segment} row {row}: frequency {freq_hz} Hz is outside \
+         {min_hz}..={max_hz} Hz"
+    )]
     FrequencyOutOfRange {
         /// Channel.
         channel: u8,
@@ -136,6 +145,7 @@ pub enum TableProblem {
         max_hz: u32,
     },
     /// A target that does not fit a DINT.
+    #[error("channel {channel}: target {target} does not fit a 32-bit DINT")]
     TargetOutOfI32 {
         /// Channel.
         channel: u8,
@@ -143,6 +153,10 @@ pub enum TableProblem {
         target: i64,
     },
     /// Duty 1/2 at a frequency that needs 1/4.
+    #[error(
+        "channel {channel} segment {segment}: duty 1/2 at {freq_hz} Hz; 1/4 is required from \
+         {from_hz} Hz"
+    )]
     DutyTooHigh {
         /// Channel.
         channel: u8,
@@ -154,6 +168,7 @@ pub enum TableProblem {
         from_hz: u32,
     },
     /// Incremental targets: linterpd only writes absolute ones.
+    #[error("channel {channel} segment {segment}: targets are not absolute")]
     NotAbsolute {
         /// Channel.
         channel: u8,
@@ -161,6 +176,7 @@ pub enum TableProblem {
         segment: usize,
     },
     /// The encoded table is larger than the channel's area.
+    #[error("channel {channel} table needs {words} words; its area holds {area_words}")]
     AreaOverflow {
         /// Channel.
         channel: u8,
@@ -171,76 +187,12 @@ pub enum TableProblem {
     },
 }
 
-impl fmt::Display for TableProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            Self::TooManySegments { channel, segments } => write!(
-                f,
-                "channel {channel} needs {segments} segments; a start allows {MAX_SEGMENTS}"
-            ),
-            Self::EmptySegment { channel, segment } => {
-                write!(f, "channel {channel} segment {segment} has no rows")
-            }
-            Self::AgainstDirection {
-                channel,
-                segment,
-                row,
-                from,
-                target,
-                direction,
-            } => write!(
-                f,
-                "channel {channel} segment {segment} row {row}: target {target} from count {from} \
-                 does not move {}; an FP-X would run on without end",
-                if direction == Direction::Up {
-                    "up"
-                } else {
-                    "down"
-                }
-            ),
-            Self::FrequencyOutOfRange {
-                channel,
-                segment,
-                row,
-                freq_hz,
-                min_hz,
-                max_hz,
-            } => write!(
-                f,
-                "channel {channel} segment {segment} row {row}: frequency {freq_hz} Hz is outside \
-                 {min_hz}..={max_hz} Hz"
-            ),
-            Self::TargetOutOfI32 { channel, target } => {
-                write!(
-                    f,
-                    "channel {channel}: target {target} does not fit a 32-bit DINT"
-                )
-            }
-            Self::DutyTooHigh {
-                channel,
-                segment,
-                freq_hz,
-                from_hz,
-            } => write!(
-                f,
-                "channel {channel} segment {segment}: duty 1/2 at {freq_hz} Hz; 1/4 is required \
-                 from {from_hz} Hz"
-            ),
-            Self::NotAbsolute { channel, segment } => {
-                write!(
-                    f,
-                    "channel {channel} segment {segment}: targets are not absolute"
-                )
-            }
-            Self::AreaOverflow {
-                channel,
-                words,
-                area_words,
-            } => write!(
-                f,
-                "channel {channel} table needs {words} words; its area holds {area_words}"
-            ),
-        }
+/// `up` or `down`.
+fn up_or_down(direction: Direction) -> &'static str {
+    if direction == Direction::Up {
+        "up"
+    } else {
+        "down"
     }
 }
 
@@ -319,33 +271,8 @@ fn segment_problems(
     let max_hz = range.max_set_hz().min(limits.max_freq_hz);
     let direction = seg.control.direction;
     for (ri, r) in seg.rows.iter().enumerate() {
-        let row = ri + 1;
-        if (r.target - *count) * direction.sign() <= 0 {
-            out.push(TableProblem::AgainstDirection {
-                channel,
-                segment,
-                row,
-                from: *count,
-                target: r.target,
-                direction,
-            });
-        }
-        if r.freq_hz < min_hz || r.freq_hz > max_hz {
-            out.push(TableProblem::FrequencyOutOfRange {
-                channel,
-                segment,
-                row,
-                freq_hz: r.freq_hz,
-                min_hz,
-                max_hz,
-            });
-        }
-        if i32::try_from(r.target).is_err() {
-            out.push(TableProblem::TargetOutOfI32 {
-                channel,
-                target: r.target,
-            });
-        }
+        let at = (channel, segment, ri + 1);
+        row_problems(at, r, (*count, direction), (min_hz, max_hz), out);
         *count = r.target;
     }
     let top = seg.rows.iter().map(|r| r.freq_hz).max().unwrap_or(0);
@@ -356,6 +283,43 @@ fn segment_problems(
             segment,
             freq_hz: top,
             from_hz,
+        });
+    }
+}
+
+/// The problems of row `row` of `segment` on `channel`: a target that does not move `direction`
+/// from `from`, a frequency outside `min_hz..=max_hz`, a target outside a DINT.
+fn row_problems(
+    (channel, segment, row): (u8, usize, usize),
+    r: &Row,
+    (from, direction): (i64, Direction),
+    (min_hz, max_hz): (u32, u32),
+    out: &mut Vec<TableProblem>,
+) {
+    if (r.target - from) * direction.sign() <= 0 {
+        out.push(TableProblem::AgainstDirection {
+            channel,
+            segment,
+            row,
+            from,
+            target: r.target,
+            direction,
+        });
+    }
+    if r.freq_hz < min_hz || r.freq_hz > max_hz {
+        out.push(TableProblem::FrequencyOutOfRange {
+            channel,
+            segment,
+            row,
+            freq_hz: r.freq_hz,
+            min_hz,
+            max_hz,
+        });
+    }
+    if i32::try_from(r.target).is_err() {
+        out.push(TableProblem::TargetOutOfI32 {
+            channel,
+            target: r.target,
         });
     }
 }

@@ -7,11 +7,14 @@
 //!            PathAccepted
 //! state.rs   RobotState (LinkState, RobotPhase, GatewayStats, FaceState, FaceRefusal)
 //! cycle.rs   CycleStatus, CycleState, StepAt
+//! journal/   Entry, Kind: the cell's journal, one JSON line an entry; what changed between two
+//!            states of a robot (the follower's decision), production counts per shift
 //! live.rs    Live (a robot's live state for the console and `status --watch`), LiveMessage
 //!            (the stream: the whole snapshot, then merge patches)
 //! ```
 
 mod cycle;
+pub mod journal;
 mod live;
 mod report;
 mod state;

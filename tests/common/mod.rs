@@ -52,7 +52,7 @@ fn motion() -> Motion {
 pub fn gantry() -> Robot {
     Robot {
         name: "gantry".into(),
-        kinematics: Model::Cartesian(Cartesian),
+        kinematics: Model::Cartesian(Cartesian).into(),
         joints: [
             joint("x", 0, JointKind::Prismatic, 0.01, 2_000.0, 100_000),
             joint("y", 1, JointKind::Prismatic, 0.01, 2_000.0, 100_000),
@@ -73,7 +73,8 @@ pub fn scara() -> Robot {
             l2_mm: 300.0,
             elbow: Elbow::Left,
             reach_margin_mm: 1.0,
-        }),
+        })
+        .into(),
         joints: [
             joint("t1", 0, JointKind::Revolute, 0.001, 360.0, 100_000),
             joint("t2", 1, JointKind::Revolute, 0.001, 360.0, 100_000),

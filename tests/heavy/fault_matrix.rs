@@ -565,7 +565,7 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
             tokio::time::sleep(Duration::from_millis(10)).await;
         }
     }
-    if let Err(e) = h.run_cycle(program, Some(1)) {
+    if let Err(e) = h.run_cycle(program, Some(1)).await {
         v.0.push(format!("the cycle was refused: {e}"));
         return Vec::new();
     }
@@ -616,7 +616,7 @@ async fn run_cycle(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveI
         shared.with(|m| m.set_input(5, true).unwrap());
         tokio::time::sleep(Duration::from_millis(100)).await;
         if status.state == CycleState::Paused {
-            let _ = h.resume_cycle();
+            let _ = h.resume_cycle().await;
         }
     }
     let done = cycle_until(h, ended).await;

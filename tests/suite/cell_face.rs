@@ -344,7 +344,7 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
     let mut c = cell("stop", Mode::Local).await;
     c.write(0, &[0, 0, ON, 0]).await;
     // A locally run cycle, stopped now from the face in local mode.
-    c.h.run_cycle("load", None).unwrap();
+    c.h.run_cycle("load", None).await.unwrap();
     c.until("waiting", |s| on(s, status_bit::WAITING)).await;
     c.edge(bit::STOP_NOW).await;
     let s = c.until("stopped", |s| !on(s, status_bit::WAITING)).await;

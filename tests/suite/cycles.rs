@@ -126,7 +126,7 @@ async fn a_press_cycle_waits_for_the_press_runs_interlocked_and_counts_its_cycle
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("press", &[("press-load", press_cycle())]));
     taking_moves(&h).await;
-    let s = h.run_cycle("press-load", Some(2)).unwrap();
+    let s = h.run_cycle("press-load", Some(2)).await.unwrap();
     assert_eq!((s.state, s.count), (CycleState::Running, Some(2)));
     // The press is closed: the cycle waits, and nothing moves.
     let s = until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
@@ -164,7 +164,7 @@ async fn the_press_cycle_runs_the_same_over_modbus_tcp() {
     let dir = programs("modbus", &[("press-load", press_cycle())]);
     let (_d, h) = spawn_on(modbus_connector(&shared).await, dir);
     taking_moves(&h).await;
-    h.run_cycle("press-load", Some(1)).unwrap();
+    h.run_cycle("press-load", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     assert!(shared.with(|m| m.starts().is_empty()));
     shared.with(|m| m.set_input(5, true).unwrap());
@@ -195,7 +195,7 @@ async fn a_wait_that_times_out_faults_the_cycle_which_resumes_only_after_clear_f
     );
     let (_d, h) = spawn(&shared, programs("timeout", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     let why = s.reason.unwrap();
     assert!(
@@ -207,13 +207,13 @@ async fn a_wait_that_times_out_faults_the_cycle_which_resumes_only_after_clear_f
     shared.with(|m| m.set_input(2, true).unwrap());
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert_eq!(h.cycle().unwrap().state, CycleState::Faulted);
-    let e = h.resume_cycle().unwrap_err();
+    let e = h.resume_cycle().await.unwrap_err();
     assert!(matches!(e, CycleError::FaultNotCleared { .. }), "{e}");
     assert!(e.to_string().contains("clear the fault first"), "{e}");
     // Cleared (the PLC has no fault: the cycle's is cleared), then resumed: the wait again,
     // met now, and the move.
     h.clear_fault().await.unwrap();
-    h.resume_cycle().unwrap();
+    h.resume_cycle().await.unwrap();
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
     assert_eq!(shared.with(|m| m.starts().len()), 1);
@@ -230,7 +230,7 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
     taking_moves(&h).await;
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     // Once the robot moves, the press closes.
     for _ in 0..2_000 {
         if shared.with(|m| m.status().state) == State::Running.word() {
@@ -249,7 +249,7 @@ async fn a_permit_that_drops_mid_move_pauses_the_cycle_naming_the_input_and_resu
     // Open again, resumed: the move again, from where the robot stopped, to its target.
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
-    h.resume_cycle().unwrap();
+    h.resume_cycle().await.unwrap();
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
     let last = h.reports().into_iter().max_by_key(|r| r.id).unwrap();
@@ -264,7 +264,7 @@ async fn the_move_after_a_wait_is_uploaded_during_it_and_started_only_once_it_is
         programs("prepared", &[("press-load", press_cycle())]),
     );
     taking_moves(&h).await;
-    h.run_cycle("press-load", Some(1)).unwrap();
+    h.run_cycle("press-load", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     // The move is uploaded and held while the press stays closed: nothing starts.
     let began = std::time::Instant::now();
@@ -318,7 +318,7 @@ async fn the_move_after_a_move_and_its_outputs_is_uploaded_while_that_one_runs_a
     );
     let (_d, h) = spawn(&shared, programs("ahead", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     // The second move is uploaded while the first still runs, and held.
     let reports = until_uploaded(&h, 1).await;
     assert!(!reports[0].stage.is_final(), "{reports:?}");
@@ -356,7 +356,7 @@ async fn past_a_move_to_where_the_robot_will_be_the_next_move_is_prepared_too_an
     );
     let (_d, h) = spawn(&shared, programs("ahead-past", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     // Both queued behind the first move while it runs; the last uploaded, held.
     let reports = until_uploaded(&h, 2).await;
     assert!(!reports[0].stage.is_final(), "{reports:?}");
@@ -392,7 +392,7 @@ async fn a_move_prepared_behind_one_the_plc_holds_is_cancelled_before_its_start_
     taking_moves(&h).await;
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     let reports = until_uploaded(&h, 1).await;
     let prepared = reports[1].id;
     // The press closes while the first move runs: it is held, the one behind it never starts.
@@ -410,7 +410,7 @@ async fn a_move_prepared_behind_one_the_plc_holds_is_cancelled_before_its_start_
     // Resumed: the first move again from where it stopped, then the second afresh.
     shared.with(|m| m.set_input(5, true).unwrap());
     tokio::time::sleep(Duration::from_millis(50)).await;
-    h.resume_cycle().unwrap();
+    h.resume_cycle().await.unwrap();
     until(&h, "done", |s| s.state == CycleState::Done).await;
     let starts = shared.with(|m| m.starts().to_vec());
     assert_eq!(starts.len(), 3, "{starts:?}");
@@ -428,7 +428,7 @@ async fn the_daemon_shuts_down_while_a_prepared_move_is_held_and_nothing_starts(
         programs("prepared-shutdown", &[("press-load", press_cycle())]),
     );
     taking_moves(&h).await;
-    h.run_cycle("press-load", Some(1)).unwrap();
+    h.run_cycle("press-load", Some(1)).await.unwrap();
     let began = std::time::Instant::now();
     while !h.reports().iter().any(|r| r.upload_s.is_some()) {
         assert!(began.elapsed() < LIMIT, "never uploaded: {:?}", h.reports());
@@ -454,7 +454,7 @@ async fn a_wait_that_times_out_cancels_its_prepared_move_before_any_start() {
     );
     let (_d, h) = spawn(&shared, programs("prepared-timeout", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     assert!(s.reason.unwrap().contains("timed out"));
     let reports = h.reports();
@@ -476,7 +476,7 @@ async fn a_stop_during_a_wait_ends_the_cycle_and_nothing_moves() {
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("stop", &[("press-load", press_cycle())]));
     taking_moves(&h).await;
-    h.run_cycle("press-load", None).unwrap();
+    h.run_cycle("press-load", None).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     // The CLI's stop (the robot's) always works, and ends the cycle.
     h.stop().await.unwrap();
@@ -497,22 +497,22 @@ async fn one_cycle_at_a_time_and_a_bad_program_is_refused_before_anything_moves(
         programs("one", &[("press-load", press_cycle()), ("bad", bad)]),
     );
     taking_moves(&h).await;
-    let e = h.run_cycle("bad", Some(1)).unwrap_err();
+    let e = h.run_cycle("bad", Some(1)).await.unwrap_err();
     assert!(
         e.to_string()
             .contains("program \"bad\" step 1: wait: condition \"door\""),
         "{e}"
     );
     assert!(h.cycle().is_none());
-    let e = h.run_cycle("nope", Some(1)).unwrap_err();
+    let e = h.run_cycle("nope", Some(1)).await.unwrap_err();
     assert!(
         e.to_string()
             .contains("no such program; there are: bad, press-load"),
         "{e}"
     );
-    h.run_cycle("press-load", None).unwrap();
+    h.run_cycle("press-load", None).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
-    let e = h.run_cycle("press-load", Some(1)).unwrap_err();
+    let e = h.run_cycle("press-load", Some(1)).await.unwrap_err();
     assert!(matches!(e, CycleError::Running { .. }), "{e}");
     assert!(e.to_string().contains("is waiting: stop it first"), "{e}");
     // A stop at the end of the step: the wait is the step; stop now ends it.
@@ -538,7 +538,7 @@ async fn a_plc_power_cycle_mid_move_faults_the_cycle_which_never_resumes_by_itse
     let program = format!("[[step]]\nmove = {}\n[[step]]\nmove = {}\n", at(P2), at(P1));
     let (_d, h) = spawn(&shared, programs("power", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", None).unwrap();
+    h.run_cycle("p", None).await.unwrap();
     until_moving(&shared).await;
     tokio::time::sleep(Duration::from_millis(100)).await;
     shared.with(linterpd::mock::MockPlc::power_cycle);
@@ -554,7 +554,7 @@ async fn a_plc_power_cycle_mid_move_faults_the_cycle_which_never_resumes_by_itse
     // The PLC came back unhomed: cleared and resumed, the move is refused (not homed) and the
     // cycle faults again; nothing moves.
     h.clear_fault().await.unwrap();
-    h.resume_cycle().unwrap();
+    h.resume_cycle().await.unwrap();
     let s = until(&h, "faulted again", |s| {
         s.state == CycleState::Faulted && s.reason.as_deref().is_some_and(|r| r.contains("homed"))
     })
@@ -572,7 +572,7 @@ async fn a_link_lost_during_a_wait_neither_faults_nor_meets_it_and_the_cycle_goe
     );
     let (_d, h) = spawn(&shared, programs("link", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     // Every command's connection closed for a while: the link is down, the inputs unknown.
     shared.with(|m| m.set_faults("close@100%".parse().unwrap()));
@@ -604,7 +604,7 @@ async fn a_restarted_daemon_has_no_cycle_and_does_not_move_the_robot() {
     let (d, h) = spawn(&shared, dir.clone());
     taking_moves(&h).await;
     shared.with(|m| m.set_input(5, true).unwrap());
-    h.run_cycle("press-load", None).unwrap();
+    h.run_cycle("press-load", None).await.unwrap();
     until(&h, "running a move", |s| !s.moves.is_empty()).await;
     d.kill().await;
     // A start the old daemon wrote just before it died is acted on in the PLC's next scans.
@@ -625,7 +625,7 @@ async fn a_loop_of_outputs_alone_goes_round_at_the_pace_of_the_status_reads_and_
     let program = "[[step]]\nlabel = \"x\"\nset = { press_go = true }\n[[step]]\nloop = { to = \"x\", until = \"press_open\" }\n".to_owned();
     let (_d, h) = spawn(&shared, programs("spin", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     tokio::time::sleep(Duration::from_millis(100)).await;
     let before = h.state().gateway.requests;
     tokio::time::sleep(Duration::from_millis(500)).await;
@@ -643,9 +643,9 @@ async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resume
     let shared = mock_at_seed_start("");
     let (_d, h) = spawn(&shared, programs("pause", &[("press-load", press_cycle())]));
     taking_moves(&h).await;
-    h.run_cycle("press-load", Some(1)).unwrap();
+    h.run_cycle("press-load", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
-    h.pause_cycle().unwrap();
+    h.pause_cycle().await.unwrap();
     let s = until(&h, "paused", |s| s.state == CycleState::Paused).await;
     assert_eq!(s.reason.as_deref(), Some("paused by request"));
     // Paused, the press opening moves nothing.
@@ -661,7 +661,7 @@ async fn a_pause_or_a_stop_asked_during_a_wait_takes_effect_at_once_and_a_resume
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
-    h.resume_cycle().unwrap();
+    h.resume_cycle().await.unwrap();
     until(&h, "waiting again", |s| s.state == CycleState::Waiting).await;
     // A stop at the step's end: a wait is ended at once (it moves nothing).
     h.stop_cycle(false).await.unwrap();
@@ -742,7 +742,7 @@ async fn a_plc_restart_during_a_wait_faults_the_cycle_and_writes_no_output_until
         .to_owned();
     let (_d, h) = spawn(&shared, programs("restart-wait", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     shared.with(linterpd::mock::MockPlc::power_cycle);
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
@@ -761,11 +761,11 @@ async fn a_plc_restart_during_a_wait_faults_the_cycle_and_writes_no_output_until
     // A resume without a clear is refused; after one, the cycle goes on: the wait again, then
     // the outputs.
     assert!(matches!(
-        h.resume_cycle(),
+        h.resume_cycle().await,
         Err(CycleError::FaultNotCleared { .. })
     ));
     h.clear_fault().await.unwrap();
-    let resumed = h.resume_cycle().unwrap();
+    let resumed = h.resume_cycle().await.unwrap();
     assert_eq!(resumed.state, CycleState::Running, "{resumed:?}");
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
@@ -783,15 +783,15 @@ async fn a_paused_cycle_faults_when_the_plc_restarts_and_needs_a_clear_to_resume
             .to_owned();
     let (_d, h) = spawn(&shared, programs("restart-paused", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
-    h.pause_cycle().unwrap();
+    h.pause_cycle().await.unwrap();
     until(&h, "paused", |s| s.state == CycleState::Paused).await;
     shared.with(linterpd::mock::MockPlc::power_cycle);
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     assert!(s.reason.as_deref().unwrap().contains("restarted"), "{s:?}");
     assert!(matches!(
-        h.resume_cycle(),
+        h.resume_cycle().await,
         Err(CycleError::FaultNotCleared { .. })
     ));
     shared.with(|m| m.set_input(2, true).unwrap());
@@ -808,7 +808,7 @@ async fn a_clear_before_a_second_restart_does_not_resume_the_cycle() {
             .to_owned();
     let (_d, h) = spawn(&shared, programs("restart-twice", &[("p", program)]));
     taking_moves(&h).await;
-    h.run_cycle("p", Some(1)).unwrap();
+    h.run_cycle("p", Some(1)).await.unwrap();
     until(&h, "waiting", |s| s.state == CycleState::Waiting).await;
     shared.with(linterpd::mock::MockPlc::power_cycle);
     until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
@@ -837,7 +837,7 @@ async fn a_clear_before_a_second_restart_does_not_resume_the_cycle() {
         "the second restart was never seen"
     );
     assert!(matches!(
-        h.resume_cycle(),
+        h.resume_cycle().await,
         Err(CycleError::FaultNotCleared { .. })
     ));
 }
@@ -868,27 +868,27 @@ async fn a_bad_neighbour_never_keeps_a_good_program_from_running() {
     );
     let (_d, h) = spawn(&shared, dir);
     taking_moves(&h).await;
-    let refused = |name: &str| match h.run_cycle(name, Some(1)) {
+    let refused = async |name: &str| match h.run_cycle(name, Some(1)).await {
         Err(CycleError::Program(e)) => e,
         other => panic!("{name}: {other:?}"),
     };
-    let e = refused("first");
+    let e = refused("first").await;
     assert!(
         e.contains("number = 1 is program \"copy\"'s number too"),
         "{e}"
     );
-    let e = refused("escape");
+    let e = refused("escape").await;
     assert!(e.contains("\"../../x.toml\" goes up with .."), "{e}");
-    let e = refused("passwd");
+    let e = refused("passwd").await;
     assert!(e.contains("\"/etc/passwd\" is an absolute name"), "{e}");
-    let e = refused("garbled");
+    let e = refused("garbled").await;
     assert!(e.contains("cannot be read: garbled.toml: "), "{e}");
-    let e = refused("nosuch");
+    let e = refused("nosuch").await;
     assert!(
         e.contains("no such program; there are: copy, first, good (and, unreadable: escape, garbled, passwd)"),
         "{e}"
     );
-    h.run_cycle("good", Some(1)).unwrap();
+    h.run_cycle("good", Some(1)).await.unwrap();
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
 }

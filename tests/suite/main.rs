@@ -24,6 +24,7 @@ mod gateway;
 mod interop_rmodbus;
 mod io_cli;
 mod jog_teach;
+mod journal;
 mod layers;
 mod mock_servers;
 mod modbus_face;

@@ -1,7 +1,7 @@
 //! `linterpd check-config`: read a configuration file as the daemon would and say what it holds
 //! (text, or with `--json` one document: `{"config", "robots": [{"name", "kinematics",
 //! "joints": [{"name", "channel"}], "link", "programs"?: {"dir", "checked": [{"name", "number",
-//! "ops"}], "positions"}}]}`), or what is wrong with it on stderr with exit 2: the first fault of
+//! "ops"}], "positions"}, "pallets"?: [line]}]}`), or what is wrong with it on stderr with exit 2: the first fault of
 //! the file (the file, line, key path, value, limit, and the nearest valid key of an unknown
 //! one), or every cycle program of a robot's `programs` directory that does not check (each as
 //! `cycle run` would say it; `programs.rs`). Needs no daemon.
@@ -161,8 +161,38 @@ fn text(
         if let Some(p) = programs.get(i).and_then(Option::as_ref) {
             let _ = writeln!(text, "    {}", describe_programs(p));
         }
+        for line in pallet_lines(config, robot) {
+            let _ = writeln!(text, "    {line}");
+        }
     }
     text
+}
+
+/// A line per pallet of `robot`: its slots, every one checked against the robot's reach when
+/// the config was; or that it waits for its taught points.
+fn pallet_lines(config: &Config, robot: &crate::robot::Robot) -> Vec<String> {
+    let Some(set) = config.pallets.get(&robot.name) else {
+        return Vec::new();
+    };
+    let none = std::collections::BTreeMap::new();
+    set.layouts
+        .keys()
+        .map(|name| {
+            if set.needs_taught(name) {
+                return format!(
+                    "pallet {name}: on taught points; laid out and checked when they are taught"
+                );
+            }
+            match set.pattern(name, robot, &none) {
+                Ok(p) => format!(
+                    "pallet {name}: {} slots in {} layers, every slot and waypoint within reach",
+                    p.len(),
+                    p.layers()
+                ),
+                Err(e) => format!("pallet {name}: {e}"),
+            }
+        })
+        .collect()
 }
 
 fn document(
@@ -186,6 +216,10 @@ fn document(
                 "joints": joints,
                 "link": link_of(config, &robot.name),
             });
+            let pallets = pallet_lines(config, robot);
+            if !pallets.is_empty() {
+                robot_json["pallets"] = json!(pallets);
+            }
             if let Some(p) = programs {
                 let checked: Vec<Value> = p
                     .checked

@@ -123,6 +123,11 @@ impl Client {
             .uri(path)
             .header("host", "localhost")
             .header("content-type", "application/json")
+            // The daemon's journal tells the CLI's commands from other API clients' by it.
+            .header(
+                "user-agent",
+                concat!("linterpd/", env!("CARGO_PKG_VERSION")),
+            )
             .body(Full::new(bytes))?)
     }
 

@@ -11,7 +11,7 @@ use anyhow::Context;
 use super::starts::{Start, elements_between, holding, starts};
 use super::{Failure, Format, PlanArgs, csv, method, motion, path_json, start_pose, tolerance};
 use crate::config::PathDoc;
-use crate::geometry::Primitive;
+use crate::geometry::{Piece, Primitive};
 use crate::kinematics::Kinematics;
 use crate::plan::{Origin, PathPlan, PathRequest, Plan, plan_path};
 use crate::robot::Robot;
@@ -125,62 +125,11 @@ fn write_text(
         starts.last().map_or(0, |s| s.section)
     )?;
     for piece in planned.path.pieces() {
-        let p = &piece.primitive;
-        let end_mm = piece.start_mm + p.length_mm();
-        let start = holding(starts, piece.start_mm + p.length_mm() / 2.0);
-        let (slowest, cruise) = (
-            start.cruise_mm_s(piece.start_mm, end_mm),
-            start.plan.profile.speed_mm_s,
-        );
-        let slowed = if slowest < cruise - 0.05 {
-            format!(", slowed to {slowest:.1} mm/s")
-        } else {
-            String::new()
-        };
-        let source = match (piece.element, piece.waypoint) {
-            (Some(e), _) => format!("element {e}"),
-            (None, Some(w)) => format!("blend {w}"),
-            (None, None) => "blend".to_owned(),
-        };
-        let [x, y, z, _] = p.to().to_mm_deg();
-        match p {
-            Primitive::Line(_) => writeln!(
-                out,
-                "  {source:<11} line {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}){slowed}",
-                p.length_mm()
-            )?,
-            Primitive::Arc(a) => writeln!(
-                out,
-                "  {source:<11} arc  {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}), radius {:.3} mm, {:.1} deg{slowed}",
-                p.length_mm(),
-                a.radius_mm,
-                a.sweep_rad.to_degrees()
-            )?,
-        }
+        write_piece(piece, starts, out)?;
     }
     writeln!(out, "starts")?;
     for start in starts {
-        let (plan, f) = (start.plan, &start.plan.figures);
-        writeln!(
-            out,
-            "  {} (section {}, element {}){}: {:.3} mm at {:.1} mm/s, {:.3} s, {} rows, path \
-             deviation {:.4} mm, tracking error {:.4} mm{}",
-            start.number,
-            start.section,
-            elements_between(&planned.path, start.begins_mm, start.ends_mm()),
-            if plan.window.begins_at_speed() {
-                ", chained at speed"
-            } else {
-                ""
-            },
-            start.ends_mm() - start.begins_mm,
-            plan.profile.speed_mm_s,
-            plan.duration_s(),
-            f.rows,
-            f.path_deviation_mm,
-            f.tracking_error_mm,
-            if plan.valid() { "" } else { ", NOT VALID" }
-        )?;
+        write_start(planned, start, out)?;
     }
     writeln!(
         out,
@@ -193,4 +142,66 @@ fn write_text(
     } else {
         writeln!(out, "valid    NO, must not be sent to a PLC")
     }
+}
+
+/// One primitive of the path: where it comes from, its kind and length, where it ends, and the
+/// speed its start slows to on it.
+fn write_piece(piece: &Piece, starts: &[Start<'_>], out: &mut dyn Write) -> std::io::Result<()> {
+    let p = &piece.primitive;
+    let end_mm = piece.start_mm + p.length_mm();
+    let start = holding(starts, piece.start_mm + p.length_mm() / 2.0);
+    let (slowest, cruise) = (
+        start.cruise_mm_s(piece.start_mm, end_mm),
+        start.plan.profile.speed_mm_s,
+    );
+    let slowed = if slowest < cruise - 0.05 {
+        format!(", slowed to {slowest:.1} mm/s")
+    } else {
+        String::new()
+    };
+    let source = match (piece.element, piece.waypoint) {
+        (Some(e), _) => format!("element {e}"),
+        (None, Some(w)) => format!("blend {w}"),
+        (None, None) => "blend".to_owned(),
+    };
+    let [x, y, z, _] = p.to().to_mm_deg();
+    match p {
+        Primitive::Line(_) => writeln!(
+            out,
+            "  {source:<11} line {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}){slowed}",
+            p.length_mm()
+        ),
+        Primitive::Arc(a) => writeln!(
+            out,
+            "  {source:<11} arc  {:>9.3} mm  to ({x:.3}, {y:.3}, {z:.3}), radius {:.3} mm, {:.1} deg{slowed}",
+            p.length_mm(),
+            a.radius_mm,
+            a.sweep_rad.to_degrees()
+        ),
+    }
+}
+
+/// One start of the path: its section and elements, length, speed, time, rows and figures.
+fn write_start(planned: &PathPlan, start: &Start<'_>, out: &mut dyn Write) -> std::io::Result<()> {
+    let (plan, f) = (start.plan, &start.plan.figures);
+    writeln!(
+        out,
+        "  {} (section {}, element {}){}: {:.3} mm at {:.1} mm/s, {:.3} s, {} rows, path \
+         deviation {:.4} mm, tracking error {:.4} mm{}",
+        start.number,
+        start.section,
+        elements_between(&planned.path, start.begins_mm, start.ends_mm()),
+        if plan.window.begins_at_speed() {
+            ", chained at speed"
+        } else {
+            ""
+        },
+        start.ends_mm() - start.begins_mm,
+        plan.profile.speed_mm_s,
+        plan.duration_s(),
+        f.rows,
+        f.path_deviation_mm,
+        f.tracking_error_mm,
+        if plan.valid() { "" } else { ", NOT VALID" }
+    )
 }

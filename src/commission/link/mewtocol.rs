@@ -3,10 +3,10 @@
 
 use tokio::time::Instant;
 
-use super::sizes::{probe_timeout, sizes};
+use super::sizes::{Search, probe_timeout, sizes};
 use super::{MULTI_FRAME_CHECKS, check};
-use crate::commission::report::HeaderProbe;
-use crate::commission::{Halt, Session};
+use crate::commission::report::{CheckReport, HeaderProbe};
+use crate::commission::{Check, Halt, Session};
 use crate::mewtocol::{
     Command, Header, Reply, Station, max_read_reply_words, max_write_words, response_frames,
 };
@@ -80,6 +80,17 @@ fn tries(settings: &LinkSettings) -> String {
     }
 }
 
+impl Probe {
+    /// What the probe got, in words.
+    fn words(&self, settings: &LinkSettings) -> String {
+        match self {
+            Probe::Answered(took_s) => format!("answered in {:.1} ms", took_s * 1e3),
+            Probe::NotAnswered(why) => format!("{why}{}", tries(settings)),
+            Probe::LinkFailed(why) => format!("link failed: {why}"),
+        }
+    }
+}
+
 /// MEWTOCOL-COM: headers, then request sizes with each header that answered.
 pub(super) async fn step(
     s: &mut Session<'_>,
@@ -93,24 +104,40 @@ pub(super) async fn step(
             settings.layout.status_base
         ),
     );
-    let mut link = link;
+    let (link, works, saw) = probe_headers(s, &c, link, settings).await?;
+    let header = settle_header(s, c, saw, &works, settings.header)?;
+    let (link, header) = mewtocol_sizes(s, link, settings, &works, header).await?;
+    let link = multi_frame_read(s, link, settings, header).await?;
+    s.findings.header_used = Some(header_name(header).to_owned());
+    let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    // The config's choice, unless the check just saw this PLC leave a multi-frame read
+    // unanswered: the rest of the commission does not spend a timeout finding that out again.
+    options.multi_frame_reads &= s.findings.multi_frame_reads != Some(false);
+    Ok(AnyPlc::Mewtocol(MewtocolClient::new(link, options)))
+}
+
+/// A 1-word read with `%`, then with `<`: the stream back, the headers the PLC answered and
+/// what each probe got, in words.
+async fn probe_headers(
+    s: &mut Session<'_>,
+    c: &Check,
+    mut link: BoxedLink,
+    settings: &LinkSettings,
+) -> Result<(BoxedLink, Vec<Header>, String), Halt> {
     let mut works = Vec::new();
     let mut said = Vec::new();
     for header in [Header::Percent, Header::Angle] {
         let (back, outcome) = match probe_header(link, settings, header).await {
             Ok(done) => done,
             Err(e) => {
-                s.record(c.fail(format!("{e:#}"), "check the station number in the config"))?;
+                let hint = "check the station number in the config";
+                s.record(c.clone().fail(format!("{e:#}"), hint))?;
                 return Err(Halt);
             }
         };
         link = back;
         let name = header_name(header);
-        let text = match &outcome {
-            Probe::Answered(took_s) => format!("answered in {:.1} ms", took_s * 1e3),
-            Probe::NotAnswered(why) => format!("{why}{}", tries(settings)),
-            Probe::LinkFailed(why) => format!("link failed: {why}"),
-        };
+        let text = outcome.words(settings);
         said.push(format!("{name} {text}"));
         s.findings.headers.push(HeaderProbe {
             header: name.to_owned(),
@@ -121,7 +148,7 @@ pub(super) async fn step(
             Probe::Answered(_) => works.push(header),
             Probe::NotAnswered(_) => {}
             Probe::LinkFailed(_) => {
-                s.record(c.fail(
+                s.record(c.clone().fail(
                     said.join("; "),
                     "the link itself failed: check the cable, port and its settings",
                 ))?;
@@ -129,8 +156,18 @@ pub(super) async fn step(
             }
         }
     }
-    let saw = said.join("; ");
-    let configured = settings.header;
+    Ok((link, works, said.join("; ")))
+}
+
+/// The header to go on with: the one the config asks for when the PLC answered it, else the
+/// first that answered (a config change).
+fn settle_header(
+    s: &mut Session<'_>,
+    c: Check,
+    saw: String,
+    works: &[Header],
+    configured: HeaderChoice,
+) -> Result<Header, Halt> {
     let wanted = match configured {
         HeaderChoice::Angle => Header::Angle,
         HeaderChoice::Auto if works.contains(&Header::Angle) => Header::Angle,
@@ -144,21 +181,7 @@ pub(super) async fn step(
         ))?;
         return Err(Halt);
     };
-    let header = if works.contains(&wanted) {
-        let note = match configured {
-            HeaderChoice::Auto => Some(format!(
-                "header = \"auto\" settles on {} here",
-                header_name(wanted)
-            )),
-            _ => None,
-        };
-        let report = match note {
-            Some(note) => c.pass_noting(saw, note),
-            None => c.pass(saw),
-        };
-        s.record(report)?;
-        wanted
-    } else {
+    if !works.contains(&wanted) {
         s.record(c.config(
             saw,
             format!(
@@ -167,16 +190,17 @@ pub(super) async fn step(
                 header_config(fallback)
             ),
         ))?;
-        fallback
+        return Ok(fallback);
+    }
+    let report = match configured {
+        HeaderChoice::Auto => c.pass_noting(
+            saw,
+            format!("header = \"auto\" settles on {} here", header_name(wanted)),
+        ),
+        _ => c.pass(saw),
     };
-    let (link, header) = mewtocol_sizes(s, link, settings, &works, header).await?;
-    let link = multi_frame_read(s, link, settings, header).await?;
-    s.findings.header_used = Some(header_name(header).to_owned());
-    let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
-    // The config's choice, unless the check just saw this PLC leave a multi-frame read
-    // unanswered: the rest of the commission does not spend a timeout finding that out again.
-    options.multi_frame_reads &= s.findings.multi_frame_reads != Some(false);
-    Ok(AnyPlc::Mewtocol(MewtocolClient::new(link, options)))
+    s.record(report)?;
+    Ok(wanted)
 }
 
 fn header_config(header: Header) -> &'static str {
@@ -225,19 +249,13 @@ async fn mewtocol_sizes(
     let mut fits = Vec::new();
     let mut said = Vec::new();
     for &header in works {
-        let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
-        options.timeout = probe_timeout(settings, header.max_frame_len());
-        let mut client = MewtocolClient::new(link, options);
-        let (max_read, max_write) = (max_read_reply_words(header), max_write_words(header));
-        let probed = sizes(&mut client, settings, (max_read, max_write)).await;
-        link = client.into_inner();
+        let (back, probed) = sizes_with(link, settings, header).await?;
+        link = back;
         let (read, write) = match probed {
             Ok(found) => found,
             Err(e) => {
-                s.record(c.fail(
-                    format!("{e:#}"),
-                    "the link failed while probing request sizes",
-                ))?;
+                let hint = "the link failed while probing request sizes";
+                s.record(c.fail(format!("{e:#}"), hint))?;
                 return Err(Halt);
             }
         };
@@ -247,15 +265,8 @@ async fn mewtocol_sizes(
             read.bisect.largest(),
             write.bisect.largest(),
         );
-        said.push(format!(
-            "{}: reads up to {} of {max_read} words{}, writes up to {} of {max_write}{}{}",
-            header_name(header),
-            read.bisect.largest(),
-            read.refused_at(),
-            write.bisect.largest(),
-            write.refused_at(),
-            frame.map_or(String::new(), |n| format!(", frames up to {n} characters")),
-        ));
+        said.push(sizes_said(header, (&read, &write), frame));
+        let (max_read, max_write) = (max_read_reply_words(header), max_write_words(header));
         if read.carries(max_read, settings.timeout) && write.carries(max_write, settings.timeout) {
             fits.push(header);
         }
@@ -263,10 +274,51 @@ async fn mewtocol_sizes(
             .sizes
             .push(read.sizes(&write, header_name(header), frame));
     }
-    let saw = said.join("; ");
+    settle_sizes(s, c, said.join("; "), &fits, wanted).map(|header| (link, header))
+}
+
+/// What the size search under `header` found, in words.
+fn sizes_said(header: Header, (read, write): (&Search, &Search), frame: Option<usize>) -> String {
+    format!(
+        "{}: reads up to {} of {} words{}, writes up to {} of {}{}{}",
+        header_name(header),
+        read.bisect.largest(),
+        max_read_reply_words(header),
+        read.refused_at(),
+        write.bisect.largest(),
+        max_write_words(header),
+        write.refused_at(),
+        frame.map_or(String::new(), |n| format!(", frames up to {n} characters")),
+    )
+}
+
+/// The size search under `header`, with a client whose timeout allows for the longest frame:
+/// the stream back, and what the search found.
+async fn sizes_with(
+    link: BoxedLink,
+    settings: &LinkSettings,
+    header: Header,
+) -> Result<(BoxedLink, Result<(Search, Search), PlcError>), Halt> {
+    let mut options = mewtocol_options(settings, header).map_err(|_| Halt)?;
+    options.timeout = probe_timeout(settings, header.max_frame_len());
+    let mut client = MewtocolClient::new(link, options);
+    let most = (max_read_reply_words(header), max_write_words(header));
+    let probed = sizes(&mut client, settings, most).await;
+    Ok((client.into_inner(), probed))
+}
+
+/// The header whose frames carry linterpd's reads and writes: `wanted` if it does, else `%`
+/// (a config change); the procedure stops when neither does.
+fn settle_sizes(
+    s: &mut Session<'_>,
+    c: Check,
+    saw: String,
+    fits: &[Header],
+    wanted: Header,
+) -> Result<Header, Halt> {
     if fits.contains(&wanted) {
         s.record(c.pass(saw))?;
-        return Ok((link, wanted));
+        return Ok(wanted);
     }
     if fits.contains(&Header::Percent) {
         s.record(c.config(
@@ -274,7 +326,7 @@ async fn mewtocol_sizes(
             "linterpd fills each < frame (509 words a read, 507 a write): more than this PLC \
              takes, or longer on the line than the config's timeout: set header = \"percent\"",
         ))?;
-        return Ok((link, Header::Percent));
+        return Ok(Header::Percent);
     }
     s.record(c.fail(
         saw,
@@ -318,7 +370,20 @@ async fn multi_frame_read(
         return Err(Halt);
     }
     s.findings.multi_frame_reads = answered;
-    let report = match (answered, settings.multi_frame_reads) {
+    let report = multi_frame_report(c, answered, settings.multi_frame_reads, (words, took_ms));
+    s.record(report)?;
+    Ok(link)
+}
+
+/// The multi-frame check's report: whether the PLC answered a read of `words` words in several
+/// frames (`None`: the line is too slow to try), against the config's `configured` choice.
+fn multi_frame_report(
+    c: Check,
+    answered: Option<bool>,
+    configured: bool,
+    (words, took_ms): (usize, f64),
+) -> CheckReport {
+    match (answered, configured) {
         (None, _) => c.skip(format!(
             "the line is too slow for a read past one frame within {} ms of wire time",
             EXCHANGE_BUDGET.as_millis()
@@ -345,7 +410,5 @@ async fn multi_frame_read(
                 c.pass_noting(saw, "multi_frame_reads = false fits this PLC")
             }
         }
-    };
-    s.record(report)?;
-    Ok(link)
+    }
 }

@@ -19,7 +19,8 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::judge::{scan_rate, spread};
+use super::judge::{ScanRate, scan_rate, spread};
+use super::report::CheckReport;
 use super::{Check, Halt, LINK_CHECKS, LinkTiming, Session, Step};
 use crate::plc::{AnyPlc, BoxedLink, LinkSettings, Plc, PlcError, PlcMode, Protocol, relay_name};
 
@@ -83,19 +84,13 @@ async fn round_trip(
         )
         .as_str(),
     );
-    let base = settings.layout.status_base;
-    let mut word = Vec::new();
-    let mut status = Vec::new();
-    for _ in 0..ROUND_TRIPS {
-        for (count, into) in [(1, &mut word), (crate::contract::STATUS_WORDS, &mut status)] {
-            let began = Instant::now();
-            if let Err(e) = plc.read_words(base, count as u16).await {
-                s.record(c.fail(format!("{e:#}"), "the link failed while timing exchanges"))?;
-                return Err(Halt);
-            }
-            into.push(began.elapsed().as_secs_f64());
+    let (word, status) = match time_reads(plc, settings.layout.status_base).await {
+        Ok(times) => times,
+        Err(e) => {
+            s.record(c.fail(format!("{e:#}"), "the link failed while timing exchanges"))?;
+            return Err(Halt);
         }
-    }
+    };
     let (Some(word), Some(status)) = (spread(&word), spread(&status)) else {
         return Err(Halt);
     };
@@ -121,6 +116,20 @@ async fn round_trip(
     Ok(status.median_ms / 1e3)
 }
 
+/// [`ROUND_TRIPS`] times a 1-word read and a status-block read, in turn: their round trips, s.
+async fn time_reads(plc: &mut AnyPlc, base: u16) -> Result<(Vec<f64>, Vec<f64>), PlcError> {
+    let mut word = Vec::new();
+    let mut status = Vec::new();
+    for _ in 0..ROUND_TRIPS {
+        for (count, into) in [(1, &mut word), (crate::contract::STATUS_WORDS, &mut status)] {
+            let began = Instant::now();
+            plc.read_words(base, count as u16).await?;
+            into.push(began.elapsed().as_secs_f64());
+        }
+    }
+    Ok((word, status))
+}
+
 /// A duration in whole milliseconds, rounded up to 10 ms, as the config writes it.
 pub(super) fn lines_ms(ms: f64) -> String {
     format!("{}ms", ((ms / 10.0).ceil() * 10.0).max(10.0) as u64)
@@ -141,24 +150,18 @@ async fn scan_time(
         )
         .as_str(),
     );
-    let began = Instant::now();
-    let mut reads = Vec::new();
-    while began.elapsed().as_secs_f64() < SCAN_WINDOW_S || reads.len() < MIN_READS {
-        match plc.read_words(heartbeat, 1).await {
-            Ok(w) => reads.push((began.elapsed().as_secs_f64(), w[0])),
-            Err(e) => {
-                s.record(c.fail(
-                    format!("{e:#}"),
-                    "the link failed while reading the heartbeat",
-                ))?;
-                return Err(Halt);
-            }
+    let reads = match heartbeats(plc, heartbeat).await {
+        Ok(reads) => reads,
+        Err(e) => {
+            s.record(c.fail(
+                format!("{e:#}"),
+                "the link failed while reading the heartbeat",
+            ))?;
+            return Err(Halt);
         }
-        tokio::time::sleep(Duration::from_millis(1)).await;
-    }
+    };
     let rate = scan_rate(&reads);
     s.findings.scan = Some(rate);
-    let configured_ms = settings.scan_time.as_secs_f64() * 1e3;
     let Some(mean_s) = rate.mean_scan_s else {
         s.record(c.fail(
             format!(
@@ -171,26 +174,55 @@ async fn scan_time(
         ))?;
         return Err(Halt);
     };
+    s.record(scan_report(
+        c,
+        &rate,
+        (reads.len(), mean_s),
+        settings.scan_time,
+    ))?;
+    Ok(mean_s)
+}
+
+/// Reads the heartbeat word for [`SCAN_WINDOW_S`] (and [`MIN_READS`] times at least): when
+/// each read came back, s, and what it read.
+async fn heartbeats(plc: &mut AnyPlc, heartbeat: u16) -> Result<Vec<(f64, u16)>, PlcError> {
+    let began = Instant::now();
+    let mut reads = Vec::new();
+    while began.elapsed().as_secs_f64() < SCAN_WINDOW_S || reads.len() < MIN_READS {
+        let w = plc.read_words(heartbeat, 1).await?;
+        reads.push((began.elapsed().as_secs_f64(), w[0]));
+        tokio::time::sleep(Duration::from_millis(1)).await;
+    }
+    Ok(reads)
+}
+
+/// The scan time check's report: the mean scan `mean_s` over `reads` reads against the
+/// config's `scan_time`.
+fn scan_report(
+    c: Check,
+    rate: &ScanRate,
+    (reads, mean_s): (usize, f64),
+    scan_time: Duration,
+) -> CheckReport {
+    let configured_ms = scan_time.as_secs_f64() * 1e3;
     let saw = format!(
-        "{} scans in {:.3} s over {} reads: {:.2} ms a scan on average; the config's scan_time \
-         (the longest scan) is {configured_ms:.0} ms",
+        "{} scans in {:.3} s over {reads} reads: {:.2} ms a scan on average; the config's \
+         scan_time (the longest scan) is {configured_ms:.0} ms",
         rate.scans,
         rate.window_s,
-        reads.len(),
         mean_s * 1e3
     );
     if mean_s * 1e3 > configured_ms {
-        s.record(c.config(
+        c.config(
             saw,
             format!(
                 "the scans take longer than scan_time says: set scan_time = \"{}ms\"",
                 (2.0 * mean_s * 1e3).ceil() as u64
             ),
-        ))?;
+        )
     } else {
-        s.record(c.pass(saw))?;
+        c.pass(saw)
     }
-    Ok(mean_s)
 }
 
 /// Reads the mode while the heartbeat moves: it must say RUN.

@@ -8,8 +8,8 @@ use tokio::time::Instant;
 
 use super::{MULTI_FRAME_CHECKS, check};
 use crate::commission::judge::Bisect;
-use crate::commission::report::RequestSizes;
-use crate::commission::{Halt, Session};
+use crate::commission::report::{CheckReport, RequestSizes};
+use crate::commission::{Check, Halt, Session};
 use crate::plc::{
     AnyPlc, BoxedLink, LinkSettings, MAX_READ_REGISTERS, MAX_WRITE_REGISTERS, ModbusClient,
     ModbusOptions, Parity, Plc, PlcError, Transport,
@@ -182,6 +182,25 @@ pub(super) async fn modbus(
         }
     };
     s.findings.sizes.push(read.sizes(&write, "modbus", None));
+    s.record(modbus_sizes_report(
+        c,
+        (&read, &write),
+        (max_read, max_write),
+        settings,
+    ))?;
+    let multi = check("multi-frame read", MULTI_FRAME_CHECKS);
+    s.record(multi.skip("Modbus replies are not split into frames"))?;
+    Ok(AnyPlc::Modbus(client))
+}
+
+/// The Modbus sizes check's report from the searches, against the config's request sizes.
+/// Sizes under what linterpd's own requests need stop the procedure.
+fn modbus_sizes_report(
+    c: Check,
+    (read, write): (&Search, &Search),
+    (max_read, max_write): (usize, usize),
+    settings: &LinkSettings,
+) -> CheckReport {
     let (read_most, write_most) = (read.bisect.largest(), write.bisect.largest());
     let saw = format!(
         "reads up to {read_most} of {max_read} registers{}, writes up to {write_most} of \
@@ -193,31 +212,27 @@ pub(super) async fn modbus(
     );
     let smallest_needed = crate::contract::STATUS_WORDS;
     if read_most < smallest_needed || write_most < crate::contract::COMMAND_WORDS - 1 {
-        s.record(c.fail(
+        return c.fail(
             saw,
             format!(
                 "linterpd needs at least {smallest_needed} registers a read and {} a write",
                 crate::contract::COMMAND_WORDS - 1
             ),
-        ))?;
-        return Err(Halt);
+        );
     }
     let (read_size, write_size) = (
         usize::from(settings.modbus_max_read),
         usize::from(settings.modbus_max_write),
     );
     if !read.carries(read_size, settings.timeout) || !write.carries(write_size, settings.timeout) {
-        s.record(c.config(
+        c.config(
             saw,
             format!(
                 "set modbus_max_read = {read_most} and modbus_max_write = {write_most} (or, if \
                  they took longer than the timeout, raise the timeout)"
             ),
-        ))?;
+        )
     } else {
-        s.record(c.pass(saw))?;
+        c.pass(saw)
     }
-    let multi = check("multi-frame read", MULTI_FRAME_CHECKS);
-    s.record(multi.skip("Modbus replies are not split into frames"))?;
-    Ok(AnyPlc::Modbus(client))
 }

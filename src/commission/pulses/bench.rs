@@ -5,11 +5,12 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::{MAX_HZ, MIN_HZ, QUIET_POLLS, RANGE};
+use super::{MAX_HZ, MIN_HZ, QUIET_POLLS, RANGE, within};
 use crate::commission::LinkTiming;
+use crate::commission::error::Failure;
 use crate::contract::{CHANNELS, Fault, Permit, State, StatusBlock};
 use crate::plc::Plc;
-use crate::plc::exchange::{Contract, ContractError, StartBlock, fault_meaning};
+use crate::plc::exchange::{Contract, StartBlock, fault_meaning};
 use crate::robot::Joint;
 use crate::table::{
     ChannelLimits, ChannelTable, ControlCode, Direction, Duty, FrequencyModel, Row, Segment,
@@ -101,6 +102,35 @@ impl Run {
             .is_some_and(|s| s.state == state && s.block.seq == self.seq)
     }
 
+    /// Whether the start was refused with `fault` and nothing moved: its seq not latched (still
+    /// `seq_before`), channel `c` still at `c0` and never busy.
+    pub(super) fn refused_still(&self, fault: Fault, seq_before: u16, c: usize, c0: i64) -> bool {
+        let refused = self.last().is_some_and(|x| {
+            x.state == State::Fault && x.block.fault == fault.word() && x.block.seq == seq_before
+        });
+        refused && self.count(c).unwrap_or(c0) == c0 && self.busy_reads(c) == 0
+    }
+
+    /// Whether `sample` ends the run: a fault, its own start done or stopped, or any end
+    /// once the run wrote a stop.
+    fn is_over(&self, sample: &Sample) -> bool {
+        let ours = sample.block.seq == self.seq;
+        sample.state == State::Fault
+            || (ours && matches!(sample.state, State::Done | State::Stopped))
+            || (self.stopped_for.is_some() && sample.state != State::Running)
+    }
+
+    /// How a start that must not run ended, then where channel `c` (found at `c0`) ended and
+    /// in how many reads it was busy.
+    pub(super) fn still_words(&self, c: usize, c0: i64) -> String {
+        format!(
+            "{}; the count ended at {}, busy ON in {} reads",
+            self.ending(),
+            self.count(c).unwrap_or(c0),
+            self.busy_reads(c)
+        )
+    }
+
     pub(super) fn busy_reads(&self, c: usize) -> usize {
         self.samples
             .iter()
@@ -158,12 +188,8 @@ impl<P: Plc> Bench<'_, P> {
         self.seq
     }
 
-    pub(super) async fn status(&mut self) -> Result<StatusBlock, String> {
-        self.contract
-            .status()
-            .await
-            .map(|s| s.block)
-            .map_err(|e| format!("{e:#}"))
+    pub(super) async fn status(&mut self) -> Result<StatusBlock, Failure> {
+        Ok(self.contract.status().await?.block)
     }
 
     /// Uploads `segments` for channel `ch` with `from` and `permit` (and `seq`, or a new one)
@@ -174,19 +200,14 @@ impl<P: Plc> Bench<'_, P> {
         segments: Vec<Segment>,
         (from, permit): ([i32; CHANNELS], Permit),
         seq: Option<u16>,
-    ) -> Result<u16, String> {
+    ) -> Result<u16, Failure> {
         let table = ChannelTable {
             channel: ch.c,
             start: i64::from(from[ch.index()]),
             segments,
         };
-        let table = validate(table, ch.limits).map_err(|problems| {
-            let words: Vec<String> = problems.iter().map(ToString::to_string).collect();
-            format!(
-                "the commission's own table is invalid: {}",
-                words.join("; ")
-            )
-        })?;
+        let table =
+            validate(table, ch.limits).map_err(|problems| Failure::OwnTable { problems })?;
         let seq = seq.unwrap_or_else(|| self.next_seq());
         self.bank ^= 1;
         let start = StartBlock {
@@ -195,17 +216,13 @@ impl<P: Plc> Bench<'_, P> {
             from,
             permit,
         };
-        let link = |e: ContractError| format!("{e:#}");
-        let mut upload = self.contract.begin_upload(&start, &[table]).map_err(link)?;
+        let mut upload = self.contract.begin_upload(&start, &[table])?;
         let bank = loop {
-            if let Some(bank) = self.contract.upload_step(&mut upload).await.map_err(link)? {
+            if let Some(bank) = self.contract.upload_step(&mut upload).await? {
                 break bank;
             }
         };
-        self.contract
-            .start(&bank)
-            .await
-            .map_err(|e| format!("{e:#}"))?;
+        self.contract.start(&bank).await?;
         Ok(seq)
     }
 
@@ -236,51 +253,88 @@ impl<P: Plc> Bench<'_, P> {
         match self.launch(ch, segments, start, None).await {
             Ok(seq) => run.seq = seq,
             Err(e) => {
-                run.link_error = Some(e);
+                run.link_error = Some(e.to_string());
                 return run;
             }
         }
         let began = Instant::now();
         for k in 0.. {
             tokio::time::sleep(jittered(self.pace.poll(), k)).await;
-            let block = match self.contract.status().await {
-                Ok(s) => s,
+            let sample = match self.contract.status().await {
+                Ok(st) => Sample {
+                    t_s: began.elapsed().as_secs_f64(),
+                    block: st.block,
+                    state: st.state,
+                },
                 Err(e) => {
                     run.link_error = Some(format!("{e:#}"));
                     let _ = self.contract.stop().await;
                     break;
                 }
             };
-            let t_s = began.elapsed().as_secs_f64();
-            let sample = Sample {
-                t_s,
-                block: block.block,
-                state: block.state,
-            };
+            let t_s = sample.t_s;
             run.samples.push(sample);
             if run.stopped_for.is_none() {
                 let why = watch(&sample).or_else(|| {
                     (t_s > deadline_s).then(|| format!("no end within {deadline_s:.2} s"))
                 });
                 if let Some(why) = why {
-                    tracing::warn!(channel = ch.c, %why, "commission: stop");
-                    if let Err(e) = self.contract.stop().await {
-                        run.link_error = Some(format!("{e:#}"));
+                    if !self.stop_for(ch, &mut run, t_s, why).await {
                         break;
                     }
-                    run.stopped_for = Some((t_s, why));
                     continue;
                 }
             }
-            let ours = sample.block.seq == run.seq;
-            let ended = sample.state == State::Fault
-                || (ours && matches!(sample.state, State::Done | State::Stopped))
-                || (run.stopped_for.is_some() && sample.state != State::Running);
-            if ended || t_s > deadline_s + 1.0 {
+            if run.is_over(&sample) || t_s > deadline_s + 1.0 {
                 break;
             }
         }
         run
+    }
+
+    /// Plays a table on `ch` from `at` to `to` (the counts `from`), stopping it should the count
+    /// leave the span between them.
+    pub(super) async fn play_between(
+        &mut self,
+        ch: &Channel<'_>,
+        from: [i32; CHANNELS],
+        (at, to, hz): (i64, i64, u32),
+        deadline_s: f64,
+    ) -> Run {
+        let watch = within(ch.index(), at.min(to), at.max(to));
+        self.play(ch, vec![ch.segment(at, to, hz)], from, deadline_s, &watch)
+            .await
+    }
+
+    /// Plays a start that must be refused: a stop is written as soon as channel `ch` leaves
+    /// `c0` or the program runs.
+    pub(super) async fn play_refused(
+        &mut self,
+        ch: &Channel<'_>,
+        segment: Segment,
+        start: ([i32; CHANNELS], Permit),
+        c0: i64,
+        hz: u32,
+    ) -> Run {
+        let i = ch.index();
+        let watch = move |x: &Sample| {
+            (i64::from(x.block.elapsed[i]) != c0 || x.state == State::Running)
+                .then(|| "the start ran".to_owned())
+        };
+        let deadline = self.deadline_s(0, hz) + self.pace.sample_s() * QUIET_POLLS as f64;
+        self.play_permitted(ch, vec![segment], start, deadline, &watch)
+            .await
+    }
+
+    /// Writes a stop for `why`, `t_s` into `run`: whether it was written (else the link failed).
+    async fn stop_for(&mut self, ch: &Channel<'_>, run: &mut Run, t_s: f64, why: String) -> bool {
+        tracing::warn!(channel = ch.c, %why, "commission: stop");
+        if let Err(e) = self.contract.stop().await {
+            run.link_error = Some(format!("{e:#}"));
+            return false;
+        }
+        run.stopped_for = Some((t_s, why));
+        true
     }
 
     /// How long `pulses` take at `hz` under the slower model, with room for polls and scans, s.
@@ -292,7 +346,7 @@ impl<P: Plc> Bench<'_, P> {
     }
 
     /// Reads the status block `QUIET_POLLS` times; the reads.
-    pub(super) async fn watch_quietly(&mut self) -> Result<Vec<StatusBlock>, String> {
+    pub(super) async fn watch_quietly(&mut self) -> Result<Vec<StatusBlock>, Failure> {
         let mut out = Vec::with_capacity(QUIET_POLLS);
         for k in 0..QUIET_POLLS {
             tokio::time::sleep(jittered(self.pace.poll(), k as u32)).await;

@@ -15,13 +15,15 @@
 use tokio::time::Instant;
 
 use super::bench::{Bench, Channel, Sample, jittered, unfinished_hint};
-use super::refusals::clear_fault;
-use super::{QUIET_POLLS, check, counts, within};
-use crate::commission::inputs::{DROP_BIT, is_on, on_off, relay, switch};
-use crate::commission::{Halt, Session};
-use crate::contract::{CHANNELS, Fault, Permit, PermitBit, State, bit_name};
+use super::permit::one_bit;
+use super::refusals::clear_after;
+use super::{QUIET_POLLS, check, counts};
+use crate::commission::error::Failure;
+use crate::commission::inputs::{self, DROP_BIT, is_on, on_off, relay, switch};
+use crate::commission::{Check, Halt, Session};
+use crate::contract::{CHANNELS, Fault, Permit, State, bit_name};
 use crate::plc::Plc;
-use crate::plc::exchange::fault_meaning;
+use crate::plc::exchange::{ContractError, fault_meaning};
 
 /// Pulses of the table whose permit is dropped.
 const DROP_PULSES: i64 = 300;
@@ -35,23 +37,46 @@ const DROP_MIN_S: f64 = 0.5;
 /// Reads in a row with the channel stopped that end the watch after the switch.
 const SETTLED_READS: usize = 3;
 
+/// Why the drop check cannot switch an R input bit.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+enum NoDropRelay {
+    /// The inputs step found nothing.
+    #[error("the inputs step did not read the status block's inputs")]
+    NotRead,
+    /// The four input words are X words.
+    #[error(
+        "all four input words are X words ({words}), which the link cannot switch: this check \
+         needs wiring (switch an input a move's permit needs while it runs, \
+         deploy/plc/README.md, \"by hand\")"
+    )]
+    AllX {
+        /// The words, `WX0, WX1, WX2, WX3`.
+        words: String,
+    },
+    /// The R word's copy was not seen in the inputs step.
+    #[error("{word}'s copy was not seen in inputs[{index}] (inputs: copied every scan)")]
+    NotCopied {
+        /// The R word.
+        word: String,
+        /// Its place among the inputs.
+        index: usize,
+    },
+}
+
 /// The R word whose [`DROP_BIT`] the drop check switches, or why it cannot.
-fn drop_word(s: &Session<'_>) -> Result<usize, String> {
+fn drop_word(s: &Session<'_>) -> Result<usize, NoDropRelay> {
     let Some(found) = &s.findings.inputs else {
-        return Err("the inputs step did not read the status block's inputs".to_owned());
+        return Err(NoDropRelay::NotRead);
     };
     match (found.relay_word, found.copied) {
-        (None, _) => Err(format!(
-            "all four input words are X words ({}), which the link cannot switch: this check \
-             needs wiring (switch an input a move's permit needs while it runs, \
-             deploy/plc/README.md, \"by hand\")",
-            found.words.join(", ")
-        )),
+        (None, _) => Err(NoDropRelay::AllX {
+            words: found.words.join(", "),
+        }),
         (Some(w), Some(true)) => Ok(w),
-        (Some(w), _) => Err(format!(
-            "{}'s copy was not seen in inputs[{w}] (inputs: copied every scan)",
-            found.words[w]
-        )),
+        (Some(w), _) => Err(NoDropRelay::NotCopied {
+            word: found.words[w].clone(),
+            index: w,
+        }),
     }
 }
 
@@ -65,6 +90,20 @@ struct Switched {
     /// The furthest the count may go: one scan at the table's frequency past the count at the
     /// acknowledgement (bounded from the read before).
     limit: i64,
+}
+
+impl Switched {
+    /// The switch acknowledged now, after read `x` (sent at `sent`) showed channel `i` `moved`
+    /// pulses into a table at `hz` on a PLC scanning every `scan_s`.
+    fn at(x: &Sample, i: usize, moved: i64, sent: Instant, (hz, scan_s): (u32, f64)) -> Self {
+        let read_to_ack_s = sent.elapsed().as_secs_f64();
+        let allowed = (f64::from(hz) * (read_to_ack_s + scan_s.max(0.001))).ceil() as i64;
+        Self {
+            count: i64::from(x.block.elapsed[i]),
+            read_to_ack_s,
+            limit: moved + allowed + DROP_SLACK,
+        }
+    }
 }
 
 /// What the run whose permit was dropped did.
@@ -93,6 +132,37 @@ impl DropRun {
             .map(|x| sign * (i64::from(x.block.elapsed[i]) - c0))
             .max()
     }
+
+    /// The link failed: a stop is written, and the run ends.
+    async fn link_failed<P: Plc>(&mut self, bench: &mut Bench<'_, P>, e: impl ToString) {
+        self.error = Some(e.to_string());
+        let _ = bench.contract.stop().await;
+    }
+}
+
+/// The drop run's status reads: irregular polls, timed from the start.
+struct Polls {
+    began: Instant,
+    k: u32,
+}
+
+impl Polls {
+    /// Waits a poll, reads the status block; when the read was sent, and the sample.
+    async fn read<P: Plc>(
+        &mut self,
+        bench: &mut Bench<'_, P>,
+    ) -> Result<(Instant, Sample), ContractError> {
+        tokio::time::sleep(jittered(bench.pace.poll(), self.k)).await;
+        self.k += 1;
+        let sent = Instant::now();
+        let st = bench.contract.status().await?;
+        let sample = Sample {
+            t_s: self.began.elapsed().as_secs_f64(),
+            block: st.block,
+            state: st.state,
+        };
+        Ok((sent, sample))
+    }
 }
 
 /// Plays `DROP_PULSES` with `permit`; once the channel has moved [`DROP_AFTER`], writes the
@@ -102,11 +172,10 @@ async fn drop_run<P: Plc>(
     bench: &mut Bench<'_, P>,
     ch: &Channel<'_>,
     (from, permit): ([i32; CHANNELS], Permit),
-    (w, on): (usize, bool),
+    relay_at: (usize, bool),
     hz: u32,
 ) -> DropRun {
-    let i = ch.index();
-    let c0 = i64::from(from[i]);
+    let c0 = i64::from(from[ch.index()]);
     let target = c0 + ch.sign * DROP_PULSES;
     let mut run = DropRun::default();
     match bench
@@ -115,66 +184,83 @@ async fn drop_run<P: Plc>(
     {
         Ok(seq) => run.seq = seq,
         Err(e) => {
-            run.error = Some(e);
+            run.error = Some(e.to_string());
             return run;
         }
     }
+    let mut polls = Polls {
+        began: Instant::now(),
+        k: 0,
+    };
+    if until_switched(bench, ch, &mut run, &mut polls, (c0, relay_at, hz)).await {
+        until_settled(bench, ch.index(), &mut run, &mut polls).await;
+    }
+    run
+}
+
+/// Reads until the channel has moved [`DROP_AFTER`] pulses of its run, then switches the relay
+/// `(w, on)`: whether it did (else the run ended, or was stopped, before).
+async fn until_switched<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    ch: &Channel<'_>,
+    run: &mut DropRun,
+    polls: &mut Polls,
+    (c0, (w, on), hz): (i64, (usize, bool), u32),
+) -> bool {
+    let i = ch.index();
     let deadline_s = bench.deadline_s(DROP_PULSES, hz);
     let relay_no = relay(bench.contract.settings().layout.inputs[w], DROP_BIT);
-    let began = Instant::now();
-    let mut settled = 0;
-    for k in 0.. {
-        tokio::time::sleep(jittered(bench.pace.poll(), k)).await;
-        let sent = Instant::now();
-        let x = match bench.contract.status().await {
-            Ok(st) => Sample {
-                t_s: began.elapsed().as_secs_f64(),
-                block: st.block,
-                state: st.state,
-            },
+    loop {
+        let (sent, x) = match polls.read(bench).await {
+            Ok(read) => read,
             Err(e) => {
-                run.error = Some(format!("{e:#}"));
-                let _ = bench.contract.stop().await;
-                return run;
+                run.link_failed(bench, format!("{e:#}")).await;
+                return false;
             }
         };
         let moved = ch.sign * (i64::from(x.block.elapsed[i]) - c0);
-        let Some(switched) = run.switched else {
-            let ours = x.block.seq == run.seq;
-            if x.state == State::Fault || (ours && matches!(x.state, State::Done | State::Stopped))
-            {
-                run.ended_early = Some(x);
-                return run;
-            }
-            if x.t_s > deadline_s || !(0..=DROP_PULSES).contains(&moved) {
-                run.ended_early = Some(x);
-                run.stopped_for = Some(format!("the channel reached {}", x.block.elapsed[i]));
-                let _ = bench.contract.stop().await;
-                return run;
-            }
-            if x.state == State::Running && ours && moved >= DROP_AFTER {
-                if let Err(e) = bench.contract.plc().write_relay(relay_no, on).await {
-                    run.error = Some(format!("{e:#}"));
-                    let _ = bench.contract.stop().await;
-                    return run;
-                }
-                let read_to_ack_s = sent.elapsed().as_secs_f64();
-                let scan_s = bench.pace.scan_s.max(0.001);
-                let allowed = (f64::from(hz) * (read_to_ack_s + scan_s)).ceil() as i64;
-                run.switched = Some(Switched {
-                    count: i64::from(x.block.elapsed[i]),
-                    read_to_ack_s,
-                    limit: moved + allowed + DROP_SLACK,
-                });
-            }
-            continue;
+        let ours = x.block.seq == run.seq;
+        if x.state == State::Fault || (ours && matches!(x.state, State::Done | State::Stopped)) {
+            run.ended_early = Some(x);
+            return false;
+        }
+        if x.t_s > deadline_s || !(0..=DROP_PULSES).contains(&moved) {
+            run.ended_early = Some(x);
+            run.stopped_for = Some(format!("the channel reached {}", x.block.elapsed[i]));
+            let _ = bench.contract.stop().await;
+            return false;
+        }
+        if x.state == State::Running && ours && moved >= DROP_AFTER {
+            let Err(e) = bench.contract.plc().write_relay(relay_no, on).await else {
+                run.switched = Some(Switched::at(&x, i, moved, sent, (hz, bench.pace.scan_s)));
+                return true;
+            };
+            run.link_failed(bench, format!("{e:#}")).await;
+            return false;
+        }
+    }
+}
+
+/// Reads after the switch until channel `i` has stood still [`SETTLED_READS`] times in a row;
+/// writes a stop should it still run after [`QUIET_POLLS`] reads, and gives up after three
+/// times that.
+async fn until_settled<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    i: usize,
+    run: &mut DropRun,
+    polls: &mut Polls,
+) {
+    let mut settled = 0;
+    loop {
+        let x = match polls.read(bench).await {
+            Ok((_, x)) => x,
+            Err(e) => return run.link_failed(bench, format!("{e:#}")).await,
         };
-        let _ = switched;
         run.after.push(x);
         let still = x.state != State::Running && x.block.busy & (1 << i) == 0;
         settled = if still { settled + 1 } else { 0 };
         if settled >= SETTLED_READS {
-            break;
+            return;
         }
         if run.stopped_for.is_none() && run.after.len() >= QUIET_POLLS {
             run.stopped_for = Some(format!(
@@ -185,10 +271,17 @@ async fn drop_run<P: Plc>(
         }
         if run.after.len() >= QUIET_POLLS * 3 {
             let _ = bench.contract.stop().await;
-            break;
+            return;
         }
     }
-    run
+}
+
+/// The drop check's channel: its index, the count it was found at and the direction it runs.
+#[derive(Debug, Clone, Copy)]
+struct Origin {
+    i: usize,
+    c0: i64,
+    sign: i64,
 }
 
 /// Once a permitted move runs, the relay its permit needs is switched: the move must stop
@@ -199,7 +292,6 @@ pub(super) async fn drop_holds<P: Plc>(
     bench: &mut Bench<'_, P>,
     ch: &Channel<'_>,
 ) -> Result<(), Halt> {
-    let (c, i) = (ch.c, ch.index());
     let words = s.target.link.layout.inputs;
     let hz = ch.hz_for(DROP_PULSES, (20.0 * bench.pace.sample_s()).max(DROP_MIN_S));
     let plan = drop_word(s);
@@ -207,7 +299,64 @@ pub(super) async fn drop_holds<P: Plc>(
         |_| "an R input bit".to_owned(),
         |&w| bit_name(words[w], DROP_BIT),
     );
-    let k = check(
+    let k = drop_check(ch.c, &name, hz);
+    let w = match plan {
+        Ok(w) => w,
+        Err(why) => return s.record(k.skip(why.to_string())),
+    };
+    let before = match bench.status().await {
+        Ok(b) => b,
+        Err(e) => return s.record(k.fail(e.to_string(), "the link failed")),
+    };
+    let i = ch.index();
+    let at = Origin {
+        i,
+        c0: i64::from(before.elapsed[i]),
+        sign: ch.sign,
+    };
+    let on = is_on(before.inputs[w], DROP_BIT);
+    let permit = one_bit(w, DROP_BIT, on);
+    let run = drop_run(bench, ch, (before.elapsed, permit), (w, !on), hz).await;
+    // The relay goes back whatever happened.
+    let restored = switch(bench.contract, bench.pace, (w, DROP_BIT), on, &before).await;
+    let saw = describe_drop(&run, at, (&name, on), hz, bench.pace.scan_s);
+    let saw = match restored_saw(restored, saw, &name, on) {
+        Ok(saw) => saw,
+        Err((saw, hint)) => return s.record(k.fail(saw, hint)),
+    };
+    if let Some(hint) = drop_verdict(&run, at, &name, hz) {
+        return s.record(k.fail(saw, hint));
+    }
+    back_to_start(s, bench, ch, (k, saw), (at.c0, hz)).await
+}
+
+/// What was seen once the relay `name` was switched back to `on`, or (the check fails) what
+/// was seen and the hint.
+fn restored_saw(
+    restored: Result<inputs::Switched, Failure>,
+    saw: String,
+    name: &str,
+    on: bool,
+) -> Result<String, (String, String)> {
+    match restored {
+        Ok(r) if r.shown_after_s.is_some() => Ok(format!("{saw}; {name} back {}", on_off(on))),
+        Ok(_) => Err((
+            format!(
+                "{saw}; {name} switched back {} but its copy did not follow",
+                on_off(on)
+            ),
+            format!("{name} may be left {}: switch it back", on_off(!on)),
+        )),
+        Err(e) => Err((
+            format!("{saw}; {e}"),
+            format!("the link failed: {name} may be left {}", on_off(!on)),
+        )),
+    }
+}
+
+/// The drop check, as its report names what it looks at.
+fn drop_check(c: u8, name: &str, hz: u32) -> Check {
+    check(
         "permit drop holds within one scan",
         c,
         format!(
@@ -217,73 +366,28 @@ pub(super) async fn drop_holds<P: Plc>(
              the write was acknowledged; then {name} back, clear fault gives idle, and a start \
              back"
         ),
-    );
-    let w = match plan {
-        Ok(w) => w,
-        Err(why) => return s.record(k.skip(why)),
+    )
+}
+
+/// After the held run: clear fault, and a start back to `c0`, which must end done there.
+async fn back_to_start<P: Plc>(
+    s: &mut Session<'_>,
+    bench: &mut Bench<'_, P>,
+    ch: &Channel<'_>,
+    (k, saw): (Check, String),
+    (c0, hz): (i64, u32),
+) -> Result<(), Halt> {
+    let saw = match clear_after(bench, &k, saw).await {
+        Ok(saw) => saw,
+        Err(report) => return s.record(report),
     };
-    let before = match bench.status().await {
-        Ok(b) => b,
-        Err(e) => return s.record(k.fail(e, "the link failed")),
-    };
-    let c0 = i64::from(before.elapsed[i]);
-    let on = is_on(before.inputs[w], DROP_BIT);
-    let permit = Permit::of(&[PermitBit {
-        word: w,
-        bit: DROP_BIT,
-        on,
-    }])
-    .unwrap_or(Permit::NONE);
-    let run = drop_run(bench, ch, (before.elapsed, permit), (w, !on), hz).await;
-    // The relay goes back whatever happened.
-    let restored = switch(bench.contract, bench.pace, (w, DROP_BIT), on, &before).await;
-    let saw = describe_drop(&run, (c0, ch.sign, i), (&name, on), hz, bench.pace.scan_s);
-    let restored = match restored {
-        Ok(r) if r.shown_after_s.is_some() => format!("{name} back {}", on_off(on)),
-        Ok(_) => {
-            return s.record(k.fail(
-                format!(
-                    "{saw}; {name} switched back {} but its copy did not follow",
-                    on_off(on)
-                ),
-                format!("{name} may be left {}: switch it back", on_off(!on)),
-            ));
-        }
-        Err(e) => {
-            return s.record(k.fail(
-                format!("{saw}; {e}"),
-                format!("the link failed: {name} may be left {}", on_off(!on)),
-            ));
-        }
-    };
-    if let Some(hint) = drop_verdict(&run, (c0, ch.sign, i), &name, hz) {
-        return s.record(k.fail(format!("{saw}; {restored}"), hint));
-    }
-    let saw = format!("{saw}; {restored}");
-    if let Err(e) = clear_fault(bench).await {
-        return s.record(k.fail(
-            format!("{saw}; {e}"),
-            "clear fault (command = 3) must give fault 0 and state idle",
-        ));
-    }
+    let i = ch.index();
     let from = counts(s, bench, &k).await?;
     let at = i64::from(from[i]);
-    let (lo, hi) = (c0.min(at), c0.max(at));
     let deadline = bench.deadline_s((at - c0).abs(), hz);
-    let back = bench
-        .play(
-            ch,
-            vec![ch.segment(at, c0, hz)],
-            from,
-            deadline,
-            &within(i, lo, hi),
-        )
-        .await;
+    let back = bench.play_between(ch, from, (at, c0, hz), deadline).await;
     let end = back.count(i).unwrap_or(at);
-    let saw = format!(
-        "{saw}; clear fault gave idle; back {at} -> {end}: {}",
-        back.ending()
-    );
+    let saw = format!("{saw}; back {at} -> {end}: {}", back.ending());
     if back.ended(State::Done) && end == c0 {
         s.record(k.pass(saw))
     } else {
@@ -291,15 +395,9 @@ pub(super) async fn drop_holds<P: Plc>(
     }
 }
 
-/// What the run did, in words.
-fn describe_drop(
-    run: &DropRun,
-    (c0, sign, i): (i64, i64, usize),
-    (name, on): (&str, bool),
-    hz: u32,
-    scan_s: f64,
-) -> String {
-    let state = |x: &Sample| match x.state {
+/// A read's state and fault, with the fault's meaning when it latched one.
+fn state_words(x: &Sample) -> String {
+    match x.state {
         State::Fault | State::Stopped if x.block.fault != 0 => format!(
             "state {}, fault {} ({})",
             x.state.name(),
@@ -307,34 +405,33 @@ fn describe_drop(
             fault_meaning(x.block.fault)
         ),
         other => format!("state {}, fault {}", other.name(), x.block.fault),
-    };
+    }
+}
+
+/// What the run did, in words.
+fn describe_drop(
+    run: &DropRun,
+    Origin { i, c0, sign }: Origin,
+    (name, on): (&str, bool),
+    hz: u32,
+    scan_s: f64,
+) -> String {
     if let Some(e) = &run.error {
         return format!("count {c0}; the link failed: {e}");
     }
     let Some(sw) = run.switched else {
-        let how = run.last().map_or("no status read".to_owned(), |x| {
-            format!("{} at count {}", state(x), x.block.elapsed[i])
-        });
-        let stop = run
-            .stopped_for
-            .as_ref()
-            .map_or(String::new(), |why| format!(" (stopped: {why})"));
-        return format!(
-            "count {c0}; the start whose permit needs {name} {} (as it is) ended before it had \
-             moved {DROP_AFTER} pulses: {how}{stop}",
-            on_off(on)
-        );
+        return describe_early(run, (i, c0), (name, on));
     };
     let limit = c0 + sign * sw.limit;
     let last = run.last().map_or("no read after it".to_owned(), |x| {
+        let busy = if x.block.busy & (1 << i) == 0 {
+            "OFF"
+        } else {
+            "ON"
+        };
         format!(
-            "{}, busy {}, the count at {}",
-            state(x),
-            if x.block.busy & (1 << i) == 0 {
-                "OFF"
-            } else {
-                "ON"
-            },
+            "{}, busy {busy}, the count at {}",
+            state_words(x),
             x.block.elapsed[i]
         )
     });
@@ -356,10 +453,26 @@ fn describe_drop(
     )
 }
 
+/// A run that ended before the relay was switched, in words.
+fn describe_early(run: &DropRun, (i, c0): (usize, i64), (name, on): (&str, bool)) -> String {
+    let how = run.last().map_or("no status read".to_owned(), |x| {
+        format!("{} at count {}", state_words(x), x.block.elapsed[i])
+    });
+    let stop = run
+        .stopped_for
+        .as_ref()
+        .map_or(String::new(), |why| format!(" (stopped: {why})"));
+    format!(
+        "count {c0}; the start whose permit needs {name} {} (as it is) ended before it had \
+         moved {DROP_AFTER} pulses: {how}{stop}",
+        on_off(on)
+    )
+}
+
 /// `None` when the run held as the contract says; else the hint.
 fn drop_verdict(
     run: &DropRun,
-    (c0, sign, i): (i64, i64, usize),
+    Origin { i, c0, sign }: Origin,
     name: &str,
     hz: u32,
 ) -> Option<String> {
@@ -367,19 +480,7 @@ fn drop_verdict(
         return Some("the link failed during the run".to_owned());
     }
     let Some(sw) = run.switched else {
-        let fault8 = run
-            .last()
-            .is_some_and(|x| x.block.fault == Fault::PermitNotMet.word());
-        return Some(if fault8 {
-            format!(
-                "the contract says a start whose permit holds runs; this program refused it with \
-                 fault 8 although {name} was as the permit needs"
-            )
-        } else {
-            "the start did not run long enough to switch its permit's input: see what the status \
-             block showed"
-                .to_owned()
-        });
+        return Some(not_switched_hint(run, name));
     };
     let last = run.last()?;
     let held = last.state == State::Stopped
@@ -405,6 +506,28 @@ fn drop_verdict(
             furthest - sw.limit
         ));
     }
+    moved_after_still(run, i)
+}
+
+/// The hint for a run that ended before its relay was switched.
+fn not_switched_hint(run: &DropRun, name: &str) -> String {
+    let fault8 = run
+        .last()
+        .is_some_and(|x| x.block.fault == Fault::PermitNotMet.word());
+    if fault8 {
+        format!(
+            "the contract says a start whose permit holds runs; this program refused it with \
+             fault 8 although {name} was as the permit needs"
+        )
+    } else {
+        "the start did not run long enough to switch its permit's input: see what the status \
+         block showed"
+            .to_owned()
+    }
+}
+
+/// The hint when channel `i`'s count moved on after a read showed it stopped.
+fn moved_after_still(run: &DropRun, i: usize) -> Option<String> {
     let first_still = run
         .after
         .iter()

@@ -97,7 +97,7 @@ pub(super) async fn step<P: Plc>(
         let count = match bench.status().await {
             Ok(st) => st.elapsed[usize::from(c)],
             Err(e) => {
-                s.record(check("busy on then off", c, "").fail(e, "the link failed"))?;
+                s.record(check("busy on then off", c, "").fail(e.to_string(), "the link failed"))?;
                 return Err(Halt);
             }
         };
@@ -146,7 +146,7 @@ async fn counts<P: Plc>(
     match bench.status().await {
         Ok(st) => Ok(st.elapsed),
         Err(e) => {
-            s.record(c.clone().fail(e, "the link failed"))?;
+            s.record(c.clone().fail(e.to_string(), "the link failed"))?;
             Err(Halt)
         }
     }

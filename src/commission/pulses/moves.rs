@@ -1,13 +1,13 @@
 //! Two-segment chaining, and a stop mid-table followed by a new start: both bring the channel
 //! back to where it began.
 
-use super::bench::{Bench, Channel, Sample, unfinished_hint};
+use super::bench::{Bench, Channel, Run, Sample, unfinished_hint};
 use super::{
     CHAIN_PULSES, Check, QUIET_POLLS, STOP_AFTER, STOP_PULSES, TIMING_PULSES, check, counts, within,
 };
 use crate::commission::report::CheckReport;
 use crate::commission::{Halt, Session};
-use crate::contract::{CHANNELS, Fault, State};
+use crate::contract::{CHANNELS, Fault, State, StatusBlock};
 use crate::plc::Plc;
 
 /// Two segments: further out, then back to the start count.
@@ -46,7 +46,19 @@ pub(super) async fn chain<P: Plc>(
          {home}); {}",
         run.ending()
     );
-    let report = if run.ended(State::Done) && end == home && seen.contains(&2) {
+    s.record(chain_report(k, &run, saw, (end, far, home), &seen))
+}
+
+/// The chain check's report: the run ended at `end`, out to `far` and back to `home`, its
+/// segment index read as `seen`.
+fn chain_report(
+    k: Check,
+    run: &Run,
+    saw: String,
+    (end, far, home): (i64, i64, i64),
+    seen: &[u16],
+) -> CheckReport {
+    if run.ended(State::Done) && end == home && seen.contains(&2) {
         k.pass(saw)
     } else if end == far {
         k.fail(
@@ -62,9 +74,8 @@ pub(super) async fn chain<P: Plc>(
             "the chain ended done away from its last target: check the table walk (SUB 1)",
         )
     } else {
-        k.fail(saw, unfinished_hint(&run))
-    };
-    s.record(report)
+        k.fail(saw, unfinished_hint(run))
+    }
 }
 
 /// A table stopped mid-way, its count held; then a new start back to the start count.
@@ -136,6 +147,19 @@ async fn stop_mid_table<P: Plc>(
         };
         return Err((saw, hint));
     }
+    let held = held_after_stop(bench, i, at, &saw).await?;
+    let from = held.last().map_or(from, |b| b.elapsed);
+    Ok(Held { c0, at, from, saw })
+}
+
+/// Reads [`QUIET_POLLS`] times after a stop at `at`: the reads, when channel `i`'s count held
+/// with busy OFF throughout; else (a stop written again) what was seen and the hint.
+async fn held_after_stop<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    i: usize,
+    at: i64,
+    saw: &str,
+) -> Result<Vec<StatusBlock>, (String, String)> {
     let held = bench
         .watch_quietly()
         .await
@@ -153,8 +177,7 @@ async fn stop_mid_table<P: Plc>(
                     for every channel (deploy/plc/README.md, DT90052)";
         return Err((saw, hint.to_owned()));
     }
-    let from = held.last().map_or(from, |b| b.elapsed);
-    Ok(Held { c0, at, from, saw })
+    Ok(held)
 }
 
 /// A new start from where the stop left the channel back to its start count: it must play to
@@ -189,6 +212,17 @@ async fn following_start<P: Plc>(
         held.saw,
         back.ending()
     );
+    following_report(k, &back, saw, (end, c0), i)
+}
+
+/// The following start's report: it ended at `end`, and should have played to done at `c0`.
+fn following_report(
+    k: Check,
+    back: &Run,
+    saw: String,
+    (end, c0): (i64, i64),
+    i: usize,
+) -> CheckReport {
     let refused_busy = back
         .last()
         .is_some_and(|x| x.state == State::Fault && x.block.fault == Fault::ChannelBusy.word());
@@ -213,6 +247,6 @@ async fn following_start<P: Plc>(
              the stop only paused F174 (deploy/plc/README.md, DT90052 H n108)",
         )
     } else {
-        k.fail(saw, unfinished_hint(&back))
+        k.fail(saw, unfinished_hint(back))
     }
 }

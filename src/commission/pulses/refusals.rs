@@ -1,11 +1,25 @@
 //! Starts the program must refuse or ignore, with nothing moving: `from` one pulse off (fault
 //! 5, then clear fault), and a repeated seq (command back to 0).
 
-use super::bench::{Bench, Channel, Sample, jittered};
+use super::bench::{Bench, Channel, jittered};
 use super::{PROBE_PULSES, QUIET_POLLS, check, counts};
-use crate::commission::{Halt, Session};
-use crate::contract::{Fault, Permit, State};
+use crate::commission::error::Failure;
+use crate::commission::report::CheckReport;
+use crate::commission::{Check, Halt, Session};
+use crate::contract::{Fault, Permit, State, StatusBlock};
 use crate::plc::Plc;
+
+/// What the interlock check looks at, after its start.
+const INTERLOCK_CHECKS: &str = "refused with state fault, fault 5, seq not latched, nothing \
+                                moves; then clear fault gives idle";
+
+/// What the repeated seq check looks at, after the start's size.
+const REPEAT_CHECKS: &str = "carrying the seq of the last accepted start: the program sets \
+                             command back to 0 and nothing moves, state and seq stay";
+
+/// What a check says when clear fault does not give idle.
+pub(super) const CLEAR_FAULT_HINT: &str =
+    "clear fault (command = 3) must give fault 0 and state idle";
 
 /// A start whose `from` is one pulse off on this channel: refused with fault 5, nothing moves;
 /// then the fault is cleared.
@@ -19,10 +33,7 @@ pub(super) async fn interlock<P: Plc>(
     let k = check(
         "`from` interlock refuses fault 5",
         c,
-        format!(
-            "a start whose from[{c}] is one pulse off the count: refused with state fault, fault \
-             5, seq not latched, nothing moves; then clear fault gives idle"
-        ),
+        format!("a start whose from[{c}] is one pulse off the count: {INTERLOCK_CHECKS}"),
     );
     let counts_now = counts(s, bench, &k).await?;
     let before = bench.status().await.map(|b| b.seq).unwrap_or_default();
@@ -31,32 +42,17 @@ pub(super) async fn interlock<P: Plc>(
     from[i] = (c0 + ch.sign) as i32;
     let off = i64::from(from[i]);
     let target = off + ch.sign * PROBE_PULSES;
-    let watch = move |x: &Sample| {
-        (i64::from(x.block.elapsed[i]) != c0 || x.state == State::Running)
-            .then(|| "the start ran".to_owned())
-    };
-    let deadline = bench.deadline_s(0, hz) + bench.pace.sample_s() * QUIET_POLLS as f64;
     let run = bench
-        .play(
+        .play_refused(
             ch,
-            vec![ch.segment(off, target, hz)],
-            from,
-            deadline,
-            &watch,
+            ch.segment(off, target, hz),
+            (from, Permit::NONE),
+            c0,
+            hz,
         )
         .await;
-    let end = run.count(i).unwrap_or(c0);
-    let saw = format!(
-        "count {c0}, from[{c}] {off}: {}; the count ended at {end}, busy ON in {} reads",
-        run.ending(),
-        run.busy_reads(i)
-    );
-    let refused = run.last().is_some_and(|x| {
-        x.state == State::Fault
-            && x.block.fault == Fault::NotAtStart.word()
-            && x.block.seq == before
-    });
-    if !refused || end != c0 || run.busy_reads(i) > 0 {
+    let saw = format!("count {c0}, from[{c}] {off}: {}", run.still_words(i, c0));
+    if !run.refused_still(Fault::NotAtStart, before, i, c0) {
         let hint = if run.stopped_for.is_some() {
             "the start ran from counts other than its from: the program must compare every \
              channel's count with from[c] before starting (fault 5)"
@@ -65,23 +61,15 @@ pub(super) async fn interlock<P: Plc>(
         };
         return s.record(k.fail(saw, hint));
     }
-    let cleared = clear_fault(bench).await;
-    match cleared {
-        Ok(()) => s.record(k.pass(format!("{saw}; clear fault gave idle"))),
-        Err(e) => s.record(k.fail(
-            format!("{saw}; {e}"),
-            "clear fault (command = 3) must give fault 0 and state idle",
-        )),
+    match clear_after(bench, &k, saw).await {
+        Ok(saw) => s.record(k.pass(saw)),
+        Err(report) => s.record(report),
     }
 }
 
 /// Writes clear fault and reads until fault 0 and state idle.
-pub(super) async fn clear_fault<P: Plc>(bench: &mut Bench<'_, P>) -> Result<(), String> {
-    bench
-        .contract
-        .clear_fault()
-        .await
-        .map_err(|e| format!("{e:#}"))?;
+pub(super) async fn clear_fault<P: Plc>(bench: &mut Bench<'_, P>) -> Result<(), Failure> {
+    bench.contract.clear_fault().await?;
     for k in 0..QUIET_POLLS * 2 {
         tokio::time::sleep(jittered(bench.pace.poll(), k as u32)).await;
         let b = bench.status().await?;
@@ -89,7 +77,20 @@ pub(super) async fn clear_fault<P: Plc>(bench: &mut Bench<'_, P>) -> Result<(), 
             return Ok(());
         }
     }
-    Err("after clear fault the state is not idle".to_owned())
+    Err(Failure::NotIdleAfterClear)
+}
+
+/// Clears the fault a check's refused start latched: `saw` and that clear fault gave idle, or
+/// the check failed.
+pub(super) async fn clear_after<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    k: &Check,
+    saw: String,
+) -> Result<String, CheckReport> {
+    match clear_fault(bench).await {
+        Ok(()) => Ok(format!("{saw}; clear fault gave idle")),
+        Err(e) => Err(k.clone().fail(format!("{saw}; {e}"), CLEAR_FAULT_HINT)),
+    }
 }
 
 /// A start with the last accepted seq and a valid table: the program must drop it.
@@ -103,14 +104,11 @@ pub(super) async fn repeated_seq<P: Plc>(
     let k = check(
         "repeated seq ignored",
         c,
-        format!(
-            "a valid start of {PROBE_PULSES} pulses carrying the seq of the last accepted \
-             start: the program sets command back to 0 and nothing moves, state and seq stay"
-        ),
+        format!("a valid start of {PROBE_PULSES} pulses {REPEAT_CHECKS}"),
     );
     let before = match bench.status().await {
         Ok(b) => b,
-        Err(e) => return s.record(k.fail(e, "the link failed")),
+        Err(e) => return s.record(k.fail(e.to_string(), "the link failed")),
     };
     let c0 = i64::from(before.elapsed[i]);
     let target = c0 + ch.sign * PROBE_PULSES;
@@ -123,11 +121,46 @@ pub(super) async fn repeated_seq<P: Plc>(
         )
         .await;
     if let Err(e) = launched {
-        return s.record(k.fail(e, "the link failed"));
+        return s.record(k.fail(e.to_string(), "the link failed"));
     }
     let command_at = s.target.link.layout.command_base;
-    let mut reads = Vec::new();
-    let mut acted = false;
+    let report = match after_repeat(bench, i, &before, command_at).await {
+        Repeat::Link(e) => k.fail(e.to_string(), "the link failed"),
+        Repeat::Acted(block) => {
+            let _ = bench.contract.stop().await;
+            repeat_acted(k, &before, &block, i)
+        }
+        Repeat::Quiet { reads, dropped } => {
+            if !dropped {
+                let _ = bench.contract.withdraw().await;
+            }
+            repeat_quiet(k, before.seq, reads, dropped, c0)
+        }
+    };
+    s.record(report)
+}
+
+/// What the reads after a repeated start saw.
+enum Repeat {
+    /// The link failed.
+    Link(Failure),
+    /// The start acted (the channel moved, or the seq or the state changed): the read that
+    /// showed it.
+    Acted(StatusBlock),
+    /// Nothing acted over `reads` reads; whether the command word went back to 0.
+    Quiet { reads: usize, dropped: bool },
+}
+
+/// Reads the command word and the status block until the command is back to 0 (three reads at
+/// least), something acts, or [`QUIET_POLLS`] twice.
+async fn after_repeat<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    i: usize,
+    before: &StatusBlock,
+    command_at: u16,
+) -> Repeat {
+    let c0 = i64::from(before.elapsed[i]);
+    let (mut reads, mut dropped) = (0, false);
     for n in 0..QUIET_POLLS * 2 {
         tokio::time::sleep(jittered(bench.pace.poll(), n as u32)).await;
         let (command, block) = match (
@@ -135,46 +168,49 @@ pub(super) async fn repeated_seq<P: Plc>(
             bench.status().await,
         ) {
             (Ok(w), Ok(b)) => (w[0], b),
-            (Err(e), _) => return s.record(k.fail(format!("{e:#}"), "the link failed")),
-            (_, Err(e)) => return s.record(k.fail(e, "the link failed")),
+            (Err(e), _) => return Repeat::Link(e.into()),
+            (_, Err(e)) => return Repeat::Link(e),
         };
-        reads.push(block);
+        reads += 1;
         let moved = i64::from(block.elapsed[i]) != c0 || block.busy & (1 << i) != 0;
         if moved || block.seq != before.seq || block.state != before.state {
-            let _ = bench.contract.stop().await;
-            let state = State::from_word(block.state).map_or("unknown", State::name);
-            let saw = format!(
-                "seq {} repeated: the count went to {}, state {state}, seq {}",
-                before.seq, block.elapsed[i], block.seq
-            );
-            return s.record(k.fail(
-                saw,
-                "a start carrying the last accepted seq must be dropped (command = 0) in any \
-                 state: the listing's repeated-seq rule",
-            ));
+            return Repeat::Acted(block);
         }
         if command == 0 {
-            acted = true;
-            if reads.len() >= 3 {
+            dropped = true;
+            if reads >= 3 {
                 break;
             }
         }
     }
-    if !acted {
-        let _ = bench.contract.withdraw().await;
-        return s.record(k.fail(
-            format!(
-                "seq {} repeated: the command word stayed 1 for {} reads",
-                before.seq,
-                reads.len()
-            ),
+    Repeat::Quiet { reads, dropped }
+}
+
+/// The report of a repeated start that nothing acted on over `reads` reads: it passes when the
+/// command word went back to 0 (`dropped`).
+fn repeat_quiet(k: Check, seq: u16, reads: usize, dropped: bool, c0: i64) -> CheckReport {
+    if !dropped {
+        return k.fail(
+            format!("seq {seq} repeated: the command word stayed 1 for {reads} reads"),
             "the program must set command back to 0 when it drops a repeated start",
-        ));
+        );
     }
-    s.record(k.pass(format!(
-        "seq {} repeated: command back to 0, the count held at {c0}, state and seq unchanged \
-         over {} reads",
-        before.seq,
-        reads.len()
-    )))
+    k.pass(format!(
+        "seq {seq} repeated: command back to 0, the count held at {c0}, state and seq unchanged \
+         over {reads} reads"
+    ))
+}
+
+/// The failure of a repeated start that acted.
+fn repeat_acted(k: Check, before: &StatusBlock, block: &StatusBlock, i: usize) -> CheckReport {
+    let state = State::from_word(block.state).map_or("unknown", State::name);
+    let saw = format!(
+        "seq {} repeated: the count went to {}, state {state}, seq {}",
+        before.seq, block.elapsed[i], block.seq
+    );
+    k.fail(
+        saw,
+        "a start carrying the last accepted seq must be dropped (command = 0) in any state: the \
+         listing's repeated-seq rule",
+    )
 }

@@ -40,6 +40,22 @@ pub(super) async fn timing<P: Plc>(
     let run = bench
         .play(ch, vec![ch.segment(c0, target, hz)], from, deadline, &watch)
         .await;
+    let model = s.target.robot.motion.frequency_model;
+    let (elapsed, time) = judged_checks(c, (c0, target), hz, model);
+    let first = s.record(judge_busy(busy, &run, i));
+    let second = s.record(judge_elapsed(elapsed, &run, i, c0, target));
+    let third = judge_time(s, time, &run, ch, c0, hz);
+    let third = s.record(third);
+    first.and(second).and(third)
+}
+
+/// The elapsed and time checks of the timing run from `c0` to `target` at `hz`.
+fn judged_checks(
+    c: u8,
+    (c0, target): (i64, i64),
+    hz: u32,
+    model: FrequencyModel,
+) -> (Check, Check) {
     let elapsed = check(
         "elapsed moves by exactly the table's pulses",
         c,
@@ -53,14 +69,10 @@ pub(super) async fn timing<P: Plc>(
         format!(
             "the rate of those pulses against the `ideal` and `fpx-divider` models (range 0, \
              {hz} Hz); the config says {}",
-            s.target.robot.motion.frequency_model.name()
+            model.name()
         ),
     );
-    let first = s.record(judge_busy(busy, &run, i));
-    let second = s.record(judge_elapsed(elapsed, &run, i, c0, target));
-    let third = judge_time(s, time, &run, ch, c0, hz);
-    let third = s.record(third);
-    first.and(second).and(third)
+    (elapsed, time)
 }
 
 fn judge_busy(c: Check, run: &Run, i: usize) -> CheckReport {
@@ -160,7 +172,13 @@ fn judge_time(
         channel: ch.c,
         rate,
     });
-    let saw = format!(
+    let configured = s.target.robot.motion.frequency_model;
+    rate_report(c, rate_saw(&rate, hz), rate.fit, configured)
+}
+
+/// The fitted rate against both models, in words.
+fn rate_saw(rate: &crate::commission::judge::RateFit, hz: u32) -> String {
+    format!(
         "{} pulses at {hz} Hz ran at {:.2} Hz +- {:.2} ({} reads): {:.4} s; ideal {:.2} Hz \
          ({:.4} s), fpx-divider {:.2} Hz ({:.4} s): {}",
         rate.pulses,
@@ -173,9 +191,12 @@ fn judge_time(
         rate.divider_hz,
         rate.predicted_s(FrequencyModel::FpxDivider),
         rate.fit.describe()
-    );
-    let configured = s.target.robot.motion.frequency_model;
-    match rate.fit {
+    )
+}
+
+/// The time check's report: which model the rate `fit`s against the config's `configured`.
+fn rate_report(c: Check, saw: String, fit: Fit, configured: FrequencyModel) -> CheckReport {
+    match fit {
         Fit::Neither => c.fail(
             saw,
             "the channel's rate matches neither model: check the control code's range digit \

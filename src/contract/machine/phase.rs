@@ -147,6 +147,21 @@ impl Written {
 }
 
 impl Phase {
+    /// A start runs and `next` was written behind it.
+    pub(super) fn chained(
+        current: Running,
+        next: Planned,
+        written: Written,
+        seen_waiting: bool,
+    ) -> Self {
+        Self::Chained {
+            current,
+            next,
+            written,
+            seen_waiting,
+        }
+    }
+
     /// Its name, for status reports.
     #[must_use]
     pub fn name(&self) -> &'static str {

@@ -298,14 +298,7 @@ fn chained(
         return running(current, status, now, m, events);
     }
     if seq != current.start.seq {
-        for tag in [current.start.tag, next.tag] {
-            events.push(Event::Ended {
-                tag,
-                outcome: Outcome::Restarted,
-            });
-        }
-        events.push(Event::WriteStop);
-        return halt(now);
+        return restarted(&current, &next, now, events);
     }
     match status.state {
         State::Done => {
@@ -326,25 +319,40 @@ fn chained(
                 tag: current.start.tag,
                 outcome: ended(status),
             });
-            events.push(Event::Ended {
-                tag: next.tag,
-                outcome: Outcome::Dropped,
-            });
+            dropped(&next, events);
             idle(status, m, events)
         }
         State::Running => {
             let current_phase = running(current, status, now, m, events);
             let Phase::Running { current } = current_phase else {
                 // A watchdog ended the running start and asked for a stop: the next goes too.
-                events.push(Event::Ended {
-                    tag: next.tag,
-                    outcome: Outcome::Dropped,
-                });
+                dropped(&next, events);
                 return current_phase;
             };
             waiting_next(current, next, written, seen_waiting, status, m, events)
         }
     }
+}
+
+/// A seq that is neither the running start's nor the next's: another host started something.
+/// Both end restarted, and a stop is written.
+fn restarted(current: &Running, next: &Planned, now: Instant, events: &mut Vec<Event>) -> Phase {
+    for tag in [current.start.tag, next.tag] {
+        events.push(Event::Ended {
+            tag,
+            outcome: Outcome::Restarted,
+        });
+    }
+    events.push(Event::WriteStop);
+    halt(now)
+}
+
+/// The next start is dropped.
+fn dropped(next: &Planned, events: &mut Vec<Event>) {
+    events.push(Event::Ended {
+        tag: next.tag,
+        outcome: Outcome::Dropped,
+    });
 }
 
 /// The next start behind a running one: seen waiting, dropped, or never shown.
@@ -363,12 +371,7 @@ fn waiting_next(
         events.push(Event::Waiting { tag });
     }
     if waiting {
-        return Phase::Chained {
-            current,
-            next,
-            written,
-            seen_waiting: true,
-        };
+        return Phase::chained(current, next, written, true);
     }
     if seen_waiting {
         // It waited and is gone while the running start goes on: somebody withdrew it.
@@ -380,21 +383,11 @@ fn waiting_next(
     }
     let scans = written.scans(status);
     if scans < m.settings.start_scans {
-        return Phase::Chained {
-            current,
-            next,
-            written,
-            seen_waiting: false,
-        };
+        return Phase::chained(current, next, written, false);
     }
     if !written.confirmed && written.attempts < 2 {
         events.push(Event::RewriteStart { tag });
-        return Phase::Chained {
-            current,
-            next,
-            written,
-            seen_waiting: false,
-        };
+        return Phase::chained(current, next, written, false);
     }
     events.push(Event::Ended {
         tag,
@@ -430,15 +423,10 @@ fn stopping(
         if written.scans(status) >= m.settings.start_scans {
             // The stop did not take (lost on the way): a stop is safe to write again.
             events.push(Event::WriteStop);
-            let written = Written {
+            written = Written {
                 at: now,
                 beat: Some(status.block.heartbeat),
                 ..written
-            };
-            return Phase::Stopping {
-                current,
-                next,
-                written,
             };
         }
         return Phase::Stopping {
@@ -447,6 +435,23 @@ fn stopping(
             written,
         };
     }
+    end_stopped(current, next, status, events);
+    if status.block.ready & READY_HOMED == 0 {
+        Phase::Unhomed
+    } else {
+        Phase::Idle
+    }
+}
+
+/// The starts in flight once the PLC stopped: the running one done if it got there first, else
+/// stopped; the next dropped.
+fn end_stopped(
+    current: Option<Running>,
+    next: Option<Planned>,
+    status: &Status,
+    events: &mut Vec<Event>,
+) {
+    let seq = status.block.seq;
     if let Some(c) = current {
         let tag = c.start.tag;
         if seq == c.start.seq && status.state == State::Done {
@@ -468,10 +473,5 @@ fn stopping(
             tag: n.tag,
             outcome: Outcome::Dropped,
         });
-    }
-    if status.block.ready & READY_HOMED == 0 {
-        Phase::Unhomed
-    } else {
-        Phase::Idle
     }
 }

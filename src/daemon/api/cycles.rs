@@ -51,7 +51,7 @@ pub(super) async fn run(
     tracing::info!(robot = %name, program = %order.program, count = order.count, "cycle run requested");
     let status = {
         let _owner = robot.owned_by(Mode::Local).await?;
-        robot.run_cycle(&order.program, order.count)?
+        robot.run_cycle(&order.program, order.count).await?
     };
     Ok((StatusCode::ACCEPTED, Json(status)))
 }
@@ -89,7 +89,7 @@ pub(super) async fn pause(
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle pause requested");
     let _owner = robot.owned_by(Mode::Local).await?;
-    Ok(Json(robot.pause_cycle()?))
+    Ok(Json(robot.pause_cycle().await?))
 }
 
 pub(super) async fn resume(
@@ -99,5 +99,5 @@ pub(super) async fn resume(
     let robot = api.robot(&name)?;
     tracing::info!(robot = %name, "cycle resume requested");
     let _owner = robot.owned_by(Mode::Local).await?;
-    Ok(Json(robot.resume_cycle()?))
+    Ok(Json(robot.resume_cycle().await?))
 }

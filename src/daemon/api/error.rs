@@ -299,6 +299,7 @@ impl From<crate::daemon::CycleError> for ApiError {
                 message,
                 reason: "faulted",
             },
+            CycleError::ShuttingDown => Self::ShuttingDown,
         }
     }
 }
@@ -323,6 +324,7 @@ impl From<crate::daemon::ModeError> for ApiError {
                 message: e.to_string(),
                 field: Some("mode".to_owned()),
             },
+            ModeError::ShuttingDown => Self::ShuttingDown,
         }
     }
 }

@@ -196,6 +196,10 @@ pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {
         Some(robot) => metrics::render(robot.metrics(), &states),
         None => metrics::render(&crate::daemon::metrics::Metrics::new(), &states),
     };
+    let text = match &api.journal {
+        Some(journal) => super::metrics_text(journal, text),
+        None => text,
+    };
     ([(header::CONTENT_TYPE, metrics::CONTENT_TYPE)], text)
 }
 

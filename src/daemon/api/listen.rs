@@ -19,13 +19,43 @@ use hyper_util::rt::{TokioIo, TokioTimer};
 use hyper_util::service::TowerToHyperService;
 use tokio::sync::watch;
 
+use super::Caller;
+
 /// How long a connection may take to send a complete request head (from its first byte, or
 /// from the end of the response before), before it is closed.
 pub const HEADER_READ_TIMEOUT: Duration = Duration::from_secs(10);
 
+/// Who is at the other end of a connection, put on each of its requests as a [`Caller`] (the
+/// journal names who sent a command).
+pub trait PeerCaller {
+    /// The caller.
+    fn caller(&self) -> Caller;
+}
+
+impl PeerCaller for tokio::net::UnixStream {
+    /// The peer's user id (`SO_PEERCRED`), when the system tells it.
+    fn caller(&self) -> Caller {
+        Caller::Unix {
+            uid: self.peer_cred().ok().map(|c| c.uid()),
+        }
+    }
+}
+
+impl PeerCaller for tokio::net::TcpStream {
+    fn caller(&self) -> Caller {
+        match self.peer_addr() {
+            Ok(address) => Caller::Tcp(address),
+            Err(_) => Caller::Unix { uid: None },
+        }
+    }
+}
+
 /// Serves `router` on `listener` until `until` completes, then waits for the connections open
 /// to end (each after the response it is sending).
-pub async fn serve<L: Listener>(listener: L, router: Router, until: impl Future<Output = ()>) {
+pub async fn serve<L: Listener>(listener: L, router: Router, until: impl Future<Output = ()>)
+where
+    L::Io: PeerCaller,
+{
     serve_with(listener, router, HEADER_READ_TIMEOUT, until).await;
 }
 
@@ -35,7 +65,9 @@ pub async fn serve_with<L: Listener>(
     router: Router,
     header_timeout: Duration,
     until: impl Future<Output = ()>,
-) {
+) where
+    L::Io: PeerCaller,
+{
     // Changed to tell the connections to end; each holds a receiver until it has.
     let (closing, _) = watch::channel(());
     tokio::pin!(until);
@@ -59,8 +91,9 @@ fn connection<I>(
     header_timeout: Duration,
 ) -> http1::Connection<TokioIo<I>, TowerToHyperService<Router>>
 where
-    I: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + 'static,
+    I: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + PeerCaller + 'static,
 {
+    let router = router.layer(axum::Extension(io.caller()));
     http1::Builder::new()
         .timer(TokioTimer::new())
         .header_read_timeout(header_timeout)

@@ -22,6 +22,8 @@
 //! GET  /v1/live, /v1/robots/{name}/live   application/x-ndjson: the live stream (live.rs)
 //! GET, PUT /v1/robots/{name}/speed-override {"percent": 1..=100}
 //! GET  /metrics                            Prometheus text
+//! GET  /v1/journal                         {"entries": [Entry], "last_seq"} (journal.rs: and
+//!                                          every other method's request journaled, with who)
 //! ```
 //! The answers are typed ([`crate::daemon::RobotState`], [`crate::daemon::MoveReport`],
 //! [`crate::daemon::MoveAccepted`], [`NamedPosition`], [`Registers`], [`ErrorBody`]...) and
@@ -37,6 +39,7 @@ mod body;
 mod cycles;
 mod error;
 mod handlers;
+mod journal;
 mod listen;
 mod live;
 pub mod metrics;
@@ -57,6 +60,8 @@ pub use answers::{DeletedPosition, NamedPosition, PositionList, SavedPosition};
 pub use auth::{BearerToken, TokenError};
 pub use body::MAX_BODY_BYTES;
 pub use error::{ApiError, ErrorBody};
+pub use journal::{CLI_AGENT, Caller, JournalPage, MAX_ENTRIES, metrics_text};
+pub use listen::PeerCaller;
 pub use listen::{HEADER_READ_TIMEOUT, serve, serve_with};
 
 use super::RobotHandle;
@@ -68,6 +73,8 @@ pub struct Api {
     closing: CancellationToken,
     /// The live streams (`GET .../live`), when the daemon publishes them.
     live: Option<super::stream::LiveHub>,
+    /// The cell's journal (`GET /v1/journal`; commands journaled), when the daemon keeps one.
+    journal: Option<crate::journal::Journal>,
 }
 
 impl Api {
@@ -78,6 +85,16 @@ impl Api {
             robots: Arc::new(robots),
             closing: CancellationToken::new(),
             live: None,
+            journal: None,
+        }
+    }
+
+    /// This API journaling every command into `journal` and reading it (`GET /v1/journal`).
+    #[must_use]
+    pub fn with_journal(self, journal: crate::journal::Journal) -> Self {
+        Self {
+            journal: journal.is_on().then_some(journal),
+            ..self
         }
     }
 
@@ -139,8 +156,13 @@ impl Api {
                     .delete(handlers::delete_position),
             )
             .route("/metrics", get(handlers::metrics))
+            .route("/v1/journal", get(journal::read))
             .fallback(handlers::no_route)
             .method_not_allowed_fallback(handlers::wrong_method)
+            .layer(axum::middleware::from_fn_with_state(
+                self.clone(),
+                journal::commands,
+            ))
             .with_state(self.clone());
         let router = match token {
             Some(token) => router.layer(axum::middleware::from_fn_with_state(

@@ -16,158 +16,37 @@
 //! Writes are taken one at a time (a second waits for the first's actions), so the refusal word
 //! always answers the last command.
 
-use std::sync::{Mutex, MutexGuard, PoisonError};
-
+use super::CellOwner;
 use crate::cell::Mode;
 use crate::cell::face::{
-    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Face, Link, Refusal, STATUS_AT,
-    View, status_words,
+    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Link, Refusal, STATUS_AT, View,
+    status_words,
 };
 use crate::config::FaceSettings;
-use crate::daemon::request::{CommandError, ConflictReason};
-use crate::daemon::{CycleError, CycleState, MoveOrder, RobotHandle, RobotPhase};
-
-/// A robot's cell face: its settings and its command side.
-#[derive(Debug)]
-pub(crate) struct FaceCell {
-    settings: FaceSettings,
-    face: Mutex<Face>,
-    /// One write's actions at a time.
-    turn: tokio::sync::Mutex<()>,
-}
-
-impl FaceCell {
-    pub(crate) fn new(settings: FaceSettings) -> Self {
-        Self {
-            settings,
-            face: Mutex::new(Face::new()),
-            turn: tokio::sync::Mutex::new(()),
-        }
-    }
-
-    fn face(&self) -> MutexGuard<'_, Face> {
-        self.face.lock().unwrap_or_else(PoisonError::into_inner)
-    }
-
-    pub(crate) fn mode_changed(&self) {
-        self.face().mode_changed();
-    }
-
-    fn refuse(&self, why: Refusal) {
-        self.face().refuse(why);
-    }
-}
+use crate::daemon::request::{CellRequest, CommandError, ConflictReason, CycleError};
+use crate::daemon::{CycleState, MoveOrder, RobotHandle, RobotPhase};
 
 impl RobotHandle {
-    /// The robot's cell face settings, if it has one.
-    #[must_use]
-    pub fn face_settings(&self) -> Option<&FaceSettings> {
-        self.cell.face.as_ref().map(|f| &f.settings)
-    }
-
-    /// The face's command side, for the robot's state.
-    pub(crate) fn face_state(&self) -> Option<crate::wire::FaceState> {
-        let cell = self.cell.face.as_ref()?;
-        let face = cell.face();
-        Some(crate::wire::FaceState {
-            program: face.selected().map_or(0, |(n, _)| u16::from(n)),
-            program_name: face.selected().map(|(_, name)| name.to_owned()),
-            enabled: face.enabled(),
-            commands: face.words()[crate::cell::face::command::BITS],
-            refused: face.refused().map(|r| crate::daemon::FaceRefusal {
-                code: r.code(),
-                meaning: r.meaning().to_owned(),
-            }),
-        })
-    }
-
-    /// Whether the face holds every motion: remote mode with move-enable off.
-    pub(crate) fn face_holds_motion(&self) -> bool {
-        self.cell
-            .face
-            .as_ref()
-            .is_some_and(|f| !f.face().enabled() && self.mode() == Mode::Remote)
-    }
-
     /// The face's block now: the command words as written, reserved words 0, the status words.
     #[must_use]
     pub fn face_block(&self) -> Option<[u16; BLOCK_WORDS]> {
-        let cell = self.cell.face.as_ref()?;
-        let view = self.face_view(&cell.settings);
-        let face = cell.face();
+        let settings = self.face_settings()?;
+        let view = self.face_view(settings);
+        let cell = self.cell();
+        let face = cell.face.as_ref()?;
         let mut block = [0; BLOCK_WORDS];
         block[..COMMAND_WORDS].copy_from_slice(&face.words());
-        block[STATUS_AT..].copy_from_slice(&status_words(&face, &view));
+        block[STATUS_AT..].copy_from_slice(&status_words(face, &view));
         Some(block)
     }
 
     /// The line wrote `values` from command word `at` (within the command words): the actions
     /// its edges ask for are carried out before this returns. `false` when the robot has no face.
     pub async fn face_write(&self, at: usize, values: &[u16]) -> bool {
-        let Some(cell) = &self.cell.face else {
-            return false;
-        };
-        let _turn = cell.turn.lock().await;
-        let refusals = cell.face().refusals();
-        let actions = cell.face().write(at, values, self.mode());
-        for action in actions {
-            tracing::info!(robot = %self.robot().name, ?action, "cell face command");
-            self.shared.metrics.face_command(action.name());
-            if let Err(why) = self.face_act(cell, &action).await {
-                tracing::warn!(robot = %self.robot().name, ?action, refused = why.code(), "cell face command refused: {}", why.meaning());
-                cell.refuse(why);
-            }
-        }
-        let face = cell.face();
-        if let Some(why) = face.refused().filter(|_| face.refusals() > refusals) {
-            self.shared.metrics.face_refused(why.code());
-        }
-        true
-    }
-
-    async fn face_act(&self, cell: &FaceCell, action: &Action) -> Result<(), Refusal> {
-        match action {
-            Action::Hold => {
-                self.cycles.hold("move-enable dropped on the cell face");
-                let _ = self.stop_robot().await;
-                Ok(())
-            }
-            Action::StopNow => {
-                let _ = self.stop().await;
-                Ok(())
-            }
-            Action::Stop => {
-                // Nothing to stop is no refusal: a stop is always taken.
-                let _ = self.cycles.stop(false);
-                Ok(())
-            }
-            Action::Reset => {
-                self.owned_by(Mode::Remote)
-                    .await
-                    .map_err(|_| Refusal::Local)?;
-                match self.clear_fault().await {
-                    Ok(()) => Ok(()),
-                    Err(CommandError::Conflict {
-                        reason: ConflictReason::NoFault,
-                    }) => Err(Refusal::NotNow),
-                    Err(_) => Err(Refusal::NotReady),
-                }
-            }
-            Action::Pause => {
-                let _owner = self
-                    .owned_by(Mode::Remote)
-                    .await
-                    .map_err(|_| Refusal::Local)?;
-                self.pause_cycle().map(|_| ()).map_err(|_| Refusal::NotNow)
-            }
-            Action::Select { number } => {
-                let name = self.program_numbered(*number)?;
-                cell.face().select(*number, &name);
-                Ok(())
-            }
-            Action::Start { count } => self.face_start(cell, *count).await,
-            Action::Home => self.face_home(&cell.settings).await,
-        }
+        let values = values.to_vec();
+        self.ask_cell(|reply| CellRequest::FaceWrite { at, values, reply })
+            .await
+            .unwrap_or(false)
     }
 
     /// The program whose `number` is `number`.
@@ -186,59 +65,6 @@ impl RobotHandle {
                 Err(Refusal::ProgramRefused)
             }
         }
-    }
-
-    async fn face_start(&self, cell: &FaceCell, count: Option<u64>) -> Result<(), Refusal> {
-        let _owner = self
-            .owned_by(Mode::Remote)
-            .await
-            .map_err(|_| Refusal::Local)?;
-        if let Some(c) = self.cycle().filter(|c| !c.state.is_final()) {
-            return match c.state {
-                CycleState::Paused | CycleState::Faulted => {
-                    self.resume_cycle().map(|_| ()).map_err(|e| match e {
-                        CycleError::FaultNotCleared { .. } => Refusal::FaultNotCleared,
-                        _ => Refusal::NotNow,
-                    })
-                }
-                _ => Err(Refusal::Busy),
-            };
-        }
-        let selected = cell.face().selected().map(|(_, name)| name.to_owned());
-        let program = selected.ok_or(Refusal::NotSelected)?;
-        let state = self.state();
-        if state.current_move.is_some() || !state.queued.is_empty() {
-            return Err(Refusal::Busy);
-        }
-        if state.refuses.is_some() {
-            return Err(Refusal::NotReady);
-        }
-        self.run_cycle(&program, count).map(|_| ()).map_err(|e| {
-            tracing::warn!(robot = %self.robot().name, program, "cell face start refused: {e}");
-            match e {
-                CycleError::Running { .. } | CycleError::Conflict { .. } => Refusal::Busy,
-                _ => Refusal::ProgramRefused,
-            }
-        })
-    }
-
-    async fn face_home(&self, settings: &FaceSettings) -> Result<(), Refusal> {
-        let _owner = self
-            .owned_by(Mode::Remote)
-            .await
-            .map_err(|_| Refusal::Local)?;
-        if self.cycle().is_some_and(|c| !c.state.is_final()) {
-            return Err(Refusal::Busy);
-        }
-        self.position(&settings.home).map_err(|_| Refusal::NoHome)?;
-        let order = MoveOrder {
-            position: Some(settings.home.clone()),
-            ..MoveOrder::default()
-        };
-        self.submit(order).await.map(|_| ()).map_err(|e| {
-            tracing::warn!(robot = %self.robot().name, "cell face home refused: {e}");
-            Refusal::NotReady
-        })
     }
 
     /// What the status words need of the robot now.
@@ -288,4 +114,162 @@ impl RobotHandle {
             in_home: at(&settings.home),
         }
     }
+}
+
+impl CellOwner {
+    /// The line wrote `values` from command word `at`: the actions its edges ask for carried
+    /// out, one by one, through `robot`, the face published after each. `false` when the
+    /// robot has no face.
+    pub(super) async fn face_write(
+        &mut self,
+        robot: &RobotHandle,
+        at: usize,
+        values: &[u16],
+    ) -> bool {
+        let mode = self.view.mode;
+        let Some(face) = self.view.face.as_mut() else {
+            return false;
+        };
+        let refusals = face.refusals();
+        let actions = face.write(at, values, mode);
+        self.publish();
+        let metrics = &robot.shared.metrics;
+        for action in actions {
+            tracing::info!(robot = %robot.robot().name, ?action, "cell face command");
+            metrics.face_command(action.name());
+            if let Err(why) = self.face_act(robot, &action).await {
+                tracing::warn!(robot = %robot.robot().name, ?action, refused = why.code(), "cell face command refused: {}", why.meaning());
+                self.face(|f| f.refuse(why));
+            }
+        }
+        let face = self
+            .view
+            .face
+            .as_ref()
+            .expect("the face is never taken away");
+        if let Some(why) = face.refused().filter(|_| face.refusals() > refusals) {
+            metrics.face_refused(why.code());
+        }
+        true
+    }
+
+    /// Changes the face by `f` and publishes it.
+    fn face(&mut self, f: impl FnOnce(&mut crate::cell::face::Face)) {
+        if let Some(face) = self.view.face.as_mut() {
+            f(face);
+            self.publish();
+        }
+    }
+
+    /// Refused unless the cell face drives the robot (the owner alone changes the mode, so it
+    /// holds while the action is carried out).
+    fn remote(&self) -> Result<(), Refusal> {
+        if self.view.mode == Mode::Remote {
+            Ok(())
+        } else {
+            Err(Refusal::Local)
+        }
+    }
+
+    async fn face_act(&mut self, robot: &RobotHandle, action: &Action) -> Result<(), Refusal> {
+        match action {
+            Action::Hold => {
+                robot
+                    .hold_cycle("move-enable dropped on the cell face")
+                    .await;
+                let _ = robot.stop_robot().await;
+                Ok(())
+            }
+            Action::StopNow => {
+                let _ = robot.stop().await;
+                Ok(())
+            }
+            Action::Stop => {
+                // Nothing to stop is no refusal: a stop is always taken.
+                let _ = robot.stop_cycle(false).await;
+                Ok(())
+            }
+            Action::Reset => {
+                self.remote()?;
+                match robot.clear_fault().await {
+                    Ok(()) => Ok(()),
+                    Err(CommandError::Conflict {
+                        reason: ConflictReason::NoFault,
+                    }) => Err(Refusal::NotNow),
+                    Err(_) => Err(Refusal::NotReady),
+                }
+            }
+            Action::Pause => {
+                self.remote()?;
+                robot
+                    .pause_cycle()
+                    .await
+                    .map(|_| ())
+                    .map_err(|_| Refusal::NotNow)
+            }
+            Action::Select { number } => {
+                let name = robot.program_numbered(*number)?;
+                self.face(|f| f.select(*number, &name));
+                Ok(())
+            }
+            Action::Start { count } => self.face_start(robot, *count).await,
+            Action::Home => {
+                self.remote()?;
+                face_home(robot).await
+            }
+        }
+    }
+
+    async fn face_start(&self, robot: &RobotHandle, count: Option<u64>) -> Result<(), Refusal> {
+        self.remote()?;
+        if let Some(c) = robot.cycle().filter(|c| !c.state.is_final()) {
+            return match c.state {
+                CycleState::Paused | CycleState::Faulted => {
+                    robot.resume_cycle().await.map(|_| ()).map_err(|e| match e {
+                        CycleError::FaultNotCleared { .. } => Refusal::FaultNotCleared,
+                        _ => Refusal::NotNow,
+                    })
+                }
+                _ => Err(Refusal::Busy),
+            };
+        }
+        let selected = self.view.face.as_ref().and_then(|f| f.selected());
+        let program = selected
+            .map(|(_, name)| name.to_owned())
+            .ok_or(Refusal::NotSelected)?;
+        let state = robot.state();
+        if state.current_move.is_some() || !state.queued.is_empty() {
+            return Err(Refusal::Busy);
+        }
+        if state.refuses.is_some() {
+            return Err(Refusal::NotReady);
+        }
+        robot.run_cycle(&program, count).await.map(|_| ()).map_err(|e| {
+            tracing::warn!(robot = %robot.robot().name, program, "cell face start refused: {e}");
+            match e {
+                CycleError::Running { .. } | CycleError::Conflict { .. } => Refusal::Busy,
+                _ => Refusal::ProgramRefused,
+            }
+        })
+    }
+}
+
+/// A move to the face's `home` position, in remote mode.
+async fn face_home(robot: &RobotHandle) -> Result<(), Refusal> {
+    if robot.cycle().is_some_and(|c| !c.state.is_final()) {
+        return Err(Refusal::Busy);
+    }
+    let home = robot
+        .face_settings()
+        .map(|f| f.home.clone())
+        .ok_or(Refusal::NoHome)?;
+    robot.position(&home).map_err(|_| Refusal::NoHome)?;
+    let order = MoveOrder {
+        position: Some(home),
+        ..MoveOrder::default()
+    };
+    robot.submit(order).await.map(|_| ()).map_err(|e| {
+        tracing::warn!(robot = %robot.robot().name, "cell face home refused: {e}");
+        Refusal::NotReady
+    })
 }

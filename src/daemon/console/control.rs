@@ -88,10 +88,30 @@ pub enum Request {
         /// The keep-alive's number.
         seq: u64,
         /// Refused, or started.
-        reply: oneshot::Sender<Result<(), String>>,
+        reply: oneshot::Sender<Result<(), JogRefusal>>,
     },
     /// A keep-alive, a release, a hidden page, a closed connection: for the lease.
     Lease(Event),
+}
+
+/// Why a hold-to-run jog was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum JogRefusal {
+    /// The session may not operate the robot (the seat, the mode).
+    #[error(transparent)]
+    Seat(#[from] Refusal),
+    /// The robot cannot jog now (a fault, the link, a cycle), `why`.
+    #[error("jog refused: {why}")]
+    NotNow {
+        /// Why, in words.
+        why: String,
+    },
+    /// A joint asked for: hold-to-run jogs the tool.
+    #[error("hold-to-run jogs the tool along x, y, z or a; a joint jogs in steps")]
+    Joint,
+    /// Another session jogs the robot.
+    #[error("another session jogs this robot")]
+    OtherSession,
 }
 
 /// A robot's control task's handle.
@@ -314,47 +334,43 @@ impl Task {
                 seq,
                 reply,
             } => {
-                let refused = self
-                    .seat
-                    .check(who.asker(), Command::Operate, remote)
-                    .map_err(|e| e.to_string())
-                    .and_then(|()| match self.facts().refusal() {
-                        Some(why) => Err(format!("jog refused: {why}")),
-                        None => Ok(()),
-                    })
-                    .and_then(|()| match axis {
-                        JogAxis::Joint(_) => Err(
-                            "hold-to-run jogs the tool along x, y, z or a; a joint jogs in steps"
-                                .to_owned(),
-                        ),
-                        _ => Ok(()),
-                    })
-                    .and_then(|()| match self.lease.jogging() {
-                        Some(j) if j.session != who.session => {
-                            Err("another session jogs this robot".to_owned())
-                        }
-                        _ => Ok(()),
-                    });
+                let refused = self.jog_refused(&who, axis, remote);
                 let ok = refused.is_ok();
                 let _ = reply.send(refused);
-                if ok && self.lease.jogging().is_none() {
+                if !ok {
+                    Vec::new()
+                } else if self.lease.jogging().is_none() {
                     self.jogger = Some(who.user.clone());
+                    let session = who.session;
                     vec![Event::Start {
-                        session: who.session,
+                        session,
                         axis,
                         positive,
                         seq,
                     }]
-                } else if ok {
-                    vec![Event::KeepAlive {
-                        session: who.session,
-                        seq,
-                    }]
                 } else {
-                    Vec::new()
+                    let session = who.session;
+                    vec![Event::KeepAlive { session, seq }]
                 }
             }
             Request::Lease(event) => vec![event],
+        }
+    }
+
+    /// Why `who` may not jog along `axis` now, if it may not.
+    fn jog_refused(&self, who: &Who, axis: JogAxis, remote: bool) -> Result<(), JogRefusal> {
+        self.seat.check(who.asker(), Command::Operate, remote)?;
+        if let Some(why) = self.facts().refusal() {
+            return Err(JogRefusal::NotNow {
+                why: why.to_owned(),
+            });
+        }
+        if let JogAxis::Joint(_) = axis {
+            return Err(JogRefusal::Joint);
+        }
+        match self.lease.jogging() {
+            Some(j) if j.session != who.session => Err(JogRefusal::OtherSession),
+            _ => Ok(()),
         }
     }
 

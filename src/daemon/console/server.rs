@@ -233,12 +233,21 @@ pub(super) async fn programs(
 /// and the role for what the request does.
 pub(super) async fn guard(
     State(state): State<Arc<ConsoleState>>,
-    request: Request,
+    mut request: Request,
     next: Next,
 ) -> Response {
     let Some((_, session)) = session_of(&state, request.headers()) else {
         return refuse(StatusCode::UNAUTHORIZED, "log in first", "login");
     };
+    // The journal names the console's user as who sent a command.
+    if let Some(Peer(peer)) = request.extensions().get::<Peer>().copied() {
+        request
+            .extensions_mut()
+            .insert(crate::daemon::api::Caller::Console {
+                user: session.user.clone(),
+                ip: client_ip(peer),
+            });
+    }
     let method = request.method().clone();
     let changes = !matches!(method, Method::GET | Method::HEAD);
     if changes && let Err(e) = origin_allowed(request.headers(), &state.origins) {

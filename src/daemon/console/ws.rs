@@ -197,9 +197,9 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
                 return None;
             }
             match answer.await {
-                Ok(Err(e)) => {
-                    Some(json!({"type": "error", "robot": robot, "for": "jog", "error": e}))
-                }
+                Ok(Err(e)) => Some(
+                    json!({"type": "error", "robot": robot, "for": "jog", "error": e.to_string()}),
+                ),
                 _ => None,
             }
         }

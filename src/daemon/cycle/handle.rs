@@ -1,20 +1,19 @@
-//! What a robot's handle does with its cycle: run one (checked whole first), watch, stop, pause
-//! and resume it, and the metrics its runner reports.
+//! What a robot's handle does with its cycle: run one (checked whole first), stop, pause and
+//! resume it, each a request to the cycle's owner ([`super::slot`]), and the metrics its
+//! driver reports. The cycle's status is read from what the owner publishes
+//! ([`RobotHandle::cycle`]).
 
-use super::CycleError;
 use crate::daemon::RobotHandle;
+use crate::daemon::request::{CycleError, CycleRequest};
 use crate::wire::CycleStatus;
 
 impl RobotHandle {
-    /// The robot's cycle, if one ran since the daemon started.
-    #[must_use]
-    pub fn cycle(&self) -> Option<CycleStatus> {
-        self.cycles.status()
-    }
-
     /// Stops the robot's cycle at the end of its current step, or `now`.
     pub async fn stop_cycle(&self, now: bool) -> Result<CycleStatus, CycleError> {
-        let status = self.cycles.stop(now)?;
+        let status = self
+            .ask_cycle(|reply| CycleRequest::Stop { now, reply })
+            .await
+            .unwrap_or(Err(CycleError::ShuttingDown))?;
         if now {
             // The runner stops the robot too; this makes it sure even if it is between steps.
             let _ = self.stop().await;
@@ -24,7 +23,11 @@ impl RobotHandle {
 
     /// Runs cycle program `program` (`count` cycles, or until stopped): loaded from the robot's
     /// programs directory and checked whole before anything moves.
-    pub fn run_cycle(&self, program: &str, count: Option<u64>) -> Result<CycleStatus, CycleError> {
+    pub async fn run_cycle(
+        &self,
+        program: &str,
+        count: Option<u64>,
+    ) -> Result<CycleStatus, CycleError> {
         if count == Some(0) {
             return Err(CycleError::Program(
                 "count = 0: run at least 1 cycle".to_owned(),
@@ -37,10 +40,17 @@ impl RobotHandle {
         // The cycle runs with the signals and lists it was checked with, whatever a reload does.
         let handle = self.pinned();
         tracing::info!(robot = %self.robot.name, program, count, ops = checked.ops.len(), "cycle starts");
-        self.cycles.start(
-            CycleStatus::starting(program, count),
-            move |control, status| super::run(handle, checked, count, control, status),
-        )
+        let runner: crate::daemon::request::CycleRunner = Box::new(move |control, status| {
+            Box::pin(super::run::run(handle, checked, count, control, status))
+        });
+        let status = CycleStatus::starting(program, count);
+        self.ask_cycle(|reply| CycleRequest::Run {
+            status,
+            runner,
+            reply,
+        })
+        .await
+        .unwrap_or(Err(CycleError::ShuttingDown))
     }
 
     /// Program `name` of the robot's programs directory, read and checked whole against the
@@ -73,7 +83,7 @@ impl RobotHandle {
             names: crate::cycle::Names {
                 permit: crate::daemon::permit::PermitNames {
                     signals: &live.cell.signals,
-                    inputs: &self.cell.inputs,
+                    inputs: &self.inputs,
                 },
                 access: &live.gateway.access,
             },
@@ -118,12 +128,25 @@ impl RobotHandle {
     }
 
     /// Pauses the robot's cycle at the end of its current step.
-    pub fn pause_cycle(&self) -> Result<CycleStatus, CycleError> {
-        self.cycles.pause()
+    pub async fn pause_cycle(&self) -> Result<CycleStatus, CycleError> {
+        self.ask_cycle(CycleRequest::Pause)
+            .await
+            .unwrap_or(Err(CycleError::ShuttingDown))
     }
 
     /// Resumes a paused cycle, or a faulted one once its fault was cleared.
-    pub fn resume_cycle(&self) -> Result<CycleStatus, CycleError> {
-        self.cycles.resume(self.incidents().count)
+    pub async fn resume_cycle(&self) -> Result<CycleStatus, CycleError> {
+        let incidents = self.incidents().count;
+        self.ask_cycle(|reply| CycleRequest::Resume { incidents, reply })
+            .await
+            .unwrap_or(Err(CycleError::ShuttingDown))
+    }
+
+    /// Holds the robot's cycle from outside the PLC (`why`): the move running ends held and
+    /// the cycle pauses (the caller stops the robot). Whether a cycle was under way.
+    pub(crate) async fn hold_cycle(&self, why: &'static str) -> bool {
+        self.ask_cycle(|reply| CycleRequest::Hold { why, reply })
+            .await
+            .unwrap_or(false)
     }
 }

@@ -10,8 +10,9 @@
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
 //!             dwell, a loop's condition decided, moves prepared ahead unprepared
 //! status.rs   the cycle's status as the driver writes it
-//! slot.rs     the robot's cycle: at most one running, its status, its controller
-//! handle.rs   RobotHandle's cycle methods: run (checked first), watch, stop, pause, resume
+//! slot.rs     the robot's cycle's owner task: at most one running, its status, its control
+//! handle.rs   RobotHandle's cycle methods: run (checked first), stop, pause, resume, each a
+//!             request to the owner
 //! ```
 //! A cycle never resumes by itself: after a fault it needs `clear-fault` and `resume` (or a
 //! fresh `run`); a restarted daemon has no cycle.
@@ -22,6 +23,4 @@ mod run;
 mod slot;
 mod status;
 
-pub(crate) use run::run;
-pub use slot::CycleError;
-pub(crate) use slot::CycleSlot;
+pub(crate) use slot::own;

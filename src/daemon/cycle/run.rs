@@ -10,13 +10,13 @@ use std::time::Instant;
 use tokio::sync::watch;
 
 use super::act;
-use super::slot::SharedStatus;
 use super::status::Status;
 use crate::cycle::runner::{Action, Control, Event, MotionEnd, Prepared, Seen};
 use crate::cycle::{Checked, Runner};
 use crate::daemon::RobotHandle;
 use crate::daemon::Snapshot;
 use crate::daemon::gate::Gate;
+use crate::daemon::shared::CycleOut;
 use crate::wire::CycleState;
 
 /// Runs `program` `count` times (or until stopped).
@@ -25,7 +25,7 @@ pub(crate) async fn run(
     program: Checked,
     count: Option<u64>,
     control: watch::Receiver<Control>,
-    status: SharedStatus,
+    status: CycleOut,
 ) {
     let incidents = handle.watch_snapshot();
     let epoch = incidents.borrow().incidents.count;

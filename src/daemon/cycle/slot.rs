@@ -1,71 +1,36 @@
-//! A robot's cycle: at most one at a time, its status as the runner last wrote it, and the
-//! control value the runner watches. Requests that make no sense in the cycle's state (pause a
-//! stopped cycle, run while one runs) are refused with the state named.
+//! A robot's cycle and its one owner: a task that takes the cycle requests one at a time (at
+//! most one cycle under way, steered by the control value its driver watches) and publishes the
+//! status the driver writes ([`CycleOut`]). Requests that make no sense in the cycle's state
+//! (pause a stopped cycle, run while one runs) are refused with the state named.
+//!
+//! ```text
+//!  handles --CycleRequest--> own(): CycleSlot --Control (watch)--> the cycle's driver
+//!  handles <--Option<CycleStatus> (watch)-- CycleSlot (starts, resumes), driver (the rest)
+//! ```
 
-use std::future::Future;
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
-
-use thiserror::Error;
-use tokio::sync::watch;
+use tokio::sync::{mpsc, watch};
 
 use crate::cycle::runner::Control;
+use crate::daemon::request::{CycleError, CycleRequest, CycleRunner};
+use crate::daemon::shared::CycleOut;
 use crate::wire::{CycleState, CycleStatus};
 
-/// Why a cycle request was refused.
-#[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum CycleError {
-    /// No cycle has run on this robot since the daemon started.
-    #[error("no cycle has run on this robot since the daemon started")]
-    NoCycle,
-    /// A cycle is under way (run refused).
-    #[error("cycle {program} is {state}: stop it first (linterpd cycle stop)")]
-    Running {
-        /// Its program.
-        program: String,
-        /// Its state.
-        state: String,
-    },
-    /// The request does not fit the cycle's state.
-    #[error("cycle {program} is {state}: {what}")]
-    Conflict {
-        /// Its program.
-        program: String,
-        /// Its state.
-        state: String,
-        /// Why the request does not fit.
-        what: &'static str,
-    },
-    /// The program cannot run: unknown, or refused by the check (the step and value named).
-    #[error("{0}")]
-    Program(String),
-    /// A faulted cycle resumes only after the fault was cleared.
-    #[error(
-        "cycle {program} faulted ({why}): clear the fault first (linterpd clear-fault), then resume"
-    )]
-    FaultNotCleared {
-        /// Its program.
-        program: String,
-        /// Why it faulted.
-        why: String,
-    },
-}
-
-/// The shared status a runner writes.
-pub(crate) type SharedStatus = Arc<Mutex<CycleStatus>>;
-
-fn lock(status: &SharedStatus) -> MutexGuard<'_, CycleStatus> {
-    status.lock().unwrap_or_else(PoisonError::into_inner)
+/// Takes `requests` until every handle is gone.
+pub(crate) async fn own(out: CycleOut, mut requests: mpsc::UnboundedReceiver<CycleRequest>) {
+    let mut slot = CycleSlot { out, current: None };
+    while let Some(request) = requests.recv().await {
+        slot.take(request);
+    }
 }
 
 /// One robot's cycle slot.
-#[derive(Debug, Default)]
-pub(crate) struct CycleSlot {
-    current: Mutex<Option<Current>>,
+struct CycleSlot {
+    /// The cycle's status, published.
+    out: CycleOut,
+    current: Option<Current>,
 }
 
-#[derive(Debug)]
 struct Current {
-    status: SharedStatus,
     control: watch::Sender<Control>,
     /// The PLC's incident count when the fault the cycle is in was cleared (`None`: not cleared
     /// since it faulted). A resume needs it to be the count now: an incident after the clear
@@ -81,41 +46,59 @@ fn state_name(state: CycleState) -> String {
 }
 
 impl CycleSlot {
-    fn current(&self) -> MutexGuard<'_, Option<Current>> {
-        self.current.lock().unwrap_or_else(PoisonError::into_inner)
+    fn take(&mut self, request: CycleRequest) {
+        match request {
+            CycleRequest::Run {
+                status,
+                runner,
+                reply,
+            } => {
+                let _ = reply.send(self.start(status, runner));
+            }
+            CycleRequest::Stop { now, reply } => {
+                let _ = reply.send(self.stop(now));
+            }
+            CycleRequest::Pause(reply) => {
+                let _ = reply.send(self.pause());
+            }
+            CycleRequest::Resume { incidents, reply } => {
+                let _ = reply.send(self.resume(incidents));
+            }
+            CycleRequest::Hold { why, reply } => {
+                let _ = reply.send(self.hold(why));
+            }
+            CycleRequest::FaultCleared { incidents, reply } => {
+                let _ = reply.send(self.fault_cleared(incidents));
+            }
+            CycleRequest::RobotStopped(reply) => {
+                self.robot_stopped();
+                let _ = reply.send(());
+            }
+        }
     }
 
     /// The cycle's status.
-    pub(crate) fn status(&self) -> Option<CycleStatus> {
-        self.current().as_ref().map(|c| lock(&c.status).clone())
+    fn status(&self) -> Option<CycleStatus> {
+        self.out.borrow().clone()
     }
 
     /// Starts a cycle: `runner` gets the control to watch and the status to write. Refused
     /// while another cycle is under way (not stopped or done).
-    pub(crate) fn start<F, Fut>(
-        &self,
+    fn start(
+        &mut self,
         status: CycleStatus,
-        runner: F,
-    ) -> Result<CycleStatus, CycleError>
-    where
-        F: FnOnce(watch::Receiver<Control>, SharedStatus) -> Fut,
-        Fut: Future<Output = ()> + Send + 'static,
-    {
-        let mut current = self.current();
-        if let Some(c) = current.as_ref() {
-            let s = lock(&c.status);
-            if !s.state.is_final() {
-                return Err(CycleError::Running {
-                    program: s.program.clone(),
-                    state: state_name(s.state),
-                });
-            }
+        runner: CycleRunner,
+    ) -> Result<CycleStatus, CycleError> {
+        if let Some(s) = self.status().filter(|s| !s.state.is_final()) {
+            return Err(CycleError::Running {
+                program: s.program,
+                state: state_name(s.state),
+            });
         }
-        let shared = Arc::new(Mutex::new(status.clone()));
+        self.out.send_replace(Some(status.clone()));
         let (control, watched) = watch::channel(Control::default());
-        tokio::spawn(runner(watched, Arc::clone(&shared)));
-        *current = Some(Current {
-            status: shared,
+        tokio::spawn(runner(watched, std::sync::Arc::clone(&self.out)));
+        self.current = Some(Current {
             control,
             cleared_at: None,
         });
@@ -123,19 +106,18 @@ impl CycleSlot {
     }
 
     fn with_live<T>(
-        &self,
+        &mut self,
         f: impl FnOnce(&mut Current, &CycleStatus) -> Result<T, CycleError>,
     ) -> Result<T, CycleError> {
-        let mut current = self.current();
-        let Some(c) = current.as_mut() else {
-            return Err(CycleError::NoCycle);
-        };
-        let status = lock(&c.status).clone();
-        f(c, &status)
+        let status = self.status();
+        match (self.current.as_mut(), status) {
+            (Some(c), Some(status)) => f(c, &status),
+            _ => Err(CycleError::NoCycle),
+        }
     }
 
     /// Stops the cycle: at the end of its current step, or `now` (the robot stopped at once).
-    pub(crate) fn stop(&self, now: bool) -> Result<CycleStatus, CycleError> {
+    fn stop(&mut self, now: bool) -> Result<CycleStatus, CycleError> {
         self.with_live(|c, s| {
             if s.state.is_final() {
                 return Err(conflict(s, "it has ended already"));
@@ -146,7 +128,7 @@ impl CycleSlot {
     }
 
     /// Pauses the cycle at the end of its current step.
-    pub(crate) fn pause(&self) -> Result<CycleStatus, CycleError> {
+    fn pause(&mut self) -> Result<CycleStatus, CycleError> {
         self.with_live(|c, s| match s.state {
             CycleState::Running | CycleState::Waiting => {
                 c.control.send_modify(Control::pause_asked);
@@ -158,59 +140,64 @@ impl CycleSlot {
 
     /// Holds the cycle from outside the PLC (`why`): the move running ends held and the cycle
     /// pauses (the caller stops the robot). Whether a cycle was under way.
-    pub(crate) fn hold(&self, why: &'static str) -> bool {
-        match self.current().as_ref() {
-            Some(c) if !lock(&c.status).state.is_final() => {
-                c.control.send_modify(|k| k.hold_asked(why));
-                true
+    fn hold(&mut self, why: &'static str) -> bool {
+        self.with_live(|c, s| {
+            if s.state.is_final() {
+                return Ok(false);
             }
-            _ => false,
-        }
+            c.control.send_modify(|k| k.hold_asked(why));
+            Ok(true)
+        })
+        .unwrap_or(false)
     }
 
     /// Resumes a paused cycle, or a faulted one whose fault was cleared with no incident since
     /// (`incidents`: the PLC's incident count now). The status returned is the cycle's as it
     /// goes on: running, at the step it was at.
-    pub(crate) fn resume(&self, incidents: u64) -> Result<CycleStatus, CycleError> {
-        let mut current = self.current();
-        let Some(c) = current.as_mut() else {
-            return Err(CycleError::NoCycle);
-        };
-        let mut status = lock(&c.status);
-        let epoch = match status.state {
-            CycleState::Paused => None,
-            CycleState::Faulted if c.cleared_at == Some(incidents) => c.cleared_at.take(),
-            CycleState::Faulted => {
-                return Err(CycleError::FaultNotCleared {
-                    program: status.program.clone(),
-                    why: status.reason.clone().unwrap_or_default(),
-                });
+    fn resume(&mut self, incidents: u64) -> Result<CycleStatus, CycleError> {
+        let status = self.with_live(|c, s| {
+            let epoch = match s.state {
+                CycleState::Paused => None,
+                CycleState::Faulted if c.cleared_at == Some(incidents) => c.cleared_at.take(),
+                CycleState::Faulted => {
+                    return Err(CycleError::FaultNotCleared {
+                        program: s.program.clone(),
+                        why: s.reason.clone().unwrap_or_default(),
+                    });
+                }
+                _ => return Err(conflict(s, "only a paused or faulted cycle resumes")),
+            };
+            c.control.send_modify(|k| k.resume(epoch));
+            Ok(s.clone())
+        })?;
+        // What the driver writes as it takes the resume; said here so the answer is true.
+        let mut resumed = None;
+        self.out.send_modify(|s| {
+            if let Some(s) = s.as_mut() {
+                s.state = CycleState::Running;
+                s.reason = None;
+                resumed = Some(s.clone());
             }
-            _ => return Err(conflict(&status, "only a paused or faulted cycle resumes")),
-        };
-        c.control.send_modify(|k| k.resume(epoch));
-        // What the runner writes as it takes the resume; said here so the answer is true.
-        status.state = CycleState::Running;
-        status.reason = None;
-        Ok(status.clone())
+        });
+        Ok(resumed.unwrap_or(status))
     }
 
     /// The robot's fault was cleared (at the PLC's incident count `incidents`): a faulted
     /// cycle may resume. Whether one was faulted.
-    pub(crate) fn fault_cleared(&self, incidents: u64) -> bool {
-        let mut current = self.current();
-        match current.as_mut() {
-            Some(c) if lock(&c.status).state == CycleState::Faulted => {
-                c.cleared_at = Some(incidents);
-                true
+    fn fault_cleared(&mut self, incidents: u64) -> bool {
+        self.with_live(|c, s| {
+            if s.state != CycleState::Faulted {
+                return Ok(false);
             }
-            _ => false,
-        }
+            c.cleared_at = Some(incidents);
+            Ok(true)
+        })
+        .unwrap_or(false)
     }
 
     /// The robot was stopped from outside the cycle (`linterpd stop`): the cycle ends with it.
-    pub(crate) fn robot_stopped(&self) {
-        if let Some(c) = self.current().as_ref() {
+    fn robot_stopped(&mut self) {
+        if let Some(c) = &self.current {
             c.control.send_modify(|k| k.stop(true));
         }
     }

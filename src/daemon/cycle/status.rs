@@ -1,23 +1,23 @@
 //! The cycle's status as its driver writes it, one method per thing that happens: a step
 //! begins, a wait waits, a cycle ends done, the cycle pauses, faults or ends. Anyone reads it
-//! through the slot ([`super::slot`]).
+//! as it is published ([`CycleOut`]).
 
+use crate::daemon::shared::CycleOut;
 use crate::wire::{CycleState, CycleStatus, StepAt};
-
-use super::slot::SharedStatus;
 
 /// Moves kept in the status, the newest last.
 const MOVES_SHOWN: usize = 10;
 
 /// The status a cycle's driver writes.
-pub(super) struct Status(pub(super) SharedStatus);
+pub(super) struct Status(pub(super) CycleOut);
 
 impl Status {
     fn set(&self, f: impl FnOnce(&mut CycleStatus)) {
-        f(&mut self
-            .0
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner));
+        self.0.send_modify(|s| {
+            if let Some(s) = s.as_mut() {
+                f(s);
+            }
+        });
     }
 
     /// The cycle runs at step `at`.

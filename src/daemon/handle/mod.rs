@@ -1,100 +1,57 @@
-//! The daemon's face to the rest of the program: one handle per robot (submit a move, stop, home,
-//! clear a fault, read state and reports, follow a move's progress, teach positions) and the
-//! daemon that spawns a worker per robot, watches that they make progress, and shuts them down.
+//! The daemon's face to the rest of the program: one handle per robot, a thin sender of
+//! requests to the owners of the robot's state (its worker: moves, stops, home, clear-fault,
+//! register jobs; its cycle's owner; its cell's owner) and a reader of what they publish (the
+//! worker's snapshot and move reports, the cycle's status, the mode and the cell face). It
+//! holds none of their state: `daemon/cycle` and `daemon/cell` add their requests to it
+//! (`impl RobotHandle` there), and it imports neither.
+//!
+//! ```text
+//!  API, CLI, console, cell face, cycles --> RobotHandle --Request/stop/Job--> worker
+//!                                                      --CycleRequest------> cycle owner
+//!                                                      --CellRequest-------> cell owner
+//!                                          <--Snapshot, Moves, cycle status, CellView (published)
+//! ```
 
 mod submit;
 
-use super::cell::Cell;
-use super::cycle::CycleSlot;
-use super::request::ConflictReason;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
-use thiserror::Error;
 use tokio::sync::{mpsc, oneshot, watch};
-use tokio::task::JoinSet;
 
 use super::gateway::{self, GatewayError, Job, Values};
-use super::live::{Live, LiveSettings};
+use super::live::Live;
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
-use super::request::{CommandError, Reply, Request};
-use super::setup::{DaemonOptions, RobotSetup};
-use super::shared::Shared;
-use super::worker::{Channels, Worker};
-use crate::contract::CHANNELS;
+use super::request::{CellRequest, CommandError, ConflictReason, CycleRequest, Reply, Request};
+use super::shared::{CellView, Shared};
+use crate::cell::Mode;
+use crate::config::FaceSettings;
 use crate::contract::machine::Blocker;
+use crate::contract::{CHANNELS, INPUT_WORDS, InputWord};
 use crate::gateway::{Address, GatewaySettings, Range};
 use crate::kinematics::JOINTS;
-use crate::order::OrderError;
-use crate::plan::PlanError;
 use crate::robot::Robot;
-use crate::wire::{MoveId, MoveReport, RobotPhase, RobotState};
-
-/// Why a move was not accepted.
-#[derive(Debug, Error)]
-pub enum SubmitError {
-    /// A field of the order is wrong.
-    #[error(transparent)]
-    Order(#[from] OrderError),
-    /// The move cannot be planned from where the robot is (or will be).
-    #[error(transparent)]
-    Plan(#[from] PlanError),
-    /// The robot cannot take a move now (link down, not homed, a fault...).
-    #[error("{blocker}{}", detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
-    NotNow {
-        /// Why.
-        blocker: Blocker,
-        /// The link's last error, when that is why.
-        detail: Option<String>,
-    },
-    /// The queue would hold more starts than it takes.
-    #[error(
-        "{queued} starts are queued or running and the order adds {adding}; at most {limit} \
-         at once: wait for some to end"
-    )]
-    QueueFull {
-        /// Starts queued or running now.
-        queued: usize,
-        /// Starts the order would add.
-        adding: usize,
-        /// The most, [`MAX_QUEUED_STARTS`].
-        limit: usize,
-    },
-    /// The robot is in remote mode and the cell face's move-enable is off.
-    #[error(
-        "the cell face's move-enable is off (remote mode): no motion until the line turns it on"
-    )]
-    MoveEnableOff,
-    /// The daemon is shutting down.
-    #[error("the daemon is shutting down")]
-    ShuttingDown,
-    /// Asked for by a cycle before the PLC restarted, stalled or was lost: refused.
-    #[error("{why} since the cycle asked for it")]
-    Untrusted {
-        /// What happened.
-        why: String,
-    },
-}
-
-/// The most starts a robot's queue holds, the running one included: an order that would pass
-/// it is refused whole.
-pub const MAX_QUEUED_STARTS: usize = 1_000;
+use crate::wire::{
+    CycleState, CycleStatus, FaceRefusal, FaceState, MoveId, MoveReport, RobotPhase, RobotState,
+};
 
 /// One robot, as the API and the CLI see it.
 #[derive(Debug, Clone)]
 pub struct RobotHandle {
     pub(super) robot: Arc<Robot>,
-    requests: mpsc::UnboundedSender<Request>,
-    stops: mpsc::UnboundedSender<Reply>,
-    gateway: mpsc::UnboundedSender<Job>,
+    /// The requests this handle sends: to the worker, the cycle's owner and the cell's.
+    to: Senders,
     /// The gateway's lists and the cell's signals and programs: a reload changes them.
     pub(super) live: Live,
+    /// What the owners publish: the worker's snapshot and reports, the cycle, the cell.
     pub(super) shared: Arc<Shared>,
     pub(super) positions: Arc<TaughtPositions>,
-    pub(super) cell: Arc<Cell>,
-    pub(super) cycles: Arc<CycleSlot>,
+    /// The input words the PLC copies into the status block (the robot's layout).
+    pub(super) inputs: [InputWord; INPUT_WORDS],
+    /// The cell face's settings, as started (`None`: the robot has none).
+    face: Option<Arc<FaceSettings>>,
     /// Orders are taken one at a time, each planned from where the one before it ends.
     lane: Arc<tokio::sync::Mutex<()>>,
     /// The PLC's incident count this handle acts under (a cycle's): its moves and writes are
@@ -103,6 +60,23 @@ pub struct RobotHandle {
     /// The speed override, 1 to 100 %: every order checked after it is set is planned at it
     /// ([`Self::limits`]).
     speed_override: Arc<std::sync::atomic::AtomicU8>,
+    /// The cell's journal (`DaemonOptions::journal`).
+    journal: crate::journal::Journal,
+}
+
+/// Where a handle's requests go.
+#[derive(Debug, Clone)]
+pub(super) struct Senders {
+    /// To the worker: moves, homes, clear-faults.
+    pub requests: mpsc::UnboundedSender<Request>,
+    /// To the worker: stops (they overtake its other requests).
+    pub stops: mpsc::UnboundedSender<Reply>,
+    /// To the worker: register gateway jobs.
+    pub gateway: mpsc::UnboundedSender<Job>,
+    /// To the cycle's owner.
+    pub cycles: mpsc::UnboundedSender<CycleRequest>,
+    /// To the cell's owner.
+    pub cell: mpsc::UnboundedSender<CellRequest>,
 }
 
 /// A position saved from the robot's pose.
@@ -115,10 +89,41 @@ pub struct Saved {
 }
 
 impl RobotHandle {
+    /// A handle sending to `to` and reading `shared`.
+    pub(super) fn new(
+        robot: Robot,
+        to: Senders,
+        shared: Arc<Shared>,
+        (live, positions, journal): (Live, Arc<TaughtPositions>, crate::journal::Journal),
+        inputs: [InputWord; INPUT_WORDS],
+        face: Option<FaceSettings>,
+    ) -> Self {
+        Self {
+            robot: Arc::new(robot),
+            to,
+            live,
+            shared,
+            positions,
+            inputs,
+            face: face.map(Arc::new),
+            lane: Arc::default(),
+            epoch: None,
+            speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
+            journal,
+        }
+    }
+
     /// The robot.
     #[must_use]
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+
+    /// The cell's journal: what the robot's cycle records into (a pallet's slot placed, a
+    /// pallet full).
+    #[must_use]
+    pub fn journal(&self) -> &crate::journal::Journal {
+        &self.journal
     }
 
     /// The speed override, 1 to 100 %.
@@ -220,8 +225,9 @@ impl RobotHandle {
 
     /// Stops every channel and cancels every queued move; returns once the stop is written.
     pub async fn stop(&self) -> Result<(), CommandError> {
-        // A stop always works, whoever runs the robot: a cycle ends with it.
-        self.cycles.robot_stopped();
+        // A stop always works, whoever runs the robot: a cycle ends with it (its control says
+        // so before the stop is written).
+        let _ = self.ask_cycle(CycleRequest::RobotStopped).await;
         self.stop_robot().await
     }
 
@@ -230,7 +236,8 @@ impl RobotHandle {
     pub(crate) async fn stop_robot(&self) -> Result<(), CommandError> {
         self.shared.stop_pending.store(true, Ordering::SeqCst);
         let (tx, rx) = oneshot::channel();
-        self.stops
+        self.to
+            .stops
             .send(tx)
             .map_err(|_| CommandError::ShuttingDown)?;
         rx.await.map_err(|_| CommandError::ShuttingDown)?
@@ -245,9 +252,7 @@ impl RobotHandle {
     /// Clears a latched fault on the PLC (refused while a move runs or when there is none,
     /// unless a cycle is faulted: then its fault is cleared, and it may be resumed).
     pub async fn clear_fault(&self) -> Result<(), CommandError> {
-        let cycle_faulted = self
-            .cycle()
-            .is_some_and(|c| c.state == super::CycleState::Faulted);
+        let cycle_faulted = self.cycle().is_some_and(|c| c.state == CycleState::Faulted);
         let cleared = match self.command(Request::ClearFault).await {
             Err(CommandError::Conflict {
                 reason: ConflictReason::NoFault,
@@ -256,14 +261,18 @@ impl RobotHandle {
         };
         // Only a clear that happened lets a faulted cycle be resumed.
         if cleared.is_ok() {
-            self.cycles.fault_cleared(self.incidents().count);
+            let incidents = self.incidents().count;
+            let _ = self
+                .ask_cycle(|reply| CycleRequest::FaultCleared { incidents, reply })
+                .await;
         }
         cleared
     }
 
     async fn command(&self, request: fn(Reply) -> Request) -> Result<(), CommandError> {
         let (tx, rx) = oneshot::channel();
-        self.requests
+        self.to
+            .requests
             .send(request(tx))
             .map_err(|_| CommandError::ShuttingDown)?;
         rx.await.map_err(|_| CommandError::ShuttingDown)?
@@ -306,7 +315,8 @@ impl RobotHandle {
         let (tx, rx) = oneshot::channel();
         let mut job = Job::new(range, write, tx);
         job.epoch = self.epoch;
-        self.gateway
+        self.to
+            .gateway
             .send(job)
             .map_err(|_| GatewayError::ShuttingDown)?;
         rx.await.map_err(|_| GatewayError::ShuttingDown)?
@@ -316,10 +326,60 @@ impl RobotHandle {
     #[must_use]
     pub fn state(&self) -> RobotState {
         let mut state = self.shared.snapshot().state;
-        state.cycle = self.cycles.status();
-        state.mode = self.mode();
-        state.face = self.face_state();
+        state.cycle = self.cycle();
+        let cell = self.cell();
+        state.mode = cell.mode;
+        state.face = face_state(&cell);
         state
+    }
+
+    /// The robot's cycle, as its owner and driver last published it (`None`: none ran since
+    /// the daemon started).
+    #[must_use]
+    pub fn cycle(&self) -> Option<CycleStatus> {
+        self.shared.cycle.borrow().clone()
+    }
+
+    /// The mode and the cell face, as the cell's owner last published them.
+    pub(crate) fn cell(&self) -> CellView {
+        self.shared.cell.borrow().clone()
+    }
+
+    /// Who drives the robot.
+    #[must_use]
+    pub fn mode(&self) -> Mode {
+        self.shared.cell.borrow().mode
+    }
+
+    /// The robot's cell face settings, if it has one.
+    #[must_use]
+    pub fn face_settings(&self) -> Option<&FaceSettings> {
+        self.face.as_deref()
+    }
+
+    /// Whether the face holds every motion: remote mode with move-enable off.
+    pub(crate) fn face_holds_motion(&self) -> bool {
+        self.shared.cell.borrow().holds_motion()
+    }
+
+    /// Asks the cycle's owner: its answer, `None` once it is gone.
+    pub(crate) async fn ask_cycle<T>(
+        &self,
+        request: impl FnOnce(oneshot::Sender<T>) -> CycleRequest,
+    ) -> Option<T> {
+        let (tx, rx) = oneshot::channel();
+        self.to.cycles.send(request(tx)).ok()?;
+        rx.await.ok()
+    }
+
+    /// Asks the cell's owner: its answer, `None` once it is gone.
+    pub(crate) async fn ask_cell<T>(
+        &self,
+        request: impl FnOnce(oneshot::Sender<T>) -> CellRequest,
+    ) -> Option<T> {
+        let (tx, rx) = oneshot::channel();
+        self.to.cell.send(request(tx)).ok()?;
+        rx.await.ok()
     }
 
     /// A move's report.
@@ -447,106 +507,17 @@ impl RobotHandle {
     }
 }
 
-/// The daemon: a worker per robot.
-#[derive(Debug)]
-pub struct Daemon {
-    robots: BTreeMap<String, RobotHandle>,
-    shutdown: watch::Sender<bool>,
-    workers: JoinSet<String>,
-}
-
-impl Daemon {
-    /// Spawns a worker for each robot.
-    #[must_use]
-    pub fn spawn(robots: Vec<RobotSetup>, options: &DaemonOptions) -> Self {
-        let (shutdown, _) = watch::channel(false);
-        let mut handles = BTreeMap::new();
-        let mut workers = JoinSet::new();
-        let metrics = super::metrics::Metrics::new();
-        for setup in robots {
-            let name = setup.robot.name.clone();
-            let (shared, publisher) =
-                Shared::new(&name, Arc::clone(&options.ids), metrics.robot(&name));
-            let shared = Arc::new(shared);
-            let (requests, requests_rx) = mpsc::unbounded_channel();
-            let (stops, stops_rx) = mpsc::unbounded_channel();
-            let (gateway, gateway_rx) = mpsc::unbounded_channel();
-            let handle = RobotHandle {
-                robot: Arc::new(setup.robot.clone()),
-                requests,
-                stops,
-                gateway,
-                live: Live::new(LiveSettings {
-                    gateway: setup.gateway.clone(),
-                    cell: setup.cell.clone(),
-                }),
-                shared: Arc::clone(&shared),
-                positions: Arc::clone(&options.positions),
-                cell: Arc::new(Cell::new(&setup.cell, setup.settings.layout.inputs)),
-                cycles: Arc::new(CycleSlot::default()),
-                lane: Arc::default(),
-                epoch: None,
-                speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
-            };
-            let worker = Worker::new(
-                setup,
-                options,
-                Channels {
-                    requests: requests_rx,
-                    stops: stops_rx,
-                    gateway: gateway_rx,
-                    shutdown: shutdown.subscribe(),
-                },
-                shared,
-                publisher,
-            );
-            let task_name = name.clone();
-            workers.spawn(async move {
-                worker.run().await;
-                task_name
-            });
-            handles.insert(name, handle);
-        }
-        Self {
-            robots: handles,
-            shutdown,
-            workers,
-        }
-    }
-
-    /// The robots, by name.
-    #[must_use]
-    pub fn robots(&self) -> &BTreeMap<String, RobotHandle> {
-        &self.robots
-    }
-
-    /// A robot by name.
-    #[must_use]
-    pub fn robot(&self, name: &str) -> Option<&RobotHandle> {
-        self.robots.get(name)
-    }
-
-    /// Completes when a worker ends before shutdown (it panicked), with what happened.
-    pub async fn worker_failed(&mut self) -> String {
-        match self.workers.join_next().await {
-            Some(Ok(name)) => format!("the worker of robot {name:?} ended"),
-            Some(Err(e)) if e.is_panic() => format!("a robot's worker panicked: {e}"),
-            Some(Err(e)) => format!("a robot's worker was cancelled: {e}"),
-            None => std::future::pending().await,
-        }
-    }
-
-    /// Shuts every worker down cleanly (no half-written bank, no start left waiting) and waits
-    /// for them.
-    pub async fn shut_down(mut self) {
-        let _ = self.shutdown.send(true);
-        while self.workers.join_next().await.is_some() {}
-    }
-
-    /// Ends every worker at once, as a killed process would (no withdrawal, nothing written):
-    /// for tests of a daemon restart.
-    pub async fn kill(mut self) {
-        self.workers.abort_all();
-        while self.workers.join_next().await.is_some() {}
-    }
+/// The cell face's command side as the robot's state shows it.
+fn face_state(cell: &CellView) -> Option<FaceState> {
+    let face = cell.face.as_ref()?;
+    Some(FaceState {
+        program: face.selected().map_or(0, |(n, _)| u16::from(n)),
+        program_name: face.selected().map(|(_, name)| name.to_owned()),
+        enabled: face.enabled(),
+        commands: face.words()[crate::cell::face::command::BITS],
+        refused: face.refused().map(|r| FaceRefusal {
+            code: r.code(),
+            meaning: r.meaning().to_owned(),
+        }),
+    })
 }

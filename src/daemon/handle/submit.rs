@@ -9,9 +9,8 @@ use std::sync::{Arc, OnceLock};
 use super::RobotHandle;
 use crate::contract::Permit;
 use crate::contract::machine::Blocker;
-use crate::daemon::SubmitError;
 use crate::daemon::gate::Gate;
-use crate::daemon::request::{Batch, Request};
+use crate::daemon::request::{Batch, Request, SubmitError};
 use crate::geometry::Pose;
 use crate::kinematics::JOINTS;
 use crate::order::{
@@ -168,7 +167,8 @@ impl RobotHandle {
             epoch: self.epoch,
             reply,
         };
-        self.requests
+        self.to
+            .requests
             .send(Request::Moves(batch))
             .map_err(|_| SubmitError::ShuttingDown)?;
         answer.await.map_err(|_| SubmitError::ShuttingDown)?
@@ -218,7 +218,7 @@ impl RobotHandle {
         let live = self.live.get();
         let names = crate::order::permit::PermitNames {
             signals: &live.cell.signals,
-            inputs: &self.cell.inputs,
+            inputs: &self.inputs,
         };
         crate::order::permit::resolve(text, names)
             .map_err(|e| crate::order::permit_refused(&e).into())

@@ -37,8 +37,10 @@ use super::notify::Notifier;
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
 use crate::config::{Config, DaemonSettings};
 use crate::contract::machine::WatchSettings;
+use crate::journal::Journal;
 use crate::plc::exchange::ContractSettings;
 use crate::plc::{self, LinkSettings};
+use crate::wire::journal::Kind;
 
 /// Longest wait for open connections after the daemon has shut down.
 const DRAIN: Duration = Duration::from_secs(3);
@@ -111,6 +113,9 @@ pub enum ServeError {
         #[source]
         source: io::Error,
     },
+    /// The journal cannot be opened in the state directory.
+    #[error(transparent)]
+    Journal(#[from] crate::journal::JournalError),
     /// A listener failed while serving.
     #[error("the API listener failed")]
     Serve(#[source] io::Error),
@@ -182,9 +187,10 @@ pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
 }
 
 /// The daemon-wide options `settings` describe: move ids counted on in the state directory (from
-/// the clock when it cannot be used), taught positions kept there, a fresh host word.
+/// the clock when it cannot be used), taught positions kept there, a fresh host word, the
+/// journal.
 #[must_use]
-pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
+pub fn daemon_options(settings: &DaemonSettings, journal: &Journal) -> DaemonOptions {
     let ids = match MoveIds::in_state_dir(&settings.state_dir) {
         Ok(ids) => ids,
         Err(e) => {
@@ -201,6 +207,7 @@ pub fn daemon_options(settings: &DaemonSettings) -> DaemonOptions {
         ids: Arc::new(ids),
         start_within: settings.start_within,
         positions: Arc::new(TaughtPositions::in_state_dir(&settings.state_dir)),
+        journal: journal.clone(),
     }
 }
 
@@ -292,11 +299,13 @@ pub async fn serve(
     };
     let faces = bind_modbus_faces(config).await?;
     let console_tcp = bind_console(config).await?;
-    let mut daemon = Daemon::spawn(robots, &daemon_options(settings));
+    let journal = open_journal(settings)?;
+    let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal));
     let api = Api::new(daemon.robots().clone());
     let closing = api.closing();
     let hub = LiveHub::start(daemon.robots(), &snapshot_setups(config), &closing);
-    let api = api.with_live(hub.clone());
+    super::journal::follow(daemon.robots(), &journal, &closing);
+    let api = api.with_live(hub.clone()).with_journal(journal.clone());
     let mut servers = JoinSet::new();
     let stop = closing.clone();
     let router = api.router(None);
@@ -351,10 +360,13 @@ pub async fn serve(
                 tracing::error!("{why}; the daemon exits");
                 break Some(ServeError::WorkerFailed(why));
             }
-            Some(()) = hangups.recv() => reload(running.as_mut().zip(config_path), daemon.robots()),
+            Some(()) = hangups.recv() => {
+                reload(running.as_mut().zip(config_path), daemon.robots(), &journal);
+            }
         }
     };
     tracing::info!("shutting down");
+    journal.record(None, Kind::DaemonStopping);
     log_notify(notifier.stopping(), "STOPPING=1");
     closing.cancel();
     daemon.shut_down().await;
@@ -366,6 +378,7 @@ pub async fn serve(
     .await;
     servers.abort_all();
     let _ = std::fs::remove_file(&settings.socket);
+    journal.flush().await;
     failed.map_or(Ok(()), Err)
 }
 
@@ -458,12 +471,30 @@ fn running_config(path: &Path) -> Running {
 fn reload(
     running: Option<(&mut Running, &Path)>,
     robots: &std::collections::BTreeMap<String, super::RobotHandle>,
+    journal: &Journal,
 ) {
     let Some((running, path)) = running else {
         tracing::info!("SIGHUP: no config file to read again");
         return;
     };
-    reload::log(path, &running.reload(path, robots));
+    let result = running.reload(path, robots);
+    journal.record(None, reload::journaled(&result));
+    reload::log(path, &result);
+}
+
+/// Opens the journal in the state directory and journals the daemon's start.
+fn open_journal(settings: &DaemonSettings) -> Result<Journal, ServeError> {
+    let journal = Journal::open(
+        &settings.state_dir.join(crate::journal::DIR),
+        &settings.journal,
+    )?;
+    journal.record(
+        None,
+        Kind::DaemonStarted {
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+        },
+    );
+    Ok(journal)
 }
 
 fn log_notify(result: io::Result<()>, what: &str) {

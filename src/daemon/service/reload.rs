@@ -303,6 +303,21 @@ fn hold_for_plc(found: &mut Reloaded) {
 
 /// Logs what a reload of `path` found: every change, applied or needing a restart, or that the
 /// file is the config that runs; a refused file with its error.
+/// A reload as the journal keeps it: what was applied and what waits for a restart, or why the
+/// config was refused.
+pub(super) fn journaled(reloaded: &Result<Reloaded, ReloadError>) -> crate::wire::journal::Kind {
+    use crate::wire::journal::Kind;
+    match reloaded {
+        Ok(r) => Kind::ConfigReloaded {
+            applied: r.applied.iter().map(ToString::to_string).collect(),
+            needs_restart: r.restart.iter().map(ToString::to_string).collect(),
+        },
+        Err(e) => Kind::ConfigRefused {
+            error: e.to_string(),
+        },
+    }
+}
+
 pub(super) fn log(path: &Path, reloaded: &Result<Reloaded, ReloadError>) {
     let config = path.display();
     match reloaded {

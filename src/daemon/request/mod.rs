@@ -1,15 +1,78 @@
-//! What a robot's handle asks its worker, and the typed answers: a refusal by the PLC, a link
-//! that is down and a daemon that is shutting down are different errors, each with its own status
-//! at the API.
+//! What a robot's handle asks the owners of the robot's state, and their typed answers: its
+//! worker (moves, home, clear-fault; a refusal by the PLC, a link that is down and a daemon that
+//! is shutting down are different errors, each with its own status at the API), its cycle's
+//! owner ([`cycle`]) and its cell's ([`cell`]). The handle only sends these; the owners
+//! (`daemon/worker`, `daemon/cycle`, `daemon/cell`) take them, one at a time.
+
+mod cell;
+mod cycle;
+
+pub(crate) use cell::CellRequest;
+pub use cell::{ModeError, Owner};
+pub use cycle::CycleError;
+pub(crate) use cycle::{CycleRequest, CycleRunner};
 
 use thiserror::Error;
 use tokio::sync::oneshot;
 
 use crate::contract::State;
+use crate::contract::machine::Blocker;
 use crate::kinematics::JOINTS;
 use crate::order::CheckedOrder;
+use crate::order::OrderError;
+use crate::plan::PlanError;
 use crate::plc::exchange::fault_meaning;
 use crate::wire::{MoveId, MoveReport};
+
+/// Why a move was not accepted.
+#[derive(Debug, Error)]
+pub enum SubmitError {
+    /// A field of the order is wrong.
+    #[error(transparent)]
+    Order(#[from] OrderError),
+    /// The move cannot be planned from where the robot is (or will be).
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    /// The robot cannot take a move now (link down, not homed, a fault...).
+    #[error("{blocker}{}", detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
+    NotNow {
+        /// Why.
+        blocker: Blocker,
+        /// The link's last error, when that is why.
+        detail: Option<String>,
+    },
+    /// The queue would hold more starts than it takes.
+    #[error(
+        "{queued} starts are queued or running and the order adds {adding}; at most {limit} \
+         at once: wait for some to end"
+    )]
+    QueueFull {
+        /// Starts queued or running now.
+        queued: usize,
+        /// Starts the order would add.
+        adding: usize,
+        /// The most, [`MAX_QUEUED_STARTS`].
+        limit: usize,
+    },
+    /// The robot is in remote mode and the cell face's move-enable is off.
+    #[error(
+        "the cell face's move-enable is off (remote mode): no motion until the line turns it on"
+    )]
+    MoveEnableOff,
+    /// The daemon is shutting down.
+    #[error("the daemon is shutting down")]
+    ShuttingDown,
+    /// Asked for by a cycle before the PLC restarted, stalled or was lost: refused.
+    #[error("{why} since the cycle asked for it")]
+    Untrusted {
+        /// What happened.
+        why: String,
+    },
+}
+
+/// The most starts a robot's queue holds, the running one included: an order that would pass
+/// it is refused whole.
+pub const MAX_QUEUED_STARTS: usize = 1_000;
 
 /// Why a stop, home or clear-fault did not happen.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -108,12 +171,12 @@ pub(super) struct Batch {
     /// Where the last start is planned to end (the next order is planned from there).
     pub end: Option<[i64; JOINTS]>,
     /// The gate a single start waits for once it is uploaded (a cycle's move prepared ahead).
-    pub gate: Option<super::gate::Gate>,
+    pub gate: Option<crate::daemon::gate::Gate>,
     /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
     /// another incident came; `None`: whenever.
     pub epoch: Option<u64>,
     /// The answer: the starts' ids, or why none was queued.
-    pub reply: oneshot::Sender<Result<Vec<MoveId>, super::SubmitError>>,
+    pub reply: oneshot::Sender<Result<Vec<MoveId>, SubmitError>>,
 }
 
 #[cfg(test)]
