@@ -157,7 +157,7 @@ impl Counter {
                     slot: p.slot,
                     phase: Phase::Unsure,
                 });
-                Err(self.unsure(pallet, p.slot, len))
+                Err(unsure(pallet, p.slot, len))
             }
             _ => {
                 self.in_progress = Some(InProgress {
@@ -166,14 +166,6 @@ impl Counter {
                 });
                 Ok(self.index)
             }
-        }
-    }
-
-    fn unsure(&self, pallet: &str, slot: usize, len: usize) -> CounterError {
-        CounterError::Unsure {
-            pallet: pallet.to_owned(),
-            slot,
-            next: (slot + 1).min(len),
         }
     }
 
@@ -275,6 +267,14 @@ impl Counter {
         self.in_progress
             .filter(|p| p.phase == Phase::Unsure)
             .map(|p| p.slot)
+    }
+}
+
+fn unsure(pallet: &str, slot: usize, len: usize) -> CounterError {
+    CounterError::Unsure {
+        pallet: pallet.to_owned(),
+        slot,
+        next: (slot + 1).min(len),
     }
 }
 
