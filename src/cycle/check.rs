@@ -11,11 +11,13 @@ use std::time::Duration;
 use thiserror::Error;
 
 use super::condition::{self, Condition, Names};
-use super::program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
+use super::program::{LoopDoc, ProgramDoc};
+use super::step::{Action, PalletStep, Step, WaitStep};
 use crate::config::{DurationError, parse_duration_s};
 use crate::gateway::Values;
 use crate::gateway::{Address, Area, Range};
 use crate::order::{MoveOrder, OrderLimits, PathOrder};
+use crate::pallet::Pattern;
 use crate::robot::Position;
 use crate::robot::Robot;
 use crate::wire::StepAt;
@@ -71,6 +73,9 @@ pub struct Context<'a> {
     /// (`check-config`, which knows only their names): a move to a position is checked for its
     /// name only, its reach when it runs.
     pub poses_known: bool,
+    /// The robot's pallet patterns, by name (for `place`, `pick`, `advance` and pallet
+    /// conditions).
+    pub pallets: &'a BTreeMap<String, Pattern>,
 }
 
 /// How a loop ends.
@@ -104,6 +109,30 @@ pub enum OpKind {
     Set(Vec<(Address, Values)>),
     /// A pause.
     Dwell(Duration),
+    /// A pallet's counter changed (on disk before the next op).
+    Pallet {
+        /// The pallet.
+        pallet: String,
+        /// The change.
+        act: PalletAct,
+    },
+    /// The way into (or out of) the pallet's slot in progress, as one blended path from where
+    /// the robot is.
+    PalletPath {
+        /// The pallet.
+        pallet: String,
+        /// Into the slot or out of it.
+        leg: Leg,
+        /// The speed where the pattern gives none, mm/s.
+        speed_mm_s: Option<f64>,
+    },
+    /// On to op `to` unless the condition holds (a pallet's between-layers and when-full steps).
+    Skip {
+        /// The condition the ops after this one run under.
+        unless: Condition,
+        /// The op after them.
+        to: usize,
+    },
     /// A jump back to op `to` until `exit`.
     Loop {
         /// The op jumped to.
@@ -111,6 +140,28 @@ pub enum OpKind {
         /// When it stops jumping.
         exit: LoopExit,
     },
+}
+
+/// A change of a pallet's counter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PalletAct {
+    /// The next slot marked in progress (refused while the last one waits for the operator).
+    Begin,
+    /// The robot is at the slot: its at-slot steps begin.
+    Arrived,
+    /// The slot is done: the counter moves on.
+    Advance,
+    /// The full pallet was changed: the counter starts again at slot 0.
+    Restart,
+}
+
+/// A pallet path's leg.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Leg {
+    /// Through the slot's approach waypoints into the slot.
+    In,
+    /// From the slot through its retreat waypoints.
+    Out,
 }
 
 /// One op and the step it came from.
@@ -215,9 +266,39 @@ fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
         .transpose()
 }
 
-struct Flattener<'c, 'o> {
-    ctx: &'c Context<'c>,
-    ops: &'o mut Vec<Op>,
+pub(super) struct Flattener<'c, 'o> {
+    pub(super) ctx: &'c Context<'c>,
+    pub(super) ops: &'o mut Vec<Op>,
+}
+
+/// The step being flattened: what its errors and its ops name.
+pub(super) struct Here<'a> {
+    program: &'a str,
+    /// From 1.
+    step: usize,
+    label: Option<&'a String>,
+    called_from: &'a [String],
+}
+
+impl Here<'_> {
+    pub(super) fn fail(&self, reason: String) -> ProgramError {
+        ProgramError {
+            program: self.program.to_owned(),
+            step: Some(self.step),
+            label: self.label.cloned(),
+            reason,
+        }
+    }
+
+    pub(super) fn at(&self, does: String) -> StepAt {
+        StepAt {
+            program: self.program.to_owned(),
+            step: self.step,
+            label: self.label.cloned(),
+            does,
+            called_from: self.called_from.to_vec(),
+        }
+    }
 }
 
 /// A jump to a label, resolved once the program's labels are known.
@@ -229,6 +310,25 @@ struct Fixup {
     backward_only: bool,
 }
 
+/// What a step turns into before its jumps are resolved.
+pub(super) enum Flat {
+    /// An op.
+    Op(OpKind, String),
+    /// An op that jumps to a label (a loop; a wait's `on_timeout`).
+    Jump {
+        kind: OpKind,
+        does: String,
+        to: String,
+        backward_only: bool,
+    },
+    /// Another program, inlined here.
+    Call(String),
+    /// A place (`pick` true: a pick) at a pallet's slot.
+    Pallet(PalletStep, bool),
+    /// A pallet advanced.
+    Advance(String),
+}
+
 impl Flattener<'_, '_> {
     fn program(
         &mut self,
@@ -237,101 +337,105 @@ impl Flattener<'_, '_> {
         called_from: &[String],
     ) -> Result<(), ProgramError> {
         let doc = &self.ctx.programs[name];
-        let fail = |step: Option<usize>, label: Option<&String>, reason: String| ProgramError {
-            program: name.to_owned(),
-            step,
-            label: label.cloned(),
-            reason,
-        };
         if doc.step.is_empty() {
-            return Err(fail(None, None, "has no step".to_owned()));
+            return Err(ProgramError {
+                program: name.to_owned(),
+                step: None,
+                label: None,
+                reason: "has no step".to_owned(),
+            });
         }
         let mut labels: BTreeMap<String, usize> = BTreeMap::new();
         let mut fixups = Vec::new();
-        for (i, step) in doc.step.iter().enumerate() {
-            let n = i + 1;
-            let here = |reason: String| fail(Some(n), step.label.as_ref(), reason);
-            if let Some(label) = &step.label
+        for (i, written) in doc.step.iter().enumerate() {
+            let here = Here {
+                program: name,
+                step: i + 1,
+                label: written.label.as_ref(),
+                called_from,
+            };
+            if let Some(label) = &written.label
                 && labels.insert(label.clone(), self.ops.len()).is_some()
             {
-                return Err(here(format!(
-                    "label {label:?} is used by an earlier step too"
-                )));
+                return Err(here.fail(format!("label {label:?} is used by an earlier step too")));
             }
-            let at = |does: String| StepAt {
-                program: name.to_owned(),
-                step: n,
-                label: step.label.clone(),
-                does,
-                called_from: called_from.to_vec(),
-            };
-            let kind = self.step(step, &here)?;
-            match kind {
-                Action::Op(kind, does) => self.ops.push(Op { at: at(does), kind }),
-                Action::Wait(until, timeout, on_timeout) => {
-                    if let Some(label) = on_timeout {
-                        fixups.push(Fixup {
-                            op: self.ops.len(),
-                            label,
-                            step: n,
-                            step_label: step.label.clone(),
-                            backward_only: false,
-                        });
-                    }
-                    let does = format!("wait for {until}");
-                    let kind = OpKind::Wait {
-                        until,
-                        timeout,
-                        on_timeout: None,
-                    };
-                    self.ops.push(Op { at: at(does), kind });
-                }
-                Action::Loop(label, exit) => {
-                    fixups.push(Fixup {
-                        op: self.ops.len(),
-                        label: label.clone(),
-                        step: n,
-                        step_label: step.label.clone(),
-                        backward_only: true,
-                    });
-                    let does = match &exit {
-                        LoopExit::Count(c) => format!("loop to {label} ({c} times in all)"),
-                        LoopExit::Until(c) => format!("loop to {label} until {c}"),
-                        LoopExit::Stop => format!("loop to {label} until stopped"),
-                    };
-                    let kind = OpKind::Loop { to: 0, exit };
-                    self.ops.push(Op { at: at(does), kind });
-                }
-                Action::Call(callee) => {
-                    if chain.contains(&callee) {
-                        return Err(here(format!(
-                            "call = {callee:?} is a recursion: {} -> {callee}",
-                            chain.join(" -> ")
-                        )));
-                    }
-                    if let Some(why) = self.ctx.broken.get(&callee) {
-                        return Err(here(format!("call = {callee:?}: cannot be read: {why}")));
-                    }
-                    if !self.ctx.programs.contains_key(&callee) {
-                        return Err(here(format!(
-                            "call = {callee:?}: no such program; {}",
-                            there_are(self.ctx.programs, self.ctx.broken)
-                        )));
-                    }
-                    let mut from = called_from.to_vec();
-                    from.push(format!("{name} step {n}"));
-                    chain.push(callee.clone());
-                    self.program(&callee, chain, &from)?;
-                    chain.pop();
-                }
-            }
+            let step = Step::try_from(written).map_err(|e| here.fail(e.to_string()))?;
+            let flat = self.step(&step.action, &|r| here.fail(r))?;
+            self.push(flat, &here, chain, &mut fixups)?;
             if self.ops.len() > MAX_OPS {
-                return Err(here(format!(
+                return Err(here.fail(format!(
                     "flattens into more than {MAX_OPS} steps (calls inlined)"
                 )));
             }
         }
         self.resolve(name, &labels, fixups)
+    }
+
+    /// A flattened step into the ops: an op, a jump to resolve, or the program it calls.
+    fn push(
+        &mut self,
+        flat: Flat,
+        here: &Here<'_>,
+        chain: &mut Vec<String>,
+        fixups: &mut Vec<Fixup>,
+    ) -> Result<(), ProgramError> {
+        let (kind, does) = match flat {
+            Flat::Call(callee) => return self.call(&callee, chain, here),
+            Flat::Pallet(step, pick) => return self.place(&step, pick, here, chain),
+            Flat::Advance(pallet) => return self.advance(&pallet, here, chain),
+            Flat::Op(kind, does) => (kind, does),
+            Flat::Jump {
+                kind,
+                does,
+                to,
+                backward_only,
+            } => {
+                fixups.push(Fixup {
+                    op: self.ops.len(),
+                    label: to,
+                    step: here.step,
+                    step_label: here.label.cloned(),
+                    backward_only,
+                });
+                (kind, does)
+            }
+        };
+        self.ops.push(Op {
+            at: here.at(does),
+            kind,
+        });
+        Ok(())
+    }
+
+    /// Program `callee` inlined at `here`: refused when it is a recursion, unreadable or
+    /// missing.
+    pub(super) fn call(
+        &mut self,
+        callee: &str,
+        chain: &mut Vec<String>,
+        here: &Here<'_>,
+    ) -> Result<(), ProgramError> {
+        if chain.iter().any(|c| c == callee) {
+            return Err(here.fail(format!(
+                "call = {callee:?} is a recursion: {} -> {callee}",
+                chain.join(" -> ")
+            )));
+        }
+        if let Some(why) = self.ctx.broken.get(callee) {
+            return Err(here.fail(format!("call = {callee:?}: cannot be read: {why}")));
+        }
+        if !self.ctx.programs.contains_key(callee) {
+            return Err(here.fail(format!(
+                "call = {callee:?}: no such program; {}",
+                there_are(self.ctx.programs, self.ctx.broken)
+            )));
+        }
+        let mut from = here.called_from.to_vec();
+        from.push(format!("{} step {}", here.program, here.step));
+        chain.push(callee.to_owned());
+        self.program(callee, chain, &from)?;
+        chain.pop();
+        Ok(())
     }
 
     /// Points every jump of program `name` at its label's op.
@@ -341,37 +445,32 @@ impl Flattener<'_, '_> {
         labels: &BTreeMap<String, usize>,
         fixups: Vec<Fixup>,
     ) -> Result<(), ProgramError> {
-        let fail = |step: Option<usize>, label: Option<&String>, reason: String| ProgramError {
-            program: name.to_owned(),
-            step,
-            label: label.cloned(),
-            reason,
-        };
         for f in fixups {
+            let fail = |reason: String| ProgramError {
+                program: name.to_owned(),
+                step: Some(f.step),
+                label: f.step_label.clone(),
+                reason,
+            };
             let Some(&to) = labels.get(&f.label) else {
                 let known: Vec<&str> = labels.keys().map(String::as_str).collect();
-                return Err(fail(
-                    Some(f.step),
-                    f.step_label.as_ref(),
-                    format!(
-                        "no step is labelled {:?} in this program (labels: {})",
-                        f.label,
-                        if known.is_empty() {
-                            "none".to_owned()
-                        } else {
-                            known.join(", ")
-                        }
-                    ),
-                ));
+                let known = if known.is_empty() {
+                    "none".to_owned()
+                } else {
+                    known.join(", ")
+                };
+                return Err(fail(format!(
+                    "no step is labelled {:?} in this program (labels: {known})",
+                    f.label
+                )));
             };
             match &mut self.ops[f.op].kind {
                 OpKind::Loop { to: target, .. } => {
                     if f.backward_only && to > f.op {
-                        return Err(fail(
-                            Some(f.step),
-                            f.step_label.as_ref(),
-                            format!("loop to {:?} jumps forward: a loop jumps back", f.label),
-                        ));
+                        return Err(fail(format!(
+                            "loop to {:?} jumps forward: a loop jumps back",
+                            f.label
+                        )));
                     }
                     *target = to;
                 }
@@ -382,81 +481,34 @@ impl Flattener<'_, '_> {
         Ok(())
     }
 
-    fn step(
+    pub(super) fn step(
         &self,
-        step: &StepDoc,
+        action: &Action,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
-        let actions: Vec<&str> = [
-            ("move", step.move_.is_some()),
-            ("path", step.path.is_some()),
-            ("wait", step.wait.is_some()),
-            ("set", step.set.is_some()),
-            ("dwell", step.dwell.is_some()),
-            ("call", step.call.is_some()),
-            ("loop", step.loop_.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(k, given)| given.then_some(k))
-        .collect();
-        match actions.as_slice() {
-            [_] => {}
-            [] => {
-                return Err(here(
-                    "has no action: one of move, path, wait, set, dwell, call, loop".to_owned(),
-                ));
+    ) -> Result<Flat, ProgramError> {
+        match action {
+            Action::Move(order) => self.move_step(order, here),
+            Action::Path(order) => self.path_step(order, here),
+            Action::Wait(wait) => self.wait_step(wait, here),
+            Action::Set(set) => self.set_step(set, here),
+            Action::Dwell(text) => {
+                let d = duration("dwell", text, MAX_DWELL_S).map_err(|e| here(e.to_string()))?;
+                Ok(Flat::Op(OpKind::Dwell(d), format!("dwell {text}")))
             }
-            many => {
-                return Err(here(format!(
-                    "has {} actions: one step does one",
-                    many.join(" and ")
-                )));
-            }
+            Action::Call(callee) => Ok(Flat::Call(callee.clone())),
+            Action::Loop(l) => self.loop_step(l, here),
+            Action::Place(step) => Ok(Flat::Pallet(step.clone(), false)),
+            Action::Pick(step) => Ok(Flat::Pallet(step.clone(), true)),
+            Action::Advance(pallet) => Ok(Flat::Advance(pallet.clone())),
         }
-        if step.permit.is_some() && step.move_.is_none() && step.path.is_none() {
-            return Err(here("permit goes with a move or a path".to_owned()));
-        }
-        if (step.timeout.is_some() || step.on_timeout.is_some()) && step.wait.is_none() {
-            return Err(here("timeout and on_timeout go with a wait".to_owned()));
-        }
-        if let Some(order) = &step.move_ {
-            return self.move_step(order, step.permit.as_deref(), here);
-        }
-        if let Some(path) = &step.path {
-            return self.path_step(path, step.permit.as_deref(), here);
-        }
-        if let Some(text) = &step.wait {
-            return self.wait_step(text, step, here);
-        }
-        if let Some(set) = &step.set {
-            return self.set_step(set, here);
-        }
-        if let Some(text) = &step.dwell {
-            let d = duration("dwell", text, MAX_DWELL_S).map_err(|e| here(e.to_string()))?;
-            return Ok(Action::Op(OpKind::Dwell(d), format!("dwell {text}")));
-        }
-        if let Some(callee) = &step.call {
-            return Ok(Action::Call(callee.clone()));
-        }
-        let l = step.loop_.as_ref().expect("one action, and it is loop");
-        self.loop_step(l, here)
     }
 
-    fn permit_into(
+    fn permit(
         &self,
         permit: Option<&str>,
-        inner: &mut Option<String>,
         here: &dyn Fn(String) -> ProgramError,
     ) -> Result<(), ProgramError> {
         if let Some(p) = permit {
-            if inner.is_some() {
-                return Err(here(
-                    "permit is given twice (in the step and in its order)".to_owned(),
-                ));
-            }
-            *inner = Some(p.to_owned());
-        }
-        if let Some(p) = inner.as_deref() {
             crate::order::permit::resolve(p, self.ctx.names.permit)
                 .map_err(|e| here(e.to_string()))?;
         }
@@ -466,50 +518,22 @@ impl Flattener<'_, '_> {
     fn move_step(
         &self,
         order: &MoveOrder,
-        permit: Option<&str>,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
-        let mut order = order.clone();
-        self.permit_into(permit, &mut order.permit, here)?;
+    ) -> Result<Flat, ProgramError> {
+        self.permit(order.permit.as_deref(), here)?;
         let robot = self.ctx.robot;
         order
             .check_with(robot.motion, &OrderLimits::of(robot), self.ctx.taught)
             .map_err(|e| here(format!("move: {e}")))?;
-        let does = describe_move(&order);
-        Ok(Action::Op(OpKind::Move(order), does))
+        Ok(Flat::Op(OpKind::Move(order.clone()), describe_move(order)))
     }
 
     fn path_step(
         &self,
-        step: &PathStep,
-        permit: Option<&str>,
+        order: &PathOrder,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
-        let document = match (&step.path, &step.file) {
-            (Some(doc), None) => doc.clone(),
-            (None, Some(file)) => {
-                return Err(here(format!(
-                    "path file {file:?} was not read (programs are loaded with their path files)"
-                )));
-            }
-            _ => {
-                return Err(here(
-                    "a path step has `file` or `path`, one of them".to_owned(),
-                ));
-            }
-        };
-        let mut order = PathOrder {
-            path: document,
-            speed_mm_s: step.speed_mm_s,
-            accel_time: step.accel_time.clone(),
-            method: step.method.clone(),
-            period: step.period.clone(),
-            tolerance_mm: step.tolerance_mm,
-            profile: step.profile.clone(),
-            jerk_mm_s3: step.jerk_mm_s3,
-            permit: None,
-        };
-        self.permit_into(permit, &mut order.permit, here)?;
+    ) -> Result<Flat, ProgramError> {
+        self.permit(order.permit.as_deref(), here)?;
         let robot = self.ctx.robot;
         order
             .check(robot, &OrderLimits::of(robot))
@@ -518,18 +542,19 @@ impl Flattener<'_, '_> {
             Some(p) => format!("path (permit {p})"),
             None => "path".to_owned(),
         };
-        Ok(Action::Op(OpKind::Path(order), does))
+        Ok(Flat::Op(OpKind::Path(order.clone()), does))
     }
 
     fn wait_step(
         &self,
-        text: &str,
-        step: &StepDoc,
+        wait: &WaitStep,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
+    ) -> Result<Flat, ProgramError> {
+        let text = &wait.until;
         let until =
             condition::parse(text, self.ctx.names).map_err(|e| here(format!("wait: {e}")))?;
-        let timeout = step
+        self.pallets_known(&until, here)?;
+        let timeout = wait
             .timeout
             .as_deref()
             .map(|t| duration("timeout", t, MAX_TIMEOUT_S))
@@ -540,75 +565,94 @@ impl Flattener<'_, '_> {
                 "wait = {text:?} has no timeout, and [robots.NAME.cell] require_wait_timeout = true"
             )));
         }
-        let on_timeout = match step.on_timeout.as_deref() {
-            None | Some("fault") => None,
-            Some(_) if timeout.is_none() => {
-                return Err(here(
-                    "on_timeout without a timeout never happens".to_owned(),
-                ));
-            }
-            Some(label) => Some(label.to_owned()),
+        let does = format!("wait for {until}");
+        let kind = OpKind::Wait {
+            until,
+            timeout,
+            on_timeout: None,
         };
-        Ok(Action::Wait(until, timeout, on_timeout))
+        match wait.on_timeout.as_deref() {
+            None | Some("fault") => Ok(Flat::Op(kind, does)),
+            Some(_) if timeout.is_none() => Err(here(
+                "on_timeout without a timeout never happens".to_owned(),
+            )),
+            Some(label) => Ok(Flat::Jump {
+                kind,
+                does,
+                to: label.to_owned(),
+                backward_only: false,
+            }),
+        }
     }
 
     fn set_step(
         &self,
         set: &BTreeMap<String, toml::Value>,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
+    ) -> Result<Flat, ProgramError> {
         if set.is_empty() {
             return Err(here("set = {} writes nothing".to_owned()));
         }
         let mut writes = Vec::new();
         let mut does = Vec::new();
         for (key, value) in set {
-            let signals = self.ctx.names.permit.signals;
-            let address = match signals.get(key) {
-                Some(a) => *a,
-                None => key.parse::<Address>().map_err(|_| {
-                    here(format!(
-                        "set: {key:?} is neither a signal nor an address (Y0, R20, DT100)"
-                    ))
-                })?,
-            };
-            let range = Range::from_count(address, 1)
-                .ok_or_else(|| here(format!("set: {address} does not exist")))?;
-            self.ctx
-                .names
-                .access
-                .check_write(&range)
-                .map_err(|e| here(format!("set: {key} = {value}: {e}")))?;
-            let values = match (address.area, value) {
-                (Area::Dt, toml::Value::Integer(v)) if (-32_768..=65_535).contains(v) => {
-                    Values::Words(vec![*v as u16])
-                }
-                (Area::Dt, _) => {
-                    return Err(here(format!(
-                        "set: {key} = {value}: a DT word takes a whole number in -32768..=65535"
-                    )));
-                }
-                (_, toml::Value::Boolean(on)) => Values::Bits(vec![*on]),
-                (_, _) => {
-                    return Err(here(format!(
-                        "set: {key} = {value}: a bit takes true or false"
-                    )));
-                }
-            };
+            writes.push(self.write(key, value, here)?);
             does.push(format!("{key} = {value}"));
-            writes.push((address, values));
         }
-        Ok(Action::Op(
+        Ok(Flat::Op(
             OpKind::Set(writes),
             format!("set {}", does.join(", ")),
         ))
+    }
+
+    /// One output of a `set`: its address (a signal's, or written out) and its value, in the
+    /// gateway's access list and the value's range.
+    pub(super) fn write(
+        &self,
+        key: &str,
+        value: &toml::Value,
+        here: &dyn Fn(String) -> ProgramError,
+    ) -> Result<(Address, Values), ProgramError> {
+        let signals = self.ctx.names.permit.signals;
+        let address = match signals.get(key) {
+            Some(a) => *a,
+            None => key.parse::<Address>().map_err(|_| {
+                here(format!(
+                    "set: {key:?} is neither a signal nor an address (Y0, R20, DT100)"
+                ))
+            })?,
+        };
+        let range = Range::from_count(address, 1)
+            .ok_or_else(|| here(format!("set: {address} does not exist")))?;
+        self.ctx
+            .names
+            .access
+            .check_write(&range)
+            .map_err(|e| here(format!("set: {key} = {value}: {e}")))?;
+        let values = match (address.area, value) {
+            (Area::Dt, toml::Value::Integer(v)) if (-32_768..=65_535).contains(v) => {
+                Values::Words(vec![*v as u16])
+            }
+            (Area::Dt, _) => {
+                return Err(here(format!(
+                    "set: {key} = {value}: a DT word takes a whole number in -32768..=65535"
+                )));
+            }
+            (_, toml::Value::Boolean(on)) => Values::Bits(vec![*on]),
+            (_, _) => {
+                return Err(here(format!(
+                    "set: {key} = {value}: a bit takes true or false"
+                )));
+            }
+        };
+        Ok((address, values))
     }
 
     fn loop_step(
         &self,
         l: &LoopDoc,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<Action, ProgramError> {
+    ) -> Result<Flat, ProgramError> {
         let exit = match (l.count, l.until.as_deref()) {
             (Some(_), Some(_)) => {
                 return Err(here("loop has count and until: give one".to_owned()));
@@ -621,10 +665,12 @@ impl Flattener<'_, '_> {
                 LoopExit::Count(c)
             }
             (None, Some("stop")) => LoopExit::Stop,
-            (None, Some(text)) => LoopExit::Until(
-                condition::parse(text, self.ctx.names)
-                    .map_err(|e| here(format!("loop until: {e}")))?,
-            ),
+            (None, Some(text)) => {
+                let until = condition::parse(text, self.ctx.names)
+                    .map_err(|e| here(format!("loop until: {e}")))?;
+                self.pallets_known(&until, here)?;
+                LoopExit::Until(until)
+            }
             (None, None) => {
                 return Err(here(format!(
                     "loop to {:?} has no exit: give count, until = \"<condition>\" or until = \"stop\"",
@@ -632,16 +678,19 @@ impl Flattener<'_, '_> {
                 )));
             }
         };
-        Ok(Action::Loop(l.to.clone(), exit))
+        let label = &l.to;
+        let does = match &exit {
+            LoopExit::Count(c) => format!("loop to {label} ({c} times in all)"),
+            LoopExit::Until(c) => format!("loop to {label} until {c}"),
+            LoopExit::Stop => format!("loop to {label} until stopped"),
+        };
+        Ok(Flat::Jump {
+            kind: OpKind::Loop { to: 0, exit },
+            does,
+            to: label.clone(),
+            backward_only: true,
+        })
     }
-}
-
-/// What a step turns into before its jumps are resolved.
-enum Action {
-    Op(OpKind, String),
-    Wait(Condition, Option<Duration>, Option<String>),
-    Loop(String, LoopExit),
-    Call(String),
 }
 
 /// A step's duration (a wait's timeout, a dwell) that cannot be.

@@ -111,6 +111,14 @@ pub enum ConditionFault {
         /// Why the gateway refuses it.
         denied: Denied,
     },
+    /// A pallet term that is not one.
+    #[error(
+        "{name}: a pallet is read as pallet.NAME.full, pallet.NAME.layer == N or pallet.NAME.index < N"
+    )]
+    PalletTerm {
+        /// The term as written.
+        name: String,
+    },
     /// Terms after a whole condition.
     #[error("{left} is left over after a whole condition")]
     LeftOver {
@@ -201,14 +209,100 @@ pub enum Condition {
     All(Vec<Condition>),
     /// Any of.
     Any(Vec<Condition>),
+    /// A pallet's counter: `pallet.NAME.full`, `pallet.NAME.layer == 3`, `pallet.NAME.index < 12`
+    /// (layer and index from 0, as the pattern counts them).
+    Pallet {
+        /// The pallet.
+        pallet: String,
+        /// What of it.
+        term: PalletTerm,
+    },
+}
+
+/// What a condition reads of a pallet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PalletTerm {
+    /// Every slot is filled.
+    Full,
+    /// The next slot begins a layer above the first (the cycle's `between_layers` runs).
+    BeginsLayer,
+    /// The next slot's layer compared with a value.
+    Layer(Compare, i64),
+    /// The next slot's index compared with a value.
+    Index(Compare, i64),
+}
+
+/// A pallet's counter as a condition reads it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PalletView {
+    /// The slot to fill next, from 0.
+    pub index: usize,
+    /// Its layer, from 0.
+    pub layer: usize,
+    /// Whether it is the first slot of a layer above the first.
+    pub begins_layer: bool,
+    /// Whether every slot is filled.
+    pub full: bool,
+}
+
+impl PalletTerm {
+    fn holds(self, view: PalletView) -> bool {
+        let compare = |c: Compare, a: usize, b: i64| {
+            let a = i64::try_from(a).unwrap_or(i64::MAX);
+            match c {
+                Compare::Eq => a == b,
+                Compare::Ne => a != b,
+                Compare::Lt => a < b,
+                Compare::Le => a <= b,
+                Compare::Gt => a > b,
+                Compare::Ge => a >= b,
+            }
+        };
+        match self {
+            Self::Full => view.full,
+            Self::BeginsLayer => view.begins_layer,
+            Self::Layer(c, v) => compare(c, view.layer, v),
+            Self::Index(c, v) => compare(c, view.index, v),
+        }
+    }
 }
 
 impl Condition {
+    /// The pallets it reads, each once.
+    #[must_use]
+    pub fn pallets(&self) -> Vec<&str> {
+        let mut out = Vec::new();
+        self.collect_pallets(&mut out);
+        out
+    }
+
+    fn collect_pallets<'a>(&'a self, out: &mut Vec<&'a str>) {
+        match self {
+            Self::Pallet { pallet, .. } if !out.contains(&pallet.as_str()) => out.push(pallet),
+            Self::Not(c) => c.collect_pallets(out),
+            Self::All(cs) | Self::Any(cs) => cs.iter().for_each(|c| c.collect_pallets(out)),
+            _ => {}
+        }
+    }
+
     /// Whether it holds on the status block's input words, `read` giving every other word or
     /// bit it needs (`None`: unknown, and a term that cannot be known does not hold).
     #[must_use]
     pub fn holds(&self, inputs: &[u16; 4], read: &dyn Fn(Address) -> Option<u16>) -> bool {
+        self.holds_with(inputs, read, &|_| None)
+    }
+
+    /// [`Self::holds`], `pallet` giving each pallet's counter (`None`: unknown, and its term
+    /// does not hold).
+    #[must_use]
+    pub fn holds_with(
+        &self,
+        inputs: &[u16; 4],
+        read: &dyn Fn(Address) -> Option<u16>,
+        pallet: &dyn Fn(&str) -> Option<PalletView>,
+    ) -> bool {
         match self {
+            Self::Pallet { pallet: name, term } => pallet(name).is_some_and(|v| term.holds(v)),
             Self::Bit { source, .. } => match *source {
                 Source::Input { word, bit } => inputs[word] & (1 << bit) != 0,
                 Source::Read(a) => read(a).is_some_and(|v| v != 0),
@@ -218,9 +312,9 @@ impl Condition {
                 compare,
                 value,
             } => read(*address).is_some_and(|v| compare.holds(v as i16, *value)),
-            Self::Not(c) => !c.holds(inputs, read),
-            Self::All(cs) => cs.iter().all(|c| c.holds(inputs, read)),
-            Self::Any(cs) => cs.iter().any(|c| c.holds(inputs, read)),
+            Self::Not(c) => !c.holds_with(inputs, read, pallet),
+            Self::All(cs) => cs.iter().all(|c| c.holds_with(inputs, read, pallet)),
+            Self::Any(cs) => cs.iter().any(|c| c.holds_with(inputs, read, pallet)),
         }
     }
 
@@ -243,7 +337,7 @@ impl Condition {
                 source: Source::Read(a),
                 ..
             } => push(*a),
-            Self::Bit { .. } => {}
+            Self::Bit { .. } | Self::Pallet { .. } => {}
             Self::Word { address, .. } => push(*address),
             Self::Not(c) => c.collect_reads(out),
             Self::All(cs) | Self::Any(cs) => cs.iter().for_each(|c| c.collect_reads(out)),
@@ -276,6 +370,12 @@ impl fmt::Display for Condition {
                 compare,
                 value,
             } => write!(f, "{address} {} {value}", compare.symbol()),
+            Self::Pallet { pallet, term } => match term {
+                PalletTerm::Full => write!(f, "pallet.{pallet}.full"),
+                PalletTerm::BeginsLayer => write!(f, "pallet.{pallet} begins a layer"),
+                PalletTerm::Layer(c, v) => write!(f, "pallet.{pallet}.layer {} {v}", c.symbol()),
+                PalletTerm::Index(c, v) => write!(f, "pallet.{pallet}.index {} {v}", c.symbol()),
+            },
             Self::Not(c) if matches!(**c, Self::Any(_) | Self::All(_)) => write!(f, "!({c})"),
             Self::Not(c) => write!(f, "!{c}"),
             Self::All(cs) => join(f, cs, "&"),
@@ -341,7 +441,9 @@ fn tokens(text: &str) -> Result<Vec<Token>, ConditionFault> {
             }
             (c, _) if c.is_ascii_alphabetic() || c == '_' => {
                 let end = (i + 1..chars.len())
-                    .find(|&j| !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-')))
+                    .find(|&j| {
+                        !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-' | '.'))
+                    })
                     .unwrap_or(chars.len());
                 (Token::Word(chars[i..end].iter().collect()), end - i)
             }
@@ -417,6 +519,9 @@ impl Parser<'_> {
     }
 
     fn term(&mut self, name: &str) -> Result<Condition, ConditionFault> {
+        if let Some(rest) = name.strip_prefix("pallet.") {
+            return self.pallet_term(name, rest);
+        }
         let address = match self.names.permit.signals.get(name) {
             Some(a) => *a,
             None => name.parse::<Address>().map_err(|_| {
@@ -474,6 +579,40 @@ impl Parser<'_> {
             name: name.to_owned(),
             address,
             source,
+        })
+    }
+
+    /// `pallet.NAME.full`, or `pallet.NAME.layer` / `.index` compared with a number.
+    fn pallet_term(&mut self, name: &str, rest: &str) -> Result<Condition, ConditionFault> {
+        let bad = || ConditionFault::PalletTerm {
+            name: name.to_owned(),
+        };
+        let (pallet, what) = rest.rsplit_once('.').ok_or_else(bad)?;
+        if pallet.is_empty() {
+            return Err(bad());
+        }
+        let compared = match self.peek().cloned() {
+            Some(Token::Compare(c)) => {
+                let Some(Token::Number(v)) = self.tokens.get(self.at + 1).cloned() else {
+                    return Err(ConditionFault::NoNumber {
+                        name: name.to_owned(),
+                        compare: c.symbol(),
+                    });
+                };
+                self.at += 2;
+                Some((c, v))
+            }
+            _ => None,
+        };
+        let term = match (what, compared) {
+            ("full", None) => PalletTerm::Full,
+            ("layer", Some((c, v))) => PalletTerm::Layer(c, v),
+            ("index", Some((c, v))) => PalletTerm::Index(c, v),
+            _ => return Err(bad()),
+        };
+        Ok(Condition::Pallet {
+            pallet: pallet.to_owned(),
+            term,
         })
     }
 
@@ -544,7 +683,7 @@ mod tests {
         .unwrap()
     }
 
-    fn parsed(text: &str) -> Result<Condition, String> {
+    fn parsed(text: &str) -> Result<Condition, ConditionError> {
         let (signals, access) = (signals(), access());
         let names = Names {
             permit: PermitNames {
@@ -553,7 +692,7 @@ mod tests {
             },
             access: &access,
         };
-        parse(text, names).map_err(|e| e.to_string())
+        parse(text, names)
     }
 
     #[test]
@@ -623,10 +762,52 @@ mod tests {
             ("X40", "X40 is not in the input words"),
             ("X5 ; X6", "';' at character 4"),
         ] {
-            let e = parsed(text).unwrap_err();
+            let e = parsed(text).unwrap_err().to_string();
             assert!(
                 e.contains(words) && e.contains(&format!("{text:?}")),
                 "{text}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_pallet_is_read_by_its_counter() {
+        let c = parsed("pallet.out.full | pallet.out.layer == 3 & pallet.in.index < 12").unwrap();
+        assert_eq!(c.pallets(), ["out", "in"]);
+        assert_eq!(
+            c.to_string(),
+            "pallet.out.full | (pallet.out.layer == 3 & pallet.in.index < 12)"
+        );
+        let view = |index, layer, full| PalletView {
+            index,
+            layer,
+            begins_layer: false,
+            full,
+        };
+        let inputs = [0; 4];
+        let holds = |out: PalletView, inp: PalletView| {
+            c.holds_with(&inputs, &|_| None, &|p| match p {
+                "out" => Some(out),
+                "in" => Some(inp),
+                _ => None,
+            })
+        };
+        assert!(holds(view(0, 0, true), view(20, 0, false)));
+        assert!(holds(view(19, 3, false), view(11, 0, false)));
+        assert!(!holds(view(19, 3, false), view(12, 0, false)));
+        assert!(!holds(view(5, 2, false), view(0, 0, false)));
+        // A pallet not known: its terms do not hold.
+        assert!(!c.holds(&inputs, &|_| None));
+        for bad in [
+            "pallet.out.layer",
+            "pallet.out.full == 1",
+            "pallet.out",
+            "pallet..full",
+        ] {
+            let e = parsed(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("pallet.NAME.full") || e.contains("needs a number"),
+                "{bad}: {e}"
             );
         }
     }

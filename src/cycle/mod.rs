@@ -5,7 +5,8 @@
 //! (`crate::daemon`'s cycle module) carries its actions out. docs/CYCLES.md is the user's reference.
 //!
 //! ```text
-//! program.rs    the document: ProgramDoc, StepDoc (every key known)
+//! program.rs    the document: ProgramDoc, StepDoc (every key known, as TOML and JSON write it)
+//! step.rs       StepDoc -> Step { label, action: Action }: the document's shape checked once
 //! condition.rs  a wait's condition: bits, signals, DT compares, ! & | ( ); resolved and decided
 //! check.rs      ProgramDoc -> Checked { ops }: names, limits, labels, calls inlined
 //! reach.rs      where the ops take the robot: targets in reach and limits, motions planned
@@ -18,9 +19,11 @@
 pub mod check;
 pub mod condition;
 pub mod load;
+mod place;
 pub mod program;
 mod reach;
 pub mod runner;
+pub mod step;
 
 pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramError};
 
@@ -34,10 +37,13 @@ pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
     checked.unchecked = reach::check(&checked.ops, ctx)?;
     Ok(checked)
 }
-pub use condition::{Condition, ConditionError, ConditionFault, Names, Source};
+pub use condition::{
+    Condition, ConditionError, ConditionFault, Names, PalletTerm, PalletView, Source,
+};
 pub use load::{ProgramFileError, Programs};
 pub use program::{LoopDoc, PathStep, ProgramDoc, StepDoc};
 pub use runner::Runner;
+pub use step::{ShapeError, Step};
 
 #[cfg(test)]
 mod tests;

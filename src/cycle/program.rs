@@ -1,6 +1,7 @@
 //! The cycle program document, as a TOML file (and the same keys as JSON): an optional program
 //! number, a description, and its steps in order. Every key is known (unknown ones are refused,
-//! naming them); what each step means is checked by [`super::check`].
+//! naming them); each step's shape (one action, the keys that go with it) is checked once as it
+//! becomes a [`super::step::Step`], what it means by [`super::check`].
 //!
 //! ```toml
 //! number = 1                     # 1..=255: the number the press line selects it by
@@ -25,7 +26,17 @@
 //! call = "eject"
 //! [[step]]
 //! loop = { to = "pick", count = 3 }   # or until = "<condition>", or until = "stop"
+//! [[step]]
+//! place = { pallet = "out", at_slot = [{ set = { gripper = false } }, { dwell = "150ms" }] }
+//! [[step]]
+//! advance = "out"                # a pallet's next slot (after a place with advance = false)
 //! ```
+//!
+//! A `place` (or `pick`) at the pallet's current slot runs: the pallet's `between_layers`
+//! program before the first slot of every layer but the first; the slot marked in progress;
+//! from where the robot is through the slot's approach waypoints into the slot as one blended
+//! path; the `at_slot` steps with the robot at the slot; the pallet advanced (on disk before the
+//! next step); the retreat path; and when that filled the pallet, its `when_full`.
 
 use std::collections::BTreeMap;
 
@@ -48,7 +59,8 @@ pub struct ProgramDoc {
     pub step: Vec<StepDoc>,
 }
 
-/// One step as written: exactly one action key, and the keys that go with it.
+/// One step as written: exactly one action key, and the keys that go with it (as the file
+/// writes it; [`super::step::Step`] is the step the check reads).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct StepDoc {
@@ -86,6 +98,33 @@ pub struct StepDoc {
     /// A move's or path's interlock, enforced by the PLC.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
+    /// A place at a pallet's current slot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub place: Option<PalletStepDoc>,
+    /// A pick from a pallet's current slot (depalletising: the same route, the same counter).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pick: Option<PalletStepDoc>,
+    /// A pallet advanced to its next slot (after a place written with `advance = false`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advance: Option<String>,
+}
+
+/// A `place` or `pick` step's table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PalletStepDoc {
+    /// The pallet (a pattern of the robot's `[robots.NAME.pallets.NAME]`).
+    pub pallet: String,
+    /// The steps run with the robot at the slot (the gripper's `set`, `wait` and `dwell`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub at_slot: Vec<StepDoc>,
+    /// Whether the pallet advances once the at-slot steps ran (default true; `false`: an
+    /// `advance` step does it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advance: Option<bool>,
+    /// The speed of the approach and retreat where the pattern gives none, mm/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_mm_s: Option<f64>,
 }
 
 /// A `path` step's table.

@@ -153,7 +153,7 @@ impl Reach<'_> {
                 Err(_) => At::Unset,
             },
             (OpKind::Move(_), _) => self.meant(op),
-            (OpKind::Path(_), _) => At::Varies,
+            (OpKind::Path(_) | OpKind::PalletPath { .. }, _) => At::Varies,
             _ => at,
         }
     }
@@ -213,10 +213,11 @@ fn successors(ops: &[Op], i: usize) -> Vec<usize> {
             exit: super::LoopExit::Stop,
         } => vec![*to],
         OpKind::Loop { to, .. }
+        | OpKind::Skip { to, .. }
         | OpKind::Wait {
             on_timeout: Some(to),
             ..
-        } => vec![next, *to],
+        } => vec![next, *to % ops.len()],
         _ => vec![next],
     }
 }

@@ -48,6 +48,51 @@ struct Cell {
     access: AccessList,
     taught: BTreeMap<String, Position>,
     robot: crate::robot::Robot,
+    pallets: BTreeMap<String, crate::pallet::Pattern>,
+}
+
+/// A 2 x 2-slot pallet beside the stack (2 layers), each slot entered from 100 mm above at
+/// 50 mm/s; a slip sheet between layers; when full, `press_go` set until `part_present`.
+/// And `far`: one slot out of the robot's reach.
+fn pallets() -> BTreeMap<String, crate::pallet::Pattern> {
+    use crate::geometry::Pose;
+    use crate::pallet::{Pattern, Slot, Waypoint};
+    let slot = |index: usize, x: f64, z: f64| {
+        let up = |s| Waypoint {
+            pose: Pose::from_mm_deg(x, 535.0, z + 100.0, 0.0),
+            speed_mm_s: s,
+        };
+        Slot {
+            index,
+            layer: index / 2,
+            row: 0,
+            column: index % 2,
+            pose: Pose::from_mm_deg(x, 535.0, z, 0.0),
+            approach: vec![up(None)],
+            slot_speed_mm_s: Some(50.0),
+            retreat: vec![up(Some(200.0))],
+        }
+    };
+    let mut out = Pattern::from_slots(
+        "out",
+        vec![
+            slot(0, -926.0, 100.0),
+            slot(1, -826.0, 100.0),
+            slot(2, -926.0, 150.0),
+            slot(3, -826.0, 150.0),
+        ],
+    )
+    .unwrap();
+    out.between_layers = Some("slip".to_owned());
+    out.when_full = crate::pallet::WhenFull {
+        signal: Some("press_go".to_owned()),
+        wait_for: Some("part_present".to_owned()),
+        call: None,
+    };
+    let far = Pattern::from_slots("far", vec![slot(0, -9000.0, 100.0)]).unwrap();
+    [("out".to_owned(), out), ("far".to_owned(), far)]
+        .into_iter()
+        .collect()
 }
 
 fn cell() -> Cell {
@@ -84,14 +129,26 @@ fn cell() -> Cell {
         access,
         taught,
         robot: seed_robot(),
+        pallets: pallets(),
     }
+}
+
+/// Why a test's program was refused: its TOML, or its check.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum Refused {
+    /// The TOML.
+    #[error(transparent)]
+    Toml(#[from] toml::de::Error),
+    /// The check.
+    #[error(transparent)]
+    Program(#[from] ProgramError),
 }
 
 pub(super) fn checked(
     programs: &[(&str, &str)],
     run: &str,
     require_timeout: bool,
-) -> Result<Checked, String> {
+) -> Result<Checked, Refused> {
     checked_from(programs, run, require_timeout, None)
 }
 
@@ -100,17 +157,12 @@ fn checked_from(
     run: &str,
     require_timeout: bool,
     start: Option<[i64; 4]>,
-) -> Result<Checked, String> {
+) -> Result<Checked, Refused> {
     let c = cell();
     let docs: BTreeMap<String, ProgramDoc> = programs
         .iter()
-        .map(|(n, t)| {
-            Ok((
-                (*n).to_owned(),
-                ProgramDoc::from_toml(t).map_err(|e| e.to_string())?,
-            ))
-        })
-        .collect::<Result<_, String>>()?;
+        .map(|(n, t)| Ok(((*n).to_owned(), ProgramDoc::from_toml(t)?)))
+        .collect::<Result<_, Refused>>()?;
     let ctx = Context {
         robot: &c.robot,
         taught: &c.taught,
@@ -126,8 +178,9 @@ fn checked_from(
         require_wait_timeout: require_timeout,
         start,
         poses_known: true,
+        pallets: &c.pallets,
     };
-    check(run, &ctx).map_err(|e| e.to_string())
+    Ok(check(run, &ctx)?)
 }
 
 #[test]
@@ -250,7 +303,9 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
         ),
     ];
     for (program, words) in cases {
-        let e = checked(&[("p", &program)], "p", true).unwrap_err();
+        let e = checked(&[("p", &program)], "p", true)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains(words), "{program}\n=> {e}");
         if !words.starts_with("unknown field") {
             assert!(e.contains("program \"p\""), "{e}");
@@ -262,17 +317,21 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
 fn a_recursion_through_call_is_refused_naming_the_chain() {
     let a = "[[step]]\ncall = \"b\"\n";
     let b = "[[step]]\ndwell = \"1s\"\n[[step]]\ncall = \"a\"\n";
-    let e = checked(&[("a", a), ("b", b)], "a", false).unwrap_err();
+    let e = checked(&[("a", a), ("b", b)], "a", false)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("program \"b\" step 2: call = \"a\" is a recursion: a -> b -> a"),
         "{e}"
     );
-    let e = checked(&[("a", "[[step]]\ncall = \"zz\"\n")], "a", false).unwrap_err();
+    let e = checked(&[("a", "[[step]]\ncall = \"zz\"\n")], "a", false)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("call = \"zz\": no such program; there are: a"),
         "{e}"
     );
-    let e = checked(&[("a", a)], "main", false).unwrap_err();
+    let e = checked(&[("a", a)], "main", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"main\": no such program; there are: a"),
         "{e}"
@@ -285,12 +344,12 @@ fn two_programs_with_one_number_are_refused_naming_each_other_and_the_rest_run()
     let p = "number = 4\n[[step]]\ndwell = \"1s\"\n";
     let other = "number = 5\n[[step]]\ndwell = \"1s\"\n";
     let programs = [("a", p), ("b", p), ("c", other)];
-    let e = checked(&programs, "a", false).unwrap_err();
+    let e = checked(&programs, "a", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"a\": number = 4 is program \"b\"'s number too"),
         "{e}"
     );
-    let e = checked(&programs, "b", false).unwrap_err();
+    let e = checked(&programs, "b", false).unwrap_err().to_string();
     assert!(
         e.contains("program \"b\": number = 4 is program \"a\"'s number too"),
         "{e}"
@@ -302,7 +361,9 @@ fn two_programs_with_one_number_are_refused_naming_each_other_and_the_rest_run()
 fn a_loop_jumps_back_only_and_on_timeout_may_jump_forward() {
     let forward =
         "[[step]]\nloop = { to = \"end\", count = 2 }\n[[step]]\nlabel = \"end\"\ndwell = \"1s\"\n";
-    let e = checked(&[("p", forward)], "p", false).unwrap_err();
+    let e = checked(&[("p", forward)], "p", false)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("jumps forward"), "{e}");
     let skip = "[[step]]\nwait = \"X5\"\ntimeout = \"1s\"\non_timeout = \"end\"\n[[step]]\ndwell = \"1s\"\n[[step]]\nlabel = \"end\"\ndwell = \"2s\"\n";
     let c = checked(&[("p", skip)], "p", false).unwrap();
@@ -328,19 +389,23 @@ fn counts_at_p1() -> [i64; 4] {
 fn a_target_out_of_reach_or_past_a_limit_is_refused_when_checked_naming_the_step() {
     let beyond = "[[step]]\nmove = { position = \"above-stack\" }\n[[step]]\ndwell = \"1s\"\n\
                   [[step]]\nlabel = \"up\"\nmove = { to = [-926.57, 535.03, 900.0, 0.0] }\n";
-    let e = checked(&[("p", beyond)], "p", false).unwrap_err();
+    let e = checked(&[("p", beyond)], "p", false)
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("program \"p\" step 3 (up): move: "), "{e}");
     assert!(
         e.contains("joint d2 target 900.0000 mm is beyond its limits"),
         "{e}"
     );
     let axis = "[[step]]\nmove = { to = [0.0, 0.0, 100.0] }\n";
-    let e = checked(&[("p", axis)], "p", false).unwrap_err();
+    let e = checked(&[("p", axis)], "p", false).unwrap_err().to_string();
     assert!(e.starts_with("program \"p\" step 1: move: "), "{e}");
     // In a called program too, named there.
     let calls = "[[step]]\ncall = \"far\"\n";
     let far = "[[step]]\ndwell = \"1s\"\n[[step]]\nmove = { joints = [0, 900, 600, 0] }\n";
-    let e = checked(&[("p", calls), ("far", far)], "p", false).unwrap_err();
+    let e = checked(&[("p", calls), ("far", far)], "p", false)
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("program \"far\" step 2: move: "), "{e}");
 }
 
@@ -348,7 +413,7 @@ fn a_target_out_of_reach_or_past_a_limit_is_refused_when_checked_naming_the_step
 fn a_move_by_an_offset_is_checked_from_where_the_moves_before_it_end() {
     let up = "[[step]]\nmove = { position = \"in-press\" }\n[[step]]\nwait = \"X5\"\n\
               [[step]]\nmove = { by = [0, 0, 800] }\n";
-    let e = checked(&[("p", up)], "p", false).unwrap_err();
+    let e = checked(&[("p", up)], "p", false).unwrap_err().to_string();
     assert!(
         e.starts_with("program \"p\" step 3: move from where the steps before it end (-1144.4, 659.6, 186.6, 0.0): "),
         "{e}"
@@ -378,7 +443,9 @@ fn a_motion_whose_start_depends_on_the_run_is_named_as_checked_when_it_runs() {
     // A jog up 800 mm from P1 (and back, so each cycle begins there) is planned from the
     // run's start, and refused.
     let far = "[[step]]\nmove = { by = [0, 0, 800] }\n[[step]]\nmove = { by = [0, 0, -800] }\n";
-    let e = checked_from(&[("p", far)], "p", false, Some(counts_at_p1())).unwrap_err();
+    let e = checked_from(&[("p", far)], "p", false, Some(counts_at_p1()))
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("step 1: move from where the steps before it end"),
         "{e}"
@@ -393,4 +460,121 @@ fn a_motion_whose_start_depends_on_the_run_is_named_as_checked_when_it_runs() {
         "{:?}",
         c.unchecked
     );
+}
+
+pub(super) const PALLETISE: &str = r#"
+[[step]]
+label = "pick"
+move = { position = "above-stack" }
+[[step]]
+place = { pallet = "out", at_slot = [{ set = { Y1 = false } }, { dwell = "150ms" }] }
+[[step]]
+loop = { to = "pick", until = "pallet.out.index == 0" }
+"#;
+
+pub(super) const SLIP: &str = "[[step]]\ndwell = \"1s\"\n";
+
+#[test]
+fn a_place_step_flattens_into_its_slot_s_ops_between_layers_and_when_full() {
+    let c = checked(&[("p", PALLETISE), ("slip", SLIP)], "p", false).unwrap();
+    let does: Vec<String> = c.ops.iter().map(|o| o.at.does.clone()).collect();
+    assert_eq!(
+        does,
+        [
+            "move to @above-stack",
+            "unless pallet.out begins a layer: skip",
+            "dwell 1s",
+            "place on out: next slot in progress",
+            "place on out: approach",
+            "place on out: at the slot",
+            "set Y1 = false",
+            "dwell 150ms",
+            "place on out: slot done",
+            "place on out: retreat",
+            "unless pallet.out.full: skip",
+            "out full: set press_go = true",
+            "out full: wait for part_present (X2)",
+            "out full: set press_go = false",
+            "out full: the next pallet from slot 0",
+            "loop to pick until pallet.out.index == 0",
+        ]
+    );
+    // The skips jump past their blocks; every op names the place step (or the slip sheet's).
+    assert!(matches!(c.ops[1].kind, OpKind::Skip { to: 3, .. }));
+    assert!(matches!(c.ops[10].kind, OpKind::Skip { to: 15, .. }));
+    assert_eq!(c.ops[2].at.program, "slip");
+    assert_eq!(c.ops[2].at.called_from, ["p step 2"]);
+    assert!(c.ops[3..15].iter().all(|o| o.at.step == 2));
+}
+
+#[test]
+fn a_place_written_without_advance_leaves_it_to_an_advance_step() {
+    let program = "[[step]]\nplace = { pallet = \"out\", advance = false }\n\
+                   [[step]]\nadvance = \"out\"\n";
+    let c = checked(&[("p", program), ("slip", SLIP)], "p", false).unwrap();
+    let acts: Vec<&OpKind> = c.ops.iter().map(|o| &o.kind).collect();
+    let advances = acts
+        .iter()
+        .filter(|k| {
+            matches!(
+                k,
+                OpKind::Pallet {
+                    act: check::PalletAct::Advance,
+                    ..
+                }
+            )
+        })
+        .count();
+    assert_eq!(advances, 1);
+    let advance = c
+        .ops
+        .iter()
+        .position(|o| {
+            matches!(
+                o.kind,
+                OpKind::Pallet {
+                    act: check::PalletAct::Advance,
+                    ..
+                }
+            )
+        })
+        .unwrap();
+    assert_eq!(c.ops[advance].at.step, 2);
+}
+
+#[test]
+fn pallet_steps_that_cannot_run_are_refused_naming_the_pallet_the_slot_or_the_step() {
+    let cases = [
+        (
+            "[[step]]\nplace = { pallet = \"nope\" }\n",
+            "step 1: no pallet \"nope\"; there are: far, out",
+        ),
+        (
+            "[[step]]\nplace = { pallet = \"far\" }\n",
+            "pallet \"far\" slot 0 (layer 0): the slot [-9000.0, 535.0, 100.0, 0.0] cannot be reached",
+        ),
+        (
+            "[[step]]\nplace = { pallet = \"out\", at_slot = [{ move = { position = \"in-press\" } }] }\n",
+            "at_slot step 1: runs with the robot at the slot",
+        ),
+        (
+            "[[step]]\nplace = { pallet = \"out\", at_slot = [{ dwell = \"1s\", set = { Y1 = true } }] }\n",
+            "at_slot step 1: has set and dwell actions",
+        ),
+        (
+            "[[step]]\nwait = \"pallet.in.full\"\n",
+            "condition reads pallet \"in\", which the robot does not have (pallets: far, out)",
+        ),
+        ("[[step]]\nadvance = \"in\"\n", "no pallet \"in\""),
+        (
+            "[[step]]\nplace = { pallet = \"out\" }\npick = { pallet = \"out\" }\n",
+            "has place and pick actions",
+        ),
+    ];
+    for (program, words) in cases {
+        let e = checked(&[("p", program), ("slip", SLIP)], "p", false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(words), "{program}\n=> {e}");
+    }
 }

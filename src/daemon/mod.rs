@@ -49,6 +49,7 @@ mod live;
 pub mod metrics;
 pub mod modbus_face;
 pub mod notify;
+pub mod pallets;
 pub mod positions;
 mod report;
 mod request;

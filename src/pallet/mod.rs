@@ -2,6 +2,7 @@
 //! approach and retreat, and what a cell does between layers and when the pallet is full.
 //!
 //! - [`pattern`]: the checked pattern as the cycle runs it ([`Pattern`], [`Slot`], [`Waypoint`]).
+//! - [`counter`]: which slot is next, the slot in progress, and what a restart means ([`Counter`]).
 //! - [`frame`]: a user frame taught from three points or given as numbers ([`Frame`]).
 //! - [`doc`]: the `[robots.NAME.pallets.NAME]` and `[robots.NAME.frames.NAME]` tables as
 //!   written (serde).
@@ -11,6 +12,7 @@
 //!   taught positions are known, every slot checked against the robot's reach.
 //! - [`error`], why a pallet or a frame cannot be used ([`PalletError`]).
 
+pub mod counter;
 pub mod doc;
 pub mod error;
 pub mod frame;
@@ -18,6 +20,7 @@ pub mod layout;
 pub mod pattern;
 pub mod set;
 
+pub use counter::{Choice, Counter, CounterError};
 pub use error::{PalletError, SlotAt};
 pub use frame::{Frame, FrameError};
 pub use layout::Layout;

@@ -82,6 +82,7 @@ pub(super) fn check(config: &Config, robot: &Robot) -> Option<Programs> {
         // Not the robot's pose at a run, nor its taught poses: those are the daemon's.
         start: None,
         poses_known: false,
+        pallets: &BTreeMap::new(),
     };
     for name in docs.keys() {
         if shared.iter().any(|(names, _)| names.contains(name)) {

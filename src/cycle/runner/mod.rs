@@ -37,7 +37,7 @@ use std::time::{Duration, Instant};
 
 pub use control::{Ask, Control, MotionEnd, WaitEnd};
 
-use super::check::{Checked, Op, OpKind};
+use super::check::{Checked, Leg, Op, OpKind, PalletAct};
 use super::condition::Condition;
 use crate::gateway::{Address, Values};
 use crate::order::{MoveOrder, PathOrder};
@@ -105,6 +105,13 @@ pub enum Action<G> {
     Dwell(Duration),
     /// Decide a loop's condition on a fresh status block: [`Event::Decided`].
     Decide(Condition),
+    /// Change a pallet's counter, on disk before the answer: [`Event::Counted`].
+    Pallet {
+        /// The pallet.
+        pallet: String,
+        /// The change.
+        act: PalletAct,
+    },
     /// Let one status read pass before going round a loop whose steps take no time:
     /// [`Event::Paced`].
     Pace,
@@ -155,6 +162,15 @@ pub enum Motion {
     Move(MoveOrder),
     /// A path.
     Path(PathOrder),
+    /// The way into or out of a pallet's slot in progress, from where the robot is.
+    Pallet {
+        /// The pallet.
+        pallet: String,
+        /// Into the slot or out of it.
+        leg: Leg,
+        /// The speed where the pattern gives none, mm/s.
+        speed_mm_s: Option<f64>,
+    },
 }
 
 /// What came of the runner's last action.
@@ -184,6 +200,8 @@ pub enum Event<G> {
     /// The loop's condition: met or not (`None`: nothing more is read, the robot's worker is
     /// gone).
     Decided(Option<bool>),
+    /// The pallet's counter changed and is on disk (`Some`: it did not, why).
+    Counted(Option<String>),
     /// A status read passed (`false`: the robot's worker is gone).
     Paced(bool),
     /// An incident came since [`Runner::incident_mark`], in words.

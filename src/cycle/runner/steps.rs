@@ -21,12 +21,23 @@ impl<G> Runner<G> {
                 self.phase = Phase::Released(prepared.id);
                 Action::Release(prepared.gate)
             }
-            OpKind::Move(_) | OpKind::Path(_) if hold.is_some() => {
+            OpKind::Move(_) | OpKind::Path(_) | OpKind::PalletPath { .. } if hold.is_some() => {
                 let why = hold.unwrap_or_default().to_owned();
                 self.followed(MotionEnd::Held { why }, seen)
             }
             OpKind::Move(order) => Action::Submit(Motion::Move(order)),
             OpKind::Path(order) => Action::Submit(Motion::Path(order)),
+            OpKind::PalletPath {
+                pallet,
+                leg,
+                speed_mm_s,
+            } => Action::Submit(Motion::Pallet {
+                pallet,
+                leg,
+                speed_mm_s,
+            }),
+            OpKind::Pallet { pallet, act } => Action::Pallet { pallet, act },
+            OpKind::Skip { unless, .. } => Action::Decide(unless),
             OpKind::Wait { .. } => self.prepare(pc, Then::Wait, seen),
             OpKind::Set(writes) => Action::Write(writes),
             OpKind::Dwell(d) => Action::Dwell(d),
@@ -51,7 +62,12 @@ impl<G> Runner<G> {
     pub(super) fn answer(&mut self, event: Event<G>, seen: &Seen) -> Action<G> {
         let pc = self.pc;
         let next = match event {
-            Event::Queued(ids) if matches!(self.ops[pc].kind, OpKind::Path(_)) => {
+            Event::Queued(ids)
+                if matches!(
+                    self.ops[pc].kind,
+                    OpKind::Path(_) | OpKind::PalletPath { .. }
+                ) =>
+            {
                 return Action::Follow(ids);
             }
             Event::Queued(ids) => return self.prepare(pc, Then::Follow(ids), seen),
@@ -62,10 +78,16 @@ impl<G> Runner<G> {
             Event::Prepared(prepared) => return self.prepared(prepared),
             Event::Followed(end) => return self.followed(end, seen),
             Event::Waited { end, waited_s } => self.waited(end, waited_s),
-            Event::Written(None) | Event::Dwelt(true) | Event::Decided(Some(true)) => {
-                Next::Go(pc + 1)
+            Event::Written(None)
+            | Event::Counted(None)
+            | Event::Dwelt(true)
+            | Event::Decided(Some(true)) => Next::Go(pc + 1),
+            Event::Written(Some(why)) | Event::Counted(Some(why)) | Event::Incident(why) => {
+                Next::Fault(why)
             }
-            Event::Written(Some(why)) | Event::Incident(why) => Next::Fault(why),
+            Event::Decided(Some(false)) if let OpKind::Skip { to, .. } = self.ops[pc].kind => {
+                Next::Go(to)
+            }
             Event::Dwelt(false) | Event::Decided(None) | Event::Paced(false) => Next::Stopped,
             Event::Decided(Some(false)) => return self.back_to(self.loop_to(), seen),
             Event::Paced(true) => Next::Go(self.loop_to()),
@@ -97,7 +119,11 @@ impl<G> Runner<G> {
         self.ops[from..=to].iter().any(|op| {
             matches!(
                 op.kind,
-                OpKind::Move(_) | OpKind::Path(_) | OpKind::Wait { .. } | OpKind::Dwell(_)
+                OpKind::Move(_)
+                    | OpKind::Path(_)
+                    | OpKind::PalletPath { .. }
+                    | OpKind::Wait { .. }
+                    | OpKind::Dwell(_)
             )
         })
     }

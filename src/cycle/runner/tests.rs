@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use super::*;
-use crate::cycle::tests::{EJECT, PRESS_LOAD, checked};
+use crate::cycle::tests::{EJECT, PALLETISE, PRESS_LOAD, SLIP, checked};
 
 /// What the runner sees: the control, the incidents, the time.
 struct World {
@@ -55,6 +55,8 @@ fn said(action: &Action<u32>) -> String {
         Action::Step(at) => format!("step {}", at.does),
         Action::Submit(Motion::Move(_)) => "submit move".to_owned(),
         Action::Submit(Motion::Path(_)) => "submit path".to_owned(),
+        Action::Submit(Motion::Pallet { pallet, leg, .. }) => format!("submit {pallet} {leg:?}"),
+        Action::Pallet { pallet, act } => format!("pallet {pallet} {act:?}"),
         Action::Prepare { at, .. } => format!("prepare op {at}"),
         Action::Release(gate) => format!("release {gate}"),
         Action::Follow(ids) => format!("follow {ids:?}"),
@@ -531,4 +533,90 @@ fn a_stop_now_during_a_dwell_ends_the_cycle_now() {
     let (mut r, w) = runner(DWELLS, &[], None);
     let got = script(&mut r, &w, vec![Event::Go, Event::Go, Event::Dwelt(false)]);
     assert_eq!(got[2], "end Stopped (Some(\"stopped now by request\")) []");
+}
+
+/// A place as the runner steps it: the between-layers skip decided, the counter's changes
+/// answered, the legs followed; a counter that refuses (a slot unsure after a restart) faults
+/// the cycle on the place step before anything moves.
+#[test]
+fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults() {
+    let (mut r, w) = runner(PALLETISE, &[("slip", SLIP)], None);
+    let got = script(
+        &mut r,
+        &w,
+        vec![
+            Event::Go,
+            Event::Go,
+            Event::Queued(vec![1]),
+            Event::Followed(MotionEnd::Done),
+            // Not the first slot of a layer: the slip sheet is skipped.
+            Event::Go,
+            Event::Decided(Some(false)),
+            Event::Go,
+            Event::Counted(None),
+            Event::Go,
+            Event::Queued(vec![2]),
+            Event::Followed(MotionEnd::Done),
+            Event::Go,
+            Event::Counted(None),
+            Event::Go,
+            Event::Written(None),
+            Event::Go,
+            Event::Dwelt(true),
+            Event::Go,
+            Event::Counted(None),
+            Event::Go,
+            Event::Queued(vec![3]),
+            Event::Followed(MotionEnd::Done),
+            Event::Go,
+            // Not full: the when-full block is skipped.
+            Event::Decided(Some(false)),
+            Event::Go,
+        ],
+    );
+    let want = [
+        "step move to @above-stack",
+        "submit move",
+        "follow [1]",
+        "step unless pallet.out begins a layer: skip",
+        "decide pallet.out begins a layer",
+        "step place on out: next slot in progress",
+        "pallet out Begin",
+        "step place on out: approach",
+        "submit out In",
+        "follow [2]",
+        "step place on out: at the slot",
+        "pallet out Arrived",
+        "step set Y1 = false",
+        "write 1",
+        "step dwell 150ms",
+        "dwell 150ms",
+        "step place on out: slot done",
+        "pallet out Advance",
+        "step place on out: retreat",
+        "submit out Out",
+        "follow [3]",
+        "step unless pallet.out.full: skip",
+        "decide pallet.out.full",
+        "step loop to pick until pallet.out.index == 0",
+        "decide pallet.out.index == 0",
+    ];
+    assert_eq!(got, want);
+    let (mut r, w) = runner(PALLETISE, &[("slip", SLIP)], None);
+    let why = "pallet \"out\": the place at slot 3 was interrupted";
+    let got = script(
+        &mut r,
+        &w,
+        vec![
+            Event::Go,
+            Event::Go,
+            Event::Queued(vec![1]),
+            Event::Followed(MotionEnd::Done),
+            Event::Go,
+            Event::Decided(Some(false)),
+            Event::Go,
+            Event::Counted(Some(why.to_owned())),
+        ],
+    );
+    assert_eq!(got.last().unwrap(), &format!("fault ({why}) stop true []"));
 }

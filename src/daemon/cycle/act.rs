@@ -24,6 +24,10 @@ pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> 
         // The handle plans a path off the runtime (it takes milliseconds), as for the API.
         Motion::Move(order) => handle.submit_starts(order).await,
         Motion::Path(order) => handle.submit_path(&order).await,
+        // The daemon's programs are checked with no pallet yet, so no place step runs.
+        Motion::Pallet { pallet, .. } => {
+            return Event::Refused(format!("pallet {pallet:?}: the robot has no pallets"));
+        }
     };
     match submitted {
         Ok(ids) => Event::Queued(ids),

@@ -92,6 +92,8 @@ impl RobotHandle {
             require_wait_timeout: live.cell.require_wait_timeout,
             start: self.where_next_begins(),
             poses_known: true,
+            // The robot's pallet patterns come with the config's pallets (not wired yet).
+            pallets: &std::collections::BTreeMap::new(),
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
     }

@@ -192,6 +192,10 @@ impl Driver {
             Action::Dwell(d) => Event::Dwelt(act::dwell(d, &mut self.control).await),
             Action::Decide(until) => Event::Decided(act::decide(handle, &until).await),
             Action::Pace => Event::Paced(act::pace(handle).await),
+            // As for a pallet path: no program with a pallet step passes the daemon's check yet.
+            Action::Pallet { pallet, .. } => {
+                Event::Counted(Some(format!("pallet {pallet:?}: the robot has no pallets")))
+            }
             _ => Event::Go,
         }
     }
