@@ -3,7 +3,6 @@
 
 use thiserror::Error;
 
-use super::inputs::on_off;
 use crate::plc::PlcError;
 use crate::plc::exchange::ContractError;
 use crate::table::TableProblem;
@@ -57,4 +56,9 @@ pub(super) enum Failure {
 fn joined(problems: &[TableProblem]) -> String {
     let words: Vec<String> = problems.iter().map(ToString::to_string).collect();
     words.join("; ")
+}
+
+/// `on` or `off`.
+pub(super) fn on_off(on: bool) -> &'static str {
+    if on { "on" } else { "off" }
 }

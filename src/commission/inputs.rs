@@ -15,6 +15,7 @@
 use tokio::time::Instant;
 
 use super::error::Failure;
+pub(super) use super::error::on_off;
 use super::report::InputsFound;
 use super::{Check, Halt, INPUT_CHECKS, LinkTiming, Session, Step};
 use crate::contract::{INPUT_WORDS, InputArea, InputWord, StatusBlock, bit_name};
@@ -50,11 +51,6 @@ pub(super) fn relay(word: InputWord, bit: u8) -> u16 {
 /// Whether bit `bit` of `word` is on.
 pub(super) fn is_on(word: u16, bit: u8) -> bool {
     word & (1 << bit) != 0
-}
-
-/// `on` or `off`.
-pub(super) fn on_off(on: bool) -> &'static str {
-    if on { "on" } else { "off" }
 }
 
 /// `WX0 0x0000 (all off), WR10 0x8001 (R100, R10F on)`.
