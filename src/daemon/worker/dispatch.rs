@@ -71,6 +71,9 @@ impl Queued {
     }
 }
 
+/// A part of a path section queued: its id and order.
+pub(super) type Part = (MoveId, CheckedOrder);
+
 /// How a move whose turn came is started.
 #[derive(Debug, Clone)]
 pub(super) enum StartMode {
@@ -497,9 +500,7 @@ impl Dispatcher {
 
     /// The parts of a path section chained at speed queued at the head (the first part's turn
     /// just came): the section, and each part's id and order, in order.
-    pub(super) fn section_behind(
-        &self,
-    ) -> Option<(Arc<SectionOrder>, Vec<(MoveId, CheckedOrder)>)> {
+    pub(super) fn section_behind(&self) -> Option<(Arc<SectionOrder>, Vec<Part>)> {
         let section = self
             .queue
             .front()

@@ -223,19 +223,10 @@ impl Worker {
                 tag,
                 elapsed,
                 fraction,
-            } => self.shared.moves(|m| {
-                m.update(tag, |r| {
-                    r.counts = Some(elapsed.map(i64::from));
-                    r.progress = fraction;
-                });
-            }),
+            } => self.progress(tag, elapsed, fraction),
             Event::Done { tag, elapsed } => self.done(tag, elapsed),
             Event::Ended { tag, outcome } => self.ended(tag, outcome),
-            Event::Restarted => {
-                tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
-                self.cancel_queue("cancelled: the PLC restarted");
-                self.dispatch.forget_starts();
-            }
+            Event::Restarted => self.restarted(),
             Event::Stalled { still } => {
                 tracing::error!(robot = %self.robot.name, still_ms = still.as_millis() as u64, "the PLC heartbeat stands still");
                 self.cancel_queue("cancelled: the PLC heartbeat stood still");
@@ -273,6 +264,23 @@ impl Worker {
         self.out.state(|s| {
             s.current_move = Some(tag);
             s.queued.retain(|q| *q != tag);
+        });
+    }
+
+    /// The PLC restarted: the queue cancelled, no start written again.
+    fn restarted(&mut self) {
+        tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
+        self.cancel_queue("cancelled: the PLC restarted");
+        self.dispatch.forget_starts();
+    }
+
+    /// Move `tag` runs on: its counts and its share of its planned path.
+    fn progress(&self, tag: MoveId, elapsed: [i32; CHANNELS], fraction: f64) {
+        self.shared.moves(|m| {
+            m.update(tag, |r| {
+                r.counts = Some(elapsed.map(i64::from));
+                r.progress = fraction;
+            });
         });
     }
 

@@ -171,7 +171,7 @@ impl Worker {
             self.shared.beat.mark();
             self.take_in();
             let seen = self.seen();
-            let action = self.dispatch.next(&seen, now());
+            let action = self.dispatch.next(seen, now());
             if matches!(action, Action::ShutDown) {
                 self.shut_down().await;
                 return;
@@ -204,7 +204,7 @@ impl Worker {
                 Ok(())
             }
             Action::ReadMode => self.read_mode().await,
-            Action::Begin(queued) => self.begin(queued).await,
+            Action::Begin(queued) => self.begin(*queued).await,
             Action::UploadStep { uploading, watch } => self.upload_step(uploading, watch).await,
             Action::ProveRead(uploaded) => self.prove(uploaded).await,
             Action::WriteStart(uploaded) => self.start(*uploaded).await,

@@ -202,22 +202,11 @@ impl Worker {
         id: MoveId,
         order: &CheckedOrder,
     ) -> Result<bool, ContractError> {
-        let from = self.by_joint(walk.ends_on.map(i64::from));
-        let Ok(plan) = plan_order(&self.robot, order, from) else {
+        let Some((plan, tables)) = self.plan_part(walk, order) else {
             return Ok(false);
         };
-        let Some(tables) = plan.valid_tables(&self.robot) else {
-            return Ok(false);
-        };
-        let so_far = parts(section, &walk.directories);
         let bank = walk.bank;
-        let base = match preload::choose(
-            walk.pace.as_ref(),
-            &so_far,
-            &mut walk.placement,
-            bank,
-            &tables,
-        )? {
+        let base = match walk.choose(section, &tables)? {
             Choice::Preload(base) => base,
             Choice::Enough => return Ok(false),
             Choice::Full => {
@@ -240,6 +229,15 @@ impl Worker {
         walk.ends_on = end_counts(&plan, walk.ends_on);
         walk.bank = 1 - bank;
         Ok(true)
+    }
+
+    /// A part's plan from where the part before it ends, and its tables: `None` when it
+    /// cannot be planned (it is left to fail at its own turn).
+    fn plan_part(&self, walk: &Walk, order: &CheckedOrder) -> Option<(Plan, Vec<ValidTable>)> {
+        let from = self.by_joint(walk.ends_on.map(i64::from));
+        let plan = plan_order(&self.robot, order, from).ok()?;
+        let tables = plan.valid_tables(&self.robot)?;
+        Some((plan, tables))
     }
 
     /// Writes and reads back `tables` into `bank` at `base` (per channel): what was written, and
@@ -456,6 +454,25 @@ struct Walk {
     permit: bool,
     /// How long a status read just took.
     exchange: Duration,
+}
+
+impl Walk {
+    /// What to do with the next part of `section`, whose tables are `tables`
+    /// ([`preload::choose`]).
+    fn choose(
+        &mut self,
+        section: &SectionOrder,
+        tables: &[ValidTable],
+    ) -> Result<Choice, ContractError> {
+        let so_far = parts(section, &self.directories);
+        preload::choose(
+            self.pace.as_ref(),
+            &so_far,
+            &mut self.placement,
+            self.bank,
+            tables,
+        )
+    }
 }
 
 /// The parts of `section` (planned) as the pace check sees them: the first

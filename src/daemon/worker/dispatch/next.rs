@@ -45,7 +45,9 @@ pub(in crate::daemon::worker) enum Retry {
     Answering,
 }
 
-/// What the driver has taken in, as far as the next step depends on it.
+/// What the driver has taken in, as far as the next step depends on it: each an independent
+/// fact of the moment, not a mode.
+#[allow(clippy::struct_excessive_bools)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(in crate::daemon::worker) struct Seen {
     /// A session is open.
@@ -79,7 +81,7 @@ pub(in crate::daemon::worker) enum Action {
     ReadMode,
     /// Begin the head of the queue: its turn on a fresh status block, planned, its section's
     /// parts preloaded, its upload made ready ([`Activity::Uploading`]).
-    Begin(Queued),
+    Begin(Box<Queued>),
     /// One exchange of the upload; `watch`: a status read first (a start runs meanwhile).
     UploadStep {
         /// The upload.
@@ -114,7 +116,7 @@ pub(in crate::daemon::worker) enum Action {
 impl Dispatcher {
     /// The next step, given what was `seen` at `now`. The activity it continues is taken into
     /// the action (the driver puts back what comes of it) or left in place.
-    pub(in crate::daemon::worker) fn next(&mut self, seen: &Seen, now: Instant) -> Action {
+    pub(in crate::daemon::worker) fn next(&mut self, seen: Seen, now: Instant) -> Action {
         let just_polled = std::mem::take(&mut self.just_polled);
         match std::mem::take(&mut self.activity) {
             Activity::Idle => self.next_idle(seen, now),
@@ -133,7 +135,7 @@ impl Dispatcher {
     /// A round with no move between its turn and its start: a stop first, then commands, the
     /// queue's ends, the mode read a poll asked for, a move to begin, the status block when its
     /// read is due or one register gateway exchange, else a wait.
-    fn next_idle(&mut self, seen: &Seen, now: Instant) -> Action {
+    fn next_idle(&mut self, seen: Seen, now: Instant) -> Action {
         if seen.shutting_down {
             return Action::ShutDown;
         }
@@ -156,7 +158,8 @@ impl Dispatcher {
         }
         if self.has_room(now) {
             self.next_poll = None;
-            return Action::Begin(self.queue.pop_front().expect("room for the head"));
+            let head = self.queue.pop_front().expect("room for the head");
+            return Action::Begin(Box::new(head));
         }
         let poll_due = self.poll_due(now);
         // Gateway exchanges go between the worker's own, one at a time; when the status read is
@@ -175,7 +178,7 @@ impl Dispatcher {
     /// backoff (never past the instant a move in flight expires), answers what came meanwhile
     /// (stops and commands: the link is down; the queue's expiry; gateway requests), and tries
     /// again.
-    fn next_offline(&mut self, seen: &Seen, now: Instant) -> Action {
+    fn next_offline(&mut self, seen: Seen, now: Instant) -> Action {
         if let Retry::At(at) = self.retry {
             self.retry = Retry::Answering;
             let until = self
@@ -237,22 +240,14 @@ impl Dispatcher {
     fn next_hold(
         &mut self,
         held: Box<Uploaded>,
-        seen: &Seen,
+        seen: Seen,
         just_polled: bool,
         now: Instant,
     ) -> Action {
         let id = held.turn.id;
         let gate = held.turn.mode.gate().expect("held behind a gate").clone();
-        if just_polled {
-            // Behind a running move, which may end meanwhile (followed as ever), or alone.
-            let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
-            let blocked = self
-                .machine
-                .blocker(now)
-                .is_some_and(|b| b != Blocker::Full);
-            if !uploading || blocked {
-                return unprepare(id, "the PLC changed under it");
-            }
+        if just_polled && self.changed_under_upload(now) {
+            return unprepare(id, "the PLC changed under it");
         }
         let runs_ahead = self.machine.uploading_behind().is_some();
         match Hold::on_gate(gate.state(), runs_ahead) {
@@ -275,6 +270,18 @@ impl Dispatcher {
             },
             _ => Action::Poll,
         }
+    }
+
+    /// Whether the PLC, as last read, is no longer where the upload left it: no upload under
+    /// way behind a running move (which may end meanwhile, followed as ever) or alone, or a
+    /// start refused for more than the running move.
+    fn changed_under_upload(&self, now: Instant) -> bool {
+        let uploading = matches!(self.machine.phase(), Phase::Uploading { .. });
+        !uploading
+            || self
+                .machine
+                .blocker(now)
+                .is_some_and(|b| b != Blocker::Full)
     }
 
     /// A held bank whose gate opened: started on the status block just read if it is fresh
