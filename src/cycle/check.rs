@@ -189,6 +189,10 @@ pub struct Checked {
     /// The motions whose start depends on the run, checked when they run (one line each,
     /// naming the step).
     pub unchecked: Vec<String>,
+    /// The patterns of the robot's pallets as the program was checked against them, by name:
+    /// its place and pick steps run these slots (a frame re-taught later changes the next
+    /// check, not a cycle under way).
+    pub pallets: BTreeMap<String, Pattern>,
 }
 
 /// Program `name` of `ctx.programs` flattened into its ops, with every program it calls, each
@@ -232,6 +236,7 @@ pub(super) fn flatten(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramE
         number,
         ops,
         unchecked: Vec::new(),
+        pallets: ctx.pallets.clone(),
     })
 }
 

@@ -77,6 +77,9 @@ impl RobotHandle {
             tracing::warn!(robot = %self.robot.name, program, "a cycle program cannot be read: {why}");
         }
         let taught = self.positions.of(&self.robot.name);
+        let pallets = self
+            .pallet_patterns()
+            .map_err(|e| CycleError::Program(format!("robot {}: {e}", self.robot.name)))?;
         let ctx = crate::cycle::Context {
             robot: &self.robot,
             taught: &taught,
@@ -92,8 +95,7 @@ impl RobotHandle {
             require_wait_timeout: live.cell.require_wait_timeout,
             start: self.where_next_begins(),
             poses_known: true,
-            // The robot's pallet patterns come with the config's pallets (not wired yet).
-            pallets: &std::collections::BTreeMap::new(),
+            pallets: &pallets,
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
     }

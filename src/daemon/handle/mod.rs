@@ -23,6 +23,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 use super::gateway::{self, GatewayError, Job, Values};
 use super::live::Live;
+use super::pallets::{PalletCounters, Pallets};
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::request::{CellRequest, CommandError, ConflictReason, CycleRequest, Reply, Request};
 use super::shared::{CellView, Shared};
@@ -62,6 +63,8 @@ pub struct RobotHandle {
     speed_override: Arc<std::sync::atomic::AtomicU8>,
     /// The cell's journal (`DaemonOptions::journal`).
     journal: crate::journal::Journal,
+    /// The robots' frames, pallets and counters (`DaemonOptions::pallets`).
+    pallets: Arc<Pallets>,
 }
 
 /// Where a handle's requests go.
@@ -94,7 +97,12 @@ impl RobotHandle {
         robot: Robot,
         to: Senders,
         shared: Arc<Shared>,
-        (live, positions, journal): (Live, Arc<TaughtPositions>, crate::journal::Journal),
+        (live, positions, journal, pallets): (
+            Live,
+            Arc<TaughtPositions>,
+            crate::journal::Journal,
+            Arc<Pallets>,
+        ),
         inputs: [InputWord; INPUT_WORDS],
         face: Option<FaceSettings>,
     ) -> Self {
@@ -110,6 +118,7 @@ impl RobotHandle {
             epoch: None,
             speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
             journal,
+            pallets,
         }
     }
 
@@ -124,6 +133,23 @@ impl RobotHandle {
     #[must_use]
     pub fn journal(&self) -> &crate::journal::Journal {
         &self.journal
+    }
+
+    /// The pallets' counters of every robot of the daemon (kept in the state directory).
+    #[must_use]
+    pub fn pallet_counters(&self) -> &PalletCounters {
+        &self.pallets.counters
+    }
+
+    /// The robot's pallets laid out with its taught positions now, checked against its reach.
+    ///
+    /// # Errors
+    /// The first pallet that cannot be laid out or reached, naming the pallet and the slot.
+    pub fn pallet_patterns(
+        &self,
+    ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        let taught = self.positions.of(&self.robot.name);
+        self.pallets.patterns(&self.robot, &taught)
     }
 
     /// The speed override, 1 to 100 %.
