@@ -221,6 +221,10 @@ impl Worker {
                 self.wait_until(until, gate.as_ref()).await;
                 Ok(())
             }
+            Action::Pause { until } => {
+                tokio::time::sleep_until(until.into()).await;
+                Ok(())
+            }
         }
     }
 
@@ -250,9 +254,15 @@ impl Worker {
         }
     }
 
-    /// Takes in every request, stop and gateway request already sent, without waiting.
+    /// Takes in every stop and gateway request already sent, without waiting, and the requests
+    /// unless a bank is being written or proven (they wait for its start).
     fn take_in(&mut self) {
-        self.take_pending_requests();
+        if matches!(
+            self.dispatch.activity,
+            Activity::Idle | Activity::Holding(_)
+        ) {
+            self.take_pending_requests();
+        }
         while let Ok(reply) = self.inbox.stops.try_recv() {
             self.inbox.pending_stops.push(reply);
         }

@@ -8,7 +8,7 @@
 //!              (taking turns with the status read when both are due) | poll | wait
 //!   Uploading: one exchange of the bank (a status read first when one is due)
 //!   Holding:   release (write the start, or prove it) | cancel | gateway | poll | wait on its gate
-//!   Proving:   one proof read, half a scan apart | the start written once
+//!   Proving:   one proof read, a pause of half a scan between two | the start written once
 //! ```
 
 use std::time::{Duration, Instant};
@@ -104,6 +104,11 @@ pub(in crate::daemon::worker) enum Action {
     Gateway,
     /// Read the status block and apply it.
     Poll,
+    /// Pause until `until`, taking nothing in meanwhile (between two proof reads).
+    Pause {
+        /// The end of the pause.
+        until: Instant,
+    },
     /// Wait for what comes next: until `until`, a request, a stop, or `gate` deciding.
     Wait {
         /// The latest the wait lasts.
@@ -124,8 +129,8 @@ impl Dispatcher {
             Activity::Holding(held) => self.next_hold(held, seen, just_polled, now),
             Activity::Proving(uploaded, not_before) => match not_before {
                 Some(until) if now < until => {
-                    self.activity = Activity::Proving(uploaded, not_before);
-                    Action::Wait { until, gate: None }
+                    self.activity = Activity::Proving(uploaded, None);
+                    Action::Pause { until }
                 }
                 _ => Action::ProveRead(uploaded),
             },

@@ -34,6 +34,7 @@ fn what(action: &Action) -> (&'static str, Option<MoveId>) {
         Action::Gateway => ("gateway", None),
         Action::Poll => ("poll", None),
         Action::Wait { .. } => ("wait", None),
+        Action::Pause { .. } => ("pause", None),
     }
 }
 
@@ -314,7 +315,7 @@ fn a_proof_read_that_does_not_prove_is_made_again_half_a_scan_later() {
         panic!("a proof read");
     };
     assert!(d.proven(u, false, now).is_none());
-    let Action::Wait { until, .. } = d.next(up(), now + ms(1)) else {
+    let Action::Pause { until } = d.next(up(), now + ms(1)) else {
         panic!("half a scan");
     };
     assert_eq!(until, now + PACE.scan_time / 2);
