@@ -1,19 +1,20 @@
 //! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
 //! the contract (docs/CONTRACT.md, "What the host does for one move"). Its decisions are the
 //! pure [`Dispatcher`]'s (the queue, one record per move in flight, how a move starts, what the
-//! worker is doing as one [`Activity`], and the contract's [`Machine`] deciding what every
-//! status block means); the worker is its driver: one loop that makes the exchanges they ask
-//! for over the link's session, feeds back what came of them, and applies what the machine
-//! says in one place ([`events`]).
+//! worker is doing as one [`Activity`], the contract's [`Machine`] deciding what every status
+//! block means, and what comes next as an [`Action`]); the worker is its driver: one loop that
+//! takes in what came, asks the dispatcher for the next action, carries it out over the link's
+//! session and feeds back what came of it, and applies what the machine says in one place
+//! ([`events`]).
 //!
 //! ```text
-//! run: loop { link down: reconnect | step: by the activity, one step a round }
-//!   Idle:       stops first | commands | queue expiry | begin a move | poll | gateway | wait
-//!   Uploading:  one exchange of the bank (the running start watched between)
-//!   Holding:    a prepared bank held until its gate opens (reads, gateway, wait)
-//!   Proving:    one proof read until the PLC may take the start; then the start written once
-//!   mod.rs       the loop, waiting on requests, stops, home and clear-fault, shutdown
-//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers)
+//! run: loop { take in | action = dispatcher.next(seen, now) | carry it out }
+//!   Connect | Stop | Commands | Finish | ReadMode | Begin | UploadStep | ProveRead | WriteStart
+//!   | Unprepare | Gateway | Poll | Pause | Wait (the one select!: requests, stops, gateway,
+//!   shutdown, a read asked for, a held bank's gate, the timer)
+//!   mod.rs       the loop, carrying actions out, stops, home and clear-fault, shutdown
+//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers);
+//!                dispatch/next.rs: what comes next ([`Action`])
 //!   activity.rs  the steps of the move whose turn came
 //!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
 //!   events.rs    reading the status block into the machine; applying its events to the reports
