@@ -94,7 +94,7 @@ impl RobotHandle {
         gate: Option<&Gate>,
         permit: Option<Permit>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
         checked.permit = match permit {
             Some(permit) => permit,
@@ -305,7 +305,7 @@ impl RobotHandle {
             blocker: Blocker::LinkDown,
             detail: Some("no counts read from the PLC yet".to_owned()),
         })?;
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let lookup = |name: &str| {
             taught.get(name).map(|p| {
                 let [x, y, z, a] = p.pose;
