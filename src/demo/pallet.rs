@@ -106,15 +106,7 @@ pub async fn run(options: DemoOptions) -> Result<PalletDemo, DemoError> {
     // Hundreds of moves: their pulses are not kept.
     rig.mock.with(|m| m.record_pulses(false));
     let dir = std::env::temp_dir().join(format!("linterpd-demo-pallet-{}", std::process::id()));
-    let programs = [
-        ("palletise", program()),
-        ("slip-sheet", SLIP_SHEET.to_owned()),
-    ];
-    for (name, text) in &programs {
-        std::fs::create_dir_all(&dir)
-            .and_then(|()| std::fs::write(dir.join(format!("{name}.toml")), text))
-            .map_err(|e| DemoError::Rig(format!("{}: {e}", dir.display())))?;
-    }
+    write_programs(&dir)?;
     let setup = RobotSetup {
         robot: robot.clone(),
         settings: ContractSettings {
@@ -142,6 +134,20 @@ pub async fn run(options: DemoOptions) -> Result<PalletDemo, DemoError> {
     rig.stop();
     let _ = std::fs::remove_dir_all(&dir);
     result
+}
+
+/// Writes the demo's cycle programs into `dir` (made if missing).
+fn write_programs(dir: &std::path::Path) -> Result<(), DemoError> {
+    let programs = [
+        ("palletise", program()),
+        ("slip-sheet", SLIP_SHEET.to_owned()),
+    ];
+    for (name, text) in &programs {
+        std::fs::create_dir_all(dir)
+            .and_then(|()| std::fs::write(dir.join(format!("{name}.toml")), text))
+            .map_err(|e| DemoError::Rig(format!("{}: {e}", dir.display())))?;
+    }
+    Ok(())
 }
 
 /// The cell: the gripper in the status block's input words (R100), the pallet's signals.
