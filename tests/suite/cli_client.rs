@@ -262,7 +262,8 @@ fn pallet_show_lists_the_shipped_palletisers_96_slots_and_draws_its_four_layers(
         assert_eq!(on.len(), 24, "layer {layer}");
         let z = f64::from(layer - 1) * 90.0 - 40.0;
         assert!(
-            on.iter().all(|r| r[6].parse::<f64>().unwrap() == z),
+            on.iter()
+                .all(|r| (r[6].parse::<f64>().unwrap() - z).abs() < 1e-9),
             "layer {layer}"
         );
     }
