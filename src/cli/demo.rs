@@ -50,6 +50,13 @@ pub struct DemoArgs {
     /// viewer-demo, admin / admin-demo).
     #[arg(long, conflicts_with = "cycle")]
     pub console: bool,
+    /// Build a pallet of 4 interlocked layers of 6 cases to full with a cycle program instead,
+    /// and draw its layers (`--pallet-svg`).
+    #[arg(long, conflicts_with_all = ["cycle", "console"])]
+    pub pallet: bool,
+    /// Where `--pallet` draws the pallet's layers.
+    #[arg(long, value_name = "FILE", default_value = "linterpd-pallet.svg")]
+    pub pallet_svg: PathBuf,
     /// Where `--console` listens.
     #[arg(long, default_value = "127.0.0.1:8470", requires = "console")]
     pub listen: std::net::SocketAddr,
@@ -87,6 +94,9 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
             .context("cannot write to stdout")
             .map_err(Failure::Runtime);
     }
+    if args.pallet {
+        return runtime.block_on(pallet(args, options, out));
+    }
     let demo = runtime
         .block_on(run_demo(options))
         .context("demo")
@@ -103,6 +113,23 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
             .map_err(Failure::Runtime)?;
     }
     Ok(())
+}
+
+/// `demo --pallet`: the pallet built to full, its report, its picture.
+async fn pallet(args: &DemoArgs, options: DemoOptions, out: &mut dyn Write) -> Result<(), Failure> {
+    let demo = crate::demo::pallet::run(options)
+        .await
+        .context("demo --pallet")
+        .map_err(Failure::Runtime)?;
+    let svg = (!args.no_svg).then_some(args.pallet_svg.as_path());
+    if let Some(path) = svg {
+        std::fs::write(path, &demo.svg)
+            .with_context(|| format!("cannot write the picture to {}", path.display()))
+            .map_err(Failure::Runtime)?;
+    }
+    crate::demo::pallet::write_pallet_report(&demo, svg, out)
+        .context("cannot write to stdout")
+        .map_err(Failure::Runtime)
 }
 
 /// `demo --console`: the console on the mock until Ctrl-C.

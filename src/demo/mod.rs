@@ -21,6 +21,7 @@
 pub mod console;
 mod cycle;
 pub mod drives;
+pub mod pallet;
 pub mod press;
 mod replay;
 mod rig;

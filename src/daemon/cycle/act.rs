@@ -10,13 +10,16 @@ use tokio::sync::watch;
 
 use super::status::Status;
 use crate::contract::{INPUT_WORDS, Permit};
-use crate::cycle::Condition;
 use crate::cycle::runner::{Control, Event, Motion, MotionEnd, Prepared, WaitEnd};
+use crate::cycle::{Condition, PalletView};
 use crate::daemon::RobotHandle;
 use crate::daemon::gate::Gate;
 use crate::gateway::{Address, Values};
 use crate::order::MoveOrder;
 use crate::wire::{EndReason, MoveId, MoveReport, Stage, StepAt};
+
+/// Each pallet's counter as a condition reads it (`None`: not a pallet of the program).
+pub(super) type Pallets<'a> = &'a (dyn Fn(&str) -> Option<PalletView> + Sync);
 
 /// Queues `motion`: its starts, or why it was refused.
 pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> {
@@ -24,9 +27,9 @@ pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> 
         // The handle plans a path off the runtime (it takes milliseconds), as for the API.
         Motion::Move(order, permit) => handle.submit_checked(order, permit).await,
         Motion::Path(order, permit) => handle.submit_checked_path(&order, permit).await,
-        // The daemon's programs are checked with no pallet yet, so no place step runs.
+        // Carried out by the driver's pallets (`super::pallet`), which know the slots.
         Motion::Pallet { pallet, .. } => {
-            return Event::Refused(format!("pallet {pallet:?}: the robot has no pallets"));
+            return Event::Refused(format!("pallet {pallet:?}: no pallet way here"));
         }
     };
     match submitted {
@@ -221,15 +224,17 @@ impl Inputs {
         }
     }
 
-    /// Whether `until` holds on them (never while the input words are unknown).
-    pub(super) fn meet(&self, until: &Condition) -> bool {
+    /// Whether `until` holds on them (never while the input words are unknown), `pallets`
+    /// giving each pallet's counter.
+    pub(super) fn meet(&self, until: &Condition, pallets: Pallets<'_>) -> bool {
         let read = |a| {
             self.reads
                 .iter()
                 .find(|(r, _)| *r == a)
                 .and_then(|(_, v)| *v)
         };
-        self.words.is_some_and(|w| until.holds(&w, &read))
+        self.words
+            .is_some_and(|w| until.holds_with(&w, &read, pallets))
     }
 }
 
@@ -269,14 +274,36 @@ pub(super) async fn unprepare(handle: &RobotHandle, moves: Vec<Prepared<Gate>>) 
     }
 }
 
-/// Whether a loop's `until` holds, decided on a fresh status block, not one from before the
-/// steps ran (`None`: the robot's worker is gone).
-pub(super) async fn decide(handle: &RobotHandle, until: &Condition) -> Option<bool> {
+/// Whether a loop's `until` (or a skip's condition) holds, decided on a fresh status block,
+/// not one from before the steps ran (`None`: the robot's worker is gone); one that reads
+/// pallets alone at once.
+pub(super) async fn decide(
+    handle: &RobotHandle,
+    until: &Condition,
+    pallets: Pallets<'_>,
+) -> Option<bool> {
+    if !reads_the_plc(until) {
+        return Some(until.holds_with(&[0; INPUT_WORDS], &|_| None, pallets));
+    }
     let stale = handle.since_status_read().is_none_or(|age| age > FRESH);
     if stale && !pace(handle).await {
         return None;
     }
-    Some(Inputs::read(handle, &until.reads()).await.meet(until))
+    Some(
+        Inputs::read(handle, &until.reads())
+            .await
+            .meet(until, pallets),
+    )
+}
+
+/// Whether `c` reads anything of the PLC (an input, a bit, a word), not pallets alone.
+fn reads_the_plc(c: &Condition) -> bool {
+    match c {
+        Condition::Pallet { .. } => false,
+        Condition::Not(c) => reads_the_plc(c),
+        Condition::All(cs) | Condition::Any(cs) => cs.iter().any(reads_the_plc),
+        Condition::Bit { .. } | Condition::Word { .. } => true,
+    }
 }
 
 /// Lets one status read pass (at most a second): `false` when the robot's worker is gone.
@@ -291,13 +318,14 @@ pub(super) async fn wait_step(
     handle: &RobotHandle,
     status: &Status,
     (at, until, timeout): (&StepAt, &Condition, Option<Duration>),
+    pallets: Pallets<'_>,
     control: &mut watch::Receiver<Control>,
 ) -> Event<Gate> {
     let since = tokio::time::Instant::now();
     status.waiting(Some(until.to_string()), Some(0.0));
     let holds = |inputs: &Inputs| {
         status.waited(since.elapsed().as_secs_f64());
-        inputs.meet(until)
+        inputs.meet(until, pallets)
     };
     let end = wait_until(handle, holds, &until.reads(), timeout, control).await;
     let waited_s = since.elapsed().as_secs_f64();

@@ -104,7 +104,7 @@ impl RobotHandle {
     /// Where the robot will be when the next order begins, per joint: where the last order
     /// queued or running is planned to end, else where the PLC last said it is; `None` while its
     /// counts mean nothing (not homed, no link).
-    fn where_next_begins(&self) -> Option<[i64; crate::kinematics::JOINTS]> {
+    pub(super) fn where_next_begins(&self) -> Option<[i64; crate::kinematics::JOINTS]> {
         let snapshot = self.shared.snapshot();
         let state = snapshot.state;
         if !state.homed || !state.link.connected {

@@ -9,6 +9,8 @@
 //!             cycle's status written
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
 //!             dwell, a loop's condition decided, moves prepared ahead unprepared
+//! pallet.rs   the pallet steps: counters changed on disk (and journaled), the way into and
+//!             out of the slot in progress queued as paths, what conditions read of a pallet
 //! status.rs   the cycle's status as the driver writes it
 //! slot.rs     the robot's cycle's owner task: at most one running, its status, its control
 //! handle.rs   RobotHandle's cycle methods: run (checked first), stop, pause, resume, each a
@@ -19,6 +21,7 @@
 
 mod act;
 mod handle;
+mod pallet;
 mod run;
 mod slot;
 mod status;

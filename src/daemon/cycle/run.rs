@@ -10,8 +10,9 @@ use std::time::Instant;
 use tokio::sync::watch;
 
 use super::act;
+use super::pallet::Palletising;
 use super::status::Status;
-use crate::cycle::runner::{Action, Control, Event, MotionEnd, Prepared, Seen};
+use crate::cycle::runner::{Action, Control, Event, Motion, MotionEnd, Prepared, Seen};
 use crate::cycle::{Checked, Runner};
 use crate::daemon::RobotHandle;
 use crate::daemon::Snapshot;
@@ -30,6 +31,7 @@ pub(crate) async fn run(
     let incidents = handle.watch_snapshot();
     let epoch = incidents.borrow().incidents.count;
     let name = program.name.clone();
+    let pallets = Palletising::new(program.pallets.clone());
     let mut runner = Runner::new(program, count, epoch, Instant::now());
     let mut driver = Driver {
         handle: handle.under(epoch),
@@ -39,6 +41,7 @@ pub(crate) async fn run(
         control,
         orphaned: false,
         status: Status(status),
+        pallets,
     };
     let mut event = Event::Go;
     let state = loop {
@@ -74,6 +77,8 @@ struct Driver {
     /// The controller is gone (the daemon shuts down): taken as a stop.
     orphaned: bool,
     status: Status,
+    /// The pallets the program was checked with, and their counters.
+    pallets: Palletising,
 }
 
 impl Driver {
@@ -169,7 +174,14 @@ impl Driver {
     /// An op's action on the robot.
     async fn op(&mut self, action: Action<Gate>) -> Event<Gate> {
         let handle = &self.handle;
+        let pallets = &self.pallets;
+        let view = |name: &str| pallets.view(handle, name);
         match action {
+            Action::Submit(Motion::Pallet {
+                pallet,
+                leg,
+                speed_mm_s,
+            }) => pallets.submit(handle, &pallet, leg, speed_mm_s).await,
             Action::Submit(motion) => act::submit(handle, motion).await,
             Action::Prepare { order, permit, .. } => act::prepare(handle, order, permit).await,
             Action::Release(gate) => {
@@ -186,16 +198,13 @@ impl Driver {
             }
             Action::Wait { at, until, timeout } => {
                 let wait = (&at, &until, timeout);
-                act::wait_step(handle, &self.status, wait, &mut self.control).await
+                act::wait_step(handle, &self.status, wait, &view, &mut self.control).await
             }
             Action::Write(writes) => act::write(handle, writes).await,
             Action::Dwell(d) => Event::Dwelt(act::dwell(d, &mut self.control).await),
-            Action::Decide(until) => Event::Decided(act::decide(handle, &until).await),
+            Action::Decide(until) => Event::Decided(act::decide(handle, &until, &view).await),
             Action::Pace => Event::Paced(act::pace(handle).await),
-            // As for a pallet path: no program with a pallet step passes the daemon's check yet.
-            Action::Pallet { pallet, .. } => {
-                Event::Counted(Some(format!("pallet {pallet:?}: the robot has no pallets")))
-            }
+            Action::Pallet { pallet, act } => pallets.count(handle, &pallet, act),
             _ => Event::Go,
         }
     }

@@ -273,7 +273,8 @@ impl RobotHandle {
     /// again from the counts where it begins, and only if the robot is there: a section whose
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub async fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_path_with(order, None).await
+        self.submit_paths_with(std::slice::from_ref(order), None)
+            .await
     }
 
     /// [`RobotHandle::submit_path`] of a path whose permit was resolved when it was checked (a
@@ -283,25 +284,38 @@ impl RobotHandle {
         order: &PathOrder,
         permit: Permit,
     ) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_path_with(order, Some(permit)).await
+        self.submit_paths_with(std::slice::from_ref(order), Some(permit))
+            .await
     }
 
-    /// A path, its `permit` resolved when it was checked (`None`: here, from its text).
-    async fn submit_path_with(
+    /// Checks paths that run one after another (a pallet's way into a slot, cut where its
+    /// speed changes), plans each from where the one before it ends (the first from where the
+    /// robot will be), refusing them all if any cannot be planned; then queues every section of
+    /// every path, in order, at once. Returns the sections' move ids.
+    pub async fn submit_paths(&self, orders: &[PathOrder]) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_paths_with(orders, None).await
+    }
+
+    /// [`RobotHandle::submit_paths`], every path under `permit` when it was resolved at a
+    /// check (`None`: each path's own, from its text).
+    async fn submit_paths_with(
         &self,
-        order: &PathOrder,
+        orders: &[PathOrder],
         permit: Option<Permit>,
     ) -> Result<Vec<MoveId>, SubmitError> {
         // Every field is checked before the robot's state: a bad order is a bad order.
         let limits = self.limits();
-        order.check(&self.robot, &limits)?;
-        let permit = match permit {
-            Some(permit) => permit,
-            None => self.permit(order.permit.as_deref())?,
-        };
+        let mut permits = Vec::with_capacity(orders.len());
+        for order in orders {
+            order.check(&self.robot, &limits)?;
+            permits.push(match permit {
+                Some(permit) => permit,
+                None => self.permit(order.permit.as_deref())?,
+            });
+        }
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
-        let counts = self.start().counts.ok_or(SubmitError::NotNow {
+        let mut counts = self.start().counts.ok_or(SubmitError::NotNow {
             blocker: Blocker::LinkDown,
             detail: Some("no counts read from the PLC yet".to_owned()),
         })?;
@@ -312,13 +326,20 @@ impl RobotHandle {
                 Pose::from_mm_deg(x, y, z, a)
             })
         };
-        let req = order.request(&self.robot, &limits, counts, &lookup)?;
-        let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
-        let planned = self.planned_path(req).await?;
-        self.queue_sections(planned, path_accel_mm_s2, motion, permit, |end| {
-            order.section_report(end)
-        })
-        .await
+        let mut starts = Vec::new();
+        let mut end = None;
+        for (order, permit) in orders.iter().zip(permits) {
+            let req = order.request(&self.robot, &limits, counts, &lookup)?;
+            let (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
+            let planned = self.planned_path(req).await?;
+            if let Some(last) = planned.sections.last() {
+                counts = last.end_counts();
+                end = Some(counts);
+            }
+            let with = (path_accel_mm_s2, motion, permit);
+            starts.extend(self.section_starts(planned, with, |e| order.section_report(e)));
+        }
+        self.enqueue(starts, end, None).await
     }
 
     /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the
@@ -331,8 +352,19 @@ impl RobotHandle {
         permit: Permit,
         report: impl Fn(&Pose) -> MoveOrder,
     ) -> Result<Vec<MoveId>, SubmitError> {
-        let of = planned.sections.len();
         let end = planned.sections.last().map(SectionPlan::end_counts);
+        let starts = self.section_starts(planned, (path_accel_mm_s2, motion, permit), report);
+        self.enqueue(starts, end, None).await
+    }
+
+    /// Every start of `planned` as the worker takes it, with its report, in order.
+    fn section_starts(
+        &self,
+        planned: PathPlan,
+        (path_accel_mm_s2, motion, permit): (f64, Motion, Permit),
+        report: impl Fn(&Pose) -> MoveOrder,
+    ) -> Vec<(MoveReport, CheckedOrder)> {
+        let of = planned.sections.len();
         let mut starts = Vec::new();
         for (n, section) in planned.sections.into_iter().enumerate() {
             let shared = Arc::new(SectionOrder {
@@ -370,7 +402,7 @@ impl RobotHandle {
                 starts.push((report, checked));
             }
         }
-        self.enqueue(starts, end, None).await
+        starts
     }
 }
 

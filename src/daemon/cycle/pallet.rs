@@ -1,0 +1,307 @@
+//! A cycle's pallet steps on the robot: the counter changes the runner asks for, made in the
+//! daemon's pallet store (on disk before the answer) and journaled; the way into and out of the
+//! slot in progress, queued as paths; and what a condition reads of a pallet.
+//!
+//! ```text
+//!   Begin / Arrived / Advance / Restart   the store's change (Counter), Counted(None) once it
+//!                                         is written, Counted(Some(why)) when it is not
+//!   Advance                               journal: pallet_placed (slot, layer from 1), and
+//!                                         pallet_full when that slot was the last
+//!   the way in   from where the next order begins -> approach waypoints -> the slot
+//!   the way out  the slot -> retreat waypoints
+//! ```
+//! A way is cut where its speed changes (a path has one speed): the stretches at one speed are
+//! one path, stopped at its corners, and the paths are checked, planned one from the end of the
+//! other and queued together ([`RobotHandle::submit_paths`]), or all refused before anything
+//! moves. The slots are the patterns the program was checked against ([`crate::cycle::Checked`]).
+
+use std::collections::BTreeMap;
+
+use serde_json::json;
+
+use crate::cycle::PalletView;
+use crate::cycle::check::{Leg, PalletAct};
+use crate::cycle::runner::Event;
+use crate::daemon::RobotHandle;
+use crate::daemon::gate::Gate;
+use crate::daemon::pallets::PalletStoreError;
+use crate::geometry::Pose;
+use crate::order::PathOrder;
+use crate::pallet::counter::Phase;
+use crate::pallet::{Pattern, Slot};
+
+/// Closer than this to where the robot will be, a way's first waypoint is passed over, mm.
+const HERE_MM: f64 = 0.01;
+/// Closer than this in tool angle, rad.
+const HERE_RAD: f64 = 1e-6;
+
+/// The pallets a cycle runs: the patterns its program was checked against, by name.
+pub(super) struct Palletising {
+    patterns: BTreeMap<String, Pattern>,
+}
+
+impl Palletising {
+    pub(super) fn new(patterns: BTreeMap<String, Pattern>) -> Self {
+        Self { patterns }
+    }
+
+    fn pattern(&self, pallet: &str) -> Result<&Pattern, String> {
+        self.patterns
+            .get(pallet)
+            .ok_or_else(|| format!("pallet {pallet:?} is not one the program was checked with"))
+    }
+
+    /// Changes `pallet`'s counter (on disk before this returns): `Counted(None)`, or why not.
+    pub(super) fn count(&self, handle: &RobotHandle, pallet: &str, act: PalletAct) -> Event<Gate> {
+        Event::Counted(self.change(handle, pallet, act).err())
+    }
+
+    fn change(&self, handle: &RobotHandle, pallet: &str, act: PalletAct) -> Result<(), String> {
+        let pattern = self.pattern(pallet)?;
+        let len = pattern.len();
+        let robot = handle.robot().name.as_str();
+        let store = handle.pallet_counters();
+        let said = |e: PalletStoreError| e.to_string();
+        match act {
+            PalletAct::Begin => store.change(robot, pallet, |c| c.begin(pallet, len).map(drop)),
+            PalletAct::Arrived => store.change(robot, pallet, |c| c.arrived(pallet).map(drop)),
+            PalletAct::Restart => store.change(robot, pallet, |c| {
+                c.restart();
+                Ok(())
+            }),
+            PalletAct::Advance => {
+                let (slot, full) = store
+                    .change(robot, pallet, |c| Ok((c.advance(len), c.full)))
+                    .map_err(said)?;
+                let journal = handle.journal();
+                let layer = pattern.slot(slot).map_or(0, |s| s.layer);
+                journal.pallet_placed(robot, pallet, from_1(slot), from_1(layer));
+                if full {
+                    journal.pallet_full(robot, pallet, u32::try_from(len).unwrap_or(u32::MAX));
+                }
+                return Ok(());
+            }
+        }
+        .map_err(said)
+    }
+
+    /// `pallet`'s counter as a condition reads it (`None`: not one of the program's pallets).
+    pub(super) fn view(&self, handle: &RobotHandle, pallet: &str) -> Option<PalletView> {
+        let pattern = self.patterns.get(pallet)?;
+        let c = handle.pallet_counters().get(&handle.robot().name, pallet);
+        let layer_of = |i: usize| pattern.slot(i).map(|s| s.layer);
+        let last_layer = pattern.slots().last().map_or(0, |s| s.layer);
+        let layer = layer_of(c.index).unwrap_or(last_layer);
+        let begins_layer = !c.full && c.index > 0 && layer_of(c.index) != layer_of(c.index - 1);
+        Some(PalletView {
+            index: c.index,
+            layer,
+            begins_layer,
+            full: c.full,
+        })
+    }
+
+    /// Queues the way into (or out of) `pallet`'s slot in progress: its starts, or why it was
+    /// refused (naming the pallet and the slot).
+    pub(super) async fn submit(
+        &self,
+        handle: &RobotHandle,
+        pallet: &str,
+        leg: Leg,
+        speed_mm_s: Option<f64>,
+    ) -> Event<Gate> {
+        let slot = match self.slot_in_progress(handle, pallet, leg) {
+            Ok(slot) => slot,
+            Err(why) => return Event::Refused(why),
+        };
+        let from = handle
+            .where_next_begins()
+            .map(|counts| handle.robot().pose_of(&counts));
+        let orders = paths(&way(slot, leg), from.as_ref(), speed_mm_s);
+        if orders.is_empty() {
+            // The robot is there already.
+            return Event::Queued(Vec::new());
+        }
+        match handle.submit_paths(&orders).await {
+            Ok(ids) => Event::Queued(ids),
+            Err(e) => Event::Refused(format!(
+                "pallet {pallet:?} slot {} (layer {}), {}: {e}",
+                slot.index,
+                slot.layer,
+                match leg {
+                    Leg::In => "the way in",
+                    Leg::Out => "the way out",
+                }
+            )),
+        }
+    }
+
+    /// The slot a way leads into or out of: the counter's slot in progress, or (the way out
+    /// after the slot was counted done) the slot just filled.
+    fn slot_in_progress(
+        &self,
+        handle: &RobotHandle,
+        pallet: &str,
+        leg: Leg,
+    ) -> Result<&Slot, String> {
+        let pattern = self.pattern(pallet)?;
+        let c = handle.pallet_counters().get(&handle.robot().name, pallet);
+        let index = match (c.in_progress, leg) {
+            (Some(p), _) if p.phase != Phase::Unsure => Some(p.slot),
+            (None, Leg::Out) => c.index.checked_sub(1),
+            _ => None,
+        };
+        index.and_then(|i| pattern.slot(i)).ok_or_else(|| {
+            format!(
+                "pallet {pallet:?} has no slot in progress to go {} (counter at slot {}{})",
+                if leg == Leg::In { "into" } else { "out of" },
+                c.index,
+                if c.needs_choice().is_some() {
+                    ", its last place interrupted: the operator chooses redo or go on"
+                } else {
+                    ""
+                }
+            )
+        })
+    }
+}
+
+/// A slot's layer or index counted from 1, as the journal counts them.
+fn from_1(i: usize) -> u32 {
+    u32::try_from(i + 1).unwrap_or(u32::MAX)
+}
+
+/// The way's stretches, in order: where each ends and its speed (`None`: the step's).
+fn way(slot: &Slot, leg: Leg) -> Vec<(Pose, Option<f64>)> {
+    match leg {
+        Leg::In => slot
+            .approach
+            .iter()
+            .map(|w| (w.pose, w.speed_mm_s))
+            .chain([(slot.pose, slot.slot_speed_mm_s)])
+            .collect(),
+        Leg::Out => slot
+            .retreat
+            .iter()
+            .map(|w| (w.pose, w.speed_mm_s))
+            .collect(),
+    }
+}
+
+/// The way as paths, one per run of stretches at one speed, every corner a stop; a first
+/// waypoint where the robot will be already (`from`) passed over.
+fn paths(
+    way: &[(Pose, Option<f64>)],
+    from: Option<&Pose>,
+    step_speed_mm_s: Option<f64>,
+) -> Vec<PathOrder> {
+    let at = |a: &Pose, b: &Pose| {
+        (a.position_mm - b.position_mm).norm() < HERE_MM && (a.a_rad - b.a_rad).abs() < HERE_RAD
+    };
+    let skip = match (way.first(), from) {
+        (Some((first, _)), Some(from)) if at(first, from) => 1,
+        _ => 0,
+    };
+    let mut runs: Vec<(Option<f64>, Vec<serde_json::Value>)> = Vec::new();
+    for (pose, speed) in &way[skip..] {
+        let speed = speed.or(step_speed_mm_s);
+        let element = json!({ "line": pose.to_mm_deg() });
+        match runs.last_mut() {
+            Some((s, elements)) if *s == speed => elements.push(element),
+            _ => runs.push((speed, vec![element])),
+        }
+    }
+    runs.into_iter()
+        .map(|(speed_mm_s, elements)| PathOrder {
+            path: json!({ "linterpd_path": 1, "element": elements }),
+            speed_mm_s,
+            ..PathOrder::default()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pallet::Waypoint;
+
+    fn slot() -> Slot {
+        let p = |z| Pose::from_mm_deg(-1000.0, 600.0, z, 0.0);
+        Slot {
+            index: 0,
+            layer: 0,
+            row: 0,
+            column: 0,
+            pose: p(100.0),
+            approach: vec![
+                Waypoint {
+                    pose: p(180.0),
+                    speed_mm_s: None,
+                },
+                Waypoint {
+                    pose: p(130.0),
+                    speed_mm_s: None,
+                },
+            ],
+            slot_speed_mm_s: Some(40.0),
+            retreat: vec![
+                Waypoint {
+                    pose: p(130.0),
+                    speed_mm_s: Some(40.0),
+                },
+                Waypoint {
+                    pose: p(180.0),
+                    speed_mm_s: None,
+                },
+            ],
+        }
+    }
+
+    fn lines(order: &PathOrder) -> Vec<f64> {
+        order.path["element"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["line"][2].as_f64().unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn the_way_in_is_cut_where_its_speed_changes_and_ends_on_the_slot_at_the_slow_speed() {
+        let orders = paths(&way(&slot(), Leg::In), None, Some(300.0));
+        assert_eq!(orders.len(), 2);
+        assert_eq!(orders[0].speed_mm_s, Some(300.0));
+        assert_eq!(lines(&orders[0]), [180.0, 130.0]);
+        assert_eq!(orders[1].speed_mm_s, Some(40.0));
+        assert_eq!(lines(&orders[1]), [100.0]);
+        // Every order is a path document the daemon reads, its corners stops.
+        for o in &orders {
+            let doc = crate::config::PathDoc::from_json(o.path.clone()).unwrap();
+            assert!(
+                doc.elements
+                    .iter()
+                    .all(|e| e.corner == crate::geometry::Corner::Stop)
+            );
+        }
+    }
+
+    #[test]
+    fn the_way_out_leaves_slowly_and_a_first_waypoint_where_the_robot_is_is_passed_over() {
+        let orders = paths(&way(&slot(), Leg::Out), None, None);
+        assert_eq!(orders.len(), 2);
+        assert_eq!(
+            (orders[0].speed_mm_s, lines(&orders[0])),
+            (Some(40.0), vec![130.0])
+        );
+        assert_eq!(
+            (orders[1].speed_mm_s, lines(&orders[1])),
+            (None, vec![180.0])
+        );
+        let s = slot();
+        let above = s.approach[0].pose;
+        let orders = paths(&way(&s, Leg::In), Some(&above), None);
+        assert_eq!(lines(&orders[0]), [130.0]);
+        let orders = paths(&way(&s, Leg::In)[2..], Some(&s.pose), None);
+        assert!(orders.is_empty());
+    }
+}

@@ -1,0 +1,379 @@
+//! A cycle program's pallet steps run by the daemon on the in-process mock (issue 48, items 3
+//! and 4): a small interlocked pallet placed to full, each slot's place ending on that slot's
+//! counts, the counter on disk and the journal; and a daemon killed mid-place, restarted on the
+//! same state directory, refusing to place until the operator chooses, then neither skipping a
+//! slot nor placing one twice. The independent record of the places is the mock's: every start
+//! records the channels' counts and the cell's input words (the gripper, R100, is in them), so a
+//! start that begins on a slot's counts with the gripper open is a part left on that slot.
+
+use crate::common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use common::daemon::{duplex_connector, signals, taking_moves};
+use common::exchange::{P1, mock_at_seed_start};
+use linterpd::config::{CellSettings, JournalSettings};
+use linterpd::contract::Layout;
+use linterpd::daemon::pallets::{PALLETS_FILE, PalletCounters, Pallets};
+use linterpd::daemon::{CycleState, CycleStatus, Daemon, DaemonOptions, RobotHandle, RobotSetup};
+use linterpd::gateway::{AccessList, Area, GatewaySettings};
+use linterpd::journal::{Journal, Query};
+use linterpd::kinematics::{JOINTS, Kinematics};
+use linterpd::mock::{SharedMock, StartRecord};
+use linterpd::pallet::counter::Phase;
+use linterpd::pallet::doc::{FrameDoc, PalletDoc};
+use linterpd::pallet::{Choice, Counter, Pattern, RobotPallets};
+use linterpd::plc::exchange::ContractSettings;
+use linterpd::robot::Robot;
+use linterpd::wire::journal::Kind;
+
+const LIMIT: Duration = Duration::from_secs(60);
+const ROBOT: &str = "press-loader";
+const SLOTS: usize = 6;
+
+/// A pallet station near the seed's P2, and on it 2 layers of 1 x 3, the second turned half a
+/// turn and moved half a pitch (interlocked); approached from 80 mm above, the last 30 mm at
+/// 40 mm/s. When full: `pallet_full` (Y1) set until `pallet_empty` (X3). The tool angle is the
+/// one the robot has at P1 (its wrist at 0): layer 2's half turn is the only wrist turn, slowed
+/// down for (the wrist's 20 kHz turn it at 50 degrees a second).
+const PALLET: &str = r#"
+frame = "station"
+a_deg = 150
+rows = 1
+columns = 3
+pitch_mm = [100, 100]
+layer_height_mm = 60
+layers = ["A", "B"]
+kinds.A = {}
+kinds.B = { turn_deg = 180, shift_mm = [50, 0] }
+approach = { height_mm = 80, slow_mm = 30, slow_speed_mm_s = 40 }
+when_full = { signal = "pallet_full", wait_for = "pallet_empty" }
+"#;
+
+/// Pick at P1 (the gripper closes), place on the pallet (the gripper opens at the slot).
+fn program() -> String {
+    format!(
+        r#"
+[[step]]
+move = {{ to = [{}, {}, {}] }}
+[[step]]
+set = {{ gripper = true }}
+[[step]]
+place = {{ pallet = "out", speed_mm_s = 300, at_slot = [ {{ set = {{ gripper = false }} }}, {{ dwell = "300ms" }} ] }}
+"#,
+        P1[0], P1[1], P1[2]
+    )
+}
+
+fn temp(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("linterpd-pallets-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn robot_pallets() -> RobotPallets {
+    let frames: BTreeMap<String, FrameDoc> =
+        toml::from_str("station = { origin = [-1050, 600, 60] }").unwrap();
+    let pallets: BTreeMap<String, PalletDoc> =
+        BTreeMap::from([("out".to_owned(), toml::from_str(PALLET).unwrap())]);
+    RobotPallets::check(&frames, &pallets).unwrap()
+}
+
+/// The daemon in a cell with a gripper (R100, in the status block's input words) and the
+/// pallet's signals, its programs in `programs`, its counters and journal in `state`.
+fn spawn(shared: &SharedMock, programs: &Path, state: &Path) -> (Daemon, RobotHandle, Journal) {
+    let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
+    let access = AccessList::new(
+        ranges(&["DT0-DT199"]),
+        ranges(&["Y0-Y7", "R100-R10F"]),
+        &Layout::default(),
+    )
+    .unwrap();
+    let cell = CellSettings {
+        signals: signals(&[
+            ("gripper", "R100"),
+            ("pallet_full", "Y1"),
+            ("pallet_empty", "X3"),
+        ]),
+        programs: Some(programs.to_owned()),
+        require_wait_timeout: false,
+        face: None,
+    };
+    let journal = Journal::open(&state.join("journal"), &JournalSettings::default()).unwrap();
+    let options = DaemonOptions {
+        journal: journal.clone(),
+        pallets: Arc::new(Pallets {
+            sets: BTreeMap::from([(ROBOT.to_owned(), robot_pallets())]),
+            counters: PalletCounters::in_state_dir(state),
+        }),
+        ..DaemonOptions::default()
+    };
+    let setup = RobotSetup {
+        robot: common::cylindrical(),
+        settings: ContractSettings::default(),
+        connect: duplex_connector(shared, None),
+        home_counts: [0; JOINTS],
+        gateway: GatewaySettings {
+            access,
+            modbus: None,
+        },
+        cell,
+    };
+    let d = Daemon::spawn(vec![setup], &options);
+    let h = d.robot(ROBOT).unwrap().clone();
+    (d, h, journal)
+}
+
+async fn until<T>(what: &str, mut done: impl FnMut() -> Option<T>) -> T {
+    let began = Instant::now();
+    loop {
+        if let Some(t) = done() {
+            return t;
+        }
+        assert!(began.elapsed() < LIMIT, "never {what}");
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+}
+
+async fn cycle_until(h: &RobotHandle, what: &str, f: impl Fn(&CycleStatus) -> bool) -> CycleStatus {
+    let began = Instant::now();
+    loop {
+        if let Some(s) = h.cycle().filter(|s| f(s)) {
+            return s;
+        }
+        assert!(
+            began.elapsed() < LIMIT,
+            "never {what}: {:?}, counter {:?}",
+            h.cycle(),
+            counter(h)
+        );
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+}
+
+fn counter(h: &RobotHandle) -> Counter {
+    h.pallet_counters().get(ROBOT, "out")
+}
+
+fn gripper_closed(shared: &SharedMock) -> bool {
+    // R100: word 10, bit 0.
+    shared.with(|m| m.read_bit(Area::R, 10 * 16).unwrap())
+}
+
+/// Each slot's counts per channel: the robot's inverse kinematics of the slot's pose.
+fn slot_counts(robot: &Robot, pattern: &Pattern) -> Vec<[i64; 4]> {
+    pattern
+        .slots()
+        .iter()
+        .map(|s| {
+            let q = robot.kinematics.ik(&s.pose, None).unwrap();
+            let by_joint = robot.counts_of(&q);
+            let mut by_channel = [0; 4];
+            for (j, joint) in robot.joints.iter().enumerate() {
+                by_channel[usize::from(joint.channel)] = by_joint[j];
+            }
+            by_channel
+        })
+        .collect()
+}
+
+/// The mock's record of places: for every start that began with the gripper open on a slot's
+/// counts (within a pulse), that slot, in order.
+fn places(starts: &[StartRecord], slots: &[[i64; 4]]) -> Vec<usize> {
+    starts
+        .iter()
+        .filter(|s| s.inputs[2] & 1 == 0)
+        .filter_map(|s| {
+            slots.iter().position(|c| {
+                c.iter()
+                    .zip(&s.counts)
+                    .all(|(want, got)| (want - got).abs() <= 1)
+            })
+        })
+        .collect()
+}
+
+fn file_counter(state: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(state.join(PALLETS_FILE)).unwrap();
+    let file: serde_json::Value = serde_json::from_str(&text).unwrap();
+    file["robots"][ROBOT]["out"].clone()
+}
+
+#[tokio::test]
+async fn an_interlocked_pallet_is_placed_to_full_slot_by_slot_on_each_slots_counts() {
+    let shared = mock_at_seed_start("");
+    let state = temp("full");
+    let programs = common::daemon::programs_dir("pallets", "full", &[("palletise", program())]);
+    let (_d, h, journal) = spawn(&shared, &programs, &state);
+    taking_moves(&h).await;
+    let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
+    assert_eq!((pattern.len(), pattern.layers()), (SLOTS, 2));
+    h.run_cycle("palletise", Some(SLOTS as u64)).await.unwrap();
+    // Full: the cycle waits for an empty pallet with its signal set.
+    let s = cycle_until(&h, "waiting for an empty pallet", |s| {
+        s.waiting_for
+            .as_deref()
+            .is_some_and(|w| w.contains("pallet_empty"))
+    })
+    .await;
+    assert_eq!(s.done, SLOTS as u64 - 1);
+    let c = counter(&h);
+    assert!(
+        c.full && c.parts == SLOTS as u64 && c.in_progress.is_none(),
+        "{c:?}"
+    );
+    let on_disk = file_counter(&state);
+    assert_eq!(
+        (on_disk["full"].as_bool(), on_disk["parts"].as_u64()),
+        (Some(true), Some(6))
+    );
+    assert!(shared.with(|m| m.read_bit(Area::Y, 1).unwrap()));
+    // Every slot once, in fill order, each where the robot's kinematics puts it.
+    let robot = common::cylindrical();
+    let slots = slot_counts(&robot, &pattern);
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(places(&starts, &slots), (0..SLOTS).collect::<Vec<_>>());
+    // The turned layer is another place: no slot of layer 2 is on layer 1's.
+    assert!(slots[3..].iter().all(|s| !slots[..3].contains(s)));
+    // The journal: six parts placed, slot and layer from 1, and the pallet full.
+    journal.flush().await;
+    let entries = journal
+        .read(&Query {
+            limit: usize::MAX,
+            ..Query::default()
+        })
+        .unwrap();
+    let placed: Vec<(u32, u32)> = entries
+        .iter()
+        .filter_map(|e| match &e.kind {
+            Kind::PalletPlaced { slot, layer, .. } => Some((*slot, *layer)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(placed, [(1, 1), (2, 1), (3, 1), (4, 2), (5, 2), (6, 2)]);
+    let full: Vec<u32> = entries
+        .iter()
+        .filter_map(|e| match &e.kind {
+            Kind::PalletFull { parts, .. } => Some(*parts),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(full, [6]);
+    // An empty pallet: the signal reset, the counter back to slot 0, a pallet counted.
+    shared.with(|m| m.set_input(3, true).unwrap());
+    cycle_until(&h, "done", |s| s.state == CycleState::Done).await;
+    let c = counter(&h);
+    assert_eq!((c.index, c.full, c.parts, c.pallets), (0, false, 6, 1));
+    assert!(!shared.with(|m| m.read_bit(Area::Y, 1).unwrap()));
+}
+
+/// A daemon on a runtime of its own, as a process: killing it ends every task it spawned (the
+/// worker, the cycle's owner and driver, its link to the mock) where it is, nothing written
+/// after, as a SIGKILL would.
+struct Process {
+    daemon: Daemon,
+    runtime: tokio::runtime::Runtime,
+    h: RobotHandle,
+}
+
+impl Process {
+    fn start(shared: &SharedMock, programs: &Path, state: &Path) -> Self {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .enable_all()
+            .build()
+            .unwrap();
+        let (daemon, h, _) = {
+            let _in = runtime.enter();
+            spawn(shared, programs, state)
+        };
+        Self { daemon, runtime, h }
+    }
+
+    /// Kills it once `when` holds of the counter.
+    async fn kill_when(self, what: &str, when: impl Fn(&Counter) -> bool) {
+        until(what, || when(&counter(&self.h)).then_some(())).await;
+        let Self {
+            daemon, runtime, ..
+        } = self;
+        tokio::task::spawn_blocking(move || {
+            drop(daemon);
+            runtime.shutdown_timeout(Duration::from_secs(5));
+        })
+        .await
+        .unwrap();
+        // The start the killed daemon left running ends in the PLC.
+        tokio::time::sleep(Duration::from_millis(1_500)).await;
+    }
+}
+
+/// Runs the program on a restarted daemon: it refuses to place, naming the slot, until the
+/// operator chooses `choice`; then it goes on (cleared and resumed).
+async fn restart_and_choose(h: &RobotHandle, slot: usize, choice: Choice) {
+    taking_moves(h).await;
+    let c = counter(h);
+    assert_eq!(c.needs_choice(), Some(slot), "{c:?}");
+    h.run_cycle("palletise", None).await.unwrap();
+    let s = cycle_until(h, "refusing to place", |s| s.state == CycleState::Faulted).await;
+    let why = s.reason.unwrap_or_default();
+    assert!(
+        why.contains(&format!("slot {slot}")) && why.contains("choose redo"),
+        "{why}"
+    );
+    h.pallet_counters()
+        .set_by_operator(ROBOT, "out", |c| c.choose("out", choice, SLOTS))
+        .unwrap();
+    h.clear_fault().await.unwrap();
+    h.resume_cycle().await.unwrap();
+}
+
+#[tokio::test]
+async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot_and_places_none_twice()
+ {
+    let shared = mock_at_seed_start("");
+    let state = temp("kill");
+    let programs = common::daemon::programs_dir("pallets", "kill", &[("palletise", program())]);
+    let first = Process::start(&shared, &programs, &state);
+    taking_moves(&first.h).await;
+    first.h.run_cycle("palletise", None).await.unwrap();
+    // Killed at slot 1 with the part let go: it is on the pallet.
+    let open_at_slot = |c: &Counter, slot| {
+        c.in_progress
+            .is_some_and(|p| p.slot == slot && p.phase == Phase::AtSlot)
+            && !gripper_closed(&shared)
+    };
+    first
+        .kill_when("at slot 1, the gripper open", |c| open_at_slot(c, 1))
+        .await;
+    let second = Process::start(&shared, &programs, &state);
+    restart_and_choose(&second.h, 1, Choice::GoOn).await;
+    // Killed on the way into slot 3, the part still held: nothing was placed there.
+    let moving = second.h.clone();
+    let moving_to = |c: &Counter, slot| {
+        c.in_progress
+            .is_some_and(|p| p.slot == slot && p.phase == Phase::Moving)
+            && moving.state().current_move.is_some()
+    };
+    second
+        .kill_when("on the way to slot 3", |c| moving_to(c, 3))
+        .await;
+    let (_d, h, _) = spawn(&shared, &programs, &state);
+    restart_and_choose(&h, 3, Choice::Redo).await;
+    cycle_until(&h, "full", |s| {
+        s.waiting_for
+            .as_deref()
+            .is_some_and(|w| w.contains("pallet_empty"))
+    })
+    .await;
+    let c = counter(&h);
+    assert!(c.full && c.parts == SLOTS as u64, "{c:?}");
+    let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
+    let slots = slot_counts(&common::cylindrical(), &pattern);
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(places(&starts, &slots), (0..SLOTS).collect::<Vec<_>>());
+    h.stop_cycle(true).await.unwrap();
+}
