@@ -116,6 +116,7 @@ fn cell() -> Cell {
         pose,
         joint_counts: [0; 4],
         saved_unix_s: 0,
+        frame: None,
     };
     let taught = [
         ("above-stack", at([-926.57, 535.03, 150.0, 0.0])),

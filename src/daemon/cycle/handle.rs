@@ -76,10 +76,11 @@ impl RobotHandle {
             // Said once each time a program is run; it keeps no other from running.
             tracing::warn!(robot = %self.robot.name, program, "a cycle program cannot be read: {why}");
         }
-        let taught = self.positions.of(&self.robot.name);
-        let pallets = self
-            .pallet_patterns()
-            .map_err(|e| CycleError::Program(format!("robot {}: {e}", self.robot.name)))?;
+        let in_words = |e: crate::pallet::PalletError| {
+            CycleError::Program(format!("robot {}: {e}", self.robot.name))
+        };
+        let taught = self.taught_world().map_err(in_words)?;
+        let pallets = self.pallets_laid_out(&taught).map_err(in_words)?;
         let ctx = crate::cycle::Context {
             robot: &self.robot,
             taught: &taught,

@@ -151,8 +151,27 @@ impl RobotHandle {
     pub fn pallet_patterns(
         &self,
     ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        self.pallets_laid_out(&self.taught_world()?)
+    }
+
+    /// The robot's pallets laid out with `taught` (world positions).
+    pub(crate) fn pallets_laid_out(
+        &self,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        self.pallets.patterns(&self.robot, taught)
+    }
+
+    /// The robot's taught positions as it reaches them now: one kept in a frame carried by the
+    /// frame as its points are taught now (its pose and counts those of the world pose).
+    ///
+    /// # Errors
+    /// A position kept in a frame that cannot be resolved or reached, naming it.
+    pub fn taught_world(&self) -> Result<BTreeMap<String, Position>, crate::pallet::PalletError> {
         let taught = self.positions.of(&self.robot.name);
-        self.pallets.patterns(&self.robot, &taught)
+        let none = crate::pallet::RobotPallets::default();
+        let set = self.pallets.sets.get(&self.robot.name).unwrap_or(&none);
+        set.world_positions(&self.robot, &taught)
     }
 
     /// The speed override, 1 to 100 %.
@@ -208,9 +227,10 @@ impl RobotHandle {
     }
 
     /// Saves the robot's pose, from the counts the PLC last reported, as position `name`
-    /// (replacing one of that name). Refused while the link is down or stalled, the robot is
+    /// (replacing one of that name), in world coordinates or kept in `frame` (re-teaching the
+    /// frame's points then moves it). Refused while the link is down or stalled, the robot is
     /// not homed or homing (its counts mean nothing), or a move runs or waits.
-    pub fn save_position(&self, name: &str) -> Result<Saved, PositionError> {
+    pub fn save_position(&self, name: &str, frame: Option<&str>) -> Result<Saved, PositionError> {
         check_name(name)?;
         if let Some(
             blocker @ (Blocker::LinkDown | Blocker::Stalled | Blocker::NotHomed | Blocker::Homing),
@@ -233,10 +253,22 @@ impl RobotHandle {
         let joint_counts = self.counts_by_joint().ok_or(PositionError::NotNow {
             blocker: Blocker::LinkDown,
         })?;
+        let world = self.robot.pose_of(&joint_counts);
+        let pose = match frame {
+            None => world.to_mm_deg(),
+            Some(frame) => {
+                let taught = self.positions.of(&self.robot.name);
+                let none = crate::pallet::RobotPallets::default();
+                let set = self.pallets.sets.get(&self.robot.name).unwrap_or(&none);
+                set.in_frame(name, frame, &world, &taught)
+                    .map_err(|source| PositionError::Frame { source })?
+            }
+        };
         let position = Position {
-            pose: self.robot.pose_of(&joint_counts).to_mm_deg(),
+            pose,
             joint_counts,
             saved_unix_s: unix_now_s(),
+            frame: frame.map(str::to_owned),
         };
         let replaced = self
             .positions

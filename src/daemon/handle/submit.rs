@@ -76,7 +76,7 @@ impl RobotHandle {
         order: MoveOrder,
         gate: Option<&Gate>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
         checked.permit = self.permit(order.permit.as_deref())?;
         self.can_move_now()?;
@@ -262,7 +262,7 @@ impl RobotHandle {
             blocker: Blocker::LinkDown,
             detail: Some("no counts read from the PLC yet".to_owned()),
         })?;
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let lookup = |name: &str| {
             taught.get(name).map(|p| {
                 let [x, y, z, a] = p.pose;
