@@ -153,12 +153,18 @@ struct PalletLabels {
     pallet: String,
 }
 
+/// A pallet's counts for its series: parts, pallets done, the slot to fill next.
+type PalletCounts = (u64, u64, usize);
+
+/// A counter family read from [`PalletCounts`]: name, help, value.
+type PalletFamily = (&'static str, &'static str, fn(&PalletCounts) -> u64);
+
 /// Every pallet's counts as its counter last gave them (parts, pallets done, the next slot),
 /// read at each scrape: the counters live in the state directory and survive a restart, so
 /// these never go down.
 #[derive(Debug, Default)]
 struct PalletCollector {
-    counts: Mutex<BTreeMap<(String, String), (u64, u64, usize)>>,
+    counts: Mutex<BTreeMap<(String, String), PalletCounts>>,
 }
 
 impl Collector for PalletCollector {
@@ -168,7 +174,7 @@ impl Collector for PalletCollector {
             robot: robot.clone(),
             pallet: pallet.clone(),
         };
-        let counters: [(&str, &str, fn(&(u64, u64, usize)) -> u64); 2] = [
+        let counters: [PalletFamily; 2] = [
             (
                 "linterpd_pallet_parts",
                 "Parts placed on (or picked from) each pallet, from its counter.",

@@ -64,7 +64,7 @@ fn temp(test: &str) -> PathBuf {
 }
 
 fn pallets(dir: &Path) -> Arc<Pallets> {
-    let frames: std::collections::BTreeMap<String, FrameDoc> = Default::default();
+    let frames = std::collections::BTreeMap::<String, FrameDoc>::new();
     let docs: std::collections::BTreeMap<String, PalletDoc> = toml::from_str(PALLETS).unwrap();
     let set = RobotPallets::check(&frames, &docs).unwrap();
     Arc::new(Pallets {
@@ -189,7 +189,16 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
     assert_eq!(pallet(&list, "in")["index"], 0);
     assert!(list.get("warning").is_none(), "{list}");
 
-    // Bad input: named, nothing changed.
+    refusals_name_the_value_and_change_nothing(&api, &dir).await;
+    a_running_cycle_takes_only_the_choice(&api, &h, &dir).await;
+    metrics_and_journal_count_the_changes(&api, &journal).await;
+    closing.cancel();
+    daemon.shut_down().await;
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Bad input: named, nothing changed.
+async fn refusals_name_the_value_and_change_nothing(api: &Endpoint, dir: &Path) {
     let past = api
         .post(&format!("{ROBOT}/pallets/out/set"), r#"{"index": 13}"#)
         .await;
@@ -215,11 +224,14 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
         (nothing.status.as_u16(), nothing.json()["reason"].clone()),
         (409, json!("nothing-to-choose"))
     );
-    assert_eq!(on_disk(&dir).index, 4);
+    assert_eq!(on_disk(dir).index, 4);
+}
 
-    // A cycle waits: set and reset are refused, the choice for the unsure slot is taken.
+/// A cycle waits: set and reset are refused, the choice for the unsure slot is taken; stopped,
+/// set to the end and reset.
+async fn a_running_cycle_takes_only_the_choice(api: &Endpoint, h: &RobotHandle, dir: &Path) {
     h.run_cycle("waits", None).await.unwrap();
-    until_cycle(&h, CycleState::Waiting).await;
+    until_cycle(h, CycleState::Waiting).await;
     let refused = api
         .post(&format!("{ROBOT}/pallets/out/set"), r#"{"index": 2}"#)
         .await;
@@ -238,7 +250,7 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
         (json!(5), json!(17))
     );
     assert!(went_on.get("in_progress").is_none(), "{went_on}");
-    let c = on_disk(&dir);
+    let c = on_disk(dir);
     assert_eq!((c.index, c.parts, c.in_progress), (5, 17, None));
     // Nothing left to choose: while the cycle runs that is the cycle's count.
     let again = api.post(&format!("{ROBOT}/pallets/out/redo"), "").await;
@@ -246,7 +258,7 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
 
     // Stopped: set to the end (full), then a new pallet.
     h.stop_cycle(true).await.unwrap();
-    until_cycle(&h, CycleState::Stopped).await;
+    until_cycle(h, CycleState::Stopped).await;
     let full = api
         .post(&format!("{ROBOT}/pallets/out/set"), r#"{"index": 12}"#)
         .await;
@@ -267,10 +279,12 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
         ),
         (json!(0), json!(false), json!(2))
     );
-    let c = on_disk(&dir);
+    let c = on_disk(dir);
     assert_eq!((c.index, c.full, c.parts, c.pallets), (0, false, 17, 2));
+}
 
-    // /metrics counts the parts and the pallets from the counters.
+/// `/metrics` counts the parts and the pallets; every command is journaled with who sent it.
+async fn metrics_and_journal_count_the_changes(api: &Endpoint, journal: &Journal) {
     let metrics = api.get("/metrics").await.text();
     for want in [
         "linterpd_pallet_parts_total{robot=\"press-loader\",pallet=\"out\"} 17",
@@ -333,9 +347,6 @@ async fn the_operator_sees_and_changes_the_counts_through_the_api_refused_while_
         "{commands:?}"
     );
     assert_eq!(commands.len(), 8, "{commands:?}");
-    closing.cancel();
-    daemon.shut_down().await;
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The face's status words (+8..) as the line reads them.
