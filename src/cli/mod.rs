@@ -118,8 +118,9 @@ pub enum Command {
     /// The operator's console: `hash-password` makes a user's password hash for
     /// `[console.users.NAME]`.
     Console(console::ConsoleArgs),
-    /// A robot's pallet patterns, from the config: `show` lists a pallet's slots (and draws
-    /// its layers with --svg).
+    /// A robot's pallets: `show` lists a pallet's slots from the config (and draws its layers
+    /// with --svg); `status`, `set`, `reset`, `redo`, `go-on` read and change their counts in
+    /// the daemon.
     Pallet(pallet::PalletArgs),
     /// Check a configuration file without starting anything.
     CheckConfig(check_config::CheckConfigArgs),

@@ -8,8 +8,10 @@
 //! require_wait_timeout = true    # refuse a program whose `wait` has no `timeout` (default false)
 //!
 //! [robots.press-loader.cell.face]   # the register face the line's PLC or HMI drives
-//! registers = 50000              # its first register on the gateway's Modbus face (18 words)
+//! registers = 50000              # its first register on the gateway's Modbus face (23 words)
 //! # plc = "DT3000"               # or: mirrored in the robot PLC's DT3000..DT3017, polled
+//! pallet = "out"                 # the pallet the status block's +18..+22 show (mirrored: to
+//!                                # DT3022); a pallet of the robot
 //! home = "home"                  # the taught position `home` moves to (default "home")
 //! positions = ["home", "pick", "press"]   # numbered from 1 in the status block's +16
 //! mode = "local"                 # the mode at start-up: local (default) or remote
@@ -26,7 +28,7 @@ use super::ConfigError;
 use super::check::At;
 use super::raw::{RawCell, RawCellFace};
 use crate::cell::Mode;
-use crate::cell::face::BLOCK_WORDS;
+use crate::cell::face::{BLOCK_WORDS, BLOCK_WORDS_NO_PALLET};
 use crate::contract::DT_LAST;
 use crate::gateway::Address;
 
@@ -59,6 +61,25 @@ pub struct FaceSettings {
     pub positions: Vec<String>,
     /// The mode at start-up.
     pub mode: Mode,
+    /// The pallet the status block shows (`[robots.NAME.pallets.NAME]`), and whose redo and
+    /// go-on the command bits give.
+    pub pallet: Option<String>,
+}
+
+impl FaceSettings {
+    /// The block's words: without a pallet shown, the 18 before the pallet's.
+    #[must_use]
+    pub fn block_words(&self) -> usize {
+        face_words(self.pallet.is_some())
+    }
+}
+
+fn face_words(pallet: bool) -> usize {
+    if pallet {
+        BLOCK_WORDS
+    } else {
+        BLOCK_WORDS_NO_PALLET
+    }
 }
 
 /// The face's default first register.
@@ -100,7 +121,8 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, 
 /// The face a table describes.
 fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
     let first = i64::from(DT_LAST) + 1;
-    let last = i64::from(u16::MAX) + 1 - BLOCK_WORDS as i64;
+    let words = face_words(raw.pallet.is_some());
+    let last = i64::from(u16::MAX) + 1 - words as i64;
     let registers = match &raw.registers {
         Some(r) => {
             let v = at.child("registers").int_within(r, first, last)?;
@@ -117,11 +139,11 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
                 .get_ref()
                 .parse()
                 .map_err(|e: crate::gateway::AddressError| at.invalid(p, e.reason))?;
-            let last = address.index + BLOCK_WORDS as u32 - 1;
+            let last = address.index + words as u32 - 1;
             if address.area != crate::gateway::Area::Dt || last > u32::from(DT_LAST) {
                 return Err(at.invalid(
                     p,
-                    format!("the face's {BLOCK_WORDS} words are DT words, within DT0-DT{DT_LAST}"),
+                    format!("the face's {words} words are DT words, within DT0-DT{DT_LAST}"),
                 ));
             }
             Ok(address.index)
@@ -162,12 +184,14 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
             .map_err(|e: crate::cell::ModeError| at.child("mode").invalid(m, e.to_string()))?,
         None => Mode::Local,
     };
+    let pallet = raw.pallet.as_ref().map(|p| p.get_ref().clone());
     Ok(FaceSettings {
         registers,
         plc,
         home,
         positions,
         mode,
+        pallet,
     })
 }
 
@@ -179,14 +203,11 @@ pub(super) fn face_clear_of_contract(
     first: u32,
     link: Option<&crate::plc::LinkSettings>,
 ) -> Result<(), ConfigError> {
-    let Some(plc) = raw
-        .get_ref()
-        .face
-        .as_ref()
-        .and_then(|f| f.get_ref().plc.as_ref())
-    else {
+    let face = raw.get_ref().face.as_ref().map(Spanned::get_ref);
+    let Some(plc) = face.and_then(|f| f.plc.as_ref()) else {
         return Ok(());
     };
+    let shows_pallet = face.is_some_and(|f| f.pallet.is_some());
     let at = at.child("plc");
     let Some(link) = link else {
         return Err(at.invalid(
@@ -197,7 +218,7 @@ pub(super) fn face_clear_of_contract(
     let block = crate::gateway::Range {
         area: crate::gateway::Area::Dt,
         first,
-        last: first + BLOCK_WORDS as u32 - 1,
+        last: first + face_words(shows_pallet) as u32 - 1,
     };
     for (what, words) in crate::gateway::contract_regions(&link.layout) {
         if block.overlaps(&words) {
@@ -205,6 +226,32 @@ pub(super) fn face_clear_of_contract(
         }
     }
     Ok(())
+}
+
+/// The face's `pallet` must name a pallet of the robot.
+pub(super) fn face_pallet_known(
+    at: &At,
+    raw: &Spanned<RawCell>,
+    pallets: Option<&crate::pallet::RobotPallets>,
+) -> Result<(), ConfigError> {
+    let face = raw.get_ref().face.as_ref().map(Spanned::get_ref);
+    let Some(pallet) = face.and_then(|f| f.pallet.as_ref()) else {
+        return Ok(());
+    };
+    let known: Vec<&str> = pallets
+        .iter()
+        .flat_map(|p| p.layouts.keys())
+        .map(String::as_str)
+        .collect();
+    if known.contains(&pallet.get_ref().as_str()) {
+        return Ok(());
+    }
+    let reason = if known.is_empty() {
+        "the robot has no pallet: add [robots.NAME.pallets.NAME]".to_owned()
+    } else {
+        format!("the robot's pallets are {}", known.join(", "))
+    };
+    Err(at.child("pallet").invalid(pallet, reason))
 }
 
 /// A signal's name: a letter, then letters, digits, `_` or `-`; never one that reads as an
@@ -332,6 +379,50 @@ mod tests {
              [robots.r.gateway.modbus]\nlisten = \"127.0.0.1:1502\"\n\
              [robots.r.cell.face]\n{face}\n"
         )
+    }
+
+    #[test]
+    fn the_faces_pallet_names_a_pallet_of_the_robot_and_adds_its_five_words() {
+        const OUT: &str = "[robots.r.pallets.out]\norigin_mm = [700, 0, 100]\nrows = 2\n\
+                           columns = 3\npitch_mm = [300, 200]\nlayer_height_mm = 80\nlayers = 2\n";
+        let config = Config::from_toml(&format!("{}{OUT}", with_face("pallet = \"out\""))).unwrap();
+        let face = config.cells["r"].face.clone().unwrap();
+        assert_eq!(
+            (face.pallet.as_deref(), face.block_words()),
+            (Some("out"), 23)
+        );
+        assert_eq!(with_face_words(""), 18);
+        let refused = |text: String| Config::from_toml(&text).unwrap_err().to_string();
+        let e = refused(format!("{}{OUT}", with_face("pallet = \"top\"")));
+        assert!(
+            e.contains("face.pallet")
+                && e.contains("\"top\"")
+                && e.contains("the robot's pallets are out"),
+            "{e}"
+        );
+        let e = refused(with_face("pallet = \"out\""));
+        assert!(
+            e.contains("face.pallet") && e.contains("the robot has no pallet"),
+            "{e}"
+        );
+        // The block's last word must fit: 23 words with a pallet, 18 without.
+        let e = refused(format!(
+            "{}{OUT}",
+            with_face("pallet = \"out\"\nregisters = 65518")
+        ));
+        assert!(e.contains("32765..=65513"), "{e}");
+        let mirrored = "plc = \"DT32745\"";
+        assert!(Config::from_toml(&with_face(mirrored)).is_ok());
+        let e = refused(format!(
+            "{}{OUT}",
+            with_face(&format!("{mirrored}\npallet = \"out\""))
+        ));
+        assert!(e.contains("the face's 23 words are DT words"), "{e}");
+    }
+
+    fn with_face_words(face: &str) -> usize {
+        let config = Config::from_toml(&with_face(face)).unwrap();
+        config.cells["r"].face.clone().unwrap().block_words()
     }
 
     #[test]

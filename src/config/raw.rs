@@ -121,6 +121,7 @@ pub(super) struct RawCellFace {
     pub home: Option<Spanned<String>>,
     pub positions: Option<Vec<Spanned<String>>>,
     pub mode: Option<Spanned<String>>,
+    pub pallet: Option<Spanned<String>>,
 }
 
 /// `[robots.NAME.gateway]`: the register gateway's access list; checked by `gateway`.

@@ -50,6 +50,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         if let Some(table) = &raw.get_ref().cell {
             let at = At::new(text, "robots").child(&robot.name).child("cell");
             let settings = cell::settings(&at, table)?;
+            cell::face_pallet_known(&at.child("face"), table, robot_pallets.get(&robot.name))?;
             let served = gateways
                 .get(&robot.name)
                 .is_some_and(|g| g.modbus.is_some());

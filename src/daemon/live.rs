@@ -73,6 +73,7 @@ mod tests {
             home: "home".to_owned(),
             positions: Vec::new(),
             mode: crate::cell::Mode::Local,
+            pallet: None,
         }
     }
 

@@ -7,6 +7,7 @@
 //! One [`Metrics`] per daemon, shared by every robot (a label per robot); docs/API.md lists every
 //! metric.
 
+use std::collections::BTreeMap;
 use std::sync::atomic::AtomicU64;
 use std::sync::{Arc, Mutex, PoisonError};
 
@@ -14,12 +15,13 @@ use prometheus_client::collector::Collector;
 use prometheus_client::encoding::{DescriptorEncoder, EncodeLabelSet, EncodeMetric};
 use prometheus_client::metrics::counter::{ConstCounter, Counter};
 use prometheus_client::metrics::family::Family;
-use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::gauge::{ConstGauge, Gauge};
 use prometheus_client::metrics::histogram::Histogram;
 use prometheus_client::metrics::info::Info;
 use prometheus_client::registry::Registry;
 
 use crate::plc::ExchangeCounts;
+use crate::wire::PalletStatus;
 use crate::wire::Stage;
 
 /// The label every per-robot series carries.
@@ -106,6 +108,7 @@ struct Inner {
     fault: Family<RobotLabel, Gauge>,
     heartbeat_age: Family<RobotLabel, Gauge<f64, AtomicU64>>,
     exchanges: Arc<ExchangeCollector>,
+    pallets: Arc<PalletCollector>,
 }
 
 /// A counter family read from [`ExchangeCounts`]: name, help, value.
@@ -138,6 +141,68 @@ impl Collector for ExchangeCollector {
             for (label, counts) in links.iter() {
                 ConstCounter::new(value(counts)).encode(family.encode_family(label)?)?;
             }
+        }
+        Ok(())
+    }
+}
+
+/// A pallet's series: the robot and the pallet.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, EncodeLabelSet)]
+struct PalletLabels {
+    robot: String,
+    pallet: String,
+}
+
+/// A pallet's counts for its series: parts, pallets done, the slot to fill next.
+type PalletCounts = (u64, u64, usize);
+
+/// A counter family read from [`PalletCounts`]: name, help, value.
+type PalletFamily = (&'static str, &'static str, fn(&PalletCounts) -> u64);
+
+/// Every pallet's counts as its counter last gave them (parts, pallets done, the next slot),
+/// read at each scrape: the counters live in the state directory and survive a restart, so
+/// these never go down.
+#[derive(Debug, Default)]
+struct PalletCollector {
+    counts: Mutex<BTreeMap<(String, String), PalletCounts>>,
+}
+
+impl Collector for PalletCollector {
+    fn encode(&self, mut encoder: DescriptorEncoder<'_>) -> Result<(), std::fmt::Error> {
+        let counts = self.counts.lock().unwrap_or_else(PoisonError::into_inner);
+        let labels = |(robot, pallet): &(String, String)| PalletLabels {
+            robot: robot.clone(),
+            pallet: pallet.clone(),
+        };
+        let counters: [PalletFamily; 2] = [
+            (
+                "linterpd_pallet_parts",
+                "Parts placed on (or picked from) each pallet, from its counter.",
+                |c| c.0,
+            ),
+            (
+                "linterpd_pallets",
+                "Pallets completed (filled, then begun again at slot 0), from each pallet's counter.",
+                |c| c.1,
+            ),
+        ];
+        for (name, help, value) in counters {
+            let kind = ConstCounter::new(0_u64).metric_type();
+            let mut family = encoder.encode_descriptor(name, help, None, kind)?;
+            for (key, c) in counts.iter() {
+                ConstCounter::new(value(c)).encode(family.encode_family(&labels(key))?)?;
+            }
+        }
+        let kind = ConstGauge::new(0_i64).metric_type();
+        let mut family = encoder.encode_descriptor(
+            "linterpd_pallet_index",
+            "Each pallet's slot to fill next, from 0: the slots filled.",
+            None,
+            kind,
+        )?;
+        for (key, c) in counts.iter() {
+            let index = i64::try_from(c.2).unwrap_or(i64::MAX);
+            ConstGauge::new(index).encode(family.encode_family(&labels(key))?)?;
         }
         Ok(())
     }
@@ -181,6 +246,7 @@ impl Metrics {
             fault: Family::default(),
             heartbeat_age: Family::default(),
             exchanges: Arc::default(),
+            pallets: Arc::default(),
             registry,
         };
         Self {
@@ -242,6 +308,18 @@ impl Metrics {
             None => {
                 i.heartbeat_age.remove(&label);
             }
+        }
+    }
+
+    /// Sets robot `robot`'s pallets' series from their counts now (a pallet no longer
+    /// configured loses its series).
+    pub fn set_pallets(&self, robot: &str, pallets: &[PalletStatus]) {
+        let collector = &self.inner.pallets.counts;
+        let mut counts = collector.lock().unwrap_or_else(PoisonError::into_inner);
+        counts.retain(|(r, _), _| r != robot);
+        for p in pallets {
+            let key = (robot.to_owned(), p.name.clone());
+            counts.insert(key, (p.parts, p.pallets, p.index));
         }
     }
 
@@ -352,6 +430,7 @@ impl Inner {
             self.heartbeat_age.clone(),
         );
         r.register_collector(Box::new(Arc::clone(&self.exchanges)));
+        r.register_collector(Box::new(Arc::clone(&self.pallets)));
     }
 }
 
@@ -539,6 +618,47 @@ mod tests {
             assert!(text.lines().any(|l| l == want), "no {want:?} in\n{text}");
         }
         assert!(text.ends_with("# EOF\n"));
+    }
+
+    #[test]
+    fn pallet_series_come_from_the_counters_and_follow_the_configured_pallets() {
+        use crate::pallet::Counter;
+        let metrics = Metrics::new();
+        let counter = Counter {
+            index: 7,
+            parts: 31,
+            pallets: 1,
+            ..Counter::default()
+        };
+        let layers = [0; 24];
+        let out = PalletStatus::new("out", &counter, &layers, true);
+        let inn = PalletStatus::new("in", &Counter::default(), &layers, true);
+        metrics.set_pallets("a", &[out.clone(), inn]);
+        metrics.set_pallets("b", &[out]);
+        let text = metrics.encode();
+        for want in [
+            "# TYPE linterpd_pallet_parts counter",
+            "linterpd_pallet_parts_total{robot=\"a\",pallet=\"out\"} 31",
+            "linterpd_pallet_parts_total{robot=\"a\",pallet=\"in\"} 0",
+            "linterpd_pallets_total{robot=\"a\",pallet=\"out\"} 1",
+            "linterpd_pallets_total{robot=\"b\",pallet=\"out\"} 1",
+            "linterpd_pallet_index{robot=\"a\",pallet=\"out\"} 7",
+        ] {
+            assert!(text.lines().any(|l| l == want), "no {want:?} in\n{text}");
+        }
+        // Robot a's pallet "in" is gone from its config: its series go, b's stay.
+        let done = Counter {
+            parts: 32,
+            ..counter
+        };
+        metrics.set_pallets("a", &[PalletStatus::new("out", &done, &layers, true)]);
+        let text = metrics.encode();
+        assert!(!text.contains("pallet=\"in\""), "{text}");
+        assert!(
+            text.contains("linterpd_pallet_parts_total{robot=\"a\",pallet=\"out\"} 32"),
+            "{text}"
+        );
+        assert!(text.contains("linterpd_pallets_total{robot=\"b\",pallet=\"out\"} 1"));
     }
 
     #[test]

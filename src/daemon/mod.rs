@@ -73,7 +73,7 @@ pub use crate::wire::{
 };
 pub use cell::{MIRROR_EVERY, mirror_face};
 pub use gateway::{GatewayError, MAX_BITS, MAX_WORDS, Values, values_from_json};
-pub use handle::{RobotHandle, Saved};
+pub use handle::{PalletCommand, PalletOpError, RobotHandle, Saved};
 pub use ids::{MoveIds, write_atomically};
 pub use positions::{Position, PositionError, TaughtPositions};
 pub use report::{KEPT, Moves};

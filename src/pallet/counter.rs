@@ -113,7 +113,11 @@ pub enum CounterError {
         pallet: String,
     },
     /// An index set past the pallet's slots.
-    #[error("pallet {pallet:?}: index {index} is past its last slot ({last})")]
+    #[error(
+        "pallet {pallet:?}: index {index} is past its last slot ({last}): 0 to {last} is the \
+         slot to fill next, {} marks the pallet full",
+        .last + 1
+    )]
     PastEnd {
         /// The pallet.
         pallet: String,

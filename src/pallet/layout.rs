@@ -228,6 +228,20 @@ impl Layout {
         &self.name
     }
 
+    /// Each slot's layer, in fill order (its length is the pallet's slots): what a counter
+    /// needs of a pallet, known without its frame or the taught positions.
+    #[must_use]
+    pub fn slot_layers(&self) -> Vec<usize> {
+        let grid = self.rows * self.columns;
+        self.layers
+            .iter()
+            .enumerate()
+            .flat_map(|(layer, kind)| {
+                std::iter::repeat_n(layer, kind.listed.as_ref().map_or(grid, Vec::len))
+            })
+            .collect()
+    }
+
     /// Rows and columns of its grid (1 x 1 when every layer is a list).
     #[must_use]
     pub fn grid(&self) -> (usize, usize) {

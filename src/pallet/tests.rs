@@ -300,3 +300,21 @@ fn bad_keys_and_values_are_refused_naming_the_pallet_key_value_and_limit() {
         .to_string();
     assert!(unknown.contains("unknown field `colour`"), "{unknown}");
 }
+
+#[test]
+fn slot_layers_agree_with_the_laid_out_pattern_for_grid_and_listed_layers() {
+    let text = "[mixed]\norigin_mm = [700, 0, 100]\nrows = 2\ncolumns = 3\npitch_mm = [300, 200]\n\
+                layer_height_mm = 80\nlayers = [\"A\", \"L\", \"A\"]\nkinds.A = {}\n\
+                kinds.L = { slots = [[0, 0, 0], [300, 0, 0]] }\n";
+    let set = pallets("", &format!("[brick]\n{BRICK}\n{text}")).unwrap();
+    for name in ["brick", "mixed"] {
+        let pattern = set.pattern(name, &seed_robot(), &BTreeMap::new()).unwrap();
+        let by_pattern: Vec<usize> = pattern.slots().iter().map(|s| s.layer).collect();
+        assert_eq!(set.layouts[name].slot_layers(), by_pattern, "{name}");
+    }
+    // Worked by hand: 6 grid slots, 2 listed, 6 grid.
+    let mut want = vec![0; 6];
+    want.extend([1, 1]);
+    want.extend([2; 6]);
+    assert_eq!(set.layouts["mixed"].slot_layers(), want);
+}

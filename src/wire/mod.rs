@@ -9,6 +9,7 @@
 //! cycle.rs   CycleStatus, CycleState, StepAt
 //! journal/   Entry, Kind: the cell's journal, one JSON line an entry; what changed between two
 //!            states of a robot (the follower's decision), production counts per shift
+//! pallet.rs  PalletStatus, PalletList: a robot's pallets' counts as the operator sees them
 //! live.rs    Live (a robot's live state for the console and `status --watch`), LiveMessage
 //!            (the stream: the whole snapshot, then merge patches)
 //! ```
@@ -16,11 +17,13 @@
 mod cycle;
 pub mod journal;
 mod live;
+mod pallet;
 mod report;
 mod state;
 
 pub use cycle::{CycleState, CycleStatus, StepAt};
 pub use live::{ActiveJog, ConsoleLive, JogLive, Live, LiveMessage, SeatHolder, SignalValue};
+pub use pallet::{PalletList, PalletStatus, SlotInProgress};
 pub use report::{
     EndReason, MoveAccepted, MoveId, MoveReport, PathAccepted, PieceKind, PieceReport, Predicted,
     SectionReport, Stage,

@@ -78,6 +78,7 @@ async fn cell_with(test: &str, mode: Mode, mirror: Option<u32>) -> Cell {
             home: "home".to_owned(),
             positions: vec!["home".to_owned(), "out".to_owned()],
             mode,
+            pallet: None,
         }),
     };
     let access = AccessList::new(Vec::new(), Vec::new(), &Layout::default()).unwrap();

@@ -28,6 +28,7 @@ mod journal;
 mod layers;
 mod mock_servers;
 mod modbus_face;
+mod pallet_ops;
 mod pallets;
 mod path_progress;
 mod paths;

@@ -33,6 +33,10 @@ pub enum Action {
     },
     /// Move to the home position.
     Home,
+    /// The shown pallet's interrupted slot was not placed: place at it again.
+    PalletRedo,
+    /// The shown pallet's interrupted slot was placed: count it, go on at the next.
+    PalletGoOn,
 }
 
 impl Action {
@@ -48,6 +52,8 @@ impl Action {
             Self::Select { .. } => "strobe",
             Self::Start { .. } => "start",
             Self::Home => "home",
+            Self::PalletRedo => "pallet-redo",
+            Self::PalletGoOn => "pallet-go-on",
         }
     }
 }
@@ -83,11 +89,19 @@ pub enum Refusal {
     ProgramRefused = 12,
     /// No `home` position is taught.
     NoHome = 13,
+    /// A pallet redo or go-on with no pallet shown (`[robots.NAME.cell.face] pallet`).
+    NoPallet = 14,
+    /// A pallet redo or go-on with no interrupted slot to choose for.
+    NothingToChoose = 15,
+    /// Pallet redo and go-on raised together: raise one.
+    RedoAndGoOn = 16,
+    /// The pallet's count could not be written (the daemon's log says why): nothing changed.
+    PalletNotWritten = 17,
 }
 
 impl Refusal {
     /// Every refusal, by code.
-    pub const ALL: [Self; 13] = [
+    pub const ALL: [Self; 17] = [
         Self::Local,
         Self::NotEnabled,
         Self::NoProgram,
@@ -101,6 +115,10 @@ impl Refusal {
         Self::NotNow,
         Self::ProgramRefused,
         Self::NoHome,
+        Self::NoPallet,
+        Self::NothingToChoose,
+        Self::RedoAndGoOn,
+        Self::PalletNotWritten,
     ];
 
     /// Its code in the refusal word.
@@ -126,13 +144,24 @@ impl Refusal {
             Self::NotNow => "the command does not fit the cycle's state",
             Self::ProgramRefused => "the program fails its check",
             Self::NoHome => "no home position is taught",
+            Self::NoPallet => "the face shows no pallet",
+            Self::NothingToChoose => "the pallet has no interrupted slot to redo or go on from",
+            Self::RedoAndGoOn => "pallet redo and go-on came together",
+            Self::PalletNotWritten => "the pallet's count could not be written",
         }
     }
 }
 
 /// The commands that act on their rising edge (all but move-enable).
-const EDGES: u16 =
-    bit::STROBE | bit::START | bit::STOP | bit::PAUSE | bit::RESET | bit::HOME | bit::STOP_NOW;
+const EDGES: u16 = bit::STROBE
+    | bit::START
+    | bit::STOP
+    | bit::PAUSE
+    | bit::RESET
+    | bit::HOME
+    | bit::STOP_NOW
+    | bit::PALLET_REDO
+    | bit::PALLET_GO_ON;
 
 /// The command side of the face.
 #[derive(Debug, Clone, Default)]
@@ -239,7 +268,16 @@ impl Face {
                 self.refuse(Refusal::ChangedDuringStrobe);
             }
         }
-        for edge in [bit::RESET, bit::PAUSE, bit::STROBE, bit::START, bit::HOME] {
+        let rose = self.one_choice(rose, remote);
+        for edge in [
+            bit::RESET,
+            bit::PAUSE,
+            bit::STROBE,
+            bit::START,
+            bit::HOME,
+            bit::PALLET_REDO,
+            bit::PALLET_GO_ON,
+        ] {
             if rose & edge == 0 {
                 continue;
             }
@@ -249,6 +287,20 @@ impl Face {
             }
         }
         actions
+    }
+
+    /// `rose` without the pallet's choices when both rose at once (refused: neither is taken).
+    fn one_choice(&mut self, rose: u16, remote: bool) -> u16 {
+        let both = bit::PALLET_REDO | bit::PALLET_GO_ON;
+        if rose & both != both {
+            return rose;
+        }
+        self.refuse(if remote {
+            Refusal::RedoAndGoOn
+        } else {
+            Refusal::Local
+        });
+        rose & !both
     }
 
     fn command(&mut self, edge: u16, remote: bool) -> Result<Action, Refusal> {
@@ -278,6 +330,9 @@ impl Face {
                 })
             }
             bit::HOME if enabled => Ok(Action::Home),
+            // A choice moves nothing: move-enable is not needed.
+            bit::PALLET_REDO => Ok(Action::PalletRedo),
+            bit::PALLET_GO_ON => Ok(Action::PalletGoOn),
             _ => Err(Refusal::NotEnabled),
         }
     }
@@ -434,11 +489,50 @@ mod tests {
     }
 
     #[test]
+    fn pallet_redo_and_go_on_act_on_their_edges_in_remote_without_move_enable() {
+        let mut f = Face::new();
+        f.write(0, &[0, 0, 0, 0], Remote);
+        assert_eq!(
+            f.write(command::BITS, &[bit::PALLET_REDO], Remote),
+            [Action::PalletRedo]
+        );
+        // Held on: no second edge.
+        assert!(
+            f.write(command::BITS, &[bit::PALLET_REDO], Remote)
+                .is_empty()
+        );
+        assert_eq!(
+            f.write(command::BITS, &[bit::PALLET_GO_ON], Remote),
+            [Action::PalletGoOn]
+        );
+        assert_eq!(f.refused(), None);
+        // Both at once: neither, refused.
+        f.write(command::BITS, &[0], Remote);
+        let both = bit::PALLET_REDO | bit::PALLET_GO_ON;
+        assert!(f.write(command::BITS, &[both], Remote).is_empty());
+        assert_eq!(f.refused(), Some(Refusal::RedoAndGoOn));
+        // Local mode: refused as the other commands are.
+        let mut f = Face::new();
+        f.write(0, &[0, 0, 0, 0], Local);
+        assert!(
+            f.write(command::BITS, &[bit::PALLET_GO_ON], Local)
+                .is_empty()
+        );
+        assert_eq!(f.refused(), Some(Refusal::Local));
+        assert_eq!(
+            (Action::PalletRedo.name(), Action::PalletGoOn.name()),
+            ("pallet-redo", "pallet-go-on")
+        );
+    }
+
+    #[test]
     fn refusal_codes_are_distinct_and_say_what_they_mean() {
         let codes: std::collections::BTreeSet<u16> =
             Refusal::ALL.iter().map(|r| r.code()).collect();
         assert_eq!(codes.len(), Refusal::ALL.len());
         assert_eq!(codes.first(), Some(&1));
+        // Numbered 1 on without a gap: a line PLC's table of meanings is indexed by them.
+        assert_eq!(codes.last(), Some(&(Refusal::ALL.len() as u16)));
         assert!(Refusal::ALL.iter().all(|r| !r.meaning().is_empty()));
     }
 }

@@ -1,4 +1,4 @@
-//! The cell face: a block of 18 registers through which the line's PLC or HMI drives the robot
+//! The cell face: a block of 23 registers through which the line's PLC or HMI drives the robot
 //! with no PC code of its own, in the manner of KUKA's Automatic External interface and FANUC's
 //! UOP signals. The line writes the command words and reads the status words; the daemon serves
 //! the block on the gateway's Modbus TCP face (from register `registers`), or mirrors it in the
@@ -16,6 +16,9 @@
 //!                 bit 6 enable     move-enable, a level: motion only while it is on; when it
 //!                                  drops, the robot stops at once and the cycle pauses
 //!                 bit 7 stop-now   stop the robot at once and end the cycle
+//!                 bit 8 pallet-redo   the shown pallet's interrupted slot was not placed:
+//!                                  place at it again
+//!                 bit 9 pallet-go-on  it was placed: count it, go on at the next slot
 //!  +3  count      cycles a start runs (0: until stopped)
 //!  +4..+7         reserved: read 0, not writable
 //!  +8  status     bit 0 ready      remote, enabled, linked, homed, no fault, no cycle: a start runs
@@ -33,7 +36,16 @@
 //!  +14 done       cycles done, low word         +15  high word
 //!  +16 position   the taught position the robot stands at, its place in `positions` from 1 (0: none)
 //!  +17 commands   the command word as the face last took it
+//!  +18 pallet     the pallet the face shows (`pallet`); 0 in all five words without one
+//!                 bit 0 shown      its count is known        bit 1 full
+//!                 bit 2 unsure     a slot was interrupted: redo or go on (+22 says which)
+//!                 bit 3 lost       its count was lost with the pallets file: set it
+//!  +19 index      the slot to fill next, from 0 (the slots filled; +20 when full)
+//!  +20 slots      its slots                  +21 layer   the next slot's layer, from 0
+//!  +22 unsure     the interrupted slot, from 0 (with bit 2)
 //! ```
+//! Words +18..+22 came after the first 18 (issue 48): no earlier address moved. A face that
+//! shows no pallet is mirrored in the PLC as 18 words, as before.
 //! Commands act on edges, so a line that writes its whole command block every scan starts one
 //! cycle per rising edge, not one per write. The first write after the daemon starts, or after
 //! the mode changes, only sets the baseline: a bit already on in it is not an edge (drop it and
@@ -43,16 +55,18 @@ mod machine;
 mod status;
 
 pub use machine::{Action, Face, Refusal};
-pub use status::{CyclePhase, CycleView, Link, View, status_words};
+pub use status::{CyclePhase, CycleView, Link, PalletView, View, status_words};
 
 /// Command words (+0..+3).
 pub const COMMAND_WORDS: usize = 4;
 /// The status words' offset in the block.
 pub const STATUS_AT: usize = 8;
-/// Status words (+8..+17).
-pub const STATUS_WORDS: usize = 10;
+/// Status words (+8..+22).
+pub const STATUS_WORDS: usize = 15;
 /// The block's words.
 pub const BLOCK_WORDS: usize = STATUS_AT + STATUS_WORDS;
+/// The block's words before the pallet's (+0..+17): all a face showing no pallet mirrors.
+pub const BLOCK_WORDS_NO_PALLET: usize = 18;
 
 /// Command word offsets.
 pub mod command {
@@ -84,6 +98,10 @@ pub mod bit {
     pub const ENABLE: u16 = 1 << 6;
     /// Stop the robot now and end the cycle (rising edge).
     pub const STOP_NOW: u16 = 1 << 7;
+    /// The shown pallet's interrupted slot was not placed: place at it again (rising edge).
+    pub const PALLET_REDO: u16 = 1 << 8;
+    /// The shown pallet's interrupted slot was placed: go on at the next (rising edge).
+    pub const PALLET_GO_ON: u16 = 1 << 9;
 }
 
 /// Status bits (+8).
@@ -136,6 +154,28 @@ pub mod status_word {
     pub const POSITION: usize = 8;
     /// The command word as taken.
     pub const COMMANDS: usize = 9;
+    /// The shown pallet's bits ([`super::pallet_bit`]).
+    pub const PALLET: usize = 10;
+    /// The shown pallet's slot to fill next.
+    pub const PALLET_INDEX: usize = 11;
+    /// The shown pallet's slots.
+    pub const PALLET_SLOTS: usize = 12;
+    /// The shown pallet's next slot's layer.
+    pub const PALLET_LAYER: usize = 13;
+    /// The shown pallet's interrupted slot.
+    pub const PALLET_UNSURE: usize = 14;
+}
+
+/// The shown pallet's bits (+18).
+pub mod pallet_bit {
+    /// A pallet is shown and its count is known.
+    pub const SHOWN: u16 = 1 << 0;
+    /// Every slot is filled.
+    pub const FULL: u16 = 1 << 1;
+    /// A slot was interrupted: the cycle places on the pallet only after redo or go on.
+    pub const UNSURE: u16 = 1 << 2;
+    /// Its count was lost with the pallets file: set it (CLI, API) before the cycle places.
+    pub const LOST: u16 = 1 << 3;
 }
 
 /// Fault codes (+11) beyond the PLC's own fault word (1..=99).

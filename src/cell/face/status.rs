@@ -1,8 +1,8 @@
-//! The face's status side: the status words (+8..+17) from the command side and what the robot
+//! The face's status side: the status words (+8..+22) from the command side and what the robot
 //! does.
 
 use super::machine::Face;
-use super::{STATUS_WORDS, fault, status_bit, status_word};
+use super::{STATUS_WORDS, fault, pallet_bit, status_bit, status_word};
 use crate::cell::Mode;
 
 /// Where the robot's cycle stands, as the face shows it.
@@ -43,6 +43,23 @@ pub enum Link {
     Up,
 }
 
+/// The pallet the face shows, as the status words need it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PalletView {
+    /// Its count is known (not lost with the pallets file).
+    pub known: bool,
+    /// The slot to fill next, from 0.
+    pub index: usize,
+    /// Its slots.
+    pub slots: usize,
+    /// The next slot's layer, from 0.
+    pub layer: usize,
+    /// Every slot is filled.
+    pub full: bool,
+    /// The interrupted slot waiting for redo or go on.
+    pub unsure: Option<usize>,
+}
+
 /// What the robot does, as the status words need it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct View {
@@ -64,6 +81,8 @@ pub struct View {
     pub position: Option<u16>,
     /// Whether it stands at the home position.
     pub in_home: bool,
+    /// The pallet the face shows, if it shows one.
+    pub pallet: Option<PalletView>,
 }
 
 /// The status words.
@@ -116,7 +135,33 @@ pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
     words[status_word::DONE_HIGH] = ((done >> 16) & 0xFFFF) as u16;
     words[status_word::POSITION] = view.position.unwrap_or(0);
     words[status_word::COMMANDS] = face.words()[super::command::BITS];
+    if let Some(p) = &view.pallet {
+        pallet_words(p, &mut words);
+    }
     words
+}
+
+/// The shown pallet's words (+18..+22); a count past a word's range shows as 65535.
+fn pallet_words(p: &PalletView, words: &mut [u16; STATUS_WORDS]) {
+    let word = |n: usize| u16::try_from(n).unwrap_or(u16::MAX);
+    let bits = if p.known {
+        pallet_bit::SHOWN
+            | if p.full { pallet_bit::FULL } else { 0 }
+            | if p.unsure.is_some() {
+                pallet_bit::UNSURE
+            } else {
+                0
+            }
+    } else {
+        pallet_bit::LOST
+    };
+    words[status_word::PALLET] = bits;
+    words[status_word::PALLET_SLOTS] = word(p.slots);
+    if p.known {
+        words[status_word::PALLET_INDEX] = word(p.index);
+        words[status_word::PALLET_LAYER] = word(p.layer);
+        words[status_word::PALLET_UNSURE] = word(p.unsure.unwrap_or(0));
+    }
 }
 
 #[cfg(test)]
@@ -267,6 +312,63 @@ mod tests {
         assert_eq!(w[status_word::PROGRAM], 0);
         assert_eq!(w[status_word::REFUSED], 5);
         assert!(has(&w, status_bit::REFUSED));
+    }
+
+    #[test]
+    fn the_shown_pallet_has_its_index_full_and_unsure_at_the_end_of_the_block() {
+        let (face, view) = remote_ready();
+        let before = status_words(&face, &view);
+        assert_eq!(before[status_word::PALLET..], [0; 5], "no pallet shown");
+        let pallet = PalletView {
+            known: true,
+            index: 7,
+            slots: 24,
+            layer: 1,
+            full: false,
+            unsure: Some(7),
+        };
+        let shown = View {
+            pallet: Some(pallet),
+            ..view
+        };
+        let w = status_words(&face, &shown);
+        // The first ten status words do not move.
+        assert_eq!(w[..status_word::PALLET], before[..status_word::PALLET]);
+        assert_eq!(
+            w[status_word::PALLET..],
+            [pallet_bit::SHOWN | pallet_bit::UNSURE, 7, 24, 1, 7]
+        );
+        assert_eq!(status_word::PALLET + crate::cell::face::STATUS_AT, 18);
+        let full = PalletView {
+            index: 24,
+            layer: 3,
+            full: true,
+            unsure: None,
+            ..pallet
+        };
+        let w = status_words(
+            &face,
+            &View {
+                pallet: Some(full),
+                ..view
+            },
+        );
+        assert_eq!(
+            w[status_word::PALLET..],
+            [pallet_bit::SHOWN | pallet_bit::FULL, 24, 24, 3, 0]
+        );
+        let lost = PalletView {
+            known: false,
+            ..pallet
+        };
+        let w = status_words(
+            &face,
+            &View {
+                pallet: Some(lost),
+                ..view
+            },
+        );
+        assert_eq!(w[status_word::PALLET..], [pallet_bit::LOST, 0, 24, 0, 0]);
     }
 
     #[test]

@@ -1,21 +1,26 @@
-//! `linterpd pallet`: a robot's pallet patterns.
+//! `linterpd pallet`: a robot's pallet patterns (`show`, from the config), and their counts in
+//! the daemon (`status`, and the operator's `set`, `reset`, `redo`, `go-on`: `ops.rs`).
 //!
 //! ```text
 //! linterpd pallet show out [--robot R] [--svg out.svg]
 //!     -> pallet "out" of robot press-loader: 96 slots in 4 layers
 //!        slot  layer  row  column        x        y        z       a
 //!           0      1    1       1    700.0      0.0    100.0     0.0
+//! linterpd pallet status [out] [--robot R] [--json]
+//!     -> press-loader pallet out: slot 7 of 96 next, layer 1 of 4; 31 parts, 1 pallet done
+//! linterpd pallet set out 12 | reset out | redo out | go-on out
 //! ```
 //! `show` works offline from the config file (no daemon): a pallet whose frame or corners name
 //! taught positions is laid out with the positions in the config's state directory.
 
+mod ops;
 mod show;
 
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use super::Failure;
+use super::{DaemonArgs, Failure};
 
 /// Arguments of `linterpd pallet`.
 #[derive(Debug, Args)]
@@ -34,6 +39,9 @@ pub struct PalletArgs {
         default_value = "/etc/linterpd/linterpd.toml"
     )]
     pub config: PathBuf,
+    /// The daemon and output options (all but `show`).
+    #[command(flatten)]
+    pub daemon: DaemonArgs,
 }
 
 /// `linterpd pallet` actions.
@@ -41,11 +49,23 @@ pub struct PalletArgs {
 pub enum PalletAction {
     /// List a pallet's slots in fill order (index, layer, row, column, x y z a), from the config.
     Show(show::ShowArgs),
+    /// Each pallet's count in the daemon: the slot to fill next, the layer, full, parts and
+    /// pallets done, and what to do when a slot was interrupted.
+    Status(ops::StatusArgs),
+    /// Set the slot to fill next (a partly built pallet put in); the counts stay.
+    Set(ops::SetArgs),
+    /// Begin a new pallet at slot 0 (a full one is counted as done).
+    Reset(ops::Named),
+    /// An interrupted slot's part was not placed: place at that slot again.
+    Redo(ops::Named),
+    /// An interrupted slot's part was placed: count it and go on at the next slot.
+    GoOn(ops::Named),
 }
 
 /// Runs `linterpd pallet`.
 pub fn run(args: &PalletArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     match &args.action {
         PalletAction::Show(show) => show::run(args, show, out),
+        _ => ops::run(args, out),
     }
 }

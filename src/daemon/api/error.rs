@@ -63,6 +63,12 @@ pub enum ApiError {
         /// The positions file that could not be written, or why none can be.
         source: PositionError,
     },
+    /// A pallet's count could not be written to the state directory (500).
+    #[error(transparent)]
+    PalletStorage {
+        /// The pallets file that could not be written, or why none can be.
+        source: crate::daemon::pallets::PalletStoreError,
+    },
     /// The daemon is shutting down (503).
     #[error("the daemon is shutting down")]
     ShuttingDown,
@@ -117,7 +123,7 @@ impl ApiError {
             Self::Forbidden(_) => StatusCode::FORBIDDEN,
             Self::Conflict { .. } => StatusCode::CONFLICT,
             Self::Plc { .. } => StatusCode::BAD_GATEWAY,
-            Self::Storage { .. } => StatusCode::INTERNAL_SERVER_ERROR,
+            Self::Storage { .. } | Self::PalletStorage { .. } => StatusCode::INTERNAL_SERVER_ERROR,
             Self::Unavailable { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             Self::Unauthorized => StatusCode::UNAUTHORIZED,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
@@ -142,7 +148,7 @@ impl ApiError {
             Self::ShuttingDown => Some("shutting-down"),
             Self::Plc { .. } => Some("plc"),
             Self::Forbidden(_) => Some("not-allowed"),
-            Self::Storage { .. } => Some("storage"),
+            Self::Storage { .. } | Self::PalletStorage { .. } => Some("storage"),
             Self::TooLarge { .. } => Some("too-large"),
             _ => None,
         }

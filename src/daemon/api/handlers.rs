@@ -199,6 +199,10 @@ pub(super) async fn delete_position(
 
 pub(super) async fn metrics(State(api): State<Api>) -> impl IntoResponse {
     let states: Vec<_> = api.robots.values().map(RobotHandle::state).collect();
+    for robot in api.robots.values() {
+        let name = &robot.robot().name;
+        robot.metrics().set_pallets(name, &robot.pallets().pallets);
+    }
     // Every robot of a daemon shares one set of metrics; with no robot there is only build info.
     let text = match api.robots.values().next() {
         Some(robot) => metrics::render(robot.metrics(), &states),

@@ -21,6 +21,8 @@
 //! GET  /v1/robots/{name}/cycles            CycleStatus       resume a cycle program)
 //! GET  /v1/live, /v1/robots/{name}/live   application/x-ndjson: the live stream (live.rs)
 //! GET, PUT /v1/robots/{name}/speed-override {"percent": 1..=100}
+//! GET  /v1/robots/{name}/pallets[/{pallet}]  PalletList, PalletStatus (pallets.rs: and POST
+//!      .../pallets/{pallet}/set|reset|redo|go-on, the operator's changes of a count)
 //! GET  /metrics                            Prometheus text
 //! GET  /v1/journal                         {"entries": [Entry], "last_seq"} (journal.rs: and
 //!                                          every other method's request journaled, with who)
@@ -44,9 +46,11 @@ mod listen;
 mod live;
 pub mod metrics;
 pub mod mode;
+mod pallets;
 mod registers;
 pub use cycles::{CycleOrder, CycleStop};
 pub use live::SpeedOverride;
+pub use pallets::PalletSet;
 pub use registers::{RegisterWrite, Registers};
 
 use std::collections::BTreeMap;
@@ -154,6 +158,12 @@ impl Api {
                     .put(handlers::save_position)
                     .post(handlers::save_position)
                     .delete(handlers::delete_position),
+            )
+            .route(&format!("{robot}/pallets"), get(pallets::list))
+            .route(&format!("{robot}/pallets/{{pallet}}"), get(pallets::one))
+            .route(
+                &format!("{robot}/pallets/{{pallet}}/{{command}}"),
+                post(pallets::command),
             )
             .route("/metrics", get(handlers::metrics))
             .route("/v1/journal", get(journal::read))

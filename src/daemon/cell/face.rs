@@ -11,6 +11,7 @@
 //!     Select    the program with that number, from the programs directory
 //!     Start     resume a paused or faulted cycle, or run the selected program
 //!     Home      a move to the `home` position
+//!     PalletRedo, PalletGoOn   the shown pallet's choice (RobotHandle::pallet_command)
 //!  line <--read the block-- face_block: the command words, then status_words(View)
 //! ```
 //! Writes are taken one at a time (a second waits for the first's actions), so the refusal word
@@ -19,12 +20,14 @@
 use super::CellOwner;
 use crate::cell::Mode;
 use crate::cell::face::{
-    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Link, Refusal, STATUS_AT, View,
-    status_words,
+    Action, BLOCK_WORDS, COMMAND_WORDS, CyclePhase, CycleView, Link, PalletView, Refusal,
+    STATUS_AT, View, status_words,
 };
 use crate::config::FaceSettings;
+use crate::daemon::pallets::PalletStoreError;
 use crate::daemon::request::{CellRequest, CommandError, ConflictReason, CycleError};
-use crate::daemon::{CycleState, MoveOrder, RobotHandle, RobotPhase};
+use crate::daemon::{CycleState, MoveOrder, PalletCommand, PalletOpError, RobotHandle, RobotPhase};
+use crate::pallet::CounterError;
 
 impl RobotHandle {
     /// The face's block now: the command words as written, reserved words 0, the status words.
@@ -113,7 +116,21 @@ impl RobotHandle {
             heartbeat: self.snapshot().reads,
             position,
             in_home: at(&settings.home),
+            pallet: self.face_pallet(settings),
         }
+    }
+
+    /// The pallet the face shows, as its words need it.
+    fn face_pallet(&self, settings: &FaceSettings) -> Option<PalletView> {
+        let p = self.pallet(settings.pallet.as_deref()?).ok()?;
+        Some(PalletView {
+            known: p.known,
+            index: p.index,
+            slots: p.slots,
+            layer: p.layer,
+            full: p.full,
+            unsure: p.unsure(),
+        })
     }
 }
 
@@ -218,6 +235,10 @@ impl CellOwner {
                 self.remote()?;
                 face_home(robot).await
             }
+            Action::PalletRedo | Action::PalletGoOn => {
+                self.remote()?;
+                face_pallet_choice(robot, action)
+            }
         }
     }
 
@@ -253,6 +274,32 @@ impl CellOwner {
             }
         })
     }
+}
+
+/// The line's choice for the shown pallet's interrupted slot.
+fn face_pallet_choice(robot: &RobotHandle, action: &Action) -> Result<(), Refusal> {
+    let choice = match action {
+        Action::PalletRedo => PalletCommand::Redo,
+        _ => PalletCommand::GoOn,
+    };
+    let pallet = robot
+        .face_settings()
+        .and_then(|f| f.pallet.clone())
+        .ok_or(Refusal::NoPallet)?;
+    robot.pallet_command(&pallet, choice).map(|_| ()).map_err(|e| {
+        tracing::warn!(robot = %robot.robot().name, pallet, "cell face pallet {} refused: {e}", choice.name());
+        match e {
+            PalletOpError::NoPallet { .. } => Refusal::NoPallet,
+            PalletOpError::CycleRunning { .. } => Refusal::Busy,
+            PalletOpError::Store(PalletStoreError::Counter(CounterError::NothingToChoose {
+                ..
+            })) => Refusal::NothingToChoose,
+            PalletOpError::Store(PalletStoreError::Write { .. } | PalletStoreError::ReadOnly { .. }) => {
+                Refusal::PalletNotWritten
+            }
+            PalletOpError::Store(_) => Refusal::NotNow,
+        }
+    })
 }
 
 /// A move to the face's `home` position, in remote mode.

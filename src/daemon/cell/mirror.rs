@@ -7,6 +7,7 @@
 //! ```text
 //!  PLC DTn+0..+3  --read every 200 ms, when changed--> face_write (edges, actions)
 //!  PLC DTn+8..+17 <--written when changed-------------- face_block's status words
+//!       (..+22 with the pallet's words, when the face shows a pallet)
 //! ```
 //! While the link is down nothing is read or written; once back, the status words are written
 //! again whole.
@@ -14,7 +15,7 @@
 use std::future::Future;
 use std::time::Duration;
 
-use crate::cell::face::{BLOCK_WORDS, COMMAND_WORDS, STATUS_AT};
+use crate::cell::face::{COMMAND_WORDS, STATUS_AT};
 use crate::daemon::{RobotHandle, Values};
 use crate::gateway::{Area, Range};
 
@@ -23,16 +24,20 @@ pub const MIRROR_EVERY: Duration = Duration::from_millis(200);
 
 /// Mirrors `robot`'s face in its PLC until `until` completes (at once when it has no mirror).
 pub async fn mirror_face(robot: RobotHandle, until: impl Future<Output = ()>) {
-    let Some(first) = robot.face_settings().and_then(|f| f.plc) else {
+    let Some((first, words)) = robot
+        .face_settings()
+        .and_then(|f| Some((f.plc?, f.block_words())))
+    else {
         return;
     };
     tokio::select! {
-        () = mirror(&robot, first) => {}
+        () = mirror(&robot, first, words) => {}
         () = until => {}
     }
 }
 
-async fn mirror(robot: &RobotHandle, first: u32) {
+/// Mirrors the block's first `block` words from DT`first`.
+async fn mirror(robot: &RobotHandle, first: u32, block: usize) {
     let commands = Range {
         area: Area::Dt,
         first,
@@ -41,7 +46,7 @@ async fn mirror(robot: &RobotHandle, first: u32) {
     let status = Range {
         area: Area::Dt,
         first: first + STATUS_AT as u32,
-        last: first + BLOCK_WORDS as u32 - 1,
+        last: first + block as u32 - 1,
     };
     let mut taken: Option<Vec<u16>> = None;
     let mut written: Option<Vec<u16>> = None;
@@ -61,10 +66,10 @@ async fn mirror(robot: &RobotHandle, first: u32) {
                 continue;
             }
         }
-        let Some(block) = robot.face_block() else {
+        let Some(face) = robot.face_block() else {
             return;
         };
-        let words = block[STATUS_AT..].to_vec();
+        let words = face[STATUS_AT..block].to_vec();
         if written.as_ref() != Some(&words) {
             let wrote = robot
                 .gateway_job(status, Some(Values::Words(words.clone())))

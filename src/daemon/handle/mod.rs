@@ -12,7 +12,10 @@
 //!                                          <--Snapshot, Moves, cycle status, CellView (published)
 //! ```
 
+mod pallets;
 mod submit;
+
+pub use pallets::{PalletCommand, PalletOpError};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
