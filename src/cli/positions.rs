@@ -34,7 +34,7 @@ pub struct PosArgs {
 #[derive(Debug, Subcommand)]
 pub enum PosAction {
     /// Save the robot's pose now (from the PLC's counts) as NAME, replacing one of that name.
-    Save(Named),
+    Save(SaveArgs),
     /// List the robot's taught positions.
     List,
     /// Show one taught position.
@@ -48,6 +48,17 @@ pub enum PosAction {
 pub struct Named {
     /// The position's name: 1 to 32 letters, digits, '_' or '-', not starting with '-'.
     pub name: String,
+}
+
+/// `pos save`: the position, and the frame it is kept in.
+#[derive(Debug, Args)]
+pub struct SaveArgs {
+    /// The position's name: 1 to 32 letters, digits, '_' or '-', not starting with '-'.
+    pub name: String,
+    /// Keep it in this frame (`[robots.NAME.frames.FRAME]`): re-teaching the frame's three
+    /// points then moves it with them.
+    #[arg(long)]
+    pub frame: Option<String>,
 }
 
 /// A robot of the daemon.
@@ -64,7 +75,7 @@ pub struct Robot {
 /// Runs `linterpd pos`.
 pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let (method, name) = match &args.action {
-        PosAction::Save(n) => (Method::PUT, Some(n.name.as_str())),
+        PosAction::Save(s) => (Method::PUT, Some(s.name.as_str())),
         PosAction::List => (Method::GET, None),
         PosAction::Show(n) => (Method::GET, Some(n.name.as_str())),
         PosAction::Delete(n) => (Method::DELETE, Some(n.name.as_str())),
@@ -73,6 +84,12 @@ pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
     if let Some(name) = name {
         check_name(name).map_err(super::bad_input)?;
     }
+    let query = match &args.action {
+        PosAction::Save(SaveArgs {
+            frame: Some(frame), ..
+        }) => format!("?frame={}", frame_query(frame)?),
+        _ => String::new(),
+    };
     let daemon = &target.daemon;
     daemon.block_on(async {
         let client = Client::new(&daemon.socket);
@@ -81,7 +98,7 @@ pub fn run(args: &PosArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> 
             .await
             .map_err(Failure::from_client)?;
         let path = match name {
-            Some(name) => format!("/v1/robots/{robot}/positions/{name}"),
+            Some(name) => format!("/v1/robots/{robot}/positions/{name}{query}"),
             None => format!("/v1/robots/{robot}/positions"),
         };
         let answer = client.expect(method, &path, None).await?;
@@ -113,6 +130,18 @@ fn text(action: &PosAction, robot: &str, answer: &Value) -> anyhow::Result<Strin
     })
 }
 
+/// A frame's name as a query value: a TOML key of the config, so letters, digits, '_' or '-'.
+fn frame_query(frame: &str) -> Result<&str, Failure> {
+    let fits = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'-';
+    if frame.is_empty() || !frame.bytes().all(fits) {
+        return Err(super::bad_input(anyhow::anyhow!(
+            "--frame {frame:?}: a frame's name is letters, digits, '_' or '-' (as its \
+             [robots.NAME.frames.NAME] table names it)"
+        )));
+    }
+    Ok(frame)
+}
+
 fn warn(warning: Option<&str>) {
     if let Some(warning) = warning {
         eprintln!("warning: {warning}");
@@ -131,8 +160,13 @@ fn position_text(p: &NamedPosition) -> String {
         }
     };
     let counts: Vec<String> = p.position.joint_counts.iter().map(i64::to_string).collect();
+    let frame = p
+        .position
+        .frame
+        .as_ref()
+        .map_or_else(String::new, |f| format!(" in frame {f}"));
     format!(
-        "{}: x {}, y {}, z {} mm, a {} deg; joint counts [{}]",
+        "{}: x {}, y {}, z {} mm, a {} deg{frame}; joint counts [{}]",
         p.name,
         v(0),
         v(1),
@@ -206,7 +240,7 @@ mod tests {
             panic!()
         };
         assert!(
-            matches!(&args.action, PosAction::Save(n) if n.name == "pick")
+            matches!(&args.action, PosAction::Save(n) if n.name == "pick" && n.frame.is_none())
                 && args.robot.daemon.json
         );
         let cli = crate::cli::Cli::try_parse_from(["linterpd", "pos", "--json", "list"]).unwrap();
@@ -221,5 +255,36 @@ mod tests {
         let e = run(&args, &mut Vec::new()).unwrap_err();
         assert_eq!(e.exit_code(), crate::cli::EXIT_BAD_INPUT);
         assert!(e.to_string().contains("not starting with '-'"), "{e}");
+    }
+
+    #[test]
+    fn a_position_in_a_frame_says_so_and_a_bad_frame_name_is_refused_before_asking() {
+        let p = json!({"name": "grip", "pose": [30.0, 40.0, 20.0, 10.0],
+            "joint_counts": [0, 800, 1538, 0], "saved_unix_s": 1, "frame": "station"});
+        let grip = Received::<NamedPosition>::read(p, "a position")
+            .unwrap()
+            .value;
+        assert_eq!(
+            position_text(&grip),
+            "grip: x 30.000, y 40.000, z 20.000 mm, a 10.000 deg in frame station; joint counts \
+             [0,800,1538,0]"
+        );
+        let parse = |frame: &str| {
+            let cli = crate::cli::Cli::try_parse_from([
+                "linterpd", "pos", "save", "grip", "--frame", frame,
+            ])
+            .unwrap();
+            let crate::cli::Command::Pos(args) = cli.command else {
+                panic!()
+            };
+            args
+        };
+        let args = parse("station");
+        assert!(
+            matches!(&args.action, PosAction::Save(s) if s.frame.as_deref() == Some("station"))
+        );
+        let e = run(&parse("a&b=c"), &mut Vec::new()).unwrap_err();
+        assert_eq!(e.exit_code(), crate::cli::EXIT_BAD_INPUT);
+        assert!(e.to_string().contains("--frame \"a&b=c\""), "{e}");
     }
 }

@@ -73,10 +73,10 @@ impl Flattener<'_, '_> {
         }
         let order = path_of(&run);
         let flat = self.path_step(&order, &|r| here.fail(r))?;
-        let super::check::Flat::Op(kind, _) = flat else {
-            unreachable!("a path step is one op")
+        let super::check::Flat::Motion(kind, _, permit) = flat else {
+            unreachable!("a path step is one motion")
         };
-        self.push_blended(here, kind, describe(&run, here.step));
+        self.push_blended(here, kind, describe(&run, here.step), permit);
         Ok(run.len())
     }
 

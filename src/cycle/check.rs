@@ -14,6 +14,7 @@ use super::condition::{self, Condition, Names};
 use super::program::{LoopDoc, ProgramDoc};
 use super::step::{Action, PalletStep, Step, WaitStep};
 use crate::config::{DurationError, parse_duration_s};
+use crate::contract::Permit;
 use crate::gateway::Values;
 use crate::gateway::{Address, Area, Range};
 use crate::order::{MoveOrder, OrderLimits, PathOrder};
@@ -171,6 +172,9 @@ pub struct Op {
     pub at: StepAt,
     /// What it does.
     pub kind: OpKind,
+    /// A move's or a path's permit, resolved once when the program is checked
+    /// ([`Permit::NONE`]: none, or not a motion).
+    pub permit: Permit,
 }
 
 /// A checked program: its ops, calls inlined.
@@ -187,6 +191,10 @@ pub struct Checked {
     pub unchecked: Vec<String>,
     /// The ops that are runs of blended move steps (`super::blend`), by index.
     pub blended: Vec<usize>,
+    /// The patterns of the robot's pallets as the program was checked against them, by name:
+    /// its place and pick steps run these slots (a frame re-taught later changes the next
+    /// check, not a cycle under way).
+    pub pallets: BTreeMap<String, Pattern>,
 }
 
 /// Program `name` of `ctx.programs` flattened into its ops, with every program it calls, each
@@ -237,6 +245,7 @@ pub(super) fn flatten(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramE
         ops,
         unchecked: Vec::new(),
         blended,
+        pallets: ctx.pallets.clone(),
     })
 }
 
@@ -335,6 +344,8 @@ struct Fixup {
 pub(super) enum Flat {
     /// An op.
     Op(OpKind, String),
+    /// A move or a path, with its permit resolved.
+    Motion(OpKind, String, Permit),
     /// An op that jumps to a label (a loop; a wait's `on_timeout`).
     Jump {
         kind: OpKind,
@@ -406,11 +417,12 @@ impl Flattener<'_, '_> {
         chain: &mut Vec<String>,
         fixups: &mut Vec<Fixup>,
     ) -> Result<(), ProgramError> {
-        let (kind, does) = match flat {
+        let (kind, does, permit) = match flat {
             Flat::Call(callee) => return self.call(&callee, chain, here),
             Flat::Pallet(step, pick) => return self.place(&step, pick, here, chain),
             Flat::Advance(pallet) => return self.advance(&pallet, here, chain),
-            Flat::Op(kind, does) => (kind, does),
+            Flat::Op(kind, does) => (kind, does, Permit::NONE),
+            Flat::Motion(kind, does, permit) => (kind, does, permit),
             Flat::Jump {
                 kind,
                 does,
@@ -424,22 +436,30 @@ impl Flattener<'_, '_> {
                     step_label: here.label.cloned(),
                     backward_only,
                 });
-                (kind, does)
+                (kind, does, Permit::NONE)
             }
         };
         self.ops.push(Op {
             at: here.at(does),
             kind,
+            permit,
         });
         Ok(())
     }
 
     /// A run of blended move steps' path op, at its first step.
-    pub(super) fn push_blended(&mut self, here: &Here<'_>, kind: OpKind, does: String) {
+    pub(super) fn push_blended(
+        &mut self,
+        here: &Here<'_>,
+        kind: OpKind,
+        does: String,
+        permit: Permit,
+    ) {
         self.blended.push(self.ops.len());
         self.ops.push(Op {
             at: here.at(does),
             kind,
+            permit,
         });
     }
 
@@ -539,16 +559,15 @@ impl Flattener<'_, '_> {
         }
     }
 
+    /// A step's permit resolved (none: [`Permit::NONE`]): once, here; it travels with the op.
     fn permit(
         &self,
         permit: Option<&str>,
         here: &dyn Fn(String) -> ProgramError,
-    ) -> Result<(), ProgramError> {
-        if let Some(p) = permit {
-            crate::order::permit::resolve(p, self.ctx.names.permit)
-                .map_err(|e| here(e.to_string()))?;
-        }
-        Ok(())
+    ) -> Result<Permit, ProgramError> {
+        permit.map_or(Ok(Permit::NONE), |p| {
+            crate::order::permit::resolve(p, self.ctx.names.permit).map_err(|e| here(e.to_string()))
+        })
     }
 
     pub(super) fn move_step(
@@ -556,12 +575,13 @@ impl Flattener<'_, '_> {
         order: &MoveOrder,
         here: &dyn Fn(String) -> ProgramError,
     ) -> Result<Flat, ProgramError> {
-        self.permit(order.permit.as_deref(), here)?;
+        let permit = self.permit(order.permit.as_deref(), here)?;
         let robot = self.ctx.robot;
         order
             .check_with(robot.motion, &OrderLimits::of(robot), self.ctx.taught)
             .map_err(|e| here(format!("move: {e}")))?;
-        Ok(Flat::Op(OpKind::Move(order.clone()), describe_move(order)))
+        let does = describe_move(order);
+        Ok(Flat::Motion(OpKind::Move(order.clone()), does, permit))
     }
 
     pub(super) fn path_step(
@@ -569,7 +589,7 @@ impl Flattener<'_, '_> {
         order: &PathOrder,
         here: &dyn Fn(String) -> ProgramError,
     ) -> Result<Flat, ProgramError> {
-        self.permit(order.permit.as_deref(), here)?;
+        let permit = self.permit(order.permit.as_deref(), here)?;
         let robot = self.ctx.robot;
         order
             .check(robot, &OrderLimits::of(robot))
@@ -578,7 +598,7 @@ impl Flattener<'_, '_> {
             Some(p) => format!("path (permit {p})"),
             None => "path".to_owned(),
         };
-        Ok(Flat::Op(OpKind::Path(order.clone()), does))
+        Ok(Flat::Motion(OpKind::Path(order.clone()), does, permit))
     }
 
     fn wait_step(

@@ -85,6 +85,7 @@ impl Flattener<'_, '_> {
         self.ops.push(Op {
             at: here.at(does),
             kind,
+            permit: crate::contract::Permit::NONE,
         });
     }
 

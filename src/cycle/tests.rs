@@ -116,6 +116,7 @@ fn cell() -> Cell {
         pose,
         joint_counts: [0; 4],
         saved_unix_s: 0,
+        frame: None,
     };
     let taught = [
         ("above-stack", at([-926.57, 535.03, 150.0, 0.0])),
@@ -229,6 +230,16 @@ fn a_press_loading_program_flattens_with_its_call_inlined_and_its_jumps_resolved
         panic!()
     };
     assert_eq!(order.permit.as_deref(), Some("press_open & !press_moving"));
+    // Its permit resolved once, here: it travels with the op (no parse when it runs).
+    let c_names = cell();
+    let names = PermitNames {
+        signals: &c_names.signals,
+        inputs: &InputWord::DEFAULTS,
+    };
+    let resolved = crate::order::permit::resolve("press_open & !press_moving", names).unwrap();
+    assert_eq!(c.ops[3].permit, resolved);
+    assert!(!resolved.is_none());
+    assert!(c.ops[0].permit.is_none(), "a move without a permit");
 }
 
 #[test]

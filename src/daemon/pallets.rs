@@ -25,7 +25,46 @@ use thiserror::Error;
 
 use super::ids::write_atomically;
 use super::positions::unix_now_s;
-use crate::pallet::{Counter, CounterError};
+use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
+use crate::robot::{Position, Robot};
+
+/// The robots' pallets: each robot's frames and pallet tables (from the config, laid out
+/// against its taught positions at every cycle check) and every pallet's counter.
+#[derive(Debug)]
+pub struct Pallets {
+    /// Each robot's frames and pallets, by robot (a robot with none is not listed).
+    pub sets: BTreeMap<String, RobotPallets>,
+    /// Every pallet's counter.
+    pub counters: PalletCounters,
+}
+
+impl Default for Pallets {
+    /// No pallets, counters in memory.
+    fn default() -> Self {
+        Self {
+            sets: BTreeMap::new(),
+            counters: PalletCounters::in_memory(),
+        }
+    }
+}
+
+impl Pallets {
+    /// Robot `robot`'s pallets laid out with its taught positions `taught`, checked against its
+    /// reach (none: an empty map).
+    ///
+    /// # Errors
+    /// The first pallet that cannot be laid out or reached, naming the pallet and the slot.
+    pub fn patterns(
+        &self,
+        robot: &Robot,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<BTreeMap<String, Pattern>, PalletError> {
+        match self.sets.get(&robot.name) {
+            Some(set) => set.patterns(robot, taught),
+            None => Ok(BTreeMap::new()),
+        }
+    }
+}
 
 /// The file's name in the state directory.
 pub const PALLETS_FILE: &str = "pallets.json";

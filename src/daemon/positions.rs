@@ -71,6 +71,12 @@ pub enum PositionError {
         /// Why.
         blocker: Blocker,
     },
+    /// The frame to keep the position in cannot be used.
+    #[error(transparent)]
+    Frame {
+        /// Why.
+        source: crate::pallet::PalletError,
+    },
     /// The robot moves (or a move waits): its pose is not one to teach.
     #[error(
         "cannot take the robot's pose while it moves or moves wait (move {current} current, {queued} \
@@ -351,6 +357,7 @@ mod tests {
             pose: [0.0, 520.0, 20.0, 0.0],
             joint_counts: [0, 800, 1_538, 0],
             saved_unix_s: 1_767_225_600,
+            frame: None,
         }
     }
 

@@ -122,6 +122,7 @@ fn spawn_robot(
             live,
             Arc::clone(&options.positions),
             options.journal.clone(),
+            Arc::clone(&options.pallets),
         ),
         setup.settings.layout.inputs,
         setup.cell.face.clone(),

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::ids::MoveIds;
+use super::pallets::Pallets;
 use super::positions::TaughtPositions;
 use crate::config::CellSettings;
 use crate::gateway::GatewaySettings;
@@ -50,6 +51,8 @@ pub struct DaemonOptions {
     pub positions: Arc<TaughtPositions>,
     /// The cell's journal (by default off: nothing recorded).
     pub journal: Journal,
+    /// The robots' frames, pallets and pallet counters (by default none, counters in memory).
+    pub pallets: Arc<Pallets>,
 }
 
 impl Default for DaemonOptions {
@@ -60,6 +63,7 @@ impl Default for DaemonOptions {
             start_within: Duration::from_secs(10),
             positions: Arc::new(TaughtPositions::in_memory()),
             journal: Journal::off(),
+            pallets: Arc::new(Pallets::default()),
         }
     }
 }

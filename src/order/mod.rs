@@ -1243,6 +1243,7 @@ mod tests {
                 pose: [10.0, 520.0, 30.0, 5.0],
                 joint_counts: [0; JOINTS],
                 saved_unix_s: 0,
+                frame: None,
             },
         )])
     }

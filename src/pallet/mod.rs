@@ -10,6 +10,7 @@
 //!   approach and retreat ([`Layout`]).
 //! - [`set`]: a robot's frames and pallets ([`RobotPallets`]), turned into patterns once the
 //!   taught positions are known, every slot checked against the robot's reach.
+//! - [`taught`]: taught positions kept in a frame, carried by it to the world.
 //! - [`error`], why a pallet or a frame cannot be used ([`PalletError`]).
 
 pub mod counter;
@@ -19,6 +20,7 @@ pub mod frame;
 pub mod layout;
 pub mod pattern;
 pub mod set;
+pub mod taught;
 
 pub use counter::{Choice, Counter, CounterError};
 pub use error::{PalletError, SlotAt};

@@ -89,6 +89,22 @@ impl FrameSpec {
         }
     }
 
+    /// The taught positions its `"@name"` points name.
+    #[must_use]
+    pub fn taught_points(&self) -> Vec<&str> {
+        let points: Vec<&PointDoc> = match self {
+            Self::Taught(p) => p.iter().collect(),
+            Self::Level { origin, .. } => vec![origin],
+        };
+        points
+            .into_iter()
+            .filter_map(|p| match p {
+                PointDoc::Taught(s) => Some(s.trim_start_matches('@')),
+                PointDoc::Given(_) => None,
+            })
+            .collect()
+    }
+
     /// The frame, its `"@name"` points looked up in `taught`.
     ///
     /// # Errors

@@ -23,6 +23,7 @@ fn position(x: f64, y: f64, z: f64) -> Position {
         pose: [x, y, z, 0.0],
         joint_counts: [0; 4],
         saved_unix_s: 0,
+        frame: None,
     }
 }
 

@@ -386,6 +386,10 @@ pub struct Position {
     pub joint_counts: [i64; JOINTS],
     /// When it was taught, seconds since 1970.
     pub saved_unix_s: u64,
+    /// The frame `pose` is kept in (`None`: world coordinates): re-teaching the frame's points
+    /// moves the position with it (`pallet::RobotPallets::world_positions`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<String>,
 }
 
 /// Whether `name` follows [`POSITION_NAME_RULE`].

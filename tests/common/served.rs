@@ -56,8 +56,19 @@ impl Served {
             positions: Arc::new(positions),
             ..DaemonOptions::default()
         };
+        Self::start_with(connect, shared, &options, dir, socket).await
+    }
+
+    /// [`Self::start_on`] with the daemon's `options`.
+    pub async fn start_with(
+        connect: Connector,
+        shared: &SharedMock,
+        options: &DaemonOptions,
+        dir: &Path,
+        socket: &str,
+    ) -> Self {
         let (daemon, handle) =
-            spawn_with(connect, ContractSettings::default(), &options, [0; JOINTS]);
+            spawn_with(connect, ContractSettings::default(), options, [0; JOINTS]);
         let path = dir.join(socket);
         let listener = UnixListener::bind(&path).unwrap();
         let api = Api::new(daemon.robots().clone());

@@ -357,7 +357,7 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
         c.status().await[status_word::REFUSED],
         Refusal::NoHome.code()
     );
-    c.h.save_position("home").unwrap();
+    c.h.save_position("home", None).unwrap();
     let s = c.status().await;
     assert!(
         on(&s, status_bit::IN_HOME) && s[status_word::POSITION] == 1,
@@ -372,7 +372,7 @@ async fn a_stop_works_in_both_modes_and_home_moves_to_the_taught_home() {
         .await
         .unwrap();
     c.h.wait(id, LIMIT).await;
-    c.h.save_position("out").unwrap();
+    c.h.save_position("out", None).unwrap();
     let s = c.status().await;
     assert!(
         !on(&s, status_bit::IN_HOME) && s[status_word::POSITION] == 2,

@@ -227,3 +227,60 @@ fn output_into_a_closed_pipe_ends_quietly_with_0() {
         );
     }
 }
+
+#[test]
+fn pallet_show_lists_the_shipped_palletisers_96_slots_and_draws_its_four_layers() {
+    let example = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/config/examples/palletiser.toml"
+    );
+    let svg = std::env::temp_dir().join(format!("linterpd-pallet-show-{}.svg", std::process::id()));
+    let svg_arg = svg.to_str().unwrap();
+    let (code, out, err) = linterpd(&[
+        "pallet", "show", "out", "--config", example, "--svg", svg_arg,
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let mut lines = out.lines();
+    assert_eq!(
+        lines.next(),
+        Some("pallet \"out\" of robot press-loader: 96 slots in 4 layers")
+    );
+    let rows: Vec<Vec<&str>> = lines
+        .skip(1)
+        .map(|l| l.split_whitespace().collect())
+        .filter(|f: &Vec<&str>| f.len() == 8 && f[0].parse::<u32>().is_ok())
+        .collect();
+    assert_eq!(rows.len(), 96, "{out}");
+    // Slot 0: the frame's origin (-270, 750, 0) plus origin_mm (0, 0, -40), by hand.
+    assert_eq!(
+        &rows[0][..],
+        ["0", "1", "1", "1", "-270.0", "750.0", "-40.0", "0.0"]
+    );
+    // Every layer 90 mm above the one below; 24 slots each.
+    for layer in 1..=4 {
+        let on: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == layer.to_string()).collect();
+        assert_eq!(on.len(), 24, "layer {layer}");
+        let z = f64::from(layer - 1) * 90.0 - 40.0;
+        assert!(
+            on.iter()
+                .all(|r| (r[6].parse::<f64>().unwrap() - z).abs() < 1e-9),
+            "layer {layer}"
+        );
+    }
+    assert!(out.contains("between layers: slip-sheet"), "{out}");
+    assert!(
+        out.contains("when full: signal pallet_full, wait for pallet_empty, call change-pallet"),
+        "{out}"
+    );
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    let _ = std::fs::remove_file(&svg);
+    assert!(drawn.starts_with("<svg"), "{drawn}");
+    assert_eq!(drawn.matches("<g transform").count(), 4);
+
+    let (code, out, err) = linterpd(&["pallet", "show", "in", "--config", example]);
+    assert_eq!(code, Some(2), "{out}");
+    assert!(
+        err.contains("robot press-loader has no pallet \"in\"; it has out"),
+        "{err}"
+    );
+}

@@ -313,3 +313,87 @@ async fn a_corrupt_positions_file_is_refused_kept_aside_and_the_daemon_runs_on()
     assert!(again.warning().is_none());
     assert_eq!(again.of("press-loader").len(), 1);
 }
+
+/// The pose `offset` mm from P1, the tool angle 0.
+fn near_p1(offset: [f64; 3]) -> Vec<f64> {
+    vec![P1[0] + offset[0], P1[1] + offset[1], P1[2] + offset[2]]
+}
+
+#[tokio::test]
+async fn a_position_kept_in_a_frame_moves_with_the_frames_points_when_they_are_taught_again() {
+    let shared = mock_at_seed_start("");
+    let dir = TempDir::new("frame-teach");
+    let frame: linterpd::pallet::doc::FrameDoc = toml::from_str(
+        r#"origin = "@o"
+x_point = "@x"
+xy_point = "@xy""#,
+    )
+    .unwrap();
+    let mut set = linterpd::pallet::RobotPallets::default();
+    set.add_frame("station", &frame).unwrap();
+    let options = linterpd::daemon::DaemonOptions {
+        pallets: std::sync::Arc::new(linterpd::daemon::pallets::Pallets {
+            sets: [("press-loader".to_owned(), set)].into(),
+            counters: linterpd::daemon::pallets::PalletCounters::in_memory(),
+        }),
+        ..linterpd::daemon::DaemonOptions::default()
+    };
+    let connect = common::daemon::duplex_connector(&shared, None);
+    let s = Served::start_with(connect, &shared, &options, dir.path(), "api.sock").await;
+    // Teaches the frame's three points `shift` mm along x from P1.
+    let teach_frame = |shift: f64| {
+        let s = &s;
+        async move {
+            for (name, at) in [
+                ("o", [shift, 0.0, 0.0]),
+                ("x", [shift + 100.0, 0.0, 0.0]),
+                ("xy", [shift, 100.0, 0.0]),
+            ] {
+                assert_exactly_on_target(&s.run(&json!({"to": near_p1(at)})).await);
+                let saved = s.call("PUT", &format!("positions/{name}")).await;
+                assert_eq!(saved.status, StatusCode::OK, "{}", saved.text());
+            }
+        }
+    };
+    teach_frame(0.0).await;
+    // The grip taught 30 mm along the frame's x, 40 along its y, 20 up from its origin.
+    assert_exactly_on_target(&s.run(&json!({"to": near_p1([30.0, 40.0, 20.0])})).await);
+    let saved = s.call("PUT", "positions/grip?frame=station").await;
+    assert_eq!(saved.status, StatusCode::OK, "{}", saved.text());
+    let saved = saved.json();
+    assert_eq!(saved["frame"], "station", "{saved}");
+    for (i, want) in [30.0, 40.0, 20.0].iter().enumerate() {
+        let got = saved["pose"][i].as_f64().unwrap();
+        // Within the pulse grid: the pose is the one the counts stand at.
+        assert!((got - want).abs() < 0.05, "{saved}");
+    }
+    // The frame taught again 25 mm further along x: the grip moves with it.
+    teach_frame(25.0).await;
+    let r = s.run(&json!({"position": "grip"})).await;
+    assert_exactly_on_target(&r);
+    // The frame is only shifted: the grip stands 25 mm further along x, its tool angle the
+    // one it was taught at, within the pulse grid (the frame's points and the grip were each
+    // taught on the grid).
+    let taught_a = saved["pose"][3].as_f64().unwrap();
+    let now = seed_robot().pose_of(&counts_now(&s.handle)).to_mm_deg();
+    let want = [P1[0] + 55.0, P1[1] + 40.0, P1[2] + 20.0, taught_a];
+    for i in 0..4 {
+        assert!(
+            (now[i] - want[i]).abs() < 0.1,
+            "at {now:?}, expected {want:?}"
+        );
+    }
+    // A frame the config does not have: refused, naming the frames there are.
+    let bad = s.call("PUT", "positions/other?frame=die").await;
+    assert_eq!(bad.status, StatusCode::BAD_REQUEST, "{}", bad.text());
+    assert_eq!(bad.json()["field"], "frame");
+    assert!(
+        bad.json()["error"]
+            .as_str()
+            .unwrap()
+            .contains("the frames defined are station"),
+        "{}",
+        bad.text()
+    );
+    s.daemon.shut_down().await;
+}

@@ -121,6 +121,7 @@ fn placeholder() -> Position {
         pose: [0.0; 4],
         joint_counts: [0; crate::kinematics::JOINTS],
         saved_unix_s: 0,
+        frame: None,
     }
 }
 

@@ -39,6 +39,7 @@ pub use control::{Ask, Control, MotionEnd, WaitEnd};
 
 use super::check::{Checked, Leg, Op, OpKind, PalletAct};
 use super::condition::Condition;
+use crate::contract::Permit;
 use crate::gateway::{Address, Values};
 use crate::order::{MoveOrder, PathOrder};
 use crate::wire::{CycleState, MoveId, StepAt};
@@ -83,6 +84,8 @@ pub enum Action<G> {
         at: usize,
         /// Its move.
         order: MoveOrder,
+        /// Its permit (resolved when the program was checked).
+        permit: Permit,
     },
     /// Release a move prepared ahead (its gate opens).
     Release(G),
@@ -158,10 +161,10 @@ pub enum Action<G> {
 /// A motion to queue.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Motion {
-    /// A move.
-    Move(MoveOrder),
-    /// A path.
-    Path(PathOrder),
+    /// A move, with its permit (resolved when the program was checked).
+    Move(MoveOrder, Permit),
+    /// A path, with its permit (resolved when the program was checked).
+    Path(PathOrder, Permit),
     /// The way into or out of a pallet's slot in progress, from where the robot is.
     Pallet {
         /// The pallet.

@@ -25,8 +25,8 @@ impl<G> Runner<G> {
                 let why = hold.unwrap_or_default().to_owned();
                 self.followed(MotionEnd::Held { why }, seen)
             }
-            OpKind::Move(order) => Action::Submit(Motion::Move(order)),
-            OpKind::Path(order) => Action::Submit(Motion::Path(order)),
+            OpKind::Move(order) => Action::Submit(Motion::Move(order, self.ops[pc].permit)),
+            OpKind::Path(order) => Action::Submit(Motion::Path(order, self.ops[pc].permit)),
             OpKind::PalletPath {
                 pallet,
                 leg,
@@ -205,6 +205,7 @@ impl<G> Runner<G> {
                 OpKind::Move(order) => Action::Prepare {
                     at,
                     order: order.clone(),
+                    permit: self.ops[at].permit,
                 },
                 _ => self.then(),
             },

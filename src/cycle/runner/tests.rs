@@ -53,8 +53,8 @@ fn said(action: &Action<u32>) -> String {
     let gates = |p: &[Prepared<u32>]| p.iter().map(|p| p.gate).collect::<Vec<_>>();
     match action {
         Action::Step(at) => format!("step {}", at.does),
-        Action::Submit(Motion::Move(_)) => "submit move".to_owned(),
-        Action::Submit(Motion::Path(_)) => "submit path".to_owned(),
+        Action::Submit(Motion::Move(..)) => "submit move".to_owned(),
+        Action::Submit(Motion::Path(..)) => "submit path".to_owned(),
         Action::Submit(Motion::Pallet { pallet, leg, .. }) => format!("submit {pallet} {leg:?}"),
         Action::Pallet { pallet, act } => format!("pallet {pallet} {act:?}"),
         Action::Prepare { at, .. } => format!("prepare op {at}"),
@@ -295,6 +295,35 @@ fn the_next_move_is_prepared_ahead_and_released_at_its_step() {
             "step set DT100 = 7, press_go = true",
         ]
     );
+}
+
+#[test]
+fn a_moves_permit_goes_out_as_it_was_resolved_when_the_program_was_checked() {
+    use crate::contract::{Permit, PermitBit};
+    let (mut r, w) = runner(PRESS_LOAD, &[("eject", EJECT)], None);
+    feed(&mut r, &w, Event::Go);
+    let Action::Submit(Motion::Move(_, permit)) = r.on(Event::Go, &w.seen()) else {
+        panic!("the first move is submitted");
+    };
+    assert_eq!(permit, Permit::NONE, "a move with no permit");
+    let Action::Prepare { at, permit, .. } = r.on(Event::Queued(vec![1]), &w.seen()) else {
+        panic!("the move after the waits is prepared");
+    };
+    // press_open & !press_moving: X5 on, X6 off, in the first input word.
+    let want = Permit::of(&[
+        PermitBit {
+            word: 0,
+            bit: 5,
+            on: true,
+        },
+        PermitBit {
+            word: 0,
+            bit: 6,
+            on: false,
+        },
+    ])
+    .expect("two bits");
+    assert_eq!((at, permit), (3, want));
 }
 
 #[test]

@@ -62,6 +62,7 @@ mod tests {
                 pose: [-0.0, 520.0, 20.5, 90.0],
                 joint_counts: [0, 800, 1538, 0],
                 saved_unix_s: 1_700_000_000,
+                frame: None,
             },
         }
     }

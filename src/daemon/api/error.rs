@@ -214,6 +214,7 @@ impl From<SubmitError> for ApiError {
                 field: Some(order.field.to_owned()),
             },
             SubmitError::Plan(plan) => Self::Unplannable(plan.to_string()),
+            SubmitError::Taught(e) => Self::Unplannable(e.to_string()),
             e @ SubmitError::NotNow { blocker, .. } => Self::not_now(blocker, e.to_string()),
             e @ SubmitError::QueueFull { .. } => Self::Conflict {
                 message: e.to_string(),
@@ -245,6 +246,10 @@ impl From<PositionError> for ApiError {
                 field: Some("position"),
             },
             PositionError::NotNow { blocker } => Self::not_now(blocker, message),
+            PositionError::Frame { .. } => Self::BadRequest {
+                message,
+                field: Some("frame".to_owned()),
+            },
             PositionError::Busy { .. } => Self::Conflict {
                 message,
                 reason: "busy",

@@ -160,12 +160,20 @@ pub(super) async fn position(
     }))
 }
 
+/// `PUT .../positions/{pos}`'s query: `?frame=NAME` keeps the position in that frame.
+#[derive(Debug, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SaveParams {
+    frame: Option<String>,
+}
+
 pub(super) async fn save_position(
     State(api): State<Api>,
     Path((name, pos)): Path<(String, String)>,
+    axum::extract::Query(params): axum::extract::Query<SaveParams>,
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let robot = api.robot(&name)?;
-    let saved = robot.save_position(&pos)?;
+    let saved = robot.save_position(&pos, params.frame.as_deref())?;
     let answer = SavedPosition {
         saved: NamedPosition {
             name: pos,

@@ -78,7 +78,8 @@ impl RobotHandle {
         let linked = link != Link::Down;
         let moving = state.current_move.is_some() || !state.queued.is_empty();
         let counts = self.counts_by_joint().filter(|_| linked && !moving);
-        let taught = self.positions();
+        // A position kept in a frame that cannot be carried to the world is at no counts.
+        let taught = self.taught_world().unwrap_or_default();
         let at = |name: &str| {
             counts.is_some_and(|c| taught.get(name).is_some_and(|p| p.joint_counts == c))
         };

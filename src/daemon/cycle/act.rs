@@ -9,7 +9,7 @@ use std::time::Duration;
 use tokio::sync::watch;
 
 use super::status::Status;
-use crate::contract::INPUT_WORDS;
+use crate::contract::{INPUT_WORDS, Permit};
 use crate::cycle::Condition;
 use crate::cycle::runner::{Control, Event, Motion, MotionEnd, Prepared, WaitEnd};
 use crate::daemon::RobotHandle;
@@ -22,8 +22,8 @@ use crate::wire::{EndReason, MoveId, MoveReport, Stage, StepAt};
 pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> {
     let submitted = match motion {
         // The handle plans a path off the runtime (it takes milliseconds), as for the API.
-        Motion::Move(order) => handle.submit_starts(order).await,
-        Motion::Path(order) => handle.submit_path(&order).await,
+        Motion::Move(order, permit) => handle.submit_checked(order, permit).await,
+        Motion::Path(order, permit) => handle.submit_checked_path(&order, permit).await,
         // The daemon's programs are checked with no pallet yet, so no place step runs.
         Motion::Pallet { pallet, .. } => {
             return Event::Refused(format!("pallet {pallet:?}: the robot has no pallets"));
@@ -36,9 +36,9 @@ pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> 
 }
 
 /// Uploads `order` ahead, held behind a gate of its own (`None`: the robot refused it now).
-pub(super) async fn prepare(handle: &RobotHandle, order: MoveOrder) -> Event<Gate> {
+pub(super) async fn prepare(handle: &RobotHandle, order: MoveOrder, permit: Permit) -> Event<Gate> {
     let gate = Gate::new();
-    let prepared = handle.submit_gated(order, &gate).await;
+    let prepared = handle.submit_gated(order, permit, &gate).await;
     Event::Prepared(
         prepared
             .ok()

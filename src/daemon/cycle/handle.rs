@@ -76,7 +76,11 @@ impl RobotHandle {
             // Said once each time a program is run; it keeps no other from running.
             tracing::warn!(robot = %self.robot.name, program, "a cycle program cannot be read: {why}");
         }
-        let taught = self.positions.of(&self.robot.name);
+        let in_words = |e: crate::pallet::PalletError| {
+            CycleError::Program(format!("robot {}: {e}", self.robot.name))
+        };
+        let taught = self.taught_world().map_err(in_words)?;
+        let pallets = self.pallets_laid_out(&taught).map_err(in_words)?;
         let ctx = crate::cycle::Context {
             robot: &self.robot,
             taught: &taught,
@@ -92,8 +96,7 @@ impl RobotHandle {
             require_wait_timeout: live.cell.require_wait_timeout,
             start: self.where_next_begins(),
             poses_known: true,
-            // The robot's pallet patterns come with the config's pallets (not wired yet).
-            pallets: &std::collections::BTreeMap::new(),
+            pallets: &pallets,
         };
         crate::cycle::check(name, &ctx).map_err(|e| CycleError::Program(e.to_string()))
     }

@@ -171,7 +171,7 @@ impl Driver {
         let handle = &self.handle;
         match action {
             Action::Submit(motion) => act::submit(handle, motion).await,
-            Action::Prepare { order, .. } => act::prepare(handle, order).await,
+            Action::Prepare { order, permit, .. } => act::prepare(handle, order, permit).await,
             Action::Release(gate) => {
                 gate.open();
                 Event::Go

@@ -23,6 +23,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 use super::gateway::{self, GatewayError, Job, Values};
 use super::live::Live;
+use super::pallets::{PalletCounters, Pallets};
 use super::positions::{Position, PositionError, TaughtPositions, check_name, unix_now_s};
 use super::request::{CellRequest, CommandError, ConflictReason, CycleRequest, Reply, Request};
 use super::shared::{CellView, Shared};
@@ -62,6 +63,8 @@ pub struct RobotHandle {
     speed_override: Arc<std::sync::atomic::AtomicU8>,
     /// The cell's journal (`DaemonOptions::journal`).
     journal: crate::journal::Journal,
+    /// The robots' frames, pallets and counters (`DaemonOptions::pallets`).
+    pallets: Arc<Pallets>,
 }
 
 /// Where a handle's requests go.
@@ -94,7 +97,12 @@ impl RobotHandle {
         robot: Robot,
         to: Senders,
         shared: Arc<Shared>,
-        (live, positions, journal): (Live, Arc<TaughtPositions>, crate::journal::Journal),
+        (live, positions, journal, pallets): (
+            Live,
+            Arc<TaughtPositions>,
+            crate::journal::Journal,
+            Arc<Pallets>,
+        ),
         inputs: [InputWord; INPUT_WORDS],
         face: Option<FaceSettings>,
     ) -> Self {
@@ -110,6 +118,7 @@ impl RobotHandle {
             epoch: None,
             speed_override: Arc::new(std::sync::atomic::AtomicU8::new(100)),
             journal,
+            pallets,
         }
     }
 
@@ -124,6 +133,42 @@ impl RobotHandle {
     #[must_use]
     pub fn journal(&self) -> &crate::journal::Journal {
         &self.journal
+    }
+
+    /// The pallets' counters of every robot of the daemon (kept in the state directory).
+    #[must_use]
+    pub fn pallet_counters(&self) -> &PalletCounters {
+        &self.pallets.counters
+    }
+
+    /// The robot's pallets laid out with its taught positions now, checked against its reach.
+    ///
+    /// # Errors
+    /// The first pallet that cannot be laid out or reached, naming the pallet and the slot.
+    pub fn pallet_patterns(
+        &self,
+    ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        self.pallets_laid_out(&self.taught_world()?)
+    }
+
+    /// The robot's pallets laid out with `taught` (world positions).
+    pub(crate) fn pallets_laid_out(
+        &self,
+        taught: &BTreeMap<String, Position>,
+    ) -> Result<BTreeMap<String, crate::pallet::Pattern>, crate::pallet::PalletError> {
+        self.pallets.patterns(&self.robot, taught)
+    }
+
+    /// The robot's taught positions as it reaches them now: one kept in a frame carried by the
+    /// frame as its points are taught now (its pose and counts those of the world pose).
+    ///
+    /// # Errors
+    /// A position kept in a frame that cannot be resolved or reached, naming it.
+    pub fn taught_world(&self) -> Result<BTreeMap<String, Position>, crate::pallet::PalletError> {
+        let taught = self.positions.of(&self.robot.name);
+        let none = crate::pallet::RobotPallets::default();
+        let set = self.pallets.sets.get(&self.robot.name).unwrap_or(&none);
+        set.world_positions(&self.robot, &taught)
     }
 
     /// The speed override, 1 to 100 %.
@@ -179,9 +224,10 @@ impl RobotHandle {
     }
 
     /// Saves the robot's pose, from the counts the PLC last reported, as position `name`
-    /// (replacing one of that name). Refused while the link is down or stalled, the robot is
+    /// (replacing one of that name), in world coordinates or kept in `frame` (re-teaching the
+    /// frame's points then moves it). Refused while the link is down or stalled, the robot is
     /// not homed or homing (its counts mean nothing), or a move runs or waits.
-    pub fn save_position(&self, name: &str) -> Result<Saved, PositionError> {
+    pub fn save_position(&self, name: &str, frame: Option<&str>) -> Result<Saved, PositionError> {
         check_name(name)?;
         if let Some(
             blocker @ (Blocker::LinkDown | Blocker::Stalled | Blocker::NotHomed | Blocker::Homing),
@@ -204,10 +250,22 @@ impl RobotHandle {
         let joint_counts = self.counts_by_joint().ok_or(PositionError::NotNow {
             blocker: Blocker::LinkDown,
         })?;
+        let world = self.robot.pose_of(&joint_counts);
+        let pose = match frame {
+            None => world.to_mm_deg(),
+            Some(frame) => {
+                let taught = self.positions.of(&self.robot.name);
+                let none = crate::pallet::RobotPallets::default();
+                let set = self.pallets.sets.get(&self.robot.name).unwrap_or(&none);
+                set.in_frame(name, frame, &world, &taught)
+                    .map_err(|source| PositionError::Frame { source })?
+            }
+        };
         let position = Position {
-            pose: self.robot.pose_of(&joint_counts).to_mm_deg(),
+            pose,
             joint_counts,
             saved_unix_s: unix_now_s(),
+            frame: frame.map(str::to_owned),
         };
         let replaced = self
             .positions

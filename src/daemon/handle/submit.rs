@@ -52,7 +52,21 @@ impl RobotHandle {
     /// of a path of that one line, cut at the reversal and chained at speed
     /// ([`crate::plan::plan_line`]); any other order is one start.
     pub async fn submit_starts(&self, order: MoveOrder) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_behind(order, None).await.map(|(ids, _)| ids)
+        self.submit_behind(order, None, None)
+            .await
+            .map(|(ids, _)| ids)
+    }
+
+    /// [`RobotHandle::submit_starts`] of an order whose permit was resolved when it was checked
+    /// (a cycle's move step): not parsed again.
+    pub(crate) async fn submit_checked(
+        &self,
+        order: MoveOrder,
+        permit: Permit,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_behind(order, None, Some(permit))
+            .await
+            .map(|(ids, _)| ids)
     }
 
     /// [`RobotHandle::submit`] of a move that is uploaded now and started only once `gate`
@@ -60,25 +74,32 @@ impl RobotHandle {
     /// that would run as several is refused (the cycle then runs it after its wait). With its
     /// id, whether it moves: `false` when it is planned to end within a pulse of where it
     /// begins (it then ends with the move ahead of it, with no start of its own).
+    /// Its permit was resolved when its cycle was checked.
     pub(crate) async fn submit_gated(
         &self,
         order: MoveOrder,
+        permit: Permit,
         gate: &Gate,
     ) -> Result<(MoveId, bool), SubmitError> {
-        let (ids, moves) = self.submit_behind(order, Some(gate)).await?;
+        let (ids, moves) = self.submit_behind(order, Some(gate), Some(permit)).await?;
         Ok((ids[0], moves))
     }
 
     /// The ids of `order`'s starts, and whether it moves the robot (as far as it can be told
-    /// before its turn: no counts read yet, it is taken to).
+    /// before its turn: no counts read yet, it is taken to). `permit`: its permit as resolved
+    /// when it was checked (`None`: resolved here from its text).
     async fn submit_behind(
         &self,
         order: MoveOrder,
         gate: Option<&Gate>,
+        permit: Option<Permit>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
-        checked.permit = self.permit(order.permit.as_deref())?;
+        checked.permit = match permit {
+            Some(permit) => permit,
+            None => self.permit(order.permit.as_deref())?,
+        };
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
         // Behind a move that is queued or running, an order starts where that one is planned
@@ -252,17 +273,39 @@ impl RobotHandle {
     /// again from the counts where it begins, and only if the robot is there: a section whose
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub async fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_path_with(order, None).await
+    }
+
+    /// [`RobotHandle::submit_path`] of a path whose permit was resolved when it was checked (a
+    /// cycle's path step): not parsed again.
+    pub(crate) async fn submit_checked_path(
+        &self,
+        order: &PathOrder,
+        permit: Permit,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_path_with(order, Some(permit)).await
+    }
+
+    /// A path, its `permit` resolved when it was checked (`None`: here, from its text).
+    async fn submit_path_with(
+        &self,
+        order: &PathOrder,
+        permit: Option<Permit>,
+    ) -> Result<Vec<MoveId>, SubmitError> {
         // Every field is checked before the robot's state: a bad order is a bad order.
         let limits = self.limits();
         order.check(&self.robot, &limits)?;
-        let permit = self.permit(order.permit.as_deref())?;
+        let permit = match permit {
+            Some(permit) => permit,
+            None => self.permit(order.permit.as_deref())?,
+        };
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
         let counts = self.start().counts.ok_or(SubmitError::NotNow {
             blocker: Blocker::LinkDown,
             detail: Some("no counts read from the PLC yet".to_owned()),
         })?;
-        let taught = self.positions.of(&self.robot.name);
+        let taught = self.taught_world()?;
         let lookup = |name: &str| {
             taught.get(name).map(|p| {
                 let [x, y, z, a] = p.pose;

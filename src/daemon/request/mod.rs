@@ -33,6 +33,9 @@ pub enum SubmitError {
     /// The move cannot be planned from where the robot is (or will be).
     #[error(transparent)]
     Plan(#[from] PlanError),
+    /// A taught position kept in a frame cannot be carried to the world now.
+    #[error(transparent)]
+    Taught(#[from] crate::pallet::PalletError),
     /// The robot cannot take a move now (link down, not homed, a fault...).
     #[error("{blocker}{}", detail.as_ref().map(|d| format!(": {d}")).unwrap_or_default())]
     NotNow {

@@ -34,10 +34,12 @@ use super::api::{self, Api, BearerToken, TokenError};
 use super::console::{Console, LiveHub, SnapshotSetup, UsersError};
 use super::modbus_face::ModbusFaceServer;
 use super::notify::Notifier;
+use super::pallets::{PalletCounters, Pallets};
 use super::{Connector, Daemon, DaemonOptions, MoveIds, RobotSetup, TaughtPositions, host_word};
 use crate::config::{Config, DaemonSettings};
 use crate::contract::machine::WatchSettings;
 use crate::journal::Journal;
+use crate::pallet::RobotPallets;
 use crate::plc::exchange::ContractSettings;
 use crate::plc::{self, LinkSettings};
 use crate::wire::journal::Kind;
@@ -188,9 +190,13 @@ pub fn contract_settings(link: &LinkSettings) -> ContractSettings {
 
 /// The daemon-wide options `settings` describe: move ids counted on in the state directory (from
 /// the clock when it cannot be used), taught positions kept there, a fresh host word, the
-/// journal.
+/// journal, the robots' pallets (`pallet_sets`, the config's) with their counters kept there.
 #[must_use]
-pub fn daemon_options(settings: &DaemonSettings, journal: &Journal) -> DaemonOptions {
+pub fn daemon_options(
+    settings: &DaemonSettings,
+    journal: &Journal,
+    pallet_sets: &std::collections::BTreeMap<String, RobotPallets>,
+) -> DaemonOptions {
     let ids = match MoveIds::in_state_dir(&settings.state_dir) {
         Ok(ids) => ids,
         Err(e) => {
@@ -208,6 +214,10 @@ pub fn daemon_options(settings: &DaemonSettings, journal: &Journal) -> DaemonOpt
         start_within: settings.start_within,
         positions: Arc::new(TaughtPositions::in_state_dir(&settings.state_dir)),
         journal: journal.clone(),
+        pallets: Arc::new(Pallets {
+            sets: pallet_sets.clone(),
+            counters: PalletCounters::in_state_dir(&settings.state_dir),
+        }),
     }
 }
 
@@ -294,7 +304,7 @@ pub async fn serve(
     let _lock = lock(&settings.socket)?;
     let bound = Bound::bind(config, settings).await?;
     let journal = open_journal(settings)?;
-    let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal));
+    let mut daemon = Daemon::spawn(robots, &daemon_options(settings, &journal, &config.pallets));
     let api = Api::new(daemon.robots().clone()).with_journal(journal.clone());
     let closing = api.closing();
     super::journal::follow(daemon.robots(), &journal, &closing);

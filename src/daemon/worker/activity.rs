@@ -3,7 +3,7 @@
 //! holding a prepared bank, one proof read a step, and its start written once. Each step is
 //! one round of the worker's loop ([`Worker::run`]); what a step ends in is the next activity.
 
-use super::dispatch::{Activity, CYCLE_WENT_ON, Hold, Queued, Turn, Uploaded, Uploading};
+use super::dispatch::{Activity, CYCLE_WENT_ON, Queued, Turn, Uploaded, Uploading};
 use super::prepared::prepared_watch;
 use super::{Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Phase, Planned};
@@ -13,17 +13,6 @@ use crate::table::ValidTable;
 use crate::wire::Stage;
 
 impl Worker {
-    /// One step of what the worker is doing: a round of the idle loop, or one step of the move
-    /// whose turn came.
-    pub(super) async fn step(&mut self) -> Result<(), ContractError> {
-        match std::mem::take(&mut self.dispatch.activity) {
-            Activity::Idle => self.idle_step().await,
-            Activity::Uploading(uploading) => self.upload_step(uploading).await,
-            Activity::Holding(held) => self.hold(held).await,
-            Activity::Proving(uploaded) => self.prove(uploaded).await,
-        }
-    }
-
     /// Plans `queued` and makes its upload ready (after preloading, from rest, the parts of a
     /// path behind it); a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {
@@ -34,15 +23,12 @@ impl Worker {
             self.cancel_queue("cancelled: the move before it did not start");
             return Ok(());
         }
-        let Some(mut turn) = self.turn(queued).await? else {
+        let Some(turn) = self.turn(queued).await? else {
             return Ok(());
         };
         let Some((plan, planned)) = self.plan_turn(&turn) else {
             return Ok(());
         };
-        let tables = plan
-            .valid_tables(&self.robot)
-            .expect("plan_move returns valid tables");
         if turn
             .mode
             .gate()
@@ -51,6 +37,20 @@ impl Worker {
             // Its cycle went another way while it was queued: nothing written.
             return self.unprepared(turn.id, CYCLE_WENT_ON, None);
         }
+        self.upload_begun(turn, &plan, planned).await
+    }
+
+    /// The upload of `turn`'s `plan` (`planned`) begun ([`Activity::Uploading`]); an upload
+    /// that cannot begin ends its move.
+    async fn upload_begun(
+        &mut self,
+        mut turn: Turn,
+        plan: &crate::plan::Plan,
+        planned: Planned,
+    ) -> Result<(), ContractError> {
+        let tables = plan
+            .valid_tables(&self.robot)
+            .expect("plan_move returns valid tables");
         self.dispatch.machine.upload_begun();
         self.publish_phase();
         let began = now();
@@ -115,16 +115,20 @@ impl Worker {
         Ok((upload, every))
     }
 
-    /// One exchange of an upload; between two, while a start the PLC was given may run, the
-    /// status block is read whenever the last read is `every` old: the running move stays
-    /// watched (its heartbeat, counts, state, progress) through an upload that lasts seconds
-    /// on a slow line, and is stopped as it would be between uploads. A prepared move is
-    /// uploaded behind a cycle's move, whose end (done, or held by its permit) the cycle goes
+    /// One exchange of an upload; before it, when the dispatcher says so (`watch`: a start
+    /// the PLC was given may run and the last read is `every` old), a status read: the running
+    /// move stays watched (its heartbeat, counts, state, progress) through an upload that lasts
+    /// seconds on a slow line, and is stopped as it would be between uploads. A prepared move
+    /// is uploaded behind a cycle's move, whose end (done, or held by its permit) the cycle goes
     /// on from: its status block is read more often, at most a sixth of the link's time
     /// ([`prepared_watch`]). An upload the machine gave up on meanwhile (the PLC stalled or
-    /// restarted) ends there, as does the upload of a prepared move whose gate shut.
-    async fn upload_step(&mut self, mut uploading: Box<Uploading>) -> Result<(), ContractError> {
-        match self.upload_exchange(&mut uploading).await {
+    /// restarted) ends there.
+    pub(super) async fn upload_step(
+        &mut self,
+        mut uploading: Box<Uploading>,
+        watch: bool,
+    ) -> Result<(), ContractError> {
+        match self.upload_exchange(&mut uploading, watch).await {
             Ok(None) => {
                 self.dispatch.activity = Activity::Uploading(uploading);
                 Ok(())
@@ -140,17 +144,9 @@ impl Worker {
     async fn upload_exchange(
         &mut self,
         uploading: &mut Uploading,
+        watch: bool,
     ) -> Result<Option<VerifiedBank>, ContractError> {
-        let gate = uploading.turn.mode.gate();
-        if gate.is_some_and(|g| g.state() == GateState::Shut) {
-            return Err(ContractError::Aborted);
-        }
-        let due = self
-            .dispatch
-            .machine
-            .read_at()
-            .is_none_or(|at| now().saturating_duration_since(at) >= uploading.every);
-        if due && !self.dispatch.machine.given().is_empty() {
+        if watch {
             self.poll().await?;
             if !matches!(self.dispatch.machine.phase(), Phase::Uploading { .. }) {
                 // Stalled, restarted, ...: this bank will not be started; the link is needed
@@ -166,21 +162,13 @@ impl Worker {
         self.link()?.upload_step(&mut uploading.upload).await
     }
 
-    /// Its bank written and verified: a prepared move is held, any other proven.
+    /// Its bank written and verified ([`Dispatcher::uploaded`]): its upload time recorded, a
+    /// prepared move's report says so.
+    ///
+    /// [`Dispatcher::uploaded`]: super::dispatch::Dispatcher::uploaded
     fn uploaded(&mut self, uploading: Uploading, bank: VerifiedBank) {
-        // Written whole from the directory's end, a bank may lie over tables preloaded past
-        // its own, which no later start may rest on. Only a start from rest, whose section's
-        // parts were placed around it, keeps them.
-        if !(bank.on_preload || uploading.from_rest) {
-            self.dispatch.forget_preloads();
-        }
-        let Uploading { turn, planned, .. } = uploading;
-        let id = turn.id;
-        let upload_s = now()
-            .saturating_duration_since(uploading.began)
-            .as_secs_f64();
+        let (id, upload_s, prepared) = self.dispatch.uploaded(uploading, bank, now());
         self.shared.metrics.uploaded(upload_s);
-        let prepared = turn.mode.gate().is_some();
         self.shared.moves(|m| {
             m.update(id, |r| {
                 r.upload_s = Some(upload_s);
@@ -189,17 +177,6 @@ impl Worker {
                 }
             });
         });
-        let uploaded = Box::new(Uploaded {
-            turn,
-            planned,
-            bank,
-            upload_s,
-        });
-        self.dispatch.activity = if prepared {
-            Activity::Holding(uploaded)
-        } else {
-            Activity::Proving(uploaded)
-        };
     }
 
     /// Ends the move of `turn`, whose upload failed by `e`: a prepared move is cancelled before
@@ -217,52 +194,16 @@ impl Worker {
         self.unprepared(turn.id, &why, link_broken(&e).then_some(e))
     }
 
-    /// One step of holding a prepared move's bank ([`Self::hold_step`]). Released on a status
-    /// block read within a poll (the one that met its wait) it starts on it, as a move's turn
-    /// is planned on one; else on a fresh read.
-    async fn hold(&mut self, held: Box<Uploaded>) -> Result<(), ContractError> {
-        let gate = held.turn.mode.gate().expect("held behind a gate").clone();
-        let id = held.turn.id;
-        match self.hold_step(&gate).await {
-            Ok(Hold::Wait) => {
-                self.dispatch.activity = Activity::Holding(held);
-                Ok(())
-            }
-            Ok(Hold::Cancel(why)) => self.unprepared(id, why, None),
-            Ok(Hold::Release) => {
-                let fresh = self.dispatch.machine.read_at().is_some_and(|at| {
-                    now().saturating_duration_since(at) < self.settings.poll_interval
-                }) && self
-                    .dispatch
-                    .machine
-                    .may_start(&held.planned, now())
-                    .is_ok();
-                if fresh {
-                    self.start(*held).await
-                } else {
-                    self.dispatch.activity = Activity::Proving(held);
-                    Ok(())
-                }
-            }
-            Err(e) => {
-                let why = describe(&e);
-                self.unprepared(id, &why, Some(e))
-            }
-        }
-    }
-
     /// The contract's first step once more, after the upload: the bank is started only once
     /// the heartbeat is seen moving, while the PLC takes it and every count is the plan's `from`
     /// (or it chains behind the start whose targets are its `from`). When two reads are needed
     /// for the heartbeat, the first is of its word alone. One read a step.
-    async fn prove(&mut self, uploaded: Box<Uploaded>) -> Result<(), ContractError> {
+    pub(super) async fn prove(&mut self, uploaded: Box<Uploaded>) -> Result<(), ContractError> {
         match self.proof_read(&uploaded.planned).await {
-            Ok(true) => self.start(*uploaded).await,
-            Ok(false) => {
-                tokio::time::sleep(self.settings.scan_time / 2).await;
-                self.dispatch.activity = Activity::Proving(uploaded);
-                Ok(())
-            }
+            Ok(proven) => match self.dispatch.proven(uploaded, proven, now()) {
+                Some(uploaded) => self.start(*uploaded).await,
+                None => Ok(()),
+            },
             Err(e) => self.not_started(uploaded.turn.id, e),
         }
     }
@@ -287,7 +228,7 @@ impl Worker {
 
     /// Writes the start of `uploaded`, unless it begins at speed and the start it was to chain
     /// behind ended meanwhile.
-    async fn start(&mut self, uploaded: Uploaded) -> Result<(), ContractError> {
+    pub(super) async fn start(&mut self, uploaded: Uploaded) -> Result<(), ContractError> {
         let Uploaded {
             turn,
             planned,

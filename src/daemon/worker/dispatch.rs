@@ -13,14 +13,19 @@
 //! ```
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::contract::machine::{Blocker, Machine, Outcome, Planned, Status};
 use crate::contract::{CHANNELS, Fault, Permit};
 use crate::daemon::gate::{Gate, GateState};
-use crate::order::CheckedOrder;
+use crate::order::{CheckedOrder, SectionOrder};
 use crate::plc::exchange::{Preload, Upload, VerifiedBank, describe_outcome};
 use crate::wire::{EndReason, MoveId, Stage};
+
+mod next;
+use next::Retry;
+pub(super) use next::{Action, PollPace, Seen};
 
 /// How a prepared move cancelled before its start begins its report's error: the cycle then runs
 /// it as any move, after its wait.
@@ -65,6 +70,9 @@ impl Queued {
         })
     }
 }
+
+/// A part of a path section queued: its id and order.
+pub(super) type Part = (MoveId, CheckedOrder);
 
 /// How a move whose turn came is started.
 #[derive(Debug, Clone)]
@@ -144,8 +152,8 @@ pub(super) enum Activity {
     /// A prepared move's bank, verified, held until its gate opens.
     Holding(Box<Uploaded>),
     /// Its bank verified: reading the status block until the PLC may take its start (the
-    /// heartbeat seen moving, the counts at its `from`).
-    Proving(Box<Uploaded>),
+    /// heartbeat seen moving, the counts at its `from`); the next read not before this.
+    Proving(Box<Uploaded>, Option<Instant>),
 }
 
 /// A move whose bank is being written.
@@ -296,11 +304,24 @@ pub(super) struct Dispatcher {
     stop_asked: Option<Instant>,
     /// What is done with the move whose turn came.
     pub activity: Activity,
+    /// How often the status block is read.
+    pace: PollPace,
+    /// When the status block is next to be read (`None`: now).
+    next_poll: Option<Instant>,
+    /// Whether a gateway exchange goes before the next status read, if both are due.
+    gateway_turn: bool,
+    /// Whether the PLC's mode is to be read (a poll found the robot at rest, its mode old).
+    mode_due: bool,
+    /// Whether the status block was just read (a held bank is checked on it).
+    just_polled: bool,
+    /// While the link is down: when it is next opened.
+    retry: Retry,
 }
 
 impl Dispatcher {
-    /// Nothing queued or in flight; `machine` knows nothing of the PLC yet.
-    pub(super) fn new(machine: Machine, start_within: Duration) -> Self {
+    /// Nothing queued or in flight; `machine` knows nothing of the PLC yet; the status block
+    /// read at `pace`.
+    pub(super) fn new(machine: Machine, start_within: Duration, pace: PollPace) -> Self {
         Self {
             machine,
             queue: VecDeque::new(),
@@ -311,6 +332,12 @@ impl Dispatcher {
             next_bank: 0,
             stop_asked: None,
             activity: Activity::Idle,
+            pace,
+            next_poll: None,
+            gateway_turn: false,
+            mode_due: false,
+            just_polled: false,
+            retry: Retry::Now,
         }
     }
 
@@ -320,6 +347,7 @@ impl Dispatcher {
     }
 
     /// The queue, its head first.
+    #[cfg(test)]
     pub(super) fn queue(&self) -> &VecDeque<Queued> {
         &self.queue
     }
@@ -327,11 +355,6 @@ impl Dispatcher {
     /// Queues `queued` behind the rest.
     pub(super) fn push(&mut self, queued: Queued) {
         self.queue.push_back(queued);
-    }
-
-    /// Takes the head of the queue.
-    pub(super) fn pop(&mut self) -> Option<Queued> {
-        self.queue.pop_front()
     }
 
     /// Puts `queued` back at the head of the queue: its turn has not come.
@@ -473,6 +496,26 @@ impl Dispatcher {
                 }
             })
             .collect()
+    }
+
+    /// The parts of a path section chained at speed queued at the head (the first part's turn
+    /// just came): the section, and each part's id and order, in order.
+    pub(super) fn section_behind(&self) -> Option<(Arc<SectionOrder>, Vec<Part>)> {
+        let section = self
+            .queue
+            .front()
+            .filter(|q| q.order.begins_at_speed())
+            .and_then(|q| q.order.section().cloned())?;
+        let behind = self
+            .queue
+            .iter()
+            .take_while(|q| {
+                q.order.begins_at_speed()
+                    && q.order.section().is_some_and(|s| Arc::ptr_eq(s, &section))
+            })
+            .map(|q| (q.id, q.order.clone()))
+            .collect();
+        Some((section, behind))
     }
 
     /// Forgets every preload: a bank written whole may lie over them.

@@ -214,22 +214,7 @@ impl Worker {
     /// What an event changes in the reports and the robot's state (no exchanges).
     fn report_event(&mut self, event: Event) {
         match event {
-            Event::Started { tag } => {
-                self.dispatch.started(tag, now());
-                let deadline_s = self.run_deadline(tag).map(|d| d.as_secs_f64());
-                self.shared.moves(|m| {
-                    m.update(tag, |r| {
-                        r.stage = Stage::Running;
-                        // From its start on: its run limit and the grace of a lost link (a move
-                        // chained behind another waited for that one first).
-                        r.deadline_s = deadline_s.or(r.deadline_s);
-                    });
-                });
-                self.out.state(|s| {
-                    s.current_move = Some(tag);
-                    s.queued.retain(|q| *q != tag);
-                });
-            }
+            Event::Started { tag } => self.started(tag),
             Event::Waiting { tag } => {
                 self.shared
                     .moves(|m| m.update(tag, |r| r.stage = Stage::Waiting));
@@ -238,35 +223,22 @@ impl Worker {
                 tag,
                 elapsed,
                 fraction,
-            } => self.shared.moves(|m| {
-                m.update(tag, |r| {
-                    r.counts = Some(elapsed.map(i64::from));
-                    r.progress = fraction;
-                });
-            }),
+            } => self.progress(tag, elapsed, fraction),
             Event::Done { tag, elapsed } => self.done(tag, elapsed),
             Event::Ended { tag, outcome } => self.ended(tag, outcome),
-            Event::Restarted => {
-                tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
-                self.cancel_queue("cancelled: the PLC restarted");
-                self.dispatch.forget_starts();
-            }
+            Event::Restarted => self.restarted(),
             Event::Stalled { still } => {
                 tracing::error!(robot = %self.robot.name, still_ms = still.as_millis() as u64, "the PLC heartbeat stands still");
                 self.cancel_queue("cancelled: the PLC heartbeat stood still");
             }
             Event::Homed => {
                 tracing::info!(robot = %self.robot.name, "homed");
-                for reply in std::mem::take(&mut self.inbox.homing) {
-                    let _ = reply.send(Ok(()));
-                }
+                self.homing_ended(&Ok(()));
             }
             Event::HomeFailed { fault } => {
                 let why = CommandError::HomeFailed { fault };
                 tracing::error!(robot = %self.robot.name, "{why}");
-                for reply in std::mem::take(&mut self.inbox.homing) {
-                    let _ = reply.send(Err(why.clone()));
-                }
+                self.homing_ended(&Err(why));
             }
             Event::WriteHost
             | Event::WriteStop
@@ -274,6 +246,48 @@ impl Worker {
             | Event::Withdraw { .. }
             | Event::FoundRunning { .. }
             | Event::FoundWaiting { .. } => {}
+        }
+    }
+
+    /// Move `tag` was seen starting: its report runs, its deadline counted from now.
+    fn started(&mut self, tag: MoveId) {
+        self.dispatch.started(tag, now());
+        let deadline_s = self.run_deadline(tag).map(|d| d.as_secs_f64());
+        self.shared.moves(|m| {
+            m.update(tag, |r| {
+                r.stage = Stage::Running;
+                // From its start on: its run limit and the grace of a lost link (a move
+                // chained behind another waited for that one first).
+                r.deadline_s = deadline_s.or(r.deadline_s);
+            });
+        });
+        self.out.state(|s| {
+            s.current_move = Some(tag);
+            s.queued.retain(|q| *q != tag);
+        });
+    }
+
+    /// The PLC restarted: the queue cancelled, no start written again.
+    fn restarted(&mut self) {
+        tracing::error!(robot = %self.robot.name, "the PLC restarted: every move it was given ended failed; nothing starts until it is homed");
+        self.cancel_queue("cancelled: the PLC restarted");
+        self.dispatch.forget_starts();
+    }
+
+    /// Move `tag` runs on: its counts and its share of its planned path.
+    fn progress(&self, tag: MoveId, elapsed: [i32; CHANNELS], fraction: f64) {
+        self.shared.moves(|m| {
+            m.update(tag, |r| {
+                r.counts = Some(elapsed.map(i64::from));
+                r.progress = fraction;
+            });
+        });
+    }
+
+    /// The home routine ended: every home request is answered with `result`.
+    fn homing_ended(&mut self, result: &Result<(), CommandError>) {
+        for reply in std::mem::take(&mut self.inbox.homing) {
+            let _ = reply.send(result.clone());
         }
     }
 

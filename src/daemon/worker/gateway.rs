@@ -4,10 +4,8 @@
 
 use std::time::Duration;
 
-use tokio::time::Instant;
-
-use super::Worker;
-use crate::daemon::gateway::{GatewayError, Piece, Values};
+use super::{Worker, now};
+use crate::daemon::gateway::{GatewayError, Job, Piece, Values};
 use crate::plc::exchange::ContractError;
 use crate::plc::{AnyPlc, Plc, PlcError};
 
@@ -19,43 +17,17 @@ impl Worker {
             self.gateway_link_down();
             return Ok(());
         };
-        let plc = session.contract.plc();
-        let sizes = plc.exchange_sizes();
-        let Some(job) = self.inbox.gateway.front_mut() else {
-            return Ok(());
-        };
-        let incidents = self.out.incidents();
-        if job.epoch.is_some_and(|e| e != incidents.count) {
-            // Asked for before the PLC restarted, stalled or was lost: a cycle's output is
-            // never written to a PLC it no longer knows.
-            let job = self.inbox.gateway.pop_front().expect("front");
-            let why = incidents.last.unwrap_or_default();
-            tracing::warn!(robot = %self.robot.name, range = %job.range, "a cycle's output not written: {why} since it was asked for");
-            let _ = job.reply.send(Err(GatewayError::Untrusted { why }));
+        let sizes = session.contract.plc().exchange_sizes();
+        if self.inbox.gateway.is_empty() || self.refuse_untrusted() {
             return Ok(());
         }
+        let job = self.inbox.gateway.front_mut().expect("not empty");
         let Some(piece) = job.next_piece(sizes) else {
             let job = self.inbox.gateway.pop_front().expect("front");
             job.finish();
             return Ok(());
         };
-        let began = Instant::now();
-        let result = exchange(plc, &piece).await;
-        let ended = Instant::now();
-        // How long a status read that fell due meanwhile waited for this exchange.
-        let held = ended.saturating_duration_since(began.max(self.next_poll));
-        self.out.state(|s| {
-            s.gateway.exchanges += 1;
-            s.gateway.longest_exchange_ms =
-                s.gateway.longest_exchange_ms.max(millis(ended - began));
-            s.gateway.longest_poll_delay_ms = s.gateway.longest_poll_delay_ms.max(millis(held));
-        });
-        if self.next_poll <= ended {
-            self.shared
-                .metrics
-                .waited_behind_gateway(held.as_secs_f64());
-        }
-        match result {
+        match self.timed_exchange(&piece).await? {
             Ok(read) => {
                 let job = self.inbox.gateway.front_mut().expect("front");
                 job.piece_done(&piece, read);
@@ -67,23 +39,67 @@ impl Worker {
                 }
                 Ok(())
             }
-            Err(e) => {
-                let job = self.inbox.gateway.pop_front().expect("front");
-                self.out.state(|s| {
-                    s.gateway.requests += 1;
-                    s.gateway.failed += 1;
-                });
-                self.shared.metrics.gateway_request(true);
-                if e.is_link_failure() {
-                    let _ = job.reply.send(Err(GatewayError::LinkDown {
-                        detail: Some(e.to_string()),
-                    }));
-                    Err(ContractError::Plc(e))
-                } else {
-                    let _ = job.reply.send(Err(GatewayError::Plc(e.to_string())));
-                    Ok(())
-                }
-            }
+            Err(e) => self.gateway_failed(e),
+        }
+    }
+
+    /// Refuses the oldest request if it was asked for before the PLC restarted, stalled or was
+    /// lost: a cycle's output is never written to a PLC it no longer knows.
+    fn refuse_untrusted(&mut self) -> bool {
+        let incidents = self.out.incidents();
+        let stale = |job: &Job| job.epoch.is_some_and(|e| e != incidents.count);
+        if !self.inbox.gateway.front().is_some_and(stale) {
+            return false;
+        }
+        let job = self.inbox.gateway.pop_front().expect("front");
+        let why = incidents.last.unwrap_or_default();
+        tracing::warn!(robot = %self.robot.name, range = %job.range, "a cycle's output not written: {why} since it was asked for");
+        let _ = job.reply.send(Err(GatewayError::Untrusted { why }));
+        true
+    }
+
+    /// One exchange of `piece`, timed into the gateway's figures: how long it took and how long
+    /// a status read that fell due meanwhile waited for it.
+    async fn timed_exchange(
+        &mut self,
+        piece: &Piece,
+    ) -> Result<Result<Option<Values>, PlcError>, ContractError> {
+        let plc = self.link()?.plc();
+        let began = now();
+        let result = exchange(plc, piece).await;
+        let ended = now();
+        let due = self.dispatch.next_poll().unwrap_or(began);
+        let held = ended.saturating_duration_since(began.max(due));
+        self.out.state(|s| {
+            s.gateway.exchanges += 1;
+            s.gateway.longest_exchange_ms =
+                s.gateway.longest_exchange_ms.max(millis(ended - began));
+            s.gateway.longest_poll_delay_ms = s.gateway.longest_poll_delay_ms.max(millis(held));
+        });
+        if due <= ended {
+            self.shared
+                .metrics
+                .waited_behind_gateway(held.as_secs_f64());
+        }
+        Ok(result)
+    }
+
+    /// The oldest request failed by `e`: answered; a link failure goes on up.
+    fn gateway_failed(&mut self, e: PlcError) -> Result<(), ContractError> {
+        let job = self.inbox.gateway.pop_front().expect("front");
+        self.out.state(|s| {
+            s.gateway.requests += 1;
+            s.gateway.failed += 1;
+        });
+        self.shared.metrics.gateway_request(true);
+        if e.is_link_failure() {
+            let _ = job.reply.send(Err(GatewayError::LinkDown {
+                detail: Some(e.to_string()),
+            }));
+            Err(ContractError::Plc(e))
+        } else {
+            let _ = job.reply.send(Err(GatewayError::Plc(e.to_string())));
+            Ok(())
         }
     }
 

@@ -60,59 +60,47 @@ impl Worker {
             None => attempt.await,
         };
         match opened {
-            Ok(plc) => {
-                self.conn.session = Some(Session::open(plc, self.settings, &self.shared));
-                self.conn.backoff = BACKOFF_MIN;
-                // The first opening is a connection, not a reconnection.
-                let again = std::mem::replace(&mut self.conn.opened_before, true);
-                self.out.state(|s| s.link.reconnects += u64::from(again));
-                if again {
-                    self.shared.metrics.reconnected();
-                }
-                tracing::info!(robot = %self.robot.name, "PLC link opened");
-                if let Err(e) = self.poll().await {
-                    self.link_failed(&e);
-                }
-            }
-            Err(e) => {
-                let text = describe(&e);
-                let changed = self.out.state(|s| {
-                    s.link.connected = false;
-                    let changed = s.link.error.as_deref() != Some(text.as_str());
-                    s.link.error = Some(text.clone());
-                    changed
-                });
-                // Once per change, not once per retry: the journal keeps the first and the news.
-                if changed {
-                    let hint = crate::plc::open_hint(&e);
-                    tracing::warn!(robot = %self.robot.name, error = %text, hint, "cannot open the PLC link");
-                }
-                self.publish_refusal();
-                let until_expiry = self
-                    .dispatch
-                    .machine
-                    .expires_while_down()
-                    .map(|at| at.saturating_duration_since(now()));
-                let wait = until_expiry.map_or(self.conn.backoff, |d| self.conn.backoff.min(d));
-                self.conn.backoff = (self.conn.backoff * 2).min(BACKOFF_MAX);
-                self.wait(wait).await;
-                self.offline_requests().await;
-            }
+            Ok(plc) => self.opened(plc).await,
+            Err(e) => self.open_failed(&e),
         }
     }
 
-    /// While the link is down: stops and commands are answered at once (the link is down),
-    /// queued moves are cancelled by a stop and expire after `start_within`.
-    async fn offline_requests(&mut self) {
-        if !self.inbox.pending_stops.is_empty() {
-            let _ = self.take_stops().await;
+    /// The link opened: a session over it, and its first status block read.
+    async fn opened(&mut self, plc: crate::plc::AnyPlc) {
+        self.conn.session = Some(Session::open(plc, self.settings, &self.shared));
+        self.conn.backoff = BACKOFF_MIN;
+        // The first opening is a connection, not a reconnection.
+        let again = std::mem::replace(&mut self.conn.opened_before, true);
+        self.out.state(|s| s.link.reconnects += u64::from(again));
+        if again {
+            self.shared.metrics.reconnected();
         }
-        for command in std::mem::take(&mut self.inbox.commands) {
-            let detail = self.out.state(|s| s.link.error.clone());
-            super::answer(command, Err(super::CommandError::LinkDown { detail }));
+        tracing::info!(robot = %self.robot.name, "PLC link opened");
+        if let Err(e) = self.poll().await {
+            self.link_failed(&e);
         }
-        self.expire_queue();
-        self.gateway_link_down();
+    }
+
+    /// An attempt to open the link failed by `e`: said once per change, and the next attempt
+    /// after the backoff, which doubles.
+    fn open_failed(&mut self, e: &crate::plc::PlcError) {
+        let text = describe(e);
+        let changed = self.out.state(|s| {
+            s.link.connected = false;
+            let changed = s.link.error.as_deref() != Some(text.as_str());
+            s.link.error = Some(text.clone());
+            changed
+        });
+        // Once per change, not once per retry: the journal keeps the first and the news.
+        if changed {
+            let hint = crate::plc::open_hint(e);
+            tracing::warn!(robot = %self.robot.name, error = %text, hint, "cannot open the PLC link");
+        }
+        self.publish_refusal();
+        // The dispatcher waits this long (never past a move's expiry), answers what came
+        // meanwhile and opens the link again.
+        self.dispatch.connect_failed(now(), self.conn.backoff);
+        self.conn.backoff = (self.conn.backoff * 2).min(BACKOFF_MAX);
     }
 
     /// Starts in flight past their planned end while the link is down end as unknown.

@@ -1,19 +1,20 @@
 //! The task that owns one robot's PLC link. Everything else sends it requests; it carries out
 //! the contract (docs/CONTRACT.md, "What the host does for one move"). Its decisions are the
 //! pure [`Dispatcher`]'s (the queue, one record per move in flight, how a move starts, what the
-//! worker is doing as one [`Activity`], and the contract's [`Machine`] deciding what every
-//! status block means); the worker is its driver: one loop that makes the exchanges they ask
-//! for over the link's session, feeds back what came of them, and applies what the machine
-//! says in one place ([`events`]).
+//! worker is doing as one [`Activity`], the contract's [`Machine`] deciding what every status
+//! block means, and what comes next as an [`Action`]); the worker is its driver: one loop that
+//! takes in what came, asks the dispatcher for the next action, carries it out over the link's
+//! session and feeds back what came of it, and applies what the machine says in one place
+//! ([`events`]).
 //!
 //! ```text
-//! run: loop { link down: reconnect | step: by the activity, one step a round }
-//!   Idle:       stops first | commands | queue expiry | begin a move | poll | gateway | wait
-//!   Uploading:  one exchange of the bank (the running start watched between)
-//!   Holding:    a prepared bank held until its gate opens (reads, gateway, wait)
-//!   Proving:    one proof read until the PLC may take the start; then the start written once
-//!   mod.rs       the loop, waiting on requests, stops, home and clear-fault, shutdown
-//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers)
+//! run: loop { take in | action = dispatcher.next(seen, now) | carry it out }
+//!   Connect | Stop | Commands | Finish | ReadMode | Begin | UploadStep | ProveRead | WriteStart
+//!   | Unprepare | Gateway | Poll | Pause | Wait (the one select!: requests, stops, gateway,
+//!   shutdown, a read asked for, a held bank's gate, the timer)
+//!   mod.rs       the loop, carrying actions out, stops, home and clear-fault, shutdown
+//!   dispatch.rs  PURE: the decisions (queue, InFlight, StartMode, Activity, followers);
+//!                dispatch/next.rs: what comes next ([`Action`])
 //!   activity.rs  the steps of the move whose turn came
 //!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
 //!   events.rs    reading the status block into the machine; applying its events to the reports
@@ -40,7 +41,6 @@ mod session;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
-use std::time::Duration;
 
 use tokio::sync::{mpsc, watch};
 
@@ -55,12 +55,7 @@ use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettin
 use crate::plc::{AnyPlc, Plc};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
-use dispatch::{Activity, Dispatcher, Queued};
-
-/// Polling while nothing is in flight (the heartbeat's freshness comes from these reads).
-const IDLE_POLL: Duration = Duration::from_millis(250);
-/// How often the PLC's mode (RUN / PROG) is read while nothing is in flight.
-const MODE_POLL: Duration = Duration::from_secs(10);
+use dispatch::{Action, Activity, Dispatcher, PollPace, Queued, Seen};
 
 /// What a worker receives on.
 pub(super) struct Channels {
@@ -111,10 +106,9 @@ pub(super) struct Worker {
     conn: link::Connection,
     /// What comes in, and what was taken in and waits to be carried out.
     inbox: Inbox,
-    /// The queue, the moves in flight and the contract's machine: what the worker decides.
+    /// The queue, the moves in flight, the contract's machine and what the worker does next:
+    /// what it decides.
     dispatch: Dispatcher,
-    /// When the status block is next to be read.
-    next_poll: tokio::time::Instant,
 }
 
 /// What the worker receives, and what it took in that waits for its turn.
@@ -129,8 +123,6 @@ struct Inbox {
     shutdown: watch::Receiver<bool>,
     /// Register gateway requests, served one exchange at a time between the worker's own.
     gateway: VecDeque<super::gateway::Job>,
-    /// Whether a gateway exchange goes before the next status read, if both are due.
-    gateway_turn: bool,
     /// Stops taken while waiting, answered by the next `take_stops`.
     pending_stops: Vec<Reply>,
     /// Home and clear-fault requests taken while waiting.
@@ -148,6 +140,10 @@ impl Worker {
         out: Publisher,
     ) -> Self {
         let machine = Machine::new(setup.settings.watch, options.host);
+        let pace = PollPace {
+            poll_interval: setup.settings.poll_interval,
+            scan_time: setup.settings.scan_time,
+        };
         Self {
             robot: setup.robot,
             settings: setup.settings,
@@ -161,31 +157,27 @@ impl Worker {
                 gateway_rx: channels.gateway,
                 shutdown: channels.shutdown,
                 gateway: VecDeque::new(),
-                gateway_turn: false,
                 pending_stops: Vec::new(),
                 commands: Vec::new(),
                 homing: Vec::new(),
             },
-            dispatch: Dispatcher::new(machine, options.start_within),
-            next_poll: tokio::time::Instant::now(),
+            dispatch: Dispatcher::new(machine, options.start_within, pace),
         }
     }
 
-    /// Runs until shutdown.
+    /// Runs until shutdown: one loop that takes in what came, asks the dispatcher what comes
+    /// next ([`Dispatcher::next`]) and carries it out.
     pub(super) async fn run(mut self) {
         loop {
             self.shared.beat.mark();
-            // A move between its turn and its start goes on to its start or its end first.
-            let idle = matches!(self.dispatch.activity, Activity::Idle);
-            if idle && *self.inbox.shutdown.borrow() {
+            self.take_in();
+            let seen = self.seen();
+            let action = self.dispatch.next(seen, now());
+            if matches!(action, Action::ShutDown) {
                 self.shut_down().await;
                 return;
             }
-            if idle && self.conn.session.is_none() {
-                self.reconnect().await;
-                continue;
-            }
-            if let Err(e) = self.step().await {
+            if let Err(e) = self.carry_out(action).await {
                 if link_broken(&e) {
                     self.link_failed(&e);
                 } else {
@@ -195,48 +187,101 @@ impl Worker {
         }
     }
 
-    /// One round while no move is between its turn and its start: a stop first, then commands,
-    /// the queue, a move to begin, the status block when its read is due, else one register
-    /// gateway exchange; then a wait for what comes next.
-    async fn idle_step(&mut self) -> Result<(), ContractError> {
-        // Requests come in here too: a busy gateway never leaves the worker without a wait.
-        self.take_pending_requests();
-        self.take_stops().await?;
-        self.run_commands().await?;
-        self.drop_shut();
-        self.expire_queue();
-        if self.has_room() {
-            let queued = self.dispatch.pop().expect("not empty");
-            self.next_poll = tokio::time::Instant::now();
-            return self.begin(queued).await;
-        }
-        let poll_due = tokio::time::Instant::now() >= self.next_poll;
-        // Gateway exchanges go between the worker's own, one at a time; when the status read is
-        // due too they take turns, so neither waits behind more than one of the other.
-        if !self.inbox.gateway.is_empty() && (!poll_due || self.inbox.gateway_turn) {
-            self.inbox.gateway_turn = false;
-            return self.gateway_exchange().await;
-        }
-        if poll_due {
-            self.poll().await?;
-            self.inbox.gateway_turn = true;
-            self.expire_queue();
-            let idle = matches!(self.dispatch.machine.phase(), Phase::Idle | Phase::Unhomed);
-            let mode_read = self.session()?.mode_read;
-            if idle && mode_read.is_none_or(|t| now().saturating_duration_since(t) > MODE_POLL) {
-                self.read_mode().await?;
+    /// Carries out one of the dispatcher's actions over the session.
+    async fn carry_out(&mut self, action: Action) -> Result<(), ContractError> {
+        match action {
+            Action::ShutDown => {
+                self.shut_down().await;
+                Ok(())
             }
-            self.next_poll = tokio::time::Instant::now() + self.poll_pause();
-            if self.has_room() {
-                // The PLC has room now (the move before was just seen running): begin at once,
-                // on this status block.
-                return Ok(());
+            Action::Connect => {
+                self.reconnect().await;
+                Ok(())
+            }
+            Action::Stop => self.take_stops().await,
+            Action::Commands => self.run_commands().await,
+            Action::Finish(ends) => {
+                self.finish_all(ends);
+                Ok(())
+            }
+            Action::ReadMode => self.read_mode().await,
+            Action::Begin(queued) => self.begin(*queued).await,
+            Action::UploadStep { uploading, watch } => self.upload_step(uploading, watch).await,
+            Action::ProveRead(uploaded) => self.prove(uploaded).await,
+            Action::WriteStart(uploaded) => self.start(*uploaded).await,
+            Action::Unprepare { id, why } => self.unprepared(id, &why, None),
+            Action::Gateway => {
+                let done = self.gateway_exchange().await;
+                self.held_through(done)
+            }
+            Action::Poll => {
+                let done = self.poll_step().await;
+                self.held_through(done)
+            }
+            Action::Wait { until, gate } => {
+                self.wait_until(until, gate.as_ref()).await;
+                Ok(())
+            }
+            Action::Pause { until } => {
+                tokio::time::sleep_until(until.into()).await;
+                Ok(())
             }
         }
-        if self.inbox.gateway.is_empty() {
-            self.wait_until(self.next_poll, None).await;
-        }
+    }
+
+    /// The status block read for the dispatcher's [`Action::Poll`], and what it learns of it.
+    async fn poll_step(&mut self) -> Result<(), ContractError> {
+        self.poll().await?;
+        let mode_read = self.conn.session.as_ref().and_then(|s| s.mode_read);
+        let watched = self.shared.inputs_watched.load(Ordering::Relaxed);
+        self.dispatch.polled(now(), mode_read, watched);
         Ok(())
+    }
+
+    /// What came of an exchange made while a prepared bank is held: its failure cancels it.
+    fn held_through(&mut self, done: Result<(), ContractError>) -> Result<(), ContractError> {
+        let Err(e) = done else {
+            return Ok(());
+        };
+        match std::mem::take(&mut self.dispatch.activity) {
+            Activity::Holding(held) => {
+                let why = describe(&e);
+                self.unprepared(held.turn.id, &why, Some(e))
+            }
+            other => {
+                self.dispatch.activity = other;
+                Err(e)
+            }
+        }
+    }
+
+    /// Takes in every stop and gateway request already sent, without waiting, and the requests
+    /// unless a bank is being written or proven (they wait for its start).
+    fn take_in(&mut self) {
+        if matches!(
+            self.dispatch.activity,
+            Activity::Idle | Activity::Holding(_)
+        ) {
+            self.take_pending_requests();
+        }
+        while let Ok(reply) = self.inbox.stops.try_recv() {
+            self.inbox.pending_stops.push(reply);
+        }
+        while let Ok(job) = self.inbox.gateway_rx.try_recv() {
+            self.inbox.gateway.push_back(job);
+        }
+    }
+
+    /// What was taken in, as the dispatcher sees it.
+    fn seen(&self) -> Seen {
+        Seen {
+            link_up: self.conn.session.is_some(),
+            shutting_down: *self.inbox.shutdown.borrow(),
+            stop: !self.inbox.pending_stops.is_empty(),
+            commands: !self.inbox.commands.is_empty(),
+            gateway: !self.inbox.gateway.is_empty(),
+            stop_pending: self.shared.stop_pending.load(Ordering::SeqCst),
+        }
     }
 
     /// The open link's session. Every exchange is made from a step the loop runs only while
@@ -250,35 +295,6 @@ impl Worker {
     /// The contract over the open link ([`Self::session`]).
     fn link(&mut self) -> Result<&mut Contract<AnyPlc>, ContractError> {
         Ok(&mut self.session()?.contract)
-    }
-
-    /// Whether the head of the queue can begin now ([`Dispatcher::has_room`]).
-    fn has_room(&self) -> bool {
-        self.dispatch.has_room(now())
-    }
-
-    /// How long until the next status read: short while anything is in flight or queued.
-    fn poll_pause(&self) -> Duration {
-        let busy = !matches!(
-            self.dispatch.machine.phase(),
-            Phase::Idle | Phase::Unhomed | Phase::Stalled
-        ) || !self.dispatch.queue().is_empty()
-            || self.dispatch.any_settling()
-            || self
-                .shared
-                .inputs_watched
-                .load(std::sync::atomic::Ordering::Relaxed);
-        if !busy {
-            return IDLE_POLL;
-        }
-        // Near a move's planned end reads come a scan apart: the next step (a start from rest,
-        // a cycle's output) waits on seeing it end.
-        let pace = self.settings.poll_interval;
-        if self.dispatch.machine.near_planned_end(now(), 2 * pace) {
-            self.settings.scan_time.min(pace)
-        } else {
-            pace
-        }
     }
 
     /// Reads the PLC's mode (RUN / PROG) for the robot's state; a PLC that cannot say is not a
@@ -299,15 +315,9 @@ impl Worker {
         }
     }
 
-    /// Waits up to `pause`; a request, a stop or shutdown ends the wait at once.
-    async fn wait(&mut self, pause: Duration) {
-        self.wait_until(tokio::time::Instant::now() + pause, None)
-            .await;
-    }
-
     /// Waits until `until`; a request, a stop, a gateway request, shutdown, a read asked for
     /// soon or `gate` deciding (a held bank's) ends the wait.
-    async fn wait_until(&mut self, until: tokio::time::Instant, gate: Option<&Gate>) {
+    async fn wait_until(&mut self, until: std::time::Instant, gate: Option<&Gate>) {
         let decided = async {
             match gate {
                 Some(gate) => gate.decided().await,
@@ -332,10 +342,8 @@ impl Worker {
                     self.inbox.gateway.push_back(job);
                 }
             }
-            () = tokio::time::sleep_until(until) => {}
-            () = self.shared.read_soon.notified() => {
-                self.next_poll = tokio::time::Instant::now();
-            }
+            () = tokio::time::sleep_until(until.into()) => {}
+            () = self.shared.read_soon.notified() => self.dispatch.poll_now(),
             () = decided => {}
         }
     }
@@ -349,7 +357,7 @@ impl Worker {
 
     fn take_request(&mut self, request: Request) {
         // Something to do: the status block is read at once, not at the next idle poll.
-        self.next_poll = tokio::time::Instant::now();
+        self.dispatch.poll_now();
         match request {
             Request::Moves(batch) => self.accept(batch),
             command => self.inbox.commands.push(command),
@@ -403,7 +411,7 @@ impl Worker {
         if replies.is_empty() {
             return Ok(());
         }
-        self.next_poll = tokio::time::Instant::now();
+        self.dispatch.poll_now();
         let result = match self.conn.session.as_mut() {
             Some(session) => session.contract.stop().await,
             None => Err(ContractError::Blocked(
@@ -412,6 +420,24 @@ impl Worker {
         };
         self.shared.stop_pending.store(false, Ordering::SeqCst);
         self.dispatch.stop_asked(now());
+        self.cancel_for_stop();
+        if result.is_ok() {
+            self.dispatch.machine.stop_written(now());
+        }
+        let answer_for = self.stop_answer(&result);
+        for reply in replies {
+            let _ = reply.send(answer_for.clone());
+        }
+        tracing::info!(robot = %self.robot.name, ok = result.is_ok(), "stop taken");
+        match result {
+            Err(e) if link_broken(&e) => Err(e),
+            _ => Ok(()),
+        }
+    }
+
+    /// A stop was taken: the orders sent before it and the queue are cancelled, the commands
+    /// refused.
+    fn cancel_for_stop(&mut self) {
         // Orders sent before this stop join the queue, to be cancelled with it.
         while let Ok(request) = self.inbox.requests.try_recv() {
             self.take_request(request);
@@ -427,10 +453,11 @@ impl Worker {
         self.cancel_queue("cancelled by a stop request");
         // Orders asked after it plan from where the robot stops, not from a queue's end.
         self.out.set_planned_end(None);
-        if result.is_ok() {
-            self.dispatch.machine.stop_written(now());
-        }
-        let answer_for = match &result {
+    }
+
+    /// What the askers of a stop are answered, its write having come to `result`.
+    fn stop_answer(&self, result: &Result<(), ContractError>) -> Result<(), CommandError> {
+        match result {
             Ok(()) => Ok(()),
             Err(_) if self.conn.session.is_none() => Err(CommandError::LinkDown {
                 detail: self.out.state(|s| s.link.error.clone()),
@@ -441,14 +468,6 @@ impl Worker {
             Err(e) => Err(CommandError::Plc {
                 detail: describe(e),
             }),
-        };
-        for reply in replies {
-            let _ = reply.send(answer_for.clone());
-        }
-        tracing::info!(robot = %self.robot.name, ok = result.is_ok(), "stop taken");
-        match result {
-            Err(e) if link_broken(&e) => Err(e),
-            _ => Ok(()),
         }
     }
 

@@ -31,11 +31,9 @@ impl Worker {
     ///
     /// [`Dispatcher::turn`]: super::dispatch::Dispatcher::turn
     pub(super) async fn turn(&mut self, queued: Queued) -> Result<Option<Turn>, ContractError> {
-        let fresh =
-            self.dispatch.machine.read_at().is_some_and(|at| {
-                now().saturating_duration_since(at) < self.settings.poll_interval
-            });
-        if !fresh && let Err(e) = self.poll().await {
+        if !self.dispatch.is_fresh(now())
+            && let Err(e) = self.poll().await
+        {
             self.dispatch.push_front(queued);
             return Err(e);
         }
@@ -118,13 +116,7 @@ impl Worker {
                 .moves(|m| m.update(id, |r| r.stage = Stage::Waiting));
         }
         self.publish_phase();
-        // Chained: how long after the move before was seen running this start was written, of
-        // the time that move runs (the chain's slack, as the pace check estimates it).
-        let behind_s = chain
-            .and_then(|c| self.dispatch.started_at(c.tag))
-            .map(|seen| now().saturating_duration_since(seen).as_secs_f64());
-        let runs_s = chain.map(|c| c.duration.as_secs_f64());
-        tracing::info!(robot = %self.robot.name, id, seq, bank = planned_bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
+        self.log_start(id, (seq, planned_bank), upload_s, confirmed, chain);
         match written {
             CommandWrite::Unconfirmed(e) if e.is_link_failure() => {
                 // Whether it was taken is learnt from the status block once the link is back.
@@ -132,6 +124,24 @@ impl Worker {
             }
             _ => Ok(()),
         }
+    }
+
+    /// Says a start was written: chained (behind `chain`), how long after the move before was
+    /// seen running, of the time that move runs (the chain's slack, as the pace check
+    /// estimates it).
+    fn log_start(
+        &self,
+        id: MoveId,
+        (seq, bank): (u16, u16),
+        upload_s: f64,
+        confirmed: bool,
+        chain: Option<&Planned>,
+    ) {
+        let behind_s = chain
+            .and_then(|c| self.dispatch.started_at(c.tag))
+            .map(|seen| now().saturating_duration_since(seen).as_secs_f64());
+        let runs_s = chain.map(|c| c.duration.as_secs_f64());
+        tracing::info!(robot = %self.robot.name, id, seq, bank, upload_s, confirmed, chained = chain.is_some(), behind_s, runs_s, "start written");
     }
 
     /// Before a start written while nothing runs (`first`, its `tables`): when the moves queued
@@ -155,67 +165,79 @@ impl Worker {
     ) -> Result<(), ContractError> {
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
-        let Some(section) = self
-            .dispatch
-            .queue()
-            .front()
-            .filter(|q| q.order.begins_at_speed())
-            .and_then(|q| q.order.section().cloned())
-        else {
+        let Some((section, behind)) = self.dispatch.section_behind() else {
             return Ok(());
         };
-        let behind: Vec<(MoveId, CheckedOrder)> = self
-            .dispatch
-            .queue()
-            .iter()
-            .take_while(|q| {
-                q.order.begins_at_speed()
-                    && q.order.section().is_some_and(|s| Arc::ptr_eq(s, &section))
-            })
-            .map(|q| (q.id, q.order.clone()))
-            .collect();
         let area_words = usize::from(self.link()?.settings().layout.area_words);
-        let mut placement = Placement::new(first.bank, tables, area_words);
-        let mut ends_on = first.targets.expect("a plan knows its targets");
-        let mut bank = 1 - first.bank;
-        let mut pace: Option<LinkPace> = None;
-        let mut directories = Vec::new();
+        let mut walk = Walk {
+            placement: Placement::new(first.bank, tables, area_words),
+            ends_on: first.targets.expect("a plan knows its targets"),
+            bank: 1 - first.bank,
+            pace: None,
+            directories: Vec::new(),
+            permit: !first.permit.is_none(),
+            exchange,
+        };
         for (id, order) in behind {
-            let Ok(plan) = plan_order(&self.robot, &order, self.by_joint(ends_on.map(i64::from)))
-            else {
+            if !self.preload_part(&mut walk, &section, id, &order).await? {
                 break;
-            };
-            let Some(tables) = plan.valid_tables(&self.robot) else {
-                break;
-            };
-            let so_far = parts(&section, &directories);
-            let base = match preload::choose(pace.as_ref(), &so_far, &mut placement, bank, &tables)?
-            {
-                Choice::Preload(base) => base,
-                Choice::Enough => break,
-                Choice::Full => {
-                    tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
-                    break;
-                }
-            };
-            let (preloaded, took) = self.preload(bank, base, &tables).await?;
-            tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
-            let pace = match &mut pace {
-                Some(pace) => pace,
-                None => pace.insert(self.pace(exchange, !first.permit.is_none()).await?),
-            };
-            pace.preload += took;
-            pace.preload_words += preloaded.words();
-            directories.push(directories_left(&base, &tables));
-            self.dispatch.preloaded(id, preloaded);
-            ends_on = end_counts(&plan, ends_on);
-            bank = 1 - bank;
+            }
         }
+        let Walk {
+            pace, directories, ..
+        } = walk;
         let Some(pace) = pace else {
             return Ok(());
         };
         tracing::info!(robot = %self.robot.name, parts = directories.len(), words = pace.preload_words, preload_s = pace.preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
         pace.check(&parts(&section, &directories))
+    }
+
+    /// Preloads part `id` (`order`) of `section` on `walk`, if [`preload::choose`] says so:
+    /// whether the walk goes on to the next part.
+    async fn preload_part(
+        &mut self,
+        walk: &mut Walk,
+        section: &SectionOrder,
+        id: MoveId,
+        order: &CheckedOrder,
+    ) -> Result<bool, ContractError> {
+        let Some((plan, tables)) = self.plan_part(walk, order) else {
+            return Ok(false);
+        };
+        let bank = walk.bank;
+        let base = match walk.choose(section, &tables)? {
+            Choice::Preload(base) => base,
+            Choice::Enough => return Ok(false),
+            Choice::Full => {
+                tracing::info!(robot = %self.robot.name, id, bank, "part chained at speed not preloaded: its bank's areas are full");
+                return Ok(false);
+            }
+        };
+        let (preloaded, took) = self.preload(bank, base, &tables).await?;
+        tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
+        let pace = match &mut walk.pace {
+            Some(pace) => pace,
+            None => walk
+                .pace
+                .insert(self.pace(walk.exchange, walk.permit).await?),
+        };
+        pace.preload += took;
+        pace.preload_words += preloaded.words();
+        walk.directories.push(directories_left(&base, &tables));
+        self.dispatch.preloaded(id, preloaded);
+        walk.ends_on = end_counts(&plan, walk.ends_on);
+        walk.bank = 1 - bank;
+        Ok(true)
+    }
+
+    /// A part's plan from where the part before it ends, and its tables: `None` when it
+    /// cannot be planned (it is left to fail at its own turn).
+    fn plan_part(&self, walk: &Walk, order: &CheckedOrder) -> Option<(Plan, Vec<ValidTable>)> {
+        let from = self.by_joint(walk.ends_on.map(i64::from));
+        let plan = plan_order(&self.robot, order, from).ok()?;
+        let tables = plan.valid_tables(&self.robot)?;
+        Some((plan, tables))
     }
 
     /// Writes and reads back `tables` into `bank` at `base` (per channel): what was written, and
@@ -347,19 +369,6 @@ impl Worker {
         if link_broken(&e) { Err(e) } else { Ok(()) }
     }
 
-    /// Ends the head of the queue once it waited too long for its turn
-    /// ([`Dispatcher::expire`]), and the rest behind it.
-    ///
-    /// [`Dispatcher::expire`]: super::dispatch::Dispatcher::expire
-    pub(super) fn expire_queue(&mut self) {
-        let ends = self.dispatch.expire(self.conn.session.is_some(), now());
-        if let Some(head) = ends.first() {
-            let why = head.error.as_deref().unwrap_or_default();
-            tracing::warn!(robot = %self.robot.name, id = head.id, "{why}");
-        }
-        self.finish_all(ends);
-    }
-
     /// Cancels every queued move (never given to the PLC).
     pub(super) fn cancel_queue(&mut self, why: &str) {
         let ends = self.dispatch.cancel_queue(why);
@@ -378,8 +387,14 @@ impl Worker {
     }
 
     /// Ends the reports of `ends`, in order.
+    /// A move that failed before its start (its turn came too late) is said in the journal.
     pub(super) fn finish_all(&mut self, ends: Vec<Finish>) {
         for end in ends {
+            if end.stage == Stage::Failed
+                && let Some(why) = &end.error
+            {
+                tracing::warn!(robot = %self.robot.name, id = end.id, "{why}");
+            }
             if let Some(reason) = end.end {
                 self.mark_end(end.id, reason);
             }
@@ -420,6 +435,43 @@ impl Worker {
             // move will not reach.
             self.out.set_planned_end(None);
         }
+    }
+}
+
+/// A section's parts preloaded so far, behind its first part.
+struct Walk {
+    /// Where the parts went in the banks' areas.
+    placement: Placement,
+    /// Where the last part preloaded ends, per channel.
+    ends_on: [i32; CHANNELS],
+    /// The next part's bank.
+    bank: u16,
+    /// The link's pace, once the first part was preloaded.
+    pace: Option<LinkPace>,
+    /// Per part preloaded, the directories its start still writes.
+    directories: Vec<usize>,
+    /// Whether the first part's start writes a permit.
+    permit: bool,
+    /// How long a status read just took.
+    exchange: Duration,
+}
+
+impl Walk {
+    /// What to do with the next part of `section`, whose tables are `tables`
+    /// ([`preload::choose`]).
+    fn choose(
+        &mut self,
+        section: &SectionOrder,
+        tables: &[ValidTable],
+    ) -> Result<Choice, ContractError> {
+        let so_far = parts(section, &self.directories);
+        preload::choose(
+            self.pace.as_ref(),
+            &so_far,
+            &mut self.placement,
+            self.bank,
+            tables,
+        )
     }
 }
 

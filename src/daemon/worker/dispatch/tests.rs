@@ -32,9 +32,24 @@ fn planned(tag: MoveId, seq: u16, from: [i32; CHANNELS], to: [i32; CHANNELS]) ->
     }
 }
 
+/// The status block read every 50 ms at the busy pace, the PLC's scan 10 ms.
+const PACE: PollPace = PollPace {
+    poll_interval: Duration::from_millis(50),
+    scan_time: Duration::from_millis(10),
+};
+
+/// A dispatcher whose machine has seen nothing of the PLC yet.
+fn dispatcher() -> Dispatcher {
+    Dispatcher::new(
+        Machine::new(WatchSettings::default(), HOST),
+        START_WITHIN,
+        PACE,
+    )
+}
+
 /// A dispatcher whose machine has seen the PLC idle at `FROM` (start 7 done), heartbeat moving.
 fn idle(t0: Instant) -> Dispatcher {
-    let mut d = Dispatcher::new(Machine::new(WatchSettings::default(), HOST), START_WITHIN);
+    let mut d = dispatcher();
     d.machine.on_status(&status(State::Done, 7, 1, FROM), t0);
     d.machine.on_status(
         &status(State::Done, 7, 2, FROM),
@@ -93,7 +108,7 @@ use crate::contract::machine::Event;
 #[test]
 fn a_head_that_cannot_start_within_its_time_fails_and_the_rest_are_cancelled() {
     let t0 = Instant::now();
-    let mut d = Dispatcher::new(Machine::new(WatchSettings::default(), HOST), START_WITHIN);
+    let mut d = dispatcher();
     d.push(queued(1, None, t0));
     d.push(queued(2, None, t0));
     // The link is down: the time counts from when the head was accepted.
@@ -196,7 +211,7 @@ fn a_turn_whose_permit_does_not_hold_ends_before_anything_is_written() {
 #[test]
 fn a_turn_the_plc_cannot_take_stays_at_the_head() {
     let t0 = Instant::now();
-    let mut d = Dispatcher::new(Machine::new(WatchSettings::default(), HOST), START_WITHIN);
+    let mut d = dispatcher();
     d.push(queued(2, None, t0));
     assert!(matches!(
         d.turn(queued(1, None, t0), t0),
@@ -458,3 +473,5 @@ fn a_cycles_move_asked_for_before_an_incident_is_stale() {
         Some("cancelled: the PLC restarted since its cycle asked for it")
     );
 }
+
+mod next_tests;

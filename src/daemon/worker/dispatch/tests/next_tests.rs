@@ -1,0 +1,326 @@
+//! What the worker does next ([`Dispatcher::next`]), step by step, with no mock PLC or runtime:
+//! the order of its steps, the status read's pace and turns with the gateway, the link's
+//! backoff, a held bank and a proof read.
+
+use super::*;
+use crate::plc::exchange::VerifiedBank;
+
+/// The link up, nothing taken in.
+fn up() -> Seen {
+    Seen {
+        link_up: true,
+        ..Seen::default()
+    }
+}
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+/// The action's name, and the move it is about where it names one.
+fn what(action: &Action) -> (&'static str, Option<MoveId>) {
+    match action {
+        Action::ShutDown => ("shut down", None),
+        Action::Connect => ("connect", None),
+        Action::Stop => ("stop", None),
+        Action::Commands => ("commands", None),
+        Action::Finish(ends) => ("finish", ends.first().map(|e| e.id)),
+        Action::ReadMode => ("read mode", None),
+        Action::Begin(q) => ("begin", Some(q.id)),
+        Action::UploadStep { uploading, .. } => ("upload", Some(uploading.turn.id)),
+        Action::ProveRead(u) => ("prove", Some(u.turn.id)),
+        Action::WriteStart(u) => ("start", Some(u.turn.id)),
+        Action::Unprepare { id, .. } => ("unprepare", Some(*id)),
+        Action::Gateway => ("gateway", None),
+        Action::Poll => ("poll", None),
+        Action::Wait { .. } => ("wait", None),
+        Action::Pause { .. } => ("pause", None),
+    }
+}
+
+/// Move 4's bank, verified: held behind `gate`, or to be started from rest.
+fn uploaded(gate: Option<Gate>) -> Box<Uploaded> {
+    let mode = match gate {
+        Some(gate) => StartMode::Gated { gate, ahead: None },
+        None => StartMode::FromRest,
+    };
+    Box::new(Uploaded {
+        turn: Turn {
+            id: 4,
+            order: order(Permit::NONE),
+            mode,
+            from: FROM,
+            preload: None,
+        },
+        planned: planned(4, 8, FROM, TO),
+        bank: VerifiedBank {
+            block: CommandBlock::default(),
+            words: 0,
+            on_preload: false,
+        },
+        upload_s: 0.1,
+    })
+}
+
+#[test]
+fn shutdown_then_a_stop_overtake_commands_and_the_queue() {
+    let t0 = Instant::now();
+    let now = t0 + ms(30);
+    let mut d = idle(t0);
+    d.push(queued(1, None, t0));
+    let all = Seen {
+        shutting_down: true,
+        stop: true,
+        commands: true,
+        gateway: true,
+        ..up()
+    };
+    assert_eq!(what(&d.next(all, now)), ("shut down", None));
+    let taken = Seen {
+        shutting_down: false,
+        ..all
+    };
+    assert_eq!(what(&d.next(taken, now)), ("stop", None));
+    let commands = Seen {
+        stop: false,
+        ..taken
+    };
+    assert_eq!(what(&d.next(commands, now)), ("commands", None));
+    // The head begins on the status block just read (fresh), before the gateway.
+    let gateway = Seen {
+        commands: false,
+        ..commands
+    };
+    assert_eq!(what(&d.next(gateway, now)), ("begin", Some(1)));
+    assert!(d.queue().is_empty());
+    assert_eq!(d.next_poll(), None, "read at once after a turn");
+}
+
+#[test]
+fn the_status_read_and_the_gateway_take_turns_and_the_worker_waits_between_reads() {
+    let t0 = Instant::now();
+    let now = t0 + ms(30);
+    let mut d = idle(t0);
+    let gateway = Seen {
+        gateway: true,
+        ..up()
+    };
+    // Both due, the read first (the gateway's turn comes after a read).
+    assert_eq!(what(&d.next(gateway, now)), ("poll", None));
+    d.polled(now, Some(now), false);
+    // At rest: the next read a quarter of a second later.
+    assert_eq!(d.next_poll(), Some(now + ms(250)));
+    assert_eq!(what(&d.next(gateway, now)), ("gateway", None));
+    // The read not due: the gateway is served on.
+    assert_eq!(what(&d.next(gateway, now + ms(10))), ("gateway", None));
+    // Both due: the gateway had its turn, the read comes first, then the gateway again.
+    let due = now + ms(250);
+    assert_eq!(what(&d.next(gateway, due)), ("poll", None));
+    d.polled(due, Some(now), false);
+    assert_eq!(what(&d.next(gateway, due)), ("gateway", None));
+    // Nothing to do: a wait until the next read.
+    let Action::Wait { until, gate } = d.next(up(), due + ms(1)) else {
+        panic!("nothing to do: a wait");
+    };
+    assert_eq!((until, gate.is_none()), (due + ms(250), true));
+    // A request came (the read asked for at once).
+    d.poll_now();
+    assert_eq!(what(&d.next(up(), due + ms(2))), ("poll", None));
+}
+
+#[test]
+fn the_mode_is_read_after_a_read_at_rest_when_it_is_old() {
+    let t0 = Instant::now();
+    let now = t0 + ms(30);
+    let mut d = idle(t0);
+    d.polled(now, None, false);
+    assert_eq!(what(&d.next(up(), now)), ("read mode", None));
+    assert_eq!(what(&d.next(up(), now)), ("wait", None), "once");
+    d.polled(now, Some(t0), false);
+    assert_eq!(what(&d.next(up(), now)), ("wait", None), "read 30 ms ago");
+    // Running, it is not read.
+    let mut d = running(t0);
+    d.polled(now + ms(10), None, false);
+    assert_ne!(what(&d.next(up(), now + ms(10))).0, "read mode");
+}
+
+#[test]
+fn a_busy_robot_is_read_at_the_busy_pace_and_a_scan_apart_near_its_end() {
+    let t0 = Instant::now();
+    let mut d = running(t0);
+    let now = t0 + ms(40);
+    d.polled(now, Some(now), false);
+    assert_eq!(d.next_poll(), Some(now + PACE.poll_interval));
+    // Start 8 runs 1 s from t0 + 30 ms: within two polls of its end, a scan apart.
+    let late = t0 + ms(950);
+    d.polled(late, Some(now), false);
+    assert_eq!(d.next_poll(), Some(late + PACE.scan_time));
+    // At rest with inputs watched (a cycle's wait): the busy pace.
+    let mut d = idle(t0);
+    d.polled(now, Some(now), true);
+    assert_eq!(d.next_poll(), Some(now + PACE.poll_interval));
+}
+
+#[test]
+fn a_link_down_is_opened_at_once_and_after_a_failed_attempt_its_backoff_ends_in_answers() {
+    let t0 = Instant::now();
+    let mut d = dispatcher();
+    d.push(queued(1, None, t0));
+    let down = Seen {
+        stop: true,
+        commands: true,
+        gateway: true,
+        ..Seen::default()
+    };
+    // Just lost (or never opened): an attempt first, whatever waits.
+    assert_eq!(what(&d.next(down, t0)), ("connect", None));
+    d.connect_failed(t0, ms(100));
+    let Action::Wait { until, .. } = d.next(down, t0) else {
+        panic!("the backoff");
+    };
+    assert_eq!(until, t0 + ms(100));
+    // Woken (by the stop, or at the backoff's end): what came is answered, then an attempt.
+    assert_eq!(what(&d.next(down, t0 + ms(10))), ("stop", None));
+    let down = Seen {
+        stop: false,
+        ..down
+    };
+    assert_eq!(what(&d.next(down, t0 + ms(10))), ("commands", None));
+    let down = Seen {
+        commands: false,
+        ..down
+    };
+    assert_eq!(what(&d.next(down, t0 + ms(10))), ("gateway", None));
+    assert_eq!(
+        what(&d.next(Seen::default(), t0 + ms(10))),
+        ("connect", None)
+    );
+    // A queue that waited too long expires while the link is down, after a backoff (its time
+    // counted from when its turn could first have come: the first look at it, at 10 ms).
+    d.connect_failed(t0 + ms(20), ms(100));
+    let late = t0 + ms(10) + START_WITHIN + ms(1);
+    assert_eq!(what(&d.next(Seen::default(), late)), ("finish", Some(1)));
+    assert_eq!(what(&d.next(Seen::default(), late)), ("connect", None));
+}
+
+#[test]
+fn a_held_bank_is_read_and_waits_on_its_gate_then_starts_on_a_fresh_read() {
+    let t0 = Instant::now();
+    let now = t0 + ms(20);
+    let mut d = idle(t0);
+    let gate = Gate::new();
+    d.machine.upload_begun();
+    // Two reads since its upload began show the heartbeat moving: the PLC may take its start.
+    d.machine
+        .on_status(&status(State::Done, 7, 3, FROM), t0 + ms(12));
+    d.machine
+        .on_status(&status(State::Done, 7, 4, FROM), t0 + ms(15));
+    d.activity = Activity::Holding(uploaded(Some(gate.clone())));
+    // The gateway is served and the status block read while it is held.
+    let gateway = Seen {
+        gateway: true,
+        ..up()
+    };
+    assert_eq!(what(&d.next(gateway, now)), ("gateway", None));
+    assert_eq!(what(&d.next(up(), now)), ("poll", None));
+    d.polled(now, Some(now), false);
+    let Action::Wait { gate: waits_on, .. } = d.next(up(), now) else {
+        panic!("held: a wait");
+    };
+    assert!(waits_on.is_some(), "woken by its gate");
+    assert!(matches!(d.activity, Activity::Holding(_)));
+    // Its gate opens on a fresh read: started on it.
+    gate.open();
+    assert_eq!(what(&d.next(up(), now)), ("start", Some(4)));
+    // On a stale read: a proof read first.
+    d.activity = Activity::Holding(uploaded(Some(gate.clone())));
+    assert_eq!(what(&d.next(up(), now + ms(500))), ("prove", Some(4)));
+}
+
+#[test]
+fn a_held_bank_is_cancelled_by_a_stop_a_command_or_its_gate_shut() {
+    let t0 = Instant::now();
+    let now = t0 + ms(20);
+    let cases = [
+        (
+            Seen {
+                stop_pending: true,
+                ..up()
+            },
+            "a stop was asked for",
+        ),
+        (
+            Seen {
+                commands: true,
+                ..up()
+            },
+            "a command came (home, clear-fault)",
+        ),
+        (
+            Seen {
+                shutting_down: true,
+                ..up()
+            },
+            "the daemon is shutting down",
+        ),
+    ];
+    for (seen, want) in cases {
+        let mut d = idle(t0);
+        d.machine.upload_begun();
+        d.activity = Activity::Holding(uploaded(Some(Gate::new())));
+        let Action::Unprepare { id, why } = d.next(seen, now) else {
+            panic!("{want}: cancelled");
+        };
+        assert_eq!((id, why.as_str()), (4, want));
+        assert!(matches!(d.activity, Activity::Idle));
+    }
+    let mut d = idle(t0);
+    d.machine.upload_begun();
+    let gate = Gate::new();
+    d.activity = Activity::Holding(uploaded(Some(gate.clone())));
+    gate.shut();
+    let Action::Unprepare { why, .. } = d.next(up(), now) else {
+        panic!("shut: cancelled");
+    };
+    assert_eq!(why, CYCLE_WENT_ON);
+}
+
+#[test]
+fn a_held_bank_is_cancelled_when_a_read_shows_the_plc_changed_under_it() {
+    let t0 = Instant::now();
+    let mut d = idle(t0);
+    d.machine.upload_begun();
+    d.activity = Activity::Holding(uploaded(Some(Gate::new())));
+    // The PLC restarted: its host word cleared.
+    let mut restarted = status(State::Idle, 0, 3, FROM);
+    restarted.block.host = 0;
+    let now = t0 + ms(30);
+    d.machine.on_status(&restarted, now);
+    // Only the worker's own read of it decides (a read made for the upload does not).
+    assert_eq!(what(&d.next(up(), now)), ("poll", None));
+    d.polled(now, Some(now), false);
+    let Action::Unprepare { why, .. } = d.next(up(), now) else {
+        panic!("cancelled");
+    };
+    assert_eq!(why, "the PLC changed under it");
+}
+
+#[test]
+fn a_proof_read_that_does_not_prove_is_made_again_half_a_scan_later() {
+    let t0 = Instant::now();
+    let now = t0 + ms(20);
+    let mut d = idle(t0);
+    d.activity = Activity::Proving(uploaded(None), None);
+    let Action::ProveRead(u) = d.next(up(), now) else {
+        panic!("a proof read");
+    };
+    assert!(d.proven(u, false, now).is_none());
+    let Action::Pause { until } = d.next(up(), now + ms(1)) else {
+        panic!("half a scan");
+    };
+    assert_eq!(until, now + PACE.scan_time / 2);
+    let Action::ProveRead(u) = d.next(up(), until) else {
+        panic!("read again");
+    };
+    assert_eq!(d.proven(u, true, until).map(|u| u.turn.id), Some(4));
+}
