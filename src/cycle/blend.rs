@@ -100,7 +100,7 @@ impl Flattener<'_, '_> {
         let Some(doc) = doc else {
             return Err(refuse("this is the program's last step".to_owned()));
         };
-        let next = step_here(doc, here.later(n, doc.label.as_ref()))?;
+        let next = step_here(doc, &here.later(n, doc.label.as_ref()))?;
         if !matches!(next.action, Action::Move(_)) {
             return Err(refuse(format!(
                 "step {} is not a move: only consecutive move steps blend",
@@ -157,7 +157,7 @@ impl Flattener<'_, '_> {
 }
 
 /// `doc` converted, its shape's fault named for its step.
-fn step_here(doc: &StepDoc, here: Here<'_>) -> Result<Step, ProgramError> {
+fn step_here(doc: &StepDoc, here: &Here<'_>) -> Result<Step, ProgramError> {
     Step::try_from(doc).map_err(|e| here.fail(e.to_string()))
 }
 
