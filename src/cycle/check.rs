@@ -189,6 +189,8 @@ pub struct Checked {
     /// The motions whose start depends on the run, checked when they run (one line each,
     /// naming the step).
     pub unchecked: Vec<String>,
+    /// The ops that are runs of blended move steps (`super::blend`), by index.
+    pub blended: Vec<usize>,
     /// The patterns of the robot's pallets as the program was checked against them, by name:
     /// its place and pick steps run these slots (a frame re-taught later changes the next
     /// check, not a cycle under way).
@@ -230,12 +232,19 @@ pub(super) fn flatten(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramE
         )));
     }
     let mut ops = Vec::new();
-    Flattener { ctx, ops: &mut ops }.program(name, &mut vec![name.to_owned()], &[])?;
+    let mut blended = Vec::new();
+    Flattener {
+        ctx,
+        ops: &mut ops,
+        blended: &mut blended,
+    }
+    .program(name, &mut vec![name.to_owned()], &[])?;
     Ok(Checked {
         name: name.to_owned(),
         number,
         ops,
         unchecked: Vec::new(),
+        blended,
         pallets: ctx.pallets.clone(),
     })
 }
@@ -278,13 +287,15 @@ fn number(name: &str, doc: &ProgramDoc) -> Result<Option<u8>, ProgramError> {
 pub(super) struct Flattener<'c, 'o> {
     pub(super) ctx: &'c Context<'c>,
     pub(super) ops: &'o mut Vec<Op>,
+    /// The ops that are runs of blended move steps.
+    pub(super) blended: &'o mut Vec<usize>,
 }
 
 /// The step being flattened: what its errors and its ops name.
 pub(super) struct Here<'a> {
     program: &'a str,
     /// From 1.
-    step: usize,
+    pub(super) step: usize,
     label: Option<&'a String>,
     called_from: &'a [String],
 }
@@ -296,6 +307,16 @@ impl Here<'_> {
             step: Some(self.step),
             label: self.label.cloned(),
             reason,
+        }
+    }
+
+    /// The step `by` steps after this one in its program, labelled `label`.
+    pub(super) fn later<'b>(&'b self, by: usize, label: Option<&'b String>) -> Here<'b> {
+        Here {
+            program: self.program,
+            step: self.step + by,
+            label,
+            called_from: self.called_from,
         }
     }
 
@@ -358,7 +379,8 @@ impl Flattener<'_, '_> {
         }
         let mut labels: BTreeMap<String, usize> = BTreeMap::new();
         let mut fixups = Vec::new();
-        for (i, written) in doc.step.iter().enumerate() {
+        let mut i = 0;
+        while let Some(written) = doc.step.get(i) {
             let here = Here {
                 program: name,
                 step: i + 1,
@@ -371,8 +393,13 @@ impl Flattener<'_, '_> {
                 return Err(here.fail(format!("label {label:?} is used by an earlier step too")));
             }
             let step = Step::try_from(written).map_err(|e| here.fail(e.to_string()))?;
-            let flat = self.step(&step.action, &|r| here.fail(r))?;
-            self.push(flat, &here, chain, &mut fixups)?;
+            i += if step.blend_mm.is_some() {
+                self.blended(&doc.step[i..], &step, &here)?
+            } else {
+                let flat = self.step(&step.action, &|r| here.fail(r))?;
+                self.push(flat, &here, chain, &mut fixups)?;
+                1
+            };
             if self.ops.len() > MAX_OPS {
                 return Err(here.fail(format!(
                     "flattens into more than {MAX_OPS} steps (calls inlined)"
@@ -418,6 +445,22 @@ impl Flattener<'_, '_> {
             permit,
         });
         Ok(())
+    }
+
+    /// A run of blended move steps' path op, at its first step.
+    pub(super) fn push_blended(
+        &mut self,
+        here: &Here<'_>,
+        kind: OpKind,
+        does: String,
+        permit: Permit,
+    ) {
+        self.blended.push(self.ops.len());
+        self.ops.push(Op {
+            at: here.at(does),
+            kind,
+            permit,
+        });
     }
 
     /// Program `callee` inlined at `here`: refused when it is a recursion, unreadable or
@@ -527,7 +570,7 @@ impl Flattener<'_, '_> {
         })
     }
 
-    fn move_step(
+    pub(super) fn move_step(
         &self,
         order: &MoveOrder,
         here: &dyn Fn(String) -> ProgramError,
@@ -541,7 +584,7 @@ impl Flattener<'_, '_> {
         Ok(Flat::Motion(OpKind::Move(order.clone()), does, permit))
     }
 
-    fn path_step(
+    pub(super) fn path_step(
         &self,
         order: &PathOrder,
         here: &dyn Fn(String) -> ProgramError,
@@ -748,7 +791,7 @@ fn duration(key: &'static str, text: &str, max_s: f64) -> Result<Duration, Durat
     Ok(Duration::from_secs_f64(s))
 }
 
-fn describe_move(order: &MoveOrder) -> String {
+pub(super) fn describe_move(order: &MoveOrder) -> String {
     let target = if let Some(p) = &order.position {
         format!("move to @{p}")
     } else if let Some(to) = &order.to {

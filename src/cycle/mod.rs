@@ -9,6 +9,7 @@
 //! step.rs       StepDoc -> Step { label, action: Action }: the document's shape checked once
 //! condition.rs  a wait's condition: bits, signals, DT compares, ! & | ( ); resolved and decided
 //! check.rs      ProgramDoc -> Checked { ops }: names, limits, labels, calls inlined
+//! blend.rs      consecutive move steps with blend_mm -> one path op (its corners checked)
 //! reach.rs      where the ops take the robot: targets in reach and limits, motions planned
 //!               from every start known before the run
 //! load.rs       a robot's programs directory, path files read in
@@ -16,6 +17,7 @@
 //!               actions out (the daemon's cycle driver carries them out)
 //! ```
 
+mod blend;
 pub mod check;
 pub mod condition;
 pub mod load;
@@ -34,7 +36,7 @@ pub use check::{Checked, Context, DurationFault, LoopExit, Op, OpKind, ProgramEr
 /// The first fault found, naming the program, the step and the value.
 pub fn check(name: &str, ctx: &Context<'_>) -> Result<Checked, ProgramError> {
     let mut checked = check::flatten(name, ctx)?;
-    checked.unchecked = reach::check(&checked.ops, ctx)?;
+    checked.unchecked = reach::check(&checked.ops, &checked.blended, ctx)?;
     Ok(checked)
 }
 pub use condition::{

@@ -17,6 +17,11 @@
 //! move = { position = "in-press" }
 //! permit = "press_open & !press_moving"
 //! [[step]]
+//! move = { position = "above-stack" }
+//! blend_mm = 20                  # not stopped here: rounded into the next move, one path
+//! [[step]]
+//! move = { position = "above-press" }
+//! [[step]]
 //! path = { file = "load.toml", speed_mm_s = 200 }   # or path = { path = { ...document... } }
 //! [[step]]
 //! set = { press_go = true, DT100 = 7 }
@@ -98,6 +103,10 @@ pub struct StepDoc {
     /// A move's or path's interlock, enforced by the PLC.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
+    /// A move's end passed without stopping, rounded into the next move step within this
+    /// distance of it, mm (the moves run as one path: `super::blend`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend_mm: Option<f64>,
     /// A place at a pallet's current slot.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub place: Option<PalletStepDoc>,

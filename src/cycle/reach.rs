@@ -49,7 +49,11 @@ impl At {
 ///
 /// Returns what is left to check when the steps run: one line per motion whose start depends
 /// on the run.
-pub(super) fn check(ops: &[Op], ctx: &Context<'_>) -> Result<Vec<String>, ProgramError> {
+pub(super) fn check(
+    ops: &[Op],
+    blended: &[usize],
+    ctx: &Context<'_>,
+) -> Result<Vec<String>, ProgramError> {
     let mut reach = Reach {
         ctx,
         planned: HashMap::new(),
@@ -82,6 +86,11 @@ pub(super) fn check(ops: &[Op], ctx: &Context<'_>) -> Result<Vec<String>, Progra
             OpKind::Move(_) => reach.target(op).map_err(|e| fail(format!("move: {e}")))?,
             _ => None,
         };
+        if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at[i])
+            && blended.contains(&i)
+        {
+            super::blend::first_corner(ctx, order, from, op.at.step).map_err(&fail)?;
+        }
         match (&op.kind, at[i]) {
             (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {
                 if let Err(e) = reach.end(i, op, from) {

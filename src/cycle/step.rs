@@ -2,7 +2,7 @@
 //! TOML and JSON write them) converted once into a [`Step`], its label and one [`Action`] that
 //! carries exactly the data that action takes. The rules of the document's shape live here and
 //! nowhere else: one action a step, a permit only with a motion (and then in its order), a
-//! timeout only with a wait, a path step's document read in.
+//! timeout only with a wait, a blend only with a move, a path step's document read in.
 
 use std::collections::BTreeMap;
 
@@ -18,6 +18,9 @@ pub struct Step {
     pub label: Option<String>,
     /// What it does.
     pub action: Action,
+    /// A move's end passed without stopping into the next move, within this distance of it,
+    /// mm (checked by `super::blend`).
+    pub blend_mm: Option<f64>,
 }
 
 /// What a step does, with the data that takes.
@@ -84,6 +87,9 @@ pub enum ShapeError {
     /// A timeout on a step that does not wait.
     #[error("timeout and on_timeout go with a wait")]
     TimeoutWithoutWait,
+    /// A blend on a step that is not a move.
+    #[error("blend_mm goes with a move (a path's corners are blended in its document)")]
+    BlendWithoutMove,
     /// A permit in the step and in its order.
     #[error("permit is given twice (in the step and in its order)")]
     PermitTwice,
@@ -142,9 +148,13 @@ impl TryFrom<&StepDoc> for Step {
         if (doc.timeout.is_some() || doc.on_timeout.is_some()) && doc.wait.is_none() {
             return Err(ShapeError::TimeoutWithoutWait);
         }
+        if doc.blend_mm.is_some() && doc.move_.is_none() {
+            return Err(ShapeError::BlendWithoutMove);
+        }
         Ok(Self {
             label: doc.label.clone(),
             action: action(doc)?,
+            blend_mm: doc.blend_mm,
         })
     }
 }

@@ -153,7 +153,7 @@ pub(super) fn checked(
     checked_from(programs, run, require_timeout, None)
 }
 
-fn checked_from(
+pub(super) fn checked_from(
     programs: &[(&str, &str)],
     run: &str,
     require_timeout: bool,
@@ -388,7 +388,7 @@ fn a_loop_jumps_back_only_and_on_timeout_may_jump_forward() {
 }
 
 /// The seed robot's counts at the seed's P1, the tool at 0 degrees (as the taught positions).
-fn counts_at_p1() -> [i64; 4] {
+pub(super) fn counts_at_p1() -> [i64; 4] {
     let robot = seed_robot();
     let pose = crate::geometry::Pose::from_mm_deg(-926.57, 535.03, 50.0, 0.0);
     robot.counts_of(&crate::kinematics::Kinematics::ik(&robot.kinematics, &pose, None).unwrap())

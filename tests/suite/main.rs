@@ -9,6 +9,7 @@
 mod common;
 
 mod api;
+mod blended_moves;
 mod cell_face;
 mod cli_client;
 mod cli_compare;
