@@ -29,7 +29,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
     for (name, raw) in &entries {
         robots.add(text, name, raw)?;
     }
-    if robots.robots.is_empty() {
+    if robots.checked.is_empty() {
         return Err(ConfigError::NoRobots);
     }
     let daemon = daemon::settings(&At::new(text, "daemon"), raw.daemon.as_ref())?;
@@ -39,7 +39,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         .map(|c| console::settings(&At::new(text, "console"), c))
         .transpose()?;
     Ok(Config {
-        robots: robots.robots,
+        robots: robots.checked,
         links: robots.links,
         gateways: robots.gateways,
         cells: robots.cells,
@@ -53,7 +53,7 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
 /// The robots checked so far and their sections, by robot name.
 #[derive(Default)]
 struct Robots {
-    robots: Vec<Robot>,
+    checked: Vec<Robot>,
     links: BTreeMap<String, LinkSettings>,
     gateways: BTreeMap<String, crate::gateway::GatewaySettings>,
     cells: BTreeMap<String, cell::CellSettings>,
@@ -90,7 +90,7 @@ impl Robots {
         if let Some(link) = link {
             self.links.insert(robot.name.clone(), link);
         }
-        self.robots.push(robot);
+        self.checked.push(robot);
         Ok(())
     }
 }

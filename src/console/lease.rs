@@ -318,13 +318,14 @@ impl Lease {
                     end(j.session, EndedBy::Refused { reason })
                 }
             }
-            other => match ending(&j, other, now) {
-                Some(by) => end(j.session, by),
-                None => {
+            other => {
+                if let Some(by) = ending(&j, other, now) {
+                    end(j.session, by)
+                } else {
                     *self = Self::Jogging(j);
                     Vec::new()
                 }
-            },
+            }
         }
     }
 
