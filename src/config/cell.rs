@@ -120,35 +120,9 @@ pub(super) fn settings(at: &At, raw: &Spanned<RawCell>) -> Result<CellSettings, 
 
 /// The face a table describes.
 fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
-    let first = i64::from(DT_LAST) + 1;
     let words = face_words(raw.pallet.is_some());
-    let last = i64::from(u16::MAX) + 1 - words as i64;
-    let registers = match &raw.registers {
-        Some(r) => {
-            let v = at.child("registers").int_within(r, first, last)?;
-            u16::try_from(v).unwrap_or(FACE_REGISTERS)
-        }
-        None => FACE_REGISTERS,
-    };
-    let plc = raw
-        .plc
-        .as_ref()
-        .map(|p| {
-            let at = at.child("plc");
-            let address: Address = p
-                .get_ref()
-                .parse()
-                .map_err(|e: crate::gateway::AddressError| at.invalid(p, e.reason))?;
-            let last = address.index + words as u32 - 1;
-            if address.area != crate::gateway::Area::Dt || last > u32::from(DT_LAST) {
-                return Err(at.invalid(
-                    p,
-                    format!("the face's {words} words are DT words, within DT0-DT{DT_LAST}"),
-                ));
-            }
-            Ok(address.index)
-        })
-        .transpose()?;
+    let registers = face_registers(at, raw, words)?;
+    let plc = face_plc_word(at, raw, words)?;
     if let (Some(_), Some(r)) = (&plc, &raw.registers) {
         return Err(at.child("registers").invalid(
             r,
@@ -156,27 +130,11 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
              (`plc`), not both: its command words have one writer",
         ));
     }
-    let name = |key: &str, value: &Spanned<String>| {
-        if crate::robot::is_position_name(value.get_ref()) {
-            Ok(value.get_ref().clone())
-        } else {
-            Err(at
-                .child(key)
-                .invalid(value, crate::robot::POSITION_NAME_RULE))
-        }
-    };
     let home = raw
         .home
         .as_ref()
-        .map_or_else(|| Ok("home".to_owned()), |h| name("home", h))?;
-    let mut positions = Vec::new();
-    for p in raw.positions.iter().flatten() {
-        let n = name("positions", p)?;
-        if positions.contains(&n) {
-            return Err(at.child("positions").invalid(p, "is named twice"));
-        }
-        positions.push(n);
-    }
+        .map_or_else(|| Ok("home".to_owned()), |h| position_name(at, "home", h))?;
+    let positions = face_positions(at, raw)?;
     let mode = match &raw.mode {
         Some(m) => m
             .get_ref()
@@ -193,6 +151,63 @@ fn face(at: &At, raw: &RawCellFace) -> Result<FaceSettings, ConfigError> {
         mode,
         pallet,
     })
+}
+
+/// The first Modbus register the face is served at.
+fn face_registers(at: &At, raw: &RawCellFace, words: usize) -> Result<u16, ConfigError> {
+    let first = i64::from(DT_LAST) + 1;
+    let last = i64::from(u16::MAX) + 1 - words as i64;
+    Ok(match &raw.registers {
+        Some(r) => {
+            let v = at.child("registers").int_within(r, first, last)?;
+            u16::try_from(v).unwrap_or(FACE_REGISTERS)
+        }
+        None => FACE_REGISTERS,
+    })
+}
+
+/// The first DT word the face is mirrored at in the PLC, when it is.
+fn face_plc_word(at: &At, raw: &RawCellFace, words: usize) -> Result<Option<u32>, ConfigError> {
+    let Some(p) = &raw.plc else {
+        return Ok(None);
+    };
+    let at = at.child("plc");
+    let address: Address = p
+        .get_ref()
+        .parse()
+        .map_err(|e: crate::gateway::AddressError| at.invalid(p, e.reason))?;
+    let last = address.index + words as u32 - 1;
+    if address.area != crate::gateway::Area::Dt || last > u32::from(DT_LAST) {
+        return Err(at.invalid(
+            p,
+            format!("the face's {words} words are DT words, within DT0-DT{DT_LAST}"),
+        ));
+    }
+    Ok(Some(address.index))
+}
+
+/// A position name under `key`, checked against the rule.
+fn position_name(at: &At, key: &str, value: &Spanned<String>) -> Result<String, ConfigError> {
+    if crate::robot::is_position_name(value.get_ref()) {
+        Ok(value.get_ref().clone())
+    } else {
+        Err(at
+            .child(key)
+            .invalid(value, crate::robot::POSITION_NAME_RULE))
+    }
+}
+
+/// The positions the face offers, each named once.
+fn face_positions(at: &At, raw: &RawCellFace) -> Result<Vec<String>, ConfigError> {
+    let mut positions = Vec::new();
+    for p in raw.positions.iter().flatten() {
+        let n = position_name(at, "positions", p)?;
+        if positions.contains(&n) {
+            return Err(at.child("positions").invalid(p, "is named twice"));
+        }
+        positions.push(n);
+    }
+    Ok(positions)
 }
 
 /// The mirrored face's words must not touch the contract's (the PLC program owns those), and

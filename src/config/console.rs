@@ -199,7 +199,14 @@ fn user(at: &At, raw: &Spanned<RawConsoleUser>) -> Result<ConsoleUser, ConfigErr
                 .invalid(&r.role, "must be \"viewer\", \"operator\" or \"admin\""));
         }
     };
-    let secret = match (&r.password_hash, &r.token_file) {
+    let secret = secret(at, raw)?;
+    Ok(ConsoleUser { role, secret })
+}
+
+/// How a user proves who it is: exactly one of a password hash (argon2) and a token file.
+fn secret(at: &At, raw: &Spanned<RawConsoleUser>) -> Result<Secret, ConfigError> {
+    let r = raw.get_ref();
+    match (&r.password_hash, &r.token_file) {
         (Some(hash), None) => {
             argon2::password_hash::phc::PasswordHash::new(hash.get_ref())
                 .ok()
@@ -211,27 +218,20 @@ fn user(at: &At, raw: &Spanned<RawConsoleUser>) -> Result<ConsoleUser, ConfigErr
                          `linterpd console hash-password` makes one",
                     )
                 })?;
-            Secret::PasswordHash(hash.get_ref().clone())
+            Ok(Secret::PasswordHash(hash.get_ref().clone()))
         }
         (None, Some(file)) if !file.get_ref().trim().is_empty() => {
-            Secret::TokenFile(PathBuf::from(file.get_ref()))
+            Ok(Secret::TokenFile(PathBuf::from(file.get_ref())))
         }
-        (None, Some(file)) => {
-            return Err(at.child("token_file").invalid(file, "needs a file path"));
-        }
-        (Some(_), Some(file)) => {
-            return Err(at
-                .child("token_file")
-                .invalid(file, "a user has a password_hash or a token_file, not both"));
-        }
-        (None, None) => {
-            return Err(at.missing(
-                &raw.span(),
-                "a user needs a password_hash (`linterpd console hash-password`) or a token_file",
-            ));
-        }
-    };
-    Ok(ConsoleUser { role, secret })
+        (None, Some(file)) => Err(at.child("token_file").invalid(file, "needs a file path")),
+        (Some(_), Some(file)) => Err(at
+            .child("token_file")
+            .invalid(file, "a user has a password_hash or a token_file, not both")),
+        (None, None) => Err(at.missing(
+            &raw.span(),
+            "a user needs a password_hash (`linterpd console hash-password`) or a token_file",
+        )),
+    }
 }
 
 /// An origin as a browser sends it: `scheme://host[:port]`, no path.

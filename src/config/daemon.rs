@@ -115,12 +115,7 @@ pub(super) fn settings(
         settings.token_file = Some(path(&at.child("token_file"), v)?);
     }
     if let Some(v) = &r.start_within {
-        let at = at.child("start_within");
-        let seconds = parse_duration_s(v.get_ref()).map_err(|e| at.invalid(v, e.problem))?;
-        if !(seconds > 0.0 && seconds <= 3_600.0) {
-            return Err(at.invalid(v, "must be longer than 0 s and at most 1 h"));
-        }
-        settings.start_within = Duration::from_secs_f64(seconds);
+        settings.start_within = start_within(&at.child("start_within"), v)?;
     }
     if let Some(v) = &r.state_dir {
         settings.state_dir = path(&at.child("state_dir"), v)?;
@@ -139,6 +134,15 @@ pub(super) fn settings(
         settings.listen = Some(address);
     }
     Ok(settings)
+}
+
+/// How long a move may wait to start: longer than 0 s, at most 1 h.
+fn start_within(at: &At, v: &Spanned<String>) -> Result<Duration, ConfigError> {
+    let seconds = parse_duration_s(v.get_ref()).map_err(|e| at.invalid(v, e.problem))?;
+    if !(seconds > 0.0 && seconds <= 3_600.0) {
+        return Err(at.invalid(v, "must be longer than 0 s and at most 1 h"));
+    }
+    Ok(Duration::from_secs_f64(seconds))
 }
 
 /// `[daemon.journal]`, each key within its range.

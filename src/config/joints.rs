@@ -132,26 +132,29 @@ fn dynamics(
     let start_hz = raw
         .start_hz
         .as_ref()
-        .map(|v| {
-            let hz = at.child("start_hz").finite(v)?;
-            if hz <= 0.0 {
-                return Err(at.child("start_hz").invalid(v, "must be above 0 Hz"));
-            }
-            if hz > f64::from(joint.max_freq_hz) {
-                let reason = format!(
-                    "must be at most the joint's max_freq_hz = {} Hz",
-                    joint.max_freq_hz
-                );
-                return Err(at.child("start_hz").invalid(v, reason));
-            }
-            Ok(hz)
-        })
+        .map(|v| start_hz(&at.child("start_hz"), v, joint))
         .transpose()?;
     Ok(Dynamics {
         max_accel,
         start_hz,
         max_jerk,
     })
+}
+
+/// The frequency the drive starts at: above 0 Hz and at most the joint's `max_freq_hz`.
+fn start_hz(at: &At, v: &Spanned<f64>, joint: &Joint) -> Result<f64, ConfigError> {
+    let hz = at.finite(v)?;
+    if hz <= 0.0 {
+        return Err(at.invalid(v, "must be above 0 Hz"));
+    }
+    if hz > f64::from(joint.max_freq_hz) {
+        let reason = format!(
+            "must be at most the joint's max_freq_hz = {} Hz",
+            joint.max_freq_hz
+        );
+        return Err(at.invalid(v, reason));
+    }
+    Ok(hz)
 }
 
 /// The quantity in internal units, when given in the unit `kind` takes; an error naming the

@@ -199,23 +199,7 @@ impl PathDoc {
             .as_ref()
             .map(|p| waypoint("start", p))
             .transpose()?;
-        let path_accel_mm_s2 = raw
-            .path_accel
-            .as_ref()
-            .map(|q| {
-                let v = q
-                    .value("mm/s2")
-                    .map_err(|e| invalid("path_accel", e.to_string()))?;
-                if v.is_finite() && v > 0.0 {
-                    Ok(v)
-                } else {
-                    Err(invalid(
-                        "path_accel",
-                        format!("{v} mm/s2 must be a number above 0"),
-                    ))
-                }
-            })
-            .transpose()?;
+        let path_accel_mm_s2 = raw.path_accel.as_ref().map(path_accel).transpose()?;
         if raw.element.is_empty() {
             return Err(invalid(
                 "element",
@@ -290,6 +274,21 @@ impl PathDoc {
             .as_ref()
             .map(|w| resolve_waypoint("start", w, a_rad, lookup))
             .transpose()
+    }
+}
+
+/// The path's acceleration, mm/s2: a number above 0.
+fn path_accel(q: &Quantity) -> Result<f64, PathFileError> {
+    let v = q
+        .value("mm/s2")
+        .map_err(|e| invalid("path_accel", e.to_string()))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(
+            "path_accel",
+            format!("{v} mm/s2 must be a number above 0"),
+        ))
     }
 }
 
@@ -397,40 +396,48 @@ fn element(n: usize, e: &RawElement) -> Result<ElementDoc, PathFileError> {
     let arc = if is_arc {
         Some(arc_doc(n, e)?)
     } else {
-        for (key, given) in [
-            ("via", e.via.is_some()),
-            ("centre", e.centre.is_some()),
-            ("direction", e.direction.is_some()),
-            ("axis", e.axis.is_some()),
-        ] {
-            if given {
-                return Err(invalid(
-                    &here(key),
-                    "belongs to an arc, and this is a line".into(),
-                ));
-            }
-        }
+        no_arc_keys(n, e)?;
         None
     };
-    let corner = match (&e.blend, e.stop) {
-        (Some(_), Some(true)) => {
+    let corner = corner(n, e)?;
+    Ok(ElementDoc { to, arc, corner })
+}
+
+/// A line element gives none of an arc's keys.
+fn no_arc_keys(n: usize, e: &RawElement) -> Result<(), PathFileError> {
+    for (key, given) in [
+        ("via", e.via.is_some()),
+        ("centre", e.centre.is_some()),
+        ("direction", e.direction.is_some()),
+        ("axis", e.axis.is_some()),
+    ] {
+        if given {
             return Err(invalid(
-                &format!("element {n}"),
-                "give `blend` or `stop = true`, not both".into(),
+                &format!("element {n}: {key}"),
+                "belongs to an arc, and this is a line".into(),
             ));
         }
+    }
+    Ok(())
+}
+
+/// How element `n` ends: a blend of a radius above 0, or a stop.
+fn corner(n: usize, e: &RawElement) -> Result<Corner, PathFileError> {
+    let here = format!("element {n}: blend");
+    match (&e.blend, e.stop) {
+        (Some(_), Some(true)) => Err(invalid(
+            &format!("element {n}"),
+            "give `blend` or `stop = true`, not both".into(),
+        )),
         (Some(q), _) => {
-            let r = q
-                .value("mm")
-                .map_err(|p| invalid(&here("blend"), p.to_string()))?;
+            let r = q.value("mm").map_err(|p| invalid(&here, p.to_string()))?;
             if !(r.is_finite() && r > 0.0) {
-                return Err(invalid(&here("blend"), format!("{r} mm must be above 0")));
+                return Err(invalid(&here, format!("{r} mm must be above 0")));
             }
-            Corner::Blend(r)
+            Ok(Corner::Blend(r))
         }
-        (None, _) => Corner::Stop,
-    };
-    Ok(ElementDoc { to, arc, corner })
+        (None, _) => Ok(Corner::Stop),
+    }
 }
 
 fn arc_doc(n: usize, e: &RawElement) -> Result<ArcDoc, PathFileError> {
@@ -447,40 +454,11 @@ fn arc_doc(n: usize, e: &RawElement) -> Result<ArcDoc, PathFileError> {
             }
             Ok(ArcDoc::Via(point(&here("via"), v, false)?))
         }
-        (None, Some(c)) => {
-            let centre_mm = point(&here("centre"), c, false)?;
-            let axis = match &e.axis {
-                Some(a) => {
-                    let a = point(&here("axis"), a, false)?;
-                    if Vector3::from(a).norm() < 1e-9 {
-                        return Err(invalid(&here("axis"), "must not be [0, 0, 0]".into()));
-                    }
-                    a
-                }
-                None => [0.0, 0.0, 1.0],
-            };
-            let clockwise = match e.direction.as_deref() {
-                Some("cw") => true,
-                Some("ccw") => false,
-                Some(other) => {
-                    return Err(invalid(
-                        &here("direction"),
-                        format!("'{other}' must be \"cw\" or \"ccw\""),
-                    ));
-                }
-                None => {
-                    return Err(invalid(
-                        &here("direction"),
-                        "an arc about a centre needs `direction = \"cw\"` or `\"ccw\"`".into(),
-                    ));
-                }
-            };
-            Ok(ArcDoc::Centre {
-                centre_mm,
-                axis,
-                clockwise,
-            })
-        }
+        (None, Some(c)) => Ok(ArcDoc::Centre {
+            centre_mm: point(&here("centre"), c, false)?,
+            axis: arc_axis(n, e)?,
+            clockwise: arc_clockwise(n, e)?,
+        }),
         (Some(_), Some(_)) => Err(invalid(
             &format!("element {n}"),
             "give `via` or `centre`, not both".into(),
@@ -488,6 +466,36 @@ fn arc_doc(n: usize, e: &RawElement) -> Result<ArcDoc, PathFileError> {
         (None, None) => Err(invalid(
             &format!("element {n}"),
             "an arc needs `via = [x, y, z]` or `centre = [x, y, z]`".into(),
+        )),
+    }
+}
+
+/// The axis of an arc about a centre: not [0, 0, 0]; z up when not given.
+fn arc_axis(n: usize, e: &RawElement) -> Result<[f64; 3], PathFileError> {
+    let here = format!("element {n}: axis");
+    let Some(a) = &e.axis else {
+        return Ok([0.0, 0.0, 1.0]);
+    };
+    let a = point(&here, a, false)?;
+    if Vector3::from(a).norm() < 1e-9 {
+        return Err(invalid(&here, "must not be [0, 0, 0]".into()));
+    }
+    Ok(a)
+}
+
+/// Which way an arc about a centre turns: `direction` is "cw" or "ccw", and must be given.
+fn arc_clockwise(n: usize, e: &RawElement) -> Result<bool, PathFileError> {
+    let here = format!("element {n}: direction");
+    match e.direction.as_deref() {
+        Some("cw") => Ok(true),
+        Some("ccw") => Ok(false),
+        Some(other) => Err(invalid(
+            &here,
+            format!("'{other}' must be \"cw\" or \"ccw\""),
+        )),
+        None => Err(invalid(
+            &here,
+            "an arc about a centre needs `direction = \"cw\"` or `\"ccw\"`".into(),
         )),
     }
 }

@@ -57,6 +57,24 @@ pub(super) fn link(
     let protocol = protocol(r.protocol);
     let transport = transport(at, raw, protocol)?;
     let mut settings = LinkSettings::new(protocol, transport);
+    framing(at, r, &mut settings)?;
+    patience(at, r, &mut settings)?;
+    requests(at, r, &mut settings)?;
+    settings.scan_time = positive_duration(
+        &at.child("scan_time"),
+        r.scan_time.as_ref(),
+        settings.scan_time,
+    )?;
+    if let Some(v) = &r.home_counts {
+        settings.home_counts = home_counts(&at.child("home_counts"), v, robot)?;
+    }
+    settings.layout = layout(&at.child("contract"), r.contract.as_ref(), area_words)?;
+    Ok(settings)
+}
+
+/// How frames are addressed and read: `station`, `header`, `multi_frame_reads`, `read_back`.
+fn framing(at: &At, r: &RawPlc, settings: &mut LinkSettings) -> Result<(), ConfigError> {
+    let protocol = settings.protocol;
     if let Some(v) = &r.station {
         settings.station = station(&at.child("station"), v, protocol)?;
     }
@@ -73,6 +91,11 @@ pub(super) fn link(
     if let Some(v) = &r.read_back {
         settings.read_back = *v.get_ref();
     }
+    Ok(())
+}
+
+/// How long the link waits and how often it tries: `timeout`, `retries`, `heartbeat_timeout`.
+fn patience(at: &At, r: &RawPlc, settings: &mut LinkSettings) -> Result<(), ConfigError> {
     settings.timeout =
         positive_duration(&at.child("timeout"), r.timeout.as_ref(), settings.timeout)?;
     if let Some(v) = &r.retries {
@@ -84,6 +107,12 @@ pub(super) fn link(
         heartbeat,
         settings.heartbeat_timeout,
     )?;
+    Ok(())
+}
+
+/// The relay that tells the mode, and the Modbus requests' largest sizes.
+fn requests(at: &At, r: &RawPlc, settings: &mut LinkSettings) -> Result<(), ConfigError> {
+    let protocol = settings.protocol;
     if let Some(v) = &r.mode_relay {
         settings.mode_relay = mode_relay(&at.child("mode_relay"), v, protocol)?;
     }
@@ -95,16 +124,7 @@ pub(super) fn link(
         let at = at.child("modbus_max_read");
         settings.modbus_max_read = request_size(&at, v, protocol, MAX_READ_REGISTERS)?;
     }
-    settings.scan_time = positive_duration(
-        &at.child("scan_time"),
-        r.scan_time.as_ref(),
-        settings.scan_time,
-    )?;
-    if let Some(v) = &r.home_counts {
-        settings.home_counts = home_counts(&at.child("home_counts"), v, robot)?;
-    }
-    settings.layout = layout(&at.child("contract"), r.contract.as_ref(), area_words)?;
-    Ok(settings)
+    Ok(())
 }
 
 fn protocol(raw: RawProtocol) -> Protocol {

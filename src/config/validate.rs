@@ -25,53 +25,11 @@ const MAX_AREA_WORDS: i64 = 8000;
 pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigError> {
     let mut entries: Vec<_> = std::mem::take(&mut raw.robots).into_iter().collect();
     entries.sort_by_key(|(name, _)| name.span().start);
-    let mut robots = Vec::with_capacity(entries.len());
-    let mut links = BTreeMap::new();
-    let mut gateways = BTreeMap::new();
-    let mut cells = BTreeMap::new();
-    let mut robot_consoles = BTreeMap::new();
-    let mut robot_pallets = BTreeMap::new();
+    let mut robots = Robots::default();
     for (name, raw) in &entries {
-        let robot = self::robot(text, name, raw)?;
-        if let Some(set) = pallets::pallets(text, &robot, raw.get_ref())? {
-            robot_pallets.insert(robot.name.clone(), set);
-        }
-        if let Some(table) = &raw.get_ref().console {
-            let at = At::new(text, "robots").child(&robot.name).child("console");
-            robot_consoles.insert(robot.name.clone(), console::robot(&at, table)?);
-        }
-        let link = self::link(text, &robot, raw)?;
-        if let Some(g) = self::gateway(text, &robot, raw, link.as_ref())? {
-            gateways.insert(robot.name.clone(), g);
-        }
-        if let Some(link) = link {
-            links.insert(robot.name.clone(), link);
-        }
-        if let Some(table) = &raw.get_ref().cell {
-            let at = At::new(text, "robots").child(&robot.name).child("cell");
-            let settings = cell::settings(&at, table)?;
-            cell::face_pallet_known(&at.child("face"), table, robot_pallets.get(&robot.name))?;
-            let served = gateways
-                .get(&robot.name)
-                .is_some_and(|g| g.modbus.is_some());
-            let mirrored = settings.face.as_ref().and_then(|f| f.plc);
-            if let (Some(face), false, None) = (&table.get_ref().face, served, mirrored) {
-                let reason = format!(
-                    "the cell face is served on the gateway's Modbus face or mirrored in the \
-                     PLC: it needs [robots.{}.gateway.modbus], or `plc = \"DT...\"`",
-                    robot.name
-                );
-                return Err(at.child("face").missing(&face.span(), reason));
-            }
-            if let Some(first) = mirrored {
-                let link = links.get(&robot.name);
-                cell::face_clear_of_contract(&at.child("face"), table, first, link)?;
-            }
-            cells.insert(robot.name.clone(), settings);
-        }
-        robots.push(robot);
+        robots.add(text, name, raw)?;
     }
-    if robots.is_empty() {
+    if robots.checked.is_empty() {
         return Err(ConfigError::NoRobots);
     }
     let daemon = daemon::settings(&At::new(text, "daemon"), raw.daemon.as_ref())?;
@@ -81,15 +39,91 @@ pub(super) fn config(text: &str, mut raw: RawConfig) -> Result<Config, ConfigErr
         .map(|c| console::settings(&At::new(text, "console"), c))
         .transpose()?;
     Ok(Config {
-        robots,
-        links,
-        gateways,
-        cells,
+        robots: robots.checked,
+        links: robots.links,
+        gateways: robots.gateways,
+        cells: robots.cells,
         daemon,
         console,
-        robot_consoles,
-        pallets: robot_pallets,
+        robot_consoles: robots.consoles,
+        pallets: robots.pallets,
     })
+}
+
+/// The robots checked so far and their sections, by robot name.
+#[derive(Default)]
+struct Robots {
+    checked: Vec<Robot>,
+    links: BTreeMap<String, LinkSettings>,
+    gateways: BTreeMap<String, crate::gateway::GatewaySettings>,
+    cells: BTreeMap<String, cell::CellSettings>,
+    consoles: BTreeMap<String, super::RobotConsoleSettings>,
+    pallets: BTreeMap<String, crate::pallet::RobotPallets>,
+}
+
+impl Robots {
+    /// Checks the robot `name` and its sections, and adds them.
+    fn add(
+        &mut self,
+        text: &str,
+        name: &Spanned<String>,
+        raw: &Spanned<RawRobot>,
+    ) -> Result<(), ConfigError> {
+        let robot = self::robot(text, name, raw)?;
+        if let Some(set) = pallets::pallets(text, &robot, raw.get_ref())? {
+            self.pallets.insert(robot.name.clone(), set);
+        }
+        if let Some(table) = &raw.get_ref().console {
+            let at = At::new(text, "robots").child(&robot.name).child("console");
+            self.consoles
+                .insert(robot.name.clone(), console::robot(&at, table)?);
+        }
+        let link = self::link(text, &robot, raw)?;
+        let gateway = self::gateway(text, &robot, raw, link.as_ref())?;
+        let served = gateway.as_ref().is_some_and(|g| g.modbus.is_some());
+        if let Some(g) = gateway {
+            self.gateways.insert(robot.name.clone(), g);
+        }
+        let pallets = self.pallets.get(&robot.name);
+        if let Some(settings) = self::cell(text, (&robot, pallets), raw, served, link.as_ref())? {
+            self.cells.insert(robot.name.clone(), settings);
+        }
+        if let Some(link) = link {
+            self.links.insert(robot.name.clone(), link);
+        }
+        self.checked.push(robot);
+        Ok(())
+    }
+}
+
+/// The robot's `[robots.NAME.cell]` table, if it has one (a face's pallet one of `pallets`): its face is `served` on the gateway's
+/// Modbus face or mirrored in the PLC (over `link`), clear of the contract's words.
+fn cell(
+    text: &str,
+    (robot, pallets): (&Robot, Option<&crate::pallet::RobotPallets>),
+    raw: &Spanned<RawRobot>,
+    served: bool,
+    link: Option<&LinkSettings>,
+) -> Result<Option<cell::CellSettings>, ConfigError> {
+    let Some(table) = &raw.get_ref().cell else {
+        return Ok(None);
+    };
+    let at = At::new(text, "robots").child(&robot.name).child("cell");
+    let settings = cell::settings(&at, table)?;
+    cell::face_pallet_known(&at.child("face"), table, pallets)?;
+    let mirrored = settings.face.as_ref().and_then(|f| f.plc);
+    if let (Some(face), false, None) = (&table.get_ref().face, served, mirrored) {
+        let reason = format!(
+            "the cell face is served on the gateway's Modbus face or mirrored in the \
+             PLC: it needs [robots.{}.gateway.modbus], or `plc = \"DT...\"`",
+            robot.name
+        );
+        return Err(at.child("face").missing(&face.span(), reason));
+    }
+    if let Some(first) = mirrored {
+        cell::face_clear_of_contract(&at.child("face"), table, first, link)?;
+    }
+    Ok(Some(settings))
 }
 
 /// The robot's `[robots.NAME.gateway]` table, if it has one (it needs the plc table).

@@ -264,73 +264,67 @@ impl Lease {
 
     /// Takes `event` at `now`; returns what to do, in order.
     pub fn on(&mut self, event: Event, now: Instant, settings: &LeaseSettings) -> Vec<Action> {
-        match (std::mem::take(self), event) {
-            (
-                Self::Idle,
+        match std::mem::take(self) {
+            Self::Idle => match event {
                 Event::Start {
                     session,
                     axis,
                     positive,
                     seq,
-                },
-            ) => {
-                let jog = Jogging {
-                    session,
-                    axis,
-                    positive,
-                    seq,
-                    expires: now + settings.lease,
-                    asked: 0,
-                    pieces: Vec::new(),
-                };
-                self.refill(jog, now, settings)
-            }
-            (Self::Jogging(mut j), Event::KeepAlive { session, seq })
-                if j.session == session && seq > j.seq =>
-            {
+                } => {
+                    let jog = Jogging {
+                        session,
+                        axis,
+                        positive,
+                        seq,
+                        expires: now + settings.lease,
+                        asked: 0,
+                        pieces: Vec::new(),
+                    };
+                    self.refill(jog, now, settings)
+                }
+                _ => Vec::new(),
+            },
+            Self::Jogging(jog) => self.on_jogging(jog, event, now, settings),
+        }
+    }
+
+    /// Takes `event` while `j` is under way.
+    fn on_jogging(
+        &mut self,
+        mut j: Jogging,
+        event: Event,
+        now: Instant,
+        settings: &LeaseSettings,
+    ) -> Vec<Action> {
+        match event {
+            Event::KeepAlive { session, seq } if j.session == session && seq > j.seq => {
                 j.seq = seq;
                 j.expires = now + settings.lease;
                 self.refill(j, now, settings)
             }
-            (Self::Jogging(j), Event::Release { session }) if j.session == session => {
-                end(j.session, EndedBy::Released)
-            }
-            (Self::Jogging(j), Event::Closed { session }) if j.session == session => {
-                end(j.session, EndedBy::Closed)
-            }
-            (Self::Jogging(j), Event::Hidden { session }) if j.session == session => {
-                end(j.session, EndedBy::Hidden)
-            }
-            (Self::Jogging(j), Event::SeatTaken) => end(j.session, EndedBy::SeatTaken),
-            (Self::Jogging(j), Event::Fault { reason }) => {
-                end(j.session, EndedBy::Fault { reason })
-            }
-            (Self::Jogging(j), Event::Refused { reason }) => {
-                end(j.session, EndedBy::Refused { reason })
-            }
-            (Self::Jogging(mut j), Event::Queued { id }) => {
+            Event::Queued { id } => {
                 j.asked = j.asked.saturating_sub(1);
                 j.pieces.push(id);
                 *self = Self::Jogging(j);
                 Vec::new()
             }
-            (Self::Jogging(mut j), Event::PieceEnded { id, done }) if j.pieces.contains(&id) => {
+            Event::PieceEnded { id, done } if j.pieces.contains(&id) => {
                 j.pieces.retain(|p| *p != id);
                 if done {
                     self.refill(j, now, settings)
                 } else {
-                    end(
-                        j.session,
-                        EndedBy::Refused {
-                            reason: format!("piece {id} did not end done (a stop came)"),
-                        },
-                    )
+                    let reason = format!("piece {id} did not end done (a stop came)");
+                    end(j.session, EndedBy::Refused { reason })
                 }
             }
-            (Self::Jogging(j), Event::Tick) if now >= j.expires => end(j.session, EndedBy::Expired),
-            (state, _) => {
-                *self = state;
-                Vec::new()
+            other => {
+                if let Some(by) = ending(&j, other, now) {
+                    end(j.session, by)
+                } else {
+                    *self = Self::Jogging(j);
+                    Vec::new()
+                }
             }
         }
     }
@@ -350,6 +344,22 @@ impl Lease {
         }
         *self = Self::Jogging(jog);
         actions
+    }
+}
+
+/// Why `event` ends `jog` at `now`, when it does: its page lets go, closes or hides, the seat
+/// is taken, a fault or a refusal comes, or the lease runs out.
+fn ending(jog: &Jogging, event: Event, now: Instant) -> Option<EndedBy> {
+    let own = |session: SessionId| session == jog.session;
+    match event {
+        Event::Release { session } if own(session) => Some(EndedBy::Released),
+        Event::Closed { session } if own(session) => Some(EndedBy::Closed),
+        Event::Hidden { session } if own(session) => Some(EndedBy::Hidden),
+        Event::SeatTaken => Some(EndedBy::SeatTaken),
+        Event::Fault { reason } => Some(EndedBy::Fault { reason }),
+        Event::Refused { reason } => Some(EndedBy::Refused { reason }),
+        Event::Tick if now >= jog.expires => Some(EndedBy::Expired),
+        _ => None,
     }
 }
 

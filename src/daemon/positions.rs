@@ -170,7 +170,7 @@ impl TaughtPositions {
         match std::fs::read(&file) {
             Ok(bytes) => match parse(&bytes) {
                 Ok(book) => taught.book = Mutex::new(book),
-                Err(problem) => taught.set_aside(&file, &problem),
+                Err(problem) => taught.set_aside(&file, &problem.to_string()),
             },
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => {
@@ -317,23 +317,59 @@ fn render(book: &Book) -> String {
     text
 }
 
+/// What is wrong with a positions file's bytes (the file is then corrupt).
+#[derive(Debug, Error)]
+enum CorruptFile {
+    /// Not JSON of the file's form.
+    #[error("{0}")]
+    Json(#[from] serde_json::Error),
+    /// Another format version.
+    #[error("linterpd_positions is {found}; this linterpd reads version {VERSION}")]
+    Version {
+        /// The version the file says.
+        found: u32,
+    },
+    /// A position name that breaks the rule.
+    #[error("robot {robot:?}: {source}")]
+    Name {
+        /// The robot.
+        robot: String,
+        /// The name's fault.
+        #[source]
+        source: PositionError,
+    },
+    /// A pose with a number that is not finite.
+    #[error("robot {robot:?}, position {name:?}: pose {pose:?} is not finite")]
+    NotFinite {
+        /// The robot.
+        robot: String,
+        /// The position.
+        name: String,
+        /// Its pose.
+        pose: [f64; 4],
+    },
+}
+
 /// The book in a file's bytes, or what is wrong with them.
-fn parse(bytes: &[u8]) -> Result<Book, String> {
-    let file: PositionsFile = serde_json::from_slice(bytes).map_err(|e| e.to_string())?;
+fn parse(bytes: &[u8]) -> Result<Book, CorruptFile> {
+    let file: PositionsFile = serde_json::from_slice(bytes)?;
     if file.linterpd_positions != VERSION {
-        return Err(format!(
-            "linterpd_positions is {}; this linterpd reads version {VERSION}",
-            file.linterpd_positions
-        ));
+        return Err(CorruptFile::Version {
+            found: file.linterpd_positions,
+        });
     }
     for (robot, positions) in &file.robots {
         for (name, position) in positions {
-            check_name(name).map_err(|e| format!("robot {robot:?}: {e}"))?;
+            check_name(name).map_err(|source| CorruptFile::Name {
+                robot: robot.clone(),
+                source,
+            })?;
             if position.pose.iter().any(|v| !v.is_finite()) {
-                return Err(format!(
-                    "robot {robot:?}, position {name:?}: pose {:?} is not finite",
-                    position.pose
-                ));
+                return Err(CorruptFile::NotFinite {
+                    robot: robot.clone(),
+                    name: name.clone(),
+                    pose: position.pose,
+                });
             }
         }
     }

@@ -208,6 +208,71 @@ impl TimedKnots {
     }
 }
 
+/// The envelope of `w²` at every boundary between `stretches` (`(s0, s1, limit)`, in order): the
+/// lowest of every stretch's limit plus `slope` times the distance to it, from the left and from
+/// the right; 1 where nothing lowers it.
+fn boundary_envelope(stretches: &[(f64, f64, f64)], slope: f64) -> Vec<f64> {
+    let n = stretches.len();
+    let mut at = vec![1.0_f64; n + 1];
+    let mut left = f64::INFINITY;
+    for j in 1..=n {
+        let (s0, s1, limit) = stretches[j - 1];
+        left = (left + slope * (s1 - s0)).min(limit);
+        at[j] = at[j].min(left);
+    }
+    let mut right = f64::INFINITY;
+    for j in (0..n).rev() {
+        let (s0, s1, limit) = stretches[j];
+        right = (right + slope * (s1 - s0)).min(limit);
+        at[j] = at[j].min(right);
+    }
+    at
+}
+
+/// The corners `(s_mm, w²)` of the envelope from the path's start: inside a stretch the envelope
+/// is its own limit, or the slope from one of its ends (`at`, from [`boundary_envelope`]).
+fn envelope_corners(stretches: &[(f64, f64, f64)], at: &[f64], slope: f64) -> Vec<(f64, f64)> {
+    let mut corners: Vec<(f64, f64)> = vec![(0.0, at[0])];
+    for (i, &(s0, s1, limit)) in stretches.iter().enumerate() {
+        let (u0, u1) = (at[i], at[i + 1]);
+        let rise = s0 + (limit - u0) / slope;
+        let fall = s1 - (limit - u1) / slope;
+        if rise <= fall {
+            corners.push((rise, limit));
+            corners.push((fall, limit));
+        } else {
+            let meet = ((u1 - u0) / slope + s0 + s1) / 2.0;
+            corners.push((meet.clamp(s0, s1), u0 + slope * (meet - s0).max(0.0)));
+        }
+        corners.push((s1, u1));
+    }
+    corners
+}
+
+/// The knots through `corners` (the first at the path's start), each corner clamped onto the
+/// path of `length_mm` and the profile distance summed between them.
+fn knots_through(corners: &[(f64, f64)], length_mm: f64) -> Vec<Knot> {
+    let mut knots = vec![Knot {
+        s_mm: 0.0,
+        sigma_mm: 0.0,
+        w: corners[0].1.sqrt(),
+    }];
+    for &(s_mm, u) in &corners[1..] {
+        let last = knots[knots.len() - 1];
+        let s_mm = s_mm.clamp(last.s_mm, length_mm);
+        if s_mm <= last.s_mm {
+            continue;
+        }
+        let w = u.sqrt();
+        knots.push(Knot {
+            s_mm,
+            sigma_mm: last.sigma_mm + 2.0 * (s_mm - last.s_mm) / (last.w + w),
+            w,
+        });
+    }
+    knots
+}
+
 /// One corner of the piecewise-linear `w²(s)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Knot {
@@ -267,56 +332,10 @@ impl Pace {
         {
             return Self::uniform(path.length_mm());
         }
-        // The envelope at every boundary between stretches: the lowest of every stretch's limit
-        // plus the slope times the distance to it, from the left and from the right.
-        let n = stretches.len();
-        let mut at = vec![1.0_f64; n + 1];
-        let mut left = f64::INFINITY;
-        for j in 1..=n {
-            let (s0, s1, limit) = stretches[j - 1];
-            left = (left + slope * (s1 - s0)).min(limit);
-            at[j] = at[j].min(left);
-        }
-        let mut right = f64::INFINITY;
-        for j in (0..n).rev() {
-            let (s0, s1, limit) = stretches[j];
-            right = (right + slope * (s1 - s0)).min(limit);
-            at[j] = at[j].min(right);
-        }
-        // Inside a stretch the envelope is its own limit, or the slope from one of its ends.
-        let mut corners: Vec<(f64, f64)> = vec![(0.0, at[0])];
-        for (i, &(s0, s1, limit)) in stretches.iter().enumerate() {
-            let (u0, u1) = (at[i], at[i + 1]);
-            let rise = s0 + (limit - u0) / slope;
-            let fall = s1 - (limit - u1) / slope;
-            if rise <= fall {
-                corners.push((rise, limit));
-                corners.push((fall, limit));
-            } else {
-                let meet = ((u1 - u0) / slope + s0 + s1) / 2.0;
-                corners.push((meet.clamp(s0, s1), u0 + slope * (meet - s0).max(0.0)));
-            }
-            corners.push((s1, u1));
-        }
+        let at = boundary_envelope(&stretches, slope);
+        let corners = envelope_corners(&stretches, &at, slope);
         let length_mm = path.length_mm();
-        let mut knots = vec![Knot {
-            s_mm: 0.0,
-            sigma_mm: 0.0,
-            w: at[0].sqrt(),
-        }];
-        for &(s_mm, u) in &corners[1..] {
-            let last = knots[knots.len() - 1];
-            let s_mm = s_mm.clamp(last.s_mm, length_mm);
-            if s_mm <= last.s_mm {
-                continue;
-            }
-            let w = u.sqrt();
-            knots.push(Knot {
-                s_mm,
-                sigma_mm: last.sigma_mm + 2.0 * (s_mm - last.s_mm) / (last.w + w),
-                w,
-            });
-        }
+        let knots = knots_through(&corners, length_mm);
         let kept = without_flat_knots(&knots);
         if kept.len() < 2 {
             return Self::uniform(length_mm);

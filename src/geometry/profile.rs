@@ -96,6 +96,21 @@ fn positive(what: &'static str, value: f64) -> Result<f64, ProfileError> {
     }
 }
 
+/// The whole periods of `period_s` that `x` periods take (at least one), within
+/// [`MAX_PERIODS`]. A hair of tolerance so 0.2 / 0.05 = 4.000000000000001 stays 4.
+fn whole_periods(x: f64, period_s: f64) -> Result<u32, ProfileError> {
+    let n = (x - 1e-9).ceil().max(1.0);
+    if n > f64::from(MAX_PERIODS) {
+        Err(ProfileError::TooManyPeriods {
+            periods: n,
+            period_s,
+            max: MAX_PERIODS,
+        })
+    } else {
+        Ok(n as u32)
+    }
+}
+
 impl Profile {
     /// Plans the profile; see the module docs for how non-integer step counts are decided.
     pub fn new(req: ProfileRequest) -> Result<Self, ProfileError> {
@@ -108,34 +123,11 @@ impl Profile {
                 value: req.accel_s,
             });
         }
-        let whole = |x: f64| -> Result<u32, ProfileError> {
-            // A hair of tolerance so 0.2 / 0.05 = 4.000000000000001 stays 4.
-            let n = (x - 1e-9).ceil().max(1.0);
-            if n > f64::from(MAX_PERIODS) {
-                Err(ProfileError::TooManyPeriods {
-                    periods: n,
-                    period_s,
-                    max: MAX_PERIODS,
-                })
-            } else {
-                Ok(n as u32)
-            }
-        };
+        let whole = |x: f64| whole_periods(x, period_s);
         if req.accel_s == 0.0 {
             // No ramp asked for: a constant speed for the whole line.
             let n0 = whole(length_mm / (speed * period_s))?;
-            let speed_mm_s = length_mm / (f64::from(n0) * period_s);
-            return Ok(Self {
-                length_mm,
-                speed_mm_s,
-                accel_mm_s2: f64::INFINITY,
-                accel_s: 0.0,
-                period_s,
-                ramp_periods: 0,
-                cruise_end_periods: n0,
-                last_period_s: period_s,
-                jerk_s: 0.0,
-            });
+            return Ok(Self::constant(length_mm, n0, period_s));
         }
         let accel = speed / req.accel_s;
         let (na, n0) = if length_mm >= speed * req.accel_s {
@@ -159,6 +151,21 @@ impl Profile {
             last_period_s: period_s,
             jerk_s: 0.0,
         })
+    }
+
+    /// A constant speed along `length_mm` for `periods` of `period_s`: no ramp.
+    fn constant(length_mm: f64, periods: u32, period_s: f64) -> Self {
+        Self {
+            length_mm,
+            speed_mm_s: length_mm / (f64::from(periods) * period_s),
+            accel_mm_s2: f64::INFINITY,
+            accel_s: 0.0,
+            period_s,
+            ramp_periods: 0,
+            cruise_end_periods: periods,
+            last_period_s: period_s,
+            jerk_s: 0.0,
+        }
     }
 
     /// The jerk-limited (S-curve) profile of `req` under `jerk_mm_s3`: every ramp's acceleration

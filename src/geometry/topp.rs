@@ -149,6 +149,11 @@ struct Half {
 /// (`step` ahead) at an `x` between 0 and `next_max`: a linear programme in `(u, x)`, solved
 /// over the vertices of its feasible polygon (a dozen half-planes: every pair is cheap).
 fn highest_controllable(point: &GridPoint, step: f64, next_max: f64) -> f64 {
+    highest_vertex(&controllable_halves(point, step, next_max)).min(point.x_max)
+}
+
+/// The half-planes of [`highest_controllable`]'s programme at `point`.
+fn controllable_halves(point: &GridPoint, step: f64, next_max: f64) -> Vec<Half> {
     let mut halves: Vec<Half> = Vec::with_capacity(2 * point.accels.len() + 4);
     // 0 <= x <= x_max.
     halves.push(Half {
@@ -188,6 +193,12 @@ fn highest_controllable(point: &GridPoint, step: f64, next_max: f64) -> f64 {
             });
         }
     }
+    halves
+}
+
+/// The highest `x` (at least 0) of a vertex of the polygon `halves` bound: every pair's
+/// crossing, kept when it is inside every half-plane.
+fn highest_vertex(halves: &[Half]) -> f64 {
     let feasible = |u: f64, x: f64| {
         halves
             .iter()
@@ -207,7 +218,7 @@ fn highest_controllable(point: &GridPoint, step: f64, next_max: f64) -> f64 {
             }
         }
     }
-    best.min(point.x_max)
+    best
 }
 
 /// The time the motion `x` over `grid` takes, in the unit of `s` over its speed: every step at

@@ -227,48 +227,29 @@ impl Engine {
         let (segment, direction, range, runs_on) =
             (p.segment, p.direction, p.range, p.pulses.is_none());
         let (min_hz, max_hz) = self.allowed(range);
-        let channel = self.channel;
-        let row = row + 1;
         if freq_hz < min_hz || freq_hz > max_hz {
-            tracing::warn!(
-                channel,
-                segment,
-                row,
-                freq_hz,
-                min_hz,
-                max_hz,
-                "row frequency out of range: clamped"
-            );
             let a = Anomaly::Clamped {
-                channel,
+                channel: self.channel,
                 segment,
-                row,
+                row: row + 1,
                 freq_hz,
                 min_hz,
                 max_hz,
                 at_s,
             };
-            rec.anomalies.push(a);
+            note(a, rec);
         }
         if runs_on {
-            tracing::error!(
-                channel,
-                segment,
-                row,
-                from = count,
-                target,
-                "target against the segment's direction: the count runs on without end until a stop"
-            );
             let a = Anomaly::RunOn {
-                channel,
+                channel: self.channel,
                 segment,
-                row,
+                row: row + 1,
                 from: count,
                 target,
                 direction,
                 at_s,
             };
-            rec.anomalies.push(a);
+            note(a, rec);
         }
     }
 
@@ -297,6 +278,45 @@ impl Engine {
             }
         }
     }
+}
+
+/// Logs `anomaly` (a clamped row as a warning, a count that runs on as an error) and records it.
+fn note(anomaly: Anomaly, rec: &mut Recorder) {
+    match anomaly {
+        Anomaly::Clamped {
+            channel,
+            segment,
+            row,
+            freq_hz,
+            min_hz,
+            max_hz,
+            ..
+        } => tracing::warn!(
+            channel,
+            segment,
+            row,
+            freq_hz,
+            min_hz,
+            max_hz,
+            "row frequency out of range: clamped"
+        ),
+        Anomaly::RunOn {
+            channel,
+            segment,
+            row,
+            from,
+            target,
+            ..
+        } => tracing::error!(
+            channel,
+            segment,
+            row,
+            from,
+            target,
+            "target against the segment's direction: the count runs on without end until a stop"
+        ),
+    }
+    rec.anomalies.push(anomaly);
 }
 
 #[cfg(test)]

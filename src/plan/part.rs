@@ -5,6 +5,7 @@
 use crate::geometry::Profile;
 use crate::kinematics::JOINTS;
 use crate::robot::{Motion, Robot};
+use crate::sim::Figures;
 use crate::table::ChannelTable;
 
 use super::course::Course;
@@ -140,28 +141,7 @@ pub(super) fn plan_start(
 ) -> Result<Plan, PlanError> {
     let robot = sampled.robot;
     let (window, samples) = sampled.part(first, last, counts);
-    let (tables, problems, figures) = if let Some(tolerance_mm) = sampled.bounded() {
-        let v = bounded_move(sampled, &window, &samples).plan(tolerance_mm)?;
-        (v.tables, Vec::new(), v.figures)
-    } else {
-        let tables = build_tables(
-            robot,
-            &samples,
-            &sampled.profile,
-            window.duration_s(),
-            &sampled.motion,
-        );
-        let problems = check_tables(robot, &tables, sampled.motion.method)?;
-        let figures = simulate(
-            robot,
-            &tables,
-            sampled.course,
-            &sampled.profile,
-            &window,
-            &sampled.motion,
-        );
-        (tables, problems, figures)
-    };
+    let (tables, problems, figures) = tabled(sampled, &window, &samples)?;
     let drive = if sampled.motion.method.is_seed_exact() {
         [DriveFigures::default(); JOINTS]
     } else {
@@ -190,6 +170,37 @@ pub(super) fn plan_start(
         window,
         drive,
     })
+}
+
+/// The start's tables, what is wrong with them and their figures: bounded by the path tolerance
+/// when the motion asks for it, else built from `samples`, checked and simulated.
+fn tabled(
+    sampled: &Sampled,
+    window: &Window,
+    samples: &Samples,
+) -> Result<(Vec<ChannelTable>, Vec<String>, Figures), PlanError> {
+    if let Some(tolerance_mm) = sampled.bounded() {
+        let v = bounded_move(sampled, window, samples).plan(tolerance_mm)?;
+        return Ok((v.tables, Vec::new(), v.figures));
+    }
+    let robot = sampled.robot;
+    let tables = build_tables(
+        robot,
+        samples,
+        &sampled.profile,
+        window.duration_s(),
+        &sampled.motion,
+    );
+    let problems = check_tables(robot, &tables, sampled.motion.method)?;
+    let figures = simulate(
+        robot,
+        &tables,
+        sampled.course,
+        &sampled.profile,
+        window,
+        &sampled.motion,
+    );
+    Ok((tables, problems, figures))
 }
 
 /// Every joint's table from `samples`, a period apart but the last point, `end_s` from the first.

@@ -189,20 +189,7 @@ fn path_panel(
         .iter()
         .map(|path| path.iter().map(|p| projected(picture, p, axes)).collect())
         .collect();
-    let all = || {
-        points
-            .iter()
-            .flatten()
-            .copied()
-            .chain(planned.iter().map(|e| (e[axes[0]], e[axes[1]])))
-    };
-    let (w, h) = area.dim_in_pixel();
-    let (x, y) = equal_scale(
-        padded(all().map(|p| p.0), 0.06),
-        padded(all().map(|p| p.1), 0.06),
-        f64::from(w) - 110.0,
-        f64::from(h) - 110.0,
-    );
+    let ranges = path_ranges(area, &points, &planned, axes);
     let caption = format!(
         "path in {}{} plane (offsets from the {} x{})",
         &names[0][..1],
@@ -216,7 +203,7 @@ fn path_panel(
         decimals: [0, 0],
         y_label_px: 64,
     };
-    let mut chart = chart(area, caption, (x, y), &axes_drawn)?;
+    let mut chart = chart(area, caption, ranges, &axes_drawn)?;
     for (pts, s) in points.into_iter().zip(picture.series) {
         chart.draw_series(LineSeries::new(pts, colour(s.rgb).stroke_width(2)))?;
     }
@@ -231,16 +218,32 @@ fn path_panel(
     Ok(())
 }
 
+/// The x and y ranges of a path panel: every executed point and the `planned` outline, padded,
+/// on one scale in both directions.
+fn path_ranges(
+    area: &Area<'_>,
+    points: &[Vec<(f64, f64)>],
+    planned: &[Vector3<f64>],
+    axes: [usize; 2],
+) -> (Range<f64>, Range<f64>) {
+    let all = || {
+        points
+            .iter()
+            .flatten()
+            .copied()
+            .chain(planned.iter().map(|e| (e[axes[0]], e[axes[1]])))
+    };
+    let (w, h) = area.dim_in_pixel();
+    equal_scale(
+        padded(all().map(|p| p.0), 0.06),
+        padded(all().map(|p| p.1), 0.06),
+        f64::from(w) - 110.0,
+        f64::from(h) - 110.0,
+    )
+}
+
 fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed> {
     let length_mm = picture.path.length_mm();
-    let top = picture
-        .envelopes
-        .iter()
-        .flatten()
-        .map(|p| p.1)
-        .chain(picture.tolerances_mm.iter().copied())
-        .fold(0.0, f64::max);
-    let top = if top > 0.0 { top * 1.12 } else { 0.01 };
     let caption = format!(
         "deviation from the {noun}, true scale (largest in each {:.2} mm of the {noun})",
         picture.stretch_mm,
@@ -255,7 +258,12 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
         decimals: [0, 3],
         y_label_px: 74,
     };
-    let mut chart = chart(area, caption, (0.0..length_mm, 0.0..top), &axes)?;
+    let mut chart = chart(
+        area,
+        caption,
+        (0.0..length_mm, 0.0..deviation_top(picture)),
+        &axes,
+    )?;
     for &tolerance in &picture.tolerances_mm {
         let style = TOLERANCE.stroke_width(1);
         chart.draw_series(DashedLineSeries::new(
@@ -272,6 +280,18 @@ fn deviation_panel(area: &Area<'_>, picture: &Picture<'_>) -> Result<(), Failed>
         ))?;
     }
     Ok(())
+}
+
+/// The top of the deviation panel's y axis: above every envelope and tolerance.
+fn deviation_top(picture: &Picture<'_>) -> f64 {
+    let top = picture
+        .envelopes
+        .iter()
+        .flatten()
+        .map(|p| p.1)
+        .chain(picture.tolerances_mm.iter().copied())
+        .fold(0.0, f64::max);
+    if top > 0.0 { top * 1.12 } else { 0.01 }
 }
 
 /// The legend: a line sample and the label of every series, then the planned line or path, its

@@ -12,7 +12,7 @@
 
 use std::fmt::Write as _;
 
-use crate::pallet::Pattern;
+use crate::pallet::{Pattern, Slot};
 
 /// A panel's side, px.
 const PANEL_PX: f64 = 260.0;
@@ -42,50 +42,57 @@ pub fn layers_svg(pattern: &Pattern, placed: usize) -> String {
     );
     let scale = Scale::of(pattern);
     for layer in 0..layers {
-        let (ox, oy) = (
-            (layer % PER_ROW) as f64 * PANEL_PX,
-            (layer / PER_ROW) as f64 * PANEL_PX + MARGIN_PX,
-        );
-        let in_layer = pattern.slots().iter().filter(|s| s.layer == layer);
-        let done = in_layer.clone().filter(|s| s.index < placed).count();
-        let _ = writeln!(
-            svg,
-            "<g transform=\"translate({ox},{oy})\"><rect x=\"2\" y=\"2\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#999\"/>\
-             <text x=\"{}\" y=\"16\" text-anchor=\"middle\">layer {} ({done} of {} placed)</text>",
-            PANEL_PX - 4.0,
-            PANEL_PX - 4.0,
-            PANEL_PX / 2.0,
-            layer + 1,
-            in_layer.clone().count(),
-        );
-        for slot in in_layer {
-            let (x, y) = scale.at(slot.pose.position_mm.x, slot.pose.position_mm.y);
-            let half = scale.slot_px / 2.0;
-            let fill = if slot.index < placed {
-                "#4a7fb5"
-            } else {
-                "none"
-            };
-            let (s, c) = slot.pose.a_rad.sin_cos();
-            let _ = writeln!(
-                svg,
-                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"{fill}\" stroke=\"#1d3d5e\"/>\
-                 <line x1=\"{x:.1}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"#c33\"/>\
-                 <text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-size=\"8\">{}</text>",
-                x - half,
-                y - half,
-                scale.slot_px,
-                scale.slot_px,
-                x + c * half,
-                y - s * half,
-                y + half + 9.0,
-                slot.index + 1,
-            );
-        }
-        svg.push_str("</g>\n");
+        layer_panel(&mut svg, pattern, &scale, layer, placed);
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+/// Writes the panel of `layer` (its place in the picture, its title, its slots) to `svg`.
+fn layer_panel(svg: &mut String, pattern: &Pattern, scale: &Scale, layer: usize, placed: usize) {
+    let (ox, oy) = (
+        (layer % PER_ROW) as f64 * PANEL_PX,
+        (layer / PER_ROW) as f64 * PANEL_PX + MARGIN_PX,
+    );
+    let in_layer = pattern.slots().iter().filter(|s| s.layer == layer);
+    let done = in_layer.clone().filter(|s| s.index < placed).count();
+    let _ = writeln!(
+        svg,
+        "<g transform=\"translate({ox},{oy})\"><rect x=\"2\" y=\"2\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#999\"/>\
+         <text x=\"{}\" y=\"16\" text-anchor=\"middle\">layer {} ({done} of {} placed)</text>",
+        PANEL_PX - 4.0,
+        PANEL_PX - 4.0,
+        PANEL_PX / 2.0,
+        layer + 1,
+        in_layer.clone().count(),
+    );
+    for slot in in_layer {
+        slot_mark(svg, scale, slot, slot.index < placed);
+    }
+    svg.push_str("</g>\n");
+}
+
+/// Writes `slot` to `svg`: a square at its place (filled when `placed`), a tick showing the tool
+/// angle and its number in fill order.
+fn slot_mark(svg: &mut String, scale: &Scale, slot: &Slot, placed: bool) {
+    let (x, y) = scale.at(slot.pose.position_mm.x, slot.pose.position_mm.y);
+    let half = scale.slot_px / 2.0;
+    let fill = if placed { "#4a7fb5" } else { "none" };
+    let (s, c) = slot.pose.a_rad.sin_cos();
+    let _ = writeln!(
+        svg,
+        "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"{fill}\" stroke=\"#1d3d5e\"/>\
+         <line x1=\"{x:.1}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"#c33\"/>\
+         <text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-size=\"8\">{}</text>",
+        x - half,
+        y - half,
+        scale.slot_px,
+        scale.slot_px,
+        x + c * half,
+        y - s * half,
+        y + half + 9.0,
+        slot.index + 1,
+    );
 }
 
 /// World x, y -> a panel's px, the same for every layer.

@@ -308,24 +308,6 @@ impl Robot {
 #[must_use]
 pub fn seed_robot() -> Robot {
     use crate::kinematics::Cylindrical;
-    let joint = |name: &str,
-                 channel: u8,
-                 kind: JointKind,
-                 step_user: f64,
-                 min: f64,
-                 max: f64,
-                 max_freq_hz: u32| Joint {
-        name: name.into(),
-        channel,
-        kind,
-        step: kind.from_user(step_user),
-        offset: 0.0,
-        min: kind.from_user(min),
-        max: kind.from_user(max),
-        max_freq_hz,
-        output: OutputMethod::PulseSign,
-        dynamics: Dynamics::default(),
-    };
     Robot {
         name: "press-loader".into(),
         kinematics: Model::Cylindrical(Cylindrical {
@@ -334,24 +316,29 @@ pub fn seed_robot() -> Robot {
         })
         .into(),
         joints: [
-            joint(
+            seed_joint(
                 "theta1",
                 0,
                 JointKind::Revolute,
                 0.0025,
-                -170.0,
-                170.0,
+                [-170.0, 170.0],
                 100_000,
             ),
-            joint("d2", 1, JointKind::Prismatic, 0.025, -50.0, 400.0, 100_000),
-            joint("d3", 2, JointKind::Prismatic, 0.013, 0.0, 1_000.0, 20_000),
-            joint(
+            seed_joint(
+                "d2",
+                1,
+                JointKind::Prismatic,
+                0.025,
+                [-50.0, 400.0],
+                100_000,
+            ),
+            seed_joint("d3", 2, JointKind::Prismatic, 0.013, [0.0, 1_000.0], 20_000),
+            seed_joint(
                 "wrist",
                 3,
                 JointKind::Revolute,
                 0.0025,
-                -360.0,
-                360.0,
+                [-360.0, 360.0],
                 20_000,
             ),
         ],
@@ -366,6 +353,30 @@ pub fn seed_robot() -> Robot {
         },
         area_words: 2_000,
         max_speed_mm_s: DEFAULT_MAX_SPEED_MM_S,
+    }
+}
+
+/// A joint of the seed's robot: its step and range in the user's unit (degrees or mm), pulse
+/// and sign output, no offset and no drive limits.
+fn seed_joint(
+    name: &str,
+    channel: u8,
+    kind: JointKind,
+    step_user: f64,
+    [min, max]: [f64; 2],
+    max_freq_hz: u32,
+) -> Joint {
+    Joint {
+        name: name.into(),
+        channel,
+        kind,
+        step: kind.from_user(step_user),
+        offset: 0.0,
+        min: kind.from_user(min),
+        max: kind.from_user(max),
+        max_freq_hz,
+        output: OutputMethod::PulseSign,
+        dynamics: Dynamics::default(),
     }
 }
 

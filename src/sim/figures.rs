@@ -81,68 +81,179 @@ pub fn measure_within(
     path_limit_mm: f64,
 ) -> Option<Figures> {
     let counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
-    // One joint changes per event: only its value is converted, and the kinematics' sines and
-    // cosines are reused while their angles hold (bit for bit what forward kinematics gives).
-    let mut q = robot.values_of(&counts);
-    let mut positions = Positions::new(&robot.kinematics);
-    path.restart();
-    let mut p = positions.at(&q);
-    let mut deviation = Deviation::new(path);
-    deviation.see(&p);
-    // Squared, the root taken once at the end (the root is monotonic: the same maximum).
-    let mut tracking2 = (p - planned.at(0.0)).norm_squared();
-    let mut tracking = tracking2.sqrt();
-    let mut sampled: f64 = 0.0;
-    let mut next_sample = 0.0;
+    let mut executed = Executed::new(robot, &counts);
+    let mut p = executed.position();
+    let mut deviation = Deviation::from_start(path, &p);
+    let mut tracking = Tracking::new(p, planned);
+    let mut sampled = Sampled::default();
     let mut last_finish_s = 0.0;
     for e in events {
         last_finish_s = e.t_s;
-        while next_sample < e.t_s {
-            sampled = sampled.max(path.distance_mm(&p));
-            next_sample += SAMPLE_PERIOD_S;
-        }
+        sampled.before(e.t_s, &p, path);
         // The planned pose moves while the executed one holds: check both ends of the hold.
         let held = p;
-        set_joint(&mut q, e.table, robot.joints[e.table].value_of(e.count));
-        p = positions.at(&q);
+        p = executed.take(&e);
         if deviation.see(&p) > path_limit_mm {
             return None;
         }
-        // First against a planned position within `off` of the exact one: only a hold whose
-        // ends may pass the largest so far is measured exactly (a <= T, so (a + off)^2 <= ...).
-        let (near, off) = planned.near(e.t_s);
-        let a2 = (held - near).norm_squared().max((p - near).norm_squared());
-        if a2 + off * (2.0 * tracking + off) > tracking2 {
-            let target = planned.at(e.t_s);
-            tracking2 = tracking2
-                .max((held - target).norm_squared())
-                .max((p - target).norm_squared());
-            tracking = tracking2.sqrt();
-        }
+        tracking.hold(&held, &p, e.t_s, planned);
     }
-    tracking2 =
-        tracking2.max((p - planned.at(planned_duration_s.max(last_finish_s))).norm_squared());
-    while next_sample <= planned_duration_s.max(last_finish_s) + 1e-12 {
-        sampled = sampled.max(path.distance_mm(&p));
-        next_sample += SAMPLE_PERIOD_S;
-    }
-    let finishes: Vec<f64> = finish_s.iter().flatten().copied().collect();
-    let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - finishes.iter().copied().fold(f64::INFINITY, f64::min);
+    let end_s = planned_duration_s.max(last_finish_s);
+    tracking.see(&p, &planned.at(end_s));
+    sampled.through(end_s + 1e-12, &p, path);
     Some(Figures {
         path_deviation_mm: deviation.max_mm,
-        tracking_error_mm: tracking2.sqrt(),
-        sampled_deviation_mm: sampled,
-        end_skew_ms: if finishes.is_empty() { 0.0 } else { skew * 1e3 },
+        tracking_error_mm: tracking.squared.sqrt(),
+        sampled_deviation_mm: sampled.max_mm,
+        end_skew_ms: end_skew_ms(finish_s),
         end_error_mm: (p - path.end_mm()).norm(),
         finish_s: last_finish_s,
-        rows: tables.iter().map(ChannelTable::rows).sum(),
-        words: tables
-            .iter()
-            .filter(|t| !t.segments.is_empty())
-            .map(encoded_words)
-            .sum(),
+        ..Figures::sizes(tables)
     })
+}
+
+impl Figures {
+    /// The sizes of `tables` (their rows, and the words of every channel area written), every
+    /// measured figure 0.
+    fn sizes(tables: &[ChannelTable]) -> Self {
+        Self {
+            rows: tables.iter().map(ChannelTable::rows).sum(),
+            words: tables
+                .iter()
+                .filter(|t| !t.segments.is_empty())
+                .map(encoded_words)
+                .sum(),
+            ..Self::default()
+        }
+    }
+}
+
+/// The executed pose as the run's events come. One joint changes per event: only its value is
+/// converted, and the kinematics' sines and cosines are reused while their angles hold (bit for
+/// bit what forward kinematics gives).
+struct Executed<'a> {
+    robot: &'a Robot,
+    positions: Positions<'a>,
+    /// The joint values now.
+    q: [f64; JOINTS],
+}
+
+impl<'a> Executed<'a> {
+    /// At `counts`.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn new(robot: &'a Robot, counts: &[i64; JOINTS]) -> Self {
+        Self {
+            robot,
+            positions: Positions::new(&robot.kinematics),
+            q: robot.values_of(counts),
+        }
+    }
+
+    /// The position now.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn position(&mut self) -> Vector3<f64> {
+        self.positions.at(&self.q)
+    }
+
+    /// Takes event `e`; returns the position after it.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn take(&mut self, e: &PulseEvent) -> Vector3<f64> {
+        let value = self.robot.joints[e.table].value_of(e.count);
+        set_joint(&mut self.q, e.table, value);
+        self.position()
+    }
+}
+
+/// The largest distance between the executed and the planned position so far, squared (the
+/// root taken once at the end: the root is monotonic, the same maximum) and its root as of the
+/// last exact check.
+struct Tracking {
+    squared: f64,
+    root: f64,
+}
+
+impl Tracking {
+    /// At the start, with the executed position `p`.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn new(p: Vector3<f64>, planned: &impl Planned) -> Self {
+        let squared = (p - planned.at(0.0)).norm_squared();
+        Self {
+            squared,
+            root: squared.sqrt(),
+        }
+    }
+
+    /// Takes a hold that ends at `t_s`, at `held` before the event and at `p` after it. First
+    /// against a planned position within `off` of the exact one: only a hold whose ends may
+    /// pass the largest so far is measured exactly (a <= T, so (a + off)^2 <= ...).
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn hold(&mut self, held: &Vector3<f64>, p: &Vector3<f64>, t_s: f64, planned: &impl Planned) {
+        let (near, off) = planned.near(t_s);
+        let a2 = (held - near).norm_squared().max((p - near).norm_squared());
+        if a2 + off * (2.0 * self.root + off) > self.squared {
+            let target = planned.at(t_s);
+            self.see(held, &target);
+            self.see(p, &target);
+            self.root = self.squared.sqrt();
+        }
+    }
+
+    /// Takes the executed position `p` against the planned `target`.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn see(&mut self, p: &Vector3<f64>, target: &Vector3<f64>) {
+        self.squared = self.squared.max((p - target).norm_squared());
+    }
+}
+
+/// The path deviation sampled every [`SAMPLE_PERIOD_S`], as the seed measured it.
+#[derive(Default)]
+struct Sampled {
+    /// The largest so far, mm.
+    max_mm: f64,
+    /// When the next sample is due, s.
+    next_s: f64,
+}
+
+impl Sampled {
+    /// Samples the position `p`, held until `t_s`, at every sample time before `t_s`.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn before(&mut self, t_s: f64, p: &Vector3<f64>, path: &dyn ToolPath) {
+        while self.next_s < t_s {
+            self.sample(p, path);
+        }
+    }
+
+    /// Samples the position `p` at every sample time up to `t_s`, the end.
+    fn through(&mut self, t_s: f64, p: &Vector3<f64>, path: &dyn ToolPath) {
+        while self.next_s <= t_s {
+            self.sample(p, path);
+        }
+    }
+
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn sample(&mut self, p: &Vector3<f64>, path: &dyn ToolPath) {
+        self.max_mm = self.max_mm.max(path.distance_mm(p));
+        self.next_s += SAMPLE_PERIOD_S;
+    }
+}
+
+/// The largest difference between the channels' finish times, ms (0 when none finished).
+fn end_skew_ms(finish_s: &[Option<f64>]) -> f64 {
+    let finishes: Vec<f64> = finish_s.iter().flatten().copied().collect();
+    if finishes.is_empty() {
+        return 0.0;
+    }
+    let skew = finishes.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - finishes.iter().copied().fold(f64::INFINITY, f64::min);
+    skew * 1e3
 }
 
 /// `q` with joint `j` set to `value`, every joint chosen without an indexed store: `q` stays in
@@ -180,14 +291,10 @@ pub fn path_deviation_mm(
     events: impl IntoIterator<Item = PulseEvent>,
     path: &dyn ToolPath,
 ) -> f64 {
-    let mut q = robot.values_of(start);
-    let mut positions = Positions::new(&robot.kinematics);
-    path.restart();
-    let mut deviation = Deviation::new(path);
-    deviation.see(&positions.at(&q));
+    let mut executed = Executed::new(robot, start);
+    let mut deviation = Deviation::from_start(path, &executed.position());
     for e in events {
-        set_joint(&mut q, e.table, robot.joints[e.table].value_of(e.count));
-        deviation.see(&positions.at(&q));
+        deviation.see(&executed.take(&e));
     }
     deviation.max_mm
 }
@@ -209,6 +316,16 @@ struct Deviation<'a> {
 }
 
 impl<'a> Deviation<'a> {
+    /// From a run's start at `p`, along `path` restarted.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn from_start(path: &'a dyn ToolPath, p: &Vector3<f64>) -> Self {
+        path.restart();
+        let mut deviation = Self::new(path);
+        deviation.see(p);
+        deviation
+    }
+
     fn new(path: &'a dyn ToolPath) -> Self {
         Self {
             path,

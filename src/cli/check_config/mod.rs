@@ -204,36 +204,43 @@ fn document(
         .robots
         .iter()
         .zip(programs)
-        .map(|(robot, programs)| {
-            let joints: Vec<Value> = robot
-                .joints
-                .iter()
-                .map(|j| json!({ "name": j.name, "channel": j.channel }))
-                .collect();
-            let mut robot_json = json!({
-                "name": robot.name,
-                "kinematics": robot.kinematics.name(),
-                "joints": joints,
-                "link": link_of(config, &robot.name),
-            });
-            let pallets = pallet_lines(config, robot);
-            if !pallets.is_empty() {
-                robot_json["pallets"] = json!(pallets);
-            }
-            if let Some(p) = programs {
-                let checked: Vec<Value> = p
-                    .checked
-                    .iter()
-                    .map(|c| json!({ "name": c.name, "number": c.number, "ops": c.ops }))
-                    .collect();
-                robot_json["programs"] = json!({
-                    "dir": p.dir.display().to_string(),
-                    "checked": checked,
-                    "positions": p.positions,
-                });
-            }
-            robot_json
-        })
+        .map(|(robot, programs)| robot_document(config, robot, programs.as_ref()))
         .collect();
     json!({ "config": args.config.display().to_string(), "robots": robots })
+}
+
+/// One robot of the JSON document: its joints, link, pallets and programs.
+fn robot_document(
+    config: &Config,
+    robot: &crate::robot::Robot,
+    programs: Option<&programs::Programs>,
+) -> Value {
+    let joints: Vec<Value> = robot
+        .joints
+        .iter()
+        .map(|j| json!({ "name": j.name, "channel": j.channel }))
+        .collect();
+    let mut robot_json = json!({
+        "name": robot.name,
+        "kinematics": robot.kinematics.name(),
+        "joints": joints,
+        "link": link_of(config, &robot.name),
+    });
+    let pallets = pallet_lines(config, robot);
+    if !pallets.is_empty() {
+        robot_json["pallets"] = json!(pallets);
+    }
+    if let Some(p) = programs {
+        let checked: Vec<Value> = p
+            .checked
+            .iter()
+            .map(|c| json!({ "name": c.name, "number": c.number, "ops": c.ops }))
+            .collect();
+        robot_json["programs"] = json!({
+            "dir": p.dir.display().to_string(),
+            "checked": checked,
+            "positions": p.positions,
+        });
+    }
+    robot_json
 }

@@ -63,6 +63,7 @@ pub(super) fn check(config: &Config, robot: &Robot) -> Option<Programs> {
     out.faults
         .extend(shared.iter().map(|(_, line)| line.clone()));
     out.positions = positions(&docs);
+    // Taken as taught: the taught poses are the daemon's.
     let taught: BTreeMap<String, Position> = out
         .positions
         .iter()
@@ -84,12 +85,18 @@ pub(super) fn check(config: &Config, robot: &Robot) -> Option<Programs> {
         poses_known: false,
         pallets: &BTreeMap::new(),
     };
-    for name in docs.keys() {
+    check_each(&ctx, &shared, &mut out);
+    Some(out)
+}
+
+/// Checks every program of `ctx` into `out`, but those that `shared` a number: those are said
+/// once, naming both files.
+fn check_each(ctx: &Context, shared: &[(Vec<String>, String)], out: &mut Programs) {
+    for name in ctx.programs.keys() {
         if shared.iter().any(|(names, _)| names.contains(name)) {
-            // Said once above, naming both files.
             continue;
         }
-        match crate::cycle::check(name, &ctx) {
+        match crate::cycle::check(name, ctx) {
             Ok(checked) => out.checked.push(Checked {
                 name: checked.name,
                 number: checked.number,
@@ -98,7 +105,6 @@ pub(super) fn check(config: &Config, robot: &Robot) -> Option<Programs> {
             Err(e) => out.faults.push(e.to_string()),
         }
     }
-    Some(out)
 }
 
 fn names<'a>(

@@ -6,7 +6,7 @@ use crate::kinematics::Kinematics;
 use crate::plan::Plan;
 use crate::robot::Robot;
 use crate::sim::RowTiming;
-use crate::table::{Direction, Duty, FrequencyRange};
+use crate::table::{Direction, Duty, FrequencyRange, Segment};
 
 fn range_text(range: FrequencyRange) -> &'static str {
     match range {
@@ -109,27 +109,7 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         .as_ref()
         .is_some_and(crate::geometry::Pace::from_rest)
     {
-        // An S-curve under drive limits, or on a path section whose speed changes along it, is
-        // the time-optimal motion averaged to its jerk.
-        let shape = match plan.motion.ramp {
-            crate::robot::Ramp::SCurve { jerk_mm_s3 } => format!(
-                "s-curve (jerk {jerk_mm_s3:.0} mm/s^3), the time-optimal motion averaged to that \
-                 jerk"
-            ),
-            crate::robot::Ramp::Trapezoid => "time-optimal under the drive limits".to_owned(),
-        };
-        writeln!(
-            out,
-            "profile  {shape}: {:.3} mm at up to {:.3} mm/s, period {:.3} s: {} periods, {:.3} s",
-            plan.pace
-                .as_ref()
-                .map_or(p.length_mm, crate::geometry::Pace::path_length_mm),
-            p.speed_mm_s,
-            p.period_s,
-            p.periods(),
-            p.duration_s()
-        )?;
-        return write_slowed(plan, out);
+        return write_paced_profile(plan, out);
     }
     if p.jerk_s > 0.0 {
         writeln!(
@@ -154,6 +134,31 @@ fn write_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
         p.speed_mm_s,
         p.accel_s,
         p.accel_mm_s2,
+        p.period_s,
+        p.periods(),
+        p.duration_s()
+    )?;
+    write_slowed(plan, out)
+}
+
+/// The profile of a motion timed along its pace from rest: an S-curve under drive limits, or on
+/// a path section whose speed changes along it, is the time-optimal motion averaged to its jerk.
+fn write_paced_profile(plan: &Plan, out: &mut dyn Write) -> io::Result<()> {
+    let p = &plan.profile;
+    let shape = match plan.motion.ramp {
+        crate::robot::Ramp::SCurve { jerk_mm_s3 } => format!(
+            "s-curve (jerk {jerk_mm_s3:.0} mm/s^3), the time-optimal motion averaged to that \
+                 jerk"
+        ),
+        crate::robot::Ramp::Trapezoid => "time-optimal under the drive limits".to_owned(),
+    };
+    writeln!(
+        out,
+        "profile  {shape}: {:.3} mm at up to {:.3} mm/s, period {:.3} s: {} periods, {:.3} s",
+        plan.pace
+            .as_ref()
+            .map_or(p.length_mm, crate::geometry::Pace::path_length_mm),
+        p.speed_mm_s,
         p.period_s,
         p.periods(),
         p.duration_s()
@@ -195,41 +200,52 @@ fn write_channel(
         table.rows()
     )?;
     for (si, seg) in table.segments.iter().enumerate() {
-        let c = seg.control;
-        writeln!(
-            out,
-            "  segment {}: {}, {}, duty {}, control code {:#06x}",
-            si + 1,
-            if c.direction == Direction::Up {
-                "up"
-            } else {
-                "down"
-            },
-            range_text(c.range),
-            if c.duty == Duty::Quarter {
-                "1/4"
-            } else {
-                "1/2"
-            },
-            c.value()
-        )?;
-        writeln!(
-            out,
-            "    {:>4} {:>9} {:>12} {:>9} {:>9}",
-            "row", "freq Hz", "target", "start s", "end s"
-        )?;
         let timings = timings.iter().filter(|r| r.table == j && r.segment == si);
-        for (row, timing) in seg.rows.iter().zip(timings) {
-            writeln!(
-                out,
-                "    {:>4} {:>9} {:>12} {:>9.4} {:>9.4}",
-                timing.row + 1,
-                row.freq_hz,
-                row.target,
-                timing.start_s,
-                timing.end_s
-            )?;
-        }
+        write_segment(si, seg, timings, out)?;
+    }
+    Ok(())
+}
+
+/// Segment `si` of a channel: its control code and its rows, each with its `timings`.
+fn write_segment<'a>(
+    si: usize,
+    seg: &Segment,
+    timings: impl Iterator<Item = &'a RowTiming>,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let c = seg.control;
+    writeln!(
+        out,
+        "  segment {}: {}, {}, duty {}, control code {:#06x}",
+        si + 1,
+        if c.direction == Direction::Up {
+            "up"
+        } else {
+            "down"
+        },
+        range_text(c.range),
+        if c.duty == Duty::Quarter {
+            "1/4"
+        } else {
+            "1/2"
+        },
+        c.value()
+    )?;
+    writeln!(
+        out,
+        "    {:>4} {:>9} {:>12} {:>9} {:>9}",
+        "row", "freq Hz", "target", "start s", "end s"
+    )?;
+    for (row, timing) in seg.rows.iter().zip(timings) {
+        writeln!(
+            out,
+            "    {:>4} {:>9} {:>12} {:>9.4} {:>9.4}",
+            timing.row + 1,
+            row.freq_hz,
+            row.target,
+            timing.start_s,
+            timing.end_s
+        )?;
     }
     Ok(())
 }

@@ -309,57 +309,53 @@ pub(super) fn expire_while_down(
     settings: &WatchSettings,
     events: &mut Vec<Event>,
 ) {
-    let lost = Outcome::LinkLost { down };
+    if let Phase::Homing { written, .. } = was
+        && now.saturating_duration_since(written.at) >= settings.home_timeout
+    {
+        events.push(Event::HomeFailed { fault: 0 });
+        *was = Phase::Unhomed;
+    } else if let Some(tags) = expired_tags(was, now, down, settings) {
+        let outcome = Outcome::LinkLost { down };
+        events.extend(tags.into_iter().map(|tag| Event::Ended { tag, outcome }));
+        *was = Phase::Idle;
+    }
+}
+
+/// The tags of the starts `phase` holds that end as unknown, the link down for `down` at
+/// `now`, when they do: a start past its planned end (or never seen taken past its scans), or
+/// the starts of a stop once the link's grace has passed.
+fn expired_tags(
+    phase: &Phase,
+    now: Instant,
+    down: Duration,
+    settings: &WatchSettings,
+) -> Option<Vec<u64>> {
     let over = |since: Instant, duration: Duration| {
         now.saturating_duration_since(since) >= settings.run_limit(duration) + settings.link_grace
     };
-    let phase = std::mem::replace(was, Phase::Idle);
-    *was = match phase {
+    match phase {
         Phase::Running { current }
         | Phase::Uploading {
             current: Some(current),
             ..
-        } if over(current.since, current.start.duration) => {
-            events.push(Event::Ended {
-                tag: current.start.tag,
-                outcome: lost,
-            });
-            Phase::Idle
-        }
+        } if over(current.since, current.start.duration) => Some(vec![current.start.tag]),
         Phase::Starting { start, written } if over(written.at, start.duration) => {
-            events.push(Event::Ended {
-                tag: start.tag,
-                outcome: lost,
-            });
-            Phase::Idle
+            Some(vec![start.tag])
         }
-        Phase::Chained {
-            current,
-            next,
-            written,
-            ..
-        } if over(current.since, current.start.duration + next.duration) => {
-            let _ = written;
-            for tag in [current.start.tag, next.tag] {
-                events.push(Event::Ended { tag, outcome: lost });
-            }
-            Phase::Idle
+        Phase::Chained { current, next, .. }
+            if over(current.since, current.start.duration + next.duration) =>
+        {
+            Some(vec![current.start.tag, next.tag])
         }
         Phase::Stopping { current, next, .. } if down >= settings.link_grace => {
-            for start in current.map(|c| c.start).into_iter().chain(next) {
-                events.push(Event::Ended {
-                    tag: start.tag,
-                    outcome: lost,
-                });
-            }
-            Phase::Idle
+            let current = current.as_ref().map(|c| c.start.tag);
+            Some(
+                current
+                    .into_iter()
+                    .chain(next.as_ref().map(|n| n.tag))
+                    .collect(),
+            )
         }
-        Phase::Homing { written, .. }
-            if now.saturating_duration_since(written.at) >= settings.home_timeout =>
-        {
-            events.push(Event::HomeFailed { fault: 0 });
-            Phase::Unhomed
-        }
-        other => other,
-    };
+        _ => None,
+    }
 }

@@ -63,18 +63,7 @@ pub(super) fn fillet(
 ) -> Result<Fillet, NoFillet> {
     let len_a = a.length_mm();
     if let (Primitive::Line(_), Primitive::Line(_)) = (a, b) {
-        let reach = reach_in_mm.min(reach_out_mm);
-        return Ok(Fillet {
-            reach_in_mm: reach,
-            reach_out_mm: reach,
-            corner: Arc::tangent(
-                a.at(len_a - reach),
-                b.at(reach),
-                a.direction(len_a),
-                b.direction(0.0),
-                reach / (turn_rad / 2.0).tan(),
-            ),
-        });
+        return Ok(between_lines(a, b, turn_rad, reach_in_mm.min(reach_out_mm)));
     }
     let plane = Plane::of(a, b)?;
     let t_in = plane.dir(&a.direction(len_a));
@@ -94,10 +83,38 @@ pub(super) fn fillet(
     corner.branch = corner
         .branch_near(tiny, &centre)
         .ok_or(NoFillet::NoCircle)?;
-    // Where circles of every size up to the largest touch both (a line nearly tangent to an arc
-    // curving back across it), the largest is found far off, where the offsets' crossing has
-    // lost the digits the arc as built needs: it is halved until the arc fits.
-    let mut radius = corner.largest(guess)?;
+    let radius = corner.largest(guess)?;
+    halved_until_it_fits(a, b, &plane, &corner, radius)
+}
+
+/// The corner arc between two lines: it reaches `reach` mm along both.
+fn between_lines(a: &Primitive, b: &Primitive, turn_rad: f64, reach: f64) -> Fillet {
+    let len_a = a.length_mm();
+    Fillet {
+        reach_in_mm: reach,
+        reach_out_mm: reach,
+        corner: Arc::tangent(
+            a.at(len_a - reach),
+            b.at(reach),
+            a.direction(len_a),
+            b.direction(0.0),
+            reach / (turn_rad / 2.0).tan(),
+        ),
+    }
+}
+
+/// The arc of `corner` of the largest `radius`, built and checked. Where circles of every size
+/// up to the largest touch both (a line nearly tangent to an arc curving back across it), the
+/// largest is found far off, where the offsets' crossing has lost the digits the arc as built
+/// needs: it is halved until the arc fits.
+fn halved_until_it_fits(
+    a: &Primitive,
+    b: &Primitive,
+    plane: &Plane,
+    corner: &Corner,
+    mut radius: f64,
+) -> Result<Fillet, NoFillet> {
+    let len_a = a.length_mm();
     for _ in 0..=HALVINGS {
         let (centre, reach_in, reach_out) = corner.at(radius).ok_or(NoFillet::NoCircle)?;
         let arc = Arc::tangent(

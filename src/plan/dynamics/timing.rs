@@ -117,6 +117,48 @@ struct JointsAlong {
     kinks: Vec<(usize, Joints)>,
 }
 
+/// Every joint's second derivative by distance at every point of `s_mm` (`q` the joints
+/// there): central differences, the ends taking their neighbour's.
+fn second_rates(s_mm: &[f64], q: &[Joints]) -> Vec<Joints> {
+    let n = s_mm.len() - 1;
+    (0..=n)
+        .map(|i| {
+            let m = i.clamp(1, n - 1);
+            let (h1, h2) = (s_mm[m] - s_mm[m - 1], s_mm[m + 1] - s_mm[m]);
+            std::array::from_fn(|j| {
+                let (back, on) = ((q[m][j] - q[m - 1][j]) / h1, (q[m + 1][j] - q[m][j]) / h2);
+                2.0 * (on - back) / (h1 + h2)
+            })
+        })
+        .collect()
+}
+
+/// At every break between pieces, every joint's jump in rate by distance, per mm: probed
+/// [`KINK_PROBE_MM`] before and after the point.
+fn kinks(
+    robot: &Robot,
+    shape: &Shape,
+    s_mm: &[f64],
+    q: &[Joints],
+    breaks: &[usize],
+) -> Result<Vec<(usize, Joints)>, PlanError> {
+    let mut kinks = Vec::with_capacity(breaks.len());
+    for &i in breaks {
+        let s = s_mm[i];
+        let back = robot
+            .kinematics
+            .ik(&(shape.pose_at)(s - KINK_PROBE_MM), Some(&q[i]))?;
+        let on = robot
+            .kinematics
+            .ik(&(shape.pose_at)(s + KINK_PROBE_MM), Some(&q[i]))?;
+        let jump: Joints = std::array::from_fn(|j| {
+            ((on[j] - q[i][j]) - (q[i][j] - back[j])).abs() / KINK_PROBE_MM
+        });
+        kinks.push((i, jump));
+    }
+    Ok(kinks)
+}
+
 impl JointsAlong {
     fn new(robot: &Robot, shape: &Shape, start: &Joints) -> Result<Self, PlanError> {
         let (s_mm, breaks) = grid_points(shape);
@@ -127,26 +169,13 @@ impl JointsAlong {
             near = robot.kinematics.ik(&(shape.pose_at)(s), Some(&near))?;
             q.push(near);
         }
-        let at = |i: usize, j: usize| q[i][j];
         let rate = |a: usize, b: usize| -> Joints {
-            std::array::from_fn(|j| (at(b, j) - at(a, j)) / (s_mm[b] - s_mm[a]))
+            std::array::from_fn(|j| (q[b][j] - q[a][j]) / (s_mm[b] - s_mm[a]))
         };
         let mut dq: Vec<Joints> = (0..=n)
             .map(|i| rate(i.saturating_sub(1), (i + 1).min(n)))
             .collect();
-        let mut ddq: Vec<Joints> = (0..=n)
-            .map(|i| {
-                let m = i.clamp(1, n - 1);
-                let (h1, h2) = (s_mm[m] - s_mm[m - 1], s_mm[m + 1] - s_mm[m]);
-                std::array::from_fn(|j| {
-                    let (back, on) = (
-                        (at(m, j) - at(m - 1, j)) / h1,
-                        (at(m + 1, j) - at(m, j)) / h2,
-                    );
-                    2.0 * (on - back) / (h1 + h2)
-                })
-            })
-            .collect();
+        let mut ddq = second_rates(&s_mm, &q);
         // Where two pieces meet, the next piece's derivatives: its rate over the step from
         // the point, and its second derivative at the step's end (every piece is at least
         // PIECE_STEPS steps, so both are on it).
@@ -156,20 +185,7 @@ impl JointsAlong {
             dq[i] = rate(i, i + 1);
             ddq[i] = ddq[i + 1];
         }
-        let mut kinks = Vec::new();
-        for i in breaks {
-            let s = s_mm[i];
-            let back = robot
-                .kinematics
-                .ik(&(shape.pose_at)(s - KINK_PROBE_MM), Some(&q[i]))?;
-            let on = robot
-                .kinematics
-                .ik(&(shape.pose_at)(s + KINK_PROBE_MM), Some(&q[i]))?;
-            let jump: Joints = std::array::from_fn(|j| {
-                ((on[j] - q[i][j]) - (q[i][j] - back[j])).abs() / KINK_PROBE_MM
-            });
-            kinks.push((i, jump));
-        }
+        let kinks = kinks(robot, shape, &s_mm, &q, &breaks)?;
         Ok(Self {
             s_mm,
             q,
