@@ -5,8 +5,8 @@
 //! pallet's signal set while the cycle waits for an empty pallet.
 //!
 //! ```text
-//!  the pallet: 2 rows x 3 columns, 180 x 130 mm pitch, 90 mm layers; layers 2 and 4 moved
-//!      half a column pitch (interlocked, the wrist not turned: see `run`); counters in memory
+//!  the pallet: 2 rows x 3 columns, 180 x 130 mm pitch, 90 mm layers; layers 2 and 4 turned
+//!      half a turn and moved half a column pitch; counters in memory
 //!  the cycle: move to the pick point, gripper (R100) closed, place on "out" (gripper open,
 //!      100 ms); between layers "slip-sheet" (Y2 on, 200 ms, off); full: Y1 set, wait for X3
 //!  measured: from the run to the pallet full (the cycle waiting for X3), s; the mock's record
@@ -40,7 +40,7 @@ pitch_mm = [180, 130]
 layer_height_mm = 90
 layers = ["A", "B", "A", "B"]
 kinds.A = {}
-kinds.B = { shift_mm = [90, 0] }
+kinds.B = { turn_deg = 180, shift_mm = [90, 0] }
 order = "snake-rows"
 approach = { height_mm = 80, slow_mm = 20, slow_speed_mm_s = 60 }
 between_layers = "slip-sheet"
@@ -305,7 +305,7 @@ pub fn write_pallet_report(
     writeln!(
         out,
         "Palletising on the seed robot and the mock PLC: pallet \"out\", {layers} layers of {} \
-         ({len} slots), interlocked (every other layer moved half a pitch)",
+         ({len} slots), interlocked (every other layer turned half a turn and moved half a pitch)",
         len / layers.max(1)
     )?;
     writeln!(
