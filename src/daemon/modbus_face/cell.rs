@@ -113,10 +113,10 @@ mod tests {
             }))
         );
         assert_eq!(
-            ask(&Request::ReadHoldingRegisters(BASE + 8, 10), BASE),
+            ask(&Request::ReadHoldingRegisters(BASE + 8, 15), BASE),
             Some(Ok(FaceAsk::Read {
                 offset: 8,
-                count: 10,
+                count: 15,
                 kind: ReadKind::Holding
             }))
         );
@@ -127,7 +127,8 @@ mod tests {
         ));
         let address = Some(Err(ExceptionCode::IllegalDataAddress));
         assert_eq!(
-            ask(&Request::ReadHoldingRegisters(BASE + 8, 11), BASE),
+            // The block is 23 words, the pallet's +18..+22 with them (zero when none is shown).
+            ask(&Request::ReadHoldingRegisters(BASE + 8, 16), BASE),
             address
         );
         assert_eq!(
