@@ -75,7 +75,7 @@ pub enum PositionError {
     #[error(transparent)]
     Frame {
         /// Why.
-        source: crate::pallet::PalletError,
+        source: Box<crate::pallet::PalletError>,
     },
     /// The robot moves (or a move waits): its pose is not one to teach.
     #[error(

@@ -261,7 +261,9 @@ impl RobotHandle {
                 let none = crate::pallet::RobotPallets::default();
                 let set = self.pallets.sets.get(&self.robot.name).unwrap_or(&none);
                 set.in_frame(name, frame, &world, &taught)
-                    .map_err(|source| PositionError::Frame { source })?
+                    .map_err(|e| PositionError::Frame {
+                        source: Box::new(e),
+                    })?
             }
         };
         let position = Position {
