@@ -50,8 +50,11 @@ pub(super) fn run(
         )));
     };
     let taught = if set.needs_taught(&show.name) {
-        crate::daemon::positions::TaughtPositions::in_state_dir(&config.daemon.state_dir)
-            .of(&robot.name)
+        let kept =
+            crate::daemon::positions::TaughtPositions::in_state_dir(&config.daemon.state_dir)
+                .of(&robot.name);
+        // Those kept in a frame where the frame is now, as the daemon lays the pallet out.
+        set.world_positions(robot, &kept).map_err(bad_input)?
     } else {
         BTreeMap::new()
     };
