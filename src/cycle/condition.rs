@@ -522,47 +522,10 @@ impl Parser<'_> {
         if let Some(rest) = name.strip_prefix("pallet.") {
             return self.pallet_term(name, rest);
         }
-        let address = match self.names.permit.signals.get(name) {
-            Some(a) => *a,
-            None => name.parse::<Address>().map_err(|_| {
-                let known: Vec<&str> = self
-                    .names
-                    .permit
-                    .signals
-                    .keys()
-                    .map(String::as_str)
-                    .collect();
-                ConditionFault::Unknown {
-                    name: name.to_owned(),
-                    known: if known.is_empty() {
-                        "none named".to_owned()
-                    } else {
-                        known.join(", ")
-                    },
-                }
-            })?,
-        };
+        let address = self.address_of(name)?;
         if let Some(Token::Compare(compare)) = self.peek().cloned() {
             self.at += 1;
-            let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
-                return Err(ConditionFault::NoNumber {
-                    name: name.to_owned(),
-                    compare: compare.symbol(),
-                });
-            };
-            self.at += 1;
-            if address.area != Area::Dt {
-                return Err(ConditionFault::BitCompared {
-                    name: name.to_owned(),
-                });
-            }
-            let value = i16::try_from(value).map_err(|_| ConditionFault::OutOfRange { value })?;
-            self.readable(address)?;
-            return Ok(Condition::Word {
-                address,
-                compare,
-                value,
-            });
+            return self.word_term(name, address, compare);
         }
         if address.area == Area::Dt {
             return Err(ConditionFault::WordNotCompared {
@@ -579,6 +542,58 @@ impl Parser<'_> {
             name: name.to_owned(),
             address,
             source,
+        })
+    }
+
+    /// The address `name` is: a signal's, or an address written out.
+    fn address_of(&self, name: &str) -> Result<Address, ConditionFault> {
+        if let Some(a) = self.names.permit.signals.get(name) {
+            return Ok(*a);
+        }
+        name.parse::<Address>().map_err(|_| {
+            let known: Vec<&str> = self
+                .names
+                .permit
+                .signals
+                .keys()
+                .map(String::as_str)
+                .collect();
+            ConditionFault::Unknown {
+                name: name.to_owned(),
+                known: if known.is_empty() {
+                    "none named".to_owned()
+                } else {
+                    known.join(", ")
+                },
+            }
+        })
+    }
+
+    /// A DT word `name` (at `address`) compared by `compare` with the number that follows.
+    fn word_term(
+        &mut self,
+        name: &str,
+        address: Address,
+        compare: Compare,
+    ) -> Result<Condition, ConditionFault> {
+        let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
+            return Err(ConditionFault::NoNumber {
+                name: name.to_owned(),
+                compare: compare.symbol(),
+            });
+        };
+        self.at += 1;
+        if address.area != Area::Dt {
+            return Err(ConditionFault::BitCompared {
+                name: name.to_owned(),
+            });
+        }
+        let value = i16::try_from(value).map_err(|_| ConditionFault::OutOfRange { value })?;
+        self.readable(address)?;
+        Ok(Condition::Word {
+            address,
+            compare,
+            value,
         })
     }
 

@@ -65,56 +65,35 @@ pub(super) fn check(
             // No way comes to it: it never runs.
             continue;
         }
-        let fail = |reason: String| ProgramError {
-            program: op.at.program.clone(),
-            step: Some(op.at.step),
-            label: op.at.label.clone(),
-            reason,
-        };
-        let shown = format!(
-            "{} step {}{}",
-            op.at.program,
-            op.at.step,
-            op.at
-                .label
-                .as_ref()
-                .map(|l| format!(" ({l})"))
-                .unwrap_or_default()
-        );
-        // An absolute target first, wherever the move starts: its reach and limits.
-        let target = match &op.kind {
-            OpKind::Move(_) => reach.target(op).map_err(|e| fail(format!("move: {e}")))?,
-            _ => None,
-        };
-        if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at[i])
-            && blended.contains(&i)
-        {
-            super::blend::first_corner(ctx, order, from, op.at.step)
-                .map_err(|e| fail(e.to_string()))?;
-        }
-        match (&op.kind, at[i]) {
-            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {
-                if let Err(e) = reach.end(i, op, from) {
-                    let pose = ctx.robot.pose_of(&from).to_mm_deg();
-                    let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
-                    return Err(fail(format!(
-                        "{} from where the steps before it end ({}): {e}",
-                        kind(op),
-                        pose.join(", ")
-                    )));
-                }
-            }
-            (OpKind::Move(_), _) if target.is_none() => unchecked.push(format!(
-                "{shown}: {} from where the robot stands when it begins: checked when it runs",
-                op.at.does
-            )),
-            (OpKind::Path(_), _) => unchecked.push(format!(
-                "{shown}: a path from where the robot stands when it begins: checked when it runs"
-            )),
-            _ => {}
+        if let Some(later) = reach.op(i, op, at[i], blended.contains(&i))? {
+            unchecked.push(later);
         }
     }
     Ok(unchecked)
+}
+
+/// `op` refused for `reason`, named by its step.
+fn refused(op: &Op, reason: String) -> ProgramError {
+    ProgramError {
+        program: op.at.program.clone(),
+        step: Some(op.at.step),
+        label: op.at.label.clone(),
+        reason,
+    }
+}
+
+/// `op`'s step as the list of what is checked when it runs names it.
+fn shown(op: &Op) -> String {
+    format!(
+        "{} step {}{}",
+        op.at.program,
+        op.at.step,
+        op.at
+            .label
+            .as_ref()
+            .map(|l| format!(" ({l})"))
+            .unwrap_or_default()
+    )
 }
 
 fn kind(op: &Op) -> &'static str {
@@ -165,6 +144,57 @@ impl Reach<'_> {
             (OpKind::Move(_), _) => self.meant(op),
             (OpKind::Path(_) | OpKind::PalletPath { .. }, _) => At::Varies,
             _ => at,
+        }
+    }
+
+    /// Checks op `i` (the first of a blended run when `blended`), begun at `at`: `Some` line
+    /// when it depends on the run, and is checked when it runs.
+    fn op(
+        &mut self,
+        i: usize,
+        op: &Op,
+        at: At,
+        blended: bool,
+    ) -> Result<Option<String>, ProgramError> {
+        // An absolute target first, wherever the move starts: its reach and limits.
+        let target = match &op.kind {
+            OpKind::Move(_) => self
+                .target(op)
+                .map_err(|e| refused(op, format!("move: {e}")))?,
+            _ => None,
+        };
+        if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at)
+            && blended
+        {
+            super::blend::first_corner(self.ctx, order, from, op.at.step)
+                .map_err(|e| refused(op, e.to_string()))?;
+        }
+        match (&op.kind, at) {
+            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {
+                if let Err(e) = self.end(i, op, from) {
+                    let pose = self.ctx.robot.pose_of(&from).to_mm_deg();
+                    let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
+                    return Err(refused(
+                        op,
+                        format!(
+                            "{} from where the steps before it end ({}): {e}",
+                            kind(op),
+                            pose.join(", ")
+                        ),
+                    ));
+                }
+                Ok(None)
+            }
+            (OpKind::Move(_), _) if target.is_none() => Ok(Some(format!(
+                "{}: {} from where the robot stands when it begins: checked when it runs",
+                shown(op),
+                op.at.does
+            ))),
+            (OpKind::Path(_), _) => Ok(Some(format!(
+                "{}: a path from where the robot stands when it begins: checked when it runs",
+                shown(op)
+            ))),
+            _ => Ok(None),
         }
     }
 

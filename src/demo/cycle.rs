@@ -122,21 +122,7 @@ async fn run_cycle(
         .submit_path(&order)
         .await
         .map_err(|source| DemoError::Refused { name, source })?;
-    let mut reports = Vec::new();
-    for id in ids {
-        let report = handle
-            .wait(id, BATCH_LIMIT)
-            .await
-            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
-        if report.stage != Stage::Done {
-            return Err(DemoError::NotDone {
-                name,
-                stage: report.stage,
-                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
-            });
-        }
-        reports.push(report);
-    }
+    let reports = done(handle, name, ids).await?;
     let plans = replan(handle.robot(), name, &order, &reports)?;
     let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
     let runs = cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
@@ -169,6 +155,30 @@ async fn run_cycle(
         starts,
         cycle_s: end - first,
     })
+}
+
+/// The reports of the path's starts `ids`, each once it is done; the first that is not, refused.
+async fn done(
+    handle: &RobotHandle,
+    name: &'static str,
+    ids: Vec<crate::daemon::MoveId>,
+) -> Result<Vec<crate::daemon::MoveReport>, DemoError> {
+    let mut reports = Vec::new();
+    for id in ids {
+        let report = handle
+            .wait(id, BATCH_LIMIT)
+            .await
+            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
+        if report.stage != Stage::Done {
+            return Err(DemoError::NotDone {
+                name,
+                stage: report.stage,
+                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
+            });
+        }
+        reports.push(report);
+    }
+    Ok(reports)
 }
 
 /// The daemon's plans of the path's starts, made again from the counts the first was planned

@@ -197,7 +197,6 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             return Some(json!({"type": "error", "error": format!("a console message: {e}")}));
         }
     };
-    let control = |robot: &str| control_of(state, robot);
     let session = who.session;
     match incoming {
         Incoming::Jog {
@@ -206,7 +205,7 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             positive,
             seq,
         } => {
-            let c = match control(&robot) {
+            let c = match control_of(state, &robot) {
                 Ok(c) => c,
                 Err(e) => return Some(e),
             };
@@ -215,25 +214,8 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             let request = Request::jog(who, jog, reply);
             asked(c, request, answer, &robot, "jog").await
         }
-        Incoming::Keep { robot, seq } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::Lease(Event::KeepAlive { session, seq }))
-                .await;
-            None
-        }
-        Incoming::Release { robot } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::Lease(Event::Release { session })).await;
-            None
-        }
-        Incoming::Hidden => {
-            for c in state.controls.values() {
-                c.send(Request::Lease(Event::Hidden { session })).await;
-            }
-            None
-        }
         Incoming::TakeSeat { robot } => {
-            let c = match control(&robot) {
+            let c = match control_of(state, &robot) {
                 Ok(c) => c,
                 Err(e) => return Some(e),
             };
@@ -242,10 +224,31 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             let request = Request::TakeSeat { who, reply };
             asked(c, request, answer, &robot, "take-seat").await
         }
-        Incoming::LeaveSeat { robot } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::LeaveSeat { session }).await;
+        Incoming::Keep { robot, seq } => {
+            let keep = Event::KeepAlive { session, seq };
+            told(state, &robot, Request::Lease(keep)).await
+        }
+        Incoming::Release { robot } => {
+            let release = Event::Release { session };
+            told(state, &robot, Request::Lease(release)).await
+        }
+        Incoming::Hidden => {
+            for c in state.controls.values() {
+                c.send(Request::Lease(Event::Hidden { session })).await;
+            }
             None
         }
+        Incoming::LeaveSeat { robot } => {
+            told(state, &robot, Request::LeaveSeat { session }).await
+        }
     }
+}
+
+/// Sends robot `robot`'s control task `request`, which has no answer (none to a robot there
+/// is not either).
+async fn told(state: &ConsoleState, robot: &str, request: Request) -> Option<serde_json::Value> {
+    if let Ok(c) = control_of(state, robot) {
+        c.send(request).await;
+    }
+    None
 }
