@@ -170,21 +170,10 @@ impl Reach<'_> {
                 .map_err(|e| refused(op, e.to_string()))?;
         }
         match (&op.kind, at) {
-            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {
-                if let Err(e) = self.end(i, op, from) {
-                    let pose = self.ctx.robot.pose_of(&from).to_mm_deg();
-                    let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
-                    return Err(refused(
-                        op,
-                        format!(
-                            "{} from where the steps before it end ({}): {e}",
-                            kind(op),
-                            pose.join(", ")
-                        ),
-                    ));
-                }
-                Ok(None)
-            }
+            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => match self.end(i, op, from) {
+                Ok(_) => Ok(None),
+                Err(e) => Err(self.unplanned(op, from, &e)),
+            },
             (OpKind::Move(_), _) if target.is_none() => Ok(Some(format!(
                 "{}: {} from where the robot stands when it begins: checked when it runs",
                 shown(op),
@@ -196,6 +185,18 @@ impl Reach<'_> {
             ))),
             _ => Ok(None),
         }
+    }
+
+    /// `op` refused: it cannot run from `from`, where the steps before it end, for `e`.
+    fn unplanned(&self, op: &Op, from: [i64; JOINTS], e: &Unplanned) -> ProgramError {
+        let pose = self.ctx.robot.pose_of(&from).to_mm_deg();
+        let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
+        let reason = format!(
+            "{} from where the steps before it end ({}): {e}",
+            kind(op),
+            pose.join(", ")
+        );
+        refused(op, reason)
     }
 
     /// Where move `op` ends begun anywhere: its absolute target's counts, if it has one.

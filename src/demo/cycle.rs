@@ -10,6 +10,7 @@ use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, measure_
 
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle, Stage};
 use crate::kinematics::JOINTS;
+use crate::mock::PulsePoint;
 use crate::plan::{Plan, plan_path};
 use crate::robot::Robot;
 
@@ -124,13 +125,7 @@ async fn run_cycle(
         .map_err(|source| DemoError::Refused { name, source })?;
     let reports = done(handle, name, ids).await?;
     let plans = replan(handle.robot(), name, &order, &reports)?;
-    let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
-    let runs = cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
-        DemoError::Trace(format!(
-            "{name}: {} pulses do not match the plans",
-            trace.len()
-        ))
-    })?;
+    let runs = played_runs(rig, name, &plans)?;
     let mut starts: Vec<DemoMove> = reports
         .into_iter()
         .zip(plans)
@@ -146,14 +141,36 @@ async fn run_cycle(
         })
         .collect();
     measure_waits(&mut starts, &rig.mock.with(|m| m.starts().to_vec()));
-    let first = starts.first().map_or(0.0, |m| m.played.start_s);
-    let end = starts
-        .last()
-        .map_or(0.0, |m| m.played.start_s + m.played.figures.finish_s);
-    Ok(Cycle {
-        name,
-        starts,
-        cycle_s: end - first,
+    Ok(Cycle::of(name, starts))
+}
+
+impl Cycle {
+    /// Cycle `name` of `starts`, timed from the first start to the last one's finish.
+    fn of(name: &'static str, starts: Vec<DemoMove>) -> Self {
+        let first = starts.first().map_or(0.0, |m| m.played.start_s);
+        let end = starts
+            .last()
+            .map_or(0.0, |m| m.played.start_s + m.played.figures.finish_s);
+        Self {
+            name,
+            starts,
+            cycle_s: end - first,
+        }
+    }
+}
+
+/// The mock's pulses since the last take, cut into the runs of `plans`.
+fn played_runs(
+    rig: &Rig,
+    name: &'static str,
+    plans: &[Plan],
+) -> Result<Vec<Vec<PulsePoint>>, DemoError> {
+    let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
+    cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
+        DemoError::Trace(format!(
+            "{name}: {} pulses do not match the plans",
+            trace.len()
+        ))
     })
 }
 
