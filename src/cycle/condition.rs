@@ -429,30 +429,35 @@ fn tokens(text: &str) -> Result<Vec<Token>, ConditionFault> {
             ('|', _) => (Token::Or, 1),
             ('(', _) => (Token::Open, 1),
             (')', _) => (Token::Close, 1),
-            (c, _) if c == '-' || c.is_ascii_digit() => {
-                let end = (i + 1..chars.len())
-                    .find(|&j| !chars[j].is_ascii_digit())
-                    .unwrap_or(chars.len());
-                let digits: String = chars[i..end].iter().collect();
-                let n = digits
-                    .parse()
-                    .map_err(|_| ConditionFault::NotANumber { digits })?;
-                (Token::Number(n), end - i)
-            }
-            (c, _) if c.is_ascii_alphabetic() || c == '_' => {
-                let end = (i + 1..chars.len())
-                    .find(|&j| {
-                        !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-' | '.'))
-                    })
-                    .unwrap_or(chars.len());
-                (Token::Word(chars[i..end].iter().collect()), end - i)
-            }
+            (c, _) if c == '-' || c.is_ascii_digit() => number(&chars[i..])?,
+            (c, _) if c.is_ascii_alphabetic() || c == '_' => word(&chars[i..]),
             (found, _) => return Err(ConditionFault::NotUnderstood { found, at: i + 1 }),
         };
         out.push(token);
         i += len;
     }
     Ok(out)
+}
+
+/// The number `chars` begin with (a `-`, then digits), and its length.
+fn number(chars: &[char]) -> Result<(Token, usize), ConditionFault> {
+    let end = (1..chars.len())
+        .find(|&j| !chars[j].is_ascii_digit())
+        .unwrap_or(chars.len());
+    let digits: String = chars[..end].iter().collect();
+    let n = digits
+        .parse()
+        .map_err(|_| ConditionFault::NotANumber { digits })?;
+    Ok((Token::Number(n), end))
+}
+
+/// The word `chars` begin with (a name or an address: letters, digits, `_`, `-`, `.`), and
+/// its length.
+fn word(chars: &[char]) -> (Token, usize) {
+    let end = (1..chars.len())
+        .find(|&j| !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-' | '.')))
+        .unwrap_or(chars.len());
+    (Token::Word(chars[..end].iter().collect()), end)
 }
 
 struct Parser<'a> {
