@@ -161,19 +161,12 @@ fn step_here(doc: &StepDoc, here: &Here<'_>) -> Result<Step, ProgramError> {
     Step::try_from(doc).map_err(|e| here.fail(e.to_string()))
 }
 
-/// The motion keys of a move and their values as written.
-fn motion_keys(o: &MoveOrder) -> [(&'static str, Option<String>); 8] {
-    let shown = |v: Option<f64>| v.map(|v| v.to_string());
-    [
-        ("speed_mm_s", shown(o.speed_mm_s)),
-        ("accel_time", o.accel_time.clone()),
-        ("method", o.method.clone()),
-        ("period", o.period.clone()),
-        ("tolerance_mm", shown(o.tolerance_mm)),
-        ("profile", o.profile.clone()),
-        ("jerk_mm_s3", shown(o.jerk_mm_s3)),
-        ("permit", o.permit.clone()),
-    ]
+/// The motion keys of a move and their values as written, and its permit.
+fn motion_keys(o: &MoveOrder) -> impl Iterator<Item = (&'static str, Option<String>)> {
+    o.motion
+        .shown()
+        .into_iter()
+        .chain([("permit", o.permit.clone())])
 }
 
 /// Whether `next` moves as `first` (step `first_step`) does: one path has one motion.
@@ -271,13 +264,7 @@ fn path_of(run: &[RunMove]) -> PathOrder {
     let o = &run[0].order;
     PathOrder {
         path: json!({ "element": elements }),
-        speed_mm_s: o.speed_mm_s,
-        accel_time: o.accel_time.clone(),
-        method: o.method.clone(),
-        period: o.period.clone(),
-        tolerance_mm: o.tolerance_mm,
-        profile: o.profile.clone(),
-        jerk_mm_s3: o.jerk_mm_s3,
+        motion: o.motion.clone(),
         permit: o.permit.clone(),
     }
 }
