@@ -57,6 +57,7 @@ mod robots;
 pub mod service;
 mod setup;
 mod shared;
+mod state_file;
 pub mod stream;
 mod worker;
 

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
-use super::positions::unix_now_s;
+use super::state_file::{self, Opened};
 use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
 use crate::robot::{Position, Robot};
 
@@ -149,36 +149,19 @@ impl PalletCounters {
             file: Some(file.clone()),
             ..Self::in_memory()
         };
-        match std::fs::read(&file) {
-            Ok(bytes) => match parse(&bytes) {
-                Ok(book) => store.book = Mutex::new(book),
-                Err(problem) => store.set_aside(&file, &problem.to_string()),
-            },
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => {
-                let why = format!("cannot read the pallets file {}: {e}", file.display());
+        match state_file::open(&file, "pallets", parse) {
+            Opened::Read(book) => store.book = Mutex::new(book.unwrap_or_default()),
+            Opened::SetAside { why, aside } => {
+                let why = format!("{why}; it was kept aside as {}", aside.display());
+                tracing::error!("{why}; every pallet must be set before the cycle places on it");
+                store.lost = Some(why);
+            }
+            Opened::Stuck(why) | Opened::Unreadable(why) => {
                 tracing::error!("{why}; pallet counters cannot be changed");
                 store.read_only = Some(why);
             }
         }
         store
-    }
-
-    fn set_aside(&mut self, file: &Path, problem: &str) {
-        let aside = file.with_file_name(format!("{PALLETS_FILE}.corrupt-{}", unix_now_s()));
-        let why = format!("the pallets file {} is corrupt: {problem}", file.display());
-        match std::fs::rename(file, &aside) {
-            Ok(()) => {
-                let why = format!("{why}; it was kept aside as {}", aside.display());
-                tracing::error!("{why}; every pallet must be set before the cycle places on it");
-                self.lost = Some(why);
-            }
-            Err(e) => {
-                let why = format!("{why}; it could not be moved aside ({e})");
-                tracing::error!("{why}; pallet counters cannot be changed");
-                self.read_only = Some(why);
-            }
-        }
     }
 
     /// What went wrong with the file at start, if anything did.

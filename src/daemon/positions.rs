@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
+use super::state_file::{self, Opened};
 use crate::contract::machine::Blocker;
 
 /// The file's name in the state directory.
@@ -167,54 +168,29 @@ impl TaughtPositions {
             file: Some(file.clone()),
             ..Self::in_memory()
         };
-        match std::fs::read(&file) {
-            Ok(bytes) => match parse(&bytes) {
-                Ok(book) => taught.book = Mutex::new(book),
-                Err(problem) => taught.set_aside(&file, &problem.to_string()),
-            },
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => {
-                let why = format!("cannot read the positions file {}: {e}", file.display());
+        match state_file::open(&file, "positions", parse) {
+            Opened::Read(book) => taught.book = Mutex::new(book.unwrap_or_default()),
+            Opened::SetAside { why, aside } => {
+                let what = format!(
+                    "{why}; it was kept aside as {}, and the daemon started with no positions",
+                    aside.display()
+                );
+                tracing::error!("{what}");
+                taught.warning = Some(what);
+            }
+            Opened::Stuck(why) => {
+                let what = format!("{why}, so positions cannot be changed");
+                tracing::error!("{what}");
+                taught.warning = Some(what.clone());
+                taught.read_only = Some(what);
+            }
+            Opened::Unreadable(why) => {
                 tracing::error!("{why}; starting with no positions and refusing changes");
                 taught.warning = Some(format!("{why}; no positions are available"));
                 taught.read_only = Some(why);
             }
         }
         taught
-    }
-
-    /// Moves a corrupt file aside and notes it.
-    fn set_aside(&mut self, file: &Path, problem: &str) {
-        let refused = format!(
-            "the positions file {} is corrupt: {problem}",
-            file.display()
-        );
-        let now = unix_now_s();
-        let mut aside = file.with_file_name(format!("{POSITIONS_FILE}.corrupt-{now}"));
-        for n in 1.. {
-            if !aside.exists() {
-                break;
-            }
-            aside = file.with_file_name(format!("{POSITIONS_FILE}.corrupt-{now}-{n}"));
-        }
-        match std::fs::rename(file, &aside) {
-            Ok(()) => {
-                let what = format!(
-                    "{refused}; it was kept aside as {}, and the daemon started with no positions",
-                    aside.display()
-                );
-                tracing::error!("{what}");
-                self.warning = Some(what);
-            }
-            Err(e) => {
-                let what = format!(
-                    "{refused}; it could not be moved aside ({e}), so positions cannot be changed"
-                );
-                tracing::error!("{what}");
-                self.warning = Some(what.clone());
-                self.read_only = Some(what);
-            }
-        }
     }
 
     /// What went wrong with the file at start, if anything did.

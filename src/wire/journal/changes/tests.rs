@@ -91,15 +91,8 @@ fn a_run_of_three_cycles_journals_each_start_and_end() {
         with_cycle(CycleState::Done, 3),
     ]);
     assert_eq!(
-        names(&got),
-        vec![
-            "cycle-started",
-            "cycle-ended",
-            "cycle-started",
-            "cycle-ended",
-            "cycle-started",
-            "cycle-ended"
-        ]
+        names(&got).join(" "),
+        "cycle-started cycle-ended cycle-started cycle-ended cycle-started cycle-ended"
     );
     assert_eq!(
         got[5],
@@ -135,15 +128,8 @@ fn hold_resume_fault_and_stop_of_a_cycle() {
         with_cycle(CycleState::Running, 0),
     ]);
     assert_eq!(
-        names(&got),
-        vec![
-            "cycle-started",
-            "hold",
-            "resume",
-            "fault",
-            "cycle-ended",
-            "cycle-started"
-        ]
+        names(&got).join(" "),
+        "cycle-started hold resume fault cycle-ended cycle-started"
     );
     assert_eq!(
         got[1],
