@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
-use super::state_file::{self, Opened};
+use super::state_file::{self, Trouble};
 use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
 use crate::robot::{Position, Robot};
 
@@ -145,18 +145,20 @@ impl PalletCounters {
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
         let file = dir.join(PALLETS_FILE);
+        let (book, trouble) = state_file::open(&file, "pallets", parse);
         let mut store = Self {
-            file: Some(file.clone()),
+            file: Some(file),
+            book: Mutex::new(book),
             ..Self::in_memory()
         };
-        match state_file::open(&file, "pallets", parse) {
-            Opened::Read(book) => store.book = Mutex::new(book.unwrap_or_default()),
-            Opened::SetAside { why, aside } => {
+        match trouble {
+            None => {}
+            Some(Trouble::SetAside { why, aside }) => {
                 let why = format!("{why}; it was kept aside as {}", aside.display());
                 tracing::error!("{why}; every pallet must be set before the cycle places on it");
                 store.lost = Some(why);
             }
-            Opened::Stuck(why) | Opened::Unreadable(why) => {
+            Some(Trouble::Stuck(why) | Trouble::Unreadable(why)) => {
                 tracing::error!("{why}; pallet counters cannot be changed");
                 store.read_only = Some(why);
             }

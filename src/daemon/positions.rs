@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
-use super::state_file::{self, Opened};
+use super::state_file::{self, Trouble};
 use crate::contract::machine::Blocker;
 
 /// The file's name in the state directory.
@@ -126,6 +126,33 @@ pub fn check_name(name: &str) -> Result<(), PositionError> {
     }
 }
 
+/// What went wrong with the positions file at start, logged: the warning shown, and why
+/// changes are refused (if they are).
+fn noted(trouble: Trouble) -> (Option<String>, Option<String>) {
+    let (warning, read_only) = match trouble {
+        Trouble::SetAside { why, aside } => {
+            let shown = aside.display();
+            let what = format!(
+                "{why}; it was kept aside as {shown}, and the daemon started with no positions"
+            );
+            (what, None)
+        }
+        Trouble::Stuck(why) => {
+            let what = format!("{why}, so positions cannot be changed");
+            (what.clone(), Some(what))
+        }
+        Trouble::Unreadable(why) => {
+            tracing::error!("{why}; starting with no positions and refusing changes");
+            return (
+                Some(format!("{why}; no positions are available")),
+                Some(why),
+            );
+        }
+    };
+    tracing::error!("{warning}");
+    (Some(warning), read_only)
+}
+
 /// Seconds since 1970, now.
 #[must_use]
 pub fn unix_now_s() -> u64 {
@@ -164,33 +191,14 @@ impl TaughtPositions {
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
         let file = dir.join(POSITIONS_FILE);
-        let mut taught = Self {
-            file: Some(file.clone()),
-            ..Self::in_memory()
-        };
-        match state_file::open(&file, "positions", parse) {
-            Opened::Read(book) => taught.book = Mutex::new(book.unwrap_or_default()),
-            Opened::SetAside { why, aside } => {
-                let what = format!(
-                    "{why}; it was kept aside as {}, and the daemon started with no positions",
-                    aside.display()
-                );
-                tracing::error!("{what}");
-                taught.warning = Some(what);
-            }
-            Opened::Stuck(why) => {
-                let what = format!("{why}, so positions cannot be changed");
-                tracing::error!("{what}");
-                taught.warning = Some(what.clone());
-                taught.read_only = Some(what);
-            }
-            Opened::Unreadable(why) => {
-                tracing::error!("{why}; starting with no positions and refusing changes");
-                taught.warning = Some(format!("{why}; no positions are available"));
-                taught.read_only = Some(why);
-            }
+        let (book, trouble) = state_file::open(&file, "positions", parse);
+        let (warning, read_only) = trouble.map_or((None, None), noted);
+        Self {
+            file: Some(file),
+            book: Mutex::new(book),
+            warning,
+            read_only,
         }
-        taught
     }
 
     /// What went wrong with the file at start, if anything did.

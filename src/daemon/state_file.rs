@@ -8,11 +8,9 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
-/// What was found in a state file at start.
+/// What went wrong with a state file at start.
 #[derive(Debug)]
-pub(crate) enum Opened<B> {
-    /// Read and parsed; `None`: there is no file yet.
-    Read(Option<B>),
+pub(crate) enum Trouble {
     /// Corrupt (`why`: the file and the problem), kept aside as `aside`.
     SetAside {
         /// "the NAME file F is corrupt: PROBLEM".
@@ -26,32 +24,32 @@ pub(crate) enum Opened<B> {
     Unreadable(String),
 }
 
-/// Reads `file`, the daemon's `what` file (`"positions"`), with `parse`.
-pub(crate) fn open<B, E: Display>(
+/// Reads `file`, the daemon's `what` file (`"positions"`), with `parse`: what it holds (the
+/// default when there is no file yet, or it is set aside or unread), and what went wrong.
+pub(crate) fn open<B: Default, E: Display>(
     file: &Path,
     what: &str,
     parse: impl FnOnce(&[u8]) -> Result<B, E>,
-) -> Opened<B> {
+) -> (B, Option<Trouble>) {
     let bytes = match std::fs::read(file) {
         Ok(bytes) => bytes,
-        Err(e) if e.kind() == io::ErrorKind::NotFound => return Opened::Read(None),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return (B::default(), None),
         Err(e) => {
-            return Opened::Unreadable(format!(
-                "cannot read the {what} file {}: {e}",
-                file.display()
-            ));
+            let why = format!("cannot read the {what} file {}: {e}", file.display());
+            return (B::default(), Some(Trouble::Unreadable(why)));
         }
     };
     let problem = match parse(&bytes) {
-        Ok(book) => return Opened::Read(Some(book)),
+        Ok(book) => return (book, None),
         Err(problem) => problem,
     };
     let why = format!("the {what} file {} is corrupt: {problem}", file.display());
     let aside = aside_name(file);
-    match std::fs::rename(file, &aside) {
-        Ok(()) => Opened::SetAside { why, aside },
-        Err(e) => Opened::Stuck(format!("{why}; it could not be moved aside ({e})")),
-    }
+    let trouble = match std::fs::rename(file, &aside) {
+        Ok(()) => Trouble::SetAside { why, aside },
+        Err(e) => Trouble::Stuck(format!("{why}; it could not be moved aside ({e})")),
+    };
+    (B::default(), Some(trouble))
 }
 
 /// A name beside `file` for it set aside, not yet taken.

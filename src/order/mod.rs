@@ -1068,58 +1068,42 @@ mod tests {
     #[test]
     fn period_accel_time_and_tolerance_are_bounded_naming_the_limit() {
         let m = seed_robot().motion;
-        let with = |o: MoveOrder| o.check(m).unwrap_err().to_string();
-        let base = order(vec![1.0, 2.0, 3.0]);
-        assert_eq!(
-            with(MoveOrder {
-                motion: OrderMotion {
-                    period: Some("2s".into()),
-                    ..OrderMotion::default()
-                },
-                ..base.clone()
-            }),
-            "period = \"2s\": must be within 1 ms to 1 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                motion: OrderMotion {
-                    period: Some("100us".into()),
-                    ..OrderMotion::default()
-                },
-                ..base.clone()
-            }),
-            "period = \"100us\": must be within 1 ms to 1 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                motion: OrderMotion {
+        let refused =
+            |o: OrderMotion| (o.check(m, OrderLimits::default()).unwrap_err()).to_string();
+        let none = OrderMotion::default;
+        let period = |t: &str| OrderMotion {
+            period: Some(t.into()),
+            ..none()
+        };
+        let tolerance = |t| OrderMotion {
+            tolerance_mm: Some(t),
+            ..none()
+        };
+        let cases = [
+            (period("2s"), "period = \"2s\": must be within 1 ms to 1 s"),
+            (
+                period("100us"),
+                "period = \"100us\": must be within 1 ms to 1 s",
+            ),
+            (
+                tolerance(50.0),
+                "tolerance_mm = 50: must be within 0.001 to 10 mm",
+            ),
+            (
+                tolerance(1e-6),
+                "tolerance_mm = 1e-6: must be within 0.001 to 10 mm",
+            ),
+            (
+                OrderMotion {
                     accel_time: Some("20s".into()),
-                    ..OrderMotion::default()
+                    ..none()
                 },
-                ..base.clone()
-            }),
-            "accel_time = \"20s\": must be at most 10 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                motion: OrderMotion {
-                    tolerance_mm: Some(50.0),
-                    ..OrderMotion::default()
-                },
-                ..base.clone()
-            }),
-            "tolerance_mm = 50: must be within 0.001 to 10 mm"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                motion: OrderMotion {
-                    tolerance_mm: Some(1e-6),
-                    ..OrderMotion::default()
-                },
-                ..base
-            }),
-            "tolerance_mm = 1e-6: must be within 0.001 to 10 mm"
-        );
+                "accel_time = \"20s\": must be at most 10 s",
+            ),
+        ];
+        for (motion, words) in cases {
+            assert_eq!(refused(motion), words);
+        }
     }
 
     #[test]

@@ -124,6 +124,22 @@ fn through_the_waits(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u3
     first_move(waits.into_iter().chain(then))
 }
 
+/// The palletising program to its place step: the pick done, the slip sheet skipped (not the
+/// first slot of a layer), the place begun; then `then`.
+fn to_the_place(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u32>> {
+    let mut events = vec![
+        Event::Go,
+        Event::Go,
+        Event::Queued(vec![1]),
+        Event::Followed(MotionEnd::Done),
+        Event::Go,
+        Event::Decided(Some(false)),
+        Event::Go,
+    ];
+    events.extend(then);
+    events
+}
+
 fn met(waited_s: f64) -> Event<u32> {
     Event::Waited {
         end: WaitEnd::Met,
@@ -542,15 +558,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
     let got = script(
         &mut r,
         &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            Event::Followed(MotionEnd::Done),
-            // Not the first slot of a layer: the slip sheet is skipped.
-            Event::Go,
-            Event::Decided(Some(false)),
-            Event::Go,
+        to_the_place([
             Event::Counted(None),
             Event::Go,
             Event::Queued(vec![2]),
@@ -570,7 +578,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
             // Not full: the when-full block is skipped.
             Event::Decided(Some(false)),
             Event::Go,
-        ],
+        ]),
     );
     let want = [
         "step move to @above-stack",
@@ -605,16 +613,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
     let got = script(
         &mut r,
         &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            Event::Followed(MotionEnd::Done),
-            Event::Go,
-            Event::Decided(Some(false)),
-            Event::Go,
-            Event::Counted(Some(why.to_owned())),
-        ],
+        to_the_place([Event::Counted(Some(why.to_owned()))]),
     );
     assert_eq!(got.last().unwrap(), &format!("fault ({why}) stop true []"));
 }
