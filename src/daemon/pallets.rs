@@ -117,27 +117,23 @@ pub enum PalletStoreError {
 }
 
 /// The pallet counters of every robot of one daemon.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct PalletCounters {
+    /// The counters.
+    book: Mutex<Book>,
     /// Where they are kept (`None`: in memory only).
     file: Option<PathBuf>,
-    book: Mutex<Book>,
-    /// Why the counts of pallets not in the book are unknown (a corrupt file set aside).
-    lost: Option<String>,
     /// Why changes are refused, when they are.
     read_only: Option<String>,
+    /// Why the counts of pallets not in the book are unknown (a corrupt file set aside).
+    lost: Option<String>,
 }
 
 impl PalletCounters {
     /// Counters in memory only (tests, the demo): every pallet at slot 0.
     #[must_use]
     pub fn in_memory() -> Self {
-        Self {
-            file: None,
-            book: Mutex::new(Book::new()),
-            lost: None,
-            read_only: None,
-        }
+        Self::default()
     }
 
     /// The counters kept in `dir`'s `pallets.json`, as a restart finds them (a slot in progress
@@ -147,8 +143,8 @@ impl PalletCounters {
         let file = dir.join(PALLETS_FILE);
         let (book, trouble) = state_file::open(&file, "pallets", parse);
         let mut store = Self {
-            file: Some(file),
             book: Mutex::new(book),
+            file: Some(file),
             ..Self::in_memory()
         };
         match trouble {

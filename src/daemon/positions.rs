@@ -162,7 +162,7 @@ pub fn unix_now_s() -> u64 {
 }
 
 /// The taught positions of every robot of one daemon.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct TaughtPositions {
     /// Where they are kept (`None`: in memory only).
     file: Option<PathBuf>,
@@ -177,12 +177,7 @@ impl TaughtPositions {
     /// Positions kept in memory only (tests, the demo): none to start with.
     #[must_use]
     pub fn in_memory() -> Self {
-        Self {
-            file: None,
-            book: Mutex::new(Book::new()),
-            warning: None,
-            read_only: None,
-        }
+        Self::default()
     }
 
     /// The positions kept in `dir`'s `positions.json` (none when there is no file yet). A
