@@ -232,7 +232,7 @@ pub(super) enum BlendError {
 /// Whether `next` moves as `first` (step `first_step`) does: one path has one motion.
 fn same_motion(first: &MoveOrder, next: &MoveOrder, first_step: usize) -> Result<(), BlendError> {
     let shown = |v: Option<String>| v.unwrap_or_else(|| "not given".to_owned());
-    for ((key, a), (_, b)) in motion_keys(first).into_iter().zip(motion_keys(next)) {
+    for ((key, a), (_, b)) in motion_keys(first).zip(motion_keys(next)) {
         if a != b {
             return Err(BlendError::OtherMotion {
                 key,

@@ -253,7 +253,7 @@ impl Serialize for OrderMotion {
 
 /// A document's table that embeds an [`OrderMotion`], read key by key by [`read_table`].
 pub(crate) trait Table: Default {
-    /// Its name, as serde's messages give it (`MoveOrder`: "expected struct MoveOrder").
+    /// Its name, as serde's messages give it (`MoveOrder`: "expected struct `MoveOrder`").
     const NAME: &'static str;
     /// Every key it takes, in the order it is written (the motion's among them).
     const KEYS: &'static [&'static str];
@@ -431,7 +431,7 @@ mod tests {
             r#"{"jerk_mm_s3":[1]}"#,
             r#"{"position":"pick","tolerance_mm":0.05,"profile":"s-curve","period":"1s"}"#,
             r#"{"speed_mm_s":null}"#,
-            r#"[1,2,3]"#,
+            "[1,2,3]",
             "5",
             "{}",
         ];
