@@ -14,6 +14,7 @@ use linterpd::mewtocol::Station;
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock, StartOutcome,
 };
+use linterpd::order::OrderMotion;
 use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, HeaderChoice, MewtocolClient, MewtocolOptions};
 use linterpd::robot::seed_robot;
@@ -133,7 +134,10 @@ async fn latencies(
         let ids = h
             .submit_starts(MoveOrder {
                 to: Some(to.to_vec()),
-                tolerance_mm,
+                motion: OrderMotion {
+                    tolerance_mm,
+                    ..OrderMotion::default()
+                },
                 ..MoveOrder::default()
             })
             .await

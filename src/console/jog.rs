@@ -23,7 +23,7 @@ use serde::Serialize;
 
 use crate::geometry::Pose;
 use crate::kinematics::Kinematics;
-use crate::order::MoveOrder;
+use crate::order::{MoveOrder, OrderMotion};
 use crate::robot::Robot;
 
 use super::lease::JogAxis;
@@ -48,9 +48,12 @@ pub fn piece_order(axis: JogAxis, positive: bool, length: f64, speed_mm_s: f64) 
     }
     MoveOrder {
         by: Some(by),
-        speed_mm_s: Some(speed_mm_s),
-        accel_time: Some("0s".into()),
-        method: Some("constant-period".into()),
+        motion: OrderMotion {
+            speed_mm_s: Some(speed_mm_s),
+            accel_time: Some("0s".into()),
+            method: Some("constant-period".into()),
+            ..OrderMotion::default()
+        },
         ..MoveOrder::default()
     }
 }
@@ -179,8 +182,8 @@ mod tests {
     fn a_piece_is_a_constant_speed_line_along_its_axis() {
         let o = piece_order(JogAxis::Y, false, 7.5, 50.0);
         assert_eq!(o.by, Some(vec![0.0, -7.5, 0.0, 0.0]));
-        assert_eq!(o.accel_time.as_deref(), Some("0s"));
-        assert_eq!(o.speed_mm_s, Some(50.0));
+        assert_eq!(o.motion.accel_time.as_deref(), Some("0s"));
+        assert_eq!(o.motion.speed_mm_s, Some(50.0));
         let checked = o.check(seed_robot().motion).unwrap();
         assert!(checked.motion.accel_s.abs() < 1e-12);
     }

@@ -200,33 +200,24 @@ impl Seat {
 mod tests {
     use super::*;
 
-    fn ann() -> Asker<'static> {
+    fn asker(session: SessionId, user: &'static str, role: Role) -> Asker<'static> {
         Asker {
-            session: 1,
-            user: "ann",
-            role: Role::Operator,
+            session,
+            user,
+            role,
         }
+    }
+    fn ann() -> Asker<'static> {
+        asker(1, "ann", Role::Operator)
     }
     fn bob() -> Asker<'static> {
-        Asker {
-            session: 2,
-            user: "bob",
-            role: Role::Operator,
-        }
+        asker(2, "bob", Role::Operator)
     }
     fn vic() -> Asker<'static> {
-        Asker {
-            session: 3,
-            user: "vic",
-            role: Role::Viewer,
-        }
+        asker(3, "vic", Role::Viewer)
     }
     fn ada() -> Asker<'static> {
-        Asker {
-            session: 4,
-            user: "ada",
-            role: Role::Admin,
-        }
+        asker(4, "ada", Role::Admin)
     }
 
     #[test]

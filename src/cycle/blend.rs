@@ -162,19 +162,12 @@ fn step_here(doc: &StepDoc, here: &Here<'_>) -> Result<Step, ProgramError> {
     Step::try_from(doc).map_err(|e| here.fail(e.to_string()))
 }
 
-/// The motion keys of a move and their values as written.
-fn motion_keys(o: &MoveOrder) -> [(&'static str, Option<String>); 8] {
-    let shown = |v: Option<f64>| v.map(|v| v.to_string());
-    [
-        ("speed_mm_s", shown(o.speed_mm_s)),
-        ("accel_time", o.accel_time.clone()),
-        ("method", o.method.clone()),
-        ("period", o.period.clone()),
-        ("tolerance_mm", shown(o.tolerance_mm)),
-        ("profile", o.profile.clone()),
-        ("jerk_mm_s3", shown(o.jerk_mm_s3)),
-        ("permit", o.permit.clone()),
-    ]
+/// The motion keys of a move and their values as written, and its permit.
+fn motion_keys(o: &MoveOrder) -> impl Iterator<Item = (&'static str, Option<String>)> {
+    o.motion
+        .shown()
+        .into_iter()
+        .chain([("permit", o.permit.clone())])
 }
 
 /// Why a blended run's moves or corner cannot be one path, in the words of the refusal.
@@ -239,7 +232,7 @@ pub(super) enum BlendError {
 /// Whether `next` moves as `first` (step `first_step`) does: one path has one motion.
 fn same_motion(first: &MoveOrder, next: &MoveOrder, first_step: usize) -> Result<(), BlendError> {
     let shown = |v: Option<String>| v.unwrap_or_else(|| "not given".to_owned());
-    for ((key, a), (_, b)) in motion_keys(first).into_iter().zip(motion_keys(next)) {
+    for ((key, a), (_, b)) in motion_keys(first).zip(motion_keys(next)) {
         if a != b {
             return Err(BlendError::OtherMotion {
                 key,
@@ -322,13 +315,7 @@ fn path_of(run: &[RunMove]) -> PathOrder {
     let o = &run[0].order;
     PathOrder {
         path: json!({ "element": elements }),
-        speed_mm_s: o.speed_mm_s,
-        accel_time: o.accel_time.clone(),
-        method: o.method.clone(),
-        period: o.period.clone(),
-        tolerance_mm: o.tolerance_mm,
-        profile: o.profile.clone(),
-        jerk_mm_s3: o.jerk_mm_s3,
+        motion: o.motion.clone(),
         permit: o.permit.clone(),
     }
 }

@@ -214,10 +214,7 @@ mod tests {
     use super::*;
 
     fn temp(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("linterpd-load-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+        crate::testing::fresh_dir(&format!("load-{name}"))
     }
 
     /// Issue 44: one bad file made every good program of the directory refuse, naming it.

@@ -45,141 +45,121 @@
 
 use std::collections::BTreeMap;
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
-use crate::order::MoveOrder;
+use crate::order::motion::{Table, keys, read_table};
+use crate::order::{MoveOrder, OrderMotion};
+use serde::de::MapAccess;
 
 /// A cycle program as written.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
 pub struct ProgramDoc {
     /// The number the cell selects it by (1..=255).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub number: Option<i64>,
     /// What it does, for people.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
     /// Its steps, in order.
-    #[serde(default)]
     pub step: Vec<StepDoc>,
 }
 
 /// One step as written: exactly one action key, and the keys that go with it (as the file
 /// writes it; [`super::step::Step`] is the step the check reads).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
 pub struct StepDoc {
     /// A name other steps jump to.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label: Option<String>,
     /// A move (a move order's keys).
-    #[serde(default, rename = "move", skip_serializing_if = "Option::is_none")]
+    #[serde(rename = "move")]
     pub move_: Option<MoveOrder>,
     /// A path: `file` (relative to the program's directory) or `path` (the document), and the
     /// motion keys of a path order.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathStep>,
     /// A condition to wait for.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wait: Option<String>,
     /// How long a wait may take, e.g. `"30s"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timeout: Option<String>,
     /// What a wait that times out does: `"fault"` (the default) or a label to go on from.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub on_timeout: Option<String>,
     /// Outputs to write: a Y or R bit (or its signal name) = true/false, a DT word = a number.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub set: Option<BTreeMap<String, toml::Value>>,
     /// A pause, e.g. `"200ms"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dwell: Option<String>,
     /// Another program to run here, by name.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub call: Option<String>,
     /// A jump back to a label.
-    #[serde(default, rename = "loop", skip_serializing_if = "Option::is_none")]
+    #[serde(rename = "loop")]
     pub loop_: Option<LoopDoc>,
     /// A move's or path's interlock, enforced by the PLC.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
     /// A move's end passed without stopping, rounded into the next move step within this
     /// distance of it, mm (the moves run as one path: `super::blend`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blend_mm: Option<f64>,
     /// A place at a pallet's current slot.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub place: Option<PalletStepDoc>,
     /// A pick from a pallet's current slot (depalletising: the same route, the same counter).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pick: Option<PalletStepDoc>,
     /// A pallet advanced to its next slot (after a place written with `advance = false`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub advance: Option<String>,
 }
 
 /// A `place` or `pick` step's table.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct PalletStepDoc {
     /// The pallet (a pattern of the robot's `[robots.NAME.pallets.NAME]`).
     pub pallet: String,
     /// The steps run with the robot at the slot (the gripper's `set`, `wait` and `dwell`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(default)]
     pub at_slot: Vec<StepDoc>,
     /// Whether the pallet advances once the at-slot steps ran (default true; `false`: an
     /// `advance` step does it).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub advance: Option<bool>,
     /// The speed of the approach and retreat where the pattern gives none, mm/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub speed_mm_s: Option<f64>,
 }
 
-/// A `path` step's table.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+/// A `path` step's table: the path (`file` or `path`) and the motion keys of a path order.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct PathStep {
     /// A path file, relative to the program's directory.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
     /// The path document itself.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<serde_json::Value>,
-    /// Speed along the path, mm/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub speed_mm_s: Option<f64>,
-    /// Acceleration time.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub accel_time: Option<String>,
-    /// `"constant-period"` or `"bounded-error"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub method: Option<String>,
-    /// Interpolation period.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub period: Option<String>,
-    /// Path tolerance, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tolerance_mm: Option<f64>,
-    /// The ramps' shape: `"trapezoid"` or `"s-curve"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub profile: Option<String>,
-    /// The path's jerk of an S-curve, mm/s^3.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub jerk_mm_s3: Option<f64>,
+    /// The motion keys, as for a path order.
+    pub motion: OrderMotion,
+}
+
+impl<'de> Deserialize<'de> for PathStep {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        read_table(d)
+    }
+}
+
+impl Table for PathStep {
+    const NAME: &'static str = "PathStep";
+    const KEYS: &'static [&'static str] = &keys::<9>(&["file", "path"], &[]);
+
+    fn read<'de, A: MapAccess<'de>>(&mut self, key: &str, map: &mut A) -> Result<(), A::Error> {
+        match key {
+            "file" => self.file = map.next_value()?,
+            "path" => self.path = map.next_value()?,
+            motion => self.motion.read(motion, map)?,
+        }
+        Ok(())
+    }
 }
 
 /// A `loop` step's table.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct LoopDoc {
     /// The label to jump back to.
     pub to: String,
     /// How many times the steps from `to` to here run in all.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count: Option<i64>,
     /// Jump back until this condition holds (or `"stop"`: until a stop is asked for).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub until: Option<String>,
 }
 

@@ -238,13 +238,7 @@ fn path_order(step: &PathStep, permit: Option<&str>) -> Result<PathOrder, ShapeE
     };
     Ok(PathOrder {
         path: document,
-        speed_mm_s: step.speed_mm_s,
-        accel_time: step.accel_time.clone(),
-        method: step.method.clone(),
-        period: step.period.clone(),
-        tolerance_mm: step.tolerance_mm,
-        profile: step.profile.clone(),
-        jerk_mm_s3: step.jerk_mm_s3,
+        motion: step.motion.clone(),
         permit: permit.map(str::to_owned),
     })
 }

@@ -248,6 +248,15 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
     let cases: Vec<(String, &str)> = vec![
         (one("jump = \"pick\""), "unknown field `jump`"),
         (
+            one("path = { file = \"p.toml\", sped_mm_s = 3 }"),
+            "unknown field `sped_mm_s`, expected one of `file`, `path`, `speed_mm_s`, \
+             `accel_time`, `method`, `period`, `tolerance_mm`, `profile`, `jerk_mm_s3`",
+        ),
+        (
+            one("move = { position = \"in-press\", speed_mm_s = \"fast\" }"),
+            "invalid type: string \"fast\", expected f64",
+        ),
+        (
             one("wait = \"door_shut\"\ntimeout = \"1s\""),
             "step 1: wait: condition \"door_shut\": \"door_shut\" is neither a signal",
         ),
@@ -318,7 +327,8 @@ fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
             .unwrap_err()
             .to_string();
         assert!(e.contains(words), "{program}\n=> {e}");
-        if !words.starts_with("unknown field") {
+        // serde's refusals (a key or a value of the wrong type) name the line, not the program.
+        if !words.starts_with("unknown field") && !words.starts_with("invalid type") {
             assert!(e.contains("program \"p\""), "{e}");
         }
     }

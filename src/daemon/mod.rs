@@ -18,6 +18,7 @@
 //!             errors (CommandError, SubmitError, CycleError, ModeError)
 //! order.rs    a move order (to, by, joints or position), its check, and planning it
 //! positions.rs taught positions per robot, kept in the state directory
+//! state_file.rs a state file read at start (positions, pallets): a corrupt one set aside
 //! report.rs   RobotState (RobotPhase), MoveReport (Stage, SectionReport), MoveAccepted,
 //!             PathAccepted: what the API writes and the CLI reads back
 //! ids.rs      move ids unique across restarts
@@ -57,6 +58,7 @@ mod robots;
 pub mod service;
 mod setup;
 mod shared;
+mod state_file;
 pub mod stream;
 mod worker;
 

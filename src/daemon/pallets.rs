@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
-use super::positions::unix_now_s;
+use super::state_file::{self, Trouble};
 use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
 use crate::robot::{Position, Robot};
 
@@ -117,27 +117,23 @@ pub enum PalletStoreError {
 }
 
 /// The pallet counters of every robot of one daemon.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct PalletCounters {
+    /// The counters.
+    book: Mutex<Book>,
     /// Where they are kept (`None`: in memory only).
     file: Option<PathBuf>,
-    book: Mutex<Book>,
-    /// Why the counts of pallets not in the book are unknown (a corrupt file set aside).
-    lost: Option<String>,
     /// Why changes are refused, when they are.
     read_only: Option<String>,
+    /// Why the counts of pallets not in the book are unknown (a corrupt file set aside).
+    lost: Option<String>,
 }
 
 impl PalletCounters {
     /// Counters in memory only (tests, the demo): every pallet at slot 0.
     #[must_use]
     pub fn in_memory() -> Self {
-        Self {
-            file: None,
-            book: Mutex::new(Book::new()),
-            lost: None,
-            read_only: None,
-        }
+        Self::default()
     }
 
     /// The counters kept in `dir`'s `pallets.json`, as a restart finds them (a slot in progress
@@ -145,40 +141,25 @@ impl PalletCounters {
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
         let file = dir.join(PALLETS_FILE);
+        let (book, trouble) = state_file::open(&file, "pallets", parse);
         let mut store = Self {
-            file: Some(file.clone()),
+            book: Mutex::new(book),
+            file: Some(file),
             ..Self::in_memory()
         };
-        match std::fs::read(&file) {
-            Ok(bytes) => match parse(&bytes) {
-                Ok(book) => store.book = Mutex::new(book),
-                Err(problem) => store.set_aside(&file, &problem.to_string()),
-            },
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => {
-                let why = format!("cannot read the pallets file {}: {e}", file.display());
+        match trouble {
+            None => {}
+            Some(Trouble::SetAside { why, aside }) => {
+                let why = format!("{why}; it was kept aside as {}", aside.display());
+                tracing::error!("{why}; every pallet must be set before the cycle places on it");
+                store.lost = Some(why);
+            }
+            Some(Trouble::Stuck(why) | Trouble::Unreadable(why)) => {
                 tracing::error!("{why}; pallet counters cannot be changed");
                 store.read_only = Some(why);
             }
         }
         store
-    }
-
-    fn set_aside(&mut self, file: &Path, problem: &str) {
-        let aside = file.with_file_name(format!("{PALLETS_FILE}.corrupt-{}", unix_now_s()));
-        let why = format!("the pallets file {} is corrupt: {problem}", file.display());
-        match std::fs::rename(file, &aside) {
-            Ok(()) => {
-                let why = format!("{why}; it was kept aside as {}", aside.display());
-                tracing::error!("{why}; every pallet must be set before the cycle places on it");
-                self.lost = Some(why);
-            }
-            Err(e) => {
-                let why = format!("{why}; it could not be moved aside ({e})");
-                tracing::error!("{why}; pallet counters cannot be changed");
-                self.read_only = Some(why);
-            }
-        }
     }
 
     /// What went wrong with the file at start, if anything did.

@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::ids::write_atomically;
+use super::state_file::{self, Trouble};
 use crate::contract::machine::Blocker;
 
 /// The file's name in the state directory.
@@ -125,6 +126,33 @@ pub fn check_name(name: &str) -> Result<(), PositionError> {
     }
 }
 
+/// What went wrong with the positions file at start, logged: the warning shown, and why
+/// changes are refused (if they are).
+fn noted(trouble: Trouble) -> (Option<String>, Option<String>) {
+    let (warning, read_only) = match trouble {
+        Trouble::SetAside { why, aside } => {
+            let shown = aside.display();
+            let what = format!(
+                "{why}; it was kept aside as {shown}, and the daemon started with no positions"
+            );
+            (what, None)
+        }
+        Trouble::Stuck(why) => {
+            let what = format!("{why}, so positions cannot be changed");
+            (what.clone(), Some(what))
+        }
+        Trouble::Unreadable(why) => {
+            tracing::error!("{why}; starting with no positions and refusing changes");
+            return (
+                Some(format!("{why}; no positions are available")),
+                Some(why),
+            );
+        }
+    };
+    tracing::error!("{warning}");
+    (Some(warning), read_only)
+}
+
 /// Seconds since 1970, now.
 #[must_use]
 pub fn unix_now_s() -> u64 {
@@ -134,7 +162,7 @@ pub fn unix_now_s() -> u64 {
 }
 
 /// The taught positions of every robot of one daemon.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct TaughtPositions {
     /// Where they are kept (`None`: in memory only).
     file: Option<PathBuf>,
@@ -149,12 +177,7 @@ impl TaughtPositions {
     /// Positions kept in memory only (tests, the demo): none to start with.
     #[must_use]
     pub fn in_memory() -> Self {
-        Self {
-            file: None,
-            book: Mutex::new(Book::new()),
-            warning: None,
-            read_only: None,
-        }
+        Self::default()
     }
 
     /// The positions kept in `dir`'s `positions.json` (none when there is no file yet). A
@@ -163,57 +186,13 @@ impl TaughtPositions {
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
         let file = dir.join(POSITIONS_FILE);
-        let mut taught = Self {
-            file: Some(file.clone()),
-            ..Self::in_memory()
-        };
-        match std::fs::read(&file) {
-            Ok(bytes) => match parse(&bytes) {
-                Ok(book) => taught.book = Mutex::new(book),
-                Err(problem) => taught.set_aside(&file, &problem.to_string()),
-            },
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => {
-                let why = format!("cannot read the positions file {}: {e}", file.display());
-                tracing::error!("{why}; starting with no positions and refusing changes");
-                taught.warning = Some(format!("{why}; no positions are available"));
-                taught.read_only = Some(why);
-            }
-        }
-        taught
-    }
-
-    /// Moves a corrupt file aside and notes it.
-    fn set_aside(&mut self, file: &Path, problem: &str) {
-        let refused = format!(
-            "the positions file {} is corrupt: {problem}",
-            file.display()
-        );
-        let now = unix_now_s();
-        let mut aside = file.with_file_name(format!("{POSITIONS_FILE}.corrupt-{now}"));
-        for n in 1.. {
-            if !aside.exists() {
-                break;
-            }
-            aside = file.with_file_name(format!("{POSITIONS_FILE}.corrupt-{now}-{n}"));
-        }
-        match std::fs::rename(file, &aside) {
-            Ok(()) => {
-                let what = format!(
-                    "{refused}; it was kept aside as {}, and the daemon started with no positions",
-                    aside.display()
-                );
-                tracing::error!("{what}");
-                self.warning = Some(what);
-            }
-            Err(e) => {
-                let what = format!(
-                    "{refused}; it could not be moved aside ({e}), so positions cannot be changed"
-                );
-                tracing::error!("{what}");
-                self.warning = Some(what.clone());
-                self.read_only = Some(what);
-            }
+        let (book, trouble) = state_file::open(&file, "positions", parse);
+        let (warning, read_only) = trouble.map_or((None, None), noted);
+        Self {
+            file: Some(file),
+            book: Mutex::new(book),
+            warning,
+            read_only,
         }
     }
 

@@ -116,7 +116,10 @@ async fn run_cycle(
 ) -> Result<Cycle, DemoError> {
     let order = PathOrder {
         path: doc.clone(),
-        tolerance_mm: Some(CYCLE_TOLERANCE_MM),
+        motion: crate::order::OrderMotion {
+            tolerance_mm: Some(CYCLE_TOLERANCE_MM),
+            ..crate::order::OrderMotion::default()
+        },
         ..PathOrder::default()
     };
     let ids = handle

@@ -41,6 +41,7 @@ use crate::daemon::{
 };
 use crate::kinematics::JOINTS;
 use crate::mock::{StartOutcome, StartRecord};
+use crate::order::OrderMotion;
 use crate::plan::Plan;
 use crate::plc::exchange::ContractSettings;
 use crate::robot::{Robot, seed_robot};
@@ -136,7 +137,10 @@ fn to(p: [f64; 3]) -> MoveOrder {
 /// A bounded-error line to `p` (0.05 mm).
 fn bounded(p: [f64; 3]) -> MoveOrder {
     MoveOrder {
-        tolerance_mm: Some(0.05),
+        motion: OrderMotion {
+            tolerance_mm: Some(0.05),
+            ..OrderMotion::default()
+        },
         ..to(p)
     }
 }
@@ -151,7 +155,10 @@ pub fn steps() -> Vec<Vec<Step>> {
         vec![step(
             "P1 -> P2 at 120 mm/s",
             MoveOrder {
-                speed_mm_s: Some(120.0),
+                motion: OrderMotion {
+                    speed_mm_s: Some(120.0),
+                    ..OrderMotion::default()
+                },
                 ..to(P2)
             },
         )],
@@ -159,7 +166,10 @@ pub fn steps() -> Vec<Vec<Step>> {
             step(
                 "P2 -> P1, dT 20 ms, queued",
                 MoveOrder {
-                    period: Some("20ms".into()),
+                    motion: OrderMotion {
+                        period: Some("20ms".into()),
+                        ..OrderMotion::default()
+                    },
                     ..to(P1)
                 },
             ),

@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
+use serde::de::MapAccess;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -24,101 +25,111 @@ use crate::plan::{
     JointMoveRequest, MoveRequest, Origin, PathRequest, Plan, PlanError, plan_joint_move,
     plan_move, plan_section,
 };
-use crate::robot::{Method, Motion, Ramp, Robot};
+use crate::robot::{Motion, Robot};
 use crate::robot::{POSITION_NAME_RULE as NAME_RULE, Position, is_position_name};
 
+pub mod motion;
 pub mod permit;
+
+pub use motion::OrderMotion;
 
 /// The most elements a path order may have (checked before anything is planned).
 pub const MAX_PATH_ELEMENTS: usize = 500;
 
 /// A move order: one target (`to`, `by`, `joints` or `position`) and optional motion overrides
-/// (the robot's defaults otherwise).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+/// (the robot's defaults otherwise). Read by hand ([`motion::read_table`]): every key known,
+/// as with serde's `deny_unknown_fields`.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct MoveOrder {
     /// Target `[x, y, z]` in mm, or `[x, y, z, a]` with the tool angle in degrees (without it the
     /// tool keeps its angle).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub to: Option<Vec<f64>>,
     /// A jog: `[dx, dy, dz]` in mm, or `[dx, dy, dz, da]` with the tool's turn in degrees, from
     /// where the move starts (the daemon takes that as where the order before it is planned to
     /// end, or where the robot is when none is queued or running).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub by: Option<Vec<f64>>,
     /// A joint-space move: every joint's target in the joints' order, degrees or mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub joints: Option<Vec<f64>>,
     /// A taught position's name: a straight line to its pose.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub position: Option<String>,
-    /// Speed along the path, mm/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub speed_mm_s: Option<f64>,
-    /// Acceleration time, e.g. `"200ms"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub accel_time: Option<String>,
-    /// `"constant-period"` or `"bounded-error"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub method: Option<String>,
-    /// Interpolation period, e.g. `"50ms"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub period: Option<String>,
-    /// Path tolerance of a bounded-error move, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tolerance_mm: Option<f64>,
-    /// The ramps' shape: `"trapezoid"` or `"s-curve"` (jerk-limited; its jerk from
-    /// `jerk_mm_s3` or the robot's).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub profile: Option<String>,
-    /// The path's jerk of an S-curve, mm/s^3.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub jerk_mm_s3: Option<f64>,
+    /// The motion keys (`speed_mm_s`, ..., `jerk_mm_s3`), at the order's top level.
+    #[serde(flatten)]
+    pub motion: OrderMotion,
     /// An interlock the PLC enforces: input bits or signal names joined by `&`, each optionally
     /// negated (`"press_open & !press_moving"`); the move starts only while it holds and is
     /// held (stopped) in the first scan it stops holding.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for MoveOrder {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        motion::read_table(d)
+    }
+}
+
+impl motion::Table for MoveOrder {
+    const NAME: &'static str = "MoveOrder";
+    const KEYS: &'static [&'static str] =
+        &motion::keys::<12>(&["to", "by", "joints", "position"], &["permit"]);
+
+    fn read<'de, A: MapAccess<'de>>(&mut self, key: &str, map: &mut A) -> Result<(), A::Error> {
+        match key {
+            "to" => self.to = map.next_value()?,
+            "by" => self.by = map.next_value()?,
+            "joints" => self.joints = map.next_value()?,
+            "position" => self.position = map.next_value()?,
+            "permit" => self.permit = map.next_value()?,
+            motion => self.motion.read(motion, map)?,
+        }
+        Ok(())
+    }
 }
 
 /// A path to run, as the API takes it (`POST /v1/robots/{name}/paths`): the path document
 /// (the path file's keys, as JSON: `start`, `path_accel`, `element`) and the motion, as for a
 /// move.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct PathOrder {
     /// The path document.
     pub path: serde_json::Value,
-    /// Speed along the path, mm/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub speed_mm_s: Option<f64>,
-    /// Acceleration time, e.g. `"200ms"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub accel_time: Option<String>,
-    /// `"constant-period"` or `"bounded-error"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub method: Option<String>,
-    /// Interpolation period, e.g. `"50ms"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub period: Option<String>,
-    /// Path tolerance of a bounded-error path, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tolerance_mm: Option<f64>,
-    /// The ramps' shape (see [`MoveOrder::profile`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub profile: Option<String>,
-    /// The path's jerk of an S-curve, mm/s^3.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub jerk_mm_s3: Option<f64>,
+    /// The motion keys, as for a move.
+    #[serde(flatten)]
+    pub motion: OrderMotion,
     /// An interlock the PLC enforces on every start of the path (see [`MoveOrder::permit`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub permit: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for PathOrder {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        motion::read_table(d)
+    }
+}
+
+impl motion::Table for PathOrder {
+    const NAME: &'static str = "PathOrder";
+    const KEYS: &'static [&'static str] = &motion::keys::<9>(&["path"], &["permit"]);
+    const REQUIRED: Option<&'static str> = Some("path");
+
+    fn read<'de, A: MapAccess<'de>>(&mut self, key: &str, map: &mut A) -> Result<(), A::Error> {
+        match key {
+            "path" => self.path = map.next_value()?,
+            "permit" => self.permit = map.next_value()?,
+            motion => self.motion.read(motion, map)?,
+        }
+        Ok(())
+    }
 }
 
 impl PathOrder {
     /// The motion the order asks for, the robot's `defaults` filling the gaps, within `limits`.
     pub fn motion(&self, defaults: Motion, limits: &OrderLimits) -> Result<Motion, OrderError> {
-        self.as_move(None).motion(defaults, *limits)
+        self.motion.check(defaults, *limits)
     }
 
     /// Checks the order's motion fields against `limits` and reads its document (at most
@@ -131,7 +142,7 @@ impl PathOrder {
         robot: &Robot,
         limits: &OrderLimits,
     ) -> Result<(Motion, PathDoc), OrderError> {
-        let motion = self.as_move(None).motion(robot.motion, *limits)?;
+        let motion = self.motion.check(robot.motion, *limits)?;
         let doc = PathDoc::from_json(self.path.clone())
             .map_err(|e| path_refused("(the document)", e.to_string()))?;
         let max = MAX_PATH_ELEMENTS;
@@ -182,20 +193,9 @@ impl PathOrder {
     /// order's motion.
     #[must_use]
     pub fn section_report(&self, end: &Pose) -> MoveOrder {
-        self.as_move(Some(end))
-    }
-
-    /// A move order with this order's motion fields, to `to` if given.
-    fn as_move(&self, to: Option<&Pose>) -> MoveOrder {
         MoveOrder {
-            to: to.map(|p| p.to_mm_deg().to_vec()),
-            speed_mm_s: self.speed_mm_s,
-            accel_time: self.accel_time.clone(),
-            method: self.method.clone(),
-            period: self.period.clone(),
-            tolerance_mm: self.tolerance_mm,
-            profile: self.profile.clone(),
-            jerk_mm_s3: self.jerk_mm_s3,
+            to: Some(end.to_mm_deg().to_vec()),
+            motion: self.motion.clone(),
             permit: self.permit.clone(),
             ..MoveOrder::default()
         }
@@ -587,7 +587,7 @@ impl MoveOrder {
     ) -> Result<CheckedOrder, OrderError> {
         Ok(CheckedOrder {
             target: self.target(taught)?,
-            motion: self.motion(defaults, *limits)?,
+            motion: self.motion.check(defaults, *limits)?,
             permit: Permit::NONE,
             accepted: None,
         })
@@ -639,112 +639,6 @@ impl MoveOrder {
                 format!("an order takes one of to, by, joints or position; it also has {first}"),
             )),
         }
-    }
-
-    fn motion(&self, defaults: Motion, limits: OrderLimits) -> Result<Motion, OrderError> {
-        let mut m = defaults;
-        if let Some(v) = self.speed_mm_s {
-            m.speed_mm_s = positive("speed_mm_s", v)?;
-            if v > limits.max_speed_mm_s {
-                return Err(refuse(
-                    "speed_mm_s",
-                    &number(v),
-                    format!(
-                        "must be at most {} mm/s, the robot's max_speed_mm_s",
-                        limits.max_speed_mm_s
-                    ),
-                ));
-            }
-        }
-        if let Some(t) = &self.accel_time {
-            m.accel_s = accel_time(t)?;
-        }
-        if let Some(t) = &self.period {
-            m.period_s = period(t)?;
-        }
-        m.method = self.method(defaults.method)?;
-        m.ramp = self.ramp(defaults.ramp)?;
-        // The speed override: every order's speed (asked, or the robot's default) is planned
-        // at its share, once checked against the robot's limit as asked.
-        m.speed_mm_s *= limits.speed_override.clamp(0.01, 1.0);
-        Ok(m)
-    }
-
-    /// The method asked (`method`, `tolerance_mm`), the robot's `default` filling the gaps.
-    fn method(&self, default: Method) -> Result<Method, OrderError> {
-        let tolerance = self
-            .tolerance_mm
-            .map(|t| {
-                positive("tolerance_mm", t)
-                    .and_then(|t| within("tolerance_mm", t, &TOLERANCE_RANGE_MM, "mm"))
-            })
-            .transpose()?;
-        Ok(match (self.method.as_deref(), tolerance, default) {
-            (Some("constant-period"), None, _) => Method::ConstantPeriod,
-            (Some("bounded-error") | None, Some(tolerance_mm), _)
-            | (Some("bounded-error"), None, Method::BoundedError { tolerance_mm }) => {
-                Method::BoundedError { tolerance_mm }
-            }
-            (Some("bounded-error"), None, Method::ConstantPeriod) => {
-                return Err(refuse(
-                    "tolerance_mm",
-                    &"null",
-                    "method bounded-error needs a tolerance above 0 mm",
-                ));
-            }
-            (Some("constant-period"), Some(t), _) => {
-                return Err(refuse(
-                    "tolerance_mm",
-                    &t,
-                    "only method bounded-error takes a tolerance",
-                ));
-            }
-            (Some(other), _, _) => {
-                return Err(refuse(
-                    "method",
-                    &format!("{other:?}"),
-                    "must be \"constant-period\" or \"bounded-error\"",
-                ));
-            }
-            (None, None, method) => method,
-        })
-    }
-
-    /// The ramps' shape asked (`profile`, `jerk_mm_s3`), the robot's filling the gaps.
-    fn ramp(&self, default: Ramp) -> Result<Ramp, OrderError> {
-        let jerk = self
-            .jerk_mm_s3
-            .map(|j| positive("jerk_mm_s3", j))
-            .transpose()?;
-        Ok(match (self.profile.as_deref(), jerk, default) {
-            (None, None, ramp) => ramp,
-            (Some("trapezoid"), None, _) => Ramp::Trapezoid,
-            (Some("s-curve") | None, Some(jerk_mm_s3), Ramp::SCurve { .. })
-            | (Some("s-curve"), Some(jerk_mm_s3), Ramp::Trapezoid)
-            | (Some("s-curve"), None, Ramp::SCurve { jerk_mm_s3 }) => Ramp::SCurve { jerk_mm_s3 },
-            (Some("s-curve"), None, Ramp::Trapezoid) => {
-                return Err(refuse(
-                    "jerk_mm_s3",
-                    &"null",
-                    "profile \"s-curve\" needs the path's jerk (the robot's profile is the \
-                     trapezoid), e.g. 20000 mm/s^3",
-                ));
-            }
-            (Some("trapezoid") | None, Some(j), _) => {
-                return Err(refuse(
-                    "jerk_mm_s3",
-                    &number(j),
-                    "only profile \"s-curve\" takes a jerk",
-                ));
-            }
-            (Some(other), _, _) => {
-                return Err(refuse(
-                    "profile",
-                    &format!("{other:?}"),
-                    "must be \"trapezoid\" or \"s-curve\"",
-                ));
-            }
-        })
     }
 }
 
@@ -839,40 +733,10 @@ fn taught_target(name: &str, taught: &BTreeMap<String, Position>) -> Result<Targ
     })
 }
 
-/// The acceleration time asked, at most [`MAX_ACCEL_TIME_S`], s.
-fn accel_time(t: &str) -> Result<f64, OrderError> {
-    let accel_s = duration("accel_time", t, true)?;
-    if accel_s > MAX_ACCEL_TIME_S {
-        return Err(refuse(
-            "accel_time",
-            &format!("{t:?}"),
-            format!("must be at most {MAX_ACCEL_TIME_S} s"),
-        ));
-    }
-    Ok(accel_s)
-}
-
-/// The interpolation period asked, within [`PERIOD_RANGE_S`], s.
-fn period(t: &str) -> Result<f64, OrderError> {
-    let period_s = duration("period", t, false)?;
-    if !PERIOD_RANGE_S.contains(&period_s) {
-        return Err(refuse(
-            "period",
-            &format!("{t:?}"),
-            format!(
-                "must be within {} ms to {} s",
-                PERIOD_RANGE_S.start() * 1e3,
-                PERIOD_RANGE_S.end()
-            ),
-        ));
-    }
-    Ok(period_s)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::robot::seed_robot;
+    use crate::robot::{Method, Ramp, seed_robot};
 
     fn order(to: Vec<f64>) -> MoveOrder {
         MoveOrder {
@@ -1055,7 +919,10 @@ mod tests {
             "to[1] (y) = NaN: must be a finite number"
         );
         let slow = MoveOrder {
-            speed_mm_s: Some(0.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(0.0),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0])
         };
         assert_eq!(
@@ -1063,12 +930,18 @@ mod tests {
             "speed_mm_s = 0: must be a number above 0"
         );
         let bad = MoveOrder {
-            period: Some("0ms".into()),
+            motion: OrderMotion {
+                period: Some("0ms".into()),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0])
         };
         assert_eq!(bad.check(m).unwrap_err().field, "period");
         let weird = MoveOrder {
-            method: Some("spline".into()),
+            motion: OrderMotion {
+                method: Some("spline".into()),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0])
         };
         assert!(
@@ -1089,8 +962,11 @@ mod tests {
         };
         let base = order(vec![1.0, 2.0, 3.0]);
         let with = |profile: Option<&str>, jerk: Option<f64>| MoveOrder {
-            profile: profile.map(str::to_owned),
-            jerk_mm_s3: jerk,
+            motion: OrderMotion {
+                profile: profile.map(str::to_owned),
+                jerk_mm_s3: jerk,
+                ..OrderMotion::default()
+            },
             ..base.clone()
         };
         let ramp = |o: MoveOrder, m: Motion| o.check(m).map(|c| c.motion.ramp);
@@ -1143,7 +1019,10 @@ mod tests {
     fn speed_1e308_is_refused_naming_the_robots_max_speed() {
         let m = seed_robot().motion;
         let fast = |v: f64| MoveOrder {
-            speed_mm_s: Some(v),
+            motion: OrderMotion {
+                speed_mm_s: Some(v),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0])
         };
         let limits = OrderLimits {
@@ -1169,7 +1048,10 @@ mod tests {
         }
         .overridden(25);
         let asked = MoveOrder {
-            speed_mm_s: Some(800.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(800.0),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0])
         };
         let checked = asked.check_with(m, &limits, &BTreeMap::new()).unwrap();
@@ -1186,49 +1068,51 @@ mod tests {
     #[test]
     fn period_accel_time_and_tolerance_are_bounded_naming_the_limit() {
         let m = seed_robot().motion;
-        let with = |o: MoveOrder| o.check(m).unwrap_err().to_string();
-        let base = order(vec![1.0, 2.0, 3.0]);
-        assert_eq!(
-            with(MoveOrder {
-                period: Some("2s".into()),
-                ..base.clone()
-            }),
-            "period = \"2s\": must be within 1 ms to 1 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                period: Some("100us".into()),
-                ..base.clone()
-            }),
-            "period = \"100us\": must be within 1 ms to 1 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                accel_time: Some("20s".into()),
-                ..base.clone()
-            }),
-            "accel_time = \"20s\": must be at most 10 s"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                tolerance_mm: Some(50.0),
-                ..base.clone()
-            }),
-            "tolerance_mm = 50: must be within 0.001 to 10 mm"
-        );
-        assert_eq!(
-            with(MoveOrder {
-                tolerance_mm: Some(1e-6),
-                ..base
-            }),
-            "tolerance_mm = 1e-6: must be within 0.001 to 10 mm"
-        );
+        let refused =
+            |o: OrderMotion| (o.check(m, OrderLimits::default()).unwrap_err()).to_string();
+        let none = OrderMotion::default;
+        let period = |t: &str| OrderMotion {
+            period: Some(t.into()),
+            ..none()
+        };
+        let tolerance = |t| OrderMotion {
+            tolerance_mm: Some(t),
+            ..none()
+        };
+        let cases = [
+            (period("2s"), "period = \"2s\": must be within 1 ms to 1 s"),
+            (
+                period("100us"),
+                "period = \"100us\": must be within 1 ms to 1 s",
+            ),
+            (
+                tolerance(50.0),
+                "tolerance_mm = 50: must be within 0.001 to 10 mm",
+            ),
+            (
+                tolerance(1e-6),
+                "tolerance_mm = 1e-6: must be within 0.001 to 10 mm",
+            ),
+            (
+                OrderMotion {
+                    accel_time: Some("20s".into()),
+                    ..none()
+                },
+                "accel_time = \"20s\": must be at most 10 s",
+            ),
+        ];
+        for (motion, words) in cases {
+            assert_eq!(refused(motion), words);
+        }
     }
 
     #[test]
     fn tolerance_makes_a_bounded_error_move() {
         let o = MoveOrder {
-            tolerance_mm: Some(0.05),
+            motion: OrderMotion {
+                tolerance_mm: Some(0.05),
+                ..OrderMotion::default()
+            },
             ..order(vec![1.0, 2.0, 3.0, 10.0])
         };
         let c = o.check(seed_robot().motion).unwrap();

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::contract::{PlcMode, State};
-use crate::order::MoveOrder;
+use crate::order::{MoveOrder, OrderMotion};
 use serde::Serialize;
 
 const STATE_NEW: &str = r#"{"name":"press-loader","link":{"connected":false,"error":null,"reconnects":0},"phase":"connecting","homed":false,"refuses":null,"plc_mode":null,"heartbeat_age_ms":null,"state":null,"fault":null,"counts":null,"pose":null,"current_move":null,"queued":[],"gateway":{"requests":0,"failed":0,"exchanges":0,"longest_exchange_ms":0,"longest_poll_delay_ms":0},"mode":"local"}"#;
@@ -63,8 +63,11 @@ fn full_state() -> RobotState {
 fn full_report() -> MoveReport {
     let order = MoveOrder {
         to: Some(vec![1.0, 2.0, 3.0]),
-        speed_mm_s: Some(120.0),
-        method: Some("bounded-error".into()),
+        motion: OrderMotion {
+            speed_mm_s: Some(120.0),
+            method: Some("bounded-error".into()),
+            ..OrderMotion::default()
+        },
         ..MoveOrder::default()
     };
     let piece = |kind, element, waypoint, begins, ends| PieceReport {

@@ -48,6 +48,7 @@ use linterpd::kinematics::JOINTS;
 use linterpd::mock::{
     Anomaly, MewtocolServer, MewtocolServerOptions, MockConfig, MockPlc, SharedMock, StartOutcome,
 };
+use linterpd::order::OrderMotion;
 use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{AnyPlc, BoxedLink, MewtocolClient, PlcMode};
 use linterpd::robot::seed_robot;
@@ -459,11 +460,17 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             // The first runs about 1.4 s at 40 mm/s; the second, sampled every 20 ms, takes
             // longer than that to upload at 19200 baud: the first is watched through it.
             let slow = MoveOrder {
-                speed_mm_s: Some(40.0),
+                motion: OrderMotion {
+                    speed_mm_s: Some(40.0),
+                    ..OrderMotion::default()
+                },
                 ..order(B)
             };
             let fine = MoveOrder {
-                period: Some("20ms".into()),
+                motion: OrderMotion {
+                    period: Some("20ms".into()),
+                    ..OrderMotion::default()
+                },
                 ..order(C)
             };
             ids.extend(h.submit(slow).await.ok());
@@ -511,7 +518,10 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             tokio::time::sleep(Duration::from_millis(150)).await;
             let before = h.state().queued;
             let fast = MoveOrder {
-                speed_mm_s: Some(1e308),
+                motion: OrderMotion {
+                    speed_mm_s: Some(1e308),
+                    ..OrderMotion::default()
+                },
                 ..order(C)
             };
             v.check(h.submit(fast).await.is_err(), || {

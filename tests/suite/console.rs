@@ -13,6 +13,7 @@ use linterpd::console::patch;
 use linterpd::daemon::console::{LiveHub, SnapshotSetup};
 use linterpd::daemon::{MoveOrder, RobotPhase};
 use linterpd::demo::console::ConsoleRig;
+use linterpd::order::OrderMotion;
 use serde_json::{Value, json};
 
 use crate::common::console::{Browser, Ws, rig};
@@ -177,7 +178,10 @@ async fn every_subscriber_sees_the_moves_phases_and_pose_at_each_status_read_for
         .handle
         .submit(MoveOrder {
             by: Some(vec![0.0, 0.0, 60.0]),
-            speed_mm_s: Some(60.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(60.0),
+                ..OrderMotion::default()
+            },
             ..MoveOrder::default()
         })
         .await

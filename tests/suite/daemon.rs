@@ -11,6 +11,7 @@ use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, St
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
 };
+use linterpd::order::OrderMotion;
 use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{
     AnyPlc, BoxedLink, MewtocolClient, ModbusClient, ModbusFraming, ModbusOptions, PlcMode,
@@ -511,15 +512,21 @@ async fn a_running_move_stays_watched_while_the_next_one_uploads() {
     wait_connected(&h).await;
     let a = h
         .submit(MoveOrder {
-            speed_mm_s: Some(120.0),
-            tolerance_mm: Some(0.05),
+            motion: OrderMotion {
+                speed_mm_s: Some(120.0),
+                tolerance_mm: Some(0.05),
+                ..OrderMotion::default()
+            },
             ..order(P2)
         })
         .await
         .unwrap();
     let b = h
         .submit(MoveOrder {
-            period: Some("20ms".into()),
+            motion: OrderMotion {
+                period: Some("20ms".into()),
+                ..OrderMotion::default()
+            },
             ..order(P1)
         })
         .await
@@ -811,8 +818,8 @@ async fn an_s_curve_order_on_a_robot_with_drive_limits_runs_within_them_on_the_p
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
     let mut asked = order(P2);
-    asked.profile = Some("s-curve".to_owned());
-    asked.jerk_mm_s3 = Some(20_000.0);
+    asked.motion.profile = Some("s-curve".to_owned());
+    asked.motion.jerk_mm_s3 = Some(20_000.0);
     let id = h.submit(asked).await.unwrap();
     let there = h.wait(id, LIMIT).await.unwrap();
     assert_on_target(&there);
@@ -839,7 +846,7 @@ async fn a_robot_with_a_joint_s_max_jerk_runs_its_s_curve_within_it_and_refuses_
     }
     // A trapezoid asked for: refused naming d3, and nothing moves.
     let mut trapezoid = order(P2);
-    trapezoid.profile = Some("trapezoid".to_owned());
+    trapezoid.motion.profile = Some("trapezoid".to_owned());
     let refused = h.submit(trapezoid).await.unwrap_err();
     assert!(
         refused
@@ -879,8 +886,8 @@ async fn an_order_asking_for_an_s_curve_runs_jerk_limited_ramps_on_the_plc() {
             tokio::time::sleep(Duration::from_millis(5)).await;
         }
         let mut asked = order(P2);
-        asked.profile = profile.map(str::to_owned);
-        asked.jerk_mm_s3 = profile.map(|_| 5000.0);
+        asked.motion.profile = profile.map(str::to_owned);
+        asked.motion.jerk_mm_s3 = profile.map(|_| 5000.0);
         let id = h.submit(asked).await.unwrap();
         let there = h.wait(id, LIMIT).await.unwrap();
         assert_on_target(&there);
@@ -917,7 +924,10 @@ async fn a_move_with_no_motion_of_its_own_has_no_seq_bank_or_upload() {
     assert!(shared.with(|m| m.starts().is_empty()));
     // Behind a running move, one to where that one ends waits queued, and ends with it.
     let out = MoveOrder {
-        speed_mm_s: Some(100.0),
+        motion: OrderMotion {
+            speed_mm_s: Some(100.0),
+            ..OrderMotion::default()
+        },
         ..order(P2)
     };
     let lead = h.submit(out).await.unwrap();

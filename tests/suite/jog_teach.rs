@@ -10,6 +10,7 @@ use hyper::StatusCode;
 use linterpd::daemon::{MoveOrder, MoveReport, RobotHandle, Stage, TaughtPositions};
 use linterpd::geometry::Pose;
 use linterpd::kinematics::{JOINTS, Kinematics};
+use linterpd::order::OrderMotion;
 use linterpd::robot::seed_robot;
 use serde_json::json;
 
@@ -57,7 +58,10 @@ async fn a_jog_ends_on_its_offset_and_a_queued_jog_is_relative_to_the_one_before
         .handle
         .submit(MoveOrder {
             by: Some(vec![0.0, 30.0, -10.0, 20.0]),
-            speed_mm_s: Some(60.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(60.0),
+                ..OrderMotion::default()
+            },
             ..MoveOrder::default()
         })
         .await
@@ -66,7 +70,10 @@ async fn a_jog_ends_on_its_offset_and_a_queued_jog_is_relative_to_the_one_before
         .handle
         .submit(MoveOrder {
             by: Some(vec![0.0, -30.0, 10.0, -20.0]),
-            speed_mm_s: Some(60.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(60.0),
+                ..OrderMotion::default()
+            },
             ..MoveOrder::default()
         })
         .await

@@ -376,7 +376,10 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
     let over = h
         .submit(linterpd::daemon::MoveOrder {
             to: Some(P2.to_vec()),
-            tolerance_mm: Some(0.05),
+            motion: linterpd::order::OrderMotion {
+                tolerance_mm: Some(0.05),
+                ..linterpd::order::OrderMotion::default()
+            },
             ..linterpd::daemon::MoveOrder::default()
         })
         .await
@@ -384,7 +387,10 @@ async fn a_section_waiting_for_a_running_move_to_end_is_not_failed_for_waiting()
     let back = h
         .submit(linterpd::daemon::MoveOrder {
             to: Some(P1.to_vec()),
-            tolerance_mm: Some(0.05),
+            motion: linterpd::order::OrderMotion {
+                tolerance_mm: Some(0.05),
+                ..linterpd::order::OrderMotion::default()
+            },
             ..linterpd::daemon::MoveOrder::default()
         })
         .await
@@ -785,6 +791,7 @@ async fn a_path_of_1000_stopped_elements_is_refused_whole_naming_the_limit() {
 #[tokio::test]
 async fn a_line_too_long_for_one_start_runs_in_the_parts_plan_shows_to_its_target() {
     use linterpd::daemon::MoveOrder;
+    use linterpd::order::OrderMotion;
     use linterpd::plan::{MovePlan, MoveRequest, Origin, plan_line};
     let shared = mock_at_seed_start("");
     let dir = TempDir::new("paths-long-line");
@@ -794,8 +801,11 @@ async fn a_line_too_long_for_one_start_runs_in_the_parts_plan_shows_to_its_targe
     let a_rad = robot.pose_of(&from).a_rad;
     let order = MoveOrder {
         to: Some(P2.to_vec()),
-        speed_mm_s: Some(80.0),
-        period: Some("2ms".to_owned()),
+        motion: OrderMotion {
+            speed_mm_s: Some(80.0),
+            period: Some("2ms".to_owned()),
+            ..OrderMotion::default()
+        },
         ..MoveOrder::default()
     };
     let req = MoveRequest {

@@ -13,6 +13,7 @@ use linterpd::config::CellSettings;
 use linterpd::contract::{Fault, State};
 use linterpd::daemon::{Daemon, MoveOrder, RobotHandle, Stage, SubmitError};
 use linterpd::mock::SharedMock;
+use linterpd::order::OrderMotion;
 
 const LIMIT: Duration = Duration::from_secs(15);
 
@@ -162,7 +163,10 @@ async fn a_stopped_or_held_moves_report_says_where_the_plc_stopped_it() {
         taking_moves(&h).await;
         shared.with(|m| m.set_input(5, true).unwrap());
         let order = MoveOrder {
-            speed_mm_s: Some(60.0),
+            motion: OrderMotion {
+                speed_mm_s: Some(60.0),
+                ..OrderMotion::default()
+            },
             ..to(P2, "press_open")
         };
         let id = h.submit(order).await.unwrap();

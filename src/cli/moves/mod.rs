@@ -36,6 +36,7 @@ use super::client::{Client, Received};
 use super::interrupt::Interrupt;
 use super::{DaemonArgs, Failure};
 use crate::daemon::{MoveAccepted, MoveOrder, MoveReport, Stage};
+use crate::order::OrderMotion;
 use crate::robot::Ramp;
 
 /// Arguments of `linterpd move`.
@@ -60,27 +61,55 @@ pub struct MoveArgs {
     /// Speed, acceleration, method, period and tolerance.
     #[command(flatten)]
     pub motion: MotionFlags,
-    /// The longest to wait for the move's end, e.g. `30s` (default: the daemon's deadline for
-    /// the move, its planned duration and upload plus margins, and 2 s more). Running out
-    /// exits 3 saying what the move waits for; the move is not stopped.
-    #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
-    pub timeout: Option<String>,
-    /// Return once the move is accepted, printing its id.
-    #[arg(long)]
-    pub no_wait: bool,
-    /// Ctrl-C stops following and leaves the move running (without it, Ctrl-C stops the robot).
-    #[arg(long, conflicts_with = "no_wait")]
-    pub detach: bool,
+    /// How long to follow it, and what Ctrl-C does.
+    #[command(flatten)]
+    pub follow: FollowFlags,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
 }
 
+/// The following flags `move` and `run` share.
+#[derive(Debug, Args)]
+pub struct FollowFlags {
+    /// The longest to wait for the move's end (a path's: each section's), e.g. `30s` (default:
+    /// the daemon's deadline for the move, its planned duration and upload plus margins, and
+    /// 2 s more). Running out exits 3 saying what the move waits for; the move is not stopped.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
+    pub timeout: Option<String>,
+    /// Return once the move (the path) is accepted, printing its id (its sections' ids).
+    #[arg(long)]
+    pub no_wait: bool,
+    /// Ctrl-C stops following and leaves the move (the path) running (without it, Ctrl-C stops
+    /// the robot).
+    #[arg(long, conflicts_with = "no_wait")]
+    pub detach: bool,
+}
+
+impl FollowFlags {
+    /// `--timeout`, if given.
+    fn timeout(&self) -> Result<Option<std::time::Duration>, Failure> {
+        (self.timeout.as_deref())
+            .map(|t| parse_duration(t).context("--timeout"))
+            .transpose()
+            .map_err(Failure::BadInput)
+    }
+
+    /// Ctrl-C caught (within the runtime), unless `--no-wait`.
+    fn interrupt(&self) -> Result<Option<Interrupt>, Failure> {
+        (!self.no_wait)
+            .then(|| Interrupt::catch(self.detach))
+            .transpose()
+    }
+}
+
 /// The API's move order for the arguments; every value is checked here first, naming its flag.
 fn order(args: &MoveArgs) -> anyhow::Result<MoveOrder> {
-    let mut order = target(args)?;
-    args.motion.add_to(&mut order)?;
-    Ok(order)
+    Ok(MoveOrder {
+        motion: args.motion.order_motion()?,
+        permit: args.motion.permit.clone(),
+        ..target(args)?
+    })
 }
 
 /// The motion flags `move` and `run` share.
@@ -115,28 +144,30 @@ pub struct MotionFlags {
 }
 
 impl MotionFlags {
-    /// Adds the flags given to a move order, each checked here first, naming its flag.
-    fn add_to(&self, order: &mut MoveOrder) -> anyhow::Result<()> {
-        if let Some(text) = &self.speed {
-            order.speed_mm_s = Some(parse_speed_mm_s(text).context("--speed")?);
-        }
-        order.accel_time = checked_duration(self.accel_time.as_ref(), "--accel-time")?;
-        order.period = checked_duration(self.period.as_ref(), "--period")?;
-        order.method = self.method.map(|m| m.name().to_owned());
-        if let Some(text) = &self.tolerance {
-            order.tolerance_mm = Some(parse_length_mm(text).context("--tolerance")?);
-        }
-        if let Some(text) = &self.profile {
-            match parse_ramp(text).context("--profile")? {
-                Ramp::Trapezoid => order.profile = Some("trapezoid".to_owned()),
-                Ramp::SCurve { jerk_mm_s3 } => {
-                    order.profile = Some("s-curve".to_owned());
-                    order.jerk_mm_s3 = Some(jerk_mm_s3);
-                }
-            }
-        }
-        order.permit.clone_from(&self.permit);
-        Ok(())
+    /// The motion the flags ask for, each checked here first, naming its flag (the permit
+    /// is not a motion key: the caller takes it as it is).
+    fn order_motion(&self) -> anyhow::Result<OrderMotion> {
+        let speed_mm_s = self.speed.as_deref().map(parse_speed_mm_s);
+        let speed_mm_s = speed_mm_s.transpose().context("--speed")?;
+        let accel_time = checked_duration(self.accel_time.as_ref(), "--accel-time")?;
+        let period = checked_duration(self.period.as_ref(), "--period")?;
+        let tolerance_mm = self.tolerance.as_deref().map(parse_length_mm);
+        let tolerance_mm = tolerance_mm.transpose().context("--tolerance")?;
+        let ramp = self.profile.as_deref().map(parse_ramp);
+        let (profile, jerk_mm_s3) = match ramp.transpose().context("--profile")? {
+            None => (None, None),
+            Some(Ramp::Trapezoid) => (Some("trapezoid"), None),
+            Some(Ramp::SCurve { jerk_mm_s3 }) => (Some("s-curve"), Some(jerk_mm_s3)),
+        };
+        Ok(OrderMotion {
+            speed_mm_s,
+            accel_time,
+            method: self.method.map(|m| m.name().to_owned()),
+            period,
+            tolerance_mm,
+            profile: profile.map(str::to_owned),
+            jerk_mm_s3,
+        })
     }
 }
 
@@ -185,11 +216,9 @@ fn target(args: &MoveArgs) -> anyhow::Result<MoveOrder> {
 /// Runs `linterpd move`.
 pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let order = order(args).map_err(Failure::BadInput)?;
-    let timeout = timeout(args.timeout.as_deref())?;
+    let timeout = args.follow.timeout()?;
     args.daemon.block_on(async {
-        let mut interrupt = (!args.no_wait)
-            .then(|| Interrupt::catch(args.detach))
-            .transpose()?;
+        let mut interrupt = args.follow.interrupt()?;
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "moves", &order).await?;
         let accepted: Received<MoveAccepted> =
@@ -201,40 +230,11 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
             [] => vec![id],
             ids => ids.to_vec(),
         };
-        if args.no_wait {
-            let accepted_line = if ids.len() > 1 {
-                let list: Vec<String> = ids.iter().map(u64::to_string).collect();
-                format!(
-                    "move {id} accepted: a line cut into {} starts, moves {}",
-                    ids.len(),
-                    list.join(", ")
-                )
-            } else {
-                format!("move {id} accepted")
-            };
-            return super::print(out, args.daemon.json, &accepted.json, &accepted_line);
+        if args.follow.no_wait {
+            let line = accepted_line(id, &ids);
+            return super::print(out, args.daemon.json, &accepted.json, &line);
         }
-        let work = async {
-            let mut outcome = Ok(());
-            for (n, &id) in ids.iter().enumerate() {
-                let last = follow::to_end(&client, &robot, id, timeout, args.daemon.json).await?;
-                let line = if ids.len() > 1 {
-                    format!("start {}/{}: {}", n + 1, ids.len(), summary(&last.value))
-                } else {
-                    summary(&last.value)
-                };
-                // The JSON is the last start's report; a start before it is summed up in text
-                // only.
-                let printed = if args.daemon.json && n + 1 < ids.len() {
-                    Ok(())
-                } else {
-                    super::print(out, args.daemon.json, &last.json, &line)
-                };
-                // The verdict counts even when the summary cannot be written (a closed pipe).
-                outcome = outcome.and(verdict(&last.value)).and(printed);
-            }
-            outcome
-        };
+        let work = follow_starts(&client, &robot, &ids, timeout, args.daemon.json, out);
         let running = format!("move {id} goes on (`linterpd stop` stops it)");
         let stop = async || stop_robot(&client, &robot, &format!("move {id}")).await;
         match &mut interrupt {
@@ -244,19 +244,56 @@ pub fn run(args: &MoveArgs, out: &mut dyn std::io::Write) -> Result<(), Failure>
     })
 }
 
+/// What `--no-wait` prints of move `id` accepted as the starts `ids`.
+fn accepted_line(id: u64, ids: &[u64]) -> String {
+    if ids.len() > 1 {
+        let list: Vec<String> = ids.iter().map(u64::to_string).collect();
+        format!(
+            "move {id} accepted: a line cut into {} starts, moves {}",
+            ids.len(),
+            list.join(", ")
+        )
+    } else {
+        format!("move {id} accepted")
+    }
+}
+
+/// Follows a move's starts `ids` to their ends, a summary line each (the JSON: the last start's
+/// report); done, or exit 3 with how the first one not done ended.
+async fn follow_starts(
+    client: &Client,
+    robot: &str,
+    ids: &[u64],
+    timeout: Option<std::time::Duration>,
+    json: bool,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
+    let mut outcome = Ok(());
+    for (n, &id) in ids.iter().enumerate() {
+        let last = follow::to_end(client, robot, id, timeout, json).await?;
+        let line = if ids.len() > 1 {
+            format!("start {}/{}: {}", n + 1, ids.len(), summary(&last.value))
+        } else {
+            summary(&last.value)
+        };
+        // A start before the last is summed up in text only.
+        let printed = if json && n + 1 < ids.len() {
+            Ok(())
+        } else {
+            super::print(out, json, &last.json, &line)
+        };
+        // The verdict counts even when the summary cannot be written (a closed pipe).
+        outcome = outcome.and(verdict(&last.value)).and(printed);
+    }
+    outcome
+}
+
 /// Stops the robot on Ctrl-C (its queued moves are cancelled with it); what was stopped.
 async fn stop_robot(client: &Client, robot: &str, what: &str) -> Result<String, Failure> {
     client
         .expect(Method::POST, &format!("/v1/robots/{robot}/stop"), None)
         .await?;
     Ok(format!("{robot} stopped, {what} with it"))
-}
-
-/// `--timeout`, if given.
-fn timeout(text: Option<&str>) -> Result<Option<std::time::Duration>, Failure> {
-    text.map(|t| parse_duration(t).context("--timeout"))
-        .transpose()
-        .map_err(Failure::BadInput)
 }
 
 /// Posts `order` to the robot's `endpoint` (`moves`, `paths`); the robot's name and the 202 body.
@@ -360,7 +397,7 @@ mod tests {
                 "method": "bounded-error", "tolerance_mm": 0.05, "accel_time": "200ms"})
         );
         let old = move_args(&["--to", "1,2,3", "--tolerance-mm", "0.1"]);
-        assert_eq!(order(&old).unwrap().tolerance_mm, Some(0.1));
+        assert_eq!(order(&old).unwrap().motion.tolerance_mm, Some(0.1));
     }
 
     #[test]

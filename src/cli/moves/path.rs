@@ -17,11 +17,10 @@ use clap::Args;
 use serde_json::Value;
 
 use super::super::client::{Client, Received};
-use super::super::interrupt::Interrupt;
 use super::super::{DaemonArgs, Failure};
-use super::{MotionFlags, bars, follow, post, stop_robot, summary, timeout, verdict};
+use super::{FollowFlags, MotionFlags, bars, follow, post, stop_robot, summary, verdict};
 use crate::config::PathDoc;
-use crate::daemon::{MoveOrder, MoveReport, PathAccepted, PathOrder};
+use crate::daemon::{MoveReport, PathAccepted, PathOrder};
 
 /// Arguments of `linterpd run`.
 #[derive(Debug, Args)]
@@ -36,15 +35,9 @@ pub struct RunArgs {
     /// Speed, acceleration, method, period and tolerance.
     #[command(flatten)]
     pub motion: MotionFlags,
-    /// The longest to wait for each section's end, e.g. `30s` (default: the daemon's deadline).
-    #[arg(long, allow_hyphen_values = true, conflicts_with = "no_wait")]
-    pub timeout: Option<String>,
-    /// Return once the path is accepted, printing its sections' ids.
-    #[arg(long)]
-    pub no_wait: bool,
-    /// Ctrl-C stops following and leaves the path running (without it, Ctrl-C stops the robot).
-    #[arg(long, conflicts_with = "no_wait")]
-    pub detach: bool,
+    /// How long to follow it, and what Ctrl-C does.
+    #[command(flatten)]
+    pub follow: FollowFlags,
     /// The daemon and output options.
     #[command(flatten)]
     pub daemon: DaemonArgs,
@@ -55,35 +48,25 @@ fn order(args: &RunArgs) -> anyhow::Result<PathOrder> {
     let text = crate::config::files::read_regular(&args.file)?;
     PathDoc::from_toml(&text).with_context(|| args.file.display().to_string())?;
     let path: Value = toml::from_str(&text).with_context(|| args.file.display().to_string())?;
-    let mut motion = MoveOrder::default();
-    args.motion.add_to(&mut motion)?;
     Ok(PathOrder {
         path,
-        speed_mm_s: motion.speed_mm_s,
-        accel_time: motion.accel_time,
-        method: motion.method,
-        period: motion.period,
-        tolerance_mm: motion.tolerance_mm,
-        profile: motion.profile,
-        jerk_mm_s3: motion.jerk_mm_s3,
-        permit: motion.permit,
+        motion: args.motion.order_motion()?,
+        permit: args.motion.permit.clone(),
     })
 }
 
 /// Runs `linterpd run`.
 pub fn run(args: &RunArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     let order = order(args).map_err(Failure::BadInput)?;
-    let timeout = timeout(args.timeout.as_deref())?;
+    let timeout = args.follow.timeout()?;
     args.daemon.block_on(async {
-        let mut interrupt = (!args.no_wait)
-            .then(|| Interrupt::catch(args.detach))
-            .transpose()?;
+        let mut interrupt = args.follow.interrupt()?;
         let client = Client::new(&args.daemon.socket);
         let (robot, accepted) = post(&client, args.robot.as_deref(), "paths", &order).await?;
         let accepted: Received<PathAccepted> =
             Received::read(accepted, "a path accepted").map_err(Failure::Runtime)?;
         let ids = &accepted.value.ids;
-        if args.no_wait {
+        if args.follow.no_wait {
             let list: Vec<String> = ids.iter().map(u64::to_string).collect();
             return super::super::print(
                 out,
@@ -154,7 +137,7 @@ fn start_labels(reports: &[MoveReport], starts: usize) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::daemon::SectionReport;
+    use crate::daemon::{MoveOrder, SectionReport};
 
     fn report(number: usize, of: usize) -> MoveReport {
         MoveReport {

@@ -29,12 +29,8 @@ pub(super) async fn interlock<P: Plc>(
     ch: &Channel<'_>,
 ) -> Result<(), Halt> {
     let (c, i) = (ch.c, ch.index());
-    let hz = ch.hz_for(PROBE_PULSES, 8.0 * bench.pace.sample_s());
-    let k = check(
-        "`from` interlock refuses fault 5",
-        c,
-        format!("a start whose from[{c}] is one pulse off the count: {INTERLOCK_CHECKS}"),
-    );
+    let what = format!("a start whose from[{c}] is one pulse off the count: {INTERLOCK_CHECKS}");
+    let (k, hz) = probe(bench, ch, "`from` interlock refuses fault 5", what);
     let counts_now = counts(s, bench, &k).await?;
     let before = bench.status().await.map(|b| b.seq).unwrap_or_default();
     let c0 = i64::from(counts_now[i]);
@@ -53,18 +49,33 @@ pub(super) async fn interlock<P: Plc>(
         .await;
     let saw = format!("count {c0}, from[{c}] {off}: {}", run.still_words(i, c0));
     if !run.refused_still(Fault::NotAtStart, before, i, c0) {
-        let hint = if run.stopped_for.is_some() {
-            "the start ran from counts other than its from: the program must compare every \
-             channel's count with from[c] before starting (fault 5)"
-        } else {
-            "the start was not refused with fault 5"
-        };
-        return s.record(k.fail(saw, hint));
+        return s.record(k.fail(saw, interlock_hint(run.stopped_for.is_some())));
     }
     match clear_after(bench, &k, saw).await {
         Ok(saw) => s.record(k.pass(saw)),
         Err(report) => s.record(report),
     }
+}
+
+/// Why a start one pulse off its `from` was not refused: it `ran`, or it did something else.
+fn interlock_hint(ran: bool) -> &'static str {
+    if ran {
+        "the start ran from counts other than its from: the program must compare every \
+         channel's count with from[c] before starting (fault 5)"
+    } else {
+        "the start was not refused with fault 5"
+    }
+}
+
+/// A probe of [`PROBE_PULSES`] on `ch`: its check (`name`, `what` it checks) and its speed, Hz.
+fn probe<P: Plc>(
+    bench: &Bench<'_, P>,
+    ch: &Channel<'_>,
+    name: &'static str,
+    what: String,
+) -> (Check, u32) {
+    let hz = ch.hz_for(PROBE_PULSES, 8.0 * bench.pace.sample_s());
+    (check(name, ch.c, what), hz)
 }
 
 /// Writes clear fault and reads until fault 0 and state idle.
@@ -99,13 +110,9 @@ pub(super) async fn repeated_seq<P: Plc>(
     bench: &mut Bench<'_, P>,
     ch: &Channel<'_>,
 ) -> Result<(), Halt> {
-    let (c, i) = (ch.c, ch.index());
-    let hz = ch.hz_for(PROBE_PULSES, 8.0 * bench.pace.sample_s());
-    let k = check(
-        "repeated seq ignored",
-        c,
-        format!("a valid start of {PROBE_PULSES} pulses {REPEAT_CHECKS}"),
-    );
+    let i = ch.index();
+    let what = format!("a valid start of {PROBE_PULSES} pulses {REPEAT_CHECKS}");
+    let (k, hz) = probe(bench, ch, "repeated seq ignored", what);
     let before = match bench.status().await {
         Ok(b) => b,
         Err(e) => return s.record(k.fail(e.to_string(), "the link failed")),
@@ -123,12 +130,25 @@ pub(super) async fn repeated_seq<P: Plc>(
     if let Err(e) = launched {
         return s.record(k.fail(e.to_string(), "the link failed"));
     }
-    let command_at = s.target.link.layout.command_base;
-    let report = match after_repeat(bench, i, &before, command_at).await {
+    let report = repeat_report(bench, k, &before, i, s.target.link.layout.command_base).await;
+    s.record(report)
+}
+
+/// The check `k` of a repeated start on channel `i`, from what the reads after it saw; a start
+/// it acted on stopped, one left pending withdrawn.
+async fn repeat_report<P: Plc>(
+    bench: &mut Bench<'_, P>,
+    k: Check,
+    before: &StatusBlock,
+    i: usize,
+    command_at: u16,
+) -> CheckReport {
+    let c0 = i64::from(before.elapsed[i]);
+    match after_repeat(bench, i, before, command_at).await {
         Repeat::Link(e) => k.fail(e.to_string(), "the link failed"),
         Repeat::Acted(block) => {
             let _ = bench.contract.stop().await;
-            repeat_acted(k, &before, &block, i)
+            repeat_acted(k, before, &block, i)
         }
         Repeat::Quiet { reads, dropped } => {
             if !dropped {
@@ -136,8 +156,7 @@ pub(super) async fn repeated_seq<P: Plc>(
             }
             repeat_quiet(k, before.seq, reads, dropped, c0)
         }
-    };
-    s.record(report)
+    }
 }
 
 /// What the reads after a repeated start saw.

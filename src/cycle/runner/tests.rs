@@ -100,6 +100,46 @@ fn prepared(id: MoveId, gate: u32) -> Event<u32> {
     }))
 }
 
+/// The press-loading program's first move submitted and the one after its waits prepared,
+/// then `then`.
+fn first_move(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u32>> {
+    let mut events = vec![
+        Event::Go,
+        Event::Go,
+        Event::Queued(vec![1]),
+        prepared(2, 20),
+    ];
+    events.extend(then);
+    events
+}
+
+/// [`first_move`] on through its end and the first wait (met after 0.5 s), then `then`.
+fn through_the_waits(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u32>> {
+    let waits = [
+        Event::Followed(MotionEnd::Done),
+        Event::Go,
+        met(0.5),
+        Event::Go,
+    ];
+    first_move(waits.into_iter().chain(then))
+}
+
+/// The palletising program to its place step: the pick done, the slip sheet skipped (not the
+/// first slot of a layer), the place begun; then `then`.
+fn to_the_place(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u32>> {
+    let mut events = vec![
+        Event::Go,
+        Event::Go,
+        Event::Queued(vec![1]),
+        Event::Followed(MotionEnd::Done),
+        Event::Go,
+        Event::Decided(Some(false)),
+        Event::Go,
+    ];
+    events.extend(then);
+    events
+}
+
 fn met(waited_s: f64) -> Event<u32> {
     Event::Waited {
         end: WaitEnd::Met,
@@ -260,20 +300,12 @@ fn the_next_move_is_prepared_ahead_and_released_at_its_step() {
     let got = script(
         &mut r,
         &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            prepared(2, 20),
-            Event::Followed(MotionEnd::Done),
-            Event::Go,
-            met(0.5),
-            Event::Go,
+        through_the_waits([
             met(0.25),
             Event::Go,
             Event::Go,
             Event::Followed(MotionEnd::Done),
-        ],
+        ]),
     );
     assert_eq!(
         got,
@@ -329,22 +361,7 @@ fn a_moves_permit_goes_out_as_it_was_resolved_when_the_program_was_checked() {
 #[test]
 fn a_prepared_move_cancelled_before_its_start_runs_afresh_at_its_step() {
     let (mut r, w) = runner(PRESS_LOAD, &[("eject", EJECT)], None);
-    script(
-        &mut r,
-        &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            prepared(2, 20),
-            Event::Followed(MotionEnd::Done),
-            Event::Go,
-            met(0.5),
-            Event::Go,
-            met(0.25),
-            Event::Go,
-        ],
-    );
+    script(&mut r, &w, through_the_waits([met(0.25), Event::Go]));
     let got = script(
         &mut r,
         &w,
@@ -370,20 +387,7 @@ fn a_prepared_move_cancelled_before_its_start_runs_afresh_at_its_step() {
 #[test]
 fn a_wait_that_times_out_jumps_to_its_label_or_faults() {
     let (mut r, w) = runner(PRESS_LOAD, &[("eject", EJECT)], None);
-    script(
-        &mut r,
-        &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            prepared(2, 20),
-            Event::Followed(MotionEnd::Done),
-            Event::Go,
-            met(0.5),
-            Event::Go,
-        ],
-    );
+    script(&mut r, &w, through_the_waits([]));
     let timed_out = |waited_s| Event::Waited {
         end: WaitEnd::TimedOut,
         waited_s,
@@ -432,17 +436,7 @@ fn a_hold_pauses_a_move_to_a_pose_and_faults_one_by_an_offset() {
         })
     };
     let (mut r, w) = runner(PRESS_LOAD, &[("eject", EJECT)], None);
-    let got = script(
-        &mut r,
-        &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            prepared(2, 20),
-            held(),
-        ],
-    );
+    let got = script(&mut r, &w, first_move([held()]));
     assert_eq!(got[4], "pause (held by the PLC: X5 is off) [20]");
     let program = "[[step]]\nmove = { by = [0, 0, 5] }\n";
     let (mut r, w) = runner(program, &[], None);
@@ -461,16 +455,7 @@ fn a_hold_pauses_a_move_to_a_pose_and_faults_one_by_an_offset() {
 #[test]
 fn a_stop_ends_the_cycle_at_the_steps_end_with_the_prepared_moves_unprepared() {
     let (mut r, mut w) = runner(PRESS_LOAD, &[("eject", EJECT)], None);
-    script(
-        &mut r,
-        &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            prepared(2, 20),
-        ],
-    );
+    script(&mut r, &w, first_move([]));
     w.control.stop(false);
     let got = feed(&mut r, &w, Event::Followed(MotionEnd::Done));
     assert_eq!(got, "end Stopped (Some(\"stopped by request\")) [20]");
@@ -573,15 +558,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
     let got = script(
         &mut r,
         &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            Event::Followed(MotionEnd::Done),
-            // Not the first slot of a layer: the slip sheet is skipped.
-            Event::Go,
-            Event::Decided(Some(false)),
-            Event::Go,
+        to_the_place([
             Event::Counted(None),
             Event::Go,
             Event::Queued(vec![2]),
@@ -601,7 +578,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
             // Not full: the when-full block is skipped.
             Event::Decided(Some(false)),
             Event::Go,
-        ],
+        ]),
     );
     let want = [
         "step move to @above-stack",
@@ -636,16 +613,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
     let got = script(
         &mut r,
         &w,
-        vec![
-            Event::Go,
-            Event::Go,
-            Event::Queued(vec![1]),
-            Event::Followed(MotionEnd::Done),
-            Event::Go,
-            Event::Decided(Some(false)),
-            Event::Go,
-            Event::Counted(Some(why.to_owned())),
-        ],
+        to_the_place([Event::Counted(Some(why.to_owned()))]),
     );
     assert_eq!(got.last().unwrap(), &format!("fault ({why}) stop true []"));
 }

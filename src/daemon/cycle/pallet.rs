@@ -247,7 +247,10 @@ fn paths(
     runs.into_iter()
         .map(|(speed_mm_s, elements)| PathOrder {
             path: json!({ "linterpd_path": 1, "element": elements }),
-            speed_mm_s,
+            motion: crate::order::OrderMotion {
+                speed_mm_s,
+                ..Default::default()
+            },
             ..PathOrder::default()
         })
         .collect()
@@ -303,9 +306,9 @@ mod tests {
     fn the_way_in_is_cut_where_its_speed_changes_and_ends_on_the_slot_at_the_slow_speed() {
         let orders = paths(&way(&slot(), Leg::In), None, Some(300.0));
         assert_eq!(orders.len(), 2);
-        assert_eq!(orders[0].speed_mm_s, Some(300.0));
+        assert_eq!(orders[0].motion.speed_mm_s, Some(300.0));
         assert_eq!(lines(&orders[0]), [180.0, 130.0]);
-        assert_eq!(orders[1].speed_mm_s, Some(40.0));
+        assert_eq!(orders[1].motion.speed_mm_s, Some(40.0));
         assert_eq!(lines(&orders[1]), [100.0]);
         // Every order is a path document the daemon reads, its corners stops.
         for o in &orders {
@@ -323,11 +326,11 @@ mod tests {
         let orders = paths(&way(&slot(), Leg::Out), None, None);
         assert_eq!(orders.len(), 2);
         assert_eq!(
-            (orders[0].speed_mm_s, lines(&orders[0])),
+            (orders[0].motion.speed_mm_s, lines(&orders[0])),
             (Some(40.0), vec![130.0])
         );
         assert_eq!(
-            (orders[1].speed_mm_s, lines(&orders[1])),
+            (orders[1].motion.speed_mm_s, lines(&orders[1])),
             (None, vec![180.0])
         );
         let s = slot();

@@ -573,12 +573,7 @@ pub async fn shutdown_signal() {
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("linterpd-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::testing::fresh_dir as temp;
 
     #[test]
     fn a_missing_state_dir_is_created_0750_so_the_first_pos_save_can_write() {

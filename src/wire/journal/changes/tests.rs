@@ -91,15 +91,8 @@ fn a_run_of_three_cycles_journals_each_start_and_end() {
         with_cycle(CycleState::Done, 3),
     ]);
     assert_eq!(
-        names(&got),
-        vec![
-            "cycle-started",
-            "cycle-ended",
-            "cycle-started",
-            "cycle-ended",
-            "cycle-started",
-            "cycle-ended"
-        ]
+        names(&got).join(" "),
+        "cycle-started cycle-ended cycle-started cycle-ended cycle-started cycle-ended"
     );
     assert_eq!(
         got[5],
@@ -123,27 +116,13 @@ fn a_run_of_three_cycles_journals_each_start_and_end() {
 
 #[test]
 fn hold_resume_fault_and_stop_of_a_cycle() {
-    let got = run(&[
-        with_cycle(CycleState::Running, 0),
-        with_cycle(CycleState::Paused, 0),
-        with_cycle(CycleState::Running, 0),
-        with_cycle(CycleState::Faulted, 0),
-        with_cycle(CycleState::Stopped, 0),
-        // The same stopped status again: nothing new.
-        with_cycle(CycleState::Stopped, 0),
-        // A new run after it.
-        with_cycle(CycleState::Running, 0),
-    ]);
+    use CycleState::{Faulted, Paused, Running, Stopped};
+    // The same stopped status twice (nothing new the second time), then a new run after it.
+    let states = [Running, Paused, Running, Faulted, Stopped, Stopped, Running];
+    let got = run(&states.map(|state| with_cycle(state, 0)));
     assert_eq!(
-        names(&got),
-        vec![
-            "cycle-started",
-            "hold",
-            "resume",
-            "fault",
-            "cycle-ended",
-            "cycle-started"
-        ]
+        names(&got).join(" "),
+        "cycle-started hold resume fault cycle-ended cycle-started"
     );
     assert_eq!(
         got[1],
