@@ -65,3 +65,27 @@ pub(super) fn error(text: &str) -> ConfigError {
 pub(super) fn message(text: &str) -> String {
     error(text).to_string()
 }
+
+/// What the message of a refused config must be: all of it, or its start, end or a part.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Says {
+    Is(&'static str),
+    StartsWith(&'static str),
+    EndsWith(&'static str),
+    Contains(&'static str),
+}
+
+/// Checks each row `(line, text, says)`: `MINIMAL` with that line replaced by `text` is refused
+/// with a message as `says`. A failing row names its edit and the message it got.
+pub(super) fn assert_refusals(rows: &[(usize, &str, Says)]) {
+    for &(line, text, says) in rows {
+        let got = message(&edited(&[(line, text)]));
+        let ok = match says {
+            Says::Is(m) => got == m,
+            Says::StartsWith(m) => got.starts_with(m),
+            Says::EndsWith(m) => got.ends_with(m),
+            Says::Contains(m) => got.contains(m),
+        };
+        assert!(ok, "line {line} as {text:?}: got {got:?}, want {says:?}");
+    }
+}

@@ -276,93 +276,86 @@ fn refuse_shared(at: &At, i: usize, raw: &RawJoint, earlier: &[Joint]) -> Result
 
 #[cfg(test)]
 mod tests {
-    use super::super::fixture::{edited, error, message};
+    use super::super::fixture::Says::{Contains, EndsWith, Is};
+    use super::super::fixture::{assert_refusals, edited, error, message};
     use super::ConfigError;
 
     #[test]
-    fn channel_outside_the_plc_names_value_and_limit() {
-        let text = edited(&[(35, "channel = 4")]);
-        assert_eq!(
-            message(&text),
-            "config line 35: robots.r.joints[3].channel = 4: must be within 0..=3"
-        );
-    }
-
-    #[test]
-    fn duplicate_channel_names_the_joint_that_has_it() {
-        let text = edited(&[(27, "channel = 1")]);
-        assert_eq!(
-            message(&text),
-            "config line 27: robots.r.joints[2].channel = 1: channel 1 already drives joints[1] (d2)"
-        );
-    }
-
-    #[test]
-    fn max_freq_above_the_channel_limit_names_the_limit() {
-        let text = edited(&[(31, "max_freq_hz = 200000")]);
-        assert_eq!(
-            message(&text),
-            "config line 31: robots.r.joints[2].max_freq_hz = 200000: channel 2 of an FP-X C60T \
-             allows at most 20000 Hz"
-        );
-    }
-
-    #[test]
-    fn max_freq_of_zero_is_refused() {
-        let text = edited(&[(15, "max_freq_hz = 0")]);
-        assert!(message(&text).ends_with("max_freq_hz = 0: must be at least 1 Hz"));
-    }
-
-    #[test]
-    fn zero_step_is_refused() {
-        let text = edited(&[(20, "step_mm = 0.0")]);
-        assert_eq!(
-            message(&text),
-            "config line 20: robots.r.joints[1].step_mm = 0: must not be 0"
-        );
-    }
-
-    #[test]
-    fn non_finite_step_is_refused() {
-        let text = edited(&[(12, "step_deg = nan")]);
-        assert_eq!(
-            message(&text),
-            "config line 12: robots.r.joints[0].step_deg = nan: must be a finite number"
-        );
-    }
-
-    #[test]
-    fn min_not_below_max_is_refused_at_max() {
-        let text = edited(&[(13, "min_deg = 170.0")]);
-        assert_eq!(
-            message(&text),
-            "config line 14: robots.r.joints[0].max_deg = 170: must be above min_deg = 170"
-        );
-    }
-
-    #[test]
-    fn step_mm_on_a_revolute_joint_names_the_key_it_needs() {
-        let text = edited(&[(36, "step_mm = 0.0025")]);
-        assert_eq!(
-            message(&text),
-            "config line 36: robots.r.joints[3].step_mm = 0.0025: joint wrist is revolute, so it \
-             takes step_deg"
-        );
-    }
-
-    #[test]
-    fn degrees_on_a_prismatic_joint_are_refused() {
-        let text = edited(&[(29, "min_deg = 0.0")]);
-        assert!(message(&text).contains("joint d3 is prismatic, so it takes min_mm"));
-    }
-
-    #[test]
-    fn missing_step_names_the_key_and_the_joint_line() {
-        let text = edited(&[(12, "")]);
-        assert_eq!(
-            message(&text),
-            "config line 9: robots.r.joints[0].step_deg is missing: joint theta1 is revolute"
-        );
+    fn each_bad_joint_key_is_refused_naming_its_line_value_and_limit() {
+        assert_refusals(&[
+            (
+                35,
+                "channel = 4",
+                Is("config line 35: robots.r.joints[3].channel = 4: must be within 0..=3"),
+            ),
+            (
+                27,
+                "channel = 1",
+                Is(
+                    "config line 27: robots.r.joints[2].channel = 1: channel 1 already drives \
+                     joints[1] (d2)",
+                ),
+            ),
+            (
+                31,
+                "max_freq_hz = 200000",
+                Is(
+                    "config line 31: robots.r.joints[2].max_freq_hz = 200000: channel 2 of an FP-X \
+                     C60T allows at most 20000 Hz",
+                ),
+            ),
+            (
+                15,
+                "max_freq_hz = 0",
+                EndsWith("max_freq_hz = 0: must be at least 1 Hz"),
+            ),
+            (
+                20,
+                "step_mm = 0.0",
+                Is("config line 20: robots.r.joints[1].step_mm = 0: must not be 0"),
+            ),
+            (
+                12,
+                "step_deg = nan",
+                Is("config line 12: robots.r.joints[0].step_deg = nan: must be a finite number"),
+            ),
+            (
+                13,
+                "min_deg = 170.0",
+                Is("config line 14: robots.r.joints[0].max_deg = 170: must be above min_deg = 170"),
+            ),
+            (
+                36,
+                "step_mm = 0.0025",
+                Is(
+                    "config line 36: robots.r.joints[3].step_mm = 0.0025: joint wrist is revolute, \
+                     so it takes step_deg",
+                ),
+            ),
+            (
+                29,
+                "min_deg = 0.0",
+                Contains("joint d3 is prismatic, so it takes min_mm"),
+            ),
+            (
+                12,
+                "",
+                Is(
+                    "config line 9: robots.r.joints[0].step_deg is missing: joint theta1 is \
+                     revolute",
+                ),
+            ),
+            (
+                34,
+                "name = \"d2\"",
+                EndsWith("joints[3].name = \"d2\": joints[1] already has this name"),
+            ),
+            (
+                30,
+                "max_mm = 1e9",
+                Contains("a PLC count reaches at most 2147483647"),
+            ),
+        ]);
     }
 
     #[test]
@@ -378,14 +371,6 @@ mod tests {
         assert!(
             e.to_string()
                 .contains("a cylindrical robot has exactly 4 joints")
-        );
-    }
-
-    #[test]
-    fn duplicate_joint_names_are_refused() {
-        let text = edited(&[(34, "name = \"d2\"")]);
-        assert!(
-            message(&text).ends_with("joints[3].name = \"d2\": joints[1] already has this name")
         );
     }
 
@@ -473,11 +458,5 @@ mod tests {
             "config line 33: robots.r.joints[2].max_jerk_mm_s3 = 5000: needs the robot's \
              motion.profile = \"s-curve\" (a trapezoid steps its acceleration at once)"
         );
-    }
-
-    #[test]
-    fn limit_beyond_the_plc_count_is_refused() {
-        let text = edited(&[(30, "max_mm = 1e9")]);
-        assert!(message(&text).contains("a PLC count reaches at most 2147483647"));
     }
 }

@@ -155,45 +155,45 @@ fn scara(at: &At, raw: &Spanned<RawKinematics>) -> Result<Scara, ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::super::Config;
-    use super::super::fixture::{edited, message};
+    use super::super::fixture::Says::{EndsWith, Is};
+    use super::super::fixture::{assert_refusals, edited, message};
     use super::*;
 
     #[test]
-    fn key_of_another_model_names_the_keys_this_one_takes() {
-        let text = edited(&[(4, "l0_mm = 500.0\nl1_mm = 300.0")]);
-        assert_eq!(
-            message(&text),
-            "config line 5: robots.r.kinematics.l1_mm = 300: a cylindrical model takes l0_mm, \
-             min_axis_distance_mm"
-        );
-    }
-
-    #[test]
-    fn cylindrical_needs_l0() {
-        let text = edited(&[(4, "")]);
-        assert_eq!(
-            message(&text),
-            "config line 2: robots.r.kinematics.l0_mm is missing: a cylindrical model needs its \
-             radius at d3 = 0"
-        );
-    }
-
-    #[test]
-    fn negative_l0_is_refused() {
-        let text = edited(&[(4, "l0_mm = -1.0")]);
-        assert!(message(&text).ends_with("l0_mm = -1: must be at least 0"));
-    }
-
-    #[test]
-    fn zero_min_axis_distance_is_refused() {
-        let text = edited(&[(4, "l0_mm = 0\nmin_axis_distance_mm = 0")]);
-        assert!(message(&text).ends_with("min_axis_distance_mm = 0: must be above 0"));
-    }
-
-    #[test]
-    fn cartesian_takes_no_dimension() {
-        let text = edited(&[(3, "type = \"cartesian\"")]);
-        assert!(message(&text).ends_with("l0_mm = 500: a cartesian model takes no key but type"));
+    fn each_bad_kinematics_key_is_refused_naming_its_line_value_and_limit() {
+        assert_refusals(&[
+            (
+                4,
+                "l0_mm = 500.0\nl1_mm = 300.0",
+                Is(
+                    "config line 5: robots.r.kinematics.l1_mm = 300: a cylindrical model takes \
+                     l0_mm, min_axis_distance_mm",
+                ),
+            ),
+            (
+                4,
+                "",
+                Is(
+                    "config line 2: robots.r.kinematics.l0_mm is missing: a cylindrical model \
+                     needs its radius at d3 = 0",
+                ),
+            ),
+            (
+                4,
+                "l0_mm = -1.0",
+                EndsWith("l0_mm = -1: must be at least 0"),
+            ),
+            (
+                4,
+                "l0_mm = 0\nmin_axis_distance_mm = 0",
+                EndsWith("min_axis_distance_mm = 0: must be above 0"),
+            ),
+            (
+                3,
+                "type = \"cartesian\"",
+                EndsWith("l0_mm = 500: a cartesian model takes no key but type"),
+            ),
+        ]);
     }
 
     #[test]

@@ -204,7 +204,8 @@ mod fixture;
 #[cfg(test)]
 #[allow(clippy::float_cmp)] // values parsed from TOML are exact
 mod tests {
-    use super::fixture::{MINIMAL, edited, message};
+    use super::fixture::Says::{Is, StartsWith};
+    use super::fixture::{MINIMAL, assert_refusals, edited, message};
     use super::*;
     use crate::kinematics::{JointKind, Model};
     use crate::robot::{Method, OverSpeed};
@@ -335,29 +336,53 @@ mod tests {
     }
 
     #[test]
-    fn unknown_key_names_key_and_line() {
-        let text = edited(&[(7, "speed_mm_s = 240.0\ncolour = \"red\"")]);
-        assert_eq!(
-            message(&text),
-            "config line 8: robots.r.motion.colour: unknown field `colour`, expected one of \
-             `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, `over_speed`, `tolerance_mm`, `max_speed_mm_s`, \
-             `profile`, `jerk_mm_s3`"
-        );
+    fn each_bad_edit_is_refused_naming_its_line_and_key() {
+        assert_refusals(&[
+            (
+                7,
+                "speed_mm_s = 240.0\ncolour = \"red\"",
+                Is(
+                    "config line 8: robots.r.motion.colour: unknown field `colour`, expected one \
+                     of `method`, `period`, `speed_mm_s`, `accel_time`, `frequency_model`, \
+                     `over_speed`, `tolerance_mm`, `max_speed_mm_s`, `profile`, `jerk_mm_s3`",
+                ),
+            ),
+            (
+                7,
+                "speed_mm_s = \"fast\"",
+                Is(
+                    "config line 7: robots.r.motion.speed_mm_s: invalid type: string \"fast\", \
+                     expected f64",
+                ),
+            ),
+            (12, "step_deg = ", StartsWith("config line 12: ")),
+            (
+                7,
+                "",
+                Is("config line 5: robots.r.motion: missing field `speed_mm_s`"),
+            ),
+            (
+                24,
+                "",
+                Is("config line 17: robots.r.joints[1]: missing field `output`"),
+            ),
+            (
+                6,
+                "method = \"spline\"\nperiod = \"50ms\"",
+                StartsWith("config line 6: robots.r.motion.method: unknown variant"),
+            ),
+            (
+                1,
+                "[robots.r]\narea_words = 9000",
+                Is("config line 2: robots.r.area_words = 9000: must be within 64..=8000"),
+            ),
+        ]);
     }
 
     #[test]
     fn unknown_top_level_key_is_an_error() {
         let text = format!("robot = 1\n{MINIMAL}");
         assert!(message(&text).starts_with("config line 1: robot: unknown field `robot`"));
-    }
-
-    #[test]
-    fn wrong_type_reports_its_line() {
-        let text = edited(&[(7, "speed_mm_s = \"fast\"")]);
-        assert_eq!(
-            message(&text),
-            "config line 7: robots.r.motion.speed_mm_s: invalid type: string \"fast\", expected f64"
-        );
     }
 
     #[test]
@@ -399,51 +424,6 @@ mod tests {
         assert_eq!(d.socket, dir.join("run/api.sock"));
         assert_eq!(d.state_dir, Path::new("/abs"));
         std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn toml_syntax_error_reports_its_line() {
-        let text = edited(&[(12, "step_deg = ")]);
-        assert!(
-            message(&text).starts_with("config line 12: "),
-            "{}",
-            message(&text)
-        );
-    }
-
-    #[test]
-    fn missing_key_reports_the_table_line() {
-        let text = edited(&[(7, "")]);
-        assert_eq!(
-            message(&text),
-            "config line 5: robots.r.motion: missing field `speed_mm_s`"
-        );
-    }
-
-    #[test]
-    fn missing_key_in_a_joint_names_the_joint_table() {
-        let text = edited(&[(24, "")]);
-        assert_eq!(
-            message(&text),
-            "config line 17: robots.r.joints[1]: missing field `output`"
-        );
-    }
-
-    #[test]
-    fn unknown_method_is_an_error() {
-        let text = edited(&[(6, "method = \"spline\"\nperiod = \"50ms\"")]);
-        assert!(
-            message(&text).starts_with("config line 6: robots.r.motion.method: unknown variant")
-        );
-    }
-
-    #[test]
-    fn area_words_outside_limits_is_an_error() {
-        let text = edited(&[(1, "[robots.r]\narea_words = 9000")]);
-        assert_eq!(
-            message(&text),
-            "config line 2: robots.r.area_words = 9000: must be within 64..=8000"
-        );
     }
 
     #[test]

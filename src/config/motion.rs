@@ -87,7 +87,8 @@ fn duration_s(at: &At, text: &Spanned<String>) -> Result<f64, ConfigError> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::fixture::{edited, message};
+    use super::super::fixture::Says::{EndsWith, Is, StartsWith};
+    use super::super::fixture::{assert_refusals, edited, message};
 
     #[test]
     fn an_s_curve_takes_its_jerk_and_the_trapezoid_none() {
@@ -126,19 +127,42 @@ mod tests {
     }
 
     #[test]
-    fn period_without_unit_names_value_and_line() {
-        let text = edited(&[(6, "period = \"50\"")]);
-        assert_eq!(
-            message(&text),
-            "config line 6: robots.r.motion.period = \"50\": no unit; write s, ms or us after the \
-             number, as in 50ms"
-        );
-    }
-
-    #[test]
-    fn zero_period_is_refused() {
-        let text = edited(&[(6, "period = \"0ms\"")]);
-        assert!(message(&text).ends_with("period = \"0ms\": must be longer than 0 s"));
+    fn each_bad_motion_key_is_refused_naming_its_line_value_and_limit() {
+        assert_refusals(&[
+            (
+                6,
+                "period = \"50\"",
+                Is(
+                    "config line 6: robots.r.motion.period = \"50\": no unit; write s, ms or us \
+                     after the number, as in 50ms",
+                ),
+            ),
+            (
+                6,
+                "period = \"0ms\"",
+                EndsWith("period = \"0ms\": must be longer than 0 s"),
+            ),
+            (
+                8,
+                "accel_time = \"-1ms\"",
+                EndsWith("accel_time = \"-1ms\": must not be negative"),
+            ),
+            (
+                7,
+                "speed_mm_s = 0",
+                EndsWith("speed_mm_s = 0: must be above 0"),
+            ),
+            (
+                8,
+                "accel_time = \"200ms\"\nmethod = \"bounded-error\"",
+                StartsWith("config line 9: robots.r.motion.tolerance_mm is missing"),
+            ),
+            (
+                8,
+                "accel_time = \"200ms\"\ntolerance_mm = 0.05",
+                EndsWith("only method \"bounded-error\" takes a tolerance"),
+            ),
+        ]);
     }
 
     #[test]
@@ -162,18 +186,6 @@ mod tests {
     }
 
     #[test]
-    fn negative_accel_time_is_refused() {
-        let text = edited(&[(8, "accel_time = \"-1ms\"")]);
-        assert!(message(&text).ends_with("accel_time = \"-1ms\": must not be negative"));
-    }
-
-    #[test]
-    fn non_positive_speed_is_refused() {
-        let text = edited(&[(7, "speed_mm_s = 0")]);
-        assert!(message(&text).ends_with("speed_mm_s = 0: must be above 0"));
-    }
-
-    #[test]
     fn bounded_error_reads_its_tolerance() {
         let text = edited(&[(
             8,
@@ -183,26 +195,6 @@ mod tests {
         assert_eq!(
             m.method,
             crate::robot::Method::BoundedError { tolerance_mm: 0.05 }
-        );
-    }
-
-    #[test]
-    fn bounded_error_without_tolerance_is_refused() {
-        let text = edited(&[(8, "accel_time = \"200ms\"\nmethod = \"bounded-error\"")]);
-        assert!(
-            message(&text).starts_with("config line 9: robots.r.motion.tolerance_mm is missing"),
-            "{}",
-            message(&text)
-        );
-    }
-
-    #[test]
-    fn tolerance_without_bounded_error_is_refused() {
-        let text = edited(&[(8, "accel_time = \"200ms\"\ntolerance_mm = 0.05")]);
-        assert!(
-            message(&text).ends_with("only method \"bounded-error\" takes a tolerance"),
-            "{}",
-            message(&text)
         );
     }
 

@@ -244,84 +244,84 @@ fn a_press_loading_program_flattens_with_its_call_inlined_and_its_jumps_resolved
 
 #[test]
 fn every_malformed_program_is_refused_naming_the_step_and_the_value() {
-    let one = |steps: &str| format!("[[step]]\n{steps}\n");
-    let cases: Vec<(String, &str)> = vec![
-        (one("jump = \"pick\""), "unknown field `jump`"),
+    // One-step programs: the step's keys, and words its refusal holds.
+    let steps = [
+        ("jump = \"pick\"", "unknown field `jump`"),
         (
-            one("path = { file = \"p.toml\", sped_mm_s = 3 }"),
+            "path = { file = \"p.toml\", sped_mm_s = 3 }",
             "unknown field `sped_mm_s`, expected one of `file`, `path`, `speed_mm_s`, \
              `accel_time`, `method`, `period`, `tolerance_mm`, `profile`, `jerk_mm_s3`",
         ),
         (
-            one("move = { position = \"in-press\", speed_mm_s = \"fast\" }"),
+            "move = { position = \"in-press\", speed_mm_s = \"fast\" }",
             "invalid type: string \"fast\", expected f64",
         ),
         (
-            one("wait = \"door_shut\"\ntimeout = \"1s\""),
+            "wait = \"door_shut\"\ntimeout = \"1s\"",
             "step 1: wait: condition \"door_shut\": \"door_shut\" is neither a signal",
         ),
         (
-            one("set = { Y10 = true }"),
+            "set = { Y10 = true }",
             "step 1: set: Y10 = true: Y10 is not in this robot's gateway write list (Y0-Y7, DT100-DT199)",
         ),
-        (one("set = { X5 = true }"), "step 1: set: X5 = true"),
+        ("set = { X5 = true }", "step 1: set: X5 = true"),
+        ("set = { DT100 = true }", "a DT word takes a whole number"),
+        ("set = { press_go = 1 }", "a bit takes true or false"),
         (
-            one("set = { DT100 = true }"),
-            "a DT word takes a whole number",
-        ),
-        (one("set = { press_go = 1 }"), "a bit takes true or false"),
-        (
-            one("wait = \"press_open\""),
+            "wait = \"press_open\"",
             "step 1: wait = \"press_open\" has no timeout, and [robots.NAME.cell] require_wait_timeout = true",
         ),
         (
-            one("label = \"a\"\nloop = { to = \"a\" }"),
+            "label = \"a\"\nloop = { to = \"a\" }",
             "step 1 (a): loop to \"a\" has no exit",
         ),
         (
-            one("loop = { to = \"nowhere\", count = 2 }"),
+            "loop = { to = \"nowhere\", count = 2 }",
             "step 1: no step is labelled \"nowhere\" in this program",
         ),
         (
-            one("move = { position = \"nowhere\" }"),
+            "move = { position = \"nowhere\" }",
             "step 1: move: position",
         ),
         (
-            one("move = { position = \"in-press\" }\npermit = \"press_open | X7\""),
+            "move = { position = \"in-press\" }\npermit = \"press_open | X7\"",
             "`|` cannot be a permit",
         ),
-        (one("dwell = \"0s\""), "dwell = \"0s\": must be above 0 s"),
+        ("dwell = \"0s\"", "dwell = \"0s\": must be above 0 s"),
         (
-            one("dwell = \"1s\"\nmove = { position = \"in-press\" }"),
+            "dwell = \"1s\"\nmove = { position = \"in-press\" }",
             "has move and dwell actions",
         ),
-        (one("label = \"x\""), "has no action"),
+        ("label = \"x\"", "has no action"),
         (
-            one("move = { position = \"in-press\", profile = \"s-curve\" }"),
+            "move = { position = \"in-press\", profile = \"s-curve\" }",
             "step 1: move: jerk_mm_s3 = null: profile \"s-curve\" needs the path's jerk",
         ),
         (
-            one(
-                "path = { path = { element = [{ line = [1, 2, 3] }] }, profile = \"trapezoid\", \
-                 jerk_mm_s3 = 5000 }",
-            ),
+            "path = { path = { element = [{ line = [1, 2, 3] }] }, profile = \"trapezoid\", \
+             jerk_mm_s3 = 5000 }",
             "step 1: path: jerk_mm_s3 = 5000: only profile \"s-curve\" takes a jerk",
         ),
         (
-            one("wait = \"press_open\"\ntimeout = \"1s\"\npermit = \"X5\""),
+            "wait = \"press_open\"\ntimeout = \"1s\"\npermit = \"X5\"",
             "permit goes with a move or a path",
         ),
+    ];
+    // Whole programs.
+    let programs = [
         (
-            "number = 300\n[[step]]\ndwell = \"1s\"".to_owned(),
+            "number = 300\n[[step]]\ndwell = \"1s\"",
             "number = 300: must be 1..=255",
         ),
-        (String::new(), "has no step"),
+        ("", "has no step"),
         (
-            "[[step]]\nlabel = \"a\"\ndwell = \"1s\"\n[[step]]\nlabel = \"a\"\ndwell = \"1s\""
-                .to_owned(),
+            "[[step]]\nlabel = \"a\"\ndwell = \"1s\"\n[[step]]\nlabel = \"a\"\ndwell = \"1s\"",
             "step 2 (a): label \"a\" is used by an earlier step too",
         ),
     ];
+    let one = |(step, words): (&str, &'static str)| (format!("[[step]]\n{step}\n"), words);
+    let whole = |(program, words): (&str, &'static str)| (program.to_owned(), words);
+    let cases = steps.map(one).into_iter().chain(programs.map(whole));
     for (program, words) in cases {
         let e = checked(&[("p", &program)], "p", true)
             .unwrap_err()
