@@ -7,7 +7,7 @@
 //!   PalletPath In         from where the robot is, through the approach, into the slot
 //!   Pallet Arrived        the robot at the slot, on disk
 //!   (the at_slot steps)   set / wait / dwell: the gripper
-//!   Pallet Advance        the slot done, on disk          (not with advance = false)
+//!   Pallet SlotDone       the slot done, on disk          (not with advance = false)
 //!   PalletPath Out        through the retreat
 //!   Skip unless pallet full -> set signal, wait for wait_for, call, reset signal, Restart
 //! ```
@@ -155,7 +155,7 @@ impl Flattener<'_, '_> {
         if step.advance {
             self.push_op(
                 here,
-                counter(PalletAct::Advance),
+                counter(PalletAct::SlotDone),
                 format!("{verb} {pallet}: slot done"),
             );
         }
