@@ -1,9 +1,11 @@
 //! The fault matrix's pallet flow (issue 48): a cycle that picks at A (the gripper, R100,
 //! closes) and places on a pallet of two slots (its counter marked, the way in, the gripper let
 //! go at the slot, a dwell, the slot counted, the way out), twice, until the pallet is full and
-//! begun again. Each fault the matrix knows strikes at the first exchange of every distinct step
-//! of it (and the one after), as a fault-free run finds them: where the cycle's step, the
-//! counter, the PLC's state or the gripper changes.
+//! begun again. Each fault the matrix knows strikes around every distinct step of it, as a
+//! fault-free run finds them (where the cycle's step, the counter, the PLC's state or the
+//! gripper changes, sampled at each status read): the exchanges since the read before the
+//! change, and the one after, and every exchange of the 8 before the robot is seen at a slot
+//! (the end of the way in, which a case's run may read an exchange or two apart).
 //!
 //! The independent record of the places is the mock's (`tests/common/places.rs`): every write
 //! of the gripper with the counts the robot stood on as it landed, and every power cut with the
@@ -425,6 +427,10 @@ pub(super) async fn case(fault: Fault, k: u64) -> Violations {
     make_well(&h, &shared, &mut v).await;
     agree(&h, &state, &shared, "after the fault", &mut v);
     let c = counter(&h);
+    if std::env::var_os("MATRIX_TRACE").is_some() {
+        let gripper = common::places::releases(&shared, GRIPPER, &slot_counts());
+        eprintln!("pallet {fault:?} @{k}: after the fault {c:?}, the gripper let go at {gripper:?}");
+    }
     let restarted = !shared.with(|m| m.power_cuts().is_empty());
     let unsure_by_restart = c.needs_choice().filter(|_| restarted);
     finish(&h, &shared, &mut v).await;
@@ -450,8 +456,9 @@ fn signature(h: &RobotHandle, shared: &SharedMock) -> Signature {
     (step, counter(h), state, busy, gripper)
 }
 
-/// The exchanges (counted from the flow's first, from 1) at which the matrix strikes: the one
-/// at which each distinct step of the fault-free run begins, and the one after it.
+/// The exchanges (counted from the flow's first, from 1) at which the matrix strikes: around
+/// each distinct step of the fault-free run, the exchanges since the last status read before it
+/// was seen, and the one after; round each arrival at a slot, the 8 exchanges before it too.
 pub(super) async fn positions() -> Vec<u64> {
     let (shared, driver) = mock_at_a(true);
     let state = state_dir();
@@ -463,21 +470,42 @@ pub(super) async fn positions() -> Vec<u64> {
     );
     until_ready(&h).await.unwrap();
     let before = shared.with(|m| m.commands());
+    // Sampled at each snapshot the worker publishes (each status read), so that the sampler
+    // adds no timer of its own: the run keeps the exchange numbering of the cases.
     let sampler = {
         let (h, shared) = (h.clone(), shared.clone());
+        let mut snapshots = h.watch_snapshot();
         tokio::spawn(async move {
             let mut last = None;
             let mut at = Vec::new();
+            let mut seen_at = 0;
             loop {
                 let now = signature(&h, &shared);
+                let k = shared.with(|m| m.commands()) - before;
                 if last.as_ref() != Some(&now) {
-                    at.push(shared.with(|m| m.commands()) - before + 1);
+                    if std::env::var_os("MATRIX_TRACE").is_some() {
+                        eprintln!("pallet flow @{k}: {now:?}");
+                    }
+                    // The exchanges from the first after the last sample to the one after this;
+                    // round the arrival at a slot, every exchange from 8 before (a case's run
+                    // may read the way in's end an exchange or two apart from this one's).
+                    let arrived = now.1.in_progress.is_some_and(|p| p.phase == Phase::AtSlot)
+                        && !last
+                            .as_ref()
+                            .is_some_and(|l: &Signature| l.1.in_progress == now.1.in_progress);
+                    let from = if arrived { k.saturating_sub(8) } else { seen_at + 1 };
+                    at.extend(from..=k + 1);
                     last = Some(now);
                 }
+                seen_at = k;
                 if h.cycle().is_some_and(|c| ended(c.state)) {
                     return at;
                 }
-                tokio::time::sleep(Duration::from_millis(1)).await;
+                let changed =
+                    tokio::time::timeout(Duration::from_millis(50), snapshots.changed()).await;
+                if matches!(changed, Ok(Err(_))) {
+                    return at;
+                }
             }
         })
     };
@@ -494,11 +522,7 @@ pub(super) async fn positions() -> Vec<u64> {
     daemon.shut_down().await;
     driver.abort();
     let _ = std::fs::remove_dir_all(&state);
-    let mut at: Vec<u64> = at
-        .into_iter()
-        .flat_map(|k| [k, k + 1])
-        .filter(|k| (1..=n).contains(k))
-        .collect();
+    let mut at: Vec<u64> = at.into_iter().filter(|k| (1..=n).contains(k)).collect();
     at.sort_unstable();
     at.dedup();
     at
