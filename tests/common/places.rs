@@ -47,5 +47,8 @@ pub fn releases(shared: &SharedMock, gripper: u32, slots: &[[i64; 4]]) -> Vec<Op
 
 /// The slots the record has a part left on, in order.
 pub fn places(shared: &SharedMock, gripper: u32, slots: &[[i64; 4]]) -> Vec<usize> {
-    releases(shared, gripper, slots).into_iter().flatten().collect()
+    releases(shared, gripper, slots)
+        .into_iter()
+        .flatten()
+        .collect()
 }

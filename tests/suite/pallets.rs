@@ -415,7 +415,7 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
         (at && !gripper_closed(&shared)).then_some(())
     })
     .await;
-    shared.with(|m| m.power_cycle());
+    shared.with(linterpd::mock::MockPlc::power_cycle);
     let s = cycle_until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     let why = s.reason.clone().unwrap_or_default();
     assert!(why.contains("PLC restarted"), "{s:?}");
@@ -427,7 +427,11 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
         before
     );
     let c = counter(&h);
-    assert_eq!((c.index, c.parts, c.needs_choice()), (2, 2, Some(2)), "{c:?}");
+    assert_eq!(
+        (c.index, c.parts, c.needs_choice()),
+        (2, 2, Some(2)),
+        "{c:?}"
+    );
     assert_eq!(file_counter(&state)["in_progress"]["phase"], "unsure");
     assert_eq!(placed(), [0, 1, 2], "the part let go at slot 2 is there");
     journal.flush().await;
@@ -442,7 +446,10 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
             matches!(&e.kind, Kind::Fault { reason, .. }
             if reason.contains("slot 3 was in progress when the PLC restarted"))
         });
-    assert!(said, "the journal says the restart made slot 3 (from 1) unsure");
+    assert!(
+        said,
+        "the journal says the restart made slot 3 (from 1) unsure"
+    );
     // The operator homes, goes on and resumes: resumed at the slot's dwell, the cycle holds no
     // part and reached no slot since; it faults rather than count slot 3 as placed.
     h.home().await.unwrap();

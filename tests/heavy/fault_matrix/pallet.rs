@@ -86,9 +86,7 @@ fn slot_counts() -> Vec<[i64; 4]> {
     SLOTS_AT
         .get_or_init(|| {
             let robot = seed_robot();
-            let patterns = robot_pallets()
-                .patterns(&robot, &BTreeMap::new())
-                .unwrap();
+            let patterns = robot_pallets().patterns(&robot, &BTreeMap::new()).unwrap();
             patterns["out"]
                 .slots()
                 .iter()
@@ -248,7 +246,9 @@ async fn make_well(h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
 /// The operator: the cycle left stopped, the unsure slot chosen for by what the record shows
 /// (P2: the cycle refuses until then), and a fresh run for the slots left (P3).
 async fn finish(h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
-    if h.cycle().is_some_and(|c| !matches!(c.state, CycleState::Done | CycleState::Stopped)) {
+    if h.cycle()
+        .is_some_and(|c| !matches!(c.state, CycleState::Done | CycleState::Stopped))
+    {
         let _ = tokio::time::timeout(BOUND, h.stop_cycle(false)).await;
         cycle_until(h, ended).await;
     }
@@ -258,10 +258,21 @@ async fn finish(h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
     let asks = c.in_progress.filter(|p| p.phase != Phase::Moving);
     let choice = asks.map(|p| p.slot).map(|slot| {
         let there = placed > usize::try_from(c.parts).unwrap();
-        (slot, if there { PalletCommand::GoOn } else { PalletCommand::Redo })
+        (
+            slot,
+            if there {
+                PalletCommand::GoOn
+            } else {
+                PalletCommand::Redo
+            },
+        )
     });
     let counted = c.parts + u64::from(matches!(choice, Some((_, PalletCommand::GoOn))));
-    let left = if c.pallets > 0 { 0 } else { SLOTS as u64 - counted };
+    let left = if c.pallets > 0 {
+        0
+    } else {
+        SLOTS as u64 - counted
+    };
     let choose = |command| {
         let r = h.pallet_command("out", command);
         format!("{r:?}")
@@ -269,7 +280,9 @@ async fn finish(h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
     if left == 0 {
         if let Some((_, command)) = choice {
             let r = choose(command);
-            v.check(r.starts_with("Ok"), || format!("P2: {command:?} refused: {r}"));
+            v.check(r.starts_with("Ok"), || {
+                format!("P2: {command:?} refused: {r}")
+            });
         }
         return;
     }
@@ -285,13 +298,20 @@ async fn finish(h: &RobotHandle, shared: &SharedMock, v: &mut Violations) {
             s.state == CycleState::Faulted
                 && why.contains(&format!("slot {slot}"))
                 && why.contains("choose redo"),
-            || format!("P2: slot {slot} unsure, yet the cycle ended {:?}: {why}", s.state),
+            || {
+                format!(
+                    "P2: slot {slot} unsure, yet the cycle ended {:?}: {why}",
+                    s.state
+                )
+            },
         );
         v.check(places(shared).len() == placed, || {
             "P2: a part placed before the operator chose".into()
         });
         let r = choose(command);
-        v.check(r.starts_with("Ok"), || format!("P2: {command:?} refused: {r}"));
+        v.check(r.starts_with("Ok"), || {
+            format!("P2: {command:?} refused: {r}")
+        });
         let _ = tokio::time::timeout(BOUND, h.clear_fault()).await;
         let resumed = tokio::time::timeout(BOUND, h.resume_cycle()).await;
         v.check(matches!(resumed, Ok(Ok(_))), || {
@@ -429,7 +449,9 @@ pub(super) async fn case(fault: Fault, k: u64) -> Violations {
     let c = counter(&h);
     if std::env::var_os("MATRIX_TRACE").is_some() {
         let gripper = common::places::releases(&shared, GRIPPER, &slot_counts());
-        eprintln!("pallet {fault:?} @{k}: after the fault {c:?}, the gripper let go at {gripper:?}");
+        eprintln!(
+            "pallet {fault:?} @{k}: after the fault {c:?}, the gripper let go at {gripper:?}"
+        );
     }
     let restarted = !shared.with(|m| m.power_cuts().is_empty());
     let unsure_by_restart = c.needs_choice().filter(|_| restarted);
@@ -493,7 +515,11 @@ pub(super) async fn positions() -> Vec<u64> {
                         && !last
                             .as_ref()
                             .is_some_and(|l: &Signature| l.1.in_progress == now.1.in_progress);
-                    let from = if arrived { k.saturating_sub(8) } else { seen_at + 1 };
+                    let from = if arrived {
+                        k.saturating_sub(8)
+                    } else {
+                        seen_at + 1
+                    };
                     at.extend(from..=k + 1);
                     last = Some(now);
                 }
@@ -516,7 +542,11 @@ pub(super) async fn positions() -> Vec<u64> {
     assert!(v.0.is_empty(), "the pallet flow without a fault: {:?}", v.0);
     let c = h.cycle().unwrap();
     assert_eq!(c.state, CycleState::Done, "{c:?}");
-    assert_eq!(places(&shared), [0, 1], "the fault-free run places each slot once");
+    assert_eq!(
+        places(&shared),
+        [0, 1],
+        "the fault-free run places each slot once"
+    );
     let c = counter(&h);
     assert_eq!((c.parts, c.pallets, c.index), (2, 1, 0), "{c:?}");
     daemon.shut_down().await;
