@@ -33,10 +33,9 @@ pub(crate) async fn run(
     let name = program.name.clone();
     let pallets = Palletising::new(program.pallets.clone());
     let mut runner = Runner::new(program, count, epoch, Instant::now());
-    let restarts = incidents.borrow().incidents.restarts;
     let mut driver = Driver {
         handle: handle.under(epoch),
-        restarts,
+        restarts: incidents.borrow().incidents.restarts,
         base: handle,
         epoch,
         incidents,
