@@ -33,9 +33,10 @@ pub(crate) async fn run(
     let name = program.name.clone();
     let pallets = Palletising::new(program.pallets.clone());
     let mut runner = Runner::new(program, count, epoch, Instant::now());
+    let restarts = incidents.borrow().incidents.restarts;
     let mut driver = Driver {
         handle: handle.under(epoch),
-        restarts: incidents.borrow().incidents.restarts,
+        restarts,
         base: handle,
         epoch,
         incidents,
