@@ -34,7 +34,13 @@ pub(super) fn plan(
     motion: Motion,
     path_accel_mm_s2: f64,
 ) -> Result<Vec<SectionPlan>, PlanError> {
-    stopped(robot, section, start, (motion, path_accel_mm_s2), MAX_ADDED_STOPS)
+    stopped(
+        robot,
+        section,
+        start,
+        (motion, path_accel_mm_s2),
+        MAX_ADDED_STOPS,
+    )
 }
 
 /// [`plan`], adding at most `stops_left` stops.

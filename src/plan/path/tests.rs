@@ -689,7 +689,11 @@ fn a_part_too_short_to_chain_behind_is_a_stop_instead() {
     assert!(short(&chained), "{:?}", durations(&chained));
 
     let planned = plan_path(&robot, &req).unwrap();
-    assert!(planned.sections.len() >= 2, "{} sections", planned.sections.len());
+    assert!(
+        planned.sections.len() >= 2,
+        "{} sections",
+        planned.sections.len()
+    );
     for s in &planned.sections {
         assert!(!short(&s.starts), "{:?}", durations(&s.starts));
         assert!(!s.starts[s.starts.len() - 1].window.ends_at_speed);
