@@ -523,14 +523,21 @@ fn check(
         .filter(|(i, (_, c))| *i + 1 == req.elements.len() || *c == Corner::Stop)
         .map(|(i, _)| i)
         .collect();
-    prop_assert_eq!(planned.sections.len(), stops.len());
-    for (section, &w) in planned.sections.iter().zip(&stops) {
-        prop_assert_eq!(
-            section.end_counts(),
-            counts_at(robot, &route.waypoints[w].to),
-            "section ending at waypoint {} ends elsewhere",
+    // The planner may stop the tool inside a section too, where a part too short to chain
+    // behind would have been (src/plan/path/short.rs): every stop waypoint still ends a
+    // section, in order, and each added stop ends a section of its own.
+    prop_assert!(planned.sections.len() >= stops.len());
+    let mut ends = planned.sections.iter().map(|s| s.end_counts());
+    for &w in &stops {
+        let want = counts_at(robot, &route.waypoints[w].to);
+        prop_assert!(
+            ends.any(|end| end == want),
+            "no section ends at waypoint {}",
             w + 1
         );
+    }
+    prop_assert!(ends.next().is_none());
+    for section in &planned.sections {
         let parts = &section.starts;
         prop_assert!(!parts.is_empty());
         prop_assert!(!parts[0].window.begins_at_speed());
