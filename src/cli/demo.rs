@@ -62,9 +62,9 @@ pub struct DemoArgs {
     pub listen: std::net::SocketAddr,
 }
 
-/// Runs `linterpd demo`.
-pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
-    let options = DemoOptions {
+/// What the flags ask of the demo's rig.
+fn demo_options(args: &DemoArgs) -> DemoOptions {
+    DemoOptions {
         baud: Some(args.baud),
         frequency_model: args.frequency_model.into(),
         svg: !args.no_svg,
@@ -76,7 +76,12 @@ pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
             }
         },
         read_back: !args.no_read_back,
-    };
+    }
+}
+
+/// Runs `linterpd demo`.
+pub fn run(args: &DemoArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    let options = demo_options(args);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()

@@ -265,32 +265,14 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
     let shared = new_mock(&settings).map_err(bad_input)?;
     shared.with(|_| ()); // scan 0: the status block is live (magic, RUN) before anyone connects
     let driver = tokio::spawn(shared.clone().run_scans());
-    let control = match &settings.control {
-        Some(path) => {
-            let listener = control::bind(path)
-                .with_context(|| format!("cannot listen on --control '{}'", path.display()))
-                .map_err(bad_input)?;
-            Some(tokio::spawn(control::serve(listener, shared.clone())))
-        }
-        None => None,
-    };
+    let control = serve_control(&settings, &shared)?;
     let shutdown = shutdown_signal();
     let (server, shown) = start_server(&settings, &shared).await?;
     writeln!(out, "listening on {shown}")
         .and_then(|()| out.flush())
         .context("cannot write to stdout")
         .map_err(Failure::Runtime)?;
-    tracing::info!(
-        protocol = %settings.protocol,
-        station = %settings.station,
-        baud = %settings.baud.map_or_else(|| "none".to_owned(), |b| b.to_string()),
-        scan_s = settings.config.scan_s,
-        variant = settings.config.variant.name(),
-        "mock PLC in RUN, listening on {shown}"
-    );
-    if settings.cell.is_some() {
-        tracing::info!(cell = %shared.with(|m| m.cell().describe()), "simulated cell");
-    }
+    log_started(&settings, &shared, &shown);
     let outcome = tokio::select! {
         () = shutdown => Ok(()),
         ended = server => Err(anyhow!("the server stopped: {}", match ended {
@@ -311,6 +293,35 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
         write_trace(&shared, path).map_err(Failure::Runtime)?;
     }
     outcome.map_err(Failure::Runtime)
+}
+
+/// The control socket (`--control`), served by a task of its own.
+fn serve_control(
+    settings: &Settings,
+    shared: &SharedMock,
+) -> Result<Option<JoinHandle<()>>, Failure> {
+    let Some(path) = &settings.control else {
+        return Ok(None);
+    };
+    let listener = control::bind(path)
+        .with_context(|| format!("cannot listen on --control '{}'", path.display()))
+        .map_err(bad_input)?;
+    Ok(Some(tokio::spawn(control::serve(listener, shared.clone()))))
+}
+
+/// The log's line that the mock PLC runs, listening on `shown`, and its cell if it simulates one.
+fn log_started(settings: &Settings, shared: &SharedMock, shown: &str) {
+    tracing::info!(
+        protocol = %settings.protocol,
+        station = %settings.station,
+        baud = %settings.baud.map_or_else(|| "none".to_owned(), |b| b.to_string()),
+        scan_s = settings.config.scan_s,
+        variant = settings.config.variant.name(),
+        "mock PLC in RUN, listening on {shown}"
+    );
+    if settings.cell.is_some() {
+        tracing::info!(cell = %shared.with(|m| m.cell().describe()), "simulated cell");
+    }
 }
 
 type ServerTask = JoinHandle<anyhow::Result<()>>;

@@ -429,30 +429,35 @@ fn tokens(text: &str) -> Result<Vec<Token>, ConditionFault> {
             ('|', _) => (Token::Or, 1),
             ('(', _) => (Token::Open, 1),
             (')', _) => (Token::Close, 1),
-            (c, _) if c == '-' || c.is_ascii_digit() => {
-                let end = (i + 1..chars.len())
-                    .find(|&j| !chars[j].is_ascii_digit())
-                    .unwrap_or(chars.len());
-                let digits: String = chars[i..end].iter().collect();
-                let n = digits
-                    .parse()
-                    .map_err(|_| ConditionFault::NotANumber { digits })?;
-                (Token::Number(n), end - i)
-            }
-            (c, _) if c.is_ascii_alphabetic() || c == '_' => {
-                let end = (i + 1..chars.len())
-                    .find(|&j| {
-                        !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-' | '.'))
-                    })
-                    .unwrap_or(chars.len());
-                (Token::Word(chars[i..end].iter().collect()), end - i)
-            }
+            (c, _) if c == '-' || c.is_ascii_digit() => number(&chars[i..])?,
+            (c, _) if c.is_ascii_alphabetic() || c == '_' => word(&chars[i..]),
             (found, _) => return Err(ConditionFault::NotUnderstood { found, at: i + 1 }),
         };
         out.push(token);
         i += len;
     }
     Ok(out)
+}
+
+/// The number `chars` begin with (a `-`, then digits), and its length.
+fn number(chars: &[char]) -> Result<(Token, usize), ConditionFault> {
+    let end = (1..chars.len())
+        .find(|&j| !chars[j].is_ascii_digit())
+        .unwrap_or(chars.len());
+    let digits: String = chars[..end].iter().collect();
+    let n = digits
+        .parse()
+        .map_err(|_| ConditionFault::NotANumber { digits })?;
+    Ok((Token::Number(n), end))
+}
+
+/// The word `chars` begin with (a name or an address: letters, digits, `_`, `-`, `.`), and
+/// its length.
+fn word(chars: &[char]) -> (Token, usize) {
+    let end = (1..chars.len())
+        .find(|&j| !(chars[j].is_ascii_alphanumeric() || matches!(chars[j], '_' | '-' | '.')))
+        .unwrap_or(chars.len());
+    (Token::Word(chars[..end].iter().collect()), end)
 }
 
 struct Parser<'a> {
@@ -522,47 +527,10 @@ impl Parser<'_> {
         if let Some(rest) = name.strip_prefix("pallet.") {
             return self.pallet_term(name, rest);
         }
-        let address = match self.names.permit.signals.get(name) {
-            Some(a) => *a,
-            None => name.parse::<Address>().map_err(|_| {
-                let known: Vec<&str> = self
-                    .names
-                    .permit
-                    .signals
-                    .keys()
-                    .map(String::as_str)
-                    .collect();
-                ConditionFault::Unknown {
-                    name: name.to_owned(),
-                    known: if known.is_empty() {
-                        "none named".to_owned()
-                    } else {
-                        known.join(", ")
-                    },
-                }
-            })?,
-        };
+        let address = self.address_of(name)?;
         if let Some(Token::Compare(compare)) = self.peek().cloned() {
             self.at += 1;
-            let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
-                return Err(ConditionFault::NoNumber {
-                    name: name.to_owned(),
-                    compare: compare.symbol(),
-                });
-            };
-            self.at += 1;
-            if address.area != Area::Dt {
-                return Err(ConditionFault::BitCompared {
-                    name: name.to_owned(),
-                });
-            }
-            let value = i16::try_from(value).map_err(|_| ConditionFault::OutOfRange { value })?;
-            self.readable(address)?;
-            return Ok(Condition::Word {
-                address,
-                compare,
-                value,
-            });
+            return self.word_term(name, address, compare);
         }
         if address.area == Area::Dt {
             return Err(ConditionFault::WordNotCompared {
@@ -579,6 +547,58 @@ impl Parser<'_> {
             name: name.to_owned(),
             address,
             source,
+        })
+    }
+
+    /// The address `name` is: a signal's, or an address written out.
+    fn address_of(&self, name: &str) -> Result<Address, ConditionFault> {
+        if let Some(a) = self.names.permit.signals.get(name) {
+            return Ok(*a);
+        }
+        name.parse::<Address>().map_err(|_| {
+            let known: Vec<&str> = self
+                .names
+                .permit
+                .signals
+                .keys()
+                .map(String::as_str)
+                .collect();
+            ConditionFault::Unknown {
+                name: name.to_owned(),
+                known: if known.is_empty() {
+                    "none named".to_owned()
+                } else {
+                    known.join(", ")
+                },
+            }
+        })
+    }
+
+    /// A DT word `name` (at `address`) compared by `compare` with the number that follows.
+    fn word_term(
+        &mut self,
+        name: &str,
+        address: Address,
+        compare: Compare,
+    ) -> Result<Condition, ConditionFault> {
+        let Some(Token::Number(value)) = self.tokens.get(self.at).cloned() else {
+            return Err(ConditionFault::NoNumber {
+                name: name.to_owned(),
+                compare: compare.symbol(),
+            });
+        };
+        self.at += 1;
+        if address.area != Area::Dt {
+            return Err(ConditionFault::BitCompared {
+                name: name.to_owned(),
+            });
+        }
+        let value = i16::try_from(value).map_err(|_| ConditionFault::OutOfRange { value })?;
+        self.readable(address)?;
+        Ok(Condition::Word {
+            address,
+            compare,
+            value,
         })
     }
 

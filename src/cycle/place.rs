@@ -122,42 +122,30 @@ impl Flattener<'_, '_> {
     ) -> Result<(), ProgramError> {
         let pallet = step.pallet.as_str();
         let pattern = self.pattern(pallet, &|r| here.fail(r))?;
-        let between = pattern.between_layers.clone();
-        if let Some(program) = between {
+        if let Some(program) = pattern.between_layers.clone() {
             self.unless(here, pallet, PalletTerm::BeginsLayer, |f| {
                 f.call(&program, chain, here)
             })?;
         }
         let verb = if pick { "pick from" } else { "place on" };
-        let counter = |act| OpKind::Pallet {
-            pallet: pallet.to_owned(),
-            act,
-        };
-        let path = |leg| OpKind::PalletPath {
-            pallet: pallet.to_owned(),
-            leg,
-            speed_mm_s: step.speed_mm_s,
-        };
+        let path = |leg| way(pallet, leg, step.speed_mm_s);
         self.push_op(
             here,
-            counter(PalletAct::Begin),
+            counter(pallet, PalletAct::Begin),
             format!("{verb} {pallet}: next slot in progress"),
         );
         self.push_op(here, path(Leg::In), format!("{verb} {pallet}: approach"));
         self.push_op(
             here,
-            counter(PalletAct::Arrived),
+            counter(pallet, PalletAct::Arrived),
             format!("{verb} {pallet}: at the slot"),
         );
         for (i, s) in step.at_slot.iter().enumerate() {
             self.at_slot(i + 1, &s.action, here)?;
         }
         if step.advance {
-            self.push_op(
-                here,
-                counter(PalletAct::Advance),
-                format!("{verb} {pallet}: slot done"),
-            );
+            let done = format!("{verb} {pallet}: slot done");
+            self.push_op(here, counter(pallet, PalletAct::Advance), done);
         }
         self.push_op(here, path(Leg::Out), format!("{verb} {pallet}: retreat"));
         if step.advance {
@@ -195,10 +183,7 @@ impl Flattener<'_, '_> {
         chain: &mut Vec<String>,
     ) -> Result<(), ProgramError> {
         self.pattern(pallet, &|r| here.fail(r))?;
-        let kind = OpKind::Pallet {
-            pallet: pallet.to_owned(),
-            act: PalletAct::Advance,
-        };
+        let kind = counter(pallet, PalletAct::Advance);
         self.push_op(here, kind, format!("advance {pallet}"));
         self.when_full(pallet, here, chain)
     }
@@ -213,23 +198,14 @@ impl Flattener<'_, '_> {
     ) -> Result<(), ProgramError> {
         let when = self.pattern(pallet, &|r| here.fail(r))?.when_full.clone();
         let fail = |r: String| here.fail(format!("pallet {pallet:?} when_full: {r}"));
-        let signal = |f: &Self, on: bool| -> Result<(OpKind, String), ProgramError> {
-            let key = when.signal.as_deref().unwrap_or_default();
-            let write = f.write(key, &toml::Value::Boolean(on), &fail)?;
-            Ok((
-                OpKind::Set(vec![write]),
-                format!("{pallet} full: set {key} = {on}"),
-            ))
-        };
         let until = when
             .wait_for
             .as_deref()
             .map(|text| condition::parse(text, self.ctx.names).map_err(|e| fail(e.to_string())))
             .transpose()?;
         self.unless(here, pallet, PalletTerm::Full, |f| {
-            if when.signal.is_some() {
-                let (kind, does) = signal(f, true)?;
-                f.push_op(here, kind, does);
+            if let Some(key) = &when.signal {
+                f.full_signal(here, pallet, key, true)?;
             }
             if let Some(until) = until {
                 // No timeout: an empty pallet comes when someone brings it.
@@ -244,20 +220,45 @@ impl Flattener<'_, '_> {
             if let Some(program) = &when.call {
                 f.call(program, chain, here)?;
             }
-            if when.signal.is_some() {
-                let (kind, does) = signal(f, false)?;
-                f.push_op(here, kind, does);
+            if let Some(key) = &when.signal {
+                f.full_signal(here, pallet, key, false)?;
             }
-            let kind = OpKind::Pallet {
-                pallet: pallet.to_owned(),
-                act: PalletAct::Restart,
-            };
-            f.push_op(
-                here,
-                kind,
-                format!("{pallet} full: the next pallet from slot 0"),
-            );
+            let does = format!("{pallet} full: the next pallet from slot 0");
+            f.push_op(here, counter(pallet, PalletAct::Restart), does);
             Ok(())
         })
+    }
+
+    /// Pushes the op that sets full pallet `pallet`'s signal `key` `on`.
+    fn full_signal(
+        &mut self,
+        here: &Here<'_>,
+        pallet: &str,
+        key: &str,
+        on: bool,
+    ) -> Result<(), ProgramError> {
+        let fail = |r: String| here.fail(format!("pallet {pallet:?} when_full: {r}"));
+        let write = self.write(key, &toml::Value::Boolean(on), &fail)?;
+        let does = format!("{pallet} full: set {key} = {on}");
+        self.push_op(here, OpKind::Set(vec![write]), does);
+        Ok(())
+    }
+}
+
+/// The op that goes `leg` of `pallet`'s slot in progress, at `speed_mm_s` where the pattern gives
+/// none.
+fn way(pallet: &str, leg: Leg, speed_mm_s: Option<f64>) -> OpKind {
+    OpKind::PalletPath {
+        pallet: pallet.to_owned(),
+        leg,
+        speed_mm_s,
+    }
+}
+
+/// The op that changes `pallet`'s counter by `act`.
+fn counter(pallet: &str, act: PalletAct) -> OpKind {
+    OpKind::Pallet {
+        pallet: pallet.to_owned(),
+        act,
     }
 }

@@ -65,56 +65,35 @@ pub(super) fn check(
             // No way comes to it: it never runs.
             continue;
         }
-        let fail = |reason: String| ProgramError {
-            program: op.at.program.clone(),
-            step: Some(op.at.step),
-            label: op.at.label.clone(),
-            reason,
-        };
-        let shown = format!(
-            "{} step {}{}",
-            op.at.program,
-            op.at.step,
-            op.at
-                .label
-                .as_ref()
-                .map(|l| format!(" ({l})"))
-                .unwrap_or_default()
-        );
-        // An absolute target first, wherever the move starts: its reach and limits.
-        let target = match &op.kind {
-            OpKind::Move(_) => reach.target(op).map_err(|e| fail(format!("move: {e}")))?,
-            _ => None,
-        };
-        if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at[i])
-            && blended.contains(&i)
-        {
-            super::blend::first_corner(ctx, order, from, op.at.step)
-                .map_err(|e| fail(e.to_string()))?;
-        }
-        match (&op.kind, at[i]) {
-            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {
-                if let Err(e) = reach.end(i, op, from) {
-                    let pose = ctx.robot.pose_of(&from).to_mm_deg();
-                    let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
-                    return Err(fail(format!(
-                        "{} from where the steps before it end ({}): {e}",
-                        kind(op),
-                        pose.join(", ")
-                    )));
-                }
-            }
-            (OpKind::Move(_), _) if target.is_none() => unchecked.push(format!(
-                "{shown}: {} from where the robot stands when it begins: checked when it runs",
-                op.at.does
-            )),
-            (OpKind::Path(_), _) => unchecked.push(format!(
-                "{shown}: a path from where the robot stands when it begins: checked when it runs"
-            )),
-            _ => {}
+        if let Some(later) = reach.op(i, op, at[i], blended.contains(&i))? {
+            unchecked.push(later);
         }
     }
     Ok(unchecked)
+}
+
+/// `op` refused for `reason`, named by its step.
+fn refused(op: &Op, reason: String) -> ProgramError {
+    ProgramError {
+        program: op.at.program.clone(),
+        step: Some(op.at.step),
+        label: op.at.label.clone(),
+        reason,
+    }
+}
+
+/// `op`'s step as the list of what is checked when it runs names it.
+fn shown(op: &Op) -> String {
+    format!(
+        "{} step {}{}",
+        op.at.program,
+        op.at.step,
+        op.at
+            .label
+            .as_ref()
+            .map(|l| format!(" ({l})"))
+            .unwrap_or_default()
+    )
 }
 
 fn kind(op: &Op) -> &'static str {
@@ -166,6 +145,58 @@ impl Reach<'_> {
             (OpKind::Path(_) | OpKind::PalletPath { .. }, _) => At::Varies,
             _ => at,
         }
+    }
+
+    /// Checks op `i` (the first of a blended run when `blended`), begun at `at`: `Some` line
+    /// when it depends on the run, and is checked when it runs.
+    fn op(
+        &mut self,
+        i: usize,
+        op: &Op,
+        at: At,
+        blended: bool,
+    ) -> Result<Option<String>, ProgramError> {
+        // An absolute target first, wherever the move starts: its reach and limits.
+        let target = match &op.kind {
+            OpKind::Move(_) => self
+                .target(op)
+                .map_err(|e| refused(op, format!("move: {e}")))?,
+            _ => None,
+        };
+        if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at)
+            && blended
+        {
+            super::blend::first_corner(self.ctx, order, from, op.at.step)
+                .map_err(|e| refused(op, e.to_string()))?;
+        }
+        match (&op.kind, at) {
+            (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => match self.end(i, op, from) {
+                Ok(_) => Ok(None),
+                Err(e) => Err(self.unplanned(op, from, &e)),
+            },
+            (OpKind::Move(_), _) if target.is_none() => Ok(Some(format!(
+                "{}: {} from where the robot stands when it begins: checked when it runs",
+                shown(op),
+                op.at.does
+            ))),
+            (OpKind::Path(_), _) => Ok(Some(format!(
+                "{}: a path from where the robot stands when it begins: checked when it runs",
+                shown(op)
+            ))),
+            _ => Ok(None),
+        }
+    }
+
+    /// `op` refused: it cannot run from `from`, where the steps before it end, for `e`.
+    fn unplanned(&self, op: &Op, from: [i64; JOINTS], e: &Unplanned) -> ProgramError {
+        let pose = self.ctx.robot.pose_of(&from).to_mm_deg();
+        let pose: Vec<String> = pose.iter().map(|v| format!("{v:.1}")).collect();
+        let reason = format!(
+            "{} from where the steps before it end ({}): {e}",
+            kind(op),
+            pose.join(", ")
+        );
+        refused(op, reason)
     }
 
     /// Where move `op` ends begun anywhere: its absolute target's counts, if it has one.

@@ -87,6 +87,32 @@ impl Daemon {
     }
 }
 
+/// The handle of robot `setup`, sending `to` its owners and reading `shared`.
+fn handle_of(
+    setup: &RobotSetup,
+    options: &DaemonOptions,
+    to: Senders,
+    shared: Arc<Shared>,
+) -> RobotHandle {
+    let live = Live::new(LiveSettings {
+        gateway: setup.gateway.clone(),
+        cell: setup.cell.clone(),
+    });
+    RobotHandle::new(
+        setup.robot.clone(),
+        to,
+        shared,
+        (
+            live,
+            Arc::clone(&options.positions),
+            options.journal.clone(),
+            Arc::clone(&options.pallets),
+        ),
+        setup.settings.layout.inputs,
+        setup.cell.face.clone(),
+    )
+}
+
 /// One robot's handle and worker, its cycle's and its cell's owners spawned.
 fn spawn_robot(
     setup: RobotSetup,
@@ -110,23 +136,7 @@ fn spawn_robot(
         cycles,
         cell: cell_tx,
     };
-    let live = Live::new(LiveSettings {
-        gateway: setup.gateway.clone(),
-        cell: setup.cell.clone(),
-    });
-    let handle = RobotHandle::new(
-        setup.robot.clone(),
-        to,
-        Arc::clone(&shared),
-        (
-            live,
-            Arc::clone(&options.positions),
-            options.journal.clone(),
-            Arc::clone(&options.pallets),
-        ),
-        setup.settings.layout.inputs,
-        setup.cell.face.clone(),
-    );
+    let handle = handle_of(&setup, options, to, Arc::clone(&shared));
     tokio::spawn(super::cycle::own(Arc::new(cycle_out), cycles_rx));
     let cell_requests = (cell_rx, shutdown.subscribe());
     tokio::spawn(super::cell::own(cell_owner, handle.clone(), cell_requests));

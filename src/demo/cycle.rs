@@ -10,6 +10,7 @@ use super::{BATCH_LIMIT, DemoError, DemoMove, P1, P2, as_reported, cut, measure_
 
 use crate::daemon::{MoveOrder, PathOrder, RobotHandle, Stage};
 use crate::kinematics::JOINTS;
+use crate::mock::PulsePoint;
 use crate::plan::{Plan, plan_path};
 use crate::robot::Robot;
 
@@ -122,29 +123,9 @@ async fn run_cycle(
         .submit_path(&order)
         .await
         .map_err(|source| DemoError::Refused { name, source })?;
-    let mut reports = Vec::new();
-    for id in ids {
-        let report = handle
-            .wait(id, BATCH_LIMIT)
-            .await
-            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
-        if report.stage != Stage::Done {
-            return Err(DemoError::NotDone {
-                name,
-                stage: report.stage,
-                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
-            });
-        }
-        reports.push(report);
-    }
+    let reports = done(handle, name, ids).await?;
     let plans = replan(handle.robot(), name, &order, &reports)?;
-    let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
-    let runs = cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
-        DemoError::Trace(format!(
-            "{name}: {} pulses do not match the plans",
-            trace.len()
-        ))
-    })?;
+    let runs = played_runs(rig, name, &plans)?;
     let mut starts: Vec<DemoMove> = reports
         .into_iter()
         .zip(plans)
@@ -160,15 +141,61 @@ async fn run_cycle(
         })
         .collect();
     measure_waits(&mut starts, &rig.mock.with(|m| m.starts().to_vec()));
-    let first = starts.first().map_or(0.0, |m| m.played.start_s);
-    let end = starts
-        .last()
-        .map_or(0.0, |m| m.played.start_s + m.played.figures.finish_s);
-    Ok(Cycle {
-        name,
-        starts,
-        cycle_s: end - first,
+    Ok(Cycle::of(name, starts))
+}
+
+impl Cycle {
+    /// Cycle `name` of `starts`, timed from the first start to the last one's finish.
+    fn of(name: &'static str, starts: Vec<DemoMove>) -> Self {
+        let first = starts.first().map_or(0.0, |m| m.played.start_s);
+        let end = starts
+            .last()
+            .map_or(0.0, |m| m.played.start_s + m.played.figures.finish_s);
+        Self {
+            name,
+            starts,
+            cycle_s: end - first,
+        }
+    }
+}
+
+/// The mock's pulses since the last take, cut into the runs of `plans`.
+fn played_runs(
+    rig: &Rig,
+    name: &'static str,
+    plans: &[Plan],
+) -> Result<Vec<Vec<PulsePoint>>, DemoError> {
+    let trace = rig.mock.with(crate::mock::MockPlc::take_pulses);
+    cut(&trace, &plans.iter().collect::<Vec<_>>()).ok_or_else(|| {
+        DemoError::Trace(format!(
+            "{name}: {} pulses do not match the plans",
+            trace.len()
+        ))
     })
+}
+
+/// The reports of the path's starts `ids`, each once it is done; the first that is not, refused.
+async fn done(
+    handle: &RobotHandle,
+    name: &'static str,
+    ids: Vec<crate::daemon::MoveId>,
+) -> Result<Vec<crate::daemon::MoveReport>, DemoError> {
+    let mut reports = Vec::new();
+    for id in ids {
+        let report = handle
+            .wait(id, BATCH_LIMIT)
+            .await
+            .unwrap_or_else(|| unreachable!("move {id} was just submitted and reports are kept"));
+        if report.stage != Stage::Done {
+            return Err(DemoError::NotDone {
+                name,
+                stage: report.stage,
+                why: report.error.clone().unwrap_or_else(|| "timed out".into()),
+            });
+        }
+        reports.push(report);
+    }
+    Ok(reports)
 }
 
 /// The daemon's plans of the path's starts, made again from the counts the first was planned

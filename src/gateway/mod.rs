@@ -110,6 +110,43 @@ fn bad(text: &str, reason: impl Into<String>) -> AddressError {
     }
 }
 
+/// A bit address's index from its `digits`: the word in decimal, then its bit in hex (X1F:
+/// word 1, bit 15).
+fn bit_index(text: &str, digits: &str) -> Result<u32, AddressError> {
+    let (word, bit) = digits.split_at(digits.len() - 1);
+    if !word.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(bad(
+            text,
+            "has a bit word in decimal, then its bit in hex (X1F)",
+        ));
+    }
+    let word: u32 = if word.is_empty() {
+        0
+    } else {
+        word.parse()
+            .map_err(|_| bad(text, "has a word number too large"))?
+    };
+    let bit = u32::from_str_radix(bit, 16).map_err(|_| bad(text, "has a bad bit"))?;
+    if word > BIT_WORD_MAX {
+        return Err(bad(text, format!("is past word {BIT_WORD_MAX}")));
+    }
+    Ok(word * 16 + bit)
+}
+
+/// A DT word's number from its `digits`, in decimal.
+fn dt_index(text: &str, digits: &str) -> Result<u32, AddressError> {
+    if !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(bad(text, "has a DT number in decimal"));
+    }
+    let n: u32 = digits
+        .parse()
+        .map_err(|_| bad(text, "has a DT number too large"))?;
+    if n > u32::from(DT_LAST) {
+        return Err(bad(text, format!("is past DT{DT_LAST}")));
+    }
+    Ok(n)
+}
+
 impl FromStr for Address {
     type Err = AddressError;
 
@@ -130,35 +167,9 @@ impl FromStr for Address {
             return Err(bad(text, "needs a number after its area"));
         }
         let index = if area.is_bits() {
-            let (word, bit) = digits.split_at(digits.len() - 1);
-            if !word.bytes().all(|b| b.is_ascii_digit()) {
-                return Err(bad(
-                    text,
-                    "has a bit word in decimal, then its bit in hex (X1F)",
-                ));
-            }
-            let word: u32 = if word.is_empty() {
-                0
-            } else {
-                word.parse()
-                    .map_err(|_| bad(text, "has a word number too large"))?
-            };
-            let bit = u32::from_str_radix(bit, 16).map_err(|_| bad(text, "has a bad bit"))?;
-            if word > BIT_WORD_MAX {
-                return Err(bad(text, format!("is past word {BIT_WORD_MAX}")));
-            }
-            word * 16 + bit
+            bit_index(text, digits)?
         } else {
-            if !digits.bytes().all(|b| b.is_ascii_digit()) {
-                return Err(bad(text, "has a DT number in decimal"));
-            }
-            let n: u32 = digits
-                .parse()
-                .map_err(|_| bad(text, "has a DT number too large"))?;
-            if n > u32::from(DT_LAST) {
-                return Err(bad(text, format!("is past DT{DT_LAST}")));
-            }
-            n
+            dt_index(text, digits)?
         };
         Ok(Self { area, index })
     }

@@ -18,7 +18,8 @@
 
 use crate::gateway::Area;
 use crate::mewtocol::{
-    Command, ContactArea, Mode, PlcError, PlcErrorCode, PlcStatus, Reply, Response, Station,
+    Command, Contact, ContactArea, ContactWords, Mode, PlcError, PlcErrorCode, PlcStatus, Reply,
+    Response, Station,
 };
 use crate::plc::PlcMode;
 
@@ -122,10 +123,46 @@ fn dt_words(command: &Command) -> usize {
     }
 }
 
+/// The area and bit number of contact `c` (`None`: not an area of bits).
+fn contact_bit(c: Contact) -> Option<(Area, u32)> {
+    let area = bit_area(c.area())?;
+    Some((area, u32::from(c.word()) * 16 + u32::from(c.bit())))
+}
+
+/// RCS: one contact.
+fn read_contact(mock: &mut MockPlc, c: Contact) -> Response {
+    let Some((area, bit)) = contact_bit(c) else {
+        return refuse(PlcErrorCode::AddressError);
+    };
+    mock.read_bit(area, bit)
+        .map(Reply::ReadContact)
+        .map_err(memory_refusal)
+}
+
+/// WCS: one contact set or reset.
+fn write_contact(mock: &mut MockPlc, c: Contact, on: bool) -> Response {
+    let Some((area, bit)) = contact_bit(c) else {
+        return refuse(PlcErrorCode::AddressError);
+    };
+    mock.host_write_bit(area, bit, on)
+        .map(|()| Reply::WriteContact)
+        .map_err(memory_refusal)
+}
+
+/// RCC: words of contacts.
+fn read_contact_words(mock: &mut MockPlc, words: ContactWords) -> Response {
+    let Some(area) = bit_area(words.area()) else {
+        return refuse(PlcErrorCode::AddressError);
+    };
+    mock.memory()
+        .read_bit_words(area, u32::from(words.start()), words.len())
+        .map(|w| Reply::ReadContactWords(w.to_vec()))
+        .map_err(memory_refusal)
+}
+
 /// Executes one MEWTOCOL-COM command on the mock and gives its response.
 pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
     tracing::trace!(?command, at_s = mock.now_s(), "MEWTOCOL command");
-    let address_error = || refuse(PlcErrorCode::AddressError);
     if let Some(limit) = mock.config().variant.mewtocol_words_limit()
         && dt_words(command) > limit
     {
@@ -141,28 +178,9 @@ pub fn execute(mock: &mut MockPlc, command: &Command) -> Response {
             .host_write_words(*start, words)
             .map(|()| Reply::WriteDt)
             .map_err(memory_refusal),
-        Command::ReadContact(c) => match bit_area(c.area()) {
-            Some(area) => mock
-                .read_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()))
-                .map(Reply::ReadContact)
-                .map_err(memory_refusal),
-            None => address_error(),
-        },
-        Command::WriteContact { contact: c, on } => match bit_area(c.area()) {
-            Some(area) => mock
-                .host_write_bit(area, u32::from(c.word()) * 16 + u32::from(c.bit()), *on)
-                .map(|()| Reply::WriteContact)
-                .map_err(memory_refusal),
-            None => address_error(),
-        },
-        Command::ReadContactWords(words) => match bit_area(words.area()) {
-            Some(area) => mock
-                .memory()
-                .read_bit_words(area, u32::from(words.start()), words.len())
-                .map(|w| Reply::ReadContactWords(w.to_vec()))
-                .map_err(memory_refusal),
-            None => address_error(),
-        },
+        Command::ReadContact(c) => read_contact(mock, *c),
+        Command::WriteContact { contact, on } => write_contact(mock, *contact, *on),
+        Command::ReadContactWords(words) => read_contact_words(mock, *words),
         Command::Status => Ok(Reply::Status(plc_status(mock))),
         Command::SetMode(mode) => {
             mock.set_mode(match mode {

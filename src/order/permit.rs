@@ -48,6 +48,14 @@ impl PermitNames<'_> {
         Some((at, bit))
     }
 
+    fn signals_named(&self) -> String {
+        if self.signals.is_empty() {
+            return "none named".to_owned();
+        }
+        let known: Vec<&str> = self.signals.keys().map(String::as_str).collect();
+        known.join(", ")
+    }
+
     fn words_named(&self) -> String {
         let names: Vec<String> = self.inputs.iter().map(ToString::to_string).collect();
         names.join(", ")
@@ -74,47 +82,50 @@ pub fn resolve(text: &str, names: PermitNames<'_>) -> Result<Permit, PermitError
             "is empty: leave `permit` out for a move with none".into(),
         ));
     }
-    let mut bits = Vec::new();
-    for term in text.split('&') {
-        let term = term.trim();
-        let (on, name) = match term.strip_prefix('!') {
-            Some(rest) => (false, rest.trim()),
-            None => (true, term),
-        };
-        if name.is_empty() {
-            return Err(refuse(
-                "has an empty term (two `&` in a row, or a lone `!`)".into(),
-            ));
-        }
-        let address = match names.signals.get(name) {
-            Some(a) => *a,
-            None => name.parse::<Address>().map_err(|_| {
-                let known: Vec<&str> = names.signals.keys().map(String::as_str).collect();
-                refuse(format!(
-                    "{name:?} is neither a signal ({}) nor an X or R bit",
-                    if known.is_empty() {
-                        "none named".to_owned()
-                    } else {
-                        known.join(", ")
-                    }
-                ))
-            })?,
-        };
-        if address.area == Area::Dt {
-            return Err(refuse(format!(
-                "{name} is a DT word: a permit is input bits only (a `wait` may compare words)"
-            )));
-        }
-        let (word, bit) = names.input_bit(address).ok_or_else(|| {
-            refuse(format!(
-                "{name} ({address}) is not in the input words the PLC copies ({}): the PLC \
-                 could not check it",
-                names.words_named()
-            ))
-        })?;
-        bits.push(PermitBit { word, bit, on });
-    }
+    let bits = text
+        .split('&')
+        .map(|term| term_bit(text, term.trim(), names))
+        .collect::<Result<Vec<_>, _>>()?;
     Permit::of(&bits).ok_or_else(|| refuse("asks one input bit to be both on and off".into()))
+}
+
+/// One term of permit `text`: a signal or an X / R bit in the input words, `!` for off.
+fn term_bit(text: &str, term: &str, names: PermitNames<'_>) -> Result<PermitBit, PermitError> {
+    let refuse = |reason: String| PermitError {
+        text: text.to_owned(),
+        reason,
+    };
+    let (on, name) = match term.strip_prefix('!') {
+        Some(rest) => (false, rest.trim()),
+        None => (true, term),
+    };
+    if name.is_empty() {
+        return Err(refuse(
+            "has an empty term (two `&` in a row, or a lone `!`)".into(),
+        ));
+    }
+    let address = match names.signals.get(name) {
+        Some(a) => *a,
+        None => name.parse::<Address>().map_err(|_| {
+            refuse(format!(
+                "{name:?} is neither a signal ({}) nor an X or R bit",
+                names.signals_named()
+            ))
+        })?,
+    };
+    if address.area == Area::Dt {
+        return Err(refuse(format!(
+            "{name} is a DT word: a permit is input bits only (a `wait` may compare words)"
+        )));
+    }
+    let (word, bit) = names.input_bit(address).ok_or_else(|| {
+        refuse(format!(
+            "{name} ({address}) is not in the input words the PLC copies ({}): the PLC \
+             could not check it",
+            names.words_named()
+        ))
+    })?;
+    Ok(PermitBit { word, bit, on })
 }
 
 #[cfg(test)]

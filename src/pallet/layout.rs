@@ -182,22 +182,7 @@ impl Layout {
                 format!("make {per_layer} slots; a pallet has at most {MAX_SLOTS}"),
             ));
         }
-        let approach = doc
-            .approach
-            .as_ref()
-            .map(|r| reach(&k, "approach", r))
-            .transpose()?;
-        let (retreat, retreat_key) = match &doc.retreat {
-            Some(r) => (Some(reach(&k, "retreat", r)?), "retreat.slow_speed_mm_s"),
-            None => (approach, "approach.slow_speed_mm_s"),
-        };
-        let slow_speeds_mm_s = [
-            ("approach.slow_speed_mm_s", approach),
-            (retreat_key, retreat),
-        ]
-        .into_iter()
-        .filter_map(|(key, r)| r.and_then(|r| r.slow).map(|s| (key, s.1)))
-        .collect();
+        let (approach, retreat, slow_speeds_mm_s) = ways(&k, doc)?;
         let w = &doc.when_full;
         Ok(Self {
             name: name.to_owned(),
@@ -515,6 +500,60 @@ impl Kind {
     }
 }
 
+/// The way into a slot and out of it (out: as in, when not given), and the slow speeds they
+/// ask, each with the key that gives it.
+#[allow(clippy::type_complexity)]
+fn ways(
+    k: &Keys<'_>,
+    doc: &PalletDoc,
+) -> Result<(Option<Reach>, Option<Reach>, Vec<(&'static str, f64)>), PalletError> {
+    let approach = doc
+        .approach
+        .as_ref()
+        .map(|r| reach(k, "approach", r))
+        .transpose()?;
+    let (retreat, retreat_key) = match &doc.retreat {
+        Some(r) => (Some(reach(k, "retreat", r)?), "retreat.slow_speed_mm_s"),
+        None => (approach, "approach.slow_speed_mm_s"),
+    };
+    let slow_speeds_mm_s = [
+        ("approach.slow_speed_mm_s", approach),
+        (retreat_key, retreat),
+    ]
+    .into_iter()
+    .filter_map(|(key, r)| r.and_then(|r| r.slow).map(|s| (key, s.1)))
+    .collect();
+    Ok((approach, retreat, slow_speeds_mm_s))
+}
+
+/// A listed layer's slots (`key.slots`), each within the limits: `[x, y, a]` in mm, mm, rad.
+fn listed(
+    k: &Keys<'_>,
+    key: &str,
+    slots: Option<&Vec<[f64; 3]>>,
+) -> Result<Option<Vec<[f64; 3]>>, PalletError> {
+    let Some(list) = slots else {
+        return Ok(None);
+    };
+    if list.is_empty() || list.len() > MAX_SLOTS {
+        return Err(k.bad(
+            &format!("{key}.slots"),
+            format!("{} slots", list.len()),
+            format!("a listed layer has 1..={MAX_SLOTS} slots"),
+        ));
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, [x, y, a])| {
+            let at = format!("{key}.slots[{i}]");
+            k.within(&at, *x, -MAX_LENGTH_MM, MAX_LENGTH_MM)?;
+            k.within(&at, *y, -MAX_LENGTH_MM, MAX_LENGTH_MM)?;
+            Ok([*x, *y, k.within(&at, *a, -360.0, 360.0)?.to_radians()])
+        })
+        .collect::<Result<Vec<_>, PalletError>>()
+        .map(Some)
+}
+
 fn kind(
     k: &Keys<'_>,
     key: &str,
@@ -529,27 +568,7 @@ fn kind(
             "must be a quarter turn: 0, 90, 180 or 270 (or their negatives)",
         ));
     }
-    let listed = match &doc.slots {
-        None => None,
-        Some(list) if list.is_empty() || list.len() > MAX_SLOTS => {
-            return Err(k.bad(
-                &format!("{key}.slots"),
-                format!("{} slots", list.len()),
-                format!("a listed layer has 1..={MAX_SLOTS} slots"),
-            ));
-        }
-        Some(list) => Some(
-            list.iter()
-                .enumerate()
-                .map(|(i, [x, y, a])| {
-                    let at = format!("{key}.slots[{i}]");
-                    k.within(&at, *x, -MAX_LENGTH_MM, MAX_LENGTH_MM)?;
-                    k.within(&at, *y, -MAX_LENGTH_MM, MAX_LENGTH_MM)?;
-                    Ok([*x, *y, k.within(&at, *a, -360.0, 360.0)?.to_radians()])
-                })
-                .collect::<Result<Vec<_>, PalletError>>()?,
-        ),
-    };
+    let listed = listed(k, key, doc.slots.as_ref())?;
     if let (Some(_), Some(shift)) = (&listed, doc.odd_rows_shift_mm) {
         return Err(k.bad(
             &format!("{key}.odd_rows_shift_mm"),

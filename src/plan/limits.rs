@@ -119,16 +119,7 @@ pub(super) fn peak(robot: &Robot, samples: &Samples, profile: &Profile, continuo
     let intervals = loads.intervals;
     // The periods of the common length: all but the last.
     let common = intervals.saturating_sub(1);
-    let mut largest = [0.0_f64; JOINTS];
-    let mut first_largest = [None::<usize>; JOINTS];
-    for i in 0..common {
-        let change = loads.change(i);
-        for j in 0..JOINTS {
-            if change[j] > largest[j] || (first_largest[j].is_none() && change[j] >= largest[j]) {
-                (largest[j], first_largest[j]) = (change[j], Some(i));
-            }
-        }
-    }
+    let (largest, first_largest) = loads.largest_changes(common);
     // Every joint's largest load over the common periods, and the last period's.
     let at_largest: Joints =
         std::array::from_fn(|j| first_largest[j].map_or(f64::NAN, |i| loads.at(i).1[j]));
@@ -181,6 +172,23 @@ struct Loads<'a> {
 }
 
 impl<'a> Loads<'a> {
+    /// Each joint's largest change over the first `common` periods, and the first period
+    /// where it is (`None`: there are none).
+    fn largest_changes(&self, common: usize) -> ([f64; JOINTS], [Option<usize>; JOINTS]) {
+        let mut largest = [0.0_f64; JOINTS];
+        let mut first_largest = [None::<usize>; JOINTS];
+        for i in 0..common {
+            let change = self.change(i);
+            for j in 0..JOINTS {
+                if change[j] > largest[j] || (first_largest[j].is_none() && change[j] >= largest[j])
+                {
+                    (largest[j], first_largest[j]) = (change[j], Some(i));
+                }
+            }
+        }
+        (largest, first_largest)
+    }
+
     fn new(robot: &Robot, samples: &'a Samples, profile: &Profile, continuous: bool) -> Self {
         Self {
             samples,

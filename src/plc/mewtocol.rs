@@ -548,6 +548,35 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> MewtocolClient<T> {
         }
     }
 
+    /// Contact words `first..=last` of `area` (RCC), in as few exchanges as the frames allow.
+    async fn read_contact_words(
+        &mut self,
+        header: Header,
+        area: ContactArea,
+        (first, last): (u32, u32),
+        operation: &str,
+    ) -> Result<Vec<u16>, PlcError> {
+        let per = self
+            .options
+            .words_per_exchange(header, max_read_reply_words(header), 9);
+        let mut words = Vec::new();
+        let mut word = first;
+        while word <= last {
+            let end = last.min(word + per as u32 - 1);
+            let range = ContactWords::new(area, word as u16, end as u16)
+                .map_err(|e| invalid(operation, &e))?;
+            match self
+                .exchange(header, &Command::ReadContactWords(range), operation)
+                .await?
+            {
+                Reply::ReadContactWords(w) => words.extend(w),
+                other => return Err(unexpected(operation, &other)),
+            }
+            word = end + 1;
+        }
+        Ok(words)
+    }
+
     async fn write_chunk(
         &mut self,
         header: Header,
@@ -627,25 +656,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin + Send> Plc for MewtocolClient<T> {
                 other => Err(unexpected(&operation, &other)),
             };
         }
-        let per = self
-            .options
-            .words_per_exchange(header, max_read_reply_words(header), 9);
         let (first, last) = (start / 16, (start + u32::from(count) - 1) / 16);
-        let mut words = Vec::new();
-        let mut word = first;
-        while word <= last {
-            let end = last.min(word + per as u32 - 1);
-            let range = ContactWords::new(contact_area, word as u16, end as u16)
-                .map_err(|e| invalid(&operation, &e))?;
-            match self
-                .exchange(header, &Command::ReadContactWords(range), &operation)
-                .await?
-            {
-                Reply::ReadContactWords(w) => words.extend(w),
-                other => return Err(unexpected(&operation, &other)),
-            }
-            word = end + 1;
-        }
+        let words = self
+            .read_contact_words(header, contact_area, (first, last), &operation)
+            .await?;
         let offset = start - first * 16;
         Ok((0..u32::from(count))
             .map(|i| {

@@ -315,33 +315,7 @@ pub fn seed_robot() -> Robot {
             min_axis_distance_mm: 50.0,
         })
         .into(),
-        joints: [
-            seed_joint(
-                "theta1",
-                0,
-                JointKind::Revolute,
-                0.0025,
-                [-170.0, 170.0],
-                100_000,
-            ),
-            seed_joint(
-                "d2",
-                1,
-                JointKind::Prismatic,
-                0.025,
-                [-50.0, 400.0],
-                100_000,
-            ),
-            seed_joint("d3", 2, JointKind::Prismatic, 0.013, [0.0, 1_000.0], 20_000),
-            seed_joint(
-                "wrist",
-                3,
-                JointKind::Revolute,
-                0.0025,
-                [-360.0, 360.0],
-                20_000,
-            ),
-        ],
+        joints: seed_joints(),
         motion: Motion {
             method: Method::ConstantPeriod,
             period_s: 0.05,
@@ -354,6 +328,37 @@ pub fn seed_robot() -> Robot {
         area_words: 2_000,
         max_speed_mm_s: DEFAULT_MAX_SPEED_MM_S,
     }
+}
+
+/// The seed robot's joints: theta1, d2, d3, wrist.
+fn seed_joints() -> [Joint; JOINTS] {
+    [
+        seed_joint(
+            "theta1",
+            0,
+            JointKind::Revolute,
+            0.0025,
+            [-170.0, 170.0],
+            100_000,
+        ),
+        seed_joint(
+            "d2",
+            1,
+            JointKind::Prismatic,
+            0.025,
+            [-50.0, 400.0],
+            100_000,
+        ),
+        seed_joint("d3", 2, JointKind::Prismatic, 0.013, [0.0, 1_000.0], 20_000),
+        seed_joint(
+            "wrist",
+            3,
+            JointKind::Revolute,
+            0.0025,
+            [-360.0, 360.0],
+            20_000,
+        ),
+    ]
 }
 
 /// A joint of the seed's robot: its step and range in the user's unit (degrees or mm), pulse

@@ -250,16 +250,7 @@ impl Face {
         if rose & EDGES != 0 {
             self.refused = None;
         }
-        let mut actions = Vec::new();
-        if remote && fell & bit::ENABLE != 0 {
-            actions.push(Action::Hold);
-        }
-        if rose & bit::STOP_NOW != 0 {
-            actions.push(Action::StopNow);
-        }
-        if rose & bit::STOP != 0 {
-            actions.push(Action::Stop);
-        }
+        let mut actions = stops(rose, fell, remote);
         let renumbered = new[command::PROGRAM] != old[command::PROGRAM]
             || new[command::CHECK] != old[command::CHECK];
         if renumbered {
@@ -269,6 +260,12 @@ impl Face {
             }
         }
         let rose = self.one_choice(rose, remote);
+        self.commands(rose, remote, &mut actions);
+        actions
+    }
+
+    /// The commands whose bits `rose` (but the stops), in order: each action, or its refusal.
+    fn commands(&mut self, rose: u16, remote: bool, actions: &mut Vec<Action>) {
         for edge in [
             bit::RESET,
             bit::PAUSE,
@@ -286,7 +283,6 @@ impl Face {
                 Err(why) => self.refuse(why),
             }
         }
-        actions
     }
 
     /// `rose` without the pallet's choices when both rose at once (refused: neither is taken).
@@ -336,6 +332,21 @@ impl Face {
             _ => Err(Refusal::NotEnabled),
         }
     }
+}
+
+/// What the stop bits ask, taken in any mode, and the hold of `enable` falling in remote.
+fn stops(rose: u16, fell: u16, remote: bool) -> Vec<Action> {
+    let mut actions = Vec::new();
+    if remote && fell & bit::ENABLE != 0 {
+        actions.push(Action::Hold);
+    }
+    if rose & bit::STOP_NOW != 0 {
+        actions.push(Action::StopNow);
+    }
+    if rose & bit::STOP != 0 {
+        actions.push(Action::Stop);
+    }
+    actions
 }
 
 #[cfg(test)]

@@ -90,39 +90,8 @@ pub struct View {
 pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
     let phase = view.cycle.map(|c| c.phase);
     let cycle_live = phase.is_some_and(|p| p != CyclePhase::Ended);
-    let remote = view.mode == Mode::Remote;
-    let linked = view.link != Link::Down;
-    let fault = match (view.link, view.plc_fault, phase) {
-        (Link::Down, ..) => fault::LINK_DOWN,
-        (Link::Stalled, ..) => fault::STALLED,
-        (Link::Up, Some(code), _) => code.min(99),
-        (Link::Up, None, Some(CyclePhase::Faulted)) => fault::CYCLE,
-        (Link::Up, ..) => 0,
-    };
-    let ready = remote
-        && face.enabled()
-        && linked
-        && view.accepts_moves
-        && fault == 0
-        && !cycle_live
-        && !view.moving;
-    let bits = [
-        (ready, status_bit::READY),
-        (phase == Some(CyclePhase::Running), status_bit::RUNNING),
-        (phase == Some(CyclePhase::Paused), status_bit::PAUSED),
-        (phase == Some(CyclePhase::Waiting), status_bit::WAITING),
-        (fault != 0, status_bit::FAULT),
-        (view.in_home, status_bit::IN_HOME),
-        (remote, status_bit::REMOTE),
-        (face.selected().is_some(), status_bit::SELECTED),
-        (view.moving, status_bit::MOVING),
-        (linked, status_bit::LINKED),
-        (face.refused().is_some(), status_bit::REFUSED),
-        (face.enabled(), status_bit::ENABLED),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .fold(0, |word, (_, bit)| word | bit);
+    let fault = fault_code(view, phase);
+    let bits = status_bits(face, view, fault);
     let done = view.cycle.map_or(0, |c| c.done);
     let mut words = [0; STATUS_WORDS];
     words[status_word::BITS] = bits;
@@ -139,6 +108,49 @@ pub fn status_words(face: &Face, view: &View) -> [u16; STATUS_WORDS] {
         pallet_words(p, &mut words);
     }
     words
+}
+
+/// The fault word: the link's, the PLC's, the cycle's (0: none).
+fn fault_code(view: &View, phase: Option<CyclePhase>) -> u16 {
+    match (view.link, view.plc_fault, phase) {
+        (Link::Down, ..) => fault::LINK_DOWN,
+        (Link::Stalled, ..) => fault::STALLED,
+        (Link::Up, Some(code), _) => code.min(99),
+        (Link::Up, None, Some(CyclePhase::Faulted)) => fault::CYCLE,
+        (Link::Up, ..) => 0,
+    }
+}
+
+/// The status bits word, with `fault` the fault word.
+fn status_bits(face: &Face, view: &View, fault: u16) -> u16 {
+    let phase = view.cycle.map(|c| c.phase);
+    let cycle_live = phase.is_some_and(|p| p != CyclePhase::Ended);
+    let remote = view.mode == Mode::Remote;
+    let linked = view.link != Link::Down;
+    let ready = remote
+        && face.enabled()
+        && linked
+        && view.accepts_moves
+        && fault == 0
+        && !cycle_live
+        && !view.moving;
+    [
+        (ready, status_bit::READY),
+        (phase == Some(CyclePhase::Running), status_bit::RUNNING),
+        (phase == Some(CyclePhase::Paused), status_bit::PAUSED),
+        (phase == Some(CyclePhase::Waiting), status_bit::WAITING),
+        (fault != 0, status_bit::FAULT),
+        (view.in_home, status_bit::IN_HOME),
+        (remote, status_bit::REMOTE),
+        (face.selected().is_some(), status_bit::SELECTED),
+        (view.moving, status_bit::MOVING),
+        (linked, status_bit::LINKED),
+        (face.refused().is_some(), status_bit::REFUSED),
+        (face.enabled(), status_bit::ENABLED),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .fold(0, |word, (_, bit)| word | bit)
 }
 
 /// The shown pallet's words (+18..+22); a count past a word's range shows as 65535.

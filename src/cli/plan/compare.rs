@@ -240,6 +240,15 @@ fn write_text(
         out,
         "upload   bytes of the MEWTOCOL-COM % frames writing the tables (24 words a WDD frame)\n"
     )?;
+    write_heading(out)?;
+    for entry in entries {
+        write_row(entry, out)?;
+    }
+    Ok(())
+}
+
+/// The table's column names.
+fn write_heading(out: &mut dyn Write) -> std::io::Result<()> {
     writeln!(
         out,
         "{:<24} {:<11} {:>5} {:>5} {:>8} {:>9} {:>9} {:>9} {:>9} {:>8} {:>5}",
@@ -254,11 +263,7 @@ fn write_text(
         "skew ms",
         "end mm",
         "valid"
-    )?;
-    for entry in entries {
-        write_row(entry, out)?;
-    }
-    Ok(())
+    )
 }
 
 fn write_row(entry: &Entry, out: &mut dyn Write) -> std::io::Result<()> {

@@ -169,7 +169,24 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             requested_speed_mm_s: request.motion.speed_mm_s,
             speed_factor: plan.speed_factor,
         },
-        profile: ProfileDoc {
+        profile: ProfileDoc::of(plan),
+        channels: plan
+            .tables
+            .iter()
+            .zip(&robot.joints)
+            .map(|(t, j)| channel_doc(t, &j.name))
+            .collect(),
+        valid: plan.valid(),
+        problems: plan.problems.clone(),
+        figures: FiguresDoc::from(figures),
+        drives: drives(robot, plan),
+    }
+}
+
+impl ProfileDoc {
+    /// The plan's speed profile and how it was timed.
+    fn of(plan: &Plan) -> Self {
+        Self {
             length_mm: plan.profile.length_mm,
             course_length_mm: plan.pace.as_ref().map_or(
                 plan.profile.length_mm,
@@ -193,17 +210,7 @@ pub(super) fn document(robot: &Robot, request: &MoveRequest, plan: &Plan) -> Doc
             period_s: plan.profile.period_s,
             periods: plan.profile.periods(),
             duration_s: plan.duration_s(),
-        },
-        channels: plan
-            .tables
-            .iter()
-            .zip(&robot.joints)
-            .map(|(t, j)| channel_doc(t, &j.name))
-            .collect(),
-        valid: plan.valid(),
-        problems: plan.problems.clone(),
-        figures: FiguresDoc::from(figures),
-        drives: drives(robot, plan),
+        }
     }
 }
 

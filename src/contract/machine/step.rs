@@ -22,26 +22,10 @@ pub(super) fn step(
             seen,
             homed_before,
         } => homing(written, seen, homed_before, status, now, m, events),
-        Phase::Uploading {
-            current: None,
-            proof,
-        } => Phase::Uploading {
-            current: None,
-            proof,
-        },
-        Phase::Uploading {
-            current: Some(current),
-            proof,
-        } => match running(current, status, now, m, events) {
-            Phase::Running { current } => Phase::Uploading {
-                current: Some(current),
-                proof,
-            },
-            _ => Phase::Uploading {
-                current: None,
-                proof,
-            },
-        },
+        Phase::Uploading { current, proof } => {
+            let current = current.and_then(|c| still_running(c, status, now, m, events));
+            Phase::Uploading { current, proof }
+        }
         Phase::Starting { start, written } => starting(start, written, status, now, m, events),
         Phase::Running { current } => running(current, status, now, m, events),
         Phase::Chained {
@@ -55,6 +39,20 @@ pub(super) fn step(
             next,
             written,
         } => stopping(current, next, written, status, now, m, events),
+    }
+}
+
+/// The start `current` that ran while an upload goes on, after `status`: `None` once it ended.
+fn still_running(
+    current: Running,
+    status: &Status,
+    now: Instant,
+    m: &Machine,
+    events: &mut Vec<Event>,
+) -> Option<Running> {
+    match running(current, status, now, m, events) {
+        Phase::Running { current } => Some(current),
+        _ => None,
     }
 }
 
@@ -287,15 +285,7 @@ fn chained(
 ) -> Phase {
     let seq = status.block.seq;
     if seq == next.seq {
-        // The PLC starts a waiting start only once the one before ended done, in the same
-        // scan: that one's final counts are exactly the next one's `from`.
-        events.push(Event::Done {
-            tag: current.start.tag,
-            elapsed: None,
-        });
-        events.push(Event::Started { tag: next.tag });
-        let current = Running::new(next, now);
-        return running(current, status, now, m, events);
+        return next_began(&current, next, status, now, m, events);
     }
     if seq != current.start.seq {
         return restarted(&current, &next, now, events);
@@ -308,19 +298,11 @@ fn chained(
             });
             // The waiting start is acted on in the next scan (or was never there): its scans
             // are counted from here.
-            let written = Written {
-                beat: Some(status.block.heartbeat),
-                ..written
-            };
-            starting(next, written, status, now, m, events)
+            let beat = Some(status.block.heartbeat);
+            starting(next, Written { beat, ..written }, status, now, m, events)
         }
         State::Stopped | State::Fault | State::Idle | State::Homing => {
-            events.push(Event::Ended {
-                tag: current.start.tag,
-                outcome: ended(status),
-            });
-            dropped(&next, events);
-            idle(status, m, events)
+            ended_with_next(&current, &next, status, m, events)
         }
         State::Running => {
             let current_phase = running(current, status, now, m, events);
@@ -332,6 +314,40 @@ fn chained(
             waiting_next(current, next, written, seen_waiting, status, m, events)
         }
     }
+}
+
+/// The running start ended otherwise than done (`status`): it ends so, the next is dropped.
+fn ended_with_next(
+    current: &Running,
+    next: &Planned,
+    status: &Status,
+    m: &Machine,
+    events: &mut Vec<Event>,
+) -> Phase {
+    events.push(Event::Ended {
+        tag: current.start.tag,
+        outcome: ended(status),
+    });
+    dropped(next, events);
+    idle(status, m, events)
+}
+
+/// The PLC began the waiting start `next`: it starts one only once the one before (`current`)
+/// ended done, in the same scan, so that one's final counts are exactly `next`'s `from`.
+fn next_began(
+    current: &Running,
+    next: Planned,
+    status: &Status,
+    now: Instant,
+    m: &Machine,
+    events: &mut Vec<Event>,
+) -> Phase {
+    events.push(Event::Done {
+        tag: current.start.tag,
+        elapsed: None,
+    });
+    events.push(Event::Started { tag: next.tag });
+    running(Running::new(next, now), status, now, m, events)
 }
 
 /// A seq that is neither the running start's nor the next's: another host started something.

@@ -41,20 +41,26 @@ impl<G> Runner<G> {
             OpKind::Wait { .. } => self.prepare(pc, Then::Wait, seen),
             OpKind::Set(writes) => Action::Write(writes),
             OpKind::Dwell(d) => Action::Dwell(d),
-            OpKind::Loop { to, exit } => match exit {
-                LoopExit::Count(n) => {
-                    let ran = self.round.loops.entry(pc).or_insert(1);
-                    if *ran < n {
-                        *ran += 1;
-                        self.back_to(to, seen)
-                    } else {
-                        self.round.loops.remove(&pc);
-                        self.next(Next::Go(pc + 1), seen)
-                    }
+            OpKind::Loop { to, exit } => self.loop_op(to, exit, seen),
+        }
+    }
+
+    /// Loop op `self.pc`, back to op `to` until `exit`.
+    fn loop_op(&mut self, to: usize, exit: LoopExit, seen: &Seen) -> Action<G> {
+        let pc = self.pc;
+        match exit {
+            LoopExit::Count(n) => {
+                let ran = self.round.loops.entry(pc).or_insert(1);
+                if *ran < n {
+                    *ran += 1;
+                    self.back_to(to, seen)
+                } else {
+                    self.round.loops.remove(&pc);
+                    self.next(Next::Go(pc + 1), seen)
                 }
-                LoopExit::Stop => self.back_to(to, seen),
-                LoopExit::Until(until) => Action::Decide(until),
-            },
+            }
+            LoopExit::Stop => self.back_to(to, seen),
+            LoopExit::Until(until) => Action::Decide(until),
         }
     }
 

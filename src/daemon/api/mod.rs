@@ -70,6 +70,9 @@ pub use listen::{HEADER_READ_TIMEOUT, serve, serve_with};
 
 use super::RobotHandle;
 
+/// A robot's resource: every route about one robot is under it.
+const ROBOT: &str = "/v1/robots/{name}";
+
 /// What every handler sees: the robots and the signal that the daemon is closing.
 #[derive(Debug, Clone)]
 pub struct Api {
@@ -119,52 +122,14 @@ impl Api {
 
     /// The routes; with a token, every request must carry it as `Authorization: Bearer`.
     pub fn router(&self, token: Option<BearerToken>) -> Router {
-        let robot = "/v1/robots/{name}";
         let router = Router::new()
             .route("/v1/robots", get(handlers::robots))
-            .route(robot, get(handlers::robot))
+            .route(ROBOT, get(handlers::robot))
             .route("/v1/live", get(live::all))
-            .route(&format!("{robot}/live"), get(live::one))
-            .route(
-                &format!("{robot}/speed-override"),
-                get(live::get_override).put(live::put_override),
-            )
-            .route(&format!("{robot}/moves"), post(handlers::submit))
-            .route(&format!("{robot}/paths"), post(handlers::submit_path))
-            .route(&format!("{robot}/moves/{{id}}"), get(handlers::report))
-            .route(
-                &format!("{robot}/moves/{{id}}/events"),
-                get(handlers::events),
-            )
-            .route(&format!("{robot}/stop"), post(handlers::stop))
-            .route(
-                &format!("{robot}/cycles"),
-                get(cycles::status).post(cycles::run),
-            )
-            .route(&format!("{robot}/cycles/stop"), post(cycles::stop))
-            .route(&format!("{robot}/cycles/pause"), post(cycles::pause))
-            .route(&format!("{robot}/cycles/resume"), post(cycles::resume))
-            .route(&format!("{robot}/clear-fault"), post(handlers::clear_fault))
-            .route(&format!("{robot}/home"), post(handlers::home))
-            .route(&format!("{robot}/mode"), get(mode::get).put(mode::put))
-            .route(
-                &format!("{robot}/registers/{{address}}"),
-                get(registers::read).put(registers::write),
-            )
-            .route(&format!("{robot}/positions"), get(handlers::positions))
-            .route(
-                &format!("{robot}/positions/{{pos}}"),
-                get(handlers::position)
-                    .put(handlers::save_position)
-                    .post(handlers::save_position)
-                    .delete(handlers::delete_position),
-            )
-            .route(&format!("{robot}/pallets"), get(pallets::list))
-            .route(&format!("{robot}/pallets/{{pallet}}"), get(pallets::one))
-            .route(
-                &format!("{robot}/pallets/{{pallet}}/{{command}}"),
-                post(pallets::command),
-            )
+            .route(&format!("{ROBOT}/live"), get(live::one))
+            .merge(Self::motion_routes())
+            .merge(Self::cycle_routes())
+            .merge(Self::store_routes())
             .route("/metrics", get(handlers::metrics))
             .route("/v1/journal", get(journal::read))
             .fallback(handlers::no_route)
@@ -182,6 +147,61 @@ impl Api {
             None => router,
         };
         router.layer(axum::middleware::map_response(body::json_errors))
+    }
+
+    /// What moves a robot or changes how it moves: moves, paths, stop, home, mode, override.
+    fn motion_routes() -> Router<Self> {
+        Router::new()
+            .route(
+                &format!("{ROBOT}/speed-override"),
+                get(live::get_override).put(live::put_override),
+            )
+            .route(&format!("{ROBOT}/moves"), post(handlers::submit))
+            .route(&format!("{ROBOT}/paths"), post(handlers::submit_path))
+            .route(&format!("{ROBOT}/moves/{{id}}"), get(handlers::report))
+            .route(
+                &format!("{ROBOT}/moves/{{id}}/events"),
+                get(handlers::events),
+            )
+            .route(&format!("{ROBOT}/stop"), post(handlers::stop))
+            .route(&format!("{ROBOT}/clear-fault"), post(handlers::clear_fault))
+            .route(&format!("{ROBOT}/home"), post(handlers::home))
+            .route(&format!("{ROBOT}/mode"), get(mode::get).put(mode::put))
+    }
+
+    /// A robot's cycles: status, run, stop, pause, resume.
+    fn cycle_routes() -> Router<Self> {
+        Router::new()
+            .route(
+                &format!("{ROBOT}/cycles"),
+                get(cycles::status).post(cycles::run),
+            )
+            .route(&format!("{ROBOT}/cycles/stop"), post(cycles::stop))
+            .route(&format!("{ROBOT}/cycles/pause"), post(cycles::pause))
+            .route(&format!("{ROBOT}/cycles/resume"), post(cycles::resume))
+    }
+
+    /// What a robot keeps and what it reads: registers, taught positions, pallet counters.
+    fn store_routes() -> Router<Self> {
+        Router::new()
+            .route(
+                &format!("{ROBOT}/registers/{{address}}"),
+                get(registers::read).put(registers::write),
+            )
+            .route(&format!("{ROBOT}/positions"), get(handlers::positions))
+            .route(
+                &format!("{ROBOT}/positions/{{pos}}"),
+                get(handlers::position)
+                    .put(handlers::save_position)
+                    .post(handlers::save_position)
+                    .delete(handlers::delete_position),
+            )
+            .route(&format!("{ROBOT}/pallets"), get(pallets::list))
+            .route(&format!("{ROBOT}/pallets/{{pallet}}"), get(pallets::one))
+            .route(
+                &format!("{ROBOT}/pallets/{{pallet}}/{{command}}"),
+                post(pallets::command),
+            )
     }
 
     /// The robot called `name`, or a 404 naming the robots there are.

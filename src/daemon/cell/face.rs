@@ -191,31 +191,13 @@ impl CellOwner {
 
     async fn face_act(&mut self, robot: &RobotHandle, action: &Action) -> Result<(), Refusal> {
         match action {
-            Action::Hold => {
-                robot
-                    .hold_cycle("move-enable dropped on the cell face")
-                    .await;
-                let _ = robot.stop_robot().await;
-                Ok(())
-            }
-            Action::StopNow => {
-                let _ = robot.stop().await;
-                Ok(())
-            }
-            Action::Stop => {
-                // Nothing to stop is no refusal: a stop is always taken.
-                let _ = robot.stop_cycle(false).await;
+            Action::Hold | Action::StopNow | Action::Stop => {
+                face_stop(robot, action).await;
                 Ok(())
             }
             Action::Reset => {
                 self.remote()?;
-                match robot.clear_fault().await {
-                    Ok(()) => Ok(()),
-                    Err(CommandError::Conflict {
-                        reason: ConflictReason::NoFault,
-                    }) => Err(Refusal::NotNow),
-                    Err(_) => Err(Refusal::NotReady),
-                }
+                face_reset(robot).await
             }
             Action::Pause => {
                 self.remote()?;
@@ -300,6 +282,36 @@ fn face_pallet_choice(robot: &RobotHandle, action: &Action) -> Result<(), Refusa
             PalletOpError::Store(_) => Refusal::NotNow,
         }
     })
+}
+
+/// A stop the face asks (`Hold`, `StopNow`, `Stop`): taken in any mode. Nothing to stop is no
+/// refusal: a stop is always taken.
+async fn face_stop(robot: &RobotHandle, action: &Action) {
+    match action {
+        Action::Hold => {
+            robot
+                .hold_cycle("move-enable dropped on the cell face")
+                .await;
+            let _ = robot.stop_robot().await;
+        }
+        Action::StopNow => {
+            let _ = robot.stop().await;
+        }
+        _ => {
+            let _ = robot.stop_cycle(false).await;
+        }
+    }
+}
+
+/// The face's reset: the fault cleared (none to clear: not now).
+async fn face_reset(robot: &RobotHandle) -> Result<(), Refusal> {
+    match robot.clear_fault().await {
+        Ok(()) => Ok(()),
+        Err(CommandError::Conflict {
+            reason: ConflictReason::NoFault,
+        }) => Err(Refusal::NotNow),
+        Err(_) => Err(Refusal::NotReady),
+    }
 }
 
 /// A move to the face's `home` position, in remote mode.

@@ -115,6 +115,39 @@ pub(super) struct Login {
     password: String,
 }
 
+impl Login {
+    /// The login `body` carries, or the answer refusing it (not a login, or too long).
+    fn read(body: &[u8]) -> Result<Self, Box<Response>> {
+        let login: Self = serde_json::from_slice(body).map_err(|e| {
+            Box::new(refuse(
+                StatusCode::BAD_REQUEST,
+                &format!("a login is {{\"user\": \"...\", \"password\": \"...\"}}: {e}"),
+                "bad-request",
+            ))
+        })?;
+        if login.user.len() > 64 || login.password.len() > 1024 {
+            return Err(Box::new(refuse(
+                StatusCode::BAD_REQUEST,
+                "user is at most 64 bytes and password at most 1024 bytes",
+                "bad-request",
+            )));
+        }
+        Ok(login)
+    }
+}
+
+/// The answer to a login taken: who and their role, the session's cookie set.
+fn logged_in(state: &ConsoleState, cookie: &str, session: &Session) -> Response {
+    let max_age = state.sessions.lasts().as_secs();
+    let set = format!("{COOKIE}={cookie}; HttpOnly; SameSite=Strict; Path=/; Max-Age={max_age}");
+    let mut response =
+        Json(json!({"user": session.user, "role": session.role.name()})).into_response();
+    if let Ok(v) = HeaderValue::from_str(&set) {
+        response.headers_mut().insert(header::SET_COOKIE, v);
+    }
+    response
+}
+
 pub(super) async fn login(
     State(state): State<Arc<ConsoleState>>,
     Extension(Peer(peer)): Extension<Peer>,
@@ -124,39 +157,16 @@ pub(super) async fn login(
     if let Err(e) = origin_allowed(&headers, &state.origins) {
         return refuse(StatusCode::FORBIDDEN, &e.to_string(), "origin");
     }
-    let login: Login = match serde_json::from_slice(&body) {
+    let login = match Login::read(&body) {
         Ok(l) => l,
-        Err(e) => {
-            return refuse(
-                StatusCode::BAD_REQUEST,
-                &format!("a login is {{\"user\": \"...\", \"password\": \"...\"}}: {e}"),
-                "bad-request",
-            );
-        }
+        Err(refused) => return *refused,
     };
-    if login.user.len() > 64 || login.password.len() > 1024 {
-        return refuse(
-            StatusCode::BAD_REQUEST,
-            "user is at most 64 bytes and password at most 1024 bytes",
-            "bad-request",
-        );
-    }
     match state
         .sessions
         .login(client_ip(peer), &login.user, &login.password)
         .await
     {
-        Ok((cookie, session)) => {
-            let max_age = state.sessions.lasts().as_secs();
-            let set =
-                format!("{COOKIE}={cookie}; HttpOnly; SameSite=Strict; Path=/; Max-Age={max_age}");
-            let mut response =
-                Json(json!({"user": session.user, "role": session.role.name()})).into_response();
-            if let Ok(v) = HeaderValue::from_str(&set) {
-                response.headers_mut().insert(header::SET_COOKIE, v);
-            }
-            response
-        }
+        Ok((cookie, session)) => logged_in(&state, &cookie, &session),
         Err(e @ LoginError::Limited(_)) => refuse(
             StatusCode::TOO_MANY_REQUESTS,
             &e.to_string(),

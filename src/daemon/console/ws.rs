@@ -108,17 +108,27 @@ async fn forward(stream: RobotStream, out: mpsc::Sender<String>, lagged: mpsc::S
     }
 }
 
+/// A task per robot that forwards its live stream to the page's `out`box (`lagged` when the
+/// page falls behind).
+fn forward_all(
+    state: &ConsoleState,
+    out: &mpsc::Sender<String>,
+    lagged: &mpsc::Sender<String>,
+) -> Vec<tokio::task::JoinHandle<()>> {
+    state
+        .hub
+        .robots()
+        .values()
+        .map(|stream| tokio::spawn(forward(stream.clone(), out.clone(), lagged.clone())))
+        .collect()
+}
+
 async fn run(mut socket: WebSocket, state: Arc<ConsoleState>, who: Who) {
     let (out, mut outbox) = mpsc::channel::<String>(OUTBOX);
     let (lagged_tx, mut lagged) = mpsc::channel::<String>(1);
     let hello = json!({"type": "hello", "user": who.user, "role": who.role.name()});
     let _ = out.try_send(hello.to_string());
-    let forwarders: Vec<_> = state
-        .hub
-        .robots()
-        .values()
-        .map(|stream| tokio::spawn(forward(stream.clone(), out.clone(), lagged_tx.clone())))
-        .collect();
+    let forwarders = forward_all(&state, &out, &lagged_tx);
     let closing = state.closing.clone();
     loop {
         tokio::select! {
@@ -151,6 +161,11 @@ async fn run(mut socket: WebSocket, state: Arc<ConsoleState>, who: Who) {
     for f in forwarders {
         f.abort();
     }
+    closed(&state, &who).await;
+}
+
+/// Tells every robot's control task that `who`'s page closed: its lease ends.
+async fn closed(state: &ConsoleState, who: &Who) {
     for control in state.controls.values() {
         control
             .send(Request::Lease(Event::Closed {
@@ -189,15 +204,17 @@ fn control_of<'s>(state: &'s ConsoleState, robot: &str) -> Result<&'s Control, s
     })
 }
 
+/// The page's error for a message that is not one the console takes.
+fn unreadable(e: &serde_json::Error) -> serde_json::Value {
+    json!({"type": "error", "error": format!("a console message: {e}")})
+}
+
 /// Takes one message from the page; an error to send back, if any.
 async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json::Value> {
     let incoming: Incoming = match serde_json::from_str(text) {
         Ok(m) => m,
-        Err(e) => {
-            return Some(json!({"type": "error", "error": format!("a console message: {e}")}));
-        }
+        Err(e) => return Some(unreadable(&e)),
     };
-    let control = |robot: &str| control_of(state, robot);
     let session = who.session;
     match incoming {
         Incoming::Jog {
@@ -206,25 +223,22 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             positive,
             seq,
         } => {
-            let c = match control(&robot) {
-                Ok(c) => c,
-                Err(e) => return Some(e),
-            };
-            let (reply, answer) = oneshot::channel();
-            let (who, jog) = (who.clone(), (axis, positive, seq));
-            let request = Request::jog(who, jog, reply);
-            asked(c, request, answer, &robot, "jog").await
+            let jog = (axis, positive, seq);
+            let request = |reply| Request::jog(who.clone(), jog, reply);
+            ask(state, &robot, "jog", request).await
+        }
+        Incoming::TakeSeat { robot } => {
+            let who = who.clone();
+            let request = |reply| Request::TakeSeat { who, reply };
+            ask(state, &robot, "take-seat", request).await
         }
         Incoming::Keep { robot, seq } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::Lease(Event::KeepAlive { session, seq }))
-                .await;
-            None
+            let keep = Event::KeepAlive { session, seq };
+            told(state, &robot, Request::Lease(keep)).await
         }
         Incoming::Release { robot } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::Lease(Event::Release { session })).await;
-            None
+            let release = Event::Release { session };
+            told(state, &robot, Request::Lease(release)).await
         }
         Incoming::Hidden => {
             for c in state.controls.values() {
@@ -232,20 +246,31 @@ async fn take(state: &ConsoleState, who: &Who, text: &str) -> Option<serde_json:
             }
             None
         }
-        Incoming::TakeSeat { robot } => {
-            let c = match control(&robot) {
-                Ok(c) => c,
-                Err(e) => return Some(e),
-            };
-            let (reply, answer) = oneshot::channel();
-            let who = who.clone();
-            let request = Request::TakeSeat { who, reply };
-            asked(c, request, answer, &robot, "take-seat").await
-        }
-        Incoming::LeaveSeat { robot } => {
-            let c = control(&robot).ok()?;
-            c.send(Request::LeaveSeat { session }).await;
-            None
-        }
+        Incoming::LeaveSeat { robot } => told(state, &robot, Request::LeaveSeat { session }).await,
     }
+}
+
+/// Asks robot `robot`'s control task the request `request` makes of its reply: the page's
+/// error when there is no such robot or the task refuses, naming what it was `for_`.
+async fn ask<E: std::fmt::Display>(
+    state: &ConsoleState,
+    robot: &str,
+    for_: &str,
+    request: impl FnOnce(oneshot::Sender<Result<(), E>>) -> Request,
+) -> Option<serde_json::Value> {
+    let c = match control_of(state, robot) {
+        Ok(c) => c,
+        Err(e) => return Some(e),
+    };
+    let (reply, answer) = oneshot::channel();
+    asked(c, request(reply), answer, robot, for_).await
+}
+
+/// Sends robot `robot`'s control task `request`, which has no answer (none to a robot there
+/// is not either).
+async fn told(state: &ConsoleState, robot: &str, request: Request) -> Option<serde_json::Value> {
+    if let Ok(c) = control_of(state, robot) {
+        c.send(request).await;
+    }
+    None
 }

@@ -68,25 +68,9 @@ pub(super) async fn follow(
 ) -> MotionEnd {
     started.extend_from_slice(ids);
     for &id in ids {
-        let Some(mut feed) = handle.subscribe(id) else {
-            return MotionEnd::Failed {
-                why: format!("move {id} has no report"),
-            };
-        };
-        let report = loop {
-            let ended = async {
-                let r = feed.wait_for(|r| r.stage.is_final()).await;
-                r.map(|r| r.clone()).ok()
-            };
-            tokio::select! {
-                ended = ended => break ended,
-                changed = control.changed() => {
-                    if changed.is_err() || control.borrow().stops_now() {
-                        let _ = handle.stop().await;
-                        return MotionEnd::StoppedNow;
-                    }
-                }
-            }
+        let report = match at_end(handle, id, control).await {
+            Ok(report) => report,
+            Err(end) => return end,
         };
         // A hold from outside the PLC is set before the robot is stopped: the move that ends
         // short under it was held.
@@ -110,6 +94,35 @@ pub(super) async fn follow(
         }
     }
     MotionEnd::Done
+}
+
+/// Start `id`'s report once it ends (`None`: its feed closed first); the cycle's end instead
+/// when it has no report, or when its control stops it now (the robot stopped).
+async fn at_end(
+    handle: &RobotHandle,
+    id: MoveId,
+    control: &mut watch::Receiver<Control>,
+) -> Result<Option<MoveReport>, MotionEnd> {
+    let Some(mut feed) = handle.subscribe(id) else {
+        return Err(MotionEnd::Failed {
+            why: format!("move {id} has no report"),
+        });
+    };
+    loop {
+        let ended = async {
+            let r = feed.wait_for(|r| r.stage.is_final()).await;
+            r.map(|r| r.clone()).ok()
+        };
+        tokio::select! {
+            ended = ended => return Ok(ended),
+            changed = control.changed() => {
+                if changed.is_err() || control.borrow().stops_now() {
+                    let _ = handle.stop().await;
+                    return Err(MotionEnd::StoppedNow);
+                }
+            }
+        }
+    }
 }
 
 fn ended_short(r: &MoveReport) -> MotionEnd {

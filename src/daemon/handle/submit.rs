@@ -32,6 +32,25 @@ struct Start {
     behind: bool,
 }
 
+impl Start {
+    /// `checked` anchored here when it is behind a move (a jog then adds to where that move
+    /// ends); else as it is.
+    fn anchor(&self, checked: CheckedOrder, robot: &crate::robot::Robot) -> CheckedOrder {
+        match (self.behind, self.counts) {
+            (true, Some(end)) => checked.anchored_at(robot, end),
+            _ => checked,
+        }
+    }
+
+    /// Whether an order begun here and planned to end at `end` moves the robot (as far as it
+    /// can be told: unknown counts or end, it is taken to).
+    fn moves_to(&self, end: Option<[i64; JOINTS]>) -> bool {
+        self.counts
+            .zip(end)
+            .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1))
+    }
+}
+
 impl RobotHandle {
     /// Checks an order, refuses it at once if the robot cannot take a move now (link down, not
     /// homed, a fault), plans it from where the robot will be when its turn comes (refusing it,
@@ -94,12 +113,7 @@ impl RobotHandle {
         gate: Option<&Gate>,
         permit: Option<Permit>,
     ) -> Result<(Vec<MoveId>, bool), SubmitError> {
-        let taught = self.taught_world()?;
-        let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
-        checked.permit = match permit {
-            Some(permit) => permit,
-            None => self.permit(order.permit.as_deref())?,
-        };
+        let checked = self.checked(&order, permit)?;
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
         // Behind a move that is queued or running, an order starts where that one is planned
@@ -107,10 +121,7 @@ impl RobotHandle {
         // none, a jog stays relative and is anchored to the PLC's counts when it begins (the
         // counts read here may be a poll old); it is checked from them here.
         let start = self.start();
-        let mut checked = match (start.behind, start.counts) {
-            (true, Some(end)) => checked.anchored_at(&self.robot, end),
-            _ => checked,
-        };
+        let mut checked = start.anchor(checked, &self.robot);
         let mut end = None;
         if let Some(counts) = start.counts {
             match self.planned(&checked, counts).await {
@@ -127,26 +138,50 @@ impl RobotHandle {
                 // One start only (a cycle then runs it after its wait, in parts).
                 Err(e) if runs_in_parts(&e) && gate.is_some() => return Err(e.into()),
                 Err(e) if runs_in_parts(&e) => {
-                    return match checked.pose_target(&self.robot.pose_of(&counts)) {
-                        Some(to) => self
-                            .submit_line_in_parts(&order, &checked, (counts, to), e)
-                            .await
-                            .map(|ids| (ids, true)),
-                        None => Err(e.into()),
-                    };
+                    return self.in_parts(&order, &checked, counts, e).await;
                 }
                 Err(e) => return Err(e.into()),
             }
         }
-        let moves = start
-            .counts
-            .zip(end)
-            .is_none_or(|(from, end)| from.iter().zip(&end).any(|(f, e)| (e - f).abs() > 1));
+        let moves = start.moves_to(end);
         let id = self.shared.next_id();
         let report = MoveReport::new(id, &self.robot.name, order);
         self.enqueue(vec![(report, checked)], end, gate.cloned())
             .await
             .map(|ids| (ids, moves))
+    }
+
+    /// `order` (`checked`), refused with `e` from `counts` as one start, queued as a line in
+    /// parts; refused with `e` when it is not a line to a pose.
+    async fn in_parts(
+        &self,
+        order: &MoveOrder,
+        checked: &CheckedOrder,
+        counts: [i64; JOINTS],
+        e: PlanError,
+    ) -> Result<(Vec<MoveId>, bool), SubmitError> {
+        match checked.pose_target(&self.robot.pose_of(&counts)) {
+            Some(to) => self
+                .submit_line_in_parts(order, checked, (counts, to), e)
+                .await
+                .map(|ids| (ids, true)),
+            None => Err(e.into()),
+        }
+    }
+
+    /// `order` checked, with `permit` (`None`: resolved here from its text).
+    fn checked(
+        &self,
+        order: &MoveOrder,
+        permit: Option<Permit>,
+    ) -> Result<CheckedOrder, SubmitError> {
+        let taught = self.taught_world()?;
+        let mut checked = order.check_with(self.robot.motion, &self.limits(), &taught)?;
+        checked.permit = match permit {
+            Some(permit) => permit,
+            None => self.permit(order.permit.as_deref())?,
+        };
+        Ok(checked)
     }
 
     /// Where the next order begins ([`Start`]).

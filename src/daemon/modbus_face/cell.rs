@@ -47,38 +47,50 @@ pub(super) fn ask(request: &Request<'_>, base: u16) -> Option<Result<FaceAsk, Ex
     let offset = usize::from(at.checked_sub(base)?);
     let count = usize::from(count);
     Some(match (kind, values) {
-        (Some(kind), _) => {
-            if !(1..=125).contains(&count) {
-                Err(ExceptionCode::IllegalDataValue)
-            } else if offset + count > BLOCK_WORDS {
-                Err(ExceptionCode::IllegalDataAddress)
-            } else {
-                Ok(FaceAsk::Read {
-                    offset,
-                    count,
-                    kind,
-                })
-            }
-        }
-        (None, Some(values)) => {
-            if !(1..=MAX_WRITE_REGISTERS).contains(&values.len()) {
-                Err(ExceptionCode::IllegalDataValue)
-            } else if offset + values.len() > COMMAND_WORDS {
-                Err(ExceptionCode::IllegalDataAddress)
-            } else {
-                let echo = match request {
-                    Request::WriteSingleRegister(a, w) => Response::WriteSingleRegister(*a, *w),
-                    _ => Response::WriteMultipleRegisters(at, values.len() as u16),
-                };
-                Ok(FaceAsk::Write {
-                    offset,
-                    values,
-                    echo,
-                })
-            }
-        }
+        (Some(kind), _) => read_ask(offset, count, kind),
+        (None, Some(values)) => write_ask(request, (at, offset), values),
         (None, None) => return None,
     })
+}
+
+/// A read of `count` words of `kind` from word `offset` of the block: within the block, and
+/// within what one Modbus read carries.
+fn read_ask(offset: usize, count: usize, kind: ReadKind) -> Result<FaceAsk, ExceptionCode> {
+    if !(1..=125).contains(&count) {
+        Err(ExceptionCode::IllegalDataValue)
+    } else if offset + count > BLOCK_WORDS {
+        Err(ExceptionCode::IllegalDataAddress)
+    } else {
+        Ok(FaceAsk::Read {
+            offset,
+            count,
+            kind,
+        })
+    }
+}
+
+/// `request`, a write of `values` from register `at` (word `offset` of the block): within the
+/// command words, and within what one Modbus write carries; its echo.
+fn write_ask(
+    request: &Request<'_>,
+    (at, offset): (u16, usize),
+    values: Vec<u16>,
+) -> Result<FaceAsk, ExceptionCode> {
+    if !(1..=MAX_WRITE_REGISTERS).contains(&values.len()) {
+        Err(ExceptionCode::IllegalDataValue)
+    } else if offset + values.len() > COMMAND_WORDS {
+        Err(ExceptionCode::IllegalDataAddress)
+    } else {
+        let echo = match request {
+            Request::WriteSingleRegister(a, w) => Response::WriteSingleRegister(*a, *w),
+            _ => Response::WriteMultipleRegisters(at, values.len() as u16),
+        };
+        Ok(FaceAsk::Write {
+            offset,
+            values,
+            echo,
+        })
+    }
 }
 
 /// The reply to a read of `kind`.

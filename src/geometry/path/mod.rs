@@ -370,6 +370,12 @@ impl Path {
         for (i, (_, corner)) in spec.elements.iter().enumerate().take(last) {
             passes.push(pass(i + 1, *corner, &raw[i], &raw[i + 1])?);
         }
+        Ok(Self::joined(&raw, &passes))
+    }
+
+    /// The path of primitives `raw` passing each waypoint between them as `passes` say: each
+    /// cut back by the blends beside it, a corner arc between, a stop where it comes to rest.
+    fn joined(raw: &[Primitive], passes: &[Pass]) -> Self {
         let mut pieces = Vec::new();
         let mut stops_mm = Vec::new();
         let mut s = 0.0;
@@ -408,7 +414,7 @@ impl Path {
             }
         }
         stops_mm.push(s);
-        Ok(Self::new(pieces, stops_mm))
+        Self::new(pieces, stops_mm)
     }
 
     /// Its pieces, in order.

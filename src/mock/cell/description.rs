@@ -450,6 +450,28 @@ fn stack(at: &str, s: &RawStack, signals: &BTreeMap<String, Address>) -> Result<
     })
 }
 
+/// A sensor at `at` that is on while channel `channel`'s count is within `counts`.
+fn position(at: &str, channel: i64, [min, max]: [i64; 2]) -> Result<Follows, CellError> {
+    let channel = usize::try_from(channel)
+        .ok()
+        .filter(|&c| c < CHANNELS)
+        .ok_or_else(|| {
+            invalid(
+                &format!("{at}.channel"),
+                channel,
+                format!("must be within 0..={}", CHANNELS - 1),
+            )
+        })?;
+    if min > max {
+        return Err(invalid(
+            &format!("{at}.counts"),
+            [min, max],
+            "is [lowest, highest]: the first must not be above the second",
+        ));
+    }
+    Ok(Follows::Position { channel, min, max })
+}
+
 fn sensor(
     at: &str,
     s: &RawSensor,
@@ -461,26 +483,7 @@ fn sensor(
             When::parse(text, &|name| bit_of(&key("when"), name, signals).ok())
                 .map_err(|reason| invalid(&key("when"), text, reason.to_string()))?,
         ),
-        (None, Some(channel), Some([min, max])) => {
-            let channel = usize::try_from(channel)
-                .ok()
-                .filter(|&c| c < CHANNELS)
-                .ok_or_else(|| {
-                    invalid(
-                        &key("channel"),
-                        channel,
-                        format!("must be within 0..={}", CHANNELS - 1),
-                    )
-                })?;
-            if min > max {
-                return Err(invalid(
-                    &key("counts"),
-                    [min, max],
-                    "is [lowest, highest]: the first must not be above the second",
-                ));
-            }
-            Follows::Position { channel, min, max }
-        }
+        (None, Some(channel), Some(counts)) => position(at, channel, counts)?,
         _ => {
             return Err(invalid(
                 at,

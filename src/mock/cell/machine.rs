@@ -253,19 +253,11 @@ impl Unit {
             } => {
                 let go = (seen.bit)(press.go);
                 if *phase == Phase::Open && go && !*go_was {
-                    *phase = Phase::Stroke {
-                        until_s: now_s + press.stroke_s,
-                    };
-                    *strokes += 1;
+                    begin_stroke(press, phase, strokes, now_s);
                 }
                 *go_was = go;
                 *phase = settled(*phase, press, now_s);
-                out.extend(press.open.map(|a| (a, *phase == Phase::Open)));
-                out.extend(
-                    press
-                        .moving
-                        .map(|a| (a, matches!(phase, Phase::Stroke { .. }))),
-                );
+                out.extend(press_inputs(press, *phase));
             }
             Self::Stack {
                 stack,
@@ -285,18 +277,47 @@ impl Unit {
                 differs_since_s,
             } => {
                 let now_on = follows(&sensor.follows, seen);
-                if now_on == *on {
-                    *differs_since_s = None;
-                } else {
-                    let since = *differs_since_s.get_or_insert(now_s);
-                    if now_s - since >= sensor.delay_s {
-                        *on = now_on;
-                        *differs_since_s = None;
-                    }
-                }
+                debounce(now_on, on, differs_since_s, sensor.delay_s, now_s);
                 out.push((sensor.input, *on));
             }
             Self::Constant { input, on } => out.push((*input, *on)),
+        }
+    }
+}
+
+/// A press's stroke begun at `now_s`, counted.
+fn begin_stroke(press: &Press, phase: &mut Phase, strokes: &mut u64, now_s: f64) {
+    *phase = Phase::Stroke {
+        until_s: now_s + press.stroke_s,
+    };
+    *strokes += 1;
+}
+
+/// What a press in `phase` tells the PLC: open, moving (each if wired).
+fn press_inputs(press: &Press, phase: Phase) -> impl Iterator<Item = (Address, bool)> {
+    let open = press.open.map(|a| (a, phase == Phase::Open));
+    let moving = press
+        .moving
+        .map(|a| (a, matches!(phase, Phase::Stroke { .. })));
+    open.into_iter().chain(moving)
+}
+
+/// A sensor's output `on` following `now_on` once it has differed for `delay_s`, since
+/// `differs_since_s`.
+fn debounce(
+    now_on: bool,
+    on: &mut bool,
+    differs_since_s: &mut Option<f64>,
+    delay_s: f64,
+    now_s: f64,
+) {
+    if now_on == *on {
+        *differs_since_s = None;
+    } else {
+        let since = *differs_since_s.get_or_insert(now_s);
+        if now_s - since >= delay_s {
+            *on = now_on;
+            *differs_since_s = None;
         }
     }
 }

@@ -54,7 +54,6 @@ pub(super) fn parts_in_turn(
     start: &Start,
     mut ahead: Vec<Ahead>,
 ) -> Result<Vec<Plan>, PlanError> {
-    let min_points = min_points(sampled);
     let mut todo = vec![(0, sampled.last_point())];
     let mut plans = Vec::new();
     let mut counts = start.counts;
@@ -66,13 +65,8 @@ pub(super) fn parts_in_turn(
             todo.push((first, cut));
             continue;
         }
-        let planned = match ahead
-            .iter()
-            .position(|a| a.first == first && a.end == end && a.counts == counts)
-        {
-            Some(i) => ahead.swap_remove(i).plan,
-            None => plan_start(sampled, first, end, counts),
-        };
+        let planned = Ahead::take(&mut ahead, first, end, counts)
+            .unwrap_or_else(|| plan_start(sampled, first, end, counts));
         let split = match planned {
             // A part plays as planned only with one segment per channel.
             Ok(plan)
@@ -86,22 +80,34 @@ pub(super) fn parts_in_turn(
                 plans.push(plan);
                 continue;
             }
-            Err(e) if e.too_big() && end - first >= 2 * min_points => first + (end - first) / 2,
-            Err(e @ PlanError::ToleranceTooSmall { .. }) => {
-                match late_cut(sampled, first, end, min_points) {
-                    Some(cut) => cut,
-                    None => {
-                        return Err(late_start(robot, sampled, first, end)
-                            .unwrap_or_else(|| named(sampled, e, first, end, counts)));
-                    }
-                }
-            }
-            Err(e) => return Err(e),
+            Err(e) => cut_refused(robot, sampled, e, (first, end), counts)?,
         };
         todo.push((split, end));
         todo.push((first, split));
     }
     Ok(plans)
+}
+
+/// Where part `first..end`, refused with `e` from `counts`, is cut in two to be planned again
+/// (too big: in the middle; a tolerance too small: before the late joint moves), or the
+/// refusal (named for the part) when it cannot be.
+fn cut_refused(
+    robot: &Robot,
+    sampled: &Sampled,
+    e: PlanError,
+    (first, end): (usize, usize),
+    counts: [i64; JOINTS],
+) -> Result<usize, PlanError> {
+    let min_points = min_points(sampled);
+    match e {
+        e if e.too_big() && end - first >= 2 * min_points => Ok(first + (end - first) / 2),
+        e @ PlanError::ToleranceTooSmall { .. } => late_cut(sampled, first, end, min_points)
+            .ok_or_else(|| {
+                late_start(robot, sampled, first, end)
+                    .unwrap_or_else(|| named(sampled, e, first, end, counts))
+            }),
+        e => Err(e),
+    }
 }
 
 /// A part planned ahead of its turn ([`planned_ahead`]).
@@ -111,6 +117,21 @@ pub(super) struct Ahead {
     /// The counts it was planned from.
     pub(super) counts: [i64; JOINTS],
     pub(super) plan: Result<Plan, PlanError>,
+}
+
+impl Ahead {
+    /// The plan made ahead of part `first..end` from `counts`, taken out of `ahead`.
+    fn take(
+        ahead: &mut Vec<Self>,
+        first: usize,
+        end: usize,
+        counts: [i64; JOINTS],
+    ) -> Option<Result<Plan, PlanError>> {
+        let i = ahead
+            .iter()
+            .position(|a| a.first == first && a.end == end && a.counts == counts)?;
+        Some(ahead.swap_remove(i).plan)
+    }
 }
 
 /// The parts a bounded-error section is cut into at reversals ([`Sampled::reversal_cut`],

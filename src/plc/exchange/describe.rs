@@ -11,8 +11,8 @@ use crate::contract::Permit;
 use std::time::Duration;
 
 use super::{Contract, ContractError};
-use crate::contract::CHANNELS;
 use crate::contract::machine::{Planned, Status};
+use crate::contract::{CHANNELS, CommandBlock};
 use crate::plc::Plc;
 use crate::table::{DIRECTORY_WORDS, DecodeError, Segment, decode};
 
@@ -56,6 +56,24 @@ impl<P: Plc> Contract<P> {
         }
     }
 
+    /// The table of channel `c` in `bank` of a running start: `segments` of them when the
+    /// command block describes it (then a table that cannot be read is an error), else as many as
+    /// its directory names (then none, if it cannot be read).
+    async fn running_table(
+        &mut self,
+        bank: u16,
+        c: usize,
+        segments: Option<usize>,
+    ) -> Result<Vec<Segment>, ContractError> {
+        match self.read_table(bank, c, segments).await {
+            Err(e) if segments.is_none() => {
+                tracing::debug!(channel = c, error = %e, "no table to bound the channel by");
+                Ok(Vec::new())
+            }
+            read => read,
+        }
+    }
+
     /// Describes start `seq`, found running with `status`, as `tag` (see the module docs).
     pub async fn describe_running(
         &mut self,
@@ -65,24 +83,9 @@ impl<P: Plc> Contract<P> {
     ) -> Result<Planned, ContractError> {
         let block = self.command_block().await?;
         let known = block.seq == seq;
-        let bank = if known {
-            block.bank
-        } else {
-            1 - block.bank.min(1)
-        };
         let elapsed = status.block.elapsed;
-        let mut planned = Planned {
-            tag,
-            seq,
-            bank,
-            from: if known { block.from } else { elapsed },
-            targets: None,
-            envelope: std::array::from_fn(|c| (elapsed[c], elapsed[c])),
-            duration: Duration::ZERO,
-            // Its plan is not known here: its progress is the clock's.
-            curve: None,
-            permit: if known { block.permit } else { Permit::NONE },
-        };
+        let mut planned = unbounded(tag, seq, &block, elapsed);
+        let bank = planned.bank;
         let mut targets = planned.from;
         for c in 0..CHANNELS {
             let busy = status.block.busy & (1 << c) != 0;
@@ -90,14 +93,7 @@ impl<P: Plc> Contract<P> {
                 continue;
             }
             let segments = known.then(|| usize::from(block.segments[c]));
-            let table = match self.read_table(bank, c, segments).await {
-                Ok(table) => table,
-                Err(e) if !known => {
-                    tracing::debug!(channel = c, error = %e, "no table to bound the channel by");
-                    Vec::new()
-                }
-                Err(e) => return Err(e),
-            };
+            let table = self.running_table(bank, c, segments).await?;
             let (min, max, end, seconds) = bounds(planned.from[c], &table);
             let holds_count = (min..=max).contains(&elapsed[c]);
             if known || (holds_count && !table.is_empty()) {
@@ -110,6 +106,29 @@ impl<P: Plc> Contract<P> {
         }
         planned.targets = known.then_some(targets);
         Ok(planned)
+    }
+}
+
+/// Start `seq` as `tag` before its tables are read, each channel bounded by its count now
+/// (`elapsed`): its bank, `from` and permit `block`'s when that describes it, else the other
+/// bank (a start is only uploaded into the bank that is not running).
+fn unbounded(tag: u64, seq: u16, block: &CommandBlock, elapsed: [i32; CHANNELS]) -> Planned {
+    let known = block.seq == seq;
+    Planned {
+        tag,
+        seq,
+        bank: if known {
+            block.bank
+        } else {
+            1 - block.bank.min(1)
+        },
+        from: if known { block.from } else { elapsed },
+        targets: None,
+        envelope: std::array::from_fn(|c| (elapsed[c], elapsed[c])),
+        duration: Duration::ZERO,
+        // Its plan is not known here: its progress is the clock's.
+        curve: None,
+        permit: if known { block.permit } else { Permit::NONE },
     }
 }
 

@@ -14,6 +14,28 @@
 mod describe;
 #[cfg(any(test, feature = "testing"))]
 pub mod driver;
+
+/// The command block `start` begins, no channel placed yet: its bank and permit checked.
+fn block_of(start: &StartBlock) -> Result<CommandBlock, ContractError> {
+    let bank = start.bank;
+    if bank >= crate::contract::BANKS {
+        return Err(ContractError::BadBank { bank });
+    }
+    if !start.permit.is_well_formed() {
+        return Err(ContractError::BadPermit {
+            permit: start.permit,
+        });
+    }
+    Ok(CommandBlock {
+        command: Command::None.word(),
+        seq: start.seq,
+        bank,
+        from: start.from,
+        permit: start.permit,
+        ..CommandBlock::default()
+    })
+}
+
 #[cfg(test)]
 mod tests;
 mod upload;
@@ -692,23 +714,8 @@ impl<P: Plc> Contract<P> {
         tables: &[ValidTable],
         base: [usize; CHANNELS],
     ) -> Result<(CommandBlock, Vec<Write>, Vec<Write>), ContractError> {
-        let bank = start.bank;
-        if bank >= crate::contract::BANKS {
-            return Err(ContractError::BadBank { bank });
-        }
-        if !start.permit.is_well_formed() {
-            return Err(ContractError::BadPermit {
-                permit: start.permit,
-            });
-        }
-        let mut block = CommandBlock {
-            command: Command::None.word(),
-            seq: start.seq,
-            bank,
-            from: start.from,
-            permit: start.permit,
-            ..CommandBlock::default()
-        };
+        let mut block = block_of(start)?;
+        let bank = block.bank;
         let mut writes: Vec<Write> = Vec::with_capacity(tables.len() + 1);
         let mut directories: Vec<Write> = Vec::new();
         for t in tables {

@@ -187,25 +187,13 @@ impl<'a> Track<'a> {
             } else {
                 Direction::Down
             };
-            match spans.last_mut() {
-                Some(span) if span.start.direction == direction => {
-                    span.one_stretch &= !bent;
-                    span.last_interval = i;
-                }
-                _ => spans.push(Span {
-                    start: RunStart {
-                        first: k,
-                        direction,
-                        count,
-                    },
-                    n: 0,
-                    first_interval: i,
-                    last_interval: i,
-                    one_stretch: true,
-                }),
-            }
+            let start = RunStart {
+                first: k,
+                direction,
+                count,
+            };
+            let span = run_of(&mut spans, start, i, bent);
             // A count that starts off its track crosses where the track holds still.
-            let span = spans.last_mut().expect("a run");
             span.one_stretch &= self.moves(i, d as f64);
             bent = false;
             w.crossed.push((k, i));
@@ -460,4 +448,24 @@ impl<'a> Track<'a> {
         *interval = i;
         self.at(i, level)
     }
+}
+
+/// The run interval `i` crosses in: the last run, carried on when it goes `start`'s way (no
+/// longer one stretch if the intervals since its last crossing were `bent`), else a new run
+/// begun at `start`.
+fn run_of(spans: &mut Vec<Span>, start: RunStart, i: usize, bent: bool) -> &mut Span {
+    match spans.last_mut() {
+        Some(span) if span.start.direction == start.direction => {
+            span.one_stretch &= !bent;
+            span.last_interval = i;
+        }
+        _ => spans.push(Span {
+            start,
+            n: 0,
+            first_interval: i,
+            last_interval: i,
+            one_stretch: true,
+        }),
+    }
+    spans.last_mut().expect("a run")
 }
