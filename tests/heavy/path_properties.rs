@@ -523,20 +523,7 @@ fn check(
         .filter(|(i, (_, c))| *i + 1 == req.elements.len() || *c == Corner::Stop)
         .map(|(i, _)| i)
         .collect();
-    // The planner may stop the tool inside a section too, where a part too short to chain
-    // behind would have been (src/plan/path/short.rs): every stop waypoint still ends a
-    // section, in order, and each added stop ends a section of its own.
-    prop_assert!(planned.sections.len() >= stops.len());
-    let mut ends = planned.sections.iter().map(|s| s.end_counts());
-    for &w in &stops {
-        let want = counts_at(robot, &route.waypoints[w].to);
-        prop_assert!(
-            ends.any(|end| end == want),
-            "no section ends at waypoint {}",
-            w + 1
-        );
-    }
-    prop_assert!(ends.next().is_none());
+    sections_end_at_the_stops(robot, route, planned, &stops)?;
     for section in &planned.sections {
         let parts = &section.starts;
         prop_assert!(!parts.is_empty());
@@ -931,4 +918,30 @@ fn a_wrist_reversing_at_a_blend_leaves_it_within_its_max_accel() {
             );
         }
     }
+}
+
+/// Every stop waypoint (`stops`, their indices) ends a section of `planned`, in order; the
+/// planner may stop the tool inside a section too, where a part too short to chain behind would
+/// have been (src/plan/path/short.rs), and each such stop ends a section of its own.
+fn sections_end_at_the_stops(
+    robot: &Robot,
+    route: &Route,
+    planned: &linterpd::plan::PathPlan,
+    stops: &[usize],
+) -> Result<(), TestCaseError> {
+    prop_assert!(planned.sections.len() >= stops.len());
+    let mut ends = planned
+        .sections
+        .iter()
+        .map(linterpd::plan::SectionPlan::end_counts);
+    for &w in stops {
+        let want = counts_at(robot, &route.waypoints[w].to);
+        prop_assert!(
+            ends.any(|end| end == want),
+            "no section ends at waypoint {}",
+            w + 1
+        );
+    }
+    prop_assert!(ends.next().is_none());
+    Ok(())
 }
