@@ -24,6 +24,7 @@
 
 use nalgebra::Vector3;
 use serde_json::json;
+use thiserror::Error;
 
 use super::check::{Flattener, Here, ProgramError};
 use super::program::StepDoc;
@@ -60,7 +61,7 @@ impl Flattener<'_, '_> {
             let before = &run[n - 1];
             let next = self.next_move(steps.get(n), before, here, n)?;
             same_motion(&run[0].order, &next.order, here.step)
-                .map_err(|r| here.later(n, None).fail(r))?;
+                .map_err(|r| here.later(n, None).fail(r.to_string()))?;
             run.push(next);
         }
         for k in 1..run.len() - 1 {
@@ -68,7 +69,7 @@ impl Flattener<'_, '_> {
             if let (Some(b), Some(p), Some(a)) = (before.at_mm, at.at_mm, after.at_mm) {
                 let blend_mm = at.blend_mm.unwrap_or_default();
                 corner(b, p, a, blend_mm, here.step + k + 1)
-                    .map_err(|r| here.later(k, None).fail(r))?;
+                    .map_err(|r| here.later(k, None).fail(r.to_string()))?;
             }
         }
         let order = path_of(&run);
@@ -176,33 +177,91 @@ fn motion_keys(o: &MoveOrder) -> [(&'static str, Option<String>); 8] {
     ]
 }
 
+/// Why a blended run's moves or corner cannot be one path, in the words of the refusal.
+#[derive(Debug, Error)]
+pub(super) enum BlendError {
+    /// A move of the run moves otherwise than its first.
+    #[error(
+        "this move's {key} ({this}) differs from step {first_step}'s ({first}): the moves of a \
+         blended run are one path with one motion and one permit; give them the same or leave \
+         out blend_mm"
+    )]
+    OtherMotion {
+        key: &'static str,
+        this: String,
+        first: String,
+        first_step: usize,
+    },
+    /// The blended move does not move the tool.
+    #[error(
+        "the move ends where it starts: a blended move must move the tool (leave it out, or its \
+         blend_mm)"
+    )]
+    NoMove,
+    /// The move after it ends where this one does.
+    #[error(
+        "blend_mm = {blend_mm}: step {next_step} ends where this move ends: there is no corner \
+         to round (leave out blend_mm)"
+    )]
+    NoCorner { blend_mm: f64, next_step: usize },
+    /// The move after it turns back.
+    #[error(
+        "blend_mm = {blend_mm}: step {next_step} turns back by {turn_deg:.1} deg from this move: \
+         no blend can round that (leave out blend_mm to stop there)"
+    )]
+    TurnsBack {
+        blend_mm: f64,
+        next_step: usize,
+        turn_deg: f64,
+    },
+    /// The corner's path cannot be built otherwise.
+    #[error("blend_mm = {blend_mm}: {source}")]
+    Path {
+        blend_mm: f64,
+        #[source]
+        source: PathError,
+    },
+    /// The blend is more than half the shorter move beside it.
+    #[error(
+        "blend_mm = {blend_mm} is more than this corner allows: at most {max_mm:.1} mm, half the \
+         shorter of the moves beside it (this move {into_mm:.1} mm, step {next_step}'s \
+         {out_of_mm:.1} mm)"
+    )]
+    TooLarge {
+        blend_mm: f64,
+        max_mm: f64,
+        into_mm: f64,
+        out_of_mm: f64,
+        next_step: usize,
+    },
+}
+
 /// Whether `next` moves as `first` (step `first_step`) does: one path has one motion.
-fn same_motion(first: &MoveOrder, next: &MoveOrder, first_step: usize) -> Result<(), String> {
-    let shown = |v: &Option<String>| v.clone().unwrap_or_else(|| "not given".to_owned());
+fn same_motion(first: &MoveOrder, next: &MoveOrder, first_step: usize) -> Result<(), BlendError> {
+    let shown = |v: Option<String>| v.unwrap_or_else(|| "not given".to_owned());
     for ((key, a), (_, b)) in motion_keys(first).into_iter().zip(motion_keys(next)) {
         if a != b {
-            return Err(format!(
-                "this move's {key} ({}) differs from step {first_step}'s ({}): the moves of a \
-                 blended run are one path with one motion and one permit; give them the same \
-                 or leave out blend_mm",
-                shown(&b),
-                shown(&a)
-            ));
+            return Err(BlendError::OtherMotion {
+                key,
+                this: shown(b),
+                first: shown(a),
+                first_step,
+            });
         }
     }
     Ok(())
 }
 
 /// The corner at `at` between the moves from `before` and on to `after`, blended by
-/// `blend_mm`: refused (in words) when the moves beside it cannot hold the blend. `next_step`
-/// is the step of the move after it.
+/// `blend_mm`: refused when the moves beside it cannot hold the blend. `next_step` is the
+/// step of the move after it.
 fn corner(
     before: Vector3<f64>,
     at: Vector3<f64>,
     after: Vector3<f64>,
     blend_mm: f64,
     next_step: usize,
-) -> Result<(), String> {
+) -> Result<(), BlendError> {
     let line = |p: Vector3<f64>| Element::Line {
         to: Pose {
             position_mm: p,
@@ -216,37 +275,29 @@ fn corner(
         },
         elements: vec![(line(at), Pass::Blend(blend_mm)), (line(after), Pass::Stop)],
     };
-    match Path::build(&spec) {
-        Ok(_) => {}
-        Err(PathError::NoLength { element: 1, .. }) => {
-            return Err(
-                "the move ends where it starts: a blended move must move the tool \
-                        (leave it out, or its blend_mm)"
-                    .to_owned(),
-            );
-        }
-        Err(PathError::NoLength { .. }) => {
-            return Err(format!(
-                "blend_mm = {blend_mm}: step {next_step} ends where this move ends: there is no \
-                 corner to round (leave out blend_mm)"
-            ));
-        }
-        Err(PathError::Reversal { turn_deg, .. }) => {
-            return Err(format!(
-                "blend_mm = {blend_mm}: step {next_step} turns back by {turn_deg:.1} deg from \
-                 this move: no blend can round that (leave out blend_mm to stop there)"
-            ));
-        }
-        Err(e) => return Err(format!("blend_mm = {blend_mm}: {e}")),
-    }
-    let (into, out_of) = ((at - before).norm(), (after - at).norm());
-    let max_mm = into.min(out_of) / 2.0;
+    Path::build(&spec).map_err(|e| match e {
+        PathError::NoLength { element: 1, .. } => BlendError::NoMove,
+        PathError::NoLength { .. } => BlendError::NoCorner {
+            blend_mm,
+            next_step,
+        },
+        PathError::Reversal { turn_deg, .. } => BlendError::TurnsBack {
+            blend_mm,
+            next_step,
+            turn_deg,
+        },
+        source => BlendError::Path { blend_mm, source },
+    })?;
+    let (into_mm, out_of_mm) = ((at - before).norm(), (after - at).norm());
+    let max_mm = into_mm.min(out_of_mm) / 2.0;
     if blend_mm > max_mm + 1e-9 {
-        return Err(format!(
-            "blend_mm = {blend_mm} is more than this corner allows: at most {max_mm:.1} mm, half \
-             the shorter of the moves beside it (this move {into:.1} mm, step {next_step}'s \
-             {out_of:.1} mm)"
-        ));
+        return Err(BlendError::TooLarge {
+            blend_mm,
+            max_mm,
+            into_mm,
+            out_of_mm,
+            next_step,
+        });
     }
     Ok(())
 }
@@ -314,13 +365,13 @@ fn describe(run: &[RunMove], first: usize) -> String {
 /// `step`), checked once the run's start `from` is known: its blend against the move into it.
 ///
 /// # Errors
-/// Why it cannot be blended, in words.
+/// Why it cannot be blended.
 pub(super) fn first_corner(
     ctx: &super::Context<'_>,
     order: &PathOrder,
     from: [i64; JOINTS],
     step: usize,
-) -> Result<(), String> {
+) -> Result<(), BlendError> {
     let robot = ctx.robot;
     let lookup = |name: &str| {
         ctx.taught.get(name).map(|p| {

@@ -89,7 +89,8 @@ pub(super) fn check(
         if let (OpKind::Path(order), At::Known(from)) = (&op.kind, at[i])
             && blended.contains(&i)
         {
-            super::blend::first_corner(ctx, order, from, op.at.step).map_err(&fail)?;
+            super::blend::first_corner(ctx, order, from, op.at.step)
+                .map_err(|e| fail(e.to_string()))?;
         }
         match (&op.kind, at[i]) {
             (OpKind::Move(_) | OpKind::Path(_), At::Known(from)) => {

@@ -133,13 +133,13 @@ mod tests {
         .collect()
     }
 
-    fn resolved(text: &str) -> Result<Permit, String> {
+    fn resolved(text: &str) -> Result<Permit, PermitError> {
         let signals = signals();
         let names = PermitNames {
             signals: &signals,
             inputs: &InputWord::DEFAULTS,
         };
-        resolve(text, names).map_err(|e| e.to_string())
+        resolve(text, names)
     }
 
     #[test]
@@ -169,7 +169,7 @@ mod tests {
             ("X5 & & X6", "empty term"),
             ("  ", "is empty"),
         ] {
-            let e = resolved(text).unwrap_err();
+            let e = resolved(text).unwrap_err().to_string();
             assert!(
                 e.contains(words) && e.contains(&format!("{text:?}")),
                 "{text}: {e}"

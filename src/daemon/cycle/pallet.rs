@@ -18,6 +18,7 @@
 use std::collections::BTreeMap;
 
 use serde_json::json;
+use thiserror::Error;
 
 use crate::cycle::PalletView;
 use crate::cycle::check::{Leg, PalletAct};
@@ -35,6 +36,34 @@ const HERE_MM: f64 = 0.01;
 /// Closer than this in tool angle, rad.
 const HERE_RAD: f64 = 1e-6;
 
+/// Why a pallet step cannot be taken (the runner reads it in words).
+#[derive(Debug, Error)]
+enum PalletStepError {
+    /// The step names a pallet the program was not checked with.
+    #[error("pallet {pallet:?} is not one the program was checked with")]
+    NotChecked { pallet: String },
+    /// The store refused the counter's change.
+    #[error(transparent)]
+    Store(#[from] PalletStoreError),
+    /// A way in or out with no slot to lead to.
+    #[error(
+        "pallet {pallet:?} has no slot in progress to go {into} (counter at slot {index}{interrupted})",
+        into = if *.leg == Leg::In { "into" } else { "out of" },
+        interrupted = if *.interrupted {
+            ", its last place interrupted: the operator chooses redo or go on"
+        } else {
+            ""
+        }
+    )]
+    NoSlot {
+        pallet: String,
+        leg: Leg,
+        index: usize,
+        /// The counter's last place was interrupted.
+        interrupted: bool,
+    },
+}
+
 /// The pallets a cycle runs: the patterns its program was checked against, by name.
 pub(super) struct Palletising {
     patterns: BTreeMap<String, Pattern>,
@@ -45,23 +74,33 @@ impl Palletising {
         Self { patterns }
     }
 
-    fn pattern(&self, pallet: &str) -> Result<&Pattern, String> {
+    fn pattern(&self, pallet: &str) -> Result<&Pattern, PalletStepError> {
         self.patterns
             .get(pallet)
-            .ok_or_else(|| format!("pallet {pallet:?} is not one the program was checked with"))
+            .ok_or_else(|| PalletStepError::NotChecked {
+                pallet: pallet.to_owned(),
+            })
     }
 
     /// Changes `pallet`'s counter (on disk before this returns): `Counted(None)`, or why not.
     pub(super) fn count(&self, handle: &RobotHandle, pallet: &str, act: PalletAct) -> Event<Gate> {
-        Event::Counted(self.change(handle, pallet, act).err())
+        Event::Counted(
+            self.change(handle, pallet, act)
+                .err()
+                .map(|e| e.to_string()),
+        )
     }
 
-    fn change(&self, handle: &RobotHandle, pallet: &str, act: PalletAct) -> Result<(), String> {
+    fn change(
+        &self,
+        handle: &RobotHandle,
+        pallet: &str,
+        act: PalletAct,
+    ) -> Result<(), PalletStepError> {
         let pattern = self.pattern(pallet)?;
         let len = pattern.len();
         let robot = handle.robot().name.as_str();
         let store = handle.pallet_counters();
-        let said = |e: PalletStoreError| e.to_string();
         match act {
             PalletAct::Begin => store.change(robot, pallet, |c| c.begin(pallet, len).map(drop)),
             PalletAct::Arrived => store.change(robot, pallet, |c| c.arrived(pallet).map(drop)),
@@ -70,9 +109,7 @@ impl Palletising {
                 Ok(())
             }),
             PalletAct::Advance => {
-                let (slot, full) = store
-                    .change(robot, pallet, |c| Ok((c.advance(len), c.full)))
-                    .map_err(said)?;
+                let (slot, full) = store.change(robot, pallet, |c| Ok((c.advance(len), c.full)))?;
                 let journal = handle.journal();
                 let layer = pattern.slot(slot).map_or(0, |s| s.layer);
                 journal.pallet_placed(robot, pallet, from_1(slot), from_1(layer));
@@ -82,7 +119,7 @@ impl Palletising {
                 return Ok(());
             }
         }
-        .map_err(said)
+        .map_err(PalletStepError::from)
     }
 
     /// `pallet`'s counter as a condition reads it (`None`: not one of the program's pallets).
@@ -112,7 +149,7 @@ impl Palletising {
     ) -> Event<Gate> {
         let slot = match self.slot_in_progress(handle, pallet, leg) {
             Ok(slot) => slot,
-            Err(why) => return Event::Refused(why),
+            Err(why) => return Event::Refused(why.to_string()),
         };
         let from = handle
             .where_next_begins()
@@ -143,7 +180,7 @@ impl Palletising {
         handle: &RobotHandle,
         pallet: &str,
         leg: Leg,
-    ) -> Result<&Slot, String> {
+    ) -> Result<&Slot, PalletStepError> {
         let pattern = self.pattern(pallet)?;
         let c = handle.pallet_counters().get(&handle.robot().name, pallet);
         let index = match (c.in_progress, leg) {
@@ -151,18 +188,14 @@ impl Palletising {
             (None, Leg::Out) => c.index.checked_sub(1),
             _ => None,
         };
-        index.and_then(|i| pattern.slot(i)).ok_or_else(|| {
-            format!(
-                "pallet {pallet:?} has no slot in progress to go {} (counter at slot {}{})",
-                if leg == Leg::In { "into" } else { "out of" },
-                c.index,
-                if c.needs_choice().is_some() {
-                    ", its last place interrupted: the operator chooses redo or go on"
-                } else {
-                    ""
-                }
-            )
-        })
+        index
+            .and_then(|i| pattern.slot(i))
+            .ok_or_else(|| PalletStepError::NoSlot {
+                pallet: pallet.to_owned(),
+                leg,
+                index: c.index,
+                interrupted: c.needs_choice().is_some(),
+            })
     }
 }
 
