@@ -23,7 +23,7 @@ fn above(p: [f64; 3]) -> [f64; 3] {
 }
 
 /// From P1 up to 100 mm above it, across to 100 mm above P2, down to P2: the two corners
-/// blended. The run is the daemon's first motion (tests/suite/first_path.rs).
+/// blended. The run is the daemon's first motion (`tests/suite/first_path.rs`).
 fn lift_across_down() -> String {
     let step = |p: [f64; 3], blend: &str| format!("[[step]]\nmove = {{ to = {p:?} }}\n{blend}");
     let blend = format!("blend_mm = {BLEND_MM}\n");
