@@ -46,7 +46,9 @@ fn above(p: [f64; 3]) -> [f64; 3] {
 /// The program, blended by `blend_mm` at the four waypoints over the pick and the place, or
 /// stopped at every one (`None`).
 fn program(blend_mm: Option<f64>) -> String {
-    let blend = blend_mm.map(|b| format!("blend_mm = {b}\n")).unwrap_or_default();
+    let blend = blend_mm
+        .map(|b| format!("blend_mm = {b}\n"))
+        .unwrap_or_default();
     let step = |p: [f64; 3], blend: &str| format!("[[step]]\nmove = {{ to = {p:?} }}\n{blend}");
     let dwell = "[[step]]\ndwell = \"100ms\"\n".to_owned();
     [
@@ -172,7 +174,11 @@ async fn run(blend_mm: Option<f64>) -> Measured {
             arrivals.push(p.time_s);
         }
     }
-    assert_eq!(arrivals.len() as u64, CYCLES, "one arrival at the pick a cycle");
+    assert_eq!(
+        arrivals.len() as u64,
+        CYCLES,
+        "one arrival at the pick a cycle"
+    );
     let (first, last) = (pulses[0].time_s, pulses[pulses.len() - 1].time_s);
     Measured {
         cycle_s: (arrivals[arrivals.len() - 1] - arrivals[0]) / (CYCLES - 1) as f64,
