@@ -17,6 +17,7 @@ use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::daemon::{Daemon, MoveOrder, PathOrder, RobotHandle, Stage};
 use linterpd::kinematics::JOINTS;
 use linterpd::mock::SharedMock;
+use linterpd::order::OrderMotion;
 use linterpd::plc::exchange::ContractSettings;
 use linterpd::robot::seed_robot;
 use nalgebra::Vector3;
@@ -56,7 +57,10 @@ fn pick_and_place(start: Option<[f64; 3]>) -> PathOrder {
     }
     PathOrder {
         path,
-        tolerance_mm: Some(0.05),
+        motion: OrderMotion {
+            tolerance_mm: Some(0.05),
+            ..OrderMotion::default()
+        },
         ..PathOrder::default()
     }
 }
