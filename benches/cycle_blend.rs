@@ -22,6 +22,11 @@
 //! pulse to the last, per cycle.
 //!
 //! Run: `cargo bench --bench cycle_blend`
+//!
+//! To see where the time goes: `BLEND_TIMELINE=1` prints one cycle's motions (pulses less than
+//! 40 ms apart) and the gaps between them, per run; `RUST_LOG=linterpd=info` the daemon's
+//! `start written` lines (`upload_s`, `chained`, `behind_s`); `BLEND_MOTION` is added to every
+//! move step's table, e.g. `BLEND_MOTION=', method = "bounded-error", tolerance_mm = 0.05'`.
 
 use std::time::Duration;
 
@@ -49,7 +54,9 @@ fn program(blend_mm: Option<f64>) -> String {
     let blend = blend_mm
         .map(|b| format!("blend_mm = {b}\n"))
         .unwrap_or_default();
-    let step = |p: [f64; 3], blend: &str| format!("[[step]]\nmove = {{ to = {p:?} }}\n{blend}");
+    let extra = std::env::var("BLEND_MOTION").unwrap_or_default();
+    let step =
+        |p: [f64; 3], blend: &str| format!("[[step]]\nmove = {{ to = {p:?}{extra} }}\n{blend}");
     let dwell = "[[step]]\ndwell = \"100ms\"\n".to_owned();
     [
         dwell.clone(),
@@ -80,6 +87,11 @@ struct Measured {
 
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
 async fn main() {
+    // RUST_LOG=linterpd=info shows the daemon's `start written` lines (upload_s, behind_s).
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
     let stopped = run(None).await;
     println!(
         "stopped at every waypoint: cycle {:.3} s (first to last pulse {:.3} s a cycle)",
@@ -155,7 +167,8 @@ async fn run(blend_mm: Option<f64>) -> Measured {
     h.run_cycle("pp", Some(CYCLES)).await.unwrap();
     let s = loop {
         let s = h.cycle().unwrap();
-        if s.state.is_final() {
+        // A faulted cycle stands until cleared: the run ends there (the assert names it).
+        if s.state.is_final() || s.state == CycleState::Faulted {
             break s;
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
@@ -179,9 +192,42 @@ async fn run(blend_mm: Option<f64>) -> Measured {
         CYCLES,
         "one arrival at the pick a cycle"
     );
+    if std::env::var_os("BLEND_TIMELINE").is_some() {
+        timeline(&pulses, arrivals[1], arrivals[2]);
+    }
     let (first, last) = (pulses[0].time_s, pulses[pulses.len() - 1].time_s);
     Measured {
         cycle_s: (arrivals[arrivals.len() - 1] - arrivals[0]) / (CYCLES - 1) as f64,
         motion_s: (last - first) / CYCLES as f64,
     }
+}
+
+/// With `BLEND_TIMELINE` set: the motions of one cycle (from `from` to `to`, s on the trace),
+/// a motion being pulses less than 40 ms apart, with the gaps between them.
+fn timeline(pulses: &[linterpd::mock::PulsePoint], from: f64, to: f64) {
+    let times: Vec<f64> = pulses
+        .iter()
+        .map(|p| p.time_s)
+        .filter(|t| *t > from && *t <= to)
+        .collect();
+    let (mut moving, mut gaps) = (0.0, times[0] - from);
+    let (mut start, mut prev) = (times[0], times[0]);
+    eprintln!("gap {:.3}", times[0] - from);
+    for &t in &times[1..] {
+        if t - prev > 0.040 {
+            eprintln!(
+                "motion {:.3} (at {:.3})\ngap {:.3}",
+                prev - start,
+                start - from,
+                t - prev
+            );
+            moving += prev - start;
+            gaps += t - prev;
+            start = t;
+        }
+        prev = t;
+    }
+    eprintln!("motion {:.3} (at {:.3})", prev - start, start - from);
+    moving += prev - start;
+    eprintln!("cycle {:.3}: motion {moving:.3}, gaps {gaps:.3}", to - from);
 }
