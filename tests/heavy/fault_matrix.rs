@@ -518,7 +518,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             }
             match h.submit_path(&pick_and_place()).await {
                 Ok(parts) => ids.extend(parts),
-                Err(e) => v.0.push(format!("the path was refused: {e}")),
+                Err(e) => refused_by_the_fault(&e, v, "the path"),
             }
         }
         Flow::ZeroBehind => {
@@ -534,7 +534,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             }
             match h.submit_path(&path_off_start()).await {
                 Ok(parts) => ids.extend(parts),
-                Err(e) => v.0.push(format!("the path off its start was refused: {e}")),
+                Err(e) => refused_by_the_fault(&e, v, "the path off its start"),
             }
         }
         Flow::RefusedWhileRunning => {
@@ -765,6 +765,19 @@ async fn cycle_until(h: &RobotHandle, done: impl Fn(linterpd::daemon::CycleState
 thread_local! {
     /// The mock of the case running on this thread (the cycle flows set its inputs).
     static SHARED: std::cell::RefCell<Option<SharedMock>> = const { std::cell::RefCell::new(None) };
+    /// The mock's command at which the case's fault strikes.
+    static STRIKE: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Whether a path refused as `e` was refused by the case's fault: the fault had struck by the
+/// time of the refusal. A path is built from a status block read afresh when it is submitted
+/// from rest, so a fault that strikes that read (a lost link; a PLC restarted, its counts lost)
+/// is answered with a refusal, nothing queued; I1 still holds over every start.
+fn refused_by_the_fault(e: &impl std::fmt::Display, v: &mut Violations, what: &str) {
+    let now = SHARED.with(|s| s.borrow().as_ref().map(|m| m.with(|m| m.commands())));
+    if now.is_none_or(|now| now < STRIKE.with(std::cell::Cell::get)) {
+        v.0.push(format!("{what} was refused before its fault struck: {e}"));
+    }
 }
 
 /// I5, watched as it happens: for each of `ids`, when its report turns done, its targets must
@@ -1004,7 +1017,9 @@ async fn case(flow: Flow, fault: Fault, k: u64) -> Violations {
         driver.abort();
         return v;
     }
-    let script = fault.script(shared.with(|m| m.commands()) + k);
+    let strike = shared.with(|m| m.commands()) + k;
+    STRIKE.with(|s| s.set(strike));
+    let script = fault.script(strike);
     shared.with(|m| m.set_faults(script.parse().unwrap()));
     switch.arm(k);
     let (daemon, h) = if fault == Fault::DaemonRestart {
