@@ -150,8 +150,10 @@ pub enum PalletAct {
     Begin,
     /// The robot is at the slot: its at-slot steps begin.
     Arrived,
-    /// The slot is done: the counter moves on.
+    /// An `advance` step: the counter moves on (refused while a slot is unsure).
     Advance,
+    /// A place's slot is done: the counter moves on, only from the slot the robot reached.
+    SlotDone,
     /// The full pallet was changed: the counter starts again at slot 0.
     Restart,
 }

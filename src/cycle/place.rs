@@ -7,7 +7,7 @@
 //!   PalletPath In         from where the robot is, through the approach, into the slot
 //!   Pallet Arrived        the robot at the slot, on disk
 //!   (the at_slot steps)   set / wait / dwell: the gripper
-//!   Pallet Advance        the slot done, on disk          (not with advance = false)
+//!   Pallet SlotDone       the slot done, on disk          (not with advance = false)
 //!   PalletPath Out        through the retreat
 //!   Skip unless pallet full -> set signal, wait for wait_for, call, reset signal, Restart
 //! ```
@@ -145,7 +145,7 @@ impl Flattener<'_, '_> {
         }
         if step.advance {
             let done = format!("{verb} {pallet}: slot done");
-            self.push_op(here, counter(pallet, PalletAct::Advance), done);
+            self.push_op(here, counter(pallet, PalletAct::SlotDone), done);
         }
         self.push_op(here, path(Leg::Out), format!("{verb} {pallet}: retreat"));
         if step.advance {

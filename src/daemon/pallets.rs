@@ -25,6 +25,7 @@ use thiserror::Error;
 
 use super::ids::write_atomically;
 use super::state_file::{self, Trouble};
+use crate::pallet::counter::Phase;
 use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
 use crate::robot::{Position, Robot};
 
@@ -217,6 +218,27 @@ impl PalletCounters {
         self.apply(robot, pallet, true, f)
     }
 
+    /// The PLC under `robot` restarted (its outputs went off: a gripper let go wherever the
+    /// robot was): every slot of its pallets in progress, whatever its phase, becomes unsure, as
+    /// a restart of the daemon makes it ([`Counter::restored`]). Returns the pallets and slots
+    /// made unsure.
+    ///
+    /// # Errors
+    /// The write that failed (nothing changed).
+    pub fn interrupted(&self, robot: &str) -> Result<Vec<(String, usize)>, PalletStoreError> {
+        let mut unsure = Vec::new();
+        for (pallet, counter) in self.of(robot) {
+            if let Some(p) = counter.in_progress.filter(|p| p.phase != Phase::Unsure) {
+                self.change(robot, &pallet, |c| {
+                    *c = c.restored();
+                    Ok(())
+                })?;
+                unsure.push((pallet, p.slot));
+            }
+        }
+        Ok(unsure)
+    }
+
     fn apply<T>(
         &self,
         robot: &str,
@@ -378,5 +400,25 @@ mod tests {
         let file: PalletsFile = serde_json::from_str(&text).unwrap();
         let c = file.robots["r"]["out"];
         assert_eq!(c.in_progress.map(|p| p.phase), Some(Phase::AtSlot));
+    }
+
+    #[test]
+    fn a_plc_restart_makes_every_slot_in_progress_unsure_on_disk() {
+        let dir = fresh_dir("pallets-plc-restart");
+        let store = PalletCounters::in_state_dir(&dir);
+        place(&store, 3);
+        store.change("r", "out", |c| c.begin("out", 3)).unwrap();
+        store.change("r", "in", |c| c.begin("in", 3)).unwrap();
+        store.change("r", "in", |c| c.arrived("in")).unwrap();
+        store.change("r", "done", |c| Ok(c.advance(3))).unwrap();
+        let unsure = store.interrupted("r").unwrap();
+        assert_eq!(unsure, [("in".to_owned(), 0), ("out".to_owned(), 1)]);
+        assert_eq!(store.get("r", "out").needs_choice(), Some(1));
+        assert_eq!(store.get("r", "done").needs_choice(), None);
+        let text = std::fs::read_to_string(dir.join(PALLETS_FILE)).unwrap();
+        let file: PalletsFile = serde_json::from_str(&text).unwrap();
+        assert_eq!(file.robots["r"]["in"].needs_choice(), Some(0));
+        // Once unsure, nothing more to mark.
+        assert!(store.interrupted("r").unwrap().is_empty());
     }
 }

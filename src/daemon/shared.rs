@@ -35,6 +35,9 @@ pub struct Incidents {
     pub count: u64,
     /// The last one, in words.
     pub last: Option<String>,
+    /// How many of them were restarts of the PLC (its outputs and non-hold relays went off: a
+    /// gripper let go).
+    pub restarts: u64,
 }
 
 /// One robot as its worker last published it.
@@ -162,10 +165,11 @@ impl Publisher {
 
     /// The PLC restarted, stalled or went to PROG mode, or the link was lost past a move's end
     /// (`why`): counted, and every watcher woken.
-    pub(super) fn incident(&self, why: String) {
+    pub(super) fn incident(&self, why: String, restart: bool) {
         self.0.send_modify(|s| {
             s.incidents.count += 1;
             s.incidents.last = Some(why);
+            s.incidents.restarts += u64::from(restart);
         });
     }
 

@@ -19,6 +19,10 @@ pub const RELAY_WORDS: u16 = 256;
 pub const RELAY_LAST: u16 = RELAY_WORDS * 16 - 1;
 /// Words of X inputs and of Y outputs (X0..=X109F, Y0..=Y109F on an FP-X C60).
 pub const IO_WORDS: u16 = 110;
+/// The first relay word kept through a power cut: WR248..=WR255 (R2480..=R255F) is the FP-X's
+/// fixed hold area (kept without a battery, as the FP0R's is); the relays below it are
+/// non-hold, off at power-up.
+pub const RELAY_HOLD_WORD: u16 = 248;
 
 /// An access outside the mock's memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
@@ -233,6 +237,21 @@ impl Memory {
             words[word] &= !mask;
         }
         Ok(())
+    }
+
+    /// A power cut: every Y output and every non-hold relay (below [`RELAY_HOLD_WORD`]) off.
+    /// Returns the bits that were on, Y then R (bit numbers word * 16 + bit).
+    pub fn power_cut(&mut self) -> (Vec<u32>, Vec<u32>) {
+        let on = |words: &[u16]| -> Vec<u32> {
+            (0..words.len() as u32 * 16)
+                .filter(|b| words[(b / 16) as usize] & (1 << (b % 16)) != 0)
+                .collect()
+        };
+        let hold = usize::from(RELAY_HOLD_WORD);
+        let lost = (on(&self.wy), on(&self.wr[..hold]));
+        self.wy.fill(0);
+        self.wr[..hold].fill(0);
+        lost
     }
 
     /// Reads relay R`relay` (`relay` = word * 16 + bit).

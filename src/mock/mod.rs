@@ -51,12 +51,12 @@ pub use faults::{
     ScriptError, Trigger,
 };
 pub use in_process::InProcess;
-pub use memory::{IO_WORDS, Memory, MemoryError, RELAY_LAST, RELAY_WORDS};
+pub use memory::{IO_WORDS, Memory, MemoryError, RELAY_HOLD_WORD, RELAY_LAST, RELAY_WORDS};
 pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
 pub use modbus_server::{ModbusServer, ModbusServerOptions};
 pub use program::{HeaderError, StartOutcome, StartRecord};
 pub use shared::SharedMock;
-pub use trace::{Anomaly, HostWrite, PulsePoint, Recorder, RestartSeen, write_csv};
+pub use trace::{Anomaly, HostWrite, PowerCut, PulsePoint, Recorder, RestartSeen, write_csv};
 pub use variant::{MockVariant, SMALL_MEWTOCOL_WORDS, SMALL_MODBUS_REGISTERS};
 pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
@@ -413,6 +413,7 @@ impl MockPlc {
             start,
             values,
             after_restart_seen: self.recorder.restart == RestartSeen::Seen,
+            counts: std::array::from_fn(|c| self.engines[c].count()),
         };
         self.recorder.host_writes.push(write);
     }
@@ -423,6 +424,12 @@ impl MockPlc {
     #[must_use]
     pub fn host_writes(&self) -> &[HostWrite] {
         &self.recorder.host_writes
+    }
+
+    /// Every power cut so far, in order, with what it lost.
+    #[must_use]
+    pub fn power_cuts(&self) -> &[PowerCut] {
+        &self.recorder.power_cuts
     }
 
     /// Reads relay R`relay` (word * 16 + bit).
@@ -485,10 +492,19 @@ impl MockPlc {
         self.program.starts()
     }
 
-    /// A power cycle: every channel stops and its count is lost (0), the program starts over with
-    /// a first scan and the homed bit clear. DT memory is kept (the table areas and the command
-    /// block's words are hold registers); the first scan clears the contract's words.
+    /// A power cycle: every channel stops and its count is lost (0), every Y output and every
+    /// non-hold R relay (below WR248) goes off, the program starts over with a first scan and the
+    /// homed bit clear. DT memory is kept (the table areas and the command block's words are
+    /// hold registers); the first scan clears the contract's words. Recorded
+    /// ([`Self::power_cuts`]).
     pub fn power_cycle(&mut self) {
+        let (outputs, relays) = self.memory.power_cut();
+        self.recorder.power_cuts.push(PowerCut {
+            command: self.commands,
+            counts: std::array::from_fn(|c| self.engines[c].count()),
+            outputs,
+            relays,
+        });
         for e in &mut self.engines {
             e.stop();
             e.set_count(0);

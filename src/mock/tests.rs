@@ -791,6 +791,33 @@ fn host_word_is_echoed_and_cleared_by_a_power_cycle_with_the_counts_and_homed_bi
     assert_eq!(m.read_words(host, 1).unwrap(), [0]);
 }
 
+/// A power cut loses what a real FP-X loses at power-up: the counts, every Y output and the
+/// non-hold relays; the hold relays (WR248..) and DT memory stay. What it lost is recorded, with
+/// the counts the robot stood at.
+#[test]
+fn a_power_cut_turns_off_the_outputs_and_the_non_hold_relays_and_records_what_was_lost() {
+    use crate::gateway::Area;
+    let mut m = mock(FrequencyModel::Ideal);
+    m.set_count(1, 1_234);
+    m.host_write_bit(Area::R, 100, true).unwrap();
+    m.host_write_bit(Area::Y, 1, true).unwrap();
+    let hold = u32::from(RELAY_HOLD_WORD) * 16 + 3;
+    m.host_write_bit(Area::R, hold, true).unwrap();
+    m.write_words(100, &[7]).unwrap();
+    assert_eq!(m.host_writes()[0].counts, [0, 1_234, 0, 0]);
+    m.power_cycle();
+    assert!(!m.read_bit(Area::R, 100).unwrap());
+    assert!(!m.read_bit(Area::Y, 1).unwrap());
+    assert!(m.read_bit(Area::R, hold).unwrap());
+    assert_eq!(m.read_words(100, 1).unwrap(), [7]);
+    let cut = &m.power_cuts()[0];
+    assert_eq!(
+        (cut.counts, cut.outputs.clone(), cut.relays.clone()),
+        ([0, 1_234, 0, 0], vec![1], vec![100])
+    );
+    assert_eq!(m.count(1), 0);
+}
+
 #[test]
 fn a_start_while_not_homed_is_refused_with_fault_six() {
     let mut m = MockPlc::new(MockConfig {

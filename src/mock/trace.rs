@@ -71,6 +71,21 @@ pub struct HostWrite {
     /// Whether the mock had power-cycled and a client had read the status block's `host` word
     /// since (the host then knew of the restart before it wrote this).
     pub after_restart_seen: bool,
+    /// The channels' counts as the write landed (where the robot stood).
+    pub counts: [i64; 4],
+}
+
+/// A power cut of the mock ([`super::MockPlc::power_cycle`]): what it lost.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PowerCut {
+    /// The mock's command count at it: a write of the same command landed after it.
+    pub command: u64,
+    /// The channels' counts before they were lost (where the robot stood).
+    pub counts: [i64; 4],
+    /// The Y outputs that were on (and went off).
+    pub outputs: Vec<u32>,
+    /// The non-hold R relays that were on (and went off).
+    pub relays: Vec<u32>,
 }
 
 /// Where the engines put what they did.
@@ -84,6 +99,8 @@ pub struct Recorder {
     pub host_writes: Vec<HostWrite>,
     /// What a client can know of the last power cycle.
     pub restart: RestartSeen,
+    /// Every power cut, in order.
+    pub power_cuts: Vec<PowerCut>,
 }
 
 /// What a client can know of the mock's last power cycle.

@@ -201,6 +201,36 @@ impl Counter {
         slot
     }
 
+    /// A place step's own advance: [`Self::advance`], only from the slot the robot reached
+    /// since the place began (`AtSlot`). Refused while the slot is unsure (a restart of the PC or
+    /// the PLC came: whether the part is there is the operator's to say), or with no slot reached
+    /// (the place resumed after the operator chose: the part it held was placed or let go, and a
+    /// new one is picked by a fresh run). Returns the slot filled.
+    ///
+    /// # Errors
+    /// [`CounterError::Unsure`], or [`CounterError::NoSlot`] with no slot reached.
+    pub fn slot_done(&mut self, pallet: &str, len: usize) -> Result<usize, CounterError> {
+        match self.in_progress {
+            Some(p) if p.phase == Phase::AtSlot => Ok(self.advance(len)),
+            Some(p) if p.phase == Phase::Unsure => Err(unsure(pallet, p.slot, len)),
+            _ => Err(CounterError::NoSlot {
+                pallet: pallet.to_owned(),
+                what: "count as placed (none was reached since its place began)",
+            }),
+        }
+    }
+
+    /// An `advance` step's: [`Self::advance`], refused while the slot in progress is unsure.
+    ///
+    /// # Errors
+    /// [`CounterError::Unsure`].
+    pub fn advance_step(&mut self, pallet: &str, len: usize) -> Result<usize, CounterError> {
+        match self.needs_choice() {
+            Some(slot) => Err(unsure(pallet, slot, len)),
+            None => Ok(self.advance(len)),
+        }
+    }
+
     /// The operator's choice for the unsure slot.
     ///
     /// # Errors
@@ -355,6 +385,31 @@ mod tests {
         }
         .restored();
         assert_eq!(c.needs_choice(), None);
+    }
+
+    /// A place's own advance counts only a slot the robot reached since its place began: not
+    /// one unsure (a restart came), not one the operator chose for (the place resumed after the
+    /// choice holds no part), not one still on its way.
+    #[test]
+    fn a_places_advance_counts_only_a_slot_reached_and_never_one_unsure_or_chosen_for() {
+        let mut c = Counter::default();
+        c.begin("out", 3).unwrap();
+        assert!(matches!(
+            c.slot_done("out", 3),
+            Err(CounterError::NoSlot { .. })
+        ));
+        c.arrived("out").unwrap();
+        let mut unsure = c.restored();
+        assert!(matches!(
+            unsure.slot_done("out", 3),
+            Err(CounterError::Unsure { slot: 0, .. })
+        ));
+        assert!(unsure.advance_step("out", 3).is_err());
+        unsure.choose("out", Choice::GoOn, 3).unwrap();
+        assert!(unsure.slot_done("out", 3).is_err());
+        assert_eq!((unsure.index, unsure.parts), (1, 1));
+        assert_eq!(c.slot_done("out", 3), Ok(0));
+        assert_eq!((c.index, c.parts, c.in_progress), (1, 1, None));
     }
 
     #[test]

@@ -7,6 +7,7 @@ pub mod daemon;
 pub mod exchange;
 pub mod http;
 pub mod moves;
+pub mod places;
 pub mod process;
 pub mod serve;
 pub mod served;

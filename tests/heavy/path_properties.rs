@@ -523,14 +523,8 @@ fn check(
         .filter(|(i, (_, c))| *i + 1 == req.elements.len() || *c == Corner::Stop)
         .map(|(i, _)| i)
         .collect();
-    prop_assert_eq!(planned.sections.len(), stops.len());
-    for (section, &w) in planned.sections.iter().zip(&stops) {
-        prop_assert_eq!(
-            section.end_counts(),
-            counts_at(robot, &route.waypoints[w].to),
-            "section ending at waypoint {} ends elsewhere",
-            w + 1
-        );
+    sections_end_at_the_stops(robot, route, planned, &stops)?;
+    for section in &planned.sections {
         let parts = &section.starts;
         prop_assert!(!parts.is_empty());
         prop_assert!(!parts[0].window.begins_at_speed());
@@ -924,4 +918,30 @@ fn a_wrist_reversing_at_a_blend_leaves_it_within_its_max_accel() {
             );
         }
     }
+}
+
+/// Every stop waypoint (`stops`, their indices) ends a section of `planned`, in order; the
+/// planner may stop the tool inside a section too, where a part too short to chain behind would
+/// have been (src/plan/path/short.rs), and each such stop ends a section of its own.
+fn sections_end_at_the_stops(
+    robot: &Robot,
+    route: &Route,
+    planned: &linterpd::plan::PathPlan,
+    stops: &[usize],
+) -> Result<(), TestCaseError> {
+    prop_assert!(planned.sections.len() >= stops.len());
+    let mut ends = planned
+        .sections
+        .iter()
+        .map(linterpd::plan::SectionPlan::end_counts);
+    for &w in stops {
+        let want = counts_at(robot, &route.waypoints[w].to);
+        prop_assert!(
+            ends.any(|end| end == want),
+            "no section ends at waypoint {}",
+            w + 1
+        );
+    }
+    prop_assert!(ends.next().is_none());
+    Ok(())
 }

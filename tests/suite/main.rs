@@ -21,6 +21,7 @@ mod contract_exchange;
 mod cycles;
 mod daemon;
 mod demo;
+mod first_path;
 mod gateway;
 mod interop_rmodbus;
 mod io_cli;

@@ -4,7 +4,10 @@
 //! same state directory, refusing to place until the operator chooses, then neither skipping a
 //! slot nor placing one twice. The independent record of the places is the mock's: every start
 //! records the channels' counts and the cell's input words (the gripper, R100, is in them), so a
-//! start that begins on a slot's counts with the gripper open is a part left on that slot.
+//! start that begins on a slot's counts with the gripper open is a part left on that slot. A
+//! power cut of the PLC mid-place (the gripper's relay lost with the counts) is followed on the
+//! mock's record of the gripper instead (`tests/common/places.rs`): the relay opening while it
+//! held a part, on a slot's counts, is a part left there.
 
 use crate::common;
 
@@ -18,7 +21,9 @@ use common::exchange::{P1, mock_at_seed_start};
 use linterpd::config::{CellSettings, JournalSettings};
 use linterpd::contract::Layout;
 use linterpd::daemon::pallets::{PALLETS_FILE, PalletCounters, Pallets};
-use linterpd::daemon::{CycleState, CycleStatus, Daemon, DaemonOptions, RobotHandle, RobotSetup};
+use linterpd::daemon::{
+    CycleState, CycleStatus, Daemon, DaemonOptions, PalletCommand, RobotHandle, RobotSetup,
+};
 use linterpd::gateway::{AccessList, Area, GatewaySettings};
 use linterpd::journal::{Journal, Query};
 use linterpd::kinematics::{JOINTS, Kinematics};
@@ -116,7 +121,7 @@ fn spawn(shared: &SharedMock, programs: &Path, state: &Path) -> (Daemon, RobotHa
         robot: common::cylindrical(),
         settings: ContractSettings::default(),
         connect: duplex_connector(shared, None),
-        home_counts: [0; JOINTS],
+        home_counts: counts_at_p1(),
         gateway: GatewaySettings {
             access,
             modbus: None,
@@ -126,6 +131,13 @@ fn spawn(shared: &SharedMock, programs: &Path, state: &Path) -> (Daemon, RobotHa
     let d = Daemon::spawn(vec![setup], &options);
     let h = d.robot(ROBOT).unwrap().clone();
     (d, h, journal)
+}
+
+/// The joints' counts at P1, where the robot homes (after a power cut of the PLC).
+fn counts_at_p1() -> [i64; JOINTS] {
+    let robot = common::cylindrical();
+    let pose = robot.pose_with_wrist_at_zero(P1[0], P1[1], P1[2]).unwrap();
+    robot.counts_of(&robot.kinematics.ik(&pose, None).unwrap())
 }
 
 async fn until<T>(what: &str, mut done: impl FnMut() -> Option<T>) -> T {
@@ -375,5 +387,93 @@ async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot
     let slots = slot_counts(&common::cylindrical(), &pattern);
     let starts = shared.with(|m| m.starts().to_vec());
     assert_eq!(places(&starts, &slots), (0..SLOTS).collect::<Vec<_>>());
+    h.stop_cycle(true).await.unwrap();
+}
+
+/// A power cut of the PLC at slot 2 with the part let go: the cycle faults and stays faulted
+/// (nothing started, written or counted by itself), the slot becomes unsure (on disk, and the
+/// journal says so). The operator homes, goes on (the part is there) and resumes: the cycle,
+/// resumed at its dwell at the slot, faults rather than count the next slot, which it never
+/// reached; a fresh run then places the pallet to full, every slot once.
+#[tokio::test]
+async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_pallet_completes() {
+    let shared = mock_at_seed_start("");
+    let state = temp("power-cut");
+    let programs =
+        common::daemon::programs_dir("pallets", "power-cut", &[("palletise", program())]);
+    let (_d, h, journal) = spawn(&shared, &programs, &state);
+    taking_moves(&h).await;
+    let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
+    let slots = slot_counts(&common::cylindrical(), &pattern);
+    let placed = || common::places::places(&shared, 10 * 16, &slots);
+    h.run_cycle("palletise", None).await.unwrap();
+    until("at slot 2, the gripper open", || {
+        let c = counter(&h);
+        let at = c
+            .in_progress
+            .is_some_and(|p| p.slot == 2 && p.phase == Phase::AtSlot);
+        (at && !gripper_closed(&shared)).then_some(())
+    })
+    .await;
+    shared.with(linterpd::mock::MockPlc::power_cycle);
+    let s = cycle_until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    let why = s.reason.clone().unwrap_or_default();
+    assert!(why.contains("PLC restarted"), "{s:?}");
+    // Never on by itself: nothing started or written, the index not advanced.
+    let before = shared.with(|m| (m.starts().len(), m.host_writes().len()));
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    assert_eq!(
+        shared.with(|m| (m.starts().len(), m.host_writes().len())),
+        before
+    );
+    let c = counter(&h);
+    assert_eq!(
+        (c.index, c.parts, c.needs_choice()),
+        (2, 2, Some(2)),
+        "{c:?}"
+    );
+    assert_eq!(file_counter(&state)["in_progress"]["phase"], "unsure");
+    assert_eq!(placed(), [0, 1, 2], "the part let go at slot 2 is there");
+    journal.flush().await;
+    let said = journal
+        .read(&Query {
+            limit: usize::MAX,
+            ..Query::default()
+        })
+        .unwrap()
+        .into_iter()
+        .any(|e| {
+            matches!(&e.kind, Kind::Fault { reason, .. }
+            if reason.contains("slot 3 was in progress when the PLC restarted"))
+        });
+    assert!(
+        said,
+        "the journal says the restart made slot 3 (from 1) unsure"
+    );
+    // The operator homes, goes on and resumes: resumed at the slot's dwell, the cycle holds no
+    // part and reached no slot since; it faults rather than count slot 3 as placed.
+    h.home().await.unwrap();
+    taking_moves(&h).await;
+    h.pallet_command("out", PalletCommand::GoOn).unwrap();
+    h.clear_fault().await.unwrap();
+    h.resume_cycle().await.unwrap();
+    let s = cycle_until(&h, "faulted again", |s| s.state == CycleState::Faulted).await;
+    let why = s.reason.unwrap_or_default();
+    assert!(why.contains("count as placed"), "{why}");
+    let c = counter(&h);
+    assert_eq!((c.index, c.parts, c.in_progress), (3, 3, None), "{c:?}");
+    // A fresh run picks a part and places the rest.
+    h.stop_cycle(false).await.unwrap();
+    cycle_until(&h, "stopped", |s| s.state == CycleState::Stopped).await;
+    h.run_cycle("palletise", None).await.unwrap();
+    cycle_until(&h, "full", |s| {
+        s.waiting_for
+            .as_deref()
+            .is_some_and(|w| w.contains("pallet_empty"))
+    })
+    .await;
+    let c = counter(&h);
+    assert!(c.full && c.parts == SLOTS as u64, "{c:?}");
+    assert_eq!(placed(), (0..SLOTS).collect::<Vec<_>>());
     h.stop_cycle(true).await.unwrap();
 }

@@ -598,7 +598,7 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
         "step dwell 150ms",
         "dwell 150ms",
         "step place on out: slot done",
-        "pallet out Advance",
+        "pallet out SlotDone",
         "step place on out: retreat",
         "submit out Out",
         "follow [3]",

@@ -33,6 +33,9 @@ impl RobotHandle {
                 "count = 0: run at least 1 cycle".to_owned(),
             ));
         }
+        // Checked from where the robot is (its first blended corner, its reach): read afresh.
+        // A link lost here leaves the check to what it knows.
+        let _ = self.read_afresh_at_rest().await;
         let checked = self.check_program(program)?;
         for note in &checked.unchecked {
             tracing::info!(robot = %self.robot.name, program, "not checked before the run: {note}");

@@ -3,9 +3,9 @@
 //! slot in progress, queued as paths; and what a condition reads of a pallet.
 //!
 //! ```text
-//!   Begin / Arrived / Advance / Restart   the store's change (Counter), Counted(None) once it
+//!   Begin / Arrived / Advance / SlotDone / Restart   the store's change (Counter), Counted(None) once it
 //!                                         is written, Counted(Some(why)) when it is not
-//!   Advance                               journal: pallet_placed (slot, layer from 1), and
+//!   Advance, SlotDone                     journal: pallet_placed (slot, layer from 1), and
 //!                                         pallet_full when that slot was the last
 //!   the way in   from where the next order begins -> approach waypoints -> the slot
 //!   the way out  the slot -> retreat waypoints
@@ -30,6 +30,7 @@ use crate::geometry::Pose;
 use crate::order::PathOrder;
 use crate::pallet::counter::Phase;
 use crate::pallet::{Pattern, Slot};
+use crate::wire::journal::Kind;
 
 /// Closer than this to where the robot will be, a way's first waypoint is passed over, mm.
 const HERE_MM: f64 = 0.01;
@@ -108,8 +109,15 @@ impl Palletising {
                 c.restart();
                 Ok(())
             }),
-            PalletAct::Advance => {
-                let (slot, full) = store.change(robot, pallet, |c| Ok((c.advance(len), c.full)))?;
+            PalletAct::Advance | PalletAct::SlotDone => {
+                let (slot, full) = store.change(robot, pallet, |c| {
+                    let slot = if act == PalletAct::SlotDone {
+                        c.slot_done(pallet, len)?
+                    } else {
+                        c.advance_step(pallet, len)?
+                    };
+                    Ok((slot, c.full))
+                })?;
                 let journal = handle.journal();
                 let layer = pattern.slot(slot).map_or(0, |s| s.layer);
                 journal.pallet_placed(robot, pallet, from_1(slot), from_1(layer));
@@ -120,6 +128,33 @@ impl Palletising {
             }
         }
         .map_err(PalletStepError::from)
+    }
+
+    /// The PLC restarted under the cycle (its outputs went off, the gripper let go wherever the
+    /// robot was): every slot of the robot's pallets in progress becomes unsure, on disk, and
+    /// the journal says which; the cycle places on none of them until the operator chooses.
+    pub(super) fn interrupted(handle: &RobotHandle) {
+        let robot = handle.robot().name.as_str();
+        let journal = handle.journal();
+        match handle.pallet_counters().interrupted(robot) {
+            Ok(unsure) => {
+                for (pallet, slot) in unsure {
+                    let reason = format!(
+                        "pallet {pallet:?}: slot {} was in progress when the PLC restarted (its \
+                         outputs went off): whether the part is on it is unsure; choose redo or \
+                         go on",
+                        from_1(slot)
+                    );
+                    tracing::warn!(robot, "{reason}");
+                    journal.record(Some(robot), Kind::Fault { code: None, reason });
+                }
+            }
+            Err(e) => {
+                let reason = format!("the PLC restarted mid-place and {e}");
+                tracing::error!(robot, "{reason}");
+                journal.record(Some(robot), Kind::Fault { code: None, reason });
+            }
+        }
     }
 
     /// `pallet`'s counter as a condition reads it (`None`: not one of the program's pallets).

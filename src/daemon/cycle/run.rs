@@ -33,8 +33,10 @@ pub(crate) async fn run(
     let name = program.name.clone();
     let pallets = Palletising::new(program.pallets.clone());
     let mut runner = Runner::new(program, count, epoch, Instant::now());
+    let restarts = incidents.borrow().incidents.restarts;
     let mut driver = Driver {
         handle: handle.under(epoch),
+        restarts,
         base: handle,
         epoch,
         incidents,
@@ -71,6 +73,8 @@ struct Driver {
     base: RobotHandle,
     /// The incident count [`Self::handle`] acts under.
     epoch: u64,
+    /// The PLC's restarts the cycle has seen (a restart mid-place makes the slot unsure).
+    restarts: u64,
     /// The robot's snapshot, for its incidents.
     incidents: watch::Receiver<Snapshot>,
     control: watch::Receiver<Control>,
@@ -152,6 +156,11 @@ impl Driver {
     /// Faults the cycle on its step (`why`): the robot stopped, the prepared moves unprepared.
     async fn fault(&mut self, why: String, stop_robot: bool, unprepare: Vec<Prepared<Gate>>) {
         tracing::warn!(robot = %self.handle.robot().name, "cycle faulted: {why}");
+        let restarts = self.incidents.borrow().incidents.restarts;
+        if restarts != self.restarts {
+            self.restarts = restarts;
+            Palletising::interrupted(&self.base);
+        }
         if stop_robot {
             let _ = self.base.stop_robot().await;
         }

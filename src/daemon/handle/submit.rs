@@ -5,6 +5,7 @@
 //! planned from where the one before it ends.
 
 use std::sync::{Arc, OnceLock};
+use std::time::Duration;
 
 use super::RobotHandle;
 use crate::contract::Permit;
@@ -23,6 +24,11 @@ use crate::plan::{
 use crate::plc::PlcMode;
 use crate::robot::Motion;
 use crate::wire::{MoveId, MoveReport, SectionReport};
+
+/// How long an order at rest waits for the status block it is built from
+/// ([`RobotHandle::read_afresh_at_rest`]): the worker reads one at once when asked, so only a
+/// link that fails takes this long.
+const PATH_READ_LIMIT: Duration = Duration::from_secs(5);
 
 /// Where the next order begins: where the last one queued or running ends, else where the PLC
 /// last said the robot is (`None`: no counts read yet).
@@ -138,6 +144,8 @@ impl RobotHandle {
                 // One start only (a cycle then runs it after its wait, in parts).
                 Err(e) if runs_in_parts(&e) && gate.is_some() => return Err(e.into()),
                 Err(e) if runs_in_parts(&e) => {
+                    // A path of the line: built from where it begins, read afresh.
+                    let counts = self.path_start().await?;
                     return self.in_parts(&order, &checked, counts, e).await;
                 }
                 Err(e) => return Err(e.into()),
@@ -193,6 +201,53 @@ impl RobotHandle {
             _ => self.joints_of(snapshot.state.counts),
         };
         Start { counts, behind }
+    }
+
+    /// Where a path (or a line run as a path of its parts) begins, per joint: behind a move
+    /// queued or running, where the last is planned to end; else where a status block read
+    /// after this call says the robot is ([`RobotHandle::read_afresh_at_rest`]). A move is
+    /// planned again from the PLC's counts when its turn comes, but a path's course is built
+    /// here from where it begins, and its first section is refused at its turn when the robot
+    /// is not there.
+    async fn path_start(&self) -> Result<[i64; JOINTS], SubmitError> {
+        self.read_afresh_at_rest().await?;
+        self.start().counts.ok_or_else(|| SubmitError::NotNow {
+            blocker: Blocker::LinkDown,
+            detail: Some("no counts read from the PLC yet".to_owned()),
+        })
+    }
+
+    /// With no move queued or running, waits for a status block read after this call (the
+    /// worker woken to read one at once): what is built from where the robot is (a path's
+    /// course, a cycle's check) must not take it from a block an idle poll old, which may not
+    /// say where it is: the robot moved or its counts were preset since (at connect, the block
+    /// the PLC wrote before its counts were set). Behind a move there is nothing to wait for:
+    /// the next order begins where that one is planned to end.
+    ///
+    /// # Errors
+    /// [`SubmitError::NotNow`] when the link is lost or no block comes within
+    /// [`PATH_READ_LIMIT`]; [`SubmitError::ShuttingDown`] once the worker is gone.
+    pub(crate) async fn read_afresh_at_rest(&self) -> Result<(), SubmitError> {
+        if self.start().behind {
+            return Ok(());
+        }
+        let no_read = |detail: String| SubmitError::NotNow {
+            blocker: Blocker::LinkDown,
+            detail: Some(detail),
+        };
+        let mut reads = self.shared.reads();
+        self.shared.read_soon.notify_one();
+        match tokio::time::timeout(PATH_READ_LIMIT, reads.next()).await {
+            Ok(Ok(())) if self.shared.snapshot().read_at.is_some() => Ok(()),
+            Ok(Ok(())) => Err(no_read(
+                "the link was lost reading where the robot is".to_owned(),
+            )),
+            Ok(Err(_)) => Err(SubmitError::ShuttingDown),
+            Err(_) => Err(no_read(format!(
+                "no status block read from the PLC within {} s",
+                PATH_READ_LIMIT.as_secs()
+            ))),
+        }
     }
 
     /// `checked` planned from `counts`, off the async runtime.
@@ -350,10 +405,7 @@ impl RobotHandle {
         }
         self.can_move_now()?;
         let _turn = self.lane.lock().await;
-        let mut counts = self.start().counts.ok_or(SubmitError::NotNow {
-            blocker: Blocker::LinkDown,
-            detail: Some("no counts read from the PLC yet".to_owned()),
-        })?;
+        let mut counts = self.path_start().await?;
         let taught = self.taught_world()?;
         let lookup = |name: &str| {
             taught.get(name).map(|p| {

@@ -106,7 +106,7 @@ impl Worker {
         for event in events {
             if let Some(why) = incident(event) {
                 tracing::warn!(robot = %self.robot.name, "incident: {why}");
-                self.out.incident(why);
+                self.out.incident(why, matches!(event, Event::Restarted));
             }
         }
     }

@@ -25,6 +25,8 @@ use fillet::{Fillet, NoFillet, fillet};
 const STRAIGHT_RAD: f64 = 1e-6;
 /// The turn (radians) beyond which a corner goes back the way it came: no arc can round it.
 const REVERSAL_RAD: f64 = std::f64::consts::PI - 1e-3;
+/// How far from a path's ends and stops a stop added to it ([`Path::with_stop_at`]) must be, mm.
+const STOP_APART_MM: f64 = 1e-3;
 
 /// How the path goes on from one element to the next.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -433,6 +435,40 @@ impl Path {
     #[must_use]
     pub fn stops_mm(&self) -> &[f64] {
         &self.stops_mm
+    }
+
+    /// The same path with the tool also coming to rest `s_mm` along it (the piece there cut in
+    /// two, both from the same element): `None` unless `s_mm` lies inside it, more than a
+    /// micrometre from its ends and its stops.
+    #[must_use]
+    pub fn with_stop_at(&self, s_mm: f64) -> Option<Self> {
+        let apart = |stop: f64| (stop - s_mm).abs() > STOP_APART_MM;
+        let inside = s_mm > STOP_APART_MM && s_mm < self.length_mm() - STOP_APART_MM;
+        if !(inside && self.stops_mm.iter().all(|&stop| apart(stop))) {
+            return None;
+        }
+        let mut pieces = Vec::with_capacity(self.pieces.len() + 1);
+        for piece in &self.pieces {
+            let into = s_mm - piece.start_mm;
+            let length_mm = piece.primitive.length_mm();
+            if into > STOP_APART_MM && into < length_mm - STOP_APART_MM {
+                pieces.push(Piece {
+                    primitive: piece.primitive.cut(0.0, length_mm - into),
+                    ..*piece
+                });
+                pieces.push(Piece {
+                    primitive: piece.primitive.cut(into, 0.0),
+                    start_mm: s_mm,
+                    ..*piece
+                });
+            } else {
+                pieces.push(*piece);
+            }
+        }
+        let mut stops_mm = self.stops_mm.clone();
+        stops_mm.push(s_mm);
+        stops_mm.sort_by(f64::total_cmp);
+        Some(Self::new(pieces, stops_mm))
     }
 
     /// The path cut at every stop: sections the tool runs through without coming to rest, each

@@ -159,6 +159,40 @@ fn a_stop_corner_is_a_rest_and_a_straight_blend_is_neither_rest_nor_arc() {
 }
 
 #[test]
+fn a_stop_added_inside_a_piece_cuts_it_in_two_on_the_same_path() {
+    let spec = PathSpec {
+        start: pose(0.0, 0.0, 0.0),
+        elements: vec![
+            line(pose(100.0, 0.0, 0.0), Corner::Blend(10.0)),
+            line(pose(100.0, 100.0, 0.0), Corner::Stop),
+        ],
+    };
+    let path = Path::build(&spec).unwrap();
+    let stopped = path.with_stop_at(40.0).unwrap();
+    assert_eq!(stopped.pieces().len(), path.pieces().len() + 1);
+    assert_eq!(stopped.stops_mm(), [40.0, path.length_mm()]);
+    assert!((stopped.length_mm() - path.length_mm()).abs() < 1e-9);
+    for k in 0..=40 {
+        let s = f64::from(k) * path.length_mm() / 40.0;
+        assert!((stopped.at(s).position_mm - path.at(s).position_mm).norm() < 1e-9);
+    }
+    let sections = stopped.sections();
+    assert_eq!(sections.len(), 2);
+    assert!((sections[0].length_mm() - 40.0).abs() < 1e-9);
+    assert_eq!(sections[0].pieces()[0].element, Some(1));
+    assert_eq!(sections[1].pieces()[0].element, Some(1));
+    assert!((sections[1].at(0.0).position_mm - Vector3::new(40.0, 0.0, 0.0)).norm() < 1e-9);
+    // On the blend's arc too.
+    let on_arc = path.pieces()[1].start_mm + 1.0;
+    assert_eq!(path.with_stop_at(on_arc).unwrap().sections().len(), 2);
+    // Not at an end, nor on a stop, nor off the path.
+    for s in [0.0, path.length_mm(), -5.0, path.length_mm() + 5.0] {
+        assert!(path.with_stop_at(s).is_none(), "{s}");
+    }
+    assert!(stopped.with_stop_at(40.0).is_none());
+}
+
+#[test]
 fn a_line_into_an_arc_along_its_tangent_needs_no_blend_and_does_not_stop() {
     let spec = PathSpec {
         start: pose(0.0, -50.0, 0.0),

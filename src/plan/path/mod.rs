@@ -2,10 +2,12 @@
 //! into sections, and each section planned as one move along it ([`section`]), each starting
 //! from the counts the one before it ends on, so the PLC can chain them through its waiting
 //! start. A section that cannot run as one start is cut into parts chained at speed
-//! ([`parts`]).
+//! ([`parts`]); where that would chain behind a part too short for the PLC to have the next
+//! one ready, the tool stops there instead and the section is planned as two ([`short`]).
 
 mod parts;
 mod section;
+mod short;
 
 use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
 use crate::kinematics::{JOINTS, Kinematics};
@@ -40,7 +42,9 @@ pub struct PathRequest {
 pub struct PathPlan {
     /// The path as planned (blends included).
     pub path: Path,
-    /// The sections, in order; each starts from the previous one's end counts.
+    /// The sections, in order; each starts from the previous one's end counts. A section of
+    /// the path may be planned as two or more, with a stop where a part too short to chain
+    /// behind would have been (see `short.rs`).
     pub sections: Vec<SectionPlan>,
 }
 
@@ -167,22 +171,18 @@ fn plan_path_once(robot: &Robot, req: &PathRequest) -> Result<PathPlan, PlanErro
     let path = Path::build(&spec)?;
     let mut sections = Vec::new();
     for (n, section) in path.sections().into_iter().enumerate() {
-        let starts = section::plan(robot, &section, &start, req.motion, req.path_accel_mm_s2)
+        let planned = short::plan(robot, &section, &start, req.motion, req.path_accel_mm_s2)
             .map_err(|source| PlanError::Section {
                 section: n + 1,
                 elements: covered(&section),
                 source: Box::new(source),
             })?;
-        let planned = SectionPlan {
-            path: section,
-            starts,
-        };
-        let end = planned.end_counts();
+        let end = planned[planned.len() - 1].end_counts();
         start = Start {
             values: robot.values_of(&end),
             counts: end,
         };
-        sections.push(planned);
+        sections.extend(planned);
     }
     Ok(PathPlan { path, sections })
 }

@@ -656,3 +656,65 @@ fn parts_planned_side_by_side_are_the_parts_planned_in_turn() {
         in_turn
     );
 }
+
+#[test]
+fn a_part_too_short_to_chain_behind_is_a_stop_instead() {
+    // `demo --pallet`'s way into slot 19 (layer 4, turned): from the pick point, the tool at
+    // 140 degrees, to 80 mm above the slot, turned half a turn. d2 slows into its reversal:
+    // its last row before it needs a later segment (cut there) and it reverses a sample
+    // later (cut there): a part of one sample, 50 ms, which no link can chain behind.
+    let mut robot = seed_robot();
+    robot.motion.over_speed = OverSpeed::SlowDown;
+    let pick = Pose::from_mm_deg(-900.0, 450.0, 120.0, 140.0);
+    let above = Pose::from_mm_deg(-250.0, 780.0, 350.0, -40.0);
+    let req = PathRequest {
+        from: Origin::Pose(pick),
+        start: None,
+        elements: vec![(Element::Line { to: above }, Corner::Stop)],
+        motion: robot.motion,
+        path_accel_mm_s2: robot.motion.speed_mm_s / robot.motion.accel_s,
+    };
+    let start = Start::at(&robot, req.from).unwrap();
+    let line = Path::build(&PathSpec {
+        start: pick,
+        elements: req.elements.clone(),
+    })
+    .unwrap();
+    let chained = section::plan(&robot, &line, &start, req.motion, req.path_accel_mm_s2).unwrap();
+    let short = |starts: &[Plan]| {
+        starts[..starts.len() - 1]
+            .iter()
+            .any(|p| p.duration_s() < MIN_PART_S - 1e-9)
+    };
+    assert!(short(&chained), "{:?}", durations(&chained));
+
+    let planned = plan_path(&robot, &req).unwrap();
+    assert!(
+        planned.sections.len() >= 2,
+        "{} sections",
+        planned.sections.len()
+    );
+    for s in &planned.sections {
+        assert!(!short(&s.starts), "{:?}", durations(&s.starts));
+        assert!(!s.starts[s.starts.len() - 1].window.ends_at_speed);
+    }
+    // The stop lies on the line, the sections follow each other and end where the line does.
+    let mut along_mm = 0.0;
+    for pair in planned.sections.windows(2) {
+        assert_eq!(pair[1].starts[0].start_counts(), pair[0].end_counts());
+        along_mm += pair[0].path.length_mm();
+        let stop = pair[1].path.at(0.0).position_mm;
+        assert!((stop - line.at(along_mm).position_mm).norm() < 1e-6);
+    }
+    let total_mm: f64 = planned.sections.iter().map(|s| s.path.length_mm()).sum();
+    assert!((total_mm - line.length_mm()).abs() < 1e-6);
+    assert_eq!(
+        planned.sections[planned.sections.len() - 1].end_counts(),
+        chained[chained.len() - 1].end_counts()
+    );
+    assert!(planned.valid());
+}
+
+fn durations(starts: &[Plan]) -> Vec<f64> {
+    starts.iter().map(Plan::duration_s).collect()
+}
