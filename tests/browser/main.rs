@@ -181,7 +181,10 @@ async fn the_pose_on_the_page_tracks_the_mock_while_a_move_runs() {
         .handle
         .submit(linterpd::daemon::MoveOrder {
             by: Some(vec![0.0, 0.0, 100.0]),
-            speed_mm_s: Some(100.0),
+            motion: linterpd::order::OrderMotion {
+                speed_mm_s: Some(100.0),
+                ..linterpd::order::OrderMotion::default()
+            },
             ..linterpd::daemon::MoveOrder::default()
         })
         .await
