@@ -508,8 +508,8 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             v.check(stop.is_ok(), || "I3: the stop did not answer".into());
         }
         Flow::Path => {
-            // A path is planned when it is accepted, from the counts last read: wait until the
-            // daemon has read them after the mock's first scans.
+            // A path from rest is planned from a status block read afresh when it is submitted;
+            // the wait for the mock's counts keeps the fault positions where they were before.
             for _ in 0..500 {
                 if h.state().counts == Some(channel_counts_at_a()) {
                     break;
