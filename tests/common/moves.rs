@@ -142,14 +142,29 @@ pub fn starts_or_area(
     req: &linterpd::plan::MoveRequest,
     context: &str,
 ) -> Option<Vec<Plan>> {
-    use linterpd::plan::PlanError;
-    use linterpd::table::TableProblem;
     match linterpd::plan::plan_line(robot, req) {
         Ok(planned) => Some(planned.starts().cloned().collect()),
-        Err(PlanError::InvalidTable {
+        Err(e) if refused_for_area(&e) => None,
+        Err(e) => panic!("{:?} -> {:?} {context}: {e}", req.from, req.to),
+    }
+}
+
+/// Whether `e` refuses a move only because its rows do not fit a table area, however the
+/// planner wraps that: a line too big for one start whose parts chained at speed do not fit
+/// either (`NoParts`), a joint move that is never cut (`JointMoveTooLong`), a path's section.
+#[allow(dead_code)] // not every test binary plans random lines
+pub fn refused_for_area(e: &linterpd::plan::PlanError) -> bool {
+    use linterpd::plan::PlanError;
+    use linterpd::table::TableProblem;
+    match e {
+        PlanError::InvalidTable {
             first: TableProblem::AreaOverflow { .. },
             ..
-        }) => None,
-        Err(e) => panic!("{:?} -> {:?} {context}: {e}", req.from, req.to),
+        } => true,
+        PlanError::NoParts { source, parts } => refused_for_area(source) && refused_for_area(parts),
+        PlanError::JointMoveTooLong { source } | PlanError::Section { source, .. } => {
+            refused_for_area(source)
+        }
+        _ => false,
     }
 }

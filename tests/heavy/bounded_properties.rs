@@ -13,7 +13,7 @@ use linterpd::kinematics::Kinematics;
 use linterpd::plan::{MoveRequest, Origin, Plan, PlanError, plan_line};
 use linterpd::robot::{Method, Robot};
 use linterpd::sim;
-use linterpd::table::{FrequencyModel, TableProblem};
+use linterpd::table::FrequencyModel;
 use proptest::prelude::*;
 
 fn motion() -> impl Strategy<Value = (Motion, f64)> {
@@ -71,10 +71,7 @@ fn plan(
             }
             Ok(None)
         }
-        Err(PlanError::InvalidTable {
-            first: TableProblem::AreaOverflow { .. },
-            ..
-        }) => Ok(None),
+        Err(e) if common::moves::refused_for_area(&e) => Ok(None),
         Err(e) => Err(TestCaseError::fail(format!("{from:?} -> {to:?}: {e}"))),
     }
 }

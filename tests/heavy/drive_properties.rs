@@ -429,3 +429,40 @@ proptest! {
         check(&robot, &starts.unwrap(), &l)?;
     }
 }
+
+/// Found by CI (stop 53): a slow SCARA line under low drive accelerations whose one start and
+/// whose parts chained at speed both overflow the area is a refusal for size, named as both
+/// (`NoParts`), not a failure of the drive limits.
+#[test]
+fn a_line_whose_parts_overflow_too_is_refused_for_its_size_only() {
+    let l = Limits {
+        accel_share: [0.148_750_881_8, 0.02, 0.02, 0.563_603_253],
+        start_share: [None; 4],
+        bounded_mm: Some(0.277_088_970_8),
+    };
+    let robot = limited(common::scara(), &l);
+    let mv = (
+        Pose {
+            position_mm: nalgebra::Vector3::new(507.893_196_734, -160.368_818_265, 5.848_383_667),
+            a_rad: 0.670_924_299_5,
+        },
+        Pose {
+            position_mm: nalgebra::Vector3::new(352.180_670_567, 141.754_630_099, -5.848_383_667),
+            a_rad: -0.670_924_299_5,
+        },
+    );
+    let m = Motion {
+        speed_mm_s: 424.810_450_9,
+        accel_s: 0.0,
+        period_s: 0.01,
+        ideal: true,
+    };
+    let req = request(&robot, mv, m, &l);
+    let e = linterpd::plan::plan_line(&robot, &req).expect_err("too many rows for the area");
+    assert!(
+        matches!(e, linterpd::plan::PlanError::NoParts { .. }),
+        "refused as {e}"
+    );
+    assert!(common::moves::refused_for_area(&e), "{e}");
+    assert!(plan(&robot, mv, m, &l).is_none());
+}

@@ -8,7 +8,7 @@ use crate::common;
 use linterpd::kinematics::{JOINTS, Joints, Kinematics};
 use linterpd::plan::{JointMoveRequest, Origin, Plan, PlanError, plan_joint_move};
 use linterpd::robot::{Method, Robot};
-use linterpd::table::{FrequencyModel, TableProblem, problems};
+use linterpd::table::{FrequencyModel, problems};
 use proptest::prelude::*;
 
 /// Joint values in user units (deg or mm), each drawn from its range.
@@ -96,14 +96,8 @@ fn plan(
     };
     match plan_joint_move(robot, &req) {
         Ok(plan) => Ok(Some((req, plan))),
-        Err(
-            PlanError::InvalidTable {
-                first: TableProblem::AreaOverflow { .. },
-                ..
-            }
-            | PlanError::ToleranceTooSmall { .. }
-            | PlanError::NoTravel { .. },
-        ) => Ok(None),
+        Err(PlanError::ToleranceTooSmall { .. } | PlanError::NoTravel { .. }) => Ok(None),
+        Err(e) if common::moves::refused_for_area(&e) => Ok(None),
         Err(e) => Err(TestCaseError::fail(format!(
             "{from_user:?} -> {to_user:?}: {e}"
         ))),
