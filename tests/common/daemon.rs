@@ -161,7 +161,10 @@ pub async fn report_until(
     match seen {
         Ok(Ok(r)) if until(&r) => r,
         Ok(Ok(r)) => panic!("the move ended before {what}: {r:?}"),
-        Ok(Err(_)) => panic!("the move's feed closed before {what}: {:?}", feed.borrow()),
-        Err(_) => panic!("not {what} within {REPORT_LIMIT:?}: {:?}", feed.borrow()),
+        Ok(Err(closed)) => panic!("{closed} before {what}: {:?}", feed.borrow()),
+        Err(elapsed) => panic!(
+            "not {what} ({elapsed}, {REPORT_LIMIT:?}): {:?}",
+            feed.borrow()
+        ),
     }
 }
