@@ -337,10 +337,13 @@ impl Metrics {
     }
 }
 
+/// A family in [`FAMILIES`]: its name, its help, the family.
+type RegisteredFamily = (&'static str, &'static str, fn(&Inner) -> AnyFamily);
+
 /// Every family, in the order `/metrics` shows them (the collectors' after): its name, its
 /// help (`Registry::register` ends it with a period itself: the texts here have none; a
 /// collector's, written as they are, do), and the family.
-const FAMILIES: [(&str, &str, fn(&Inner) -> AnyFamily); 15] = [
+const FAMILIES: [RegisteredFamily; 15] = [
     ("linterpd_moves", "Moves that ended, by outcome", |m| {
         AnyFamily::of(&m.moves)
     }),
