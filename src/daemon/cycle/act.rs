@@ -19,7 +19,7 @@ use crate::daemon::RobotHandle;
 use crate::daemon::gate::Gate;
 use crate::gateway::{Address, Values};
 use crate::order::MoveOrder;
-use crate::wire::{CycleState, EndReason, MoveId, MoveReport, Stage, StepAt};
+use crate::wire::{EndReason, MoveId, MoveReport, Stage, StepAt};
 
 /// Each pallet's counter as a condition reads it (`None`: not a pallet of the program).
 pub(super) type Pallets<'a> = &'a (dyn Fn(&str) -> Option<PalletView> + Sync);
@@ -294,43 +294,6 @@ pub(super) async fn dwell(for_: Duration, control: &mut watch::Receiver<Control>
     }
 }
 
-/// Pauses the cycle (`why`): the moves prepared ahead unprepared, the status saying so.
-pub(super) async fn pause(
-    handle: &RobotHandle,
-    status: &Status,
-    why: String,
-    moves: Vec<Prepared<Gate>>,
-) -> Event<Gate> {
-    tracing::warn!(robot = %handle.robot().name, "cycle paused: {why}");
-    unprepare(handle, moves).await;
-    status.paused(why);
-    Event::Changed
-}
-
-/// Faults the cycle on its step (`why`): the robot stopped (through `base`, as any client:
-/// the stop is never refused), the pallets' slots in progress made unsure after a restart of
-/// the PLC (`(stop_robot, interrupted)`), the moves prepared ahead unprepared, the status
-/// saying so.
-pub(super) async fn fault(
-    handle: &RobotHandle,
-    base: &RobotHandle,
-    status: &Status,
-    why: String,
-    (stop_robot, interrupted): (bool, bool),
-    moves: Vec<Prepared<Gate>>,
-) -> Event<Gate> {
-    tracing::warn!(robot = %handle.robot().name, "cycle faulted: {why}");
-    if interrupted {
-        Palletising::interrupted(base);
-    }
-    if stop_robot {
-        let _ = base.stop_robot().await;
-    }
-    unprepare(handle, moves).await;
-    status.ended(CycleState::Faulted, Some(why));
-    Event::Changed
-}
-
 /// Unprepares moves prepared ahead: their gates shut, then waited out (cancelled before their
 /// start), so nothing is queued behind them.
 pub(super) async fn unprepare(handle: &RobotHandle, moves: Vec<Prepared<Gate>>) {
@@ -400,4 +363,41 @@ pub(super) async fn wait_step(
     handle.waited(at, waited_s);
     status.waiting(None, None);
     Event::Waited { end, waited_s }
+}
+
+/// Pauses the cycle (`why`): the moves prepared ahead unprepared, the status saying so.
+pub(super) async fn pause(
+    handle: &RobotHandle,
+    status: &Status,
+    why: String,
+    moves: Vec<Prepared<Gate>>,
+) -> Event<Gate> {
+    tracing::warn!(robot = %handle.robot().name, "cycle paused: {why}");
+    unprepare(handle, moves).await;
+    status.paused(why);
+    Event::Changed
+}
+
+/// Faults the cycle on its step (`why`): the robot stopped (through `base`, as any client:
+/// the stop is never refused), the pallets' slots in progress made unsure after a restart of
+/// the PLC (`(stop_robot, interrupted)`), the moves prepared ahead unprepared, the status
+/// saying so.
+pub(super) async fn fault(
+    handle: &RobotHandle,
+    base: &RobotHandle,
+    status: &Status,
+    why: String,
+    (stop_robot, interrupted): (bool, bool),
+    moves: Vec<Prepared<Gate>>,
+) -> Event<Gate> {
+    tracing::warn!(robot = %handle.robot().name, "cycle faulted: {why}");
+    if interrupted {
+        Palletising::interrupted(base);
+    }
+    if stop_robot {
+        let _ = base.stop_robot().await;
+    }
+    unprepare(handle, moves).await;
+    status.ended(crate::wire::CycleState::Faulted, Some(why));
+    Event::Changed
 }
