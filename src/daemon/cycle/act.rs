@@ -378,10 +378,10 @@ pub(super) async fn pause(
     Event::Changed
 }
 
-/// Faults the cycle on its step (`why`): the robot stopped (through `base`, as any client:
-/// the stop is never refused), the pallets' slots in progress made unsure after a restart of
-/// the PLC (`(stop_robot, interrupted)`), the moves prepared ahead unprepared, the status
-/// saying so.
+/// Faults the cycle on its step (`why`): the robot stopped when `stop_robot` (through `base`,
+/// as any client: the stop is not refused for an incident), the pallets' slots in progress made
+/// unsure when `interrupted` (the PLC restarted under the cycle), the moves prepared ahead
+/// unprepared, the status saying so.
 pub(super) async fn fault(
     handle: &RobotHandle,
     base: &RobotHandle,

@@ -128,8 +128,8 @@ impl Driver {
                 interrupted,
                 unprepare,
             } => {
-                let (base, done) = (&self.base, (stop_robot, interrupted));
-                return act::fault(robot, base, &self.status, why, done, unprepare).await;
+                let (base, stop) = (&self.base, (stop_robot, interrupted));
+                return act::fault(robot, base, &self.status, why, stop, unprepare).await;
             }
             _ => {}
         }
