@@ -29,7 +29,7 @@ use toml::Spanned;
 
 use super::ConfigError;
 use super::check::At;
-use super::raw::{RawContract, RawParity, RawPlc, RawProtocol, RawSerial, RawTcp};
+use super::raw::{RawContract, RawPlc, RawSerial, RawTcp};
 use super::units::parse_duration_s;
 use crate::contract::{DT_LAST, INPUT_WORDS, InputWord, Layout};
 use crate::kinematics::JOINTS;
@@ -54,7 +54,7 @@ pub(super) fn link(
 ) -> Result<LinkSettings, ConfigError> {
     let area_words = robot.area_words;
     let r = raw.get_ref();
-    let protocol = protocol(r.protocol);
+    let protocol = r.protocol;
     let transport = transport(at, raw, protocol)?;
     let mut settings = LinkSettings::new(protocol, transport);
     framing(at, r, &mut settings)?;
@@ -127,14 +127,6 @@ fn requests(at: &At, r: &RawPlc, settings: &mut LinkSettings) -> Result<(), Conf
     Ok(())
 }
 
-fn protocol(raw: RawProtocol) -> Protocol {
-    match raw {
-        RawProtocol::Mewtocol => Protocol::Mewtocol,
-        RawProtocol::ModbusRtu => Protocol::ModbusRtu,
-        RawProtocol::ModbusTcp => Protocol::ModbusTcp,
-    }
-}
-
 /// Exactly one of `serial` and `tcp`; Modbus TCP needs `tcp`.
 fn transport(at: &At, raw: &Spanned<RawPlc>, protocol: Protocol) -> Result<Transport, ConfigError> {
     match (&raw.get_ref().serial, &raw.get_ref().tcp) {
@@ -171,11 +163,7 @@ fn serial_settings(at: &At, raw: &Spanned<RawSerial>) -> Result<SerialSettings, 
         path: r.path.get_ref().clone(),
         baud: int("baud", r.baud.as_ref(), &BAUDS, 19_200)? as u32,
         data_bits: int("data_bits", r.data_bits.as_ref(), &[7, 8], 8)? as u8,
-        parity: match r.parity.unwrap_or(RawParity::Odd) {
-            RawParity::None => Parity::None,
-            RawParity::Odd => Parity::Odd,
-            RawParity::Even => Parity::Even,
-        },
+        parity: r.parity.unwrap_or(Parity::Odd),
         stop_bits: int("stop_bits", r.stop_bits.as_ref(), &[1, 2], 1)? as u8,
     })
 }

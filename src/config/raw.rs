@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
+use crate::plc::{Parity, Protocol};
 use crate::robot::OverSpeed;
 use crate::table::{FrequencyModel, OutputMethod};
 
@@ -145,7 +146,7 @@ pub(super) struct RawModbusFace {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPlc {
-    pub protocol: RawProtocol,
+    pub protocol: Protocol,
     pub serial: Option<Spanned<RawSerial>>,
     pub tcp: Option<Spanned<RawTcp>>,
     pub station: Option<Spanned<i64>>,
@@ -163,15 +164,6 @@ pub(super) struct RawPlc {
     pub contract: Option<Spanned<RawContract>>,
 }
 
-/// `plc.protocol`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub(super) enum RawProtocol {
-    Mewtocol,
-    ModbusRtu,
-    ModbusTcp,
-}
-
 /// `plc.serial`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -179,17 +171,8 @@ pub(super) struct RawSerial {
     pub path: Spanned<String>,
     pub baud: Option<Spanned<i64>>,
     pub data_bits: Option<Spanned<i64>>,
-    pub parity: Option<RawParity>,
+    pub parity: Option<Parity>,
     pub stop_bits: Option<Spanned<i64>>,
-}
-
-/// `plc.serial.parity`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub(super) enum RawParity {
-    None,
-    Odd,
-    Even,
 }
 
 /// `plc.tcp`.

@@ -12,7 +12,8 @@ use std::sync::atomic::AtomicU64;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use prometheus_client::collector::Collector;
-use prometheus_client::encoding::{DescriptorEncoder, EncodeLabelSet, EncodeMetric};
+use prometheus_client::encoding::{DescriptorEncoder, EncodeLabelSet, EncodeMetric, MetricEncoder};
+use prometheus_client::metrics::MetricType;
 use prometheus_client::metrics::counter::{ConstCounter, Counter};
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::{ConstGauge, Gauge};
@@ -336,101 +337,128 @@ impl Metrics {
     }
 }
 
+/// A family in [`FAMILIES`]: its name, its help, the family.
+type RegisteredFamily = (&'static str, &'static str, fn(&Inner) -> AnyFamily);
+
+/// Every family, in the order `/metrics` shows them (the collectors' after): its name, its
+/// help (`Registry::register` ends it with a period itself: the texts here have none; a
+/// collector's, written as they are, do), and the family.
+const FAMILIES: [RegisteredFamily; 15] = [
+    ("linterpd_moves", "Moves that ended, by outcome", |m| {
+        AnyFamily::of(&m.moves)
+    }),
+    (
+        "linterpd_link_reconnects",
+        "PLC link reopened after it was lost (the first opening is not counted)",
+        |m| AnyFamily::of(&m.reconnects),
+    ),
+    (
+        "linterpd_gateway_requests",
+        "Register gateway requests answered (read or write)",
+        |m| AnyFamily::of(&m.gateway_requests),
+    ),
+    (
+        "linterpd_gateway_errors",
+        "Register gateway requests that failed (link down, PLC error)",
+        |m| AnyFamily::of(&m.gateway_errors),
+    ),
+    (
+        "linterpd_upload_seconds",
+        "Time to write and verify a move's bank",
+        |m| AnyFamily::of(&m.upload),
+    ),
+    (
+        "linterpd_motion_seconds",
+        "Time from a move's start to its end on the PLC (moves that ended done)",
+        |m| AnyFamily::of(&m.motion),
+    ),
+    (
+        "linterpd_gateway_motion_wait_seconds",
+        "How long a due status read waited behind a gateway exchange",
+        |m| AnyFamily::of(&m.gateway_wait),
+    ),
+    (
+        "linterpd_cycles",
+        "Cycle programs' cycles run to their end",
+        |m| AnyFamily::of(&m.cycles),
+    ),
+    (
+        "linterpd_cycle_seconds",
+        "Time a cycle took, from its first step to the end of its last",
+        |m| AnyFamily::of(&m.cycle_time),
+    ),
+    (
+        "linterpd_cycle_wait_seconds",
+        "Time a cycle's wait step waited, by program and step",
+        |m| AnyFamily::of(&m.cycle_wait),
+    ),
+    (
+        "linterpd_face_commands",
+        "Cell face commands taken from the line (an edge of a command bit), by command",
+        |m| AnyFamily::of(&m.face_commands),
+    ),
+    (
+        "linterpd_face_refusals",
+        "Cell face commands refused, by the refusal word's code",
+        |m| AnyFamily::of(&m.face_refusals),
+    ),
+    (
+        "linterpd_link_up",
+        "1 while the PLC link is up and the contract answers",
+        |m| AnyFamily::of(&m.link_up),
+    ),
+    (
+        "linterpd_plc_fault",
+        "The PLC program's fault code (0: none), as last read",
+        |m| AnyFamily::of(&m.fault),
+    ),
+    (
+        "linterpd_heartbeat_age_seconds",
+        "Time since the PLC program's heartbeat last changed",
+        |m| AnyFamily::of(&m.heartbeat_age),
+    ),
+];
+
 impl Inner {
-    /// Registers every family. `Registry::register` ends each help text with a period itself: the
-    /// texts here have none (a collector's, written as they are, do).
+    /// Registers every family ([`FAMILIES`]), then the exchanges' and the pallets' collectors.
     fn registered(mut self) -> Self {
-        self.register_moves();
-        self.register_cell();
-        self
-    }
-
-    /// The moves', the link's and the gateway's families, in the order they are shown.
-    fn register_moves(&mut self) {
+        for (name, help, family) in FAMILIES {
+            let family = family(&self);
+            self.registry.register(name, help, family);
+        }
         let r = &mut self.registry;
-        r.register(
-            "linterpd_moves",
-            "Moves that ended, by outcome",
-            self.moves.clone(),
-        );
-        r.register(
-            "linterpd_link_reconnects",
-            "PLC link reopened after it was lost (the first opening is not counted)",
-            self.reconnects.clone(),
-        );
-        r.register(
-            "linterpd_gateway_requests",
-            "Register gateway requests answered (read or write)",
-            self.gateway_requests.clone(),
-        );
-        r.register(
-            "linterpd_gateway_errors",
-            "Register gateway requests that failed (link down, PLC error)",
-            self.gateway_errors.clone(),
-        );
-        r.register(
-            "linterpd_upload_seconds",
-            "Time to write and verify a move's bank",
-            self.upload.clone(),
-        );
-        r.register(
-            "linterpd_motion_seconds",
-            "Time from a move's start to its end on the PLC (moves that ended done)",
-            self.motion.clone(),
-        );
-        r.register(
-            "linterpd_gateway_motion_wait_seconds",
-            "How long a due status read waited behind a gateway exchange",
-            self.gateway_wait.clone(),
-        );
-    }
-
-    /// The cycles', the cell face's and the PLC's families, then the exchanges' collector, in
-    /// the order they are shown (after [`Self::register_moves`]'s).
-    fn register_cell(&mut self) {
-        let r = &mut self.registry;
-        r.register(
-            "linterpd_cycles",
-            "Cycle programs' cycles run to their end",
-            self.cycles.clone(),
-        );
-        r.register(
-            "linterpd_cycle_seconds",
-            "Time a cycle took, from its first step to the end of its last",
-            self.cycle_time.clone(),
-        );
-        r.register(
-            "linterpd_cycle_wait_seconds",
-            "Time a cycle's wait step waited, by program and step",
-            self.cycle_wait.clone(),
-        );
-        r.register(
-            "linterpd_face_commands",
-            "Cell face commands taken from the line (an edge of a command bit), by command",
-            self.face_commands.clone(),
-        );
-        r.register(
-            "linterpd_face_refusals",
-            "Cell face commands refused, by the refusal word's code",
-            self.face_refusals.clone(),
-        );
-        r.register(
-            "linterpd_link_up",
-            "1 while the PLC link is up and the contract answers",
-            self.link_up.clone(),
-        );
-        r.register(
-            "linterpd_plc_fault",
-            "The PLC program's fault code (0: none), as last read",
-            self.fault.clone(),
-        );
-        r.register(
-            "linterpd_heartbeat_age_seconds",
-            "Time since the PLC program's heartbeat last changed",
-            self.heartbeat_age.clone(),
-        );
         r.register_collector(Box::new(Arc::clone(&self.exchanges)));
         r.register_collector(Box::new(Arc::clone(&self.pallets)));
+        self
+    }
+}
+
+/// A family of any kind, so that every family can stand in one table ([`FAMILIES`]).
+#[derive(Debug)]
+struct AnyFamily(Box<dyn Encodes>);
+
+/// What a registered family is.
+trait Encodes: EncodeMetric + Send + Sync + std::fmt::Debug {}
+
+impl<T: EncodeMetric + Send + Sync + std::fmt::Debug> Encodes for T {}
+
+impl AnyFamily {
+    fn of<F: Encodes + Clone + 'static>(family: &F) -> Self {
+        Self(Box::new(family.clone()))
+    }
+}
+
+impl EncodeMetric for AnyFamily {
+    fn encode(&self, encoder: MetricEncoder<'_>) -> Result<(), std::fmt::Error> {
+        self.0.encode(encoder)
+    }
+
+    fn metric_type(&self) -> MetricType {
+        self.0.metric_type()
+    }
+
+    fn is_empty(&self) -> bool {
+        self.0.is_empty()
     }
 }
 

@@ -18,13 +18,11 @@
 use std::collections::BTreeMap;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, PoisonError};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::ids::write_atomically;
-use super::state_file::{self, Trouble};
+use super::state_file::{Kept, Trouble, WriteFailed};
 use crate::pallet::counter::Phase;
 use crate::pallet::{Counter, CounterError, PalletError, Pattern, RobotPallets};
 use crate::robot::{Position, Robot};
@@ -120,12 +118,8 @@ pub enum PalletStoreError {
 /// The pallet counters of every robot of one daemon.
 #[derive(Debug, Default)]
 pub struct PalletCounters {
-    /// The counters.
-    book: Mutex<Book>,
-    /// Where they are kept (`None`: in memory only).
-    file: Option<PathBuf>,
-    /// Why changes are refused, when they are.
-    read_only: Option<String>,
+    /// The counters, and where they are kept.
+    kept: Kept<Book>,
     /// Why the counts of pallets not in the book are unknown (a corrupt file set aside).
     lost: Option<String>,
 }
@@ -141,13 +135,8 @@ impl PalletCounters {
     /// is unsure).
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
-        let file = dir.join(PALLETS_FILE);
-        let (book, trouble) = state_file::open(&file, "pallets", parse);
-        let mut store = Self {
-            book: Mutex::new(book),
-            file: Some(file),
-            ..Self::in_memory()
-        };
+        let (kept, trouble) = Kept::open(dir.join(PALLETS_FILE), "pallets", parse);
+        let mut store = Self { kept, lost: None };
         match trouble {
             None => {}
             Some(Trouble::SetAside { why, aside }) => {
@@ -157,7 +146,7 @@ impl PalletCounters {
             }
             Some(Trouble::Stuck(why) | Trouble::Unreadable(why)) => {
                 tracing::error!("{why}; pallet counters cannot be changed");
-                store.read_only = Some(why);
+                store.kept.refuse_changes(why);
             }
         }
         store
@@ -166,11 +155,11 @@ impl PalletCounters {
     /// What went wrong with the file at start, if anything did.
     #[must_use]
     pub fn warning(&self) -> Option<&str> {
-        self.read_only.as_deref().or(self.lost.as_deref())
+        self.kept.read_only().or(self.lost.as_deref())
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Book> {
-        self.book.lock().unwrap_or_else(PoisonError::into_inner)
+        self.kept.lock()
     }
 
     /// A robot's pallets' counters, by pallet (those never changed are not listed).
@@ -246,8 +235,10 @@ impl PalletCounters {
         operator: bool,
         f: impl FnOnce(&mut Counter) -> Result<T, CounterError>,
     ) -> Result<T, PalletStoreError> {
-        if let Some(why) = &self.read_only {
-            return Err(PalletStoreError::ReadOnly { why: why.clone() });
+        if let Some(why) = self.kept.read_only() {
+            return Err(PalletStoreError::ReadOnly {
+                why: why.to_owned(),
+            });
         }
         let mut book = self.lock();
         let known = book.get(robot).and_then(|p| p.get(pallet)).copied();
@@ -268,15 +259,8 @@ impl PalletCounters {
             next.entry(robot.to_owned())
                 .or_default()
                 .insert(pallet.to_owned(), counter);
-            if let Some(file) = &self.file {
-                write_atomically(file, &render(&next)).map_err(|source| {
-                    PalletStoreError::Write {
-                        file: file.clone(),
-                        source,
-                    }
-                })?;
-            }
-            *book = next;
+            let kept = self.kept.keep(&mut book, next, render);
+            kept.map_err(|WriteFailed { file, source }| PalletStoreError::Write { file, source })?;
         }
         Ok(out?)
     }

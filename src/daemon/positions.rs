@@ -18,14 +18,12 @@
 use std::collections::BTreeMap;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, PoisonError};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::ids::write_atomically;
-use super::state_file::{self, Trouble};
+use super::state_file::{Kept, Trouble, WriteFailed};
 use crate::contract::machine::Blocker;
 
 /// The file's name in the state directory.
@@ -164,13 +162,10 @@ pub fn unix_now_s() -> u64 {
 /// The taught positions of every robot of one daemon.
 #[derive(Debug, Default)]
 pub struct TaughtPositions {
-    /// Where they are kept (`None`: in memory only).
-    file: Option<PathBuf>,
-    book: Mutex<Book>,
+    /// The positions, and where they are kept.
+    kept: Kept<Book>,
     /// What became of the file at start, when something went wrong with it.
     warning: Option<String>,
-    /// Why changes are refused, when they are.
-    read_only: Option<String>,
 }
 
 impl TaughtPositions {
@@ -185,15 +180,12 @@ impl TaughtPositions {
     /// be read is left alone, logged, and changes are refused.
     #[must_use]
     pub fn in_state_dir(dir: &Path) -> Self {
-        let file = dir.join(POSITIONS_FILE);
-        let (book, trouble) = state_file::open(&file, "positions", parse);
+        let (mut kept, trouble) = Kept::open(dir.join(POSITIONS_FILE), "positions", parse);
         let (warning, read_only) = trouble.map_or((None, None), noted);
-        Self {
-            file: Some(file),
-            book: Mutex::new(book),
-            warning,
-            read_only,
+        if let Some(why) = read_only {
+            kept.refuse_changes(why);
         }
+        Self { kept, warning }
     }
 
     /// What went wrong with the file at start, if anything did.
@@ -203,7 +195,7 @@ impl TaughtPositions {
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Book> {
-        self.book.lock().unwrap_or_else(PoisonError::into_inner)
+        self.kept.lock()
     }
 
     /// A robot's positions, by name.
@@ -254,19 +246,16 @@ impl TaughtPositions {
         &self,
         f: impl FnOnce(&mut Book) -> Result<T, PositionError>,
     ) -> Result<T, PositionError> {
-        if let Some(why) = &self.read_only {
-            return Err(PositionError::ReadOnly { why: why.clone() });
+        if let Some(why) = self.kept.read_only() {
+            return Err(PositionError::ReadOnly {
+                why: why.to_owned(),
+            });
         }
         let mut book = self.lock();
         let mut next = book.clone();
         let out = f(&mut next)?;
-        if let Some(file) = &self.file {
-            write_atomically(file, &render(&next)).map_err(|source| PositionError::Write {
-                file: file.clone(),
-                source,
-            })?;
-        }
-        *book = next;
+        let kept = self.kept.keep(&mut book, next, render);
+        kept.map_err(|WriteFailed { file, source }| PositionError::Write { file, source })?;
         Ok(out)
     }
 }

@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+use serde::Deserialize;
+
 use crate::contract::Layout;
 
 /// Registers one read (function 03) may ask for (Modbus Application Protocol v1.1b3, §6.3; the
@@ -17,8 +19,9 @@ pub const MAX_WRITE_REGISTERS: u16 = 123;
 /// configurable.
 pub const R9020: u16 = 902 * 16;
 
-/// Which protocol the PLC's port speaks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which protocol the PLC's port speaks (`plc.protocol` in the config, kebab-case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Protocol {
     /// MEWTOCOL-COM (PLC.md §1).
     Mewtocol,
@@ -28,8 +31,9 @@ pub enum Protocol {
     ModbusTcp,
 }
 
-/// Serial parity.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Serial parity (`plc.serial.parity` in the config, kebab-case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Parity {
     /// No parity bit.
     None,

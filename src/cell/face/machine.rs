@@ -152,17 +152,6 @@ impl Refusal {
     }
 }
 
-/// The commands that act on their rising edge (all but move-enable).
-const EDGES: u16 = bit::STROBE
-    | bit::START
-    | bit::STOP
-    | bit::PAUSE
-    | bit::RESET
-    | bit::HOME
-    | bit::STOP_NOW
-    | bit::PALLET_REDO
-    | bit::PALLET_GO_ON;
-
 /// The command side of the face.
 #[derive(Debug, Clone, Default)]
 pub struct Face {
@@ -247,7 +236,7 @@ impl Face {
         let rose = now & !was;
         let fell = was & !now;
         let remote = mode == Mode::Remote;
-        if rose & EDGES != 0 {
+        if rose & bit::EDGES != 0 {
             self.refused = None;
         }
         let mut actions = stops(rose, fell, remote);
@@ -370,9 +359,19 @@ mod tests {
     }
 
     #[test]
+    fn every_command_bit_but_move_enable_acts_on_its_edge() {
+        let all = (0..10).fold(0, |all, n| all | 1 << n);
+        assert_eq!(bit::EDGES, all & !bit::ENABLE);
+        assert_eq!(
+            (bit::STROBE, bit::ENABLE, bit::PALLET_GO_ON),
+            (1, 1 << 6, 1 << 9)
+        );
+    }
+
+    #[test]
     fn the_first_write_only_sets_the_baseline() {
         let mut f = Face::new();
-        let all = EDGES | ON;
+        let all = bit::EDGES | ON;
         assert!(f.write(0, &[3, check_of(3), all, 0], Remote).is_empty());
         assert!(f.enabled());
         assert_eq!(f.selected(), None);

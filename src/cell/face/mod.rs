@@ -80,28 +80,42 @@ pub mod command {
     pub const COUNT: usize = 3;
 }
 
+/// Declares the command bits, each with its bit number and what it acts on: its rising edge
+/// (`edge`) or its level (`level`); and [`bit::EDGES`], the bits that act on their edge.
+macro_rules! command_bits {
+    ($($(#[$doc:meta])* $acts_on:ident $name:ident = $bit:literal;)*) => {
+        $($(#[$doc])* pub const $name: u16 = 1 << $bit;)*
+        /// The commands that act on their rising edge (all but the levels).
+        pub const EDGES: u16 = 0 $(| command_bits!(@$acts_on $name))*;
+    };
+    (@edge $name:ident) => { $name };
+    (@level $name:ident) => { 0 };
+}
+
 /// Command bits (+2).
 pub mod bit {
-    /// Select the program (rising edge).
-    pub const STROBE: u16 = 1 << 0;
-    /// Run the selected program, or resume (rising edge).
-    pub const START: u16 = 1 << 1;
-    /// Stop the cycle at the end of its step (rising edge).
-    pub const STOP: u16 = 1 << 2;
-    /// Pause the cycle at the end of its step (rising edge).
-    pub const PAUSE: u16 = 1 << 3;
-    /// Clear the robot's fault (rising edge).
-    pub const RESET: u16 = 1 << 4;
-    /// Move to the home position (rising edge).
-    pub const HOME: u16 = 1 << 5;
-    /// Move-enable (a level).
-    pub const ENABLE: u16 = 1 << 6;
-    /// Stop the robot now and end the cycle (rising edge).
-    pub const STOP_NOW: u16 = 1 << 7;
-    /// The shown pallet's interrupted slot was not placed: place at it again (rising edge).
-    pub const PALLET_REDO: u16 = 1 << 8;
-    /// The shown pallet's interrupted slot was placed: go on at the next (rising edge).
-    pub const PALLET_GO_ON: u16 = 1 << 9;
+    command_bits! {
+        /// Select the program (rising edge).
+        edge STROBE = 0;
+        /// Run the selected program, or resume (rising edge).
+        edge START = 1;
+        /// Stop the cycle at the end of its step (rising edge).
+        edge STOP = 2;
+        /// Pause the cycle at the end of its step (rising edge).
+        edge PAUSE = 3;
+        /// Clear the robot's fault (rising edge).
+        edge RESET = 4;
+        /// Move to the home position (rising edge).
+        edge HOME = 5;
+        /// Move-enable (a level).
+        level ENABLE = 6;
+        /// Stop the robot now and end the cycle (rising edge).
+        edge STOP_NOW = 7;
+        /// The shown pallet's interrupted slot was not placed: place at it again (rising edge).
+        edge PALLET_REDO = 8;
+        /// The shown pallet's interrupted slot was placed: go on at the next (rising edge).
+        edge PALLET_GO_ON = 9;
+    }
 }
 
 /// Status bits (+8).

@@ -44,28 +44,21 @@ pub struct PalletArgs {
     pub daemon: DaemonArgs,
 }
 
-/// `linterpd pallet` actions.
+/// `linterpd pallet` actions: one on the config, the others on the daemon's counts.
 #[derive(Debug, Subcommand)]
 pub enum PalletAction {
     /// List a pallet's slots in fill order (index, layer, row, column, x y z a), from the config.
     Show(show::ShowArgs),
-    /// Each pallet's count in the daemon: the slot to fill next, the layer, full, parts and
-    /// pallets done, and what to do when a slot was interrupted.
-    Status(ops::StatusArgs),
-    /// Set the slot to fill next (a partly built pallet put in); the counts stay.
-    Set(ops::SetArgs),
-    /// Begin a new pallet at slot 0 (a full one is counted as done).
-    Reset(ops::Named),
-    /// An interrupted slot's part was not placed: place at that slot again.
-    Redo(ops::Named),
-    /// An interrupted slot's part was placed: count it and go on at the next slot.
-    GoOn(ops::Named),
+    /// The counts in the daemon (`status`, `set`, `reset`, `redo`, `go-on`), each a
+    /// subcommand of `pallet` itself.
+    #[command(flatten)]
+    Counts(ops::CountAction),
 }
 
 /// Runs `linterpd pallet`.
 pub fn run(args: &PalletArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
     match &args.action {
         PalletAction::Show(show) => show::run(args, show, out),
-        _ => ops::run(args, out),
+        PalletAction::Counts(action) => ops::run(args, action, out),
     }
 }

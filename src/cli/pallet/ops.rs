@@ -9,14 +9,30 @@
 //!           not write its pallets file (500)
 //! ```
 
-use clap::Args;
+use clap::{Args, Subcommand};
 use hyper::Method;
 use serde_json::{Value, json};
 
-use super::{PalletAction, PalletArgs};
+use super::PalletArgs;
 use crate::cli::Failure;
 use crate::cli::client::{Client, Received};
 use crate::wire::{PalletList, PalletStatus};
+
+/// `linterpd pallet` actions on the daemon's counts.
+#[derive(Debug, Subcommand)]
+pub enum CountAction {
+    /// Each pallet's count in the daemon: the slot to fill next, the layer, full, parts and
+    /// pallets done, and what to do when a slot was interrupted.
+    Status(StatusArgs),
+    /// Set the slot to fill next (a partly built pallet put in); the counts stay.
+    Set(SetArgs),
+    /// Begin a new pallet at slot 0 (a full one is counted as done).
+    Reset(Named),
+    /// An interrupted slot's part was not placed: place at that slot again.
+    Redo(Named),
+    /// An interrupted slot's part was placed: count it and go on at the next slot.
+    GoOn(Named),
+}
 
 /// Arguments of `linterpd pallet status`.
 #[derive(Debug, Args)]
@@ -42,24 +58,27 @@ pub struct Named {
 }
 
 /// What an action asks of the daemon: the method, the path under the robot, the body.
-fn request(action: &PalletAction) -> (Method, String, Option<Value>) {
+fn request(action: &CountAction) -> (Method, String, Option<Value>) {
     let post =
         |name: &str, command: &str, body| (Method::POST, format!("pallets/{name}/{command}"), body);
     match action {
-        PalletAction::Status(s) => match &s.name {
+        CountAction::Status(s) => match &s.name {
             Some(name) => (Method::GET, format!("pallets/{name}"), None),
             None => (Method::GET, "pallets".to_owned(), None),
         },
-        PalletAction::Set(s) => post(&s.name, "set", Some(json!({ "index": s.index }))),
-        PalletAction::Reset(n) => post(&n.name, "reset", None),
-        PalletAction::Redo(n) => post(&n.name, "redo", None),
-        PalletAction::GoOn(n) => post(&n.name, "go-on", None),
-        PalletAction::Show(_) => unreachable!("show reads the config"),
+        CountAction::Set(s) => post(&s.name, "set", Some(json!({ "index": s.index }))),
+        CountAction::Reset(n) => post(&n.name, "reset", None),
+        CountAction::Redo(n) => post(&n.name, "redo", None),
+        CountAction::GoOn(n) => post(&n.name, "go-on", None),
     }
 }
 
 /// Runs an action that asks the daemon.
-pub(super) fn run(args: &PalletArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
+pub(super) fn run(
+    args: &PalletArgs,
+    action: &CountAction,
+    out: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
     let daemon = &args.daemon;
     daemon.block_on(async {
         let client = Client::new(&daemon.socket);
@@ -67,7 +86,7 @@ pub(super) fn run(args: &PalletArgs, out: &mut dyn std::io::Write) -> Result<(),
             .robot(args.robot.as_deref())
             .await
             .map_err(Failure::from_client)?;
-        let (method, path, body) = request(&args.action);
+        let (method, path, body) = request(action);
         let answer = client
             .expect(method, &format!("/v1/robots/{robot}/{path}"), body.as_ref())
             .await?;
@@ -160,6 +179,7 @@ fn plural(n: u64) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cli::pallet::PalletAction;
     use crate::cli::{Cli, Command};
     use clap::Parser;
 
@@ -197,9 +217,11 @@ mod tests {
             ),
         ];
         for (args, method, path, body) in cases {
-            let parsed = parse(args);
+            let PalletAction::Counts(action) = parse(args).action else {
+                panic!("{args:?} is not a count action");
+            };
             assert_eq!(
-                request(&parsed.action),
+                request(&action),
                 (method, path.to_owned(), body),
                 "{args:?}"
             );

@@ -54,6 +54,9 @@ pub struct Seen {
     pub incidents: u64,
     /// The last incident, in words.
     pub last_incident: Option<String>,
+    /// How many of the incidents were restarts of the PLC (its outputs went off, a gripper
+    /// let go wherever the robot was).
+    pub restarts: u64,
     /// Now.
     pub now: Instant,
 }
@@ -134,13 +137,17 @@ pub enum Action<G> {
         /// The moves prepared ahead.
         unprepare: Vec<Prepared<G>>,
     },
-    /// Fault: the robot stopped (`stop_robot`), the moves prepared ahead unprepared first;
-    /// then stand, [`Event::Changed`].
+    /// Fault: the robot stopped (`stop_robot`), the pallets' slots in progress made unsure
+    /// (`interrupted`), the moves prepared ahead unprepared first; then stand,
+    /// [`Event::Changed`].
     Fault {
         /// Why.
         why: String,
         /// Whether the robot is to be stopped (not when a standing cycle is faulted).
         stop_robot: bool,
+        /// Whether the PLC restarted since the cycle began or last faulted: a place under way
+        /// may have been cut short, so every pallet's slot in progress is unsure.
+        interrupted: bool,
         /// The moves prepared ahead.
         unprepare: Vec<Prepared<G>>,
     },
@@ -272,6 +279,8 @@ struct Marks {
     reported: u64,
     /// Resumes taken.
     resumes: u64,
+    /// The PLC's restarts when the cycle began or last faulted.
+    restarts: u64,
 }
 
 /// A checked program run `count` times (or until stopped), one decision at a time.
@@ -292,10 +301,11 @@ pub struct Runner<G> {
 }
 
 impl<G> Runner<G> {
-    /// A run of `program`, `count` times (or until stopped), beginning `now` under the PLC's
-    /// incident count `incidents`. Its first action comes from [`Event::Go`].
+    /// A run of `program`, `count` times (or until stopped), beginning as `seen` shows (its
+    /// time, and the PLC's incidents and restarts it acts under). Its first action comes from
+    /// [`Event::Go`].
     #[must_use]
-    pub fn new(program: Checked, count: Option<u64>, incidents: u64, now: Instant) -> Self {
+    pub fn new(program: Checked, count: Option<u64>, seen: &Seen) -> Self {
         Self {
             ops: program.ops,
             count,
@@ -303,15 +313,16 @@ impl<G> Runner<G> {
             done: 0,
             round: Round {
                 loops: HashMap::new(),
-                began: now,
+                began: seen.now,
                 waited_s: 0.0,
             },
             ahead: VecDeque::new(),
             then: None,
             marks: Marks {
-                epoch: incidents,
-                reported: incidents,
+                epoch: seen.incidents,
+                reported: seen.incidents,
                 resumes: 0,
+                restarts: seen.restarts,
             },
             phase: Phase::Top,
         }
@@ -356,6 +367,7 @@ impl<G> Runner<G> {
                 Action::Fault {
                     why,
                     stop_robot: false,
+                    interrupted: self.restarted(seen),
                     unprepare: Vec::new(),
                 }
             }
@@ -442,8 +454,14 @@ impl<G> Runner<G> {
         Action::Fault {
             why,
             stop_robot: true,
+            interrupted: self.restarted(seen),
             unprepare: self.unprepare(),
         }
+    }
+
+    /// Whether the PLC restarted since the cycle began or last faulted (counted from now on).
+    fn restarted(&mut self, seen: &Seen) -> bool {
+        std::mem::replace(&mut self.marks.restarts, seen.restarts) != seen.restarts
     }
 
     fn end(&mut self, state: CycleState, why: Option<&str>) -> Action<G> {

@@ -11,6 +11,7 @@ struct World {
     control: Control,
     incidents: u64,
     last_incident: Option<String>,
+    restarts: u64,
     now: Instant,
 }
 
@@ -20,6 +21,7 @@ impl World {
             control: Control::default(),
             incidents: 0,
             last_incident: None,
+            restarts: 0,
             now: Instant::now(),
         }
     }
@@ -29,6 +31,7 @@ impl World {
             control: self.control,
             incidents: self.incidents,
             last_incident: self.last_incident.clone(),
+            restarts: self.restarts,
             now: self.now,
         }
     }
@@ -45,7 +48,7 @@ fn runner(program: &str, others: &[(&str, &str)], count: Option<u64>) -> (Runner
     programs.extend_from_slice(others);
     let checked = checked(&programs, "p", false).unwrap();
     let world = World::new();
-    (Runner::new(checked, count, 0, world.now), world)
+    (Runner::new(checked, count, &world.seen()), world)
 }
 
 /// An action, in words.
@@ -72,6 +75,7 @@ fn said(action: &Action<u32>) -> String {
             why,
             stop_robot,
             unprepare,
+            ..
         } => format!("fault ({why}) stop {stop_robot} {:?}", gates(unprepare)),
         Action::Stand => "stand".to_owned(),
         Action::End {
@@ -540,6 +544,44 @@ fn an_incident_seen_at_the_top_faults_and_a_stop_while_standing_ends_it() {
         feed(&mut r, &w, Event::Changed),
         "end Stopped (Some(\"stopped by request\")) []"
     );
+}
+
+/// Whether a fault makes the pallets' slots in progress unsure: only when the PLC restarted
+/// since the cycle began or last faulted (a place under way may have been cut short), not for
+/// an incident of another kind, nor twice for one restart.
+#[test]
+fn a_fault_after_a_restart_of_the_plc_makes_the_slots_in_progress_unsure_once() {
+    let interrupted = |action: Action<u32>| match action {
+        Action::Fault { interrupted, .. } => interrupted,
+        other => panic!("not a fault: {}", said(&other)),
+    };
+    // A restart before the cycle began is not one under it.
+    let mut w = World::new();
+    w.incident("the PLC restarted");
+    w.restarts = 1;
+    let checked = checked(&[("p", DWELLS)], "p", false).unwrap();
+    let mut r = Runner::<u32>::new(checked, None, &w.seen());
+    assert_eq!(feed(&mut r, &w, Event::Go), "step dwell 1s");
+    assert_eq!(feed(&mut r, &w, Event::Go), "dwell 1s");
+    w.incident("the PLC stalls");
+    assert!(!interrupted(
+        r.on(Event::Incident("stall".to_owned()), &w.seen())
+    ));
+    // Standing: a restart now is one under the cycle, named once.
+    assert_eq!(feed(&mut r, &w, Event::Changed), "stand");
+    w.incident("the PLC restarted");
+    w.restarts = 2;
+    let restart = || Event::Incident("the PLC restarted".to_owned());
+    assert!(interrupted(r.on(restart(), &w.seen())));
+    w.incident("the link was lost");
+    assert!(!interrupted(r.on(restart(), &w.seen())));
+    // Resumed after a clear; a restart mid-dwell faults with the slots made unsure.
+    w.control.resume(Some(w.incidents));
+    assert_eq!(feed(&mut r, &w, Event::Changed), "step dwell 1s");
+    assert_eq!(feed(&mut r, &w, Event::Go), "dwell 1s");
+    w.incident("the PLC restarted");
+    w.restarts = 3;
+    assert!(interrupted(r.on(restart(), &w.seen())));
 }
 
 #[test]

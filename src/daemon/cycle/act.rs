@@ -2,12 +2,15 @@
 //! a move or a path followed to its end, a wait on the cell's inputs decided on every
 //! status block the worker reads, outputs written through the gateway, a dwell. Each gives way
 //! to a control request (stop now, or a stop / pause that waits for the step's end) as soon as
-//! one comes.
+//! one comes. And what a pause and a fault do: the robot stopped (a fault), the pallets' slots
+//! in progress made unsure (a fault after a restart of the PLC), the moves prepared ahead
+//! unprepared.
 
 use std::time::Duration;
 
 use tokio::sync::watch;
 
+use super::pallet::Palletising;
 use super::status::Status;
 use crate::contract::{INPUT_WORDS, Permit};
 use crate::cycle::runner::{Control, Event, Motion, MotionEnd, Prepared, WaitEnd};
@@ -59,8 +62,23 @@ pub(super) async fn write(handle: &RobotHandle, writes: Vec<(Address, Values)>) 
     Event::Written(None)
 }
 
+/// A follow step: every start of `ids` to its end, the status naming them once they started.
+pub(super) async fn follow_step(
+    handle: &RobotHandle,
+    status: &Status,
+    ids: &[MoveId],
+    control: &mut watch::Receiver<Control>,
+) -> Event<Gate> {
+    let mut started = Vec::new();
+    let end = follow(handle, ids, control, &mut started).await;
+    if end != MotionEnd::NotStarted {
+        status.moves(&started);
+    }
+    Event::Followed(end)
+}
+
 /// Follows every start of `ids` to its end.
-pub(super) async fn follow(
+async fn follow(
     handle: &RobotHandle,
     ids: &[MoveId],
     control: &mut watch::Receiver<Control>,
@@ -345,4 +363,41 @@ pub(super) async fn wait_step(
     handle.waited(at, waited_s);
     status.waiting(None, None);
     Event::Waited { end, waited_s }
+}
+
+/// Pauses the cycle (`why`): the moves prepared ahead unprepared, the status saying so.
+pub(super) async fn pause(
+    handle: &RobotHandle,
+    status: &Status,
+    why: String,
+    moves: Vec<Prepared<Gate>>,
+) -> Event<Gate> {
+    tracing::warn!(robot = %handle.robot().name, "cycle paused: {why}");
+    unprepare(handle, moves).await;
+    status.paused(why);
+    Event::Changed
+}
+
+/// Faults the cycle on its step (`why`): the robot stopped when `stop_robot` (through `base`,
+/// as any client: the stop is not refused for an incident), the pallets' slots in progress made
+/// unsure when `interrupted` (the PLC restarted under the cycle), the moves prepared ahead
+/// unprepared, the status saying so.
+pub(super) async fn fault(
+    handle: &RobotHandle,
+    base: &RobotHandle,
+    status: &Status,
+    why: String,
+    (stop_robot, interrupted): (bool, bool),
+    moves: Vec<Prepared<Gate>>,
+) -> Event<Gate> {
+    tracing::warn!(robot = %handle.robot().name, "cycle faulted: {why}");
+    if interrupted {
+        Palletising::interrupted(base);
+    }
+    if stop_robot {
+        let _ = base.stop_robot().await;
+    }
+    unprepare(handle, moves).await;
+    status.ended(crate::wire::CycleState::Faulted, Some(why));
+    Event::Changed
 }

@@ -8,9 +8,12 @@
 //! run.rs      the driver: the runner's actions carried out, what came of them fed back, the
 //!             cycle's status written
 //! act.rs      what the steps do: a move or path followed to its end, a wait on the inputs, a
-//!             dwell, a loop's condition decided, moves prepared ahead unprepared
+//!             dwell, a loop's condition decided, moves prepared ahead unprepared; what a pause
+//!             and a fault do to the robot
 //! pallet.rs   the pallet steps: counters changed on disk (and journaled), the way into and
 //!             out of the slot in progress queued as paths, what conditions read of a pallet
+//! seen.rs     what the driver sees before each decision (the control, the PLC's incidents)
+//!             and waits on: a change of the control, an incident
 //! status.rs   the cycle's status as the driver writes it
 //! slot.rs     the robot's cycle's owner task: at most one running, its status, its control
 //! handle.rs   RobotHandle's cycle methods: run (checked first), stop, pause, resume, each a
@@ -23,6 +26,7 @@ mod act;
 mod handle;
 mod pallet;
 mod run;
+mod seen;
 mod slot;
 mod status;
 
