@@ -114,10 +114,11 @@ pub fn spawn_in_cell(
     (d, h)
 }
 
-/// Waits until the daemon takes moves: connected, nothing refusing them, the counts read.
+/// Waits until the daemon takes moves: connected, nothing refusing them, the counts read (at
+/// most 10 s: a slow line's first exchanges on a loaded machine take seconds).
 #[allow(dead_code)] // not every test binary waits so
 pub async fn taking_moves(h: &RobotHandle) {
-    for _ in 0..500 {
+    for _ in 0..1_000 {
         let s = h.state();
         if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
             return;

@@ -4,7 +4,9 @@ use crate::common;
 
 use std::time::Duration;
 
-use common::daemon::{duplex_connector, mewtocol_options, report_until};
+use common::daemon::{
+    duplex_connector, mewtocol_options, report_until, taking_moves as wait_connected,
+};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::contract::Layout;
 use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage, SubmitError};
@@ -132,18 +134,6 @@ fn order(p: [f64; 3]) -> MoveOrder {
     }
 }
 
-/// Waits until the daemon takes moves: connected, its host word echoed, nothing refusing them.
-async fn wait_connected(h: &RobotHandle) {
-    for _ in 0..200 {
-        let s = h.state();
-        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("never connected: {:?}", h.state());
-}
-
 async fn run(h: &RobotHandle, p: [f64; 3]) -> MoveReport {
     let id = h.submit(order(p)).await.unwrap();
     h.wait(id, LIMIT).await.unwrap()
@@ -251,10 +241,17 @@ async fn stop_mid_move_stops_every_channel() {
 }
 
 /// An order is refused at once, naming why, once the daemon has seen the PLC (a heartbeat
-/// standing still is known after its timeout); nothing is written.
+/// standing still is known after its timeout: the robot's state says what refuses moves);
+/// nothing is written.
 async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, want: &str) {
     let (d, h) = daemon(connector(link, shared, None), settings);
-    tokio::time::sleep(settings.watch.heartbeat_timeout + Duration::from_millis(300)).await;
+    tokio::time::sleep(settings.watch.heartbeat_timeout).await;
+    for _ in 0..1_000 {
+        if h.state().refuses.is_some_and(|why| why.contains(want)) {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     let e = h.submit(order(P2)).await.unwrap_err();
     assert!(matches!(e, SubmitError::NotNow { .. }), "{link:?}: {e:?}");
     assert!(e.to_string().contains(want), "{link:?}: {e}");

@@ -7,7 +7,7 @@ use crate::common;
 
 use std::time::Duration;
 
-use common::daemon::duplex_connector;
+use common::daemon::{duplex_connector, taking_moves as wait_connected};
 use common::exchange::{P2, mock_at_seed_start};
 use linterpd::contract::Layout;
 use linterpd::daemon::{
@@ -53,17 +53,6 @@ fn spawn(connect: Connector) -> (Daemon, RobotHandle) {
 
 fn at(text: &str) -> Address {
     text.parse().unwrap()
-}
-
-async fn wait_connected(h: &RobotHandle) {
-    for _ in 0..500 {
-        let s = h.state();
-        if s.link.connected && s.refuses.is_none() && s.counts.is_some() {
-            return;
-        }
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
-    panic!("never connected: {:?}", h.state());
 }
 
 fn words(shared: &SharedMock, start: u32, count: usize) -> Vec<u16> {
