@@ -387,11 +387,13 @@ impl Worker {
             }
         });
         self.out.state(|s| s.queued.extend(&ids));
+        // Only the first start waits for the gate: the rest of a path follow it as its own.
+        let mut gate = batch.gate;
         for (report, order) in batch.starts {
             self.dispatch.push(Queued {
                 id: report.id,
                 order,
-                gate: batch.gate.clone(),
+                gate: gate.take(),
                 epoch: batch.epoch,
                 accepted: now(),
                 preload: None,
