@@ -74,6 +74,17 @@ impl Layout {
         self.table_base + bank * self.bank_stride + channel as u16 * self.channel_stride
     }
 
+    /// The bank and channel of the table area DT word `word` lies in, if it lies in one.
+    #[must_use]
+    pub fn table_area_of(&self, word: u32) -> Option<(u16, usize)> {
+        (0..BANKS)
+            .flat_map(|bank| (0..CHANNELS).map(move |channel| (bank, channel)))
+            .find(|&(bank, channel)| {
+                let start = u32::from(self.area(bank, channel));
+                (start..start + u32::from(self.area_words)).contains(&word)
+            })
+    }
+
     /// Whether DT word `word` belongs to the contract (its blocks or a table area).
     #[must_use]
     pub fn holds(&self, word: u32) -> bool {
