@@ -266,7 +266,8 @@ async fn serve(settings: Settings, out: &mut dyn Write) -> Result<(), Failure> {
     shared.with(|_| ()); // scan 0: the status block is live (magic, RUN) before anyone connects
     let driver = tokio::spawn(shared.clone().run_scans());
     let control = serve_control(&settings, &shared)?;
-    let shutdown = shutdown_signal();
+    // Before "listening on" is printed: a SIGTERM sent as soon as that line is read ends it.
+    let shutdown = crate::daemon::service::shutdown_signal();
     let (server, shown) = start_server(&settings, &shared).await?;
     writeln!(out, "listening on {shown}")
         .and_then(|()| out.flush())
@@ -391,24 +392,6 @@ fn spawn_serial(
             };
             let server = ModbusServer::new(shared.clone(), options);
             tokio::spawn(async move { Ok(server.serve_rtu(port).await?) })
-        }
-    }
-}
-
-/// Ends at SIGTERM or SIGINT. SIGTERM is listened for from the call on, not from the first
-/// poll: called before "listening on" is printed, a SIGTERM sent as soon as that line is read is
-/// not lost (it would kill the process instead of ending it with 0).
-fn shutdown_signal() -> impl Future<Output = ()> {
-    use tokio::signal::unix::{SignalKind, signal};
-    let term = signal(SignalKind::terminate());
-    async move {
-        let Ok(mut term) = term else {
-            let _ = tokio::signal::ctrl_c().await;
-            return;
-        };
-        tokio::select! {
-            _ = tokio::signal::ctrl_c() => tracing::info!("SIGINT"),
-            _ = term.recv() => tracing::info!("SIGTERM"),
         }
     }
 }

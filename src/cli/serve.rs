@@ -41,13 +41,10 @@ pub fn run(args: &ServeArgs) -> Result<(), Failure> {
         .context("cannot start the async runtime")
         .map_err(Failure::Runtime)?;
     runtime
-        .block_on(service::serve(
-            &config,
-            Some(&args.config),
-            &settings,
-            notifier,
-            service::shutdown_signal(),
-        ))
+        .block_on(async {
+            let shutdown = service::shutdown_signal();
+            service::serve(&config, Some(&args.config), &settings, notifier, shutdown).await
+        })
         .map_err(|e| match e {
             ServeError::NoLink { .. } | ServeError::Token(_) => bad_input(e),
             other => Failure::Runtime(other.into()),

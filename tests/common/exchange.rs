@@ -2,8 +2,8 @@
 //! plan the seed's move from the counts it reports, upload and verify a bank, start it, follow it
 //! to done, and compare the final counts with the plan.
 //!
-//! The tests' driver of the pure [`Machine`] is the library's `plc::exchange::driver` (built
-//! for tests with the `testing` feature), the one the unit tests use too.
+//! The tests' driver of the pure [`Machine`] is the library's `plc::exchange::driver`, the one
+//! the unit tests use too.
 
 use linterpd::geometry::Pose;
 use linterpd::kinematics::JOINTS;

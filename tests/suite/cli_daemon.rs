@@ -518,3 +518,46 @@ fn counts_after_cycle() -> [i64; 4] {
     let q = linterpd::kinematics::Kinematics::ik(&robot.kinematics, &pose, None).unwrap();
     robot.counts_of(&q)
 }
+
+/// systemd may stop (SIGTERM), reload (SIGHUP) or a terminal interrupt (SIGINT) the daemon the
+/// moment it says it listens: each is listened for before anything is bound, so none of them
+/// kills it (a SIGHUP's and a SIGTERM's default action ends a process). Found by the Modbus
+/// face's test, which once saw the daemon killed by its SIGTERM under load.
+#[test]
+fn a_signal_as_soon_as_the_daemon_listens_is_handled_never_fatal() {
+    let dir = common::process::TempDir::new("signals");
+    let socket = dir.path().join("api.sock");
+    let config = dir.path().join("linterpd.toml");
+    // No PLC there: the daemon serves its API and keeps trying the link.
+    std::fs::write(&config, common::serve::config_for("127.0.0.1:1", &socket)).unwrap();
+    let serve = || {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_linterpd"));
+        command.arg("serve").arg("--config").arg(&config);
+        let mut serve = Spawned::spawn("linterpd serve", command);
+        serve.wait_for_stderr("API listening", READY);
+        serve
+    };
+    for round in 0..3 {
+        let mut term = serve();
+        let status = term.terminate(READY);
+        assert!(status.success(), "round {round}, SIGTERM: {status:?}");
+
+        let mut hup = serve();
+        hup.hangup();
+        hup.wait_for_stderr("SIGHUP", READY);
+        let status = hup.terminate(READY);
+        assert!(
+            status.success(),
+            "round {round}, SIGHUP then SIGTERM: {status:?}"
+        );
+
+        let mut int = serve();
+        int.interrupt();
+        let done = int.finish(READY);
+        assert!(
+            done.status.success(),
+            "round {round}, SIGINT: {}",
+            done.describe()
+        );
+    }
+}

@@ -294,6 +294,8 @@ pub async fn serve(
     notifier: Notifier,
     shutdown: impl Future<Output = ()>,
 ) -> Result<(), ServeError> {
+    // SIGHUP's default action ends the process: listened for before anything is bound.
+    let hangups = hangup_signals();
     let robots = robots_from_config(config)?;
     let token = settings
         .token_file
@@ -317,7 +319,7 @@ pub async fn serve(
         notifier,
         closing.clone(),
     ));
-    let reloads = (config_path, &journal);
+    let reloads = (config_path, &journal, hangups);
     let failed = run_until(shutdown, &mut daemon, &mut servers, reloads).await;
     tracing::info!("shutting down");
     journal.record(None, Kind::DaemonStopping);
@@ -410,10 +412,9 @@ async fn run_until(
     shutdown: impl Future<Output = ()>,
     daemon: &mut Daemon,
     servers: &mut JoinSet<io::Result<()>>,
-    (config_path, journal): (Option<&Path>, &Journal),
+    (config_path, journal, mut hangups): (Option<&Path>, &Journal, Hangups),
 ) -> Option<ServeError> {
     let mut running = config_path.map(running_config);
-    let mut hangups = hangup_signals();
     tokio::pin!(shutdown);
     loop {
         tokio::select! {
@@ -493,7 +494,10 @@ async fn serve_console(
 }
 
 /// SIGHUP as a stream (nothing comes if its handler cannot be installed).
-fn hangup_signals() -> tokio::sync::mpsc::Receiver<()> {
+/// Each SIGHUP, as it comes.
+type Hangups = tokio::sync::mpsc::Receiver<()>;
+
+fn hangup_signals() -> Hangups {
     let (tx, rx) = tokio::sync::mpsc::channel(1);
     match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()) {
         Ok(mut hup) => {
@@ -556,16 +560,22 @@ fn log_notify(result: io::Result<()>, what: &str) {
     }
 }
 
-/// Completes on SIGTERM or SIGINT.
+/// Completes on SIGTERM or SIGINT, both listened for from this call on, not from the first
+/// poll: made before anything is bound or systemd is told READY=1, a SIGTERM sent as soon as
+/// the daemon says it listens ends it cleanly (exit 0) instead of killing it. Call it inside
+/// the runtime.
 ///
 /// # Panics
-/// If the SIGTERM handler cannot be installed (no signal support in this process).
-pub async fn shutdown_signal() {
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-        .expect("SIGTERM handler");
-    tokio::select! {
-        _ = term.recv() => tracing::info!("SIGTERM"),
-        _ = tokio::signal::ctrl_c() => tracing::info!("SIGINT"),
+/// If the handlers cannot be installed (no signal support in this process, or no runtime).
+pub fn shutdown_signal() -> impl Future<Output = ()> + use<> {
+    use tokio::signal::unix::{SignalKind, signal};
+    let mut term = signal(SignalKind::terminate()).expect("SIGTERM handler");
+    let mut int = signal(SignalKind::interrupt()).expect("SIGINT handler");
+    async move {
+        tokio::select! {
+            _ = term.recv() => tracing::info!("SIGTERM"),
+            _ = int.recv() => tracing::info!("SIGINT"),
+        }
     }
 }
 

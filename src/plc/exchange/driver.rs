@@ -1,9 +1,8 @@
 //! The tests' driver of the pure [`Machine`] over a [`Contract`], shared by the crate's unit
-//! tests and (with the `testing` feature, which the crate's own dev-dependency turns on) the
-//! integration tests in `tests/common/`. It makes the daemon worker's exchanges in its order:
-//! status reads until the PLC takes a start ([`until_ready`]), the upload (begun in the machine
-//! first, by the caller), then the worker's own [`Contract::proof_read`] (the heartbeat word
-//! alone first, when the machine wants two reads, then the status block) until
+//! tests and the integration tests in `tests/common/`. It makes the daemon worker's exchanges in
+//! its order: status reads until the PLC takes a start ([`until_ready`]), the upload (begun in
+//! the machine first, by the caller), then the worker's own [`Contract::proof_read`] (the
+//! heartbeat word alone first, when the machine wants two reads, then the status block) until
 //! [`Machine::may_start`] ([`until_it_may_start`]), the start written once, and status reads
 //! every poll interval to the start's end ([`start_and_follow`]).
 //!

@@ -12,7 +12,12 @@
 //! counts it was planned from (`from`), and the PLC refuses it (fault 5) from any others.
 
 mod describe;
-#[cfg(any(test, feature = "testing"))]
+// The tests' driver, shared by the unit tests and tests/common/: not product code, so not in the
+// docs. Its functions are generic over the PLC, so no binary holds code of it unless it calls
+// it. (It was behind a `testing` feature turned on by the crate's own dev-dependency; that made
+// cargo build the library before its unit tests instead of beside them: 80 s of a cold
+// `cargo test` on 2 cores.)
+#[doc(hidden)]
 pub mod driver;
 
 /// The command block `start` begins, no channel placed yet: its bank and permit checked.
