@@ -747,6 +747,9 @@ fn a_prepared_path_cancelled_before_its_start_runs_afresh_at_its_step() {
     assert_eq!(r.pc(), 3);
 }
 
+/// A change of the control, asked for by a test.
+type AskFor = fn(&mut Control);
+
 /// Each way the cycle goes other than on to the prepared path's step takes it back: its gate
 /// named in the action that ends, pauses or faults the cycle.
 #[test]
@@ -771,7 +774,7 @@ fn a_fault_a_hold_a_pause_or_a_stop_unprepares_a_prepared_path() {
         "{got}"
     );
     // A pause, a hold from outside the PLC, a stop: at the end of the path before it.
-    let asks: [(fn(&mut Control), &str); 3] = [
+    let asks: [(AskFor, &str); 3] = [
         (Control::pause_asked, "pause (paused by request) [21]"),
         (
             |c| c.hold_asked("move-enable dropped"),
