@@ -162,6 +162,21 @@ mod tests {
     }
 
     #[test]
+    fn a_word_is_placed_in_its_banks_channel_area_and_none_outside_them() {
+        let l = Layout::default();
+        // Bank 0 channel 0 from DT2000, channel 1 from DT4000; bank 1 from DT10000.
+        assert_eq!(l.table_area_of(2_000), Some((0, 0)));
+        assert_eq!(l.table_area_of(3_999), Some((0, 0)));
+        assert_eq!(l.table_area_of(4_000), Some((0, 1)));
+        assert_eq!(l.table_area_of(10_000), Some((1, 0)));
+        assert_eq!(l.table_area_of(17_999), Some((1, 3)));
+        // The blocks and past the last area: none.
+        assert_eq!(l.table_area_of(1_032), None);
+        assert_eq!(l.table_area_of(1_999), None);
+        assert_eq!(l.table_area_of(18_000), None);
+    }
+
+    #[test]
     fn area_past_dt_end_is_refused() {
         let l = Layout {
             table_base: 20_000,
