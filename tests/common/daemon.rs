@@ -139,3 +139,29 @@ pub fn programs_dir(prefix: &str, test: &str, files: &[(&str, String)]) -> std::
     }
     dir
 }
+
+/// How long a move's report may take to come to what a test waits for.
+const REPORT_LIMIT: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// Waits until the report on `feed` satisfies `until`, and returns it. Fails the test, naming
+/// `what` and the last report, when the move ends first (a report that ended never changes
+/// again) or after [`REPORT_LIMIT`]: a test never hangs on a move that went another way.
+#[allow(dead_code)] // not every test binary follows a move
+pub async fn report_until(
+    feed: &mut tokio::sync::watch::Receiver<linterpd::wire::MoveReport>,
+    what: &str,
+    mut until: impl FnMut(&linterpd::wire::MoveReport) -> bool,
+) -> linterpd::wire::MoveReport {
+    let seen = tokio::time::timeout(REPORT_LIMIT, async {
+        feed.wait_for(|r| until(r) || r.stage.is_final())
+            .await
+            .map(|r| r.clone())
+    })
+    .await;
+    match seen {
+        Ok(Ok(r)) if until(&r) => r,
+        Ok(Ok(r)) => panic!("the move ended before {what}: {r:?}"),
+        Ok(Err(_)) => panic!("the move's feed closed before {what}: {:?}", feed.borrow()),
+        Err(_) => panic!("not {what} within {REPORT_LIMIT:?}: {:?}", feed.borrow()),
+    }
+}

@@ -216,7 +216,7 @@ async fn stop_answers_200_and_the_move_ends_stopped() {
     let s = Served::start().await;
     let id = s.submit(P2).await;
     let mut feed = s.handle().subscribe(id).unwrap();
-    feed.wait_for(|r| r.progress > 0.3).await.unwrap();
+    common::daemon::report_until(&mut feed, "30 % done", |r| r.progress > 0.3).await;
     let stop = s.api.post(&format!("{ROBOT}/stop"), "").await;
     assert_eq!(stop.status, StatusCode::OK, "{}", stop.text());
     assert_eq!(stop.json(), json!({ "stopped": true }));

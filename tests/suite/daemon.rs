@@ -4,7 +4,7 @@ use crate::common;
 
 use std::time::Duration;
 
-use common::daemon::{duplex_connector, mewtocol_options};
+use common::daemon::{duplex_connector, mewtocol_options, report_until};
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::contract::Layout;
 use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage, SubmitError};
@@ -228,9 +228,10 @@ async fn stop_mid_move_stops_every_channel() {
         wait_connected(&h).await;
         let id = h.submit(order(P2)).await.unwrap();
         let mut feed = h.subscribe(id).unwrap();
-        feed.wait_for(|r| r.stage == Stage::Running && r.progress > 0.3)
-            .await
-            .unwrap();
+        report_until(&mut feed, "running, 30 % done", |r| {
+            r.stage == Stage::Running && r.progress > 0.3
+        })
+        .await;
         h.stop().await.unwrap();
         let r = h.wait(id, LIMIT).await.unwrap();
         assert_eq!(r.stage, Stage::Stopped, "{link:?} {r:?}");
@@ -341,11 +342,10 @@ async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
         let (first, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
         let id = h.submit(order(P2)).await.unwrap();
-        h.subscribe(id)
-            .unwrap()
-            .wait_for(|r| r.stage == Stage::Running)
-            .await
-            .unwrap();
+        report_until(&mut h.subscribe(id).unwrap(), "running", |r| {
+            r.stage == Stage::Running
+        })
+        .await;
         while shared.with(|m| m.status().state) != linterpd::contract::State::Running.word() {
             tokio::time::sleep(Duration::from_millis(2)).await;
         }
@@ -591,7 +591,7 @@ async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
     let ahead = h.submit(order(P2)).await.unwrap();
     let same = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(ahead).unwrap();
-    feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
+    report_until(&mut feed, "running", |r| r.stage == Stage::Running).await;
     tokio::time::sleep(Duration::from_millis(100)).await;
     let behind = h.report(same).unwrap();
     assert!(
@@ -615,7 +615,7 @@ async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
     let ahead = h.submit(order(P2)).await.unwrap();
     let same = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(ahead).unwrap();
-    feed.wait_for(|r| r.stage == Stage::Running).await.unwrap();
+    report_until(&mut feed, "running", |r| r.stage == Stage::Running).await;
     h.stop().await.unwrap();
     let ahead = h.wait(ahead, LIMIT).await.unwrap();
     assert_eq!(ahead.stage, Stage::Stopped, "{ahead:?}");
@@ -704,11 +704,7 @@ async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
     wait_connected(&h).await;
     let id = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(id).unwrap();
-    let running = feed
-        .wait_for(|r| r.stage == Stage::Running)
-        .await
-        .unwrap()
-        .clone();
+    let running = report_until(&mut feed, "running", |r| r.stage == Stage::Running).await;
     let seen = tokio::time::Instant::now();
     let deadline = Duration::from_secs_f64(running.deadline_s.unwrap());
     let next = shared.with(|m| m.commands()) + 1;
