@@ -162,6 +162,9 @@ pub async fn report_until(
         Ok(Ok(r)) if until(&r) => r,
         Ok(Ok(r)) => panic!("the move ended before {what}: {r:?}"),
         Ok(Err(_)) => panic!("the move's feed closed before {what}: {:?}", feed.borrow()),
-        Err(_) => panic!("not {what} within {REPORT_LIMIT:?}: {:?}", feed.borrow()),
+        Err(elapsed) => panic!(
+            "not {what} within {REPORT_LIMIT:?} ({elapsed}): {:?}",
+            feed.borrow()
+        ),
     }
 }
