@@ -74,6 +74,17 @@ impl Layout {
         self.table_base + bank * self.bank_stride + channel as u16 * self.channel_stride
     }
 
+    /// The bank and channel of the table area DT word `word` lies in, if it lies in one.
+    #[must_use]
+    pub fn table_area_of(&self, word: u32) -> Option<(u16, usize)> {
+        (0..BANKS)
+            .flat_map(|bank| (0..CHANNELS).map(move |channel| (bank, channel)))
+            .find(|&(bank, channel)| {
+                let start = u32::from(self.area(bank, channel));
+                (start..start + u32::from(self.area_words)).contains(&word)
+            })
+    }
+
     /// Whether DT word `word` belongs to the contract (its blocks or a table area).
     #[must_use]
     pub fn holds(&self, word: u32) -> bool {
@@ -148,6 +159,21 @@ mod tests {
         assert_eq!(l.area(0, 0), 2_000);
         assert_eq!(l.area(1, 3), 2_000 + 8_000 + 6_000);
         assert!(l.check().is_ok());
+    }
+
+    #[test]
+    fn a_word_is_placed_in_its_banks_channel_area_and_none_outside_them() {
+        let l = Layout::default();
+        // Bank 0 channel 0 from DT2000, channel 1 from DT4000; bank 1 from DT10000.
+        assert_eq!(l.table_area_of(2_000), Some((0, 0)));
+        assert_eq!(l.table_area_of(3_999), Some((0, 0)));
+        assert_eq!(l.table_area_of(4_000), Some((0, 1)));
+        assert_eq!(l.table_area_of(10_000), Some((1, 0)));
+        assert_eq!(l.table_area_of(17_999), Some((1, 3)));
+        // The blocks and past the last area: none.
+        assert_eq!(l.table_area_of(1_032), None);
+        assert_eq!(l.table_area_of(1_999), None);
+        assert_eq!(l.table_area_of(18_000), None);
     }
 
     #[test]

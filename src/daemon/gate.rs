@@ -1,5 +1,5 @@
-//! A start gate: a move uploaded ahead of the condition it waits for and started only once the
-//! gate opens (a cycle's wait met), or never (the gate shut). The worker holds the verified bank
+//! A start gate: a move (or a path's first start) uploaded ahead of the condition it waits for
+//! and started only once the gate opens (a cycle's wait met), or never (the gate shut). The worker holds the verified bank
 //! while the gate is closed, reading the status block and serving the gateway as usual; anything
 //! else (a stop, a command, the PLC changing under it, the link) cancels the move before its
 //! start, and the cycle then runs it as any move, after its wait.

@@ -56,7 +56,9 @@ pub use mewtocol_server::{MewtocolServer, MewtocolServerOptions, ServerError};
 pub use modbus_server::{ModbusServer, ModbusServerOptions};
 pub use program::{HeaderError, StartOutcome, StartRecord};
 pub use shared::SharedMock;
-pub use trace::{Anomaly, HostWrite, PowerCut, PulsePoint, Recorder, RestartSeen, write_csv};
+pub use trace::{
+    Anomaly, HostWrite, PowerCut, PulsePoint, Recorder, RestartSeen, TableWrite, write_csv,
+};
 pub use variant::{MockVariant, SMALL_MEWTOCOL_WORDS, SMALL_MODBUS_REGISTERS};
 pub use wire::{BITS_PER_CHAR, WireStream, wire_time};
 
@@ -400,7 +402,10 @@ impl MockPlc {
 
     fn note_host_write(&mut self, area: crate::gateway::Area, start: u32, values: Vec<u16>) {
         if area == crate::gateway::Area::Dt && self.config.layout.holds(start) {
-            // The contract's own words: its starts are recorded as such.
+            // The contract's own words: its starts are recorded as such, its uploads here.
+            if let Some((bank, channel)) = self.config.layout.table_area_of(start) {
+                self.note_table_write(bank, channel, start, values.len());
+            }
             return;
         }
         let kept = &mut self.recorder.host_writes;
@@ -416,6 +421,29 @@ impl MockPlc {
             counts: std::array::from_fn(|c| self.engines[c].count()),
         };
         self.recorder.host_writes.push(write);
+    }
+
+    fn note_table_write(&mut self, bank: u16, channel: usize, start: u32, words: usize) {
+        let kept = &mut self.recorder.table_writes;
+        if kept.len() == HOST_WRITES_KEPT {
+            kept.drain(..HOST_WRITES_KEPT / 2);
+        }
+        kept.push(TableWrite {
+            command: self.commands,
+            at_s: self.now_s,
+            bank,
+            channel,
+            start,
+            words,
+        });
+    }
+
+    /// The writes a client made (over MEWTOCOL, Modbus or in process) into the table areas (the
+    /// uploads and preloads), in order, each with when it landed; the last
+    /// [`HOST_WRITES_KEPT`] at most.
+    #[must_use]
+    pub fn table_writes(&self) -> &[TableWrite] {
+        &self.recorder.table_writes
     }
 
     /// The writes a client made (over MEWTOCOL, Modbus or in process) outside the contract's

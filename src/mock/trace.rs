@@ -75,6 +75,24 @@ pub struct HostWrite {
     pub counts: [i64; 4],
 }
 
+/// A client's write into a table area (an upload's or a preload's), in the order written: when
+/// a bank was written, against the other writes ([`HostWrite::command`]) and the starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableWrite {
+    /// The mock's command count at it.
+    pub command: u64,
+    /// When, s since the mock started (as [`super::StartRecord::at_s`]).
+    pub at_s: f64,
+    /// The bank written.
+    pub bank: u16,
+    /// The channel whose area was written.
+    pub channel: usize,
+    /// The first word written.
+    pub start: u32,
+    /// How many words.
+    pub words: usize,
+}
+
 /// A power cut of the mock ([`super::MockPlc::power_cycle`]): what it lost.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PowerCut {
@@ -97,6 +115,8 @@ pub struct Recorder {
     pub anomalies: Vec<Anomaly>,
     /// Every write a client made, in order.
     pub host_writes: Vec<HostWrite>,
+    /// Every write a client made into a table area, in order.
+    pub table_writes: Vec<TableWrite>,
     /// What a client can know of the last power cycle.
     pub restart: RestartSeen,
     /// Every power cut, in order.

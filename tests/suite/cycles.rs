@@ -892,3 +892,117 @@ async fn a_bad_neighbour_never_keeps_a_good_program_from_running() {
     let s = until(&h, "done", |s| s.state == CycleState::Done).await;
     assert_eq!(s.done, 1);
 }
+
+/// From P1 up, across and down to P2 blended, `between` (steps, then a `set` of the gripper),
+/// and back to P1 blended: two path ops of three moves each.
+fn blended_there_and_back(between: &str) -> String {
+    let above = |p: [f64; 3]| [p[0], p[1], p[2] + 100.0];
+    let step = |p: [f64; 3], blend: bool| {
+        let blend = if blend { "blend_mm = 20\n" } else { "" };
+        format!("[[step]]\nmove = {}\n{blend}", at(p))
+    };
+    [
+        step(above(P1), true),
+        step(above(P2), true),
+        step(P2, false),
+        between.to_owned(),
+        "[[step]]\nset = { gripper = true }\n".to_owned(),
+        step(above(P2), true),
+        step(above(P1), true),
+        step(P1, false),
+    ]
+    .concat()
+}
+
+/// A blended run after a dwell is uploaded while the run before it moves and the dwell waits,
+/// and held: the gate opens at its step (after the output that follows the dwell), and it
+/// starts from the held bank, with no table written between the output and its start.
+#[tokio::test]
+async fn a_blended_run_after_a_dwell_is_uploaded_ahead_and_starts_from_its_held_bank() {
+    let shared = mock_at_seed_start("");
+    let program = blended_there_and_back("[[step]]\ndwell = \"1s\"\n");
+    let (_d, h) = spawn(&shared, programs("blended-ahead", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).await.unwrap();
+    let s = until(&h, "done", |s| s.state == CycleState::Done).await;
+    let reports = h.reports();
+    assert!(
+        reports
+            .iter()
+            .all(|r| r.stage == linterpd::daemon::Stage::Done),
+        "{reports:?}"
+    );
+    assert_eq!(s.moves.len(), reports.len(), "{s:?}");
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert!(starts.iter().all(|st| !st.from_mismatch()), "{starts:?}");
+    // The way back's first start: the first with the gripper on (R100, set after the dwell).
+    let back = starts
+        .iter()
+        .position(|st| st.inputs[2] & 1 == 1)
+        .expect("the way back started after the output");
+    assert!(back > 0, "{starts:?}");
+    let (writes, tables) = shared.with(|m| (m.host_writes().to_vec(), m.table_writes().to_vec()));
+    let gripper_on = writes
+        .iter()
+        .find(|w| w.area == linterpd::gateway::Area::R && w.values == [1])
+        .expect("the gripper's write")
+        .command;
+    // Its bank was written before the output that opens its gate (during the dwell)...
+    let bank = starts[back].block.bank;
+    assert!(
+        tables
+            .iter()
+            .any(|t| t.bank == bank && t.command < gripper_on),
+        "{tables:?}"
+    );
+    // ...and nothing was written to any table area from that output to its start: it
+    // started from the bank held behind the gate.
+    let late: Vec<_> = tables
+        .iter()
+        .filter(|t| t.command > gripper_on && t.at_s < starts[back].at_s)
+        .collect();
+    assert!(late.is_empty(), "written after the gate opened: {late:?}");
+    // The way there ended before the dwell: the way back began after it, from rest.
+    assert!(starts[back].seen_s > starts[back - 1].at_s);
+}
+
+/// A blended run held behind its gate while the wait before it times out: the cycle faults,
+/// every start of the run is cancelled before its start, and nothing of it moves.
+#[tokio::test]
+async fn a_fault_while_a_blended_run_is_held_cancels_every_start_of_it_and_nothing_moves() {
+    let shared = mock_at_seed_start("");
+    let program =
+        blended_there_and_back("[[step]]\nwait = \"part_present\"\ntimeout = \"1500ms\"\n");
+    let (_d, h) = spawn(&shared, programs("blended-held-fault", &[("p", program)]));
+    taking_moves(&h).await;
+    h.run_cycle("p", Some(1)).await.unwrap();
+    // The way there is queued first; the way back is queued behind it, prepared.
+    let there = until(&h, "waiting", |s| s.state == CycleState::Waiting)
+        .await
+        .moves;
+    let back: Vec<_> = h
+        .reports()
+        .into_iter()
+        .filter(|r| !there.contains(&r.id))
+        .collect();
+    assert!(back.len() > 1, "a run in parts: {back:?}");
+    let held = h.report(back[0].id).unwrap();
+    assert_eq!(held.stage, linterpd::daemon::Stage::Prepared, "{held:?}");
+    let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    assert!(s.reason.unwrap().contains("timed out"));
+    for r in &back {
+        let r = h.report(r.id).unwrap();
+        assert_eq!(r.stage, linterpd::daemon::Stage::Cancelled, "{r:?}");
+    }
+    let first = h.report(back[0].id).unwrap();
+    assert!(
+        first.error.as_deref().unwrap().contains("before its start"),
+        "{first:?}"
+    );
+    // The part arrives too late: nothing of the way back ever starts.
+    shared.with(|m| m.set_input(2, true).unwrap());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let starts = shared.with(|m| m.starts().to_vec());
+    assert_eq!(starts.len(), there.len(), "{starts:?}");
+    assert!(starts.iter().all(|st| st.inputs[2] & 1 == 0));
+}

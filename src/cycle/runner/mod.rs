@@ -1,5 +1,5 @@
 //! PURE. The cycle runner's decisions: a checked program's program counter, its loops, its
-//! cycles, the moves it prepares ahead and what ends it, as a machine that takes what came of
+//! cycles, the motions it prepares ahead and what ends it, as a machine that takes what came of
 //! its last action (an [`Event`]) with what it sees now ([`Seen`]: the control, the PLC's
 //! incidents, the time) and returns the next [`Action`]. It does no IO and reads no clock;
 //! `daemon`'s cycle driver carries the actions out through the robot's handle.
@@ -11,8 +11,8 @@
 //!    |  ---- pause or hold asked ---------------------------------> Pause -> Standing
 //!    |  ---- past the last op: CycleDone -> Top (or End(done))
 //!    v
-//!   Step(at) -> the op: Submit / Release, Prepare*, Follow | Prepare*, Wait | Write | Dwell |
-//!               Decide, Pace  -> Top at the next op, Pause (held), Fault, End (stopped now)
+//!   Step(at) -> the op: Submit / Release, Prepare*, Follow | Prepare*, Wait | Write |
+//!               Prepare*, Dwell | Decide, Pace  -> Top at the next op, Pause (held), Fault, End (stopped now)
 //!   Standing: a resume -> Top at the same op; a stop -> End; an incident -> Fault (named)
 //! ```
 //!
@@ -20,12 +20,15 @@
 //! `by` move and a path fault instead: their target or course depended on where they began);
 //! anything else faults it, and it goes on only after a resume, with that step again.
 //!
-//! The next move is prepared ahead: while a move runs, or a wait waits, the next move step the
-//! cycle comes to through outputs, waits and dwells only (round to the next cycle) is uploaded
-//! behind it and held; it is released when the runner reaches its step. (A move to where the
-//! robot will already be has no motion of its own: the one after it is prepared too.) Anything
-//! else the cycle does first (another motion, a fault, a hold, a pause, a stop, its end)
-//! unprepares it; a move cancelled before its start is run afresh at its step.
+//! The next motion is prepared ahead: while a move or a path runs, or a wait or a dwell
+//! waits, the next move step or path op (a `path` step, a run of blended moves) the cycle
+//! comes to through outputs, waits and dwells only (round to the next cycle) is uploaded
+//! behind it and held; it is released when the runner reaches its step. It is asked for only
+//! once the motion before it is queued (or there is none), so it is planned from where that
+//! one is planned to end. (A move to where the robot will already be has no motion of its
+//! own: the one after it is prepared too.) Anything else the cycle does first (another
+//! motion, a fault, a hold, a pause, a stop, its end) unprepares it; a motion cancelled
+//! before its start is run afresh at its step.
 
 mod control;
 mod steps;
@@ -61,12 +64,13 @@ pub struct Seen {
     pub now: Instant,
 }
 
-/// A move prepared ahead: its id, whether it moves the robot, and the driver's handle on it
-/// (`G`: its start gate).
+/// A motion prepared ahead: its starts, whether it moves the robot, and the driver's handle on
+/// it (`G`: its start gate).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Prepared<G> {
-    /// Its move.
-    pub id: MoveId,
+    /// Its starts, in order: one for a move; a path's sections and their parts, the first
+    /// held behind the gate and the rest queued behind it.
+    pub ids: Vec<MoveId>,
     /// Whether it moves the robot (planned to end more than a pulse from where it begins).
     pub moves: bool,
     /// What releases it, or unprepares it.
@@ -81,14 +85,12 @@ pub enum Action<G> {
     Step(StepAt),
     /// Queue this motion: [`Event::Queued`] or [`Event::Refused`].
     Submit(Motion),
-    /// Upload op `at`'s move ahead, held behind its gate: [`Event::Prepared`].
+    /// Upload op `at`'s motion ahead, held behind its gate: [`Event::Prepared`].
     Prepare {
         /// Its op.
         at: usize,
-        /// Its move.
-        order: MoveOrder,
-        /// Its permit (resolved when the program was checked).
-        permit: Permit,
+        /// Its motion, with its permit: a move or a path, never a pallet's way.
+        motion: Motion,
     },
     /// Release a move prepared ahead (its gate opens).
     Release(G),
@@ -192,7 +194,8 @@ pub enum Event<G> {
     Queued(Vec<MoveId>),
     /// The motion was refused.
     Refused(String),
-    /// The move of op `at` was prepared (`None`: the robot refused it now; it runs at its step).
+    /// The motion of op `at` was prepared (`None`: the robot refused it now; it runs at its
+    /// step).
     Prepared(Option<Prepared<G>>),
     /// The starts followed ended so.
     Followed(MotionEnd),
@@ -221,14 +224,15 @@ pub enum Event<G> {
 }
 
 /// Where the runner is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 enum Phase {
     /// At the top of op `pc`: stops, incidents, pauses and the cycle's end looked at first.
     Top,
     /// Op `pc`'s step said: the op begins.
     Entered,
-    /// Op `pc`'s move, prepared ahead, was released: the next prepared, then followed.
-    Released(MoveId),
+    /// Op `pc`'s motion, prepared ahead, was released (its starts): the next prepared, then
+    /// followed.
+    Released(Vec<MoveId>),
     /// Waiting for what came of op `pc`'s action.
     Op,
     /// The last cycle ended: the run ends done.
@@ -246,6 +250,8 @@ enum Then {
     Follow(Vec<MoveId>),
     /// Begin op `pc`'s wait.
     Wait,
+    /// Begin op `pc`'s dwell, this long.
+    Dwell(Duration),
 }
 
 /// How an op ended.
@@ -291,8 +297,8 @@ pub struct Runner<G> {
     pc: usize,
     done: u64,
     round: Round,
-    /// The next move steps' moves, prepared ahead, in the order the cycle comes to them: one
-    /// that moves, and before it any that do not; with the op each is for.
+    /// The next motions, prepared ahead, in the order the cycle comes to them: one that moves,
+    /// and before it any that do not; with the op each is for.
     ahead: VecDeque<(usize, Prepared<G>)>,
     /// What follows the moves being prepared, and the op they are prepared after.
     then: Option<(usize, Then)>,
@@ -360,7 +366,7 @@ impl<G> Runner<G> {
 
     /// What came of the last action, seen with `seen`: the next action.
     pub fn on(&mut self, event: Event<G>, seen: &Seen) -> Action<G> {
-        match (self.phase, event) {
+        match (self.phase.clone(), event) {
             (Phase::Ended, _) => self.end(CycleState::Stopped, None),
             (Phase::Standing, Event::Incident(why)) => {
                 self.marks.reported = seen.incidents;
@@ -375,7 +381,7 @@ impl<G> Runner<G> {
             (Phase::Top, _) => self.top(seen),
             (Phase::Finished, _) => self.end(CycleState::Done, None),
             (Phase::Entered, _) => self.begin(seen),
-            (Phase::Released(id), _) => self.prepare(self.pc, Then::Follow(vec![id]), seen),
+            (Phase::Released(ids), _) => self.prepare(self.pc, Then::Follow(ids), seen),
             (Phase::Op, Event::Incident(why)) => self.next(Next::Fault(why), seen),
             (Phase::Op, event) => self.answer(event, seen),
         }

@@ -1,5 +1,5 @@
-//! The ops: what each asks of the driver, the moves prepared ahead of it, and how what came of
-//! it moves the program counter.
+//! The ops: what each asks of the driver, the motions prepared ahead of it, and how what came
+//! of it moves the program counter.
 
 use super::{Action, Event, Motion, MotionEnd, Next, Phase, Prepared, Runner, Seen, Then, WaitEnd};
 use crate::cycle::check::{LoopExit, OpKind};
@@ -11,14 +11,16 @@ impl<G> Runner<G> {
         self.phase = super::Phase::Op;
         let hold = seen.control.hold();
         match self.ops[pc].kind.clone() {
-            OpKind::Move(_) if self.ahead.front().is_some_and(|(at, _)| *at == pc) => {
+            OpKind::Move(_) | OpKind::Path(_)
+                if self.ahead.front().is_some_and(|(at, _)| *at == pc) =>
+            {
                 if let Some(why) = hold {
-                    // Held from outside the PLC (move-enable dropped): its gate shuts, as a move
-                    // not prepared is not queued.
+                    // Held from outside the PLC (move-enable dropped): its gate shuts, as a
+                    // motion not prepared is not queued.
                     return self.next(Next::Hold(why.to_owned()), seen);
                 }
                 let (_, prepared) = self.ahead.pop_front().expect("just seen");
-                self.phase = Phase::Released(prepared.id);
+                self.phase = Phase::Released(prepared.ids);
                 Action::Release(prepared.gate)
             }
             OpKind::Move(_) | OpKind::Path(_) | OpKind::PalletPath { .. } if hold.is_some() => {
@@ -40,7 +42,7 @@ impl<G> Runner<G> {
             OpKind::Skip { unless, .. } => Action::Decide(unless),
             OpKind::Wait { .. } => self.prepare(pc, Then::Wait, seen),
             OpKind::Set(writes) => Action::Write(writes),
-            OpKind::Dwell(d) => Action::Dwell(d),
+            OpKind::Dwell(d) => self.prepare(pc, Then::Dwell(d), seen),
             OpKind::Loop { to, exit } => self.loop_op(to, exit, seen),
         }
     }
@@ -68,12 +70,7 @@ impl<G> Runner<G> {
     pub(super) fn answer(&mut self, event: Event<G>, seen: &Seen) -> Action<G> {
         let pc = self.pc;
         let next = match event {
-            Event::Queued(ids)
-                if matches!(
-                    self.ops[pc].kind,
-                    OpKind::Path(_) | OpKind::PalletPath { .. }
-                ) =>
-            {
+            Event::Queued(ids) if matches!(self.ops[pc].kind, OpKind::PalletPath { .. }) => {
                 return Action::Follow(ids);
             }
             Event::Queued(ids) => return self.prepare(pc, Then::Follow(ids), seen),
@@ -183,8 +180,8 @@ impl<G> Runner<G> {
         self.next(next, seen)
     }
 
-    /// Prepares the next moves after op `after` up to one that moves, unless a stop, a pause
-    /// or a hold is asked for; then `then`.
+    /// Prepares the next motions after op `after` up to one that moves, unless a stop, a
+    /// pause or a hold is asked for; then `then`.
     pub(super) fn prepare(&mut self, after: usize, then: Then, seen: &Seen) -> Action<G> {
         self.phase = Phase::Op;
         self.then = Some((after, then));
@@ -194,7 +191,7 @@ impl<G> Runner<G> {
         self.prepare_next()
     }
 
-    /// The move prepared (`None`: refused now, left to run at its step), and the next.
+    /// The motion prepared (`None`: refused now, left to run at its step), and the next.
     fn prepared(&mut self, prepared: Option<Prepared<G>>) -> Action<G> {
         match (prepared, self.next_to_prepare()) {
             (Some(prepared), Some(at)) => {
@@ -206,30 +203,29 @@ impl<G> Runner<G> {
     }
 
     fn prepare_next(&mut self) -> Action<G> {
-        match self.next_to_prepare() {
-            Some(at) => match &self.ops[at].kind {
-                OpKind::Move(order) => Action::Prepare {
-                    at,
-                    order: order.clone(),
-                    permit: self.ops[at].permit,
-                },
-                _ => self.then(),
-            },
-            None => self.then(),
-        }
+        let Some(at) = self.next_to_prepare() else {
+            return self.then();
+        };
+        let permit = self.ops[at].permit;
+        let motion = match &self.ops[at].kind {
+            OpKind::Move(order) => Motion::Move(order.clone(), permit),
+            OpKind::Path(order) => Motion::Path(order.clone(), permit),
+            _ => return self.then(),
+        };
+        Action::Prepare { at, motion }
     }
 
-    /// The op whose move is to be prepared next, if one is.
+    /// The op whose motion is to be prepared next, if one is.
     fn next_to_prepare(&self) -> Option<usize> {
         let (from, _) = self.then.as_ref()?;
-        // Never round the program more than once: a move's step is prepared once.
+        // Never round the program more than once: a motion's step is prepared once.
         let room =
             self.ahead.len() < self.ops.len() && self.ahead.back().is_none_or(|(_, p)| !p.moves);
         if !room {
             return None;
         }
         let after = self.ahead.back().map_or(*from, |(at, _)| *at);
-        let at = self.next_move(after)?;
+        let at = self.next_motion(after)?;
         let fresh = at != *from && !self.ahead.iter().any(|(a, _)| *a == at);
         fresh.then_some(at)
     }
@@ -238,6 +234,7 @@ impl<G> Runner<G> {
     fn then(&mut self) -> Action<G> {
         match self.then.take().map(|(_, then)| then) {
             Some(Then::Follow(ids)) => Action::Follow(ids),
+            Some(Then::Dwell(d)) => Action::Dwell(d),
             Some(Then::Wait) => match &self.ops[self.pc].kind {
                 OpKind::Wait { until, timeout, .. } => Action::Wait {
                     at: self.ops[self.pc].at.clone(),
@@ -250,11 +247,13 @@ impl<G> Runner<G> {
         }
     }
 
-    /// The next move step the cycle comes to after op `pc` through outputs, waits and dwells
-    /// only (round to the first op when another cycle follows, on through a loop that always
-    /// goes back): that step's op, if its move can be prepared (to a pose, a position or
-    /// joints; not `by` an offset, not a path).
-    fn next_move(&self, pc: usize) -> Option<usize> {
+    /// The next motion the cycle comes to after op `pc` through outputs, waits and dwells only
+    /// (round to the first op when another cycle follows, on through a loop that always goes
+    /// back): its op, if it can be prepared: a move to a pose, a position or joints (not `by`
+    /// an offset), or a path op (a `path` step, a run of blended moves; not a pallet's way,
+    /// whose slot is known only at its step). It begins where the motion before it is
+    /// planned to end: that one is queued (or prepared) before this is asked for.
+    fn next_motion(&self, pc: usize) -> Option<usize> {
         let ops = &self.ops;
         let wraps = self.count.is_none_or(|n| self.done + 1 < n);
         let mut at = pc + 1;
@@ -272,6 +271,7 @@ impl<G> Runner<G> {
                     exit: LoopExit::Stop,
                 } => at = *to,
                 OpKind::Move(order) if order.by.is_none() && at != pc => return Some(at),
+                OpKind::Path(_) if at != pc => return Some(at),
                 _ => return None,
             }
         }

@@ -98,7 +98,7 @@ fn script(r: &mut Runner<u32>, w: &World, events: Vec<Event<u32>>) -> Vec<String
 
 fn prepared(id: MoveId, gate: u32) -> Event<u32> {
     Event::Prepared(Some(Prepared {
-        id,
+        ids: vec![id],
         moves: true,
         gate,
     }))
@@ -342,7 +342,11 @@ fn a_moves_permit_goes_out_as_it_was_resolved_when_the_program_was_checked() {
         panic!("the first move is submitted");
     };
     assert_eq!(permit, Permit::NONE, "a move with no permit");
-    let Action::Prepare { at, permit, .. } = r.on(Event::Queued(vec![1]), &w.seen()) else {
+    let Action::Prepare {
+        at,
+        motion: Motion::Move(_, permit),
+    } = r.on(Event::Queued(vec![1]), &w.seen())
+    else {
         panic!("the move after the waits is prepared");
     };
     // press_open & !press_moving: X5 on, X6 off, in the first input word.
@@ -658,4 +662,250 @@ fn a_place_runs_its_counter_changes_and_legs_in_order_and_a_refused_begin_faults
         to_the_place([Event::Counted(Some(why.to_owned()))]),
     );
     assert_eq!(got.last().unwrap(), &format!("fault ({why}) stop true []"));
+}
+
+/// A pick and place as blended runs: the gripper's dwell, up from the pick, across and down
+/// to the place (one path op), the gripper's dwell, up, across and down to the pick (another).
+const BLENDED: &str = r#"
+[[step]]
+dwell = "100ms"
+[[step]]
+move = { position = "above-stack" }
+blend_mm = 20
+[[step]]
+move = { to = [-1144.43, 659.6, 286.6] }
+blend_mm = 20
+[[step]]
+move = { position = "in-press" }
+[[step]]
+dwell = "100ms"
+[[step]]
+move = { to = [-1144.43, 659.6, 286.6] }
+blend_mm = 20
+[[step]]
+move = { position = "above-stack" }
+blend_mm = 20
+[[step]]
+move = { to = [-926.57, 535.03, 50.0] }
+"#;
+
+/// A path of `ids` prepared behind `gate`.
+fn prepared_path(ids: &[MoveId], gate: u32) -> Event<u32> {
+    Event::Prepared(Some(Prepared {
+        ids: ids.to_vec(),
+        moves: true,
+        gate,
+    }))
+}
+
+/// [`BLENDED`] to its first path running: the dwell before it, nothing to prepare behind the
+/// path that is uploaded during that dwell, the path queued as its three starts, and the path
+/// after the second dwell prepared behind it as starts 4 to 6; then `then`.
+fn first_path(then: impl IntoIterator<Item = Event<u32>>) -> Vec<Event<u32>> {
+    let mut events = vec![
+        Event::Go,
+        Event::Go,
+        prepared_path(&[1, 2, 3], 20),
+        Event::Dwelt(true),
+        Event::Go,
+        Event::Go,
+        prepared_path(&[4, 5, 6], 21),
+    ];
+    events.extend(then);
+    events
+}
+
+#[test]
+fn a_path_after_a_dwell_is_prepared_during_the_dwell_and_released_at_its_step() {
+    let (mut r, w) = runner(BLENDED, &[], None);
+    let got = script(
+        &mut r,
+        &w,
+        first_path([
+            Event::Followed(MotionEnd::Done),
+            Event::Go,
+            Event::Dwelt(true),
+            Event::Go,
+            Event::Go,
+            prepared_path(&[7, 8, 9], 22),
+        ]),
+    );
+    let first = "step blended moves, steps 2 to 4: move to @above-stack (blend 20 mm), move to \
+                 [-1144.43, 659.6, 286.6] (blend 20 mm), move to @in-press";
+    let second = "step blended moves, steps 6 to 8: move to [-1144.43, 659.6, 286.6] (blend 20 \
+                  mm), move to @above-stack (blend 20 mm), move to [-926.57, 535.03, 50.0]";
+    assert_eq!(
+        got,
+        [
+            "step dwell 100ms",
+            // Nothing runs: the path after the dwell is uploaded during it.
+            "prepare op 1",
+            "dwell 100ms",
+            first,
+            "release 20",
+            // The path after the next dwell is prepared behind it, from where it ends.
+            "prepare op 3",
+            "follow [1, 2, 3]",
+            "step dwell 100ms",
+            // Prepared already: the dwell begins at once.
+            "dwell 100ms",
+            second,
+            "release 21",
+            // Round to the next cycle: its first path, after its dwell, behind this one.
+            "prepare op 1",
+            "follow [4, 5, 6]",
+        ]
+    );
+}
+
+#[test]
+fn a_prepared_path_cancelled_before_its_start_runs_afresh_at_its_step() {
+    let (mut r, w) = runner(BLENDED, &[], None);
+    script(&mut r, &w, first_path([Event::Followed(MotionEnd::Done)]));
+    let got = script(
+        &mut r,
+        &w,
+        vec![
+            Event::Go,
+            Event::Dwelt(true),
+            Event::Go,
+            Event::Go,
+            Event::Prepared(None),
+            Event::Followed(MotionEnd::NotStarted),
+            Event::Go,
+            Event::Queued(vec![7, 8, 9]),
+        ],
+    );
+    assert_eq!(
+        &got[2..5],
+        ["release 21", "prepare op 1", "follow [4, 5, 6]"]
+    );
+    // Its gate shut before it started: planned again from where the robot is, at its step.
+    assert!(
+        got[5].starts_with("step blended moves, steps 6 to 8"),
+        "{got:?}"
+    );
+    assert_eq!(&got[6..], ["submit path", "prepare op 1"]);
+    assert_eq!(r.pc(), 3);
+}
+
+/// A change of the control, asked for by a test.
+type AskFor = fn(&mut Control);
+
+/// Each way the cycle goes other than on to the prepared path's step takes it back: its gate
+/// named in the action that ends, pauses or faults the cycle.
+#[test]
+fn a_fault_a_hold_a_pause_or_a_stop_unprepares_a_prepared_path() {
+    let done = || Event::Followed(MotionEnd::Done);
+    // An incident while the path before it runs.
+    let (mut r, mut w) = runner(BLENDED, &[], None);
+    script(&mut r, &w, first_path([]));
+    w.incident("the PLC restarted");
+    let got = feed(&mut r, &w, Event::Incident("the PLC restarted".to_owned()));
+    assert_eq!(got, "fault (the PLC restarted) stop true [21]");
+    // The path before it held by the PLC: a path is not resumed mid-way, the cycle faults.
+    let (mut r, w) = runner(BLENDED, &[], None);
+    script(&mut r, &w, first_path([]));
+    let held = MotionEnd::Held {
+        why: "held by the PLC: X5 is off".to_owned(),
+    };
+    let got = feed(&mut r, &w, Event::Followed(held));
+    assert!(
+        got.starts_with("fault (held by the PLC: X5 is off; a path is not resumed")
+            && got.ends_with("stop true [21]"),
+        "{got}"
+    );
+    // A pause, a hold from outside the PLC, a stop: at the end of the path before it.
+    let asks: [(AskFor, &str); 3] = [
+        (Control::pause_asked, "pause (paused by request) [21]"),
+        (
+            |c| c.hold_asked("move-enable dropped"),
+            "pause (move-enable dropped) [21]",
+        ),
+        (
+            |c| c.stop(false),
+            "end Stopped (Some(\"stopped by request\")) [21]",
+        ),
+    ];
+    for (ask, want) in asks {
+        let (mut r, mut w) = runner(BLENDED, &[], None);
+        script(&mut r, &w, first_path([]));
+        ask(&mut w.control);
+        assert_eq!(feed(&mut r, &w, done()), want);
+    }
+    // A hold asked during the dwell before it: at the top of the path's step.
+    let (mut r, mut w) = runner(BLENDED, &[], None);
+    script(&mut r, &w, first_path([done(), Event::Go]));
+    w.control.hold_asked("move-enable dropped");
+    let got = feed(&mut r, &w, Event::Dwelt(true));
+    assert_eq!(got, "pause (move-enable dropped) [21]");
+}
+
+#[test]
+fn a_path_is_prepared_only_once_the_motion_it_begins_after_is_queued() {
+    // During the wait the move `by` an offset cannot be prepared (its target depends on where
+    // it begins), so neither can the path after it: that one begins where the move ends.
+    let program = r#"
+[[step]]
+wait = "part_present"
+[[step]]
+move = { by = [0, 0, 50] }
+[[step]]
+dwell = "100ms"
+[[step]]
+path = { path = { element = [{ line = [-900, 500, 150] }] } }
+"#;
+    let (mut r, w) = runner(program, &[], Some(1));
+    let got = script(
+        &mut r,
+        &w,
+        vec![
+            Event::Go,
+            Event::Go,
+            met(0.1),
+            Event::Go,
+            Event::Queued(vec![1]),
+            prepared_path(&[2], 20),
+            Event::Followed(MotionEnd::Done),
+            Event::Go,
+            Event::Dwelt(true),
+            Event::Go,
+        ],
+    );
+    assert_eq!(
+        got,
+        [
+            "step wait for part_present (X2)",
+            "wait part_present (X2)",
+            "step move by [0.0, 0.0, 50.0]",
+            "submit move",
+            // Queued: it ends where it is planned to, the path is planned from there.
+            "prepare op 3",
+            "follow [1]",
+            "step dwell 100ms",
+            "dwell 100ms",
+            "step path",
+            "release 20",
+        ]
+    );
+    // A move to a pose before it: prepared during the wait, and the path only once that
+    // move is released (queued for good), not while it is only held.
+    let program = program.replace("{ by = [0, 0, 50] }", "{ position = \"above-stack\" }");
+    let (mut r, w) = runner(&program, &[], Some(1));
+    let got = script(
+        &mut r,
+        &w,
+        vec![Event::Go, Event::Go, prepared(1, 20), met(0.1), Event::Go],
+    );
+    assert_eq!(
+        got,
+        [
+            "step wait for part_present (X2)",
+            "prepare op 1",
+            "wait part_present (X2)",
+            "step move to @above-stack",
+            "release 20",
+        ]
+    );
+    assert_eq!(feed(&mut r, &w, Event::Go), "prepare op 3");
 }

@@ -12,13 +12,12 @@ use tokio::sync::watch;
 
 use super::pallet::Palletising;
 use super::status::Status;
-use crate::contract::{INPUT_WORDS, Permit};
+use crate::contract::INPUT_WORDS;
 use crate::cycle::runner::{Control, Event, Motion, MotionEnd, Prepared, WaitEnd};
 use crate::cycle::{Condition, PalletView};
 use crate::daemon::RobotHandle;
 use crate::daemon::gate::Gate;
 use crate::gateway::{Address, Values};
-use crate::order::MoveOrder;
 use crate::wire::{EndReason, MoveId, MoveReport, Stage, StepAt};
 
 /// Each pallet's counter as a condition reads it (`None`: not a pallet of the program).
@@ -41,14 +40,26 @@ pub(super) async fn submit(handle: &RobotHandle, motion: Motion) -> Event<Gate> 
     }
 }
 
-/// Uploads `order` ahead, held behind a gate of its own (`None`: the robot refused it now).
-pub(super) async fn prepare(handle: &RobotHandle, order: MoveOrder, permit: Permit) -> Event<Gate> {
+/// Uploads `motion` ahead, held behind a gate of its own (`None`: the robot refused it now).
+pub(super) async fn prepare(handle: &RobotHandle, motion: Motion) -> Event<Gate> {
     let gate = Gate::new();
-    let prepared = handle.submit_gated(order, permit, &gate).await;
+    let prepared = match motion {
+        Motion::Move(order, permit) => handle
+            .submit_gated(order, permit, &gate)
+            .await
+            .map(|(id, moves)| (vec![id], moves)),
+        // A path's sections: the first held behind the gate, the rest queued behind it.
+        Motion::Path(order, permit) => handle
+            .submit_gated_path(&order, permit, &gate)
+            .await
+            .map(|ids| (ids, true)),
+        // The runner never prepares a pallet's way (its slot is known at its step only).
+        Motion::Pallet { .. } => return Event::Prepared(None),
+    };
     Event::Prepared(
         prepared
             .ok()
-            .map(|(id, moves)| Prepared { id, moves, gate }),
+            .map(|(ids, moves)| Prepared { ids, moves, gate }),
     )
 }
 
@@ -294,14 +305,14 @@ pub(super) async fn dwell(for_: Duration, control: &mut watch::Receiver<Control>
     }
 }
 
-/// Unprepares moves prepared ahead: their gates shut, then waited out (cancelled before their
-/// start), so nothing is queued behind them.
+/// Unprepares motions prepared ahead: their gates shut, then every start of them waited out
+/// (cancelled before their start), so nothing is queued behind them.
 pub(super) async fn unprepare(handle: &RobotHandle, moves: Vec<Prepared<Gate>>) {
     for prepared in &moves {
         handle.shut_gate(&prepared.gate);
     }
-    for prepared in moves {
-        let _ = handle.wait(prepared.id, Duration::from_secs(30)).await;
+    for id in moves.into_iter().flat_map(|p| p.ids) {
+        let _ = handle.wait(id, Duration::from_secs(30)).await;
     }
 }
 

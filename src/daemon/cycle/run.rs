@@ -149,7 +149,7 @@ impl Driver {
                 speed_mm_s,
             }) => pallets.submit(handle, &pallet, leg, speed_mm_s).await,
             Action::Submit(motion) => act::submit(handle, motion).await,
-            Action::Prepare { order, permit, .. } => act::prepare(handle, order, permit).await,
+            Action::Prepare { motion, .. } => act::prepare(handle, motion).await,
             Action::Release(gate) => {
                 gate.open();
                 Event::Go

@@ -263,7 +263,7 @@ impl RobotHandle {
     /// Gives one order's starts to the worker, whole or not at all: refused with nothing queued
     /// when the queue would pass [`MAX_QUEUED_STARTS`](crate::daemon::MAX_QUEUED_STARTS) or the
     /// worker is gone. `end`: where the last is planned to end, for the next order; `gate`: what
-    /// a single start waits for once uploaded (a cycle's move prepared ahead).
+    /// the first start waits for once uploaded (a cycle's move or path prepared ahead).
     async fn enqueue(
         &self,
         starts: Vec<(MoveReport, CheckedOrder)>,
@@ -363,7 +363,7 @@ impl RobotHandle {
     /// again from the counts where it begins, and only if the robot is there: a section whose
     /// move before it did not end done is cancelled with it. Returns the sections' move ids.
     pub async fn submit_path(&self, order: &PathOrder) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_paths_with(std::slice::from_ref(order), None)
+        self.submit_paths_with(std::slice::from_ref(order), None, None)
             .await
     }
 
@@ -374,7 +374,24 @@ impl RobotHandle {
         order: &PathOrder,
         permit: Permit,
     ) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_paths_with(std::slice::from_ref(order), Some(permit))
+        self.submit_paths_with(std::slice::from_ref(order), Some(permit), None)
+            .await
+    }
+
+    /// [`RobotHandle::submit_checked_path`] of a path prepared ahead (a cycle's path op, or
+    /// its run of blended moves, prepared during the steps before it): planned as any path
+    /// from where the robot will be, its first start uploaded and held until `gate` opens
+    /// (started then from rest, as a move prepared ahead is), every start after it queued
+    /// behind it as the path's own (the parts chained at speed preloaded around the first as
+    /// for a path from rest). All or nothing: refused, nothing is queued. Once `gate` shuts
+    /// before the first start, every start of it ends cancelled before its start.
+    pub(crate) async fn submit_gated_path(
+        &self,
+        order: &PathOrder,
+        permit: Permit,
+        gate: &Gate,
+    ) -> Result<Vec<MoveId>, SubmitError> {
+        self.submit_paths_with(std::slice::from_ref(order), Some(permit), Some(gate))
             .await
     }
 
@@ -383,15 +400,17 @@ impl RobotHandle {
     /// robot will be), refusing them all if any cannot be planned; then queues every section of
     /// every path, in order, at once. Returns the sections' move ids.
     pub async fn submit_paths(&self, orders: &[PathOrder]) -> Result<Vec<MoveId>, SubmitError> {
-        self.submit_paths_with(orders, None).await
+        self.submit_paths_with(orders, None, None).await
     }
 
     /// [`RobotHandle::submit_paths`], every path under `permit` when it was resolved at a
-    /// check (`None`: each path's own, from its text).
+    /// check (`None`: each path's own, from its text); the first start held behind `gate`
+    /// once uploaded, if there is one.
     async fn submit_paths_with(
         &self,
         orders: &[PathOrder],
         permit: Option<Permit>,
+        gate: Option<&Gate>,
     ) -> Result<Vec<MoveId>, SubmitError> {
         // Every field is checked before the robot's state: a bad order is a bad order.
         let limits = self.limits();
@@ -426,7 +445,7 @@ impl RobotHandle {
             let with = (path_accel_mm_s2, motion, permit);
             starts.extend(self.section_starts(planned, with, |e| order.section_report(e)));
         }
-        self.enqueue(starts, end, None).await
+        self.enqueue(starts, end, gate.cloned()).await
     }
 
     /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the

@@ -173,7 +173,8 @@ pub(super) struct Batch {
     pub starts: Vec<(MoveReport, CheckedOrder)>,
     /// Where the last start is planned to end (the next order is planned from there).
     pub end: Option<[i64; JOINTS]>,
-    /// The gate a single start waits for once it is uploaded (a cycle's move prepared ahead).
+    /// The gate the first start waits for once it is uploaded (a cycle's move or path prepared
+    /// ahead); the starts behind it are queued behind it, ungated.
     pub gate: Option<crate::daemon::gate::Gate>,
     /// The PLC's incident count it was asked under (a cycle's move): cancelled at its turn once
     /// another incident came; `None`: whenever.

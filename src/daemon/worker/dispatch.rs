@@ -357,6 +357,29 @@ impl Dispatcher {
         self.queue.push_back(queued);
     }
 
+    /// Queues one order's `starts` behind the rest, in order, accepted at `now` under `epoch`:
+    /// only the first waits for `gate` (a cycle's motion prepared ahead); the starts behind it
+    /// (a path's parts and sections) follow it as the path's own, and go with it if it never
+    /// starts.
+    pub(super) fn push_order(
+        &mut self,
+        starts: Vec<(MoveId, CheckedOrder)>,
+        mut gate: Option<Gate>,
+        epoch: Option<u64>,
+        now: Instant,
+    ) {
+        for (id, order) in starts {
+            self.push(Queued {
+                id,
+                order,
+                gate: gate.take(),
+                epoch,
+                accepted: now,
+                preload: None,
+            });
+        }
+    }
+
     /// Puts `queued` back at the head of the queue: its turn has not come.
     pub(super) fn push_front(&mut self, queued: Queued) {
         self.queue.push_front(queued);

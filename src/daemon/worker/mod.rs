@@ -55,7 +55,7 @@ use crate::plc::exchange::{CommandWrite, Contract, ContractError, ContractSettin
 use crate::plc::{AnyPlc, Plc};
 use crate::robot::Robot;
 use crate::wire::{MoveId, Stage};
-use dispatch::{Action, Activity, Dispatcher, PollPace, Queued, Seen};
+use dispatch::{Action, Activity, Dispatcher, PollPace, Seen};
 
 /// What a worker receives on.
 pub(super) struct Channels {
@@ -387,16 +387,9 @@ impl Worker {
             }
         });
         self.out.state(|s| s.queued.extend(&ids));
-        for (report, order) in batch.starts {
-            self.dispatch.push(Queued {
-                id: report.id,
-                order,
-                gate: batch.gate.clone(),
-                epoch: batch.epoch,
-                accepted: now(),
-                preload: None,
-            });
-        }
+        let starts = batch.starts.into_iter().map(|(r, o)| (r.id, o)).collect();
+        self.dispatch
+            .push_order(starts, batch.gate, batch.epoch, now());
         self.out.set_planned_end(batch.end);
         let _ = batch.reply.send(Ok(ids));
     }

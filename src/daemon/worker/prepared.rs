@@ -1,5 +1,6 @@
-//! A cycle's move prepared ahead: its bank uploaded and verified, then held behind a start gate
-//! until the cycle reaches its step ([`crate::daemon::gate`]). While held, the status block is
+//! A cycle's move prepared ahead (or a path's first start, the path's other starts queued
+//! behind it): its bank uploaded and verified, then held behind a start gate until the cycle
+//! reaches its step ([`crate::daemon::gate`]). While held, the status block is
 //! read at the busy pace and the gateway served ([`Dispatcher::next`]); anything else (a stop, a command, the PLC
 //! changing under it, the link, the gate shut) cancels it before its start.
 

@@ -240,6 +240,101 @@ fn a_shut_gate_cancels_its_move_and_every_move_behind_it() {
     assert_eq!(d.queue().len(), 1);
 }
 
+/// A path section cut into `parts` starts chained at speed, as the handle queues it.
+fn section_parts(parts: usize) -> Vec<CheckedOrder> {
+    use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
+    use crate::order::{SectionOrder, SectionPart};
+    let pose = |x: f64| Pose {
+        position_mm: Vector3::new(x, 500.0, 150.0),
+        a_rad: 0.0,
+    };
+    let spec = PathSpec {
+        start: pose(-900.0),
+        elements: vec![(Element::Line { to: pose(-800.0) }, Corner::Stop)],
+    };
+    let section = Arc::new(SectionOrder {
+        path: Path::build(&spec).expect("a line"),
+        path_accel_mm_s2: 1_000.0,
+        accepted: Vec::new(),
+        planned: std::sync::OnceLock::new(),
+    });
+    (0..parts)
+        .map(|part| CheckedOrder {
+            target: Target::Section(SectionPart {
+                section: Arc::clone(&section),
+                part,
+                parts,
+            }),
+            ..order(Permit::NONE)
+        })
+        .collect()
+}
+
+/// A cycle's path prepared ahead while a move runs: only its first part waits for the gate;
+/// that part (which leads parts chained at speed) begins only from rest, gated, with the parts
+/// behind it there to be preloaded around it as for a path from rest.
+#[test]
+fn a_prepared_paths_first_part_alone_is_gated_and_begins_from_rest_with_its_parts_behind() {
+    let t0 = Instant::now();
+    let mut d = running(t0);
+    let gate = Gate::new();
+    let starts = (2..).zip(section_parts(3)).collect();
+    d.push_order(starts, Some(gate.clone()), Some(0), t0);
+    let gated: Vec<bool> = d.queue().iter().map(|q| q.gate.is_some()).collect();
+    assert_eq!(gated, [true, false, false]);
+    assert!(d.queue().iter().all(|q| q.epoch == Some(0)));
+    // Move 1 runs: its parts cannot be preloaded in both banks yet.
+    let now = t0 + Duration::from_millis(40);
+    assert!(!d.has_room(now));
+    // Move 1 ends: the first part's turn comes, gated, from rest.
+    d.machine.on_status(
+        &status(State::Done, 8, 4, TO),
+        t0 + Duration::from_millis(1_100),
+    );
+    let now = t0 + Duration::from_millis(1_110);
+    assert!(d.has_room(now));
+    let head = d.queue.pop_front().expect("the first part");
+    let TurnDecision::Begin(turn) = d.turn(head, now) else {
+        panic!("at rest: it begins");
+    };
+    assert!(
+        matches!(&turn.mode, StartMode::Gated { ahead: None, .. }),
+        "{:?}",
+        turn.mode
+    );
+    assert_eq!(turn.from, TO, "from the counts the PLC reports");
+    let (_, behind) = d.section_behind().expect("its parts behind it");
+    assert_eq!(behind.iter().map(|(id, _)| *id).collect::<Vec<_>>(), [3, 4]);
+}
+
+/// The gate of a prepared path shut before its first part's turn: every part of it ends, the
+/// first cancelled before its start (the cycle runs it afresh), the rest behind it.
+#[test]
+fn a_shut_gate_ends_every_part_of_a_prepared_path() {
+    let t0 = Instant::now();
+    let mut d = running(t0);
+    let gate = Gate::new();
+    d.push_order(
+        (2..).zip(section_parts(3)).collect(),
+        Some(gate.clone()),
+        None,
+        t0,
+    );
+    gate.shut();
+    let ends = d.drop_shut();
+    assert_eq!(
+        ids(&ends),
+        [
+            (2, Stage::Cancelled),
+            (3, Stage::Cancelled),
+            (4, Stage::Cancelled)
+        ]
+    );
+    assert_eq!(ends[0].end, Some(EndReason::CancelledBeforeStart));
+    assert!(ends[1..].iter().all(|e| e.end.is_none()));
+    assert!(d.queue().is_empty());
+}
+
 #[test]
 fn a_move_in_place_with_nothing_running_is_done_at_once() {
     let mut d = idle(Instant::now());
