@@ -9,6 +9,7 @@ use common::daemon::{
 };
 use common::exchange::{P1, P2, mock_at_seed_start};
 use linterpd::contract::Layout;
+use linterpd::contract::machine::Blocker;
 use linterpd::daemon::{Connector, Daemon, MoveOrder, MoveReport, RobotHandle, Stage, SubmitError};
 use linterpd::mock::{
     MewtocolServer, MewtocolServerOptions, ModbusServer, ModbusServerOptions, SharedMock,
@@ -18,6 +19,7 @@ use linterpd::plc::exchange::ContractSettings;
 use linterpd::plc::{
     AnyPlc, BoxedLink, MewtocolClient, ModbusClient, ModbusFraming, ModbusOptions, PlcMode,
 };
+use linterpd::wire::RobotState;
 use tokio::net::{TcpListener, TcpStream};
 
 const LIMIT: Duration = Duration::from_secs(15);
@@ -240,14 +242,18 @@ async fn stop_mid_move_stops_every_channel() {
     }
 }
 
-/// An order is refused at once, naming why, once the daemon has seen the PLC (a heartbeat
-/// standing still is known after its timeout: the robot's state says what refuses moves);
-/// nothing is written.
-async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, want: &str) {
+/// An order is refused at once, naming why, once the daemon has seen the PLC (`seen`: its
+/// state shows what it saw; a heartbeat standing still is known after its timeout); nothing
+/// is written.
+async fn refused(
+    link: Link,
+    shared: &SharedMock,
+    settings: ContractSettings,
+    (want, seen): (&str, fn(&RobotState) -> bool),
+) {
     let (d, h) = daemon(connector(link, shared, None), settings);
-    tokio::time::sleep(settings.watch.heartbeat_timeout).await;
     for _ in 0..1_000 {
-        if h.state().refuses.is_some_and(|why| why.contains(want)) {
+        if seen(&h.state()) {
             break;
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
@@ -262,41 +268,28 @@ async fn refused(link: Link, shared: &SharedMock, settings: ContractSettings, wa
 
 #[tokio::test]
 async fn prog_mode_frozen_heartbeat_and_wrong_magic_are_refused_and_nothing_is_written() {
+    let prog = |s: &RobotState| s.plc_mode == Some(PlcMode::Prog) && s.refuses.is_some();
+    let stalled = |s: &RobotState| s.refuses == Some(Blocker::Stalled.to_string());
+    let magic = |s: &RobotState| s.link.error.as_ref().is_some_and(|e| e.contains("magic"));
     for link in LINKS {
         let shared = mock_at_seed_start("");
         shared.with(|m| m.set_mode(PlcMode::Prog));
         // Over Modbus the mode comes from the RUN relay R9020, which the mock keeps.
-        refused(
-            link,
-            &shared,
-            ContractSettings::default(),
-            "it reports PROG mode",
-        )
-        .await;
+        let settings = ContractSettings::default();
+        refused(link, &shared, settings, ("it reports PROG mode", prog)).await;
         let shared = mock_at_seed_start("");
         shared.with(|m| m.freeze_heartbeat(true));
-        refused(
-            link,
-            &shared,
-            ContractSettings::default(),
-            "the PLC is stalled",
-        )
-        .await;
+        refused(link, &shared, settings, ("the PLC is stalled", stalled)).await;
         let shared = mock_at_seed_start("");
         let elsewhere = Layout {
             status_base: 30_000,
             ..Layout::default()
         };
-        refused(
-            link,
-            &shared,
-            ContractSettings {
-                layout: elsewhere,
-                ..ContractSettings::default()
-            },
-            "magic is 0x0000",
-        )
-        .await;
+        let settings = ContractSettings {
+            layout: elsewhere,
+            ..ContractSettings::default()
+        };
+        refused(link, &shared, settings, ("magic is 0x0000", magic)).await;
     }
 }
 
