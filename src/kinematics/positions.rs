@@ -34,29 +34,30 @@ impl Trig {
     }
 }
 
-/// Forward kinematics' position for a run of joint vectors (see the module docs).
+/// Forward kinematics' position for a run of joint vectors (see the module docs). `TOOL` is
+/// whether the arm has a tool offset: a constant, so that a loop over pulses is made once for
+/// each and the common one (no offset) tests nothing per pulse.
 #[derive(Debug, Clone)]
-pub struct Positions<'a> {
+pub struct Positions<'a, const TOOL: bool> {
     arm: &'a Arm,
     trig: [Trig; 2],
 }
 
-impl<'a> Positions<'a> {
-    /// Positions of `model`'s tool.
+impl<'a, const TOOL: bool> Positions<'a, TOOL> {
+    /// Positions of `arm`'s tool, `None` unless `TOOL` is whether `arm` has a tool offset.
     #[must_use]
-    pub fn new(arm: &'a Arm) -> Self {
-        Self {
+    pub fn new(arm: &'a Arm) -> Option<Self> {
+        (arm.has_tool() == TOOL).then_some(Self {
             arm,
             trig: [Trig::UNSET; 2],
-        }
+        })
     }
 
-    /// The tool position at joints `q`, exactly `model.fk(q).position_mm`.
+    /// The tool position at joints `q`, exactly `arm.fk(q).position_mm`.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
     pub fn at(&mut self, q: &Joints) -> Vector3<f64> {
-        if self.arm.has_tool() {
-            return self.arm.fk(q).position_mm;
-        }
-        match &self.arm.model {
+        let flange = match &self.arm.model {
             Model::Cylindrical(k) => {
                 let [theta1, d2, d3, _] = *q;
                 let r = d3 + k.l0_mm;
@@ -74,7 +75,22 @@ impl<'a> Positions<'a> {
                     d3,
                 )
             }
+        };
+        // The tool's offset is added to the flange (as `Arm::fk` adds it), never returned in
+        // place of it: a position made out of line comes back through memory, and merged
+        // with the flange's it stalled every pulse on the store.
+        if TOOL {
+            flange + self.offset(q)
+        } else {
+            flange
         }
+    }
+
+    /// The tool's offset from the flange at joints `q`, world mm.
+    #[cold]
+    #[inline(never)]
+    fn offset(&self, q: &Joints) -> Vector3<f64> {
+        self.arm.offset_at(self.arm.model.fk(q).a_rad)
     }
 }
 
@@ -104,20 +120,28 @@ mod tests {
                 model: model.clone(),
                 tool_mm,
             }) {
-                let model = &arm;
-                let mut positions = Positions::new(model);
-                let mut q = [1.047, 50.0, 570.0, 0.0];
-                for i in 0..400u32 {
-                    // A pseudo-random joint moves a step each time, now and then one stays put.
-                    let j = (i * 7 + i / 3) as usize % 4;
-                    q[j] += f64::from(i % 5) * 4.363e-5;
-                    assert_eq!(
-                        positions.at(&q),
-                        model.fk(&q).position_mm,
-                        "{model:?} {q:?}"
-                    );
+                assert!(Positions::<true>::new(&arm).is_some() == arm.has_tool());
+                assert!(Positions::<false>::new(&arm).is_some() != arm.has_tool());
+                match Positions::<true>::new(&arm) {
+                    Some(positions) => walk(&arm, positions, Positions::at),
+                    None => walk(&arm, Positions::<false>::new(&arm).unwrap(), Positions::at),
                 }
             }
+        }
+    }
+
+    /// Moves a pseudo-random joint a step at a time (now and then none) and checks each
+    /// position `at` gives against the arm's forward kinematics.
+    fn walk<P>(arm: &Arm, mut positions: P, at: impl Fn(&mut P, &Joints) -> Vector3<f64>) {
+        let mut q = [1.047, 50.0, 570.0, 0.0];
+        for i in 0..400u32 {
+            let j = (i * 7 + i / 3) as usize % 4;
+            q[j] += f64::from(i % 5) * 4.363e-5;
+            assert_eq!(
+                at(&mut positions, &q),
+                arm.fk(&q).position_mm,
+                "{arm:?} {q:?}"
+            );
         }
     }
 }

@@ -81,35 +81,77 @@ pub fn measure_within(
     path_limit_mm: f64,
 ) -> Option<Figures> {
     let counts: [i64; JOINTS] = std::array::from_fn(|j| tables.get(j).map_or(0, |t| t.start));
-    let mut executed = Executed::new(robot, &counts);
-    let mut p = executed.position();
-    let mut deviation = Deviation::from_start(path, &p);
-    let mut tracking = Tracking::new(p, planned);
-    let mut sampled = Sampled::default();
-    let mut last_finish_s = 0.0;
-    for e in events {
-        last_finish_s = e.t_s;
-        sampled.before(e.t_s, &p, path);
-        // The planned pose moves while the executed one holds: check both ends of the hold.
-        let held = p;
-        p = executed.take(&e);
-        if deviation.see(&p) > path_limit_mm {
-            return None;
-        }
-        tracking.hold(&held, &p, e.t_s, planned);
+    let against = Against {
+        tables,
+        finish_s,
+        path,
+        planned,
+        planned_duration_s,
+        path_limit_mm,
+    };
+    match Executed::<true>::new(robot, &counts) {
+        Some(executed) => against.measure(executed, events),
+        None => against.measure(Executed::<false>::new(robot, &counts)?, events),
     }
-    let end_s = planned_duration_s.max(last_finish_s);
-    tracking.see(&p, &planned.at(end_s));
-    sampled.through(end_s + 1e-12, &p, path);
-    Some(Figures {
-        path_deviation_mm: deviation.max_mm,
-        tracking_error_mm: tracking.squared.sqrt(),
-        sampled_deviation_mm: sampled.max_mm,
-        end_skew_ms: end_skew_ms(finish_s),
-        end_error_mm: (p - path.end_mm()).norm(),
-        finish_s: last_finish_s,
-        ..Figures::sizes(tables)
-    })
+}
+
+/// What [`measure_within`] measures a run against.
+struct Against<'a, P> {
+    tables: &'a [ChannelTable],
+    finish_s: &'a [Option<f64>],
+    path: &'a dyn ToolPath,
+    planned: &'a P,
+    planned_duration_s: f64,
+    path_limit_mm: f64,
+}
+
+impl<P: Planned> Against<'_, P> {
+    /// [`measure_within`] of `events` from `executed` at the start's counts: made once for an
+    /// arm with a tool offset and once for one without.
+    #[allow(clippy::inline_always)]
+    #[inline(always)]
+    fn measure<const TOOL: bool>(
+        &self,
+        mut executed: Executed<'_, TOOL>,
+        events: impl IntoIterator<Item = PulseEvent>,
+    ) -> Option<Figures> {
+        let Self {
+            tables,
+            finish_s,
+            path,
+            planned,
+            planned_duration_s,
+            path_limit_mm,
+        } = *self;
+        let mut p = executed.position();
+        let mut deviation = Deviation::from_start(path, &p);
+        let mut tracking = Tracking::new(p, planned);
+        let mut sampled = Sampled::default();
+        let mut last_finish_s = 0.0;
+        for e in events {
+            last_finish_s = e.t_s;
+            sampled.before(e.t_s, &p, path);
+            // The planned pose moves while the executed one holds: check both ends of the hold.
+            let held = p;
+            p = executed.take(&e);
+            if deviation.see(&p) > path_limit_mm {
+                return None;
+            }
+            tracking.hold(&held, &p, e.t_s, planned);
+        }
+        let end_s = planned_duration_s.max(last_finish_s);
+        tracking.see(&p, &planned.at(end_s));
+        sampled.through(end_s + 1e-12, &p, path);
+        Some(Figures {
+            path_deviation_mm: deviation.max_mm,
+            tracking_error_mm: tracking.squared.sqrt(),
+            sampled_deviation_mm: sampled.max_mm,
+            end_skew_ms: end_skew_ms(finish_s),
+            end_error_mm: (p - path.end_mm()).norm(),
+            finish_s: last_finish_s,
+            ..Figures::sizes(tables)
+        })
+    }
 }
 
 impl Figures {
@@ -131,23 +173,23 @@ impl Figures {
 /// The executed pose as the run's events come. One joint changes per event: only its value is
 /// converted, and the kinematics' sines and cosines are reused while their angles hold (bit for
 /// bit what forward kinematics gives).
-struct Executed<'a> {
+struct Executed<'a, const TOOL: bool> {
     robot: &'a Robot,
-    positions: Positions<'a>,
+    positions: Positions<'a, TOOL>,
     /// The joint values now.
     q: [f64; JOINTS],
 }
 
-impl<'a> Executed<'a> {
-    /// At `counts`.
+impl<'a, const TOOL: bool> Executed<'a, TOOL> {
+    /// At `counts`; `None` unless `TOOL` is whether the robot has a tool offset.
     #[allow(clippy::inline_always)]
     #[inline(always)]
-    fn new(robot: &'a Robot, counts: &[i64; JOINTS]) -> Self {
-        Self {
+    fn new(robot: &'a Robot, counts: &[i64; JOINTS]) -> Option<Self> {
+        Some(Self {
             robot,
-            positions: Positions::new(&robot.kinematics),
+            positions: Positions::new(&robot.kinematics)?,
             q: robot.values_of(counts),
-        }
+        })
     }
 
     /// The position now.
@@ -291,7 +333,19 @@ pub fn path_deviation_mm(
     events: impl IntoIterator<Item = PulseEvent>,
     path: &dyn ToolPath,
 ) -> f64 {
-    let mut executed = Executed::new(robot, start);
+    match Executed::<true>::new(robot, start) {
+        Some(executed) => deviation_from(executed, events, path),
+        None => Executed::<false>::new(robot, start)
+            .map_or(f64::NAN, |executed| deviation_from(executed, events, path)),
+    }
+}
+
+/// [`path_deviation_mm`] from `executed` at the start's counts.
+fn deviation_from<const TOOL: bool>(
+    mut executed: Executed<'_, TOOL>,
+    events: impl IntoIterator<Item = PulseEvent>,
+    path: &dyn ToolPath,
+) -> f64 {
     let mut deviation = Deviation::from_start(path, &executed.position());
     for e in events {
         deviation.see(&executed.take(&e));
