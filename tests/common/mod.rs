@@ -93,3 +93,19 @@ pub fn cylindrical() -> Robot {
     r.motion.over_speed = OverSpeed::SlowDown;
     r
 }
+
+/// Runs `test` on a current-thread runtime with paused time and no I/O driver: what
+/// `#[tokio::test(start_paused = true)]` gives, less the epoll the I/O driver makes at every
+/// step of paused time (a quarter of the fault matrix's time went to the kernel). For tests
+/// whose links are in memory.
+///
+/// # Panics
+/// When the runtime cannot be built.
+pub fn paused<F: std::future::Future>(test: F) -> F::Output {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .start_paused(true)
+        .build()
+        .expect("a runtime")
+        .block_on(test)
+}

@@ -1167,79 +1167,107 @@ async fn run_matrix_of(flow: Flow, faults: &[Fault]) {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn single_move_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::Single).await;
+#[test]
+fn single_move_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::Single).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn chained_pair_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::Chained).await;
+#[test]
+fn chained_pair_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::Chained).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_chained_pair_without_read_back_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::ChainedUnread).await;
+#[test]
+fn a_chained_pair_without_read_back_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::ChainedUnread).await;
+    });
 }
 
 // At 19200 baud a case runs seconds of uploads and motion: its faults are split in three tests.
 
-#[tokio::test(start_paused = true)]
-async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_1_of_3() {
-    run_matrix_of(Flow::ChainedSlow, &FAULTS[..3]).await;
+#[test]
+fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_1_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::ChainedSlow, &FAULTS[..3]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_2_of_3() {
-    run_matrix_of(Flow::ChainedSlow, &FAULTS[3..6]).await;
+#[test]
+fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_2_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::ChainedSlow, &FAULTS[3..6]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_3_of_3() {
-    run_matrix_of(Flow::ChainedSlow, &FAULTS[6..]).await;
+#[test]
+fn a_chained_pair_at_19200_baud_under_every_fault_at_every_exchange_3_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::ChainedSlow, &FAULTS[6..]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn stop_during_a_chained_pair_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::StopChained).await;
+#[test]
+fn stop_during_a_chained_pair_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::StopChained).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn homing_then_a_move_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::Home).await;
+#[test]
+fn homing_then_a_move_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::Home).await;
+    });
 }
 
 // A path's case plans it (twice: when accepted, when its first part begins) and runs 2 s of
 // motion: its faults are split in three tests, which the test harness runs side by side.
 
-#[tokio::test(start_paused = true)]
-async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_1_of_3() {
-    run_matrix_of(Flow::Path, &FAULTS[..3]).await;
+#[test]
+fn a_path_chained_at_speed_under_every_fault_at_every_exchange_1_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Path, &FAULTS[..3]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_2_of_3() {
-    run_matrix_of(Flow::Path, &FAULTS[3..6]).await;
+#[test]
+fn a_path_chained_at_speed_under_every_fault_at_every_exchange_2_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Path, &FAULTS[3..6]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
-    run_matrix_of(Flow::Path, &FAULTS[6..]).await;
+#[test]
+fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Path, &FAULTS[6..]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_move_with_no_motion_behind_a_running_move_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::ZeroBehind).await;
+#[test]
+fn a_move_with_no_motion_behind_a_running_move_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::ZeroBehind).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_path_from_near_its_stated_start_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::PathOffStart).await;
+#[test]
+fn a_path_from_near_its_stated_start_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::PathOffStart).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn orders_refused_while_a_move_runs_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::RefusedWhileRunning).await;
+#[test]
+fn orders_refused_while_a_move_runs_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::RefusedWhileRunning).await;
+    });
 }
 
 /// One case with the daemon's and the mock's log, to see what happened in it:
@@ -1247,82 +1275,98 @@ async fn orders_refused_while_a_move_runs_under_every_fault_at_every_exchange() 
 /// --nocapture` (flows: single, chained, chained-slow, chained-unread, stop, zero-behind,
 /// path-off-start, refused,
 /// home, path, cycle, cycle-hold, cycle-kinds, pallet).
-#[tokio::test(start_paused = true)]
+#[test]
 #[ignore = "a diagnostic for one case of the matrix: set MATRIX_CASE=flow:Fault:position"]
-async fn one_case_with_its_log() {
-    let spec = std::env::var("MATRIX_CASE").expect("MATRIX_CASE=flow:Fault:position");
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter("debug")
-        .with_test_writer()
-        .try_init();
-    let parts: Vec<&str> = spec.split(':').collect();
-    let flow = match parts[0] {
-        "single" => Flow::Single,
-        "chained" => Flow::Chained,
-        "chained-slow" => Flow::ChainedSlow,
-        "chained-unread" => Flow::ChainedUnread,
-        "stop" => Flow::StopChained,
-        "path" => Flow::Path,
-        "zero-behind" => Flow::ZeroBehind,
-        "path-off-start" => Flow::PathOffStart,
-        "refused" => Flow::RefusedWhileRunning,
-        "cycle" => Flow::Cycle,
-        "cycle-hold" => Flow::CycleHold,
-        "cycle-kinds" => Flow::CycleKinds,
-        "pallet" => Flow::Pallet,
-        _ => Flow::Home,
-    };
-    let fault = FAULTS
-        .iter()
-        .copied()
-        .find(|f| format!("{f:?}") == parts[1])
-        .expect("a fault's name, as in Drop or PowerCycle");
-    let k: u64 = parts[2].parse().expect("a position");
-    let v = case(flow, fault, k).await;
-    assert!(v.0.is_empty(), "{:?}", v.0);
+fn one_case_with_its_log() {
+    common::paused(async {
+        let spec = std::env::var("MATRIX_CASE").expect("MATRIX_CASE=flow:Fault:position");
+        let _ = tracing_subscriber::fmt()
+            .with_env_filter("debug")
+            .with_test_writer()
+            .try_init();
+        let parts: Vec<&str> = spec.split(':').collect();
+        let flow = match parts[0] {
+            "single" => Flow::Single,
+            "chained" => Flow::Chained,
+            "chained-slow" => Flow::ChainedSlow,
+            "chained-unread" => Flow::ChainedUnread,
+            "stop" => Flow::StopChained,
+            "path" => Flow::Path,
+            "zero-behind" => Flow::ZeroBehind,
+            "path-off-start" => Flow::PathOffStart,
+            "refused" => Flow::RefusedWhileRunning,
+            "cycle" => Flow::Cycle,
+            "cycle-hold" => Flow::CycleHold,
+            "cycle-kinds" => Flow::CycleKinds,
+            "pallet" => Flow::Pallet,
+            _ => Flow::Home,
+        };
+        let fault = FAULTS
+            .iter()
+            .copied()
+            .find(|f| format!("{f:?}") == parts[1])
+            .expect("a fault's name, as in Drop or PowerCycle");
+        let k: u64 = parts[2].parse().expect("a position");
+        let v = case(flow, fault, k).await;
+        assert!(v.0.is_empty(), "{:?}", v.0);
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::Cycle).await;
+#[test]
+fn a_cycle_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::Cycle).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_held_by_its_permit_under_every_fault_at_every_exchange() {
-    run_matrix(Flow::CycleHold).await;
+#[test]
+fn a_cycle_held_by_its_permit_under_every_fault_at_every_exchange() {
+    common::paused(run_matrix(Flow::CycleHold));
 }
 
 // A cycle of every step kind runs seconds of motion and many exchanges: its faults are split
 // in three tests.
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_1_of_3() {
-    run_matrix_of(Flow::CycleKinds, &FAULTS[..3]).await;
+#[test]
+fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_1_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::CycleKinds, &FAULTS[..3]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_2_of_3() {
-    run_matrix_of(Flow::CycleKinds, &FAULTS[3..6]).await;
+#[test]
+fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_2_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::CycleKinds, &FAULTS[3..6]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_3_of_3() {
-    run_matrix_of(Flow::CycleKinds, &FAULTS[6..]).await;
+#[test]
+fn a_cycle_of_every_step_kind_under_every_fault_at_every_exchange_3_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::CycleKinds, &FAULTS[6..]).await;
+    });
 }
 
 // A pallet's place struck at every distinct step: its faults are split in three tests.
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_1_of_3() {
-    run_matrix_of(Flow::Pallet, &FAULTS[..3]).await;
+#[test]
+fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_1_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Pallet, &FAULTS[..3]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_2_of_3() {
-    run_matrix_of(Flow::Pallet, &FAULTS[3..6]).await;
+#[test]
+fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_2_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Pallet, &FAULTS[3..6]).await;
+    });
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_3_of_3() {
-    run_matrix_of(Flow::Pallet, &FAULTS[6..]).await;
+#[test]
+fn a_cycle_placing_on_a_pallet_under_every_fault_at_every_step_of_a_place_3_of_3() {
+    common::paused(async {
+        run_matrix_of(Flow::Pallet, &FAULTS[6..]).await;
+    });
 }

@@ -986,8 +986,11 @@ async fn a_fault_while_a_blended_run_is_held_cancels_every_start_of_it_and_nothi
         .filter(|r| !there.contains(&r.id))
         .collect();
     assert!(back.len() > 1, "a run in parts: {back:?}");
-    let held = h.report(back[0].id).unwrap();
-    assert_eq!(held.stage, linterpd::daemon::Stage::Prepared, "{held:?}");
+    // Held once its upload is done (under load it may still be uploading when the cycle waits).
+    common::daemon::report_until(&mut h.subscribe(back[0].id).unwrap(), "prepared", |r| {
+        r.stage == linterpd::daemon::Stage::Prepared
+    })
+    .await;
     let s = until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     assert!(s.reason.unwrap().contains("timed out"));
     for r in &back {

@@ -215,7 +215,7 @@ fn file_counter(state: &Path) -> serde_json::Value {
     file["robots"][ROBOT]["out"].clone()
 }
 
-#[tokio::test]
+#[tokio::test(start_paused = true)]
 async fn an_interlocked_pallet_is_placed_to_full_slot_by_slot_on_each_slots_counts() {
     let shared = mock_at_seed_start("");
     let state = temp("full");
@@ -343,7 +343,7 @@ async fn restart_and_choose(h: &RobotHandle, slot: usize, choice: Choice) {
     h.resume_cycle().await.unwrap();
 }
 
-#[tokio::test]
+#[tokio::test(start_paused = true)]
 async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot_and_places_none_twice()
  {
     let shared = mock_at_seed_start("");
@@ -395,7 +395,7 @@ async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot
 /// journal says so). The operator homes, goes on (the part is there) and resumes: the cycle,
 /// resumed at its dwell at the slot, faults rather than count the next slot, which it never
 /// reached; a fresh run then places the pallet to full, every slot once.
-#[tokio::test]
+#[tokio::test(start_paused = true)]
 async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_pallet_completes() {
     let shared = mock_at_seed_start("");
     let state = temp("power-cut");
