@@ -16,7 +16,9 @@
 //!   down to the pick
 //! ```
 //!
-//! once with every `blend_mm`, once without (a stop at every waypoint). Measured on the trace:
+//! once with every `blend_mm` (B = 20 and 40 mm; each run's corners at its default
+//! acceleration, speed / Ta = 1200 mm/s2, and with `path_accel = "5000mm/s2"` on its first
+//! move), once without (a stop at every waypoint). Measured on the trace:
 //! the cycle time, from one arrival at the pick (the last pulse that puts every channel on the
 //! pick's counts) to the next, over the cycles after the first; the motion from the first
 //! pulse to the last, per cycle.
@@ -44,15 +46,31 @@ const PLACE: [f64; 3] = [-1144.43, 659.60, 186.60];
 const CYCLES: u64 = 4;
 const BAUD: u32 = 115_200;
 
+/// How a run is blended: its corners' distance and, when given, its path acceleration.
+#[derive(Debug, Clone, Copy)]
+struct Blend {
+    mm: f64,
+    path_accel: Option<f64>,
+}
+
 fn above(p: [f64; 3]) -> [f64; 3] {
     [p[0], p[1], p[2] + 100.0]
 }
 
-/// The program, blended by `blend_mm` at the four waypoints over the pick and the place, or
-/// stopped at every one (`None`).
-fn program(blend_mm: Option<f64>) -> String {
-    let blend = blend_mm
-        .map(|b| format!("blend_mm = {b}\n"))
+/// The program, blended by `blend.mm` at the four waypoints over the pick and the place (each
+/// run's corners at `blend.path_accel`, when given), or stopped at every one (`None`).
+fn program(blend: Option<Blend>) -> String {
+    let first = blend
+        .map(|b| {
+            let accel = b
+                .path_accel
+                .map(|a| format!("path_accel = \"{a}mm/s2\"\n"))
+                .unwrap_or_default();
+            format!("blend_mm = {}\n{accel}", b.mm)
+        })
+        .unwrap_or_default();
+    let blend = blend
+        .map(|b| format!("blend_mm = {}\n", b.mm))
         .unwrap_or_default();
     let extra = std::env::var("BLEND_MOTION").unwrap_or_default();
     let step =
@@ -60,11 +78,11 @@ fn program(blend_mm: Option<f64>) -> String {
     let dwell = "[[step]]\ndwell = \"100ms\"\n".to_owned();
     [
         dwell.clone(),
-        step(above(PICK), &blend),
+        step(above(PICK), &first),
         step(above(PLACE), &blend),
         step(PLACE, ""),
         dwell,
-        step(above(PLACE), &blend),
+        step(above(PLACE), &first),
         step(above(PICK), &blend),
         step(PICK, ""),
     ]
@@ -97,11 +115,19 @@ async fn main() {
         "stopped at every waypoint: cycle {:.3} s (first to last pulse {:.3} s a cycle)",
         stopped.cycle_s, stopped.motion_s
     );
-    for blend_mm in [20.0, 40.0] {
-        let blended = run(Some(blend_mm)).await;
+    for blend in [20.0, 40.0]
+        .into_iter()
+        .flat_map(|mm| [None, Some(5_000.0)].map(|path_accel| Blend { mm, path_accel }))
+    {
+        let blended = run(Some(blend)).await;
+        let accel = blend
+            .path_accel
+            .map(|a| format!(", path_accel {a} mm/s2"))
+            .unwrap_or_default();
         println!(
-            "blend_mm = {blend_mm}: cycle {:.3} s (first to last pulse {:.3} s a cycle): \
+            "blend_mm = {}{accel}: cycle {:.3} s (first to last pulse {:.3} s a cycle): \
              {:.1} % shorter than stopped ({:.1} % by first to last pulse)",
+            blend.mm,
             blended.cycle_s,
             blended.motion_s,
             (1.0 - blended.cycle_s / stopped.cycle_s) * 100.0,
@@ -131,7 +157,7 @@ fn connector(shared: &SharedMock) -> linterpd::daemon::Connector {
     })
 }
 
-async fn run(blend_mm: Option<f64>) -> Measured {
+async fn run(blend: Option<Blend>) -> Measured {
     let robot = seed_robot();
     let pick = counts_at(PICK);
     let mut mock = MockPlc::new(MockConfig::default()).unwrap();
@@ -142,12 +168,13 @@ async fn run(blend_mm: Option<f64>) -> Measured {
     let shared = SharedMock::new(mock);
     let scans = tokio::spawn(shared.clone().run_scans());
     let dir = std::env::temp_dir().join(format!(
-        "linterpd-bench-blend-{}-{}",
+        "linterpd-bench-blend-{}-{}-{}",
         std::process::id(),
-        blend_mm.unwrap_or(0.0)
+        blend.map_or(0.0, |b| b.mm),
+        blend.and_then(|b| b.path_accel).unwrap_or(0.0)
     ));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("pp.toml"), program(blend_mm)).unwrap();
+    std::fs::write(dir.join("pp.toml"), program(blend)).unwrap();
     let setup = RobotSetup {
         robot,
         settings: ContractSettings::default(),

@@ -37,6 +37,8 @@ use crate::order::{MoveOrder, OrderLimits, PathOrder};
 struct RunMove {
     order: MoveOrder,
     blend_mm: Option<f64>,
+    /// The run's path acceleration, on its first move only.
+    path_accel: Option<serde_json::Value>,
     /// Where its target is, mm, when known now.
     at_mm: Option<Vector3<f64>>,
 }
@@ -62,6 +64,13 @@ impl Flattener<'_, '_> {
             let next = self.next_move(steps.get(n), before, here, n)?;
             same_motion(&run[0].order, &next.order, here.step)
                 .map_err(|r| here.later(n, None).fail(r.to_string()))?;
+            if next.path_accel.is_some() {
+                return Err(here.later(n, None).fail(format!(
+                    "path_accel goes on the first move of a blended run (step {}): the run is one \
+                     path, with one acceleration",
+                    here.step
+                )));
+            }
             run.push(next);
         }
         for k in 1..run.len() - 1 {
@@ -146,6 +155,7 @@ impl Flattener<'_, '_> {
         Ok(RunMove {
             order: order.clone(),
             blend_mm: step.blend_mm,
+            path_accel: step.path_accel.clone(),
             at_mm,
         })
     }
@@ -296,7 +306,7 @@ fn corner(
 }
 
 /// The path a run makes: a line to each move's target, blended where asked, with the first
-/// move's motion and permit; it starts where the robot is.
+/// move's motion, permit and path acceleration; it starts where the robot is.
 fn path_of(run: &[RunMove]) -> PathOrder {
     let elements: Vec<serde_json::Value> = run
         .iter()
@@ -313,8 +323,12 @@ fn path_of(run: &[RunMove]) -> PathOrder {
         })
         .collect();
     let o = &run[0].order;
+    let mut path = json!({ "element": elements });
+    if let Some(accel) = &run[0].path_accel {
+        path["path_accel"] = accel.clone();
+    }
     PathOrder {
-        path: json!({ "element": elements }),
+        path,
         motion: o.motion.clone(),
         permit: o.permit.clone(),
     }

@@ -19,6 +19,7 @@
 //! [[step]]
 //! move = { position = "above-stack" }
 //! blend_mm = 20                  # not stopped here: rounded into the next move, one path
+//! path_accel = "3000mm/s2"       # optional, on a run's first move: its corners' acceleration
 //! [[step]]
 //! move = { position = "above-press" }
 //! [[step]]
@@ -96,6 +97,10 @@ pub struct StepDoc {
     /// A move's end passed without stopping, rounded into the next move step within this
     /// distance of it, mm (the moves run as one path: `super::blend`).
     pub blend_mm: Option<f64>,
+    /// On the first move of a blended run: the largest acceleration across its path, the
+    /// corners' (a path file's `path_accel`, e.g. `"5000mm/s2"`; by default the run's speed over
+    /// its acceleration time).
+    pub path_accel: Option<serde_json::Value>,
     /// A place at a pallet's current slot.
     pub place: Option<PalletStepDoc>,
     /// A pick from a pallet's current slot (depalletising: the same route, the same counter).

@@ -21,6 +21,9 @@ pub struct Step {
     /// A move's end passed without stopping into the next move, within this distance of it,
     /// mm (checked by `super::blend`).
     pub blend_mm: Option<f64>,
+    /// On the first move of a blended run: its path's acceleration, as written (the path
+    /// document's `path_accel`, checked with it).
+    pub path_accel: Option<serde_json::Value>,
 }
 
 /// What a step does, with the data that takes.
@@ -90,6 +93,12 @@ pub enum ShapeError {
     /// A blend on a step that is not a move.
     #[error("blend_mm goes with a move (a path's corners are blended in its document)")]
     BlendWithoutMove,
+    /// A path acceleration on a step that does not blend.
+    #[error(
+        "path_accel goes with a move that has blend_mm (the acceleration across a blended \
+         run's corners; a path step gives it in its document)"
+    )]
+    PathAccelWithoutBlend,
     /// A permit in the step and in its order.
     #[error("permit is given twice (in the step and in its order)")]
     PermitTwice,
@@ -151,10 +160,14 @@ impl TryFrom<&StepDoc> for Step {
         if doc.blend_mm.is_some() && doc.move_.is_none() {
             return Err(ShapeError::BlendWithoutMove);
         }
+        if doc.path_accel.is_some() && (doc.blend_mm.is_none() || doc.move_.is_none()) {
+            return Err(ShapeError::PathAccelWithoutBlend);
+        }
         Ok(Self {
             label: doc.label.clone(),
             action: action(doc)?,
             blend_mm: doc.blend_mm,
+            path_accel: doc.path_accel.clone(),
         })
     }
 }

@@ -257,3 +257,57 @@ fn every_blend_that_cannot_run_is_refused_naming_the_step_and_the_value() {
         assert!(e.starts_with(expected), "{e}\nexpected: {expected}");
     }
 }
+
+#[test]
+fn a_runs_path_accel_is_given_on_its_first_move_and_goes_into_its_path() {
+    let with = pick_and_place("20").replacen(
+        "blend_mm = 20\n",
+        "blend_mm = 20\npath_accel = \"3000mm/s2\"\n",
+        1,
+    );
+    let c = checked(&[("p", &with)], "p", false).unwrap();
+    let OpKind::Path(order) = &c.ops[1].kind else {
+        panic!("{:?}", c.ops[1].kind)
+    };
+    assert_eq!(order.path["path_accel"], "3000mm/s2");
+    // The other run has none: its corners take the default (speed over acceleration time).
+    let OpKind::Path(other) = &c.ops[3].kind else {
+        panic!("{:?}", c.ops[3].kind)
+    };
+    assert!(other.path.get("path_accel").is_none(), "{}", other.path);
+}
+
+#[test]
+fn a_path_accel_anywhere_but_a_runs_first_move_or_not_a_number_is_refused_naming_the_step() {
+    // On the run's second move.
+    let second = pick_and_place("20").replacen(
+        &format!("move = {{ to = {ABOVE_PLACE} }}\nblend_mm = 20\n"),
+        &format!("move = {{ to = {ABOVE_PLACE} }}\nblend_mm = 20\npath_accel = 3000\n"),
+        1,
+    );
+    assert_eq!(
+        refusal(&second),
+        "program \"p\" step 3: path_accel goes on the first move of a blended run (step 2): \
+         the run is one path, with one acceleration"
+    );
+    // On a move that stops at its end.
+    let stopped = "[[step]]\nmove = { position = \"above-stack\" }\npath_accel = 3000\n";
+    assert!(
+        refusal(stopped).contains("step 1: path_accel goes with a move that has blend_mm"),
+        "{}",
+        refusal(stopped)
+    );
+    // Not an acceleration.
+    for (value, why) in [
+        ("\"fast\"", "'fast' is not a number of mm/s2"),
+        ("-5", "-5 mm/s2 must be a number above 0"),
+    ] {
+        let bad = pick_and_place("20").replacen(
+            "blend_mm = 20\n",
+            &format!("blend_mm = 20\npath_accel = {value}\n"),
+            1,
+        );
+        let r = refusal(&bad);
+        assert!(r.contains("step 2") && r.contains(why), "{value}: {r}");
+    }
+}
