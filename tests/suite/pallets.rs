@@ -41,7 +41,7 @@ const SLOTS: usize = 6;
 
 /// A pallet station near the seed's P2, and on it 2 layers of 1 x 3, the second turned half a
 /// turn and moved half a pitch (interlocked); approached from 80 mm above, the last 30 mm at
-/// 40 mm/s. When full: `pallet_full` (Y1) set until `pallet_empty` (X3). The tool angle is the
+/// 120 mm/s. When full: `pallet_full` (Y1) set until `pallet_empty` (X3). The tool angle is the
 /// one the robot has at P1 (its wrist at 0): layer 2's half turn is the only wrist turn, slowed
 /// down for (the wrist's 20 kHz turn it at 50 degrees a second).
 const PALLET: &str = r#"
@@ -54,7 +54,7 @@ layer_height_mm = 60
 layers = ["A", "B"]
 kinds.A = {}
 kinds.B = { turn_deg = 180, shift_mm = [50, 0] }
-approach = { height_mm = 80, slow_mm = 30, slow_speed_mm_s = 40 }
+approach = { height_mm = 80, slow_mm = 30, slow_speed_mm_s = 120 }
 when_full = { signal = "pallet_full", wait_for = "pallet_empty" }
 "#;
 
