@@ -335,8 +335,11 @@ pub fn path_deviation_mm(
 ) -> f64 {
     match Executed::<true>::new(robot, start) {
         Some(executed) => deviation_from(executed, events, path),
-        None => Executed::<false>::new(robot, start)
-            .map_or(f64::NAN, |executed| deviation_from(executed, events, path)),
+        // One of the two always is; were neither, the run would count as off its path (never
+        // NaN, which passes no limit check and so would pass every one).
+        None => Executed::<false>::new(robot, start).map_or(f64::INFINITY, |executed| {
+            deviation_from(executed, events, path)
+        }),
     }
 }
 
