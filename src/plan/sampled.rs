@@ -262,15 +262,21 @@ impl Sampler<'_> {
         };
         // Find a factor that fits. A triangular profile's peak speed goes with the square root of
         // its acceleration, and counts round to whole pulses: cut by the square of the overload,
-        // and by at least 1 %.
+        // and by at least `least` (1 % at first). A cut that leaves the load where it was (a
+        // short S-curve's whole periods, its peak set by the jerk, not the speed) squares
+        // `least`: 1, 2, 4, 8, 15, 28 % ...
         let (mut bad, mut factor, mut peak) = (1.0, 1.0, peak);
+        let mut least = 0.99_f64;
         let mut good = None;
         for _ in 0..SLOW_DOWN_ATTEMPTS {
-            factor *= (0.999 / peak.load).powi(2).min(0.99);
+            factor *= (0.999 / peak.load).powi(2).min(least);
             let (p, s, pk) = self.at(&scaled(factor))?;
             if pk.load <= 1.0 {
                 good = Some((factor, p, s));
                 break;
+            }
+            if pk.load >= peak.load {
+                least *= least;
             }
             (bad, peak) = (factor, pk);
         }

@@ -466,3 +466,25 @@ fn a_line_whose_parts_overflow_too_is_refused_for_its_size_only() {
     assert!(common::moves::refused_for_area(&e), "{e}");
     assert!(plan(&robot, mv, m, &l).is_none());
 }
+
+/// Found by CI (stop 55): a SCARA line whose wrist turns 18.4 deg under an S-curve, slowed
+/// for its wrist's channel (`slow-down`), was refused for needing 20010 Hz of a 20000 Hz
+/// channel: the slowing must reach the channel's limit, not stop 0.05 % short of it.
+#[test]
+fn an_s_curve_line_slowed_for_its_wrist_ends_within_the_channel() {
+    let from = Pose {
+        position_mm: [387.74306517209317, 85.14074444542985, -9.339351413379678].into(),
+        a_rad: 0.1602026619885213,
+    };
+    let to = Pose {
+        position_mm: [323.2195786797244, 126.55095929516932, 9.339351413379678].into(),
+        a_rad: -0.1602026619885213,
+    };
+    let m = Motion {
+        speed_mm_s: 461.8981970489556,
+        accel_s: 0.22129585871432111,
+        period_s: 0.0491742917950323,
+        ideal: false,
+    };
+    check_s_curve(&common::scara(), (from, to), m, None, 12283.601763594514).unwrap();
+}
