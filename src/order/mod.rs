@@ -508,6 +508,15 @@ impl CheckedOrder {
         matches!(&self.target, Target::Section(p) if p.part == 0 && p.parts > 1)
     }
 
+    /// How many starts its path section was cut into (1 for any other order).
+    #[must_use]
+    pub fn parts(&self) -> usize {
+        match &self.target {
+            Target::Section(p) => p.parts,
+            _ => 1,
+        }
+    }
+
     /// The path section it is a part of, if it is one.
     #[must_use]
     pub fn section(&self) -> Option<&Arc<SectionOrder>> {

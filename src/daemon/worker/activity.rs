@@ -56,7 +56,11 @@ impl Worker {
         let began = now();
         let exchange = self.session()?.exchange;
         let from_rest = turn.mode.ahead().is_none();
-        let own = turn.preload.take().filter(|p| p.bank() == planned.bank);
+        let own = turn
+            .preload
+            .take()
+            .filter(|p| p.tables.bank() == planned.bank)
+            .map(|p| p.tables);
         let gated = turn.mode.gate().is_some();
         match self
             .ready_upload(&planned, &tables, own, (from_rest, gated), exchange)
@@ -93,9 +97,9 @@ impl Worker {
         exchange: std::time::Duration,
     ) -> Result<(Upload, std::time::Duration), ContractError> {
         let own = if from_rest {
-            // Nothing preloaded before outlives a start from rest: its section's parts are
-            // preloaded afresh around it.
-            self.dispatch.forget_preloads();
+            // Nothing preloaded before outlives a start from rest but its section's second
+            // part preloaded ahead into the other bank: its parts are preloaded around it.
+            self.dispatch.forget_preloads_but_ahead(planned.bank);
             self.preload_section(planned, tables, exchange).await?;
             None
         } else {

@@ -55,7 +55,39 @@ pub(super) struct Queued {
     pub accepted: Instant,
     /// Its tables, written and read back ahead of its turn (a part of a path chained at speed):
     /// the bank, where, and the words its start must match.
-    pub preload: Option<Preload>,
+    pub preload: Option<Preloaded>,
+    /// The first part of a path section cut into parts: whether it may begin behind the start
+    /// running ([`Lead`]).
+    pub lead: Lead,
+}
+
+/// Whether the first part of a path section cut into parts (its parts chained at speed) may
+/// begin behind the start running, judged against that start by the worker
+/// ([`Dispatcher::lead_to_judge`]). From rest, its parts are preloaded into both banks and the
+/// link's pace measured before it starts (and refused if a part could not be ready in time);
+/// behind a running start, the part before it is still in a bank, so every later part is
+/// written at its turn, while the part before it runs, as the link has shown it can.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) enum Lead {
+    /// Not judged: it waits for rest (judged when a start runs ahead of it).
+    #[default]
+    Unjudged,
+    /// Judged behind start `seq`: only from rest (no pace known yet on this link, a part that
+    /// could not be written while the part before it runs, a part that does not plan). Its
+    /// second part may be preloaded meanwhile into the bank that start does not use
+    /// ([`Dispatcher::ahead_due`]), itself to follow into the bank that start ran from.
+    FromRest {
+        /// The start it was judged behind.
+        seq: u16,
+        /// Whether its second part's preload was begun.
+        ahead: bool,
+    },
+    /// Judged behind start `seq`: at the pace this link showed, each later part can be written,
+    /// read back and started while the part before it runs; it begins behind that start.
+    Behind {
+        /// The start it was judged behind.
+        seq: u16,
+    },
 }
 
 impl Queued {
@@ -69,6 +101,44 @@ impl Queued {
             )
         })
     }
+}
+
+/// Tables written and read back ahead of their turn ([`Queued::preload`]).
+#[derive(Debug)]
+pub(super) struct Preloaded {
+    /// The bank, where, and the words.
+    pub tables: Preload,
+    /// How long its exchanges took (the link's pace, for the parts after it).
+    pub took: Duration,
+}
+
+/// A path's second part, preloaded into the bank the start running does not use while that
+/// start runs, ahead of its first part's turn from rest ([`Dispatcher::ahead_due`]): one
+/// exchange a step, the running start watched between them.
+#[derive(Debug)]
+pub(super) struct Ahead {
+    /// The part.
+    pub id: MoveId,
+    /// Its exchanges.
+    pub upload: Upload,
+    /// What is preloaded once the last exchange is made.
+    pub preload: Preload,
+    /// How long its exchanges took so far.
+    pub took: Duration,
+    /// How often the status block is read between two of them.
+    pub every: Duration,
+}
+
+/// A path's second part to preload ahead ([`Dispatcher::ahead_due`]).
+#[derive(Debug)]
+pub(super) struct AheadDue {
+    /// The second part's id.
+    pub id: MoveId,
+    /// The first part's order and the second's.
+    pub first: CheckedOrder,
+    pub second: CheckedOrder,
+    /// The start running, the first part follows from rest.
+    pub behind: Planned,
 }
 
 /// A part of a path section queued: its id and order.
@@ -120,7 +190,7 @@ pub(super) struct Turn {
     pub mode: StartMode,
     pub from: [i32; CHANNELS],
     /// Its tables, if preloaded ahead of its turn.
-    pub preload: Option<Preload>,
+    pub preload: Option<Preloaded>,
 }
 
 /// What became of the head of the queue when its turn was asked for.
@@ -151,6 +221,8 @@ pub(super) enum Activity {
     Uploading(Box<Uploading>),
     /// A prepared move's bank, verified, held until its gate opens.
     Holding(Box<Uploaded>),
+    /// A path's second part preloaded ahead of its first part's turn, one exchange a step.
+    Preloading(Box<Ahead>),
     /// Its bank verified: reading the status block until the PLC may take its start (the
     /// heartbeat seen moving, the counts at its `from`); the next read not before this.
     Proving(Box<Uploaded>, Option<Instant>),
@@ -376,6 +448,7 @@ impl Dispatcher {
                 epoch,
                 accepted: now,
                 preload: None,
+                lead: Lead::Unjudged,
             });
         }
     }
@@ -400,19 +473,88 @@ impl Dispatcher {
         let Some(head) = self.queue.front() else {
             return false;
         };
-        self.machine.blocker(now).is_none() && !self.waits_for_rest(&head.order)
+        self.machine.blocker(now).is_none() && !self.waits_for_rest(head)
     }
 
-    /// Whether `order` must wait for the running move to end: the first part of a section cut
-    /// into parts begins only from rest (its parts are preloaded and paced before it starts).
-    pub(super) fn waits_for_rest(&self, order: &CheckedOrder) -> bool {
-        order.leads_parts() && self.machine.chain_behind().is_some()
+    /// Whether `queued` must wait for the running move to end: the first part of a section cut
+    /// into parts begins from rest (its parts preloaded and paced before it starts), unless it
+    /// was judged able to begin behind the start running ([`Lead::Behind`]).
+    pub(super) fn waits_for_rest(&self, queued: &Queued) -> bool {
+        queued.order.leads_parts()
+            && self
+                .machine
+                .chain_behind()
+                .is_some_and(|running| queued.lead != Lead::Behind { seq: running.seq })
+    }
+
+    /// The head of the queue, when it is the first part of a section cut into parts, not yet
+    /// judged against the start running, and the PLC would take it: its id and the start it is
+    /// to be judged behind (the worker plans its parts from that start's targets and weighs
+    /// them against the link's pace, [`Self::judged`]).
+    pub(super) fn lead_to_judge(&self, now: Instant) -> Option<(MoveId, Planned)> {
+        let head = self.queue.front().filter(|q| q.order.leads_parts())?;
+        let running = self.machine.chain_behind()?;
+        let judged = match head.lead {
+            Lead::Unjudged => None,
+            Lead::FromRest { seq, .. } | Lead::Behind { seq } => Some(seq),
+        };
+        (judged != Some(running.seq) && self.machine.blocker(now).is_none())
+            .then(|| (head.id, running.clone()))
+    }
+
+    /// The second part of the path whose first part heads the queue, to be preloaded now, while
+    /// the start running runs, into the bank it does not use (the first part to follow from
+    /// rest into the bank it ran from): when the first part waits for rest behind that start
+    /// ([`Lead::FromRest`]), nothing is written behind it, and the second part was neither
+    /// preloaded nor tried behind it. The first part is marked tried.
+    pub(super) fn ahead_due(&mut self, now: Instant) -> Option<AheadDue> {
+        let running = self.machine.chain_behind()?;
+        if self.machine.uploading_behind().is_some() || self.machine.blocker(now).is_some() {
+            return None;
+        }
+        let (head, second) = (self.queue.front()?, self.queue.get(1)?);
+        let same = |q: &Queued| {
+            q.order
+                .section()
+                .zip(head.order.section())
+                .is_some_and(|(a, b)| Arc::ptr_eq(a, b))
+        };
+        let due = head.order.leads_parts()
+            && head.lead
+                == (Lead::FromRest {
+                    seq: running.seq,
+                    ahead: false,
+                })
+            && second.order.begins_at_speed()
+            && same(second)
+            && second.preload.is_none();
+        if !due {
+            return None;
+        }
+        let due = AheadDue {
+            id: second.id,
+            first: head.order.clone(),
+            second: second.order.clone(),
+            behind: running.clone(),
+        };
+        self.queue[0].lead = Lead::FromRest {
+            seq: running.seq,
+            ahead: true,
+        };
+        Some(due)
+    }
+
+    /// Queued move `id` (a section's first part) was judged: `lead`.
+    pub(super) fn judged(&mut self, id: MoveId, lead: Lead) {
+        if let Some(q) = self.queue.iter_mut().find(|q| q.id == id) {
+            q.lead = lead;
+        }
     }
 
     /// Whether `queued`, just taken from the head of the queue, begins now and how (the status
     /// block last read is fresh). One that does not begin now is put back at the head.
     pub(super) fn turn(&mut self, queued: Queued, now: Instant) -> TurnDecision {
-        if self.machine.blocker(now).is_some() || self.waits_for_rest(&queued.order) {
+        if self.machine.blocker(now).is_some() || self.waits_for_rest(&queued) {
             // Its parts are preloaded and paced from rest ([`Self::has_room`] waits for it).
             self.queue.push_front(queued);
             return TurnDecision::Wait;
@@ -456,10 +598,7 @@ impl Dispatcher {
     /// not count), and cancels the rest behind it.
     pub(super) fn expire(&mut self, link_up: bool, now: Instant) -> Vec<Finish> {
         let blocker = self.blocker(link_up, now);
-        let behind_a_move = self
-            .queue
-            .front()
-            .is_some_and(|q| self.waits_for_rest(&q.order));
+        let behind_a_move = self.queue.front().is_some_and(|q| self.waits_for_rest(q));
         if matches!(blocker, Some(Blocker::Full | Blocker::Stopping)) || behind_a_move {
             self.room_since = None;
             return Vec::new();
@@ -541,6 +680,20 @@ impl Dispatcher {
         Some((section, behind))
     }
 
+    /// The head of the queue when it is the first part of a path section cut into parts: its
+    /// order, its section, and whether every part of the section is queued behind it.
+    pub(super) fn lead_section(&self) -> Option<(CheckedOrder, Arc<SectionOrder>, bool)> {
+        let head = self.queue.front().filter(|q| q.order.leads_parts())?;
+        let section = head.order.section()?.clone();
+        let queued = self
+            .queue
+            .iter()
+            .take_while(|q| q.order.section().is_some_and(|s| Arc::ptr_eq(s, &section)))
+            .count();
+        let all = queued == head.order.parts();
+        Some((head.order.clone(), section, all))
+    }
+
     /// Forgets every preload: a bank written whole may lie over them.
     pub(super) fn forget_preloads(&mut self) {
         for q in &mut self.queue {
@@ -548,11 +701,41 @@ impl Dispatcher {
         }
     }
 
-    /// Queued move `id`'s tables were preloaded.
-    pub(super) fn preloaded(&mut self, id: MoveId, preload: Preload) {
-        if let Some(q) = self.queue.iter_mut().find(|q| q.id == id) {
-            q.preload = Some(preload);
+    /// Forgets every preload but one made ahead ([`Self::ahead_due`]) for the part at the head
+    /// of the queue, behind a start from rest into `bank` (its path's first part): that part's,
+    /// in the other bank, which the first part's upload does not touch.
+    pub(super) fn forget_preloads_but_ahead(&mut self, bank: u16) {
+        let mut queue = self.queue.iter_mut();
+        if let Some(head) = queue.next()
+            && !(head.order.begins_at_speed()
+                && head
+                    .preload
+                    .as_ref()
+                    .is_some_and(|p| p.tables.bank() != bank))
+        {
+            head.preload = None;
         }
+        for q in queue {
+            q.preload = None;
+        }
+    }
+
+    /// Queued move `id`'s tables were preloaded, their exchanges taking `took`.
+    pub(super) fn preloaded(&mut self, id: MoveId, preload: Preload, took: Duration) {
+        if let Some(q) = self.queue.iter_mut().find(|q| q.id == id) {
+            q.preload = Some(Preloaded {
+                tables: preload,
+                took,
+            });
+        }
+    }
+
+    /// What queued move `id` has preloaded, if anything.
+    pub(super) fn preload_of(&self, id: MoveId) -> Option<&Preloaded> {
+        self.queue
+            .iter()
+            .find(|q| q.id == id)
+            .and_then(|q| q.preload.as_ref())
     }
 
     /// The sequence number for the next start: never the PLC's latched one, which it would take
@@ -566,10 +749,19 @@ impl Dispatcher {
         }
     }
 
-    /// The bank for a start planned behind the one in `running_bank` (none: the next in turn):
-    /// always the bank that is not running.
+    /// The bank for a start planned behind the one in `running_bank`: always the bank that is
+    /// not running. From rest, the next in turn, or, when the part behind it at the head of the
+    /// queue was preloaded ahead (its path's second part, [`Self::ahead_due`]), the other bank
+    /// than that part's.
     pub(super) fn next_bank(&self, running_bank: Option<u16>) -> u16 {
-        running_bank.map_or(self.next_bank, |b| 1 - b)
+        if let Some(b) = running_bank {
+            return 1 - b;
+        }
+        self.queue
+            .front()
+            .filter(|q| q.order.begins_at_speed())
+            .and_then(|q| q.preload.as_ref())
+            .map_or(self.next_bank, |p| 1 - p.tables.bank())
     }
 
     /// A start in `bank` with `seq` was written (or found running): whatever became of it, its

@@ -9,7 +9,8 @@
 //!
 //! ```text
 //! run: loop { take in | action = dispatcher.next(seen, now) | carry it out }
-//!   Connect | Stop | Commands | Finish | ReadMode | Begin | UploadStep | ProveRead | WriteStart
+//!   Connect | Stop | Commands | Finish | ReadMode | JudgeLead | PreloadAhead | AheadStep | Begin
+//!   | UploadStep | ProveRead | WriteStart
 //!   | Unprepare | Gateway | Poll | Pause | Wait (the one select!: requests, stops, gateway,
 //!   shutdown, a read asked for, a held bank's gate, the timer)
 //!   mod.rs       the loop, carrying actions out, stops, home and clear-fault, shutdown
@@ -19,6 +20,7 @@
 //!   link.rs      (re)connecting, a link that fails or a PLC program that does not answer right
 //!   events.rs    reading the status block into the machine; applying its events to the reports
 //!   moves.rs     a turn, planning, preloading a section's parts, the start written once
+//!   lead.rs      a path's first part behind a running start: judged; its second part ahead
 //! ```
 //!
 //! A stop overtakes everything: it is taken between any two exchanges (an upload in progress is
@@ -30,6 +32,7 @@ mod dispatch;
 mod events;
 mod followers;
 mod gateway;
+mod lead;
 mod link;
 mod moves;
 mod pace;
@@ -205,6 +208,12 @@ impl Worker {
                 Ok(())
             }
             Action::ReadMode => self.read_mode().await,
+            Action::JudgeLead { id, behind } => {
+                self.judge_lead(id, &behind);
+                Ok(())
+            }
+            Action::PreloadAhead(due) => self.begin_ahead(&due),
+            Action::AheadStep { ahead, watch } => self.ahead_step(ahead, watch).await,
             Action::Begin(queued) => self.begin(*queued).await,
             Action::UploadStep { uploading, watch } => self.upload_step(uploading, watch).await,
             Action::ProveRead(uploaded) => self.prove(uploaded).await,

@@ -190,6 +190,7 @@ impl Worker {
             return Ok(());
         };
         tracing::info!(robot = %self.robot.name, parts = directories.len(), words = pace.preload_words, preload_s = pace.preload.as_secs_f64(), status_s = exchange.as_secs_f64(), word_s = pace.word.as_secs_f64(), "parts chained at speed preloaded");
+        self.session()?.pace = Some(pace);
         pace.check(&parts(&section, &directories))
     }
 
@@ -214,8 +215,14 @@ impl Worker {
                 return Ok(false);
             }
         };
-        let (preloaded, took) = self.preload(bank, base, &tables).await?;
-        tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
+        let (preloaded, took) = match self.preloaded_ahead(id, bank, base, &tables) {
+            Some(ahead) => ahead,
+            None => {
+                let (preloaded, took) = self.preload(bank, base, &tables).await?;
+                tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
+                (preloaded, took)
+            }
+        };
         let pace = match &mut walk.pace {
             Some(pace) => pace,
             None => walk
@@ -225,7 +232,7 @@ impl Worker {
         pace.preload += took;
         pace.preload_words += preloaded.words();
         walk.directories.push(directories_left(&base, &tables));
-        self.dispatch.preloaded(id, preloaded);
+        self.dispatch.preloaded(id, preloaded, took);
         walk.ends_on = end_counts(&plan, walk.ends_on);
         walk.bank = 1 - bank;
         Ok(true)
@@ -238,6 +245,22 @@ impl Worker {
         let plan = plan_order(&self.robot, order, from).ok()?;
         let tables = plan.valid_tables(&self.robot)?;
         Some((plan, tables))
+    }
+
+    /// Part `id`'s preload made ahead of its first part's turn ([`Self::begin_ahead`]), and how
+    /// long it took, when it is `tables` placed in `bank` at `base` word for word: nothing is
+    /// written again.
+    fn preloaded_ahead(
+        &mut self,
+        id: MoveId,
+        bank: u16,
+        base: [usize; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Option<(crate::plc::exchange::Preload, Duration)> {
+        let ahead = self.dispatch.preload_of(id)?;
+        let link = &self.conn.session.as_ref()?.contract;
+        link.preloaded_as(&ahead.tables, bank, base, tables)
+            .then(|| (ahead.tables.clone(), ahead.took))
     }
 
     /// Writes and reads back `tables` into `bank` at `base` (per channel): what was written, and
@@ -478,7 +501,7 @@ impl Walk {
 /// The parts of `section` (planned) as the pace check sees them: the first
 /// `directories.len()` after its first preloaded, each with that many directories left for its
 /// start, the rest written whole at their turns.
-fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
+pub(super) fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
     section
         .planned
         .get()
@@ -498,7 +521,7 @@ fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> {
 }
 
 /// The counts per channel where `plan`, started from `from`, ends.
-fn end_counts(plan: &Plan, from: [i32; CHANNELS]) -> [i32; CHANNELS] {
+pub(super) fn end_counts(plan: &Plan, from: [i32; CHANNELS]) -> [i32; CHANNELS] {
     planned_bounds(from, &channel_tables(plan)).1
 }
 

@@ -69,6 +69,16 @@ impl Part {
 }
 
 impl LinkPace {
+    /// This pace, measured for one section, for another's parts: its status read as slow as
+    /// the link shows it now or was then, whichever is slower, and its first part's permit.
+    pub(super) fn for_section(self, status_now: Duration, permit_write: bool) -> Self {
+        Self {
+            status: self.status.max(status_now),
+            permit_write,
+            ..self
+        }
+    }
+
     /// About how long one exchange of `words` words takes, s: on the line through the two
     /// reads measured (never less than the one-word read).
     fn exchange_s(&self, words: usize) -> f64 {

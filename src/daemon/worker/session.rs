@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::Shared;
+use super::pace::LinkPace;
 use crate::plc::AnyPlc;
 use crate::plc::exchange::{Contract, ContractSettings};
 
@@ -19,6 +20,10 @@ pub(super) struct Session {
     pub exchange: Duration,
     /// When the PLC's mode (RUN / PROG) was last read over it.
     pub mode_read: Option<std::time::Instant>,
+    /// The pace it showed when a path's parts were last preloaded over it: what judges whether
+    /// a later path's parts can be written while the part before each runs
+    /// ([`super::dispatch::Lead`]).
+    pub pace: Option<LinkPace>,
 }
 
 impl Session {
@@ -33,6 +38,7 @@ impl Session {
             contract,
             exchange: Duration::ZERO,
             mode_read: None,
+            pace: None,
         }
     }
 }

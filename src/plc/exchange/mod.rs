@@ -661,12 +661,43 @@ impl<P: Plc> Contract<P> {
         base: [usize; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<Preload, ContractError> {
+        let (mut upload, preload) = self.begin_preload(bank, base, tables)?;
+        self.exchanges(&mut upload).await?;
+        Ok(preload)
+    }
+
+    /// [`Self::preload`] cut into exchanges, none made yet ([`Self::upload_step`] makes them,
+    /// so that a running move is watched between two of them): the upload, and what is
+    /// preloaded once its last exchange is made (not before).
+    pub fn begin_preload(
+        &self,
+        bank: u16,
+        base: [usize; CHANNELS],
+        tables: &[ValidTable],
+    ) -> Result<(Upload, Preload), ContractError> {
         let unstarted = StartBlock::unpermitted(bank, 0, [0; CHANNELS]);
         let (block, writes, _) = self.placed(&unstarted, tables, base)?;
         // The tables alone: no command block is written (the start's upload writes it).
-        let mut upload = Upload::new(block, writes.clone(), false, self.settings.verify);
-        self.exchanges(&mut upload).await?;
-        Ok(Preload { bank, base, writes })
+        let upload = Upload::new(block, writes.clone(), false, self.settings.verify);
+        Ok((upload, Preload { bank, base, writes }))
+    }
+
+    /// Whether `preload` is `tables` placed in `bank` from `base`, word for word: a part
+    /// preloaded earlier that a later walk over the same banks would place there again.
+    #[must_use]
+    pub fn preloaded_as(
+        &self,
+        preload: &Preload,
+        bank: u16,
+        base: [usize; CHANNELS],
+        tables: &[ValidTable],
+    ) -> bool {
+        let unstarted = StartBlock::unpermitted(bank, 0, [0; CHANNELS]);
+        preload.bank == bank
+            && preload.base == base
+            && self
+                .placed(&unstarted, tables, base)
+                .is_ok_and(|(_, writes, _)| writes == preload.writes)
     }
 
     /// [`Self::upload`] for tables already written into `bank` and read back by

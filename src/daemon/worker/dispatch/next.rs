@@ -4,9 +4,12 @@
 //! [`Dispatcher::uploaded`], ...); it decides nothing itself.
 //!
 //! ```text
-//!   Idle:      shut down | connect | stop | commands | finish | read mode | begin | gateway
+//!   Idle:      shut down | connect | stop | commands | finish | read mode | judge a path's
+//!              first part behind the start running | begin | gateway
 //!              (taking turns with the status read when both are due) | poll | wait
 //!   Uploading: one exchange of the bank (a status read first when one is due)
+//!   Preloading: one exchange of a path's second part ahead (a status read first when one is
+//!              due), or abandoned for what overtakes it
 //!   Holding:   release (write the start, or prove it) | cancel | gateway | poll | wait on its gate
 //!   Proving:   one proof read, a pause of half a scan between two | the start written once
 //! ```
@@ -14,7 +17,7 @@
 use std::time::{Duration, Instant};
 
 use super::{Activity, CYCLE_WENT_ON, Dispatcher, Finish, Hold, Queued, Uploaded, Uploading};
-use crate::contract::machine::{Blocker, Phase};
+use crate::contract::machine::{Blocker, Phase, Planned};
 use crate::daemon::gate::{Gate, GateState};
 use crate::wire::MoveId;
 
@@ -82,6 +85,24 @@ pub(in crate::daemon::worker) enum Action {
     /// Begin the head of the queue: its turn on a fresh status block, planned, its section's
     /// parts preloaded, its upload made ready ([`Activity::Uploading`]).
     Begin(Box<Queued>),
+    /// Judge whether the head of the queue, the first part of a path section cut into parts,
+    /// may begin behind start `behind` ([`super::Lead`]): no exchange, its parts planned.
+    JudgeLead {
+        /// The head.
+        id: MoveId,
+        /// The start running, it would begin behind.
+        behind: Box<Planned>,
+    },
+    /// Begin preloading a path's second part ahead of its first part's turn
+    /// ([`Dispatcher::ahead_due`]).
+    PreloadAhead(Box<super::AheadDue>),
+    /// One exchange of a preload ahead; `watch`: a status read first.
+    AheadStep {
+        /// The preload.
+        ahead: Box<super::Ahead>,
+        /// Whether the status block is read first.
+        watch: bool,
+    },
     /// One exchange of the upload; `watch`: a status read first (a start runs meanwhile).
     UploadStep {
         /// The upload.
@@ -127,6 +148,7 @@ impl Dispatcher {
             Activity::Idle => self.next_idle(seen, now),
             Activity::Uploading(uploading) => self.next_upload(uploading, now),
             Activity::Holding(held) => self.next_hold(held, seen, just_polled, now),
+            Activity::Preloading(ahead) => self.next_ahead(ahead, seen, now),
             Activity::Proving(uploaded, not_before) => match not_before {
                 Some(until) if now < until => {
                     self.activity = Activity::Proving(uploaded, None);
@@ -160,6 +182,13 @@ impl Dispatcher {
         }
         if std::mem::take(&mut self.mode_due) {
             return Action::ReadMode;
+        }
+        if let Some((id, behind)) = self.lead_to_judge(now) {
+            let behind = Box::new(behind);
+            return Action::JudgeLead { id, behind };
+        }
+        if let Some(due) = self.ahead_due(now) {
+            return Action::PreloadAhead(Box::new(due));
         }
         if self.has_room(now) {
             self.next_poll = None;
@@ -211,6 +240,24 @@ impl Dispatcher {
         }
         self.retry = Retry::Now;
         Action::Connect
+    }
+
+    /// One exchange of a preload ahead ([`Activity::Preloading`]), a status read first while a
+    /// start runs and the last read is `every` old. It is abandoned between two exchanges (what
+    /// was written is not preloaded: nothing points at it) when its part is no longer second in
+    /// the queue, or anything overtakes it: the daemon shutting down, a stop or a command asked
+    /// for, the link lost.
+    fn next_ahead(&mut self, ahead: Box<super::Ahead>, seen: Seen, now: Instant) -> Action {
+        let wanted = self.queue.get(1).is_some_and(|q| q.id == ahead.id);
+        if !wanted || seen.shutting_down || seen.stop || seen.commands || !seen.link_up {
+            return self.next_idle(seen, now);
+        }
+        let due = self
+            .machine
+            .read_at()
+            .is_none_or(|at| now.saturating_duration_since(at) >= ahead.every);
+        let watch = due && !self.machine.given().is_empty();
+        Action::AheadStep { ahead, watch }
     }
 
     /// One exchange of an upload; a status read first while a start the PLC was given may run

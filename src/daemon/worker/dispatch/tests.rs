@@ -96,6 +96,7 @@ fn queued(id: MoveId, gate: Option<Gate>, accepted: Instant) -> Queued {
         epoch: None,
         accepted,
         preload: None,
+        lead: Lead::Unjudged,
     }
 }
 
@@ -241,7 +242,7 @@ fn a_shut_gate_cancels_its_move_and_every_move_behind_it() {
 }
 
 /// A path section cut into `parts` starts chained at speed, as the handle queues it.
-fn section_parts(parts: usize) -> Vec<CheckedOrder> {
+pub(super) fn section_parts(parts: usize) -> Vec<CheckedOrder> {
     use crate::geometry::{Corner, Element, Path, PathSpec, Pose};
     use crate::order::{SectionOrder, SectionPart};
     let pose = |x: f64| Pose {

@@ -26,6 +26,9 @@ fn what(action: &Action) -> (&'static str, Option<MoveId>) {
         Action::Commands => ("commands", None),
         Action::Finish(ends) => ("finish", ends.first().map(|e| e.id)),
         Action::ReadMode => ("read mode", None),
+        Action::JudgeLead { id, .. } => ("judge", Some(*id)),
+        Action::PreloadAhead(due) => ("preload ahead", Some(due.id)),
+        Action::AheadStep { ahead, .. } => ("ahead step", Some(ahead.id)),
         Action::Begin(q) => ("begin", Some(q.id)),
         Action::UploadStep { uploading, .. } => ("upload", Some(uploading.turn.id)),
         Action::ProveRead(u) => ("prove", Some(u.turn.id)),
@@ -323,4 +326,59 @@ fn a_proof_read_that_does_not_prove_is_made_again_half_a_scan_later() {
         panic!("read again");
     };
     assert_eq!(d.proven(u, true, until).map(|u| u.turn.id), Some(4));
+}
+
+/// A path cut into parts queued behind a running start: its first part waits for rest until the
+/// worker judged it against that start. Judged from rest, it waits (and is not judged again
+/// behind the same start); judged behind it, it begins chained to it, planned from its targets
+/// into the other bank; behind another start it is judged again.
+#[test]
+fn a_paths_first_part_behind_a_running_start_is_judged_once_and_begins_behind_it_if_judged_so() {
+    let t0 = Instant::now();
+    let now = t0 + ms(40);
+    let mut d = running(t0);
+    d.push_order((2..).zip(super::section_parts(3)).collect(), None, None, t0);
+    let Action::JudgeLead { id, behind } = d.next(up(), now) else {
+        panic!("the first part is judged first");
+    };
+    assert_eq!((id, behind.seq, behind.targets), (2, 8, Some(TO)));
+    assert!(!d.has_room(now), "unjudged, it waits for rest");
+    d.judged(2, Lead::FromRest { seq: 8, ahead: false });
+    assert!(!d.has_room(now));
+    // From rest: its second part is preloaded ahead, once, behind start 8.
+    let Action::PreloadAhead(due) = d.next(up(), now) else {
+        panic!("its second part is preloaded ahead");
+    };
+    assert_eq!((due.id, due.behind.seq), (3, 8));
+    assert!(due.first.leads_parts() && due.second.begins_at_speed());
+    let next = what(&d.next(up(), now)).0;
+    assert!(!["judge", "preload ahead"].contains(&next), "{next}: once behind start 8");
+    assert!(
+        d.expire(true, now + START_WITHIN * 2).is_empty(),
+        "waiting for rest never expires"
+    );
+    d.judged(2, Lead::Behind { seq: 8 });
+    assert!(d.has_room(now));
+    let head = d.queue.pop_front().expect("the first part");
+    let TurnDecision::Begin(turn) = d.turn(head, now) else {
+        panic!("judged behind start 8: it begins");
+    };
+    let StartMode::Chained(ahead) = &turn.mode else {
+        panic!("chained behind start 8: {:?}", turn.mode);
+    };
+    assert_eq!((ahead.seq, turn.from), (8, TO));
+    assert_eq!(d.next_bank(Some(ahead.bank)), 1 - ahead.bank);
+    // Judged behind start 8, it is judged again behind any other.
+    d.push_front(*queued_lead(2, Lead::Behind { seq: 7 }, t0));
+    assert!(!d.has_room(now));
+    assert_eq!(what(&d.next(up(), now)), ("judge", Some(2)));
+}
+
+/// Move `id`, the first part of a path cut into 3, judged `lead`.
+fn queued_lead(id: MoveId, lead: Lead, accepted: Instant) -> Box<Queued> {
+    Box::new(Queued {
+        order: super::section_parts(3).remove(0),
+        lead,
+        ..queued(id, None, accepted)
+    })
 }
