@@ -76,17 +76,44 @@ const D: [f64; 3] = [-1035.5, 597.3, 118.3];
 /// the base and radial joints start, where d2 reverses), the second and third preloaded
 /// before the first starts, the third past the first's tables in the same bank.
 fn pick_and_place() -> linterpd::daemon::PathOrder {
+    up_across_down(A, D)
+}
+
+/// `p` 100 mm higher.
+fn above(p: [f64; 3]) -> [f64; 3] {
+    [p[0], p[1], p[2] + 100.0]
+}
+
+/// Up 100 mm from `from`, across to 100 mm over `to` and down to `to`, blended 20 mm at the
+/// two waypoints over them: a pick and place cut into parts chained at speed.
+fn up_across_down(from: [f64; 3], to: [f64; 3]) -> linterpd::daemon::PathOrder {
     serde_json::from_value(serde_json::json!({
         "path": {
-            "start": A,
+            "start": from,
             "path_accel": "5000mm/s2",
             "element": [
-                {"line": [A[0], A[1], A[2] + 100.0], "blend": "20mm"},
-                {"line": [D[0], D[1], D[2] + 100.0], "blend": "20mm"},
-                {"line": D, "stop": true},
+                {"line": above(from), "blend": "20mm"},
+                {"line": above(to), "blend": "20mm"},
+                {"line": to, "stop": true},
             ]
         },
         "tolerance_mm": 0.05
+    }))
+    .unwrap()
+}
+
+/// From 100 mm over A across to 100 mm over D, blended 40 mm there, and down to D: cut into
+/// two parts chained at speed ([`Flow::PathBehind`]).
+fn across_and_down() -> linterpd::daemon::PathOrder {
+    serde_json::from_value(serde_json::json!({
+        "path": {
+            "start": above(A),
+            "path_accel": "5000mm/s2",
+            "element": [
+                {"line": above(D), "blend": "40mm"},
+                {"line": D, "stop": true},
+            ]
+        },
     }))
     .unwrap()
 }
@@ -182,6 +209,11 @@ enum Flow {
     /// A cycle placing two parts on a pallet (issue 48): a pick, then the place's counter
     /// changes, its way in, the gripper let go at the slot, its way out.
     Pallet,
+    /// Twice a move up over A, and queued behind it while it runs a blended path across and
+    /// down to D cut into parts (issue 48): the first path before the link has shown its pace
+    /// (it waits for rest, its second part preloaded while the move runs), the second after (it
+    /// begins behind the move, its parts written while the part before each runs).
+    PathBehind,
 }
 
 impl Flow {
@@ -524,6 +556,29 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
         Flow::ZeroBehind => {
             ids.extend(h.submit(order(B)).await.ok());
             ids.extend(h.submit(order(B)).await.ok());
+        }
+        Flow::PathBehind => {
+            // The first move is planned from the counts last read, which must be A's: a line
+            // keeps its tool angle, so where it ends depends on where it begins, and the path
+            // queued behind it is built from there.
+            for _ in 0..500 {
+                if h.state().counts == Some(channel_counts_at_a()) {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(10)).await;
+            }
+            for _ in 0..2 {
+                let Ok(id) = h.submit(order(above(A))).await else {
+                    return ids;
+                };
+                ids.push(id);
+                match h.submit_path(&across_and_down()).await {
+                    Ok(parts) => ids.extend(parts),
+                    Err(e) => refused_by_the_fault(&e, v, "the path behind a move"),
+                }
+                // The second round begins once the first has ended (the link's pace is known).
+                let _ = h.wait(*ids.last().expect("a move"), BOUND).await;
+            }
         }
         Flow::PathOffStart => {
             for _ in 0..500 {
@@ -1087,6 +1142,28 @@ async fn positions(flow: Flow) -> u64 {
     if flow == Flow::Path {
         assert_eq!(ids.len(), 3, "the path is one section cut into three parts");
     }
+    if flow == Flow::PathBehind {
+        // Each round: the move up to over A, then the path's section cut into parts. The first
+        // path waits for rest, its first part into the bank the move ran from (its second part
+        // was preloaded into the other while the move ran); the second begins behind the move,
+        // into the other bank.
+        let r: Vec<_> = ids.iter().map(|&id| h.report(id).unwrap()).collect();
+        let second = 1 + r[1..].iter().position(|r| r.section.is_none()).unwrap();
+        assert!(
+            second >= 3 && ids.len() >= second + 3,
+            "paths in parts: {ids:?}"
+        );
+        assert_eq!(
+            r[1].bank, r[0].bank,
+            "the first path's first part from rest"
+        );
+        assert_eq!(r[2].bank.map(|b| 1 - b), r[0].bank, "its second part ahead");
+        assert_eq!(
+            r[second + 1].bank.map(|b| 1 - b),
+            r[second].bank,
+            "behind the move"
+        );
+    }
     if matches!(flow, Flow::Cycle | Flow::CycleHold | Flow::CycleKinds) {
         let c = h.cycle().unwrap();
         assert_eq!(
@@ -1250,6 +1327,13 @@ fn a_path_chained_at_speed_under_every_fault_at_every_exchange_3_of_3() {
 }
 
 #[test]
+fn paths_queued_behind_a_running_move_under_every_fault_at_every_exchange() {
+    common::paused(async {
+        run_matrix(Flow::PathBehind).await;
+    });
+}
+
+#[test]
 fn a_move_with_no_motion_behind_a_running_move_under_every_fault_at_every_exchange() {
     common::paused(async {
         run_matrix(Flow::ZeroBehind).await;
@@ -1299,6 +1383,7 @@ fn one_case_with_its_log() {
             "cycle-hold" => Flow::CycleHold,
             "cycle-kinds" => Flow::CycleKinds,
             "pallet" => Flow::Pallet,
+            "path-behind" => Flow::PathBehind,
             _ => Flow::Home,
         };
         let fault = FAULTS

@@ -999,15 +999,16 @@ pub(super) fn moved(outcome: Outcome) -> bool {
     )
 }
 
-/// How `followers` of move `lead` end, which ended `stage` (`why`) with its report's counts and
-/// targets (`at`): done at their targets only when it ended done at the same counts, else
-/// cancelled with the reason.
+/// How `followers` of move `lead` end, which ended `stage` (`why`) with its report's counts
+/// (`None`: its end was learnt from the start the PLC took behind it, with no counts read at
+/// it) and targets (`at`): done at their targets only when it ended done on the same targets,
+/// their final error its own (none without counts), else cancelled with the reason.
 pub(super) fn follower_ends(
     lead: MoveId,
     followers: &[Follower],
     stage: Stage,
     why: Option<&str>,
-    at: Option<([i64; CHANNELS], [i64; CHANNELS])>,
+    at: Option<(Option<[i64; CHANNELS]>, [i64; CHANNELS])>,
 ) -> Vec<Finish> {
     let at = at.filter(|_| stage == Stage::Done);
     followers
@@ -1019,7 +1020,8 @@ pub(super) fn follower_ends(
                     id: f.id,
                     stage: Stage::Done,
                     error: None,
-                    final_error: Some(std::array::from_fn(|c| counts[c] - targets[c])),
+                    final_error: counts
+                        .map(|counts| std::array::from_fn(|c| counts[c] - targets[c])),
                     end: None,
                 },
                 _ => Finish::new(

@@ -38,14 +38,28 @@ impl Worker {
         }
     }
 
-    /// Move `lead` ended `stage` (`why`): its record goes, and the moves with no motion of
-    /// their own that end with it end as its report says.
-    pub(super) fn end_followers(&mut self, lead: MoveId, stage: Stage, why: Option<&str>) {
+    /// Move `lead` ended `stage` (`why`, `final_error` off its targets): its record goes, and
+    /// the moves with no motion of their own that end with it end as its report says, at the
+    /// counts it ended on. Done with no final error, its end was learnt from the start the PLC
+    /// took behind it, with no block read at it: the counts last read are from before its end,
+    /// so none are given (the followers end done with no final error either).
+    pub(super) fn end_followers(
+        &mut self,
+        lead: MoveId,
+        stage: Stage,
+        why: Option<&str>,
+        final_error: Option<[i64; CHANNELS]>,
+    ) {
         let followers = self.dispatch.finished(lead);
-        let at = self
-            .shared
-            .moves(|m| m.get(lead))
-            .and_then(|r| r.counts.zip(r.target_counts));
+        let at = self.shared.moves(|m| m.get(lead)).and_then(|r| {
+            let targets = r.target_counts?;
+            let counts = match final_error {
+                Some(e) => Some(std::array::from_fn(|c| targets[c] + e[c])),
+                None if stage == Stage::Done => None,
+                None => r.counts,
+            };
+            Some((counts, targets))
+        });
         self.finish_all(follower_ends(lead, &followers, stage, why, at));
     }
 

@@ -432,7 +432,7 @@ impl Worker {
         error: Option<String>,
         final_error: Option<[i64; CHANNELS]>,
     ) {
-        self.end_followers(id, stage, error.as_deref());
+        self.end_followers(id, stage, error.as_deref(), final_error);
         let mut ended = false;
         self.shared.moves(|m| {
             m.update(id, |r| {

@@ -359,7 +359,13 @@ fn a_follower_ends_done_only_with_its_lead_done_at_its_targets() {
 
     let lead = TO.map(i64::from);
     let reached = lead.map(|c| c + 1);
-    let ends = follower_ends(1, &followers, Stage::Done, None, Some((reached, lead)));
+    let ends = follower_ends(
+        1,
+        &followers,
+        Stage::Done,
+        None,
+        Some((Some(reached), lead)),
+    );
     assert_eq!(ids(&ends), [(2, Stage::Done), (3, Stage::Done)]);
     assert_eq!(ends[0].final_error, Some([1; CHANNELS]));
 
@@ -368,7 +374,7 @@ fn a_follower_ends_done_only_with_its_lead_done_at_its_targets() {
         &followers,
         Stage::Stopped,
         Some("held"),
-        Some((reached, lead)),
+        Some((Some(reached), lead)),
     );
     assert_eq!(ids(&ends), [(2, Stage::Cancelled), (3, Stage::Cancelled)]);
     assert_eq!(
@@ -381,8 +387,20 @@ fn a_follower_ends_done_only_with_its_lead_done_at_its_targets() {
 
     // A lead done elsewhere than the follower's targets: not done.
     let elsewhere = lead.map(|c| c + 50);
-    let ends = follower_ends(1, &followers, Stage::Done, None, Some((reached, elsewhere)));
+    let ends = follower_ends(
+        1,
+        &followers,
+        Stage::Done,
+        None,
+        Some((Some(reached), elsewhere)),
+    );
     assert_eq!(ids(&ends)[0], (2, Stage::Cancelled));
+
+    // A lead whose end was learnt from the start the PLC took behind it (no counts read at
+    // it): done, with no final error claimed.
+    let ends = follower_ends(1, &followers, Stage::Done, None, Some((None, lead)));
+    assert_eq!(ids(&ends), [(2, Stage::Done), (3, Stage::Done)]);
+    assert_eq!(ends[0].final_error, None);
 }
 
 #[test]

@@ -343,7 +343,13 @@ fn a_paths_first_part_behind_a_running_start_is_judged_once_and_begins_behind_it
     };
     assert_eq!((id, behind.seq, behind.targets), (2, 8, Some(TO)));
     assert!(!d.has_room(now), "unjudged, it waits for rest");
-    d.judged(2, Lead::FromRest { seq: 8, ahead: false });
+    d.judged(
+        2,
+        Lead::FromRest {
+            seq: 8,
+            ahead: false,
+        },
+    );
     assert!(!d.has_room(now));
     // From rest: its second part is preloaded ahead, once, behind start 8.
     let Action::PreloadAhead(due) = d.next(up(), now) else {
@@ -352,7 +358,10 @@ fn a_paths_first_part_behind_a_running_start_is_judged_once_and_begins_behind_it
     assert_eq!((due.id, due.behind.seq), (3, 8));
     assert!(due.first.leads_parts() && due.second.begins_at_speed());
     let next = what(&d.next(up(), now)).0;
-    assert!(!["judge", "preload ahead"].contains(&next), "{next}: once behind start 8");
+    assert!(
+        !["judge", "preload ahead"].contains(&next),
+        "{next}: once behind start 8"
+    );
     assert!(
         d.expire(true, now + START_WITHIN * 2).is_empty(),
         "waiting for rest never expires"
