@@ -471,6 +471,7 @@ fn a_line_whose_parts_overflow_too_is_refused_for_its_size_only() {
 /// for its wrist's channel (`slow-down`), was refused for needing 20010 Hz of a 20000 Hz
 /// channel: the slowing must reach the channel's limit, not stop 0.05 % short of it.
 #[test]
+#[allow(clippy::unreadable_literal)] // the case as proptest printed it
 fn an_s_curve_line_slowed_for_its_wrist_ends_within_the_channel() {
     let from = Pose {
         position_mm: [387.74306517209317, 85.14074444542985, -9.339351413379678].into(),

@@ -542,12 +542,7 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
         Flow::Path => {
             // A path from rest is planned from a status block read afresh when it is submitted;
             // the wait for the mock's counts keeps the fault positions where they were before.
-            for _ in 0..500 {
-                if h.state().counts == Some(channel_counts_at_a()) {
-                    break;
-                }
-                tokio::time::sleep(Duration::from_millis(10)).await;
-            }
+            until_at_a(h).await;
             match h.submit_path(&pick_and_place()).await {
                 Ok(parts) => ids.extend(parts),
                 Err(e) => refused_by_the_fault(&e, v, "the path"),
@@ -557,36 +552,9 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
             ids.extend(h.submit(order(B)).await.ok());
             ids.extend(h.submit(order(B)).await.ok());
         }
-        Flow::PathBehind => {
-            // The first move is planned from the counts last read, which must be A's: a line
-            // keeps its tool angle, so where it ends depends on where it begins, and the path
-            // queued behind it is built from there.
-            for _ in 0..500 {
-                if h.state().counts == Some(channel_counts_at_a()) {
-                    break;
-                }
-                tokio::time::sleep(Duration::from_millis(10)).await;
-            }
-            for _ in 0..2 {
-                let Ok(id) = h.submit(order(above(A))).await else {
-                    return ids;
-                };
-                ids.push(id);
-                match h.submit_path(&across_and_down()).await {
-                    Ok(parts) => ids.extend(parts),
-                    Err(e) => refused_by_the_fault(&e, v, "the path behind a move"),
-                }
-                // The second round begins once the first has ended (the link's pace is known).
-                let _ = h.wait(*ids.last().expect("a move"), BOUND).await;
-            }
-        }
+        Flow::PathBehind => return paths_behind(h, v).await,
         Flow::PathOffStart => {
-            for _ in 0..500 {
-                if h.state().counts == Some(channel_counts_at_a()) {
-                    break;
-                }
-                tokio::time::sleep(Duration::from_millis(10)).await;
-            }
+            until_at_a(h).await;
             match h.submit_path(&path_off_start()).await {
                 Ok(parts) => ids.extend(parts),
                 Err(e) => refused_by_the_fault(&e, v, "the path off its start"),
@@ -628,6 +596,38 @@ async fn run_flow(flow: Flow, h: &RobotHandle, v: &mut Violations) -> Vec<MoveId
                 ids.extend(h.submit(order(B)).await.ok());
             }
         }
+    }
+    ids
+}
+
+/// Waits (bounded) until the daemon has read the robot standing on A's counts.
+async fn until_at_a(h: &RobotHandle) {
+    for _ in 0..500 {
+        if h.state().counts == Some(channel_counts_at_a()) {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+}
+
+/// [`Flow::PathBehind`]: twice the move up over A and the path queued behind it, the second
+/// round once the first has ended. The first move is planned from the counts last read, which
+/// must be A's: a line keeps its tool angle, so where it ends depends on where it begins, and
+/// the path queued behind it is built from there.
+async fn paths_behind(h: &RobotHandle, v: &mut Violations) -> Vec<MoveId> {
+    let mut ids = Vec::new();
+    until_at_a(h).await;
+    for _ in 0..2 {
+        let Ok(id) = h.submit(order(above(A))).await else {
+            return ids;
+        };
+        ids.push(id);
+        match h.submit_path(&across_and_down()).await {
+            Ok(parts) => ids.extend(parts),
+            Err(e) => refused_by_the_fault(&e, v, "the path behind a move"),
+        }
+        // The second round begins once the first has ended (the link's pace is known).
+        let _ = h.wait(*ids.last().expect("a move"), BOUND).await;
     }
     ids
 }

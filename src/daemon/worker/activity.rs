@@ -3,7 +3,7 @@
 //! holding a prepared bank, one proof read a step, and its start written once. Each step is
 //! one round of the worker's loop ([`Worker::run`]); what a step ends in is the next activity.
 
-use super::dispatch::{Activity, CYCLE_WENT_ON, Queued, Turn, Uploaded, Uploading};
+use super::dispatch::{Action, Activity, CYCLE_WENT_ON, Queued, Turn, Uploaded, Uploading};
 use super::prepared::prepared_watch;
 use super::{Worker, describe, link_broken, now};
 use crate::contract::machine::{Blocker, Phase, Planned};
@@ -13,6 +13,26 @@ use crate::table::ValidTable;
 use crate::wire::Stage;
 
 impl Worker {
+    /// Carries out one of the dispatcher's actions on the queue's moves: a path's first part
+    /// judged or its second part preloaded ahead ([`super::lead`]), a turn begun, one step of
+    /// its upload, its proof, its start, its cancellation.
+    pub(super) async fn move_step(&mut self, action: Action) -> Result<(), ContractError> {
+        match action {
+            Action::JudgeLead { id, behind } => {
+                self.judge_lead(id, &behind);
+                Ok(())
+            }
+            Action::PreloadAhead(due) => self.begin_ahead(&due),
+            Action::AheadStep { ahead, watch } => self.ahead_step(ahead, watch).await,
+            Action::Begin(queued) => self.begin(*queued).await,
+            Action::UploadStep { uploading, watch } => self.upload_step(uploading, watch).await,
+            Action::ProveRead(uploaded) => self.prove(uploaded).await,
+            Action::WriteStart(uploaded) => self.start(*uploaded).await,
+            Action::Unprepare { id, why } => self.unprepared(id, &why, None),
+            _ => unreachable!("not a move's step: {action:?}"),
+        }
+    }
+
     /// Plans `queued` and makes its upload ready (after preloading, from rest, the parts of a
     /// path behind it); a move that cannot be started ends with the reason.
     pub(super) async fn begin(&mut self, queued: Queued) -> Result<(), ContractError> {

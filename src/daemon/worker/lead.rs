@@ -13,9 +13,31 @@ use super::{Worker, describe, link_broken};
 use crate::contract::CHANNELS;
 use crate::contract::machine::Planned;
 use crate::order::plan_order;
+use crate::plan::PlanError;
 use crate::plc::exchange::ContractError;
 use crate::table::ValidTable;
 use crate::wire::MoveId;
+
+/// Why a path's first part waits for rest behind the start running ([`Lead::FromRest`]).
+#[derive(Debug, thiserror::Error)]
+enum WaitsForRest {
+    #[error("no pace known on this link yet")]
+    NoPace,
+    #[error("it is no longer the head of the queue")]
+    NotHead,
+    #[error("not every part of its path is queued")]
+    PartsMissing,
+    #[error("the start running has no known targets")]
+    NoTargets,
+    #[error("it does not plan from there: {0}")]
+    Plan(#[from] PlanError),
+    #[error("its section plans into other parts")]
+    PartsChanged,
+    #[error("part {part} of its section has no valid tables")]
+    InvalidTables { part: usize },
+    #[error("{0}")]
+    Pace(ContractError),
+}
 
 impl Worker {
     /// Judges whether queued move `id`, the first part of a path section cut into parts, may
@@ -41,40 +63,32 @@ impl Worker {
 
     /// Why the head of the queue, a section's first part, may not begin behind `behind`
     /// ([`Self::judge_lead`]).
-    fn chains_behind(&mut self, behind: &Planned) -> Result<(), String> {
+    fn chains_behind(&mut self, behind: &Planned) -> Result<(), WaitsForRest> {
         let (pace, exchange) = self
             .conn
             .session
             .as_ref()
             .and_then(|s| s.pace.map(|pace| (pace, s.exchange)))
-            .ok_or("no pace known on this link yet")?;
+            .ok_or(WaitsForRest::NoPace)?;
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
-        let (order, section, all) = self
-            .dispatch
-            .lead_section()
-            .ok_or("it is no longer the head of the queue")?;
+        let (order, section, all) = self.dispatch.lead_section().ok_or(WaitsForRest::NotHead)?;
         if !all {
-            return Err("not every part of its path is queued".to_owned());
+            return Err(WaitsForRest::PartsMissing);
         }
-        let targets = behind
-            .targets
-            .ok_or("the start running has no known targets")?;
-        plan_order(&self.robot, &order, self.by_joint(targets.map(i64::from)))
-            .map_err(|e| format!("it does not plan from there: {e}"))?;
-        let plans = section.planned.get().ok_or("its section was not planned")?;
-        if plans.len() != order.parts() {
-            return Err("its section plans into other parts".to_owned());
-        }
+        let targets = behind.targets.ok_or(WaitsForRest::NoTargets)?;
+        plan_order(&self.robot, &order, self.by_joint(targets.map(i64::from)))?;
+        let plans = section.planned.get().filter(|p| p.len() == order.parts());
+        let plans = plans.ok_or(WaitsForRest::PartsChanged)?;
         if let Some(k) = plans
             .iter()
             .position(|plan| plan.valid_tables(&self.robot).is_none())
         {
-            return Err(format!("part {} of its section has no valid tables", k + 1));
+            return Err(WaitsForRest::InvalidTables { part: k + 1 });
         }
         pace.for_section(exchange, !order.permit.is_none())
             .check(&super::moves::parts(&section, &[]))
-            .map_err(|e| describe(&e))
+            .map_err(WaitsForRest::Pace)
     }
 
     /// Begins preloading `due`'s second part ahead ([`Activity::Preloading`]): planned behind

@@ -208,17 +208,6 @@ impl Worker {
                 Ok(())
             }
             Action::ReadMode => self.read_mode().await,
-            Action::JudgeLead { id, behind } => {
-                self.judge_lead(id, &behind);
-                Ok(())
-            }
-            Action::PreloadAhead(due) => self.begin_ahead(&due),
-            Action::AheadStep { ahead, watch } => self.ahead_step(ahead, watch).await,
-            Action::Begin(queued) => self.begin(*queued).await,
-            Action::UploadStep { uploading, watch } => self.upload_step(uploading, watch).await,
-            Action::ProveRead(uploaded) => self.prove(uploaded).await,
-            Action::WriteStart(uploaded) => self.start(*uploaded).await,
-            Action::Unprepare { id, why } => self.unprepared(id, &why, None),
             Action::Gateway => {
                 let done = self.gateway_exchange().await;
                 self.held_through(done)
@@ -235,6 +224,8 @@ impl Worker {
                 tokio::time::sleep_until(until.into()).await;
                 Ok(())
             }
+            // The rest are steps on the queue's moves.
+            action => self.move_step(action).await,
         }
     }
 

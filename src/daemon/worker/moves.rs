@@ -217,11 +217,7 @@ impl Worker {
         };
         let (preloaded, took) = match self.preloaded_ahead(id, bank, base, &tables) {
             Some(ahead) => ahead,
-            None => {
-                let (preloaded, took) = self.preload(bank, base, &tables).await?;
-                tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
-                (preloaded, took)
-            }
+            None => self.preload(id, bank, base, &tables).await?,
         };
         let pace = match &mut walk.pace {
             Some(pace) => pace,
@@ -263,17 +259,20 @@ impl Worker {
             .then(|| (ahead.tables.clone(), ahead.took))
     }
 
-    /// Writes and reads back `tables` into `bank` at `base` (per channel): what was written, and
-    /// how long it took.
+    /// Writes and reads back part `id`'s `tables` into `bank` at `base` (per channel): what was
+    /// written, and how long it took.
     async fn preload(
         &mut self,
+        id: MoveId,
         bank: u16,
         base: [usize; CHANNELS],
         tables: &[ValidTable],
     ) -> Result<(crate::plc::exchange::Preload, Duration), ContractError> {
         let began = tokio::time::Instant::now();
         let preloaded = self.link()?.preload(bank, base, tables).await?;
-        Ok((preloaded, began.elapsed()))
+        let took = began.elapsed();
+        tracing::info!(robot = %self.robot.name, id, bank, words = preloaded.words(), preload_s = took.as_secs_f64(), "part chained at speed preloaded");
+        Ok((preloaded, took))
     }
 
     /// The link's pace before any preload: the status read `exchange` just took and a one-word

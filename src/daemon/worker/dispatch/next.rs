@@ -183,12 +183,8 @@ impl Dispatcher {
         if std::mem::take(&mut self.mode_due) {
             return Action::ReadMode;
         }
-        if let Some((id, behind)) = self.lead_to_judge(now) {
-            let behind = Box::new(behind);
-            return Action::JudgeLead { id, behind };
-        }
-        if let Some(due) = self.ahead_due(now) {
-            return Action::PreloadAhead(Box::new(due));
+        if let Some(action) = self.next_lead(now) {
+            return action;
         }
         if self.has_room(now) {
             self.next_poll = None;
@@ -206,6 +202,18 @@ impl Dispatcher {
             Some(until) if !poll_due => Action::Wait { until, gate: None },
             _ => Action::Poll,
         }
+    }
+
+    /// For a path's first part at the head of the queue behind the start running: judged
+    /// against it, or its second part preloaded ahead ([`Dispatcher::lead_to_judge`],
+    /// [`Dispatcher::ahead_due`]).
+    fn next_lead(&mut self, now: Instant) -> Option<Action> {
+        if let Some((id, behind)) = self.lead_to_judge(now) {
+            let behind = Box::new(behind);
+            return Some(Action::JudgeLead { id, behind });
+        }
+        self.ahead_due(now)
+            .map(|due| Action::PreloadAhead(Box::new(due)))
     }
 
     /// The link is down: it is opened at once; after an attempt failed, the worker waits its
