@@ -260,12 +260,18 @@ impl Dispatcher {
         if !wanted || seen.shutting_down || seen.stop || seen.commands || !seen.link_up {
             return self.next_idle(seen, now);
         }
+        let watch = self.watch_due(ahead.every, now);
+        Action::AheadStep { ahead, watch }
+    }
+
+    /// Whether the status block is read before an upload's next exchange: a start the PLC was
+    /// given may run, and the last read is `every` old.
+    fn watch_due(&self, every: Duration, now: Instant) -> bool {
         let due = self
             .machine
             .read_at()
-            .is_none_or(|at| now.saturating_duration_since(at) >= ahead.every);
-        let watch = due && !self.machine.given().is_empty();
-        Action::AheadStep { ahead, watch }
+            .is_none_or(|at| now.saturating_duration_since(at) >= every);
+        due && !self.machine.given().is_empty()
     }
 
     /// One exchange of an upload; a status read first while a start the PLC was given may run
@@ -283,11 +289,7 @@ impl Dispatcher {
                 why: CYCLE_WENT_ON.to_owned(),
             };
         }
-        let due = self
-            .machine
-            .read_at()
-            .is_none_or(|at| now.saturating_duration_since(at) >= uploading.every);
-        let watch = due && !self.machine.given().is_empty();
+        let watch = self.watch_due(uploading.every, now);
         Action::UploadStep { uploading, watch }
     }
 
