@@ -409,6 +409,16 @@ impl Preload {
     pub fn words(&self) -> usize {
         self.writes.iter().map(|(_, w)| w.len()).sum()
     }
+
+    /// A preload of nothing into `bank`, for the dispatcher's tests (no link writes one).
+    #[cfg(test)]
+    pub(crate) fn empty(bank: u16) -> Self {
+        Self {
+            bank,
+            base: [crate::table::DIRECTORY_WORDS; CHANNELS],
+            writes: Vec::new(),
+        }
+    }
 }
 
 /// What became of a command word written once.

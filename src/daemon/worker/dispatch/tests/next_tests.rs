@@ -391,3 +391,43 @@ fn queued_lead(id: MoveId, lead: Lead, accepted: Instant) -> Box<Queued> {
         ..queued(id, None, accepted)
     })
 }
+
+/// A path's second part preloaded ahead into the bank the running start does not use: its first
+/// part, from rest, goes into the bank that start ran from, and a start from rest into that
+/// bank keeps the preload (any other bank would drop it, as every other preload is dropped).
+#[test]
+fn a_second_part_preloaded_ahead_sends_its_first_part_into_the_other_bank_and_is_kept() {
+    let t0 = Instant::now();
+    let now = t0 + ms(40);
+    let mut d = running(t0);
+    let running_bank = d.machine.chain_behind().expect("start 8 runs").bank;
+    d.push_order((2..).zip(super::section_parts(3)).collect(), None, None, t0);
+    d.judged(
+        2,
+        Lead::FromRest {
+            seq: 8,
+            ahead: false,
+        },
+    );
+    let Action::PreloadAhead(due) = d.next(up(), now) else {
+        panic!("its second part is preloaded ahead");
+    };
+    assert_eq!(due.behind.bank, running_bank);
+    d.preloaded(3, Preload::empty(1 - running_bank), ms(500));
+    assert_eq!(d.preload_of(3).map(|p| p.took), Some(ms(500)));
+    // Start 8 ends: the first part's turn, from rest.
+    d.machine
+        .on_status(&status(State::Done, 8, 4, TO), t0 + ms(1_100));
+    let head = d.queue.pop_front().expect("the first part");
+    let TurnDecision::Begin(turn) = d.turn(head, t0 + ms(1_110)) else {
+        panic!("at rest: it begins");
+    };
+    assert!(turn.mode.ahead().is_none(), "from rest");
+    assert_eq!(d.next_bank(None), running_bank, "the bank start 8 ran from");
+    d.forget_preloads_but_ahead(1 - running_bank);
+    assert!(d.preload_of(3).is_none(), "a start into its bank drops it");
+    d.preloaded(3, Preload::empty(1 - running_bank), ms(500));
+    d.forget_preloads_but_ahead(running_bank);
+    assert!(d.preload_of(3).is_some(), "kept behind its first part");
+    assert!(d.preload_of(4).is_none());
+}
