@@ -413,6 +413,42 @@ impl SectionPart {
         self.part > 0
     }
 
+    /// Every start of its section as its first part would plan them from `counts` (the ones
+    /// planned already, the accepted ones from their counts, else planned afresh), without
+    /// keeping them: what a look ahead of the first part's turn weighs and preloads, which its
+    /// turn then plans for itself (the same plans when it begins on the same counts).
+    ///
+    /// # Errors
+    /// As [`Self::plan`]'s first part: a plan error, or a section planned into another number
+    /// of starts than when it was accepted.
+    pub fn section_plans(
+        &self,
+        robot: &Robot,
+        motion: Motion,
+        counts: [i64; JOINTS],
+    ) -> Result<Vec<Plan>, PlanError> {
+        let starts = match self.section.planned.get() {
+            Some(starts) => starts.clone(),
+            None => match self.section.accepted.first() {
+                Some(a) if a.start_counts() == counts => self.section.accepted.clone(),
+                _ => plan_section(
+                    robot,
+                    &self.section.path,
+                    motion,
+                    self.section.path_accel_mm_s2,
+                    counts,
+                )?,
+            },
+        };
+        if starts.len() != self.parts {
+            return Err(PlanError::PartsChanged {
+                accepted: self.parts,
+                now: starts.len(),
+            });
+        }
+        Ok(starts)
+    }
+
     /// Its plan from `counts`, where it begins: the first part plans the section (it must need
     /// as many starts as when the path was accepted); every part must begin on exactly the
     /// counts it was planned from.
@@ -506,6 +542,23 @@ impl CheckedOrder {
     #[must_use]
     pub fn leads_parts(&self) -> bool {
         matches!(&self.target, Target::Section(p) if p.part == 0 && p.parts > 1)
+    }
+
+    /// Every start of the section it leads, as [`SectionPart::section_plans`] from `counts`
+    /// (`None`: it does not lead a section).
+    ///
+    /// # Errors
+    /// As [`SectionPart::section_plans`].
+    #[must_use]
+    pub fn section_plans(
+        &self,
+        robot: &Robot,
+        counts: [i64; JOINTS],
+    ) -> Option<Result<Vec<Plan>, PlanError>> {
+        match &self.target {
+            Target::Section(p) if p.part == 0 => Some(p.section_plans(robot, self.motion, counts)),
+            _ => None,
+        }
     }
 
     /// How many starts its path section was cut into (1 for any other order).
@@ -905,6 +958,37 @@ mod tests {
         .unwrap();
         assert_eq!(replanned.start_counts(), off);
         assert_eq!(replanned.speed_factor, 1.0);
+    }
+
+    /// A look ahead of a section's first turn (`section_plans`) plans from the counts it is
+    /// given and keeps nothing: the turn, begun elsewhere, still plans from where it begins.
+    #[test]
+    #[allow(clippy::float_cmp)] // a marker value, copied exactly
+    fn a_look_ahead_at_a_sections_plans_keeps_none_of_them() {
+        let (robot, mut section, motion) = accepted_section();
+        let counts = section.accepted[0].start_counts();
+        for plan in &mut section.accepted {
+            plan.speed_factor = 0.5;
+        }
+        let parts = section.accepted.len();
+        let first = SectionPart {
+            section: Arc::new(section),
+            part: 0,
+            parts,
+        };
+        let accepted = first.section_plans(&robot, motion, counts).unwrap();
+        assert!(
+            accepted.iter().all(|p| p.speed_factor == 0.5),
+            "the accepted starts"
+        );
+        let mut off = counts;
+        off[2] += 1;
+        let ahead = first.section_plans(&robot, motion, off).unwrap();
+        assert_eq!((ahead[0].start_counts(), ahead.len()), (off, parts));
+        assert!(first.section.planned.get().is_none(), "nothing kept");
+        // Its turn, on the accepted counts after all, takes the accepted starts.
+        let turn = first.plan(&robot, motion, counts).unwrap();
+        assert_eq!(turn.speed_factor, 0.5);
     }
 
     #[test]

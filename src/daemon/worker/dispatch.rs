@@ -134,9 +134,8 @@ pub(super) struct Ahead {
 pub(super) struct AheadDue {
     /// The second part's id.
     pub id: MoveId,
-    /// The first part's order and the second's.
+    /// The first part's order (its section's plans give the second's tables).
     pub first: CheckedOrder,
-    pub second: CheckedOrder,
     /// The start running, the first part follows from rest.
     pub behind: Planned,
 }
@@ -534,7 +533,6 @@ impl Dispatcher {
         let due = AheadDue {
             id: second.id,
             first: head.order.clone(),
-            second: second.order.clone(),
             behind: running.clone(),
         };
         self.queue[0].lead = Lead::FromRest {
@@ -681,17 +679,17 @@ impl Dispatcher {
     }
 
     /// The head of the queue when it is the first part of a path section cut into parts: its
-    /// order, its section, and whether every part of the section is queued behind it.
-    pub(super) fn lead_section(&self) -> Option<(CheckedOrder, Arc<SectionOrder>, bool)> {
+    /// order, and whether every part of the section is queued behind it.
+    pub(super) fn lead_section(&self) -> Option<(CheckedOrder, bool)> {
         let head = self.queue.front().filter(|q| q.order.leads_parts())?;
-        let section = head.order.section()?.clone();
+        let section = head.order.section()?;
         let queued = self
             .queue
             .iter()
-            .take_while(|q| q.order.section().is_some_and(|s| Arc::ptr_eq(s, &section)))
+            .take_while(|q| q.order.section().is_some_and(|s| Arc::ptr_eq(s, section)))
             .count();
         let all = queued == head.order.parts();
-        Some((head.order.clone(), section, all))
+        Some((head.order.clone(), all))
     }
 
     /// Forgets every preload: a bank written whole may lie over them.

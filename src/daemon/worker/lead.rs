@@ -8,11 +8,11 @@
 use std::time::Duration;
 
 use super::dispatch::{Activity, Ahead, AheadDue, Lead};
+use super::pace::Part;
 use super::placement::Placement;
 use super::{Worker, describe, link_broken};
 use crate::contract::CHANNELS;
 use crate::contract::machine::Planned;
-use crate::order::plan_order;
 use crate::plan::PlanError;
 use crate::plc::exchange::ContractError;
 use crate::table::ValidTable;
@@ -31,8 +31,6 @@ enum WaitsForRest {
     NoTargets,
     #[error("it does not plan from there: {0}")]
     Plan(#[from] PlanError),
-    #[error("its section plans into other parts")]
-    PartsChanged,
     #[error("part {part} of its section has no valid tables")]
     InvalidTables { part: usize },
     #[error("{0}")]
@@ -72,22 +70,23 @@ impl Worker {
             .ok_or(WaitsForRest::NoPace)?;
         // The parts of a path are sent together: take in any not queued yet.
         self.take_pending_requests();
-        let (order, section, all) = self.dispatch.lead_section().ok_or(WaitsForRest::NotHead)?;
+        let (order, all) = self.dispatch.lead_section().ok_or(WaitsForRest::NotHead)?;
         if !all {
             return Err(WaitsForRest::PartsMissing);
         }
         let targets = behind.targets.ok_or(WaitsForRest::NoTargets)?;
-        plan_order(&self.robot, &order, self.by_joint(targets.map(i64::from)))?;
-        let plans = section.planned.get().filter(|p| p.len() == order.parts());
-        let plans = plans.ok_or(WaitsForRest::PartsChanged)?;
+        let plans = order
+            .section_plans(&self.robot, self.by_joint(targets.map(i64::from)))
+            .ok_or(WaitsForRest::NotHead)??;
         if let Some(k) = plans
             .iter()
             .position(|plan| plan.valid_tables(&self.robot).is_none())
         {
             return Err(WaitsForRest::InvalidTables { part: k + 1 });
         }
+        let parts: Vec<Part> = plans.iter().map(|plan| Part::of(plan, None)).collect();
         pace.for_section(exchange, !order.permit.is_none())
-            .check(&super::moves::parts(&section, &[]))
+            .check(&parts)
             .map_err(WaitsForRest::Pace)
     }
 
@@ -115,16 +114,10 @@ impl Worker {
     /// `due`'s second part's tables, its bank and where in it ([`Self::begin_ahead`]).
     fn ahead_tables(&self, due: &AheadDue) -> Option<(Vec<ValidTable>, u16, [usize; CHANNELS])> {
         let targets = due.behind.targets?;
-        let first = plan_order(
-            &self.robot,
-            &due.first,
-            self.by_joint(targets.map(i64::from)),
-        )
-        .ok()?;
+        let counts = self.by_joint(targets.map(i64::from));
+        let plans = due.first.section_plans(&self.robot, counts)?.ok()?;
+        let (first, second) = (plans.first()?, plans.get(1)?);
         let first_tables = first.valid_tables(&self.robot)?;
-        let ends = super::moves::end_counts(&first, targets);
-        let second =
-            plan_order(&self.robot, &due.second, self.by_joint(ends.map(i64::from))).ok()?;
         let tables = second.valid_tables(&self.robot)?;
         let area_words = usize::from(
             self.conn

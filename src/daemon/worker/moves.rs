@@ -520,7 +520,7 @@ pub(super) fn parts(section: &SectionOrder, directories: &[usize]) -> Vec<Part> 
 }
 
 /// The counts per channel where `plan`, started from `from`, ends.
-pub(super) fn end_counts(plan: &Plan, from: [i32; CHANNELS]) -> [i32; CHANNELS] {
+fn end_counts(plan: &Plan, from: [i32; CHANNELS]) -> [i32; CHANNELS] {
     planned_bounds(from, &channel_tables(plan)).1
 }
 
