@@ -537,8 +537,9 @@ impl CheckedOrder {
     }
 
     /// Whether it is the first part of a path section cut into several parts. The parts behind
-    /// it are written into both banks and the link's pace is checked before it starts, so it
-    /// starts only from rest, never chained behind a running move.
+    /// it are written into both banks and the link's pace is checked before it starts from
+    /// rest; behind a running move it begins only where the worker judged that the link can
+    /// write each later part while the part before it runs (`daemon/worker/lead.rs`).
     #[must_use]
     pub fn leads_parts(&self) -> bool {
         matches!(&self.target, Target::Section(p) if p.part == 0 && p.parts > 1)
