@@ -218,10 +218,19 @@ async fn stop_mid_move_stops_every_channel() {
         let shared = mock_at_seed_start("");
         let (d, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
-        let id = h.submit(order(P2)).await.unwrap();
+        // A slow move (about 5.5 s), stopped a tenth of the way: on a loaded machine the test
+        // may be woken late, and the move must still be running when it is.
+        let slow = MoveOrder {
+            motion: OrderMotion {
+                speed_mm_s: Some(60.0),
+                ..OrderMotion::default()
+            },
+            ..order(P2)
+        };
+        let id = h.submit(slow).await.unwrap();
         let mut feed = h.subscribe(id).unwrap();
-        report_until(&mut feed, "running, 30 % done", |r| {
-            r.stage == Stage::Running && r.progress > 0.3
+        report_until(&mut feed, "running, 10 % done", |r| {
+            r.stage == Stage::Running && r.progress > 0.1
         })
         .await;
         h.stop().await.unwrap();

@@ -63,7 +63,7 @@ fn program() -> String {
     format!(
         r#"
 [[step]]
-move = {{ to = [{}, {}, {}] }}
+move = {{ to = [{}, {}, {}], speed_mm_s = 300 }}
 [[step]]
 set = {{ gripper = true }}
 [[step]]
@@ -306,8 +306,9 @@ impl Process {
         Self { daemon, runtime, h }
     }
 
-    /// Kills it once `when` holds of the counter.
-    async fn kill_when(self, what: &str, when: impl Fn(&Counter) -> bool) {
+    /// Kills it once `when` holds of the counter, then waits until the PLC (`shared`) has
+    /// ended the starts it left running.
+    async fn kill_when(self, shared: &SharedMock, what: &str, when: impl Fn(&Counter) -> bool) {
         until(what, || when(&counter(&self.h)).then_some(())).await;
         let Self {
             daemon, runtime, ..
@@ -318,8 +319,13 @@ impl Process {
         })
         .await
         .unwrap();
-        // The start the killed daemon left running ends in the PLC.
-        tokio::time::sleep(Duration::from_millis(1_500)).await;
+        // The start the killed daemon left running (and any waiting behind it) ends in the PLC.
+        let running = linterpd::contract::State::Running.word();
+        until("the killed daemon's starts ended", || {
+            let s = shared.with(|m| m.status());
+            (s.state != running && s.waiting == 0).then_some(())
+        })
+        .await;
     }
 }
 
@@ -361,7 +367,9 @@ async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot
             && !gripper_closed(&shared)
     };
     first
-        .kill_when("at slot 1, the gripper open", |c| open_at_slot(c, 1))
+        .kill_when(&shared, "at slot 1, the gripper open", |c| {
+            open_at_slot(c, 1)
+        })
         .await;
     let second = Process::start(&shared, &programs, &state);
     restart_and_choose(&second.h, 1, Choice::GoOn).await;
@@ -373,7 +381,7 @@ async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot
             && moving.state().current_move.is_some()
     };
     second
-        .kill_when("on the way to slot 3", |c| moving_to(c, 3))
+        .kill_when(&shared, "on the way to slot 3", |c| moving_to(c, 3))
         .await;
     let (_d, h, _) = spawn(&shared, &programs, &state);
     restart_and_choose(&h, 3, Choice::Redo).await;
