@@ -220,6 +220,11 @@ async fn run(blend: Option<Blend>) -> Measured {
         "one arrival at the pick a cycle"
     );
     if std::env::var_os("BLEND_TIMELINE").is_some() {
+        let each: Vec<String> = arrivals
+            .windows(2)
+            .map(|w| format!("{:.3}", w[1] - w[0]))
+            .collect();
+        eprintln!("cycles after the first: {} s", each.join(" / "));
         timeline(&pulses, arrivals[1], arrivals[2]);
     }
     let (first, last) = (pulses[0].time_s, pulses[pulses.len() - 1].time_s);
