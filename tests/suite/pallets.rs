@@ -487,3 +487,69 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
     assert_eq!(placed(), (0..SLOTS).collect::<Vec<_>>());
     h.stop_cycle(true).await.unwrap();
 }
+
+/// The PLC switched to PROG on the way into slot 2, the part held, then back to RUN (its
+/// program starts over with a first scan, CONTRACT.md step 0, and its outputs went off
+/// meanwhile): the cycle faults and stays faulted, nothing is started, written or counted by
+/// itself, and the slot is the operator's to choose (the gripper let go wherever the robot
+/// was), as after a power cut.
+#[tokio::test(start_paused = true)]
+async fn a_plc_switched_to_prog_on_the_way_into_a_slot_leaves_the_slot_to_the_operator() {
+    use linterpd::plc::PlcMode;
+    let shared = mock_at_seed_start("");
+    let state = temp("prog");
+    let programs = common::daemon::programs_dir("pallets", "prog", &[("palletise", program())]);
+    let (_d, h, journal) = spawn(&shared, &programs, &state);
+    taking_moves(&h).await;
+    h.run_cycle("palletise", None).await.unwrap();
+    until("on the way into slot 2, the part held", || {
+        let c = counter(&h);
+        let moving = c
+            .in_progress
+            .is_some_and(|p| p.slot == 2 && p.phase == Phase::Moving);
+        (moving && h.state().current_move.is_some() && gripper_closed(&shared)).then_some(())
+    })
+    .await;
+    shared.with(|m| m.set_mode(PlcMode::Prog));
+    let s = cycle_until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
+    let in_prog = s.reason.clone().unwrap_or_default();
+    assert!(in_prog.contains("PROG"), "{s:?}");
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    shared.with(|m| m.set_mode(PlcMode::Run));
+    let s = cycle_until(&h, "faulted for the restart", |s| {
+        s.state == CycleState::Faulted
+            && s.reason.as_deref().is_some_and(|r| r.contains("restarted"))
+    })
+    .await;
+    // Never on by itself: nothing started or written, the index not advanced.
+    let before = shared.with(|m| (m.starts().len(), m.host_writes().len()));
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    assert_eq!(
+        shared.with(|m| (m.starts().len(), m.host_writes().len())),
+        before
+    );
+    let c = counter(&h);
+    assert_eq!(
+        (c.index, c.parts, c.needs_choice()),
+        (2, 2, Some(2)),
+        "{in_prog}; then {:?}; {c:?}",
+        s.reason
+    );
+    assert_eq!(file_counter(&state)["in_progress"]["phase"], "unsure");
+    journal.flush().await;
+    let said = journal
+        .read(&Query {
+            limit: usize::MAX,
+            ..Query::default()
+        })
+        .unwrap()
+        .into_iter()
+        .any(|e| {
+            matches!(&e.kind, Kind::Fault { reason, .. }
+            if reason.contains("slot 3 was in progress when the PLC restarted"))
+        });
+    assert!(
+        said,
+        "the journal says the restart made slot 3 (from 1) unsure"
+    );
+}
