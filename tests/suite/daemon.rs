@@ -136,6 +136,18 @@ fn order(p: [f64; 3]) -> MoveOrder {
     }
 }
 
+/// `order`'s move at `speed_mm_s`: for a test that must act on it while it runs, slow enough
+/// that a test thread woken late (24 tests at a time on 2 cores) still finds it running.
+fn slow(speed_mm_s: f64, order: MoveOrder) -> MoveOrder {
+    MoveOrder {
+        motion: OrderMotion {
+            speed_mm_s: Some(speed_mm_s),
+            ..order.motion
+        },
+        ..order
+    }
+}
+
 async fn run(h: &RobotHandle, p: [f64; 3]) -> MoveReport {
     let id = h.submit(order(p)).await.unwrap();
     h.wait(id, LIMIT).await.unwrap()
@@ -220,14 +232,7 @@ async fn stop_mid_move_stops_every_channel() {
         wait_connected(&h).await;
         // A slow move (about 5.5 s), stopped a tenth of the way: on a loaded machine the test
         // may be woken late, and the move must still be running when it is.
-        let slow = MoveOrder {
-            motion: OrderMotion {
-                speed_mm_s: Some(60.0),
-                ..OrderMotion::default()
-            },
-            ..order(P2)
-        };
-        let id = h.submit(slow).await.unwrap();
+        let id = h.submit(slow(60.0, order(P2))).await.unwrap();
         let mut feed = h.subscribe(id).unwrap();
         report_until(&mut feed, "running, 10 % done", |r| {
             r.stage == Stage::Running && r.progress > 0.1
@@ -340,7 +345,7 @@ async fn a_daemon_restarted_mid_move_reports_the_moves_true_state() {
         let shared = mock_at_seed_start("");
         let (first, h) = daemon(connector(link, &shared, None), ContractSettings::default());
         wait_connected(&h).await;
-        let id = h.submit(order(P2)).await.unwrap();
+        let id = h.submit(slow(120.0, order(P2))).await.unwrap();
         report_until(&mut h.subscribe(id).unwrap(), "running", |r| {
             r.stage == Stage::Running
         })
@@ -611,7 +616,7 @@ async fn a_move_with_no_motion_behind_a_running_move_is_not_done_before_it() {
     let shared = mock_at_seed_start("");
     let (d, h) = daemon(duplex_connector(&shared, None), ContractSettings::default());
     wait_connected(&h).await;
-    let ahead = h.submit(order(P2)).await.unwrap();
+    let ahead = h.submit(slow(120.0, order(P2))).await.unwrap();
     let same = h.submit(order(P2)).await.unwrap();
     let mut feed = h.subscribe(ahead).unwrap();
     report_until(&mut feed, "running", |r| r.stage == Stage::Running).await;
@@ -701,7 +706,7 @@ async fn a_move_whose_link_dies_ends_by_the_deadline_its_report_gave() {
     };
     let (d, h) = daemon(connect, ContractSettings::default());
     wait_connected(&h).await;
-    let id = h.submit(order(P2)).await.unwrap();
+    let id = h.submit(slow(120.0, order(P2))).await.unwrap();
     let mut feed = h.subscribe(id).unwrap();
     let running = report_until(&mut feed, "running", |r| r.stage == Stage::Running).await;
     let seen = tokio::time::Instant::now();
