@@ -400,6 +400,48 @@ async fn a_daemon_killed_mid_place_waits_for_the_operator_and_then_skips_no_slot
     h.stop_cycle(true).await.unwrap();
 }
 
+/// After a restart of the PLC with slot `slot` (from 0) in progress, the cycle faulted: nothing
+/// is started or written by itself, the index stays at the slot and the slot waits for the
+/// operator's choice, unsure on disk, and the journal says so (`why`: the cycle's reasons, for
+/// the failure's message).
+async fn left_unsure_by_the_restart(
+    h: &RobotHandle,
+    shared: &SharedMock,
+    state: &Path,
+    journal: &Journal,
+    slot: usize,
+    why: &str,
+) {
+    let before = shared.with(|m| (m.starts().len(), m.host_writes().len()));
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    assert_eq!(
+        shared.with(|m| (m.starts().len(), m.host_writes().len())),
+        before,
+        "nothing started or written by itself"
+    );
+    let c = counter(h);
+    assert_eq!(
+        (c.index, c.parts as usize, c.needs_choice()),
+        (slot, slot, Some(slot)),
+        "{why}: {c:?}"
+    );
+    assert_eq!(file_counter(state)["in_progress"]["phase"], "unsure");
+    journal.flush().await;
+    let said = format!("slot {} was in progress when the PLC restarted", slot + 1);
+    let faults = journal
+        .read(&Query {
+            limit: usize::MAX,
+            ..Query::default()
+        })
+        .unwrap();
+    assert!(
+        faults
+            .iter()
+            .any(|e| matches!(&e.kind, Kind::Fault { reason, .. } if reason.contains(&said))),
+        "the journal says {said:?}"
+    );
+}
+
 /// A power cut of the PLC at slot 2 with the part let go: the cycle faults and stays faulted
 /// (nothing started, written or counted by itself), the slot becomes unsure (on disk, and the
 /// journal says so). The operator homes, goes on (the part is there) and resumes: the cycle,
@@ -429,37 +471,8 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
     let s = cycle_until(&h, "faulted", |s| s.state == CycleState::Faulted).await;
     let why = s.reason.clone().unwrap_or_default();
     assert!(why.contains("PLC restarted"), "{s:?}");
-    // Never on by itself: nothing started or written, the index not advanced.
-    let before = shared.with(|m| (m.starts().len(), m.host_writes().len()));
-    tokio::time::sleep(Duration::from_secs(1)).await;
-    assert_eq!(
-        shared.with(|m| (m.starts().len(), m.host_writes().len())),
-        before
-    );
-    let c = counter(&h);
-    assert_eq!(
-        (c.index, c.parts, c.needs_choice()),
-        (2, 2, Some(2)),
-        "{c:?}"
-    );
-    assert_eq!(file_counter(&state)["in_progress"]["phase"], "unsure");
+    left_unsure_by_the_restart(&h, &shared, &state, &journal, 2, "").await;
     assert_eq!(placed(), [0, 1, 2], "the part let go at slot 2 is there");
-    journal.flush().await;
-    let said = journal
-        .read(&Query {
-            limit: usize::MAX,
-            ..Query::default()
-        })
-        .unwrap()
-        .into_iter()
-        .any(|e| {
-            matches!(&e.kind, Kind::Fault { reason, .. }
-            if reason.contains("slot 3 was in progress when the PLC restarted"))
-        });
-    assert!(
-        said,
-        "the journal says the restart made slot 3 (from 1) unsure"
-    );
     // The operator homes, goes on and resumes: resumed at the slot's dwell, the cycle holds no
     // part and reached no slot since; it faults rather than count slot 3 as placed.
     h.home().await.unwrap();
@@ -521,35 +534,6 @@ async fn a_plc_switched_to_prog_on_the_way_into_a_slot_leaves_the_slot_to_the_op
             && s.reason.as_deref().is_some_and(|r| r.contains("restarted"))
     })
     .await;
-    // Never on by itself: nothing started or written, the index not advanced.
-    let before = shared.with(|m| (m.starts().len(), m.host_writes().len()));
-    tokio::time::sleep(Duration::from_secs(1)).await;
-    assert_eq!(
-        shared.with(|m| (m.starts().len(), m.host_writes().len())),
-        before
-    );
-    let c = counter(&h);
-    assert_eq!(
-        (c.index, c.parts, c.needs_choice()),
-        (2, 2, Some(2)),
-        "{in_prog}; then {:?}; {c:?}",
-        s.reason
-    );
-    assert_eq!(file_counter(&state)["in_progress"]["phase"], "unsure");
-    journal.flush().await;
-    let said = journal
-        .read(&Query {
-            limit: usize::MAX,
-            ..Query::default()
-        })
-        .unwrap()
-        .into_iter()
-        .any(|e| {
-            matches!(&e.kind, Kind::Fault { reason, .. }
-            if reason.contains("slot 3 was in progress when the PLC restarted"))
-        });
-    assert!(
-        said,
-        "the journal says the restart made slot 3 (from 1) unsure"
-    );
+    let why = format!("{in_prog}; then {:?}", s.reason);
+    left_unsure_by_the_restart(&h, &shared, &state, &journal, 2, &why).await;
 }
