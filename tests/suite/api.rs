@@ -66,9 +66,14 @@ impl Served {
     }
 
     async fn submit(&self, to: [f64; 3]) -> u64 {
+        self.submit_order(&json!({ "to": to })).await
+    }
+
+    /// Posts `order` as a move: accepted, its id.
+    async fn submit_order(&self, order: &Value) -> u64 {
         let answer = self
             .api
-            .post(&format!("{ROBOT}/moves"), &json!({ "to": to }).to_string())
+            .post(&format!("{ROBOT}/moves"), &order.to_string())
             .await;
         assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
         let body = answer.json();
@@ -216,15 +221,9 @@ async fn stop_answers_200_and_the_move_ends_stopped() {
     let s = Served::start().await;
     // A slow move (about 5.5 s), stopped a tenth of the way: on a loaded machine the test may
     // be woken late, and the move must still be running when it is.
-    let answer = s
-        .api
-        .post(
-            &format!("{ROBOT}/moves"),
-            &json!({ "to": P2, "speed_mm_s": 60.0 }).to_string(),
-        )
+    let id = s
+        .submit_order(&json!({ "to": P2, "speed_mm_s": 60.0 }))
         .await;
-    assert_eq!(answer.status, StatusCode::ACCEPTED, "{}", answer.text());
-    let id = answer.json()["id"].as_u64().unwrap();
     let mut feed = s.handle().subscribe(id).unwrap();
     common::daemon::report_until(&mut feed, "10 % done", |r| r.progress > 0.1).await;
     let stop = s.api.post(&format!("{ROBOT}/stop"), "").await;
