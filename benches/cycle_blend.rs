@@ -16,7 +16,8 @@
 //!   down to the pick
 //! ```
 //!
-//! once with every `blend_mm` (B = 20 and 40 mm; each run's corners at its default
+//! once with every `blend_mm` (B = 20, 40 and 50 mm, 50 the most the 100 mm moves up and down
+//! allow: a blend takes at most half of either move beside it; each run's corners at its default
 //! acceleration, speed / Ta = 1200 mm/s2, and with `path_accel = "5000mm/s2"` on its first
 //! move), once without (a stop at every waypoint). Measured on the trace:
 //! the cycle time, from one arrival at the pick (the last pulse that puts every channel on the
@@ -115,7 +116,7 @@ async fn main() {
         "stopped at every waypoint: cycle {:.3} s (first to last pulse {:.3} s a cycle)",
         stopped.cycle_s, stopped.motion_s
     );
-    for blend in [20.0, 40.0]
+    for blend in [20.0, 40.0, 50.0]
         .into_iter()
         .flat_map(|mm| [None, Some(5_000.0)].map(|path_accel| Blend { mm, path_accel }))
     {
