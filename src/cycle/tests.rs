@@ -61,6 +61,7 @@ fn pallets() -> BTreeMap<String, crate::pallet::Pattern> {
         let up = |s| Waypoint {
             pose: Pose::from_mm_deg(x, 535.0, z + 100.0, 0.0),
             speed_mm_s: s,
+            blend_mm: None,
         };
         Slot {
             index,

@@ -19,8 +19,9 @@
 //! layers = ["A", "B", "A", "B"]     # kinds bottom up, or a count of plain layers
 //! a_deg = 0                         # the tool angle of grid slots in the frame
 //! order = "rows"                    # rows, columns, snake-rows, snake-columns
-//! approach = { height_mm = 150, side_mm = [0, -50], slow_mm = 30, slow_speed_mm_s = 40 }
-//! retreat = { height_mm = 150 }     # default: the approach's
+//! approach = { height_mm = 150, side_mm = [0, -50], slow_mm = 30, slow_speed_mm_s = 40,
+//!              blend_mm = 40 }      # its first point passed without a stop, the corner rounded
+//! retreat = { height_mm = 150 }     # default: the approach's (its blend_mm does not apply)
 //! between_layers = "slip-sheet"     # a cycle program, before every layer but the first
 //! when_full = { signal = "pallet-full", wait_for = "pallet-empty", call = "change" }
 //! [robots.r.pallets.out.kinds.B]    # a layer kind; one not listed is the plain grid
@@ -125,6 +126,9 @@ pub struct ReachDoc {
     pub slow_mm: Option<f64>,
     /// The speed of those millimetres, mm/s.
     pub slow_speed_mm_s: Option<f64>,
+    /// The approach only: its first point (`height_mm` above the slot) is a blended corner of
+    /// this size, mm, passed without a stop from wherever the robot comes (as a path's `blend`).
+    pub blend_mm: Option<f64>,
 }
 
 /// `when_full`.

@@ -62,6 +62,8 @@ struct Reach {
     side_mm: Vector2<f64>,
     /// The slow stretch: its length and speed.
     slow: Option<(f64, f64)>,
+    /// The approach's first point as a blended corner, mm.
+    blend_mm: Option<f64>,
 }
 
 /// A checked pallet table.
@@ -385,11 +387,13 @@ impl Reach {
         let mut way = vec![Waypoint {
             pose: above,
             speed_mm_s: None,
+            blend_mm: self.blend_mm,
         }];
         if let Some((near, _)) = &slow {
             way.push(Waypoint {
                 pose: *near,
                 speed_mm_s: None,
+                blend_mm: None,
             });
         }
         (way, slow.map(|s| s.1))
@@ -403,11 +407,14 @@ impl Reach {
             .map(|(near, speed)| Waypoint {
                 pose: near,
                 speed_mm_s: Some(speed),
+                blend_mm: None,
             })
             .collect();
+        // Its last point ends the way: the cycle's next step begins there, from rest.
         way.push(Waypoint {
             pose: above,
             speed_mm_s: None,
+            blend_mm: None,
         });
         way
     }
@@ -440,10 +447,36 @@ fn reach(k: &Keys<'_>, key: &str, r: &ReachDoc) -> Result<Reach, PalletError> {
             ));
         }
     };
+    let blend_mm = r
+        .blend_mm
+        .map(|mm| {
+            let key = format!("{key}.blend_mm");
+            if key == "retreat.blend_mm" {
+                return Err(k.bad(
+                    &key,
+                    mm,
+                    "the way out ends at its point above the slot, where the cycle's next step \
+                     begins from rest: only the approach's first point is blended",
+                ));
+            }
+            // The line from that point on toward the slot, before its slow stretch.
+            let line = length - slow.map_or(0.0, |(mm, _)| mm);
+            if line <= 0.0 {
+                return Err(k.bad(
+                    &key,
+                    mm,
+                    "the approach is all slow stretch (slow_mm is all of it): its first point \
+                     begins a stretch at another speed, where the robot comes to rest",
+                ));
+            }
+            k.positive(&key, mm, line)
+        })
+        .transpose()?;
     Ok(Reach {
         height_mm,
         side_mm,
         slow,
+        blend_mm,
     })
 }
 

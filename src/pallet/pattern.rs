@@ -12,6 +12,9 @@ pub struct Waypoint {
     pub pose: Pose,
     /// The speed of the line that ends here, mm/s; `None`: the step's own speed.
     pub speed_mm_s: Option<f64>,
+    /// A blended corner here, mm (a path's `blend`): passed without a stop when the line after
+    /// it runs at the same speed; `None`: a stop.
+    pub blend_mm: Option<f64>,
 }
 
 /// One place on the pallet.
@@ -194,6 +197,16 @@ fn check_slot(name: &str, slot: &Slot) -> Result<(), PatternError> {
             return Err(bad("a speed", speed, true));
         }
     }
+    let blends = slot
+        .approach
+        .iter()
+        .chain(&slot.retreat)
+        .filter_map(|w| w.blend_mm);
+    for blend in blends {
+        if !(blend.is_finite() && blend > 0.0) {
+            return Err(bad("a blend", blend, true));
+        }
+    }
     Ok(())
 }
 
@@ -245,6 +258,7 @@ mod tests {
         s.approach.push(Waypoint {
             pose: Pose::from_mm_deg(f64::NAN, 0.0, 0.0, 0.0),
             speed_mm_s: None,
+            blend_mm: None,
         });
         assert!(
             Pattern::from_slots("n", vec![s])

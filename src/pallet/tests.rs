@@ -167,6 +167,56 @@ fn the_approach_and_retreat_rise_above_the_slot_and_slow_for_the_last_millimetre
         (p.between_layers.as_deref(), p.when_full.signal.as_deref()),
         (Some("sheet"), Some("full"))
     );
+    assert!(
+        s.approach
+            .iter()
+            .chain(&s.retreat)
+            .all(|w| w.blend_mm.is_none()),
+        "every corner a stop unless blended"
+    );
+}
+
+/// `approach.blend_mm` blends the approach's first point, and it alone: the retreat given as
+/// the approach's keeps every corner a stop; a blend on the retreat, or longer than the line
+/// from that point to the slow stretch, or on an approach all slow, is refused naming it.
+#[test]
+fn the_approachs_first_point_alone_is_blended_within_its_line() {
+    let approach = "approach = { height_mm = 60, side_mm = [0, -80], slow_mm = 25, \
+                    slow_speed_mm_s = 40, blend_mm = 30 }";
+    let p = pallets("", &format!("[b]\n{BRICK}{approach}\n"))
+        .unwrap()
+        .pattern("b", &seed_robot(), &BTreeMap::new())
+        .unwrap();
+    let s = p.slot(5).unwrap();
+    let blends: Vec<Option<f64>> = s.approach.iter().map(|w| w.blend_mm).collect();
+    assert_eq!(blends, [Some(30.0), None]);
+    assert_eq!(s.retreat.len(), 2, "the approach's way, out");
+    assert!(s.retreat.iter().all(|w| w.blend_mm.is_none()));
+    let cases = [
+        (
+            "approach = { height_mm = 60, side_mm = [0, -80], slow_mm = 25, slow_speed_mm_s = 40, blend_mm = 80 }",
+            // The line from 100 mm out to 25 mm short of the slot: 75 mm.
+            "approach.blend_mm = 80: must be above 0 and at most 75",
+        ),
+        (
+            "approach = { height_mm = 60, blend_mm = -1 }",
+            "approach.blend_mm = -1: must be above 0",
+        ),
+        (
+            "approach = { height_mm = 60, slow_mm = 60, slow_speed_mm_s = 40, blend_mm = 10 }",
+            "approach.blend_mm = 10: the approach is all slow stretch",
+        ),
+        (
+            "retreat = { height_mm = 60, blend_mm = 10 }",
+            "retreat.blend_mm = 10: the way out ends at its point above the slot",
+        ),
+    ];
+    for (line, want) in cases {
+        let e = pallets("", &format!("[b]\n{BRICK}{line}\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{line}: {e}");
+    }
 }
 
 #[test]

@@ -25,6 +25,7 @@ use linterpd::daemon::{
     CycleState, CycleStatus, Daemon, DaemonOptions, PalletCommand, RobotHandle, RobotSetup,
 };
 use linterpd::gateway::{AccessList, Area, GatewaySettings};
+use linterpd::geometry::Pose;
 use linterpd::journal::{Journal, Query};
 use linterpd::kinematics::{JOINTS, Kinematics};
 use linterpd::mock::{SharedMock, StartRecord};
@@ -80,17 +81,28 @@ fn temp(test: &str) -> PathBuf {
     dir
 }
 
-fn robot_pallets() -> RobotPallets {
+/// The robot's pallets: `out`, as `pallet` gives it, on the station.
+fn robot_pallets(pallet: &str) -> RobotPallets {
     let frames: BTreeMap<String, FrameDoc> =
         toml::from_str("station = { origin = [-1050, 600, 60] }").unwrap();
     let pallets: BTreeMap<String, PalletDoc> =
-        BTreeMap::from([("out".to_owned(), toml::from_str(PALLET).unwrap())]);
+        BTreeMap::from([("out".to_owned(), toml::from_str(pallet).unwrap())]);
     RobotPallets::check(&frames, &pallets).unwrap()
 }
 
 /// The daemon in a cell with a gripper (R100, in the status block's input words) and the
 /// pallet's signals, its programs in `programs`, its counters and journal in `state`.
 fn spawn(shared: &SharedMock, programs: &Path, state: &Path) -> (Daemon, RobotHandle, Journal) {
+    spawn_with(shared, programs, state, PALLET)
+}
+
+/// [`spawn`] with the pallet `out` as `pallet` gives it.
+fn spawn_with(
+    shared: &SharedMock,
+    programs: &Path,
+    state: &Path,
+    pallet: &str,
+) -> (Daemon, RobotHandle, Journal) {
     let ranges = |l: &[&str]| l.iter().map(|r| r.parse().unwrap()).collect();
     let access = AccessList::new(
         ranges(&["DT0-DT199"]),
@@ -112,7 +124,7 @@ fn spawn(shared: &SharedMock, programs: &Path, state: &Path) -> (Daemon, RobotHa
     let options = DaemonOptions {
         journal: journal.clone(),
         pallets: Arc::new(Pallets {
-            sets: BTreeMap::from([(ROBOT.to_owned(), robot_pallets())]),
+            sets: BTreeMap::from([(ROBOT.to_owned(), robot_pallets(pallet))]),
             counters: PalletCounters::in_state_dir(state),
         }),
         ..DaemonOptions::default()
@@ -176,20 +188,23 @@ fn gripper_closed(shared: &SharedMock) -> bool {
     shared.with(|m| m.read_bit(Area::R, 10 * 16).unwrap())
 }
 
-/// Each slot's counts per channel: the robot's inverse kinematics of the slot's pose.
+/// The counts per channel at `pose`: the robot's inverse kinematics of it.
+fn channel_counts(robot: &Robot, pose: &Pose) -> [i64; 4] {
+    let q = robot.kinematics.ik(pose, None).unwrap();
+    let by_joint = robot.counts_of(&q);
+    let mut by_channel = [0; 4];
+    for (j, joint) in robot.joints.iter().enumerate() {
+        by_channel[usize::from(joint.channel)] = by_joint[j];
+    }
+    by_channel
+}
+
+/// Each slot's counts per channel.
 fn slot_counts(robot: &Robot, pattern: &Pattern) -> Vec<[i64; 4]> {
     pattern
         .slots()
         .iter()
-        .map(|s| {
-            let q = robot.kinematics.ik(&s.pose, None).unwrap();
-            let by_joint = robot.counts_of(&q);
-            let mut by_channel = [0; 4];
-            for (j, joint) in robot.joints.iter().enumerate() {
-                by_channel[usize::from(joint.channel)] = by_joint[j];
-            }
-            by_channel
-        })
+        .map(|s| channel_counts(robot, &s.pose))
         .collect()
 }
 
@@ -281,6 +296,55 @@ async fn an_interlocked_pallet_is_placed_to_full_slot_by_slot_on_each_slots_coun
     let c = counter(&h);
     assert_eq!((c.index, c.full, c.parts, c.pallets), (0, false, 6, 1));
     assert!(!shared.with(|m| m.read_bit(Area::Y, 1).unwrap()));
+}
+
+/// Runs 2 places of the program with the pallet `out` as `pallet` gives it: the slots placed
+/// (the mock's record) and how many starts began on the counts of a slot's approach point,
+/// `height_mm` above it, carrying a part (the gripper closed: the way in, at rest there).
+async fn two_places(test: &str, pallet: &str) -> (Vec<usize>, usize) {
+    let shared = mock_at_seed_start("");
+    let state = temp(test);
+    let programs = common::daemon::programs_dir("pallets", test, &[("palletise", program())]);
+    let (_d, h, _) = spawn_with(&shared, &programs, &state, pallet);
+    taking_moves(&h).await;
+    let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
+    h.run_cycle("palletise", Some(2)).await.unwrap();
+    cycle_until(&h, "done", |s| s.state == CycleState::Done).await;
+    let robot = common::cylindrical();
+    let starts = shared.with(|m| m.starts().to_vec());
+    let above: Vec<[i64; 4]> = pattern
+        .slots()
+        .iter()
+        .map(|s| channel_counts(&robot, &s.approach[0].pose))
+        .collect();
+    let at_above = starts
+        .iter()
+        .filter(|s| s.inputs[2] & 1 != 0)
+        .filter(|s| {
+            above.iter().any(|c| {
+                c.iter()
+                    .zip(&s.counts)
+                    .all(|(want, got)| (want - got).abs() <= 1)
+            })
+        })
+        .count();
+    (places(&starts, &slot_counts(&robot, &pattern)), at_above)
+}
+
+/// `approach.blend_mm`: the way into each slot passes the approach point without coming to
+/// rest there (no start begins on its counts, where without the blend the line down to the
+/// slot begins), and still places each slot on its counts, in order.
+#[tokio::test(start_paused = true)]
+async fn a_blended_approach_passes_its_point_above_the_slot_without_a_stop() {
+    let stopped = two_places("approach-stopped", PALLET).await;
+    assert_eq!(stopped, (vec![0, 1], 2), "a stop above each slot");
+    let blend = PALLET.replace(
+        "slow_speed_mm_s = 120 }",
+        "slow_speed_mm_s = 120, blend_mm = 40 }",
+    );
+    assert_ne!(blend, PALLET);
+    let blended = two_places("approach-blended", &blend).await;
+    assert_eq!(blended, (vec![0, 1], 0), "no stop above a slot");
 }
 
 /// A daemon on a runtime of its own, as a process: killing it ends every task it spawned (the

@@ -11,7 +11,8 @@
 //!   the way out  the slot -> retreat waypoints
 //! ```
 //! A way is cut where its speed changes (a path has one speed): the stretches at one speed are
-//! one path, stopped at its corners, and the paths are checked, planned one from the end of the
+//! one path, stopped at its corners but the approach's first point when the pattern blends it
+//! (`approach.blend_mm`, passed without a stop from wherever the robot comes), and the paths are checked, planned one from the end of the
 //! other and queued together ([`RobotHandle::submit_paths`]), or all refused before anything
 //! moves. The slots are the patterns the program was checked against ([`crate::cycle::Checked`]).
 
@@ -29,7 +30,7 @@ use crate::daemon::pallets::PalletStoreError;
 use crate::geometry::Pose;
 use crate::order::PathOrder;
 use crate::pallet::counter::Phase;
-use crate::pallet::{Pattern, Slot};
+use crate::pallet::{Pattern, Slot, Waypoint};
 use crate::wire::journal::Kind;
 
 /// Closer than this to where the robot will be, a way's first waypoint is passed over, mm.
@@ -239,27 +240,26 @@ fn from_1(i: usize) -> u32 {
     u32::try_from(i + 1).unwrap_or(u32::MAX)
 }
 
-/// The way's stretches, in order: where each ends and its speed (`None`: the step's).
-fn way(slot: &Slot, leg: Leg) -> Vec<(Pose, Option<f64>)> {
+/// The way's stretches, in order: where each ends, its speed (`None`: the step's) and the
+/// blend of the corner there (`None`: a stop).
+fn way(slot: &Slot, leg: Leg) -> Vec<(Pose, Option<f64>, Option<f64>)> {
+    let stretch = |w: &Waypoint| (w.pose, w.speed_mm_s, w.blend_mm);
     match leg {
         Leg::In => slot
             .approach
             .iter()
-            .map(|w| (w.pose, w.speed_mm_s))
-            .chain([(slot.pose, slot.slot_speed_mm_s)])
+            .map(stretch)
+            .chain([(slot.pose, slot.slot_speed_mm_s, None)])
             .collect(),
-        Leg::Out => slot
-            .retreat
-            .iter()
-            .map(|w| (w.pose, w.speed_mm_s))
-            .collect(),
+        Leg::Out => slot.retreat.iter().map(stretch).collect(),
     }
 }
 
-/// The way as paths, one per run of stretches at one speed, every corner a stop; a first
-/// waypoint where the robot will be already (`from`) passed over.
+/// The way as paths, one per run of stretches at one speed; a corner within a run is blended
+/// where its waypoint asks for it (the approach's first point), every other corner a stop; a
+/// first waypoint where the robot will be already (`from`) passed over, its corner with it.
 fn paths(
-    way: &[(Pose, Option<f64>)],
+    way: &[(Pose, Option<f64>, Option<f64>)],
     from: Option<&Pose>,
     step_speed_mm_s: Option<f64>,
 ) -> Vec<PathOrder> {
@@ -267,13 +267,19 @@ fn paths(
         (a.position_mm - b.position_mm).norm() < HERE_MM && (a.a_rad - b.a_rad).abs() < HERE_RAD
     };
     let skip = match (way.first(), from) {
-        (Some((first, _)), Some(from)) if at(first, from) => 1,
+        (Some((first, ..)), Some(from)) if at(first, from) => 1,
         _ => 0,
     };
+    let way = &way[skip..];
+    let speed_of = |k: usize| way.get(k).map(|(_, speed, _)| speed.or(step_speed_mm_s));
     let mut runs: Vec<(Option<f64>, Vec<serde_json::Value>)> = Vec::new();
-    for (pose, speed) in &way[skip..] {
-        let speed = speed.or(step_speed_mm_s);
-        let element = json!({ "line": pose.to_mm_deg() });
+    for (k, (pose, _, blend_mm)) in way.iter().enumerate() {
+        let speed = speed_of(k).flatten();
+        let mut element = json!({ "line": pose.to_mm_deg() });
+        // A corner is blended only inside a run: the next stretch at the same speed.
+        if let Some(mm) = blend_mm.filter(|_| speed_of(k + 1) == Some(speed)) {
+            element["blend"] = json!(format!("{mm}mm"));
+        }
         match runs.last_mut() {
             Some((s, elements)) if *s == speed => elements.push(element),
             _ => runs.push((speed, vec![element])),
@@ -294,7 +300,6 @@ fn paths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pallet::Waypoint;
 
     fn slot() -> Slot {
         let p = |z| Pose::from_mm_deg(-1000.0, 600.0, z, 0.0);
@@ -308,10 +313,12 @@ mod tests {
                 Waypoint {
                     pose: p(180.0),
                     speed_mm_s: None,
+                    blend_mm: None,
                 },
                 Waypoint {
                     pose: p(130.0),
                     speed_mm_s: None,
+                    blend_mm: None,
                 },
             ],
             slot_speed_mm_s: Some(40.0),
@@ -319,10 +326,12 @@ mod tests {
                 Waypoint {
                     pose: p(130.0),
                     speed_mm_s: Some(40.0),
+                    blend_mm: None,
                 },
                 Waypoint {
                     pose: p(180.0),
                     speed_mm_s: None,
+                    blend_mm: None,
                 },
             ],
         }
@@ -374,5 +383,45 @@ mod tests {
         assert_eq!(lines(&orders[0]), [130.0]);
         let orders = paths(&way(&s, Leg::In)[2..], Some(&s.pose), None);
         assert!(orders.is_empty());
+    }
+
+    /// The corners of each order, as the daemon reads its path document.
+    fn corners(order: &PathOrder) -> Vec<crate::geometry::Corner> {
+        crate::config::PathDoc::from_json(order.path.clone())
+            .unwrap()
+            .elements
+            .iter()
+            .map(|e| e.corner)
+            .collect()
+    }
+
+    /// The approach's first point blended: the corner there (between the line from where the
+    /// robot comes and the line toward the slot, at one speed) is a blend of the path; passed
+    /// over (the robot there already), or ending a run (the next stretch slower), it is none.
+    #[test]
+    fn the_approachs_first_point_is_blended_only_where_a_run_goes_on_through_it() {
+        use crate::geometry::Corner::{Blend, Stop};
+        let mut s = slot();
+        s.approach[0].blend_mm = Some(30.0);
+        let orders = paths(&way(&s, Leg::In), None, Some(300.0));
+        assert_eq!(orders.len(), 2);
+        assert_eq!(corners(&orders[0]), [Blend(30.0), Stop]);
+        assert_eq!(corners(&orders[1]), [Stop]);
+        // The robot there already: the corner is passed over with its point.
+        let above = s.approach[0].pose;
+        let orders = paths(&way(&s, Leg::In), Some(&above), Some(300.0));
+        assert_eq!(corners(&orders[0]), [Stop]);
+        // No slow stretch, the slot at the step's speed: blended into the line to the slot.
+        let mut direct = s.clone();
+        direct.approach.truncate(1);
+        direct.slot_speed_mm_s = None;
+        let orders = paths(&way(&direct, Leg::In), None, Some(300.0));
+        assert_eq!(orders.len(), 1);
+        assert_eq!(corners(&orders[0]), [Blend(30.0), Stop]);
+        // The line after it slower (the slot at its own speed): a stop, the run ends there.
+        direct.slot_speed_mm_s = Some(40.0);
+        let orders = paths(&way(&direct, Leg::In), None, Some(300.0));
+        assert_eq!(orders.len(), 2);
+        assert_eq!(corners(&orders[0]), [Stop]);
     }
 }
