@@ -190,12 +190,14 @@ impl Palletising {
         let from = handle
             .where_next_begins()
             .map(|counts| handle.robot().pose_of(&counts));
-        let orders = paths(&way(slot, leg), from.as_ref(), speed_mm_s);
+        let way = way(slot, leg);
+        let orders = paths(&way, from.as_ref(), speed_mm_s);
         if orders.is_empty() {
             // The robot is there already.
             return Event::Queued(Vec::new());
         }
-        match handle.submit_paths(&orders).await {
+        let stopped = stopped_instead(&way, &orders, from.as_ref(), speed_mm_s);
+        match handle.submit_paths_or_stopped(&orders, &stopped).await {
             Ok(ids) => Event::Queued(ids),
             Err(e) => Event::Refused(format!(
                 "pallet {pallet:?} slot {} (layer {}), {}: {e}",
@@ -253,6 +255,29 @@ fn way(slot: &Slot, leg: Leg) -> Vec<(Pose, Option<f64>, Option<f64>)> {
             .collect(),
         Leg::Out => slot.retreat.iter().map(stretch).collect(),
     }
+}
+
+/// For each of `orders` (the way's paths) that blends a corner, the same path with its corners
+/// stops, run instead where the blended one would chain a part behind one too short for a
+/// serial link ([`RobotHandle::submit_paths_or_stopped`]).
+fn stopped_instead(
+    way: &[(Pose, Option<f64>, Option<f64>)],
+    orders: &[PathOrder],
+    from: Option<&Pose>,
+    step_speed_mm_s: Option<f64>,
+) -> Vec<Option<PathOrder>> {
+    let unblended: Vec<_> = way
+        .iter()
+        .map(|&(pose, speed, _)| (pose, speed, None))
+        .collect();
+    let stopped = paths(&unblended, from, step_speed_mm_s);
+    // A blend never changes where a way is cut: the same runs, one for one.
+    debug_assert_eq!(stopped.len(), orders.len());
+    orders
+        .iter()
+        .zip(stopped)
+        .map(|(order, stopped)| (order.path != stopped.path).then_some(stopped))
+        .collect()
 }
 
 /// The way as paths, one per run of stretches at one speed; a corner within a run is blended
