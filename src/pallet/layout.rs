@@ -447,30 +447,11 @@ fn reach(k: &Keys<'_>, key: &str, r: &ReachDoc) -> Result<Reach, PalletError> {
             ));
         }
     };
+    // The line from the first point on toward the slot, before its slow stretch.
+    let line = length - slow.map_or(0.0, |(mm, _)| mm);
     let blend_mm = r
         .blend_mm
-        .map(|mm| {
-            let key = format!("{key}.blend_mm");
-            if key == "retreat.blend_mm" {
-                return Err(k.bad(
-                    &key,
-                    mm,
-                    "the way out ends at its point above the slot, where the cycle's next step \
-                     begins from rest: only the approach's first point is blended",
-                ));
-            }
-            // The line from that point on toward the slot, before its slow stretch.
-            let line = length - slow.map_or(0.0, |(mm, _)| mm);
-            if line <= 0.0 {
-                return Err(k.bad(
-                    &key,
-                    mm,
-                    "the approach is all slow stretch (slow_mm is all of it): its first point \
-                     begins a stretch at another speed, where the robot comes to rest",
-                ));
-            }
-            k.positive(&key, mm, line)
-        })
+        .map(|mm| blend(k, &format!("{key}.blend_mm"), mm, line))
         .transpose()?;
     Ok(Reach {
         height_mm,
@@ -478,6 +459,28 @@ fn reach(k: &Keys<'_>, key: &str, r: &ReachDoc) -> Result<Reach, PalletError> {
         slow,
         blend_mm,
     })
+}
+
+/// `key` (`approach.blend_mm` or `retreat.blend_mm`) = `mm`, checked: the approach's alone,
+/// within `line`, the line from its first point to its slow stretch.
+fn blend(k: &Keys<'_>, key: &str, mm: f64, line: f64) -> Result<f64, PalletError> {
+    if key == "retreat.blend_mm" {
+        return Err(k.bad(
+            key,
+            mm,
+            "the way out ends at its point above the slot, where the cycle's next step \
+             begins from rest: only the approach's first point is blended",
+        ));
+    }
+    if line <= 0.0 {
+        return Err(k.bad(
+            key,
+            mm,
+            "the approach is all slow stretch (slow_mm is all of it): its first point \
+             begins a stretch at another speed, where the robot comes to rest",
+        ));
+    }
+    k.positive(key, mm, line)
 }
 
 fn layers(k: &Keys<'_>, doc: &PalletDoc) -> Result<Vec<Kind>, PalletError> {

@@ -459,20 +459,10 @@ impl RobotHandle {
         let mut starts = Vec::new();
         let mut end = None;
         for (k, (order, permit)) in orders.iter().zip(permits).enumerate() {
-            let req = order.request(&self.robot, &limits, counts, &lookup)?;
-            let (mut path_accel_mm_s2, mut motion) = (req.path_accel_mm_s2, req.motion);
-            let mut planned = self.planned_path(req).await?;
-            let mut order = order;
-            if let Some(Some(instead)) = stopped.get(k)
-                && let Some(short_s) = shortest_chained_behind(&planned)
-                && short_s < SHORTEST_BLENDED_PART_S
-            {
-                tracing::info!(robot = %self.robot.name, path = k + 1, short_s, "a blended path would chain a part behind one too short for a serial link: it runs with its corners stops");
-                let req = instead.request(&self.robot, &limits, counts, &lookup)?;
-                (path_accel_mm_s2, motion) = (req.path_accel_mm_s2, req.motion);
-                planned = self.planned_path(req).await?;
-                order = instead;
-            }
+            let instead = stopped.get(k).and_then(Option::as_ref);
+            let (order, planned, (path_accel_mm_s2, motion)) = self
+                .plan_or_stopped((k, order, instead), counts, &limits, &lookup)
+                .await?;
             if let Some(last) = planned.sections.last() {
                 counts = last.end_counts();
                 end = Some(counts);
@@ -481,6 +471,32 @@ impl RobotHandle {
             starts.extend(self.section_starts(planned, with, |e| order.section_report(e)));
         }
         self.enqueue(starts, end, gate.cloned()).await
+    }
+
+    /// Path `k`, `order`, planned from `counts`; or `instead` (the same path, its corners
+    /// stops) where given and the blended plan would chain a part behind one shorter than
+    /// [`SHORTEST_BLENDED_PART_S`]: the order planned, its plan, its path acceleration and
+    /// motion.
+    async fn plan_or_stopped<'o>(
+        &self,
+        (k, order, instead): (usize, &'o PathOrder, Option<&'o PathOrder>),
+        counts: [i64; JOINTS],
+        limits: &crate::order::OrderLimits,
+        lookup: &(dyn Fn(&str) -> Option<Pose> + Sync),
+    ) -> Result<(&'o PathOrder, PathPlan, (f64, Motion)), SubmitError> {
+        let req = order.request(&self.robot, limits, counts, lookup)?;
+        let with = (req.path_accel_mm_s2, req.motion);
+        let planned = self.planned_path(req).await?;
+        let short_s = shortest_chained_behind(&planned);
+        let Some(instead) =
+            instead.filter(|_| short_s.is_some_and(|s| s < SHORTEST_BLENDED_PART_S))
+        else {
+            return Ok((order, planned, with));
+        };
+        tracing::info!(robot = %self.robot.name, path = k + 1, short_s, "a blended path would chain a part behind one too short for a serial link: it runs with its corners stops");
+        let req = instead.request(&self.robot, limits, counts, lookup)?;
+        let with = (req.path_accel_mm_s2, req.motion);
+        Ok((instead, self.planned_path(req).await?, with))
     }
 
     /// Queues every start of `planned`, one move each, in order: their ids. `report` gives the
