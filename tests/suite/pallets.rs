@@ -153,6 +153,32 @@ fn spawn_with(
     (d, h, journal)
 }
 
+/// A cell of a test's own: the mock at the seed's start, the daemon on it ([`spawn_with`]) with
+/// `program` as `palletise` and the frames and pallet given, taking moves.
+struct Cell {
+    shared: SharedMock,
+    state: PathBuf,
+    daemon: Daemon,
+    h: RobotHandle,
+    journal: Journal,
+}
+
+/// [`Cell`] for test `test` (its state and programs directories named for it).
+async fn cell(test: &str, program: String, frames_and_pallet: (&str, &str)) -> Cell {
+    let shared = mock_at_seed_start("");
+    let state = temp(test);
+    let programs = common::daemon::programs_dir("pallets", test, &[("palletise", program)]);
+    let (daemon, h, journal) = spawn_with(&shared, &programs, &state, frames_and_pallet);
+    taking_moves(&h).await;
+    Cell {
+        shared,
+        state,
+        daemon,
+        h,
+        journal,
+    }
+}
+
 /// The joints' counts at P1, where the robot homes (after a power cut of the PLC).
 fn counts_at_p1() -> [i64; JOINTS] {
     let robot = common::cylindrical();
@@ -240,11 +266,13 @@ fn file_counter(state: &Path) -> serde_json::Value {
 
 #[tokio::test(start_paused = true)]
 async fn an_interlocked_pallet_is_placed_to_full_slot_by_slot_on_each_slots_counts() {
-    let shared = mock_at_seed_start("");
-    let state = temp("full");
-    let programs = common::daemon::programs_dir("pallets", "full", &[("palletise", program())]);
-    let (_d, h, journal) = spawn(&shared, &programs, &state);
-    taking_moves(&h).await;
+    let Cell {
+        shared,
+        state,
+        daemon: _d,
+        h,
+        journal,
+    } = cell("full", program(), (STATION, PALLET)).await;
     let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
     assert_eq!((pattern.len(), pattern.layers()), (SLOTS, 2));
     h.run_cycle("palletise", Some(SLOTS as u64)).await.unwrap();
@@ -323,11 +351,12 @@ async fn placed(
     program: String,
     count: u64,
 ) -> (Vec<usize>, Vec<usize>) {
-    let shared = mock_at_seed_start("");
-    let state = temp(test);
-    let programs = common::daemon::programs_dir("pallets", test, &[("palletise", program)]);
-    let (_d, h, _) = spawn_with(&shared, &programs, &state, frames_and_pallet);
-    taking_moves(&h).await;
+    let Cell {
+        shared,
+        daemon: _d,
+        h,
+        ..
+    } = cell(test, program, frames_and_pallet).await;
     let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
     h.run_cycle("palletise", Some(count)).await.unwrap();
     cycle_until(&h, "done", |s| s.state == CycleState::Done).await;
@@ -563,12 +592,13 @@ async fn left_unsure_by_the_restart(
 /// reached; a fresh run then places the pallet to full, every slot once.
 #[tokio::test(start_paused = true)]
 async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_pallet_completes() {
-    let shared = mock_at_seed_start("");
-    let state = temp("power-cut");
-    let programs =
-        common::daemon::programs_dir("pallets", "power-cut", &[("palletise", program())]);
-    let (_d, h, journal) = spawn(&shared, &programs, &state);
-    taking_moves(&h).await;
+    let Cell {
+        shared,
+        state,
+        daemon: _d,
+        h,
+        journal,
+    } = cell("power-cut", program(), (STATION, PALLET)).await;
     let pattern = h.pallet_patterns().unwrap().remove("out").unwrap();
     let slots = slot_counts(&common::cylindrical(), &pattern);
     let placed = || common::places::places(&shared, 10 * 16, &slots);
@@ -623,11 +653,13 @@ async fn a_plc_power_cut_mid_place_leaves_the_slot_to_the_operator_and_the_palle
 #[tokio::test(start_paused = true)]
 async fn a_plc_switched_to_prog_on_the_way_into_a_slot_leaves_the_slot_to_the_operator() {
     use linterpd::plc::PlcMode;
-    let shared = mock_at_seed_start("");
-    let state = temp("prog");
-    let programs = common::daemon::programs_dir("pallets", "prog", &[("palletise", program())]);
-    let (_d, h, journal) = spawn(&shared, &programs, &state);
-    taking_moves(&h).await;
+    let Cell {
+        shared,
+        state,
+        daemon: _d,
+        h,
+        journal,
+    } = cell("prog", program(), (STATION, PALLET)).await;
     h.run_cycle("palletise", None).await.unwrap();
     until("on the way into slot 2, the part held", || {
         let c = counter(&h);
