@@ -12,9 +12,10 @@
 //! ```
 //! A way is cut where its speed changes (a path has one speed): the stretches at one speed are
 //! one path, stopped at its corners but the approach's first point when the pattern blends it
-//! (`approach.blend_mm`, passed without a stop from wherever the robot comes), and the paths are checked, planned one from the end of the
-//! other and queued together ([`RobotHandle::submit_paths`]), or all refused before anything
-//! moves. The slots are the patterns the program was checked against ([`crate::cycle::Checked`]).
+//! (`approach.blend_mm`, passed without a stop from wherever the robot comes, unless the
+//! blended path would chain a part behind one too short for a serial link: then stopped there
+//! too), and the paths are checked, planned one from the end of the other and queued together
+//! ([`RobotHandle::submit_paths_or_stopped`]), or all refused before anything moves. The slots are the patterns the program was checked against ([`crate::cycle::Checked`]).
 
 use std::collections::BTreeMap;
 
