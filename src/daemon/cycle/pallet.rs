@@ -15,7 +15,8 @@
 //! (`approach.blend_mm`, passed without a stop from wherever the robot comes, unless the
 //! blended path would chain a part behind one too short for a serial link: then stopped there
 //! too), and the paths are checked, planned one from the end of the other and queued together
-//! ([`RobotHandle::submit_paths_or_stopped`]), or all refused before anything moves. The slots are the patterns the program was checked against ([`crate::cycle::Checked`]).
+//! ([`RobotHandle::submit_paths_or_stopped`]), or all refused before anything moves. The slots
+//! are the patterns the program was checked against ([`crate::cycle::Checked`]).
 
 use std::collections::BTreeMap;
 
